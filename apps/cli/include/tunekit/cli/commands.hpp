@@ -1,0 +1,41 @@
+#pragma once
+// The tunekit command line. Each subcommand lives in its own cmd_<name>.cpp and is added
+// to the application by its register_* function.
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "tunekit/cli/context.hpp"
+
+namespace tunekit::cli {
+
+/// Runs the CLI on `args` (without the program name) and returns the exit code.
+/// Never throws: errors are printed on `err` as one line.
+int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
+/// The result of a subcommand's callback, read by run_cli after parsing.
+void set_exit_code(int code);
+
+/// Adds a subcommand whose implementation has not landed yet: it is listed in --help and
+/// answers with a clear error (exit code 2).
+CLI::App* add_reserved_command(CLI::App& app, const std::string& name, const std::string& description);
+
+void register_step(CLI::App& app, CliContext& ctx);
+void register_freq(CLI::App& app, CliContext& ctx);
+void register_rheo(CLI::App& app, CliContext& ctx);
+void register_nozzle(CLI::App& app, CliContext& ctx);
+void register_resonance(CLI::App& app, CliContext& ctx);
+void register_shaper(CLI::App& app, CliContext& ctx);
+void register_linewidth(CLI::App& app, CliContext& ctx);
+void register_run(CLI::App& app, CliContext& ctx);
+void register_export(CLI::App& app, CliContext& ctx);
+void register_calibrate(CLI::App& app, CliContext& ctx);
+void register_report(CLI::App& app, CliContext& ctx);
+void register_batch(CLI::App& app, CliContext& ctx);
+void register_ports(CLI::App& app, CliContext& ctx);
+void register_inspect(CLI::App& app, CliContext& ctx);
+
+}  // namespace tunekit::cli

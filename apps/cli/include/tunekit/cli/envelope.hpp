@@ -1,0 +1,58 @@
+#pragma once
+// The JSON envelope every command writes: schema version, tool version, command, options,
+// inputs (path and SHA-256 of the bytes read), results with units, diagnostics and warnings.
+// Keys are sorted and nothing time- or host-dependent is included, so the same inputs and
+// options give byte-identical output.
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/cli/context.hpp"
+
+namespace tunekit::cli {
+
+inline constexpr int kSchemaVersion = 1;
+
+/// Lower-case hex SHA-256 of a byte string.
+std::string sha256_hex(std::string_view bytes);
+/// SHA-256 of a file's bytes; InputError if it cannot be read.
+std::string sha256_file(const std::string& path);
+
+class Envelope {
+ public:
+  explicit Envelope(std::string command);
+
+  void set_options(nlohmann::json options) { options_ = std::move(options); }
+  /// Records an input file by path, hashing its bytes.
+  void add_input(const std::string& path);
+  /// Records an input whose bytes are already in memory.
+  void add_input(const std::string& path, std::string_view bytes);
+  void warn(std::string message) { warnings_.push_back(std::move(message)); }
+
+  nlohmann::json& results() { return results_; }
+  nlohmann::json& diagnostics() { return diagnostics_; }
+  const nlohmann::json& results() const { return results_; }
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+  nlohmann::json to_json() const;
+  /// Pretty-printed with two-space indent and a final newline.
+  std::string dump() const;
+
+ private:
+  std::string command_;
+  nlohmann::json options_ = nlohmann::json::object();
+  nlohmann::json inputs_ = nlohmann::json::array();
+  nlohmann::json results_ = nlohmann::json::object();
+  nlohmann::json diagnostics_ = nlohmann::json::object();
+  std::vector<std::string> warnings_;
+};
+
+/// Writes the envelope where OutputOptions say (stdout with --json, a file with --output),
+/// prints warnings on stderr (one line each), and returns the process exit code
+/// (0, or 1 when a --require threshold is not met).
+int emit(const Envelope& env, const OutputOptions& o, CliContext& ctx);
+
+}  // namespace tunekit::cli

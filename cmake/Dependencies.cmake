@@ -1,0 +1,92 @@
+# Every third-party dependency comes from a Debian 12 package (scripts/install-deps).
+# When one is missing, configuration stops and names the package to install.
+
+find_package(PkgConfig QUIET)
+
+macro(tunekit_missing what debian_package)
+  message(FATAL_ERROR
+    "tunekit: ${what} not found. Install the Debian package '${debian_package}' "
+    "(or run scripts/install-deps as root).")
+endmacro()
+
+find_package(Eigen3 3.3 QUIET NO_MODULE)
+if(NOT Eigen3_FOUND)
+  tunekit_missing("Eigen3" "libeigen3-dev")
+endif()
+
+find_package(Ceres QUIET)
+if(NOT Ceres_FOUND)
+  tunekit_missing("Ceres Solver" "libceres-dev")
+endif()
+
+# Debian ships the C and the C++ NLopt configs under the same package name; ask for the C++ one.
+find_package(NLopt QUIET CONFIG
+  HINTS "/usr/lib/${CMAKE_LIBRARY_ARCHITECTURE}/cmake/nlopt_cxx" "/usr/lib/cmake/nlopt_cxx")
+if(NOT NLopt_FOUND OR NOT TARGET NLopt::nlopt_cxx)
+  tunekit_missing("NLopt (C++ interface)" "libnlopt-cxx-dev")
+endif()
+
+find_package(OpenCV QUIET COMPONENTS core imgproc imgcodecs calib3d)
+if(NOT OpenCV_FOUND)
+  tunekit_missing("OpenCV" "libopencv-dev")
+endif()
+
+find_package(nlohmann_json 3.10 QUIET)
+if(NOT nlohmann_json_FOUND)
+  tunekit_missing("nlohmann::json" "nlohmann-json3-dev")
+endif()
+
+find_package(CLI11 QUIET CONFIG)
+if(NOT CLI11_FOUND)
+  find_path(CLI11_INCLUDE_DIR CLI/CLI.hpp)
+  if(NOT CLI11_INCLUDE_DIR)
+    tunekit_missing("CLI11" "libcli11-dev")
+  endif()
+  add_library(CLI11::CLI11 INTERFACE IMPORTED)
+  target_include_directories(CLI11::CLI11 INTERFACE "${CLI11_INCLUDE_DIR}")
+endif()
+
+find_package(fmt QUIET)
+if(NOT fmt_FOUND)
+  tunekit_missing("fmt" "libfmt-dev")
+endif()
+
+find_package(tomlplusplus QUIET)
+if(NOT tomlplusplus_FOUND)
+  tunekit_missing("toml++" "libtomlplusplus-dev")
+endif()
+
+find_package(Boost 1.74 QUIET)
+if(NOT Boost_FOUND)
+  tunekit_missing("Boost (header-only Boost.Math)" "libboost-dev")
+endif()
+
+find_package(OpenSSL QUIET COMPONENTS Crypto)
+if(NOT OpenSSL_FOUND)
+  tunekit_missing("OpenSSL libcrypto (SHA-256 of inputs)" "libssl-dev")
+endif()
+
+find_package(Threads REQUIRED)
+
+if(NOT PkgConfig_FOUND)
+  tunekit_missing("pkg-config" "pkg-config")
+endif()
+pkg_check_modules(FFTW3 QUIET IMPORTED_TARGET fftw3)
+if(NOT FFTW3_FOUND)
+  tunekit_missing("FFTW3" "libfftw3-dev")
+endif()
+pkg_check_modules(SERIALPORT QUIET IMPORTED_TARGET libserialport)
+if(NOT SERIALPORT_FOUND)
+  tunekit_missing("libserialport" "libserialport-dev")
+endif()
+pkg_check_modules(PLPLOT QUIET IMPORTED_TARGET plplot-c++)
+if(NOT PLPLOT_FOUND)
+  tunekit_missing("PLplot (C++ binding)" "libplplot-dev")
+endif()
+
+if(TUNEKIT_BUILD_TESTS)
+  find_package(Catch2 2 QUIET)
+  if(NOT Catch2_FOUND)
+    tunekit_missing("Catch2" "catch2")
+  endif()
+endif()

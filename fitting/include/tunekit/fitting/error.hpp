@@ -1,0 +1,53 @@
+#pragma once
+// Errors that carry the process exit code they map to (DESIGN.md "Conventions"):
+// 0 ok, 1 fit failed or a requirement unmet, 2 usage or bad input, 3 machine or transport failure.
+// The CLI prints them as one line: `tunekit: error: LOCATION: message`.
+
+#include <stdexcept>
+#include <string>
+
+namespace tunekit {
+
+enum class ExitCode : int { ok = 0, fit_failed = 1, bad_input = 2, machine = 3 };
+
+class Error : public std::runtime_error {
+ public:
+  /// `location` is empty or "FILE", "FILE:LINE" or "FILE:LINE:COLUMN".
+  Error(ExitCode code, std::string message, std::string location = {});
+  ExitCode code() const noexcept { return code_; }
+  const std::string& location() const noexcept { return location_; }
+  const std::string& message() const noexcept { return message_; }
+  /// The one-line form printed on stderr, without a trailing newline.
+  std::string formatted() const;
+
+ private:
+  ExitCode code_;
+  std::string message_;
+  std::string location_;
+};
+
+/// Malformed, missing or implausible input (exit code 2).
+class InputError : public Error {
+ public:
+  explicit InputError(std::string message, std::string location = {})
+      : Error(ExitCode::bad_input, std::move(message), std::move(location)) {}
+};
+
+/// A fit that did not converge or whose parameters are not identifiable (exit code 1).
+class FitError : public Error {
+ public:
+  explicit FitError(std::string message, std::string location = {})
+      : Error(ExitCode::fit_failed, std::move(message), std::move(location)) {}
+};
+
+/// A machine or transport failure: no answer, disconnect, firmware error (exit code 3).
+class MachineError : public Error {
+ public:
+  explicit MachineError(std::string message, std::string location = {})
+      : Error(ExitCode::machine, std::move(message), std::move(location)) {}
+};
+
+/// "FILE:LINE" or "FILE:LINE:COLUMN" (a column of 0 is left out).
+std::string source_location(const std::string& file, std::size_t line, std::size_t column = 0);
+
+}  // namespace tunekit

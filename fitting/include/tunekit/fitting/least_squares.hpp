@@ -1,0 +1,77 @@
+#pragma once
+// Bounded nonlinear least squares with parameter uncertainty, on Ceres Solver.
+//
+// A model describes its parameters (name, unit, start, bounds) and a residual function
+// r(p) of length m. solve_least_squares() minimizes 1/2 sum r_i^2 with Levenberg-Marquardt,
+// then computes the covariance of the estimate with ceres::Covariance (dense SVD, so a
+// rank-deficient Jacobian is detected and reported as "not identifiable" instead of giving
+// meaningless intervals). Standard errors are scaled by the residual variance
+// s^2 = rss / (m - k) unless the residuals are already divided by known standard deviations
+// (`absolute_sigma`). 95 % intervals use the Student-t quantile with m - k degrees of freedom.
+//
+//   LsqProblem prob;
+//   prob.params = {{"K", "1", 1.0}, {"tau_s", "s", 0.5, 1e-6, 100.0}};
+//   prob.num_residuals = y.size();
+//   prob.residuals = [&](const double* p, double* r) { ...; return true; };
+//   prob.observed = y;               // for R^2
+//   FitResult fit = solve_least_squares("first_order", prob);
+
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "tunekit/fitting/fit_result.hpp"
+
+namespace tunekit::fitting {
+
+struct ParamSpec {
+  std::string name;
+  std::string unit;
+  double start = 0;
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
+  bool fixed = false;
+};
+
+/// Fills `residuals` (length num_residuals) for parameters `p` (length params.size()).
+/// Return false when `p` is outside the model's domain; the solver then backs off.
+using ResidualFunction = std::function<bool(const double* p, double* residuals)>;
+/// As ResidualFunction, and when `jacobian` is not null also fills the row-major
+/// num_residuals x params.size() Jacobian d r_i / d p_j.
+using ResidualJacobianFunction = std::function<bool(const double* p, double* residuals, double* jacobian)>;
+
+struct LsqProblem {
+  std::vector<ParamSpec> params;
+  int num_residuals = 0;
+  ResidualFunction residuals;                      ///< numeric (central) differences
+  ResidualJacobianFunction residuals_and_jacobian;  ///< preferred when set
+  std::vector<double> observed;  ///< optional: the data, to report R^2 = 1 - rss/tss
+  bool residuals_are_time_ordered = true;  ///< run the whiteness test on residual order
+};
+
+struct LsqOptions {
+  int max_iterations = 500;
+  double function_tolerance = 1e-15;
+  double gradient_tolerance = 1e-15;
+  double parameter_tolerance = 1e-15;
+  double confidence = 0.95;
+  bool compute_covariance = true;
+  bool absolute_sigma = false;  ///< residuals are already in units of their std. deviation
+  /// Treat reaching max_iterations as failure (FitError). Keep true for user-facing fits.
+  bool require_convergence = true;
+  /// Reciprocal condition number of J^T J below which parameters are "not identifiable".
+  double min_reciprocal_condition = 1e-14;
+};
+
+/// Solves the problem; throws FitError when the solver fails, the solution is not finite,
+/// the iteration limit was reached (if require_convergence) or the covariance is singular
+/// (if compute_covariance). The message names the parameters involved.
+FitResult solve_least_squares(const std::string& model, const LsqProblem& problem,
+                              const LsqOptions& options = {});
+
+/// Fills r.diagnostics statistics (rss, rms, r2, aic, bic, whiteness) from residuals.
+void fill_residual_diagnostics(FitResult& r, const std::vector<double>& residuals,
+                               const std::vector<double>& observed, bool time_ordered);
+
+}  // namespace tunekit::fitting

@@ -1,0 +1,24 @@
+#pragma once
+// Small statistics used by every fit: Student-t quantiles for confidence intervals,
+// the Ljung-Box whiteness test of residuals, and information criteria.
+
+#include <span>
+
+namespace tunekit::fitting {
+
+/// Two-sided Student-t multiplier: the t value with `dof` degrees of freedom such that
+/// P(|T| <= t) = confidence. Falls back to the normal quantile for dof <= 0 or huge dof.
+double t_multiplier(double confidence, double dof);
+
+/// Ljung-Box portmanteau test of residual whiteness over `lags` lags.
+struct WhitenessTest {
+  double q = 0;        ///< test statistic
+  double p_value = 1;  ///< P(chi2(lags) >= q); small means correlated residuals
+  int lags = 0;
+};
+WhitenessTest ljung_box(std::span<const double> residuals, int lags);
+
+/// Default number of lags for Ljung-Box: min(20, n/4), at least 1.
+int default_whiteness_lags(std::size_t n);
+
+}  // namespace tunekit::fitting

@@ -1,0 +1,215 @@
+#include "tunekit/fitting/least_squares.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include <ceres/ceres.h>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/fitting/stats.hpp"
+
+namespace tunekit::fitting {
+namespace {
+
+// One residual block holding every residual, one parameter block holding every parameter.
+// Jacobians come from the model when it provides them, otherwise from central differences
+// (one-sided where a central step leaves the model's domain).
+class WholeProblemCost final : public ceres::CostFunction {
+ public:
+  explicit WholeProblemCost(const LsqProblem& p) : prob_(p), n_(static_cast<int>(p.params.size())) {
+    set_num_residuals(p.num_residuals);
+    mutable_parameter_block_sizes()->push_back(n_);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const double* x = parameters[0];
+    double* jac = (jacobians != nullptr) ? jacobians[0] : nullptr;
+    if (prob_.residuals_and_jacobian) return prob_.residuals_and_jacobian(x, residuals, jac);
+    if (!prob_.residuals(x, residuals)) return false;
+    if (jac == nullptr) return true;
+    const int m = num_residuals();
+    std::vector<double> xp(x, x + n_), rp(static_cast<std::size_t>(m)), rm(static_cast<std::size_t>(m));
+    for (int j = 0; j < n_; ++j) {
+      const double h = 1e-6 * std::max(std::abs(x[j]), 1e-6);
+      xp[j] = x[j] + h;
+      const bool okp = prob_.residuals(xp.data(), rp.data());
+      xp[j] = x[j] - h;
+      const bool okm = prob_.residuals(xp.data(), rm.data());
+      xp[j] = x[j];
+      if (okp && okm) {
+        for (int i = 0; i < m; ++i) jac[i * n_ + j] = (rp[i] - rm[i]) / (2 * h);
+      } else if (okp) {
+        for (int i = 0; i < m; ++i) jac[i * n_ + j] = (rp[i] - residuals[i]) / h;
+      } else if (okm) {
+        for (int i = 0; i < m; ++i) jac[i * n_ + j] = (residuals[i] - rm[i]) / h;
+      } else {
+        return false;
+      }
+    }
+    return true;
+  }
+
+ private:
+  const LsqProblem& prob_;
+  int n_;
+};
+
+std::string free_names(const LsqProblem& p) {
+  std::string s;
+  for (const auto& ps : p.params) {
+    if (ps.fixed) continue;
+    if (!s.empty()) s += ", ";
+    s += ps.name;
+  }
+  return s;
+}
+
+}  // namespace
+
+void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res,
+                               const std::vector<double>& observed, bool time_ordered) {
+  auto& d = r.diagnostics;
+  const double n = static_cast<double>(res.size());
+  double rss = 0;
+  for (double v : res) rss += v * v;
+  d.num_observations = static_cast<int>(res.size());
+  d.rss = rss;
+  d.rms = res.empty() ? kNaN : std::sqrt(rss / n);
+  const double k = d.num_parameters;
+  if (!res.empty() && rss > 0) {
+    d.aic = n * std::log(rss / n) + 2 * k;
+    d.bic = n * std::log(rss / n) + k * std::log(n);
+  }
+  if (observed.size() == res.size() && !observed.empty()) {
+    double mean = 0;
+    for (double v : observed) mean += v;
+    mean /= n;
+    double tss = 0;
+    for (double v : observed) tss += (v - mean) * (v - mean);
+    d.r2 = tss > 0 ? 1.0 - rss / tss : kNaN;
+  }
+  if (time_ordered) {
+    const auto wt = ljung_box(res, default_whiteness_lags(res.size()));
+    d.whiteness_p = wt.p_value;
+    d.whiteness_lags = wt.lags;
+  }
+}
+
+FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, const LsqOptions& opt) {
+  const int n = static_cast<int>(prob.params.size());
+  if (n == 0) throw FitError(model + ": no parameters to fit");
+  if (!prob.residuals && !prob.residuals_and_jacobian) throw FitError(model + ": no residual function");
+  int n_free = 0;
+  std::vector<int> fixed_idx;
+  for (int j = 0; j < n; ++j) {
+    if (prob.params[j].fixed) fixed_idx.push_back(j);
+    else ++n_free;
+  }
+  if (prob.num_residuals < n_free)
+    throw InputError(model + ": " + std::to_string(prob.num_residuals) + " data points for " +
+                     std::to_string(n_free) + " free parameters (" + free_names(prob) + ")");
+
+  std::vector<double> x(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) {
+    const auto& ps = prob.params[j];
+    x[j] = std::clamp(ps.start, ps.lower, ps.upper);
+  }
+
+  ceres::Problem::Options popt;
+  popt.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(popt);
+  problem.AddResidualBlock(new WholeProblemCost(prob), nullptr, x.data());
+  for (int j = 0; j < n; ++j) {
+    const auto& ps = prob.params[j];
+    if (std::isfinite(ps.lower)) problem.SetParameterLowerBound(x.data(), j, ps.lower);
+    if (std::isfinite(ps.upper)) problem.SetParameterUpperBound(x.data(), j, ps.upper);
+  }
+  if (n_free == 0) problem.SetParameterBlockConstant(x.data());
+  else if (!fixed_idx.empty()) problem.SetManifold(x.data(), new ceres::SubsetManifold(n, fixed_idx));
+
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = opt.max_iterations;
+  so.function_tolerance = opt.function_tolerance;
+  so.gradient_tolerance = opt.gradient_tolerance;
+  so.parameter_tolerance = opt.parameter_tolerance;
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  so.num_threads = 1;
+  ceres::Solver::Summary summary;
+  if (n_free > 0) ceres::Solve(so, &problem, &summary);
+
+  FitResult r;
+  r.model = model;
+  r.diagnostics.iterations = static_cast<int>(summary.iterations.size());
+  r.diagnostics.solver = n_free > 0 ? summary.BriefReport() : "all parameters fixed";
+  r.diagnostics.num_parameters = n_free;
+
+  if (n_free > 0) {
+    if (summary.termination_type == ceres::FAILURE || summary.termination_type == ceres::USER_FAILURE ||
+        !summary.IsSolutionUsable())
+      throw FitError(model + ": the solver failed: " + summary.message + " (" + summary.BriefReport() + ")");
+    if (summary.termination_type == ceres::NO_CONVERGENCE && opt.require_convergence)
+      throw FitError(model + ": did not converge in " + std::to_string(opt.max_iterations) +
+                     " iterations (" + summary.BriefReport() + ")");
+  }
+  for (double v : x)
+    if (!std::isfinite(v)) throw FitError(model + ": the solution is not finite (" + r.diagnostics.solver + ")");
+  r.diagnostics.converged = n_free == 0 || summary.termination_type == ceres::CONVERGENCE;
+
+  // Residuals at the solution.
+  std::vector<double> res(static_cast<std::size_t>(prob.num_residuals));
+  {
+    WholeProblemCost cost(prob);
+    const double* blocks[] = {x.data()};
+    if (!cost.Evaluate(blocks, res.data(), nullptr))
+      throw FitError(model + ": the model cannot be evaluated at the solution");
+  }
+  fill_residual_diagnostics(r, res, prob.observed, prob.residuals_are_time_ordered);
+
+  const int dof = prob.num_residuals - n_free;
+  const double s2 = (opt.absolute_sigma || dof <= 0) ? 1.0 : r.diagnostics.rss / dof;
+  const double tq = t_multiplier(opt.confidence, dof);
+
+  std::vector<double> cov(static_cast<std::size_t>(n * n), kNaN);
+  if (opt.compute_covariance && n_free > 0) {
+    if (dof <= 0)
+      throw FitError(model + ": as many parameters as data points; no uncertainty can be estimated");
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::DENSE_SVD;
+    co.min_reciprocal_condition_number = opt.min_reciprocal_condition;
+    co.null_space_rank = 0;
+    co.apply_loss_function = false;
+    co.num_threads = 1;
+    ceres::Covariance covariance(co);
+    std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
+    if (!covariance.Compute(blocks, &problem) || !covariance.GetCovarianceBlock(x.data(), x.data(), cov.data()))
+      throw FitError(model + ": parameters not identifiable from these data (the Jacobian of " + free_names(prob) +
+                     " is rank deficient); record a longer or richer response, or fix a parameter");
+  }
+
+  for (int j = 0; j < n; ++j) {
+    const auto& ps = prob.params[j];
+    Param p;
+    p.name = ps.name;
+    p.unit = ps.unit;
+    p.value = x[j];
+    p.fixed = ps.fixed;
+    if (!ps.fixed && opt.compute_covariance) {
+      const double var = cov[j * n + j] * s2;
+      p.std_error = var >= 0 ? std::sqrt(var) : kNaN;
+      p.ci95_lo = p.value - tq * p.std_error;
+      p.ci95_hi = p.value + tq * p.std_error;
+      if (!std::isfinite(p.std_error))
+        throw FitError(model + ": the uncertainty of " + ps.name + " is not finite; it is not identifiable");
+    }
+    if (!ps.fixed && (x[j] <= ps.lower || x[j] >= ps.upper))
+      r.warnings.push_back(ps.name + " ended on its bound (" + std::to_string(x[j]) + ")");
+    r.params.push_back(p);
+  }
+  return r;
+}
+
+}  // namespace tunekit::fitting

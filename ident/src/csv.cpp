@@ -1,0 +1,291 @@
+#include "tunekit/ident/csv.hpp"
+
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+
+namespace tunekit::ident {
+namespace {
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+char detect_delimiter(std::string_view header) {
+  if (header.find(',') != std::string_view::npos) return ',';
+  if (header.find('\t') != std::string_view::npos) return '\t';
+  if (header.find(';') != std::string_view::npos) return ';';
+  return ',';
+}
+
+struct Field {
+  std::string_view text;  // trimmed
+  std::size_t column;     // 1-based byte column of the field's first character
+};
+
+// Splits a line into fields; `out` is reused between calls.
+void split(std::string_view line, char delim, std::vector<Field>& out) {
+  out.clear();
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = line.find(delim, start);
+    const std::string_view raw = line.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
+    std::size_t lead = 0;
+    while (lead < raw.size() && (raw[lead] == ' ' || raw[lead] == '\t')) ++lead;
+    out.push_back({trim(raw), start + lead + 1});
+    if (end == std::string_view::npos) break;
+    start = end + 1;
+  }
+}
+
+bool parse_number(std::string_view s, double& v) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty()) return false;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  return ec == std::errc() && ptr == s.data() + s.size();
+}
+
+bool all_numeric(const std::vector<Field>& fields) {
+  double v;
+  for (const auto& f : fields)
+    if (!parse_number(f.text, v)) return false;
+  return !fields.empty();
+}
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) {
+    if (!s.empty()) s += ", ";
+    s += n;
+  }
+  return s;
+}
+
+// Iterates over lines, handling CRLF and enforcing the maximum line length.
+class LineReader {
+ public:
+  LineReader(std::string_view text, const std::string& path, std::size_t max_len)
+      : text_(text), path_(path), max_len_(max_len) {}
+  bool next(std::string_view& line) {
+    if (pos_ >= text_.size()) return false;
+    ++line_no_;
+    const char* begin = text_.data() + pos_;
+    const void* nl = std::memchr(begin, '\n', text_.size() - pos_);
+    const std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
+    if (len > max_len_)
+      throw InputError(fmt::format("line is {} bytes long, more than the {} allowed (a file without line breaks, or not a CSV file?)",
+                                   len, max_len_),
+                       source_location(path_, line_no_));
+    line = std::string_view(begin, len);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos_ += len + 1;
+    return true;
+  }
+  std::size_t line_no() const { return line_no_; }
+
+ private:
+  std::string_view text_;
+  const std::string& path_;
+  std::size_t max_len_;
+  std::size_t pos_ = 0;
+  std::size_t line_no_ = 0;
+};
+
+}  // namespace
+
+bool iequals(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const auto ca = static_cast<unsigned char>(a[i]), cb = static_cast<unsigned char>(b[i]);
+    if (std::tolower(ca) != std::tolower(cb)) return false;
+  }
+  return true;
+}
+
+std::pair<std::string, std::string> split_name_unit(std::string_view f) {
+  f = trim(f);
+  if (!f.empty() && (f.back() == ')' || f.back() == ']')) {
+    const char open = f.back() == ')' ? '(' : '[';
+    const std::size_t p = f.rfind(open);
+    if (p != std::string_view::npos && p > 0)
+      return {std::string(trim(f.substr(0, p))), std::string(trim(f.substr(p + 1, f.size() - p - 2)))};
+  }
+  return {std::string(f), {}};
+}
+
+const CsvColumn& CsvTable::column(std::string_view name) const {
+  for (const auto& c : columns)
+    if (iequals(c.name, name)) return c;
+  throw InputError(fmt::format("no column '{}'; the file has: {}", name, join_names(header)),
+                   source_location(path, header_line));
+}
+
+bool CsvTable::has_column(std::string_view name) const {
+  for (const auto& c : columns)
+    if (iequals(c.name, name)) return true;
+  return false;
+}
+
+std::string read_file_bytes(const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) throw InputError(fmt::format("cannot open: {}", std::strerror(errno)), path);
+  std::string data;
+  if (std::fseek(f.get(), 0, SEEK_END) == 0) {
+    const long size = std::ftell(f.get());
+    if (size > 0) data.reserve(static_cast<std::size_t>(size));
+    std::fseek(f.get(), 0, SEEK_SET);
+  }
+  char buf[1 << 16];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f.get())) > 0) data.append(buf, n);
+  if (std::ferror(f.get())) throw InputError(fmt::format("read error: {}", std::strerror(errno)), path);
+  return data;
+}
+
+CsvTable read_csv(const std::string& path, const CsvOptions& options) {
+  const std::string data = read_file_bytes(path);
+  return parse_csv(data, path, options);
+}
+
+CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOptions& options) {
+  CsvTable t;
+  t.path = path;
+  if (text.size() >= 3 && std::memcmp(text.data(), "\xEF\xBB\xBF", 3) == 0) text.remove_prefix(3);
+  if (trim(text).empty() || text.find_first_not_of(" \t\r\n") == std::string_view::npos)
+    throw InputError("empty file: no header and no data", path);
+
+  LineReader lines(text, path, options.max_line_bytes);
+  std::string_view line;
+  std::string_view last_comment;
+  std::size_t last_comment_line = 0;
+  std::vector<Field> fields;
+  bool header_found = false;
+  char delim = ',';
+  std::string_view pending_first_row;  // a row of numbers that followed a comment header
+  std::size_t pending_line = 0;
+
+  while (lines.next(line)) {
+    const std::string_view tl = trim(line);
+    if (tl.empty()) continue;
+    if (tl.front() == '#') {
+      last_comment = tl.substr(1);
+      last_comment_line = lines.line_no();
+      continue;
+    }
+    delim = detect_delimiter(tl);
+    split(tl, delim, fields);
+    if (all_numeric(fields)) {
+      if (last_comment_line == 0)
+        throw InputError("the first row holds numbers, not column names; add a header row (e.g. 'time (s),force (N)')",
+                         source_location(path, lines.line_no()));
+      // Klipper style: the header is the comment right above the data.
+      delim = detect_delimiter(last_comment);
+      split(trim(last_comment), delim, fields);
+      t.header_line = last_comment_line;
+      pending_first_row = tl;
+      pending_line = lines.line_no();
+    } else {
+      t.header_line = lines.line_no();
+    }
+    header_found = true;
+    break;
+  }
+  if (!header_found) throw InputError("no header row and no data (only comments or blank lines)", path);
+
+  std::vector<std::pair<std::string, std::string>> header;
+  for (const auto& f : fields) {
+    header.push_back(split_name_unit(f.text));
+    t.header.push_back(header.back().first);
+  }
+  const std::size_t ncols = header.size();
+
+  // Which file column feeds each requested column.
+  std::vector<std::size_t> source;
+  std::vector<std::string> wanted = options.columns;
+  if (wanted.empty()) wanted = t.header;
+  if (!options.time_column.empty()) {
+    bool listed = false;
+    for (const auto& w : wanted) listed = listed || iequals(w, options.time_column);
+    if (!listed) wanted.insert(wanted.begin(), options.time_column);
+  }
+  for (const auto& w : wanted) {
+    const auto [wname, wunit] = split_name_unit(w);
+    std::size_t found = ncols;
+    for (std::size_t i = 0; i < ncols; ++i)
+      if (iequals(header[i].first, wname)) {
+        found = i;
+        break;
+      }
+    if (found == ncols)
+      throw InputError(fmt::format("no column '{}'; the file has: {}", wname, join_names(t.header)),
+                       source_location(path, t.header_line));
+    source.push_back(found);
+    t.columns.push_back({header[found].first, header[found].second, {}});
+  }
+  std::size_t time_index = t.columns.size();
+  if (!options.time_column.empty())
+    for (std::size_t k = 0; k < t.columns.size(); ++k)
+      if (iequals(t.columns[k].name, split_name_unit(options.time_column).first)) time_index = k;
+
+  const std::size_t estimate = text.size() / std::max<std::size_t>(16, ncols * 8);
+  for (auto& c : t.columns) c.values.reserve(estimate);
+
+  std::size_t prev_time_line = 0;
+  auto consume = [&](std::string_view row, std::size_t line_no) {
+    split(row, delim, fields);
+    if (fields.size() != ncols)
+      throw InputError(fmt::format("{} fields, but the header has {} columns", fields.size(), ncols),
+                       source_location(path, line_no));
+    for (std::size_t k = 0; k < source.size(); ++k) {
+      const Field& f = fields[source[k]];
+      double v;
+      if (f.text.empty())
+        throw InputError(fmt::format("empty field in column '{}'", t.columns[k].name),
+                         source_location(path, line_no, f.column));
+      if (!parse_number(f.text, v))
+        throw InputError(fmt::format("'{}' in column '{}' is not a number", f.text.substr(0, 40), t.columns[k].name),
+                         source_location(path, line_no, f.column));
+      if (std::isnan(v))
+        throw InputError(fmt::format("NaN in column '{}'", t.columns[k].name), source_location(path, line_no, f.column));
+      if (std::isinf(v))
+        throw InputError(fmt::format("infinite value in column '{}'", t.columns[k].name),
+                         source_location(path, line_no, f.column));
+      auto& vals = t.columns[k].values;
+      if (k == time_index && !vals.empty()) {
+        if (v == vals.back())
+          throw InputError(fmt::format("duplicate time stamp {} in column '{}' (also on line {})", v,
+                                       t.columns[k].name, prev_time_line),
+                           source_location(path, line_no, f.column));
+        if (v < vals.back())
+          throw InputError(fmt::format("time goes backwards in column '{}': {} after {} (line {})", t.columns[k].name, v,
+                                       vals.back(), prev_time_line),
+                           source_location(path, line_no, f.column));
+      }
+      vals.push_back(v);
+    }
+    prev_time_line = line_no;
+    ++t.rows;
+  };
+
+  if (!pending_first_row.empty()) consume(pending_first_row, pending_line);
+  while (lines.next(line)) {
+    const std::string_view tl = trim(line);
+    if (tl.empty() || tl.front() == '#') continue;
+    consume(tl, lines.line_no());
+  }
+  if (t.rows == 0)
+    throw InputError("a header but no data rows", source_location(path, t.header_line));
+  return t;
+}
+
+}  // namespace tunekit::ident

@@ -1,0 +1,69 @@
+// CLI conventions: help lists every subcommand, exit codes, deterministic JSON envelope.
+#include <catch2/catch.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+#include "tunekit/cli/envelope.hpp"
+
+using tunekit::test::run_cli;
+using tunekit::test::run_exe;
+using tunekit::test::write_scratch;
+
+TEST_CASE("tunekit --help lists every subcommand with one line each") {
+  const auto r = run_cli({"--help"});
+  CHECK(r.code == 0);
+  for (const char* name : {"step", "freq", "rheo", "nozzle", "resonance", "shaper", "linewidth", "run", "export",
+                           "calibrate", "report", "batch", "ports", "inspect"}) {
+    INFO(name);
+    CHECK(r.out.find(std::string("\n  ") + name + " ") != std::string::npos);
+  }
+}
+
+TEST_CASE("usage errors exit 2, no subcommand exits 2") {
+  CHECK(run_cli({}).code == 2);
+  CHECK(run_cli({"no-such-command"}).code == 2);
+  CHECK(run_cli({"inspect"}).code == 2);
+}
+
+TEST_CASE("the executable separates results (stdout) from errors (stderr) and sets its exit status") {
+  const auto bad = run_exe("inspect /nonexistent.csv");
+  CHECK(bad.code == 2);
+  CHECK(bad.out.empty());
+  CHECK(bad.err.rfind("tunekit: error: /nonexistent.csv: cannot open", 0) == 0);
+  const auto path = write_scratch("exe_ok.csv", "time,y\n0,1\n1,2\n");
+  const auto ok = run_exe("inspect " + path + " --json");
+  CHECK(ok.code == 0);
+  CHECK(nlohmann::json::parse(ok.out)["results"]["rows"] == 2);
+}
+
+TEST_CASE("the JSON envelope carries schema, tool, command, options and input hashes, byte-identical across runs") {
+  const auto path = write_scratch("envelope.csv", "time,y\n0,1\n1,2\n");
+  const auto a = run_cli({"inspect", path, "--time", "time", "--json"});
+  const auto b = run_cli({"inspect", path, "--time", "time", "--json"});
+  REQUIRE(a.code == 0);
+  CHECK(a.out == b.out);
+  const auto j = nlohmann::json::parse(a.out);
+  CHECK(j["schema_version"] == 1);
+  CHECK(j["tool"]["name"] == "tunekit");
+  CHECK(j["command"] == "inspect");
+  CHECK(j["options"]["time_column"] == "time");
+  CHECK(j["inputs"][0]["path"] == path);
+  CHECK(j["inputs"][0]["sha256"] == tunekit::cli::sha256_hex("time,y\n0,1\n1,2\n"));
+  CHECK(j["results"]["time"]["sample_rate_hz"] == 1.0);
+}
+
+TEST_CASE("SHA-256 matches the FIPS 180-2 test vector") {
+  CHECK(tunekit::cli::sha256_hex("abc") == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+}
+
+TEST_CASE("the output option writes the same envelope to a file") {
+  const auto path = write_scratch("out_src.csv", "time,y\n0,1\n1,2\n");
+  const auto out = tunekit::test::scratch_dir("output") + "/r.json";
+  const auto r = run_cli({"inspect", path, "--json", "-o", out});
+  REQUIRE(r.code == 0);
+  std::ifstream f(out);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  CHECK(ss.str() == r.out);
+}

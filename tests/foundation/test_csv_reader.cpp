@@ -1,0 +1,99 @@
+// The time-series CSV reader: every malformed input gives exit code 2 and one line naming
+// file, line (and column where there is one) and the problem.
+#include <catch2/catch.hpp>
+
+#include <string>
+
+#include "test_support.hpp"
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
+
+using tunekit::test::run_cli;
+using tunekit::test::write_scratch;
+
+namespace {
+
+// Runs `tunekit inspect FILE --time time` and checks code and the single error line.
+void expect_rejected(const std::string& name, const std::string& content, const std::string& location_suffix,
+                     const std::string& problem) {
+  const std::string path = write_scratch(name, content);
+  const auto r = run_cli({"inspect", path, "--time", "time"});
+  INFO("stderr: " << r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err == "tunekit: error: " + path + location_suffix + ": " + problem + "\n");
+}
+
+}  // namespace
+
+TEST_CASE("a well-formed CSV with units in names is read by column name") {
+  const auto t = tunekit::ident::parse_csv("# a log\ntime (s),force [N], speed\n0,1.5,2\n0.1,+2.5,3e-1\n", "mem.csv",
+                                           {{"Force", "time"}, "time"});
+  REQUIRE(t.rows == 2);
+  REQUIRE(t.columns.size() == 2);
+  CHECK(t.column("force").unit == "N");
+  CHECK(t.column("time").unit == "s");
+  CHECK(t.column("force").values[1] == 2.5);
+  CHECK(t.header == std::vector<std::string>{"time", "force", "speed"});
+  CHECK(t.header_line == 2);
+}
+
+TEST_CASE("Klipper raw accelerometer files take their header from the comment line") {
+  const auto t = tunekit::ident::parse_csv("#time,accel_x,accel_y,accel_z\n100.0,1,2,3\n100.0003125,4,5,6\n",
+                                           "raw.csv", {{"accel_x", "accel_z"}, "time"});
+  CHECK(t.rows == 2);
+  CHECK(t.column("accel_z").values == std::vector<double>{3, 6});
+  CHECK(t.column("time").values[1] == Approx(100.0003125));
+}
+
+TEST_CASE("CRLF line endings and a UTF-8 byte-order mark are accepted") {
+  const auto path = write_scratch("crlf_bom.csv", "\xEF\xBB\xBFtime,y\r\n0,1\r\n1,2\r\n");
+  const auto r = run_cli({"inspect", path, "--time", "time", "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("\"rows\": 2") != std::string::npos);
+  CHECK(r.out.find("\"header\": [\n      \"time\",\n      \"y\"") != std::string::npos);
+}
+
+TEST_CASE("a one-column file is read, and a missing second column is named") {
+  const auto path = write_scratch("one_col.csv", "time\n0\n1\n2\n");
+  CHECK(run_cli({"inspect", path, "--time", "time"}).code == 0);
+  const auto r = run_cli({"inspect", path, "--time", "time", "--columns", "force"});
+  CHECK(r.code == 2);
+  CHECK(r.err == "tunekit: error: " + path + ":1: no column 'force'; the file has: time\n");
+}
+
+TEST_CASE("malformed CSV inputs are refused with file, line, column and reason") {
+  expect_rejected("empty.csv", "", "", "empty file: no header and no data");
+  expect_rejected("blank.csv", "\n\n  \n", "", "empty file: no header and no data");
+  expect_rejected("header_only.csv", "time,y\n", ":1", "a header but no data rows");
+  expect_rejected("ragged.csv", "time,y\n0,1\n1,2,3\n", ":3", "3 fields, but the header has 2 columns");
+  expect_rejected("text.csv", "time,y\n0,1\n1,abc\n", ":3:3", "'abc' in column 'y' is not a number");
+  expect_rejected("nan.csv", "time,y\n0,1\n1,NaN\n", ":3:3", "NaN in column 'y'");
+  expect_rejected("inf.csv", "time,y\n0,1\n1,-inf\n", ":3:3", "infinite value in column 'y'");
+  expect_rejected("backwards.csv", "time,y\n0,1\n2,2\n1,3\n", ":4:1", "time goes backwards in column 'time': 1 after 2 (line 3)");
+  expect_rejected("duplicate.csv", "time,y\n0,1\n1,2\n1,3\n", ":4:1", "duplicate time stamp 1 in column 'time' (also on line 3)");
+  expect_rejected("empty_field.csv", "time,y\n0,\n", ":2:3", "empty field in column 'y'");
+  expect_rejected("numbers_first.csv", "0,1\n1,2\n", ":1", "the first row holds numbers, not column names; add a header row (e.g. 'time (s),force (N)')");
+}
+
+TEST_CASE("a 10 MB line without a newline is refused without reading it as data") {
+  const std::string huge(10u << 20, '7');
+  expect_rejected("huge_line.csv", huge, ":1",
+                  "line is 10485760 bytes long, more than the 1048576 allowed (a file without line breaks, or not a CSV file?)");
+}
+
+TEST_CASE("a file that does not exist is an input error") {
+  const auto r = run_cli({"inspect", "/nonexistent/dir/log.csv"});
+  CHECK(r.code == 2);
+  CHECK(r.err.find("tunekit: error: /nonexistent/dir/log.csv") == 0);
+}
+
+TEST_CASE("the reader throws InputError with the location for library users") {
+  try {
+    tunekit::ident::parse_csv("t,y\n0,1\n1,x\n", "lib.csv", {{"y"}, "t"});
+    FAIL("no exception");
+  } catch (const tunekit::InputError& e) {
+    CHECK(e.code() == tunekit::ExitCode::bad_input);
+    CHECK(e.location() == "lib.csv:3:3");
+  }
+}

@@ -1,0 +1,86 @@
+// The least-squares core: intervals, diagnostics, identifiability and convergence errors.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/fitting/least_squares.hpp"
+#include "tunekit/fitting/stats.hpp"
+
+using namespace tunekit::fitting;
+
+TEST_CASE("a straight line fit gives the textbook standard errors") {
+  // y = a + b x; closed-form OLS standard errors to compare with.
+  std::vector<double> x, y;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0, 0.1);
+  for (int i = 0; i < 50; ++i) {
+    x.push_back(i * 0.2);
+    y.push_back(1.0 + 2.0 * x.back() + noise(rng));
+  }
+  LsqProblem p;
+  p.params = {{"a", "1", 0}, {"b", "1", 0}};
+  p.num_residuals = 50;
+  p.observed = y;
+  p.residuals = [&](const double* q, double* r) {
+    for (int i = 0; i < 50; ++i) r[i] = q[0] + q[1] * x[i] - y[i];
+    return true;
+  };
+  const auto fit = solve_least_squares("line", p);
+  double sx = 0, sxx = 0;
+  for (double v : x) sx += v, sxx += v * v;
+  const double n = 50, sxx_c = sxx - sx * sx / n;
+  const double s2 = fit.diagnostics.rss / (n - 2);
+  CHECK(fit.param("b").std_error == Approx(std::sqrt(s2 / sxx_c)).epsilon(1e-6));
+  CHECK(fit.param("a").std_error == Approx(std::sqrt(s2 * (1 / n + sx * sx / n / n / sxx_c))).epsilon(1e-6));
+  CHECK(fit.diagnostics.converged);
+  CHECK(fit.diagnostics.r2 > 0.99);
+  CHECK(fit.param("b").ci95_lo < 2.0);
+  CHECK(fit.param("b").ci95_hi > 2.0);
+  CHECK(fit.diagnostics.whiteness_p > 0.01);
+}
+
+TEST_CASE("a parameter the data cannot see is reported as not identifiable") {
+  // y = a * exp(b x) * c: a and c are not separately identifiable.
+  std::vector<double> x{0, 1, 2, 3, 4, 5}, y;
+  for (double v : x) y.push_back(2 * std::exp(-0.5 * v));
+  LsqProblem p;
+  p.params = {{"a", "1", 1}, {"b", "1", -0.1}, {"c", "1", 1}};
+  p.num_residuals = 6;
+  p.residuals = [&](const double* q, double* r) {
+    for (int i = 0; i < 6; ++i) r[i] = q[0] * q[2] * std::exp(q[1] * x[i]) - y[i];
+    return true;
+  };
+  CHECK_THROWS_AS(solve_least_squares("degenerate", p), tunekit::FitError);
+}
+
+TEST_CASE("fewer data points than parameters is bad input") {
+  LsqProblem p;
+  p.params = {{"a", "1", 1}, {"b", "1", 1}};
+  p.num_residuals = 1;
+  p.residuals = [](const double* q, double* r) { r[0] = q[0] + q[1]; return true; };
+  CHECK_THROWS_AS(solve_least_squares("tiny", p), tunekit::InputError);
+}
+
+TEST_CASE("hitting the iteration limit is a fit failure, not a number") {
+  std::vector<double> x{1, 2, 3, 4, 5, 6, 7, 8};
+  LsqProblem p;
+  p.params = {{"a", "1", 100}, {"b", "1", -3}};
+  p.num_residuals = 8;
+  p.residuals = [&](const double* q, double* r) {
+    for (int i = 0; i < 8; ++i) r[i] = q[0] * std::exp(-q[1] * x[i]) - 5 * std::exp(-0.3 * x[i]);
+    return true;
+  };
+  LsqOptions o;
+  o.max_iterations = 1;
+  CHECK_THROWS_AS(solve_least_squares("slow", p, o), tunekit::FitError);
+}
+
+TEST_CASE("Student-t multipliers and the Ljung-Box test") {
+  CHECK(t_multiplier(0.95, 10) == Approx(2.228139).epsilon(1e-6));
+  CHECK(t_multiplier(0.95, 1e9) == Approx(1.959964).epsilon(1e-6));
+  std::vector<double> alternating;
+  for (int i = 0; i < 100; ++i) alternating.push_back(i % 2 ? 1.0 : -1.0);
+  CHECK(ljung_box(alternating, 10).p_value < 1e-6);
+}

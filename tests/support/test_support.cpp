@@ -1,0 +1,65 @@
+#include "test_support.hpp"
+
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "tunekit/cli/commands.hpp"
+
+namespace tunekit::test {
+
+CliRun run_cli(const std::vector<std::string>& args) {
+  std::ostringstream out, err;
+  CliRun r;
+  r.code = tunekit::cli::run_cli(args, out, err);
+  r.out = out.str();
+  r.err = err.str();
+  return r;
+}
+
+CliRun run_exe(const std::string& args) {
+  // One stderr file per process and call: ctest runs test cases in parallel processes.
+  static int calls = 0;
+  const auto dir = std::filesystem::path(TUNEKIT_TEST_TMP_DIR) / "run_exe";
+  std::filesystem::create_directories(dir);
+  const std::string err_path = (dir / ("stderr." + std::to_string(::getpid()) + "." + std::to_string(++calls))).string();
+  const std::string cmd = std::string(TUNEKIT_EXE) + " " + args + " 2>" + err_path;
+  CliRun r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) throw std::runtime_error("popen failed");
+  std::array<char, 4096> buf{};
+  std::size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream f(err_path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  r.err = ss.str();
+  return r;
+}
+
+std::string dataset(const std::string& relative) { return std::string(TUNEKIT_DATASETS_DIR) + "/" + relative; }
+
+std::string scratch_dir(const std::string& name) {
+  const auto dir = std::filesystem::path(TUNEKIT_TEST_TMP_DIR) / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+std::string write_scratch(const std::string& name, const std::string& content) {
+  const auto dir = std::filesystem::path(TUNEKIT_TEST_TMP_DIR) / "files";
+  std::filesystem::create_directories(dir);
+  const auto path = dir / name;
+  std::ofstream f(path, std::ios::binary);
+  f << content;
+  return path.string();
+}
+
+}  // namespace tunekit::test
