@@ -1,0 +1,115 @@
+#pragma once
+// Input shapers for a lightly damped mode (Singer & Seering 1990; Singhose, Seering & Singer
+// 1994/1997; Singhose 2009 review): impulse sequences as functions of the design frequency and
+// damping ratio, their residual vibration, the smoothing they add to a toolpath, the maximum
+// acceleration that keeps that smoothing acceptable, and the automatic choice of a shaper
+// against a measured vibration spectrum.
+//
+// Shaper names are spelled as Klipper spells them: "zv", "mzv", "zvd", "ei", "2hump_ei",
+// "3hump_ei", plus "zvdd". Amplitudes are normalized to sum to 1, times start at 0 and are in
+// seconds.
+//
+// Residual vibration (Singer-Seering): after the last impulse at T_n, the shaped response of a
+// mode (natural frequency w, damping z, w_d = w sqrt(1 - z^2)) relative to the unshaped one is
+//   V(w, z) = exp(-z w T_n) |sum_i A_i exp(z w T_i) exp(j w_d T_i)|.
+//
+// Smoothing (the path error a shaper adds; the measure Klipper publishes): with the shaper's
+// centroid t_s = sum A_i T_i, at acceleration a and square-corner velocity v_sc,
+//   s90  = sqrt(2) sum_{T_i >= t_s} A_i (v_sc + a/2 (T_i - t_s)) (T_i - t_s)
+//   s180 = sum_i A_i a/2 (T_i - t_s)^2,   smoothing = max(s90, s180)   [mm].
+// Both are linear in a, so the acceleration giving a target smoothing is solved exactly.
+
+#include <span>
+#include <string>
+#include <vector>
+
+namespace tunekit::ident {
+
+enum class ShaperType { zv, mzv, zvd, zvdd, ei, two_hump_ei, three_hump_ei };
+
+/// "zv", "mzv", "zvd", "zvdd", "ei", "2hump_ei", "3hump_ei".
+std::string to_string(ShaperType t);
+/// Parses a Klipper shaper name (case-insensitive); InputError for an unknown name.
+ShaperType parse_shaper_type(const std::string& name);
+/// Every shaper type, shortest first.
+const std::vector<ShaperType>& all_shaper_types();
+
+struct ShaperInfo {
+  ShaperType type;
+  double min_freq_hz;        ///< lowest frequency tried in automatic selection (Klipper's values)
+  double max_damping_ratio;  ///< validity limit of the design formulas
+};
+const ShaperInfo& shaper_info(ShaperType t);
+
+/// Klipper's tolerated remaining vibration of the EI family (1/20 = 5 %).
+inline constexpr double kDefaultVibrationTolerance = 0.05;
+
+struct Shaper {
+  ShaperType type = ShaperType::zv;
+  double freq_hz = 0;
+  double damping_ratio = 0;
+  std::vector<double> amplitudes;  ///< sum to 1
+  std::vector<double> times_s;     ///< increasing, first is 0
+
+  double duration_s() const { return times_s.empty() ? 0.0 : times_s.back(); }
+};
+
+/// Impulse sequence of `type` for a mode at `freq_hz` with `damping_ratio` (0 <= z < 1).
+/// ZV, ZVD, ZVDD and MZV are exact closed forms; EI, 2-hump EI and 3-hump EI use Singhose's
+/// published polynomial fits in the damping ratio (exact closed forms at zero damping).
+/// Throws InputError for a non-positive frequency or a damping ratio outside [0, 1).
+Shaper design_shaper(ShaperType type, double freq_hz, double damping_ratio,
+                     double vibration_tolerance = kDefaultVibrationTolerance);
+
+/// V(f, z): remaining vibration fraction of a mode at `freq_hz` with `damping_ratio`.
+double residual_vibration(const Shaper& s, double freq_hz, double damping_ratio);
+/// V over a frequency grid; uses a recurrence when the grid is uniform.
+std::vector<double> residual_vibration_curve(const Shaper& s, std::span<const double> freq_hz, double damping_ratio);
+
+/// Smoothing in mm at acceleration `accel_mm_s2` and square-corner velocity `scv_mm_s`.
+double shaper_smoothing(const Shaper& s, double accel_mm_s2 = 5000.0, double scv_mm_s = 5.0);
+/// Largest acceleration (mm/s^2) whose smoothing stays <= target_smoothing_mm (0 if none).
+double shaper_max_accel(const Shaper& s, double scv_mm_s = 5.0, double target_smoothing_mm = 0.12);
+
+/// One shaper evaluated against a spectrum.
+struct ShaperCandidate {
+  ShaperType type = ShaperType::zv;
+  double freq_hz = 0;
+  double damping_ratio = 0;   ///< the damping ratio the shaper is designed for (firmware setting)
+  double vibrations = 0;      ///< remaining vibration fraction, worst over the test damping ratios
+  double smoothing_mm = 0;    ///< at 5000 mm/s^2 and the square-corner velocity
+  double max_accel_mm_s2 = 0;
+  double score = 0;           ///< smoothing * (v^1.5 + 0.2 v + 0.01)
+};
+
+struct ShaperSelectionOptions {
+  std::vector<ShaperType> types = {ShaperType::zv, ShaperType::mzv, ShaperType::ei, ShaperType::two_hump_ei,
+                                   ShaperType::three_hump_ei};
+  double design_damping_ratio = 0.1;                 ///< damping the shapers are designed for
+  std::vector<double> test_damping_ratios = {0.075, 0.1, 0.15};  ///< vibrations are pessimized over these
+  double scv_mm_s = 5.0;                             ///< square-corner velocity
+  double max_smoothing_mm = 0;                       ///< 0: no limit
+  double max_freq_hz = 200.0;                        ///< PSD bins above are ignored
+  double max_shaper_freq_hz = 200.0;                 ///< highest shaper frequency tried
+  double freq_step_hz = 0.2;
+  double vibration_reduction = 20.0;                 ///< PSD below max/this is not counted
+  double target_smoothing_mm = 0.12;                 ///< for max_accel
+};
+
+struct ShaperSelection {
+  ShaperCandidate recommended;
+  std::vector<ShaperCandidate> candidates;  ///< the chosen frequency of each type, in option order
+};
+
+/// Remaining-vibration fraction of a shaper against a PSD (Klipper's measure): the share of
+/// the PSD above max(psd)/vibration_reduction that survives the shaper, for one damping ratio.
+double remaining_vibrations(const Shaper& s, std::span<const double> freq_hz, std::span<const double> psd,
+                            double test_damping_ratio, double vibration_reduction = 20.0);
+
+/// Tries every type at frequencies from its minimum to max_shaper_freq_hz in freq_step_hz
+/// steps and picks one by Klipper's published procedure (see docs/resonance.md). `psd` is
+/// the vibration PSD (Klipper's normalized psd_xyz). InputError for an empty/flat spectrum.
+ShaperSelection select_shaper(std::span<const double> freq_hz, std::span<const double> psd,
+                              const ShaperSelectionOptions& options);
+
+}  // namespace tunekit::ident

@@ -1,0 +1,482 @@
+#include "tunekit/ident/resonance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
+
+namespace tunekit::ident {
+namespace {
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// Linear interpolation of (t, x) onto t0 + i dt.
+std::vector<double> resample(const std::vector<double>& t, const std::vector<double>& x, double t0, double dt,
+                             std::size_t n) {
+  std::vector<double> y(n);
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ti = t0 + dt * static_cast<double>(i);
+    while (j + 2 < t.size() && t[j + 1] < ti) ++j;
+    const double u = std::clamp((ti - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0);
+    y[i] = x[j] + u * (x[j + 1] - x[j]);
+  }
+  return y;
+}
+
+std::vector<double> interp(const std::vector<double>& fx, const std::vector<double>& x, const std::vector<double>& fq) {
+  std::vector<double> y(fq.size());
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < fq.size(); ++i) {
+    if (fq[i] <= fx.front()) { y[i] = x.front(); continue; }
+    if (fq[i] >= fx.back()) { y[i] = x.back(); continue; }
+    while (j + 2 < fx.size() && fx[j + 1] < fq[i]) ++j;
+    const double u = (fq[i] - fx[j]) / (fx[j + 1] - fx[j]);
+    y[i] = x[j] + u * (x[j + 1] - x[j]);
+  }
+  return y;
+}
+
+ClipReport detect_clipping(const std::string& name, const std::vector<double>& v, double full_scale) {
+  ClipReport c;
+  c.channel = name;
+  if (v.empty()) return c;
+  if (full_scale > 0) {
+    c.limit_mm_s2 = full_scale;
+    for (double x : v)
+      if (std::abs(x) >= 0.999 * full_scale) ++c.samples;
+    return c;
+  }
+  // Without a declared range: the extremes are clipped when the signal sits flat on them
+  // (three or more consecutive samples, or eight or more samples in all).
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  for (const double ext : {*lo, *hi}) {
+    if (ext == 0) continue;
+    std::size_t count = 0, run = 0, longest = 0;
+    for (double x : v) {
+      if (x == ext) {
+        ++count;
+        longest = std::max(longest, ++run);
+      } else {
+        run = 0;
+      }
+    }
+    if (longest >= 3 || count >= 8) {
+      c.samples += count;
+      c.limit_mm_s2 = std::max(c.limit_mm_s2, std::abs(ext));
+    }
+  }
+  return c;
+}
+
+double kernel_enbw_hz(WindowType w, double beta, std::size_t n, double fs) {
+  const auto win = make_window(w, n, beta);
+  double s1 = 0, s2 = 0;
+  for (double x : win) {
+    s1 += x;
+    s2 += x * x;
+  }
+  return fs * s2 / (s1 * s1);
+}
+
+}  // namespace
+
+char axis_from_filename(const std::string& path) {
+  std::string base = path;
+  if (const auto slash = base.find_last_of('/'); slash != std::string::npos) base = base.substr(slash + 1);
+  base = lower(base);
+  for (const char* prefix : {"raw_data_", "calibration_data_", "resonances_"}) {
+    const auto pos = base.find(prefix);
+    if (pos == std::string::npos) continue;
+    const std::size_t a = pos + std::char_traits<char>::length(prefix);
+    if (a < base.size() && (base[a] == 'x' || base[a] == 'y' || base[a] == 'z') &&
+        (a + 1 == base.size() || base[a + 1] == '_' || base[a + 1] == '.' || base[a + 1] == '-'))
+      return base[a];
+  }
+  return 0;
+}
+
+bool is_calibration_data(std::string_view bytes) {
+  const auto nl = bytes.find('\n');
+  const std::string first = lower(std::string(bytes.substr(0, nl == std::string_view::npos ? bytes.size() : nl)));
+  return first.rfind("freq", 0) == 0 && first.find("psd_xyz") != std::string::npos;
+}
+
+AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& o) {
+  AccelRecord r;
+  r.path = path;
+  r.axis = o.axis != 0 ? o.axis : axis_from_filename(path);
+  std::vector<std::string> accel = o.accel_columns;
+  if (accel.empty()) accel = {"accel_x", "accel_y", "accel_z"};
+  CsvOptions co;
+  co.time_column = o.time_column;
+  co.columns.push_back(o.time_column);
+  for (const auto& a : accel) co.columns.push_back(a);
+  if (!o.excitation_column.empty()) co.columns.push_back(o.excitation_column);
+  CsvTable table = parse_csv(bytes, path, co);
+  for (const auto& w : table.warnings) r.warnings.push_back(w);
+  if (table.rows < 16)
+    throw InputError(fmt::format("{} rows of accelerometer data; far too few for a spectrum", table.rows), path);
+
+  std::vector<double> t = std::move(table.columns[0].values);
+  const std::size_t n = t.size();
+  std::vector<double> dt(n - 1);
+  for (std::size_t i = 1; i < n; ++i) dt[i - 1] = t[i] - t[i - 1];
+  const double med = median_of(dt);
+  auto& s = r.sampling;
+  s.samples = n;
+  s.duration_s = t.back() - t.front();
+  double sum = 0, sum2 = 0;
+  std::size_t regular = 0;
+  double gap_at = 0;
+  for (std::size_t i = 0; i < dt.size(); ++i) {
+    if (dt[i] > 1.5 * med) {
+      ++s.gaps;
+      s.missing_samples += static_cast<std::size_t>(std::llround(dt[i] / med)) - 1;
+      if (dt[i] > s.max_gap_s) {
+        s.max_gap_s = dt[i];
+        gap_at = t[i];
+      }
+      continue;
+    }
+    sum += dt[i];
+    sum2 += dt[i] * dt[i];
+    ++regular;
+  }
+  const double mean_dt = regular > 0 ? sum / static_cast<double>(regular) : med;
+  s.jitter = regular > 1 ? std::sqrt(std::max(0.0, sum2 / static_cast<double>(regular) - mean_dt * mean_dt)) / med : 0;
+  if (s.max_gap_s > o.max_gap_s || static_cast<double>(s.missing_samples) > o.max_missing_fraction * static_cast<double>(n))
+    throw InputError(fmt::format("irregular sampling: {} gap(s) in the time column, {} samples missing ({:.2f} %), the "
+                                 "longest {:.4g} s after t = {:.6g} s (limits: {:.3g} s, {:.2g} %); record again or cut "
+                                 "the file at the gap",
+                                 s.gaps, s.missing_samples, 100.0 * static_cast<double>(s.missing_samples) / static_cast<double>(n),
+                                 s.max_gap_s, gap_at, o.max_gap_s, 100 * o.max_missing_fraction),
+                     path);
+  const bool need_resample = s.gaps > 0 || s.jitter > o.max_jitter;
+  if (need_resample) {
+    s.sample_rate_hz = 1.0 / med;
+    const std::size_t m = static_cast<std::size_t>(std::floor(s.duration_s / med)) + 1;
+    s.resampled = true;
+    r.warnings.push_back(fmt::format("{}: irregular sampling ({} gap(s), {} missing samples, interval jitter {:.2g} %); "
+                                     "resampled linearly at {:.6g} Hz",
+                                     path, s.gaps, s.missing_samples, 100 * s.jitter, s.sample_rate_hz));
+    for (std::size_t c = 1; c < table.columns.size(); ++c)
+      table.columns[c].values = resample(t, table.columns[c].values, t.front(), med, m);
+  } else {
+    s.sample_rate_hz = static_cast<double>(n - 1) / s.duration_s;
+  }
+
+  for (std::size_t c = 1; c <= accel.size(); ++c) {
+    r.channel_names.push_back(lower(table.columns[c].name));
+    r.channels.push_back(std::move(table.columns[c].values));
+  }
+  if (!o.excitation_column.empty()) {
+    r.excitation_name = table.columns.back().name;
+    r.excitation = std::move(table.columns.back().values);
+  }
+
+  bool any_signal = false;
+  for (const auto& ch : r.channels) {
+    const auto [lo, hi] = std::minmax_element(ch.begin(), ch.end());
+    if (*hi > *lo) any_signal = true;
+  }
+  if (!any_signal)
+    throw InputError("the acceleration columns are all zero (or constant): the accelerometer recorded nothing; check "
+                     "its wiring and that the test moved the axis",
+                     path);
+  if (!r.excitation.empty()) {
+    const auto [lo, hi] = std::minmax_element(r.excitation.begin(), r.excitation.end());
+    if (!(*hi > *lo)) throw InputError("the excitation column '" + o.excitation_column + "' is constant", path);
+  }
+
+  for (std::size_t c = 0; c < r.channels.size(); ++c) {
+    auto rep = detect_clipping(r.channel_names[c], r.channels[c], o.full_scale_mm_s2);
+    if (rep.samples == 0) continue;
+    const double frac = static_cast<double>(rep.samples) / static_cast<double>(r.channels[c].size());
+    if (frac > o.max_clipped_fraction)
+      throw InputError(fmt::format("{} is clipped: {} samples ({:.2f} %) sit at the sensor limit +-{:.6g} mm/s^2 (limit "
+                                   "{:.2g} %); the resonance peaks would be cut off. Lower accel_per_hz or raise the "
+                                   "accelerometer's range",
+                                   rep.channel, rep.samples, 100 * frac, rep.limit_mm_s2, 100 * o.max_clipped_fraction),
+                       path);
+    r.warnings.push_back(fmt::format("{}: {} has {} clipped samples ({:.3f} %) at +-{:.6g} mm/s^2; the strongest peak may "
+                                     "be underestimated",
+                                     path, rep.channel, rep.samples, 100 * frac, rep.limit_mm_s2));
+    r.clipping.push_back(rep);
+  }
+  return r;
+}
+
+AxisSpectrum record_spectrum(const AccelRecord& r, const WelchOptions& welch) {
+  AxisSpectrum s;
+  s.axis = r.axis;
+  s.files = {r.path};
+  s.welch = welch;
+  s.sample_rate_hz = r.sampling.sample_rate_hz;
+  s.warnings = r.warnings;
+  for (std::size_t c = 0; c < r.channels.size(); ++c) {
+    Spectrum sp;
+    try {
+      sp = welch_psd(r.channels[c], r.sampling.sample_rate_hz, welch);
+    } catch (const InputError& e) {
+      throw InputError(e.message(), r.path);
+    }
+    if (s.freq_hz.empty()) {
+      s.freq_hz = sp.freq_hz;
+      s.psd_sum.assign(sp.psd.size(), 0.0);
+      s.segments = sp.segments;
+      s.segment_length = sp.segment_length;
+    }
+    for (std::size_t b = 0; b < sp.psd.size(); ++b) s.psd_sum[b] += sp.psd[b];
+    const auto& name = r.channel_names[c];
+    if (name == "accel_x") s.psd_x = std::move(sp.psd);
+    else if (name == "accel_y") s.psd_y = std::move(sp.psd);
+    else if (name == "accel_z") s.psd_z = std::move(sp.psd);
+  }
+  if (!r.excitation.empty()) {
+    // Output: the channel of the tested axis when known, else the first channel.
+    std::size_t out = 0;
+    for (std::size_t c = 0; c < r.channel_names.size(); ++c)
+      if (r.axis != 0 && r.channel_names[c] == std::string("accel_") + r.axis) out = c;
+    s.frf = h1_estimate(r.excitation, r.channels[out], r.sampling.sample_rate_hz, welch);
+  }
+  return s;
+}
+
+AxisSpectrum load_calibration_data(const std::string& path, std::string_view bytes, char axis) {
+  CsvOptions co;
+  co.columns = {"freq", "psd_x", "psd_y", "psd_z", "psd_xyz"};
+  co.time_column = "freq";
+  const CsvTable t = parse_csv(bytes, path, co);
+  AxisSpectrum s;
+  s.axis = axis != 0 ? axis : axis_from_filename(path);
+  s.files = {path};
+  s.freq_hz = t.columns[0].values;
+  s.psd_x = t.columns[1].values;
+  s.psd_y = t.columns[2].values;
+  s.psd_z = t.columns[3].values;
+  s.psd_sum = t.columns[4].values;
+  s.klipper_normalized = true;
+  s.welch = klipper_welch_options();
+  for (const auto& w : t.warnings) s.warnings.push_back(w);
+  if (s.freq_hz.size() < 8) throw InputError("calibration data has fewer than 8 frequencies", path);
+  for (double v : s.psd_sum)
+    if (v < 0) throw InputError("calibration data has a negative PSD value", path);
+  if (!(*std::max_element(s.psd_sum.begin(), s.psd_sum.end()) > 0))
+    throw InputError("calibration data: psd_xyz is all zero; the accelerometer recorded nothing", path);
+  // Klipper writes the bins rounded to 0.1 Hz: the bin width is the median step.
+  std::vector<double> df(s.freq_hz.size() - 1);
+  for (std::size_t i = 1; i < s.freq_hz.size(); ++i) df[i - 1] = s.freq_hz[i] - s.freq_hz[i - 1];
+  const double bin = median_of(df);
+  s.segment_length = 2048;  // Klipper's window at ~3.2 kHz
+  s.sample_rate_hz = bin * static_cast<double>(s.segment_length);
+  return s;
+}
+
+AxisSpectrum average_spectra(const std::vector<AxisSpectrum>& v) {
+  if (v.empty()) throw InputError("no spectra to average");
+  AxisSpectrum a = v.front();
+  if (v.size() == 1) return a;
+  auto add = [&](std::vector<double>& acc, const std::vector<double>& fx, const std::vector<double>& x) {
+    if (acc.empty() || x.empty()) return;
+    const auto y = interp(fx, x, a.freq_hz);
+    for (std::size_t i = 0; i < acc.size(); ++i) acc[i] += y[i];
+  };
+  for (std::size_t k = 1; k < v.size(); ++k) {
+    if (v[k].klipper_normalized != a.klipper_normalized)
+      throw InputError("cannot average raw accelerometer data with Klipper calibration data for the same axis",
+                       v[k].files.front());
+    add(a.psd_sum, v[k].freq_hz, v[k].psd_sum);
+    add(a.psd_x, v[k].freq_hz, v[k].psd_x);
+    add(a.psd_y, v[k].freq_hz, v[k].psd_y);
+    add(a.psd_z, v[k].freq_hz, v[k].psd_z);
+    a.files.insert(a.files.end(), v[k].files.begin(), v[k].files.end());
+    a.warnings.insert(a.warnings.end(), v[k].warnings.begin(), v[k].warnings.end());
+    a.segments += v[k].segments;
+    if (!a.frf && v[k].frf) a.frf = v[k].frf;
+  }
+  const double inv = 1.0 / static_cast<double>(v.size());
+  for (auto* p : {&a.psd_sum, &a.psd_x, &a.psd_y, &a.psd_z})
+    for (double& x : *p) x *= inv;
+  return a;
+}
+
+std::vector<double> klipper_normalize(const std::vector<double>& f, const std::vector<double>& psd) {
+  std::vector<double> out(psd.size());
+  for (std::size_t i = 0; i < psd.size(); ++i) {
+    double v = psd[i] / (f[i] + 0.1);
+    if (f[i] < 10.0) v *= std::exp(1.0 - std::pow(10.0 / (f[i] + 0.1), 2));
+    out[i] = v;
+  }
+  return out;
+}
+
+fitting::SpectralKernel welch_kernel(WindowType window, double beta, std::size_t n, double fs, int per_bin,
+                                     int half_width) {
+  const auto w = make_window(window, n, beta);
+  fitting::SpectralKernel k;
+  const double N = static_cast<double>(n);
+  double total = 0;
+  for (int j = -half_width * per_bin; j <= half_width * per_bin; ++j) {
+    const double u = static_cast<double>(j) / per_bin;  // offset in bins
+    const std::complex<double> rot = std::polar(1.0, -2 * std::numbers::pi * u / N);
+    std::complex<double> e(1, 0), sum(0, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      sum += w[i] * e;
+      e *= rot;
+    }
+    const double val = std::norm(sum);
+    k.offsets_hz.push_back(u * fs / N);
+    k.weights.push_back(val);
+    total += val;
+  }
+  for (double& x : k.weights) x /= total;
+  return k;
+}
+
+std::vector<Peak> find_peaks(const std::vector<double>& f, const std::vector<double>& psd, double p, double lo,
+                             double hi, double threshold, int max_modes, double enbw_hz) {
+  std::vector<std::size_t> idx;
+  for (std::size_t b = 0; b < f.size(); ++b)
+    if (f[b] >= lo && f[b] <= hi && f[b] > 0) idx.push_back(b);
+  std::vector<Peak> peaks;
+  if (idx.size() < 5) return peaks;
+  std::vector<double> fw(idx.size()), w(idx.size());
+  for (std::size_t i = 0; i < idx.size(); ++i) {
+    fw[i] = f[idx[i]];
+    w[i] = psd[idx[i]] / std::pow(fw[i], p);
+  }
+  const double wmax = *std::max_element(w.begin(), w.end());
+  if (!(wmax > 0)) return peaks;
+  struct Cand {
+    std::size_t i;
+    double h;
+  };
+  std::vector<Cand> cands;
+  for (std::size_t i = 1; i + 1 < w.size(); ++i)
+    if (w[i] > w[i - 1] && w[i] >= w[i + 1] && w[i] >= threshold * wmax) cands.push_back({i, w[i]});
+  std::sort(cands.begin(), cands.end(), [](const Cand& a, const Cand& b) { return a.h > b.h; });
+  for (const auto& c : cands) {
+    if (static_cast<int>(peaks.size()) >= max_modes) break;
+    // Prominence: on each side, the lowest value before a higher peak (or the band edge).
+    double lmin = c.h, rmin = c.h;
+    double lcross = -1, rcross = -1;
+    for (std::size_t j = c.i; j-- > 0;) {
+      if (w[j] > c.h) break;
+      lmin = std::min(lmin, w[j]);
+      if (lcross < 0 && w[j] < 0.5 * c.h)
+        lcross = fw[j] + (0.5 * c.h - w[j]) / (w[j + 1] - w[j]) * (fw[j + 1] - fw[j]);
+    }
+    for (std::size_t j = c.i + 1; j < w.size(); ++j) {
+      if (w[j] > c.h) break;
+      rmin = std::min(rmin, w[j]);
+      if (rcross < 0 && w[j] < 0.5 * c.h)
+        rcross = fw[j - 1] + (w[j - 1] - 0.5 * c.h) / (w[j - 1] - w[j]) * (fw[j] - fw[j - 1]);
+    }
+    if (std::max(lmin, rmin) > 0.7 * c.h) continue;  // a ripple on a slope, not a mode
+    // Peak position by a parabola through the log of three bins.
+    const double y0 = std::log(w[c.i - 1]), y1 = std::log(w[c.i]), y2 = std::log(w[c.i + 1]);
+    const double den = y0 - 2 * y1 + y2;
+    const double shift = den < 0 ? std::clamp(0.5 * (y0 - y2) / den, -0.5, 0.5) : 0.0;
+    const double fp = fw[c.i] + shift * (fw[c.i + 1] - fw[c.i - 1]) * 0.5;
+    double bw;
+    if (lcross > 0 && rcross > 0) bw = rcross - lcross;
+    else if (lcross > 0) bw = 2 * (fp - lcross);
+    else if (rcross > 0) bw = 2 * (rcross - fp);
+    else bw = 2 * (fw[c.i + 1] - fw[c.i - 1]);
+    // Leakage widens the measured peak by about the window's noise bandwidth.
+    bw = std::sqrt(std::max(bw * bw - enbw_hz * enbw_hz, 0.25 * bw * bw));
+    peaks.push_back({fp, c.h, std::clamp(bw / (2 * fp), 0.003, 0.3)});
+  }
+  return peaks;
+}
+
+AxisModes identify_modes(const AxisSpectrum& s, const ResonanceOptions& o) {
+  AxisModes out;
+  const double p = o.excitation_exponent >= 0 ? o.excitation_exponent : (s.klipper_normalized ? 1.0 : 2.0);
+  const auto kernel = welch_kernel(s.welch.window, s.welch.kaiser_beta, s.segment_length, s.sample_rate_hz);
+  const double enbw = kernel_enbw_hz(s.welch.window, s.welch.kaiser_beta, s.segment_length, s.sample_rate_hz);
+  out.peaks = find_peaks(s.freq_hz, s.psd_sum, p, o.fit_min_hz, o.fit_max_hz, o.peak_threshold, o.max_modes, enbw);
+  if (out.peaks.empty()) {
+    out.warnings.push_back(fmt::format("axis {}: no resonance peak between {} and {} Hz", s.axis == 0 ? '?' : s.axis,
+                                       o.fit_min_hz, o.fit_max_hz));
+    return out;
+  }
+  std::vector<Peak> peaks = out.peaks;  // strongest first
+  fitting::ModalFitOptions mo;
+  mo.excitation_exponent = p;
+  std::string psd_error;
+  while (!peaks.empty()) {
+    double fmin = peaks.front().freq_hz, fmax = fmin;
+    for (const auto& pk : peaks) {
+      fmin = std::min(fmin, pk.freq_hz);
+      fmax = std::max(fmax, pk.freq_hz);
+    }
+    out.band_lo_hz = std::max(o.fit_min_hz, 0.6 * fmin);
+    out.band_hi_hz = std::min(o.fit_max_hz, 1.35 * fmax);
+    std::vector<double> fb, pb;
+    std::vector<std::complex<double>> hb;
+    std::vector<double> cb;
+    for (std::size_t b = 0; b < s.freq_hz.size(); ++b)
+      if (s.freq_hz[b] >= out.band_lo_hz && s.freq_hz[b] <= out.band_hi_hz) {
+        fb.push_back(s.freq_hz[b]);
+        pb.push_back(s.psd_sum[b]);
+        if (s.frf) {
+          hb.push_back(s.frf->h[b]);
+          cb.push_back(s.frf->coherence[b]);
+        }
+      }
+    std::vector<fitting::ModeStart> starts;
+    for (const auto& pk : peaks) starts.push_back({pk.freq_hz, pk.half_power_zeta, 1.0});
+    try {
+      if (s.frf && o.use_frf) {
+        try {
+          out.fit = fitting::fit_modal_frf(fb, hb, cb, o.min_coherence, starts, kernel, mo);
+          out.method = "frf";
+        } catch (const Error& e) {
+          out.warnings.push_back(std::string("frequency-response fit failed, using the PSD: ") + e.message());
+        }
+      }
+      if (!out.fit) {
+        out.fit = fitting::fit_modal_psd(fb, pb, starts, kernel, mo);
+        out.method = "psd";
+      }
+      break;
+    } catch (const FitError& e) {
+      psd_error = e.message();
+      if (peaks.size() == 1) throw;
+      out.warnings.push_back(fmt::format("modal fit with {} modes failed ({}); dropped the weakest peak at {:.1f} Hz",
+                                         peaks.size(), e.message(), peaks.back().freq_hz));
+      peaks.pop_back();
+    }
+  }
+  out.modes = out.fit->modes;
+  for (const auto& w : out.fit->warnings) out.warnings.push_back(w);
+  // The dominant mode: nearest to the strongest peak.
+  double best = 1e300;
+  for (std::size_t k = 0; k < out.modes.size(); ++k) {
+    const double d = std::abs(out.modes[k].freq_hz - out.peaks.front().freq_hz);
+    if (d < best) {
+      best = d;
+      out.dominant = static_cast<int>(k);
+    }
+  }
+  return out;
+}
+
+}  // namespace tunekit::ident
