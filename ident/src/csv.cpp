@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -48,9 +49,36 @@ void split(std::string_view line, char delim, std::vector<Field>& out) {
   }
 }
 
+// Exact powers of ten representable in a double.
+constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                             1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+
+// Clinger's fast path for plain decimals such as "-1234.567890" (what loggers write): the
+// digits form an integer M < 10^15 < 2^53 and the value is M / 10^k with k <= 15; both are
+// exact doubles, so one IEEE division gives the correctly rounded result. Anything else
+// (exponents, more digits, inf/nan) returns false and goes to std::from_chars.
+bool parse_plain_decimal(std::string_view s, double& v) {
+  const char* p = s.data();
+  const char* end = p + s.size();
+  const bool neg = p != end && *p == '-';
+  if (neg) ++p;
+  std::uint64_t m = 0;
+  int digits = 0, frac_digits = 0;
+  for (; p != end && static_cast<unsigned>(*p - '0') <= 9; ++p, ++digits) m = m * 10 + static_cast<unsigned>(*p - '0');
+  if (p != end && *p == '.') {
+    for (++p; p != end && static_cast<unsigned>(*p - '0') <= 9; ++p, ++digits, ++frac_digits)
+      m = m * 10 + static_cast<unsigned>(*p - '0');
+  }
+  if (p != end || digits == 0 || digits > 15) return false;
+  v = static_cast<double>(m) / kPow10[frac_digits];
+  if (neg) v = -v;
+  return true;
+}
+
 bool parse_number(std::string_view s, double& v) {
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
   if (s.empty()) return false;
+  if (parse_plain_decimal(s, v)) return true;
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   return ec == std::errc() && ptr == s.data() + s.size();
 }
@@ -241,35 +269,57 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
   for (auto& c : t.columns) c.values.reserve(estimate);
 
   std::size_t prev_time_line = 0;
+  // Hot loop: one pass over each row, parsing only the selected fields, no allocation.
+  std::vector<char> wanted_field(ncols, 0);
+  for (std::size_t src : source) wanted_field[src] = 1;
+  std::vector<double> row_values(ncols, 0.0);
+  std::vector<std::size_t> row_columns(ncols, 0);
   auto consume = [&](std::string_view row, std::size_t line_no) {
-    split(row, delim, fields);
-    if (fields.size() != ncols)
-      throw InputError(fmt::format("{} fields, but the header has {} columns", fields.size(), ncols),
-                       source_location(path, line_no));
+    const char* const row_begin = row.data();
+    const char* p = row_begin;
+    const char* const end = p + row.size();
+    std::size_t nf = 0;
+    while (true) {
+      const char* q = static_cast<const char*>(std::memchr(p, delim, static_cast<std::size_t>(end - p)));
+      if (q == nullptr) q = end;
+      if (nf < ncols && wanted_field[nf]) {
+        const char* b = p;
+        while (b < q && (*b == ' ' || *b == '\t')) ++b;
+        const char* e = q;
+        while (e > b && (e[-1] == ' ' || e[-1] == '\t')) --e;
+        const std::string_view text(b, static_cast<std::size_t>(e - b));
+        const std::size_t col = static_cast<std::size_t>(b - row_begin) + 1;
+        double v;
+        if (text.empty())
+          throw InputError(fmt::format("empty field in column '{}'", t.header[nf]), source_location(path, line_no, col));
+        if (!parse_number(text, v))
+          throw InputError(fmt::format("'{}' in column '{}' is not a number", text.substr(0, 40), t.header[nf]),
+                           source_location(path, line_no, col));
+        if (std::isnan(v))
+          throw InputError(fmt::format("NaN in column '{}'", t.header[nf]), source_location(path, line_no, col));
+        if (std::isinf(v))
+          throw InputError(fmt::format("infinite value in column '{}'", t.header[nf]), source_location(path, line_no, col));
+        row_values[nf] = v;
+        row_columns[nf] = col;
+      }
+      ++nf;
+      if (q == end) break;
+      p = q + 1;
+    }
+    if (nf != ncols)
+      throw InputError(fmt::format("{} fields, but the header has {} columns", nf, ncols), source_location(path, line_no));
     for (std::size_t k = 0; k < source.size(); ++k) {
-      const Field& f = fields[source[k]];
-      double v;
-      if (f.text.empty())
-        throw InputError(fmt::format("empty field in column '{}'", t.columns[k].name),
-                         source_location(path, line_no, f.column));
-      if (!parse_number(f.text, v))
-        throw InputError(fmt::format("'{}' in column '{}' is not a number", f.text.substr(0, 40), t.columns[k].name),
-                         source_location(path, line_no, f.column));
-      if (std::isnan(v))
-        throw InputError(fmt::format("NaN in column '{}'", t.columns[k].name), source_location(path, line_no, f.column));
-      if (std::isinf(v))
-        throw InputError(fmt::format("infinite value in column '{}'", t.columns[k].name),
-                         source_location(path, line_no, f.column));
+      const double v = row_values[source[k]];
       auto& vals = t.columns[k].values;
       if (k == time_index && !vals.empty()) {
         if (v == vals.back())
           throw InputError(fmt::format("duplicate time stamp {} in column '{}' (also on line {})", v,
                                        t.columns[k].name, prev_time_line),
-                           source_location(path, line_no, f.column));
+                           source_location(path, line_no, row_columns[source[k]]));
         if (v < vals.back())
           throw InputError(fmt::format("time goes backwards in column '{}': {} after {} (line {})", t.columns[k].name, v,
                                        vals.back(), prev_time_line),
-                           source_location(path, line_no, f.column));
+                           source_location(path, line_no, row_columns[source[k]]));
       }
       vals.push_back(v);
     }
@@ -279,6 +329,10 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
 
   if (!pending_first_row.empty()) consume(pending_first_row, pending_line);
   while (lines.next(line)) {
+    if (!line.empty() && line.front() != ' ' && line.front() != '\t' && line.front() != '#') {
+      consume(line, lines.line_no());
+      continue;
+    }
     const std::string_view tl = trim(line);
     if (tl.empty() || tl.front() == '#') continue;
     consume(tl, lines.line_no());

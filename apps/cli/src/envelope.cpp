@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <openssl/evp.h>
 
+#include "tunekit/cli/requirements.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
@@ -49,7 +50,17 @@ nlohmann::json Envelope::to_json() const {
 std::string Envelope::dump() const { return to_json().dump(2) + "\n"; }
 
 int emit(const Envelope& env, const OutputOptions& o, CliContext& ctx) {
-  const std::string text = env.dump();
+  // Requirements are checked before anything is written so that the JSON records them.
+  std::vector<RequirementOutcome> outcomes;
+  for (const auto& expr : o.require) outcomes.push_back(evaluate_requirement(parse_requirement(expr), env.results()));
+  nlohmann::json j = env.to_json();
+  if (!outcomes.empty()) {
+    nlohmann::json reqs = nlohmann::json::array();
+    for (const auto& r : outcomes)
+      reqs.push_back({{"expression", r.requirement.expression}, {"path", r.resolved_path}, {"value", r.value}, {"met", r.met}});
+    j["requirements"] = reqs;
+  }
+  const std::string text = j.dump(2) + "\n";
   if (o.json) ctx.out << text;
   if (!o.output_path.empty()) {
     std::ofstream f(o.output_path, std::ios::binary);
@@ -58,7 +69,14 @@ int emit(const Envelope& env, const OutputOptions& o, CliContext& ctx) {
     if (!f.flush()) throw InputError("cannot write the results file", o.output_path);
   }
   for (const auto& w : env.warnings()) ctx.err << "tunekit: warning: " << w << "\n";
-  return 0;
+  int code = 0;
+  for (const auto& r : outcomes) {
+    if (r.met) continue;
+    ctx.err << fmt::format("tunekit: requirement not met: {} ({} = {:.6g})\n", r.requirement.expression, r.resolved_path,
+                           r.value);
+    code = static_cast<int>(ExitCode::fit_failed);
+  }
+  return code;
 }
 
 }  // namespace tunekit::cli

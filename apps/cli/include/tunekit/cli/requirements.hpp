@@ -1,0 +1,39 @@
+#pragma once
+// CI thresholds: `--require EXPR` on every analysis command, e.g. `tau_s<0.6` or
+// `x.freq_hz>=35`. An expression is PATH OP NUMBER with OP one of < <= > >= == !=.
+// PATH names a number in the command's `results` by the last keys of its path, so
+// `tau_s` finds `results.pooled.params.tau_s.value` (an object with a `value` stands for
+// its value) and `x.freq_hz` finds `results.axes.x...freq_hz`. Segments must appear in
+// order; among the matches the one with the fewest path segments wins, and a tie between
+// different numbers is an error listing the candidates. Full paths with indices
+// (`axes.x.modes[1].freq_hz`) are accepted too.
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace tunekit::cli {
+
+struct Requirement {
+  std::string expression;  ///< as written
+  std::string path;        ///< as written (left-hand side)
+  std::string op;
+  double threshold = 0;
+};
+
+struct RequirementOutcome {
+  Requirement requirement;
+  std::string resolved_path;  ///< the full path in results that was compared
+  double value = 0;
+  bool met = false;
+};
+
+/// Parses "PATH OP NUMBER"; throws InputError (exit 2) when malformed.
+Requirement parse_requirement(const std::string& expression);
+
+/// Evaluates a requirement against a `results` object; throws InputError (exit 2) when the
+/// path matches nothing or is ambiguous.
+RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::json& results);
+
+}  // namespace tunekit::cli

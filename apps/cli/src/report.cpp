@@ -1,0 +1,277 @@
+#include "tunekit/cli/report.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <openssl/evp.h>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/protocols/atomic_file.hpp"
+
+namespace tunekit::cli {
+namespace {
+
+std::vector<double> vec(const nlohmann::json& d, const char* key) {
+  if (!d.contains(key) || !d[key].is_array()) return {};
+  std::vector<double> v;
+  v.reserve(d[key].size());
+  for (const auto& x : d[key]) v.push_back(x.is_number() ? x.get<double>() : std::nan(""));
+  return v;
+}
+
+std::string base64(std::string_view bytes) {
+  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
+  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
+                                reinterpret_cast<const unsigned char*>(bytes.data()), static_cast<int>(bytes.size()));
+  out.resize(static_cast<std::size_t>(n));
+  return out;
+}
+
+std::string html_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+}  // namespace
+
+std::string display_number(double v) {
+  if (!std::isfinite(v)) return "n/a";
+  return fmt::format("{:.4g}", v);
+}
+
+const nlohmann::json* json_at(const nlohmann::json& root, const std::string& path) {
+  const nlohmann::json* cur = &root;
+  std::size_t i = 0;
+  while (i < path.size()) {
+    if (path[i] == '.') {
+      ++i;
+      continue;
+    }
+    if (path[i] == '[') {
+      const std::size_t close = path.find(']', i);
+      if (close == std::string::npos || !cur->is_array()) return nullptr;
+      const std::size_t idx = std::stoul(path.substr(i + 1, close - i - 1));
+      if (idx >= cur->size()) return nullptr;
+      cur = &(*cur)[idx];
+      i = close + 1;
+      continue;
+    }
+    std::size_t end = path.find_first_of(".[", i);
+    if (end == std::string::npos) end = path.size();
+    const std::string key = path.substr(i, end - i);
+    if (!cur->is_object() || !cur->contains(key)) return nullptr;
+    cur = &(*cur)[key];
+    i = end;
+  }
+  return cur;
+}
+
+Figure step_figure(const nlohmann::json& d) {
+  Figure f;
+  f.title = "Liquefier step response";
+  Panel in{"Input", "", d.value("u_label", std::string("input")), false, false, {}, 0.6};
+  in.series.push_back({"commanded", vec(d, "t_s"), vec(d, "u"), Series::Style::line, 8});
+  Panel out{"Output and fit", "", d.value("y_label", std::string("output")), false, false, {}, 1.4};
+  out.series.push_back({"measured", vec(d, "t_s"), vec(d, "y"), Series::Style::line, 1});
+  out.series.push_back({"fitted model", vec(d, "t_s"), vec(d, "y_fit"), Series::Style::dashed, 2});
+  const auto y = vec(d, "y"), yf = vec(d, "y_fit");
+  std::vector<double> res(std::min(y.size(), yf.size()));
+  for (std::size_t i = 0; i < res.size(); ++i) res[i] = y[i] - yf[i];
+  Panel rp{"Residuals", "time (s)", "measured - fit", false, false, {}, 0.8};
+  rp.series.push_back({"", vec(d, "t_s"), res, Series::Style::line, 3});
+  f.panels = {in, out, rp};
+  f.height_px = 760;
+  return f;
+}
+
+Figure bode_figure(const nlohmann::json& d) {
+  Figure f;
+  f.title = "Liquefier frequency response";
+  const auto fr = vec(d, "freq_hz");
+  Panel mag{"Magnitude", "", "|H| (dB)", true, false, {}, 1.2};
+  mag.series.push_back({"measured", fr, vec(d, "mag_db"), Series::Style::points, 1});
+  Panel ph{"Phase", "", "phase (deg)", true, false, {}, 1.0};
+  ph.series.push_back({"measured", fr, vec(d, "phase_deg"), Series::Style::points, 1});
+  if (d.contains("model")) {
+    const auto& m = d["model"];
+    mag.series.push_back({"fitted model", vec(m, "freq_hz"), vec(m, "mag_db"), Series::Style::line, 2});
+    ph.series.push_back({"fitted model", vec(m, "freq_hz"), vec(m, "phase_deg"), Series::Style::line, 2});
+  }
+  f.panels = {mag, ph};
+  if (d.contains("coherence")) {
+    Panel coh{"Coherence", "frequency (Hz)", "coherence", true, false, {}, 0.7};
+    coh.series.push_back({"", fr, vec(d, "coherence"), Series::Style::line, 3});
+    f.panels.push_back(coh);
+  } else {
+    f.panels.back().xlabel = "frequency (Hz)";
+  }
+  f.height_px = 760;
+  return f;
+}
+
+Figure psd_figure(const nlohmann::json& d, const std::string& axis) {
+  Figure f;
+  f.title = fmt::format("Axis {}: power spectral density, modes and input shapers", axis);
+  const auto fr = vec(d, "freq_hz");
+  const auto psd = vec(d, "psd");
+  Panel p{"Acceleration PSD", "", "PSD ((mm/s^2)^2/Hz)", false, false, {}, 1.3};
+  p.series.push_back({"measured", fr, psd, Series::Style::line, 1});
+  double peak = 0;
+  for (double v : psd) peak = std::isfinite(v) ? std::max(peak, v) : peak;
+  int color = 2;
+  if (d.contains("modes"))
+    for (const auto& m : d["modes"]) {
+      const double fm = m.value("freq_hz", 0.0);
+      p.series.push_back({fmt::format("mode {:.1f} Hz", fm), {fm, fm}, {0.0, peak}, Series::Style::dashed, color});
+      color = color % 8 + 1;
+    }
+  Panel s{"Shaper response (remaining vibration)", "frequency (Hz)", "fraction", false, false, {}, 1.0};
+  int sc = 2;
+  if (d.contains("shapers"))
+    for (const auto& sh : d["shapers"]) {
+      s.series.push_back({sh.value("type", std::string("?")), vec(sh, "freq_hz"), vec(sh, "response"), Series::Style::line, sc});
+      sc = sc % 8 + 1;
+    }
+  f.panels = {p};
+  if (!s.series.empty()) f.panels.push_back(s);
+  else f.panels.back().xlabel = "frequency (Hz)";
+  f.height_px = 720;
+  return f;
+}
+
+Figure viscosity_figure(const nlohmann::json& d) {
+  Figure f;
+  f.title = "Melt viscosity";
+  Panel p{"Viscosity against shear rate", "shear rate (1/s)", "viscosity (Pa s)", true, true, {}, 1.0};
+  int c = 1;
+  if (d.contains("series"))
+    for (const auto& s : d["series"]) {
+      const double tk = s.value("temperature_K", 0.0);
+      p.series.push_back({fmt::format("{:.0f} K data", tk), vec(s, "shear_rate_1_s"), vec(s, "viscosity_Pa_s"),
+                          Series::Style::points, c});
+      p.series.push_back({"", vec(s, "fit_shear_rate_1_s"), vec(s, "fit_viscosity_Pa_s"), Series::Style::line, c});
+      c = c % 8 + 1;
+    }
+  f.panels = {p};
+  return f;
+}
+
+Figure linewidth_figure(const nlohmann::json& d) {
+  Figure f;
+  f.title = "Line width profile";
+  Panel p{"Width along the line", "arc length (mm)", "width (mm)", false, false, {}, 1.0};
+  p.series.push_back({"measured", vec(d, "s_mm"), vec(d, "width_mm"), Series::Style::line, 1});
+  if (d.contains("setpoint_mm"))
+    p.series.push_back({"set point", vec(d, "s_mm"), vec(d, "setpoint_mm"), Series::Style::dashed, 2});
+  f.panels = {p};
+  f.height_px = 420;
+  return f;
+}
+
+std::vector<ReportImage> render_report_plots(const std::string& run_dir, const nlohmann::json& pd) {
+  std::vector<ReportImage> images;
+  const std::string dir = run_dir + "/plots";
+  auto add = [&](const std::string& id, const std::string& caption, const Figure& fig) {
+    const std::string path = dir + "/" + id + ".png";
+    render_png(fig, path);
+    images.push_back({id, caption, path});
+  };
+  if (pd.contains("step")) add("step", "Step response: data, fitted model and residuals", step_figure(pd["step"]));
+  if (pd.contains("bode")) add("bode", "Bode plot with the fitted model and the coherence", bode_figure(pd["bode"]));
+  for (const char* axis : {"x", "y", "z"}) {
+    const std::string key = std::string("psd_") + axis;
+    if (pd.contains(key))
+      add(key, fmt::format("Axis {}: PSD with identified modes and the candidate shapers' responses", axis),
+          psd_figure(pd[key], axis));
+  }
+  if (pd.contains("viscosity")) add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(pd["viscosity"]));
+  if (pd.contains("linewidth")) add("linewidth", "Line-width profile", linewidth_figure(pd["linewidth"]));
+  return images;
+}
+
+std::string build_report_html(const nlohmann::json& env, const std::vector<ReportImage>& images) {
+  const auto& results = env.contains("results") ? env["results"] : env;
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    << "<title>tunekit calibration report</title>\n<style>\n"
+    << "body{font-family:DejaVu Sans,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1000px;color:#222}\n"
+    << "h1{font-size:1.6em}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}\n"
+    << "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:.3em .7em;text-align:left}\n"
+    << "td.num{text-align:right;font-variant-numeric:tabular-nums}th{background:#f2f2f2}\n"
+    << "figure{margin:1em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:.9em}\n"
+    << "pre{background:#f7f7f7;border:1px solid #ddd;padding:.8em;overflow-x:auto;font-size:.85em}\n"
+    << ".warn{color:#a15c00}\n</style>\n</head>\n<body>\n";
+  h << "<h1>tunekit calibration report</h1>\n";
+  const std::string machine = results.value("machine", std::string());
+  if (!machine.empty()) h << "<p>Machine: " << html_escape(machine) << "</p>\n";
+  if (env.contains("tool"))
+    h << "<p>tunekit " << html_escape(env["tool"].value("version", std::string("?"))) << ", command <code>"
+      << html_escape(env.value("command", std::string("?"))) << "</code></p>\n";
+
+  h << "<h2>Summary</h2>\n<table id=\"summary\">\n<tr><th>quantity</th><th>value</th><th>unit</th></tr>\n";
+  if (results.contains("summary"))
+    for (const auto& row : results["summary"]) {
+      const std::string path = row.value("path", std::string());
+      const auto* v = json_at(results, path);
+      if (v == nullptr || !v->is_number()) continue;
+      h << "<tr><td>" << html_escape(row.value("label", path)) << "</td><td class=\"num\" data-path=\""
+        << html_escape(path) << "\" data-value=\"" << v->dump() << "\">" << display_number(v->get<double>())
+        << "</td><td>" << html_escape(row.value("unit", std::string())) << "</td></tr>\n";
+    }
+  h << "</table>\n";
+
+  if (env.contains("warnings") && !env["warnings"].empty()) {
+    h << "<h2>Warnings</h2>\n<ul>\n";
+    for (const auto& w : env["warnings"]) h << "<li class=\"warn\">" << html_escape(w.get<std::string>()) << "</li>\n";
+    h << "</ul>\n";
+  }
+  if (!images.empty()) h << "<h2>Plots</h2>\n";
+  for (const auto& img : images) {
+    const std::string bytes = ident::read_file_bytes(img.png_path);
+    h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html_escape(img.caption) << "\" src=\"data:image/png;base64,"
+      << base64(bytes) << "\"><figcaption>" << html_escape(img.caption) << "</figcaption></figure>\n";
+  }
+  if (results.contains("config_diff") && results["config_diff"].is_string() &&
+      !results["config_diff"].get<std::string>().empty())
+    h << "<h2>Configuration changes</h2>\n<pre>" << html_escape(results["config_diff"].get<std::string>()) << "</pre>\n";
+  h << "</body>\n</html>\n";
+  return h.str();
+}
+
+std::string write_report(const std::string& run_dir) {
+  const std::string results_path = run_dir + "/results.json";
+  nlohmann::json env;
+  try {
+    env = nlohmann::json::parse(ident::read_file_bytes(results_path));
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(std::string("not valid JSON: ") + e.what(), results_path);
+  }
+  nlohmann::json pd = nlohmann::json::object();
+  const std::string pd_path = run_dir + "/plotdata.json";
+  if (std::filesystem::exists(pd_path)) {
+    try {
+      pd = nlohmann::json::parse(ident::read_file_bytes(pd_path));
+    } catch (const nlohmann::json::parse_error& e) {
+      throw InputError(std::string("not valid JSON: ") + e.what(), pd_path);
+    }
+  }
+  const auto images = render_report_plots(run_dir, pd);
+  const std::string out = run_dir + "/report.html";
+  protocols::write_file_atomic(out, build_report_html(env, images));
+  return out;
+}
+
+}  // namespace tunekit::cli

@@ -1,0 +1,133 @@
+#include "tunekit/cli/requirements.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+
+namespace tunekit::cli {
+namespace {
+
+struct Leaf {
+  std::vector<std::string> segments;  // "modes[0]" is one segment "modes" followed by "[0]"
+  std::string path;
+  double value;
+};
+
+void flatten(const nlohmann::json& j, std::vector<std::string>& segs, std::vector<Leaf>& out) {
+  if (j.is_number()) {
+    std::string path;
+    for (const auto& s : segs) path += (s.front() == '[' || path.empty()) ? s : "." + s;
+    auto effective = segs;
+    if (!effective.empty() && effective.back() == "value") effective.pop_back();
+    out.push_back({effective, path, j.get<double>()});
+    return;
+  }
+  if (j.is_object()) {
+    for (const auto& [k, v] : j.items()) {
+      segs.push_back(k);
+      flatten(v, segs, out);
+      segs.pop_back();
+    }
+  } else if (j.is_array()) {
+    for (std::size_t i = 0; i < j.size(); ++i) {
+      segs.push_back("[" + std::to_string(i) + "]");
+      flatten(j[i], segs, out);
+      segs.pop_back();
+    }
+  }
+}
+
+std::vector<std::string> split_path(const std::string& p) {
+  std::vector<std::string> segs;
+  std::string cur;
+  for (char c : p) {
+    if (c == '.') {
+      if (!cur.empty()) segs.push_back(cur);
+      cur.clear();
+    } else if (c == '[') {
+      if (!cur.empty()) segs.push_back(cur);
+      cur = "[";
+    } else if (c == ']') {
+      segs.push_back(cur + "]");
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) segs.push_back(cur);
+  return segs;
+}
+
+// The wanted segments appear in order in `have`, and the last ones coincide.
+bool matches(const std::vector<std::string>& want, const std::vector<std::string>& have) {
+  if (want.empty() || have.empty() || want.back() != have.back()) return false;
+  std::size_t i = 0;
+  for (const auto& h : have)
+    if (i < want.size() && h == want[i]) ++i;
+  return i == want.size();
+}
+
+}  // namespace
+
+Requirement parse_requirement(const std::string& expr) {
+  static const char* ops[] = {"<=", ">=", "==", "!=", "<", ">"};
+  for (const char* op : ops) {
+    const auto pos = expr.find(op);
+    if (pos == std::string::npos) continue;
+    Requirement r;
+    r.expression = expr;
+    r.op = op;
+    auto trim = [](std::string s) {
+      s.erase(0, s.find_first_not_of(" \t"));
+      s.erase(s.find_last_not_of(" \t") + 1);
+      return s;
+    };
+    r.path = trim(expr.substr(0, pos));
+    const std::string rhs = trim(expr.substr(pos + std::string(op).size()));
+    const auto [ptr, ec] = std::from_chars(rhs.data(), rhs.data() + rhs.size(), r.threshold);
+    if (r.path.empty() || rhs.empty() || ec != std::errc() || ptr != rhs.data() + rhs.size() ||
+        !std::isfinite(r.threshold))
+      throw InputError(fmt::format("--require '{}': expected PATH OP NUMBER, e.g. 'tau_s<0.6'", expr));
+    return r;
+  }
+  throw InputError(fmt::format("--require '{}': no comparison (<, <=, >, >=, ==, !=)", expr));
+}
+
+RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::json& results) {
+  std::vector<Leaf> leaves;
+  std::vector<std::string> segs;
+  flatten(results, segs, leaves);
+  const auto want = split_path(r.path);
+  std::vector<const Leaf*> found;
+  for (const auto& l : leaves)
+    if (matches(want, l.segments)) found.push_back(&l);
+  if (found.empty()) throw InputError(fmt::format("--require '{}': no number named '{}' in the results", r.expression, r.path));
+  std::stable_sort(found.begin(), found.end(),
+                   [](const Leaf* a, const Leaf* b) { return a->segments.size() < b->segments.size(); });
+  std::vector<std::string> ties;
+  for (const Leaf* l : found)
+    if (l->segments.size() == found.front()->segments.size() && l->value != found.front()->value) ties.push_back(l->path);
+  if (!ties.empty()) {
+    std::string list = found.front()->path;
+    for (const auto& t : ties) list += ", " + t;
+    throw InputError(fmt::format("--require '{}': '{}' is ambiguous ({}); give a longer path", r.expression, r.path, list));
+  }
+  RequirementOutcome o;
+  o.requirement = r;
+  o.resolved_path = found.front()->path;
+  o.value = found.front()->value;
+  const double v = o.value, t = r.threshold;
+  if (r.op == "<") o.met = v < t;
+  else if (r.op == "<=") o.met = v <= t;
+  else if (r.op == ">") o.met = v > t;
+  else if (r.op == ">=") o.met = v >= t;
+  else if (r.op == "==") o.met = v == t;
+  else o.met = v != t;
+  return o;
+}
+
+}  // namespace tunekit::cli
