@@ -12,7 +12,7 @@
 
 namespace tunekit::cli {
 namespace {
-int g_exit_code = 0;
+thread_local int g_exit_code = 0;  // per thread: batch runs commands in parallel
 }
 
 void set_exit_code(int code) { g_exit_code = code; }

@@ -1,10 +1,186 @@
-// tunekit batch: Analyze every dataset in a folder and write one summary.
+// tunekit batch: analyze every dataset in a folder in parallel and write one summary. Each
+// file is recognized by its columns and analyzed by the command a user would run on it:
+//   accel_x/accel_y/accel_z (Klipper raw) or freq,psd_x (Klipper calibration data) -> shaper
+//   feed + force (a liquefier step test as tunekit run writes it)                   -> step
+//   shear_rate + viscosity (rheometer data)                                          -> rheo
+// Other files are listed as skipped with the reason. --require applies to every dataset.
+#include <algorithm>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include <fmt/format.h>
+
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/envelope.hpp"
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
 
 namespace tunekit::cli {
+namespace {
 
-void register_batch(CLI::App& app, CliContext& /*ctx*/) {
-  add_reserved_command(app, "batch", "Analyze every dataset in a folder and write one summary");
+namespace fs = std::filesystem;
+
+struct BatchArgs {
+  std::string dir;
+  unsigned jobs = 0;
+  OutputOptions output;
+};
+
+struct Job {
+  std::string file;
+  std::vector<std::string> args;  // empty: skipped
+  std::string skip_reason;
+  int code = 0;
+  std::string err;
+  nlohmann::json results;
+};
+
+// The column names of a CSV file, from its first 64 KiB, with units stripped, lower case.
+std::vector<std::string> sniff_columns(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::string head(65536, '\0');
+  f.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(f.gcount()));
+  std::istringstream in(head);
+  std::string line, last_comment;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    if (line[0] == '#') {
+      last_comment = line.substr(1);
+      continue;
+    }
+    const bool numeric = line.find_first_not_of("0123456789+-.eE, \t;") == std::string::npos;
+    const std::string header = numeric ? last_comment : line;
+    std::vector<std::string> cols;
+    std::string field;
+    std::istringstream hs(header);
+    while (std::getline(hs, field, ',')) {
+      auto name = ident::split_name_unit(field).first;
+      std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      cols.push_back(name);
+    }
+    return cols;
+  }
+  return {};
+}
+
+Job plan_job(const std::string& path) {
+  Job j;
+  j.file = path;
+  const auto ext = fs::path(path).extension().string();
+  if (ext != ".csv" && ext != ".CSV") {
+    j.skip_reason = "not a CSV file";
+    return j;
+  }
+  const auto cols = sniff_columns(path);
+  auto has = [&](const char* c) { return std::find(cols.begin(), cols.end(), c) != cols.end(); };
+  if (has("accel_x") || has("accel_y") || has("accel_z") || (has("freq") && has("psd_x"))) {
+    j.args = {"shaper", path};
+  } else if (has("feed") && has("force") && has("time")) {
+    j.args = {"step", path, "--time", "time", "--input", "feed", "--output", "force"};
+  } else if (has("shear_rate") && has("viscosity")) {
+    j.args = {"rheo", path};
+  } else {
+    j.skip_reason = "no known columns (accel_x.., freq+psd_x, time+feed+force, shear_rate+viscosity)";
+  }
+  return j;
+}
+
+int run_batch(const BatchArgs& a, CliContext& ctx) {
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(a.dir))
+    if (e.is_regular_file()) files.push_back(e.path().string());
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw InputError("no files in the folder", a.dir);
+
+  std::vector<Job> jobs;
+  for (const auto& f : files) jobs.push_back(plan_job(f));
+  for (auto& j : jobs)
+    for (const auto& r : a.output.require) {
+      if (j.args.empty()) continue;
+      j.args.push_back("--require");
+      j.args.push_back(r);
+    }
+
+  // Worker threads take jobs in order; each command runs in-process exactly as on the command line.
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t i = next++; i < jobs.size(); i = next++) {
+      Job& j = jobs[i];
+      if (j.args.empty()) continue;
+      auto args = j.args;
+      args.push_back("--json");
+      std::ostringstream out, err;
+      j.code = run_cli(args, out, err);
+      j.err = err.str();
+      if (j.code == 0 || j.code == 1) {
+        try {
+          j.results = nlohmann::json::parse(out.str()).at("results");
+        } catch (const std::exception&) {
+          j.results = nullptr;
+        }
+      }
+    }
+  };
+  const unsigned n = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> pool;
+  for (unsigned i = 0; i < std::min<std::size_t>(n, jobs.size()); ++i) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+
+  Envelope env("batch");
+  env.set_options({{"dir", a.dir}, {"require", a.output.require}});
+  nlohmann::json list = nlohmann::json::array();
+  int worst = 0, ok = 0, failed = 0, bad = 0, skipped = 0;
+  for (const auto& j : jobs) {
+    env.add_input(j.file);
+    nlohmann::json e{{"file", j.file}};
+    if (j.args.empty()) {
+      e["status"] = "skipped";
+      e["reason"] = j.skip_reason;
+      ++skipped;
+    } else {
+      e["command"] = j.args;
+      e["exit_code"] = j.code;
+      e["status"] = j.code == 0 ? "ok" : j.code == 1 ? "failed" : "error";
+      if (!j.err.empty()) e["messages"] = j.err;
+      if (!j.results.is_null()) e["results"] = j.results;
+      worst = std::max(worst, j.code);
+      (j.code == 0 ? ok : j.code == 1 ? failed : bad)++;
+    }
+    list.push_back(e);
+    if (!a.output.json)
+      ctx.out << fmt::format("{:<8} {}{}\n", e["status"].get<std::string>(), j.file,
+                             j.args.empty() ? " (" + j.skip_reason + ")" : "");
+  }
+  env.results()["datasets"] = list;
+  env.results()["counts"] = {{"ok", ok}, {"failed", failed}, {"error", bad}, {"skipped", skipped}};
+  OutputOptions o = a.output;
+  o.require.clear();  // applied per dataset above
+  emit(env, o, ctx);
+  if (worst != 0)
+    ctx.err << fmt::format("tunekit: batch: {} ok, {} failed, {} with errors, {} skipped\n", ok, failed, bad, skipped);
+  return worst;
+}
+
+}  // namespace
+
+void register_batch(CLI::App& app, CliContext& ctx) {
+  auto a = std::make_shared<BatchArgs>();
+  auto* sub = app.add_subcommand("batch", "Analyze every dataset in a folder in parallel and write one summary");
+  sub->add_option("dir", a->dir, "Folder of datasets (CSV files)")->required()->check(CLI::ExistingDirectory);
+  sub->add_option("-j,--jobs", a->jobs, "Parallel analyses (default: one per core)");
+  add_output_options(sub, a->output);
+  sub->footer(
+      "Each CSV is recognized by its columns: accel_x/y/z or freq+psd_x -> shaper; time+feed+force -> step;\n"
+      "shear_rate+viscosity -> rheo. Exit code: the worst of the datasets (0 ok, 1 fit failed or requirement\n"
+      "unmet, 2 bad input).\n"
+      "Example:\n  tunekit batch archive/2026-11/ --require 'tau_s<0.6' --require 'x.freq_hz>=35' -o summary.json");
+  sub->callback([a, &ctx] { set_exit_code(run_batch(*a, ctx)); });
 }
 
 }  // namespace tunekit::cli
