@@ -226,8 +226,13 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   }
 
   Envelope env("calibrate");
-  env.set_options({{"machine", a.machine}, {"profile", profile_path}, {"firmware", a.firmware}, {"config", a.config},
-                   {"write", a.write}, {"sim", a.sim_options}});
+  // Inputs are recorded relative to the run directory: the run can move, and two runs of the
+  // same machine give byte-identical results.json files.
+  auto add_input = [&](const std::string& path) {
+    env.add_input(fs::relative(path, run_dir).generic_string(), ident::read_file_bytes(path));
+  };
+  env.set_options({{"machine", a.machine}, {"profile", a.profile.empty() ? "builtin" : a.profile},
+                   {"firmware", a.firmware}, {"config", a.config}, {"write", a.write}, {"sim", a.sim_options}});
   nlohmann::json& res = env.results();
   nlohmann::json plot = nlohmann::json::object();
   res["machine"] = profile.name;
@@ -240,7 +245,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const std::string csv = r.files.at("load_cell");
     const std::string out = run_dir + "/analysis/step.json";
     const auto j = analyze({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--model", "fopdt"}, out, ctx);
-    env.add_input(csv);
+    add_input(csv);
     res["liquefier"]["step"] = j.at("results");
     plot["step"] = step_plotdata(csv, j.at("results"));
     export_inputs.push_back(out);
@@ -256,7 +261,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const auto j = analyze({"freq", csv, "--time", "time", "--input", "feed", "--output", "force", "--mode", "h1",
                             "--fit-tf", "1,0", "--tf-delay", "--fmax", "5"},
                            out, ctx);
-    env.add_input(csv);
+    add_input(csv);
     res["liquefier"]["freq"] = j.at("results");
     plot["bode"] = bode_plotdata(j.at("results"));
     summary.push_back({{"label", "tau from the frequency response"}, {"path", "liquefier.freq.tf_fit.params.tau_s.value"}, {"unit", "s"}});
@@ -267,7 +272,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const std::string csv = runs[name].files.at("accel");
     const std::string out = run_dir + "/analysis/shaper_" + axis + ".json";
     const auto j = analyze({"shaper", csv, "--axis", axis}, out, ctx);
-    env.add_input(csv);
+    add_input(csv);
     res["axes"][axis] = j.at("results").at("axes").at(axis);
     plot[std::string("psd_") + axis] = psd_plotdata(res["axes"][axis]);
     export_inputs.push_back(out);
