@@ -1,0 +1,66 @@
+#pragma once
+// Running an experiment protocol on a machine: the C++ API under `tunekit run` (and the base
+// for `tunekit calibrate`). The protocol is built, checked against the machine profile (all
+// violations listed; nothing is sent if there is one), then sent over the link while every
+// line and sensor sample is journaled into the run directory.
+//
+//   RunOptions o;  o.protocol = "liquefier-step";  o.machine = "sim";
+//   RunResult r = run_experiment(o);   // r.run_dir, r.files["load_cell"] = ".../step.csv"
+//
+// Machines: "sim" (the built-in simulated printer, served on a pseudo-terminal in a background
+// thread of this process; its truth.json lands in the run directory) or a profile TOML path
+// with `port`: a serial device, a pseudo-terminal (Klipper's /tmp/printer), or
+// "unix:/tmp/klippy_uds" for Klipper's API server.
+//
+// Failures: a limit violation or bad parameter is an InputError (exit 2) before anything is
+// opened; a machine/transport failure is a MachineError (exit 3) thrown after the journal has
+// been flushed, safe-state commands sent (best effort) and run.json written with
+// "status": "failed" — everything received before the failure stays in the run directory.
+
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/protocols/experiments.hpp"
+#include "tunekit/protocols/gcode_link.hpp"
+#include "tunekit/protocols/machine_profile.hpp"
+
+namespace tunekit::protocols {
+
+struct RunOptions {
+  std::string protocol;                  ///< see protocol_specs()
+  std::map<std::string, double> params;  ///< protocol parameter overrides
+  std::string axis = "x";                ///< axis protocols
+  std::string machine = "sim";           ///< "sim" or a machine profile (TOML) path
+  std::string port;                      ///< device / PTY / "unix:PATH"; empty with "sim"
+  int baud = 250000;
+  std::string run_dir;                   ///< default: <runs_root>/<protocol>-<UTC stamp>
+  std::string runs_root = "runs";
+  std::vector<std::string> sim_options;  ///< SimConfig::from_options keys ("tau_s=0.5", "fault=drop@12")
+  LinkOptions link;                      ///< timeouts and retries
+  bool dry_run = false;                  ///< build and check only; RunResult::gcode is filled
+  const std::atomic<bool>* abort_flag = nullptr;  ///< e.g. set by SIGINT
+  std::function<void(const std::string&)> progress;  ///< human progress messages
+};
+
+struct RunResult {
+  std::string run_dir;                       ///< empty for a dry run
+  std::string status;                        ///< "complete" or "dry-run"
+  std::map<std::string, std::string> files;  ///< role -> path: load_cell, accel, commanded_accel, journal, truth, gcode, summary
+  Experiment experiment;
+  std::vector<std::string> gcode;            ///< the protocol's G-code (with ;@record directives)
+  nlohmann::json summary;                    ///< what run.json holds
+};
+
+/// The built-in simulated printer's machine profile (same content as datasets/machines/sim.toml).
+MachineProfile builtin_sim_profile();
+
+/// Runs (or, with dry_run, only builds and checks) an experiment. See the header comment.
+RunResult run_experiment(const RunOptions& options);
+
+}  // namespace tunekit::protocols

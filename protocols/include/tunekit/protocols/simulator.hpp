@@ -1,0 +1,177 @@
+#pragma once
+// tunekit's virtual printer: a Marlin-flavoured G-code machine with a simulated liquefier and
+// load cell, axes with resonant modes and an accelerometer, and injectable faults. It runs
+// in-process on any Transport (a socket pair in tests) or on a pseudo-terminal (SimPtyServer,
+// and the tunekit-sim executable). Its truth (the parameters it simulates) is written to
+// truth.json so identification can be held against it.
+//
+// Simulated time: the machine clock advances only by executed motion and dwells, computed as
+// fast as the host reads; it is not tied to wall time. Sample timestamps are machine time (s).
+//
+// Protocol (docs/machine.md): lines "N<n> <cmd>*<cs>" or plain "<cmd>"; answers "ok", or
+// "Error:checksum mismatch, Last Line: <n>" + "Resend: <n+1>" + "ok". Moves are queued with a
+// one-move lookahead (consecutive same-direction moves blend at the first move's speed) and run
+// when the next move, G4, M400, M4100, G28 or M410 arrives. Sensor streaming (M4100):
+//   M4100 A1 / A0   accelerometer on/off: "echo:TKA <t_s> <ax> <ay> <az> <cmd_ax> <cmd_ay>" (mm/s^2)
+//   M4100 L1 / L0   load cell on/off:     "echo:TKL <t_s> <feed_mm_s> <force_N>"
+// M115 answers "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim ...)" and "Cap:TUNEKIT_SENSOR_STREAM:1".
+
+#include <atomic>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <random>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/protocols/gcode.hpp"
+#include "tunekit/protocols/trajectory.hpp"
+#include "tunekit/protocols/transport.hpp"
+
+namespace tunekit::protocols {
+
+struct SimMode {
+  double freq_hz = 0;
+  double zeta = 0;
+  double weight = 1;  ///< share of the axis' response (weights of an axis should sum to 1)
+};
+
+struct SimFault {
+  enum class Kind { drop, garble, late_ok, disconnect, error };
+  Kind kind = Kind::drop;
+  long at_line = 0;       ///< 1-based count of lines the simulator received
+  double delay_ms = 0;    ///< late_ok only
+  std::string describe() const;
+};
+
+struct SimConfig {
+  std::string liquefier = "fopdt";  ///< "fopdt" or "physics"
+  // First order plus dead time, feed (mm/s) -> force (N).
+  double K_N_per_mm_s = 3.5;
+  double tau_s = 0.45;
+  double theta_s = 0.04;
+  // Physics: pressure P (MPa) in the melt, flow out Q = (P / k)^(1/n) (mm^3/s, power-law melt
+  // through the nozzle), column + melt compliance C (mm^3/MPa): C dP/dt = A u(t - theta) - Q;
+  // force = P * A (A filament cross-section, mm^2). K = n F / u and tau = C k n Q^(n-1)
+  // depend on the flow.
+  double k_MPa = 2.7;          ///< MPa (s/mm^3)^n
+  double n_index = 0.5;
+  double compliance_mm3_MPa = 0.5;
+  double filament_diameter_mm = 1.75;
+  double force_offset_N = 0.5;
+  double force_noise_N = 0.02;
+  double load_cell_rate_hz = 200;
+  // Axes.
+  std::map<std::string, std::vector<SimMode>> modes{{"x", {{48, 0.08, 1}}}, {"y", {{37, 0.1, 1}}}};
+  double accel_rate_hz = 3200;
+  double accel_noise_mm_s2 = 20;
+  double cross_coupling = 0.05;  ///< share of one horizontal axis' response seen on the other
+  double jerk_mm_s3 = 1e8;
+  unsigned seed = 1;
+  std::vector<SimFault> faults;
+
+  /// "key=value" options (tunekit-sim flags and `tunekit run --sim`), e.g. "tau_s=0.5",
+  /// "liquefier=physics", "mode_x=48:0.08" or "mode_x=48:0.08:0.7,95:0.05:0.3",
+  /// "fault=garble@12", "fault=late-ok@12:300", "fault=drop@12", "fault=disconnect@40",
+  /// "fault=error@30", "seed=3". InputError for unknown keys or bad values.
+  static SimConfig from_options(const std::vector<std::string>& options);
+  /// The truth the simulator runs with (also written to truth.json).
+  nlohmann::json truth() const;
+};
+
+class Simulator {
+ public:
+  explicit Simulator(SimConfig config);
+  using Emit = std::function<void(std::string_view)>;
+
+  /// Handles one received line; writes answers and sensor data through `emit` (complete lines).
+  /// Returns false when a disconnect fault fires (the caller drops the connection).
+  bool handle_line(std::string_view raw, const Emit& emit);
+
+  /// For Klipper-API style use: samples go to this callback instead of echo:TKA lines.
+  std::function<void(double t_s, double ax, double ay, double az)> accel_sink;
+  void set_streaming(const std::string& sensor, bool on);
+  /// Runs any queued move to completion.
+  void flush(const Emit& emit);
+
+  const SimConfig& config() const { return cfg_; }
+  /// Thread-safe copies of what was received, and sample counts sent.
+  std::vector<std::string> received() const;
+  long accel_samples_sent() const { return accel_sent_; }
+  long load_cell_samples_sent() const { return load_sent_; }
+  bool halted() const { return halted_; }
+  double time_s() const { return t_; }
+
+ private:
+  struct Pending {
+    GcodeMove move;
+  };
+  void execute(const GcodeMove& m, double v_entry, double v_exit, const Emit& emit);
+  void dwell(double seconds, const Emit& emit);
+  void step(const std::array<double, 4>& pos, const std::array<double, 4>& vel, const std::array<double, 4>& acc,
+            const std::array<double, 3>& acc_mid, const std::array<double, 3>& acc_end, const Emit& emit);
+  void out_flush(const Emit& emit);
+
+  SimConfig cfg_;
+  GcodeInterpreter interp_;
+  std::optional<GcodeMove> pending_;
+  double pending_entry_ = 0;
+  long received_count_ = 0;
+  long last_n_ = 0;
+  bool halted_ = false;
+  bool stream_accel_ = false, stream_load_ = false;
+  // Physics state.
+  double t_ = 0;
+  double dt_;
+  long step_ = 0;
+  int accel_every_, load_every_;
+  std::map<std::string, std::vector<std::array<double, 2>>> mode_state_;
+  std::vector<double> delay_;
+  std::size_t delay_pos_ = 0;
+  double liq_ = 0;  ///< FOPDT output (N) or pressure (MPa)
+  double last_feed_ = 0;
+  std::mt19937 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  std::string out_;
+  std::atomic<long> accel_sent_{0}, load_sent_{0};
+  mutable std::mutex mu_;
+  std::vector<std::string> received_;
+};
+
+/// Serves a Simulator on a pseudo-terminal in a background thread.
+class SimPtyServer {
+ public:
+  explicit SimPtyServer(SimConfig config);
+  ~SimPtyServer();
+  SimPtyServer(const SimPtyServer&) = delete;
+  SimPtyServer& operator=(const SimPtyServer&) = delete;
+  /// The slave device to open (e.g. /dev/pts/7).
+  const std::string& path() const { return slave_path_; }
+  /// Stops the thread (idempotent).
+  void stop();
+  /// Blocks until the serving thread ends (disconnect fault, or stop()).
+  void wait();
+  bool disconnected() const { return disconnected_; }
+  Simulator& sim() { return *sim_; }
+
+ private:
+  void serve();
+  std::unique_ptr<Simulator> sim_;
+  int master_ = -1;
+  int slave_keepalive_ = -1;
+  std::string slave_path_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> disconnected_{false};
+  std::thread thread_;
+};
+
+/// Serves a Simulator on an already connected transport until `stop` is set or the peer goes.
+void serve_simulator(Simulator& sim, Transport& t, const std::atomic<bool>& stop);
+
+}  // namespace tunekit::protocols
