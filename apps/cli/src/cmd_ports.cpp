@@ -1,10 +1,56 @@
-// tunekit ports: List serial ports.
+// tunekit ports: list the serial ports libserialport sees (pseudo-terminals such as Klipper's
+// /tmp/printer are not serial ports and are not listed; pass them to --port directly).
+#include <memory>
+
+#include <fmt/format.h>
+
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/envelope.hpp"
+#include "tunekit/protocols/serial_transport.hpp"
 
 namespace tunekit::cli {
+namespace {
 
-void register_ports(CLI::App& app, CliContext& /*ctx*/) {
-  add_reserved_command(app, "ports", "List serial ports");
+struct PortsArgs {
+  OutputOptions output;
+};
+
+int run_ports(const PortsArgs& a, CliContext& ctx) {
+  const auto ports = protocols::list_serial_ports();
+  Envelope env("ports");
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& p : ports) {
+    nlohmann::json j{{"path", p.path}, {"description", p.description}, {"transport", p.transport}};
+    if (p.usb_vid >= 0) {
+      j["usb_vid"] = fmt::format("{:04x}", p.usb_vid);
+      j["usb_pid"] = fmt::format("{:04x}", p.usb_pid);
+    }
+    if (!p.serial_number.empty()) j["serial_number"] = p.serial_number;
+    list.push_back(j);
+  }
+  env.results()["ports"] = list;
+  if (!a.output.json) {
+    if (ports.empty()) ctx.out << "no serial ports found\n";
+    for (const auto& p : ports)
+      ctx.out << fmt::format("{:<20} {:<10} {}{}\n", p.path, p.transport, p.description,
+                             p.usb_vid >= 0 ? fmt::format(" [{:04x}:{:04x}]", p.usb_vid, p.usb_pid) : "");
+  }
+  return emit(env, a.output, ctx);
+}
+
+}  // namespace
+
+void register_ports(CLI::App& app, CliContext& ctx) {
+  auto args = std::make_shared<PortsArgs>();
+  auto* sub = app.add_subcommand("ports", "List serial ports");
+  add_output_options(sub, args->output);
+  sub->footer(
+      "Pseudo-terminals (Klipper's /tmp/printer, tunekit-sim's link) are not serial ports and are not\n"
+      "listed; give them to 'tunekit run --port' directly.\n"
+      "Examples:\n"
+      "  tunekit ports\n"
+      "  tunekit ports --json");
+  sub->callback([args, &ctx] { set_exit_code(run_ports(*args, ctx)); });
 }
 
 }  // namespace tunekit::cli
