@@ -1,0 +1,102 @@
+#pragma once
+// Fitting melt viscosity models to rheometer data (seed 001 sec. 2.2.2, 5.2.3):
+//  - weighted least squares on ln(eta) with bounds (Ceres), start values from a bounded global
+//    search (global_start.hpp), so no fit needs a guess from the user;
+//  - 95 % intervals: scale parameters (eta0, K, tau*, D1, lambda) are estimated as logarithms,
+//    so their intervals are exp of a symmetric interval in ln and never go negative; the
+//    reported std. error is the delta-method value * se(ln);
+//  - AIC-based comparison of several models on the same data;
+//  - a power-law fit to a model over a shear-rate window with log-spaced points (sec. 5.2.3:
+//    evenly spaced points would weight the window's upper end);
+//  - time-temperature superposition: shift factors per temperature and a master curve.
+// Everything is SI (1/s, Pa.s, K, Pa); conversion from files happens in ident/rheology_data.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/fitting/fit_result.hpp"
+#include "tunekit/fitting/global_start.hpp"
+#include "tunekit/fitting/least_squares.hpp"
+#include "tunekit/fitting/viscosity.hpp"
+
+namespace tunekit::fitting {
+
+struct RheologyData {
+  std::vector<double> shear_rate_1_s;
+  std::vector<double> viscosity_Pa_s;
+  std::vector<double> temperature_K;  ///< one per point
+  std::vector<double> pressure_Pa;    ///< empty, or one per point
+  std::vector<double> weight;         ///< empty (all 1), or one per point, > 0
+  std::size_t size() const { return shear_rate_1_s.size(); }
+  /// Distinct temperature levels (points within 0.05 K are one level), ascending.
+  std::vector<double> temperature_levels_K() const;
+};
+
+struct ViscosityFitOptions {
+  ViscosityModel model = ViscosityModel::cross_wlf;
+  /// Temperature shift for the models other than Cross-WLF. With data at one temperature
+  /// it must be none; with several, a model without a shift is an InputError.
+  TemperatureShift shift = TemperatureShift::none;
+  double T_ref_K = kNaN;  ///< shift reference; NaN: the temperature level nearest the median
+  /// Parameters held at a value (e.g. {"D2_K", 416}). By default Cross-WLF holds A2_K = 51.6 K
+  /// and D3_K_per_Pa = 0 (no pressure data), Carreau-Yasuda eta_inf_Pa_s = 0.
+  std::map<std::string, double> fixed;
+  /// Default-held parameters to estimate instead (e.g. "A2_K").
+  std::vector<std::string> free;
+  GlobalStartOptions global;
+  LsqOptions lsq;
+};
+
+/// Fits the model. InputError: bad data (non-positive values, too few points for the free
+/// parameters, one temperature for a temperature-dependent model); FitError: no convergence
+/// or not identifiable. The FitResult's model is ViscositySpec::name(); it also lists
+/// fixed parameters (T_ref_K, A2_K, ...) with fixed = true.
+FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& options);
+
+/// The viscosity function of a fit (the values of every parameter, fixed or not).
+ViscositySpec spec_from_fit(const FitResult& fit);
+
+struct ModelComparisonEntry {
+  std::string model;
+  bool ok = false;
+  std::string error;  ///< why the model could not be fitted
+  int num_parameters = 0;
+  double aic = kNaN, bic = kNaN, delta_aic = kNaN, akaike_weight = kNaN, rms_ln = kNaN;
+};
+struct ModelComparison {
+  std::vector<ModelComparisonEntry> entries;
+  std::vector<FitResult> fits;  ///< parallel to entries (default FitResult where !ok)
+  std::string best;             ///< lowest AIC
+};
+/// Fits every candidate to the same data and ranks them by AIC (Akaike weights).
+ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates);
+/// The default candidates for these data (with shifts when there are several temperatures).
+std::vector<ViscosityFitOptions> default_candidates(const RheologyData& data, const ViscosityFitOptions& base = {});
+nlohmann::json to_json(const ModelComparison& c);
+
+/// Power law K gamma^(n-1) fitted to a viscosity model over [lo, hi] 1/s with `points`
+/// log-spaced shear rates (linear regression of log10 tau on log10 gamma). Params
+/// K_Pa_s_n and n. The seed's procedure (sec. 5.2.3): 600..950 1/s, 50 points.
+FitResult fit_power_law_window(const ViscositySpec& v, double temperature_K, double lo_1_s, double hi_1_s,
+                               int points = 50, double pressure_Pa = 0);
+
+struct TtsResult {
+  double T_ref_K = kNaN;
+  std::vector<double> temperatures_K;
+  std::vector<double> shift_factor;      ///< a_T per temperature (1 at T_ref)
+  std::vector<double> shift_factor_lo;   ///< 95 % interval
+  std::vector<double> shift_factor_hi;
+  FitResult reference_fit;  ///< Cross at T_ref with ln a_T per other temperature
+  FitResult arrhenius;      ///< Ea_J_per_mol fitted to ln a_T (needs >= 2 other temperatures)
+  bool has_arrhenius = false;
+  std::vector<double> reduced_shear_rate_1_s;  ///< a_T gamma
+  std::vector<double> reduced_viscosity_Pa_s;  ///< eta / a_T
+};
+/// Shift factors and master curve from data at >= 2 temperatures (Cross at the reference).
+TtsResult time_temperature_superposition(const RheologyData& data, double T_ref_K = kNaN);
+nlohmann::json to_json(const TtsResult& t);
+
+}  // namespace tunekit::fitting

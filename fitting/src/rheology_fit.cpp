@@ -1,0 +1,564 @@
+#include "tunekit/fitting/rheology_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <cstdarg>
+#include <cstdio>
+
+#include "tunekit/fitting/error.hpp"
+
+namespace tunekit::fitting {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// printf-style message formatting (the fitting layer does not depend on fmt).
+[[gnu::format(printf, 1, 2)]] std::string strf(const char* f, ...) {
+  char buf[1024];
+  va_list ap;
+  va_start(ap, f);
+  std::vsnprintf(buf, sizeof buf, f, ap);
+  va_end(ap);
+  return buf;
+}
+
+// One parameter as estimated: `log` ones are estimated as ln(value).
+struct PSpec {
+  std::string name;
+  std::string unit;
+  bool log = false;
+  double lo = -kInf, hi = kInf, start = 0;
+  bool fixed = false;
+};
+
+struct DataStats {
+  double eta_min = kInf, eta_max = 0, eta_med = 0, g_med = 0;
+  std::vector<double> levels;
+};
+
+DataStats stats_of(const RheologyData& d) {
+  DataStats s;
+  std::vector<double> e = d.viscosity_Pa_s, g = d.shear_rate_1_s;
+  for (double v : e) s.eta_min = std::min(s.eta_min, v), s.eta_max = std::max(s.eta_max, v);
+  std::nth_element(e.begin(), e.begin() + static_cast<long>(e.size() / 2), e.end());
+  std::nth_element(g.begin(), g.begin() + static_cast<long>(g.size() / 2), g.end());
+  s.eta_med = e[e.size() / 2];
+  s.g_med = g[g.size() / 2];
+  s.levels = d.temperature_levels_K();
+  return s;
+}
+
+double default_T_ref(const std::vector<double>& levels) {
+  std::vector<double> l = levels;
+  return l[(l.size() - 1) / 2];
+}
+
+// Viscosity from public values in the order of `names` (model names, shift names, T_ref_K).
+struct Evaluator {
+  ViscosityModel model;
+  TemperatureShift shift;
+  double operator()(const double* v, double g, double T, double p) const {
+    double aT = 1.0;
+    std::size_t k = viscosity_param_names(model).size();
+    if (shift == TemperatureShift::arrhenius) aT = arrhenius_shift(T, v[k], v[k + 1]);
+    else if (shift == TemperatureShift::wlf) aT = wlf_shift(T, v[k], v[k + 1], v[k + 2]);
+    switch (model) {
+      case ViscosityModel::newtonian: return v[0] * aT;
+      case ViscosityModel::power_law: return power_law_viscosity(v[0] * aT, v[1], g);
+      case ViscosityModel::cross: return cross_viscosity(v[0] * aT, v[1], v[2], g);
+      case ViscosityModel::cross_wlf: return cross_wlf_viscosity({v[0], v[1], v[2], v[3], v[4], v[5], v[6]}, g, T, p);
+      case ViscosityModel::carreau_yasuda: return carreau_yasuda_viscosity(v[0] * aT, v[1] * aT, v[2] * aT, v[3], v[4], g);
+    }
+    return kNaN;
+  }
+};
+
+std::vector<PSpec> default_specs(const ViscosityFitOptions& o, const DataStats& s, double T_ref) {
+  std::vector<PSpec> p;
+  const double e_lo = s.eta_min / 10, e_hi = s.eta_max * 1e4;
+  const double T_min = s.levels.front();
+  switch (o.model) {
+    case ViscosityModel::newtonian: p.push_back({"eta0_Pa_s", "Pa.s", true, s.eta_min / 10, s.eta_max * 10, s.eta_med}); break;
+    case ViscosityModel::power_law:
+      p.push_back({"K_Pa_s_n", "Pa.s^n", true, 1e-3, 1e10, s.eta_med * std::sqrt(s.g_med)});
+      p.push_back({"n", "1", false, 0.01, 1.5, 0.5});
+      break;
+    case ViscosityModel::cross:
+      p.push_back({"eta0_Pa_s", "Pa.s", true, e_lo, e_hi, s.eta_max});
+      p.push_back({"tau_star_Pa", "Pa", true, 1, 1e8, 1e5});
+      p.push_back({"n", "1", false, 0.01, 1.0, 0.4});
+      break;
+    case ViscosityModel::carreau_yasuda:
+      p.push_back({"eta0_Pa_s", "Pa.s", true, e_lo, e_hi, s.eta_max});
+      p.push_back({"eta_inf_Pa_s", "Pa.s", false, 0, s.eta_min, 0, true});
+      p.push_back({"lambda_s", "s", true, 1e-7, 1e4, 0.01});
+      p.push_back({"a", "1", false, 0.1, 5, 2});
+      p.push_back({"n", "1", false, 0.01, 1.0, 0.4});
+      break;
+    case ViscosityModel::cross_wlf:
+      p.push_back({"n", "1", false, 0.01, 1.0, 0.4});
+      p.push_back({"tau_star_Pa", "Pa", true, 1, 1e8, 1e5});
+      p.push_back({"D1_Pa_s", "Pa.s", true, 1e3, 1e30, 1e12});
+      p.push_back({"D2_K", "K", false, 100, T_min - 5, std::max(100.0, T_min - 200)});
+      p.push_back({"D3_K_per_Pa", "K/Pa", false, 0, 1e-6, 0, true});
+      p.push_back({"A1", "1", false, 1, 100, 30});
+      p.push_back({"A2_K", "K", false, 1, 500, 51.6, true});
+      break;
+  }
+  if (o.model != ViscosityModel::cross_wlf) {
+    if (o.shift == TemperatureShift::arrhenius) {
+      p.push_back({"Ea_J_per_mol", "J/mol", false, 1e3, 1e6, 1e5});
+    } else if (o.shift == TemperatureShift::wlf) {
+      p.push_back({"C1", "1", false, 0.5, 100, 17});
+      p.push_back({"C2_K", "K", false, std::max(1.0, T_ref - T_min + 1), 2000, std::max(100.0, T_ref - T_min + 50)});
+    }
+    if (o.shift != TemperatureShift::none) p.push_back({"T_ref_K", "K", false, -kInf, kInf, T_ref, true});
+  }
+  for (auto& ps : p) {
+    if (o.fixed.count(ps.name)) {
+      ps.fixed = true;
+      ps.start = o.fixed.at(ps.name);
+    }
+    if (std::find(o.free.begin(), o.free.end(), ps.name) != o.free.end() && ps.name != "T_ref_K") ps.fixed = false;
+    ps.start = std::clamp(ps.start, ps.lo, ps.hi);
+    if (ps.fixed) ps.lo = -kInf, ps.hi = kInf;
+  }
+  for (const auto& [k, v] : o.fixed) {
+    if (std::none_of(p.begin(), p.end(), [&](const PSpec& ps) { return ps.name == k; }))
+      throw InputError(strf("--fix %s: %s has no parameter of that name", k.c_str(), ViscositySpec{o.model, o.shift, {}}.name().c_str()));
+    (void)v;
+  }
+  for (const auto& k : o.free)
+    if (std::none_of(p.begin(), p.end(), [&](const PSpec& ps) { return ps.name == k; }))
+      throw InputError(strf("--free %s: %s has no parameter of that name", k.c_str(), ViscositySpec{o.model, o.shift, {}}.name().c_str()));
+  return p;
+}
+
+void validate_data(const RheologyData& d) {
+  const std::size_t n = d.size();
+  if (n == 0) throw InputError("no rheology data points");
+  if (d.viscosity_Pa_s.size() != n || d.temperature_K.size() != n || (!d.pressure_Pa.empty() && d.pressure_Pa.size() != n) ||
+      (!d.weight.empty() && d.weight.size() != n))
+    throw InputError("rheology data columns differ in length");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(d.shear_rate_1_s[i] > 0)) throw InputError(strf("point %zu: the shear rate must be positive (is %g)", i + 1, d.shear_rate_1_s[i]));
+    if (!(d.viscosity_Pa_s[i] > 0)) throw InputError(strf("point %zu: the viscosity must be positive (is %g)", i + 1, d.viscosity_Pa_s[i]));
+    if (!(d.temperature_K[i] > 0)) throw InputError(strf("point %zu: the temperature must be positive in kelvin (is %g)", i + 1, d.temperature_K[i]));
+    if (!d.weight.empty() && !(d.weight[i] > 0)) throw InputError(strf("point %zu: weights must be positive", i + 1));
+  }
+}
+
+// Replaces the core's bound warnings (which show ln values) by ones with public values.
+void finish_params(FitResult& fit, const std::vector<PSpec>& specs) {
+  fit.warnings.erase(std::remove_if(fit.warnings.begin(), fit.warnings.end(),
+                                    [](const std::string& w) { return w.find("ended on its bound") != std::string::npos; }),
+                     fit.warnings.end());
+  for (std::size_t j = 0; j < specs.size(); ++j) {
+    auto& p = fit.params[j];
+    const auto& s = specs[j];
+    const double raw = p.value;
+    if (s.log) {
+      p.value = std::exp(raw);
+      p.std_error = p.value * p.std_error;
+      p.ci95_lo = std::exp(p.ci95_lo);
+      p.ci95_hi = std::exp(p.ci95_hi);
+    }
+    if (!s.fixed) {
+      const double lo = s.log ? std::log(s.lo) : s.lo, hi = s.log ? std::log(s.hi) : s.hi;
+      if (raw <= lo + 1e-9 * std::max(1.0, std::abs(lo)) || raw >= hi - 1e-9 * std::max(1.0, std::abs(hi)))
+        fit.warnings.push_back(strf("%s ended on its bound (%.6g %s); the data do not determine it well",
+                                           s.name.c_str(), p.value, s.unit.c_str()));
+    }
+  }
+}
+
+int free_count(const std::vector<PSpec>& specs) {
+  return static_cast<int>(std::count_if(specs.begin(), specs.end(), [](const PSpec& s) { return !s.fixed; }));
+}
+
+}  // namespace
+
+std::vector<double> RheologyData::temperature_levels_K() const {
+  std::vector<double> t = temperature_K;
+  std::sort(t.begin(), t.end());
+  std::vector<double> levels;
+  for (double v : t)
+    if (levels.empty() || v - levels.back() > 0.05) levels.push_back(v);
+  return levels;
+}
+
+FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) {
+  validate_data(data);
+  const auto st = stats_of(data);
+  const std::string name = ViscositySpec{o.model, o.shift, {}}.name();
+  const bool temp_model = o.model == ViscosityModel::cross_wlf || o.shift != TemperatureShift::none;
+  if (!temp_model && st.levels.size() > 1)
+    throw InputError(strf("%s: the data hold %zu temperatures (%.2f..%.2f K); a model without a temperature "
+                                 "shift needs data at one temperature (choose a shift: arrhenius or wlf)",
+                                 name.c_str(), st.levels.size(), st.levels.front(), st.levels.back()));
+  const double T_ref = std::isfinite(o.T_ref_K) ? o.T_ref_K : default_T_ref(st.levels);
+  const auto specs = default_specs(o, st, T_ref);
+  if (temp_model) {
+    // Parameters of the temperature dependence; the data need at least that many temperatures.
+    int t_params = 0;
+    for (const auto& s : specs) {
+      if (s.fixed) continue;
+      if (s.name == "D1_Pa_s" || s.name == "D2_K" || s.name == "A1" || s.name == "A2_K" || s.name == "Ea_J_per_mol" ||
+          s.name == "C1" || s.name == "C2_K")
+        ++t_params;
+    }
+    if (o.model != ViscosityModel::cross_wlf) ++t_params;  // the reference eta0 / K
+    if (st.levels.size() < 2)
+      throw InputError(strf("%s is temperature dependent but the data hold a single temperature (%.2f K); "
+                                   "measure at two or more temperatures or fit a model without a shift",
+                                   name.c_str(), st.levels.front()));
+    if (static_cast<int>(st.levels.size()) < t_params)
+      throw InputError(strf("%s: %d temperature parameters need data at %d or more temperatures, the data hold %zu; "
+                                   "hold one with --fix (e.g. --fix D2_K=<glass transition in K>)",
+                                   name.c_str(), t_params, t_params, st.levels.size()));
+  }
+  const int k = free_count(specs);
+  if (static_cast<int>(data.size()) <= k)
+    throw InputError(strf("%s: %zu data points for %d free parameters; need more points than parameters",
+                                 name.c_str(), data.size(), k));
+
+  LsqProblem prob;
+  for (const auto& s : specs) {
+    ParamSpec ps{s.name, s.unit, s.log ? std::log(s.start) : s.start, s.log ? std::log(s.lo) : s.lo,
+                 s.log ? std::log(s.hi) : s.hi, s.fixed};
+    if (s.fixed) ps.lower = -kInf, ps.upper = kInf;
+    prob.params.push_back(ps);
+  }
+  const std::size_t n = data.size();
+  prob.num_residuals = static_cast<int>(n);
+  std::vector<double> ln_obs(n), sw(n, 1.0), ln_g(n);
+  for (std::size_t i = 0; i < n; ++i) ln_g[i] = std::log(data.shear_rate_1_s[i]);
+  for (std::size_t i = 0; i < n; ++i) {
+    ln_obs[i] = std::log(data.viscosity_Pa_s[i]);
+    if (!data.weight.empty()) sw[i] = std::sqrt(data.weight[i]);
+  }
+  prob.observed = ln_obs;
+  prob.residuals_are_time_ordered = false;
+  const Evaluator ev{o.model, o.shift};
+  std::vector<bool> is_log;
+  for (const auto& s : specs) is_log.push_back(s.log);
+  const bool cwlf = o.model == ViscosityModel::cross_wlf;
+  // Residuals (and for Cross-WLF the analytic Jacobian) over a subset `idx` of the points.
+  auto make = [&, ev, is_log, cwlf](std::vector<std::size_t> idx) {
+    LsqProblem q = prob;
+    q.num_residuals = static_cast<int>(idx.size());
+    q.observed.clear();
+    for (auto i : idx) q.observed.push_back(ln_obs[i]);
+    if (!cwlf) {
+      q.residuals = [&, ev, is_log, idx](const double* p, double* r) {
+        double v[12];
+        for (std::size_t j = 0; j < is_log.size(); ++j) v[j] = is_log[j] ? std::exp(p[j]) : p[j];
+        for (std::size_t k = 0; k < idx.size(); ++k) {
+          const auto i = idx[k];
+          const double e = ev(v, data.shear_rate_1_s[i], data.temperature_K[i], data.pressure_Pa.empty() ? 0.0 : data.pressure_Pa[i]);
+          if (!(e > 0) || !std::isfinite(e)) return false;
+          r[k] = sw[i] * (std::log(e) - ln_obs[i]);
+        }
+        return true;
+      };
+    } else {
+      // Internal order: n, ln tau*, ln D1, D2, D3, A1, A2.
+      q.residuals_and_jacobian = [&, idx](const double* p, double* r, double* J) {
+        const double n = p[0], ln_ts = p[1], ln_d1 = p[2], D2 = p[3], D3 = p[4], A1 = p[5], A2 = p[6];
+        for (std::size_t k = 0; k < idx.size(); ++k) {
+          const auto i = idx[k];
+          const double pr = data.pressure_Pa.empty() ? 0.0 : data.pressure_Pa[i];
+          const double T = data.temperature_K[i];
+          const double x = T - D2 - D3 * pr, den = A2 + D3 * pr + x;
+          if (!(den > 0)) return false;
+          const double ln_eta0 = ln_d1 - A1 * x / den;
+          const double L = ln_eta0 + ln_g[i] - ln_ts;
+          const double u = std::exp((1 - n) * L);
+          if (!std::isfinite(u)) return false;
+          const double ln_eta = ln_eta0 - std::log1p(u);
+          r[k] = sw[i] * (ln_eta - ln_obs[i]);
+          if (!std::isfinite(r[k])) return false;
+          if (J != nullptr) {
+            const double s = u / (1 + u), c0 = 1 - (1 - n) * s;
+            double* row = J + 7 * k;
+            row[0] = sw[i] * s * L;
+            row[1] = sw[i] * (1 - n) * s;
+            row[2] = sw[i] * c0;
+            row[3] = sw[i] * c0 * A1 * (A2 + D3 * pr) / (den * den);
+            row[4] = sw[i] * c0 * A1 * pr / den;
+            row[5] = sw[i] * c0 * (-x / den);
+            row[6] = sw[i] * c0 * A1 * x / (den * den);
+          }
+        }
+        return true;
+      };
+    }
+    return q;
+  };
+  std::vector<std::size_t> all(n), sub;
+  for (std::size_t i = 0; i < n; ++i) all[i] = i;
+  const std::size_t max_search = 120;  // the search only has to find the basin
+  if (n > max_search) {
+    for (std::size_t k = 0; k < max_search; ++k) sub.push_back(k * n / max_search);
+  } else {
+    sub = all;
+  }
+  prob = make(all);
+  const LsqProblem search = make(sub);
+  auto fit = solve_with_global_start(name, prob, o.global, o.lsq, &search);
+  finish_params(fit, specs);
+  if (cwlf) {
+    const auto& d2 = fit.param("D2_K");
+    if (!d2.fixed && d2.std_error > 20)
+      fit.warnings.push_back(strf("D1_Pa_s, D2_K and A1 are strongly correlated with data at %zu temperatures "
+                                  "(D2_K +- %.0f K); hold D2_K at the glass transition (--fix D2_K=...) for tighter values",
+                                  st.levels.size(), d2.std_error));
+  }
+  return fit;
+}
+
+ViscositySpec spec_from_fit(const FitResult& fit) {
+  ViscositySpec s = parse_viscosity_spec_name(fit.model);
+  for (const auto& p : fit.params) s.values[p.name] = p.value;
+  return s;
+}
+
+std::vector<ViscosityFitOptions> default_candidates(const RheologyData& data, const ViscosityFitOptions& base) {
+  std::vector<ViscosityFitOptions> c;
+  const bool multi = data.temperature_levels_K().size() > 1;
+  for (auto m : {ViscosityModel::newtonian, ViscosityModel::power_law, ViscosityModel::cross, ViscosityModel::carreau_yasuda}) {
+    ViscosityFitOptions o = base;
+    o.fixed.clear();
+    o.free.clear();
+    o.model = m;
+    o.shift = multi ? TemperatureShift::arrhenius : TemperatureShift::none;
+    c.push_back(o);
+    if (multi && m == ViscosityModel::cross) {
+      o.shift = TemperatureShift::wlf;
+      c.push_back(o);
+    }
+  }
+  if (multi) {
+    ViscosityFitOptions o = base;
+    o.fixed.clear();
+    o.free.clear();
+    o.model = ViscosityModel::cross_wlf;
+    o.shift = TemperatureShift::none;
+    c.push_back(o);
+  }
+  return c;
+}
+
+ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates) {
+  ModelComparison c;
+  double best = kInf;
+  for (const auto& o : candidates) {
+    ModelComparisonEntry e;
+    e.model = ViscositySpec{o.model, o.shift, {}}.name();
+    FitResult fit;
+    try {
+      fit = fit_viscosity(data, o);
+      e.ok = true;
+      e.num_parameters = fit.diagnostics.num_parameters;
+      e.aic = fit.diagnostics.aic;
+      e.bic = fit.diagnostics.bic;
+      e.rms_ln = fit.diagnostics.rms;
+      if (e.aic < best) best = e.aic, c.best = e.model;
+    } catch (const Error& err) {
+      e.error = err.message();
+    }
+    c.entries.push_back(e);
+    c.fits.push_back(fit);
+  }
+  double wsum = 0;
+  for (auto& e : c.entries)
+    if (e.ok) {
+      e.delta_aic = e.aic - best;
+      wsum += std::exp(-0.5 * e.delta_aic);
+    }
+  for (auto& e : c.entries)
+    if (e.ok) e.akaike_weight = std::exp(-0.5 * e.delta_aic) / wsum;
+  return c;
+}
+
+nlohmann::json to_json(const ModelComparison& c) {
+  nlohmann::json j;
+  j["criterion"] = "AIC on ln(viscosity) residuals (n ln(rss/n) + 2k)";
+  j["best"] = c.best;
+  nlohmann::json arr = nlohmann::json::array();
+  for (const auto& e : c.entries) {
+    nlohmann::json x{{"model", e.model}, {"ok", e.ok}};
+    if (e.ok) {
+      x["num_parameters"] = e.num_parameters;
+      x["aic"] = e.aic;
+      x["bic"] = e.bic;
+      x["delta_aic"] = e.delta_aic;
+      x["akaike_weight"] = e.akaike_weight;
+      x["rms_ln_viscosity"] = e.rms_ln;
+    } else {
+      x["error"] = e.error;
+    }
+    arr.push_back(x);
+  }
+  j["models"] = arr;
+  return j;
+}
+
+FitResult fit_power_law_window(const ViscositySpec& v, double T, double lo, double hi, int points, double pressure) {
+  if (!(lo > 0) || !(hi > lo)) throw InputError(strf("power-law window: need 0 < low < high (got %g..%g 1/s)", lo, hi));
+  if (points < 3) throw InputError("power-law window: need at least 3 points");
+  std::vector<double> lg, lt;
+  for (int i = 0; i < points; ++i) {
+    const double g = std::pow(10.0, std::log10(lo) + i * (std::log10(hi) - std::log10(lo)) / (points - 1));
+    lg.push_back(std::log(g));
+    lt.push_back(std::log(v.viscosity(g, T, pressure) * g));
+  }
+  // Start from the closed-form regression, refine (and get the covariance) with the core.
+  const double N = points;
+  double mx = 0, my = 0;
+  for (int i = 0; i < points; ++i) mx += lg[i] / N, my += lt[i] / N;
+  double sxy = 0, sxx = 0;
+  for (int i = 0; i < points; ++i) sxy += (lg[i] - mx) * (lt[i] - my), sxx += (lg[i] - mx) * (lg[i] - mx);
+  const double slope = sxy / sxx, icpt = my - slope * mx;
+  LsqProblem prob;
+  prob.params = {{"K_Pa_s_n", "Pa.s^n", icpt}, {"n", "1", slope}};
+  prob.num_residuals = points;
+  prob.observed = lt;
+  prob.residuals_are_time_ordered = false;
+  prob.residuals_and_jacobian = [&](const double* p, double* r, double* J) {
+    for (int i = 0; i < points; ++i) {
+      r[i] = p[0] + p[1] * lg[i] - lt[i];
+      if (J) J[2 * i] = 1, J[2 * i + 1] = lg[i];
+    }
+    return true;
+  };
+  auto fit = solve_least_squares("power-law", prob);
+  finish_params(fit, {{"K_Pa_s_n", "Pa.s^n", true, 0, kInf, 0, false}, {"n", "1", false, -kInf, kInf, 0, false}});
+  fit.warnings.clear();
+  return fit;
+}
+
+TtsResult time_temperature_superposition(const RheologyData& data, double T_ref_K) {
+  validate_data(data);
+  const auto st = stats_of(data);
+  if (st.levels.size() < 2)
+    throw InputError(strf("time-temperature superposition needs data at two or more temperatures (the data hold one, %.2f K)",
+                                 st.levels.front()));
+  TtsResult t;
+  t.T_ref_K = std::isfinite(T_ref_K) ? T_ref_K : default_T_ref(st.levels);
+  // Reference level index: the level nearest T_ref.
+  std::size_t ref = 0;
+  for (std::size_t k = 0; k < st.levels.size(); ++k)
+    if (std::abs(st.levels[k] - t.T_ref_K) < std::abs(st.levels[ref] - t.T_ref_K)) ref = k;
+  if (std::abs(st.levels[ref] - t.T_ref_K) > 0.05)
+    throw InputError(strf("the TTS reference temperature %.2f K is not one of the data's temperatures", t.T_ref_K));
+  const std::size_t n = data.size(), L = st.levels.size();
+  std::vector<std::size_t> level_of(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t k = 0; k < L; ++k)
+      if (std::abs(data.temperature_K[i] - st.levels[k]) <= 0.05 + 1e-9) {
+        level_of[i] = k;
+        break;
+      }
+  std::vector<PSpec> specs{{"eta0_Pa_s", "Pa.s", true, st.eta_min / 10, st.eta_max * 1e4, st.eta_max},
+                           {"tau_star_Pa", "Pa", true, 1, 1e8, 1e5},
+                           {"n", "1", false, 0.01, 1.0, 0.4}};
+  std::vector<int> shift_index(L, -1);
+  for (std::size_t k = 0; k < L; ++k) {
+    if (k == ref) continue;
+    shift_index[k] = static_cast<int>(specs.size());
+    specs.push_back({strf("ln_aT_%.2fK", st.levels[k]), "1", false, -30, 30, 0});
+  }
+  if (static_cast<int>(n) <= free_count(specs))
+    throw InputError(strf("TTS: %zu data points for %d parameters", n, free_count(specs)));
+  LsqProblem prob;
+  for (const auto& s : specs)
+    prob.params.push_back({s.name, s.unit, s.log ? std::log(s.start) : s.start, s.log ? std::log(s.lo) : s.lo,
+                           s.log ? std::log(s.hi) : s.hi});
+  prob.num_residuals = static_cast<int>(n);
+  prob.residuals_are_time_ordered = false;
+  std::vector<double> ln_obs(n);
+  for (std::size_t i = 0; i < n; ++i) ln_obs[i] = std::log(data.viscosity_Pa_s[i]);
+  prob.observed = ln_obs;
+  prob.residuals = [&](const double* p, double* r) {
+    const double eta0 = std::exp(p[0]), ts = std::exp(p[1]), nn = p[2];
+    for (std::size_t i = 0; i < n; ++i) {
+      const int si = shift_index[level_of[i]];
+      const double a = si < 0 ? 1.0 : std::exp(p[si]);
+      const double e = cross_viscosity(eta0 * a, ts, nn, data.shear_rate_1_s[i]);
+      if (!(e > 0) || !std::isfinite(e)) return false;
+      r[i] = std::log(e) - ln_obs[i];
+    }
+    return true;
+  };
+  t.reference_fit = solve_with_global_start("cross+tts", prob);
+  finish_params(t.reference_fit, specs);
+  t.reference_fit.params.push_back({"T_ref_K", t.T_ref_K, kNaN, kNaN, kNaN, "K", true});
+  std::vector<double> lnA(L, 0.0), lnA_se(L, 0.0);
+  for (std::size_t k = 0; k < L; ++k) {
+    t.temperatures_K.push_back(st.levels[k]);
+    if (shift_index[k] < 0) {
+      t.shift_factor.push_back(1.0);
+      t.shift_factor_lo.push_back(1.0);
+      t.shift_factor_hi.push_back(1.0);
+      continue;
+    }
+    const auto& p = t.reference_fit.params[static_cast<std::size_t>(shift_index[k])];
+    lnA[k] = p.value;
+    lnA_se[k] = p.std_error;
+    t.shift_factor.push_back(std::exp(p.value));
+    t.shift_factor_lo.push_back(std::exp(p.ci95_lo));
+    t.shift_factor_hi.push_back(std::exp(p.ci95_hi));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const double a = t.shift_factor[level_of[i]];
+    t.reduced_shear_rate_1_s.push_back(a * data.shear_rate_1_s[i]);
+    t.reduced_viscosity_Pa_s.push_back(data.viscosity_Pa_s[i] / a);
+  }
+  if (L >= 3) {
+    // ln a_T = (Ea / R) (1/T - 1/T_ref), weighted by the shift factors' standard errors.
+    std::vector<std::size_t> ks;
+    for (std::size_t k = 0; k < L; ++k)
+      if (k != ref) ks.push_back(k);
+    LsqProblem ap;
+    ap.params = {{"Ea_J_per_mol", "J/mol", 1e5, 0, 1e7}};
+    ap.num_residuals = static_cast<int>(ks.size());
+    ap.residuals_are_time_ordered = false;
+    ap.residuals = [&](const double* p, double* r) {
+      for (std::size_t q = 0; q < ks.size(); ++q) {
+        const double T = st.levels[ks[q]];
+        const double w = lnA_se[ks[q]] > 0 ? 1.0 / lnA_se[ks[q]] : 1.0;
+        r[q] = w * (p[0] / kGasConstant * (1.0 / T - 1.0 / t.T_ref_K) - lnA[ks[q]]);
+      }
+      return true;
+    };
+    try {
+      t.arrhenius = solve_least_squares("arrhenius-shift", ap);
+      t.arrhenius.params.push_back({"T_ref_K", t.T_ref_K, kNaN, kNaN, kNaN, "K", true});
+      t.has_arrhenius = true;
+    } catch (const Error&) {
+      t.has_arrhenius = false;
+    }
+  }
+  return t;
+}
+
+nlohmann::json to_json(const TtsResult& t) {
+  nlohmann::json j;
+  j["reference_temperature_K"] = t.T_ref_K;
+  nlohmann::json sf = nlohmann::json::array();
+  for (std::size_t k = 0; k < t.temperatures_K.size(); ++k)
+    sf.push_back({{"temperature_K", t.temperatures_K[k]},
+                  {"a_T", t.shift_factor[k]},
+                  {"ci95", {t.shift_factor_lo[k], t.shift_factor_hi[k]}}});
+  j["shift_factors"] = sf;
+  j["reference_fit"] = to_json(t.reference_fit);
+  if (t.has_arrhenius) j["arrhenius"] = to_json(t.arrhenius);
+  j["master_curve"] = {{"reduced_shear_rate_1_s", t.reduced_shear_rate_1_s},
+                       {"reduced_viscosity_Pa_s", t.reduced_viscosity_Pa_s}};
+  return j;
+}
+
+}  // namespace tunekit::fitting

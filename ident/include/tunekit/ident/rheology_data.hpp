@@ -1,0 +1,44 @@
+#pragma once
+// Rheometer (or capillary) data from CSV into SI units for the viscosity fits, with the unit
+// checks that catch the usual mix-ups. Columns, by name (case-insensitive), units in brackets:
+//   shear_rate (1/s)                        required, > 0
+//   viscosity (Pa.s | mPa.s | cP | kPa.s)   or shear_stress (Pa | kPa | MPa), eta = tau / gamma
+//   temperature (degC | C | K)              optional if a temperature is given separately
+//   pressure (Pa | kPa | MPa | bar)         optional
+//   weight                                  optional, > 0 (weights of ln-viscosity residuals)
+// Refused with InputError (exit 2) and FILE:LINE: negative or zero shear rates, non-positive
+// viscosities, a temperature without a unit, kelvin values below 273.15 (they are degC),
+// degC values above 600 (they are kelvin), viscosities above 1e7 Pa.s (a column in mPa.s
+// labelled Pa.s) or below 1e-2 Pa.s.
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "tunekit/fitting/fit_result.hpp"
+#include "tunekit/fitting/rheology_fit.hpp"
+#include "tunekit/fitting/viscosity.hpp"
+
+namespace tunekit::ident {
+
+struct RheologyCsvOptions {
+  /// Temperature of every point when the file has no temperature column (degC); NaN: none.
+  double temperature_degC = fitting::kNaN;
+  /// degC -> K offset: 273.15 (SI) or 273 (the seed's code).
+  double kelvin_offset = fitting::kKelvinOffset;
+};
+
+struct RheologyTable {
+  fitting::RheologyData data;
+  std::vector<std::string> notes;  ///< conversions applied, e.g. "viscosity: mPa.s -> Pa.s"
+};
+
+RheologyTable parse_rheology_csv(std::string_view text, const std::string& path, const RheologyCsvOptions& options = {});
+RheologyTable read_rheology_csv(const std::string& path, const RheologyCsvOptions& options = {});
+
+/// Multiplier from a viscosity unit to Pa.s; InputError for an unknown unit.
+double viscosity_unit_factor(std::string_view unit);
+/// Multiplier from a pressure/stress unit to Pa; InputError for an unknown unit.
+double pressure_unit_factor(std::string_view unit);
+
+}  // namespace tunekit::ident

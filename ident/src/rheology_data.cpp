@@ -1,0 +1,175 @@
+#include "tunekit/ident/rheology_data.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
+
+namespace tunekit::ident {
+namespace {
+
+std::string lower_nospace(std::string_view s) {
+  std::string o;
+  for (char c : s)
+    if (c != ' ') o.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
+  return o;
+}
+
+// 1-based line numbers of the data rows (the lines after the header that are neither blank
+// nor comments), so errors can point at FILE:LINE.
+std::vector<std::size_t> data_row_lines(std::string_view text, std::size_t header_line) {
+  std::vector<std::size_t> lines;
+  std::size_t ln = 0, pos = 0;
+  while (pos <= text.size()) {
+    const auto nl = text.find('\n', pos);
+    std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+    ++ln;
+    if (ln > header_line) {
+      const auto first = line.find_first_not_of(" \t\r");
+      if (first != std::string_view::npos && line[first] != '#') lines.push_back(ln);
+    }
+    if (nl == std::string_view::npos) break;
+    pos = nl + 1;
+  }
+  return lines;
+}
+
+const CsvColumn* find_column(const CsvTable& t, std::initializer_list<const char*> names) {
+  for (const char* n : names)
+    if (t.has_column(n)) return &t.column(n);
+  return nullptr;
+}
+
+}  // namespace
+
+double viscosity_unit_factor(std::string_view unit) {
+  const auto u = lower_nospace(unit);
+  if (u.empty() || u == "pa.s" || u == "pas" || u == "pa*s" || u == "pa_s" || u == "pa\xc2\xb7s") return 1.0;
+  if (u == "mpa.s" || u == "mpas" || u == "mpa*s" || u == "mpa_s" || u == "cp") return 1e-3;
+  if (u == "kpa.s" || u == "kpas" || u == "kpa*s" || u == "kpa_s") return 1e3;
+  throw InputError("unknown viscosity unit '" + std::string(unit) + "' (use Pa.s, mPa.s, cP or kPa.s)");
+}
+
+double pressure_unit_factor(std::string_view unit) {
+  const auto u = lower_nospace(unit);
+  if (u.empty() || u == "pa") return 1.0;
+  if (u == "kpa") return 1e3;
+  if (u == "mpa") return 1e6;
+  if (u == "bar") return 1e5;
+  throw InputError("unknown pressure unit '" + std::string(unit) + "' (use Pa, kPa, MPa or bar)");
+}
+
+RheologyTable parse_rheology_csv(std::string_view text, const std::string& path, const RheologyCsvOptions& o) {
+  const auto t = parse_csv(text, path);
+  const auto lines = data_row_lines(text, t.header_line);
+  auto at = [&](std::size_t row) {
+    return row < lines.size() ? source_location(path, lines[row]) : path;
+  };
+  RheologyTable out;
+  auto& d = out.data;
+  const auto* g = find_column(t, {"shear_rate", "shear rate", "shearrate", "gamma_dot"});
+  if (!g) throw InputError("no shear-rate column: name one 'shear_rate (1/s)'", source_location(path, t.header_line));
+  {
+    const auto u = lower_nospace(g->unit);
+    if (!(u.empty() || u == "1/s" || u == "s^-1" || u == "s-1" || u == "/s"))
+      throw InputError("shear rate unit '" + g->unit + "' is not 1/s", source_location(path, t.header_line));
+  }
+  const auto* eta = find_column(t, {"viscosity", "eta"});
+  const auto* tau = find_column(t, {"shear_stress", "shear stress", "stress", "tau"});
+  if (!eta && !tau)
+    throw InputError("no viscosity column: name one 'viscosity (Pa.s)' or 'shear_stress (Pa)'",
+                     source_location(path, t.header_line));
+  const auto* temp = find_column(t, {"temperature", "temp", "T"});
+  const auto* pres = find_column(t, {"pressure", "p"});
+  const auto* w = find_column(t, {"weight"});
+
+  double vf = 1.0, sf = 1.0;
+  if (eta) {
+    vf = viscosity_unit_factor(eta->unit);
+    if (vf != 1.0) out.notes.push_back(fmt::format("viscosity: {} -> Pa.s (x {:g})", eta->unit, vf));
+    if (eta->unit.empty()) out.notes.push_back("viscosity column has no unit; read as Pa.s");
+  } else {
+    sf = pressure_unit_factor(tau->unit);
+  }
+  enum class TUnit { none, degc, kelvin } tu = TUnit::none;
+  if (temp) {
+    const auto u = lower_nospace(temp->unit);
+    if (u == "degc" || u == "c" || u == "\xc2\xb0" "c" || u == "celsius") tu = TUnit::degc;
+    else if (u == "k" || u == "kelvin") tu = TUnit::kelvin;
+    else if (u.empty())
+      throw InputError("the temperature column has no unit: write 'temperature (degC)' or 'temperature (K)'",
+                       source_location(path, t.header_line));
+    else
+      throw InputError("unknown temperature unit '" + temp->unit + "' (use degC or K)", source_location(path, t.header_line));
+    if (tu == TUnit::degc) out.notes.push_back(fmt::format("temperature: degC -> K (+{:g})", o.kelvin_offset));
+  } else if (!std::isfinite(o.temperature_degC)) {
+    throw InputError("no temperature: add a 'temperature (degC)' or '(K)' column, or give the temperature of the data",
+                     path);
+  }
+  const double pf = pres ? pressure_unit_factor(pres->unit) : 1.0;
+
+  for (std::size_t i = 0; i < t.rows; ++i) {
+    const double gi = g->values[i];
+    if (gi < 0) throw InputError(fmt::format("negative shear rate {:g} 1/s; shear rates must be positive", gi), at(i));
+    if (gi == 0) throw InputError("zero shear rate: the fits work on log scales and need shear rates > 0", at(i));
+    double e = 0;
+    if (eta) {
+      e = eta->values[i] * vf;
+      if (!(e > 0)) throw InputError(fmt::format("non-positive viscosity {:g}", eta->values[i]), at(i));
+    } else {
+      const double s = tau->values[i] * sf;
+      if (!(s > 0)) throw InputError(fmt::format("non-positive shear stress {:g}", tau->values[i]), at(i));
+      e = s / gi;
+    }
+    if (e > 1e7)
+      throw InputError(fmt::format("viscosity {:g} Pa.s is implausible for a polymer melt (above 1e7 Pa.s); "
+                                   "is the column in mPa.s? label it 'viscosity (mPa.s)'", e),
+                       at(i));
+    if (e < 1e-2)
+      throw InputError(fmt::format("viscosity {:g} Pa.s is implausible for a polymer melt (below 0.01 Pa.s); "
+                                   "check the column's unit", e),
+                       at(i));
+    double TK = 0;
+    if (temp) {
+      const double v = temp->values[i];
+      if (tu == TUnit::kelvin) {
+        if (v < 273.15)
+          throw InputError(fmt::format("temperature {:g} K is below 0 degC; the values look like degC but the "
+                                       "column says K (write 'temperature (degC)')", v),
+                           at(i));
+        if (v > 1200) throw InputError(fmt::format("temperature {:g} K is implausible for a polymer melt", v), at(i));
+        TK = v;
+      } else {
+        if (v > 600)
+          throw InputError(fmt::format("temperature {:g} degC is above 600 degC; the values look like kelvin but the "
+                                       "column says degC (write 'temperature (K)')", v),
+                           at(i));
+        if (v < -50) throw InputError(fmt::format("temperature {:g} degC is implausible for a polymer melt", v), at(i));
+        TK = v + o.kelvin_offset;
+      }
+    } else {
+      TK = o.temperature_degC + o.kelvin_offset;
+    }
+    d.shear_rate_1_s.push_back(gi);
+    d.viscosity_Pa_s.push_back(e);
+    d.temperature_K.push_back(TK);
+    if (pres) d.pressure_Pa.push_back(pres->values[i] * pf);
+    if (w) {
+      if (!(w->values[i] > 0)) throw InputError("weights must be positive", at(i));
+      d.weight.push_back(w->values[i]);
+    }
+  }
+  if (d.size() == 0) throw InputError("no data rows", path);
+  return out;
+}
+
+RheologyTable read_rheology_csv(const std::string& path, const RheologyCsvOptions& o) {
+  const auto bytes = read_file_bytes(path);
+  return parse_rheology_csv(bytes, path, o);
+}
+
+}  // namespace tunekit::ident
