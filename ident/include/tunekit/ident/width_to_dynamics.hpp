@@ -1,0 +1,68 @@
+#pragma once
+// From a width profile to a time signal (issue 6, part 3): the commanded speed along the path
+// maps arc length to time, and the feed modulation gives the set-point width the feed implied,
+// so `tunekit step` / `tunekit freq` can identify the liquefier from photos.
+//
+// Ring print of seed 001 (section 4.3.3): the feeder position gets an offset A sin(N theta)
+// with theta the bed's rotary position, so with print speed v on a ring of radius R
+// theta = v t / R, the excitation frequency is f = N v / (2 pi R), and the set-point width is
+// (eq. 4.3)
+//     w_sp(t) = w_gcode - pi A N r_rod^2 cos(N v t / R) / (h R)
+// with r_rod the feed rod radius and h the layer height. (Positive feeder offset retracts the
+// plunger in that machine; eq. 4.3 is used as printed.)
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace tunekit::ident {
+
+struct RingSine {
+  int n_sines = 0;             ///< N: sines per rotation
+  double amplitude_mm = 0;     ///< A: feeder offset amplitude (mm of plunger travel)
+  double speed_mm_s = 0;       ///< v: print speed under the nozzle (mm/s)
+  double radius_mm = 0;        ///< R: ring radius (mm)
+  double rod_radius_mm = 0;    ///< r_rod: radius of the feed rod / filament (mm)
+  double layer_height_mm = 0;  ///< h (mm)
+  double width_gcode_mm = 0;   ///< w_gcode: mean set-point width (mm)
+};
+
+/// f = N v / (2 pi R) (Hz).
+double ring_frequency_hz(const RingSine& r);
+/// Amplitude of the set-point width modulation pi A N r_rod^2 / (h R) (mm).
+double ring_setpoint_amplitude_mm(const RingSine& r);
+/// Eq. 4.3 (mm) at time t (s) since the nozzle passed theta = 0.
+double ring_setpoint_width_mm(const RingSine& r, double t_s);
+
+/// One row of the time profile.
+struct TimedWidth {
+  double t_s = 0;
+  double s_mm = 0;
+  double width_mm = 0;
+  double setpoint_mm = 0;
+  double confidence = 0;
+};
+
+/// Circle through points (algebraic least squares). Returns centre and radius (same units).
+cv::Vec3d fit_circle(const std::vector<cv::Point2d>& pts);
+
+/// Polar angle of p around c as seen in the image (counterclockwise, 0 = +x), in [0, 2 pi).
+double view_angle(cv::Point2d p, cv::Point2d c);
+
+/// Rows of a profile printed at constant speed: t = s / v (s from the path start).
+std::vector<TimedWidth> map_constant_speed(const std::vector<double>& s_mm, const std::vector<double>& width_mm,
+                                           const std::vector<double>& confidence, double speed_mm_s,
+                                           double setpoint_width_mm);
+
+/// Rows of a ring profile: the angle travelled from `start_deg` (view angle of theta = 0)
+/// in the printing direction gives theta, t = theta R / v, s = theta R, set-point from eq. 4.3.
+/// Rows come out sorted by time.
+std::vector<TimedWidth> map_ring(const std::vector<cv::Point2d>& centre_px, const std::vector<double>& width_mm,
+                                 const std::vector<double>& confidence, cv::Point2d ring_centre_px,
+                                 const RingSine& ring, double start_deg, bool clockwise);
+
+/// CSV text with columns `time (s)`, `s (mm)`, `width (mm)`, `setpoint_width (mm)`, `confidence`.
+std::string timed_width_csv(const std::vector<TimedWidth>& rows, const std::string& comment);
+
+}  // namespace tunekit::ident

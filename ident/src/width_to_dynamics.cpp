@@ -1,0 +1,96 @@
+#include "tunekit/ident/width_to_dynamics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+
+namespace tunekit::ident {
+
+double ring_frequency_hz(const RingSine& r) { return r.n_sines * r.speed_mm_s / (2.0 * M_PI * r.radius_mm); }
+
+double ring_setpoint_amplitude_mm(const RingSine& r) {
+  return M_PI * r.amplitude_mm * r.n_sines * r.rod_radius_mm * r.rod_radius_mm / (r.layer_height_mm * r.radius_mm);
+}
+
+double ring_setpoint_width_mm(const RingSine& r, double t_s) {
+  return r.width_gcode_mm - ring_setpoint_amplitude_mm(r) * std::cos(r.n_sines * t_s * r.speed_mm_s / r.radius_mm);
+}
+
+cv::Vec3d fit_circle(const std::vector<cv::Point2d>& pts) {
+  if (pts.size() < 3) throw InputError("a circle needs at least 3 points");
+  // Centre the data for conditioning.
+  cv::Point2d m(0, 0);
+  for (const auto& p : pts) m += p;
+  m *= 1.0 / static_cast<double>(pts.size());
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) {
+    const double x = p.x - m.x, y = p.y - m.y;
+    const Eigen::Vector3d r(x, y, 1.0);
+    A += r * r.transpose();
+    b += r * (-(x * x + y * y));
+  }
+  const Eigen::Vector3d s = A.ldlt().solve(b);
+  const double cx = -0.5 * s(0), cy = -0.5 * s(1);
+  const double r2 = cx * cx + cy * cy - s(2);
+  if (!(r2 > 0)) throw InputError("the centreline is not ring-shaped (circle fit failed)");
+  return {cx + m.x, cy + m.y, std::sqrt(r2)};
+}
+
+double view_angle(cv::Point2d p, cv::Point2d c) {
+  double a = std::atan2(-(p.y - c.y), p.x - c.x);
+  if (a < 0) a += 2 * M_PI;
+  return a;
+}
+
+std::vector<TimedWidth> map_constant_speed(const std::vector<double>& s_mm, const std::vector<double>& width_mm,
+                                           const std::vector<double>& confidence, double speed_mm_s,
+                                           double setpoint_width_mm) {
+  if (!(speed_mm_s > 0)) throw InputError("the print speed must be > 0 mm/s");
+  std::vector<TimedWidth> rows;
+  for (std::size_t i = 0; i < s_mm.size(); ++i) {
+    if (!std::isfinite(width_mm[i])) continue;
+    rows.push_back({s_mm[i] / speed_mm_s, s_mm[i], width_mm[i], setpoint_width_mm, confidence[i]});
+  }
+  return rows;
+}
+
+std::vector<TimedWidth> map_ring(const std::vector<cv::Point2d>& centre_px, const std::vector<double>& width_mm,
+                                 const std::vector<double>& confidence, cv::Point2d ring_centre_px,
+                                 const RingSine& ring, double start_deg, bool clockwise) {
+  if (!(ring.speed_mm_s > 0) || !(ring.radius_mm > 0)) throw InputError("ring speed and radius must be > 0");
+  const double start = start_deg * M_PI / 180.0;
+  std::vector<TimedWidth> rows;
+  for (std::size_t i = 0; i < centre_px.size(); ++i) {
+    if (!std::isfinite(width_mm[i])) continue;
+    double th = view_angle(centre_px[i], ring_centre_px) - start;
+    if (clockwise) th = -th;
+    th = std::fmod(th, 2 * M_PI);
+    if (th < 0) th += 2 * M_PI;
+    const double t = th * ring.radius_mm / ring.speed_mm_s;
+    rows.push_back({t, th * ring.radius_mm, width_mm[i], ring_setpoint_width_mm(ring, t), confidence[i]});
+  }
+  std::sort(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return a.t_s < b.t_s; });
+  // Equal times (two samples at the same angle) would break a strictly increasing time column.
+  rows.erase(std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
+             rows.end());
+  return rows;
+}
+
+std::string timed_width_csv(const std::vector<TimedWidth>& rows, const std::string& comment) {
+  std::ostringstream o;
+  std::istringstream c(comment);
+  for (std::string line; std::getline(c, line);) o << "# " << line << "\n";
+  o << "time (s),s (mm),width (mm),setpoint_width (mm),confidence\n";
+  for (const auto& r : rows)
+    o << fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.4f}\n", r.t_s, r.s_mm, r.width_mm, r.setpoint_mm, r.confidence);
+  return o.str();
+}
+
+}  // namespace tunekit::ident
