@@ -1,10 +1,195 @@
-// tunekit step: Identify liquefier dynamics (K, tau, theta) from step-response logs.
+// tunekit step: identify liquefier dynamics (K, tau, theta) from step-response logs
+// (seed 001 ch. 4.4.2). Steps are found in the input column, or, for records without an input
+// channel (ooze after a stop, Table B.1), given by --step-time and --step-size / --group.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+
+#include <fmt/format.h>
+
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/envelope.hpp"
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/step_analysis.hpp"
 
 namespace tunekit::cli {
+namespace {
 
-void register_step(CLI::App& app, CliContext& /*ctx*/) {
-  add_reserved_command(app, "step", "Identify liquefier dynamics (K, tau, theta) from step-response logs");
+struct StepArgs {
+  std::string file;
+  std::string time_column = "time";
+  std::string input_column;
+  std::string output_column;
+  std::string model = "fopdt";
+  std::string group_column;
+  double step_time_s = 0;
+  double step_size = std::numeric_limits<double>::quiet_NaN();
+  double min_step_fraction = 0.1;
+  OutputOptions output;
+};
+
+std::string unit_or_1(const std::string& u) { return u.empty() ? "1" : u; }
+
+void print_fit_line(std::ostream& os, const std::string& label, const fitting::FitResult& f) {
+  auto pm = [&](const char* n) {
+    const auto& p = f.param(n);
+    if (p.fixed) return fmt::format("{} = {:.4g} (fixed)", n, p.value);
+    return fmt::format("{} = {:.4g} +- {:.2g}", n, p.value, p.std_error);
+  };
+  os << fmt::format("  {:<22} {}   {}   {}   rms {:.3g}  r2 {:.4f}\n", label, pm("K"), pm("tau_s"), pm("theta_s"),
+                    f.diagnostics.rms, f.diagnostics.r2);
+}
+
+int run_step(const StepArgs& a, CliContext& ctx) {
+  const auto model = fitting::parse_step_model(a.model);
+  if (!(a.min_step_fraction > 0 && a.min_step_fraction < 1))
+    throw InputError("--min-step must be between 0 and 1 (a fraction of the input range)");
+  const std::string bytes = ident::read_file_bytes(a.file);
+  ident::CsvOptions copt;
+  copt.columns = {a.time_column, a.output_column};
+  if (!a.input_column.empty()) copt.columns.push_back(a.input_column);
+  if (!a.group_column.empty()) copt.columns.push_back(a.group_column);
+  // With --group the time restarts in every group: check monotonic time per group below.
+  if (a.group_column.empty()) copt.time_column = a.time_column;
+  const auto table = ident::parse_csv(bytes, a.file, copt);
+  const auto& tcol = table.column(a.time_column);
+  const auto& ycol = table.column(a.output_column);
+  if (table.rows < 10)
+    throw InputError(fmt::format("too few samples ({}) for a step analysis; at least 10 are needed", table.rows),
+                     a.file);
+
+  ident::StepAnalysisOptions opt;
+  opt.model = model;
+  opt.detect.min_step_fraction = a.min_step_fraction;
+  opt.output_unit = unit_or_1(ycol.unit);
+  std::string input_unit = "1";
+  if (!a.input_column.empty()) input_unit = unit_or_1(table.column(a.input_column).unit);
+  else if (!a.group_column.empty()) input_unit = unit_or_1(table.column(a.group_column).unit);
+  opt.input_unit = input_unit;
+  opt.gain_unit = opt.output_unit + "/(" + input_unit + ")";
+
+  ident::StepAnalysis res;
+  try {
+    if (!a.input_column.empty()) {
+      if (!a.group_column.empty() || !std::isnan(a.step_size))
+        throw InputError("--input finds the steps itself; do not combine it with --group or --step-size");
+      res = ident::analyze_steps(tcol.values, table.column(a.input_column).values, ycol.values, opt);
+    } else {
+      std::map<double, std::vector<std::size_t>> groups;
+      if (!a.group_column.empty()) {
+        const auto& g = table.column(a.group_column).values;
+        for (std::size_t i = 0; i < g.size(); ++i) groups[g[i]].push_back(i);
+      } else {
+        if (std::isnan(a.step_size))
+          throw InputError("without --input give the step: --step-size DU (and --step-time T), or --group COL");
+        for (std::size_t i = 0; i < table.rows; ++i) groups[0].push_back(i);
+      }
+      std::vector<ident::KnownStep> ks;
+      // Descending by the group value (the order of seed 001's tables: 50, 20, 12.2, 2 mm/s).
+      for (auto it = groups.rbegin(); it != groups.rend(); ++it) {
+        ident::KnownStep k;
+        const double du = std::isnan(a.step_size) ? it->first : a.step_size;
+        k.u_before = 0;
+        k.u_after = du;
+        k.record.t_step = a.step_time_s;
+        k.record.du = du;
+        for (std::size_t i : it->second) {
+          if (!k.record.t.empty() && !(tcol.values[i] > k.record.t.back()))
+            throw InputError(fmt::format("time is not increasing ({} s after {} s){}", tcol.values[i],
+                                         k.record.t.back(),
+                                         a.group_column.empty() ? std::string()
+                                                                : fmt::format(" in group {} = {:g}", a.group_column,
+                                                                              it->first)),
+                             source_location(a.file, table.header_line + i + 1));
+          k.record.t.push_back(tcol.values[i]);
+          k.record.y.push_back(ycol.values[i]);
+        }
+        ks.push_back(std::move(k));
+      }
+      res = ident::analyze_known_steps(ks, opt);
+    }
+  } catch (const Error& e) {
+    if (!e.location().empty()) throw;
+    if (e.code() == ExitCode::bad_input) throw InputError(e.message(), a.file);
+    if (e.code() == ExitCode::fit_failed) throw FitError(e.message(), a.file);
+    throw;
+  }
+
+  Envelope env("step");
+  env.set_options({{"time_column", a.time_column},
+                   {"input_column", a.input_column},
+                   {"output_column", a.output_column},
+                   {"model", a.model},
+                   {"group_column", a.group_column},
+                   {"step_time_s", a.step_time_s},
+                   {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
+                   {"min_step_fraction", a.min_step_fraction}});
+  env.add_input(a.file, bytes);
+  env.results() = ident::to_json(res);
+  env.results()["units"] = {{"input", input_unit}, {"output", opt.output_unit}, {"K", opt.gain_unit}, {"time", "s"}};
+  for (const auto& w : table.warnings) env.warn(w);
+  for (const auto& w : res.warnings) env.warn(w);
+  if (!a.output.json) {
+    ctx.out << fmt::format("{}: {} step(s), model {}\n", a.file, res.steps.size(), fitting::model_name(model));
+    for (const auto& s : res.steps) {
+      const std::string label = fmt::format("step {} {} @{:.4g}s", s.step.index, s.step.rising() ? "up" : "down",
+                                            s.step.t_step_s);
+      if (s.fit) print_fit_line(ctx.out, label, *s.fit);
+      else ctx.out << fmt::format("  {:<22} failed: {}\n", label, s.error);
+    }
+    if (res.pooled) print_fit_line(ctx.out, "pooled", *res.pooled);
+    for (const auto& op : res.operating_points)
+      print_fit_line(ctx.out, fmt::format("u = {:.4g} ({} step{})", op.u, op.n_steps, op.n_steps == 1 ? "" : "s"),
+                     op.fit);
+    if (res.trend_tau)
+      ctx.out << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g}   K = {:.4g} * u^{:.3g}\n",
+                             res.trend_tau->value("a"), res.trend_tau->value("b"), res.trend_K->value("a"),
+                             res.trend_K->value("b"));
+    ctx.out << fmt::format("  K in {}, y0 in {}; 95 % intervals in the JSON (--json)\n", opt.gain_unit,
+                           opt.output_unit);
+  }
+  return emit(env, a.output, ctx);
+}
+
+}  // namespace
+
+void register_step(CLI::App& app, CliContext& ctx) {
+  auto args = std::make_shared<StepArgs>();
+  auto* sub = app.add_subcommand("step", "Identify liquefier dynamics (K, tau, theta) from step-response logs");
+  sub->add_option("file", args->file, "CSV log (time in s; units in column names, e.g. 'force (N)')")->required();
+  sub->add_option("-t,--time", args->time_column, "Time column (s)")->capture_default_str();
+  sub->add_option("-i,--input", args->input_column,
+                  "Input column (e.g. feed rate, mm/s); its steps are found automatically");
+  sub->add_option("-y,--output", args->output_column, "Output column (e.g. force in N, ooze length in mm)")
+      ->required();
+  sub->add_option("-m,--model", args->model,
+                  "fo: first order K/(tau s+1); fopdt: with dead time theta (s), needs samples before each step")
+      ->capture_default_str();
+  sub->add_option("--group", args->group_column,
+                  "Without --input: split the rows by this column's value (e.g. print speed, mm/s); each group is "
+                  "one step of that size at --step-time, time restarting per group");
+  sub->add_option("--step-time", args->step_time_s, "Without --input: when the step happened (s)")
+      ->capture_default_str();
+  sub->add_option("--step-size", args->step_size,
+                  "Without --input: the input change (input units, e.g. the print speed before a stop in mm/s)");
+  sub->add_option("--min-step", args->min_step_fraction,
+                  "A change of the input larger than this fraction of its range is a step (1)")
+      ->capture_default_str();
+  add_output_options(sub, args->output);
+  sub->footer(
+      "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"
+      "its own (start values by the log-incomplete-response method), then all steps pooled, then per operating\n"
+      "point (the input level of larger magnitude) with a power-law trend tau_s = a u^b, K = a u^b.\n"
+      "Examples:\n"
+      "  tunekit step datasets/liquefier/synthetic_steps.csv --time time --input feed --output force --json\n"
+      "  tunekit step datasets/liquefier/holtrup_table_b1_ooze.csv --time t_s --output L_mm --group v_print_mm_s \\\n"
+      "      --model fo          # seed 001 Table B.1: ooze length after a stop, one step per print speed\n"
+      "  tunekit step ooze.csv --time t --output length --step-time 0 --step-size 20 --model fo\n"
+      "Exit codes: 2 bad input (no step found, constant output, NaN, too few samples, time not increasing),\n"
+      "1 the fit failed (no convergence, or tau not identifiable because the record is too short).");
+  sub->callback([args, &ctx] { set_exit_code(run_step(*args, ctx)); });
 }
 
 }  // namespace tunekit::cli

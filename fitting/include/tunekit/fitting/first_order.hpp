@@ -1,0 +1,65 @@
+#pragma once
+// First-order step-response models of the liquefier (seed 001 eq. 4.5-4.8, DESIGN.md "Liquefier"):
+//
+//   y(t) = y0                                           for t <= t_step + theta
+//   y(t) = y0 + K du (1 - exp(-(t - t_step - theta) / tau))  afterwards
+//
+// "fo" holds theta at 0 (first order), "fopdt" estimates it (first order plus dead time).
+// Fits use solve_least_squares with an analytic Jacobian, start from the log-incomplete-response
+// method (seed 001 eq. 4.4), and refuse (FitError) when tau cannot be seen in the record.
+
+#include <string>
+#include <vector>
+
+#include "tunekit/fitting/fit_result.hpp"
+#include "tunekit/fitting/least_squares.hpp"
+
+namespace tunekit::fitting {
+
+enum class StepModel { fo, fopdt };
+
+/// "fo" or "fopdt"; InputError otherwise.
+StepModel parse_step_model(const std::string& name);
+/// Model name used in FitResult::model: "first_order" or "fopdt".
+std::string model_name(StepModel m);
+
+/// The samples of one step: time (s), output, when the input changed and by how much.
+/// Samples before t_step (the steady state before the step) determine y0 and theta.
+struct StepRecord {
+  std::vector<double> t;  ///< s, increasing
+  std::vector<double> y;  ///< output samples
+  double t_step = 0;      ///< s, when the input changed
+  double du = 1;          ///< input change u_after - u_before (nonzero)
+  std::string output_unit = "1";  ///< unit of y (and y0)
+  std::string gain_unit = "1";    ///< unit of K (output unit per input unit)
+};
+
+/// Start values found by the log-incomplete-response method.
+struct StepStart {
+  double K = 0;
+  double tau_s = 1;
+  double theta_s = 0;
+  double y0 = 0;
+  double y_ss = 0;         ///< steady-state value assumed for the log transform
+  double linearity_r2 = 0; ///< R^2 of Z(t) = ln((y - y_ss)/(y0 - y_ss)) against t (0: method failed)
+};
+
+/// Seed 001 eq. 4.4: Z = ln((y - y_ss) / (y0 - y_ss)) is a straight line of slope -1/tau that
+/// crosses zero at t_step + theta. y_ss is unknown for a response that has not settled, so a few
+/// candidates beyond the last samples are tried and the one that makes Z most linear is kept.
+StepStart log_incomplete_start(const StepRecord& rec);
+
+/// Model value at time t.
+double step_response(double t, double t_step, double du, double K, double tau_s, double theta_s, double y0);
+
+/// Fits one step. Parameters: K (gain_unit), tau_s, theta_s (held at 0 for fo), y0 (output_unit).
+/// Throws InputError for too few samples, a constant output or a zero step, and FitError when
+/// the solver fails or tau / theta are not identifiable from the record.
+FitResult fit_step(const StepRecord& rec, StepModel model, const LsqOptions& options = {});
+
+/// Fits several steps with one K, tau_s and theta_s and an own y0 per step (y0_0, y0_1, ...).
+/// `start` (optional, may be null) gives K, tau_s, theta_s to start from.
+FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model, const FitResult* start = nullptr,
+                           const LsqOptions& options = {});
+
+}  // namespace tunekit::fitting

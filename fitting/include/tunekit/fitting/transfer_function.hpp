@@ -1,0 +1,72 @@
+#pragma once
+// Low-order continuous transfer functions (up to 3 poles and 2 zeros, optional dead time):
+// frequency response, exact zero-order-hold simulation with fractional delays, and fits to
+// frequency-response points (complex residuals weighted by each point's uncertainty) or to
+// an arbitrary input/output record by output error.
+//
+// Parameterization (the names used in FitResult and JSON):
+//   G(s) = K * N(s) / D(s) * exp(-theta_s s)
+//   D(s): poles 1: (tau_s s + 1); 2: (s^2/wn^2 + 2 zeta s/wn + 1), wn = 2 pi fn_hz; 3: both.
+//   N(s): zeros 0: 1; 1: (tz_s s + 1); 2: (b2_s2 s^2 + b1_s s + 1).
+// fn_hz/zeta also describe two real poles (zeta > 1). tz_s < 0 is a right-half-plane zero.
+
+#include <complex>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "tunekit/fitting/fit_result.hpp"
+#include "tunekit/fitting/least_squares.hpp"
+
+namespace tunekit::fitting {
+
+struct TransferFunction {
+  std::vector<double> num;  ///< coefficients in descending powers of s
+  std::vector<double> den;  ///< descending powers of s; den.front() != 0; num.size() <= den.size()
+  double delay_s = 0;       ///< dead time (s), >= 0
+
+  /// G(j 2 pi f).
+  std::complex<double> response(double freq_hz) const;
+  /// Steady-state gain G(0).
+  double dc_gain() const;
+  /// Output at the sample times k dt for an input held constant between samples (zero-order
+  /// hold), starting at rest with u = 0 before the record. Exact for any delay, including
+  /// fractions of a sample. Throws InputError for dt <= 0 or an improper / empty model.
+  std::vector<double> simulate_zoh(std::span<const double> u, double dt) const;
+};
+
+struct TfStructure {
+  int poles = 2;
+  int zeros = 0;
+  bool delay = false;
+};
+
+/// Parses "P,Z" (e.g. "2,0"), 1 <= P <= 3, 0 <= Z <= min(P, 2); InputError otherwise.
+TfStructure parse_tf_structure(const std::string& text);
+/// "tf(P,Z)" or "tf(P,Z)+delay".
+std::string tf_model_name(const TfStructure& s);
+/// Parameter names in order (K, fn_hz, zeta, tau_s, tz_s | b1_s, b2_s2, theta_s).
+std::vector<std::string> tf_param_names(const TfStructure& s);
+/// Builds the transfer function from parameter values in tf_param_names order.
+TransferFunction tf_from_params(const TfStructure& s, const double* p);
+/// As above from a fit (its parameters by name).
+TransferFunction tf_from_fit(const TfStructure& s, const FitResult& f);
+
+/// Fits G to frequency-response points h (output/input) at freq_hz, each with a standard
+/// uncertainty sigma (of the complex value; weights 1/sigma on real and imaginary parts).
+/// Multi-start over a grid of pole positions inside the band, then a final fit with intervals.
+FitResult fit_tf_frf(std::span<const double> freq_hz, std::span<const std::complex<double>> h,
+                     std::span<const double> sigma, const TfStructure& s, const std::string& gain_unit = "1");
+
+/// Output-error fit of G (plus an output offset y0) to a uniformly sampled record: the model
+/// output is the ZOH simulation of (u - u[0]) plus y0. `start` gives the TF parameters to start
+/// from (e.g. from fit_tf_frf); y0 starts at y[0].
+FitResult fit_tf_output_error(std::span<const double> u, std::span<const double> y, double dt, const TfStructure& s,
+                              const FitResult& start, const std::string& gain_unit = "1",
+                              const LsqOptions& options = {});
+
+/// The uncertainty of an H1 estimate from its coherence and the number of averaged segments
+/// (Bendat & Piersol): sigma = |H| sqrt((1 - g2) / (2 n g2)); g2 is clamped to [1e-6, 0.9999].
+double h1_sigma(std::complex<double> h, double coherence, std::size_t segments);
+
+}  // namespace tunekit::fitting

@@ -1,0 +1,433 @@
+#include "tunekit/fitting/first_order.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <array>
+#include <Eigen/Dense>
+#include "tunekit/fitting/stats.hpp"
+#include <cstdio>
+
+#include "tunekit/fitting/error.hpp"
+
+namespace tunekit::fitting {
+namespace {
+
+constexpr double kTauMaxFactor = 100.0;  // tau may be at most this many record lengths
+
+std::string g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+void check_record(const StepRecord& r, const std::string& what) {
+  if (r.t.size() != r.y.size()) throw InputError(what + ": time and output have different lengths");
+  if (r.t.size() < 5)
+    throw InputError(what + ": too few samples (" + std::to_string(r.t.size()) +
+                     ") to fit a step response; at least 5 are needed");
+  for (std::size_t i = 0; i < r.t.size(); ++i) {
+    if (!std::isfinite(r.t[i]) || !std::isfinite(r.y[i])) throw InputError(what + ": NaN or infinite sample");
+    if (i > 0 && !(r.t[i] > r.t[i - 1]))
+      throw InputError(what + ": time is not increasing at sample " + std::to_string(i + 1) + " (t = " + g(r.t[i]) +
+                       " s)");
+  }
+  if (!(std::abs(r.du) > 0) || !std::isfinite(r.du)) throw InputError(what + ": the input step size is zero");
+  const auto [lo, hi] = std::minmax_element(r.y.begin(), r.y.end());
+  if (!(*hi > *lo)) throw InputError(what + ": the output is constant; there is no response to fit");
+  std::size_t after = 0;
+  for (double t : r.t)
+    if (t > r.t_step) ++after;
+  if (after < 4)
+    throw InputError(what + ": only " + std::to_string(after) + " samples after the step at t = " + g(r.t_step) +
+                     " s; at least 4 are needed");
+}
+
+double mean_of(const std::vector<double>& v, std::size_t b, std::size_t e) {
+  if (e <= b) return 0;
+  return std::accumulate(v.begin() + static_cast<std::ptrdiff_t>(b), v.begin() + static_cast<std::ptrdiff_t>(e), 0.0) /
+         static_cast<double>(e - b);
+}
+
+// Residuals model - y and the Jacobian for one record; p = {K, tau, theta, y0}; columns of the
+// Jacobian row are placed at cols[0..3] of a row of width `width`.
+void step_residuals(const StepRecord& r, double K, double tau, double theta, double y0, double* res, double* jac,
+                    std::size_t width, const std::size_t cols[4]) {
+  const std::size_t n = r.t.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double s = r.t[i] - r.t_step - theta;
+    double m = y0, dK = 0, dtau = 0, dtheta = 0;
+    if (s > 0) {
+      const double e = std::exp(-s / tau);
+      m = y0 + K * r.du * (1 - e);
+      dK = r.du * (1 - e);
+      dtau = -K * r.du * e * s / (tau * tau);
+      dtheta = -K * r.du * e / tau;
+    }
+    res[i] = m - r.y[i];
+    if (jac != nullptr) {
+      double* row = jac + i * width;
+      row[cols[0]] = dK;
+      row[cols[1]] = dtau;
+      row[cols[2]] = dtheta;
+      row[cols[3]] = 1.0;
+    }
+  }
+}
+
+// Ordinary least-squares line z = a + b t; returns {a, b, r2}.
+std::array<double, 3> line_fit(const std::vector<double>& t, const std::vector<double>& z) {
+  const double n = static_cast<double>(t.size());
+  const double mt = std::accumulate(t.begin(), t.end(), 0.0) / n;
+  const double mz = std::accumulate(z.begin(), z.end(), 0.0) / n;
+  double stt = 0, stz = 0, szz = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    stt += (t[i] - mt) * (t[i] - mt);
+    stz += (t[i] - mt) * (z[i] - mz);
+    szz += (z[i] - mz) * (z[i] - mz);
+  }
+  if (stt <= 0) return {mz, 0, 0};
+  const double b = stz / stt;
+  const double r2 = szz > 0 ? (stz * stz) / (stt * szz) : 0;
+  return {mz - b * mt, b, r2};
+}
+
+
+// Accumulates J^T J (4x4), J^T r and the residual sum of squares for one record without storing
+// the Jacobian (100k samples cost a few milliseconds).
+double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
+  JtJ.setZero();
+  Jtr.setZero();
+  double rss = 0;
+  const std::size_t n = r.t.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double s = r.t[i] - r.t_step - p[2];
+    Eigen::Vector4d row(0, 0, 0, 1);
+    double m = p[3];
+    if (s > 0) {
+      const double e = std::exp(-s / p[1]);
+      m = p[3] + p[0] * r.du * (1 - e);
+      row(0) = r.du * (1 - e);
+      row(1) = -p[0] * r.du * e * s / (p[1] * p[1]);
+      row(2) = -p[0] * r.du * e / p[1];
+    }
+    const double res = m - r.y[i];
+    rss += res * res;
+    for (int a = 0; a < 4; ++a) {
+      for (int b = a; b < 4; ++b) JtJ(a, b) += row(a) * row(b);
+      Jtr(a) += row(a) * res;
+    }
+  }
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < a; ++b) JtJ(a, b) = JtJ(b, a);
+  return rss;
+}
+
+double rss_at(const StepRecord& r, const double p[4]) {
+  double rss = 0;
+  for (std::size_t i = 0; i < r.t.size(); ++i) {
+    const double d = step_response(r.t[i], r.t_step, r.du, p[0], p[1], p[2], p[3]) - r.y[i];
+    rss += d * d;
+  }
+  return rss;
+}
+
+// Levenberg-Marquardt on the 4x4 normal equations: brings a start close to the optimum cheaply,
+// so that the Ceres solve that follows needs only an iteration or two on long records.
+void polish_start(const StepRecord& r, double p[4], const double lo[4], const double hi[4], const bool fixed[4]) {
+  double lambda = 1e-3;
+  Eigen::Matrix4d JtJ;
+  Eigen::Vector4d Jtr;
+  double cost = normal_equations(r, p, JtJ, Jtr);
+  for (int it = 0; it < 60; ++it) {
+    for (int j = 0; j < 4; ++j)
+      if (fixed[j]) {
+        JtJ.row(j).setZero();
+        JtJ.col(j).setZero();
+        JtJ(j, j) = 1;
+        Jtr(j) = 0;
+      }
+    bool improved = false;
+    for (int tries = 0; tries < 12 && !improved; ++tries) {
+      Eigen::Matrix4d A = JtJ;
+      for (int j = 0; j < 4; ++j) A(j, j) += lambda * std::max(JtJ(j, j), 1e-12);
+      const Eigen::Vector4d dp = A.ldlt().solve(-Jtr);
+      double q[4];
+      for (int j = 0; j < 4; ++j) q[j] = fixed[j] ? p[j] : std::clamp(p[j] + dp(j), lo[j], hi[j]);
+      const double c = rss_at(r, q);
+      if (std::isfinite(c) && c < cost) {
+        const double rel = (cost - c) / std::max(cost, 1e-300);
+        std::copy(q, q + 4, p);
+        cost = c;
+        lambda = std::max(lambda / 3, 1e-12);
+        improved = true;
+        if (rel < 1e-10) return;
+      } else {
+        lambda *= 4;
+      }
+    }
+    if (!improved) return;
+    cost = normal_equations(r, p, JtJ, Jtr);
+  }
+}
+
+// Standard errors and 95 % intervals from the 4x4 normal matrix at the solution: the same
+// s^2 (J^T J)^-1 that ceres::Covariance computes from J, with the same rank check (ratio of
+// the extreme singular values of J, i.e. the square root of that of J^T J).
+void fill_covariance(FitResult& f, const StepRecord& r, const LsqOptions& o) {
+  double p[4] = {f.value("K"), f.value("tau_s"), f.value("theta_s"), f.value("y0")};
+  Eigen::Matrix4d JtJ;
+  Eigen::Vector4d Jtr;
+  normal_equations(r, p, JtJ, Jtr);
+  std::vector<int> free_idx;
+  for (int j = 0; j < 4; ++j)
+    if (!f.params[static_cast<std::size_t>(j)].fixed) free_idx.push_back(j);
+  const int k = static_cast<int>(free_idx.size());
+  // Fixed parameters get an identity row and column; scaled to unit diagonal so that the
+  // condition number reflects identifiability, not units (a correlation-like matrix: its
+  // eigenvalue range always contains the 1 of the padding).
+  Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
+  for (int j : free_idx)
+    for (int i : free_idx) M(j, i) = JtJ(j, i);
+  Eigen::Vector4d d;
+  for (int j = 0; j < 4; ++j) d(j) = 1.0 / std::sqrt(std::max(M(j, j), 1e-300));
+  const Eigen::Matrix4d S = d.asDiagonal() * M * d.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(S, Eigen::EigenvaluesOnly);
+  const double lmin = es.eigenvalues().minCoeff(), lmax = es.eigenvalues().maxCoeff();
+  std::string names;
+  for (int j : free_idx) names += (names.empty() ? "" : ", ") + f.params[static_cast<std::size_t>(j)].name;
+  if (!(lmax > 0) || !(lmin > 0) || std::sqrt(lmin / lmax) < std::max(o.min_reciprocal_condition, 1e-10))
+    throw FitError(f.model + ": parameters not identifiable from these data (the Jacobian of " + names +
+                   " is rank deficient); record a longer or richer response, or fix a parameter");
+  const Eigen::Matrix4d Sinv = S.inverse();
+  const int dof = f.diagnostics.num_observations - k;
+  if (dof <= 0) throw FitError(f.model + ": as many parameters as data points; no uncertainty can be estimated");
+  const double s2 = o.absolute_sigma ? 1.0 : f.diagnostics.rss / dof;
+  const double tq = t_multiplier(o.confidence, dof);
+  for (int j : free_idx) {
+    auto& prm = f.params[static_cast<std::size_t>(j)];
+    prm.std_error = std::sqrt(Sinv(j, j) * d(j) * d(j) * s2);
+    prm.ci95_lo = prm.value - tq * prm.std_error;
+    prm.ci95_hi = prm.value + tq * prm.std_error;
+    if (!std::isfinite(prm.std_error))
+      throw FitError(f.model + ": the uncertainty of " + prm.name + " is not finite; it is not identifiable");
+  }
+}
+
+void check_identifiable(const FitResult& f, const StepRecord* rec, double duration, bool have_stderr) {
+  const auto& tau = f.param("tau_s");
+  if (tau.value >= kTauMaxFactor * duration * 0.999 || (have_stderr && !(tau.std_error < tau.value)))
+    throw FitError(f.model + ": tau_s is not identifiable from this record (tau_s = " + g(tau.value) + " s +- " +
+                   g(tau.std_error) + " s against " + g(duration) + " s of response" +
+                   (rec != nullptr ? " after the step at t = " + g(rec->t_step) + " s" : std::string()) +
+                   "); the step is too short to see the time constant: record longer after the step");
+  const auto& theta = f.param("theta_s");
+  if (!theta.fixed && theta.value >= 0.9 * duration * 0.999)
+    throw FitError(f.model + ": theta_s ran to its bound (" + g(theta.value) +
+                   " s): no response to the step is visible");
+}
+
+double response_duration(const StepRecord& r) { return r.t.back() - r.t_step; }
+
+}  // namespace
+
+StepModel parse_step_model(const std::string& name) {
+  if (name == "fo" || name == "first_order") return StepModel::fo;
+  if (name == "fopdt") return StepModel::fopdt;
+  throw InputError("unknown step model '" + name + "' (expected fo or fopdt)");
+}
+
+std::string model_name(StepModel m) { return m == StepModel::fo ? "first_order" : "fopdt"; }
+
+double step_response(double t, double t_step, double du, double K, double tau_s, double theta_s, double y0) {
+  const double s = t - t_step - theta_s;
+  return s > 0 ? y0 + K * du * (1 - std::exp(-s / tau_s)) : y0;
+}
+
+StepStart log_incomplete_start(const StepRecord& r) {
+  StepStart st;
+  const std::size_t n = r.t.size();
+  std::size_t first_after = 0;
+  while (first_after < n && r.t[first_after] <= r.t_step) ++first_after;
+  st.y0 = first_after >= 1 ? mean_of(r.y, first_after > 20 ? first_after - first_after / 2 : 0, first_after) : r.y[0];
+  const std::size_t n_after = n - first_after;
+  const std::size_t tail = std::max<std::size_t>(1, n_after / 10);
+  const double y_end = mean_of(r.y, n - tail, n);
+  const double duration = response_duration(r);
+  st.y_ss = y_end;
+  st.K = (y_end - st.y0) / r.du;
+  st.tau_s = duration / 3;
+  st.theta_s = 0;
+  const double span = y_end - st.y0;
+  if (span == 0) return st;
+  // Only the transient is used: from where the (smoothed) response has made 5 % of its way to
+  // the last level until it has made 90 % -- a long settled tail would flatten the line.
+  const std::size_t w = std::max<std::size_t>(1, n_after / 100);
+  double t_lo = r.t[first_after], t_hi = r.t.back();
+  {
+    bool lo_found = false;
+    double acc = 0;
+    for (std::size_t i = first_after; i < n; ++i) {
+      acc += r.y[i];
+      if (i >= first_after + w) acc -= r.y[i - w];
+      const std::size_t cnt = std::min(w, i - first_after + 1);
+      const double prog = (acc / static_cast<double>(cnt) - st.y0) / span;
+      const double tc = r.t[i - (cnt - 1) / 2];
+      if (!lo_found && prog >= 0.05) {
+        t_lo = tc;
+        lo_found = true;
+      }
+      if (prog >= 0.9) {
+        t_hi = tc;
+        break;
+      }
+    }
+  }
+  double best_r2 = -1;
+  for (double c : {0.03, 0.1, 0.3, 1.0, 3.0, 10.0}) {
+    const double yss = y_end + c * span;
+    std::vector<double> tt, zz;
+    for (std::size_t i = first_after; i < n; ++i) {
+      if (r.t[i] < t_lo || r.t[i] > t_hi) continue;
+      const double ratio = (r.y[i] - yss) / (st.y0 - yss);  // 1 at the start, 0 at steady state
+      if (ratio > 0.01 && ratio < 0.99) {
+        tt.push_back(r.t[i]);
+        zz.push_back(std::log(ratio));
+      }
+    }
+    if (tt.size() < 3) continue;
+    const auto [a, b, r2] = line_fit(tt, zz);
+    if (!(b < 0) || r2 <= best_r2) continue;
+    best_r2 = r2;
+    st.y_ss = yss;
+    st.tau_s = std::clamp(-1.0 / b, 1e-3 * duration, 10 * duration);
+    // Z = -(t - t_step - theta) / tau crosses zero at t_step + theta.
+    st.theta_s = std::clamp(-a / b - r.t_step, 0.0, 0.5 * duration);
+    st.K = (yss - st.y0) / r.du;
+    st.linearity_r2 = r2;
+  }
+  return st;
+}
+
+FitResult fit_step(const StepRecord& r, StepModel model, const LsqOptions& options) {
+  check_record(r, model_name(model));
+  std::size_t before = 0;
+  for (double t : r.t)
+    if (t < r.t_step) ++before;
+  if (model == StepModel::fopdt && before < 3)
+    throw FitError(
+        "fopdt: theta_s and y0 cannot both be identified without samples before the step (" + std::to_string(before) +
+        " found); include the steady state before the step or use the first-order model (fo)");
+  const double duration = response_duration(r);
+  const StepStart st = log_incomplete_start(r);
+
+  // Long records: polish the start on the 4x4 normal equations, let Ceres confirm the optimum,
+  // and compute the covariance from the same normal matrix (fill_covariance).
+  LsqOptions ceres_opt = options;
+  ceres_opt.compute_covariance = false;
+  auto solve_from = [&](const StepStart& s) {
+    LsqProblem prob;
+    const double tmin = r.t.size() > 1 ? (r.t[1] - r.t[0]) * 1e-3 : 1e-9;
+    prob.params = {{"K", r.gain_unit, s.K},
+                   {"tau_s", "s", s.tau_s, std::max(tmin, 1e-9), kTauMaxFactor * duration},
+                   {"theta_s", "s", model == StepModel::fo ? 0.0 : s.theta_s, 0.0, 0.9 * duration,
+                    model == StepModel::fo},
+                   {"y0", r.output_unit, s.y0}};
+    {
+      double p[4], lo[4], hi[4];
+      bool fixed[4];
+      for (int j = 0; j < 4; ++j) {
+        const auto& ps = prob.params[static_cast<std::size_t>(j)];
+        p[j] = std::clamp(ps.start, ps.lower, ps.upper);
+        lo[j] = ps.lower;
+        hi[j] = ps.upper;
+        fixed[j] = ps.fixed;
+      }
+      polish_start(r, p, lo, hi, fixed);
+      for (int j = 0; j < 4; ++j) prob.params[static_cast<std::size_t>(j)].start = p[j];
+    }
+    prob.num_residuals = static_cast<int>(r.t.size());
+    prob.observed = r.y;
+    prob.residuals_and_jacobian = [&r](const double* p, double* res, double* jac) {
+      static constexpr std::size_t cols[4] = {0, 1, 2, 3};
+      step_residuals(r, p[0], p[1], p[2], p[3], res, jac, 4, cols);
+      return true;
+    };
+    FitResult fr = solve_least_squares(model_name(model), prob, ceres_opt);
+    if (options.compute_covariance) fill_covariance(fr, r, options);
+    return fr;
+  };
+
+  FitResult f;
+  try {
+    f = solve_from(st);
+  } catch (const FitError&) {
+    StepStart alt = st;  // fallback: plain start without the log transform
+    alt.tau_s = duration / 3;
+    alt.theta_s = 0;
+    alt.K = (r.y.back() - st.y0) / r.du;
+    f = solve_from(alt);
+  }
+  check_identifiable(f, &r, duration, options.compute_covariance);
+  return f;
+}
+
+FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model, const FitResult* start,
+                           const LsqOptions& options) {
+  if (recs.empty()) throw InputError("pooled step fit: no steps");
+  if (recs.size() == 1) return fit_step(recs.front(), model, options);
+  std::size_t m = 0;
+  double min_duration = 1e300, max_duration = 0;
+  for (const auto& r : recs) {
+    check_record(r, model_name(model) + " (pooled)");
+    m += r.t.size();
+    min_duration = std::min(min_duration, response_duration(r));
+    max_duration = std::max(max_duration, response_duration(r));
+  }
+  const std::size_t k = 3 + recs.size();
+  LsqProblem prob;
+  double K0, tau0, theta0;
+  if (start != nullptr) {
+    K0 = start->value("K");
+    tau0 = start->value("tau_s");
+    theta0 = start->value("theta_s");
+  } else {
+    const auto st = log_incomplete_start(recs.front());
+    K0 = st.K;
+    tau0 = st.tau_s;
+    theta0 = st.theta_s;
+  }
+  if (model == StepModel::fo) theta0 = 0;
+  prob.params = {{"K", recs.front().gain_unit, K0},
+                 {"tau_s", "s", tau0, 1e-9, kTauMaxFactor * max_duration},
+                 {"theta_s", "s", theta0, 0.0, 0.9 * min_duration, model == StepModel::fo}};
+  for (std::size_t j = 0; j < recs.size(); ++j) {
+    const auto& r = recs[j];
+    double y0 = r.y.front();
+    std::size_t before = 0;
+    for (double t : r.t)
+      if (t < r.t_step) ++before;
+    if (before > 0) y0 = mean_of(r.y, 0, before);
+    prob.params.push_back({"y0_" + std::to_string(j), r.output_unit, y0});
+  }
+  prob.num_residuals = static_cast<int>(m);
+  for (const auto& r : recs) prob.observed.insert(prob.observed.end(), r.y.begin(), r.y.end());
+  prob.residuals_are_time_ordered = true;
+  prob.residuals_and_jacobian = [&recs, k](const double* p, double* res, double* jac) {
+    std::size_t off = 0;
+    for (std::size_t j = 0; j < recs.size(); ++j) {
+      const auto& r = recs[j];
+      if (jac != nullptr) std::fill(jac + off * k, jac + (off + r.t.size()) * k, 0.0);
+      const std::size_t cols[4] = {0, 1, 2, 3 + j};
+      step_residuals(r, p[0], p[1], p[2], p[3 + j], res + off, jac != nullptr ? jac + off * k : nullptr, k, cols);
+      off += r.t.size();
+    }
+    return true;
+  };
+  FitResult f = solve_least_squares(model_name(model) + "_pooled", prob, options);
+  check_identifiable(f, nullptr, max_duration, options.compute_covariance);
+  return f;
+}
+
+}  // namespace tunekit::fitting

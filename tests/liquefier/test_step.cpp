@@ -1,0 +1,283 @@
+// Step-response identification: seed 001 Table B.1 against the thesis's own Table 4.3,
+// synthetic recovery with known truth, Monte-Carlo interval coverage, step detection, CLI.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/fitting/first_order.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/step_analysis.hpp"
+
+using namespace tunekit;
+using tunekit::test::dataset;
+using tunekit::test::run_cli;
+using tunekit::test::write_scratch;
+
+namespace {
+
+struct Truth {
+  double K = 2.0, tau = 0.5, theta = 0.1, y0 = 1.0;
+};
+
+fitting::StepRecord synth_step(const Truth& tr, double sigma, unsigned seed, double fs = 100, double pre_s = 1.0,
+                               double post_s = 4.0, double du = 1.5) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  fitting::StepRecord r;
+  r.t_step = 0.0;
+  r.du = du;
+  const int n0 = static_cast<int>(pre_s * fs), n1 = static_cast<int>(post_s * fs);
+  for (int i = -n0; i < n1; ++i) {
+    const double t = (i + 0.5) / fs;
+    r.t.push_back(t);
+    r.y.push_back(fitting::step_response(t, 0.0, du, tr.K, tr.tau, tr.theta, tr.y0) + noise(rng));
+  }
+  return r;
+}
+
+// Seed 001 Table B.1 / Table 4.3 from datasets/liquefier.
+std::map<double, std::pair<std::vector<double>, std::vector<double>>> table_b1() {
+  ident::CsvOptions o;
+  const auto tab = ident::read_csv(dataset("liquefier/holtrup_table_b1_ooze.csv"), o);
+  std::map<double, std::pair<std::vector<double>, std::vector<double>>> m;
+  const auto& v = tab.column("v_print_mm_s").values;
+  for (std::size_t i = 0; i < tab.rows; ++i) {
+    m[v[i]].first.push_back(tab.column("t_s").values[i]);
+    m[v[i]].second.push_back(tab.column("L_mm").values[i]);
+  }
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("Table B.1: first-order fit per print speed is at least as good as the thesis's Table 4.3 parameters") {
+  const auto b1 = table_b1();
+  const auto t43 = ident::read_csv(dataset("liquefier/holtrup_table_4_3.csv"));
+  REQUIRE(t43.rows == 4);
+  REQUIRE(b1.size() == 4);
+  for (std::size_t i = 0; i < t43.rows; ++i) {
+    const double v = t43.column("v_print_mm_s").values[i];
+    const double k = t43.column("k_mm_per_mm_s").values[i];
+    const double tau = t43.column("tau_s").values[i];
+    const double t0 = t43.column("t0_s").values[i];
+    const auto& [t, L] = b1.at(v);
+    // The thesis's model (eq. 4.5) with its own parameters on the same points.
+    double rss_thesis = 0;
+    for (std::size_t j = 0; j < t.size(); ++j) {
+      const double m = v * k * (1 - std::exp(-(t[j] - t0) / tau));
+      rss_thesis += (m - L[j]) * (m - L[j]);
+    }
+    const double rms_thesis = std::sqrt(rss_thesis / static_cast<double>(t.size()));
+    fitting::StepRecord r;
+    r.t = t;
+    r.y = L;
+    r.t_step = 0;
+    r.du = v;
+    const auto f = fitting::fit_step(r, fitting::StepModel::fo);
+    INFO("v_print = " << v << " mm/s: rms fit " << f.diagnostics.rms << " mm, rms Table 4.3 " << rms_thesis
+                      << " mm, tau " << f.value("tau_s") << " s");
+    CHECK(f.diagnostics.rms <= rms_thesis + 1e-9);
+    CHECK(f.diagnostics.rms < 1.0);  // the points are read to 1 mm
+    CHECK(f.value("tau_s") > 0);
+    CHECK(f.param("tau_s").ci95_lo < f.param("tau_s").ci95_hi);
+  }
+}
+
+TEST_CASE("log-incomplete response (eq. 4.4) gives start values near the truth for an unsettled response") {
+  Truth tr;
+  tr.tau = 3.0;
+  auto r = synth_step(tr, 0.0, 1, 50, 1.0, 2.0);  // only 2 s of a 3 s time constant
+  const auto st = fitting::log_incomplete_start(r);
+  CHECK(st.linearity_r2 > 0.99);
+  CHECK(st.tau_s == Approx(3.0).epsilon(0.5));
+  CHECK(st.theta_s == Approx(0.1).margin(0.1));
+}
+
+TEST_CASE("FOPDT with noise recovers K, tau and theta within their 95 % intervals") {
+  Truth tr;
+  const auto r = synth_step(tr, 0.02, 42);
+  const auto f = fitting::fit_step(r, fitting::StepModel::fopdt);
+  for (auto [name, truth] : {std::pair{"K", tr.K}, {"tau_s", tr.tau}, {"theta_s", tr.theta}, {"y0", tr.y0}}) {
+    const auto& p = f.param(name);
+    INFO(name << " = " << p.value << " [" << p.ci95_lo << ", " << p.ci95_hi << "], truth " << truth);
+    CHECK(p.ci95_lo <= truth);
+    CHECK(truth <= p.ci95_hi);
+    CHECK(p.std_error > 0);
+  }
+  CHECK(f.diagnostics.converged);
+  CHECK(f.diagnostics.r2 > 0.99);
+  CHECK(f.diagnostics.rms == Approx(0.02).epsilon(0.15));
+  CHECK(f.model == "fopdt");
+  // A first-order model without dead time fits worse: AIC prefers FOPDT.
+  const auto fo = fitting::fit_step(r, fitting::StepModel::fo);
+  CHECK(f.diagnostics.aic < fo.diagnostics.aic);
+}
+
+TEST_CASE("Monte-Carlo: the 95 % interval of tau covers the truth in 90-99 % of 200 noise draws") {
+  Truth tr;
+  int covered = 0, n = 0;
+  for (unsigned seed = 1000; seed < 1200; ++seed) {
+    const auto r = synth_step(tr, 0.05, seed, 50, 1.0, 3.0);
+    const auto f = fitting::fit_step(r, fitting::StepModel::fopdt);
+    const auto& p = f.param("tau_s");
+    ++n;
+    if (p.ci95_lo <= tr.tau && tr.tau <= p.ci95_hi) ++covered;
+  }
+  const double coverage = static_cast<double>(covered) / n;
+  INFO("coverage " << coverage << " over " << n << " draws");
+  CHECK(n == 200);
+  CHECK(coverage >= 0.90);
+  CHECK(coverage <= 0.99);
+}
+
+TEST_CASE("a step too short to see tau is reported as not identifiable") {
+  Truth tr;
+  tr.tau = 20.0;
+  const auto r = synth_step(tr, 0.05, 7, 100, 1.0, 0.3);
+  try {
+    (void)fitting::fit_step(r, fitting::StepModel::fopdt);
+    FAIL("expected a FitError");
+  } catch (const FitError& e) {
+    CHECK(std::string(e.what()).find("not identifiable") != std::string::npos);
+  }
+  // FOPDT without samples before the step cannot separate theta from y0.
+  auto r2 = synth_step(Truth{}, 0.01, 8, 100, 0.0, 3.0);
+  CHECK_THROWS_AS(fitting::fit_step(r2, fitting::StepModel::fopdt), FitError);
+  CHECK_NOTHROW(fitting::fit_step(r2, fitting::StepModel::fo));
+}
+
+TEST_CASE("steps are found in the input, fitted rising and falling, pooled and tabulated per operating point") {
+  // Levels 1 -> 3 -> 1 -> 2 -> 1 with a dead time; tau depends on the level (non-LTI).
+  const double fs = 100, K = 4, theta = 0.05;
+  auto tau_of = [](double level) { return 0.2 * std::pow(level, 0.5); };
+  std::vector<double> t, u, y;
+  const std::vector<std::pair<double, double>> lv{{0, 1}, {5, 3}, {10, 1}, {15, 2}, {20, 1}};
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0, 0.01);
+  double state = K * 1.0;
+  for (int i = 0; i < 25 * fs; ++i) {
+    const double ti = i / fs;
+    double ui = 0;
+    for (const auto& [t0, l] : lv)
+      if (ti >= t0) ui = l;
+    double ud = 1.0;  // the input delayed by theta
+    for (const auto& [t0, l] : lv)
+      if (ti - theta >= t0) ud = l;
+    const double upper = std::max(ud, 1.0);
+    state += (K * ud - state) * (1 - std::exp(-(1 / fs) / tau_of(upper)));
+    t.push_back(ti);
+    u.push_back(ui);
+    y.push_back(state + noise(rng));
+  }
+  ident::StepAnalysisOptions o;
+  const auto a = ident::analyze_steps(t, u, y, o);
+  REQUIRE(a.steps.size() == 4);
+  CHECK(a.steps[0].step.rising());
+  CHECK_FALSE(a.steps[1].step.rising());
+  CHECK(a.steps[1].step.t_step_s == Approx(9.995).margin(0.01));
+  CHECK(a.steps[0].step.u_before == Approx(1.0));
+  CHECK(a.steps[0].step.u_after == Approx(3.0));
+  for (const auto& s : a.steps) {
+    REQUIRE(s.fit);
+    CHECK(s.fit->value("K") == Approx(K).epsilon(0.03));
+  }
+  REQUIRE(a.pooled);
+  CHECK(a.pooled->value("K") == Approx(K).epsilon(0.03));
+  REQUIRE(a.operating_points.size() == 2);
+  CHECK(a.operating_points[0].u == Approx(2.0));
+  CHECK(a.operating_points[1].u == Approx(3.0));
+  CHECK(a.operating_points[1].n_steps == 2);
+  REQUIRE(a.trend_tau);
+  // The discrete simulation above is a first-order lag per sample; tau grows with the level.
+  CHECK(a.operating_points[1].fit.value("tau_s") > a.operating_points[0].fit.value("tau_s"));
+  CHECK(a.trend_tau->value("b") == Approx(0.5).margin(0.15));
+  const auto j = ident::to_json(a);
+  CHECK(j["steps"].size() == 4);
+  CHECK(j["steps"][1]["direction"] == "falling");
+  CHECK(j["operating_points"][0].contains("tau_s"));
+  CHECK(j["trend"]["tau_s"]["params"].contains("b"));
+}
+
+TEST_CASE("tunekit step on the synthetic data set recovers the truth written in its header") {
+  const auto r = run_cli({"step", dataset("liquefier/synthetic_steps.csv"), "--time", "time", "--input", "feed",
+                          "--output", "force", "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto j = nlohmann::json::parse(r.out)["results"];
+  CHECK(j["steps"].size() == 4);
+  const auto& p = j["pooled"]["params"];
+  for (auto [name, truth] : {std::pair{"K", 12.0}, {"tau_s", 0.6}, {"theta_s", 0.15}}) {
+    INFO(name);
+    CHECK(p[name]["ci95"][0].get<double>() <= truth);
+    CHECK(p[name]["ci95"][1].get<double>() >= truth);
+  }
+  CHECK(j["pooled"]["diagnostics"].contains("r2"));
+  CHECK(j["units"]["K"] == "N/(mm/s)");
+  CHECK(j["operating_points"].size() == 3);
+  CHECK(j["steps"][0]["params"].contains("y0"));
+}
+
+TEST_CASE("tunekit step on Table B.1 by print-speed groups gives per-speed fits and a trend") {
+  const auto r = run_cli({"step", dataset("liquefier/holtrup_table_b1_ooze.csv"), "--time", "t_s", "--output",
+                          "L_mm", "--group", "v_print_mm_s", "--model", "fo", "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto j = nlohmann::json::parse(r.out)["results"];
+  CHECK(j["steps"].size() == 4);
+  CHECK(j["steps"][0]["u_after"] == 50.0);
+  CHECK(j["operating_points"].size() >= 2);
+  CHECK(j["trend"].contains("tau_s"));
+  const auto text = run_cli({"step", dataset("liquefier/holtrup_table_b1_ooze.csv"), "--time", "t_s", "--output",
+                             "L_mm", "--group", "v_print_mm_s", "--model", "fo"});
+  CHECK(text.code == 0);
+  CHECK(text.out.find("pooled") != std::string::npos);
+}
+
+TEST_CASE("tunekit step fails clearly: exit 2 for bad input, exit 1 for a fit that cannot be made") {
+  auto csv = [](const std::string& name, auto fy, auto fu, int n = 200) {
+    std::ostringstream s;
+    s << "time (s),feed (mm/s),force (N)\n";
+    for (int i = 0; i < n; ++i) s << i * 0.01 << "," << fu(i) << "," << fy(i) << "\n";
+    return write_scratch(name, s.str());
+  };
+  auto step_u = [](int i) { return i < 50 ? 1.0 : 2.0; };
+  auto resp = [](int i) { return i < 50 ? 1.0 : 2.0 - std::exp(-(i - 50) / 20.0) + 0.001 * (i % 3); };
+  const auto no_step = csv("no_step.csv", resp, [](int) { return 1.0; });
+  const auto flat = csv("flat.csv", [](int) { return 3.0; }, step_u);
+  const auto few = csv("few.csv", resp, step_u, 6);
+  auto run = [](const std::string& f) {
+    return run_cli({"step", f, "--time", "time", "--input", "feed", "--output", "force"});
+  };
+  auto r = run(no_step);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("no step found") != std::string::npos);
+  r = run(flat);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("constant") != std::string::npos);
+  r = run(few);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("too few samples") != std::string::npos);
+  r = run(write_scratch("nan.csv", "time,feed,force\n0,1,1\n0.1,1,nan\n0.2,2,1\n"));
+  CHECK(r.code == 2);
+  r = run(write_scratch("back.csv", "time,feed,force\n0,1,1\n0.1,1,2\n0.05,2,1\n0.3,2,1\n"));
+  CHECK(r.code == 2);
+  CHECK(r.err.find("increas") != std::string::npos);
+  // Too short to see tau: a ramp that never bends.
+  const auto ramp = csv("ramp.csv", [](int i) { return i < 100 ? 1.0 : 1.0 + 0.01 * (i - 100) + 0.0005 * (i % 2); },
+                        [](int i) { return i < 100 ? 1.0 : 2.0; });
+  r = run(ramp);
+  CHECK(r.code == 1);
+  CHECK(r.err.find("not identifiable") != std::string::npos);
+  CHECK(r.out.empty());
+  // Help carries worked examples.
+  const auto h = run_cli({"step", "--help"});
+  CHECK(h.out.find("Examples:") != std::string::npos);
+}
