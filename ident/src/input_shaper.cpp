@@ -16,31 +16,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// Polynomial in z with coefficients c[0] + c[1] z + c[2] z^2 + c[3] z^3.
-double poly3(const double (&c)[4], double z) { return c[0] + z * (c[1] + z * (c[2] + z * c[3])); }
-
-// Singhose's fits of the damped two-hump EI shaper (V = 5 %): amplitude and time (in periods
-// of the design frequency) of each impulse as cubic polynomials in the damping ratio.
-constexpr double k2HumpT[4][4] = {{0, 0, 0, 0},
-                                  {0.49890, 0.16270, -0.54262, 6.16180},
-                                  {0.99748, 0.18382, -1.58270, 8.17120},
-                                  {1.49920, -0.09297, -0.28338, 1.85710}};
-constexpr double k2HumpA[4][4] = {{0.16054, 0.76699, 2.26560, -1.22750},
-                                  {0.33911, 0.45081, -2.58080, 1.73650},
-                                  {0.34089, -0.61533, -0.68765, 0.42261},
-                                  {0.15997, -0.60246, 1.00280, -0.93145}};
-// The same for the three-hump EI shaper.
-constexpr double k3HumpT[5][4] = {{0, 0, 0, 0},
-                                  {0.49974, 0.23834, 0.44559, 12.4720},
-                                  {0.99849, 0.29808, -2.36460, 23.3990},
-                                  {1.49870, 0.10306, -2.01390, 17.0320},
-                                  {1.99960, -0.28231, 0.61536, 5.40450}};
-constexpr double k3HumpA[5][4] = {{0.11275, 0.76632, 3.29160, -1.44380},
-                                  {0.23698, 0.61164, -2.57850, 4.85220},
-                                  {0.30008, -0.19062, -2.14560, 0.13744},
-                                  {0.23775, -0.73297, 0.46885, -2.08650},
-                                  {0.11244, -0.45439, 0.96382, -1.46000}};
-
 void normalize(Shaper& s) {
   double sum = 0;
   for (double a : s.amplitudes) sum += a;
@@ -132,27 +107,30 @@ Shaper design_shaper(ShaperType type, double f, double z, double V) {
       s.times_s = {0, 0.375 * td, 0.75 * td};
       break;
     }
-    case ShaperType::ei: {  // Singhose: V(f) = V_tol with zero slope; damped fit in z
-      const double a1 = (0.24968 + 0.24961 * V) + z * ((0.80008 + 1.23328 * V) + z * (0.49599 + 3.17316 * V));
-      const double a3 = (0.25149 + 0.21474 * V) + z * ((-0.83249 + 1.41498 * V) + z * (0.85181 - 4.90094 * V));
-      const double t2 = 0.4999 + z * ((0.46159 + 8.57843 * V) * V +
-                                      z * ((4.26169 - 108.644 * V) * V + z * (1.75601 + 336.989 * V) * V));
-      s.amplitudes = {a1, 1 - a1 - a3, a3};
-      s.times_s = {0, t2 * td, td};
+    case ShaperType::ei: {  // Singhose: V(f) = V_tol with zero slope at f; damped by the K factors
+      const double a1 = 0.25 * (1 + V);
+      s.amplitudes = {a1, 0.5 * (1 - V) * K, a1 * K * K};
+      s.times_s = {0, 0.5 * td, td};
       break;
     }
-    case ShaperType::two_hump_ei:
-      for (int i = 0; i < 4; ++i) {
-        s.amplitudes.push_back(poly3(k2HumpA[i], z));
-        s.times_s.push_back(poly3(k2HumpT[i], z) / f);
-      }
+    case ShaperType::two_hump_ei: {  // Singhose's two-hump EI closed form
+      const double V2 = V * V;
+      const double X = std::cbrt(V2 * (std::sqrt(1 - V2) + 1));
+      const double a1 = (3 * X * X + 2 * X + 3 * V2) / (16 * X);
+      const double a2 = 0.5 - a1;
+      s.amplitudes = {a1, a2 * K, a2 * K * K, a1 * K * K * K};
+      s.times_s = {0, 0.5 * td, td, 1.5 * td};
       break;
-    case ShaperType::three_hump_ei:
-      for (int i = 0; i < 5; ++i) {
-        s.amplitudes.push_back(poly3(k3HumpA[i], z));
-        s.times_s.push_back(poly3(k3HumpT[i], z) / f);
-      }
+    }
+    case ShaperType::three_hump_ei: {  // Singhose's three-hump EI closed form
+      const double a1 = (1 + 3 * V + 2 * std::sqrt(2 * (V + 1) * V)) / 16;
+      const double a2 = 0.25 * (1 - V);
+      const double a3 = 0.5 * (1 + V) - 2 * a1;
+      const double K2 = K * K;
+      s.amplitudes = {a1, a2 * K, a3 * K2, a2 * K2 * K, a1 * K2 * K2};
+      s.times_s = {0, 0.5 * td, td, 1.5 * td, 2 * td};
       break;
+    }
   }
   normalize(s);
   return s;

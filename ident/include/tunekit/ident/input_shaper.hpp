@@ -55,8 +55,8 @@ struct Shaper {
 };
 
 /// Impulse sequence of `type` for a mode at `freq_hz` with `damping_ratio` (0 <= z < 1).
-/// ZV, ZVD, ZVDD and MZV are exact closed forms; EI, 2-hump EI and 3-hump EI use Singhose's
-/// published polynomial fits in the damping ratio (exact closed forms at zero damping).
+/// Closed forms: ZV, ZVD, ZVDD (Singer-Seering), MZV (Klipper), EI, 2-hump and 3-hump EI
+/// (Singhose's undamped closed forms, impulse i scaled by K^i for damping, as Klipper does).
 /// Throws InputError for a non-positive frequency or a damping ratio outside [0, 1).
 Shaper design_shaper(ShaperType type, double freq_hz, double damping_ratio,
                      double vibration_tolerance = kDefaultVibrationTolerance);

@@ -1,0 +1,222 @@
+#include "resonance_common.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
+
+namespace tunekit::cli {
+namespace {
+
+ident::Detrend parse_detrend(const std::string& s) {
+  if (ident::iequals(s, "none")) return ident::Detrend::none;
+  if (ident::iequals(s, "constant") || ident::iequals(s, "mean")) return ident::Detrend::constant;
+  if (ident::iequals(s, "linear")) return ident::Detrend::linear;
+  throw InputError("unknown detrend '" + s + "' (none, constant, linear)");
+}
+
+char parse_axis(const std::string& s) {
+  if (s.empty()) return 0;
+  if (s.size() == 1 && (s[0] == 'x' || s[0] == 'y' || s[0] == 'z' || s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z'))
+    return static_cast<char>(std::tolower(static_cast<unsigned char>(s[0])));
+  throw InputError("--axis must be x, y or z, not '" + s + "'");
+}
+
+std::vector<double> two(double a, double b) { return {a, b}; }
+
+}  // namespace
+
+std::string klipper_files_help() {
+  return "Feeding Klipper's files:\n"
+         "  Raw accelerometer data (TEST_RESONANCES AXIS=X OUTPUT=raw_data, or ACCELEROMETER_MEASURE) is written as\n"
+         "  /tmp/raw_data_x_<name>.csv with the header '#time,accel_x,accel_y,accel_z' (s, mm/s^2). Pass one or more\n"
+         "  of them; the axis comes from 'raw_data_x_' / 'raw_data_y_' in the name (or --axis), several files of one\n"
+         "  axis are averaged as Klipper's calibrate_shaper.py does. SHAPER_CALIBRATE's calibration_data_x_<name>.csv\n"
+         "  (freq,psd_x,psd_y,psd_z,psd_xyz, already normalized by Klipper) is accepted as well.\n"
+         "  Other loggers: --time COL --accel COL [--accel COL...] (mm/s^2); a commanded-acceleration column\n"
+         "  --excitation COL adds the frequency response H1 and coherence, and the modes are fitted to it.\n";
+}
+
+void add_resonance_options(CLI::App* sub, ResonanceCliArgs& a) {
+  sub->add_option("files", a.files,
+                  "Accelerometer CSVs: Klipper raw_data_<axis>_*.csv (#time,accel_x,accel_y,accel_z in s and mm/s^2), "
+                  "Klipper calibration_data_<axis>_*.csv, or generic CSVs with --time/--accel")
+      ->required();
+  sub->add_option("--axis", a.axis, "Axis of every file: x, y or z (default: from the Klipper file name)");
+  sub->add_option("--time", a.time_column, "Time column (s), strictly increasing (default: time)");
+  sub->add_option("--accel", a.accel_columns,
+                  "Acceleration column(s) in mm/s^2, PSDs summed over them (default: accel_x accel_y accel_z)");
+  sub->add_option("--excitation", a.excitation_column,
+                  "Commanded-acceleration column (mm/s^2): adds the H1 frequency response and coherence, and the modes "
+                  "are fitted to the FRF");
+  sub->add_option("--window", a.window, "Welch window: kaiser (default, Klipper), hann, hamming, rect");
+  sub->add_option("--kaiser-beta", a.kaiser_beta, "Kaiser window beta (dimensionless, default 6 as Klipper)");
+  sub->add_option("--segment", a.segment,
+                  "Welch segment length in samples (default 2^ceil(log2(fs * 0.5 s)), Klipper's choice)");
+  sub->add_option("--overlap", a.overlap, "Welch segment overlap, fraction 0..0.95 (default 0.5)");
+  sub->add_option("--detrend", a.detrend, "Per-segment detrending: constant (default, Klipper), linear, none");
+  sub->add_option("--fit-min", a.fit_min_hz, "Lowest frequency searched for modes, Hz (default 10)");
+  sub->add_option("--fit-max", a.fit_max_hz,
+                  "Highest frequency searched for modes, Hz (default 133.33, where Klipper's sweep ends)");
+  sub->add_option("--max-modes", a.max_modes, "Most modes fitted per axis (default 3)");
+  sub->add_option("--peak-threshold", a.peak_threshold,
+                  "Ignore peaks lower than this fraction of the highest (whitened PSD), 0..1 (default 0.05)");
+  sub->add_option("--excitation-exponent", a.excitation_exponent,
+                  "p in the excitation spectrum shape f^p (dimensionless; default 2 for raw sweeps with amplitude "
+                  "accel_per_hz*f, 1 for Klipper calibration data)");
+  sub->add_option("--full-scale", a.full_scale_mm_s2,
+                  "Accelerometer range in mm/s^2 for clipping detection (default: detect flat-topped extremes; "
+                  "ADXL345 at +-16 g is 156906)");
+  sub->add_option("--plot-max", a.max_plot_hz, "Highest frequency of the PSD arrays in the JSON, Hz (default 200)");
+  sub->add_flag("--no-frf", a.no_frf, "Fit the PSD even when an excitation column gives the FRF");
+  add_output_options(sub, a.output);
+}
+
+nlohmann::json resonance_options_json(const ResonanceCliArgs& a) {
+  return {{"axis", a.axis},
+          {"time_column", a.time_column},
+          {"accel_columns", a.accel_columns},
+          {"excitation_column", a.excitation_column},
+          {"window", a.window},
+          {"kaiser_beta", a.kaiser_beta},
+          {"segment", a.segment},
+          {"overlap", a.overlap},
+          {"detrend", a.detrend},
+          {"fit_min_hz", a.fit_min_hz},
+          {"fit_max_hz", a.fit_max_hz},
+          {"max_modes", a.max_modes},
+          {"peak_threshold", a.peak_threshold},
+          {"excitation_exponent", a.excitation_exponent},
+          {"full_scale_mm_s2", a.full_scale_mm_s2},
+          {"no_frf", a.no_frf}};
+}
+
+std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelope& env) {
+  ident::WelchOptions welch = ident::klipper_welch_options();
+  welch.window = ident::parse_window(a.window);
+  welch.kaiser_beta = a.kaiser_beta;
+  welch.segment_length = a.segment;
+  if (!(a.overlap >= 0 && a.overlap <= 0.95)) throw InputError(fmt::format("--overlap {} must be in [0, 0.95]", a.overlap));
+  welch.overlap = a.overlap;
+  welch.detrend = parse_detrend(a.detrend);
+  if (!(a.fit_max_hz > a.fit_min_hz) || !(a.fit_min_hz >= 0))
+    throw InputError(fmt::format("--fit-min {} Hz must be below --fit-max {} Hz", a.fit_min_hz, a.fit_max_hz));
+  if (a.max_modes < 1) throw InputError("--max-modes must be at least 1");
+  if (!(a.peak_threshold > 0 && a.peak_threshold < 1)) throw InputError("--peak-threshold must be in (0, 1)");
+
+  ident::AccelInputOptions in;
+  in.time_column = a.time_column;
+  in.accel_columns = a.accel_columns;
+  in.excitation_column = a.excitation_column;
+  in.axis = parse_axis(a.axis);
+  in.full_scale_mm_s2 = a.full_scale_mm_s2;
+
+  std::map<char, std::vector<ident::AxisSpectrum>> by_axis;
+  for (const auto& path : a.files) {
+    const std::string bytes = ident::read_file_bytes(path);
+    env.add_input(path, bytes);
+    ident::AxisSpectrum s;
+    if (ident::is_calibration_data(bytes)) {
+      s = ident::load_calibration_data(path, bytes, in.axis);
+    } else {
+      const auto rec = ident::load_accel_csv(path, bytes, in);
+      s = ident::record_spectrum(rec, welch);
+    }
+    if (s.axis == 0)
+      throw InputError("cannot tell which axis this file measured (Klipper names them raw_data_x_*.csv or "
+                       "calibration_data_y_*.csv); pass --axis x|y|z",
+                       path);
+    by_axis[s.axis].push_back(std::move(s));
+  }
+  ident::ResonanceOptions ro;
+  ro.fit_min_hz = a.fit_min_hz;
+  ro.fit_max_hz = a.fit_max_hz;
+  ro.max_modes = a.max_modes;
+  ro.peak_threshold = a.peak_threshold;
+  ro.excitation_exponent = a.excitation_exponent;
+  ro.use_frf = !a.no_frf;
+  std::vector<AxisResult> out;
+  for (auto& [axis, spectra] : by_axis) {
+    AxisResult r;
+    r.axis = axis;
+    r.spectrum = ident::average_spectra(spectra);
+    for (const auto& w : r.spectrum.warnings) env.warn(w);
+    r.modes = ident::identify_modes(r.spectrum, ro);
+    for (const auto& w : r.modes.warnings) env.warn(fmt::format("axis {}: {}", axis, w));
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+nlohmann::json modes_json(const ident::AxisModes& m) {
+  nlohmann::json arr = nlohmann::json::array();
+  for (const auto& e : m.modes)
+    arr.push_back({{"freq_hz", e.freq_hz},
+                   {"zeta", e.zeta},
+                   {"freq_ci95", two(e.freq_ci95_lo, e.freq_ci95_hi)},
+                   {"zeta_ci95", two(e.zeta_ci95_lo, e.zeta_ci95_hi)},
+                   {"freq_stderr_hz", e.freq_stderr_hz},
+                   {"zeta_stderr", e.zeta_stderr},
+                   {"gain", e.gain}});
+  return arr;
+}
+
+nlohmann::json spectrum_json(const ident::AxisSpectrum& s, double max_hz) {
+  nlohmann::json j;
+  std::vector<double> f, p, px, py, pz;
+  for (std::size_t b = 0; b < s.freq_hz.size(); ++b) {
+    if (s.freq_hz[b] > max_hz) break;
+    f.push_back(s.freq_hz[b]);
+    p.push_back(s.psd_sum[b]);
+    if (!s.psd_x.empty()) px.push_back(s.psd_x[b]);
+    if (!s.psd_y.empty()) py.push_back(s.psd_y[b]);
+    if (!s.psd_z.empty()) pz.push_back(s.psd_z[b]);
+  }
+  j["freq_hz"] = f;
+  j["psd"] = p;
+  if (!px.empty()) j["psd_x"] = px;
+  if (!py.empty()) j["psd_y"] = py;
+  if (!pz.empty()) j["psd_z"] = pz;
+  j["unit"] = s.klipper_normalized ? "(mm/s^2)^2/Hz/Hz (Klipper-normalized)" : "(mm/s^2)^2/Hz";
+  j["klipper_normalized"] = s.klipper_normalized;
+  j["window"] = ident::to_string(s.welch.window);
+  j["segment_length"] = s.segment_length;
+  j["segments"] = s.segments;
+  j["sample_rate_hz"] = s.sample_rate_hz;
+  j["resolution_hz"] = s.segment_length > 0 ? s.sample_rate_hz / static_cast<double>(s.segment_length) : 0.0;
+  j["files"] = s.files;
+  if (s.frf && s.frf->h.size() >= f.size()) {
+    std::vector<double> mag, ph, coh;
+    for (std::size_t b = 0; b < f.size(); ++b) {
+      mag.push_back(std::abs(s.frf->h[b]));
+      ph.push_back(std::arg(s.frf->h[b]) * 180.0 / std::numbers::pi);
+      coh.push_back(s.frf->coherence[b]);
+    }
+    j["frf"] = {{"freq_hz", f}, {"magnitude", mag}, {"phase_deg", ph}, {"coherence", coh}};
+  }
+  return j;
+}
+
+nlohmann::json fit_json(const ident::AxisModes& m) {
+  nlohmann::json j;
+  j["method"] = m.method.empty() ? "none" : m.method;
+  j["band_hz"] = two(m.band_lo_hz, m.band_hi_hz);
+  nlohmann::json peaks = nlohmann::json::array();
+  for (const auto& p : m.peaks) peaks.push_back({{"freq_hz", p.freq_hz}, {"half_power_zeta", p.half_power_zeta}});
+  j["peaks"] = peaks;
+  if (m.fit) {
+    j["diagnostics"] = fitting::to_json(m.fit->fit.diagnostics);
+    j["variance_inflation"] = m.fit->variance_inflation;
+    j["direct_term"] = m.fit->direct_term;
+    if (m.method == "psd") j["noise_floor"] = m.fit->noise_floor;
+  }
+  j["dominant_mode"] = m.dominant;
+  return j;
+}
+
+}  // namespace tunekit::cli

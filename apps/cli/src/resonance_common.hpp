@@ -1,0 +1,62 @@
+#pragma once
+// Shared by `tunekit resonance` and `tunekit shaper`: the input options (Klipper raw CSVs,
+// calibration data, generic CSVs), the pipeline files -> per-axis spectra -> modes, and the
+// JSON of modes and spectra.
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "tunekit/cli/context.hpp"
+#include "tunekit/cli/envelope.hpp"
+#include "tunekit/ident/resonance.hpp"
+
+namespace tunekit::cli {
+
+struct ResonanceCliArgs {
+  std::vector<std::string> files;
+  std::string axis;
+  std::string time_column = "time";
+  std::vector<std::string> accel_columns;
+  std::string excitation_column;
+  std::string window = "kaiser";
+  double kaiser_beta = 6.0;
+  std::size_t segment = 0;
+  double overlap = 0.5;
+  std::string detrend = "constant";
+  double fit_min_hz = 10.0;
+  double fit_max_hz = 133.33;
+  int max_modes = 3;
+  double peak_threshold = 0.05;
+  double excitation_exponent = -1;
+  double full_scale_mm_s2 = 0;
+  double max_plot_hz = 200.0;
+  bool no_frf = false;
+  OutputOptions output;
+};
+
+struct AxisResult {
+  char axis = 0;
+  ident::AxisSpectrum spectrum;
+  ident::AxisModes modes;
+};
+
+/// Adds the input, spectrum and mode options.
+void add_resonance_options(CLI::App* sub, ResonanceCliArgs& a);
+/// Reads every file, groups by axis, computes spectra and modes; records inputs, options and
+/// warnings in the envelope. Results are ordered x, y, z.
+std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelope& env);
+/// The options as JSON (for the envelope).
+nlohmann::json resonance_options_json(const ResonanceCliArgs& a);
+/// modes[] as in the results contract.
+nlohmann::json modes_json(const ident::AxisModes& m);
+/// PSD (and FRF) arrays up to max_plot_hz for plotting.
+nlohmann::json spectrum_json(const ident::AxisSpectrum& s, double max_plot_hz);
+/// The fit's method, band, peaks and diagnostics.
+nlohmann::json fit_json(const ident::AxisModes& m);
+/// Help text: how to feed the files a Klipper printer writes.
+std::string klipper_files_help();
+
+}  // namespace tunekit::cli

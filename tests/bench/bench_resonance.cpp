@@ -1,0 +1,64 @@
+// Benchmark: a 410k-sample Klipper raw accelerometer CSV (128 s at 3.2 kHz, a 5 -> 133 Hz sweep
+// at 1 Hz/s over two modes) through `tunekit shaper --json`: CSV reading, sampling checks,
+// Welch PSD, peak detection, modal fit and shaper selection. Runs the CLI in-process several
+// times and prints the median; with --write-only it only writes the CSV (for timing the real
+// process with /usr/bin/time -v).
+//
+//   bench_resonance [--runs N] [--csv PATH] [--write-only] [--klipper-compatible]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "../resonance/synth_sweep.hpp"
+#include "tunekit/cli/commands.hpp"
+
+int main(int argc, char** argv) {
+  int runs = 7;
+  std::string csv = "/tmp/raw_data_x_bench.csv";
+  bool write_only = false, klipper = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--runs" && i + 1 < argc) runs = std::stoi(argv[++i]);
+    else if (a == "--csv" && i + 1 < argc) csv = argv[++i];
+    else if (a == "--write-only") write_only = true;
+    else if (a == "--klipper-compatible") klipper = true;
+  }
+  tunekit::test::SweepSpec spec;
+  spec.f_start_hz = 5;
+  spec.f_end_hz = 133;
+  spec.hz_per_sec = 1;
+  const auto rec = tunekit::test::synth_sweep({{42.0, 0.05, 1.0}, {77.0, 0.08, 0.6}}, spec);
+  {
+    std::ofstream f(csv, std::ios::binary);
+    f << tunekit::test::to_klipper_csv(rec);
+  }
+  fmt::print("wrote {} ({} samples, {:.1f} s at {} Hz)\n", csv, rec.t.size(), rec.t.back() - rec.t.front(),
+             spec.sample_rate_hz);
+  if (write_only) return 0;
+  std::vector<double> ms;
+  std::string last;
+  for (int r = 0; r < runs; ++r) {
+    std::ostringstream out, err;
+    std::vector<std::string> args = {"shaper", csv, "--json"};
+    if (klipper) args.push_back("--klipper-compatible");
+    const auto t0 = std::chrono::steady_clock::now();
+    const int code = tunekit::cli::run_cli(args, out, err);
+    const auto t1 = std::chrono::steady_clock::now();
+    if (code != 0) {
+      fmt::print(stderr, "tunekit shaper failed ({}): {}\n", code, err.str());
+      return 1;
+    }
+    ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    last = out.str();
+  }
+  std::sort(ms.begin(), ms.end());
+  fmt::print("tunekit shaper on 410k samples: median {:.1f} ms over {} runs (min {:.1f}, max {:.1f})\n",
+             ms[ms.size() / 2], runs, ms.front(), ms.back());
+  return 0;
+}
