@@ -1,10 +1,323 @@
-// tunekit export: Write pressure advance and input shaping into firmware configuration.
+// tunekit export: design pressure/linear advance and input shaping from the JSON results of
+// `tunekit step`, `freq`, `shaper` and `rheo` (or values on the command line) and write them
+// into a Klipper printer.cfg, a Marlin Configuration_adv.h or a RepRapFirmware config.g.
+// By default only a unified diff is printed; --write applies it (backup + atomic rename).
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include <fmt/format.h>
+
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/envelope.hpp"
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/pressure_advance.hpp"
+#include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/protocols/machine_profile.hpp"
 
 namespace tunekit::cli {
+namespace {
 
-void register_export(CLI::App& app, CliContext& /*ctx*/) {
-  add_reserved_command(app, "export", "Write pressure advance and input shaping into firmware configuration");
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct ExportArgs {
+  std::string firmware;
+  std::string config;
+  std::vector<std::string> results;
+  std::string profile;
+  double pa_k = kNaN;
+  double pa_smooth = kNaN;
+  double design_flow = kNaN;
+  std::string shaper_x, shaper_y;
+  std::string extruder = "extruder";
+  int drive = 0;
+  bool no_pa = false;
+  bool no_shaper = false;
+  bool write = false;
+  std::string gcode_out;
+  OutputOptions output;
+};
+
+double number_at(const nlohmann::json& j, const std::string& what, const std::string& path) {
+  if (j.is_null()) return kNaN;
+  if (!j.is_number()) throw InputError(fmt::format("{} must be a number", what), path);
+  return j.get<double>();
+}
+
+/// j[a][b]... or null when any level is missing.
+const nlohmann::json& dig(const nlohmann::json& j, std::initializer_list<const char*> keys) {
+  static const nlohmann::json null_json;
+  const nlohmann::json* cur = &j;
+  for (const char* k : keys) {
+    if (!cur->is_object() || !cur->contains(k)) return null_json;
+    cur = &(*cur)[k];
+  }
+  return *cur;
+}
+
+protocols::ShaperSetting parse_shaper_arg(const std::string& arg, const std::string& axis) {
+  // TYPE:FREQ[:ZETA]
+  std::vector<std::string> parts;
+  std::stringstream ss(arg);
+  std::string p;
+  while (std::getline(ss, p, ':')) parts.push_back(p);
+  if (parts.size() < 2 || parts.size() > 3 || parts[0].empty())
+    throw InputError(fmt::format("--shaper-{} takes TYPE:FREQ[:ZETA] (for example mzv:45.2:0.1), not '{}'", axis, arg));
+  protocols::ShaperSetting s;
+  s.type = parts[0];
+  try {
+    std::size_t used = 0;
+    s.freq_hz = std::stod(parts[1], &used);
+    if (used != parts[1].size()) throw std::invalid_argument("trailing");
+    if (parts.size() == 3) {
+      s.damping = std::stod(parts[2], &used);
+      if (used != parts[2].size()) throw std::invalid_argument("trailing");
+    }
+  } catch (const std::logic_error&) {
+    throw InputError(fmt::format("--shaper-{}: '{}' has a frequency or damping that is not a number", axis, arg));
+  }
+  return s;
+}
+
+int run_export(const ExportArgs& a, CliContext& ctx) {
+  const auto fw = protocols::parse_export_firmware(a.firmware);
+  Envelope env("export");
+  ident::AdvanceInputs in;
+  double freq_tau = kNaN;
+  std::map<std::string, protocols::ShaperSetting> shapers;
+  std::vector<std::string> sources;
+
+  for (const auto& path : a.results) {
+    const std::string bytes = ident::read_file_bytes(path);
+    env.add_input(path, bytes);
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(bytes);
+    } catch (const nlohmann::json::parse_error& e) {
+      throw InputError(fmt::format("not valid JSON: {}", e.what()), path);
+    }
+    const std::string cmd = j.value("command", std::string());
+    const auto& res = dig(j, {"results"});
+    if (!res.is_object()) throw InputError("no 'results' object: not a tunekit results file", path);
+    sources.push_back(cmd);
+    if (cmd == "step") {
+      const auto& params = dig(res, {"pooled", "params"});
+      if (params.is_object()) {
+        in.tau_s = number_at(dig(params, {"tau_s", "value"}), "pooled.params.tau_s.value", path);
+        in.tau_stderr_s = number_at(dig(params, {"tau_s", "stderr"}), "pooled.params.tau_s.stderr", path);
+        in.theta_s = number_at(dig(params, {"theta_s", "value"}), "pooled.params.theta_s.value", path);
+        in.gain = number_at(dig(params, {"K", "value"}), "pooled.params.K.value", path);
+        in.tau_source = "step";
+      }
+      const auto& ops = dig(res, {"operating_points"});
+      if (ops.is_array())
+        for (const auto& op : ops) {
+          ident::LiquefierPoint p;
+          p.feed_mm_s = number_at(dig(op, {"u"}), "operating_points[].u", path);
+          p.gain = number_at(dig(op, {"K"}), "operating_points[].K", path);
+          p.tau_s = number_at(dig(op, {"tau_s"}), "operating_points[].tau_s", path);
+          p.theta_s = number_at(dig(op, {"theta_s"}), "operating_points[].theta_s", path);
+          in.points.push_back(p);
+        }
+    } else if (cmd == "freq") {
+      freq_tau = number_at(dig(res, {"tf_fit", "params", "tau_s", "value"}), "tf_fit.params.tau_s.value", path);
+    } else if (cmd == "shaper") {
+      const auto& axes = dig(res, {"axes"});
+      if (!axes.is_object()) throw InputError("shaper results without 'axes'", path);
+      for (const auto& [axis, v] : axes.items()) {
+        const auto& rec = dig(v, {"recommended"});
+        if (!rec.is_object()) continue;
+        if (axis != "x" && axis != "y") {
+          env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
+          continue;
+        }
+        protocols::ShaperSetting s;
+        if (!rec.contains("type") || !rec["type"].is_string())
+          throw InputError(fmt::format("axes.{}.recommended.type must be a string", axis), path);
+        s.type = rec["type"].get<std::string>();
+        s.freq_hz = number_at(dig(rec, {"freq_hz"}), "recommended.freq_hz", path);
+        const double z = number_at(dig(rec, {"damping"}), "recommended.damping", path);
+        if (std::isfinite(z)) s.damping = z;
+        shapers[axis] = s;
+      }
+    } else if (cmd == "rheo") {
+      const auto& pred = dig(res, {"prediction"});
+      if (!pred.is_object()) throw InputError("rheo results without 'prediction'", path);
+      try {
+        in.rheo_flow_mm3_s = pred.at("flow_mm3_s").get<std::vector<double>>();
+        in.rheo_relative_tau = pred.at("relative_tau").get<std::vector<double>>();
+      } catch (const nlohmann::json::exception&) {
+        throw InputError("prediction.flow_mm3_s and prediction.relative_tau must be arrays of numbers", path);
+      }
+      in.rheo_reference_flow_mm3_s =
+          number_at(dig(pred, {"reference_flow_mm3_s"}), "prediction.reference_flow_mm3_s", path);
+    } else {
+      throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper or rheo)", cmd), path);
+    }
+  }
+  if (!std::isfinite(in.tau_s) && std::isfinite(freq_tau)) {
+    in.tau_s = freq_tau;
+    in.tau_source = "freq";
+  } else if (std::isfinite(in.tau_s) && std::isfinite(freq_tau) &&
+             std::abs(freq_tau - in.tau_s) > 0.2 * std::max(in.tau_s, freq_tau)) {
+    env.warn(fmt::format("the step response gives tau = {:.4g} s, the frequency response {:.4g} s: they differ by more "
+                         "than 20 %; the step value is used",
+                         in.tau_s, freq_tau));
+  }
+  if (std::isfinite(a.pa_k)) {
+    in.tau_s = a.pa_k;
+    in.tau_stderr_s = kNaN;
+    in.tau_source = "command line";
+    in.points.clear();
+    in.rheo_flow_mm3_s.clear();
+    in.rheo_relative_tau.clear();
+  }
+
+  protocols::MachineProfile profile;
+  if (!a.profile.empty()) {
+    profile = protocols::load_machine_profile(a.profile);
+    env.add_input(a.profile);
+  }
+  in.filament_area_mm2 = profile.filament_area_mm2();
+  in.line_area_mm2 = profile.line_area_mm2();
+  in.print_speed_mm_s = profile.print.speed_mm_s;
+  in.print_accel_mm_s2 = profile.print.max_accel_mm_s2;
+  in.extruder_accel_limit_mm_s2 = profile.extruder.max_accel_mm_s2;
+  in.design_flow_mm3_s = a.design_flow;
+
+  protocols::CompensatorSettings settings;
+  settings.klipper_extruder = a.extruder;
+  settings.rrf_drive = a.drive;
+  std::optional<ident::AdvanceDesign> design;
+  const bool have_tau = std::isfinite(in.tau_s) || !in.points.empty();
+  if (!a.no_pa && have_tau) {
+    if (a.profile.empty())
+      env.warn("no --profile: assuming 1.75 mm filament, a 0.45 x 0.2 mm line at 60 mm/s, and no acceleration limits "
+               "(the smoothing time is not designed)");
+    design = ident::design_advance(in);
+    settings.pa_k_s = design->k_s;
+    settings.pa_smooth_s = protocols::smoothing_time_for(fw, *design);
+    for (const auto& n : design->notes) env.warn(n);
+  }
+  if (std::isfinite(a.pa_smooth)) {
+    if (a.no_pa) throw InputError("--pa-smooth and --no-pa contradict each other");
+    settings.pa_smooth_s = a.pa_smooth;
+  }
+  if (!a.no_shaper) {
+    if (!a.shaper_x.empty()) shapers["x"] = parse_shaper_arg(a.shaper_x, "x");
+    if (!a.shaper_y.empty()) shapers["y"] = parse_shaper_arg(a.shaper_y, "y");
+    settings.shapers = shapers;
+  }
+  if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty())
+    throw InputError("nothing to export: give results of 'tunekit step', 'freq' or 'shaper', or --pa-k / --shaper-x");
+
+  auto result = protocols::export_config_file(fw, a.config, settings);
+  env.add_input(a.config, result.original);
+  for (const auto& w : result.warnings) env.warn(w);
+
+  env.set_options({{"firmware", protocols::to_string(fw)},
+                   {"config", a.config},
+                   {"profile", a.profile},
+                   {"pa_k_s", std::isfinite(a.pa_k) ? nlohmann::json(a.pa_k) : nlohmann::json(nullptr)},
+                   {"pa_smooth_s", std::isfinite(a.pa_smooth) ? nlohmann::json(a.pa_smooth) : nlohmann::json(nullptr)},
+                   {"design_flow_mm3_s",
+                    std::isfinite(a.design_flow) ? nlohmann::json(a.design_flow) : nlohmann::json(nullptr)},
+                   {"shaper_x", a.shaper_x},
+                   {"shaper_y", a.shaper_y},
+                   {"no_pa", a.no_pa},
+                   {"no_shaper", a.no_shaper},
+                   {"write", a.write}});
+
+  auto& res = env.results();
+  nlohmann::json sj = nlohmann::json::object();
+  sj["pa_k_s"] = settings.pa_k_s ? nlohmann::json(*settings.pa_k_s) : nlohmann::json(nullptr);
+  sj["pa_smooth_s"] = settings.pa_smooth_s ? nlohmann::json(*settings.pa_smooth_s) : nlohmann::json(nullptr);
+  sj["shapers"] = nlohmann::json::object();
+  for (const auto& [axis, sh] : settings.shapers)
+    sj["shapers"][axis] = {{"type", protocols::canonical_shaper_type(sh.type)},
+                           {"firmware_type", protocols::firmware_shaper_name(fw, sh.type)},
+                           {"freq_hz", sh.freq_hz},
+                           {"damping", sh.damping}};
+  res["settings"] = sj;
+  res["design"] = design ? design->to_json() : nlohmann::json(nullptr);
+  res["export"] = result.to_json();
+  const std::string schedule =
+      design ? protocols::advance_schedule_gcode(fw, design->schedule, settings) : std::string();
+  res["schedule_gcode"] = schedule;
+  res["written"] = false;
+
+  std::string backup;
+  if (a.write && result.changed()) {
+    backup = protocols::apply_export(result);
+    res["written"] = true;
+  }
+  if (!a.gcode_out.empty()) protocols::write_file_atomic(a.gcode_out, result.gcode);
+
+  if (!a.output.json) {
+    ctx.out << result.diff;
+    if (design)
+      ctx.err << fmt::format("tunekit: advance K = {:.4g} s ({}) at {:.3g} mm^3/s{}\n", design->k_s, design->k_source,
+                             design->design_flow_mm3_s,
+                             settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s)
+                                                  : std::string());
+    if (!result.changed())
+      ctx.err << fmt::format("tunekit: {} already has these settings; nothing to change\n", a.config);
+    else if (a.write)
+      ctx.err << fmt::format("tunekit: wrote {} (backup: {})\n", a.config, backup);
+    else
+      ctx.err << "tunekit: preview only; add --write to apply (a timestamped backup is kept)\n";
+    if (!result.gcode.empty()) ctx.err << "tunekit: the same settings as G-code:\n" << result.gcode;
+    if (!schedule.empty() && design && design->schedule.size() >= 2)
+      ctx.err << "tunekit: flow-dependent advance (for per-feature G-code; the firmware takes one number):\n"
+              << schedule;
+  }
+  return emit(env, a.output, ctx);
+}
+
+}  // namespace
+
+void register_export(CLI::App& app, CliContext& ctx) {
+  auto args = std::make_shared<ExportArgs>();
+  auto* sub = app.add_subcommand(
+      "export", "Write pressure advance and input shaping into firmware configuration (diff preview; --write applies)");
+  sub->add_option("results", args->results,
+                  "JSON results of 'tunekit step', 'freq', 'shaper' and/or 'rheo' (any number, any order)");
+  sub->add_option("-f,--firmware", args->firmware, "Firmware dialect: klipper, marlin or rrf")->required();
+  sub->add_option("-c,--config", args->config,
+                  "Configuration file to edit: printer.cfg (klipper), Configuration_adv.h (marlin), config.g (rrf)")
+      ->required();
+  sub->add_option("-p,--profile", args->profile,
+                  "Machine profile TOML (filament diameter mm, line width/height mm, print speed mm/s, print and "
+                  "extruder acceleration mm/s^2) for the smoothing time");
+  sub->add_option("--pa-k", args->pa_k, "Advance K in s (mm of filament per mm/s), instead of the results");
+  sub->add_option("--pa-smooth", args->pa_smooth,
+                  "Smoothing time in s (Klipper pressure_advance_smooth_time, Marlin ADVANCE_TAU), instead of the design");
+  sub->add_option("--design-flow", args->design_flow,
+                  "Volumetric flow in mm^3/s the single advance value is designed for (default: print speed x line "
+                  "cross-section)");
+  sub->add_option("--shaper-x", args->shaper_x, "X shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
+  sub->add_option("--shaper-y", args->shaper_y, "Y shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
+  sub->add_option("--extruder", args->extruder, "Klipper extruder section (default: extruder)");
+  sub->add_option("--drive", args->drive, "RepRapFirmware extruder drive number for M572 D (default: 0)");
+  sub->add_flag("--no-pa", args->no_pa, "Leave pressure/linear advance alone");
+  sub->add_flag("--no-shaper", args->no_shaper, "Leave input shaping alone");
+  sub->add_flag("--write", args->write,
+                "Apply the change: timestamped backup FILE.YYYYmmdd-HHMMSS.bak, then atomic replacement");
+  sub->add_option("--gcode", args->gcode_out, "Also write the settings as G-code to this file (Marlin: M900/M593/M500)");
+  add_output_options(sub, args->output);
+  sub->footer(
+      "Prints a unified diff of the configuration on stdout (a summary and the equivalent G-code on stderr);\n"
+      "nothing is written without --write. Running it again after --write changes nothing.\n"
+      "Examples:\n"
+      "  tunekit export --firmware klipper --config printer.cfg --profile datasets/machines/sim.toml step.json shaper.json\n"
+      "  tunekit export --firmware marlin --config Marlin/Configuration_adv.h --pa-k 0.045 --shaper-x zv:42:0.1 --write\n"
+      "  tunekit export --firmware rrf --config sys/config.g step.json shaper.json rheo.json --json\n"
+      "  tunekit export -f klipper -c printer.cfg --shaper-x mzv:52.4 --shaper-y ei:38.1:0.12 --no-pa");
+  sub->callback([args, &ctx] { set_exit_code(run_export(*args, ctx)); });
 }
 
 }  // namespace tunekit::cli
