@@ -248,8 +248,9 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back("G90");
     g.push_back("M83 ; relative extrusion");
     if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
+    g.push_back(d.set_accel(std::min(positive("accel_mm_s2"), profile.axis("z").max_accel_mm_s2)));
+    g.push_back(fmt::format("G1 Z{} F{}", num(positive("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
     g.push_back(d.set_accel(positive("accel_mm_s2")));
-    g.push_back(fmt::format("G1 Z{} F600", num(positive("z_mm"))));
     g.push_back(fmt::format("G1 X{} Y{} F{}", num(cx + R), num(cy), num(std::min(100.0, v * 3) * 60, 1)));
     const double seg_len = 2 * R * std::sin(std::numbers::pi / segs);
     for (int k = 1; k <= segs; ++k) {

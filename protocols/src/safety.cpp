@@ -63,21 +63,21 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
         add(fmt::format("{} position {:g} mm is outside the travel {:g}..{:g} mm", name, move->end[k], a.min_mm, a.max_mm));
       const double v = move->feed_mm_s * std::abs(u[k]);
       if (v > a.max_velocity_mm_s + tol)
-        add(fmt::format("{} speed {:.4g} mm/s exceeds max_velocity_mm_s {:g}", name, v, a.max_velocity_mm_s));
+        add(fmt::format("{} speed {:.6g} mm/s exceeds max_velocity_mm_s {:g}", name, v, a.max_velocity_mm_s));
       const double acc = move->accel_mm_s2 * std::abs(u[k]);
       if (acc > a.max_accel_mm_s2 + tol)
-        add(fmt::format("{} acceleration {:.4g} mm/s^2 exceeds max_accel_mm_s2 {:g}", name, acc, a.max_accel_mm_s2));
+        add(fmt::format("{} acceleration {:.6g} mm/s^2 exceeds max_accel_mm_s2 {:g}", name, acc, a.max_accel_mm_s2));
     }
     if (std::abs(move->end[3] - move->start[3]) > 1e-12) {
       const double ve = move->feed_mm_s * std::abs(u[3]);
       const double ae = move->accel_mm_s2 * std::abs(u[3]);
       const double flow = ve * p.filament_area_mm2();
       if (ve > p.extruder.max_velocity_mm_s + tol)
-        add(fmt::format("filament feed {:.4g} mm/s exceeds [extruder] max_velocity_mm_s {:g}", ve, p.extruder.max_velocity_mm_s));
+        add(fmt::format("filament feed {:.6g} mm/s exceeds [extruder] max_velocity_mm_s {:g}", ve, p.extruder.max_velocity_mm_s));
       if (flow > p.extruder.max_flow_mm3_s + tol)
-        add(fmt::format("volumetric flow {:.4g} mm^3/s exceeds max_flow_mm3_s {:g}", flow, p.extruder.max_flow_mm3_s));
+        add(fmt::format("volumetric flow {:.6g} mm^3/s exceeds max_flow_mm3_s {:g}", flow, p.extruder.max_flow_mm3_s));
       if (ae > p.extruder.max_accel_mm_s2 + tol)
-        add(fmt::format("filament acceleration {:.4g} mm/s^2 exceeds [extruder] max_accel_mm_s2 {:g}", ae, p.extruder.max_accel_mm_s2));
+        add(fmt::format("filament acceleration {:.6g} mm/s^2 exceeds [extruder] max_accel_mm_s2 {:g}", ae, p.extruder.max_accel_mm_s2));
     }
   }
   return out;
