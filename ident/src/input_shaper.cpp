@@ -252,6 +252,46 @@ ShaperSelection select_shaper(std::span<const double> freq, std::span<const doub
     throw InputError(fmt::format("the vibration spectrum below {} Hz is empty or zero; nothing to shape",
                                  o.max_freq_hz));
 
+  // Only bins above the threshold contribute to the remaining vibrations: evaluate the shaper
+  // there only, with the geometric recurrence when the grid is uniform.
+  const double thr = *std::max_element(psd.begin(), psd.end()) / o.vibration_reduction;
+  double all = 0;
+  std::size_t b_lo = psd.size(), b_hi = 0;
+  for (std::size_t b = 0; b < psd.size(); ++b)
+    if (psd[b] > thr) {
+      all += psd[b] - thr;
+      b_lo = std::min(b_lo, b);
+      b_hi = std::max(b_hi, b);
+    }
+  const bool uniform = uniform_grid(f);
+  const double step = uniform ? (f.back() - f.front()) / static_cast<double>(f.size() - 1) : 0.0;
+  std::vector<std::complex<double>> acc;
+  auto vibrations = [&](const Shaper& sh, double z) {
+    if (!(all > 0)) return 0.0;
+    double remaining = 0;
+    if (!uniform) {
+      for (std::size_t b = b_lo; b <= b_hi; ++b)
+        remaining += std::max(residual_vibration(sh, f[b], z) * psd[b] - thr, 0.0);
+      return remaining / all;
+    }
+    const std::size_t nb = b_hi - b_lo + 1;
+    acc.assign(nb, {0, 0});
+    const double dz = std::sqrt(std::max(0.0, 1 - z * z));
+    const double tn = sh.duration_s();
+    for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) {
+      const double decay = -z * 2 * kPi * (tn - sh.times_s[i]);
+      const double phase = 2 * kPi * dz * sh.times_s[i];
+      const std::complex<double> ratio = std::exp(std::complex<double>(decay * step, phase * step));
+      std::complex<double> cur = sh.amplitudes[i] * std::exp(std::complex<double>(decay * f[b_lo], phase * f[b_lo]));
+      for (std::size_t b = 0; b < nb; ++b) {
+        acc[b] += cur;
+        cur *= ratio;
+      }
+    }
+    for (std::size_t b = 0; b < nb; ++b) remaining += std::max(std::abs(acc[b]) * psd[b_lo + b] - thr, 0.0);
+    return remaining / all;
+  };
+
   ShaperSelection sel;
   bool have_best = false;
   ShaperCandidate best;
@@ -280,7 +320,7 @@ ShaperSelection select_shaper(std::span<const double> freq, std::span<const doub
       if (o.max_smoothing_mm > 0 && c.smoothing_mm > o.max_smoothing_mm && !results.empty()) break;
       c.max_accel_mm_s2 = shaper_max_accel(sh, o.scv_mm_s, o.target_smoothing_mm);
       for (double z : o.test_damping_ratios)
-        c.vibrations = std::max(c.vibrations, remaining_vibrations(sh, f, psd, z, o.vibration_reduction));
+        c.vibrations = std::max(c.vibrations, vibrations(sh, z));
       c.score = c.smoothing_mm * (std::pow(c.vibrations, 1.5) + 0.2 * c.vibrations + 0.01);
       results.push_back(c);
       if (results.size() == 1 || results[best_res].vibrations > c.vibrations) best_res = results.size() - 1;

@@ -144,6 +144,11 @@ TEST_CASE("automatic selection puts the shaper near a single resonance", "[shape
     CHECK(c.smoothing_mm > 0);
     CHECK(c.max_accel_mm_s2 > 0);
     CHECK(c.score == Approx(c.smoothing_mm * (std::pow(c.vibrations, 1.5) + 0.2 * c.vibrations + 0.01)));
+    // The selection's fast evaluation equals the plain definition, pessimized over the test ratios.
+    const auto sh = design_shaper(c.type, c.freq_hz, c.damping_ratio);
+    double worst = 0;
+    for (double z : o.test_damping_ratios) worst = std::max(worst, remaining_vibrations(sh, f, psd, z));
+    CHECK(c.vibrations == Approx(worst).margin(1e-9));
   }
   INFO(to_string(sel.recommended.type) << " " << sel.recommended.freq_hz);
   CHECK(sel.recommended.vibrations < 0.1);
