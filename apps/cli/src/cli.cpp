@@ -19,7 +19,8 @@ void set_exit_code(int code) { g_exit_code = code; }
 
 void add_output_options(CLI::App* sub, OutputOptions& o) {
   sub->add_flag("--json", o.json, "Print the results as JSON on stdout");
-  sub->add_option("-o,--output", o.output_path, "Also write the JSON results to this file");
+  // The long name is --json-file: --output names the output column in step and freq.
+  sub->add_option("-o,--json-file", o.output_path, "Also write the JSON results to this file");
   sub->add_option("--require", o.require,
                    "CI threshold on a result, e.g. 'tau_s<0.6' or 'x.freq_hz>=35' (repeatable); exit 1 naming each "
                    "unmet one");
