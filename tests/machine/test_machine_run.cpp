@@ -1,0 +1,283 @@
+// End-to-end tests of `tunekit run` against the simulated printer on a real pseudo-terminal:
+// refusal before any byte, fault injection with exit code 3 and the partial journal kept,
+// dry runs and help, and a fake Klipper API server streaming accelerometer data.
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/protocols/simulator.hpp"
+#include "tunekit/protocols/transport.hpp"
+
+using tunekit::test::run_cli;
+using tunekit::test::scratch_dir;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+nlohmann::json json_file(const std::string& path) { return nlohmann::json::parse(slurp(path)); }
+
+std::size_t csv_rows(const std::string& path) {
+  std::ifstream f(path);
+  std::string line;
+  std::size_t n = 0;
+  while (std::getline(f, line))
+    if (!line.empty() && line[0] != '#' && line[0] != 't') ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("run --help lists the protocols with parameters and units", "[machine]") {
+  const auto r = run_cli({"run", "--help"});
+  CHECK(r.code == 0);
+  for (const char* s : {"liquefier-step", "liquefier-sine", "liquefier-chirp", "ring-print", "axis-sweep",
+                        "axis-rectangle", "feed_high_mm_s", "[mm/s]", "hz_per_sec", "[Hz/s]", "accel_per_hz",
+                        "[mm/s^2/Hz]", "--dry-run"})
+    CHECK(r.out.find(s) != std::string::npos);
+}
+
+TEST_CASE("run --dry-run prints the checked G-code and sends nothing", "[machine]") {
+  const auto dir = scratch_dir("machine_dry");
+  const auto r = run_cli({"run", "liquefier-step", "--dry-run", "-p", "feed_high_mm_s=4", "--runs-root", dir});
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("G1 E12 F240") != std::string::npos);  // 4 mm/s for 3 s
+  CHECK(r.out.find("M109 S210") != std::string::npos);
+  CHECK(fs::is_empty(dir));
+  const auto j = run_cli({"run", "axis-sweep", "--axis", "y", "--dry-run", "--json"});
+  REQUIRE(j.code == 0);
+  const auto env = nlohmann::json::parse(j.out);
+  CHECK(env["results"]["gcode"].size() > 1000);
+  CHECK(env["results"]["experiment"]["axis"] == "y");
+}
+
+TEST_CASE("a protocol over the profile's limits is refused before any byte is sent", "[machine]") {
+  tunekit::protocols::SimPtyServer server(tunekit::protocols::SimConfig{});
+  const auto dir = scratch_dir("machine_refused");
+  const auto r = run_cli({"run", "liquefier-step", "--machine", tunekit::test::dataset("machines/sim.toml"), "--port",
+                          server.path(), "-p", "feed_high_mm_s=100", "-p", "hotend_c=350", "-p", "accel_mm_s2=9000",
+                          "--runs-root", dir});
+  CHECK(r.code == 2);
+  // All violations in one message.
+  CHECK(r.err.find("filament feed 100") != std::string::npos);
+  CHECK(r.err.find("volumetric flow") != std::string::npos);
+  CHECK(r.err.find("hot-end temperature 350") != std::string::npos);
+  CHECK(r.err.find("filament acceleration 9000") != std::string::npos);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  CHECK(server.sim().received().empty());
+  CHECK(fs::is_empty(dir));
+}
+
+TEST_CASE("liquefier-step on the simulator writes a complete run directory", "[machine]") {
+  const auto dir = scratch_dir("machine_step_run") + "/run";
+  const auto r = run_cli({"run", "liquefier-step", "--machine", "sim", "--run-dir", dir, "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto env = nlohmann::json::parse(r.out);
+  const auto& res = env["results"];
+  CHECK(res["status"] == "complete");
+  const std::string csv = res["files"]["load_cell"];
+  CHECK(fs::path(csv).filename() == "step.csv");
+  const auto table = tunekit::ident::read_csv(csv, {{}, "time"});
+  CHECK(table.column("feed").values.size() == res["samples"]["load_cell"].get<std::size_t>());
+  // 3 s settle + 2 cycles of 2 x 3 s at 200 Hz.
+  CHECK(table.rows == Approx(15 * 200).epsilon(0.02));
+  const auto stats = json_file(dir + "/sim_stats.json");
+  CHECK(stats["load_cell_samples_sent"].get<std::size_t>() == table.rows);
+  CHECK(json_file(dir + "/truth.json")["liquefier"]["tau_s"] == 0.45);
+  CHECK(json_file(dir + "/run.json")["status"] == "complete");
+  const std::string journal = slurp(dir + "/journal.jsonl");
+  CHECK(journal.find("\"kind\":\"tx\"") != std::string::npos);
+  CHECK(journal.find("FIRMWARE_NAME:Marlin") != std::string::npos);
+}
+
+TEST_CASE("garbled, dropped and late lines are recovered", "[machine]") {
+  const auto base = scratch_dir("machine_recover");
+  SECTION("garbled line: resend") {
+    const auto r = run_cli({"run", "liquefier-step", "--run-dir", base + "/garble", "--sim", "fault=garble@8", "--json"});
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(nlohmann::json::parse(r.out)["results"]["link"]["resends"] == 1);
+    CHECK(slurp(base + "/garble/journal.jsonl").find("Resend: 7") != std::string::npos);
+  }
+  SECTION("dropped line: retry after the timeout") {
+    const auto r = run_cli({"run", "liquefier-step", "--run-dir", base + "/drop", "--sim", "fault=drop@9", "--timeout",
+                            "0.3", "--json"});
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(nlohmann::json::parse(r.out)["results"]["link"]["retries"] == 1);
+  }
+  SECTION("late ok: waited for") {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = run_cli({"run", "liquefier-step", "--run-dir", base + "/late", "--sim", "fault=late-ok@8:400",
+                            "--timeout", "2", "--json"});
+    REQUIRE(r.code == 0);
+    CHECK(std::chrono::steady_clock::now() - t0 >= std::chrono::milliseconds(400));
+    CHECK(nlohmann::json::parse(r.out)["results"]["link"]["retries"] == 0);
+  }
+}
+
+TEST_CASE("a disconnect ends with exit 3 and keeps every sample received", "[machine]") {
+  const auto dir = scratch_dir("machine_disconnect") + "/run";
+  const auto r = run_cli({"run", "liquefier-step", "--run-dir", dir, "--sim", "fault=disconnect@10", "--timeout", "2"});
+  CHECK(r.code == 3);
+  CHECK(r.err.find("partial run is kept in") != std::string::npos);
+  const auto stats = json_file(dir + "/sim_stats.json");
+  CHECK(stats["disconnected"] == true);
+  const std::size_t sent = stats["load_cell_samples_sent"];
+  CHECK(sent > 1000);  // the first two moves (6 s) ran before the fault
+  CHECK(csv_rows(dir + "/step.csv") == sent);
+  const auto run = json_file(dir + "/run.json");
+  CHECK(run["status"] == "failed");
+  // The partial file is analyzable: the reader accepts it.
+  CHECK(tunekit::ident::read_csv(dir + "/step.csv", {{}, "time"}).rows == sent);
+}
+
+TEST_CASE("a firmware error ends with exit 3 after the safe-state commands", "[machine]") {
+  const auto dir = scratch_dir("machine_fw_error") + "/run";
+  const auto r = run_cli({"run", "liquefier-step", "--run-dir", dir, "--sim", "fault=error@10"});
+  CHECK(r.code == 3);
+  CHECK(r.err.find("Thermal Runaway") != std::string::npos);
+  const std::string rx = slurp(dir + "/sim_received.gcode");
+  const auto fault_at = rx.find("N9 ");  // the tenth line received carries N9 (N0 is M110)
+  REQUIRE(fault_at != std::string::npos);
+  const auto after = rx.substr(fault_at);
+  CHECK(after.find("\nM410\n") != std::string::npos);
+  CHECK(after.find("\nM104 S0\n") != std::string::npos);
+  CHECK(after.find("\nM140 S0\n") != std::string::npos);
+  CHECK(csv_rows(dir + "/step.csv") == json_file(dir + "/sim_stats.json")["load_cell_samples_sent"].get<std::size_t>());
+}
+
+namespace {
+
+/// A fake Klipper API server: a Unix socket speaking JSON + 0x03, backed by the simulator.
+/// gcode/script lines run on the simulator; adxl345/dump_adxl345 subscribes to its
+/// accelerometer, whose samples are sent as {"tk": ..., "params": {"data": [[t,x,y,z],...]}}.
+class FakeKlipper {
+ public:
+  explicit FakeKlipper(const std::string& path) : path_(path), sim_(tunekit::protocols::SimConfig{}) {
+    ::unlink(path.c_str());
+    listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+    REQUIRE(::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0);
+    REQUIRE(::listen(listen_fd_, 1) == 0);
+    thread_ = std::thread([this] { serve(); });
+  }
+  ~FakeKlipper() {
+    stop_ = true;
+    ::shutdown(listen_fd_, SHUT_RDWR);
+    ::close(listen_fd_);
+    thread_.join();
+    ::unlink(path_.c_str());
+  }
+  std::vector<std::string> scripts() {
+    std::lock_guard<std::mutex> l(mu_);
+    return scripts_;
+  }
+  long samples_sent() const { return sent_; }
+
+ private:
+  void serve() {
+    const int fd = ::accept(listen_fd_, nullptr, nullptr);
+    if (fd < 0) return;
+    tunekit::protocols::FdTransport t(fd, "fake klipper");
+    tunekit::protocols::LineReader reader(t, '\x03');
+    nlohmann::json batch = nlohmann::json::array();
+    nlohmann::json templ;
+    sim_.accel_sink = [&](double tt, double x, double y, double z) { batch.push_back({tt, x, y, z}); };
+    auto send = [&](const nlohmann::json& m) { t.write(m.dump() + "\x03"); };
+    auto flush_data = [&] {
+      for (std::size_t i = 0; i < batch.size(); i += 200) {
+        nlohmann::json msg = templ;
+        nlohmann::json chunk = nlohmann::json::array();
+        for (std::size_t k = i; k < std::min(batch.size(), i + 200); ++k) chunk.push_back(batch[k]);
+        sent_ += static_cast<long>(chunk.size());
+        msg["params"] = {{"data", chunk}, {"overflows", 0}};
+        send(msg);
+      }
+      batch = nlohmann::json::array();
+    };
+    try {
+      while (!stop_) {
+        auto frame = reader.next(std::chrono::milliseconds(50));
+        if (!frame) continue;
+        const auto req = nlohmann::json::parse(*frame);
+        const auto id = req["id"];
+        const std::string method = req["method"];
+        if (method == "info") {
+          send({{"id", id}, {"result", {{"state", "ready"}, {"software_version", "v0.12.0-fake"}}}});
+        } else if (method == "adxl345/dump_adxl345") {
+          templ = req["params"]["response_template"];
+          sim_.set_streaming("accelerometer", true);
+          send({{"id", id}, {"result", {{"header", {"time", "x_acceleration", "y_acceleration", "z_acceleration"}}}}});
+        } else if (method == "gcode/script") {
+          const std::string script = req["params"]["script"];
+          {
+            std::lock_guard<std::mutex> l(mu_);
+            scripts_.push_back(script);
+          }
+          std::stringstream ss(script);
+          std::string line;
+          const tunekit::protocols::Simulator::Emit ignore = [](std::string_view) {};
+          while (std::getline(ss, line)) sim_.handle_line(line, ignore);
+          sim_.flush(ignore);
+          flush_data();
+          send({{"id", id}, {"result", nlohmann::json::object()}});
+        } else {
+          send({{"id", id}, {"error", {{"error", "WebRequestError"}, {"message", "unknown method"}}}});
+        }
+      }
+    } catch (const std::exception&) {
+    }
+  }
+  std::string path_;
+  tunekit::protocols::Simulator sim_;
+  int listen_fd_ = -1;
+  std::atomic<bool> stop_{false};
+  std::atomic<long> sent_{0};
+  std::mutex mu_;
+  std::vector<std::string> scripts_;
+  std::thread thread_;
+};
+
+}  // namespace
+
+TEST_CASE("a Klipper API server's accelerometer stream is recorded", "[machine]") {
+  const auto dir = scratch_dir("machine_klipper");
+  const std::string sock = dir + "/klippy_uds";
+  FakeKlipper server(sock);
+  const auto r = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", tunekit::test::dataset("machines/sim.toml"),
+                          "--port", "unix:" + sock, "--run-dir", dir + "/run", "-p", "freq_start_hz=30", "-p",
+                          "freq_end_hz=70", "-p", "hz_per_sec=8", "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto env = nlohmann::json::parse(r.out);
+  const std::string accel = env["results"]["files"]["accel"];
+  CHECK(fs::path(accel).filename().string().rfind("raw_data_x_", 0) == 0);
+  CHECK(slurp(accel).rfind("#time,accel_x,accel_y,accel_z\n", 0) == 0);
+  CHECK(static_cast<long>(csv_rows(accel)) == server.samples_sent());
+  CHECK(server.samples_sent() > 3200 * 4);
+  bool saw_sweep = false;
+  for (const auto& s : server.scripts()) saw_sweep |= s.find("M204 S") != std::string::npos;
+  CHECK(saw_sweep);
+}
