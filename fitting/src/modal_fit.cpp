@@ -48,7 +48,7 @@ double variance_inflation(const std::vector<double>& r, int lags) {
     for (std::size_t i = static_cast<std::size_t>(k); i < r.size(); ++i) ck += (r[i] - mean) * (r[i - k] - mean);
     vif += 2.0 * (1.0 - k / (lags + 1.0)) * (ck / c0);
   }
-  return std::clamp(vif, 1.0, 20.0);
+  return std::clamp(vif, 1.0, 50.0);
 }
 
 std::vector<ParamSpec> mode_params(const std::vector<ModeStart>& starts, double fmin, double fmax, double max_zeta) {

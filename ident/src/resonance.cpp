@@ -65,6 +65,7 @@ ClipReport detect_clipping(const std::string& name, const std::vector<double>& v
   // Without a declared range: the extremes are clipped when the signal sits flat on them
   // (three or more consecutive samples, or eight or more samples in all).
   const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  if (!(*hi > *lo)) return c;  // a constant channel carries no signal to clip
   for (const double ext : {*lo, *hi}) {
     if (ext == 0) continue;
     std::size_t count = 0, run = 0, longest = 0;

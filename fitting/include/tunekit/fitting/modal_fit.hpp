@@ -55,7 +55,7 @@ struct ModalFitOptions {
   double excitation_exponent = 2.0;  ///< p in E(f) = (f/f_ref)^p
   bool fit_direct_term = true;       ///< estimate d (else d = 0)
   bool fit_noise_floor = true;       ///< estimate n0 (PSD only; else n0 = 0)
-  int correlation_lags = 3;          ///< L for the variance inflation factor; 0: no inflation
+  int correlation_lags = 8;          ///< L for the variance inflation factor; 0: no inflation
   double confidence = 0.95;
   double max_zeta = 0.5;
 };
