@@ -125,8 +125,8 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
       if (!(s > 0)) throw InputError(fmt::format("non-positive shear stress {:g}", tau->values[i]), at(i));
       e = s / gi;
     }
-    if (e > 1e7)
-      throw InputError(fmt::format("viscosity {:g} Pa.s is implausible for a polymer melt (above 1e7 Pa.s); "
+    if (e > 1e6)
+      throw InputError(fmt::format("viscosity {:g} Pa.s is implausible for a polymer melt at processing temperature (above 1e6 Pa.s); "
                                    "is the column in mPa.s? label it 'viscosity (mPa.s)'", e),
                        at(i));
     if (e < 1e-2)

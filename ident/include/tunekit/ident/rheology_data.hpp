@@ -8,7 +8,7 @@
 //   weight                                  optional, > 0 (weights of ln-viscosity residuals)
 // Refused with InputError (exit 2) and FILE:LINE: negative or zero shear rates, non-positive
 // viscosities, a temperature without a unit, kelvin values below 273.15 (they are degC),
-// degC values above 600 (they are kelvin), viscosities above 1e7 Pa.s (a column in mPa.s
+// degC values above 600 (they are kelvin), viscosities above 1e6 Pa.s (a column in mPa.s
 // labelled Pa.s) or below 1e-2 Pa.s.
 
 #include <string>
