@@ -135,7 +135,7 @@ std::vector<DetectedStep> detect_steps(std::span<const double> t, std::span<cons
     const std::size_t next = j + 1 < changes.size() ? changes[j + 1].first : n;
     DetectedStep s;
     s.sample = changes[j].first;
-    s.t_step_s = 0.5 * (t[s.sample - 1] + t[s.sample]);
+    s.t_step_s = t[s.sample];  // the first sample that shows the new level
     s.u_before = level(prev_end, changes[j].first);
     s.u_after = level(changes[j].settled, next);
     const std::size_t pre = changes[j].first - prev_end;

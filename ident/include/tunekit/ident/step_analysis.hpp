@@ -16,7 +16,7 @@ namespace tunekit::ident {
 struct DetectedStep {
   std::size_t index = 0;       ///< 0-based order in the record
   std::size_t sample = 0;      ///< first sample at the new input level
-  double t_step_s = 0;         ///< midway between the last old and the first new sample
+  double t_step_s = 0;         ///< time of the first sample at the new level
   double u_before = 0, u_after = 0;
   std::size_t begin = 0, end = 0;  ///< samples [begin, end) used for this step's fit
   bool rising() const { return u_after > u_before; }
