@@ -1,10 +1,509 @@
-// tunekit linewidth: Calibrated width profiles of printed lines from photos.
+// tunekit linewidth: calibrated width profiles of printed lines from photos (issue 6).
+//
+// Scale comes from --px-per-mm, a camera profile (--camera, written by --save-camera), a
+// chessboard in the scene (--chessboard/--square-mm, optionally --rectify for a tilted
+// camera) or a line of known width (--reference-width-mm). Each line's profile (arc length,
+// width, edge confidence, flags) goes to the JSON envelope; --profile-csv maps one line to
+// time with the commanded speed (constant, or seed 001's sine-modulated ring) and writes the
+// set-point width the feed implied, ready for `tunekit freq` / `tunekit step`.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <optional>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/envelope.hpp"
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/camera_calibration.hpp"
+#include "tunekit/ident/line_width.hpp"
+#include "tunekit/ident/overlay.hpp"
+#include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/protocols/atomic_file.hpp"
 
 namespace tunekit::cli {
+namespace {
 
-void register_linewidth(CLI::App& app, CliContext& /*ctx*/) {
-  add_reserved_command(app, "linewidth", "Calibrated width profiles of printed lines from photos");
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct LinewidthArgs {
+  std::vector<std::string> images;
+  double px_per_mm = 0;
+  std::string camera;
+  std::string chessboard;
+  double square_mm = 0;
+  double reference_width_mm = 0;
+  bool rectify = false;
+  std::string polarity = "auto";
+  double step_px = 1.0;
+  double min_length_px = 60.0;
+  bool allow_edge = false;
+  std::string overlay_dir;
+  std::string save_camera;
+  // Mapping to time.
+  std::string profile_csv;
+  int line = 1;
+  double speed_mm_s = 0;
+  double setpoint_width_mm = 0;
+  int ring_sines = 0;
+  double ring_amplitude_mm = 0;
+  double ring_radius_mm = 0;
+  double rod_radius_mm = 0;
+  double layer_height_mm = 0;
+  double ring_start_deg = 0;
+  bool ring_clockwise = false;
+  OutputOptions output;
+};
+
+double r6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
+double r4(double v) { return std::isfinite(v) ? std::round(v * 1e4) / 1e4 : v; }
+
+std::string flag_names(std::uint8_t f) {
+  std::string s;
+  auto add = [&](const char* n) { s += (s.empty() ? "" : ","), s += n; };
+  if (f & ident::kFlagOutOfFrame) add("out_of_frame");
+  if (f & ident::kFlagOccluded) add("occluded");
+  if (f & ident::kFlagMerged) add("merged");
+  return s;
+}
+
+// Contiguous flagged stretches of a line, in mm of arc length.
+nlohmann::json stretches(const ident::MeasuredLine& l, double ppm) {
+  nlohmann::json out = nlohmann::json::array();
+  const auto& s = l.samples;
+  std::size_t i = 0;
+  while (i < s.size()) {
+    if (s[i].flags == 0) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j + 1 < s.size() && s[j + 1].flags == s[i].flags) ++j;
+    out.push_back({{"flags", flag_names(s[i].flags)},
+                   {"s_start_mm", r6(s[i].s_px / ppm)},
+                   {"s_end_mm", r6(s[j].s_px / ppm)},
+                   {"samples", j - i + 1}});
+    i = j + 1;
+  }
+  return out;
+}
+
+struct ImageRun {
+  std::string path;
+  cv::Mat measured;  // the (undistorted / rectified) grey image that was measured
+  double ppm = 0;
+  std::string scale_source;
+  std::vector<cv::Point> target_outline;
+  ident::LineWidthResult result;
+};
+
+std::string overlay_path(const std::string& dir, const std::string& image) {
+  return (std::filesystem::path(dir) / (std::filesystem::path(image).stem().string() + "_overlay.png")).string();
+}
+
+// Writes the overlay if asked; never lets a write failure hide the original error.
+void overlay_best_effort(const LinewidthArgs& a, const ImageRun& run, const ident::LineWidthResult* res,
+                         const std::string& message, CliContext& ctx) {
+  if (a.overlay_dir.empty()) return;
+  try {
+    std::filesystem::create_directories(a.overlay_dir);
+    ident::write_overlay(overlay_path(a.overlay_dir, run.path),
+                         ident::draw_overlay(run.measured, res, run.target_outline, message));
+  } catch (const std::exception& e) {
+    ctx.err << fmt::format("tunekit: warning: overlay not written: {}\n", e.what());
+  }
+}
+
+int run_save_camera(const LinewidthArgs& a, CliContext& ctx) {
+  if (a.chessboard.empty()) throw InputError("--save-camera needs --chessboard COLSxROWS and --square-mm");
+  const auto spec = ident::parse_chessboard_spec(a.chessboard, a.square_mm);
+  Envelope env("linewidth");
+  std::vector<cv::Mat> grays;
+  for (const auto& p : a.images) {
+    grays.push_back(ident::load_gray_image(p));
+    env.add_input(p);
+  }
+  std::vector<int> skipped;
+  const auto prof = ident::calibrate_camera(grays, spec, &skipped);
+  for (int i : skipped)
+    env.warn(fmt::format("{}: {}x{} chessboard not found; image not used", a.images[static_cast<std::size_t>(i)],
+                         spec.cols, spec.rows));
+  protocols::write_file_atomic(a.save_camera, prof.to_json().dump(2) + "\n");
+  env.set_options({{"chessboard", a.chessboard}, {"square_mm", a.square_mm}, {"save_camera", a.save_camera}});
+  env.results()["camera"] = prof.to_json();
+  env.results()["camera_profile_path"] = a.save_camera;
+  if (!a.output.json)
+    ctx.out << fmt::format("camera profile {}: {} images, reprojection RMS {:.3f} px, bed scale {:.4f} px/mm\n",
+                           a.save_camera, prof.images_used, prof.rms_reprojection_px, prof.px_per_mm);
+  return emit(env, a.output, ctx);
+}
+
+ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const std::optional<ident::CameraProfile>& cam,
+                       CliContext& ctx) {
+  ImageRun run;
+  run.path = path;
+  cv::Mat gray = ident::load_gray_image(path);
+  if (cam) gray = ident::undistort_image(gray, *cam, path);
+  run.measured = gray;
+  ident::LineWidthOptions opt;
+  opt.polarity = a.polarity == "dark" ? ident::LinePolarity::dark
+                 : a.polarity == "light" ? ident::LinePolarity::light
+                                         : ident::LinePolarity::automatic;
+  opt.step_px = a.step_px;
+  opt.min_length_px = a.min_length_px;
+
+  if (!a.chessboard.empty()) {
+    const auto spec = ident::parse_chessboard_spec(a.chessboard, a.square_mm);
+    const auto det = ident::detect_chessboard(gray, spec);
+    if (!det.found) {
+      const std::string msg = fmt::format("scale target not found: no {}x{} chessboard (inner corners) in the image",
+                                          spec.cols, spec.rows);
+      overlay_best_effort(a, run, nullptr, msg, ctx);
+      throw InputError(msg, path);
+    }
+    if (a.rectify) {
+      const auto rect = ident::rectify_to_plane(gray, det.img_to_mm, det.px_per_mm);
+      run.measured = rect.image;
+      run.ppm = rect.px_per_mm;
+      for (const auto& p : det.outline) {
+        const cv::Vec3d q = rect.img_to_rect * cv::Vec3d(p.x, p.y, 1.0);
+        run.target_outline.emplace_back(static_cast<int>(std::lround(q[0] / q[2])),
+                                        static_cast<int>(std::lround(q[1] / q[2])));
+      }
+      run.scale_source = fmt::format("chessboard {}x{} x {} mm, rectified", spec.cols, spec.rows, spec.square_mm);
+    } else {
+      run.ppm = det.px_per_mm;
+      run.target_outline = det.outline;
+      run.scale_source = fmt::format("chessboard {}x{} x {} mm", spec.cols, spec.rows, spec.square_mm);
+    }
+    opt.exclude_mask = cv::Mat::zeros(run.measured.size(), CV_8U);
+    cv::fillConvexPoly(opt.exclude_mask, run.target_outline, cv::Scalar(255));
+  } else if (cam && cam->has_bed_plane && a.rectify) {
+    const auto rect = ident::rectify_to_plane(gray, cam->bed_img_to_mm, cam->px_per_mm);
+    run.measured = rect.image;
+    run.ppm = rect.px_per_mm;
+    run.scale_source = "camera profile bed plane, rectified";
+  } else if (cam && cam->has_bed_plane) {
+    run.ppm = cam->px_per_mm;
+    run.scale_source = "camera profile bed plane";
+  } else if (a.px_per_mm > 0) {
+    run.ppm = a.px_per_mm;
+    run.scale_source = "--px-per-mm";
+  }
+  run.result = ident::measure_line_widths(run.measured, opt);
+  const auto& res = run.result;
+
+  if (a.reference_width_mm > 0) {
+    if (res.lines.empty() || !(res.lines.front().valid_samples > 0)) {
+      const std::string msg = "scale target not found: no line of the reference width was measured";
+      overlay_best_effort(a, run, &res, msg, ctx);
+      throw InputError(msg, path);
+    }
+    run.ppm = res.lines.front().mean_width_px / a.reference_width_mm;
+    run.scale_source = fmt::format("reference width {} mm (line 1)", a.reference_width_mm);
+  }
+  if (res.lines.empty()) {
+    std::string msg = "no line found";
+    for (const auto& w : res.warnings) msg += ": " + w;
+    overlay_best_effort(a, run, &res, msg, ctx);
+    throw FitError(msg, path);
+  }
+  if (!a.allow_edge) {
+    for (std::size_t i = 0; i < res.lines.size(); ++i)
+      if (res.lines[i].touches_frame) {
+        const auto& b = res.lines[i].bbox;
+        const std::string msg =
+            fmt::format("line {} touches the frame edge (it spans x {}..{}, y {}..{} px of {}x{}); reframe the photo "
+                        "or pass --allow-edge to measure it with out-of-frame stretches flagged",
+                        i + 1, b.x, b.x + b.width, b.y, b.y + b.height, res.width, res.height);
+        overlay_best_effort(a, run, &res, msg, ctx);
+        throw InputError(msg, path);
+      }
+  }
+  int valid = 0;
+  for (const auto& l : res.lines) valid += l.valid_samples;
+  if (valid == 0) {
+    const std::string msg = "measured nothing: every profile sample is flagged (occluded, merged or out of frame)";
+    overlay_best_effort(a, run, &res, msg, ctx);
+    throw FitError(msg, path);
+  }
+  overlay_best_effort(a, run, &res, "", ctx);
+  return run;
+}
+
+int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
+  if (!a.save_camera.empty()) return run_save_camera(a, ctx);
+  const int scales = (a.px_per_mm > 0) + !a.camera.empty() + !a.chessboard.empty() + (a.reference_width_mm > 0);
+  if (scales == 0)
+    throw InputError("no scale: give --px-per-mm, --camera PROFILE, --chessboard COLSxROWS --square-mm S, or "
+                     "--reference-width-mm W");
+  if ((a.px_per_mm > 0) + (a.reference_width_mm > 0) + !a.chessboard.empty() > 1)
+    throw InputError("give only one of --px-per-mm, --chessboard and --reference-width-mm");
+  if (a.rectify && a.chessboard.empty() && a.camera.empty())
+    throw InputError("--rectify needs --chessboard or a --camera profile with a bed plane");
+  if (!a.chessboard.empty() && !(a.square_mm > 0)) throw InputError("--chessboard needs --square-mm (mm)");
+  if (!a.profile_csv.empty() && a.images.size() != 1)
+    throw InputError("--profile-csv maps one image's line to time: give exactly one image");
+  if (!a.profile_csv.empty() && !(a.speed_mm_s > 0))
+    throw InputError("--profile-csv needs the commanded print speed --speed-mm-s (mm/s)");
+  if (a.ring_sines > 0 && !(a.ring_amplitude_mm > 0 && a.rod_radius_mm > 0 && a.layer_height_mm > 0))
+    throw InputError("--ring-sines needs --ring-amplitude-mm, --rod-radius-mm and --layer-height-mm");
+
+  std::optional<ident::CameraProfile> cam;
+  Envelope env("linewidth");
+  if (!a.camera.empty()) {
+    cam = ident::load_camera_profile(a.camera);
+    env.add_input(a.camera);
+    if (!cam->has_bed_plane && a.px_per_mm <= 0 && a.chessboard.empty() && a.reference_width_mm <= 0)
+      throw InputError("camera profile has no bed plane scale: add --px-per-mm, --chessboard or --reference-width-mm",
+                       a.camera);
+  }
+  nlohmann::json images = nlohmann::json::array();
+  nlohmann::json lines = nlohmann::json::array();
+  std::vector<ImageRun> runs;
+  for (const auto& path : a.images) {
+    runs.push_back(measure_image(a, path, cam, ctx));
+    env.add_input(path);
+    const auto& run = runs.back();
+    const auto& res = run.result;
+    images.push_back({{"file", path},
+                      {"width_px", res.width},
+                      {"height_px", res.height},
+                      {"px_per_mm", r6(run.ppm)},
+                      {"scale_source", run.scale_source},
+                      {"polarity", res.light_lines ? "light" : "dark"},
+                      {"noise", r4(res.noise_sigma)},
+                      {"lines_found", res.lines.size()}});
+    for (const auto& w : res.warnings) env.warn(fmt::format("{}: {}", path, w));
+    for (std::size_t k = 0; k < res.lines.size(); ++k) {
+      const auto& l = res.lines[k];
+      nlohmann::json s_mm = nlohmann::json::array(), w_mm = nlohmann::json::array(), conf = nlohmann::json::array(),
+                     flags = nlohmann::json::array(), xs = nlohmann::json::array(), ys = nlohmann::json::array();
+      for (const auto& s : l.samples) {
+        s_mm.push_back(r6(s.s_px / run.ppm));
+        w_mm.push_back(s.valid() || (std::isfinite(s.width_px) && s.flags == ident::kFlagMerged)
+                           ? nlohmann::json(r6(s.width_px / run.ppm))
+                           : nlohmann::json(nullptr));
+        conf.push_back(r4(s.confidence));
+        flags.push_back(s.flags);
+        xs.push_back(r4(s.x_px));
+        ys.push_back(r4(s.y_px));
+      }
+      std::vector<double> ws;
+      for (const auto& s : l.samples)
+        if (s.valid()) ws.push_back(s.width_px / run.ppm);
+      std::sort(ws.begin(), ws.end());
+      const double med = ws.empty() ? kNaN : ws[ws.size() / 2];
+      const double valid_frac = l.samples.empty() ? 0.0 : static_cast<double>(l.valid_samples) / l.samples.size();
+      if (valid_frac < 0.5)
+        env.warn(fmt::format("{}: line {}: only {:.0f} % of the profile is measured", path, k + 1, 100 * valid_frac));
+      lines.push_back({{"image", path},
+                       {"index", k + 1},
+                       {"closed", l.closed},
+                       {"touches_frame", l.touches_frame},
+                       {"length_mm", r6(l.length_px / run.ppm)},
+                       {"samples", l.samples.size()},
+                       {"valid_samples", l.valid_samples},
+                       {"width_mm",
+                        {{"mean", r6(l.mean_width_px / run.ppm)},
+                         {"std", r6(l.std_width_px / run.ppm)},
+                         {"median", r6(med)},
+                         {"unit", "mm"}}},
+                       {"width_px", {{"mean", r4(l.mean_width_px)}, {"std", r4(l.std_width_px)}}},
+                       {"stretches", stretches(l, run.ppm)},
+                       {"profile",
+                        {{"s_mm", s_mm},
+                         {"width_mm", w_mm},
+                         {"confidence", conf},
+                         {"flags", flags},
+                         {"x_px", xs},
+                         {"y_px", ys}}}});
+    }
+  }
+  auto& results = env.results();
+  results["images"] = images;
+  results["lines"] = lines;
+  results["flag_bits"] = {{"out_of_frame", ident::kFlagOutOfFrame},
+                          {"occluded", ident::kFlagOccluded},
+                          {"merged", ident::kFlagMerged}};
+
+  if (!a.profile_csv.empty()) {
+    const auto& run = runs.front();
+    if (a.line < 1 || a.line > static_cast<int>(run.result.lines.size()))
+      throw InputError(fmt::format("--line {}: the image has {} line(s)", a.line, run.result.lines.size()));
+    const auto& l = run.result.lines[static_cast<std::size_t>(a.line - 1)];
+    std::vector<double> w_mm, conf, s_mm;
+    std::vector<cv::Point2d> centres;
+    for (const auto& s : l.samples) {
+      w_mm.push_back(s.valid() ? s.width_px / run.ppm : kNaN);
+      conf.push_back(s.confidence);
+      s_mm.push_back(s.s_px / run.ppm);
+      centres.emplace_back(s.x_px, s.y_px);
+    }
+    const double mean_mm = l.mean_width_px / run.ppm;
+    double setpoint = a.setpoint_width_mm;
+    if (!(setpoint > 0)) {
+      setpoint = mean_mm;
+      env.warn(fmt::format("no --setpoint-width-mm: the set-point width is taken as the measured mean {:.4f} mm",
+                           mean_mm));
+    }
+    std::vector<ident::TimedWidth> rows;
+    nlohmann::json mapping;
+    std::string comment;
+    if (a.ring_sines > 0) {
+      if (!l.closed) throw InputError(fmt::format("line {} is not a closed ring; --ring-sines needs one", a.line));
+      std::vector<cv::Point2d> pts;
+      for (const auto& s : l.samples)
+        if (s.valid()) pts.emplace_back(s.x_px, s.y_px);
+      const cv::Vec3d circ = ident::fit_circle(pts);
+      ident::RingSine ring;
+      ring.n_sines = a.ring_sines;
+      ring.amplitude_mm = a.ring_amplitude_mm;
+      ring.speed_mm_s = a.speed_mm_s;
+      ring.radius_mm = a.ring_radius_mm > 0 ? a.ring_radius_mm : circ[2] / run.ppm;
+      ring.rod_radius_mm = a.rod_radius_mm;
+      ring.layer_height_mm = a.layer_height_mm;
+      ring.width_gcode_mm = setpoint;
+      rows = ident::map_ring(centres, w_mm, conf, {circ[0], circ[1]}, ring, a.ring_start_deg, a.ring_clockwise);
+      mapping = {{"kind", "ring"},
+                 {"frequency_hz", r6(ident::ring_frequency_hz(ring))},
+                 {"setpoint_amplitude_mm", r6(ident::ring_setpoint_amplitude_mm(ring))},
+                 {"ring_radius_mm", r6(ring.radius_mm)},
+                 {"measured_radius_mm", r6(circ[2] / run.ppm)},
+                 {"centre_px", {r4(circ[0]), r4(circ[1])}},
+                 {"start_deg", a.ring_start_deg},
+                 {"direction", a.ring_clockwise ? "clockwise" : "counterclockwise"}};
+      comment = fmt::format(
+          "tunekit linewidth: ring profile of {} (line {}), N={} A={} mm v={} mm/s R={:.4f} mm -> f={:.6g} Hz\n"
+          "setpoint_width: seed 001 eq. 4.3",
+          run.path, a.line, ring.n_sines, ring.amplitude_mm, ring.speed_mm_s, ring.radius_mm,
+          ident::ring_frequency_hz(ring));
+    } else {
+      rows = ident::map_constant_speed(s_mm, w_mm, conf, a.speed_mm_s, setpoint);
+      mapping = {{"kind", "constant_speed"}};
+      comment = fmt::format("tunekit linewidth: profile of {} (line {}) at a constant {} mm/s", run.path, a.line,
+                            a.speed_mm_s);
+    }
+    if (rows.size() < 3) throw FitError("measured nothing: fewer than 3 valid profile samples to map to time", run.path);
+    protocols::write_file_atomic(a.profile_csv, ident::timed_width_csv(rows, comment));
+    mapping["path"] = a.profile_csv;
+    mapping["rows"] = rows.size();
+    mapping["line"] = a.line;
+    mapping["speed_mm_s"] = a.speed_mm_s;
+    mapping["setpoint_width_mm"] = r6(setpoint);
+    mapping["duration_s"] = r6(rows.back().t_s - rows.front().t_s);
+    results["profile_csv"] = mapping;
+  }
+
+  env.set_options({{"px_per_mm", a.px_per_mm},
+                   {"camera", a.camera},
+                   {"chessboard", a.chessboard},
+                   {"square_mm", a.square_mm},
+                   {"reference_width_mm", a.reference_width_mm},
+                   {"rectify", a.rectify},
+                   {"polarity", a.polarity},
+                   {"step_px", a.step_px},
+                   {"min_length_px", a.min_length_px},
+                   {"allow_edge", a.allow_edge},
+                   {"overlay", a.overlay_dir},
+                   {"profile_csv", a.profile_csv},
+                   {"line", a.line},
+                   {"speed_mm_s", a.speed_mm_s},
+                   {"setpoint_width_mm", a.setpoint_width_mm},
+                   {"ring_sines", a.ring_sines},
+                   {"ring_amplitude_mm", a.ring_amplitude_mm},
+                   {"ring_radius_mm", a.ring_radius_mm},
+                   {"rod_radius_mm", a.rod_radius_mm},
+                   {"layer_height_mm", a.layer_height_mm},
+                   {"ring_start_deg", a.ring_start_deg},
+                   {"ring_clockwise", a.ring_clockwise}});
+  if (!a.output.json) {
+    for (const auto& l : lines)
+      ctx.out << fmt::format("{} line {}: width {:.4f} mm (std {:.4f} mm), {} of {} samples, length {:.2f} mm{}\n",
+                             l["image"].get<std::string>(), l["index"].get<int>(),
+                             l["width_mm"]["mean"].get<double>(), l["width_mm"]["std"].get<double>(),
+                             l["valid_samples"].get<int>(), l["samples"].get<int>(), l["length_mm"].get<double>(),
+                             l["closed"].get<bool>() ? " (closed loop)" : "");
+    if (results.contains("profile_csv"))
+      ctx.out << fmt::format("profile written to {} ({} rows)\n", a.profile_csv,
+                             results["profile_csv"]["rows"].get<std::size_t>());
+  }
+  return emit(env, a.output, ctx);
+}
+
+}  // namespace
+
+void register_linewidth(CLI::App& app, CliContext& ctx) {
+  auto args = std::make_shared<LinewidthArgs>();
+  auto* sub = app.add_subcommand("linewidth", "Calibrated width profiles of printed lines from photos");
+  sub->add_option("images", args->images, "Photos of printed lines (PNG, JPEG, TIFF; 8 or 16 bit)")->required();
+  auto* ppm = sub->add_option("--px-per-mm", args->px_per_mm, "Image scale on the bed plane (px/mm)");
+  ppm->check(CLI::PositiveNumber);
+  sub->add_option("--camera", args->camera,
+                  "Camera profile (JSON from --save-camera): removes lens distortion; its bed plane gives the scale "
+                  "(px/mm)");
+  sub->add_option("--chessboard", args->chessboard,
+                  "Chessboard in the scene (or, with --save-camera, in the calibration photos): inner corners "
+                  "COLSxROWS, e.g. 9x6");
+  sub->add_option("--square-mm", args->square_mm, "Side of a chessboard square (mm)")->check(CLI::PositiveNumber);
+  sub->add_option("--reference-width-mm", args->reference_width_mm,
+                  "Scale from a reference: the longest line in the image has this width (mm)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--rectify", args->rectify,
+                "Warp the photo onto the bed plane first (perspective of a tilted camera; needs --chessboard or a "
+                "--camera bed plane)");
+  sub->add_option("--polarity", args->polarity, "Line brightness against the bed: auto, dark or light")
+      ->check(CLI::IsMember({"auto", "dark", "light"}));
+  sub->add_option("--step-px", args->step_px, "Spacing of profile samples along the line (px)")
+      ->check(CLI::Range(0.25, 100.0));
+  sub->add_option("--min-length-px", args->min_length_px, "Ignore features shorter than this (px of centreline)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--allow-edge", args->allow_edge,
+                "Measure lines that touch the frame edge (their out-of-frame stretches are flagged) instead of failing");
+  sub->add_option("--overlay", args->overlay_dir,
+                  "Write check images (edges, centreline, flags) to this directory as <image>_overlay.png");
+  sub->add_option("--save-camera", args->save_camera,
+                  "Calibrate the camera from the IMAGES (chessboard photos; the first lies on the bed) and write the "
+                  "profile (JSON) here; nothing is measured");
+  sub->add_option("--profile-csv", args->profile_csv,
+                  "Write line --line's profile against time: columns time (s), s (mm), width (mm), setpoint_width (mm), "
+                  "confidence");
+  sub->add_option("--line", args->line, "Line (1 = longest) written by --profile-csv")->check(CLI::PositiveNumber);
+  sub->add_option("--speed-mm-s", args->speed_mm_s, "Commanded print speed along the line (mm/s)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--setpoint-width-mm", args->setpoint_width_mm,
+                  "Set-point (G-code) line width (mm); default: the measured mean")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--ring-sines", args->ring_sines, "Ring print: sines per rotation N (seed 001 eq. 4.2; 1)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--ring-amplitude-mm", args->ring_amplitude_mm, "Ring print: feeder offset amplitude A (mm)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--ring-radius-mm", args->ring_radius_mm, "Ring print: ring radius R (mm); default: measured")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--rod-radius-mm", args->rod_radius_mm, "Ring print: feed rod (filament) radius (mm)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--layer-height-mm", args->layer_height_mm, "Ring print: layer height (mm)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--ring-start-deg", args->ring_start_deg,
+                  "Ring print: where theta = 0 is, as an angle in the photo (deg, counterclockwise from +x)");
+  sub->add_flag("--ring-clockwise", args->ring_clockwise, "Ring print: the nozzle ran clockwise as seen in the photo");
+  add_output_options(sub, args->output);
+  sub->footer(
+      "Examples:\n"
+      "  tunekit linewidth lines.png --px-per-mm 20 --json --overlay check/\n"
+      "  tunekit linewidth bed.jpg --chessboard 9x6 --square-mm 5 --rectify --overlay check/\n"
+      "  tunekit linewidth calib*.png --chessboard 9x6 --square-mm 5 --save-camera cam.json\n"
+      "  tunekit linewidth shot.png --camera cam.json --json -o widths.json\n"
+      "  tunekit linewidth ring.png --px-per-mm 20 --speed-mm-s 10 --ring-sines 3 --ring-amplitude-mm 0.08 \\\n"
+      "      --rod-radius-mm 2.5 --layer-height-mm 0.2 --setpoint-width-mm 0.66 --profile-csv ring.csv\n"
+      "  tunekit freq ring.csv --time time --output width --input setpoint_width --freq-hz 0.159 --json\n"
+      "Exit codes: 0 measured, 1 nothing measured (no line found), 2 bad input (unreadable image, line touching\n"
+      "the frame edge, scale target not found).");
+  sub->callback([args, &ctx] { set_exit_code(run_linewidth(*args, ctx)); });
 }
 
 }  // namespace tunekit::cli
