@@ -37,7 +37,7 @@ TEST_CASE("malformed, unknown and ambiguous requirements are usage errors") {
   CHECK_THROWS_AS(evaluate_requirement(parse_requirement("freq_hz>1"), kResults), tunekit::InputError);
 }
 
-TEST_CASE("an unmet requirement exits 1 and names each unmet requirement; met ones exit 0") {
+TEST_CASE("an unmet requirement exits 1 and names each unmet requirement, met ones exit 0") {
   const auto path = tunekit::test::write_scratch("req.csv", "time,y\n0,1\n1,2\n2,4\n");
   auto r = tunekit::test::run_cli({"inspect", path, "--time", "time", "--require", "rows>=3", "--require",
                                    "span_s<1.5", "--require", "sample_rate_hz>2"});

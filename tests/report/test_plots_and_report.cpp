@@ -4,7 +4,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -129,17 +128,15 @@ TEST_CASE("the report embeds every plot and its summary numbers equal results.js
   CHECK(html.find("<script") == std::string::npos);
   for (const char* id : {"step", "bode", "psd_x", "viscosity", "linewidth"}) {
     INFO(id);
-    const std::regex fig(std::string("<figure id=\"plot-") + id + "\"><img alt=\"[^\"]*\" src=\"data:image/png;base64,([A-Za-z0-9+/=]{1000,})\"");
-    CHECK(std::regex_search(html, fig));
+    CHECK(tunekit::test::embedded_png_base64_length(html, id) > 1000);
   }
   // Summary: every cell's exact value and displayed value come from results.json.
-  const std::regex cell("<td class=\"num\" data-path=\"([^\"]+)\" data-value=\"([^\"]+)\">([^<]+)</td>");
   int cells = 0;
-  for (auto it = std::sregex_iterator(html.begin(), html.end(), cell); it != std::sregex_iterator(); ++it) {
-    const auto* v = json_at(env["results"], (*it)[1].str());
+  for (const auto& c : tunekit::test::summary_cells(html)) {
+    const auto* v = json_at(env["results"], c.path);
     REQUIRE(v != nullptr);
-    CHECK(std::stod((*it)[2].str()) == v->get<double>());
-    CHECK((*it)[3].str() == display_number(v->get<double>()));
+    CHECK(std::stod(c.value) == v->get<double>());
+    CHECK(c.display == display_number(v->get<double>()));
     ++cells;
   }
   CHECK(cells == 3);

@@ -3,6 +3,8 @@
 #include <unistd.h>
 
 #include <array>
+#include <cctype>
+#include <regex>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -42,6 +44,33 @@ CliRun run_exe(const std::string& args) {
   ss << f.rdbuf();
   r.err = ss.str();
   return r;
+}
+
+std::size_t embedded_png_base64_length(const std::string& html, const std::string& id) {
+  const std::string open = "<figure id=\"plot-" + id + "\"><img alt=\"";
+  auto pos = html.find(open);
+  if (pos == std::string::npos) return 0;
+  const std::string src = "\" src=\"data:image/png;base64,";
+  pos = html.find(src, pos);
+  if (pos == std::string::npos) return 0;
+  pos += src.size();
+  std::size_t n = 0;
+  while (pos + n < html.size() && (std::isalnum(static_cast<unsigned char>(html[pos + n])) || html[pos + n] == '+' ||
+                                   html[pos + n] == '/' || html[pos + n] == '='))
+    ++n;
+  return (pos + n < html.size() && html[pos + n] == '"') ? n : 0;
+}
+
+std::vector<SummaryCell> summary_cells(const std::string& html) {
+  std::vector<SummaryCell> cells;
+  const auto begin = html.find("<table id=\"summary\">");
+  const auto end = html.find("</table>", begin);
+  if (begin == std::string::npos || end == std::string::npos) return cells;
+  const std::string table = html.substr(begin, end - begin);
+  const std::regex cell("<td class=\"num\" data-path=\"([^\"]+)\" data-value=\"([^\"]+)\">([^<]+)</td>");
+  for (auto it = std::sregex_iterator(table.begin(), table.end(), cell); it != std::sregex_iterator(); ++it)
+    cells.push_back({(*it)[1].str(), (*it)[2].str(), (*it)[3].str()});
+  return cells;
 }
 
 std::string dataset(const std::string& relative) { return std::string(TUNEKIT_DATASETS_DIR) + "/" + relative; }

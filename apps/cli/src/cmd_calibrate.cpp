@@ -104,7 +104,8 @@ nlohmann::json step_plotdata(const std::string& csv, const nlohmann::json& step_
     if (!s.contains("params")) continue;
     const double ts = s.value("t_step_s", 0.0);
     const double t_next = k + 1 < steps.size() ? steps[k + 1].value("t_step_s", t.back() + 1) : t.back() + 1;
-    const double t_prev = k > 0 ? ts : t.front() - 1;
+    // Before the first step only its own steady state is modelled (the warm-up is not).
+    const double t_prev = k > 0 ? ts : ts - 0.5 * (t_next - ts);
     const double du = s.value("u_after", 0.0) - s.value("u_before", 0.0);
     const auto& p = s["params"];
     const double K = num(p, "K.value"), tau = num(p, "tau_s.value"), y0 = num(p, "y0.value");
@@ -166,6 +167,18 @@ nlohmann::json psd_plotdata(const nlohmann::json& axis) {
   return d;
 }
 
+// Paths inside the run directory are written relative to it, so that results.json does not
+// depend on where the run lives (and two runs of one machine are byte-identical).
+void strip_prefix(nlohmann::json& j, const std::string& prefix) {
+  if (j.is_string()) {
+    std::string s = j.get<std::string>();
+    for (std::size_t pos; (pos = s.find(prefix)) != std::string::npos;) s.erase(pos, prefix.size());
+    j = s;
+  } else if (j.is_structured()) {
+    for (auto& v : j) strip_prefix(v, prefix);
+  }
+}
+
 std::string utc_stamp() {
   const std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -208,6 +221,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     o.sim_options = a.sim_options;
     o.dry_run = dry;
     o.run_dir = run_dir + "/" + e.name;
+    o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
     return o;
   };
 
@@ -311,8 +325,13 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     summary.push_back({{"label", "advance smoothing time"}, {"path", "compensators.settings.pa_smooth_s"}, {"unit", "s"}});
   bar.end(diff.empty() ? "configuration already up to date" : "configuration diff ready");
   res["summary"] = summary;
-  for (const auto& w : ex.value("warnings", std::vector<std::string>{})) env.warn(w);
+  for (const auto& w : ex.value("warnings", std::vector<std::string>{})) {
+    nlohmann::json wj = w;
+    strip_prefix(wj, run_dir + "/");
+    env.warn(wj.get<std::string>());
+  }
 
+  strip_prefix(res, run_dir + "/");
   bar.begin("write report", 2);
   protocols::write_file_atomic(run_dir + "/results.json", env.dump());
   protocols::write_file_atomic(run_dir + "/plotdata.json", plot.dump() + "\n");

@@ -83,7 +83,7 @@ Figure step_figure(const nlohmann::json& d) {
   Figure f;
   f.title = "Liquefier step response";
   Panel in{"Input", "", d.value("u_label", std::string("input")), false, false, {}, 0.6};
-  in.series.push_back({"commanded", vec(d, "t_s"), vec(d, "u"), Series::Style::line, 8});
+  in.series.push_back({"commanded", vec(d, "t_s"), vec(d, "u"), Series::Style::line, 4});
   Panel out{"Output and fit", "", d.value("y_label", std::string("output")), false, false, {}, 1.4};
   out.series.push_back({"measured", vec(d, "t_s"), vec(d, "y"), Series::Style::line, 1});
   out.series.push_back({"fitted model", vec(d, "t_s"), vec(d, "y_fit"), Series::Style::dashed, 2});

@@ -40,6 +40,7 @@ struct RunOptions {
   std::string port;                      ///< device / PTY / "unix:PATH"; empty with "sim"
   int baud = 250000;
   std::string run_dir;                   ///< default: <runs_root>/<protocol>-<UTC stamp>
+  std::string file_tag;                  ///< names raw_data_<axis>_<tag>.csv; default: the UTC stamp
   std::string runs_root = "runs";
   std::vector<std::string> sim_options;  ///< SimConfig::from_options keys ("tau_s=0.5", "fault=drop@12")
   LinkOptions link;                      ///< timeouts and retries
