@@ -16,6 +16,7 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/requirements.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
@@ -100,12 +101,8 @@ int run_batch(const BatchArgs& a, CliContext& ctx) {
 
   std::vector<Job> jobs;
   for (const auto& f : files) jobs.push_back(plan_job(f));
-  for (auto& j : jobs)
-    for (const auto& r : a.output.require) {
-      if (j.args.empty()) continue;
-      j.args.push_back("--require");
-      j.args.push_back(r);
-    }
+  std::vector<Requirement> requirements;
+  for (const auto& r : a.output.require) requirements.push_back(parse_requirement(r));
 
   // Worker threads take jobs in order; each command runs in-process exactly as on the command line.
   std::atomic<std::size_t> next{0};
@@ -149,8 +146,30 @@ int run_batch(const BatchArgs& a, CliContext& ctx) {
       e["status"] = j.code == 0 ? "ok" : j.code == 1 ? "failed" : "error";
       if (!j.err.empty()) e["messages"] = j.err;
       if (!j.results.is_null()) e["results"] = j.results;
-      worst = std::max(worst, j.code);
-      (j.code == 0 ? ok : j.code == 1 ? failed : bad)++;
+      // Requirements apply to the datasets whose results name the quantity; elsewhere they
+      // are recorded as not applicable.
+      int code = j.code;
+      if (j.code == 0 && !requirements.empty()) {
+        nlohmann::json reqs = nlohmann::json::array();
+        for (const auto& r : requirements) {
+          try {
+            const auto o = evaluate_requirement(r, j.results);
+            reqs.push_back({{"expression", r.expression}, {"path", o.resolved_path}, {"value", o.value}, {"met", o.met}});
+            if (!o.met) {
+              code = static_cast<int>(ExitCode::fit_failed);
+              ctx.err << fmt::format("tunekit: {}: requirement not met: {} ({} = {:.6g})\n", j.file, r.expression,
+                                     o.resolved_path, o.value);
+            }
+          } catch (const InputError&) {
+            reqs.push_back({{"expression", r.expression}, {"applicable", false}});
+          }
+        }
+        e["requirements"] = reqs;
+        e["exit_code"] = code;
+        e["status"] = code == 0 ? "ok" : "failed";
+      }
+      worst = std::max(worst, code);
+      (code == 0 ? ok : code == 1 ? failed : bad)++;
     }
     list.push_back(e);
     if (!a.output.json)

@@ -106,11 +106,16 @@ RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::js
   for (const auto& l : leaves)
     if (matches(want, l.segments)) found.push_back(&l);
   if (found.empty()) throw InputError(fmt::format("--require '{}': no number named '{}' in the results", r.expression, r.path));
-  std::stable_sort(found.begin(), found.end(),
-                   [](const Leaf* a, const Leaf* b) { return a->segments.size() < b->segments.size(); });
+  // Prefer a number that is not inside an array (a pooled or summary value over one of a
+  // list), then the shortest path.
+  auto in_array = [](const Leaf* l) {
+    return std::any_of(l->segments.begin(), l->segments.end(), [](const std::string& s) { return s.front() == '['; });
+  };
+  auto key = [&](const Leaf* l) { return std::make_pair(in_array(l), l->segments.size()); };
+  std::stable_sort(found.begin(), found.end(), [&](const Leaf* a, const Leaf* b) { return key(a) < key(b); });
   std::vector<std::string> ties;
   for (const Leaf* l : found)
-    if (l->segments.size() == found.front()->segments.size() && l->value != found.front()->value) ties.push_back(l->path);
+    if (key(l) == key(found.front()) && l->value != found.front()->value) ties.push_back(l->path);
   if (!ties.empty()) {
     std::string list = found.front()->path;
     for (const auto& t : ties) list += ", " + t;

@@ -4,8 +4,9 @@
 // PATH names a number in the command's `results` by the last keys of its path, so
 // `tau_s` finds `results.pooled.params.tau_s.value` (an object with a `value` stands for
 // its value) and `x.freq_hz` finds `results.axes.x...freq_hz`. Segments must appear in
-// order; among the matches the one with the fewest path segments wins, and a tie between
-// different numbers is an error listing the candidates. Full paths with indices
+// order; among the matches a number outside any array wins over one inside an array, then
+// the one with the fewest path segments; a tie between different numbers is an error
+// listing the candidates. Full paths with indices
 // (`axes.x.modes[1].freq_hz`) are accepted too.
 
 #include <string>
