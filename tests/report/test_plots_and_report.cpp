@@ -101,7 +101,9 @@ TEST_CASE("each plot type renders a non-empty PNG of the expected size") {
 
 TEST_CASE("a figure without data is refused") {
   Figure f;
-  f.panels.push_back(Panel{"empty", "x", "y"});
+  Panel empty;
+  empty.title = "empty";
+  f.panels.push_back(empty);
   CHECK_THROWS(render_png(f, tunekit::test::scratch_dir("plots_empty") + "/e.png"));
 }
 
@@ -116,7 +118,13 @@ TEST_CASE("the report embeds every plot and its summary numbers equal results.js
                                  {{"label", "x damping"}, {"path", "axes.x.modes[0].zeta"}, {"unit", "1"}}}},
                     {"config_diff", "--- a\n+++ b\n-pressure_advance = 0\n+pressure_advance = 0.451\n"}};
   std::ofstream(dir + "/results.json") << env.dump(2);
-  std::ofstream(dir + "/plotdata.json") << sample_plotdata().dump();
+  auto pd = sample_plotdata();
+  {  // a stand-in for the line-width overlay photo: any PNG
+    const auto shots = render_report_plots(tunekit::test::scratch_dir("report_overlay"), pd);
+    std::filesystem::copy_file(shots.back().png_path, dir + "/overlay.png");
+  }
+  pd["linewidth"]["overlay_png"] = "overlay.png";
+  std::ofstream(dir + "/plotdata.json") << pd.dump();
   const auto r = tunekit::test::run_cli({"report", dir});
   INFO(r.err);
   REQUIRE(r.code == 0);
@@ -126,7 +134,7 @@ TEST_CASE("the report embeds every plot and its summary numbers equal results.js
   // Self-contained: no external references.
   CHECK(html.find("src=\"http") == std::string::npos);
   CHECK(html.find("<script") == std::string::npos);
-  for (const char* id : {"step", "bode", "psd_x", "viscosity", "linewidth"}) {
+  for (const char* id : {"step", "bode", "psd_x", "viscosity", "linewidth", "linewidth_overlay"}) {
     INFO(id);
     CHECK(tunekit::test::embedded_png_base64_length(html, id) > 1000);
   }

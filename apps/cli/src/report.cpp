@@ -198,7 +198,16 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
           psd_figure(pd[key], axis));
   }
   if (pd.contains("viscosity")) add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(pd["viscosity"]));
-  if (pd.contains("linewidth")) add("linewidth", "Line-width profile", linewidth_figure(pd["linewidth"]));
+  if (pd.contains("linewidth")) {
+    add("linewidth", "Line-width profile", linewidth_figure(pd["linewidth"]));
+    // The photo with the detected edges and centreline, shown beside its profile.
+    const std::string overlay = pd["linewidth"].value("overlay_png", std::string());
+    if (!overlay.empty()) {
+      const std::string path = run_dir + "/" + overlay;
+      if (!std::filesystem::exists(path)) throw InputError("the line-width overlay named in plotdata.json is missing", path);
+      images.push_back({"linewidth_overlay", "Photo overlay: detected edges and centreline", path});
+    }
+  }
   return images;
 }
 
