@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <fstream>
 
 #include <nlohmann/json.hpp>
 
@@ -80,6 +81,16 @@ TEST_CASE("calibrate --require exits 1 naming each unmet requirement") {
   CHECK(r.cli.err.find("requirement not met: x.freq_hz<1") != std::string::npos);
   CHECK(r.cli.err.find("requirement not met: y.zeta>5") != std::string::npos);
   CHECK(r.cli.err.find("y.freq_hz>0") == std::string::npos);
+}
+
+TEST_CASE("calibrate never writes into a used run directory") {
+  const auto dir = tunekit::test::scratch_dir("calibrate_used");
+  std::ofstream(dir + "/results.json") << "{}";
+  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--out", dir});
+  CHECK(r.code == 2);
+  CHECK(r.err == "tunekit: error: " + dir + ": the run directory already exists; give a new --out (or leave it out for "
+                 "runs/calibrate-UTCSTAMP)\n");
+  CHECK(tunekit::ident::read_file_bytes(dir + "/results.json") == "{}");
 }
 
 TEST_CASE("calibrate refuses a real machine without a profile before touching it") {

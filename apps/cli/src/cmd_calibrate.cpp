@@ -208,7 +208,16 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   }
   if (exps.empty()) throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given");
 
-  const std::string run_dir = a.out_dir.empty() ? "runs/calibrate-" + utc_stamp() : a.out_dir;
+  // Each calibration keeps its own run directory: a used one is never written into again.
+  std::string run_dir = a.out_dir;
+  if (run_dir.empty()) {
+    const std::string base = "runs/calibrate-" + utc_stamp();
+    run_dir = base;
+    for (int k = 2; fs::exists(run_dir); ++k) run_dir = base + "-" + std::to_string(k);
+  } else if (fs::exists(run_dir) && !(fs::is_directory(run_dir) && fs::is_empty(run_dir))) {
+    throw InputError("the run directory already exists; give a new --out (or leave it out for runs/calibrate-UTCSTAMP)",
+                     run_dir);
+  }
   fs::create_directories(run_dir + "/analysis");
   fs::create_directories(run_dir + "/config");
 
