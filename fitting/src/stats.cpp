@@ -45,4 +45,11 @@ WhitenessTest ljung_box(std::span<const double> r, int lags) {
   return t;
 }
 
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
 }  // namespace tunekit::fitting

@@ -1,4 +1,5 @@
 #include "tunekit/ident/resonance.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -16,13 +17,6 @@ namespace {
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
-}
-
-double median_of(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
 }
 
 // Linear interpolation of (t, x) onto t0 + i dt.
@@ -138,7 +132,7 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
   const std::size_t n = t.size();
   std::vector<double> dt(n - 1);
   for (std::size_t i = 1; i < n; ++i) dt[i - 1] = t[i] - t[i - 1];
-  const double med = median_of(dt);
+  const double med = fitting::median(dt);
   auto& s = r.sampling;
   s.samples = n;
   s.duration_s = t.back() - t.front();
@@ -283,7 +277,7 @@ AxisSpectrum load_calibration_data(const std::string& path, std::string_view byt
   // Klipper writes the bins rounded to 0.1 Hz: the bin width is the median step.
   std::vector<double> df(s.freq_hz.size() - 1);
   for (std::size_t i = 1; i < s.freq_hz.size(); ++i) df[i - 1] = s.freq_hz[i] - s.freq_hz[i - 1];
-  const double bin = median_of(df);
+  const double bin = fitting::median(df);
   s.segment_length = 2048;  // Klipper's window at ~3.2 kHz
   s.sample_rate_hz = bin * static_cast<double>(s.segment_length);
   return s;

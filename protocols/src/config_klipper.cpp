@@ -13,14 +13,10 @@
 
 #include "export_writers.hpp"
 #include "tunekit/protocols/config_edit.hpp"
+#include "text_util.hpp"
 
 namespace tunekit::protocols::detail {
 namespace {
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 std::string trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t");
@@ -79,7 +75,7 @@ void parse_line(std::vector<Section>& secs, std::vector<std::string>* includes, 
   const auto sep = t.find_first_of(":=");
   if (sep == std::string::npos) return;
   Opt o;
-  o.name = lower(trim(t.substr(0, sep)));
+  o.name = text::lower(trim(t.substr(0, sep)));
   o.sep = t.substr(sep, 1);
   o.line = index;
   std::size_t vb = sep + 1;
@@ -129,7 +125,7 @@ struct Want {
 
 bool same_value(const Want& w, const std::string& existing) {
   if (w.numeric) return same_number(existing, w.number, w.decimals);
-  return lower(trim(existing)) == lower(w.value);
+  return text::lower(trim(existing)) == text::lower(w.value);
 }
 
 const Opt* find_opt(const std::vector<Section>& secs, const std::string& section, const std::string& option,

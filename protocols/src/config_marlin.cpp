@@ -11,6 +11,7 @@
 #include "export_writers.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
+#include "text_util.hpp"
 
 namespace tunekit::protocols::detail {
 namespace {
@@ -25,29 +26,27 @@ struct Define {
   std::string value;
 };
 
-bool is_space(char c) { return c == ' ' || c == '\t'; }
-
 std::optional<Define> parse_define(const std::string& t, const std::string& name, std::size_t line) {
   Define d;
   d.line = line;
   std::size_t p = 0;
-  while (p < t.size() && is_space(t[p])) ++p;
+  while (p < t.size() && text::is_blank(t[p])) ++p;
   d.indent_end = p;
   if (t.compare(p, 2, "//") == 0) {
     d.commented = true;
     p += 2;
-    while (p < t.size() && is_space(t[p])) ++p;
+    while (p < t.size() && text::is_blank(t[p])) ++p;
   }
   if (t.compare(p, 7, "#define") != 0) return std::nullopt;
   d.define_at = p;
   p += 7;
-  if (p >= t.size() || !is_space(t[p])) return std::nullopt;
-  while (p < t.size() && is_space(t[p])) ++p;
+  if (p >= t.size() || !text::is_blank(t[p])) return std::nullopt;
+  while (p < t.size() && text::is_blank(t[p])) ++p;
   if (t.compare(p, name.size(), name) != 0) return std::nullopt;
   p += name.size();
-  if (p < t.size() && !is_space(t[p])) return std::nullopt;  // a longer name (ADVANCE_K_EXTRA)
+  if (p < t.size() && !text::is_blank(t[p])) return std::nullopt;  // a longer name (ADVANCE_K_EXTRA)
   std::size_t vb = p;
-  while (vb < t.size() && is_space(t[vb])) ++vb;
+  while (vb < t.size() && text::is_blank(t[vb])) ++vb;
   if (vb >= t.size() || t.compare(vb, 2, "//") == 0 || t.compare(vb, 2, "/*") == 0) {
     d.value_begin = d.value_end = p;
     return d;
@@ -57,7 +56,7 @@ std::optional<Define> parse_define(const std::string& t, const std::string& name
     ve = t.find('}', vb);
     ve = ve == std::string::npos ? t.size() : ve + 1;
   } else {
-    while (ve < t.size() && !is_space(t[ve])) ++ve;
+    while (ve < t.size() && !text::is_blank(t[ve])) ++ve;
   }
   d.value_begin = vb;
   d.value_end = ve;

@@ -10,16 +10,10 @@
 
 #include "export_writers.hpp"
 #include "tunekit/protocols/config_edit.hpp"
+#include "text_util.hpp"
 
 namespace tunekit::protocols::detail {
 namespace {
-
-bool is_space(char c) { return c == ' ' || c == '\t'; }
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 struct Command {
   std::string code;  // upper case, e.g. "M572"
@@ -29,7 +23,7 @@ struct Command {
 
 std::optional<Command> parse_command(const std::string& t) {
   std::size_t p = 0;
-  while (p < t.size() && is_space(t[p])) ++p;
+  while (p < t.size() && text::is_blank(t[p])) ++p;
   if (p >= t.size()) return std::nullopt;
   const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(t[p])));
   if (letter != 'M' && letter != 'G') return std::nullopt;
@@ -61,12 +55,12 @@ std::optional<ParamPos> find_param(const std::string& t, const Command& c, char 
   for (std::size_t k = c.args_begin; k < c.code_end; ++k) {
     if (t[k] == '"') quoted = !quoted;
     if (quoted) continue;
-    if (std::toupper(static_cast<unsigned char>(t[k])) == letter && (k == c.args_begin || is_space(t[k - 1]))) {
+    if (std::toupper(static_cast<unsigned char>(t[k])) == letter && (k == c.args_begin || text::is_blank(t[k - 1]))) {
       ParamPos p;
       p.value_begin = k + 1;
       std::size_t e = k + 1;
       bool q = false;
-      while (e < c.code_end && (q || !is_space(t[e]))) {
+      while (e < c.code_end && (q || !text::is_blank(t[e]))) {
         if (t[e] == '"') q = !q;
         ++e;
       }
@@ -84,7 +78,7 @@ std::string set_param(const std::string& t, char letter, const std::string& valu
   if (const auto p = find_param(t, *c, letter))
     return t.substr(0, p->value_begin) + value + t.substr(p->value_end);
   std::size_t end = c->code_end;
-  while (end > c->args_begin && is_space(t[end - 1])) --end;
+  while (end > c->args_begin && text::is_blank(t[end - 1])) --end;
   return t.substr(0, end) + " " + std::string(1, letter) + value + t.substr(end);
 }
 
@@ -150,7 +144,7 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
       const std::string old_p = param_value(t, 'P'), old_f = param_value(t, 'F'), old_s = param_value(t, 'S');
       std::string bare_p = old_p;
       bare_p.erase(std::remove(bare_p.begin(), bare_p.end(), '"'), bare_p.end());
-      if (lower(bare_p) != type) {
+      if (text::lower(bare_p) != type) {
         t = set_param(t, 'P', "\"" + type + "\"");
         r.changes.push_back({"M593 P", old_p, "\"" + type + "\"", *m593 + 1, "command"});
       }

@@ -1,4 +1,5 @@
 #include "tunekit/protocols/dialect.hpp"
+#include "text_util.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -7,11 +8,6 @@
 
 namespace tunekit::protocols {
 namespace {
-
-std::string lower(std::string s) {
-  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 /// Value after "KEY:" up to the next " UPPERCASE_KEY:" token.
 std::string field(const std::string& line, const std::string& key) {
@@ -44,7 +40,7 @@ std::string to_string(Firmware f) {
 }
 
 Firmware firmware_from_name(const std::string& name) {
-  const std::string n = lower(name);
+  const std::string n = text::lower(name);
   if (n == "marlin") return Firmware::marlin;
   if (n == "prusa") return Firmware::prusa;
   if (n == "klipper") return Firmware::klipper;
@@ -70,7 +66,7 @@ FirmwareInfo parse_m115(const std::vector<std::string>& lines) {
     if (line.find("FIRMWARE_NAME:") == std::string::npos || info.firmware != Firmware::unknown) continue;
     info.name = field(line, "FIRMWARE_NAME");
     info.version = field(line, "FIRMWARE_VERSION");
-    const std::string n = lower(info.name);
+    const std::string n = text::lower(info.name);
     if (n.find("prusa") != std::string::npos) info.firmware = Firmware::prusa;
     else if (n.find("klipper") != std::string::npos) info.firmware = Firmware::klipper;
     else if (n.find("reprapfirmware") != std::string::npos) info.firmware = Firmware::reprapfirmware;

@@ -11,14 +11,10 @@
 #include "export_writers.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
+#include "text_util.hpp"
 
 namespace tunekit::protocols {
 namespace {
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 // Accepted ranges (docs/export.md gives the sources).
 constexpr double kMarlinKMax = 10.0;           // M900: K outside 0-10 is rejected
@@ -31,7 +27,7 @@ constexpr double kRrfZetaMax = 0.99;
 }  // namespace
 
 ExportFirmware parse_export_firmware(const std::string& name) {
-  const std::string n = lower(name);
+  const std::string n = text::lower(name);
   if (n == "klipper") return ExportFirmware::klipper;
   if (n == "marlin") return ExportFirmware::marlin;
   if (n == "rrf" || n == "reprapfirmware" || n == "duet") return ExportFirmware::rrf;
@@ -48,7 +44,7 @@ std::string to_string(ExportFirmware fw) {
 }
 
 std::string canonical_shaper_type(const std::string& type) {
-  const std::string t = lower(type);
+  const std::string t = text::lower(type);
   if (t == "ei2" || t == "2hei" || t == "2-hump-ei") return "2hump_ei";
   if (t == "ei3" || t == "3hei" || t == "3-hump-ei") return "3hump_ei";
   return t;

@@ -18,13 +18,6 @@ using namespace tunekit::protocols;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 /// Replaces the one occurrence of `from` in `text` (fails the test if it is not unique).
 std::string replace_once(std::string text, const std::string& from, const std::string& to) {
   const auto at = text.find(from);
@@ -55,7 +48,7 @@ CompensatorSettings klipper_settings() {
 
 TEST_CASE("Klipper printer.cfg: values land where they take effect, everything else is byte-identical") {
   const std::string path = tunekit::test::dataset("firmware/printer.cfg");
-  const std::string original = slurp(path);
+  const std::string original = tunekit::test::read_text(path);
   const auto r = export_config_text(ExportFirmware::klipper, original, path, klipper_settings());
 
   // Expected file, built from the original by the edits the rules call for.
@@ -146,7 +139,7 @@ TEST_CASE("Klipper: without a SAVE_CONFIG block a missing section is appended; n
 
 TEST_CASE("Marlin Configuration_adv.h: features enabled, values set, comments and columns kept") {
   const std::string path = tunekit::test::dataset("firmware/Configuration_adv.h");
-  const std::string original = slurp(path);
+  const std::string original = tunekit::test::read_text(path);
   CompensatorSettings s;
   s.pa_k_s = 0.0425;
   s.pa_smooth_s = 0.0011;
@@ -196,7 +189,7 @@ TEST_CASE("Marlin 2.1.2 layout without SMOOTH_LIN_ADVANCE: K written, tau report
 
 TEST_CASE("RepRapFirmware config.g: M572 edited in place, M593 added after it") {
   const std::string path = tunekit::test::dataset("firmware/config.g");
-  const std::string original = slurp(path);
+  const std::string original = tunekit::test::read_text(path);
   CompensatorSettings s;
   s.pa_k_s = 0.0425;
   s.shapers["x"] = {"mzv", 52.4, 0.08};
@@ -285,7 +278,7 @@ TEST_CASE("The CLI refuses out-of-range values with exit 2 and leaves the file a
   const std::string dir = tunekit::test::scratch_dir("export_refuse");
   const std::string cfg = dir + "/Configuration_adv.h";
   std::filesystem::copy_file(tunekit::test::dataset("firmware/Configuration_adv.h"), cfg);
-  const std::string before = slurp(cfg);
+  const std::string before = tunekit::test::read_text(cfg);
   const std::vector<std::vector<std::string>> cases = {
       {"--pa-k", "10.5"},
       {"--pa-k", "0.04", "--pa-smooth", "0.6"},
@@ -302,7 +295,7 @@ TEST_CASE("The CLI refuses out-of-range values with exit 2 and leaves the file a
     CHECK_THAT(run.err, Catch::StartsWith("tunekit: error:"));
     CHECK(run.out.empty());
   }
-  CHECK(slurp(cfg) == before);
+  CHECK(tunekit::test::read_text(cfg) == before);
   CHECK(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator{}) == 1);
 }
 
@@ -310,7 +303,7 @@ TEST_CASE("A crash between writing the temporary file and the rename leaves the 
   const std::string dir = tunekit::test::scratch_dir("export_crash");
   const std::string cfg = dir + "/printer.cfg";
   std::filesystem::copy_file(tunekit::test::dataset("firmware/printer.cfg"), cfg);
-  const std::string before = slurp(cfg);
+  const std::string before = tunekit::test::read_text(cfg);
   const auto r = export_config_file(ExportFirmware::klipper, cfg, klipper_settings());
   REQUIRE(r.changed());
 
@@ -330,22 +323,22 @@ TEST_CASE("A crash between writing the temporary file and the rename leaves the 
   REQUIRE(::waitpid(child, &status, 0) == child);
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 42);
-  CHECK(slurp(cfg) == before);
+  CHECK(tunekit::test::read_text(cfg) == before);
   // The backup was made before the replacement started and holds the original bytes.
   int backups = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
     if (name.size() > 4 && name.substr(name.size() - 4) == ".bak") {
       ++backups;
-      CHECK(slurp(e.path().string()) == before);
+      CHECK(tunekit::test::read_text(e.path().string()) == before);
     }
   }
   CHECK(backups == 1);
 
   SECTION("a completed write replaces the file with exactly the new text") {
     const std::string backup = apply_export(r);
-    CHECK(slurp(cfg) == r.updated);
-    CHECK(slurp(backup) == before);
+    CHECK(tunekit::test::read_text(cfg) == r.updated);
+    CHECK(tunekit::test::read_text(backup) == before);
   }
 }
 

@@ -20,13 +20,6 @@ using Catch::Detail::Approx;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 std::string fixture(const std::string& name) { return tunekit::test::dataset("../tests/export/fixtures/" + name); }
 
 ident::AdvanceInputs sim_inputs() {
@@ -120,7 +113,7 @@ TEST_CASE("tunekit export: preview by default, --write applies with a backup, a 
   const std::string dir = tunekit::test::scratch_dir("export_cli");
   const std::string cfg = dir + "/printer.cfg";
   std::filesystem::copy_file(tunekit::test::dataset("firmware/printer.cfg"), cfg);
-  const std::string before = slurp(cfg);
+  const std::string before = tunekit::test::read_text(cfg);
   const std::vector<std::string> base = {"export",         "--firmware",       "klipper",          "--config", cfg,
                                          "--profile",      tunekit::test::dataset("machines/sim.toml"),
                                          fixture("step.json"), fixture("shaper.json"), fixture("freq.json")};
@@ -128,7 +121,7 @@ TEST_CASE("tunekit export: preview by default, --write applies with a backup, a 
   const auto preview = tunekit::test::run_cli(base);
   INFO(preview.err);
   REQUIRE(preview.code == 0);
-  CHECK(slurp(cfg) == before);  // preview writes nothing
+  CHECK(tunekit::test::read_text(cfg) == before);  // preview writes nothing
   CHECK(preview.out.rfind("--- a/", 0) == 0);
   CHECK(preview.out.find("+#*# shaper_freq_x = 52.4") != std::string::npos);
   CHECK(preview.out.find("+#*# shaper_type_y = ei") != std::string::npos);
@@ -150,14 +143,14 @@ TEST_CASE("tunekit export: preview by default, --write applies with a backup, a 
   args.push_back("--write");
   const auto written = tunekit::test::run_cli(args);
   REQUIRE(written.code == 0);
-  const std::string after = slurp(cfg);
+  const std::string after = tunekit::test::read_text(cfg);
   CHECK(after != before);
   CHECK(after.find(k_line) != std::string::npos);
   int backups = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir))
     if (e.path().extension() == ".bak") {
       ++backups;
-      CHECK(slurp(e.path().string()) == before);
+      CHECK(tunekit::test::read_text(e.path().string()) == before);
     }
   CHECK(backups == 1);
 
@@ -165,7 +158,7 @@ TEST_CASE("tunekit export: preview by default, --write applies with a backup, a 
   CHECK(again.code == 0);
   CHECK(again.out.empty());
   CHECK(again.err.find("nothing to change") != std::string::npos);
-  CHECK(slurp(cfg) == after);
+  CHECK(tunekit::test::read_text(cfg) == after);
   backups = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir)) backups += e.path().extension() == ".bak";
   CHECK(backups == 1);

@@ -1,6 +1,8 @@
 // CLI conventions: help lists every subcommand, exit codes, deterministic JSON envelope.
 #include <catch2/catch.hpp>
 
+#include <fstream>
+
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"

@@ -91,4 +91,11 @@ std::string write_scratch(const std::string& name, const std::string& content) {
   return path.string();
 }
 
+std::string read_text(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
 }  // namespace tunekit::test

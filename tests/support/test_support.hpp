@@ -19,6 +19,9 @@ CliRun run_cli(const std::vector<std::string>& args);
 /// process: exit status, stdout/stderr separation). `args` is appended as one shell string.
 CliRun run_exe(const std::string& args);
 
+/// The whole content of the file at `path` ("" if it cannot be read).
+std::string read_text(const std::string& path);
+
 /// Path of a file under the repository's datasets/ folder.
 std::string dataset(const std::string& relative);
 

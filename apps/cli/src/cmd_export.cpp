@@ -12,6 +12,7 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
@@ -22,16 +23,15 @@
 namespace tunekit::cli {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct ExportArgs {
   std::string firmware;
   std::string config;
   std::vector<std::string> results;
   std::string profile;
-  double pa_k = kNaN;
-  double pa_smooth = kNaN;
-  double design_flow = kNaN;
+  double pa_k = fitting::kNaN;
+  double pa_smooth = fitting::kNaN;
+  double design_flow = fitting::kNaN;
   std::string shaper_x, shaper_y;
   std::string extruder = "extruder";
   int drive = 0;
@@ -43,7 +43,7 @@ struct ExportArgs {
 };
 
 double number_at(const nlohmann::json& j, const std::string& what, const std::string& path) {
-  if (j.is_null()) return kNaN;
+  if (j.is_null()) return fitting::kNaN;
   if (!j.is_number()) throw InputError(fmt::format("{} must be a number", what), path);
   return j.get<double>();
 }
@@ -87,7 +87,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   const auto fw = protocols::parse_export_firmware(a.firmware);
   Envelope env("export");
   ident::AdvanceInputs in;
-  double freq_tau = kNaN;
+  double freq_tau = fitting::kNaN;
   std::map<std::string, protocols::ShaperSetting> shapers;
   std::vector<std::string> sources;
 
@@ -170,7 +170,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   }
   if (std::isfinite(a.pa_k)) {
     in.tau_s = a.pa_k;
-    in.tau_stderr_s = kNaN;
+    in.tau_stderr_s = fitting::kNaN;
     in.tau_source = "command line";
     in.points.clear();
     in.rheo_flow_mm3_s.clear();

@@ -21,20 +21,18 @@
 namespace tunekit::cli {
 namespace {
 
-using fitting::kNaN;
-
 struct NozzleArgs {
   std::string model = "boles";
-  double K = kNaN, n = kNaN, mu = kNaN;
+  double K = fitting::kNaN, n = fitting::kNaN, mu = fitting::kNaN;
   std::string material;
   std::string rheology_json;
-  double temperature_degc = kNaN;
+  double temperature_degc = fitting::kNaN;
   double kelvin_offset = fitting::kKelvinOffset;
   std::vector<double> flows_mm3_s;
   double reference_flow_mm3_s = 3.0;
   double d_mm = 0.6, l_mm = 4.0, cone_deg = 30.0, D_mm = 5.0, melt_length_mm = 10.0;
   std::string fit_file;
-  double piston_diameter_mm = kNaN;
+  double piston_diameter_mm = fitting::kNaN;
   OutputOptions output;
 };
 
@@ -139,7 +137,7 @@ int run_nozzle(const NozzleArgs& a, CliContext& ctx) {
   if (sources != 1)
     throw InputError("give the rheology one way: --K and --n, --mu, --material NAME, or --rheology FIT.json");
   if (a.flows_mm3_s.empty()) throw InputError("give at least one --flow (mm3/s)");
-  const double T_K = std::isfinite(a.temperature_degc) ? a.temperature_degc + a.kelvin_offset : kNaN;
+  const double T_K = std::isfinite(a.temperature_degc) ? a.temperature_degc + a.kelvin_offset : fitting::kNaN;
 
   // Every source becomes a viscosity function of shear rate and temperature.
   fitting::ViscositySpec spec;

@@ -3,6 +3,7 @@
 // the Ljung-Box whiteness test of residuals, and information criteria.
 
 #include <span>
+#include <vector>
 
 namespace tunekit::fitting {
 
@@ -17,6 +18,9 @@ struct WhitenessTest {
   int lags = 0;
 };
 WhitenessTest ljung_box(std::span<const double> residuals, int lags);
+
+/// Median of `v` (taken by value: it is partially reordered). 0 for an empty vector.
+double median(std::vector<double> v);
 
 /// Default number of lags for Ljung-Box: min(20, n/4), at least 1.
 int default_whiteness_lags(std::size_t n);
