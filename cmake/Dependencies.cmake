@@ -26,7 +26,9 @@ if(NOT NLopt_FOUND OR NOT TARGET NLopt::nlopt_cxx)
   tunekit_missing("NLopt (C++ interface)" "libnlopt-cxx-dev")
 endif()
 
-find_package(OpenCV QUIET COMPONENTS core imgproc imgcodecs calib3d)
+# Not imgcodecs: it drags ~140 shared libraries (GDAL, poppler, HDF5, ...) into every process
+# and costs ~0.1 s of dynamic loading at each start. Image files go through stb (below).
+find_package(OpenCV QUIET COMPONENTS core imgproc calib3d)
 if(NOT OpenCV_FOUND)
   tunekit_missing("OpenCV" "libopencv-dev")
 endif()
@@ -82,6 +84,11 @@ endif()
 pkg_check_modules(PLPLOT QUIET IMPORTED_TARGET plplot-c++)
 if(NOT PLPLOT_FOUND)
   tunekit_missing("PLplot (C++ binding)" "libplplot-dev")
+endif()
+# stb_image / stb_image_write: reading photos and writing PNGs (ident/image_io).
+pkg_check_modules(STB QUIET IMPORTED_TARGET stb)
+if(NOT STB_FOUND)
+  tunekit_missing("stb_image (image files)" "libstb-dev")
 endif()
 
 if(TUNEKIT_BUILD_TESTS)

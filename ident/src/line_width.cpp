@@ -10,16 +10,17 @@
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
-#include <opencv2/core/utils/logger.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/image_io.hpp"
 
 namespace tunekit::ident {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Lines with a median contrast below this fraction of the strongest line's are not lines.
+constexpr double kFaintFraction = 0.3;
 
 double median_of(std::vector<double> v) {
   if (v.empty()) return kNaN;
@@ -44,6 +45,67 @@ int pick_coarse_factor(int w, int h) {
   return std::max(1, static_cast<int>(std::ceil(std::sqrt(px / 1.2e6))));
 }
 
+// Robust polynomial surface (total degree up to 4) through a small CV_32F image: iteratively
+// reweighted least squares that drops pixels more than 2.5 robust sigmas from the surface
+// (the printed lines, dirt), so it describes the bed's lighting only.
+cv::Mat fit_lighting(const cv::Mat& img) {
+  const int W = img.cols, H = img.rows;
+  const int degree = std::min(W, H) >= 24 ? 4 : (std::min(W, H) >= 8 ? 2 : 0);  // >= 36 samples per term
+  std::vector<std::pair<int, int>> terms;
+  for (int d = 0; d <= degree; ++d)
+    for (int i = 0; i <= d; ++i) terms.emplace_back(d - i, i);
+  const auto nt = static_cast<Eigen::Index>(terms.size());
+  auto coord = [](int v, int n) { return n > 1 ? 2.0 * v / (n - 1) - 1.0 : 0.0; };
+  auto basis = [&](double u, double v, double* out) {
+    const double pu[5] = {1, u, u * u, u * u * u, u * u * u * u}, pv[5] = {1, v, v * v, v * v * v, v * v * v * v};
+    for (std::size_t t = 0; t < terms.size(); ++t) out[t] = pu[terms[t].first] * pv[terms[t].second];
+  };
+  // About 3000 samples are plenty for 15 coefficients and keep this to a millisecond or two.
+  const int step = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(W) * H / 3000.0))));
+  std::vector<std::pair<int, int>> at;
+  for (int y = step / 2; y < H; y += step)
+    for (int x = step / 2; x < W; x += step) at.emplace_back(x, y);
+  const auto n = static_cast<Eigen::Index>(at.size());
+  Eigen::MatrixXd A(n, nt);
+  Eigen::VectorXd vals(n);
+  {
+    std::vector<double> r(terms.size());
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto [x, y] = at[static_cast<std::size_t>(i)];
+      basis(coord(x, W), coord(y, H), r.data());
+      for (Eigen::Index t = 0; t < nt; ++t) A(i, t) = r[static_cast<std::size_t>(t)];
+      vals(i) = img.at<float>(y, x);
+    }
+  }
+  Eigen::VectorXd wt = Eigen::VectorXd::Ones(n);
+  Eigen::VectorXd coef = Eigen::VectorXd::Zero(nt);
+  for (int it = 0; it < 6; ++it) {
+    const Eigen::MatrixXd AtA = A.transpose() * wt.asDiagonal() * A;
+    const Eigen::VectorXd Atb = A.transpose() * wt.cwiseProduct(vals);
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(AtA);
+    if (ldlt.info() != Eigen::Success) break;
+    coef = ldlt.solve(Atb);
+    const Eigen::VectorXd res = vals - A * coef;
+    std::vector<double> kept;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (wt(i) != 0) kept.push_back(std::abs(res(i)));
+    const double sigma = std::max(1e-6, 1.4826 * median_of(kept));
+    for (Eigen::Index i = 0; i < n; ++i) wt(i) = std::abs(res(i)) <= 2.5 * sigma ? 1.0 : 0.0;
+  }
+  cv::Mat out(H, W, CV_32F);
+  std::vector<double> b(terms.size());
+  for (int y = 0; y < H; ++y) {
+    float* row = out.ptr<float>(y);
+    for (int x = 0; x < W; ++x) {
+      basis(coord(x, W), coord(y, H), b.data());
+      double v = 0;
+      for (std::size_t t = 0; t < terms.size(); ++t) v += b[t] * coef(static_cast<Eigen::Index>(t));
+      row[x] = static_cast<float>(v);
+    }
+  }
+  return out;
+}
+
 Coarse coarse_detect(const cv::Mat& gray, const LineWidthOptions& o, std::vector<std::string>& warnings) {
   Coarse c;
   c.f = o.coarse_factor > 0 ? o.coarse_factor : pick_coarse_factor(gray.cols, gray.rows);
@@ -55,28 +117,36 @@ Coarse coarse_detect(const cv::Mat& gray, const LineWidthOptions& o, std::vector
   c.sx = static_cast<double>(gray.cols) / coarse.cols;
   c.sy = static_cast<double>(gray.rows) / coarse.rows;
 
-  // Background on a further-reduced copy: closing removes dark features, opening light ones.
+  // Background on a further-reduced copy, in two stages. (a) A smooth lighting surface: a
+  // low-order polynomial fitted robustly (lines and specks are outliers), which follows
+  // vignetting and a lamp at one side right up to the image border, where morphology alone
+  // is biased (its window runs out of the image and it mistakes the darkening corners for
+  // features). (b) Morphology on what remains: closing removes dark features, opening light
+  // ones, so local lighting the polynomial cannot follow (glare, bed texture) drops out too.
   const int g = std::clamp(std::min(coarse.cols, coarse.rows) / 48, 1, 4);
   cv::Mat tiny;
   if (g > 1)
     cv::resize(coarse, tiny, cv::Size(std::max(1, coarse.cols / g), std::max(1, coarse.rows / g)), 0, 0, cv::INTER_AREA);
   else
     tiny = coarse;
+  const cv::Mat lighting = fit_lighting(tiny);
+  const cv::Mat resid = tiny - lighting;
   int k = std::min(21, std::max(3, (std::min(tiny.cols, tiny.rows) / 2) | 1));
   if (k % 2 == 0) ++k;
   const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k));
   cv::Mat closed, opened;
-  cv::morphologyEx(tiny, closed, cv::MORPH_CLOSE, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
-  cv::morphologyEx(tiny, opened, cv::MORPH_OPEN, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+  cv::morphologyEx(resid, closed, cv::MORPH_CLOSE, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+  cv::morphologyEx(resid, opened, cv::MORPH_OPEN, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
   if (o.polarity == LinePolarity::automatic) {
-    const double dark_score = cv::sum(closed - tiny)[0];
-    const double light_score = cv::sum(tiny - opened)[0];
+    const double dark_score = cv::sum(closed - resid)[0];
+    const double light_score = cv::sum(resid - opened)[0];
     c.light = light_score > dark_score;
   } else {
     c.light = o.polarity == LinePolarity::light;
   }
   cv::Mat bg_tiny = c.light ? opened : closed;
   cv::GaussianBlur(bg_tiny, bg_tiny, cv::Size(0, 0), std::max(1.0, k / 4.0), 0, cv::BORDER_REPLICATE);
+  bg_tiny += lighting;
   cv::Mat bg;
   cv::resize(bg_tiny, bg, coarse.size(), 0, 0, cv::INTER_LINEAR);
   c.contrast = c.light ? cv::Mat(coarse - bg) : cv::Mat(bg - coarse);
@@ -549,17 +619,7 @@ cv::Mat to_gray_float(const cv::Mat& image) {
 }
 
 cv::Mat load_gray_image(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError("cannot read image: no such file", path);
-  if (std::filesystem::file_size(path, ec) == 0) throw InputError("empty image file (0 bytes)", path);
-  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
-  cv::Mat img;
-  try {
-    img = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-  } catch (const cv::Exception& e) {
-    throw InputError(fmt::format("cannot decode image: {}", e.what()), path);
-  }
-  if (img.empty()) throw InputError("cannot decode image (not an image, truncated, or an unsupported format)", path);
+  const cv::Mat img = read_image(path, ImageColor::keep);
   if (img.cols < 16 || img.rows < 16)
     throw InputError(fmt::format("image too small ({}x{} px)", img.cols, img.rows), path);
   return to_gray_float(img);
@@ -759,6 +819,22 @@ LineWidthResult measure_line_widths(const cv::Mat& gray_in, const LineWidthOptio
     summarize_line(line);
     res.lines.push_back(std::move(line));
     if (static_cast<int>(res.lines.size()) >= o.max_lines) break;
+  }
+  // Choose the lines by contrast: a feature far fainter than the strongest line is a shadow or a
+  // lighting gradient the background model left behind (typically along the frame edge), not a
+  // printed line.
+  double strongest = 0;
+  for (const auto& l : res.lines)
+    if (l.valid_samples > 0) strongest = std::max(strongest, l.median_contrast);
+  if (strongest > 0) {
+    const auto faint = [&](const MeasuredLine& l) { return !(l.median_contrast >= kFaintFraction * strongest); };
+    const auto dropped = std::count_if(res.lines.begin(), res.lines.end(), faint);
+    if (dropped > 0) {
+      res.lines.erase(std::remove_if(res.lines.begin(), res.lines.end(), faint), res.lines.end());
+      res.warnings.push_back(fmt::format("ignored {} faint feature(s) with less than {:.0f} % of the strongest line's "
+                                         "contrast (shadows or uneven lighting, not lines)",
+                                         dropped, 100 * kFaintFraction));
+    }
   }
   std::stable_sort(res.lines.begin(), res.lines.end(),
                    [](const MeasuredLine& a, const MeasuredLine& b) { return a.length_px > b.length_px; });

@@ -4,10 +4,10 @@
 #include <cmath>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/image_io.hpp"
 
 namespace tunekit::ident {
 
@@ -71,14 +71,6 @@ cv::Mat draw_overlay(const cv::Mat& image, const LineWidthResult* result, const 
   return out;
 }
 
-void write_overlay(const std::string& path, const cv::Mat& bgr) {
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, bgr);
-  } catch (const cv::Exception& e) {
-    throw InputError(fmt::format("cannot write overlay image: {}", e.what()), path);
-  }
-  if (!ok) throw InputError("cannot write overlay image", path);
-}
+void write_overlay(const std::string& path, const cv::Mat& bgr) { write_png(path, bgr); }
 
 }  // namespace tunekit::ident

@@ -8,12 +8,12 @@
 #include <ctime>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
-
 #include "../linewidth/synthetic_render.hpp"
+#include "tunekit/ident/image_io.hpp"
 #include "tunekit/ident/line_width.hpp"
 
 namespace rd = tunekit::test::render;
@@ -33,14 +33,13 @@ void bench(int w, int h, double line_px, int runs) {
   ph.vignetting = 0.3;
   ph.blur_px = 1.2;
   const cv::Mat img = rd::photograph(cov, ph);
-  std::vector<uchar> png;
-  cv::imencode(".png", img, png);
+  const std::string png = tunekit::ident::encode_png(img);
   std::vector<double> t_profile, t_decode, cpu_profile;
   std::size_t samples = 0;
   double mean_w = 0;
   for (int r = 0; r < runs; ++r) {
     const auto t0 = Clock::now();
-    const cv::Mat decoded = cv::imdecode(png, cv::IMREAD_GRAYSCALE);
+    const cv::Mat decoded = tunekit::ident::decode_image(png, "bench.png", tunekit::ident::ImageColor::gray);
     const auto t1 = Clock::now();
     const std::clock_t c1 = std::clock();
     const auto res = tunekit::ident::measure_line_widths(tunekit::ident::to_gray_float(decoded));

@@ -1,10 +1,11 @@
 // Benchmark: a 410k-sample Klipper raw accelerometer CSV (128 s at 3.2 kHz, a 5 -> 133 Hz sweep
 // at 1 Hz/s over two modes) through `tunekit shaper --json`: CSV reading, sampling checks,
 // Welch PSD, peak detection, modal fit and shaper selection. Runs the CLI in-process several
-// times and prints the median; with --write-only it only writes the CSV (for timing the real
-// process with /usr/bin/time -v).
+// times and prints the median; with --exe PATH it instead starts the real `tunekit` binary as a
+// whole process each run (fork + exec, output to /dev/null), which includes the dynamic loading
+// of every shared library; with --write-only it only writes the CSV (for /usr/bin/time -v).
 //
-//   bench_resonance [--runs N] [--csv PATH] [--write-only] [--klipper-compatible]
+//   bench_resonance [--runs N] [--csv PATH] [--write-only] [--klipper-compatible] [--exe PATH]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -13,21 +14,54 @@
 #include <string>
 #include <vector>
 
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <fmt/format.h>
 
 #include "../resonance/synth_sweep.hpp"
 #include "tunekit/cli/commands.hpp"
 
+namespace {
+
+// Runs `exe args...` with stdout and stderr to /dev/null; returns its exit code (or 127).
+int run_process(const std::string& exe, const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  std::vector<std::string> all{exe};
+  all.insert(all.end(), args.begin(), args.end());
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = open("/dev/null", O_WRONLY);
+    if (null >= 0) {
+      dup2(null, 1);
+      dup2(null, 2);
+    }
+    execv(exe.c_str(), argv.data());
+    _exit(127);
+  }
+  if (pid < 0) return 127;
+  int status = 0;
+  if (waitpid(pid, &status, 0) != pid) return 127;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   int runs = 7;
   std::string csv = "/tmp/raw_data_x_bench.csv";
   bool write_only = false, klipper = false;
+  std::string exe;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--runs" && i + 1 < argc) runs = std::stoi(argv[++i]);
     else if (a == "--csv" && i + 1 < argc) csv = argv[++i];
     else if (a == "--write-only") write_only = true;
     else if (a == "--klipper-compatible") klipper = true;
+    else if (a == "--exe" && i + 1 < argc) exe = argv[++i];
   }
   tunekit::test::SweepSpec spec;
   spec.f_start_hz = 5;
@@ -48,7 +82,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> args = {"shaper", csv, "--json"};
     if (klipper) args.push_back("--klipper-compatible");
     const auto t0 = std::chrono::steady_clock::now();
-    const int code = tunekit::cli::run_cli(args, out, err);
+    const int code = exe.empty() ? tunekit::cli::run_cli(args, out, err) : run_process(exe, args);
     const auto t1 = std::chrono::steady_clock::now();
     if (code != 0) {
       fmt::print(stderr, "tunekit shaper failed ({}): {}\n", code, err.str());
@@ -58,7 +92,8 @@ int main(int argc, char** argv) {
     last = out.str();
   }
   std::sort(ms.begin(), ms.end());
-  fmt::print("tunekit shaper on 410k samples: median {:.1f} ms over {} runs (min {:.1f}, max {:.1f})\n",
-             ms[ms.size() / 2], runs, ms.front(), ms.back());
+  fmt::print("tunekit shaper on 410k samples{}: median {:.1f} ms over {} runs (min {:.1f}, max {:.1f})\n",
+             exe.empty() ? " (in-process)" : " (whole process " + exe + ")", ms[ms.size() / 2], runs, ms.front(),
+             ms.back());
   return 0;
 }

@@ -6,7 +6,8 @@
 // the boundary is fully in or out; the others are supersampled (ss x ss points) and
 // area-averaged, which is exact anti-aliasing up to the supersampling. The photo is then
 // bed + (line - bed) * coverage, blurred with a Gaussian PSF, multiplied by a radial
-// vignetting falloff, given Gaussian noise and quantized to 8 bits.
+// vignetting falloff and a left-to-right lighting gradient, given Gaussian noise and quantized
+// to 8 bits.
 
 #include <algorithm>
 #include <cmath>
@@ -123,6 +124,7 @@ struct Photo {
   double line = 60;          ///< line brightness
   double blur_px = 1.0;      ///< Gaussian PSF sigma (px); 0 = none
   double vignetting = 0.0;   ///< relative falloff at the image corners
+  double gradient = 0.0;     ///< uneven lighting: relative brightness change from the left to the right edge
   double noise = 0.0;        ///< Gaussian noise sigma (grey levels)
   unsigned seed = 1;
 };
@@ -139,6 +141,13 @@ inline cv::Mat photograph(const cv::Mat& cov, const Photo& p) {
         const double r2 = ((x - cx) * (x - cx) + (y - cy) * (y - cy)) / r2max;
         row[x] = static_cast<float>(row[x] * (1.0 - p.vignetting * r2));
       }
+    }
+  }
+  if (p.gradient != 0) {
+    for (int y = 0; y < img.rows; ++y) {
+      float* row = img.ptr<float>(y);
+      for (int x = 0; x < img.cols; ++x)
+        row[x] = static_cast<float>(row[x] * (1.0 + p.gradient * (x / std::max(1.0, img.cols - 1.0) - 0.5)));
     }
   }
   if (p.noise > 0) {

@@ -11,12 +11,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "synthetic_render.hpp"
 #include "test_support.hpp"
 #include "tunekit/ident/camera_calibration.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/image_io.hpp"
 #include "tunekit/ident/line_width.hpp"
 #include "tunekit/ident/width_to_dynamics.hpp"
 
@@ -29,7 +29,7 @@ namespace {
 
 std::string save(const std::string& dir, const std::string& name, const cv::Mat& img) {
   const std::string p = (fs::path(dir) / name).string();
-  REQUIRE(cv::imwrite(p, img));
+  ident::write_png(p, img);
   return p;
 }
 
@@ -72,7 +72,7 @@ TEST_CASE("linewidth --json lists lines with profile arrays and width_mm {mean, 
   }
   CHECK(j["results"]["images"][0]["px_per_mm"].get<double>() == 10.0);
   CHECK(fs::exists(dir + "/ov/two_overlay.png"));
-  const cv::Mat ov = cv::imread(dir + "/ov/two_overlay.png");
+  const cv::Mat ov = ident::read_image(dir + "/ov/two_overlay.png");
   CHECK(ov.cols == 640);
   // Deterministic output.
   const auto r2 = run_cli({"linewidth", img, "--px-per-mm", "10", "--json", "--overlay", dir + "/ov"});

@@ -6,11 +6,11 @@
 #include <fstream>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "test_support.hpp"
 #include "tunekit/cli/report.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/image_io.hpp"
 
 using namespace tunekit::cli;
 
@@ -91,7 +91,7 @@ TEST_CASE("each plot type renders a non-empty PNG of the expected size") {
                                                             {"linewidth", {960, 420}}};
   for (const auto& img : images) {
     INFO(img.id);
-    const cv::Mat m = cv::imread(img.png_path, cv::IMREAD_COLOR);
+    const cv::Mat m = tunekit::ident::read_image(img.png_path, tunekit::ident::ImageColor::bgr);
     REQUIRE_FALSE(m.empty());
     CHECK(m.cols == expected.at(img.id).first);
     CHECK(m.rows == expected.at(img.id).second);

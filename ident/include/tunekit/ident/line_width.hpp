@@ -1,9 +1,11 @@
 #pragma once
 // Width profiles of printed lines in an image (issue 6).
 //
-// Pipeline: (1) a coarse, downsampled pass flattens the background (morphological closing or
-// opening on a further-reduced copy, so vignetting and uneven lighting drop out), picks the
-// polarity (light or dark filament), thresholds and keeps elongated connected components;
+// Pipeline: (1) a coarse, downsampled pass flattens the background (on a further-reduced copy:
+// a robust polynomial lighting surface, then morphological closing or opening of the rest, so
+// vignetting and uneven lighting drop out up to the frame edge), picks the polarity (light or
+// dark filament), thresholds and keeps elongated connected components; features far fainter
+// than the strongest line (< 30 % of its contrast) are dropped with a warning;
 // (2) each component is thinned to a skeleton, the longest path through it becomes the
 // centreline (closed loops such as seed 001's ring are cut and re-closed), which is smoothed
 // and resampled at a fixed arc-length step; (3) at every sample the full-resolution image is

@@ -17,7 +17,7 @@ namespace tunekit::ident {
 cv::Mat draw_overlay(const cv::Mat& image, const LineWidthResult* result, const std::vector<cv::Point>& target_outline,
                      const std::string& message);
 
-/// Writes an overlay image (PNG/JPEG by extension). Throws InputError when it cannot be written.
+/// Writes an overlay image as PNG (whatever the extension). Throws InputError when it cannot be written.
 void write_overlay(const std::string& path, const cv::Mat& bgr);
 
 }  // namespace tunekit::ident

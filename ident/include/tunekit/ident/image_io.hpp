@@ -1,0 +1,38 @@
+#pragma once
+// Image files without OpenCV's imgcodecs module: decoding and PNG encoding through stb_image /
+// stb_image_write (Debian's libstb). OpenCV's imgcodecs pulls in ~140 shared libraries (GDAL,
+// poppler, HDF5, ...) whose dynamic loading alone costs ~0.1 s at every start of `tunekit`,
+// whatever the command; stb costs nothing measurable.
+//
+// Readable: PNG (8 and 16 bit), JPEG (baseline and progressive), BMP, PNM (PGM/PPM), TGA, PSD
+// (composited), GIF (first frame), HDR is not accepted (float). TIFF is refused with a hint to
+// convert it to PNG, which keeps 16-bit depth.
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace tunekit::ident {
+
+enum class ImageColor {
+  keep,  ///< 1 channel for grey files, 3 channels (BGR) for colour; alpha is dropped
+  gray,  ///< always 1 channel (colour converted to luminance, ITU-R BT.601 like OpenCV)
+  bgr,   ///< always 3 channels (BGR)
+};
+
+/// Reads an image file as CV_8U or CV_16U (the file's depth), 1 or 3 channels as asked.
+/// Throws InputError ("cannot read image: no such file", "empty image file (0 bytes)",
+/// "cannot decode image: <reason>", "TIFF images are not supported ...") located at `path`.
+cv::Mat read_image(const std::string& path, ImageColor color = ImageColor::keep);
+
+/// Decodes an image held in memory; `name` is the location used in error messages.
+cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageColor color = ImageColor::keep);
+
+/// PNG file contents of an 8-bit image with 1, 3 (BGR) or 4 (BGRA) channels; 16-bit images are
+/// scaled to 8 bit. Throws InputError for other types or an empty image.
+std::string encode_png(const cv::Mat& image);
+
+/// Writes encode_png(image) to `path`. Throws InputError when the file cannot be written.
+void write_png(const std::string& path, const cv::Mat& image);
+
+}  // namespace tunekit::ident
