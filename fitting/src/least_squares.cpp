@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <sstream>
 
 #include <ceres/ceres.h>
+#include <glog/logging.h>
 
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/fitting/stats.hpp"
@@ -56,6 +58,20 @@ class WholeProblemCost final : public ceres::CostFunction {
   int n_;
 };
 
+// Ceres reports through glog, which (never initialised by the program) writes ERROR lines such
+// as "Covariance matrix is near rank deficient" to stderr before our own one-line FitError. The
+// solver's outcome is read from its summary and return values instead, so glog is kept quiet:
+// nothing below FATAL, and nothing to stderr.
+void quiet_glog() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    FLAGS_minloglevel = google::GLOG_FATAL;
+    FLAGS_stderrthreshold = google::GLOG_FATAL;
+    FLAGS_logtostderr = false;
+    FLAGS_alsologtostderr = false;
+  });
+}
+
 std::string free_names(const LsqProblem& p) {
   std::string s;
   for (const auto& ps : p.params) {
@@ -98,6 +114,7 @@ void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res,
 }
 
 FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, const LsqOptions& opt) {
+  quiet_glog();
   const int n = static_cast<int>(prob.params.size());
   if (n == 0) throw FitError(model + ": no parameters to fit");
   if (!prob.residuals && !prob.residuals_and_jacobian) throw FitError(model + ": no residual function");
