@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -25,8 +26,9 @@
 
 namespace {
 
-// Runs `exe args...` with stdout and stderr to /dev/null; returns its exit code (or 127).
-int run_process(const std::string& exe, const std::vector<std::string>& args) {
+// Runs `exe args...` with stdout and stderr to /dev/null; returns its exit code (or 127) and
+// adds the child's CPU time (user + system, ms) to `cpu_ms`.
+int run_process(const std::string& exe, const std::vector<std::string>& args, std::vector<double>& cpu_ms) {
   std::vector<char*> argv;
   std::vector<std::string> all{exe};
   all.insert(all.end(), args.begin(), args.end());
@@ -44,7 +46,9 @@ int run_process(const std::string& exe, const std::vector<std::string>& args) {
   }
   if (pid < 0) return 127;
   int status = 0;
-  if (waitpid(pid, &status, 0) != pid) return 127;
+  struct rusage ru {};
+  if (wait4(pid, &status, 0, &ru) != pid) return 127;
+  cpu_ms.push_back(1e3 * (ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-3 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec));
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
 }
 
@@ -75,14 +79,14 @@ int main(int argc, char** argv) {
   fmt::print("wrote {} ({} samples, {:.1f} s at {} Hz)\n", csv, rec.t.size(), rec.t.back() - rec.t.front(),
              spec.sample_rate_hz);
   if (write_only) return 0;
-  std::vector<double> ms;
+  std::vector<double> ms, cpu;
   std::string last;
   for (int r = 0; r < runs; ++r) {
     std::ostringstream out, err;
     std::vector<std::string> args = {"shaper", csv, "--json"};
     if (klipper) args.push_back("--klipper-compatible");
     const auto t0 = std::chrono::steady_clock::now();
-    const int code = exe.empty() ? tunekit::cli::run_cli(args, out, err) : run_process(exe, args);
+    const int code = exe.empty() ? tunekit::cli::run_cli(args, out, err) : run_process(exe, args, cpu);
     const auto t1 = std::chrono::steady_clock::now();
     if (code != 0) {
       fmt::print(stderr, "tunekit shaper failed ({}): {}\n", code, err.str());
@@ -95,5 +99,10 @@ int main(int argc, char** argv) {
   fmt::print("tunekit shaper on 410k samples{}: median {:.1f} ms over {} runs (min {:.1f}, max {:.1f})\n",
              exe.empty() ? " (in-process)" : " (whole process " + exe + ")", ms[ms.size() / 2], runs, ms.front(),
              ms.back());
+  if (!cpu.empty()) {
+    std::sort(cpu.begin(), cpu.end());
+    fmt::print("  process CPU time (user + system): median {:.1f} ms (min {:.1f}, max {:.1f})\n", cpu[cpu.size() / 2],
+               cpu.front(), cpu.back());
+  }
   return 0;
 }

@@ -440,7 +440,9 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
 void register_linewidth(CLI::App& app, CliContext& ctx) {
   auto args = std::make_shared<LinewidthArgs>();
   auto* sub = app.add_subcommand("linewidth", "Calibrated width profiles of printed lines from photos");
-  sub->add_option("images", args->images, "Photos of printed lines (PNG, JPEG, TIFF; 8 or 16 bit)")->required();
+  sub->add_option("images", args->images,
+                  "Photos of printed lines (PNG, JPEG, BMP, PNM; PNG and PNM may be 16 bit; TIFF: convert to PNG)")
+      ->required();
   auto* ppm = sub->add_option("--px-per-mm", args->px_per_mm, "Image scale on the bed plane (px/mm)");
   ppm->check(CLI::PositiveNumber);
   sub->add_option("--camera", args->camera,
