@@ -47,8 +47,9 @@ int pick_coarse_factor(int w, int h) {
 
 // Robust polynomial surface (total degree up to 4) through a small CV_32F image: iteratively
 // reweighted least squares that drops pixels more than 2.5 robust sigmas from the surface
-// (the printed lines, dirt), so it describes the bed's lighting only.
-cv::Mat fit_lighting(const cv::Mat& img) {
+// (the printed lines, dirt), so it describes the bed's lighting only. Nonzero pixels of
+// `exclude` (CV_8U, same size, may be empty) are not used (a scale target).
+cv::Mat fit_lighting(const cv::Mat& img, const cv::Mat& exclude) {
   const int W = img.cols, H = img.rows;
   const int degree = std::min(W, H) >= 24 ? 4 : (std::min(W, H) >= 8 ? 2 : 0);  // >= 36 samples per term
   std::vector<std::pair<int, int>> terms;
@@ -64,7 +65,9 @@ cv::Mat fit_lighting(const cv::Mat& img) {
   const int step = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(W) * H / 3000.0))));
   std::vector<std::pair<int, int>> at;
   for (int y = step / 2; y < H; y += step)
-    for (int x = step / 2; x < W; x += step) at.emplace_back(x, y);
+    for (int x = step / 2; x < W; x += step)
+      if (exclude.empty() || exclude.at<uchar>(y, x) == 0) at.emplace_back(x, y);
+  if (at.size() < 3 * terms.size()) return cv::Mat(H, W, CV_32F, cv::Scalar(cv::mean(img)[0]));
   const auto n = static_cast<Eigen::Index>(at.size());
   Eigen::MatrixXd A(n, nt);
   Eigen::VectorXd vals(n);
@@ -129,8 +132,16 @@ Coarse coarse_detect(const cv::Mat& gray, const LineWidthOptions& o, std::vector
     cv::resize(coarse, tiny, cv::Size(std::max(1, coarse.cols / g), std::max(1, coarse.rows / g)), 0, 0, cv::INTER_AREA);
   else
     tiny = coarse;
-  const cv::Mat lighting = fit_lighting(tiny);
-  const cv::Mat resid = tiny - lighting;
+  // A scale target in the scene (half dark squares) is neither bed nor line: keep it out of the
+  // lighting fit and the polarity vote.
+  cv::Mat tiny_ex;
+  if (!o.exclude_mask.empty()) {
+    cv::resize(o.exclude_mask, tiny_ex, tiny.size(), 0, 0, cv::INTER_AREA);
+    tiny_ex = tiny_ex > 0;
+  }
+  const cv::Mat lighting = fit_lighting(tiny, tiny_ex);
+  cv::Mat resid = tiny - lighting;
+  if (!tiny_ex.empty()) resid.setTo(0, tiny_ex);
   int k = std::min(21, std::max(3, (std::min(tiny.cols, tiny.rows) / 2) | 1));
   if (k % 2 == 0) ++k;
   const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k));
@@ -138,8 +149,24 @@ Coarse coarse_detect(const cv::Mat& gray, const LineWidthOptions& o, std::vector
   cv::morphologyEx(resid, closed, cv::MORPH_CLOSE, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
   cv::morphologyEx(resid, opened, cv::MORPH_OPEN, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
   if (o.polarity == LinePolarity::automatic) {
-    const double dark_score = cv::sum(closed - resid)[0];
-    const double light_score = cv::sum(resid - opened)[0];
+    // Which tail of the residual from the lighting surface is heavier: printed lines are the
+    // outliers. (Comparing the closing and opening residues instead mistakes the bed between
+    // two close dark lines for a light line.)
+    std::vector<double> absr;
+    absr.reserve(resid.total() / 4 + 1);
+    for (int y = 0; y < resid.rows; y += 2) {
+      const float* row = resid.ptr<float>(y);
+      for (int x = 0; x < resid.cols; x += 2) absr.push_back(std::abs(row[x]));
+    }
+    const double cut = 4.0 * 1.4826 * median_of(absr);
+    double dark_score = 0, light_score = 0;
+    for (int y = 0; y < resid.rows; ++y) {
+      const float* row = resid.ptr<float>(y);
+      for (int x = 0; x < resid.cols; ++x) {
+        if (row[x] > cut) light_score += row[x] - cut;
+        if (row[x] < -cut) dark_score += -row[x] - cut;
+      }
+    }
     c.light = light_score > dark_score;
   } else {
     c.light = o.polarity == LinePolarity::light;
