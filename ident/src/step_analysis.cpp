@@ -26,6 +26,29 @@ StepRecord make_record(std::span<const double> t, std::span<const double> y, con
   return r;
 }
 
+// First sample of the settled stretch of y in [begin, first): while the two halves of the
+// pre-step window differ in mean by more than four standard errors (a warm-up from rest, or the
+// previous response not yet settled), the earlier half is dropped. At least 20 samples stay.
+std::size_t settled_begin(std::span<const double> y, std::size_t begin, std::size_t first) {
+  auto stats = [&](std::size_t b, std::size_t e) {
+    double m = 0;
+    for (std::size_t i = b; i < e; ++i) m += y[i];
+    m /= static_cast<double>(e - b);
+    double v = 0;
+    for (std::size_t i = b; i < e; ++i) v += (y[i] - m) * (y[i] - m);
+    return std::pair{m, v / static_cast<double>(std::max<std::size_t>(e - b - 1, 1))};
+  };
+  while (first - begin >= 40) {
+    const std::size_t mid = begin + (first - begin) / 2;
+    const auto [m1, v1] = stats(begin, mid);
+    const auto [m2, v2] = stats(mid, first);
+    const double se = std::sqrt(v1 / static_cast<double>(mid - begin) + v2 / static_cast<double>(first - mid));
+    if (std::abs(m1 - m2) <= 4 * se) break;
+    begin = mid;
+  }
+  return begin;
+}
+
 // Groups steps by operating point (levels within 2 % of the largest level are one point),
 // fits each group pooled, and fits the trends.
 void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnalysisOptions& o) {
@@ -96,6 +119,12 @@ void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnal
 
 }  // namespace
 
+StepInstant parse_step_instant(const std::string& name) {
+  if (name == "midpoint") return StepInstant::midpoint;
+  if (name == "first") return StepInstant::first_sample;
+  throw InputError("unknown step instant '" + name + "' (expected midpoint or first)");
+}
+
 std::vector<DetectedStep> detect_steps(std::span<const double> t, std::span<const double> u,
                                        const StepDetectOptions& o) {
   const std::size_t n = u.size();
@@ -135,11 +164,24 @@ std::vector<DetectedStep> detect_steps(std::span<const double> t, std::span<cons
     const std::size_t next = j + 1 < changes.size() ? changes[j + 1].first : n;
     DetectedStep s;
     s.sample = changes[j].first;
-    s.t_step_s = t[s.sample];  // the first sample that shows the new level
     s.u_before = level(prev_end, changes[j].first);
     s.u_after = level(changes[j].settled, next);
+    s.t_step_s = t[s.sample];  // the first sample that shows the new level
+    if (o.instant == StepInstant::midpoint) {
+      // Where the input crosses half-way between the levels, linear between samples.
+      const double half = 0.5 * (s.u_before + s.u_after);
+      for (std::size_t k = s.sample - 1; k < changes[j].settled && k + 1 < n; ++k) {
+        const double a = u[k] - half, b = u[k + 1] - half;
+        if (a * b <= 0 && u[k + 1] != u[k]) {
+          s.t_step_s = t[k] + (half - u[k]) / (u[k + 1] - u[k]) * (t[k + 1] - t[k]);
+          break;
+        }
+      }
+    }
     const std::size_t pre = changes[j].first - prev_end;
-    s.begin = j == 0 ? 0 : changes[j].first - static_cast<std::size_t>(std::ceil(o.pre_fraction * pre));
+    // The first level is treated like the others: a record usually starts from rest, and the
+    // start of the first level is the machine warming up, not the steady state before the step.
+    s.begin = changes[j].first - static_cast<std::size_t>(std::ceil(o.pre_fraction * pre));
     s.end = next;
     if (s.end - changes[j].first < 5) continue;  // too short to fit
     s.index = steps.size();
@@ -157,9 +199,10 @@ StepAnalysis analyze_steps(std::span<const double> t, std::span<const double> u,
     if (!(*hi > *lo)) throw InputError("the output column is constant; there is no response to fit");
   }
   StepAnalysis a;
-  const auto det = detect_steps(t, u, o.detect);
+  auto det = detect_steps(t, u, o.detect);
   std::vector<StepRecord> recs;
-  for (const auto& s : det) {
+  for (auto& s : det) {
+    s.begin = settled_begin(y, s.begin, s.sample);
     recs.push_back(make_record(t, y, s, o));
     StepFit sf;
     sf.step = s;

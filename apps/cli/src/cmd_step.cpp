@@ -27,6 +27,7 @@ struct StepArgs {
   double step_time_s = 0;
   double step_size = std::numeric_limits<double>::quiet_NaN();
   double min_step_fraction = 0.1;
+  std::string step_at = "midpoint";
   OutputOptions output;
 };
 
@@ -63,6 +64,7 @@ int run_step(const StepArgs& a, CliContext& ctx) {
   ident::StepAnalysisOptions opt;
   opt.model = model;
   opt.detect.min_step_fraction = a.min_step_fraction;
+  opt.detect.instant = ident::parse_step_instant(a.step_at);
   opt.output_unit = unit_or_1(ycol.unit);
   std::string input_unit = "1";
   if (!a.input_column.empty()) input_unit = unit_or_1(table.column(a.input_column).unit);
@@ -125,7 +127,8 @@ int run_step(const StepArgs& a, CliContext& ctx) {
                    {"group_column", a.group_column},
                    {"step_time_s", a.step_time_s},
                    {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
-                   {"min_step_fraction", a.min_step_fraction}});
+                   {"min_step_fraction", a.min_step_fraction},
+                   {"step_at", a.input_column.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.step_at)}});
   env.add_input(a.file, bytes);
   env.results() = ident::to_json(res);
   env.results()["units"] = {{"input", input_unit}, {"output", opt.output_unit}, {"K", opt.gain_unit}, {"time", "s"}};
@@ -177,13 +180,22 @@ void register_step(CLI::App& app, CliContext& ctx) {
   sub->add_option("--min-step", args->min_step_fraction,
                   "A change of the input larger than this fraction of its range is a step (1)")
       ->capture_default_str();
+  sub->add_option("--step-at", args->step_at,
+                  "With --input: when the input changed between the last sample at the old level and the first at "
+                  "the new one. midpoint: half-way (interpolated; for logs sampled independently of the changes, "
+                  "e.g. a printer's); first: at the first new sample (input changes exactly at sample instants). "
+                  "Moves t_step and theta_s (s) by up to half a sample interval")
+      ->check(CLI::IsMember({"midpoint", "first"}))
+      ->capture_default_str();
   add_output_options(sub, args->output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"
       "its own (start values by the log-incomplete-response method), then all steps pooled, then per operating\n"
       "point (the input level of larger magnitude) with a power-law trend tau_s = a u^b, K = a u^b.\n"
       "Examples:\n"
-      "  tunekit step datasets/liquefier/synthetic_steps.csv --time time --input feed --output force --json\n"
+      "  tunekit step datasets/liquefier/synthetic_steps.csv --time time --input feed --output force \\\n"
+      "      --step-at first --json   # this data set's input changes exactly at sample instants\n"
+      "  tunekit step runs/step-1/step.csv --input feed --output force   # a run of 'tunekit run liquefier-step'\n"
       "  tunekit step datasets/liquefier/holtrup_table_b1_ooze.csv --time t_s --output L_mm --group v_print_mm_s \\\n"
       "      --model fo          # seed 001 Table B.1: ooze length after a stop, one step per print speed\n"
       "  tunekit step ooze.csv --time t --output length --step-time 0 --step-size 20 --model fo\n"

@@ -16,7 +16,7 @@ namespace tunekit::ident {
 struct DetectedStep {
   std::size_t index = 0;       ///< 0-based order in the record
   std::size_t sample = 0;      ///< first sample at the new input level
-  double t_step_s = 0;         ///< time of the first sample at the new level
+  double t_step_s = 0;         ///< s, when the input changed (StepDetectOptions::instant)
   double u_before = 0, u_after = 0;
   std::size_t begin = 0, end = 0;  ///< samples [begin, end) used for this step's fit
   bool rising() const { return u_after > u_before; }
@@ -25,11 +25,26 @@ struct DetectedStep {
   double operating_point() const { return std::abs(u_before) >= std::abs(u_after) ? u_before : u_after; }
 };
 
+/// Where, between the last sample at the old input level and the first at the new one, the
+/// input changed. A log that samples the input independently of when it changes (a printer's
+/// or the simulator's log) puts the change anywhere in between: `midpoint` is unbiased there
+/// (the time where the input crosses half-way, interpolated linearly; this also handles ramps
+/// caught mid-way). A record whose input changes exactly at sample instants (a simulation
+/// stepped at the sample times) is exact with `first_sample`. The choice moves t_step, and so
+/// theta_s, by up to half a sample interval.
+enum class StepInstant { midpoint, first_sample };
+
+/// "midpoint" or "first"; InputError otherwise.
+StepInstant parse_step_instant(const std::string& name);
+
 struct StepDetectOptions {
   /// A change of the input by more than this fraction of its range is a step.
   double min_step_fraction = 0.1;
-  /// Fraction of the preceding level's samples (before a step) included in that step's fit.
+  /// Fraction of the preceding level's samples (before a step) included in that step's fit,
+  /// the first level's included. analyze_steps() shortens this window further to the stretch
+  /// where the output has settled (a warm-up from rest is not the steady state before a step).
   double pre_fraction = 0.5;
+  StepInstant instant = StepInstant::midpoint;
 };
 
 /// Finds the steps of a (commanded, near piecewise-constant) input. Throws InputError when the
