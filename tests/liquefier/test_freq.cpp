@@ -2,6 +2,7 @@
 // simulation, broadband H1 through a known second-order system, transfer-function fits.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -282,4 +283,23 @@ TEST_CASE("tunekit freq --mode h1 / oe on the synthetic chirp data set") {
   CHECK(irregular.err.find("uniform sampling") != std::string::npos);
   CHECK(irregular.code == 2);
   CHECK(run_cli({"freq", "--help"}).out.find("Examples:") != std::string::npos);
+}
+
+TEST_CASE("a rank-deficient fit prints exactly one error line on the real stderr (exit 1)") {
+  // Sampling at exactly twice the dwell frequency: sin and cos of the model are both +-1 times a
+  // constant, so amplitude and phase cannot be separated. The covariance fails; the solver
+  // library's own logging must not reach stderr before tunekit's one line.
+  std::ostringstream csv;
+  csv << "time (s),width (mm)\n";
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0, 0.01);
+  for (int k = 0; k < 200; ++k) csv << k * 0.1 << ',' << 1 + 0.3 * (k % 2 == 0 ? 1 : -1) + noise(rng) << '\n';
+  const auto path = write_scratch("rank_deficient_dwell.csv", csv.str());
+  const auto r = tunekit::test::run_exe("freq " + path + " -y width --mode dwell -f 5");
+  INFO(r.err);
+  CHECK(r.code == 1);
+  CHECK(r.err.rfind("tunekit: error: ", 0) == 0);
+  CHECK(r.err.find("not identifiable") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.out.empty());
 }
