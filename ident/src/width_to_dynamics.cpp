@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -78,6 +79,52 @@ std::vector<TimedWidth> map_ring(const std::vector<cv::Point2d>& centre_px, cons
   }
   std::sort(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return a.t_s < b.t_s; });
   // Equal times (two samples at the same angle) would break a strictly increasing time column.
+  rows.erase(std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
+             rows.end());
+  return rows;
+}
+
+double feed_setpoint_width_mm(const PathSegment& seg, double filament_diameter_mm, double layer_height_mm) {
+  if (!(seg.length_mm > 0) || !(layer_height_mm > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const double area = M_PI * 0.25 * filament_diameter_mm * filament_diameter_mm;
+  return seg.feed_mm * area / (seg.length_mm * layer_height_mm);
+}
+
+std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vector<double>& width_mm,
+                                 const std::vector<double>& confidence, const std::vector<PathSegment>& path,
+                                 const PathMapping& how) {
+  double total = 0;
+  for (const auto& p : path) {
+    if (!(p.length_mm >= 0) || !(p.speed_mm_s > 0)) throw InputError("path segments need a length >= 0 and a speed > 0");
+    total += p.length_mm;
+  }
+  if (path.empty() || !(total > 0)) throw InputError("the commanded path is empty (no extruding moves)");
+  const bool from_feed = how.filament_diameter_mm > 0 && how.layer_height_mm > 0;
+  if (!from_feed && !(how.setpoint_width_mm > 0))
+    throw InputError("a set-point width is needed: filament diameter and layer height, or a constant width");
+  const double len = s_mm.empty() ? 0.0 : s_mm.back() - s_mm.front();
+  const double offset = std::isfinite(how.offset_mm) ? how.offset_mm : 0.5 * (total - len);
+  // Cumulative path length and time at each segment start.
+  std::vector<double> s0(path.size() + 1, 0.0), t0(path.size() + 1, 0.0);
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    s0[i + 1] = s0[i] + path[i].length_mm;
+    t0[i + 1] = t0[i] + path[i].length_mm / path[i].speed_mm_s;
+  }
+  std::vector<TimedWidth> rows;
+  for (std::size_t i = 0; i < s_mm.size(); ++i) {
+    if (!std::isfinite(width_mm[i])) continue;
+    const double along = how.reversed ? (s_mm.back() - s_mm[i]) : (s_mm[i] - s_mm.front());
+    const double sp = offset + along;
+    if (sp < 0 || sp > total) continue;
+    const auto k = static_cast<std::size_t>(
+        std::clamp<std::ptrdiff_t>(std::upper_bound(s0.begin(), s0.end(), sp) - s0.begin() - 1, 0,
+                                   static_cast<std::ptrdiff_t>(path.size()) - 1));
+    const double t = t0[k] + (sp - s0[k]) / path[k].speed_mm_s;
+    const double w_sp = from_feed ? feed_setpoint_width_mm(path[k], how.filament_diameter_mm, how.layer_height_mm)
+                                  : how.setpoint_width_mm;
+    rows.push_back({t, sp, width_mm[i], w_sp, confidence[i]});
+  }
+  std::sort(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return a.t_s < b.t_s; });
   rows.erase(std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
              rows.end());
   return rows;

@@ -23,7 +23,9 @@
 #include "tunekit/ident/line_width.hpp"
 #include "tunekit/ident/overlay.hpp"
 #include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/protocols/gcode.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -56,6 +58,10 @@ struct LinewidthArgs {
   double layer_height_mm = 0;
   double ring_start_deg = 0;
   bool ring_clockwise = false;
+  std::string gcode;
+  double filament_diameter_mm = 0;
+  double path_offset_mm = kNaN;
+  bool path_reversed = false;
   OutputOptions output;
 };
 
@@ -100,6 +106,35 @@ struct ImageRun {
   std::vector<cv::Point> target_outline;
   ident::LineWidthResult result;
 };
+
+// The extruding moves of a G-code file, in order (travel and extruder-only moves are skipped).
+std::vector<ident::PathSegment> gcode_path(const std::string& path, std::size_t& lines_read) {
+  const std::string text = ident::read_file_bytes(path);
+  protocols::GcodeInterpreter gi;
+  std::vector<ident::PathSegment> segs;
+  std::size_t lineno = 0, start = 0;
+  while (start <= text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    ++lineno;
+    const std::string_view line(text.data() + start, end - start);
+    try {
+      if (const auto w = protocols::parse_gcode(line)) {
+        if (const auto m = gi.apply(*w)) {
+          const double de = m->end[3] - m->start[3];
+          if (!m->extruder_only() && de > 0 && m->length_mm() > 0)
+            segs.push_back({m->length_mm(), m->feed_mm_s, de});
+        }
+      }
+    } catch (const Error& e) {
+      throw InputError(e.message(), source_location(path, lineno));
+    }
+    start = end + 1;
+  }
+  lines_read = lineno;
+  if (segs.empty()) throw InputError("no extruding moves (G1 with X/Y and a positive E) in the G-code file", path);
+  return segs;
+}
 
 std::string overlay_path(const std::string& dir, const std::string& image) {
   return (std::filesystem::path(dir) / (std::filesystem::path(image).stem().string() + "_overlay.png")).string();
@@ -248,8 +283,10 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   if (!a.chessboard.empty() && !(a.square_mm > 0)) throw InputError("--chessboard needs --square-mm (mm)");
   if (!a.profile_csv.empty() && a.images.size() != 1)
     throw InputError("--profile-csv maps one image's line to time: give exactly one image");
-  if (!a.profile_csv.empty() && !(a.speed_mm_s > 0))
-    throw InputError("--profile-csv needs the commanded print speed --speed-mm-s (mm/s)");
+  if (!a.profile_csv.empty() && !(a.speed_mm_s > 0) && a.gcode.empty())
+    throw InputError("--profile-csv needs the commanded print speed: --speed-mm-s (mm/s) or --gcode FILE");
+  if (!a.gcode.empty() && a.profile_csv.empty()) throw InputError("--gcode maps a profile to time: add --profile-csv");
+  if (!a.gcode.empty() && a.ring_sines > 0) throw InputError("give either --gcode or the ring's --ring-sines, not both");
   if (a.ring_sines > 0 && !(a.ring_amplitude_mm > 0 && a.rod_radius_mm > 0 && a.layer_height_mm > 0))
     throw InputError("--ring-sines needs --ring-amplitude-mm, --rod-radius-mm and --layer-height-mm");
 
@@ -346,7 +383,8 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
     }
     const double mean_mm = l.mean_width_px / run.ppm;
     double setpoint = a.setpoint_width_mm;
-    if (!(setpoint > 0)) {
+    const bool setpoint_from_feed = !a.gcode.empty() && a.filament_diameter_mm > 0 && a.layer_height_mm > 0;
+    if (!(setpoint > 0) && !setpoint_from_feed) {
       setpoint = mean_mm;
       env.warn(fmt::format("no --setpoint-width-mm: the set-point width is taken as the measured mean {:.4f} mm",
                            mean_mm));
@@ -354,7 +392,51 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
     std::vector<ident::TimedWidth> rows;
     nlohmann::json mapping;
     std::string comment;
-    if (a.ring_sines > 0) {
+    if (!a.gcode.empty()) {
+      if (l.closed) throw InputError(fmt::format("line {} is a closed loop; --gcode maps open lines", a.line));
+      std::size_t nlines = 0;
+      const auto segs = gcode_path(a.gcode, nlines);
+      env.add_input(a.gcode);
+      ident::PathMapping how;
+      how.offset_mm = a.path_offset_mm;
+      how.reversed = a.path_reversed;
+      how.filament_diameter_mm = a.filament_diameter_mm;
+      how.layer_height_mm = a.layer_height_mm;
+      how.setpoint_width_mm = setpoint;
+      const bool from_feed = a.filament_diameter_mm > 0 && a.layer_height_mm > 0;
+      double total = 0, duration = 0;
+      for (const auto& sg : segs) {
+        total += sg.length_mm;
+        duration += sg.length_mm / sg.speed_mm_s;
+      }
+      const double prof_len = s_mm.empty() ? 0.0 : s_mm.back() - s_mm.front();
+      const double offset = std::isfinite(a.path_offset_mm) ? a.path_offset_mm : 0.5 * (total - prof_len);
+      if (prof_len > total * 1.05)
+        env.warn(fmt::format("the measured line ({:.2f} mm) is longer than the G-code's extruding path ({:.2f} mm): "
+                             "wrong file, scale or line?",
+                             prof_len, total));
+      rows = ident::map_path(s_mm, w_mm, conf, segs, how);
+      mapping = {{"kind", "gcode"},
+                 {"gcode", a.gcode},
+                 {"segments", segs.size()},
+                 {"path_length_mm", r6(total)},
+                 {"path_duration_s", r6(duration)},
+                 {"profile_length_mm", r6(prof_len)},
+                 {"offset_mm", r6(offset)},
+                 {"reversed", a.path_reversed},
+                 {"setpoint", from_feed ? "feed" : "constant"}};
+      if (from_feed) {
+        mapping["filament_diameter_mm"] = a.filament_diameter_mm;
+        mapping["layer_height_mm"] = a.layer_height_mm;
+      }
+      comment = fmt::format(
+          "tunekit linewidth: profile of {} (line {}) along the extruding moves of {} ({} segments, {:.3f} mm)\n"
+          "setpoint_width: {}",
+          run.path, a.line, a.gcode, segs.size(), total,
+          from_feed ? fmt::format("E (pi d^2/4) / (L h), d = {} mm, h = {} mm", a.filament_diameter_mm,
+                                  a.layer_height_mm)
+                    : fmt::format("constant {} mm", setpoint));
+    } else if (a.ring_sines > 0) {
       if (!l.closed) throw InputError(fmt::format("line {} is not a closed ring; --ring-sines needs one", a.line));
       std::vector<cv::Point2d> pts;
       for (const auto& s : l.samples)
@@ -420,7 +502,12 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
                    {"rod_radius_mm", a.rod_radius_mm},
                    {"layer_height_mm", a.layer_height_mm},
                    {"ring_start_deg", a.ring_start_deg},
-                   {"ring_clockwise", a.ring_clockwise}});
+                   {"ring_clockwise", a.ring_clockwise},
+                   {"gcode", a.gcode},
+                   {"filament_diameter_mm", a.filament_diameter_mm},
+                   {"path_offset_mm", std::isfinite(a.path_offset_mm) ? nlohmann::json(a.path_offset_mm)
+                                                                       : nlohmann::json(nullptr)},
+                   {"path_reversed", a.path_reversed}});
   if (!a.output.json) {
     for (const auto& l : lines)
       ctx.out << fmt::format("{} line {}: width {:.4f} mm (std {:.4f} mm), {} of {} samples, length {:.2f} mm{}\n",
@@ -493,6 +580,18 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("--ring-start-deg", args->ring_start_deg,
                   "Ring print: where theta = 0 is, as an angle in the photo (deg, counterclockwise from +x)");
   sub->add_flag("--ring-clockwise", args->ring_clockwise, "Ring print: the nozzle ran clockwise as seen in the photo");
+  sub->add_option("--gcode", args->gcode,
+                  "G-code that printed the line (with --profile-csv): its extruding moves give the commanded speed "
+                  "(F, mm/min in the file) along the path, and with --filament-diameter-mm and --layer-height-mm the "
+                  "set-point width E (pi d^2/4) / (L h) (mm)");
+  sub->add_option("--filament-diameter-mm", args->filament_diameter_mm,
+                  "With --gcode: filament diameter d (mm) for the set-point width from the feed")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--path-offset-mm", args->path_offset_mm,
+                  "With --gcode: path length (mm) before the profile's first sample; default: profile centred on the "
+                  "path");
+  sub->add_flag("--path-reversed", args->path_reversed,
+                "With --gcode: the nozzle ran from the profile's end (right/bottom in the photo) to its start");
   add_output_options(sub, args->output);
   sub->footer(
       "Examples:\n"
@@ -503,6 +602,9 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
       "  tunekit linewidth ring.png --px-per-mm 20 --speed-mm-s 10 --ring-sines 3 --ring-amplitude-mm 0.08 \\\n"
       "      --rod-radius-mm 2.5 --layer-height-mm 0.2 --setpoint-width-mm 0.66 --profile-csv ring.csv\n"
       "  tunekit freq ring.csv --time time --output width --input setpoint_width --freq-hz 0.159 --json\n"
+      "  tunekit linewidth line.png --px-per-mm 20 --gcode line.gcode --filament-diameter-mm 1.75 \\\n"
+      "      --layer-height-mm 0.2 --profile-csv line.csv && tunekit step line.csv --time time \\\n"
+      "      --input setpoint_width --output width --json\n"
       "Exit codes: 0 measured, 1 nothing measured (no line found), 2 bad input (unreadable image, line touching\n"
       "the frame edge, scale target not found).");
   sub->callback([args, &ctx] { set_exit_code(run_linewidth(*args, ctx)); });

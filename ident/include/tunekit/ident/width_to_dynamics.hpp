@@ -11,6 +11,7 @@
 // with r_rod the feed rod radius and h the layer height. (Positive feeder offset retracts the
 // plunger in that machine; eq. 4.3 is used as printed.)
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,36 @@ std::vector<TimedWidth> map_constant_speed(const std::vector<double>& s_mm, cons
 std::vector<TimedWidth> map_ring(const std::vector<cv::Point2d>& centre_px, const std::vector<double>& width_mm,
                                  const std::vector<double>& confidence, cv::Point2d ring_centre_px,
                                  const RingSine& ring, double start_deg, bool clockwise);
+
+/// One straight piece of a commanded print path (from a G-code file), in print order.
+struct PathSegment {
+  double length_mm = 0;   ///< XY(Z) length
+  double speed_mm_s = 0;  ///< commanded feed rate (acceleration is not modelled)
+  double feed_mm = 0;     ///< filament pushed over the segment (E), mm
+};
+
+/// How a measured open line lies on the commanded path.
+struct PathMapping {
+  /// Path length (mm) before the profile's first sample: the line's ends (caps) are not in
+  /// the profile. NaN: centre the profile on the path, (path length - profile length) / 2.
+  double offset_mm = std::numeric_limits<double>::quiet_NaN();
+  bool reversed = false;              ///< the nozzle ran from the profile's last sample to its first
+  double filament_diameter_mm = 0;    ///< > 0 with layer_height_mm: set-point from the feed
+  double layer_height_mm = 0;
+  double setpoint_width_mm = 0;       ///< otherwise this constant set-point
+};
+
+/// Set-point width the feed implies on a segment: filament volume over path length and layer
+/// height, w = E (pi d^2 / 4) / (L h) (a rectangular bead), mm.
+double feed_setpoint_width_mm(const PathSegment& seg, double filament_diameter_mm, double layer_height_mm);
+
+/// Rows of an open line's profile printed along `path`: each sample's position on the path
+/// gives the time (piecewise constant speed from the first segment's start) and the set-point
+/// width (from the segment's feed, or constant). Samples off the path are dropped. Rows come
+/// out sorted by time. Throws InputError for an empty path or one without length.
+std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vector<double>& width_mm,
+                                 const std::vector<double>& confidence, const std::vector<PathSegment>& path,
+                                 const PathMapping& how);
 
 /// CSV text with columns `time (s)`, `s (mm)`, `width (mm)`, `setpoint_width (mm)`, `confidence`.
 std::string timed_width_csv(const std::vector<TimedWidth>& rows, const std::string& comment);
