@@ -173,7 +173,7 @@ namespace {
 /// accelerometer, whose samples are sent as {"tk": ..., "params": {"data": [[t,x,y,z],...]}}.
 class FakeKlipper {
  public:
-  explicit FakeKlipper(const std::string& path) : path_(path), sim_(tunekit::protocols::SimConfig{}) {
+  FakeKlipper(const std::string& path, tunekit::protocols::SimConfig config) : path_(path), sim_(std::move(config)) {
     ::unlink(path.c_str());
     listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM, 0);
     sockaddr_un addr{};
@@ -262,13 +262,16 @@ class FakeKlipper {
 
 }  // namespace
 
-TEST_CASE("a Klipper API server's accelerometer stream is recorded", "[machine]") {
+TEST_CASE("a Klipper API server's accelerometer stream is recorded and analyzed", "[machine]") {
   const auto dir = scratch_dir("machine_klipper");
   const std::string sock = dir + "/klippy_uds";
-  FakeKlipper server(sock);
+  // The fake server synthesises one x mode that is not the simulator's default (48 Hz, 0.08).
+  const double f_mode = 52.5, zeta_mode = 0.06;
+  FakeKlipper server(sock, tunekit::protocols::SimConfig::from_options(
+                               {"mode_x=" + std::to_string(f_mode) + ":" + std::to_string(zeta_mode)}));
   const auto r = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", tunekit::test::dataset("machines/sim.toml"),
-                          "--port", "unix:" + sock, "--run-dir", dir + "/run", "-p", "freq_start_hz=30", "-p",
-                          "freq_end_hz=70", "-p", "hz_per_sec=8", "--json"});
+                          "--port", "unix:" + sock, "--run-dir", dir + "/run", "-p", "freq_start_hz=35", "-p",
+                          "freq_end_hz=70", "-p", "hz_per_sec=3", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto env = nlohmann::json::parse(r.out);
@@ -280,4 +283,13 @@ TEST_CASE("a Klipper API server's accelerometer stream is recorded", "[machine]"
   bool saw_sweep = false;
   for (const auto& s : server.scripts()) saw_sweep |= s.find("M204 S") != std::string::npos;
   CHECK(saw_sweep);
+  // What was recorded is analyzed like a Klipper raw_data file: the mode the server synthesised.
+  // (The sweep is slow, 3 Hz/s: a fast one drags the apparent peak upwards, ~0.9 % at 8 Hz/s.)
+  const auto fit = run_cli({"resonance", accel, "--axis", "x", "--json"});
+  INFO(fit.err);
+  REQUIRE(fit.code == 0);
+  const auto modes = nlohmann::json::parse(fit.out)["results"]["axes"]["x"]["modes"];
+  REQUIRE(!modes.empty());
+  CHECK(modes[0]["freq_hz"].get<double>() == Approx(f_mode).epsilon(0.01));
+  CHECK(modes[0]["zeta"].get<double>() == Approx(zeta_mode).epsilon(0.20));
 }
