@@ -103,6 +103,17 @@ void check_starts(const std::vector<ModeStart>& starts) {
     if (!(s.freq_hz > 0) || !std::isfinite(s.freq_hz)) throw InputError("modal fit: a start frequency is not positive");
 }
 
+// Tight tolerances: mode parameters are few and the spectra are smooth, so convergence is cheap.
+LsqOptions modal_lsq_options(double confidence) {
+  LsqOptions lo;
+  lo.max_iterations = 300;
+  lo.function_tolerance = 1e-12;
+  lo.gradient_tolerance = 1e-12;
+  lo.parameter_tolerance = 1e-10;
+  lo.confidence = confidence;
+  return lo;
+}
+
 }  // namespace
 
 ModalFit fit_modal_psd(const std::vector<double>& freq, const std::vector<double>& psd_in,
@@ -175,12 +186,7 @@ ModalFit fit_modal_psd(const std::vector<double>& freq, const std::vector<double
   }
   double floor0 = *std::min_element(y.begin(), y.end()) * 0.1;
 
-  LsqOptions lo;
-  lo.max_iterations = 300;
-  lo.function_tolerance = 1e-12;
-  lo.gradient_tolerance = 1e-12;
-  lo.parameter_tolerance = 1e-10;
-  lo.confidence = o.confidence;
+  const LsqOptions lo = modal_lsq_options(o.confidence);
 
   ModalFit out;
   // Stages: everything free; then the floor held; then the floor and direct term held.
@@ -287,12 +293,7 @@ ModalFit fit_modal_frf(const std::vector<double>& freq, const std::vector<cd>& h
     s.gain = -im * 2 * std::max(s.zeta, 1e-3);
     if (s.gain == 0) s.gain = std::abs(y[best]) * 2 * std::max(s.zeta, 1e-3);
   }
-  LsqOptions lo;
-  lo.max_iterations = 300;
-  lo.function_tolerance = 1e-12;
-  lo.gradient_tolerance = 1e-12;
-  lo.parameter_tolerance = 1e-10;
-  lo.confidence = o.confidence;
+  const LsqOptions lo = modal_lsq_options(o.confidence);
   ModalFit out;
   std::string last_error;
   for (int stage = 0; stage < 2; ++stage) {
