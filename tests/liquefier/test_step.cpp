@@ -291,6 +291,31 @@ TEST_CASE("tunekit step on Table B.1 by print-speed groups gives per-speed fits 
   CHECK(text.out.find("pooled") != std::string::npos);
 }
 
+TEST_CASE("a fit that does not converge is a FitError carrying the solver's summary") {
+  // The step fit with one iteration allowed from a poor start: Ceres stops at its limit.
+  auto r = synth_step(Truth{}, 0.01, 4);
+  fitting::LsqOptions o;
+  o.max_iterations = 1;
+  fitting::LsqProblem prob;
+  prob.params = {{"K", "1", 0.1}, {"tau_s", "s", 5.0, 1e-3, 100.0}};
+  prob.num_residuals = static_cast<int>(r.t.size());
+  prob.residuals = [&r](const double* p, double* res) {
+    for (std::size_t i = 0; i < r.t.size(); ++i)
+      res[i] = fitting::step_response(r.t[i], 0.0, r.du, p[0], p[1], 0.0, 1.0) - r.y[i];
+    return true;
+  };
+  try {
+    (void)fitting::solve_least_squares("first_order", prob, o);
+    FAIL("no FitError");
+  } catch (const FitError& e) {
+    const std::string m = e.message();
+    INFO(m);
+    CHECK(m.find("did not converge in 1 iterations") != std::string::npos);
+    CHECK(m.find("Ceres Solver Report") != std::string::npos);
+    CHECK(e.code() == ExitCode::fit_failed);
+  }
+}
+
 TEST_CASE("tunekit step fails clearly: exit 2 for bad input, exit 1 for a fit that cannot be made") {
   auto csv = [](const std::string& name, auto fy, auto fu, int n = 200) {
     std::ostringstream s;
@@ -317,6 +342,8 @@ TEST_CASE("tunekit step fails clearly: exit 2 for bad input, exit 1 for a fit th
   CHECK(r.err.find("too few samples") != std::string::npos);
   r = run(write_scratch("nan.csv", "time,feed,force\n0,1,1\n0.1,1,nan\n0.2,2,1\n"));
   CHECK(r.code == 2);
+  CHECK(r.err.find("nan.csv:3:") != std::string::npos);  // file, line and column of the NaN
+  CHECK(r.err.find("NaN") != std::string::npos);
   r = run(write_scratch("back.csv", "time,feed,force\n0,1,1\n0.1,1,2\n0.05,2,1\n0.3,2,1\n"));
   CHECK(r.code == 2);
   CHECK((r.err.find("increas") != std::string::npos || r.err.find("backwards") != std::string::npos));
