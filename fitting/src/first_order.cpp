@@ -143,21 +143,12 @@ double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d&
   return rss;
 }
 
-double rss_at(const StepRecord& r, const double p[4]) {
-  double rss = 0;
-  for (std::size_t i = 0; i < r.t.size(); ++i) {
-    const double d = step_response(r.t[i], r.t_step, r.du, p[0], p[1], p[2], p[3]) - r.y[i];
-    rss += d * d;
-  }
-  return rss;
-}
-
 // Levenberg-Marquardt on the 4x4 normal equations: brings a start close to the optimum cheaply,
 // so that the Ceres solve that follows needs only an iteration or two on long records.
 void polish_start(const StepRecord& r, double p[4], const double lo[4], const double hi[4], const bool fixed[4]) {
   double lambda = 1e-3;
-  Eigen::Matrix4d JtJ;
-  Eigen::Vector4d Jtr;
+  Eigen::Matrix4d JtJ, JtJ_q;
+  Eigen::Vector4d Jtr, Jtr_q;
   double cost = normal_equations(r, p, JtJ, Jtr);
   for (int it = 0; it < 60; ++it) {
     for (int j = 0; j < 4; ++j)
@@ -174,11 +165,15 @@ void polish_start(const StepRecord& r, double p[4], const double lo[4], const do
       const Eigen::Vector4d dp = A.ldlt().solve(-Jtr);
       double q[4];
       for (int j = 0; j < 4; ++j) q[j] = fixed[j] ? p[j] : std::clamp(p[j] + dp(j), lo[j], hi[j]);
-      const double c = rss_at(r, q);
+      // The trial's normal equations come with its cost (one pass over the data, and the
+      // exponentials are the expensive part); an accepted step needs no second pass.
+      const double c = normal_equations(r, q, JtJ_q, Jtr_q);
       if (std::isfinite(c) && c < cost) {
         const double rel = (cost - c) / std::max(cost, 1e-300);
         std::copy(q, q + 4, p);
         cost = c;
+        JtJ = JtJ_q;
+        Jtr = Jtr_q;
         lambda = std::max(lambda / 3, 1e-12);
         improved = true;
         if (rel < 1e-8) return;  // Ceres confirms the last digits
@@ -187,7 +182,6 @@ void polish_start(const StepRecord& r, double p[4], const double lo[4], const do
       }
     }
     if (!improved) return;
-    cost = normal_equations(r, p, JtJ, Jtr);
   }
 }
 
