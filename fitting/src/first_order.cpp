@@ -10,17 +10,12 @@
 #include <cstdio>
 
 #include "tunekit/fitting/error.hpp"
+#include "number_text.hpp"
 
 namespace tunekit::fitting {
 namespace {
 
 constexpr double kTauMaxFactor = 100.0;  // tau may be at most this many record lengths
-
-std::string g(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", v);
-  return buf;
-}
 
 void check_record(const StepRecord& r, const std::string& what) {
   if (r.t.size() != r.y.size()) throw InputError(what + ": time and output have different lengths");
@@ -30,7 +25,7 @@ void check_record(const StepRecord& r, const std::string& what) {
   for (std::size_t i = 0; i < r.t.size(); ++i) {
     if (!std::isfinite(r.t[i]) || !std::isfinite(r.y[i])) throw InputError(what + ": NaN or infinite sample");
     if (i > 0 && !(r.t[i] > r.t[i - 1]))
-      throw InputError(what + ": time is not increasing at sample " + std::to_string(i + 1) + " (t = " + g(r.t[i]) +
+      throw InputError(what + ": time is not increasing at sample " + std::to_string(i + 1) + " (t = " + text::g4(r.t[i]) +
                        " s)");
   }
   if (!(std::abs(r.du) > 0) || !std::isfinite(r.du)) throw InputError(what + ": the input step size is zero");
@@ -40,7 +35,7 @@ void check_record(const StepRecord& r, const std::string& what) {
   for (double t : r.t)
     if (t > r.t_step) ++after;
   if (after < 4)
-    throw InputError(what + ": only " + std::to_string(after) + " samples after the step at t = " + g(r.t_step) +
+    throw InputError(what + ": only " + std::to_string(after) + " samples after the step at t = " + text::g4(r.t_step) +
                      " s; at least 4 are needed");
 }
 
@@ -231,13 +226,13 @@ void fill_covariance(FitResult& f, const StepRecord& r, const LsqOptions& o) {
 void check_identifiable(const FitResult& f, const StepRecord* rec, double duration, bool have_stderr) {
   const auto& tau = f.param("tau_s");
   if (tau.value >= kTauMaxFactor * duration * 0.999 || (have_stderr && !(tau.std_error < tau.value)))
-    throw FitError(f.model + ": tau_s is not identifiable from this record (tau_s = " + g(tau.value) + " s +- " +
-                   g(tau.std_error) + " s against " + g(duration) + " s of response" +
-                   (rec != nullptr ? " after the step at t = " + g(rec->t_step) + " s" : std::string()) +
+    throw FitError(f.model + ": tau_s is not identifiable from this record (tau_s = " + text::g4(tau.value) + " s +- " +
+                   text::g4(tau.std_error) + " s against " + text::g4(duration) + " s of response" +
+                   (rec != nullptr ? " after the step at t = " + text::g4(rec->t_step) + " s" : std::string()) +
                    "); the step is too short to see the time constant: record longer after the step");
   const auto& theta = f.param("theta_s");
   if (!theta.fixed && theta.value >= 0.9 * duration * 0.999)
-    throw FitError(f.model + ": theta_s ran to its bound (" + g(theta.value) +
+    throw FitError(f.model + ": theta_s ran to its bound (" + text::g4(theta.value) +
                    " s): no response to the step is visible");
 }
 

@@ -10,6 +10,7 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "tunekit/fitting/error.hpp"
+#include "number_text.hpp"
 
 namespace tunekit::fitting {
 namespace {
@@ -27,12 +28,6 @@ std::complex<double> polyval(const std::vector<double>& p, std::complex<double> 
   std::complex<double> v = 0;
   for (double c : p) v = v * s + c;
   return v;
-}
-
-std::string g(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", v);
-  return buf;
 }
 
 }  // namespace
@@ -301,7 +296,7 @@ FitResult fit_tf_frf(std::span<const double> freq_hz, std::span<const std::compl
   auto r = solve_least_squares(tf_model_name(s), prob);
   if (s.poles >= 2) {
     const double zeta = r.value("zeta");
-    if (zeta > 1) r.warnings.push_back("zeta = " + g(zeta) + " > 1: fn_hz/zeta describe two real poles");
+    if (zeta > 1) r.warnings.push_back("zeta = " + text::g4(zeta) + " > 1: fn_hz/zeta describe two real poles");
   }
   return r;
 }

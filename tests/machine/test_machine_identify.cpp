@@ -12,17 +12,6 @@
 
 using tunekit::test::run_cli;
 
-namespace {
-
-nlohmann::json json_file(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return nlohmann::json::parse(ss.str());
-}
-
-}  // namespace
-
 TEST_CASE("liquefier-step on the simulator identifies K, tau and theta within 5 %", "[machine][e2e]") {
   const auto dir = tunekit::test::scratch_dir("machine_e2e_step") + "/run";
   // Non-default truth, so the test cannot pass on defaults baked in anywhere else.
@@ -32,7 +21,7 @@ TEST_CASE("liquefier-step on the simulator identifies K, tau and theta within 5 
   REQUIRE(run.code == 0);
   const auto res = nlohmann::json::parse(run.out)["results"];
   const std::string csv = res["files"]["load_cell"];
-  const auto truth = json_file(dir + "/truth.json")["liquefier"];
+  const auto truth = tunekit::test::read_json(dir + "/truth.json")["liquefier"];
   const auto fit = run_cli({"step", csv, "--time", "time", "--input", "feed", "-y", "force", "--json"});
   INFO(fit.err);
   REQUIRE(fit.code == 0);
@@ -77,7 +66,7 @@ TEST_CASE("liquefier-step with the simulator's defaults (200 Hz load cell) ident
   INFO(run.err);
   REQUIRE(run.code == 0);
   const std::string csv = nlohmann::json::parse(run.out)["results"]["files"]["load_cell"];
-  const auto truth = json_file(dir + "/truth.json")["liquefier"];
+  const auto truth = tunekit::test::read_json(dir + "/truth.json")["liquefier"];
   const auto fit = run_cli({"step", csv, "--input", "feed", "-y", "force", "--json"});
   INFO(fit.err);
   REQUIRE(fit.code == 0);
@@ -96,7 +85,7 @@ TEST_CASE("axis-sweep on the simulator identifies the mode within 20 %", "[machi
   INFO(run.err);
   REQUIRE(run.code == 0);
   const std::string csv = nlohmann::json::parse(run.out)["results"]["files"]["accel"];
-  const auto truth = json_file(dir + "/truth.json")["axes"]["x"]["modes"][0];
+  const auto truth = tunekit::test::read_json(dir + "/truth.json")["axes"]["x"]["modes"][0];
   const auto fit = run_cli({"resonance", csv, "--axis", "x", "--json"});
   INFO(fit.err);
   REQUIRE(fit.code == 0);

@@ -26,15 +26,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-nlohmann::json json_file(const std::string& path) { return nlohmann::json::parse(slurp(path)); }
-
 std::size_t csv_rows(const std::string& path) {
   std::ifstream f(path);
   std::string line;
@@ -100,11 +91,11 @@ TEST_CASE("liquefier-step on the simulator writes a complete run directory", "[m
   CHECK(table.column("feed").values.size() == res["samples"]["load_cell"].get<std::size_t>());
   // 3 s settle + 2 cycles of 2 x 3 s at 200 Hz.
   CHECK(table.rows == Approx(15 * 200).epsilon(0.02));
-  const auto stats = json_file(dir + "/sim_stats.json");
+  const auto stats = tunekit::test::read_json(dir + "/sim_stats.json");
   CHECK(stats["load_cell_samples_sent"].get<std::size_t>() == table.rows);
-  CHECK(json_file(dir + "/truth.json")["liquefier"]["tau_s"] == 0.45);
-  CHECK(json_file(dir + "/run.json")["status"] == "complete");
-  const std::string journal = slurp(dir + "/journal.jsonl");
+  CHECK(tunekit::test::read_json(dir + "/truth.json")["liquefier"]["tau_s"] == 0.45);
+  CHECK(tunekit::test::read_json(dir + "/run.json")["status"] == "complete");
+  const std::string journal = tunekit::test::read_text(dir + "/journal.jsonl");
   CHECK(journal.find("\"kind\":\"tx\"") != std::string::npos);
   CHECK(journal.find("FIRMWARE_NAME:Marlin") != std::string::npos);
 }
@@ -116,7 +107,7 @@ TEST_CASE("garbled, dropped and late lines are recovered", "[machine]") {
     INFO(r.err);
     REQUIRE(r.code == 0);
     CHECK(nlohmann::json::parse(r.out)["results"]["link"]["resends"] == 1);
-    CHECK(slurp(base + "/garble/journal.jsonl").find("Resend: 7") != std::string::npos);
+    CHECK(tunekit::test::read_text(base + "/garble/journal.jsonl").find("Resend: 7") != std::string::npos);
   }
   SECTION("dropped line: retry after the timeout") {
     const auto r = run_cli({"run", "liquefier-step", "--run-dir", base + "/drop", "--sim", "fault=drop@9", "--timeout",
@@ -140,12 +131,12 @@ TEST_CASE("a disconnect ends with exit 3 and keeps every sample received", "[mac
   const auto r = run_cli({"run", "liquefier-step", "--run-dir", dir, "--sim", "fault=disconnect@10", "--timeout", "2"});
   CHECK(r.code == 3);
   CHECK(r.err.find("partial run is kept in") != std::string::npos);
-  const auto stats = json_file(dir + "/sim_stats.json");
+  const auto stats = tunekit::test::read_json(dir + "/sim_stats.json");
   CHECK(stats["disconnected"] == true);
   const std::size_t sent = stats["load_cell_samples_sent"];
   CHECK(sent > 1000);  // the first two moves (6 s) ran before the fault
   CHECK(csv_rows(dir + "/step.csv") == sent);
-  const auto run = json_file(dir + "/run.json");
+  const auto run = tunekit::test::read_json(dir + "/run.json");
   CHECK(run["status"] == "failed");
   // The partial file is analyzable: the reader accepts it.
   CHECK(tunekit::ident::read_csv(dir + "/step.csv", {{}, "time"}).rows == sent);
@@ -156,14 +147,14 @@ TEST_CASE("a firmware error ends with exit 3 after the safe-state commands", "[m
   const auto r = run_cli({"run", "liquefier-step", "--run-dir", dir, "--sim", "fault=error@10"});
   CHECK(r.code == 3);
   CHECK(r.err.find("Thermal Runaway") != std::string::npos);
-  const std::string rx = slurp(dir + "/sim_received.gcode");
+  const std::string rx = tunekit::test::read_text(dir + "/sim_received.gcode");
   const auto fault_at = rx.find("N9 ");  // the tenth line received carries N9 (N0 is M110)
   REQUIRE(fault_at != std::string::npos);
   const auto after = rx.substr(fault_at);
   CHECK(after.find("\nM410\n") != std::string::npos);
   CHECK(after.find("\nM104 S0\n") != std::string::npos);
   CHECK(after.find("\nM140 S0\n") != std::string::npos);
-  CHECK(csv_rows(dir + "/step.csv") == json_file(dir + "/sim_stats.json")["load_cell_samples_sent"].get<std::size_t>());
+  CHECK(csv_rows(dir + "/step.csv") == tunekit::test::read_json(dir + "/sim_stats.json")["load_cell_samples_sent"].get<std::size_t>());
 }
 
 namespace {
@@ -277,7 +268,7 @@ TEST_CASE("a Klipper API server's accelerometer stream is recorded and analyzed"
   const auto env = nlohmann::json::parse(r.out);
   const std::string accel = env["results"]["files"]["accel"];
   CHECK(fs::path(accel).filename().string().rfind("raw_data_x_", 0) == 0);
-  CHECK(slurp(accel).rfind("#time,accel_x,accel_y,accel_z\n", 0) == 0);
+  CHECK(tunekit::test::read_text(accel).rfind("#time,accel_x,accel_y,accel_z\n", 0) == 0);
   CHECK(static_cast<long>(csv_rows(accel)) == server.samples_sent());
   CHECK(server.samples_sent() > 3200 * 4);
   bool saw_sweep = false;

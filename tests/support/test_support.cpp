@@ -98,4 +98,6 @@ std::string read_text(const std::string& path) {
   return ss.str();
 }
 
+nlohmann::json read_json(const std::string& path) { return nlohmann::json::parse(read_text(path)); }
+
 }  // namespace tunekit::test

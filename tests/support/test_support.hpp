@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace tunekit::test {
 
 struct CliRun {
@@ -21,6 +23,9 @@ CliRun run_exe(const std::string& args);
 
 /// The whole content of the file at `path` ("" if it cannot be read).
 std::string read_text(const std::string& path);
+
+/// The JSON document in the file at `path` (throws nlohmann::json::parse_error if it is not JSON).
+nlohmann::json read_json(const std::string& path);
 
 /// Path of a file under the repository's datasets/ folder.
 std::string dataset(const std::string& relative);

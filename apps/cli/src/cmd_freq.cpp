@@ -36,7 +36,6 @@ struct FreqArgs {
   OutputOptions output;
 };
 
-std::string unit_or_1(const std::string& u) { return u.empty() ? "1" : u; }
 
 // Uniform sampling rate of a time column; InputError when the sampling is irregular.
 double uniform_rate(const std::vector<double>& t, const std::string& file) {

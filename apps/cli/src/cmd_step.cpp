@@ -31,7 +31,6 @@ struct StepArgs {
   OutputOptions output;
 };
 
-std::string unit_or_1(const std::string& u) { return u.empty() ? "1" : u; }
 
 void print_fit_line(std::ostream& os, const std::string& label, const fitting::FitResult& f) {
   auto pm = [&](const char* n) {

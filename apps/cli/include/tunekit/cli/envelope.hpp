@@ -55,4 +55,7 @@ class Envelope {
 /// (0, or 1 when a --require threshold is not met).
 int emit(const Envelope& env, const OutputOptions& o, CliContext& ctx);
 
+/// A column's unit as results report it: "1" (dimensionless) when the CSV header names none.
+inline std::string unit_or_1(const std::string& unit) { return unit.empty() ? "1" : unit; }
+
 }  // namespace tunekit::cli
