@@ -28,10 +28,11 @@ std::string error_of(const std::function<void()>& fn) {
 
 }  // namespace
 
-TEST_CASE("image_io: PNG round trip keeps grey and BGR pixels; colour conversions") {
+TEST_CASE("image_io: PNG round trip keeps grey and BGR pixels and converts colour") {
+  const auto dir = test::scratch_dir("image_io");
   cv::Mat grey(37, 53, CV_8U);
   cv::randu(grey, 0, 256);
-  const auto gp = test::scratch_dir("image_io") + "/grey.png";
+  const auto gp = dir + "/grey.png";
   ident::write_png(gp, grey);
   const cv::Mat g2 = ident::read_image(gp);
   REQUIRE(g2.type() == CV_8UC1);
@@ -40,7 +41,7 @@ TEST_CASE("image_io: PNG round trip keeps grey and BGR pixels; colour conversion
   cv::Mat bgr(21, 34, CV_8UC3);
   cv::randu(bgr, 0, 256);
   bgr.at<cv::Vec3b>(0, 0) = cv::Vec3b(255, 0, 0);  // pure blue stays blue (no R/B swap)
-  const auto cp = test::scratch_dir("image_io") + "/colour.png";
+  const auto cp = dir + "/colour.png";
   ident::write_png(cp, bgr);
   const cv::Mat c2 = ident::read_image(cp);
   REQUIRE(c2.type() == CV_8UC3);

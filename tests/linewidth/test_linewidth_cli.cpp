@@ -41,7 +41,7 @@ nlohmann::json parse(const test::CliRun& r) {
 
 }  // namespace
 
-TEST_CASE("linewidth --json lists lines with profile arrays and width_mm {mean, std}; overlay written") {
+TEST_CASE("linewidth --json lists lines with profile arrays and width_mm {mean, std} and writes the overlay") {
   const auto dir = test::scratch_dir("lw_json");
   const auto cov = rd::coverage(640, 480, rd::unite({rd::straight_line(60, 140, 580, 150, 11.0),
                                                      rd::straight_line(60, 330, 580, 310, 23.0)}));
