@@ -125,7 +125,7 @@ TEST_CASE("Klipper: a value set in the SAVE_CONFIG block is edited there, the sh
   CHECK_FALSE(export_config_text(ExportFirmware::klipper, r.updated, "p.cfg", s).changed());
 }
 
-TEST_CASE("Klipper: without a SAVE_CONFIG block a missing section is appended; no final newline is handled") {
+TEST_CASE("Klipper: without a SAVE_CONFIG block a missing section is appended, and a missing final newline is handled") {
   const std::string cfg = "[printer]\nkinematics: cartesian";
   CompensatorSettings s;
   s.shapers["y"] = {"2hump_ei", 61.25, 0.1};

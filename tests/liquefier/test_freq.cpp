@@ -43,7 +43,7 @@ std::string exp_path(int id) {
 }
 }  // namespace
 
-TEST_CASE("appendix D: every experiment's sine-dwell gain and phase lag; experiment 7 matches the thesis") {
+TEST_CASE("appendix D: every experiment's sine-dwell gain and phase lag, and experiment 7 matches the thesis") {
   const auto exps = design();
   REQUIRE(exps.size() == 12);
   for (const auto& e : exps) {
