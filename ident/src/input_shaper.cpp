@@ -174,7 +174,7 @@ std::vector<double> residual_vibration_curve(const Shaper& s, std::span<const do
       cur *= ratio;
     }
   }
-  for (std::size_t b = 0; b < f.size(); ++b) v[b] = std::abs(acc[b]) / sum;
+  for (std::size_t b = 0; b < f.size(); ++b) v[b] = std::sqrt(std::norm(acc[b])) / sum;
   return v;
 }
 
@@ -288,7 +288,7 @@ ShaperSelection select_shaper(std::span<const double> freq, std::span<const doub
         cur *= ratio;
       }
     }
-    for (std::size_t b = 0; b < nb; ++b) remaining += std::max(std::abs(acc[b]) * psd[b_lo + b] - thr, 0.0);
+    for (std::size_t b = 0; b < nb; ++b) remaining += std::max(std::sqrt(std::norm(acc[b])) * psd[b_lo + b] - thr, 0.0);  // |acc|, without hypot's cost
     return remaining / all;
   };
 

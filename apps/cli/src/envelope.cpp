@@ -33,7 +33,11 @@ Envelope::Envelope(std::string command) : command_(std::move(command)) {}
 void Envelope::add_input(const std::string& path) { add_input(path, ident::read_file_bytes(path)); }
 
 void Envelope::add_input(const std::string& path, std::string_view bytes) {
-  inputs_.push_back({{"path", path}, {"sha256", sha256_hex(bytes)}, {"bytes", bytes.size()}});
+  add_input_digest(path, sha256_hex(bytes), bytes.size());
+}
+
+void Envelope::add_input_digest(const std::string& path, std::string sha256, std::size_t size_bytes) {
+  inputs_.push_back({{"path", path}, {"sha256", std::move(sha256)}, {"bytes", size_bytes}});
 }
 
 nlohmann::json Envelope::to_json() const {

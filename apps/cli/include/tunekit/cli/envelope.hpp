@@ -30,6 +30,8 @@ class Envelope {
   void add_input(const std::string& path);
   /// Records an input whose bytes are already in memory.
   void add_input(const std::string& path, std::string_view bytes);
+  /// The same with the digest already computed (e.g. on another thread while the data are parsed).
+  void add_input_digest(const std::string& path, std::string sha256, std::size_t size_bytes);
   void warn(std::string message) { warnings_.push_back(std::move(message)); }
 
   nlohmann::json& results() { return results_; }
