@@ -2,8 +2,6 @@
 
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <limits>
 #include <memory>
 
@@ -13,6 +11,7 @@
 #include <stb_image_write.h>
 
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -86,11 +85,7 @@ cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageCol
 cv::Mat read_image(const std::string& path, ImageColor color) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw InputError("cannot read image: no such file", path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot read image: cannot open the file", path);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw InputError("cannot read image: read error", path);
-  return decode_image(bytes, path, color);
+  return decode_image(read_file_bytes(path), path, color);
 }
 
 std::string encode_png(const cv::Mat& image) {

@@ -14,6 +14,7 @@
 
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/image_io.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -22,12 +23,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Lines with a median contrast below this fraction of the strongest line's are not lines.
 constexpr double kFaintFraction = 0.3;
 
-double median_of(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
+// Median, NaN when there are no samples (fitting::median gives 0 there).
+double median_of(std::vector<double> v) { return v.empty() ? kNaN : fitting::median(std::move(v)); }
 
 // ---------------------------------------------------------------- coarse detection
 
