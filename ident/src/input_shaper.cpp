@@ -1,6 +1,7 @@
 #include "tunekit/ident/input_shaper.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -77,9 +78,67 @@ const ShaperInfo& shaper_info(ShaperType t) {
   return infos().front();
 }
 
-Shaper design_shaper(ShaperType type, double f, double z, double V) {
+namespace {
+
+// Singhose's fits of the damped EI family (Singhose, Seering and Singer 1997), coefficients of
+// 1, z, z^2, z^3 per impulse: times in periods of the undamped frequency, amplitudes as they are
+// (normalized afterwards). The values are the published ones, as Klipper tabulates them.
+struct HumpFit {
+  std::vector<std::array<double, 4>> times, amplitudes;
+};
+const HumpFit& two_hump_fit() {
+  static const HumpFit f{{{0, 0, 0, 0},
+                          {0.49890, 0.16270, -0.54262, 6.16180},
+                          {0.99748, 0.18382, -1.58270, 8.17120},
+                          {1.49920, -0.09297, -0.28338, 1.85710}},
+                         {{0.16054, 0.76699, 2.26560, -1.22750},
+                          {0.33911, 0.45081, -2.58080, 1.73650},
+                          {0.34089, -0.61533, -0.68765, 0.42261},
+                          {0.15997, -0.60246, 1.00280, -0.93145}}};
+  return f;
+}
+const HumpFit& three_hump_fit() {
+  static const HumpFit f{{{0, 0, 0, 0},
+                          {0.49974, 0.23834, 0.44559, 12.4720},
+                          {0.99849, 0.29808, -2.36460, 23.3990},
+                          {1.49870, 0.10306, -2.01390, 17.0320},
+                          {1.99960, -0.28231, 0.61536, 5.40450}},
+                         {{0.11275, 0.76632, 3.29160, -1.44380},
+                          {0.23698, 0.61164, -2.57850, 4.85220},
+                          {0.30008, -0.19062, -2.14560, 0.13744},
+                          {0.23775, -0.73297, 0.46885, -2.08650},
+                          {0.11244, -0.45439, 0.96382, -1.46000}}};
+  return f;
+}
+double cubic_in(const std::array<double, 4>& c, double z) { return c[0] + z * (c[1] + z * (c[2] + z * c[3])); }
+
+void apply_hump_fit(Shaper& s, const HumpFit& fit, double f, double z) {
+  for (std::size_t i = 0; i < fit.times.size(); ++i) {
+    s.times_s.push_back(cubic_in(fit.times[i], z) / f);
+    s.amplitudes.push_back(cubic_in(fit.amplitudes[i], z));
+  }
+}
+
+// Singhose's damped EI fit in the tolerance V and the damping ratio z (Singhose, Seering and
+// Singer 1997): three impulses at 0, t2 and one damped period.
+void apply_ei_fit(Shaper& s, double V, double z, double td) {
+  const double a1 = (0.24968 + 0.24961 * V) + z * ((0.80008 + 1.23328 * V) + z * (0.49599 + 3.17316 * V));
+  const double a3 = (0.25149 + 0.21474 * V) + z * ((-0.83249 + 1.41498 * V) + z * (0.85181 - 4.90094 * V));
+  const double t2 = 0.4999 + z * ((0.46159 + 8.57843 * V) * V +
+                                  z * ((4.26169 - 108.644 * V) * V + z * ((1.75601 + 336.989 * V) * V)));
+  s.amplitudes = {a1, 1 - a1 - a3, a3};
+  s.times_s = {0, t2 * td, td};
+}
+
+}  // namespace
+
+Shaper design_shaper(ShaperType type, double f, double z, double V, EiDesign ei_design) {
   if (!(f > 0) || !std::isfinite(f)) throw InputError(fmt::format("shaper frequency {} Hz must be positive", f));
   if (!(z >= 0 && z < 1)) throw InputError(fmt::format("damping ratio {} must be in [0, 1)", z));
+  const bool hump = type == ShaperType::two_hump_ei || type == ShaperType::three_hump_ei;
+  if (ei_design == EiDesign::damped_fit && hump && std::abs(V - kDefaultVibrationTolerance) > 1e-12)
+    throw InputError(fmt::format("the damped {} fit exists for a vibration tolerance of 5 % only, not {} %",
+                                 to_string(type), 100 * V));
   Shaper s;
   s.type = type;
   s.freq_hz = f;
@@ -108,12 +167,20 @@ Shaper design_shaper(ShaperType type, double f, double z, double V) {
       break;
     }
     case ShaperType::ei: {  // Singhose: V(f) = V_tol with zero slope at f; damped by the K factors
+      if (ei_design == EiDesign::damped_fit) {
+        apply_ei_fit(s, V, z, td);
+        break;
+      }
       const double a1 = 0.25 * (1 + V);
       s.amplitudes = {a1, 0.5 * (1 - V) * K, a1 * K * K};
       s.times_s = {0, 0.5 * td, td};
       break;
     }
     case ShaperType::two_hump_ei: {  // Singhose's two-hump EI closed form
+      if (ei_design == EiDesign::damped_fit) {
+        apply_hump_fit(s, two_hump_fit(), f, z);
+        break;
+      }
       const double V2 = V * V;
       const double X = std::cbrt(V2 * (std::sqrt(1 - V2) + 1));
       const double a1 = (3 * X * X + 2 * X + 3 * V2) / (16 * X);
@@ -123,6 +190,10 @@ Shaper design_shaper(ShaperType type, double f, double z, double V) {
       break;
     }
     case ShaperType::three_hump_ei: {  // Singhose's three-hump EI closed form
+      if (ei_design == EiDesign::damped_fit) {
+        apply_hump_fit(s, three_hump_fit(), f, z);
+        break;
+      }
       const double a1 = (1 + 3 * V + 2 * std::sqrt(2 * (V + 1) * V)) / 16;
       const double a2 = 0.25 * (1 - V);
       const double a3 = 0.5 * (1 + V) - 2 * a1;
@@ -234,93 +305,135 @@ double remaining_vibrations(const Shaper& s, std::span<const double> f, std::spa
   return all > 0 ? remaining / all : 0.0;
 }
 
-ShaperSelection select_shaper(std::span<const double> freq, std::span<const double> psd_in,
+namespace {
+
+// One dataset cut to the PSD frequency limit, with the bins that can count (above the
+// threshold max/vibration_reduction: the shaper's |V| <= 1 cannot lift the others over it).
+struct ScoredDataset {
+  std::vector<double> f, psd;
+  double thr = 0, all = 0;
+  std::size_t lo = 0, hi = 0;
+  bool uniform = false;
+  double step = 0;
+};
+
+// Remaining vibration fraction of one shaper against one dataset at one test damping ratio.
+double dataset_vibrations(const ScoredDataset& d, const Shaper& sh, double z, std::vector<std::complex<double>>& acc) {
+  if (!(d.all > 0)) return 0.0;
+  double remaining = 0;
+  if (!d.uniform) {
+    for (std::size_t b = d.lo; b <= d.hi; ++b)
+      remaining += std::max(residual_vibration(sh, d.f[b], z) * d.psd[b] - d.thr, 0.0);
+    return remaining / d.all;
+  }
+  // Uniform bins: every impulse's factor is a geometric sequence in the bin index.
+  const std::size_t nb = d.hi - d.lo + 1;
+  acc.assign(nb, {0, 0});
+  const double dz = std::sqrt(std::max(0.0, 1 - z * z));
+  const double tn = sh.duration_s();
+  for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) {
+    const double decay = -z * 2 * kPi * (tn - sh.times_s[i]);
+    const double phase = 2 * kPi * dz * sh.times_s[i];
+    const std::complex<double> ratio = std::exp(std::complex<double>(decay * d.step, phase * d.step));
+    std::complex<double> cur = sh.amplitudes[i] * std::exp(std::complex<double>(decay * d.f[d.lo], phase * d.f[d.lo]));
+    for (std::size_t b = 0; b < nb; ++b) {
+      acc[b] += cur;
+      cur *= ratio;
+    }
+  }
+  for (std::size_t b = 0; b < nb; ++b)
+    remaining += std::max(std::sqrt(std::norm(acc[b])) * d.psd[d.lo + b] - d.thr, 0.0);  // |acc|, without hypot's cost
+  return remaining / d.all;
+}
+
+}  // namespace
+
+ShaperSelection select_shaper(std::span<const double> freq, std::span<const double> psd,
                               const ShaperSelectionOptions& o) {
-  if (freq.size() != psd_in.size()) throw InputError("frequency and PSD arrays differ in length");
+  if (freq.size() != psd.size()) throw InputError("frequency and PSD arrays differ in length");
+  const PsdDataset one{freq, psd};
+  return select_shaper(std::span<const PsdDataset>(&one, 1), o);
+}
+
+ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const ShaperSelectionOptions& o) {
+  if (datasets.empty()) throw InputError("no vibration spectrum to choose a shaper for");
   if (o.types.empty()) throw InputError("no shaper types to choose from");
   if (o.test_damping_ratios.empty()) throw InputError("no test damping ratios");
   for (double z : o.test_damping_ratios)
     if (!(z >= 0 && z < 1)) throw InputError(fmt::format("test damping ratio {} must be in [0, 1)", z));
   if (!(o.freq_step_hz > 0)) throw InputError("shaper frequency step must be positive");
-  std::vector<double> f, psd;
-  for (std::size_t b = 0; b < freq.size(); ++b)
-    if (freq[b] <= o.max_freq_hz) {
-      f.push_back(freq[b]);
-      psd.push_back(psd_in[b]);
-    }
-  if (f.size() < 3 || !(*std::max_element(psd.begin(), psd.end()) > 0))
-    throw InputError(fmt::format("the vibration spectrum below {} Hz is empty or zero; nothing to shape",
-                                 o.max_freq_hz));
+  if (!(o.max_shaper_freq_hz > 0)) throw InputError("the highest shaper frequency must be positive");
 
-  // Only bins above the threshold contribute to the remaining vibrations: evaluate the shaper
-  // there only, with the geometric recurrence when the grid is uniform.
-  const double thr = *std::max_element(psd.begin(), psd.end()) / o.vibration_reduction;
-  double all = 0;
-  std::size_t b_lo = psd.size(), b_hi = 0;
-  for (std::size_t b = 0; b < psd.size(); ++b)
-    if (psd[b] > thr) {
-      all += psd[b] - thr;
-      b_lo = std::min(b_lo, b);
-      b_hi = std::max(b_hi, b);
+  // Shaper frequencies per type: from the type's minimum up to (not including) the maximum.
+  std::vector<std::vector<double>> type_freqs;
+  double highest_tested = 0;
+  for (ShaperType type : o.types) {
+    const double f_end = o.max_shaper_freq_hz;
+    const double f_start = std::min(shaper_info(type).min_freq_hz, f_end - 1e-7);
+    std::vector<double> tf;
+    for (std::size_t i = 0;; ++i) {
+      const double x = f_start + o.freq_step_hz * static_cast<double>(i);
+      if (x >= f_end) break;
+      tf.push_back(x);
     }
-  const bool uniform = uniform_grid(f);
-  const double step = uniform ? (f.back() - f.front()) / static_cast<double>(f.size() - 1) : 0.0;
-  std::vector<std::complex<double>> acc;
-  auto vibrations = [&](const Shaper& sh, double z) {
-    if (!(all > 0)) return 0.0;
-    double remaining = 0;
-    if (!uniform) {
-      for (std::size_t b = b_lo; b <= b_hi; ++b)
-        remaining += std::max(residual_vibration(sh, f[b], z) * psd[b] - thr, 0.0);
-      return remaining / all;
-    }
-    const std::size_t nb = b_hi - b_lo + 1;
-    acc.assign(nb, {0, 0});
-    const double dz = std::sqrt(std::max(0.0, 1 - z * z));
-    const double tn = sh.duration_s();
-    for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) {
-      const double decay = -z * 2 * kPi * (tn - sh.times_s[i]);
-      const double phase = 2 * kPi * dz * sh.times_s[i];
-      const std::complex<double> ratio = std::exp(std::complex<double>(decay * step, phase * step));
-      std::complex<double> cur = sh.amplitudes[i] * std::exp(std::complex<double>(decay * f[b_lo], phase * f[b_lo]));
-      for (std::size_t b = 0; b < nb; ++b) {
-        acc[b] += cur;
-        cur *= ratio;
+    if (!tf.empty()) highest_tested = std::max(highest_tested, tf.back());
+    type_freqs.push_back(std::move(tf));
+  }
+  // The PSD is used up to the frequency limit, but never below the highest shaper frequency.
+  const double psd_limit = std::max(o.max_freq_hz, highest_tested);
+
+  std::vector<ScoredDataset> sets;
+  for (const auto& ds : datasets) {
+    if (ds.freq_hz.size() != ds.psd.size()) throw InputError("frequency and PSD arrays differ in length");
+    ScoredDataset d;
+    for (std::size_t b = 0; b < ds.freq_hz.size(); ++b)
+      if (ds.freq_hz[b] <= psd_limit) {
+        d.f.push_back(ds.freq_hz[b]);
+        d.psd.push_back(ds.psd[b]);
       }
-    }
-    for (std::size_t b = 0; b < nb; ++b) remaining += std::max(std::sqrt(std::norm(acc[b])) * psd[b_lo + b] - thr, 0.0);  // |acc|, without hypot's cost
-    return remaining / all;
-  };
+    if (d.f.size() < 3 || !(*std::max_element(d.psd.begin(), d.psd.end()) > 0))
+      throw InputError(
+          fmt::format("the vibration spectrum below {} Hz is empty or zero; nothing to shape", psd_limit));
+    d.thr = *std::max_element(d.psd.begin(), d.psd.end()) / o.vibration_reduction;
+    d.lo = d.psd.size();
+    for (std::size_t b = 0; b < d.psd.size(); ++b)
+      if (d.psd[b] > d.thr) {
+        d.all += d.psd[b] - d.thr;
+        d.lo = std::min(d.lo, b);
+        d.hi = std::max(d.hi, b);
+      }
+    d.uniform = uniform_grid(d.f);
+    d.step = d.uniform ? (d.f.back() - d.f.front()) / static_cast<double>(d.f.size() - 1) : 0.0;
+    sets.push_back(std::move(d));
+  }
 
+  std::vector<std::complex<double>> acc;
   ShaperSelection sel;
   bool have_best = false;
   ShaperCandidate best;
-  for (ShaperType type : o.types) {
-    const auto& info = shaper_info(type);
-    const double design_z = std::min(o.design_damping_ratio, info.max_damping_ratio);
-    const double f_end = o.max_shaper_freq_hz;
-    const double f_start = std::min(info.min_freq_hz, f_end - 1e-7);
-    std::vector<double> test_freqs;
-    for (std::size_t i = 0;; ++i) {
-      const double tf = f_start + o.freq_step_hz * static_cast<double>(i);
-      if (tf >= f_end) break;
-      test_freqs.push_back(tf);
-    }
+  for (std::size_t ti = 0; ti < o.types.size(); ++ti) {
+    const ShaperType type = o.types[ti];
+    const auto& test_freqs = type_freqs[ti];
+    const double design_z = std::min(o.design_damping_ratio, shaper_info(type).max_damping_ratio);
     // Evaluate from the highest frequency down, as Klipper does (ties keep the higher one).
     std::vector<ShaperCandidate> results;
     results.reserve(test_freqs.size());
     std::size_t best_res = 0;
+    bool smoothing_limited = false;
     for (auto it = test_freqs.rbegin(); it != test_freqs.rend(); ++it) {
-      const Shaper sh = design_shaper(type, *it, design_z);
+      const Shaper sh = design_shaper(type, *it, design_z, kDefaultVibrationTolerance, o.ei_design);
       ShaperCandidate c;
       c.type = type;
       c.freq_hz = *it;
       c.damping_ratio = design_z;
       c.smoothing_mm = shaper_smoothing(sh, 5000.0, o.scv_mm_s);
-      if (o.max_smoothing_mm > 0 && c.smoothing_mm > o.max_smoothing_mm && !results.empty()) break;
+      if (o.max_smoothing_mm > 0 && c.smoothing_mm > o.max_smoothing_mm && !results.empty()) {
+        smoothing_limited = true;
+        break;
+      }
       c.max_accel_mm_s2 = shaper_max_accel(sh, o.scv_mm_s, o.target_smoothing_mm);
-      for (double z : o.test_damping_ratios)
-        c.vibrations = std::max(c.vibrations, vibrations(sh, z));
+      for (const auto& d : sets)
+        for (double z : o.test_damping_ratios) c.vibrations = std::max(c.vibrations, dataset_vibrations(d, sh, z, acc));
       c.score = c.smoothing_mm * (std::pow(c.vibrations, 1.5) + 0.2 * c.vibrations + 0.01);
       results.push_back(c);
       if (results.size() == 1 || results[best_res].vibrations > c.vibrations) best_res = results.size() - 1;
@@ -328,10 +441,13 @@ ShaperSelection select_shaper(std::span<const double> freq, std::span<const doub
     if (results.empty()) continue;
     // The frequency with fewest vibrations, or a lower-scoring one (less smoothing) that is
     // not much worse (within 10 % + 0.05 percentage points), scanning from low frequencies.
+    // When the smoothing limit cut the scan short, Klipper keeps the fewest-vibrations one.
     ShaperCandidate chosen = results[best_res];
-    const double vibr_limit = results[best_res].vibrations * 1.1 + 0.0005;
-    for (auto it = results.rbegin(); it != results.rend(); ++it)
-      if (it->vibrations < vibr_limit && it->score < chosen.score) chosen = *it;
+    if (!smoothing_limited) {
+      const double vibr_limit = results[best_res].vibrations * 1.1 + 0.0005;
+      for (auto it = results.rbegin(); it != results.rend(); ++it)
+        if (it->vibrations < vibr_limit && it->score < chosen.score) chosen = *it;
+    }
     // Across types: a new type wins by a 20 % better score, or a 5 % better score with 10 %
     // less smoothing.
     if (!have_best || chosen.score * 1.2 < best.score ||
@@ -358,6 +474,15 @@ ShaperSelection select_shaper(std::span<const double> freq, std::span<const doub
       }
   sel.recommended = best;
   return sel;
+}
+
+std::vector<double> shaper_response(const Shaper& s, std::span<const double> f, std::span<const double> zs) {
+  std::vector<double> out(f.size(), 0.0);
+  for (double z : zs) {
+    const auto v = residual_vibration_curve(s, f, z);
+    for (std::size_t b = 0; b < f.size(); ++b) out[b] = std::max(out[b], v[b]);
+  }
+  return out;
 }
 
 }  // namespace tunekit::ident

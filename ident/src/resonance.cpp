@@ -106,12 +106,6 @@ char axis_from_filename(const std::string& path) {
   return 0;
 }
 
-bool is_calibration_data(std::string_view bytes) {
-  const auto nl = bytes.find('\n');
-  const std::string first = lower(std::string(bytes.substr(0, nl == std::string_view::npos ? bytes.size() : nl)));
-  return first.rfind("freq", 0) == 0 && first.find("psd_xyz") != std::string::npos;
-}
-
 AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& o) {
   AccelRecord r;
   r.path = path;
@@ -250,36 +244,6 @@ AxisSpectrum record_spectrum(const AccelRecord& r, const WelchOptions& welch) {
       if (r.axis != 0 && r.channel_names[c] == std::string("accel_") + r.axis) out = c;
     s.frf = h1_estimate(r.excitation, r.channels[out], r.sampling.sample_rate_hz, welch);
   }
-  return s;
-}
-
-AxisSpectrum load_calibration_data(const std::string& path, std::string_view bytes, char axis) {
-  CsvOptions co;
-  co.columns = {"freq", "psd_x", "psd_y", "psd_z", "psd_xyz"};
-  co.time_column = "freq";
-  const CsvTable t = parse_csv(bytes, path, co);
-  AxisSpectrum s;
-  s.axis = axis != 0 ? axis : axis_from_filename(path);
-  s.files = {path};
-  s.freq_hz = t.columns[0].values;
-  s.psd_x = t.columns[1].values;
-  s.psd_y = t.columns[2].values;
-  s.psd_z = t.columns[3].values;
-  s.psd_sum = t.columns[4].values;
-  s.klipper_normalized = true;
-  s.welch = klipper_welch_options();
-  for (const auto& w : t.warnings) s.warnings.push_back(w);
-  if (s.freq_hz.size() < 8) throw InputError("calibration data has fewer than 8 frequencies", path);
-  for (double v : s.psd_sum)
-    if (v < 0) throw InputError("calibration data has a negative PSD value", path);
-  if (!(*std::max_element(s.psd_sum.begin(), s.psd_sum.end()) > 0))
-    throw InputError("calibration data: psd_xyz is all zero; the accelerometer recorded nothing", path);
-  // Klipper writes the bins rounded to 0.1 Hz: the bin width is the median step.
-  std::vector<double> df(s.freq_hz.size() - 1);
-  for (std::size_t i = 1; i < s.freq_hz.size(); ++i) df[i - 1] = s.freq_hz[i] - s.freq_hz[i - 1];
-  const double bin = fitting::median(df);
-  s.segment_length = 2048;  // Klipper's window at ~3.2 kHz
-  s.sample_rate_hz = bin * static_cast<double>(s.segment_length);
   return s;
 }
 

@@ -10,6 +10,7 @@
 
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/klipper_spectrum.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -37,8 +38,11 @@ std::string klipper_files_help() {
          "  Raw accelerometer data (TEST_RESONANCES AXIS=X OUTPUT=raw_data, or ACCELEROMETER_MEASURE) is written as\n"
          "  /tmp/raw_data_x_<name>.csv with the header '#time,accel_x,accel_y,accel_z' (s, mm/s^2). Pass one or more\n"
          "  of them; the axis comes from 'raw_data_x_' / 'raw_data_y_' in the name (or --axis), several files of one\n"
-         "  axis are averaged as Klipper's calibrate_shaper.py does. SHAPER_CALIBRATE's calibration_data_x_<name>.csv\n"
-         "  (freq,psd_x,psd_y,psd_z,psd_xyz, already normalized by Klipper) is accepted as well.\n"
+         "  axis are averaged for the modes (for the shaper, each counts separately, as in Klipper's calibrate_shaper.py).\n"
+         "  Klipper's spectrum files are read as its calibrate_shaper.py reads them: TEST_RESONANCES' resonances_x_<name>.csv\n"
+         "  and SHAPER_CALIBRATE's calibration_data_x_<name>.csv (freq,psd_x,psd_y,psd_z,psd_xyz), or several datasets\n"
+         "  (freq,<name>,<name>...). Without 'shapers:' columns the PSD is as measured and gets Klipper's normalization\n"
+         "  (divided by f + 0.1 Hz, damped below 10 Hz) before a shaper is chosen; with them it already has it.\n"
          "  Other loggers: --time COL --accel COL [--accel COL...] (mm/s^2); a commanded-acceleration column\n"
          "  --excitation COL adds the frequency response H1 and coherence, and the modes are fitted to it.\n";
 }
@@ -46,7 +50,8 @@ std::string klipper_files_help() {
 void add_resonance_options(CLI::App* sub, ResonanceCliArgs& a) {
   sub->add_option("files", a.files,
                   "Accelerometer CSVs: Klipper raw_data_<axis>_*.csv (#time,accel_x,accel_y,accel_z in s and mm/s^2), "
-                  "Klipper calibration_data_<axis>_*.csv, or generic CSVs with --time/--accel")
+                  "Klipper spectrum files (resonances_<axis>_*.csv, calibration_data_<axis>_*.csv), or generic CSVs "
+                  "with --time/--accel")
       ->required();
   sub->add_option("--axis", a.axis, "Axis of every file: x, y or z (default: from the Klipper file name)");
   sub->add_option("--time", a.time_column, "Time column (s), strictly increasing (default: time)");
@@ -69,7 +74,7 @@ void add_resonance_options(CLI::App* sub, ResonanceCliArgs& a) {
                   "Ignore peaks lower than this fraction of the highest (whitened PSD), 0..1 (default 0.05)");
   sub->add_option("--excitation-exponent", a.excitation_exponent,
                   "p in the excitation spectrum shape f^p (dimensionless; default 2 for raw sweeps with amplitude "
-                  "accel_per_hz*f, 1 for Klipper calibration data)");
+                  "accel_per_hz*f, 1 for spectra Klipper normalized)");
   sub->add_option("--full-scale", a.full_scale_mm_s2,
                   "Accelerometer range in mm/s^2 for clipping detection (default: detect flat-topped extremes; "
                   "ADXL345 at +-16 g is 156906)");
@@ -123,19 +128,23 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
     // The input's digest (tens of ms for a 20 MB raw file) is computed on a second core while
     // the file is parsed and its spectrum estimated.
     auto digest = std::async(std::launch::async, [&bytes] { return sha256_hex(bytes); });
-    ident::AxisSpectrum s;
-    if (ident::is_calibration_data(bytes)) {
-      s = ident::load_calibration_data(path, bytes, in.axis);
+    std::vector<ident::AxisSpectrum> file_spectra;
+    if (ident::is_klipper_spectrum(bytes)) {
+      // Klipper's spectrum files: one or several datasets; measured PSDs unless the file has
+      // shaper columns (then Klipper normalized them before writing).
+      file_spectra = std::move(ident::read_klipper_spectrum(path, bytes, in.axis).datasets);
     } else {
       const auto rec = ident::load_accel_csv(path, bytes, in);
-      s = ident::record_spectrum(rec, welch);
+      file_spectra.push_back(ident::record_spectrum(rec, welch));
     }
     env.add_input_digest(path, digest.get(), bytes.size());
-    if (s.axis == 0)
-      throw InputError("cannot tell which axis this file measured (Klipper names them raw_data_x_*.csv or "
-                       "calibration_data_y_*.csv); pass --axis x|y|z",
-                       path);
-    by_axis[s.axis].push_back(std::move(s));
+    for (auto& s : file_spectra) {
+      if (s.axis == 0)
+        throw InputError("cannot tell which axis this file measured (Klipper names them raw_data_x_*.csv, "
+                         "resonances_x_*.csv or calibration_data_y_*.csv); pass --axis x|y|z",
+                         path);
+      by_axis[s.axis].push_back(std::move(s));
+    }
   }
   ident::ResonanceOptions ro;
   ro.fit_min_hz = a.fit_min_hz;
@@ -149,6 +158,7 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
     AxisResult r;
     r.axis = axis;
     r.spectrum = ident::average_spectra(spectra);
+    r.datasets = std::move(spectra);
     for (const auto& w : r.spectrum.warnings) env.warn(w);
     r.modes = ident::identify_modes(r.spectrum, ro);
     for (const auto& w : r.modes.warnings) env.warn(fmt::format("axis {}: {}", axis, w));

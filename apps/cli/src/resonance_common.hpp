@@ -39,7 +39,8 @@ struct ResonanceCliArgs {
 
 struct AxisResult {
   char axis = 0;
-  ident::AxisSpectrum spectrum;
+  ident::AxisSpectrum spectrum;                ///< the datasets averaged (for the modes)
+  std::vector<ident::AxisSpectrum> datasets;  ///< every recording / file dataset of the axis, as read
   ident::AxisModes modes;
 };
 

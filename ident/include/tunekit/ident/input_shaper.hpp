@@ -54,12 +54,26 @@ struct Shaper {
   double duration_s() const { return times_s.empty() ? 0.0 : times_s.back(); }
 };
 
+/// How the EI family (ei, 2hump_ei, 3hump_ei) accounts for damping. ZV, ZVD, ZVDD and MZV
+/// have exact damped closed forms and do not depend on this.
+enum class EiDesign {
+  /// Singhose's undamped closed forms, impulse i scaled by K^i (an approximation for z > 0).
+  closed_form,
+  /// Singhose's polynomial fits of the damped EI solutions in the damping ratio (EI: in V and
+  /// z; 2-hump and 3-hump EI: z, for V = 5 % only): Singhose, Seering and Singer, Vibration
+  /// Reduction Using Multi-Hump Input Shapers, ASME J. Dyn. Sys. Meas. Control, 1997. These are
+  /// the shapers Klipper runs (its shaper definitions, Butyugin, 2020), valid up to the type's
+  /// max_damping_ratio.
+  damped_fit,
+};
+
 /// Impulse sequence of `type` for a mode at `freq_hz` with `damping_ratio` (0 <= z < 1).
-/// Closed forms: ZV, ZVD, ZVDD (Singer-Seering), MZV (Klipper), EI, 2-hump and 3-hump EI
-/// (Singhose's undamped closed forms, impulse i scaled by K^i for damping, as Klipper does).
-/// Throws InputError for a non-positive frequency or a damping ratio outside [0, 1).
+/// Closed forms: ZV, ZVD, ZVDD (Singer-Seering), MZV (Klipper); the EI family as `ei_design`
+/// says. Throws InputError for a non-positive frequency, a damping ratio outside [0, 1), or a
+/// damped-fit 2-hump/3-hump EI with a vibration tolerance other than 5 %.
 Shaper design_shaper(ShaperType type, double freq_hz, double damping_ratio,
-                     double vibration_tolerance = kDefaultVibrationTolerance);
+                     double vibration_tolerance = kDefaultVibrationTolerance,
+                     EiDesign ei_design = EiDesign::closed_form);
 
 /// V(f, z): remaining vibration fraction of a mode at `freq_hz` with `damping_ratio`.
 double residual_vibration(const Shaper& s, double freq_hz, double damping_ratio);
@@ -89,8 +103,10 @@ struct ShaperSelectionOptions {
   std::vector<double> test_damping_ratios = {0.075, 0.1, 0.15};  ///< vibrations are pessimized over these
   double scv_mm_s = 5.0;                             ///< square-corner velocity
   double max_smoothing_mm = 0;                       ///< 0: no limit
-  double max_freq_hz = 200.0;                        ///< PSD bins above are ignored
-  double max_shaper_freq_hz = 200.0;                 ///< highest shaper frequency tried
+  /// PSD bins above max(max_freq_hz, highest shaper frequency tried) are ignored (Klipper's rule).
+  double max_freq_hz = 200.0;
+  double max_shaper_freq_hz = 200.0;                 ///< shaper frequencies tried are below this
+  EiDesign ei_design = EiDesign::damped_fit;         ///< how the EI family is designed
   double freq_step_hz = 0.2;
   double vibration_reduction = 20.0;                 ///< PSD below max/this is not counted
   double target_smoothing_mm = 0.12;                 ///< for max_accel
@@ -106,10 +122,25 @@ struct ShaperSelection {
 double remaining_vibrations(const Shaper& s, std::span<const double> freq_hz, std::span<const double> psd,
                             double test_damping_ratio, double vibration_reduction = 20.0);
 
-/// Tries every type at frequencies from its minimum to max_shaper_freq_hz in freq_step_hz
+/// One vibration spectrum a shaper is scored against (frequency bins in Hz and the PSD on them,
+/// Klipper-normalized). Bins need not be uniform (Klipper's files round them to 0.1 Hz).
+struct PsdDataset {
+  std::span<const double> freq_hz;
+  std::span<const double> psd;
+};
+
+/// Tries every type at frequencies from its minimum to below max_shaper_freq_hz in freq_step_hz
 /// steps and picks one by Klipper's published procedure (see docs/resonance.md). `psd` is
 /// the vibration PSD (Klipper's normalized psd_xyz). InputError for an empty/flat spectrum.
 ShaperSelection select_shaper(std::span<const double> freq_hz, std::span<const double> psd,
                               const ShaperSelectionOptions& options);
+/// The same against several spectra at once (several recordings, or the datasets of one Klipper
+/// file): a shaper's remaining vibrations are the worst over the datasets, as Klipper scores them.
+ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const ShaperSelectionOptions& options);
+
+/// Klipper's per-frequency shaper response for plots and spectrum files: the residual vibration
+/// V(f, z) at each frequency, the worst over the test damping ratios.
+std::vector<double> shaper_response(const Shaper& s, std::span<const double> freq_hz,
+                                    std::span<const double> test_damping_ratios);
 
 }  // namespace tunekit::ident

@@ -8,8 +8,8 @@
 // Inputs:
 //   * Klipper raw accelerometer CSV: `#time,accel_x,accel_y,accel_z` (s, mm/s^2). Klipper names
 //     them raw_data_<axis>_<name>.csv; the axis comes from that name or from options.axis.
-//   * Klipper calibration data CSV: `freq,psd_x,psd_y,psd_z,psd_xyz` (already normalized by
-//     Klipper: divided by f + 0.1 Hz and damped below 10 Hz), named calibration_data_<axis>_*.csv.
+//   * Klipper spectrum files (`freq,psd_x,psd_y,psd_z,psd_xyz`, resonances_<axis>_*.csv and
+//     calibration_data_<axis>_*.csv): klipper_spectrum.hpp.
 //   * Generic CSV with a time column and named acceleration columns (mm/s^2).
 
 #include <complex>
@@ -73,16 +73,13 @@ struct AccelRecord {
 /// small problems that were handled (resampling, a few clipped samples).
 AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& options);
 
-/// True when the text looks like Klipper calibration data (a `freq` and `psd_xyz` header).
-bool is_calibration_data(std::string_view bytes);
-
 /// PSDs of one axis: per channel and summed, on one frequency grid.
 struct AxisSpectrum {
   char axis = 0;
   std::vector<std::string> files;
   std::vector<double> freq_hz;
   std::vector<double> psd_x, psd_y, psd_z, psd_sum;  ///< (mm/s^2)^2/Hz
-  bool klipper_normalized = false;  ///< from calibration data: already divided by f + 0.1
+  bool klipper_normalized = false;  ///< already divided by f + 0.1 (a Klipper file with shaper columns)
   std::size_t segments = 0, segment_length = 0;
   double sample_rate_hz = 0;
   WelchOptions welch;
@@ -93,8 +90,7 @@ struct AxisSpectrum {
 /// Welch PSDs of a record. Channels named like accel_x/accel_y/accel_z fill psd_x/y/z; any
 /// other channels only contribute to psd_sum. With an excitation channel, also H1.
 AxisSpectrum record_spectrum(const AccelRecord& r, const WelchOptions& welch);
-/// Reads calibration data (freq, psd_x, psd_y, psd_z, psd_xyz).
-AxisSpectrum load_calibration_data(const std::string& path, std::string_view bytes, char axis);
+/// Klipper's spectrum files (resonances_*.csv, calibration_data_*.csv): klipper_spectrum.hpp.
 /// Averages several spectra of the same axis (interpolated onto the first one's grid).
 AxisSpectrum average_spectra(const std::vector<AxisSpectrum>& spectra);
 
