@@ -144,7 +144,7 @@ KlipperSpectrumFile read_klipper_spectrum(const std::string& path, std::string_v
   auto make = [&](const std::string& name) {
     AxisSpectrum s;
     s.axis = axis != 0 ? axis : axis_from_filename(path);
-    s.files = {one_dataset ? path : path + ":" + name};
+    s.files = {one_dataset ? path : name};  // Klipper names a dataset column's data by the column
     s.freq_hz = f;
     s.klipper_normalized = out.has_shapers;
     s.welch = klipper_welch_options();

@@ -126,13 +126,14 @@ TEST_CASE("resonance and shaper --help explain how to feed Klipper's files", "[r
 }
 
 TEST_CASE("Klipper calibration data is accepted", "[resonance][cli]") {
-  // Lorentzian-like normalized PSD as Klipper would save it (0.1 Hz-rounded bins).
-  std::string csv = "freq,psd_x,psd_y,psd_z,psd_xyz\n";
+  // Lorentzian-like normalized PSD as SHAPER_CALIBRATE saves it (0.1 Hz-rounded bins, shaper
+  // response columns after `shapers:`, which tell that the PSD is already normalized).
+  std::string csv = "freq,psd_x,psd_y,psd_z,psd_xyz,shapers:,mzv(48.0)\n";
   for (int b = 0; b < 128; ++b) {
     const double f = 1.5625 * b, r = f / 48.0;
     const double p = f * 1e3 / ((1 - r * r) * (1 - r * r) + (0.1 * r) * (0.1 * r)) / (f + 0.1) + 1.0;
     char line[200];
-    std::snprintf(line, sizeof line, "%.1f,%.3e,%.3e,%.3e,%.3e\n", f, p, 1.0, 1.0, p + 2.0);
+    std::snprintf(line, sizeof line, "%.1f,%.3e,%.3e,%.3e,%.3e,,0.500\n", f, p, 1.0, 1.0, p + 2.0);
     csv += line;
   }
   const auto path = write_scratch("calibration_data_x_test.csv", csv);

@@ -145,7 +145,7 @@ TEST_CASE("automatic selection puts the shaper near a single resonance", "[shape
     CHECK(c.max_accel_mm_s2 > 0);
     CHECK(c.score == Approx(c.smoothing_mm * (std::pow(c.vibrations, 1.5) + 0.2 * c.vibrations + 0.01)));
     // The selection's fast evaluation equals the plain definition, pessimized over the test ratios.
-    const auto sh = design_shaper(c.type, c.freq_hz, c.damping_ratio);
+    const auto sh = design_shaper(c.type, c.freq_hz, c.damping_ratio, kDefaultVibrationTolerance, o.ei_design);
     double worst = 0;
     for (double z : o.test_damping_ratios) worst = std::max(worst, remaining_vibrations(sh, f, psd, z));
     CHECK(c.vibrations == Approx(worst).margin(1e-9));
@@ -155,6 +155,64 @@ TEST_CASE("automatic selection puts the shaper near a single resonance", "[shape
   CHECK(sel.recommended.freq_hz > 35);
   CHECK(sel.recommended.freq_hz < 80);
   CHECK(sel.recommended.damping_ratio == 0.1);
+}
+
+TEST_CASE("Singhose's damped EI fits stay within the tolerance over +-20 % of the frequency at their damping",
+          "[shaper]") {
+  for (ShaperType t : {ShaperType::ei, ShaperType::two_hump_ei, ShaperType::three_hump_ei})
+    for (double z : {0.0, 0.05, 0.1, 0.15}) {
+      const auto s = design_shaper(t, 60.0, z, kDefaultVibrationTolerance, EiDesign::damped_fit);
+      double sum = 0;
+      for (double a : s.amplitudes) {
+        CHECK(a > 0);
+        sum += a;
+      }
+      CHECK(sum == Approx(1.0));
+      CHECK(s.times_s.front() == 0.0);
+      for (double r = 0.8; r <= 1.2001; r += 0.01) {
+        INFO(to_string(t) << " zeta " << z << " ratio " << r);
+        CHECK(residual_vibration(s, 60.0 * r, z) <= 0.055);
+      }
+      // Far below the design frequency it is not suppressed.
+      CHECK(residual_vibration(s, 15.0, z) > 0.3);
+    }
+  // At zero damping the fits are close to the closed forms they were fitted to (amplitudes to
+  // 2e-3, times to 0.3 % of a period).
+  for (ShaperType t : {ShaperType::ei, ShaperType::two_hump_ei, ShaperType::three_hump_ei}) {
+    const auto fit = design_shaper(t, 50.0, 0.0, kDefaultVibrationTolerance, EiDesign::damped_fit);
+    const auto closed = design_shaper(t, 50.0, 0.0);
+    REQUIRE(fit.amplitudes.size() == closed.amplitudes.size());
+    for (std::size_t i = 0; i < fit.amplitudes.size(); ++i) {
+      INFO(to_string(t) << " impulse " << i);
+      CHECK(fit.amplitudes[i] == Approx(closed.amplitudes[i]).margin(2e-3));
+      CHECK(fit.times_s[i] == Approx(closed.times_s[i]).margin(3e-3 / 50.0));
+    }
+  }
+  // The 2-hump and 3-hump fits exist for V = 5 % only.
+  CHECK_THROWS(design_shaper(ShaperType::two_hump_ei, 50.0, 0.1, 0.1, EiDesign::damped_fit));
+}
+
+TEST_CASE("shaper vibrations against several spectra are the worst over them", "[shaper]") {
+  std::vector<double> f, p1, p2;
+  for (int b = 0; b < 128; ++b) {
+    const double x = 1.5625 * b, r1 = x / 45.0, r2 = x / 70.0;
+    f.push_back(x);
+    p1.push_back(1e4 / ((1 - r1 * r1) * (1 - r1 * r1) + (0.1 * r1) * (0.1 * r1)) + 10);
+    p2.push_back(1e4 / ((1 - r2 * r2) * (1 - r2 * r2) + (0.1 * r2) * (0.1 * r2)) + 10);
+  }
+  ShaperSelectionOptions o;
+  o.types = {ShaperType::mzv};
+  const std::vector<PsdDataset> both = {{f, p1}, {f, p2}};
+  const auto sel = select_shaper(both, o);
+  const auto& c = sel.recommended;
+  const auto sh = design_shaper(c.type, c.freq_hz, c.damping_ratio, kDefaultVibrationTolerance, o.ei_design);
+  double worst = 0;
+  for (const auto* p : {&p1, &p2})
+    for (double z : o.test_damping_ratios) worst = std::max(worst, remaining_vibrations(sh, f, *p, z));
+  CHECK(c.vibrations == Approx(worst).margin(1e-9));
+  // A shaper for one resonance alone is tuned differently from one that must cover both.
+  const auto alone = select_shaper(f, p1, o).recommended;
+  CHECK(std::abs(alone.freq_hz - c.freq_hz) > 1.0);
 }
 
 TEST_CASE("shaper names parse as Klipper spells them", "[shaper]") {

@@ -96,6 +96,7 @@ int run_shaper(const ShaperCliArgs& a, CliContext& ctx) {
   for (const auto& s : a.shapers) types.push_back(ident::parse_shaper_type(s));
 
   const auto axes = run_resonance_pipeline(a.in, env);
+  if (!a.klipper_csv.empty()) (void)csv_path_for_axis(a.klipper_csv, "x", axes.size());  // fail before the search
   auto& res = env.results();
   res["axes"] = nlohmann::json::object();
   std::vector<std::pair<std::string, std::string>> csv_files;  // written once every axis succeeded

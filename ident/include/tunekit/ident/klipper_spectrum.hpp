@@ -30,7 +30,7 @@ bool is_klipper_spectrum(std::string_view bytes);
 struct KlipperSpectrumFile {
   /// One spectrum per dataset. The one-dataset layout fills psd_x/psd_y/psd_z and psd_sum
   /// (from psd_xyz); the several-datasets layout fills psd_sum only. Each carries
-  /// klipper_normalized = has_shapers.
+  /// klipper_normalized = has_shapers, and files = {path} (one dataset) or {column name}.
   std::vector<AxisSpectrum> datasets;
   std::vector<std::string> dataset_names;  ///< "psd_xyz", or the names in the header
   bool has_shapers = false;                ///< the header has a `shapers:` column
