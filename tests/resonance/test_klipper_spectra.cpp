@@ -210,6 +210,26 @@ TEST_CASE("several recordings of one axis count separately and round-trip throug
         0.2 + 1e-9);
 }
 
+TEST_CASE("a normalized file and a measured one of the same axis combine as in calibrate_shaper.py",
+          "[resonance][shaper][klipper]") {
+  // calibration_data layout (normalized, with shaper columns) written from Zippy's x file, plus
+  // Kymeron's measured x file: Klipper normalizes the second only, then scores both.
+  const std::string written = scratch_dir("klipper_csv_mixed") + "/calibration_data_x_zippy.csv";
+  const auto w = run_cli({"shaper", dataset("klipper_spectra/resonances_x_20220317_143228.csv"), "--klipper-compatible",
+                          "--klipper-csv", written});
+  REQUIRE(w.code == 0);
+  const auto r = run_cli({"shaper", written, dataset("klipper_spectra/resonances_x_20250208_212836.csv"),
+                          "--klipper-compatible", "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto a = nlohmann::json::parse(r.out)["results"]["axes"]["x"];
+  CHECK(a["selection"]["datasets"] == 2);
+  const auto norm = a["selection"]["psd_normalization"].get<std::string>();
+  CHECK(norm.find("applied by tunekit to the measured spectra") != std::string::npos);
+  CHECK(norm.find("already normalized") != std::string::npos);
+  check_against_klipper(a, klipper_reference().at("resonances_x_20220317_143228.csv+resonances_x_20250208_212836.csv"));
+}
+
 TEST_CASE("tunekit's own mode on a measured spectrum file states the normalization it applied",
           "[resonance][shaper][klipper]") {
   const auto r = run_cli({"shaper", dataset("klipper_spectra/resonances_x_20220317_143228.csv"), "--json"});

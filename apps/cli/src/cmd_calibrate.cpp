@@ -161,7 +161,8 @@ nlohmann::json psd_plotdata(const nlohmann::json& axis) {
   d["shapers"] = nlohmann::json::array();
   for (const auto& c : axis.value("candidates", nlohmann::json::array())) {
     const auto type = ident::parse_shaper_type(c.at("type").get<std::string>());
-    const auto shaper = ident::design_shaper(type, c.at("freq_hz").get<double>(), c.value("damping", 0.1));
+    const auto shaper = ident::design_shaper(type, c.at("freq_hz").get<double>(), c.value("damping", 0.1),
+                                             ident::kDefaultVibrationTolerance, ident::EiDesign::damped_fit);
     d["shapers"].push_back({{"type", c.at("type")}, {"freq_hz", f}, {"response", ident::residual_vibration_curve(shaper, f, zeta)}});
   }
   return d;

@@ -145,8 +145,8 @@ int run_shaper(const ShaperCliArgs& a, CliContext& ctx) {
     sel["psd_normalization"] =
         applied == normalized.size() ? "divided by (f + 0.1 Hz), damped below 10 Hz by tunekit (Klipper's normalization)"
         : applied == 0 ? "none applied: the spectrum file was already normalized by Klipper (it has shaper columns)"
-                       : "Klipper's normalization applied by tunekit to the measured spectra; files with shaper "
-                         "columns were already normalized";
+                       : "Klipper's normalization (divided by (f + 0.1 Hz), damped below 10 Hz) applied by tunekit "
+                         "to the measured spectra; the files with shaper columns were already normalized by Klipper";
     sel["datasets"] = normalized.size();
     sel["ei_design"] = "Singhose's damped fits";
     sel["max_freq_hz"] = so.max_freq_hz;

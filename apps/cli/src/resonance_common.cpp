@@ -155,9 +155,25 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
   ro.use_frf = !a.no_frf;
   std::vector<AxisResult> out;
   for (auto& [axis, spectra] : by_axis) {
+    // Spectra Klipper normalized (files with shaper columns) and measured ones (raw data, files
+    // without them) of one axis are brought to Klipper's normalization before they are averaged,
+    // as calibrate_shaper.py does; the datasets are kept as read.
     AxisResult r;
     r.axis = axis;
-    r.spectrum = ident::average_spectra(spectra);
+    const bool any_normalized = std::any_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
+    const bool all_normalized = std::all_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
+    if (any_normalized && !all_normalized) {
+      std::vector<ident::AxisSpectrum> same = spectra;
+      for (auto& s : same)
+        if (!s.klipper_normalized) {
+          for (auto* p : {&s.psd_sum, &s.psd_x, &s.psd_y, &s.psd_z})
+            if (!p->empty()) *p = ident::klipper_normalize(s.freq_hz, *p);
+          s.klipper_normalized = true;
+        }
+      r.spectrum = ident::average_spectra(same);
+    } else {
+      r.spectrum = ident::average_spectra(spectra);
+    }
     r.datasets = std::move(spectra);
     for (const auto& w : r.spectrum.warnings) env.warn(w);
     r.modes = ident::identify_modes(r.spectrum, ro);
