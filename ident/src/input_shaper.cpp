@@ -366,7 +366,6 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
 
   // Shaper frequencies per type: from the type's minimum up to (not including) the maximum.
   std::vector<std::vector<double>> type_freqs;
-  double highest_tested = 0;
   for (ShaperType type : o.types) {
     const double f_end = o.max_shaper_freq_hz;
     const double f_start = std::min(shaper_info(type).min_freq_hz, f_end - 1e-7);
@@ -376,36 +375,42 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
       if (x >= f_end) break;
       tf.push_back(x);
     }
-    if (!tf.empty()) highest_tested = std::max(highest_tested, tf.back());
     type_freqs.push_back(std::move(tf));
   }
-  // The PSD is used up to the frequency limit, but never below the highest shaper frequency.
-  const double psd_limit = std::max(o.max_freq_hz, highest_tested);
-
-  std::vector<ScoredDataset> sets;
-  for (const auto& ds : datasets) {
+  for (const auto& ds : datasets)
     if (ds.freq_hz.size() != ds.psd.size()) throw InputError("frequency and PSD arrays differ in length");
-    ScoredDataset d;
-    for (std::size_t b = 0; b < ds.freq_hz.size(); ++b)
-      if (ds.freq_hz[b] <= psd_limit) {
-        d.f.push_back(ds.freq_hz[b]);
-        d.psd.push_back(ds.psd[b]);
-      }
-    if (d.f.size() < 3 || !(*std::max_element(d.psd.begin(), d.psd.end()) > 0))
-      throw InputError(
-          fmt::format("the vibration spectrum below {} Hz is empty or zero; nothing to shape", psd_limit));
-    d.thr = *std::max_element(d.psd.begin(), d.psd.end()) / o.vibration_reduction;
-    d.lo = d.psd.size();
-    for (std::size_t b = 0; b < d.psd.size(); ++b)
-      if (d.psd[b] > d.thr) {
-        d.all += d.psd[b] - d.thr;
-        d.lo = std::min(d.lo, b);
-        d.hi = std::max(d.hi, b);
-      }
-    d.uniform = uniform_grid(d.f);
-    d.step = d.uniform ? (d.f.back() - d.f.front()) / static_cast<double>(d.f.size() - 1) : 0.0;
-    sets.push_back(std::move(d));
-  }
+
+  // The datasets cut at a PSD frequency limit: max_freq_hz, but never below the type's highest
+  // shaper frequency (Klipper's rule, per type). Recomputed only when the limit changes.
+  std::vector<ScoredDataset> sets;
+  double sets_limit = -1;
+  auto prepare = [&](double psd_limit) {
+    if (psd_limit == sets_limit) return;
+    sets.clear();
+    sets_limit = psd_limit;
+    for (const auto& ds : datasets) {
+      ScoredDataset d;
+      for (std::size_t b = 0; b < ds.freq_hz.size(); ++b)
+        if (ds.freq_hz[b] <= psd_limit) {
+          d.f.push_back(ds.freq_hz[b]);
+          d.psd.push_back(ds.psd[b]);
+        }
+      if (d.f.size() < 3 || !(*std::max_element(d.psd.begin(), d.psd.end()) > 0))
+        throw InputError(
+            fmt::format("the vibration spectrum below {} Hz is empty or zero; nothing to shape", psd_limit));
+      d.thr = *std::max_element(d.psd.begin(), d.psd.end()) / o.vibration_reduction;
+      d.lo = d.psd.size();
+      for (std::size_t b = 0; b < d.psd.size(); ++b)
+        if (d.psd[b] > d.thr) {
+          d.all += d.psd[b] - d.thr;
+          d.lo = std::min(d.lo, b);
+          d.hi = std::max(d.hi, b);
+        }
+      d.uniform = uniform_grid(d.f);
+      d.step = d.uniform ? (d.f.back() - d.f.front()) / static_cast<double>(d.f.size() - 1) : 0.0;
+      sets.push_back(std::move(d));
+    }
+  };
 
   std::vector<std::complex<double>> acc;
   ShaperSelection sel;
@@ -414,6 +419,8 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
   for (std::size_t ti = 0; ti < o.types.size(); ++ti) {
     const ShaperType type = o.types[ti];
     const auto& test_freqs = type_freqs[ti];
+    if (test_freqs.empty()) continue;
+    prepare(std::max(o.max_freq_hz, test_freqs.back()));
     const double design_z = std::min(o.design_damping_ratio, shaper_info(type).max_damping_ratio);
     // Evaluate from the highest frequency down, as Klipper does (ties keep the higher one).
     std::vector<ShaperCandidate> results;

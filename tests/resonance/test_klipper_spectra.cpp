@@ -143,6 +143,18 @@ TEST_CASE("klipper-compatible shaper on Kymeron's TEST_RESONANCES files gives ca
   check_file("resonances_y_20250208_213102.csv", "y");
 }
 
+TEST_CASE("klipper-compatible shaper with a smoothing limit stops each scan where Klipper stops it",
+          "[resonance][shaper][klipper]") {
+  // calibrate_shaper.py --max_smoothing 0.08: every type keeps its fewest-vibrations frequency
+  // found before the limit (3hump_ei @ 106.4 Hz instead of 100.4 Hz without the limit).
+  const auto r = run_cli({"shaper", dataset("klipper_spectra/resonances_x_20220317_143228.csv"), "--axis", "x",
+                          "--klipper-compatible", "--max-smoothing", "0.08", "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  check_against_klipper(nlohmann::json::parse(r.out)["results"]["axes"]["x"],
+                        klipper_reference().at("resonances_x_20220317_143228.csv@max_smoothing=0.08"));
+}
+
 TEST_CASE("a spectrum file tunekit writes in Klipper's layout reads back to the same recommendation",
           "[resonance][shaper][klipper]") {
   const auto ref = klipper_reference();
