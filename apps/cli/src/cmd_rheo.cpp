@@ -349,6 +349,12 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
       "  tunekit rheo datasets/rheology/peek_cross_wlf_synthetic.csv --model cross-wlf --nozzle-d 0.6 --nozzle-l 4 \\\n"
       "      --cone-angle 30 --entrance-D 5 --predict-at 405 --reference-flow 3 --json   # results.prediction\n"
       "  tunekit rheo abs.csv --model cross-wlf --fix D2_K=378.15 --require 'n<0.5'\n"
+      "  tunekit rheo datasets/rheology/polyimidazole_melt_viscosity.csv --temperatures 300:350\n"
+      "  tunekit rheo melt.csv --viscosity-unit mPa.s     # a viscosity column without a unit\n"
+      "Intervals: linearised (Wald) where they hold, profile likelihood where a parameter is strongly\n"
+      "correlated, near a bound or on a curved likelihood (params.X.ci95_method). With data at several\n"
+      "temperatures results.superposition tests each temperature against the master curve and names\n"
+      "the temperatures that do not superpose (a transition, a degraded sample).\n"
       "Parameters (SI): n, tau_star_Pa, D1_Pa_s, D2_K, D3_K_per_Pa, A1, A2_K (cross-wlf); eta0_Pa_s, K_Pa_s_n,\n"
       "lambda_s, a, eta_inf_Pa_s; shifts Ea_J_per_mol or C1, C2_K with T_ref_K.");
   sub->callback([args, &ctx] { set_exit_code(run_rheo(*args, ctx)); });
