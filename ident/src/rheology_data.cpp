@@ -13,6 +13,8 @@ namespace tunekit::ident {
 namespace {
 
 constexpr double kHugeViscosity = 1e300;
+// A fall of the shear stress with rising shear rate beyond this fraction draws a warning.
+constexpr double kStressDropTolerance = 0.1;
 
 std::string lower_nospace(std::string_view s) {
   std::string o;
@@ -137,6 +139,7 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   std::size_t e_hi_row = 0, e_lo_row = 0, skipped = 0;
   // Consistency of a viscosity column with a shear-stress column in the same file.
   std::vector<double> stress_ratio;
+  std::vector<std::size_t> kept_row;  // file row of each point kept
 
   for (std::size_t i = 0; i < t.rows; ++i) {
     const double gi = g->values[i];
@@ -181,6 +184,7 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
         continue;
       }
     }
+    kept_row.push_back(i);
     if (e > e_hi) e_hi = e, e_hi_row = i;
     if (e < e_lo) e_lo = e, e_lo_row = i;
     d.shear_rate_1_s.push_back(gi);
@@ -201,6 +205,30 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   if (select_T)
     out.notes.push_back(fmt::format("temperatures {:g}..{:g} degC selected: {} of {} rows kept", t_lo, t_hi, d.size(),
                                     d.size() + skipped));
+  {
+    // The flow curve tau(gamma) = eta gamma rises with the shear rate in every stable melt (a
+    // falling one is flow instability or a column mix-up): checked per temperature, located.
+    const auto levels = d.temperature_levels_K();
+    for (double T : levels) {
+      std::vector<std::pair<double, std::size_t>> at_T;
+      for (std::size_t i = 0; i < d.size(); ++i)
+        if (std::abs(d.temperature_K[i] - T) <= 0.05 + 1e-9) at_T.push_back({d.shear_rate_1_s[i], i});
+      std::sort(at_T.begin(), at_T.end());
+      for (std::size_t q = 1; q < at_T.size(); ++q) {
+        const auto [g0, i0] = at_T[q - 1];
+        const auto [g1, i1] = at_T[q];
+        if (!(g1 > g0 * (1 + 1e-9))) continue;
+        const double s0 = d.viscosity_Pa_s[i0] * g0, s1 = d.viscosity_Pa_s[i1] * g1;
+        if (s1 < s0 * (1 - kStressDropTolerance)) {
+          out.warnings.push_back(fmt::format(
+              "{}: the shear stress falls from {:g} to {:g} Pa as the shear rate rises from {:g} to {:g} 1/s at {:g} K; "
+              "a melt's flow curve rises (flow instability, or a column or unit mix-up)",
+              at(kept_row[i1]), s0, s1, g0, g1, T));
+          break;
+        }
+      }
+    }
+  }
   if (!stress_ratio.empty()) {
     // eta = tau / gamma must hold row by row; a factor between the columns is a unit mix-up.
     std::nth_element(stress_ratio.begin(), stress_ratio.begin() + static_cast<long>(stress_ratio.size() / 2), stress_ratio.end());

@@ -82,6 +82,14 @@ TEST_CASE("rheo refuses bad input with exit code 2 and the reason") {
     CHECK(r.err.find("rheo_mpa.csv:2: viscosity 3e+06 Pa.s") != std::string::npos);
     CHECK(r.err.find("mPa.s") != std::string::npos);
   }
+  SECTION("a flow curve that falls is let through with a located warning") {
+    // eta drops 100-fold while gamma rises 10-fold: the stress falls (a mix-up or instability).
+    const auto f = write_scratch("rheo_falling_stress.csv", head + "1,3000,400\n10,2500,400\n100,25,400\n1000,20,400\n"
+                                                                   "3000,15,400\n");
+    const auto r = run_cli({"rheo", f, "--model", "cross", "--no-compare"});
+    INFO(r.err);
+    CHECK(r.err.find("rheo_falling_stress.csv:4: the shear stress falls from 25000 to 2500 Pa") != std::string::npos);
+  }
   SECTION("viscosity and shear-stress columns that disagree by a unit factor are refused") {
     const auto f = write_scratch("rheo_inconsistent.csv",
                                  "shear_rate (1/s),viscosity (Pa.s),shear_stress (Pa),temperature (degC)\n"

@@ -13,7 +13,8 @@
 // the header, and viscosity and shear_stress columns that disagree (eta != tau / gamma: a unit
 // is wrong).
 // Let through with a warning (RheologyTable::warnings): viscosities above kHighViscosity or below
-// kLowViscosity. Zero-shear viscosities above 1e6 Pa.s are real (high-Tg polymers near their
+// kLowViscosity, and a shear stress (eta gamma) that falls by more than 10 % as the shear rate
+// rises at one temperature (a melt's flow curve rises). Zero-shear viscosities above 1e6 Pa.s are real (high-Tg polymers near their
 // processing window, high molecular weights), so magnitude alone cannot prove a unit mix-up.
 
 #include <string>
