@@ -227,8 +227,8 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
                              off, sc.alpha));
       for (const auto& r : sc.reversals)
         env.warn(fmt::format("the viscosity rises between {} and {} (shift factor x{:.3g}): a transition between these "
-                             "temperatures (e.g. a liquid-crystalline melt turning isotropic); fit each side on its own "
-                             "with --temperatures",
+                             "temperatures (e.g. a liquid-crystalline melt turning isotropic) or curves of different samples; "
+                             "fit each side on its own with --temperatures",
                              degc(r.lower_K), degc(r.upper_K), r.ratio));
     } catch (const Error& e) {
       if (a.tts) throw;
