@@ -26,7 +26,7 @@ TEST_CASE("real curves: the para-polyimidazole above 1e6 Pa.s is fitted, not ref
     CHECK(j["results"]["superposition"]["superposes"] == false);
   }
   SECTION("300-350 degC with Cross-WLF: fitted and converged, the WLF ridge named") {
-    const auto r = run_cli({"rheo", file, "--temperatures", "300:350", "--model", "cross-wlf", "--json"});
+    const auto r = run_cli({"rheo", file, "--temperatures", "300:350", "--model", "cross-wlf", "--no-compare", "--json"});
     INFO(r.err);
     REQUIRE(r.code == 0);
     const auto j = nlohmann::json::parse(r.out);
