@@ -84,6 +84,14 @@ std::string free_names(const LsqProblem& p) {
 
 }  // namespace
 
+double residual_variance_floor(const std::vector<double>& observed) {
+  double scale = 1.0;
+  for (double v : observed)
+    if (std::isfinite(v)) scale = std::max(scale, std::abs(v));
+  const double sigma = kRelativeResidualFloor * scale;
+  return sigma * sigma;
+}
+
 void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res,
                                const std::vector<double>& observed, bool time_ordered) {
   auto& d = r.diagnostics;
@@ -94,9 +102,14 @@ void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res,
   d.rss = rss;
   d.rms = res.empty() ? kNaN : std::sqrt(rss / n);
   const double k = d.num_parameters;
-  if (!res.empty() && rss > 0) {
-    d.aic = n * std::log(rss / n) + 2 * k;
-    d.bic = n * std::log(rss / n) + k * std::log(n);
+  // An exact fit (rss = 0) has no finite log-likelihood; the residual variance is floored at
+  // what the arithmetic can resolve, so exact fits get finite criteria and the simpler model
+  // wins a tie (the 2k term decides).
+  const double floor = residual_variance_floor(observed);
+  if (!res.empty() && std::isfinite(rss)) {
+    const double var = std::max(rss / n, floor);
+    d.aic = n * std::log(var) + 2 * k;
+    d.bic = n * std::log(var) + k * std::log(n);
   }
   if (observed.size() == res.size() && !observed.empty()) {
     double mean = 0;
@@ -104,7 +117,14 @@ void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res,
     mean /= n;
     double tss = 0;
     for (double v : observed) tss += (v - mean) * (v - mean);
-    d.r2 = tss > 0 ? 1.0 - rss / tss : kNaN;
+    // Data that do not vary leave nothing to explain: R^2 is 1 for a fit to within the floor
+    // and 0 otherwise (the fit explains nothing the mean does not), with a warning.
+    if (tss > floor * n) {
+      d.r2 = 1.0 - rss / tss;
+    } else {
+      d.r2 = rss <= floor * n ? 1.0 : 0.0;
+      r.warnings.push_back("the observed values do not vary; R^2 says nothing about this fit");
+    }
   }
   if (time_ordered) {
     const auto wt = ljung_box(res, default_whiteness_lags(res.size()));
@@ -215,6 +235,7 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
     p.value = x[j];
     p.fixed = ps.fixed;
     if (!ps.fixed && opt.compute_covariance) {
+      p.ci95_method = "wald";
       const double var = cov[j * n + j] * s2;
       p.std_error = var >= 0 ? std::sqrt(var) : kNaN;
       p.ci95_lo = p.value - tq * p.std_error;
@@ -225,6 +246,12 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
     if (!ps.fixed && (x[j] <= ps.lower || x[j] >= ps.upper))
       r.warnings.push_back(ps.name + " ended on its bound (" + std::to_string(x[j]) + ")");
     r.params.push_back(p);
+  }
+  if (opt.compute_covariance && n_free > 0) {
+    r.covariance.assign(static_cast<std::size_t>(n * n), 0.0);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        if (!prob.params[i].fixed && !prob.params[j].fixed) r.covariance[i * n + j] = cov[i * n + j] * s2;
   }
   return r;
 }

@@ -4,15 +4,21 @@
 #include <cmath>
 #include <limits>
 
+#include <boost/math/distributions/fisher_f.hpp>
+
 #include <cstdarg>
 #include <cstdio>
 
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/fitting/profile_likelihood.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::fitting {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// |correlation| above which Cross-WLF's temperature parameters are reported as a ridge.
+constexpr double kRidgeCorrelation = 0.99;
 
 // printf-style message formatting (the fitting layer does not depend on fmt).
 [[gnu::format(printf, 1, 2)]] std::string strf(const char* f, ...) {
@@ -100,7 +106,7 @@ std::vector<PSpec> default_specs(const ViscosityFitOptions& o, const DataStats& 
     case ViscosityModel::cross_wlf:
       p.push_back({"n", "1", false, 0.01, 1.0, 0.4});
       p.push_back({"tau_star_Pa", "Pa", true, 1, 1e8, 1e5});
-      p.push_back({"D1_Pa_s", "Pa.s", true, 1e3, 1e30, 1e12});
+      p.push_back({"D1_Pa_s", "Pa.s", true, 1e3, 1e50, 1e12});
       p.push_back({"D2_K", "K", false, 100, T_min - 5, std::max(100.0, T_min - 200)});
       p.push_back({"D3_K_per_Pa", "K/Pa", false, 0, 1e-6, 0, true});
       p.push_back({"A1", "1", false, 1, 100, 30});
@@ -164,6 +170,17 @@ void finish_params(FitResult& fit, const std::vector<PSpec>& specs) {
       p.std_error = p.value * p.std_error;
       p.ci95_lo = std::exp(p.ci95_lo);
       p.ci95_hi = std::exp(p.ci95_hi);
+    }
+    // The parameter cannot leave its search box, so neither can its interval; an interval that
+    // would (or that overflows: exp of a wide interval in ln) ends at the box and says so.
+    if (!s.fixed && std::isfinite(p.std_error)) {
+      const bool lo_cut = !(p.ci95_lo >= s.lo) && std::isfinite(s.lo);
+      const bool hi_cut = !(p.ci95_hi <= s.hi) && std::isfinite(s.hi);
+      if (lo_cut) p.ci95_lo = s.lo;
+      if (hi_cut) p.ci95_hi = s.hi;
+      if (lo_cut || hi_cut)
+        fit.warnings.push_back(strf("the 95 %% interval of %s reaches its search bound (%.6g %s); the data do not bound it",
+                                    s.name.c_str(), lo_cut ? s.lo : s.hi, s.unit.c_str()));
     }
     if (!s.fixed) {
       const double lo = s.log ? std::log(s.lo) : s.lo, hi = s.log ? std::log(s.hi) : s.hi;
@@ -308,14 +325,80 @@ FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) 
   prob = make(all);
   const LsqProblem search = make(sub);
   auto fit = solve_with_global_start(name, prob, o.global, o.lsq, &search);
-  finish_params(fit, specs);
-  if (cwlf) {
-    const auto& d2 = fit.param("D2_K");
-    if (!d2.fixed && d2.std_error > 20)
-      fit.warnings.push_back(strf("D1_Pa_s, D2_K and A1 are strongly correlated with data at %zu temperatures "
-                                  "(D2_K +- %.0f K); hold D2_K at the glass transition (--fix D2_K=...) for tighter values",
-                                  st.levels.size(), d2.std_error));
+  if (o.profile_intervals) apply_profile_intervals(prob, fit, o.profile);
+  if (st.levels.size() > 1 && fit.covariance.size() == specs.size() * specs.size()) {
+    // What the data determine even when the temperature parameters are not separately
+    // identifiable: at each measured temperature the zero-shear viscosity (not for the power
+    // law, which has none) and the viscosity at the median measured shear rate. Smooth functions
+    // of the parameters, so their linearised (delta-method) intervals on ln hold.
+    const std::size_t np = specs.size();
+    std::vector<double> x(np);
+    for (std::size_t j = 0; j < np; ++j) x[j] = fit.params[j].value;
+    double p_mean = 0;
+    for (double v : data.pressure_Pa) p_mean += v / static_cast<double>(data.pressure_Pa.size());
+    auto ln_eta = [&](const std::vector<double>& q, double g, double T) {
+      double v[12];
+      for (std::size_t j = 0; j < np; ++j) v[j] = is_log[j] ? std::exp(q[j]) : q[j];
+      return std::log(ev(v, g, T, p_mean));
+    };
+    const int dof = fit.diagnostics.num_observations - fit.diagnostics.num_parameters;
+    const double tq = t_multiplier(0.95, dof);
+    auto add = [&](const std::string& qname, double g, double T) {
+      std::vector<double> grad(np, 0.0);
+      for (std::size_t j = 0; j < np; ++j) {
+        if (fit.params[j].fixed) continue;
+        const double h = 1e-6 * std::max(1.0, std::abs(x[j]));
+        auto xp = x, xm = x;
+        xp[j] += h;
+        xm[j] -= h;
+        grad[j] = (ln_eta(xp, g, T) - ln_eta(xm, g, T)) / (2 * h);
+      }
+      double var = 0;
+      for (std::size_t a = 0; a < np; ++a)
+        for (std::size_t b = 0; b < np; ++b) var += grad[a] * fit.covariance[a * np + b] * grad[b];
+      const double l = ln_eta(x, g, T), se = std::sqrt(std::max(var, 0.0));
+      Param q;
+      q.name = qname;
+      q.unit = "Pa.s";
+      q.value = std::exp(l);
+      q.std_error = q.value * se;
+      q.ci95_lo = std::exp(l - tq * se);
+      q.ci95_hi = std::exp(l + tq * se);
+      q.ci95_method = "wald";
+      if (std::isfinite(q.value) && std::isfinite(q.std_error) && std::isfinite(q.ci95_lo) && std::isfinite(q.ci95_hi))
+        fit.derived.push_back(q);
+    };
+    for (double T : st.levels) {
+      std::vector<double> gs;
+      for (std::size_t i = 0; i < n; ++i)
+        if (std::abs(data.temperature_K[i] - T) <= 0.05 + 1e-9) gs.push_back(data.shear_rate_1_s[i]);
+      std::sort(gs.begin(), gs.end());
+      const double g_med = gs[(gs.size() - 1) / 2];
+      if (o.model != ViscosityModel::power_law) add(strf("eta0_Pa_s_at_%.2fK", T), 1e-30, T);
+      add(strf("eta_Pa_s_at_%.2fK_%.4g_per_s", T, g_med), g_med, T);
+    }
   }
+  if (cwlf) {
+    // The WLF ridge: with few temperatures D1, D2 and A1 trade off against each other.
+    std::vector<std::size_t> t_idx;
+    for (std::size_t j = 0; j < specs.size(); ++j)
+      if (!specs[j].fixed && (specs[j].name == "D1_Pa_s" || specs[j].name == "D2_K" || specs[j].name == "A1" || specs[j].name == "A2_K"))
+        t_idx.push_back(j);
+    double max_r = 0;
+    for (std::size_t a = 0; a < t_idx.size(); ++a)
+      for (std::size_t b = a + 1; b < t_idx.size(); ++b) max_r = std::max(max_r, std::abs(correlation(fit, t_idx[a], t_idx[b])));
+    const bool d2_free = std::any_of(t_idx.begin(), t_idx.end(), [&](std::size_t j) { return specs[j].name == "D2_K"; });
+    if (d2_free && t_idx.size() >= 2 && max_r > kRidgeCorrelation) {
+      std::string names;
+      for (auto j : t_idx) names += (names.empty() ? "" : ", ") + specs[j].name;
+      fit.warnings.push_back(strf("%s are not separately identifiable from %zu temperatures (correlation up to %.4f); fix "
+                                  "D2_K at the polymer's glass transition (--fix D2_K=...), or measure more temperatures. "
+                                  "What the data determine: n, tau_star_Pa and the viscosity at each measured temperature "
+                                  "(derived; the zero-shear viscosity where the data reach the plateau)",
+                                  names.c_str(), st.levels.size(), max_r));
+    }
+  }
+  finish_params(fit, specs);
   return fit;
 }
 
@@ -365,10 +448,18 @@ ModelComparison compare_viscosity_models(const RheologyData& data, const std::ve
       e.aic = fit.diagnostics.aic;
       e.bic = fit.diagnostics.bic;
       e.rms_ln = fit.diagnostics.rms;
-      if (e.aic < best) best = e.aic, c.best = e.model;
+      if (!std::isfinite(e.aic)) {
+        e.ok = false;
+        e.error = strf("fitted, but its AIC is not finite (rss %g)", fit.diagnostics.rss);
+      }
     } catch (const Error& err) {
       e.error = err.message();
+    } catch (const std::exception& err) {
+      e.error = err.what();
     }
+    if (!e.ok && e.error.empty()) e.error = "the fit failed without giving a reason";
+    if (!e.ok) fit = FitResult{};
+    if (e.ok && e.aic < best) best = e.aic, c.best = e.model;
     c.entries.push_back(e);
     c.fits.push_back(fit);
   }
@@ -559,6 +650,160 @@ nlohmann::json to_json(const TtsResult& t) {
   j["master_curve"] = {{"reduced_shear_rate_1_s", t.reduced_shear_rate_1_s},
                        {"reduced_viscosity_Pa_s", t.reduced_viscosity_Pa_s}};
   return j;
+}
+
+bool SuperpositionCheck::superposes() const {
+  return reversals.empty() && std::all_of(levels.begin(), levels.end(), [](const auto& l) { return l.on_master_curve; });
+}
+
+SuperpositionCheck check_superposition(const RheologyData& data, double T_ref_K, double alpha) {
+  SuperpositionCheck c;
+  c.alpha = alpha;
+  c.tts = time_temperature_superposition(data, T_ref_K);
+  const auto& t = c.tts;
+  const std::size_t L = t.temperatures_K.size(), n = data.size();
+  auto level_index = [&](double T) {
+    std::size_t best = 0;
+    for (std::size_t k = 0; k < L; ++k)
+      if (std::abs(t.temperatures_K[k] - T) < std::abs(t.temperatures_K[best] - T)) best = k;
+    return best;
+  };
+  // Residuals of every point on the master curve (Cross at T_ref, shifted).
+  const double eta0 = t.reference_fit.value("eta0_Pa_s"), ts = t.reference_fit.value("tau_star_Pa"),
+               nn = t.reference_fit.value("n");
+  std::vector<double> rss_master(L, 0.0);
+  std::vector<int> count(L, 0);
+  std::vector<RheologyData> per(L);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto k = level_index(data.temperature_K[i]);
+    const double a = t.shift_factor[k];
+    const double r = std::log(cross_viscosity(eta0 * a, ts, nn, data.shear_rate_1_s[i])) - std::log(data.viscosity_Pa_s[i]);
+    rss_master[k] += r * r;
+    ++count[k];
+    per[k].shear_rate_1_s.push_back(data.shear_rate_1_s[i]);
+    per[k].viscosity_Pa_s.push_back(data.viscosity_Pa_s[i]);
+    per[k].temperature_K.push_back(data.temperature_K[i]);
+  }
+  // Each temperature's own Cross fit (the alternative of the F test).
+  constexpr int kOwnParams = 3, kMinOwnPoints = kOwnParams + 2;
+  std::vector<double> rss_own(L, kNaN);
+  double pooled = 0;
+  int pooled_dof = 0;
+  for (std::size_t k = 0; k < L; ++k) {
+    if (count[k] < kMinOwnPoints) continue;
+    ViscosityFitOptions o;
+    o.model = ViscosityModel::cross;
+    o.shift = TemperatureShift::none;
+    o.profile_intervals = false;
+    o.lsq.compute_covariance = false;
+    try {
+      const auto f = fit_viscosity(per[k], o);
+      rss_own[k] = std::min(f.diagnostics.rss, rss_master[k]);
+      pooled += rss_own[k];
+      pooled_dof += count[k] - kOwnParams;
+    } catch (const Error&) {
+      rss_own[k] = kNaN;
+    }
+  }
+  const double s2 = pooled_dof > 0 ? std::max(pooled / pooled_dof, residual_variance_floor({std::log(data.viscosity_Pa_s[0])})) : kNaN;
+  for (std::size_t k = 0; k < L; ++k) {
+    SuperpositionLevel l;
+    l.temperature_K = t.temperatures_K[k];
+    l.points = count[k];
+    l.shift_factor = t.shift_factor[k];
+    l.shift_lo = t.shift_factor_lo[k];
+    l.shift_hi = t.shift_factor_hi[k];
+    l.rms_master_ln = count[k] > 0 ? std::sqrt(rss_master[k] / count[k]) : kNaN;
+    if (std::isfinite(rss_own[k]) && std::isfinite(s2)) {
+      l.rms_own_ln = std::sqrt(rss_own[k] / count[k]);
+      const double df1 = kOwnParams - 1;
+      l.f_statistic = std::max(0.0, (rss_master[k] - rss_own[k]) / df1 / s2);
+      const boost::math::fisher_f_distribution<> fd(df1, pooled_dof);
+      l.p_value = boost::math::cdf(boost::math::complement(fd, l.f_statistic));
+      // Off the curve: a significant misfit that is also material (precise, digitized curves
+      // make percent-level shape differences significant).
+      l.on_master_curve = !(l.p_value < alpha && l.rms_master_ln > kSuperpositionTolerance);
+    }
+    c.levels.push_back(l);
+  }
+  for (std::size_t k = 0; k + 1 < L; ++k) {
+    const auto& a = c.levels[k];
+    const auto& b = c.levels[k + 1];
+    if (b.shift_lo > a.shift_hi) c.reversals.push_back({a.temperature_K, b.temperature_K, b.shift_factor / a.shift_factor});
+  }
+  if (!c.reversals.empty()) {
+    // A master curve across a transition fits neither side, so every temperature would look
+    // off the curve: test each side of the transitions on its own instead.
+    std::size_t first = 0;
+    int seg = 0;
+    for (std::size_t k = 0; k <= L; ++k) {
+      const bool cut = k == L || std::any_of(c.reversals.begin(), c.reversals.end(), [&](const auto& r) {
+                         return std::abs(r.upper_K - t.temperatures_K[k]) < 1e-9;
+                       });
+      if (!cut) continue;
+      for (std::size_t q = first; q < k; ++q) {
+        auto& l = c.levels[q];
+        l.segment = seg;
+        l.on_master_curve = true;  // a side with one temperature has nothing to superpose on
+        l.f_statistic = l.p_value = l.rms_own_ln = kNaN;
+      }
+      if (k - first >= 2) {
+        RheologyData side;
+        for (std::size_t i = 0; i < n; ++i) {
+          const auto lk = level_index(data.temperature_K[i]);
+          if (lk < first || lk >= k) continue;
+          side.shear_rate_1_s.push_back(data.shear_rate_1_s[i]);
+          side.viscosity_Pa_s.push_back(data.viscosity_Pa_s[i]);
+          side.temperature_K.push_back(data.temperature_K[i]);
+        }
+        try {
+          const auto sc = check_superposition(side, kNaN, alpha);
+          for (std::size_t q = first; q < k; ++q) {
+            const auto& from = sc.levels[q - first];
+            auto& l = c.levels[q];
+            l.on_master_curve = from.on_master_curve;
+            l.f_statistic = from.f_statistic;
+            l.p_value = from.p_value;
+            l.rms_own_ln = from.rms_own_ln;
+            l.rms_master_ln = from.rms_master_ln;
+          }
+        } catch (const Error&) {
+          // The side cannot be tested on its own; its temperatures keep "not tested".
+        }
+      }
+      first = k;
+      ++seg;
+    }
+  }
+  return c;
+}
+
+nlohmann::json to_json(const SuperpositionCheck& c) {
+  nlohmann::json levels = nlohmann::json::array();
+  for (const auto& l : c.levels) {
+    nlohmann::json j{{"temperature_K", l.temperature_K},
+                     {"points", l.points},
+                     {"segment", l.segment},
+                     {"a_T", l.shift_factor},
+                     {"a_T_ci95", {l.shift_lo, l.shift_hi}},
+                     {"rms_master_ln", l.rms_master_ln},
+                     {"tested", std::isfinite(l.p_value)},
+                     {"on_master_curve", l.on_master_curve}};
+    if (std::isfinite(l.p_value)) {  // untested levels (too few points) carry no statistic
+      j["rms_own_ln"] = l.rms_own_ln;
+      j["f_statistic"] = l.f_statistic;
+      j["p_value"] = l.p_value;
+    }
+    levels.push_back(j);
+  }
+  nlohmann::json rev = nlohmann::json::array();
+  for (const auto& r : c.reversals) rev.push_back({{"lower_K", r.lower_K}, {"upper_K", r.upper_K}, {"a_T_ratio", r.ratio}});
+  return {{"test", "F test of each temperature's own Cross fit against the master curve (Cross at T_ref with a shift a_T)"},
+          {"alpha", c.alpha},
+          {"reference_temperature_K", c.tts.T_ref_K},
+          {"superposes", c.superposes()},
+          {"levels", levels},
+          {"reversals", rev}};
 }
 
 }  // namespace tunekit::fitting

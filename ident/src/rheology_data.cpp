@@ -12,6 +12,10 @@
 namespace tunekit::ident {
 namespace {
 
+constexpr double kHugeViscosity = 1e300;
+// A fall of the shear stress with rising shear rate beyond this fraction draws a warning.
+constexpr double kStressDropTolerance = 0.1;
+
 std::string lower_nospace(std::string_view s) {
   std::string o;
   for (char c : s)
@@ -51,7 +55,8 @@ double viscosity_unit_factor(std::string_view unit) {
   if (u.empty() || u == "pa.s" || u == "pas" || u == "pa*s" || u == "pa_s" || u == "pa\xc2\xb7s") return 1.0;
   if (u == "mpa.s" || u == "mpas" || u == "mpa*s" || u == "mpa_s" || u == "cp") return 1e-3;
   if (u == "kpa.s" || u == "kpas" || u == "kpa*s" || u == "kpa_s") return 1e3;
-  throw InputError("unknown viscosity unit '" + std::string(unit) + "' (use Pa.s, mPa.s, cP or kPa.s)");
+  if (u == "p" || u == "poise" || u == "dpa.s" || u == "dpas") return 0.1;  // 1 P = 1 dyn s/cm^2 = 0.1 Pa.s
+  throw InputError("unknown viscosity unit '" + std::string(unit) + "' (use Pa.s, mPa.s, cP, P (poise) or kPa.s)");
 }
 
 double pressure_unit_factor(std::string_view unit) {
@@ -88,11 +93,24 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   const auto* w = find_column(t, {"weight"});
 
   double vf = 1.0, sf = 1.0;
+  std::string eta_unit;  // the unit the viscosities are read in, as stated (empty: not stated)
   if (eta) {
-    vf = viscosity_unit_factor(eta->unit);
-    if (vf != 1.0) out.notes.push_back(fmt::format("viscosity: {} -> Pa.s (x {:g})", eta->unit, vf));
-    if (eta->unit.empty()) out.notes.push_back("viscosity column has no unit; read as Pa.s");
+    eta_unit = eta->unit;
+    if (!o.viscosity_unit.empty()) {
+      const double given = viscosity_unit_factor(o.viscosity_unit);
+      if (!eta->unit.empty() && viscosity_unit_factor(eta->unit) != given)
+        throw InputError("the viscosity column says '" + eta->unit + "' but the stated viscosity unit is '" +
+                             o.viscosity_unit + "'",
+                         source_location(path, t.header_line));
+      eta_unit = o.viscosity_unit;
+    }
+    vf = viscosity_unit_factor(eta_unit);
+    if (vf != 1.0) out.notes.push_back(fmt::format("viscosity: {} -> Pa.s (x {:g})", eta_unit, vf));
+    if (eta_unit.empty()) out.notes.push_back("viscosity column has no unit; read as Pa.s");
   } else {
+    if (!o.viscosity_unit.empty())
+      throw InputError("a viscosity unit was stated but the file has no viscosity column (it has shear_stress)",
+                       source_location(path, t.header_line));
     sf = pressure_unit_factor(tau->unit);
   }
   enum class TUnit { none, degc, kelvin } tu = TUnit::none;
@@ -111,6 +129,17 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
                      path);
   }
   const double pf = pres ? pressure_unit_factor(pres->unit) : 1.0;
+  const bool select_T = std::isfinite(o.temperature_min_degC) || std::isfinite(o.temperature_max_degC);
+  const double t_lo = std::isfinite(o.temperature_min_degC) ? o.temperature_min_degC : -HUGE_VAL;
+  const double t_hi = std::isfinite(o.temperature_max_degC) ? o.temperature_max_degC : HUGE_VAL;
+  if (select_T && !(t_lo <= t_hi))
+    throw InputError(fmt::format("the temperature range {:g}..{:g} degC is empty", t_lo, t_hi));
+  // Implausible magnitudes are reported once, at their most extreme row, and let through.
+  double e_hi = 0, e_lo = kHugeViscosity;
+  std::size_t e_hi_row = 0, e_lo_row = 0, skipped = 0;
+  // Consistency of a viscosity column with a shear-stress column in the same file.
+  std::vector<double> stress_ratio;
+  std::vector<std::size_t> kept_row;  // file row of each point kept
 
   for (std::size_t i = 0; i < t.rows; ++i) {
     const double gi = g->values[i];
@@ -120,19 +149,13 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
     if (eta) {
       e = eta->values[i] * vf;
       if (!(e > 0)) throw InputError(fmt::format("non-positive viscosity {:g}", eta->values[i]), at(i));
+      if (tau && tau->values[i] > 0) stress_ratio.push_back(tau->values[i] * pressure_unit_factor(tau->unit) / (gi * e));
     } else {
       const double s = tau->values[i] * sf;
       if (!(s > 0)) throw InputError(fmt::format("non-positive shear stress {:g}", tau->values[i]), at(i));
       e = s / gi;
     }
-    if (e > 1e6)
-      throw InputError(fmt::format("viscosity {:g} Pa.s is implausible for a polymer melt at processing temperature (above 1e6 Pa.s); "
-                                   "is the column in mPa.s? label it 'viscosity (mPa.s)'", e),
-                       at(i));
-    if (e < 1e-2)
-      throw InputError(fmt::format("viscosity {:g} Pa.s is implausible for a polymer melt (below 0.01 Pa.s); "
-                                   "check the column's unit", e),
-                       at(i));
+    if (!std::isfinite(e)) throw InputError(fmt::format("viscosity {:g} Pa.s is not finite", e), at(i));
     double TK = 0;
     if (temp) {
       const double v = temp->values[i];
@@ -154,6 +177,16 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
     } else {
       TK = o.temperature_degC + o.kelvin_offset;
     }
+    if (select_T) {
+      const double degc = TK - o.kelvin_offset;
+      if (!(degc >= t_lo - 1e-9 && degc <= t_hi + 1e-9)) {
+        ++skipped;
+        continue;
+      }
+    }
+    kept_row.push_back(i);
+    if (e > e_hi) e_hi = e, e_hi_row = i;
+    if (e < e_lo) e_lo = e, e_lo_row = i;
     d.shear_rate_1_s.push_back(gi);
     d.viscosity_Pa_s.push_back(e);
     d.temperature_K.push_back(TK);
@@ -163,7 +196,59 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
       d.weight.push_back(w->values[i]);
     }
   }
-  if (d.size() == 0) throw InputError("no data rows", path);
+  if (d.size() == 0) {
+    if (select_T)
+      throw InputError(fmt::format("no data rows at {:g}..{:g} degC ({} rows outside)", t_lo, t_hi, skipped),
+                       path);
+    throw InputError("no data rows", path);
+  }
+  if (select_T)
+    out.notes.push_back(fmt::format("temperatures {:g}..{:g} degC selected: {} of {} rows kept", t_lo, t_hi, d.size(),
+                                    d.size() + skipped));
+  {
+    // The flow curve tau(gamma) = eta gamma rises with the shear rate in every stable melt (a
+    // falling one is flow instability or a column mix-up): checked per temperature, located.
+    const auto levels = d.temperature_levels_K();
+    for (double T : levels) {
+      std::vector<std::pair<double, std::size_t>> at_T;
+      for (std::size_t i = 0; i < d.size(); ++i)
+        if (std::abs(d.temperature_K[i] - T) <= 0.05 + 1e-9) at_T.push_back({d.shear_rate_1_s[i], i});
+      std::sort(at_T.begin(), at_T.end());
+      for (std::size_t q = 1; q < at_T.size(); ++q) {
+        const auto [g0, i0] = at_T[q - 1];
+        const auto [g1, i1] = at_T[q];
+        if (!(g1 > g0 * (1 + 1e-9))) continue;
+        const double s0 = d.viscosity_Pa_s[i0] * g0, s1 = d.viscosity_Pa_s[i1] * g1;
+        if (s1 < s0 * (1 - kStressDropTolerance)) {
+          out.warnings.push_back(fmt::format(
+              "{}: the shear stress falls from {:g} to {:g} Pa as the shear rate rises from {:g} to {:g} 1/s at {:g} K; "
+              "a melt's flow curve rises (flow instability, or a column or unit mix-up)",
+              at(kept_row[i1]), s0, s1, g0, g1, T));
+          break;
+        }
+      }
+    }
+  }
+  if (!stress_ratio.empty()) {
+    // eta = tau / gamma must hold row by row; a factor between the columns is a unit mix-up.
+    std::nth_element(stress_ratio.begin(), stress_ratio.begin() + static_cast<long>(stress_ratio.size() / 2), stress_ratio.end());
+    const double r = stress_ratio[stress_ratio.size() / 2];
+    if (!(r > 0.8 && r < 1.25))
+      throw InputError(fmt::format("the viscosity and shear_stress columns disagree: shear_stress / shear_rate is {:.4g} times "
+                                   "the viscosity (median over the rows); one of their units is wrong",
+                                   r),
+                       source_location(path, t.header_line));
+  }
+  const std::string stated = eta ? (eta_unit.empty() ? std::string("read as Pa.s, no unit stated") : "stated as " + eta_unit)
+                                 : "from shear_stress / shear_rate";
+  if (e_hi > kHighViscosity)
+    out.warnings.push_back(fmt::format(
+        "{}: viscosity {:g} Pa.s ({}) is above {:g} Pa.s, high for a polymer melt; real for high-Tg polymers near their "
+        "processing window or high molecular weights, but a column in mPa.s or P read as Pa.s looks the same: check the unit",
+        at(e_hi_row), e_hi, stated, kHighViscosity));
+  if (e_lo < kLowViscosity)
+    out.warnings.push_back(fmt::format("{}: viscosity {:g} Pa.s ({}) is below {:g} Pa.s, low for a polymer melt; check the unit",
+                                       at(e_lo_row), e_lo, stated, kLowViscosity));
   return out;
 }
 

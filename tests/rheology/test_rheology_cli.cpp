@@ -72,11 +72,49 @@ TEST_CASE("rheo refuses bad input with exit code 2 and the reason") {
     CHECK(r.code == 2);
     CHECK(r.err.find("data points for 3 free parameters") != std::string::npos);
   }
-  SECTION("viscosity in mPa.s labelled Pa.s") {
-    const auto f = write_scratch("rheo_mpa.csv", head + "1,3.0e6,400\n10,2.5e6,400\n100,1.2e6,400\n1000,3.5e5,400\n");
+  SECTION("viscosity in mPa.s labelled Pa.s: let through with a warning that names the row and the unit") {
+    // Magnitude alone cannot prove a unit mix-up (real melts exceed 1e6 Pa.s), so it is a warning.
+    const auto f = write_scratch("rheo_mpa.csv", head + "1,3.0e6,400\n10,2.5e6,400\n100,1.2e6,400\n1000,3.5e5,400\n"
+                                                        "3000,1.8e5,400\n");
+    const auto r = run_cli({"rheo", f, "--model", "cross", "--no-compare"});
+    INFO(r.err);
+    CHECK(r.code == 0);
+    CHECK(r.err.find("rheo_mpa.csv:2: viscosity 3e+06 Pa.s") != std::string::npos);
+    CHECK(r.err.find("mPa.s") != std::string::npos);
+  }
+  SECTION("a flow curve that falls is let through with a located warning") {
+    // eta drops 100-fold while gamma rises 10-fold: the stress falls (a mix-up or instability).
+    const auto f = write_scratch("rheo_falling_stress.csv", head + "1,3000,400\n10,2500,400\n100,25,400\n1000,20,400\n"
+                                                                   "3000,15,400\n");
+    const auto r = run_cli({"rheo", f, "--model", "cross", "--no-compare"});
+    INFO(r.err);
+    CHECK(r.err.find("rheo_falling_stress.csv:4: the shear stress falls from 25000 to 2500 Pa") != std::string::npos);
+  }
+  SECTION("viscosity and shear-stress columns that disagree by a unit factor are refused") {
+    const auto f = write_scratch("rheo_inconsistent.csv",
+                                 "shear_rate (1/s),viscosity (Pa.s),shear_stress (Pa),temperature (degC)\n"
+                                 "1,3.0e6,3.0e3,400\n10,2.5e6,2.5e4,400\n100,1.2e6,1.2e5,400\n1000,3.5e5,3.5e5,400\n"
+                                 "3000,1.8e5,5.4e5,400\n");
     const auto r = run_cli({"rheo", f, "--model", "cross", "--no-compare"});
     CHECK(r.code == 2);
-    CHECK(r.err.find("mPa.s") != std::string::npos);
+    CHECK(r.err.find("disagree") != std::string::npos);
+    CHECK(r.err.find("0.001 times") != std::string::npos);
+  }
+  SECTION("--viscosity-unit states the unit of a header without one, and may not contradict a header") {
+    const auto f = write_scratch("rheo_nounit_eta.csv",
+                                 "shear_rate (1/s),viscosity,temperature (degC)\n1,3.0e6,400\n10,2.5e6,400\n"
+                                 "100,1.2e6,400\n1000,3.5e5,400\n3000,1.8e5,400\n10000,8e4,400\n");
+    const auto r = run_cli({"rheo", f, "--model", "cross", "--no-compare", "--viscosity-unit", "mPa.s", "--json"});
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const auto j = nlohmann::json::parse(r.out);
+    // 3e6 mPa.s = 3000 Pa.s: the plateau comes out in Pa.s, and no magnitude warning.
+    CHECK(j["results"]["params"]["eta0_Pa_s"]["value"].get<double>() == Approx(3000).epsilon(0.3));
+    CHECK(r.err.find("above 1e+06") == std::string::npos);
+    const auto g = write_scratch("rheo_unit_clash.csv", head + "1,3000,400\n10,2500,400\n100,1200,400\n1000,350,400\n");
+    const auto bad = run_cli({"rheo", g, "--model", "cross", "--no-compare", "--viscosity-unit", "P"});
+    CHECK(bad.code == 2);
+    CHECK(bad.err.find("the viscosity column says 'Pa.s'") != std::string::npos);
   }
   SECTION("the same data labelled mPa.s are converted and fitted") {
     const auto f = write_scratch("rheo_mpa_ok.csv",

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -29,6 +30,8 @@ struct RheoArgs {
   double t_ref_degc = kNaN;
   double temperature_degc = kNaN;
   double kelvin_offset = fitting::kKelvinOffset;
+  std::string viscosity_unit;
+  std::string temperatures;  // LO:HI degC
   std::vector<std::string> fix;
   std::vector<std::string> free;
   bool no_compare = false;
@@ -58,6 +61,30 @@ std::pair<double, double> parse_window(const std::string& s) {
   }
 }
 
+// "LO:HI" in degC; either side may be empty (no limit).
+std::pair<double, double> parse_temperature_range(const std::string& s) {
+  const auto c = s.find(':');
+  const auto bad = [&] {
+    return InputError("--temperatures: expected LO:HI in degC, e.g. 300:350 (either side may be empty), got '" + s + "'");
+  };
+  if (c == std::string::npos) throw bad();
+  auto side = [&](const std::string& x) {
+    if (x.empty()) return kNaN;
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(x, &used);
+    } catch (const std::exception&) {
+      throw bad();
+    }
+    if (used != x.size() || !std::isfinite(v)) throw bad();
+    return v;
+  };
+  const double lo = side(s.substr(0, c)), hi = side(s.substr(c + 1));
+  if (std::isfinite(lo) && std::isfinite(hi) && lo > hi) throw bad();
+  return {lo, hi};
+}
+
 std::map<std::string, double> parse_fixes(const std::vector<std::string>& fixes) {
   std::map<std::string, double> m;
   for (const auto& f : fixes) {
@@ -80,6 +107,8 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
   ident::RheologyCsvOptions co;
   co.temperature_degC = a.temperature_degc;
   co.kelvin_offset = a.kelvin_offset;
+  co.viscosity_unit = a.viscosity_unit;
+  if (!a.temperatures.empty()) std::tie(co.temperature_min_degC, co.temperature_max_degC) = parse_temperature_range(a.temperatures);
   if (!(a.kelvin_offset == fitting::kKelvinOffset || a.kelvin_offset == fitting::kKelvinOffsetThesis))
     throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (the seed's code)");
   const auto table = ident::parse_rheology_csv(bytes, a.file, co);
@@ -109,6 +138,8 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
   env.set_options({{"model", a.model},
                    {"shift", a.shift},
                    {"kelvin_offset", a.kelvin_offset},
+                   {"viscosity_unit", a.viscosity_unit},
+                   {"temperatures_degC", a.temperatures},
                    {"fix", a.fix},
                    {"free", a.free},
                    {"compare", !a.no_compare},
@@ -122,6 +153,7 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
                    {"reference_flow_mm3_s", a.reference_flow_mm3_s},
                    {"pressure_model", a.pressure_model}});
   for (const auto& n : table.notes) env.warn(a.file + ": " + n);
+  for (const auto& w : table.warnings) env.warn(w);
 
   fitting::FitResult fit;
   nlohmann::json comparison;
@@ -141,7 +173,8 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
     if (auto_model) {
       if (cmp.best.empty()) {
         std::string why;
-        for (const auto& e : cmp.entries) why += (why.empty() ? "" : "; ") + e.model + ": " + e.error;
+        for (const auto& e : cmp.entries)
+          why += (why.empty() ? "" : "; ") + e.model + ": " + (e.error.empty() ? "no reason given" : e.error);
         throw FitError("no viscosity model could be fitted (" + why + ")", a.file);
       }
       for (std::size_t i = 0; i < cmp.entries.size(); ++i)
@@ -175,10 +208,34 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
     }
     res["power_law"] = {{"window_1_s", {lo, hi}}, {"points", a.window_points}, {"spacing", "log"}, {"fits", fits}};
   }
-  if (a.tts) {
-    if (!multi) throw InputError("--tts needs data at two or more temperatures", a.file);
-    res["tts"] = fitting::to_json(fitting::time_temperature_superposition(data, primary.T_ref_K));
+  if (a.tts && !multi) throw InputError("--tts needs data at two or more temperatures", a.file);
+  if (multi) {
+    // Do the temperatures superpose? A transition or a degraded sample shows here, and a
+    // temperature model fitted across it describes neither side.
+    try {
+      const auto sc = fitting::check_superposition(data, primary.T_ref_K);
+      res["superposition"] = fitting::to_json(sc);
+      if (a.tts) res["tts"] = fitting::to_json(sc.tts);
+      const auto degc = [&](double K) { return fmt::format("{:g} degC", std::round((K - a.kelvin_offset) * 100) / 100); };
+      std::string off;
+      for (const auto& l : sc.levels)
+        if (!l.on_master_curve) off += (off.empty() ? "" : ", ") + degc(l.temperature_K);
+      if (!off.empty())
+        env.warn(fmt::format("the curves at {} do not lie on the master curve of the other temperatures (F test, p < {:g}): "
+                             "a transition, a degraded sample or a change of mechanism; one temperature-shift model "
+                             "cannot hold them (select a range with --temperatures)",
+                             off, sc.alpha));
+      for (const auto& r : sc.reversals)
+        env.warn(fmt::format("the viscosity rises between {} and {} (shift factor x{:.3g}): a transition between these "
+                             "temperatures (e.g. a liquid-crystalline melt turning isotropic) or curves of different samples; "
+                             "fit each side on its own with --temperatures",
+                             degc(r.lower_K), degc(r.upper_K), r.ratio));
+    } catch (const Error& e) {
+      if (a.tts) throw;
+      env.warn("superposition check not done: " + e.message());
+    }
   }
+  if (auto corr = fitting::correlation_json(fit); !corr.is_null()) res["correlation"] = corr;
   if (std::isfinite(a.nozzle_d_mm)) {
     ident::LiquefierPredictionOptions po;
     po.geometry.d_m = a.nozzle_d_mm * 1e-3;
@@ -198,9 +255,17 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
       if (p.fixed)
         ctx.out << fmt::format("  {:<14} {:>12.6g} {:<8} (held)\n", p.name, p.value, p.unit);
       else
-        ctx.out << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", p.name, p.value, p.unit, p.ci95_lo,
-                               p.ci95_hi);
+        ctx.out << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]{}\n", p.name, p.value, p.unit, p.ci95_lo,
+                               p.ci95_hi, p.ci95_method == "profile-likelihood" ? " (profile likelihood)" : "");
     }
+    for (const auto& p : fit.derived)
+      ctx.out << fmt::format("  {:<26} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", p.name, p.value, p.unit, p.ci95_lo,
+                             p.ci95_hi);
+    if (res.contains("superposition"))
+      for (const auto& l : res["superposition"]["levels"])
+        ctx.out << fmt::format("  a_T at {:.2f} K: {:.4g} [{:.4g}, {:.4g}]{}\n", l["temperature_K"].get<double>(),
+                               l["a_T"].get<double>(), l["a_T_ci95"][0].get<double>(), l["a_T_ci95"][1].get<double>(),
+                               l["on_master_curve"].get<bool>() ? "" : "  NOT on the master curve");
     ctx.out << fmt::format("  rms(ln eta) {:.4g}, R2 {:.5f}, AIC {:.2f}\n", fit.diagnostics.rms, fit.diagnostics.r2,
                            fit.diagnostics.aic);
     if (res.contains("model_comparison")) {
@@ -251,6 +316,10 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
   sub->add_option("--temperature", args->temperature_degc, "Temperature of every point when the file has no temperature column (degC)");
   sub->add_option("--kelvin-offset", args->kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (as the seed's code) (K)")
       ->capture_default_str();
+  sub->add_option("--viscosity-unit", args->viscosity_unit,
+                  "Unit of the viscosity column when its header states none: Pa.s, mPa.s, cP, P (poise) or kPa.s");
+  sub->add_option("--temperatures", args->temperatures,
+                  "Fit only the rows at LO:HI degC (inclusive; either side may be empty), e.g. 300:350");
   sub->add_option("--fix", args->fix,
                   "Hold a parameter at a value, NAME=VALUE in the parameter's SI unit (e.g. D2_K=416); repeatable. "
                   "cross-wlf holds A2_K=51.6 K and D3_K_per_Pa=0 by default");
@@ -280,6 +349,12 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
       "  tunekit rheo datasets/rheology/peek_cross_wlf_synthetic.csv --model cross-wlf --nozzle-d 0.6 --nozzle-l 4 \\\n"
       "      --cone-angle 30 --entrance-D 5 --predict-at 405 --reference-flow 3 --json   # results.prediction\n"
       "  tunekit rheo abs.csv --model cross-wlf --fix D2_K=378.15 --require 'n<0.5'\n"
+      "  tunekit rheo datasets/rheology/polyimidazole_melt_viscosity.csv --temperatures 300:350\n"
+      "  tunekit rheo melt.csv --viscosity-unit mPa.s     # a viscosity column without a unit\n"
+      "Intervals: linearised (Wald) where they hold, profile likelihood where a parameter is strongly\n"
+      "correlated, near a bound or on a curved likelihood (params.X.ci95_method). With data at several\n"
+      "temperatures results.superposition tests each temperature against the master curve and names\n"
+      "the temperatures that do not superpose (a transition, a degraded sample).\n"
       "Parameters (SI): n, tau_star_Pa, D1_Pa_s, D2_K, D3_K_per_Pa, A1, A2_K (cross-wlf); eta0_Pa_s, K_Pa_s_n,\n"
       "lambda_s, a, eta_inf_Pa_s; shifts Ea_J_per_mol or C1, C2_K with T_ref_K.");
   sub->callback([args, &ctx] { set_exit_code(run_rheo(*args, ctx)); });

@@ -22,6 +22,9 @@ struct Param {
   double ci95_hi = kNaN;
   std::string unit;  ///< SI unit, e.g. "s", "Pa.s^n", "1" for dimensionless
   bool fixed = false;  ///< held at its start value, not estimated
+  /// How the interval was computed: "wald" (linearised, Student-t), "profile-likelihood"
+  /// (profile_likelihood.hpp), or empty when not stated. Serialized as "ci95_method".
+  std::string ci95_method = {};
 };
 
 /// Quality of a fit. `whiteness_p` is the Ljung-Box p-value of the residuals
@@ -46,6 +49,14 @@ struct FitResult {
   std::vector<Param> params;
   Diagnostics diagnostics;
   std::vector<std::string> warnings;
+  /// Covariance of the estimate, row-major params.size() x params.size(), in the coordinates
+  /// the solver used (ln for parameters estimated as logarithms), scaled by the residual
+  /// variance; rows and columns of fixed parameters are 0. Empty when not computed. Not part
+  /// of to_json(FitResult); see correlation_json().
+  std::vector<double> covariance = {};
+  /// Quantities computed from the parameters with their own intervals (e.g. the zero-shear
+  /// viscosity at each measured temperature), serialized under "derived".
+  std::vector<Param> derived = {};
 
   const Param& param(const std::string& name) const;  ///< throws std::out_of_range
   double value(const std::string& name) const { return param(name).value; }
@@ -54,5 +65,7 @@ struct FitResult {
 nlohmann::json to_json(const Param& p);
 nlohmann::json to_json(const Diagnostics& d);
 nlohmann::json to_json(const FitResult& r);
+/// {"parameters": [free names], "matrix": [[r_ij]]} from FitResult::covariance (null if empty).
+nlohmann::json correlation_json(const FitResult& r);
 
 }  // namespace tunekit::fitting

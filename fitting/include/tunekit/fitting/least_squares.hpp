@@ -70,7 +70,16 @@ struct LsqOptions {
 FitResult solve_least_squares(const std::string& model, const LsqProblem& problem,
                               const LsqOptions& options = {});
 
+/// Relative resolution of a residual: residual variances below (this * the largest |observed|,
+/// or * 1 without observations)^2 count as zero. AIC and BIC use max(rss / n, floor), so an
+/// exact fit has finite information criteria instead of ln(0).
+inline constexpr double kRelativeResidualFloor = 1e-9;
+/// The residual-variance floor for these observations (see kRelativeResidualFloor).
+double residual_variance_floor(const std::vector<double>& observed);
+
 /// Fills r.diagnostics statistics (rss, rms, r2, aic, bic, whiteness) from residuals.
+/// Every statistic is finite for finite residuals: AIC/BIC floor the residual variance, and
+/// R^2 of data that do not vary is 1 for a fit within the floor and 0 otherwise (with a warning).
 void fill_residual_diagnostics(FitResult& r, const std::vector<double>& residuals,
                                const std::vector<double>& observed, bool time_ordered);
 

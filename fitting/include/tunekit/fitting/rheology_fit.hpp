@@ -3,8 +3,14 @@
 //  - weighted least squares on ln(eta) with bounds (Ceres), start values from a bounded global
 //    search (global_start.hpp), so no fit needs a guess from the user;
 //  - 95 % intervals: scale parameters (eta0, K, tau*, D1, lambda) are estimated as logarithms,
-//    so their intervals are exp of a symmetric interval in ln and never go negative; the
-//    reported std. error is the delta-method value * se(ln);
+//    so their intervals are exp of an interval in ln and never go negative; the reported std.
+//    error is the delta-method value * se(ln). Where the linearised interval cannot be trusted
+//    (Cross-WLF's D1, D2, A1 on the WLF ridge of data at few temperatures, a curved likelihood,
+//    a bound nearby) it is replaced by the profile-likelihood interval (profile_likelihood.hpp);
+//    an interval never leaves the parameter's search box (it ends there, with a warning);
+//  - the zero-shear viscosity at each measured temperature as a derived quantity with its own
+//    interval (FitResult::derived), and the correlation matrix (FitResult::covariance);
+//  - information criteria finite for exact fits (least_squares.hpp: a residual-variance floor);
 //  - AIC-based comparison of several models on the same data;
 //  - a power-law fit to a model over a shear-rate window with log-spaced points (sec. 5.2.3:
 //    evenly spaced points would weight the window's upper end);
@@ -20,6 +26,7 @@
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/fitting/global_start.hpp"
 #include "tunekit/fitting/least_squares.hpp"
+#include "tunekit/fitting/profile_likelihood.hpp"
 #include "tunekit/fitting/viscosity.hpp"
 
 namespace tunekit::fitting {
@@ -48,6 +55,10 @@ struct ViscosityFitOptions {
   std::vector<std::string> free;
   GlobalStartOptions global;
   LsqOptions lsq;
+  /// Replace linearised intervals that cannot be trusted (correlation, curvature, a bound) by
+  /// profile-likelihood intervals (profile_likelihood.hpp); Param::ci95_method says which.
+  bool profile_intervals = true;
+  ProfileOptions profile;
 };
 
 /// Fits the model. InputError: bad data (non-positive values, too few points for the free
@@ -98,5 +109,49 @@ struct TtsResult {
 /// Shift factors and master curve from data at >= 2 temperatures (Cross at the reference).
 TtsResult time_temperature_superposition(const RheologyData& data, double T_ref_K = kNaN);
 nlohmann::json to_json(const TtsResult& t);
+
+/// Does each temperature lie on one master curve? (Dealy and Plazek, Time-temperature
+/// superposition -- a users guide, Rheology Bulletin 78, 2009: a transition, a degrading
+/// sample or a change of mechanism shows as curves that do not superpose.)
+///  - per temperature: the shift factor a_T with its interval (time_temperature_superposition),
+///    and an F test of the temperature's own Cross fit (3 parameters) against the master curve
+///    (1 shift): F = ((rss_master - rss_own) / 2) / s^2, s^2 pooled from every temperature's own
+///    fit; p < alpha and an rms misfit on the master curve above kSuperpositionTolerance (in
+///    ln viscosity): the temperature is off the master curve;
+///  - between neighbouring temperatures: a_T must fall as T rises (the melt thins when heated);
+///    a rise whose intervals do not overlap is a reversal -- a phase transition between the two
+///    (e.g. liquid-crystalline to isotropic), which no single temperature shift can hold; the
+///    F test is then repeated on each side of the reversals with that side's own master curve.
+/// Misfit on the master curve (rms of ln viscosity) below which a temperature is not flagged
+/// however significant: about 5 %, the repeatability of rotational and capillary rheometry.
+inline constexpr double kSuperpositionTolerance = 0.05;
+struct SuperpositionLevel {
+  double temperature_K = kNaN;
+  int points = 0;
+  double shift_factor = kNaN, shift_lo = kNaN, shift_hi = kNaN;  ///< a_T and its 95 % interval
+  double rms_master_ln = kNaN;  ///< rms of ln(viscosity) residuals on the master curve
+  double rms_own_ln = kNaN;     ///< rms of the temperature's own Cross fit (NaN: < 5 points)
+  double f_statistic = kNaN;
+  double p_value = kNaN;        ///< NaN when not tested (too few points)
+  bool on_master_curve = true;
+  /// Side of the reversals (0 below the first): with a transition each side is tested against
+  /// its own master curve (rms_master_ln, the statistic and the verdict are the side's).
+  int segment = 0;
+};
+struct SuperpositionReversal {
+  double lower_K = kNaN, upper_K = kNaN;  ///< neighbouring temperatures
+  double ratio = kNaN;                    ///< a_T(upper) / a_T(lower), > 1
+};
+struct SuperpositionCheck {
+  double alpha = 0.01;
+  TtsResult tts;
+  std::vector<SuperpositionLevel> levels;
+  std::vector<SuperpositionReversal> reversals;
+  bool superposes() const;  ///< every level on the master curve and no reversal
+};
+/// Needs data at >= 2 temperatures (InputError otherwise); FitError when the master curve cannot
+/// be fitted at all.
+SuperpositionCheck check_superposition(const RheologyData& data, double T_ref_K = kNaN, double alpha = 0.01);
+nlohmann::json to_json(const SuperpositionCheck& c);
 
 }  // namespace tunekit::fitting
