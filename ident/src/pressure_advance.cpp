@@ -31,11 +31,13 @@ bool gain_is_dimensionless(const std::string& unit) {
   for (char c : unit)
     if (c != ' ') u += c;
   if (u == "1") return true;
+  // "A/(B)": the denominator is the last parenthesized group (A may hold slashes itself).
+  if (u.size() > 3 && u.back() == ')') {
+    const auto open = u.rfind("/(");
+    if (open != std::string::npos && open > 0) return u.substr(0, open) == u.substr(open + 2, u.size() - open - 3);
+  }
   const auto slash = u.find('/');
-  if (slash == std::string::npos || slash == 0) return false;
-  std::string den = u.substr(slash + 1);
-  if (den.size() >= 2 && den.front() == '(' && den.back() == ')') den = den.substr(1, den.size() - 2);
-  return u.substr(0, slash) == den;
+  return slash != std::string::npos && slash > 0 && u.substr(0, slash) == u.substr(slash + 1);
 }
 
 double kernel_peak_factor(SmoothingKernel kernel) { return kernel == SmoothingKernel::triangular ? 2.0 : 1.0; }

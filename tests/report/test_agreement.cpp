@@ -41,12 +41,16 @@ TEST_CASE("the liquefier gain is compared with 1 only when input and output shar
   using tunekit::ident::gain_is_dimensionless;
   CHECK(gain_is_dimensionless("1"));
   CHECK(gain_is_dimensionless("mm/(mm)"));
+  CHECK(gain_is_dimensionless("mm/mm"));
   CHECK(gain_is_dimensionless("mm^3/s/(mm^3/s)"));
   CHECK_FALSE(gain_is_dimensionless("N/(mm/s)"));
   CHECK_FALSE(gain_is_dimensionless(""));
   tunekit::ident::AdvanceInputs in;
   in.tau_s = 0.45;
   in.gain = 3.5;
+  in.filament_area_mm2 = 2.405;
+  in.line_area_mm2 = 0.09;
+  in.print_speed_mm_s = 60;
   in.print_accel_mm_s2 = 3000;
   in.extruder_accel_limit_mm_s2 = 5000;
   auto gain_warned = [](const tunekit::ident::AdvanceDesign& d) {
