@@ -26,6 +26,20 @@ nlohmann::json num(double v) { return finite(v) ? nlohmann::json(v) : nlohmann::
 
 }  // namespace
 
+bool gain_is_dimensionless(const std::string& unit) {
+  std::string u;
+  for (char c : unit)
+    if (c != ' ') u += c;
+  if (u == "1") return true;
+  // "A/(B)": the denominator is the last parenthesized group (A may hold slashes itself).
+  if (u.size() > 3 && u.back() == ')') {
+    const auto open = u.rfind("/(");
+    if (open != std::string::npos && open > 0) return u.substr(0, open) == u.substr(open + 2, u.size() - open - 3);
+  }
+  const auto slash = u.find('/');
+  return slash != std::string::npos && slash > 0 && u.substr(0, slash) == u.substr(slash + 1);
+}
+
 double kernel_peak_factor(SmoothingKernel kernel) { return kernel == SmoothingKernel::triangular ? 2.0 : 1.0; }
 
 double min_smoothing_window_s(double k_s, double print_accel_mm_s2, double area_ratio,
@@ -64,8 +78,8 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
   for (const auto& p : in.points)
     if (finite(p.feed_mm_s) && finite(p.tau_s)) pts.push_back(p);
   if (pts.size() != in.points.size())
-    d.notes.push_back(fmt::format("{} operating point(s) without feed rate or tau were left out",
-                                  in.points.size() - pts.size()));
+    d.warnings.push_back(fmt::format("{} operating point(s) without feed rate or tau were left out",
+                                     in.points.size() - pts.size()));
   std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) { return a.feed_mm_s < b.feed_mm_s; });
   for (const auto& p : pts) {
     if (p.tau_s < 0 || p.feed_mm_s <= 0)
@@ -85,8 +99,8 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
     d.k_s = interp(q, k, d.design_flow_mm3_s);
     d.k_source = "operating points";
     if (d.design_flow_mm3_s < q.front() || d.design_flow_mm3_s > q.back())
-      d.notes.push_back(fmt::format("design flow {:.3g} mm^3/s lies outside the identified range {:.3g}-{:.3g} mm^3/s: "
-                                    "K is held at the nearest operating point",
+      d.warnings.push_back(fmt::format("design flow {:.3g} mm^3/s lies outside the identified range {:.3g}-{:.3g} "
+                                       "mm^3/s: K is held at the nearest operating point",
                                     d.design_flow_mm3_s, q.front(), q.back()));
     if (!finite(d.theta_s)) {
       std::vector<double> th;
@@ -131,7 +145,8 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
   if (!in.rheo_flow_mm3_s.empty() && pts.size() >= 2)
     d.notes.push_back("rheology prediction not used: the measured operating points take precedence");
   if (!in.rheo_flow_mm3_s.empty() && !finite(in.tau_s) && pts.size() < 2)
-    d.notes.push_back("rheology prediction ignored: it gives only the shape of tau(Q) and needs a measured tau to scale it");
+    d.warnings.push_back(
+        "rheology prediction ignored: it gives only the shape of tau(Q) and needs a measured tau to scale it");
 
   if (d.schedule.size() >= 2) {
     double sq = 0, sk = 0, sqq = 0, sqk = 0;
@@ -161,10 +176,12 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
                                   finite(d.theta_track_mm) ? fmt::format(", about {:.3g} mm of line at print speed",
                                                                          d.theta_track_mm)
                                                            : std::string()));
-  if (finite(d.gain) && std::abs(d.gain - 1.0) > 0.05)
-    d.notes.push_back(fmt::format("steady-state gain {:.4g} differs from 1: a flow-rate (extrusion multiplier) matter, "
-                                  "not part of K; meaningful as a multiplier only if input and output share units",
-                                  d.gain));
+  // Comparing the gain with 1 means something only when input and output share units (flow in,
+  // flow out): a feed in mm/s against a force in N has no natural "1".
+  if (finite(d.gain) && std::abs(d.gain - 1.0) > 0.05 && gain_is_dimensionless(in.gain_unit))
+    d.warnings.push_back(fmt::format("steady-state gain {:.4g} differs from 1: the delivered flow is off by that "
+                                     "factor, a flow-rate (extrusion multiplier) matter, not part of K",
+                                     d.gain));
 
   const bool limits = finite(in.print_accel_mm_s2) && in.print_accel_mm_s2 > 0 &&
                       finite(in.extruder_accel_limit_mm_s2) && in.extruder_accel_limit_mm_s2 > 0;
@@ -174,7 +191,7 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
     d.window_triangular_s = min_smoothing_window_s(d.k_s, in.print_accel_mm_s2, d.area_ratio,
                                                    in.extruder_accel_limit_mm_s2, SmoothingKernel::triangular);
   } else {
-    d.notes.push_back("no print acceleration or extruder acceleration limit: smoothing time not designed");
+    d.warnings.push_back("no print acceleration or extruder acceleration limit: smoothing time not designed");
   }
   return d;
 }
@@ -198,7 +215,8 @@ nlohmann::json AdvanceDesign::to_json() const {
           {"schedule", sched},
           {"trend", {{"k0_s", num(trend_k0_s)}, {"k1_s_per_mm3_s", num(trend_k1_s_per_mm3_s)}}},
           {"single_K_max_rel_error", num(single_k_max_rel_error)},
-          {"notes", notes}};
+          {"notes", notes},
+          {"warnings", warnings}};
 }
 
 }  // namespace tunekit::ident

@@ -307,6 +307,7 @@ nlohmann::json to_json(const StepAnalysis& a) {
     j["index"] = s.step.index;
     j["direction"] = s.step.rising() ? "rising" : "falling";
     j["t_step_s"] = s.step.t_step_s;
+    j["fit_samples"] = {s.step.begin, s.step.end};  // [first, last + 1) sample of the record in this step's fit
     j["u_before"] = s.step.u_before;
     j["u_after"] = s.step.u_after;
     j["operating_point"] = s.step.operating_point();

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/protocols/gcode.hpp"
 #include "tunekit/protocols/trajectory.hpp"
 
@@ -51,6 +52,10 @@ std::vector<ProtocolSpec> make_specs() {
                 {"freq_min_hz", 0.1, "Hz", "start frequency"},
                 {"freq_max_hz", 3.0, "Hz", "end frequency"},
                 {"duration_s", 20, "s", "chirp duration"},
+                {"settle_s", 2.0, "s", "steady feed at the mean before the chirp"},
+                {"expected_tau_s", 0, "s",
+                 "expected liquefier time constant (0: none); when given, the frequency range, duration and settle "
+                 "time not set explicitly are sized from its corner 1/(2 pi tau)"},
                 {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase"},
                 {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments"},
                 hotend},
@@ -208,9 +213,15 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     if (amp < 0 || amp >= mean) throw InputError("amplitude_mm_s must be in [0, feed_mean_mm_s) so the feed stays positive");
     const double seg = positive("segment_s");
     positive("accel_mm_s2");
+    if (protocol == "liquefier-chirp" && p.at("expected_tau_s") != 0) {
+      const auto plan = plan_liquefier_chirp(positive("expected_tau_s"), seg);
+      for (const auto& [k, v] : {std::pair{"freq_min_hz", plan.freq_min_hz}, std::pair{"freq_max_hz", plan.freq_max_hz},
+                                 std::pair{"duration_s", plan.duration_s}, std::pair{"settle_s", plan.settle_s}})
+        if (!overrides.count(k)) p[k] = v;
+    }
     liquefier_prologue(g, p, d);
     g.push_back(";@record load_cell on");
-    feed_move(g, mean, 2.0);  // steady state first
+    feed_move(g, mean, protocol == "liquefier-chirp" ? positive("settle_s") : 2.0);  // steady state first
     if (protocol == "liquefier-sine") {
       const double f0 = positive("freq_min_hz"), f1 = positive("freq_max_hz");
       const int n = std::max(1, static_cast<int>(std::lround(positive("freq_count"))));

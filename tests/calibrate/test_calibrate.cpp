@@ -46,7 +46,7 @@ TEST_CASE("calibrate on the simulated printer writes a report whose plots and nu
 
   for (const char* id : {"step", "bode", "psd_x", "psd_y"}) {
     INFO(id);
-    CHECK(tunekit::test::embedded_png_base64_length(html, id) > 2000);
+    CHECK(tunekit::test::embedded_image_base64_length(html, id) > 2000);
   }
   std::size_t cells = 0;
   for (const auto& c : tunekit::test::summary_cells(html)) {
@@ -59,6 +59,28 @@ TEST_CASE("calibrate on the simulated printer writes a report whose plots and nu
   }
   CHECK(cells == results.at("summary").size());
   CHECK(cells >= 8);
+  // Every measured quantity shows its 95 % interval; the rest say why they have none.
+  std::size_t with_interval = 0;
+  for (const auto& row : results.at("summary")) {
+    INFO(row.dump());
+    if (row.contains("ci_path")) {
+      const auto* ci = tunekit::cli::json_at(results, row.at("ci_path").get<std::string>());
+      REQUIRE(ci != nullptr);
+      REQUIRE(ci->size() == 2);
+      const double v = tunekit::cli::json_at(results, row.at("path").get<std::string>())->get<double>();
+      CHECK((*ci)[0].get<double>() <= v);
+      CHECK(v <= (*ci)[1].get<double>());
+      const std::string cell = "[" + tunekit::cli::display_number((*ci)[0].get<double>()) + ", " +
+                               tunekit::cli::display_number((*ci)[1].get<double>()) + "]";
+      CHECK(html.find(cell) != std::string::npos);
+      ++with_interval;
+    } else {
+      CHECK(row.at("basis").get<std::string>().find("designed") == 0);
+    }
+  }
+  // tau, theta, K by step; tau by frequency response; frequency and damping of x and y.
+  CHECK(with_interval == 8);
+  CHECK(html.find("<th>95 % interval</th>") != std::string::npos);
   // The configuration preview changes pressure advance and both shapers.
   const std::string diff = results.at("config_diff").get<std::string>();
   CHECK(diff.find("+pressure_advance") != std::string::npos);
@@ -97,4 +119,58 @@ TEST_CASE("calibrate refuses a real machine without a profile before touching it
   const auto r = tunekit::test::run_cli({"calibrate", "--machine", "/dev/ttyNONEXISTENT"});
   CHECK(r.code == 2);
   CHECK(r.err.find("needs its profile") != std::string::npos);
+}
+
+TEST_CASE("calibrate: step and frequency-response taus agree and the frequency interval is at most 3x the step's") {
+  const auto run = calibrate("calibrate_tau_agreement", {"--skip-axes"});
+  INFO(run.cli.err);
+  REQUIRE(run.cli.code == 0);
+  const auto env = nlohmann::json::parse(read_file_bytes(run.dir + "/results.json"));
+  const auto& liq = env.at("results").at("liquefier");
+  const auto& step = liq.at("step").at("pooled").at("params").at("tau_s");
+  const auto& freq = liq.at("freq").at("tf_oe_fit").at("params").at("tau_s");
+  const double step_lo = step.at("ci95")[0].get<double>(), step_hi = step.at("ci95")[1].get<double>();
+  const double freq_lo = freq.at("ci95")[0].get<double>(), freq_hi = freq.at("ci95")[1].get<double>();
+  INFO("step tau " << step.at("value").get<double>() << " [" << step_lo << ", " << step_hi << "], frequency tau "
+                   << freq.at("value").get<double>() << " [" << freq_lo << ", " << freq_hi << "]");
+  // The intervals overlap, and each value lies within the combined uncertainty of the other.
+  CHECK(step_lo <= freq_hi);
+  CHECK(freq_lo <= step_hi);
+  CHECK(freq_hi - freq_lo <= 3 * (step_hi - step_lo));
+  // Both contain the simulator's truth.
+  const double truth = nlohmann::json::parse(read_file_bytes(run.dir + "/liquefier-step/truth.json"))
+                           .at("liquefier").at("tau_s").get<double>();
+  CHECK(step_lo <= truth);
+  CHECK(truth <= step_hi);
+  CHECK(freq_lo <= truth);
+  CHECK(truth <= freq_hi);
+  // The chirp was sized from the step's tau: several Welch bins below the corner.
+  const auto& plan = liq.at("chirp_plan");
+  const double bin_hz = liq.at("freq").at("h1").at("sample_rate_hz").get<double>() /
+                        liq.at("freq").at("h1").at("segment_length").get<double>();
+  CHECK(plan.at("corner_hz").get<double>() / bin_hz >= 3);
+  CHECK(plan.at("expected_tau_s").get<double>() == step.at("value").get<double>());
+  // The report states the agreement.
+  const auto& agreement = env.at("results").at("agreement");
+  REQUIRE(agreement.size() == 1);
+  CHECK(agreement[0].at("agree").get<bool>());
+  const std::string html = read_file_bytes(run.dir + "/report.html");
+  CHECK(html.find("id=\"agreement-tau\" data-agree=\"true\"") != std::string::npos);
+  CHECK(html.find("agree within their combined 95 % uncertainty") != std::string::npos);
+}
+
+TEST_CASE("the README's main command warns about nothing on the default simulated machine") {
+  // `tunekit calibrate --machine sim` as the README gives it (with --out only to keep the run in
+  // the scratch directory): every warning left would have to ask the user to act, and on the
+  // default simulated machine with the bundled example configuration nothing does.
+  const auto run = calibrate("calibrate_quiet");
+  INFO(run.cli.err);
+  REQUIRE(run.cli.code == 0);
+  CHECK(run.cli.err.find("warning") == std::string::npos);
+  const auto env = nlohmann::json::parse(read_file_bytes(run.dir + "/results.json"));
+  CHECK(env.at("warnings").empty());
+  // What the design means (dead time, one operating point) is kept, as notes in the report.
+  const std::string html = read_file_bytes(run.dir + "/report.html");
+  CHECK(html.find("<ul id=\"notes\">") != std::string::npos);
+  CHECK(html.find("not cancelled by advance") != std::string::npos);
 }

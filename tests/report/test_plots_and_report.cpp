@@ -1,4 +1,4 @@
-// Plots (PLplot, PNG) and the self-contained HTML report.
+// Plots (PLplot: SVG for the report, PNG on request) and the self-contained HTML report.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -10,6 +10,7 @@
 #include "test_support.hpp"
 #include "tunekit/cli/report.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/image_io.hpp"
 
 using namespace tunekit::cli;
@@ -82,7 +83,7 @@ int drawn_pixels(const cv::Mat& img) {
 
 }  // namespace
 
-TEST_CASE("each plot type renders a non-empty PNG of the expected size") {
+TEST_CASE("each plot type renders an SVG of the expected size with its curves drawn") {
   const auto dir = tunekit::test::scratch_dir("plots");
   const auto images = render_report_plots(dir, sample_plotdata());
   REQUIRE(images.size() == 5);
@@ -91,12 +92,41 @@ TEST_CASE("each plot type renders a non-empty PNG of the expected size") {
                                                             {"linewidth", {960, 420}}};
   for (const auto& img : images) {
     INFO(img.id);
-    const cv::Mat m = tunekit::ident::read_image(img.png_path, tunekit::ident::ImageColor::bgr);
-    REQUIRE_FALSE(m.empty());
-    CHECK(m.cols == expected.at(img.id).first);
-    CHECK(m.rows == expected.at(img.id).second);
-    CHECK(drawn_pixels(m) > m.rows * m.cols / 100);  // axes, labels and curves
+    CHECK(std::filesystem::path(img.path).extension() == ".svg");
+    const std::string svg = tunekit::ident::read_file_bytes(img.path);
+    REQUIRE(svg.find("<svg") != std::string::npos);
+    const auto [w, h] = expected.at(img.id);
+    CHECK(svg.find("width=\"" + std::to_string(w) + "pt\" height=\"" + std::to_string(h) + "pt\"") != std::string::npos);
+    std::size_t paths = 0;
+    for (auto pos = svg.find("<path"); pos != std::string::npos; pos = svg.find("<path", pos + 1)) ++paths;
+    CHECK(paths > 100);  // axes, glyphs of the labels, curves
   }
+}
+
+TEST_CASE("a PNG rendering of a figure has exactly its pixel size and is drawn") {
+  const auto dir = tunekit::test::scratch_dir("plots_png");
+  const Figure f = step_figure(sample_plotdata()["step"]);
+  render_png(f, dir + "/step.png");
+  const cv::Mat m = tunekit::ident::read_image(dir + "/step.png", tunekit::ident::ImageColor::bgr);
+  REQUIRE_FALSE(m.empty());
+  CHECK(m.cols == f.width_px);
+  CHECK(m.rows == f.height_px);
+  CHECK(drawn_pixels(m) > m.rows * m.cols / 100);
+  CHECK_THROWS_AS(render_png(f, dir + "/step.svg"), tunekit::InputError);
+  CHECK_THROWS_AS(render_figure(f, dir + "/step.gif"), tunekit::InputError);
+}
+
+TEST_CASE("log axes are labelled at decades and, over short spans, at 2x and 5x") {
+  // A Bode axis from 0.098 Hz to 4.98 Hz: one decade mark alone would leave "1" as its only number.
+  const auto t = log_axis_ticks(std::log10(0.098), std::log10(4.98));
+  const std::vector<double> want{0.1, 0.2, 0.5, 1, 2};  // 5 lies beyond 4.98
+  REQUIRE(t.size() == want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) CHECK(t[i] == Approx(want[i]));
+  // Over more than three decades only the decades.
+  const auto d = log_axis_ticks(0.5, 4.2);
+  const std::vector<double> decades{10, 100, 1000, 10000};
+  REQUIRE(d.size() == decades.size());
+  for (std::size_t i = 0; i < decades.size(); ++i) CHECK(d[i] == Approx(decades[i]));
 }
 
 TEST_CASE("a figure without data is refused") {
@@ -112,16 +142,17 @@ TEST_CASE("the report embeds every plot and its summary numbers equal results.js
   nlohmann::json env = {{"schema_version", 1}, {"command", "calibrate"}, {"tool", {{"version", "test"}}}};
   env["results"] = {{"machine", "test machine"},
                     {"compensators", {{"pressure_advance", {{"k_s", 0.4512345678}, {"smooth_time_s", 0.04}}}}},
-                    {"axes", {{"x", {{"modes", {{{"freq_hz", 44.123456}, {"zeta", 0.0712}}}}}}}},
-                    {"summary", {{{"label", "pressure advance K"}, {"path", "compensators.pressure_advance.k_s"}, {"unit", "s"}},
-                                 {{"label", "x resonance"}, {"path", "axes.x.modes[0].freq_hz"}, {"unit", "Hz"}},
+                    {"axes", {{"x", {{"modes", {{{"freq_hz", 44.123456}, {"freq_ci95", {43.9, 44.35}}, {"zeta", 0.0712}}}}}}}},
+                    {"summary", {{{"label", "pressure advance K"}, {"path", "compensators.pressure_advance.k_s"}, {"unit", "s"},
+                                  {"basis", "designed"}},
+                                 {{"label", "x resonance"}, {"path", "axes.x.modes[0].freq_hz"}, {"unit", "Hz"},
+                                  {"ci_path", "axes.x.modes[0].freq_ci95"}},
                                  {{"label", "x damping"}, {"path", "axes.x.modes[0].zeta"}, {"unit", "1"}}}},
                     {"config_diff", "--- a\n+++ b\n-pressure_advance = 0\n+pressure_advance = 0.451\n"}};
   std::ofstream(dir + "/results.json") << env.dump(2);
   auto pd = sample_plotdata();
   {  // a stand-in for the line-width overlay photo: any PNG
-    const auto shots = render_report_plots(tunekit::test::scratch_dir("report_overlay"), pd);
-    std::filesystem::copy_file(shots.back().png_path, dir + "/overlay.png");
+    render_png(linewidth_figure(pd["linewidth"]), dir + "/overlay.png");
   }
   pd["linewidth"]["overlay_png"] = "overlay.png";
   std::ofstream(dir + "/plotdata.json") << pd.dump();
@@ -134,10 +165,12 @@ TEST_CASE("the report embeds every plot and its summary numbers equal results.js
   // Self-contained: no external references.
   CHECK(html.find("src=\"http") == std::string::npos);
   CHECK(html.find("<script") == std::string::npos);
-  for (const char* id : {"step", "bode", "psd_x", "viscosity", "linewidth", "linewidth_overlay"}) {
+  for (const char* id : {"step", "bode", "psd_x", "viscosity", "linewidth"}) {
     INFO(id);
-    CHECK(tunekit::test::embedded_png_base64_length(html, id) > 1000);
+    CHECK(tunekit::test::embedded_image_base64_length(html, id) > 1000);
+    CHECK(tunekit::test::embedded_png_base64_length(html, id) == 0);  // plots are SVG
   }
+  CHECK(tunekit::test::embedded_png_base64_length(html, "linewidth_overlay") > 1000);  // the photo stays a PNG
   // Summary: every cell's exact value and displayed value come from results.json.
   int cells = 0;
   for (const auto& c : tunekit::test::summary_cells(html)) {
@@ -149,6 +182,28 @@ TEST_CASE("the report embeds every plot and its summary numbers equal results.js
   }
   CHECK(cells == 3);
   CHECK(html.find("+pressure_advance = 0.451") != std::string::npos);
+  // Intervals: [lo, hi] where there is one, the basis where the row gives it, n/a otherwise.
+  CHECK(html.find("<td class=\"ci\" data-path=\"axes.x.modes[0].freq_ci95\">[43.9, 44.35]</td>") != std::string::npos);
+  CHECK(html.find("<td class=\"ci\">designed</td>") != std::string::npos);
+  CHECK(html.find("<td class=\"ci\">n/a</td>") != std::string::npos);
+  // Nothing may leave the file, and the plots are SVG.
+  CHECK(html.find("<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; img-src data:;") !=
+        std::string::npos);
+  CHECK(html.find("src=\"data:image/svg+xml;base64,") != std::string::npos);
+}
+
+TEST_CASE("every warning in the report carries a one-line what to do") {
+  const auto dir = tunekit::test::scratch_dir("report_warnings");
+  nlohmann::json env = {{"schema_version", 1}, {"command", "calibrate"}, {"tool", {{"version", "test"}}}};
+  env["warnings"] = {"steady-state gain 0.93 differs from 1: the delivered flow is off by that factor",
+                     "something no table knows about"};
+  env["results"] = {{"summary", nlohmann::json::array()}, {"notes", {"dead time theta = 0.04 s is not cancelled"}}};
+  const std::string html = build_report_html(env, {});
+  CHECK(html.find("differs from 1: the delivered flow is off by that factor<br><span class=\"todo\">What to do: "
+                  "calibrate the extrusion multiplier") != std::string::npos);
+  CHECK(html.find("something no table knows about<br><span class=\"todo\">What to do: check the file") !=
+        std::string::npos);
+  CHECK(html.find("<ul id=\"notes\">\n<li>dead time theta = 0.04 s is not cancelled</li>") != std::string::npos);
 }
 
 TEST_CASE("report on a directory without results.json is an input error") {

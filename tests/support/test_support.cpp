@@ -46,19 +46,38 @@ CliRun run_exe(const std::string& args) {
   return r;
 }
 
-std::size_t embedded_png_base64_length(const std::string& html, const std::string& id) {
+namespace {
+
+std::size_t embedded_base64_length(const std::string& html, const std::string& id, const std::vector<std::string>& mimes) {
   const std::string open = "<figure id=\"plot-" + id + "\"><img alt=\"";
   auto pos = html.find(open);
   if (pos == std::string::npos) return 0;
-  const std::string src = "\" src=\"data:image/png;base64,";
-  pos = html.find(src, pos);
+  pos = html.find("\" src=\"data:", pos);
   if (pos == std::string::npos) return 0;
-  pos += src.size();
+  pos += std::string("\" src=\"data:").size();
+  bool known = false;
+  for (const auto& m : mimes)
+    if (html.compare(pos, m.size() + 8, m + ";base64,") == 0) {
+      pos += m.size() + 8;
+      known = true;
+      break;
+    }
+  if (!known) return 0;
   std::size_t n = 0;
   while (pos + n < html.size() && (std::isalnum(static_cast<unsigned char>(html[pos + n])) || html[pos + n] == '+' ||
                                    html[pos + n] == '/' || html[pos + n] == '='))
     ++n;
   return (pos + n < html.size() && html[pos + n] == '"') ? n : 0;
+}
+
+}  // namespace
+
+std::size_t embedded_image_base64_length(const std::string& html, const std::string& id) {
+  return embedded_base64_length(html, id, {"image/svg+xml", "image/png"});
+}
+
+std::size_t embedded_png_base64_length(const std::string& html, const std::string& id) {
+  return embedded_base64_length(html, id, {"image/png"});
 }
 
 std::vector<SummaryCell> summary_cells(const std::string& html) {

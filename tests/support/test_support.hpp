@@ -36,8 +36,11 @@ std::string scratch_dir(const std::string& name);
 /// Writes `content` to scratch file `name` (in scratch_dir("files")) and returns its path.
 std::string write_scratch(const std::string& name, const std::string& content);
 
-/// Length of the base64 PNG data of the report figure `<figure id="plot-ID">` (0 if absent
-/// or not a PNG data URI). Scans the text directly: the data run is far too long for std::regex.
+/// Length of the base64 image data of the report figure `<figure id="plot-ID">` (0 if absent
+/// or not an SVG or PNG data URI). Scans the text directly: the data run is far too long for
+/// std::regex.
+std::size_t embedded_image_base64_length(const std::string& html, const std::string& id);
+/// The same, for a figure that must be a PNG (the line-width photo): 0 for an SVG.
 std::size_t embedded_png_base64_length(const std::string& html, const std::string& id);
 
 struct SummaryCell {

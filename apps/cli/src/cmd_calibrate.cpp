@@ -18,6 +18,7 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/cli/agreement.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/progress.hpp"
@@ -27,6 +28,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/input_shaper.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/protocols/runner.hpp"
 
 #ifndef TUNEKIT_DATASETS_DIR
@@ -97,22 +99,19 @@ nlohmann::json step_plotdata(const std::string& csv, const nlohmann::json& step_
   const auto& t = table.column("time").values;
   const auto& u = table.column("feed").values;
   const auto& y = table.column("force").values;
+  // Each step's model is drawn over the samples its fit used and nowhere else (not over the
+  // warm-up from rest, which no step models).
   std::vector<double> yf(t.size(), std::nan(""));
-  const auto& steps = step_results.at("steps");
-  for (std::size_t k = 0; k < steps.size(); ++k) {
-    const auto& s = steps[k];
-    if (!s.contains("params")) continue;
+  for (const auto& s : step_results.at("steps")) {
+    if (!s.contains("params") || !s.contains("fit_samples")) continue;
+    const auto begin = s["fit_samples"].at(0).get<std::size_t>(), end = std::min(s["fit_samples"].at(1).get<std::size_t>(), t.size());
     const double ts = s.value("t_step_s", 0.0);
-    const double t_next = k + 1 < steps.size() ? steps[k + 1].value("t_step_s", t.back() + 1) : t.back() + 1;
-    // Before the first step only its own steady state is modelled (the warm-up is not).
-    const double t_prev = k > 0 ? ts : ts - 0.5 * (t_next - ts);
     const double du = s.value("u_after", 0.0) - s.value("u_before", 0.0);
     const auto& p = s["params"];
     const double K = num(p, "K.value"), tau = num(p, "tau_s.value"), y0 = num(p, "y0.value");
     double theta = num(p, "theta_s.value");
     if (!std::isfinite(theta)) theta = 0;
-    for (std::size_t i = 0; i < t.size(); ++i)
-      if (t[i] >= t_prev && t[i] < t_next) yf[i] = fitting::step_response(t[i], ts, du, K, tau, theta, y0);
+    for (std::size_t i = begin; i < end; ++i) yf[i] = fitting::step_response(t[i], ts, du, K, tau, theta, y0);
   }
   // Thin very long records for the plot (every n-th sample).
   const std::size_t stride = std::max<std::size_t>(1, t.size() / 4000);
@@ -138,9 +137,12 @@ nlohmann::json bode_plotdata(const nlohmann::json& freq_results) {
   d["mag_db"] = b.at("magnitude_db");
   d["phase_deg"] = b.at("phase_deg");
   if (b.contains("coherence")) d["coherence"] = b["coherence"];
-  if (freq_results.contains("tf_fit") && freq_results["tf_fit"].contains("bode")) {
-    const auto& m = freq_results["tf_fit"]["bode"];
-    d["model"] = {{"freq_hz", m.at("freq_hz")}, {"mag_db", m.at("magnitude_db")}, {"phase_deg", m.at("phase_deg")}};
+  // The model the summary reports: the output-error fit on the chirp record when there is one.
+  for (const auto& [key, label] : {std::pair{"tf_oe_fit", "output-error fit (record)"}, std::pair{"tf_fit", "fitted model"}}) {
+    if (!freq_results.contains(key) || !freq_results[key].contains("bode")) continue;
+    const auto& m = freq_results[key]["bode"];
+    d["model"] = {{"freq_hz", m.at("freq_hz")}, {"mag_db", m.at("magnitude_db")}, {"phase_deg", m.at("phase_deg")}, {"label", label}};
+    break;
   }
   return d;
 }
@@ -222,6 +224,10 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   fs::create_directories(run_dir + "/analysis");
   fs::create_directories(run_dir + "/config");
 
+  // The chirp is sized from the expected liquefier corner: the literature time constant until
+  // the step test has measured one (it runs first).
+  protocols::ChirpPlan chirp_plan = protocols::plan_liquefier_chirp(protocols::kLiteratureLiquefierTau_s);
+  std::string chirp_basis = fmt::format("the literature time constant {} s", display_number(chirp_plan.expected_tau_s));
   auto options_for = [&](const Experiment& e, bool dry) {
     protocols::RunOptions o;
     o.protocol = e.protocol;
@@ -232,6 +238,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     o.dry_run = dry;
     o.run_dir = run_dir + "/" + e.name;
     o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
+    if (e.protocol == "liquefier-chirp") o.params["expected_tau_s"] = chirp_plan.expected_tau_s;
     return o;
   };
 
@@ -241,12 +248,25 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
 
   ProgressBar bar(ctx, static_cast<int>(exps.size()) + 3);
   std::map<std::string, protocols::RunResult> runs;
+  nlohmann::json step_analysis;
   for (const auto& e : exps) {
+    if (e.name == "liquefier-chirp" && step_analysis.is_object()) {
+      const double tau = num(step_analysis.at("results"), "pooled.params.tau_s.value");
+      if (std::isfinite(tau) && tau > 0) {
+        chirp_plan = protocols::plan_liquefier_chirp(tau);
+        chirp_basis = fmt::format("the step test's time constant {} s", display_number(tau));
+      }
+    }
     auto o = options_for(e, false);
     const double est = protocols::run_experiment(options_for(e, true)).experiment.estimated_duration_s;
     bar.begin("run " + e.name, sim ? std::max(1.0, est / 4) : est);
     runs[e.name] = protocols::run_experiment(o);
     bar.end(runs[e.name].status);
+    if (e.name == "liquefier-step") {  // identified at once: it sizes the chirp
+      const std::string csv = runs[e.name].files.at("load_cell");
+      step_analysis = analyze({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--model", "fopdt"},
+                              run_dir + "/analysis/step.json", ctx);
+    }
   }
 
   Envelope env("calibrate");
@@ -261,6 +281,16 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   nlohmann::json plot = nlohmann::json::object();
   res["machine"] = profile.name;
   nlohmann::json summary = nlohmann::json::array();
+  nlohmann::json agreement = nlohmann::json::array();
+  nlohmann::json notes = nlohmann::json::array();
+  // A summary row: the value at `path`, its 95 % interval at `ci_path` or, without one, its basis.
+  auto row = [&](const std::string& label, const std::string& path, const std::string& unit, const std::string& ci_path,
+                 const std::string& basis = "") {
+    nlohmann::json r{{"label", label}, {"path", path}, {"unit", unit}};
+    if (!ci_path.empty()) r["ci_path"] = ci_path;
+    else r["basis"] = basis;
+    summary.push_back(r);
+  };
   std::vector<std::string> export_inputs;
 
   bar.begin("identify models", 3);
@@ -268,27 +298,60 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const auto& r = runs["liquefier-step"];
     const std::string csv = r.files.at("load_cell");
     const std::string out = run_dir + "/analysis/step.json";
-    const auto j = analyze({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--model", "fopdt"}, out, ctx);
+    const auto& j = step_analysis;
     add_input(csv);
     res["liquefier"]["step"] = j.at("results");
     plot["step"] = step_plotdata(csv, j.at("results"));
     export_inputs.push_back(out);
-    summary.push_back({{"label", "liquefier time constant tau"}, {"path", "liquefier.step.pooled.params.tau_s.value"}, {"unit", "s"}});
-    summary.push_back({{"label", "tau standard error"}, {"path", "liquefier.step.pooled.params.tau_s.stderr"}, {"unit", "s"}});
-    summary.push_back({{"label", "liquefier dead time theta"}, {"path", "liquefier.step.pooled.params.theta_s.value"}, {"unit", "s"}});
-    summary.push_back({{"label", "liquefier gain K"}, {"path", "liquefier.step.pooled.params.K.value"}, {"unit", "N/(mm/s)"}});
+    const std::string p = "liquefier.step.pooled.params.";
+    row("liquefier time constant tau (step response)", p + "tau_s.value", "s", p + "tau_s.ci95");
+    row("liquefier dead time theta (step response)", p + "theta_s.value", "s", p + "theta_s.ci95");
+    row("liquefier gain K (step response)", p + "K.value", "N/(mm/s)", p + "K.ci95");
   }
   if (runs.count("liquefier-chirp")) {
     const auto& r = runs["liquefier-chirp"];
     const std::string csv = r.files.at("load_cell");
     const std::string out = run_dir + "/analysis/freq.json";
-    const auto j = analyze({"freq", csv, "--time", "time", "--input", "feed", "--output", "force", "--mode", "h1",
-                            "--fit-tf", "1,0", "--tf-delay", "--fmax", "5"},
+    // Sized from the same plan as the chirp: Welch segments putting bins at most a third of the
+    // corner apart, the record from the settled feed on, and the output-error fit on the whole
+    // chirp for the interval (the spectrum alone is coarse at the corner).
+    const auto table = ident::read_csv(csv, {{"time"}, "time"});
+    const auto& tt = table.column("time").values;
+    const double fs = tt.size() > 1 ? static_cast<double>(tt.size() - 1) / (tt.back() - tt.front()) : 0.0;
+    const auto fmt_num = [](double v) { return fmt::format("{:.6g}", v); };
+    const auto j = analyze({"freq", csv, "--time", "time", "--input", "feed", "--output", "force", "--mode", "oe",
+                            "--fit-tf", "1,0", "--tf-delay", "--fmax", fmt_num(chirp_plan.analysis_fmax_hz), "--segment",
+                            std::to_string(chirp_plan.welch_segment_samples(fs)), "--tmin",
+                            fmt_num(chirp_plan.analysis_start_s)},
                            out, ctx);
     add_input(csv);
     res["liquefier"]["freq"] = j.at("results");
+    res["liquefier"]["chirp_plan"] = {{"expected_tau_s", chirp_plan.expected_tau_s},
+                                      {"basis", chirp_basis},
+                                      {"corner_hz", chirp_plan.corner_hz},
+                                      {"freq_min_hz", chirp_plan.freq_min_hz},
+                                      {"freq_max_hz", chirp_plan.freq_max_hz},
+                                      {"duration_s", chirp_plan.duration_s},
+                                      {"settle_s", chirp_plan.settle_s},
+                                      {"analysis_start_s", chirp_plan.analysis_start_s},
+                                      {"welch_segment_samples", chirp_plan.welch_segment_samples(fs)}};
     plot["bode"] = bode_plotdata(j.at("results"));
-    summary.push_back({{"label", "tau from the frequency response"}, {"path", "liquefier.freq.tf_fit.params.tau_s.value"}, {"unit", "s"}});
+    const std::string p = "liquefier.freq.tf_oe_fit.params.";
+    row("tau from the frequency response (chirp, output-error fit)", p + "tau_s.value", "s", p + "tau_s.ci95");
+    notes.push_back(fmt::format("chirp sized from {}: corner {} Hz, {}-{} Hz over {} s, Welch segments of {} samples "
+                                "({} Hz bins)",
+                                chirp_basis, display_number(chirp_plan.corner_hz), display_number(chirp_plan.freq_min_hz),
+                                display_number(chirp_plan.freq_max_hz), display_number(chirp_plan.duration_s),
+                                chirp_plan.welch_segment_samples(fs),
+                                display_number(fs / static_cast<double>(chirp_plan.welch_segment_samples(fs)))));
+    Estimate by_step, by_freq;
+    if (estimate_from_param(json_at(res, "liquefier.step.pooled.params.tau_s"), "step response", by_step) &&
+        estimate_from_param(json_at(res, "liquefier.freq.tf_oe_fit.params.tau_s"), "frequency response", by_freq)) {
+      auto a = compare_estimates("liquefier time constant tau", "s", by_step, by_freq);
+      a["id"] = "tau";
+      if (!a.at("agree").get<bool>()) env.warn(a.at("statement").get<std::string>());
+      agreement.push_back(a);
+    }
   }
   for (const char* axis : {"x", "y"}) {
     const std::string name = std::string("axis-") + axis;
@@ -301,10 +364,10 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     plot[std::string("psd_") + axis] = psd_plotdata(res["axes"][axis]);
     export_inputs.push_back(out);
     const std::string base = std::string("axes.") + axis;
-    summary.push_back({{"label", fmt::format("{} resonance frequency", axis)}, {"path", base + ".modes[0].freq_hz"}, {"unit", "Hz"}});
-    summary.push_back({{"label", fmt::format("{} damping ratio", axis)}, {"path", base + ".modes[0].zeta"}, {"unit", "1"}});
-    summary.push_back({{"label", fmt::format("{} shaper frequency", axis)}, {"path", base + ".recommended.freq_hz"}, {"unit", "Hz"}});
-    summary.push_back({{"label", fmt::format("{} max acceleration", axis)}, {"path", base + ".recommended.max_accel_mm_s2"}, {"unit", "mm/s^2"}});
+    row(fmt::format("{} resonance frequency", axis), base + ".modes[0].freq_hz", "Hz", base + ".modes[0].freq_ci95");
+    row(fmt::format("{} damping ratio", axis), base + ".modes[0].zeta", "1", base + ".modes[0].zeta_ci95");
+    row(fmt::format("{} shaper frequency", axis), base + ".recommended.freq_hz", "Hz", "", "designed");
+    row(fmt::format("{} max acceleration", axis), base + ".recommended.max_accel_mm_s2", "mm/s^2", "", "designed");
   }
   bar.end("models identified");
 
@@ -329,12 +392,16 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   res["config_diff"] = diff;
   protocols::write_file_atomic(run_dir + "/config/changes.diff", diff);
   if (json_at(res, "compensators.settings.pa_k_s") != nullptr && res["compensators"]["settings"]["pa_k_s"].is_number())
-    summary.push_back({{"label", "pressure advance K"}, {"path", "compensators.settings.pa_k_s"}, {"unit", "s"}});
+    row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
   if (json_at(res, "compensators.settings.pa_smooth_s") != nullptr &&
       res["compensators"]["settings"]["pa_smooth_s"].is_number())
-    summary.push_back({{"label", "advance smoothing time"}, {"path", "compensators.settings.pa_smooth_s"}, {"unit", "s"}});
+    row("advance smoothing time", "compensators.settings.pa_smooth_s", "s", "", "designed");
   bar.end(diff.empty() ? "configuration already up to date" : "configuration diff ready");
   res["summary"] = summary;
+  res["agreement"] = agreement;
+  if (const auto* dn = json_at(res, "compensators.design.notes"); dn != nullptr && dn->is_array())
+    for (const auto& n : *dn) notes.push_back(n);
+  res["notes"] = notes;
   for (const auto& w : ex.value("warnings", std::vector<std::string>{})) {
     nlohmann::json wj = w;
     strip_prefix(wj, run_dir + "/");

@@ -111,6 +111,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
         in.tau_stderr_s = number_at(dig(params, {"tau_s", "stderr"}), "pooled.params.tau_s.stderr", path);
         in.theta_s = number_at(dig(params, {"theta_s", "value"}), "pooled.params.theta_s.value", path);
         in.gain = number_at(dig(params, {"K", "value"}), "pooled.params.K.value", path);
+        if (dig(params, {"K", "unit"}).is_string()) in.gain_unit = dig(params, {"K", "unit"}).get<std::string>();
         in.tau_source = "step";
       }
       const auto& ops = dig(res, {"operating_points"});
@@ -201,7 +202,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     design = ident::design_advance(in);
     settings.pa_k_s = design->k_s;
     settings.pa_smooth_s = protocols::smoothing_time_for(fw, *design);
-    for (const auto& n : design->notes) env.warn(n);
+    for (const auto& w : design->warnings) env.warn(w);
   }
   if (std::isfinite(a.pa_smooth)) {
     if (a.no_pa) throw InputError("--pa-smooth and --no-pa contradict each other");
@@ -264,6 +265,9 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
                              design->design_flow_mm3_s,
                              settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s)
                                                   : std::string());
+    // The design's notes say what it means (nothing to act on): informational lines, not warnings.
+    if (design)
+      for (const auto& n : design->notes) ctx.err << "tunekit: note: " << n << "\n";
     if (!result.changed())
       ctx.err << fmt::format("tunekit: {} already has these settings; nothing to change\n", a.config);
     else if (a.write)

@@ -32,6 +32,7 @@ struct FreqArgs {
   std::string window = "hann";
   double fmin_hz = 0;
   double fmax_hz = 0;
+  double tmin_s = 0;
   double min_coherence = 0.8;
   OutputOptions output;
 };
@@ -85,7 +86,7 @@ int run_freq(const FreqArgs& a, CliContext& ctx) {
   if (!a.input_column.empty()) copt.columns.push_back(a.input_column);
   copt.time_column = a.time_column;
   const auto table = ident::parse_csv(bytes, a.file, copt);
-  const auto& t = table.column(a.time_column).values;
+  const auto& t_all = table.column(a.time_column).values;
   const auto& ycol = table.column(a.output_column);
   const std::string y_unit = unit_or_1(ycol.unit);
   const std::string u_unit = a.input_column.empty() ? "1" : unit_or_1(table.column(a.input_column).unit);
@@ -102,6 +103,7 @@ int run_freq(const FreqArgs& a, CliContext& ctx) {
                    {"window", a.window},
                    {"fmin_hz", a.fmin_hz},
                    {"fmax_hz", a.fmax_hz},
+                   {"tmin_s", a.tmin_s},
                    {"min_coherence", a.min_coherence}});
   env.add_input(a.file, bytes);
   for (const auto& w : table.warnings) env.warn(w);
@@ -122,7 +124,7 @@ int run_freq(const FreqArgs& a, CliContext& ctx) {
     if (!a.fit_tf.empty()) throw InputError("--fit-tf needs broadband data: use --mode h1 or --mode oe");
     ident::SineDwell sd;
     located([&] {
-      sd = ident::sine_dwell(t, ycol.values, a.freq_hz,
+      sd = ident::sine_dwell(t_all, ycol.values, a.freq_hz,
                              a.input_column.empty() ? std::span<const double>() : table.column(a.input_column).values,
                              y_unit, u_unit);
     });
@@ -136,7 +138,7 @@ int run_freq(const FreqArgs& a, CliContext& ctx) {
                                what, f.value("amplitude"), f.param("amplitude").std_error, unit, f.value("phase_deg"),
                                f.param("phase_deg").std_error, f.value("offset"), unit);
       };
-      ctx.out << fmt::format("{}: sine dwell at {:.6g} Hz, {} samples\n", a.file, a.freq_hz, t.size());
+      ctx.out << fmt::format("{}: sine dwell at {:.6g} Hz, {} samples\n", a.file, a.freq_hz, t_all.size());
       line("output", sd.output, y_unit);
       if (sd.input) {
         line("input", *sd.input, u_unit);
@@ -150,9 +152,15 @@ int run_freq(const FreqArgs& a, CliContext& ctx) {
   if (a.mode != "h1" && a.mode != "oe") throw InputError("--mode must be dwell, h1 or oe (got '" + a.mode + "')");
   if (a.input_column.empty()) throw InputError("--mode " + a.mode + " needs the input column: --input COL");
   if (a.mode == "oe" && a.fit_tf.empty()) throw InputError("--mode oe needs the model structure: --fit-tf P,Z");
-  if (t.size() < 16) throw InputError(fmt::format("too few samples ({}) for a spectral estimate", t.size()), a.file);
-  const auto& u = table.column(a.input_column).values;
-  const auto& y = ycol.values;
+  // The broadband analyses use the record from --tmin on (a start-up transient left out).
+  const auto first = static_cast<std::ptrdiff_t>(std::lower_bound(t_all.begin(), t_all.end(), a.tmin_s) - t_all.begin());
+  const std::vector<double> t(t_all.begin() + first, t_all.end());
+  const std::vector<double> u(table.column(a.input_column).values.begin() + first, table.column(a.input_column).values.end());
+  const std::vector<double> y(ycol.values.begin() + first, ycol.values.end());
+  if (t.size() < 16)
+    throw InputError(fmt::format("too few samples ({}) for a spectral estimate{}", t.size(),
+                                 a.tmin_s > 0 ? fmt::format(" from --tmin {:g} s on", a.tmin_s) : std::string()),
+                     a.file);
   for (const auto* col : {&u, &y}) {
     const auto [lo, hi] = std::minmax_element(col->begin(), col->end());
     if (!(*hi > *lo))
@@ -227,6 +235,10 @@ int run_freq(const FreqArgs& a, CliContext& ctx) {
       fitting::FitResult oe;
       located([&] { oe = fitting::fit_tf_output_error(u, y, 1.0 / fs, st, fit, gain_unit); });
       res["tf_oe_fit"] = fitting::to_json(oe);
+      const auto tf_oe = fitting::tf_from_fit(st, oe);
+      std::vector<std::complex<double>> hoe;
+      for (double fi : f) hoe.push_back(tf_oe.response(fi));
+      res["tf_oe_fit"]["bode"] = bode_json(f, hoe, nullptr);
       for (const auto& w : oe.warnings) env.warn("output-error fit: " + w);
       if (!a.output.json) print_fit("output-error fit", oe);
     }
@@ -257,6 +269,9 @@ void register_freq(CLI::App& app, CliContext& ctx) {
   sub->add_option("--window", args->window, "Welch window: hann, hamming, kaiser, rect")->capture_default_str();
   sub->add_option("--fmin", args->fmin_hz, "Lowest frequency reported and fitted (Hz)");
   sub->add_option("--fmax", args->fmax_hz, "Highest frequency reported and fitted (Hz; default Nyquist)");
+  sub->add_option("--tmin", args->tmin_s,
+                  "Broadband modes: leave out the record before this time (s), e.g. a start-up transient the "
+                  "models do not describe");
   sub->add_option("--min-coherence", args->min_coherence,
                   "Frequency points with a lower coherence (0-1) are left out of the TF fit")
       ->capture_default_str();

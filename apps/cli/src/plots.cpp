@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <string>
 
 #include <fmt/format.h>
 #include <plplot/plstream.h>
@@ -62,16 +63,66 @@ void set_palette(plstream& pls) {
   pls.scol0(15, 40, 40, 40);
 }
 
+std::string plot_tick_text(double v) {
+  if (v >= 1e-3 && v < 1e5) return fmt::format("{:g}", v);
+  const int k = static_cast<int>(std::floor(std::log10(v) + 1e-9));
+  const double m = v / std::pow(10.0, k);
+  return std::abs(m - 1) < 1e-6 ? fmt::format("10#u{}#d", k) : fmt::format("{:g}#(727)10#u{}#d", std::round(m), k);
+}
+
+// Labels a logarithmic axis at its decades and (for short spans) at 2x and 5x: PLplot's own
+// log labels name the decades only, which leaves a one-decade axis with a single number.
+void label_log_axis(plstream& pls, bool x_axis, double lo_exp, double hi_exp) {
+  for (double v : log_axis_ticks(lo_exp, hi_exp)) {
+    const double frac = (std::log10(v) - lo_exp) / (hi_exp - lo_exp);
+    const std::string text = plot_tick_text(v);
+    if (x_axis) pls.mtex("b", 1.4, frac, 0.5, text.c_str());
+    else pls.mtex("lv", 0.6, frac, 1.0, text.c_str());
+  }
+}
+
+// Device of a file name: svgcairo for .svg, pngcairo for .png.
+const char* plot_device(const std::string& path) {
+  const auto ext = std::filesystem::path(path).extension().string();
+  if (ext == ".svg") return "svgcairo";
+  if (ext == ".png") return "pngcairo";
+  throw InputError("a plot file must end in .svg or .png", path);
+}
+
 }  // namespace
 
+std::vector<double> log_axis_ticks(double lo_exp, double hi_exp) {
+  std::vector<double> v;
+  if (!std::isfinite(lo_exp) || !std::isfinite(hi_exp) || hi_exp < lo_exp) return v;
+  const bool minors = hi_exp - lo_exp <= 3.0;
+  for (int k = static_cast<int>(std::floor(lo_exp)) - 1; k <= static_cast<int>(std::ceil(hi_exp)); ++k)
+    for (double m : {1.0, 2.0, 5.0}) {
+      if (m != 1.0 && !minors) continue;
+      const double e = k + std::log10(m);
+      if (e >= lo_exp - 1e-9 && e <= hi_exp + 1e-9) v.push_back(std::pow(10.0, e));
+    }
+  return v;
+}
+
 void render_png(const Figure& fig, const std::string& path) {
+  if (std::filesystem::path(path).extension() != ".png") throw InputError("render_png writes .png files", path);
+  render_figure(fig, path);
+}
+
+void render_svg(const Figure& fig, const std::string& path) {
+  if (std::filesystem::path(path).extension() != ".svg") throw InputError("render_svg writes .svg files", path);
+  render_figure(fig, path);
+}
+
+void render_figure(const Figure& fig, const std::string& path) {
   if (fig.panels.empty()) throw InputError("a figure without panels", path);
+  const char* device = plot_device(path);
   std::lock_guard lock(plplot_mutex());
   const auto dir = std::filesystem::path(path).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir);
   {
     auto pls = std::make_unique<plstream>();
-    pls->sdev("pngcairo");
+    pls->sdev(device);
     pls->sfnam(path.c_str());
     pls->spage(90, 90, fig.width_px, fig.height_px, 0, 0);
     set_palette(*pls);
@@ -81,6 +132,12 @@ void render_png(const Figure& fig, const std::string& path) {
 
     double total = 0;
     for (const auto& p : fig.panels) total += p.height_weight;
+    Range shared_x;  // with share_x: the x range of every panel's data
+    if (fig.share_x)
+      for (const auto& p : fig.panels)
+        for (const auto& s : p.series)
+          for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k)
+            if (std::isfinite(axis_value(s.y[k], p.log_y))) shared_x.add(axis_value(s.x[k], p.log_x));
     const double top_margin = fig.title.empty() ? 0.04 : 0.09, bottom = 0.03;
     double y_top = 1.0 - top_margin;
     const double usable = 1.0 - top_margin - bottom;
@@ -101,6 +158,7 @@ void render_png(const Figure& fig, const std::string& path) {
           }
         }
       if (!rx.valid() || !ry.valid()) throw InputError(fmt::format("panel '{}' has no finite data to plot", p.title), path);
+      if (fig.share_x && shared_x.valid()) rx = shared_x;
       if (!p.log_x) rx.pad(0.0);
       if (rx.hi == rx.lo) rx.pad(0.05);
       ry.pad(0.06);
@@ -108,9 +166,12 @@ void render_png(const Figure& fig, const std::string& path) {
       pls->col0(15);
       pls->width(1);
       pls->lsty(1);
-      const std::string xopt = std::string("bcnstg") + (p.log_x ? "l" : "");
-      const std::string yopt = std::string("bcnstvg") + (p.log_y ? "l" : "");
+      // Log axes: ticks and grid from PLplot, numbers from label_log_axis.
+      const std::string xopt = p.log_x ? "bcstgl" : "bcnstg";
+      const std::string yopt = p.log_y ? "bcstvgl" : "bcnstvg";
       pls->box(xopt.c_str(), 0, 0, yopt.c_str(), 0, 0);
+      if (p.log_x) label_log_axis(*pls, true, rx.lo, rx.hi);
+      if (p.log_y) label_log_axis(*pls, false, ry.lo, ry.hi);
       pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), p.title.c_str());
 
       std::vector<std::string> labels;

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <openssl/evp.h>
 
+#include "tunekit/cli/warning_advice.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
@@ -43,6 +44,17 @@ std::string html_escape(const std::string& s) {
     }
   }
   return o;
+}
+
+// The report's Content-Security-Policy: no request may leave the file.
+constexpr const char* kReportCsp =
+    "default-src 'none'; img-src data:; style-src 'unsafe-inline'; base-uri 'none'; form-action 'none'";
+
+std::string image_mime(const std::string& path) {
+  const auto ext = std::filesystem::path(path).extension().string();
+  if (ext == ".svg") return "image/svg+xml";
+  if (ext == ".png") return "image/png";
+  throw InputError("a report image must be .svg or .png", path);
 }
 
 }  // namespace
@@ -86,13 +98,14 @@ Figure step_figure(const nlohmann::json& d) {
   in.series.push_back({"commanded", vec(d, "t_s"), vec(d, "u"), Series::Style::line, 4});
   Panel out{"Output and fit", "", d.value("y_label", std::string("output")), false, false, {}, 1.4};
   out.series.push_back({"measured", vec(d, "t_s"), vec(d, "y"), Series::Style::line, 1});
-  out.series.push_back({"fitted model", vec(d, "t_s"), vec(d, "y_fit"), Series::Style::dashed, 2});
+  out.series.push_back({"fitted model (where it applies)", vec(d, "t_s"), vec(d, "y_fit"), Series::Style::dashed, 2});
   const auto y = vec(d, "y"), yf = vec(d, "y_fit");
   std::vector<double> res(std::min(y.size(), yf.size()));
   for (std::size_t i = 0; i < res.size(); ++i) res[i] = y[i] - yf[i];
   Panel rp{"Residuals", "time (s)", "measured - fit", false, false, {}, 0.8};
   rp.series.push_back({"", vec(d, "t_s"), res, Series::Style::line, 3});
   f.panels = {in, out, rp};
+  f.share_x = true;  // one time axis: the residuals exist only where the model applies
   f.height_px = 760;
   return f;
 }
@@ -107,8 +120,9 @@ Figure bode_figure(const nlohmann::json& d) {
   ph.series.push_back({"measured", fr, vec(d, "phase_deg"), Series::Style::points, 1});
   if (d.contains("model")) {
     const auto& m = d["model"];
-    mag.series.push_back({"fitted model", vec(m, "freq_hz"), vec(m, "mag_db"), Series::Style::line, 2});
-    ph.series.push_back({"fitted model", vec(m, "freq_hz"), vec(m, "phase_deg"), Series::Style::line, 2});
+    const std::string label = m.value("label", std::string("fitted model"));
+    mag.series.push_back({label, vec(m, "freq_hz"), vec(m, "mag_db"), Series::Style::line, 2});
+    ph.series.push_back({label, vec(m, "freq_hz"), vec(m, "phase_deg"), Series::Style::line, 2});
   }
   f.panels = {mag, ph};
   if (d.contains("coherence")) {
@@ -185,8 +199,8 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
   std::vector<ReportImage> images;
   const std::string dir = run_dir + "/plots";
   auto add = [&](const std::string& id, const std::string& caption, const Figure& fig) {
-    const std::string path = dir + "/" + id + ".png";
-    render_png(fig, path);
+    const std::string path = dir + "/" + id + ".svg";
+    render_svg(fig, path);
     images.push_back({id, caption, path});
   };
   if (pd.contains("step")) add("step", "Step response: data, fitted model and residuals", step_figure(pd["step"]));
@@ -205,16 +219,35 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
     if (!overlay.empty()) {
       const std::string path = run_dir + "/" + overlay;
       if (!std::filesystem::exists(path)) throw InputError("the line-width overlay named in plotdata.json is missing", path);
-      images.push_back({"linewidth_overlay", "Photo overlay: detected edges and centreline", path});
+      images.push_back({"linewidth_overlay", "Photo overlay: detected edges and centreline", path});  // a PNG photo
     }
   }
   return images;
 }
 
+namespace {
+
+// The "95 % interval" cell of a summary row: [lo, hi] from the row's ci_path, else its basis.
+std::string interval_cell(const nlohmann::json& results, const nlohmann::json& row) {
+  const std::string ci_path = row.value("ci_path", std::string());
+  if (!ci_path.empty()) {
+    const auto* ci = json_at(results, ci_path);
+    if (ci != nullptr && ci->is_array() && ci->size() == 2 && (*ci)[0].is_number() && (*ci)[1].is_number())
+      return fmt::format("<td class=\"ci\" data-path=\"{}\">[{}, {}]</td>", html_escape(ci_path),
+                         display_number((*ci)[0].get<double>()), display_number((*ci)[1].get<double>()));
+    return "<td class=\"ci\">n/a</td>";
+  }
+  return "<td class=\"ci\">" + html_escape(row.value("basis", std::string("n/a"))) + "</td>";
+}
+
+}  // namespace
+
 std::string build_report_html(const nlohmann::json& env, const std::vector<ReportImage>& images) {
   const auto& results = env.contains("results") ? env["results"] : env;
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    // Nothing may leave the file: no scripts, no fetches; images only from data: URIs.
+    << "<meta http-equiv=\"Content-Security-Policy\" content=\"" << kReportCsp << "\">\n"
     << "<title>tunekit calibration report</title>\n<style>\n"
     << "body{font-family:DejaVu Sans,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1000px;color:#222}\n"
     << "h1{font-size:1.6em}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}\n"
@@ -222,7 +255,9 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
     << "td.num{text-align:right;font-variant-numeric:tabular-nums}th{background:#f2f2f2}\n"
     << "figure{margin:1em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:.9em}\n"
     << "pre{background:#f7f7f7;border:1px solid #ddd;padding:.8em;overflow-x:auto;font-size:.85em}\n"
-    << ".warn{color:#a15c00}\n</style>\n</head>\n<body>\n";
+    << ".warn{color:#a15c00}.todo{color:#333}.ci{color:#444;font-variant-numeric:tabular-nums}\n"
+    << ".agree{border-left:4px solid #2c7a2c;padding-left:.6em}.disagree{border-left:4px solid #b00;padding-left:.6em}\n"
+    << "</style>\n</head>\n<body>\n";
   h << "<h1>tunekit calibration report</h1>\n";
   const std::string machine = results.value("machine", std::string());
   if (!machine.empty()) h << "<p>Machine: " << html_escape(machine) << "</p>\n";
@@ -230,7 +265,8 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
     h << "<p>tunekit " << html_escape(env["tool"].value("version", std::string("?"))) << ", command <code>"
       << html_escape(env.value("command", std::string("?"))) << "</code></p>\n";
 
-  h << "<h2>Summary</h2>\n<table id=\"summary\">\n<tr><th>quantity</th><th>value</th><th>unit</th></tr>\n";
+  h << "<h2>Summary</h2>\n<table id=\"summary\">\n"
+    << "<tr><th>quantity</th><th>value</th><th>95 % interval</th><th>unit</th></tr>\n";
   if (results.contains("summary"))
     for (const auto& row : results["summary"]) {
       const std::string path = row.value("path", std::string());
@@ -238,20 +274,42 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
       if (v == nullptr || !v->is_number()) continue;
       h << "<tr><td>" << html_escape(row.value("label", path)) << "</td><td class=\"num\" data-path=\""
         << html_escape(path) << "\" data-value=\"" << v->dump() << "\">" << display_number(v->get<double>())
-        << "</td><td>" << html_escape(row.value("unit", std::string())) << "</td></tr>\n";
+        << "</td>" << interval_cell(results, row) << "<td>" << html_escape(row.value("unit", std::string()))
+        << "</td></tr>\n";
     }
   h << "</table>\n";
 
+  if (results.contains("agreement") && results["agreement"].is_array() && !results["agreement"].empty()) {
+    h << "<h2>Methods compared</h2>\n";
+    for (const auto& a : results["agreement"]) {
+      const bool ok = a.value("agree", false);
+      h << "<p class=\"" << (ok ? "agree" : "disagree") << "\" id=\"agreement-"
+        << html_escape(a.value("id", std::string("quantity"))) << "\" data-agree=\"" << (ok ? "true" : "false") << "\">"
+        << html_escape(a.value("statement", std::string())) << "</p>\n";
+    }
+  }
+
   if (env.contains("warnings") && !env["warnings"].empty()) {
-    h << "<h2>Warnings</h2>\n<ul>\n";
-    for (const auto& w : env["warnings"]) h << "<li class=\"warn\">" << html_escape(w.get<std::string>()) << "</li>\n";
+    h << "<h2>Warnings</h2>\n<ul id=\"warnings\">\n";
+    for (const auto& w : env["warnings"]) {
+      const std::string text = w.get<std::string>();
+      h << "<li class=\"warn\">" << html_escape(text) << "<br><span class=\"todo\">What to do: "
+        << html_escape(advice_for_warning(text)) << "</span></li>\n";
+    }
+    h << "</ul>\n";
+  }
+  if (results.contains("notes") && results["notes"].is_array() && !results["notes"].empty()) {
+    h << "<h2>Notes</h2>\n<ul id=\"notes\">\n";
+    for (const auto& n : results["notes"])
+      if (n.is_string()) h << "<li>" << html_escape(n.get<std::string>()) << "</li>\n";
     h << "</ul>\n";
   }
   if (!images.empty()) h << "<h2>Plots</h2>\n";
   for (const auto& img : images) {
-    const std::string bytes = ident::read_file_bytes(img.png_path);
-    h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html_escape(img.caption) << "\" src=\"data:image/png;base64,"
-      << base64(bytes) << "\"><figcaption>" << html_escape(img.caption) << "</figcaption></figure>\n";
+    const std::string bytes = ident::read_file_bytes(img.path);
+    h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html_escape(img.caption) << "\" src=\"data:"
+      << image_mime(img.path) << ";base64," << base64(bytes) << "\"><figcaption>" << html_escape(img.caption)
+      << "</figcaption></figure>\n";
   }
   if (results.contains("config_diff") && results["config_diff"].is_string() &&
       !results["config_diff"].get<std::string>().empty())

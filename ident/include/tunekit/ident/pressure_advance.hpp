@@ -55,6 +55,9 @@ struct AdvanceInputs {
   double tau_stderr_s = kAdvanceNaN;
   double theta_s = kAdvanceNaN;
   double gain = kAdvanceNaN;
+  /// Unit of the gain as the fit reports it ("1", "mm/(mm)", "N/(mm/s)"); empty when unknown.
+  /// The gain is compared with 1 only when it is dimensionless (see gain_is_dimensionless).
+  std::string gain_unit;
   std::string tau_source;  ///< "step", "freq", "command line"
   /// Several operating points: flow-dependent advance (linear interpolation in flow).
   std::vector<LiquefierPoint> points;
@@ -98,10 +101,15 @@ struct AdvanceDesign {
   double trend_k0_s = kAdvanceNaN;            ///< least-squares K(Q) = k0 + k1 Q over the schedule
   double trend_k1_s_per_mm3_s = kAdvanceNaN;
   double single_k_max_rel_error = kAdvanceNaN;  ///< max |K(Q) - K| / K(Q) over the schedule
-  std::vector<std::string> notes;
+  std::vector<std::string> notes;     ///< what the design means (informational)
+  std::vector<std::string> warnings;  ///< what the user should look at or change
 
   nlohmann::json to_json() const;
 };
+
+/// True when a gain unit is "1" or a ratio of one unit to itself ("mm/(mm)", "mm^3/s/(mm^3/s)"):
+/// only then does a gain other than 1 mean that output and input disagree.
+bool gain_is_dimensionless(const std::string& unit);
 
 /// Designs the advance. Throws InputError when no time constant is available or inputs are
 /// implausible (negative tau, flows not increasing, ...).

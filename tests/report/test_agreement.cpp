@@ -1,0 +1,65 @@
+// Agreement of a quantity measured two ways, and when a liquefier gain is compared with 1.
+#include <catch2/catch.hpp>
+
+#include "tunekit/cli/agreement.hpp"
+#include "tunekit/cli/warning_advice.hpp"
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/pressure_advance.hpp"
+
+using namespace tunekit::cli;
+
+TEST_CASE("two estimates agree when their difference is within the combined 95 % half-width") {
+  // Half-widths 0.03 and 0.04 combine to 0.05.
+  const Estimate step{"step response", 0.45, 0.42, 0.48};
+  const auto ok = compare_estimates("tau", "s", step, {"frequency response", 0.49, 0.45, 0.53});
+  CHECK(ok.at("agree").get<bool>());
+  CHECK(ok.at("combined_half_width").get<double>() == Approx(0.05));
+  CHECK(ok.at("statement").get<std::string>().find("agree within their combined 95 % uncertainty") != std::string::npos);
+  const auto bad = compare_estimates("tau", "s", step, {"frequency response", 0.51, 0.47, 0.55});
+  CHECK_FALSE(bad.at("agree").get<bool>());
+  CHECK(bad.at("statement").get<std::string>().find("do NOT agree") != std::string::npos);
+  CHECK(advice_for_warning(bad.at("statement").get<std::string>()).find("repeat both experiments") == 0);
+}
+
+TEST_CASE("an estimate whose interval does not hold its value is refused") {
+  CHECK_THROWS_AS(compare_estimates("tau", "s", {"a", 0.5, 0.6, 0.7}, {"b", 0.5, 0.4, 0.6}), tunekit::InputError);
+  CHECK_THROWS_AS(compare_estimates("tau", "s", {"a", std::nan(""), 0.4, 0.6}, {"b", 0.5, 0.4, 0.6}),
+                  tunekit::InputError);
+}
+
+TEST_CASE("a fitted parameter's JSON gives an estimate only with a finite interval") {
+  Estimate e;
+  const nlohmann::json p{{"value", 0.45}, {"ci95", {0.44, 0.46}}};
+  REQUIRE(estimate_from_param(&p, "step response", e));
+  CHECK(e.ci95_hi == 0.46);
+  const nlohmann::json no_ci{{"value", 0.45}};
+  CHECK_FALSE(estimate_from_param(&no_ci, "x", e));
+  CHECK_FALSE(estimate_from_param(nullptr, "x", e));
+}
+
+TEST_CASE("the liquefier gain is compared with 1 only when input and output share units") {
+  using tunekit::ident::gain_is_dimensionless;
+  CHECK(gain_is_dimensionless("1"));
+  CHECK(gain_is_dimensionless("mm/(mm)"));
+  CHECK(gain_is_dimensionless("mm/mm"));
+  CHECK(gain_is_dimensionless("mm^3/s/(mm^3/s)"));
+  CHECK_FALSE(gain_is_dimensionless("N/(mm/s)"));
+  CHECK_FALSE(gain_is_dimensionless(""));
+  tunekit::ident::AdvanceInputs in;
+  in.tau_s = 0.45;
+  in.gain = 3.5;
+  in.filament_area_mm2 = 2.405;
+  in.line_area_mm2 = 0.09;
+  in.print_speed_mm_s = 60;
+  in.print_accel_mm_s2 = 3000;
+  in.extruder_accel_limit_mm_s2 = 5000;
+  auto gain_warned = [](const tunekit::ident::AdvanceDesign& d) {
+    for (const auto& w : d.warnings)
+      if (w.find("differs from 1") != std::string::npos) return true;
+    return false;
+  };
+  in.gain_unit = "N/(mm/s)";  // feed in, force out: no natural 1
+  CHECK_FALSE(gain_warned(tunekit::ident::design_advance(in)));
+  in.gain_unit = "mm/(mm)";  // width in, width out
+  CHECK(gain_warned(tunekit::ident::design_advance(in)));
+}
