@@ -6,13 +6,17 @@
 #include <memory>
 #include <set>
 
+#include <optional>
+
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "resonance_common.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/input_shaper.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -25,6 +29,7 @@ struct ShaperCliArgs {
   double max_smoothing_mm = 0;
   double damping_ratio = -1;
   double max_shaper_freq_hz = 200.0;
+  std::string firmware;
 };
 
 nlohmann::json candidate_json(const ident::ShaperCandidate& c) {
@@ -46,7 +51,10 @@ int run_shaper(const ShaperCliArgs& a, CliContext& ctx) {
   opts["max_smoothing_mm"] = a.max_smoothing_mm;
   opts["damping_ratio"] = a.damping_ratio;
   opts["max_shaper_freq_hz"] = a.max_shaper_freq_hz;
+  opts["firmware"] = a.firmware;
   env.set_options(opts);
+  std::optional<protocols::ExportFirmware> fw;
+  if (!a.firmware.empty()) fw = protocols::parse_export_firmware(a.firmware);
   if (!(a.scv_mm_s >= 0)) throw InputError("--scv must not be negative");
   if (a.damping_ratio >= 1) throw InputError("--damping-ratio must be below 1");
 
@@ -85,6 +93,32 @@ int run_shaper(const ShaperCliArgs& a, CliContext& ctx) {
           if (std::isfinite(z)) tests.insert(std::clamp(z, 0.001, 0.9));
       so.test_damping_ratios.assign(tests.begin(), tests.end());
       sel["method"] = "identified";
+    }
+    // The recommendation is made among the target firmware's shapers only, each within the
+    // firmware's damping bound for it (firmware_limits.hpp).
+    if (fw) {
+      std::vector<ident::ShaperType> allowed;
+      std::vector<std::string> dropped;
+      for (const auto t : so.types) {
+        const auto f = protocols::limits::find_shaper(*fw, ident::to_string(t));
+        if (!f) continue;
+        if (so.design_damping_ratio > f->max_damping) {
+          dropped.push_back(fmt::format("{} (damping at most {})", f->firmware_name, f->max_damping));
+          continue;
+        }
+        allowed.push_back(t);
+      }
+      if (allowed.empty())
+        throw InputError(fmt::format("axis {}: none of the shapers considered is available in {} ({}) at the design "
+                                     "damping {:.3f}",
+                                     ax, protocols::limits::firmware_title(*fw), protocols::limits::shaper_list(*fw),
+                                     so.design_damping_ratio));
+      if (!dropped.empty())
+        env.warn(fmt::format("axis {}: design damping {:.3f} is above {}'s bound for {}: not considered", ax,
+                             so.design_damping_ratio, protocols::limits::firmware_title(*fw),
+                             fmt::join(dropped, ", ")));
+      so.types = allowed;
+      sel["firmware"] = protocols::to_string(*fw);
     }
     // Klipper's selection works on its normalized PSD (divided by f + 0.1 Hz, damped below 10 Hz).
     const auto psd = r.spectrum.klipper_normalized ? r.spectrum.psd_sum
@@ -151,6 +185,9 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
   sub->add_option("--damping-ratio", args->damping_ratio,
                   "Design damping ratio (dimensionless; default: identified, or 0.1 with --klipper-compatible)");
   sub->add_option("--max-shaper-freq", args->max_shaper_freq_hz, "Highest shaper frequency tried, Hz (default 200)");
+  sub->add_option("--firmware", args->firmware,
+                  "Recommend among this firmware's shapers only (klipper, marlin or rrf), each within the firmware's "
+                  "damping bound for it");
   sub->footer(klipper_files_help() +
               "\nExamples:\n"
               "  tunekit shaper /tmp/raw_data_x_*.csv /tmp/raw_data_y_*.csv\n"

@@ -45,6 +45,7 @@ struct CompensatorSettings {
   std::map<std::string, ShaperSetting> shapers;  ///< by axis "x", "y"
   std::string klipper_extruder = "extruder";     ///< Klipper section holding pressure_advance
   int rrf_drive = 0;                             ///< RepRapFirmware extruder drive (M572 D)
+  int extruder_index = 0;                        ///< Marlin: entry of a per-extruder ADVANCE_K list, M900 T
 };
 
 /// One value set in the file.
@@ -64,6 +65,8 @@ struct ExportResult {
   std::string diff;  ///< unified diff original -> updated; empty when nothing changes
   std::vector<ConfigChange> changes;
   std::vector<std::string> warnings;
+  /// What the user must also do for the firmware to use the new values (restart, M502 + M500, ...).
+  std::vector<std::string> notes;
   std::string gcode;  ///< the same settings as runtime commands (Marlin adds M500)
   bool changed() const { return original != updated; }
   nlohmann::json to_json() const;  ///< everything but the file contents
