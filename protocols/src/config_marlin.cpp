@@ -141,7 +141,8 @@ class MarlinEditor {
                                        d0.line + 1, name, items.size(), index_));
         if (!d0.commented && same_number(bare_number(items[index_]), v, decimals)) continue;
         std::string item = format_number(v, decimals);
-        if (!items[index_].empty() && (items[index_].back() == 'f' || items[index_].back() == 'F')) item += 'f';
+        if (!items[index_].empty() && (items[index_].back() == 'f' || items[index_].back() == 'F'))
+          item += item.find('.') == std::string::npos ? ".0f" : "f";
         items[index_] = item;
         std::string nv = "{ ";
         for (std::size_t k = 0; k < items.size(); ++k) nv += (k ? ", " : "") + items[k];
@@ -159,7 +160,10 @@ class MarlinEditor {
       const std::string old_num = bare_number(d.value);
       if (!d0.commented && !d.value.empty() && same_number(old_num, v, decimals)) continue;
       std::string nv = format_number(v, decimals);
-      if (!d.value.empty() && (d.value.back() == 'f' || d.value.back() == 'F') && d.value.front() != '{') nv += 'f';
+      if (!d.value.empty() && (d.value.back() == 'f' || d.value.back() == 'F') && d.value.front() != '{') {
+        if (nv.find('.') == std::string::npos) nv += ".0";  // "45f" is not a C float literal
+        nv += 'f';
+      }
       if (!d.value.empty() && d.value.front() == '{') nv = "{ " + nv + " }";
       std::string rest = t.substr(d.value_end);
       if (d.value.empty()) {
@@ -193,6 +197,65 @@ class MarlinEditor {
 
 }  // namespace
 
+namespace {
+
+/// FT_MOTION build (Marlin/src/module/ft_motion.cpp): with fixed-time motion active (M493 S1)
+/// the classic shaper and smooth linear advance are bypassed (stepper.cpp isr()), so the
+/// FT_MOTION defaults are written instead: FTM_DEFAULT_SHAPER_X/Y (ftMotionShaper_<TYPE>,
+/// ft_types.h), FTM_SHAPING_DEFAULT_FREQ_X/Y, FTM_SHAPING_ZETA_X/Y; advance K goes to ADVANCE_K
+/// (FTM_LINEAR_ADV_DEFAULT_K on builds that have it).
+void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, MarlinEditor& m) {
+  auto replace_token = [&](const std::string& name, const std::string& value) {
+    const auto defs = find_defines(m.editor(), name);
+    for (const auto& d : defs) {
+      if (d.commented || d.value.empty() || d.value == value) continue;
+      const std::string& t = m.editor().line(d.line);
+      m.editor().replace(d.line, t.substr(0, d.value_begin) + value + t.substr(d.value_end));
+      r.changes.push_back({name, d.value, value, d.line + 1, "define (FT_MOTION)"});
+      return true;
+    }
+    return std::any_of(defs.begin(), defs.end(), [](const Define& d) { return !d.commented; });
+  };
+  m.set_index(static_cast<std::size_t>(s.extruder_index));
+  if (s.pa_k_s) {
+    const bool ftm_k = !find_defines(m.editor(), "FTM_LINEAR_ADV_DEFAULT_K").empty();
+    if (!m.set(ftm_k ? "FTM_LINEAR_ADV_DEFAULT_K" : "ADVANCE_K", *s.pa_k_s, kDecimalsK))
+      throw InputError("FT_MOTION build without an ADVANCE_K or FTM_LINEAR_ADV_DEFAULT_K line", r.path);
+  }
+  if (s.pa_smooth_s)
+    r.warnings.push_back(fmt::format("{}: FT_MOTION is enabled: it bypasses SMOOTH_LIN_ADVANCE (stepper.cpp isr()), so "
+                                     "ADVANCE_TAU is not written",
+                                     r.path));
+  for (const auto& [axis, sh] : s.shapers) {
+    const std::string A = axis == "x" ? "X" : "Y";
+    const std::string type = firmware_shaper_name(ExportFirmware::marlin, sh.type, true);
+    if (!replace_token("FTM_DEFAULT_SHAPER_" + A, "ftMotionShaper_" + type))
+      throw InputError(fmt::format("FT_MOTION is enabled but there is no '#define FTM_DEFAULT_SHAPER_{}' line", A), r.path);
+    if (!m.set("FTM_SHAPING_DEFAULT_FREQ_" + A, sh.freq_hz, kDecimalsFreq))
+      throw InputError(fmt::format("no '#define FTM_SHAPING_DEFAULT_FREQ_{}' line", A), r.path);
+    if (!m.set("FTM_SHAPING_ZETA_" + A, sh.damping, kDecimalsZeta))
+      throw InputError(fmt::format("no '#define FTM_SHAPING_ZETA_{}' line", A), r.path);
+  }
+  r.updated = m.editor().render();
+  r.diff = m.editor().unified_diff(r.path);
+  // M493's parameter letters differ between Marlin versions: no runtime shaping line is
+  // guessed; the compiled defaults are loaded with M502 and stored with M500.
+  std::string g;
+  if (s.pa_k_s) g += fmt::format("M900 K{}\n", format_number(*s.pa_k_s, kDecimalsK));
+  if (!s.shapers.empty())
+    r.warnings.push_back(fmt::format("{}: FT_MOTION build: the shapers are written as FT_MOTION defaults; after "
+                                     "flashing send M502 then M500 (M493 sets them at run time, with version-specific "
+                                     "parameters)",
+                                     r.path));
+  if (!g.empty()) g += "M500\n";
+  r.gcode = g;
+  if (r.updated != r.original)
+    r.notes.push_back("Marlin uses the values stored in EEPROM (M500) over the compiled defaults in this file: after "
+                      "flashing the new build, send M502 (load the compiled values) then M500 (store them)");
+}
+
+}  // namespace
+
 void write_marlin(ExportResult& r, const CompensatorSettings& s) {
   const LineEditor original(r.original);
   MarlinEditor m(r);
@@ -218,6 +281,10 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
     } else {
       tau_written = true;
     }
+  }
+  if (s.marlin_ft_motion) {
+    write_marlin_ft_motion(r, s, m);
+    return;
   }
   // SHAPING_MIN_FREQ sizes the shaping queue (stepper.h: shaping_echoes = max_step_rate /
   // shaping_min_freq / 2 + 3); a lower frequency overflows it ("IS will also misbehave!",

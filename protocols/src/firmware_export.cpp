@@ -26,6 +26,20 @@ constexpr double kRrfFreqMax = limits::kRrfShaperFreqMax_hz;
 
 }  // namespace
 
+bool marlin_ft_motion_enabled(const std::string& text) {
+  const LineEditor ed(text);
+  for (std::size_t i = 0; i < ed.size(); ++i) {
+    const std::string& t = ed.line(i);
+    std::size_t p = t.find_first_not_of(" \t");
+    if (p == std::string::npos || t.compare(p, 7, "#define") != 0) continue;
+    p = t.find_first_not_of(" \t", p + 7);
+    if (p == std::string::npos || t.compare(p, 9, "FT_MOTION") != 0) continue;
+    const std::size_t e = p + 9;
+    if (e == t.size() || t[e] == ' ' || t[e] == '\t' || t[e] == '/') return true;
+  }
+  return false;
+}
+
 ExportFirmware parse_export_firmware(const std::string& name) {
   const std::string n = text::lower(name);
   if (n == "klipper") return ExportFirmware::klipper;
@@ -50,9 +64,12 @@ std::string canonical_shaper_type(const std::string& type) {
   return t;
 }
 
-std::string firmware_shaper_name(ExportFirmware fw, const std::string& type) {
+std::string firmware_shaper_name(ExportFirmware fw, const std::string& type, bool ft_motion) {
   const std::string t = canonical_shaper_type(type);
-  if (const auto s = limits::find_shaper(fw, t)) return s->firmware_name;
+  if (const auto s = limits::find_shaper(fw, t, ft_motion)) return s->firmware_name;
+  if (fw == ExportFirmware::marlin && ft_motion)
+    throw InputError(fmt::format("Marlin's FT_MOTION has no '{}' input shaper (it has {})", type,
+                                 limits::shaper_list(fw, true)));
   if (fw == ExportFirmware::rrf && t == "zvddd") return "zvddd";
   if (fw == ExportFirmware::marlin)
     throw InputError(fmt::format("Marlin's input shaping is ZV only; '{}' is not available (choose zv)", type));
@@ -89,12 +106,12 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
       continue;
     }
     try {
-      firmware_shaper_name(fw, sh.type);
+      firmware_shaper_name(fw, sh.type, s.marlin_ft_motion);
     } catch (const InputError& e) {
       bad.push_back(fmt::format("{}: {}", axis, e.message()));
     }
     // The firmware's own damping bound for this shaper (Klipper: per shaper).
-    const auto fs = limits::find_shaper(fw, canonical_shaper_type(sh.type));
+    const auto fs = limits::find_shaper(fw, canonical_shaper_type(sh.type), s.marlin_ft_motion);
     if (fs && std::isfinite(sh.damping) && sh.damping >= 0 && sh.damping < 1 && sh.damping > fs->max_damping)
       bad.push_back(fmt::format("{}: {} accepts a damping ratio of at most {} for {} ({}); {} is out of range", axis,
                                 name, fs->max_damping, fs->firmware_name, fs->source, sh.damping));
@@ -115,7 +132,9 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
 }
 
 ExportResult export_config_text(ExportFirmware fw, const std::string& text, const std::string& path,
-                                const CompensatorSettings& s) {
+                                const CompensatorSettings& settings) {
+  CompensatorSettings s = settings;
+  if (fw == ExportFirmware::marlin && marlin_ft_motion_enabled(text)) s.marlin_ft_motion = true;
   validate_settings(fw, s);
   ExportResult r;
   r.firmware = fw;

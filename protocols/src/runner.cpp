@@ -156,6 +156,9 @@ class Session {
   virtual FirmwareInfo identify() = 0;
   virtual void send(const std::string& line) = 0;
   virtual void record(const std::string& sensor, bool on) = 0;
+  /// Whether this link can record `sensor` (checked before anything is sent: no heating or
+  /// homing for a protocol whose data cannot be recorded).
+  virtual bool can_record(const std::string& sensor) const = 0;
   virtual void finish() = 0;
   virtual void safe_state(const std::vector<std::string>& commands) = 0;
   virtual nlohmann::json stats() const = 0;
@@ -187,6 +190,7 @@ class GcodeSession : public Session {
                          t_->describe());
     link_.send(cmd);
   }
+  bool can_record(const std::string& /*sensor*/) const override { return firmware.sensor_stream(); }
   void finish() override {}
   void safe_state(const std::vector<std::string>& commands) override {
     link_.send_best_effort(commands, std::chrono::milliseconds(300));
@@ -238,6 +242,7 @@ class KlipperSession : public Session {
     if (!on) client_.pump(std::chrono::milliseconds(100));  // trailing samples
     accel_on_ = on;
   }
+  bool can_record(const std::string& sensor) const override { return sensor == "accelerometer"; }
   void finish() override { flush_script(); }
   void safe_state(const std::vector<std::string>& commands) override {
     try {
@@ -378,6 +383,15 @@ RunResult run_experiment(const RunOptions& o) {
                                {"version", session->firmware.version},
                                {"dialect", to_string(session->dialect.firmware())}});
     summary["firmware"] = {{"name", session->firmware.name}, {"version", session->firmware.version}};
+    // Fail before heating and homing when the link cannot record what the protocol needs.
+    for (const auto& sensor : res.experiment.sensors)
+      if (!session->can_record(sensor))
+        throw MachineError(fmt::format("the firmware ({}) cannot record {} data over this link (no tunekit sensor "
+                                       "stream; RepRapFirmware records its accelerometer with M956 into a file, which "
+                                       "tunekit does not fetch yet); nothing but M115 was sent",
+                                       session->firmware.name.empty() ? "unidentified" : session->firmware.name,
+                                       sensor),
+                           port);
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
     for (const auto& line : res.gcode) {

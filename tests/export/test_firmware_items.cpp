@@ -62,3 +62,38 @@ TEST_CASE("RepRapFirmware: M572 with a drive list sets only the chosen drive's v
   CHECK(r.updated == "M584 E3:4\nM572 D0:1 S0.2:0.07\n");
   CHECK(r.gcode.find("M572 D1 S0.07") != std::string::npos);
 }
+
+TEST_CASE("Marlin FT_MOTION: shapers and K go to the FT_MOTION defaults, not the bypassed classic ones") {
+  // Marlin Configuration_adv.h FT_MOTION block (FTM_DEFAULT_SHAPER_X ftMotionShaper_<type>,
+  // FTM_SHAPING_DEFAULT_FREQ_X, FTM_SHAPING_ZETA_X; types from ft_types.h); stepper.cpp isr():
+  // with FT motion active the classic shaper and SMOOTH_LIN_ADVANCE are bypassed.
+  const std::string cfg =
+      "#define LIN_ADVANCE\n#define ADVANCE_K 0.22\n"
+      "#define INPUT_SHAPING_X\n#define SHAPING_FREQ_X 40\n#define SHAPING_ZETA_X 0.15f\n"
+      "#define FT_MOTION\n#if ENABLED(FT_MOTION)\n"
+      "  #define FTM_DEFAULT_SHAPER_X      ftMotionShaper_NONE // (NONE, ZV, ZVD, ...)\n"
+      "  #define FTM_SHAPING_DEFAULT_FREQ_X   37.0f    // (Hz)\n"
+      "  #define FTM_SHAPING_ZETA_X            0.1f    // zeta\n"
+      "#endif\n";
+  CHECK(marlin_ft_motion_enabled(cfg));
+  CHECK_FALSE(marlin_ft_motion_enabled("//#define FT_MOTION\n#define FT_MOTION_MENU\n"));
+  CompensatorSettings s;
+  s.pa_k_s = 0.05;
+  s.pa_smooth_s = 0.01;
+  s.shapers["x"] = {"mzv", 45, 0.12};  // classic Marlin is ZV only; FT_MOTION has MZV
+  const auto r = export_config_text(ExportFirmware::marlin, cfg, "Configuration_adv.h", s);
+  CHECK(r.updated ==
+        "#define LIN_ADVANCE\n#define ADVANCE_K 0.05\n"
+        "#define INPUT_SHAPING_X\n#define SHAPING_FREQ_X 40\n#define SHAPING_ZETA_X 0.15f\n"
+        "#define FT_MOTION\n#if ENABLED(FT_MOTION)\n"
+        "  #define FTM_DEFAULT_SHAPER_X      ftMotionShaper_MZV // (NONE, ZV, ZVD, ...)\n"
+        "  #define FTM_SHAPING_DEFAULT_FREQ_X   45.0f    // (Hz)\n"
+        "  #define FTM_SHAPING_ZETA_X            0.12f   // zeta\n"
+        "#endif\n");
+  CHECK(r.gcode.find("M593") == std::string::npos);
+  bool tau_warning = false;
+  for (const auto& w : r.warnings) tau_warning |= w.find("SMOOTH_LIN_ADVANCE") != std::string::npos;
+  CHECK(tau_warning);
+  s.shapers["x"] = {"mzv", 45, 0.12};
+  CHECK_THROWS_AS(export_config_text(ExportFirmware::marlin, "#define INPUT_SHAPING_X\n", "c.h", s), InputError);
+}

@@ -94,6 +94,14 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   std::map<std::string, protocols::ShaperSetting> shapers;
   std::vector<std::string> sources;
 
+  // A Marlin build with FT_MOTION has FT_MOTION's shapers (firmware_limits.hpp).
+  bool ft_motion = false;
+  if (fw == protocols::ExportFirmware::marlin) {
+    std::ifstream cfg_in(a.config, std::ios::binary);
+    std::stringstream cfg_text;
+    cfg_text << cfg_in.rdbuf();
+    ft_motion = cfg_in && protocols::marlin_ft_motion_enabled(cfg_text.str());
+  }
   for (const auto& path : a.results) {
     const std::string bytes = ident::read_file_bytes(path);
     env.add_input(path, bytes);
@@ -150,7 +158,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
         };
         // The firmware must have the shaper and accept its damping (firmware_limits.hpp).
         auto usable = [&](const protocols::ShaperSetting& s) {
-          const auto f = protocols::limits::find_shaper(fw, protocols::canonical_shaper_type(s.type));
+          const auto f = protocols::limits::find_shaper(fw, protocols::canonical_shaper_type(s.type), ft_motion);
           return f && s.damping <= f->max_damping;
         };
         protocols::ShaperSetting s = setting_of(rec, "recommended");
@@ -287,7 +295,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   sj["shapers"] = nlohmann::json::object();
   for (const auto& [axis, sh] : settings.shapers)
     sj["shapers"][axis] = {{"type", protocols::canonical_shaper_type(sh.type)},
-                           {"firmware_type", protocols::firmware_shaper_name(fw, sh.type)},
+                           {"firmware_type", protocols::firmware_shaper_name(fw, sh.type, ft_motion)},
                            {"freq_hz", sh.freq_hz},
                            {"damping", sh.damping}};
   res["settings"] = sj;
