@@ -90,7 +90,10 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     } else if (k == "steps_per_mm") c.steps_per_mm = pos(parse_double(k, v));
     else if (k == "max_extrude_only_distance_mm") c.max_extrude_only_distance_mm = pos(parse_double(k, v));
     else if (k == "max_extrude_only_accel_mm_s2") c.max_extrude_only_accel_mm_s2 = pos(parse_double(k, v));
-    else if (k == "minimum_cruise_ratio") {
+    else if (k == "sensor_stream") {
+      if (v != "0" && v != "1") throw InputError("simulator option sensor_stream must be 0 or 1");
+      c.sensor_stream = v == "1";
+    } else if (k == "minimum_cruise_ratio") {
       c.minimum_cruise_ratio = parse_double(k, v);
       if (c.minimum_cruise_ratio < 0 || c.minimum_cruise_ratio >= 1)
         throw InputError("simulator option minimum_cruise_ratio must be in [0, 1)");
@@ -486,7 +489,7 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
                          "UUID:00000000-0000-0000-0000-000000000000\n"
                          "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
                          TUNEKIT_VERSION));
-      emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
+      if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
     } else if (c == "M105") {
       out_flush(emit);
       const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);

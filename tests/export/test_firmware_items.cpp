@@ -7,6 +7,9 @@
 //   RepRapFirmware GCodes2.cpp case 572: "M572 D0:1 S0.2:0.3" gives each listed drive its value.
 #include <catch2/catch.hpp>
 
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/protocols/firmware_export.hpp"
 
@@ -96,4 +99,32 @@ TEST_CASE("Marlin FT_MOTION: shapers and K go to the FT_MOTION defaults, not the
   CHECK(tau_warning);
   s.shapers["x"] = {"mzv", 45, 0.12};
   CHECK_THROWS_AS(export_config_text(ExportFirmware::marlin, "#define INPUT_SHAPING_X\n", "c.h", s), InputError);
+}
+
+TEST_CASE("export takes the best-scoring candidate the firmware has when the recommendation is not available") {
+  // Marlin's classic input shaping is ZV only (M593.cpp); RepRapFirmware has no zv and no ei
+  // (AxisShaper.h). The shaper results list every type's best frequency with its score.
+  const std::string results = tunekit::test::write_scratch("shaper_candidates.json", R"({
+  "command": "shaper", "schema_version": 1,
+  "results": {"axes": {"x": {
+    "recommended": {"type": "ei", "freq_hz": 52.4, "damping": 0.1, "score": 0.010},
+    "candidates": [
+      {"type": "zv", "freq_hz": 44.2, "damping": 0.1, "score": 0.030},
+      {"type": "mzv", "freq_hz": 49.0, "damping": 0.1, "score": 0.020},
+      {"type": "ei", "freq_hz": 52.4, "damping": 0.1, "score": 0.010}]}}}})");
+  const std::string cfg = tunekit::test::write_scratch("cand_Configuration_adv.h",
+                                                       tunekit::test::read_text(tunekit::test::dataset(
+                                                           "firmware/Configuration_adv.h")));
+  auto run = tunekit::test::run_cli({"export", "-f", "marlin", "-c", cfg, results, "--json"});
+  INFO(run.err);
+  REQUIRE(run.code == 0);
+  auto env = nlohmann::json::parse(run.out);
+  CHECK(env["results"]["settings"]["shapers"]["x"]["type"] == "zv");
+  CHECK(env["results"]["settings"]["shapers"]["x"]["freq_hz"] == 44.2);
+  const std::string rrf_cfg = tunekit::test::write_scratch("cand_config.g", "M584 X0 Y1 E3\n");
+  run = tunekit::test::run_cli({"export", "-f", "rrf", "-c", rrf_cfg, results, "--json"});
+  INFO(run.err);
+  REQUIRE(run.code == 0);
+  env = nlohmann::json::parse(run.out);
+  CHECK(env["results"]["settings"]["shapers"]["x"]["type"] == "mzv");
 }

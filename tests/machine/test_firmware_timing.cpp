@@ -303,3 +303,31 @@ TEST_CASE("an aborted sweep on Marlin is stopped with M410, then its test settin
   CHECK(received.find("M205 B20000", stop) != std::string::npos);
   CHECK(received.find("M201 X3000 Y3000", stop) != std::string::npos);
 }
+
+TEST_CASE("a protocol whose sensor the firmware cannot record fails before heating or homing", "[machine]") {
+  // RepRapFirmware records its accelerometer with M956 into a file on the board; over a plain
+  // G-code link without a sensor stream nothing can be recorded: stop right after M115.
+  const std::string dir = tunekit::test::scratch_dir("no_sensor_stream");
+  for (const char* protocol : {"axis-sweep", "liquefier-step"}) {
+    INFO(protocol);
+    RunOptions o;
+    o.protocol = protocol;
+    o.run_dir = dir;
+    o.run_dir += "/";
+    o.run_dir += protocol;
+    o.sim_options = {"firmware=rrf", "sensor_stream=0"};
+    std::string why;
+    try {
+      run_experiment(o);
+    } catch (const MachineError& e) {
+      why = e.message();
+    }
+    CHECK(why.find("cannot record") != std::string::npos);
+    const std::string received = tunekit::test::read_text(o.run_dir + "/sim_received.gcode");
+    CHECK(received.find("M115") != std::string::npos);
+    for (const char* never : {"G28", "M109", "M104 S2", "G1 "}) {
+      INFO(never);
+      CHECK(received.find(never) == std::string::npos);
+    }
+  }
+}

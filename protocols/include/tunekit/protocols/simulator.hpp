@@ -92,6 +92,9 @@ struct SimConfig {
   double max_extrude_only_distance_mm = 50;   ///< Klipper [extruder] max_extrude_only_distance
   double max_extrude_only_accel_mm_s2 = 5000; ///< Klipper [extruder] max_extrude_only_accel
   double minimum_cruise_ratio = 0.5;          ///< Klipper [printer] minimum_cruise_ratio
+  /// Whether M115 offers tunekit's sensor stream (Cap:TUNEKIT_SENSOR_STREAM:1); off, the
+  /// simulator is a firmware that cannot stream its sensors over the G-code link.
+  bool sensor_stream = true;
   std::vector<SimFault> faults;
 
   /// "key=value" options (tunekit-sim flags and `tunekit run --sim`), e.g. "tau_s=0.5",
