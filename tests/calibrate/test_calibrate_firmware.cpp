@@ -15,16 +15,16 @@
 
 namespace {
 
-using namespace tunekit::protocols;
+namespace tkp = tunekit::protocols;
 
-struct Run {
+struct FirmwareRun {
   std::string dir;
   tunekit::test::CliRun cli;
   nlohmann::json results;
 };
 
-Run calibrate(const std::string& name, const std::vector<std::string>& extra) {
-  Run r;
+FirmwareRun calibrate_firmware(const std::string& name, const std::vector<std::string>& extra) {
+  FirmwareRun r;
   r.dir = tunekit::test::scratch_dir(name) + "/run";
   std::vector<std::string> args{"calibrate", "--machine", "sim", "--out", r.dir};
   args.insert(args.end(), extra.begin(), extra.end());
@@ -34,12 +34,12 @@ Run calibrate(const std::string& name, const std::vector<std::string>& extra) {
   return r;
 }
 
-void check_shapers_are_the_firmwares(const Run& r, ExportFirmware fw) {
+void check_shapers_are_the_firmwares(const FirmwareRun& r, tkp::ExportFirmware fw) {
   const auto& shapers = r.results.at("compensators").at("settings").at("shapers");
   REQUIRE(shapers.size() >= 1);
   for (const auto& [axis, sh] : shapers.items()) {
     INFO(axis << ": " << sh.dump());
-    const auto f = limits::find_shaper(fw, sh.at("type").get<std::string>());
+    const auto f = tkp::limits::find_shaper(fw, sh.at("type").get<std::string>());
     REQUIRE(f.has_value());
     CHECK(sh.at("damping").get<double>() <= f->max_damping);
   }
@@ -50,20 +50,20 @@ void check_shapers_are_the_firmwares(const Run& r, ExportFirmware fw) {
 TEST_CASE("calibrate --firmware klipper on heavily damped axes picks Klipper shapers within their damping bounds") {
   // zeta 0.35 on X: above ei's 0.4? no, but above 2hump_ei's 0.3 and 3hump_ei's 0.2; zeta 0.45
   // on Y is above every EI bound: only zv, mzv, zvd remain.
-  const auto r = calibrate("calibrate_klipper_damped", {"--firmware", "klipper", "--skip-liquefier", "--sim",
+  const auto r = calibrate_firmware("calibrate_klipper_damped", {"--firmware", "klipper", "--skip-liquefier", "--sim",
                                                         "mode_x=48:0.35", "--sim", "mode_y=37:0.45"});
   INFO(r.cli.err);
   REQUIRE(r.cli.code == 0);
-  check_shapers_are_the_firmwares(r, ExportFirmware::klipper);
+  check_shapers_are_the_firmwares(r, tkp::ExportFirmware::klipper);
   const std::string cfg = tunekit::ident::read_file_bytes(r.dir + "/config/changes.diff");
   CHECK(cfg.find("shaper_type_x") != std::string::npos);
 }
 
 TEST_CASE("calibrate --firmware marlin completes and writes Configuration_adv.h with a ZV shaper") {
-  const auto r = calibrate("calibrate_marlin", {"--firmware", "marlin"});
+  const auto r = calibrate_firmware("calibrate_marlin", {"--firmware", "marlin"});
   INFO(r.cli.err);
   REQUIRE(r.cli.code == 0);
-  check_shapers_are_the_firmwares(r, ExportFirmware::marlin);
+  check_shapers_are_the_firmwares(r, tkp::ExportFirmware::marlin);
   const std::string diff = r.results.at("config_diff");
   CHECK(diff.find("SHAPING_FREQ_X") != std::string::npos);
   CHECK(diff.find("ADVANCE_K") != std::string::npos);
@@ -73,10 +73,10 @@ TEST_CASE("calibrate --firmware marlin completes and writes Configuration_adv.h 
 }
 
 TEST_CASE("calibrate --firmware rrf completes and writes config.g with an RRF shaper") {
-  const auto r = calibrate("calibrate_rrf", {"--firmware", "rrf"});
+  const auto r = calibrate_firmware("calibrate_rrf", {"--firmware", "rrf"});
   INFO(r.cli.err);
   REQUIRE(r.cli.code == 0);
-  check_shapers_are_the_firmwares(r, ExportFirmware::rrf);
+  check_shapers_are_the_firmwares(r, tkp::ExportFirmware::rrf);
   const std::string diff = r.results.at("config_diff");
   CHECK(diff.find("M593 P\"") != std::string::npos);
   const auto run = nlohmann::json::parse(tunekit::ident::read_file_bytes(r.dir + "/axis-x/run.json"));

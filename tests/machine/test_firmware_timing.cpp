@@ -26,7 +26,8 @@
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/simulator.hpp"
 
-using namespace tunekit;
+using tunekit::InputError;
+using tunekit::MachineError;
 using namespace tunekit::protocols;
 
 namespace {
