@@ -3,12 +3,16 @@
 // commands get their parameter values rewritten in place (other parameters and the comment
 // after ';' stay); missing ones are added after the drive configuration block.
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <cctype>
 #include <optional>
 
 #include <fmt/format.h>
 
 #include "export_writers.hpp"
+#include "tunekit/fitting/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 #include "text_util.hpp"
 
@@ -89,6 +93,26 @@ std::string param_value(const std::string& t, char letter) {
   return p ? t.substr(p->value_begin, p->value_end - p->value_begin) : std::string();
 }
 
+std::vector<std::string> split_colon(const std::string& v) {
+  std::vector<std::string> out;
+  std::size_t b = 0;
+  for (;;) {
+    const auto e = v.find(':', b);
+    out.push_back(v.substr(b, e == std::string::npos ? std::string::npos : e - b));
+    if (e == std::string::npos) break;
+    b = e + 1;
+  }
+  return out;
+}
+
+/// Position of `drive` in a colon-separated drive list ("0:1"), or -1.
+int index_in_list(const std::string& list, const std::string& drive) {
+  const auto items = split_colon(list);
+  for (std::size_t i = 0; i < items.size(); ++i)
+    if (items[i] == drive) return static_cast<int>(i);
+  return -1;
+}
+
 bool is_drive_setup(const std::string& code) {
   static const char* codes[] = {"M584", "M350", "M92", "M906", "M566", "M203", "M201", "M84"};
   return std::any_of(std::begin(codes), std::end(codes), [&](const char* k) { return code == k; });
@@ -105,9 +129,7 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
     if (!c) continue;
     if (c->code == "M572") {
       const std::string d = param_value(ed.line(i), 'D');
-      if (d == drive) m572 = i;
-      else if (d.find(':') != std::string::npos && s.pa_k_s)
-        r.warnings.push_back(fmt::format("{}:{}: M572 with several drives (D{}) left as it is", r.path, i + 1, d));
+      if (d == drive || index_in_list(d, drive) >= 0) m572 = i;
     }
     if (c->code == "M593") m593 = i;
     if (is_drive_setup(c->code)) anchor = i;
@@ -115,12 +137,59 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
   }
   std::vector<std::string> new_lines;
 
+  // Precedence: config.g's M501 runs config-override.g (GCodes2.cpp case 501) where it stands,
+  // so a command there overrides the same command in config.g before the M501. RRF's M500
+  // writes heater, kinematics, probe, tool and workplace values only (GCodes.cpp
+  // WriteConfigOverrideFile), never M572/M593: such lines there were added by hand.
+  if (m501) {
+    namespace fs = std::filesystem;
+    const fs::path over = fs::path(r.path).parent_path() / "config-override.g";
+    std::ifstream in(over, std::ios::binary);
+    if (in) {
+      std::stringstream ss;
+      ss << in.rdbuf();
+      const LineEditor oe(ss.str());
+      for (std::size_t i = 0; i < oe.size(); ++i) {
+        const auto c = parse_command(oe.line(i));
+        if (!c) continue;
+        const bool pa = c->code == "M572" && s.pa_k_s && param_value(oe.line(i), 'D') == drive;
+        const bool is = c->code == "M593" && !s.shapers.empty();
+        if (!pa && !is) continue;
+        const std::optional<std::size_t>& mine = pa ? m572 : m593;
+        if (mine && *mine > *m501) continue;  // config.g's own line runs after config-override.g
+        throw InputError(fmt::format(
+            "{}:{}: '{}' in config-override.g is run by M501 (config.g line {}) after config.g's own {} and would "
+            "override the value written here; remove that line from config-override.g (RepRapFirmware's M500 never "
+            "writes {}, so it was added by hand) and export again",
+            over.string(), i + 1, oe.line(i), *m501 + 1, c->code, c->code));
+      }
+    }
+  }
+
   if (s.pa_k_s) {
     const std::string k = format_number(*s.pa_k_s, kDecimalsK);
     if (m572) {
       const std::string& t = ed.line(*m572);
       const std::string old = param_value(t, 'S');
-      if (!same_number(old, *s.pa_k_s, kDecimalsK)) {
+      const std::string dlist = param_value(t, 'D');
+      const int at = index_in_list(dlist, drive);
+      if (dlist.find(':') != std::string::npos && at >= 0) {
+        // "M572 D0:1 S0.2:0.3" (GCodes2.cpp case 572: one S per listed drive, or one S for all):
+        // only this drive's entry changes, the others keep theirs.
+        std::vector<std::string> drives = split_colon(dlist), vals = split_colon(old);
+        if (vals.size() == 1) vals.assign(drives.size(), vals[0]);
+        if (vals.size() == drives.size() && !same_number(vals[static_cast<std::size_t>(at)], *s.pa_k_s, kDecimalsK)) {
+          const std::string before = vals[static_cast<std::size_t>(at)];
+          vals[static_cast<std::size_t>(at)] = k;
+          std::string joined;
+          for (std::size_t q = 0; q < vals.size(); ++q) joined += (q ? ":" : "") + vals[q];
+          ed.replace(*m572, set_param(t, 'S', joined));
+          r.changes.push_back({"M572 D" + drive + " S", before, k, *m572 + 1, "command (drive list)"});
+        } else if (vals.size() != drives.size()) {
+          r.warnings.push_back(fmt::format("{}:{}: M572 D{} S{}: the S list does not match the drives; left as it is",
+                                           r.path, *m572 + 1, dlist, old));
+        }
+      } else if (!same_number(old, *s.pa_k_s, kDecimalsK)) {
         ed.replace(*m572, set_param(t, 'S', k));
         r.changes.push_back({"M572 D" + drive + " S", old, k, *m572 + 1, "command"});
       }
@@ -181,6 +250,9 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
     g += fmt::format("M593 P\"{}\" F{} S{}\n", firmware_shaper_name(ExportFirmware::rrf, sh->type),
                      format_number(sh->freq_hz, kDecimalsFreq), format_number(sh->damping, kDecimalsZeta));
   r.gcode = g;
+  if (r.updated != r.original)
+    r.notes.push_back("RepRapFirmware runs config.g at start-up: restart the board (M999) after writing, or send the "
+                      "G-code above to apply the values now");
 }
 
 }  // namespace tunekit::protocols::detail

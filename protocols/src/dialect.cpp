@@ -87,11 +87,18 @@ std::string Dialect::set_accel(double a) const {
   switch (fw_) {
     case Firmware::klipper: return fmt::format("SET_VELOCITY_LIMIT ACCEL={:.0f}", a);
     case Firmware::reprapfirmware: return fmt::format("M204 P{:.0f} T{:.0f}", a, a);
-    default: return fmt::format("M204 S{:.0f}", a);
+    // Marlin: P (printing moves) and T (travel moves, those without E); M204 S is deprecated.
+    default: return fmt::format("M204 P{:.0f} T{:.0f}", a, a);
   }
 }
 
-std::string Dialect::set_hotend(double t, bool wait) const { return fmt::format("{} S{:.0f}", wait ? "M109" : "M104", t); }
+std::string Dialect::set_hotend(double t, bool wait) const {
+  if (!wait) return fmt::format("M104 S{:.0f}", t);
+  // Marlin and RepRapFirmware: M109 S waits only while heating, M109 R also while cooling
+  // (Marlin/src/gcode/temp/M104_M109.cpp). Klipper's M109 waits from either side.
+  if (fw_ == Firmware::klipper) return fmt::format("M109 S{:.0f}", t);
+  return fmt::format("M109 R{:.0f}", t);
+}
 
 std::vector<std::string> Dialect::safe_state(bool heaters_off) const {
   std::vector<std::string> out;
@@ -100,7 +107,9 @@ std::vector<std::string> Dialect::safe_state(bool heaters_off) const {
       // Klipper has no quick stop short of an emergency shutdown; M112 stops motion at once.
       out.push_back("M112");
       break;
-    case Firmware::reprapfirmware: out.push_back("M410"); break;
+    // RepRapFirmware has no M410 (GCodes2.cpp has no case 410: it falls through to a macro
+    // lookup and answers "not supported"); M112 is its documented emergency stop.
+    case Firmware::reprapfirmware: out.push_back("M112"); break;
     default: out.push_back("M410"); break;  // Marlin/Prusa quickstop: stop all steppers now
   }
   if (heaters_off) {

@@ -9,6 +9,7 @@
 
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
 #include "tunekit/protocols/gcode.hpp"
 #include "tunekit/protocols/trajectory.hpp"
 
@@ -118,14 +119,144 @@ std::string num(double v, int decimals = 4) {
   return s;
 }
 
-void feed_move(std::vector<std::string>& g, double feed_mm_s, double duration_s) {
-  g.push_back(fmt::format("G1 E{} F{}", num(feed_mm_s * duration_s, 5), num(feed_mm_s * 60, 2)));
+/// How the firmware runs an extrude-only feed: Klipper brings every extrude-only move to a full
+/// stop (klippy/toolhead.py Move.calc_junction returns early unless both moves are kinematic),
+/// Marlin and RepRapFirmware blend consecutive extrude-only moves in the same direction.
+/// `accel_mm_s2` is the acceleration the firmware applies to them; `max_len_mm` the longest
+/// extrude-only move it accepts.
+struct FeedPlan {
+  bool stops = false;
+  double accel_mm_s2 = 0;
+  double max_len_mm = 50;
+};
+
+/// One constant-feed segment of `duration_s` at `feed_mm_s`, split into moves of at most
+/// max_len_mm. When the firmware stops after each move, the move's speed is raised so that the
+/// move with its ramps (d / v + v / a) still takes its share of the duration and delivers its
+/// share of the length: the staircase keeps its labelled timing.
+void feed_move(std::vector<std::string>& g, const FeedPlan& fp, double feed_mm_s, double duration_s) {
+  const double total = feed_mm_s * duration_s;
+  const int n = std::max(1, static_cast<int>(std::ceil(total / fp.max_len_mm - 1e-9)));
+  const double d = total / n, dt = duration_s / n;
+  double v = feed_mm_s;
+  if (fp.stops) {
+    const double a = fp.accel_mm_s2;
+    const double disc = a * a * dt * dt - 4 * a * d;
+    if (disc < 0)
+      throw InputError(fmt::format(
+          "a {:.4g} s feed segment of {:.4g} mm cannot keep its timing on a firmware that stops after every "
+          "extrude-only move (Klipper) at {:.0f} mm/s^2: it needs at least {:.0f} mm/s^2 (4 d / t^2) or a longer segment",
+          dt, d, a, 4 * d / (dt * dt)));
+    v = 0.5 * (a * dt - std::sqrt(disc));
+  }
+  for (int i = 0; i < n; ++i) g.push_back(fmt::format("G1 E{} F{}", num(d, 5), num(v * 60, 3)));
 }
 
-void liquefier_prologue(std::vector<std::string>& g, const std::map<std::string, double>& p, const Dialect& d) {
+/// The acceleration commands for extrude-only moves, per firmware, and their restore lines:
+/// Klipper caps them by SET_VELOCITY_LIMIT ACCEL and max_extrude_only_accel (extruder.py
+/// check_move); Marlin plans moves without X/Y/Z steps with the retract acceleration M204 R
+/// (planner.cpp); RepRapFirmware applies M204 to XY moves only (DDA.cpp "apply M204
+/// acceleration limits to XY moves"), so M201 E limits them.
+FeedPlan extruder_accel(std::vector<std::string>& g, std::vector<std::string>& restore, double a,
+                        const MachineProfile& profile, const Dialect& d) {
+  FeedPlan fp;
+  fp.max_len_mm = profile.extruder.max_extrude_only_distance_mm;
+  switch (d.firmware()) {
+    case Firmware::klipper:
+      g.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(a, 0)));
+      restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(profile.print.max_accel_mm_s2, 0)));
+      fp.stops = true;
+      fp.accel_mm_s2 = std::min(a, profile.extruder.max_accel_mm_s2);
+      break;
+    case Firmware::reprapfirmware:
+      g.push_back(fmt::format("M201 E{}", num(a, 0)));
+      restore.push_back(fmt::format("M201 E{}", num(profile.state.max_accel_e_mm_s2, 0)));
+      fp.accel_mm_s2 = a;
+      break;
+    default:
+      g.push_back(fmt::format("M204 R{}", num(a, 0)));
+      restore.push_back(fmt::format("M204 R{}", num(profile.state.retract_accel_mm_s2, 0)));
+      fp.accel_mm_s2 = a;
+      break;
+  }
+  return fp;
+}
+
+FeedPlan liquefier_prologue(std::vector<std::string>& g, std::vector<std::string>& restore,
+                            const std::map<std::string, double>& p, const MachineProfile& profile, const Dialect& d) {
   g.push_back("M83 ; relative extrusion");
   if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
-  g.push_back(d.set_accel(p.at("accel_mm_s2")));
+  return extruder_accel(g, restore, p.at("accel_mm_s2"), profile, d);
+}
+
+/// Appends the restore lines after the ";@epilogue" marker: the runner also sends them after
+/// an abort (after stopping motion).
+void epilogue(std::vector<std::string>& g, const std::vector<std::string>& restore) {
+  if (restore.empty()) return;
+  g.push_back(";@epilogue");
+  g.insert(g.end(), restore.begin(), restore.end());
+}
+
+/// "type:freq:zeta" of the profile's [firmware_state].
+struct StateShaper {
+  std::string type;
+  std::string freq, zeta;
+};
+StateShaper split_state_shaper(const std::string& v) {
+  StateShaper s;
+  const auto a = v.find(':'), b = v.rfind(':');
+  s.type = v.substr(0, a);
+  s.freq = v.substr(a + 1, b - a - 1);
+  s.zeta = v.substr(b + 1);
+  return s;
+}
+
+/// Input shaping off for a test and its restore lines, per firmware, when the profile says the
+/// machine has shaping configured ([firmware_state] shaper_x/y): Klipper as its resonance tester
+/// (SET_INPUT_SHAPER with zero frequencies), Marlin M593 F0 (M593.cpp: without X/Y every shaped
+/// axis), RepRapFirmware M593 P"none".
+void shaping_off(const MachineProfile& profile, const Dialect& d, std::vector<std::string>& prologue,
+                 std::vector<std::string>& restore, nlohmann::json& changed) {
+  const auto& shaper = profile.state.shaper;
+  if (shaper.empty()) return;
+  switch (d.firmware()) {
+    case Firmware::klipper: {
+      prologue.push_back("SET_INPUT_SHAPER SHAPER_FREQ_X=0 SHAPER_FREQ_Y=0");
+      std::string r = "SET_INPUT_SHAPER";
+      for (const auto& [ax, v] : shaper) {
+        const auto sv = split_state_shaper(v);
+        const std::string U = ax == "x" ? "X" : "Y";
+        r += fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", U, sv.type, U, sv.freq, U, sv.zeta);
+      }
+      restore.push_back(r);
+      changed.push_back("input_shaper");
+      break;
+    }
+    case Firmware::reprapfirmware: {
+      prologue.push_back("M593 P\"none\"");
+      const auto sv = split_state_shaper(shaper.begin()->second);
+      restore.push_back(fmt::format("M593 P\"{}\" F{} S{}", sv.type, sv.freq, sv.zeta));
+      changed.push_back("M593");
+      break;
+    }
+    default:
+      prologue.push_back("M593 F0");
+      for (const auto& [ax, v] : shaper) {
+        const auto sv = split_state_shaper(v);
+        restore.push_back(fmt::format("M593 {} F{} D{}", ax == "x" ? "X" : "Y", sv.freq, sv.zeta));
+      }
+      changed.push_back("M593");
+      break;
+  }
+}
+
+/// Records how the staircase is timed on this firmware (the analysis uses the recorded feed).
+void record_feed_plan(Experiment& e, const FeedPlan& fp) {
+  e.excitation["extrude_only_moves_stop"] = fp.stops;
+  e.excitation["extrude_only_accel_mm_s2"] = fp.accel_mm_s2;
+  e.excitation["max_extrude_only_distance_mm"] = fp.max_len_mm;
+  e.excitation["timing"] = fp.stops ? "each move's speed raised so that with its stop it takes its labelled time"
+                                    : "consecutive extrude-only moves blend: the labelled timing";
 }
 
 double estimate_duration(const std::vector<std::string>& gcode, double jerk) {
@@ -164,6 +295,7 @@ nlohmann::json Experiment::to_json() const {
   j["sensors"] = sensors;
   j["gcode_lines"] = gcode.size();
   j["estimated_duration_s"] = estimated_duration_s;
+  j["excitation"] = excitation;
   return j;
 }
 
@@ -198,15 +330,18 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     positive("settle_s");
     positive("accel_mm_s2");
     const int cycles = static_cast<int>(std::lround(positive("cycles")));
-    liquefier_prologue(g, p, d);
+    std::vector<std::string> restore;
+    const FeedPlan fp = liquefier_prologue(g, restore, p, profile, d);
+    record_feed_plan(e, fp);
     g.push_back(";@record load_cell on");
-    feed_move(g, p["feed_low_mm_s"], p["settle_s"]);
+    feed_move(g, fp, p["feed_low_mm_s"], p["settle_s"]);
     for (int c = 0; c < cycles; ++c) {
-      feed_move(g, p["feed_high_mm_s"], p["hold_s"]);
-      feed_move(g, p["feed_low_mm_s"], p["hold_s"]);
+      feed_move(g, fp, p["feed_high_mm_s"], p["hold_s"]);
+      feed_move(g, fp, p["feed_low_mm_s"], p["hold_s"]);
     }
     g.push_back(d.wait_for_moves());
     g.push_back(";@record load_cell off");
+    epilogue(g, restore);
   } else if (protocol == "liquefier-sine" || protocol == "liquefier-chirp") {
     const double mean = positive("feed_mean_mm_s");
     const double amp = p.at("amplitude_mm_s");
@@ -219,9 +354,11 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
                                  std::pair{"duration_s", plan.duration_s}, std::pair{"settle_s", plan.settle_s}})
         if (!overrides.count(k)) p[k] = v;
     }
-    liquefier_prologue(g, p, d);
+    std::vector<std::string> restore;
+    const FeedPlan fp = liquefier_prologue(g, restore, p, profile, d);
+    record_feed_plan(e, fp);
     g.push_back(";@record load_cell on");
-    feed_move(g, mean, protocol == "liquefier-chirp" ? positive("settle_s") : 2.0);  // steady state first
+    feed_move(g, fp, mean, protocol == "liquefier-chirp" ? positive("settle_s") : 2.0);  // steady state first
     if (protocol == "liquefier-sine") {
       const double f0 = positive("freq_min_hz"), f1 = positive("freq_max_hz");
       const int n = std::max(1, static_cast<int>(std::lround(positive("freq_count"))));
@@ -232,7 +369,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
         const int steps = static_cast<int>(std::ceil(periods / f / dt));
         g.push_back(fmt::format("; dwell at {} Hz", num(f, 4)));
         for (int k = 0; k < steps; ++k)
-          feed_move(g, mean + amp * std::sin(2 * std::numbers::pi * f * (k + 0.5) * dt), dt);
+          feed_move(g, fp, mean + amp * std::sin(2 * std::numbers::pi * f * (k + 0.5) * dt), dt);
       }
     } else {
       const double f0 = positive("freq_min_hz"), f1 = positive("freq_max_hz"), T = positive("duration_s");
@@ -240,12 +377,13 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
       for (int k = 0; k < steps; ++k) {
         const double t = (k + 0.5) * seg;
         const double phase = 2 * std::numbers::pi * (f0 * t + 0.5 * (f1 - f0) / T * t * t);
-        feed_move(g, mean + amp * std::sin(phase), seg);
+        feed_move(g, fp, mean + amp * std::sin(phase), seg);
       }
     }
-    feed_move(g, mean, 1.0);
+    feed_move(g, fp, mean, 1.0);
     g.push_back(d.wait_for_moves());
     g.push_back(";@record load_cell off");
+    epilogue(g, restore);
   } else if (protocol == "ring-print") {
     const double R = positive("radius_mm"), v = positive("speed_mm_s"), A = p.at("amplitude");
     const int N = static_cast<int>(std::lround(positive("periods")));
@@ -281,29 +419,102 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     const double aph = positive("accel_per_hz");
     if (f1 <= f0) throw InputError("freq_end_hz must exceed freq_start_hz");
     const std::string A = axis_in == "x" ? "X" : "Y", O = axis_in == "x" ? "Y" : "X";
+    const double axis_max_accel = profile.axis(axis_in).max_accel_mm_s2;
+    // The sweep's moves, designed within the firmware's planner rules.
+    struct SweepMove {
+      double accel, dist, vpk;
+    };
+    std::vector<SweepMove> moves;
+    double min_len = 0;
+    if (d.firmware() == Firmware::marlin || d.firmware() == Firmware::prusa) {
+      // Marlin joins a move with fewer than MIN_STEPS_PER_SEGMENT steps with the next one
+      // (planner.cpp _buffer_steps; Configuration_adv.h MIN_STEPS_PER_SEGMENT 6).
+      const double spm = axis_in == "x" ? profile.state.steps_per_mm_x : profile.state.steps_per_mm_y;
+      min_len = limits::kMarlinMinStepsPerSegment / spm;
+    }
+    {
+      double t = 0, f = f0;
+      while (f < f1) {
+        const double th = 1.0 / (2 * f);
+        double a = aph * f;
+        // A triangle of duration th at acceleration a covers a th^2 / 4.
+        if (a * th * th / 4 < 1.5 * min_len) a = 1.5 * min_len * 4 / (th * th);
+        if (a > axis_max_accel)
+          throw InputError(fmt::format(
+              "axis-sweep at {:.1f} Hz on Marlin: a half period must move at least {} steps (MIN_STEPS_PER_SEGMENT, "
+              "Configuration_adv.h) = {:.4g} mm, which needs {:.0f} mm/s^2, above the axis limit {:.0f} mm/s^2; lower "
+              "freq_end_hz or raise [firmware_state] steps_per_mm",
+              f, limits::kMarlinMinStepsPerSegment, min_len, a, axis_max_accel));
+        moves.push_back({a, a * th * th / 4, a * th / 2});
+        t += th;
+        f = f0 + rate * t;
+      }
+    }
+    double peak_accel = 0;
+    for (const auto& m : moves) peak_accel = std::max(peak_accel, m.accel);
+    // Test settings: everything the firmware would do differently from the labelled moves is
+    // turned off for the test and restored after (the epilogue, also sent after an abort).
+    std::vector<std::string> prologue, restore;
+    nlohmann::json changed = nlohmann::json::array();
+    switch (d.firmware()) {
+      case Firmware::klipper:
+        // As Klipper's own TEST_RESONANCES (klippy/extras/resonance_tester.py:194-199):
+        // MINIMUM_CRUISE_RATIO=0 and input shaping off.
+        prologue.push_back("SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO=0");
+        restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={} MINIMUM_CRUISE_RATIO={}",
+                                      num(profile.print.max_accel_mm_s2, 0), num(profile.state.minimum_cruise_ratio, 3)));
+        changed.push_back("minimum_cruise_ratio");
+        break;
+      case Firmware::reprapfirmware:
+        // RRF joins a reversal at M566/2 (DDA.cpp MatchSpeeds, totalFraction 2): the lowest jerk
+        // it accepts (Configuration.h MinimumJerk 0.1 mm/s) makes every half period rest to rest.
+        prologue.push_back("M566 X6 Y6");
+        restore.push_back(fmt::format("M566 X{} Y{}", num(profile.state.jerk_xy_mm_s * 60, 1),
+                                      num(profile.state.jerk_xy_mm_s * 60, 1)));
+        changed.push_back("M566");
+        prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
+        restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
+                                      num(profile.state.max_accel_xy_mm_s2, 0)));
+        changed.push_back("M201");
+        break;
+      default:
+        // Marlin: moves shorter than DEFAULT_MINSEGMENTTIME (M205 B, us) are slowed
+        // (planner.cpp), M204 is capped by M201 (planner.cpp limit_and_warn).
+        prologue.push_back("M205 B0");
+        restore.push_back(fmt::format("M205 B{}", num(profile.state.min_segment_time_s * 1e6, 0)));
+        changed.push_back("M205 B");
+        prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
+        restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
+                                      num(profile.state.max_accel_xy_mm_s2, 0)));
+        changed.push_back("M201");
+        break;
+    }
+    shaping_off(profile, d, prologue, restore, changed);
+    e.excitation["test_settings"] = prologue;
+    e.excitation["changed"] = changed;
+    e.excitation["peak_accel_mm_s2"] = peak_accel;
+    if (min_len > 0) e.excitation["min_move_mm"] = min_len;
     g.push_back("G28");
     g.push_back("G90");
-    g.push_back(d.set_accel(std::min(3000.0, profile.axis(axis_in).max_accel_mm_s2)));
+    g.push_back(d.set_accel(std::min(3000.0, axis_max_accel)));
     g.push_back(fmt::format("G1 {}{} {}{} F{}", A, num(p["center_mm"]), O, num(p["other_mm"]),
                             num(positive("travel_speed_mm_s") * 60, 1)));
     g.push_back(d.wait_for_moves());
+    g.insert(g.end(), prologue.begin(), prologue.end());
     g.push_back(";@record accelerometer on");
     g.push_back(fmt::format("G4 P{}", std::lround(p["settle_s"] * 1000)));
-    double t = 0, f = f0, pos = p["center_mm"];
+    double pos = p["center_mm"];
     int sign = 1;
-    while (f < f1) {
-      const double th = 1.0 / (2 * f), a = aph * f;
-      const double vpk = a * th / 2, dist = vpk * th / 2;
-      g.push_back(d.set_accel(a));
-      pos += sign * dist;
-      g.push_back(fmt::format("G1 {}{} F{}", A, num(pos), num(vpk * 60, 2)));
+    for (const auto& m : moves) {
+      g.push_back(d.set_accel(m.accel));
+      pos += sign * m.dist;
+      g.push_back(fmt::format("G1 {}{} F{}", A, num(pos, 5), num(m.vpk * 60, 3)));
       sign = -sign;
-      t += th;
-      f = f0 + rate * t;
     }
     g.push_back(fmt::format("G4 P{}", std::lround(p["settle_s"] * 1000)));
     g.push_back(d.wait_for_moves());
     g.push_back(";@record accelerometer off");
+    epilogue(g, restore);
   } else if (protocol == "axis-rectangle") {
     const double w = positive("width_mm"), h = positive("height_mm"), v = positive("speed_mm_s");
     const int reps = static_cast<int>(std::lround(positive("repeats")));
@@ -314,6 +525,13 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back(d.set_accel(positive("accel_mm_s2")));
     g.push_back(fmt::format("G1 X{} Y{} F{}", num(x0), num(y0), num(v * 60, 1)));
     g.push_back(d.wait_for_moves());
+    // The overshoot is measured without the firmware's input shaping (restored after).
+    std::vector<std::string> prologue, restore;
+    nlohmann::json changed = nlohmann::json::array();
+    shaping_off(profile, d, prologue, restore, changed);
+    g.insert(g.end(), prologue.begin(), prologue.end());
+    e.excitation["test_settings"] = prologue;
+    e.excitation["changed"] = changed;
     g.push_back(";@record accelerometer on");
     g.push_back(fmt::format("G4 P{}", pause_ms));
     for (int r = 0; r < reps; ++r) {
@@ -324,6 +542,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     }
     g.push_back(d.wait_for_moves());
     g.push_back(";@record accelerometer off");
+    epilogue(g, restore);
   }
   e.estimated_duration_s = estimate_duration(g, kMachineJerk);
   return e;

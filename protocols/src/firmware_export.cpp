@@ -11,20 +11,34 @@
 #include "export_writers.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
 #include "text_util.hpp"
 
 namespace tunekit::protocols {
 namespace {
 
-// Accepted ranges (docs/export.md gives the sources).
-constexpr double kMarlinKMax = 10.0;           // M900: K outside 0-10 is rejected
-constexpr double kMarlinTauMax = 0.5;          // M900 U (SMOOTH_LIN_ADVANCE): 0-0.5 s
-constexpr double kKlipperSmoothMax = 0.2;      // pressure_advance_smooth_time: above 0, at most 0.200 s
-constexpr double kRrfFreqMin = 937500.0 / (2 * 65535.0);  // 16-bit half period at the Duet 2 step clock
-constexpr double kRrfFreqMax = 1000.0;
-constexpr double kRrfZetaMax = 0.99;
+// Accepted ranges: firmware_limits.hpp gives each bound with its source.
+constexpr double kMarlinKMax = limits::kMarlinAdvanceKMax;
+constexpr double kMarlinTauMax = limits::kMarlinAdvanceTauMax_s;
+constexpr double kKlipperSmoothMax = limits::kKlipperSmoothTimeMax_s;
+constexpr double kRrfFreqMin = limits::kRrfShaperFreqMin_hz;
+constexpr double kRrfFreqMax = limits::kRrfShaperFreqMax_hz;
 
 }  // namespace
+
+bool marlin_ft_motion_enabled(const std::string& text) {
+  const LineEditor ed(text);
+  for (std::size_t i = 0; i < ed.size(); ++i) {
+    const std::string& t = ed.line(i);
+    std::size_t p = t.find_first_not_of(" \t");
+    if (p == std::string::npos || t.compare(p, 7, "#define") != 0) continue;
+    p = t.find_first_not_of(" \t", p + 7);
+    if (p == std::string::npos || t.compare(p, 9, "FT_MOTION") != 0) continue;
+    const std::size_t e = p + 9;
+    if (e == t.size() || t[e] == ' ' || t[e] == '\t' || t[e] == '/') return true;
+  }
+  return false;
+}
 
 ExportFirmware parse_export_firmware(const std::string& name) {
   const std::string n = text::lower(name);
@@ -50,26 +64,17 @@ std::string canonical_shaper_type(const std::string& type) {
   return t;
 }
 
-std::string firmware_shaper_name(ExportFirmware fw, const std::string& type) {
+std::string firmware_shaper_name(ExportFirmware fw, const std::string& type, bool ft_motion) {
   const std::string t = canonical_shaper_type(type);
-  switch (fw) {
-    case ExportFirmware::klipper: {
-      static const char* known[] = {"zv", "mzv", "zvd", "ei", "2hump_ei", "3hump_ei"};
-      for (const char* k : known)
-        if (t == k) return t;
-      throw InputError(fmt::format("Klipper has no '{}' input shaper (it has zv, mzv, zvd, ei, 2hump_ei, 3hump_ei)", type));
-    }
-    case ExportFirmware::marlin:
-      if (t == "zv") return "zv";
-      throw InputError(fmt::format("Marlin's input shaping is ZV only; '{}' is not available (choose zv)", type));
-    case ExportFirmware::rrf:
-      if (t == "mzv" || t == "zvd" || t == "zvdd" || t == "zvddd") return t;
-      if (t == "2hump_ei") return "ei2";
-      if (t == "3hump_ei") return "ei3";
-      throw InputError(fmt::format(
-          "RepRapFirmware has no '{}' input shaper (it has mzv, zvd, zvdd, zvddd, ei2, ei3)", type));
-  }
-  throw InputError("unknown firmware");
+  if (const auto s = limits::find_shaper(fw, t, ft_motion)) return s->firmware_name;
+  if (fw == ExportFirmware::marlin && ft_motion)
+    throw InputError(fmt::format("Marlin's FT_MOTION has no '{}' input shaper (it has {})", type,
+                                 limits::shaper_list(fw, true)));
+  if (fw == ExportFirmware::rrf && t == "zvddd") return "zvddd";
+  if (fw == ExportFirmware::marlin)
+    throw InputError(fmt::format("Marlin's input shaping is ZV only; '{}' is not available (choose zv)", type));
+  throw InputError(fmt::format("{} has no '{}' input shaper (it has {})", limits::firmware_title(fw), type,
+                               limits::shaper_list(fw)));
 }
 
 void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
@@ -80,14 +85,17 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
     if (!std::isfinite(k) || k < 0)
       bad.push_back(fmt::format("advance K {} s is negative or not a number", k));
     else if (fw == ExportFirmware::marlin && k > kMarlinKMax)
-      bad.push_back(fmt::format("Marlin accepts K from 0 to {} (M900 K); {} is out of range", kMarlinKMax, k));
+      bad.push_back(fmt::format("Marlin accepts K from 0 to {} (M900 K, Marlin/src/gcode/feature/advance/M900.cpp); {} is "
+                                "out of range",
+                                kMarlinKMax, k));
   }
   if (s.pa_smooth_s) {
     const double t = *s.pa_smooth_s;
     if (!std::isfinite(t) || t < 0)
       bad.push_back(fmt::format("smoothing time {} s is negative or not a number", t));
     else if (fw == ExportFirmware::klipper && (t <= 0 || t > kKlipperSmoothMax))
-      bad.push_back(fmt::format("Klipper accepts pressure_advance_smooth_time above 0 and up to {} s; {} is out of range",
+      bad.push_back(fmt::format("Klipper accepts pressure_advance_smooth_time above 0 and up to {} s "
+                                "(klippy/kinematics/extruder.py:15); {} is out of range",
                                 kKlipperSmoothMax, t));
     else if (fw == ExportFirmware::marlin && t > kMarlinTauMax)
       bad.push_back(fmt::format("Marlin accepts ADVANCE_TAU (M900 U) from 0 to {} s; {} is out of range", kMarlinTauMax, t));
@@ -98,20 +106,23 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
       continue;
     }
     try {
-      firmware_shaper_name(fw, sh.type);
+      firmware_shaper_name(fw, sh.type, s.marlin_ft_motion);
     } catch (const InputError& e) {
       bad.push_back(fmt::format("{}: {}", axis, e.message()));
     }
+    // The firmware's own damping bound for this shaper (Klipper: per shaper).
+    const auto fs = limits::find_shaper(fw, canonical_shaper_type(sh.type), s.marlin_ft_motion);
+    if (fs && std::isfinite(sh.damping) && sh.damping >= 0 && sh.damping < 1 && sh.damping > fs->max_damping)
+      bad.push_back(fmt::format("{}: {} accepts a damping ratio of at most {} for {} ({}); {} is out of range", axis,
+                                name, fs->max_damping, fs->firmware_name, fs->source, sh.damping));
     if (!std::isfinite(sh.freq_hz) || sh.freq_hz <= 0)
       bad.push_back(fmt::format("{}: shaper frequency must be positive, not {} Hz", axis, sh.freq_hz));
     else if (fw == ExportFirmware::rrf && (sh.freq_hz < kRrfFreqMin || sh.freq_hz > kRrfFreqMax))
-      bad.push_back(fmt::format("{}: RepRapFirmware accepts shaper frequencies from {:.2f} to {:.0f} Hz; {} is out of range",
+      bad.push_back(fmt::format("{}: RepRapFirmware accepts shaper frequencies from {:.2f} to {:.0f} Hz (src/Movement/AxisShaper.cpp:81-82); {} is "
+                                "out of range",
                                 axis, kRrfFreqMin, kRrfFreqMax, sh.freq_hz));
     if (!std::isfinite(sh.damping) || sh.damping < 0 || sh.damping >= 1)
       bad.push_back(fmt::format("{}: damping ratio must be at least 0 and below 1, not {}", axis, sh.damping));
-    else if (fw == ExportFirmware::rrf && sh.damping > kRrfZetaMax)
-      bad.push_back(fmt::format("{}: RepRapFirmware accepts damping up to {}; {} is out of range", axis, kRrfZetaMax,
-                                sh.damping));
   }
   if (!bad.empty()) {
     std::string msg = fmt::format("refusing to write {} settings: ", name);
@@ -121,7 +132,9 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
 }
 
 ExportResult export_config_text(ExportFirmware fw, const std::string& text, const std::string& path,
-                                const CompensatorSettings& s) {
+                                const CompensatorSettings& settings) {
+  CompensatorSettings s = settings;
+  if (fw == ExportFirmware::marlin && marlin_ft_motion_enabled(text)) s.marlin_ft_motion = true;
   validate_settings(fw, s);
   ExportResult r;
   r.firmware = fw;
@@ -160,7 +173,7 @@ nlohmann::json ExportResult::to_json() const {
   for (const auto& c : changes)
     ch.push_back({{"key", c.key}, {"old", c.old_value}, {"new", c.new_value}, {"line", c.line}, {"where", c.where}});
   return {{"firmware", to_string(firmware)}, {"config", path},         {"changed", changed()},
-          {"changes", ch},                  {"warnings", warnings},    {"diff", diff},
+          {"changes", ch},                  {"warnings", warnings},    {"notes", notes}, {"diff", diff},
           {"gcode", gcode}};
 }
 

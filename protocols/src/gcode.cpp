@@ -1,5 +1,6 @@
 #include "tunekit/protocols/gcode.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -162,8 +163,22 @@ std::optional<GcodeMove> GcodeInterpreter::apply(const GcodeWords& w) {
     }
     pos_ = m.end;
     m.feed_mm_s = feed_mm_s_;
-    m.accel_mm_s2 = accel_mm_s2_;
     if (m.length_mm() <= 1e-12) return std::nullopt;
+    // The acceleration the firmware applies to this kind of move: extrude-only moves take the
+    // retract acceleration (Marlin M204 R) or the extruder's M201 E (RepRapFirmware applies M204
+    // to XY moves only), moves without E the travel acceleration (M204 T), others the print
+    // acceleration; each is capped by the M201 maxima of the axes that move.
+    double a = accel_mm_s2_;
+    if (m.extruder_only()) {
+      if (retract_accel_) a = *retract_accel_;
+      else if (max_accel_[3]) a = *max_accel_[3];
+    } else if (m.end[3] == m.start[3]) {
+      a = travel_accel_;
+    }
+    const auto u = m.unit();
+    for (std::size_t k = 0; k < 4; ++k)
+      if (max_accel_[k] && u[k] > 1e-12) a = std::min(a, *max_accel_[k] / u[k]);
+    m.accel_mm_s2 = a;
     return m;
   }
   if (c == "G4") dwell_s_ = w.has("S") ? w.get("S", 0) : w.get("P", 0) / 1000.0;
@@ -177,12 +192,21 @@ std::optional<GcodeMove> GcodeInterpreter::apply(const GcodeWords& w) {
       if (w.has(key)) pos_[i] = w.get(key, 0);
     }
   } else if (c == "M204") {
-    if (w.has("S")) accel_mm_s2_ = w.get("S", accel_mm_s2_);
-    else if (w.has("P")) accel_mm_s2_ = w.get("P", accel_mm_s2_);
+    if (w.has("S")) accel_mm_s2_ = travel_accel_ = w.get("S", accel_mm_s2_);
+    if (w.has("P")) accel_mm_s2_ = w.get("P", accel_mm_s2_);
+    if (w.has("T")) travel_accel_ = w.get("T", travel_accel_);
+    if (w.has("P") && !w.has("T")) travel_accel_ = accel_mm_s2_;
+    if (w.has("R")) retract_accel_ = w.get("R", 0);
+  } else if (c == "M201") {
+    for (std::size_t i = 0; i < 4; ++i) {
+      const std::string key(1, static_cast<char>(std::toupper(static_cast<unsigned char>(kAxisNames[i][0]))));
+      if (w.has(key)) max_accel_[i] = w.get(key, 0);
+    }
   } else if (c == "SET_VELOCITY_LIMIT") {
-    if (w.has("ACCEL")) accel_mm_s2_ = w.get("ACCEL", accel_mm_s2_);
+    if (w.has("ACCEL")) accel_mm_s2_ = travel_accel_ = w.get("ACCEL", accel_mm_s2_);
   } else if (c == "M104" || c == "M109") {
     if (w.has("S")) hotend_c = w.get("S", 0);
+    else if (w.has("R")) hotend_c = w.get("R", 0);
   } else if (c == "M140" || c == "M190") {
     if (w.has("S")) bed_c = w.get("S", 0);
   }

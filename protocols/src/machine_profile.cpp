@@ -1,4 +1,7 @@
 #include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
+
+#include <algorithm>
 
 #include <cmath>
 #include <numbers>
@@ -122,6 +125,9 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
   p.extruder.max_flow_mm3_s = r.positive(e, "extruder", "max_flow_mm3_s", true, 0);
   p.extruder.max_velocity_mm_s = r.positive(e, "extruder", "max_velocity_mm_s", true, 0);
   p.extruder.max_accel_mm_s2 = r.positive(e, "extruder", "max_accel_mm_s2", true, 0);
+  // Klipper's default (klippy/kinematics/extruder.py:168-169); protocols split longer feeds.
+  p.extruder.max_extrude_only_distance_mm =
+      r.positive(e, "extruder", "max_extrude_only_distance_mm", false, limits::kKlipperMaxExtrudeOnlyDistance_mm);
 
   const auto& pr = r.section("print", false);
   p.print.max_accel_mm_s2 = r.positive(pr, "print", "max_accel_mm_s2", false, 3000);
@@ -140,6 +146,36 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
   p.sensors.filament_encoder = r.flag(s, "filament_encoder", false);
   p.sensors.camera = r.flag(s, "camera", false);
   p.sensors.accelerometer_rate_hz = r.positive(s, "sensors", "accelerometer_rate_hz", false, 3200);
+
+  const auto& fs = r.section("firmware_state", false);
+  for (const char* axis : {"x", "y"}) {
+    const std::string key = std::string("shaper_") + axis;
+    if (const auto* node = fs.get(key)) {
+      const auto v = node->value<std::string>();
+      if (!v || std::count(v->begin(), v->end(), ':') != 2)
+        throw InputError(fmt::format("[firmware_state] {} must be \"type:freq_hz:damping\", e.g. \"mzv:48.6:0.1\"", key),
+                         r.where_of(*node));
+      p.state.shaper[axis] = *v;
+    }
+  }
+  auto& st = p.state;
+  if (const auto* node = fs.get("minimum_cruise_ratio")) {
+    const auto v = node->value<double>();
+    if (!v || *v < 0 || *v >= 1)
+      throw InputError("[firmware_state] minimum_cruise_ratio must be at least 0 and below 1 (klippy/toolhead.py)",
+                       r.where_of(*node));
+    st.minimum_cruise_ratio = *v;
+  }
+  st.steps_per_mm_x = r.positive(fs, "firmware_state", "steps_per_mm_x", false, limits::kMarlinDefaultStepsPerMmXY);
+  st.steps_per_mm_y = r.positive(fs, "firmware_state", "steps_per_mm_y", false, limits::kMarlinDefaultStepsPerMmXY);
+  st.min_segment_time_s =
+      r.positive(fs, "firmware_state", "min_segment_time_s", false, limits::kMarlinDefaultMinSegmentTime_s);
+  st.max_accel_xy_mm_s2 =
+      r.positive(fs, "firmware_state", "max_accel_xy_mm_s2", false, limits::kMarlinDefaultMaxAccelXY_mm_s2);
+  st.retract_accel_mm_s2 =
+      r.positive(fs, "firmware_state", "retract_accel_mm_s2", false, limits::kMarlinDefaultRetractAccel_mm_s2);
+  st.max_accel_e_mm_s2 = r.positive(fs, "firmware_state", "max_accel_e_mm_s2", false, p.extruder.max_accel_mm_s2);
+  st.jerk_xy_mm_s = r.positive(fs, "firmware_state", "jerk_xy_mm_s", false, 15.0);
   return p;
 }
 

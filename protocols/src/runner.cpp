@@ -1,5 +1,6 @@
 #include "tunekit/protocols/runner.hpp"
 
+#include <algorithm>
 #include <ctime>
 #include <cstdlib>
 #include <filesystem>
@@ -69,6 +70,13 @@ accelerometer_rate_hz = 3200
 load_cell = true
 filament_encoder = false
 camera = false
+
+# The firmware's own settings the protocols change for a test and restore after it. The
+# simulated printer has 160 steps/mm on X and Y (enough steps for Marlin's sweep to 100 Hz
+# above MIN_STEPS_PER_SEGMENT) and no input shaper configured.
+[firmware_state]
+steps_per_mm_x = 160
+steps_per_mm_y = 160
 )";
 
 std::string utc_stamp() {
@@ -148,6 +156,9 @@ class Session {
   virtual FirmwareInfo identify() = 0;
   virtual void send(const std::string& line) = 0;
   virtual void record(const std::string& sensor, bool on) = 0;
+  /// Whether this link can record `sensor` (checked before anything is sent: no heating or
+  /// homing for a protocol whose data cannot be recorded).
+  virtual bool can_record(const std::string& sensor) const = 0;
   virtual void finish() = 0;
   virtual void safe_state(const std::vector<std::string>& commands) = 0;
   virtual nlohmann::json stats() const = 0;
@@ -169,7 +180,9 @@ class GcodeSession : public Session {
   }
   void send(const std::string& line) override { link_.send(line); }
   void record(const std::string& sensor, bool on) override {
-    const std::string cmd = dialect.sensor_stream(sensor, on);
+    // tunekit-sim streams with M4100 whichever firmware it follows.
+    const std::string cmd = firmware.sensor_stream() ? Dialect(Firmware::marlin).sensor_stream(sensor, on)
+                                                      : dialect.sensor_stream(sensor, on);
     if (cmd.empty() || !firmware.sensor_stream())
       throw MachineError(fmt::format("the firmware ({}) does not stream {} data over this link (it reports no "
                                      "Cap:TUNEKIT_SENSOR_STREAM); use Klipper's API socket (--port unix:PATH) or tunekit-sim",
@@ -177,6 +190,7 @@ class GcodeSession : public Session {
                          t_->describe());
     link_.send(cmd);
   }
+  bool can_record(const std::string& /*sensor*/) const override { return firmware.sensor_stream(); }
   void finish() override {}
   void safe_state(const std::vector<std::string>& commands) override {
     link_.send_best_effort(commands, std::chrono::milliseconds(300));
@@ -228,6 +242,7 @@ class KlipperSession : public Session {
     if (!on) client_.pump(std::chrono::milliseconds(100));  // trailing samples
     accel_on_ = on;
   }
+  bool can_record(const std::string& sensor) const override { return sensor == "accelerometer"; }
   void finish() override { flush_script(); }
   void safe_state(const std::vector<std::string>& commands) override {
     try {
@@ -260,6 +275,17 @@ std::string unique_dir(const std::string& base) {
   return d;
 }
 
+/// The protocol's lines after ";@epilogue": what restores the machine's own settings.
+std::vector<std::string> epilogue_lines(const std::vector<std::string>& gcode) {
+  std::vector<std::string> out;
+  bool in = false;
+  for (const auto& l : gcode) {
+    if (l == ";@epilogue") in = true;
+    else if (in && !l.empty() && l[0] != ';') out.push_back(l.substr(0, l.find(';')));
+  }
+  return out;
+}
+
 std::string join_lines(const std::vector<std::string>& lines) {
   std::string s;
   for (const auto& l : lines) s += l + "\n";
@@ -275,7 +301,9 @@ RunResult run_experiment(const RunOptions& o) {
   const MachineProfile profile = sim ? builtin_sim_profile() : load_machine_profile(o.machine);
   const SimConfig sim_cfg = SimConfig::from_options(o.sim_options);  // bad options fail before anything else
   if (!sim && o.port.empty()) throw InputError("--port is needed with a machine profile (or use --machine sim)");
-  const Dialect dialect(profile.firmware.empty() ? Firmware::marlin : firmware_from_name(profile.firmware));
+  // The simulator follows the firmware named by its "firmware=" option (Marlin by default).
+  const std::string fw_name = sim ? sim_cfg.firmware : profile.firmware;
+  const Dialect dialect(fw_name.empty() ? Firmware::marlin : firmware_from_name(fw_name));
 
   RunResult res;
   res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect);
@@ -355,6 +383,15 @@ RunResult run_experiment(const RunOptions& o) {
                                {"version", session->firmware.version},
                                {"dialect", to_string(session->dialect.firmware())}});
     summary["firmware"] = {{"name", session->firmware.name}, {"version", session->firmware.version}};
+    // Fail before heating and homing when the link cannot record what the protocol needs.
+    for (const auto& sensor : res.experiment.sensors)
+      if (!session->can_record(sensor))
+        throw MachineError(fmt::format("the firmware ({}) cannot record {} data over this link (no tunekit sensor "
+                                       "stream; RepRapFirmware records its accelerometer with M956 into a file, which "
+                                       "tunekit does not fetch yet); nothing but M115 was sent",
+                                       session->firmware.name.empty() ? "unidentified" : session->firmware.name,
+                                       sensor),
+                           port);
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
     for (const auto& line : res.gcode) {
@@ -377,6 +414,13 @@ RunResult run_experiment(const RunOptions& o) {
     if (session) {
       journal.event("safe state", {{"commands", safe}});
       session->safe_state(safe);
+      // Restore what the protocol changed for its test (after the stop). After an emergency
+      // stop (M112) the firmware must be restarted, which reloads its configuration anyway.
+      const auto restore = epilogue_lines(res.gcode);
+      if (!restore.empty() && std::find(safe.begin(), safe.end(), "M112") == safe.end()) {
+        journal.event("restore", {{"commands", restore}});
+        session->safe_state(restore);
+      }
     }
     journal.sync();
     summary["status"] = "failed";

@@ -5,6 +5,7 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -82,6 +83,21 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     else if (k == "cross_coupling") c.cross_coupling = parse_double(k, v);
     else if (k == "jerk_mm_s3") c.jerk_mm_s3 = pos(parse_double(k, v));
     else if (k == "seed") c.seed = static_cast<unsigned>(parse_double(k, v));
+    else if (k == "firmware") {
+      if (v != "marlin" && v != "klipper" && v != "rrf")
+        throw InputError("simulator option firmware must be marlin, klipper or rrf");
+      c.firmware = v;
+    } else if (k == "steps_per_mm") c.steps_per_mm = pos(parse_double(k, v));
+    else if (k == "max_extrude_only_distance_mm") c.max_extrude_only_distance_mm = pos(parse_double(k, v));
+    else if (k == "max_extrude_only_accel_mm_s2") c.max_extrude_only_accel_mm_s2 = pos(parse_double(k, v));
+    else if (k == "sensor_stream") {
+      if (v != "0" && v != "1") throw InputError("simulator option sensor_stream must be 0 or 1");
+      c.sensor_stream = v == "1";
+    } else if (k == "minimum_cruise_ratio") {
+      c.minimum_cruise_ratio = parse_double(k, v);
+      if (c.minimum_cruise_ratio < 0 || c.minimum_cruise_ratio >= 1)
+        throw InputError("simulator option minimum_cruise_ratio must be in [0, 1)");
+    }
     else if (k.rfind("mode_", 0) == 0 && k.size() == 6) {
       std::vector<SimMode> modes;
       for (const auto& m : split(v, ',')) {
@@ -159,6 +175,11 @@ nlohmann::json SimConfig::truth() const {
   j["axes"] = axes;
   j["accelerometer"] = {{"rate_hz", accel_rate_hz}, {"noise_mm_s2", accel_noise_mm_s2}, {"cross_coupling", cross_coupling}};
   j["jerk_mm_s3"] = jerk_mm_s3;
+  j["firmware"] = firmware;
+  j["planner"] = {{"steps_per_mm", steps_per_mm},
+                  {"max_extrude_only_distance_mm", max_extrude_only_distance_mm},
+                  {"max_extrude_only_accel_mm_s2", max_extrude_only_accel_mm_s2},
+                  {"minimum_cruise_ratio", minimum_cruise_ratio}};
   j["seed"] = seed;
   nlohmann::json faults = nlohmann::json::array();
   for (const auto& f : this->faults) faults.push_back(f.describe());
@@ -173,6 +194,41 @@ Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed
   load_every_ = std::max(1, static_cast<int>(std::lround(1.0 / (cfg_.load_cell_rate_hz * dt_))));
   for (const auto& [axis, modes] : cfg_.modes) mode_state_[axis].assign(modes.size(), {0.0, 0.0});
   delay_.assign(std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(cfg_.theta_s / dt_))), 0.0);
+  mcr_ = cfg_.minimum_cruise_ratio;
+  // The firmware's defaults: Marlin Configuration.h DEFAULT_MAX_ACCELERATION {3000, 3000, 100,
+  // 10000} and DEFAULT_RETRACT_ACCELERATION 3000; RepRapFirmware's M201 of a typical config.g.
+  if (marlin()) {
+    for (const char* l : {"M201 X3000 Y3000 Z100 E10000", "M204 R3000"}) interp_.apply(*parse_gcode(l));
+  } else if (rrf()) {
+    interp_.apply(*parse_gcode("M201 X3000 Y3000 Z100 E3000"));
+  }
+}
+
+double Simulator::junction_speed(const GcodeMove& a, const GcodeMove& b) const {
+  if (a.extruder_only() != b.extruder_only()) return 0;
+  // Klipper: a junction with a move that is not kinematic (extrude-only) is a full stop.
+  if (klipper() && a.extruder_only()) return 0;
+  const auto ua = a.unit(), ub = b.unit();
+  double dot = 0;
+  if (a.extruder_only()) {
+    dot = ua[3] * ub[3];
+  } else {
+    double na = 0, nb = 0;
+    for (std::size_t k = 0; k < 3; ++k) {
+      dot += ua[k] * ub[k];
+      na += ua[k] * ua[k];
+      nb += ub[k] * ub[k];
+    }
+    dot /= std::sqrt(na * nb);
+  }
+  if (dot > 0.999) return a.feed_mm_s;
+  if (rrf() && dot < -0.999) {
+    // DDA.cpp MatchSpeeds: the speed change across the junction, |d_a - d_b| v = 2 v for a
+    // reversal, may not exceed the axis' M566 jerk.
+    const double jerk = std::abs(ua[0]) >= std::abs(ua[1]) ? jerk_x_mm_s_ : jerk_y_mm_s_;
+    return std::min({jerk / 2, a.feed_mm_s, b.feed_mm_s});
+  }
+  return 0;
 }
 
 std::vector<std::string> Simulator::received() const {
@@ -251,7 +307,16 @@ void Simulator::step(const std::array<double, 4>& /*pos*/, const std::array<doub
 }
 
 void Simulator::execute(const GcodeMove& m, double v_entry, double v_exit, const Emit& emit) {
-  const Profile prof = Profile::move(m.length_mm(), v_entry, m.feed_mm_s, v_exit, m.accel_mm_s2, cfg_.jerk_mm_s3);
+  double accel = m.accel_mm_s2, v_max = m.feed_mm_s;
+  const double L = m.length_mm();
+  if (klipper()) {
+    if (m.extruder_only()) accel = std::min(accel, cfg_.max_extrude_only_accel_mm_s2);
+    else v_max = std::min(v_max, std::sqrt(0.5 * (v_entry * v_entry + v_exit * v_exit) + accel * L * (1 - mcr_)));
+  } else if (marlin() && min_segment_time_s_ > 0 && L / v_max < min_segment_time_s_) {
+    v_max = L / min_segment_time_s_;  // planner.cpp: a block shorter than min_segment_time is slowed
+  }
+  v_max = std::max(v_max, 1e-6);
+  const Profile prof = Profile::move(L, v_entry, v_max, v_exit, accel, cfg_.jerk_mm_s3);
   const auto u = m.unit();
   const double t0 = t_;
   const double T = prof.duration_s();
@@ -350,29 +415,30 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
   if (words) {
     const std::string& c = words->command;
     if (c == "G0" || c == "G1") {
-      if (const auto m = interp_.apply(*words)) {
-        if (pending_) {
-          const auto a = pending_->unit(), b = m->unit();
-          bool same = pending_->extruder_only() == m->extruder_only();
-          if (same) {
-            double dot = 0;
-            if (m->extruder_only()) dot = a[3] * b[3];
-            else {
-              double na = 0, nb = 0;
-              for (std::size_t k = 0; k < 3; ++k) {
-                dot += a[k] * b[k];
-                na += a[k] * a[k];
-                nb += b[k] * b[k];
-              }
-              dot /= std::sqrt(na * nb);
-            }
-            same = dot > 0.999;
-          }
-          const double v_exit = same ? pending_->feed_mm_s : 0.0;
-          execute(*pending_, pending_entry_, v_exit, emit);
-          pending_entry_ = v_exit;
+      if (auto m = interp_.apply(*words)) {
+        if (carry_start_) {
+          m->start = *carry_start_;  // Marlin: the joined move's distance is added to this one
+          carry_start_.reset();
         }
-        pending_ = *m;
+        if (klipper() && m->extruder_only() && m->length_mm() > cfg_.max_extrude_only_distance_mm) {
+          out_flush(emit);
+          emit(fmt::format("!! Extrude only move too long ({:.3f}mm vs {:.3f}mm)\n", m->length_mm(),
+                           cfg_.max_extrude_only_distance_mm));
+          emit("ok\n");
+          return true;
+        }
+        double steps = 0;
+        for (std::size_t k = 0; k < 3; ++k) steps = std::max(steps, std::abs(m->end[k] - m->start[k]) * cfg_.steps_per_mm);
+        if (marlin() && !m->extruder_only() && std::lround(steps) < 6) {
+          carry_start_ = m->start;  // Configuration_adv.h MIN_STEPS_PER_SEGMENT 6
+        } else {
+          if (pending_) {
+            const double v_exit = junction_speed(*pending_, *m);
+            execute(*pending_, pending_entry_, v_exit, emit);
+            pending_entry_ = v_exit;
+          }
+          pending_ = *m;
+        }
       }
     } else if (c == "G4") {
       flush(emit);
@@ -386,6 +452,17 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
       home.command = "G92";
       home.args = {{"X", 0}, {"Y", 0}, {"Z", 0}};
       interp_.apply(home);
+    } else if (c == "M205" && words->has("B")) {
+      min_segment_time_s_ = words->get("B", 20000) * 1e-6;
+    } else if (c == "M566") {
+      if (words->has("X")) jerk_x_mm_s_ = std::max(0.1, words->get("X", 900) / 60.0);  // Configuration.h MinimumJerk
+      if (words->has("Y")) jerk_y_mm_s_ = std::max(0.1, words->get("Y", 900) / 60.0);
+    } else if (c == "SET_VELOCITY_LIMIT") {
+      interp_.apply(*words);
+      if (words->has("MINIMUM_CRUISE_RATIO")) mcr_ = words->get("MINIMUM_CRUISE_RATIO", mcr_);
+    } else if (c == "M410" && rrf()) {
+      out_flush(emit);
+      emit("Error: M410: Command is not supported\n");
     } else if (c == "M410") {
       pending_.reset();  // quickstop: queued motion is dropped
       pending_entry_ = 0;
@@ -400,11 +477,19 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
       if (words->has("L")) set_streaming("load_cell", words->get("L", 0) != 0);
     } else if (c == "M115") {
       out_flush(emit);
-      emit(fmt::format("FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
-                       "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
-                       "UUID:00000000-0000-0000-0000-000000000000\n"
-                       "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\nCap:TUNEKIT_SENSOR_STREAM:1\n",
-                       TUNEKIT_VERSION));
+      if (klipper())
+        emit(fmt::format("FIRMWARE_NAME:Klipper FIRMWARE_VERSION:v0.13.0-tunekit-sim-{}\n", TUNEKIT_VERSION));
+      else if (rrf())
+        emit(fmt::format("FIRMWARE_NAME: RepRapFirmware for tunekit-sim FIRMWARE_VERSION: 3.5.1 ELECTRONICS: tunekit-sim "
+                         "{} FIRMWARE_DATE: 2024-01-01\n",
+                         TUNEKIT_VERSION));
+      else
+        emit(fmt::format("FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
+                         "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
+                         "UUID:00000000-0000-0000-0000-000000000000\n"
+                         "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
+                         TUNEKIT_VERSION));
+      if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
     } else if (c == "M105") {
       out_flush(emit);
       const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);

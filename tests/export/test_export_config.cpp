@@ -92,7 +92,8 @@ TEST_CASE("Klipper printer.cfg: values land where they take effect, everything e
   }
 }
 
-TEST_CASE("Klipper: a value set in the SAVE_CONFIG block is edited there, the shadowed line above is reported") {
+TEST_CASE("Klipper: a value set above and in the SAVE_CONFIG block is edited above, where Klipper reads it") {
+  // klippy/configfile.py _strip_duplicates comments out the block's copy at load: the body wins.
   const std::string cfg =
       "[extruder]\n"
       "pressure_advance = 0.1\n"
@@ -108,20 +109,21 @@ TEST_CASE("Klipper: a value set in the SAVE_CONFIG block is edited there, the sh
   const auto r = export_config_text(ExportFirmware::klipper, cfg, "p.cfg", s);
   CHECK(r.updated ==
         "[extruder]\n"
-        "pressure_advance = 0.1\n"
+        "pressure_advance = 0.05\n"
         "\n"
         "#*# <---------------------- SAVE_CONFIG ---------------------->\n"
         "#*# DO NOT EDIT THIS BLOCK OR BELOW. The contents are auto-generated.\n"
         "#*#\n"
         "#*# [extruder]\n"
-        "#*# pressure_advance = 0.05\n"
+        "#*# pressure_advance = 0.08\n"
         "#*#\n"
         "#*# [input_shaper]\n"
         "#*# shaper_type_x = zv\n"
         "#*# shaper_freq_x = 40\n"
         "#*# damping_ratio_x = 0.1\n");
   REQUIRE(r.warnings.size() == 1);
-  CHECK(r.warnings[0].find("p.cfg:2") != std::string::npos);
+  CHECK(r.warnings[0].find("p.cfg:8") != std::string::npos);
+  CHECK(r.warnings[0].find("ignored by Klipper") != std::string::npos);
   CHECK_FALSE(export_config_text(ExportFirmware::klipper, r.updated, "p.cfg", s).changed());
 }
 

@@ -51,7 +51,7 @@ TEST_CASE("run --dry-run prints the checked G-code and sends nothing", "[machine
   const auto r = run_cli({"run", "liquefier-step", "--dry-run", "-p", "feed_high_mm_s=4", "--runs-root", dir});
   REQUIRE(r.code == 0);
   CHECK(r.out.find("G1 E12 F240") != std::string::npos);  // 4 mm/s for 3 s
-  CHECK(r.out.find("M109 S210") != std::string::npos);
+  CHECK(r.out.find("M109 R210") != std::string::npos);  // waits from either side (Marlin M104_M109.cpp)
   CHECK(fs::is_empty(dir));
   const auto j = run_cli({"run", "axis-sweep", "--axis", "y", "--dry-run", "--json"});
   REQUIRE(j.code == 0);
@@ -272,7 +272,7 @@ TEST_CASE("a Klipper API server's accelerometer stream is recorded and analyzed"
   CHECK(static_cast<long>(csv_rows(accel)) == server.samples_sent());
   CHECK(server.samples_sent() > 3200 * 4);
   bool saw_sweep = false;
-  for (const auto& s : server.scripts()) saw_sweep |= s.find("M204 S") != std::string::npos;
+  for (const auto& s : server.scripts()) saw_sweep |= s.find("M204 P") != std::string::npos;
   CHECK(saw_sweep);
   // What was recorded is analyzed like a Klipper raw_data file: the mode the server synthesised.
   // (The sweep is slow, 3 Hz/s: a fast one drags the apparent peak upwards, ~0.9 % at 8 Hz/s.)

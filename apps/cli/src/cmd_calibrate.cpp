@@ -10,6 +10,7 @@
 //   RUN_DIR/<experiment>/    each experiment's journal, raw CSV data and (sim) truth.json
 //   RUN_DIR/analysis/*.json  each analysis command's own JSON
 //   RUN_DIR/config/          the configuration before and after, and the diff
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -29,6 +30,7 @@
 #include "tunekit/ident/input_shaper.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
+#include "tunekit/protocols/firmware_export.hpp"
 #include "tunekit/protocols/runner.hpp"
 
 #ifndef TUNEKIT_DATASETS_DIR
@@ -235,6 +237,10 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     o.machine = sim ? "sim" : a.profile;
     o.port = a.port;
     o.sim_options = a.sim_options;
+    // The simulated printer runs the firmware being calibrated (its planner rules and dialect).
+    if (sim && std::none_of(o.sim_options.begin(), o.sim_options.end(),
+                            [](const std::string& s) { return s.rfind("firmware=", 0) == 0; }))
+      o.sim_options.push_back("firmware=" + protocols::to_string(protocols::parse_export_firmware(a.firmware)));
     o.dry_run = dry;
     o.run_dir = run_dir + "/" + e.name;
     o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
@@ -358,7 +364,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     if (!runs.count(name)) continue;
     const std::string csv = runs[name].files.at("accel");
     const std::string out = run_dir + "/analysis/shaper_" + axis + ".json";
-    const auto j = analyze({"shaper", csv, "--axis", axis}, out, ctx);
+    // The recommendation is made among the target firmware's shapers (and its damping bounds).
+    const auto j = analyze({"shaper", csv, "--axis", axis, "--firmware", a.firmware}, out, ctx);
     add_input(csv);
     res["axes"][axis] = j.at("results").at("axes").at(axis);
     plot[std::string("psd_") + axis] = psd_plotdata(res["axes"][axis]);

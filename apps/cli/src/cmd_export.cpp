@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -18,6 +19,7 @@
 #include "tunekit/ident/pressure_advance.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 
 namespace tunekit::cli {
@@ -35,6 +37,7 @@ struct ExportArgs {
   std::string shaper_x, shaper_y;
   std::string extruder = "extruder";
   int drive = 0;
+  bool drive_given = false;
   bool no_pa = false;
   bool no_shaper = false;
   bool write = false;
@@ -91,6 +94,14 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   std::map<std::string, protocols::ShaperSetting> shapers;
   std::vector<std::string> sources;
 
+  // A Marlin build with FT_MOTION has FT_MOTION's shapers (firmware_limits.hpp).
+  bool ft_motion = false;
+  if (fw == protocols::ExportFirmware::marlin) {
+    std::ifstream cfg_in(a.config, std::ios::binary);
+    std::stringstream cfg_text;
+    cfg_text << cfg_in.rdbuf();
+    ft_motion = cfg_in && protocols::marlin_ft_motion_enabled(cfg_text.str());
+  }
   for (const auto& path : a.results) {
     const std::string bytes = ident::read_file_bytes(path);
     env.add_input(path, bytes);
@@ -136,13 +147,50 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
           env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
           continue;
         }
-        protocols::ShaperSetting s;
-        if (!rec.contains("type") || !rec["type"].is_string())
-          throw InputError(fmt::format("axes.{}.recommended.type must be a string", axis), path);
-        s.type = rec["type"].get<std::string>();
-        s.freq_hz = number_at(dig(rec, {"freq_hz"}), "recommended.freq_hz", path);
-        const double z = number_at(dig(rec, {"damping"}), "recommended.damping", path);
-        if (std::isfinite(z)) s.damping = z;
+        auto setting_of = [&](const nlohmann::json& c, const std::string& what) {
+          protocols::ShaperSetting s;
+          if (!c.contains("type") || !c["type"].is_string())
+            throw InputError(fmt::format("axes.{}.{}.type must be a string", axis, what), path);
+          s.type = c["type"].get<std::string>();
+          s.freq_hz = number_at(dig(c, {"freq_hz"}), what + ".freq_hz", path);
+          const double z = number_at(dig(c, {"damping"}), what + ".damping", path);
+          if (std::isfinite(z)) s.damping = z;
+          return s;
+        };
+        // The firmware must have the shaper and accept its damping (firmware_limits.hpp).
+        auto usable = [&](const protocols::ShaperSetting& s) {
+          const auto f = protocols::limits::find_shaper(fw, protocols::canonical_shaper_type(s.type), ft_motion);
+          return f && s.damping <= f->max_damping;
+        };
+        protocols::ShaperSetting s = setting_of(rec, "recommended");
+        if (!usable(s)) {
+          // The overall recommendation is not available on this firmware: the best-scoring
+          // candidate the firmware has (the results list every type's best frequency).
+          std::optional<protocols::ShaperSetting> best;
+          double best_score = 0;
+          for (const auto& c : dig(v, {"candidates"})) {
+            const auto cs = setting_of(c, "candidates[]");
+            const double score = number_at(dig(c, {"score"}), "candidates[].score", path);
+            if (!usable(cs) || !std::isfinite(score)) continue;
+            if (!best || score < best_score) {
+              best = cs;
+              best_score = score;
+            }
+          }
+          if (!best)
+            throw InputError(fmt::format("axes.{}: the recommended shaper {} is not available in {} and no candidate "
+                                         "is ({} has {}{}); run 'tunekit shaper --firmware {}'",
+                                         axis, s.type, protocols::limits::firmware_title(fw),
+                                         protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw),
+                                         fw == protocols::ExportFirmware::marlin ? ": its input shaping is ZV only" : "",
+                                         protocols::to_string(fw)),
+                             path);
+          env.warn(fmt::format("{}: axis {}: the recommended {} shaper is not available in {} (it has {}); using the "
+                               "best-scoring candidate it has: {} at {:.1f} Hz",
+                               path, axis, s.type, protocols::limits::firmware_title(fw),
+                               protocols::limits::shaper_list(fw), best->type, best->freq_hz));
+          s = *best;
+        }
         shapers[axis] = s;
       }
     } else if (cmd == "rheo") {
@@ -193,6 +241,14 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   protocols::CompensatorSettings settings;
   settings.klipper_extruder = a.extruder;
   settings.rrf_drive = a.drive;
+  // --extruder N (a number): Klipper's [extruder] / [extruderN], Marlin's ADVANCE_K entry N
+  // (M900 T), RepRapFirmware's drive N unless --drive is given.
+  if (!a.extruder.empty() && a.extruder.find_first_not_of("0123456789") == std::string::npos) {
+    const int n = std::stoi(a.extruder);
+    settings.extruder_index = n;
+    settings.klipper_extruder = n == 0 ? "extruder" : "extruder" + a.extruder;
+    if (!a.drive_given) settings.rrf_drive = n;
+  }
   std::optional<ident::AdvanceDesign> design;
   const bool have_tau = std::isfinite(in.tau_s) || !in.points.empty();
   if (!a.no_pa && have_tau) {
@@ -240,7 +296,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   sj["shapers"] = nlohmann::json::object();
   for (const auto& [axis, sh] : settings.shapers)
     sj["shapers"][axis] = {{"type", protocols::canonical_shaper_type(sh.type)},
-                           {"firmware_type", protocols::firmware_shaper_name(fw, sh.type)},
+                           {"firmware_type", protocols::firmware_shaper_name(fw, sh.type, ft_motion)},
                            {"freq_hz", sh.freq_hz},
                            {"damping", sh.damping}};
   res["settings"] = sj;
@@ -275,6 +331,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     else
       ctx.err << "tunekit: preview only; add --write to apply (a timestamped backup is kept)\n";
     if (!result.gcode.empty()) ctx.err << "tunekit: the same settings as G-code:\n" << result.gcode;
+    for (const auto& n : result.notes) ctx.err << "tunekit: " << n << "\n";
     if (!schedule.empty() && design && design->schedule.size() >= 2)
       ctx.err << "tunekit: flow-dependent advance (for per-feature G-code; the firmware takes one number):\n"
               << schedule;
@@ -305,8 +362,11 @@ void register_export(CLI::App& app, CliContext& ctx) {
                   "cross-section)");
   sub->add_option("--shaper-x", args->shaper_x, "X shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
   sub->add_option("--shaper-y", args->shaper_y, "Y shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
-  sub->add_option("--extruder", args->extruder, "Klipper extruder section (default: extruder)");
-  sub->add_option("--drive", args->drive, "RepRapFirmware extruder drive number for M572 D (default: 0)");
+  sub->add_option("--extruder", args->extruder,
+                  "Extruder: a Klipper section name (default: extruder), or a number N: Klipper [extruderN], Marlin's "
+                  "Nth ADVANCE_K entry (M900 TN), RepRapFirmware drive N");
+  sub->add_option("--drive", args->drive, "RepRapFirmware extruder drive number for M572 D (default: 0)")
+      ->each([args](const std::string&) { args->drive_given = true; });
   sub->add_flag("--no-pa", args->no_pa, "Leave pressure/linear advance alone");
   sub->add_flag("--no-shaper", args->no_shaper, "Leave input shaping alone");
   sub->add_flag("--write", args->write,

@@ -7,7 +7,10 @@
 #include <memory>
 #include <set>
 
+#include <optional>
+
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "resonance_common.hpp"
 #include "tunekit/cli/commands.hpp"
@@ -16,6 +19,7 @@
 #include "tunekit/ident/input_shaper.hpp"
 #include "tunekit/ident/klipper_spectrum.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -30,6 +34,7 @@ struct ShaperCliArgs {
   double max_shaper_freq_hz = -1;  ///< <0: Klipper's 150 Hz with --klipper-compatible, else 200 Hz
   double max_freq_hz = 200.0;
   std::string klipper_csv;
+  std::string firmware;
 };
 
 // Klipper's calibrate_shaper.py stops its shaper frequencies below 150 Hz (MAX_SHAPER_FREQ in
@@ -88,6 +93,9 @@ int run_shaper(const ShaperCliArgs& a, CliContext& ctx) {
   env.set_options(opts);
   if (!(a.max_freq_hz > 0)) throw InputError("--max-freq must be positive");
   if (!(max_shaper_freq > 0)) throw InputError("--max-shaper-freq must be positive");
+  opts["firmware"] = a.firmware;
+  std::optional<protocols::ExportFirmware> fw;
+  if (!a.firmware.empty()) fw = protocols::parse_export_firmware(a.firmware);
   if (!(a.scv_mm_s >= 0)) throw InputError("--scv must not be negative");
   if (a.damping_ratio >= 1) throw InputError("--damping-ratio must be below 1");
 
@@ -129,6 +137,32 @@ int run_shaper(const ShaperCliArgs& a, CliContext& ctx) {
           if (std::isfinite(z)) tests.insert(std::clamp(z, 0.001, 0.9));
       so.test_damping_ratios.assign(tests.begin(), tests.end());
       sel["method"] = "identified";
+    }
+    // The recommendation is made among the target firmware's shapers only, each within the
+    // firmware's damping bound for it (firmware_limits.hpp).
+    if (fw) {
+      std::vector<ident::ShaperType> allowed;
+      std::vector<std::string> dropped;
+      for (const auto t : so.types) {
+        const auto f = protocols::limits::find_shaper(*fw, ident::to_string(t));
+        if (!f) continue;
+        if (so.design_damping_ratio > f->max_damping) {
+          dropped.push_back(fmt::format("{} (damping at most {})", f->firmware_name, f->max_damping));
+          continue;
+        }
+        allowed.push_back(t);
+      }
+      if (allowed.empty())
+        throw InputError(fmt::format("axis {}: none of the shapers considered is available in {} ({}) at the design "
+                                     "damping {:.3f}",
+                                     ax, protocols::limits::firmware_title(*fw), protocols::limits::shaper_list(*fw),
+                                     so.design_damping_ratio));
+      if (!dropped.empty())
+        env.warn(fmt::format("axis {}: design damping {:.3f} is above {}'s bound for {}: not considered", ax,
+                             so.design_damping_ratio, protocols::limits::firmware_title(*fw),
+                             fmt::join(dropped, ", ")));
+      so.types = allowed;
+      sel["firmware"] = protocols::to_string(*fw);
     }
     // Klipper's selection works on its normalized PSD (divided by f + 0.1 Hz, damped below 10 Hz),
     // each recording (or dataset of a spectrum file) on its own; a shaper's vibrations are the
@@ -242,6 +276,9 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
                   "Also write each axis's spectrum and shaper responses in Klipper's calibration_data layout "
                   "(freq,psd_x,psd_y,psd_z,psd_xyz,shapers:,...), readable by Klipper's calibrate_shaper.py; "
                   "'{axis}' in the name becomes x/y/z");
+  sub->add_option("--firmware", args->firmware,
+                  "Recommend among this firmware's shapers only (klipper, marlin or rrf), each within the firmware's "
+                  "damping bound for it");
   sub->footer(klipper_files_help() +
               "\nExamples:\n"
               "  tunekit shaper /tmp/raw_data_x_*.csv /tmp/raw_data_y_*.csv\n"

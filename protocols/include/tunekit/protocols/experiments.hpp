@@ -3,6 +3,8 @@
 // with units and defaults (listed by `tunekit run --help`), produces G-code for a dialect, and
 // names the sensors it records. Lines of the form ";@record <sensor> on|off" mark where sensor
 // recording starts and stops; the runner turns them into the firmware's commands (or API calls).
+// A line ";@epilogue" starts the lines that restore what the protocol changed for its test
+// (acceleration limits, cruise ratio, input shaping); the runner sends them also after an abort.
 //
 // Protocols (parameter defaults in experiments.cpp, documented in docs/machine.md):
 //   liquefier-step      extrusion-rate steps low -> high -> low ..., load cell recorded
@@ -48,6 +50,9 @@ struct Experiment {
   std::vector<std::string> gcode;         ///< with ";@record" directives and comments
   std::vector<std::string> sensors;
   double estimated_duration_s = 0;        ///< machine time of the motion
+  /// How the firmware's planner runs the excitation (per dialect): the acceleration in force,
+  /// whether extrude-only moves stop, the test settings changed and restored, ...
+  nlohmann::json excitation = nlohmann::json::object();
   nlohmann::json to_json() const;
 };
 

@@ -45,6 +45,11 @@ struct CompensatorSettings {
   std::map<std::string, ShaperSetting> shapers;  ///< by axis "x", "y"
   std::string klipper_extruder = "extruder";     ///< Klipper section holding pressure_advance
   int rrf_drive = 0;                             ///< RepRapFirmware extruder drive (M572 D)
+  int extruder_index = 0;                        ///< Marlin: entry of a per-extruder ADVANCE_K list, M900 T
+  /// Marlin build with FT_MOTION enabled (set by export from the configuration): shapers are
+  /// FT_MOTION's (FTM_DEFAULT_SHAPER_X/Y ...), the classic shaper and smooth linear advance are
+  /// bypassed.
+  bool marlin_ft_motion = false;
 };
 
 /// One value set in the file.
@@ -64,6 +69,8 @@ struct ExportResult {
   std::string diff;  ///< unified diff original -> updated; empty when nothing changes
   std::vector<ConfigChange> changes;
   std::vector<std::string> warnings;
+  /// What the user must also do for the firmware to use the new values (restart, M502 + M500, ...).
+  std::vector<std::string> notes;
   std::string gcode;  ///< the same settings as runtime commands (Marlin adds M500)
   bool changed() const { return original != updated; }
   nlohmann::json to_json() const;  ///< everything but the file contents
@@ -71,8 +78,12 @@ struct ExportResult {
 
 /// Normalizes a shaper name to Klipper's spelling (lower case; ei2 -> 2hump_ei, ...).
 std::string canonical_shaper_type(const std::string& type);
-/// The firmware's name for a shaper; InputError when the firmware lacks it.
-std::string firmware_shaper_name(ExportFirmware fw, const std::string& type);
+/// The firmware's name for a shaper; InputError when the firmware lacks it. `ft_motion`: Marlin's
+/// FT_MOTION shapers instead of its classic ZV.
+std::string firmware_shaper_name(ExportFirmware fw, const std::string& type, bool ft_motion = false);
+
+/// Whether a Marlin Configuration_adv.h enables FT_MOTION (an uncommented `#define FT_MOTION`).
+bool marlin_ft_motion_enabled(const std::string& configuration_text);
 
 /// Checks every value against the firmware's accepted range and shaper types and throws one
 /// InputError (exit 2) listing all violations.

@@ -53,7 +53,9 @@ struct GcodeMove {
 };
 
 /// Tracks the machine state a G-code stream sets up. Knows G0/G1, G4, G90/G91, M82/M83, G92,
-/// M204 (S, P, T), SET_VELOCITY_LIMIT ACCEL=, M104/M109/M140/M190 (temperatures).
+/// M204 (S, P print, T travel, R retract), M201 (per-axis maxima), SET_VELOCITY_LIMIT ACCEL=,
+/// M104/M109 (S or R)/M140/M190 (temperatures). A move's acceleration is the one its kind gets
+/// (extrude-only: M204 R, else M201 E; without E: travel; else print), capped by M201.
 class GcodeInterpreter {
  public:
   GcodeInterpreter();
@@ -72,7 +74,10 @@ class GcodeInterpreter {
   bool absolute_xyz_ = true;
   bool absolute_e_ = false;
   double feed_mm_s_ = 25;
-  double accel_mm_s2_ = 1000;
+  double accel_mm_s2_ = 1000;  ///< print acceleration
+  double travel_accel_ = 1000;
+  std::optional<double> retract_accel_;
+  std::array<std::optional<double>, 4> max_accel_{};
   double dwell_s_ = 0;
 };
 

@@ -23,6 +23,9 @@ struct ExtruderLimits {
   double max_flow_mm3_s = 0;      ///< volumetric flow limit of the hot end
   double max_velocity_mm_s = 0;   ///< filament feed speed limit
   double max_accel_mm_s2 = 0;     ///< filament acceleration limit (the extruder motor)
+  /// Longest extrude-only move the firmware accepts, mm (Klipper's max_extrude_only_distance,
+  /// default 50 mm); protocols split longer feeds into moves of at most this length.
+  double max_extrude_only_distance_mm = 50;
 };
 
 struct PrintSettings {
@@ -46,6 +49,22 @@ struct Sensors {
   double accelerometer_rate_hz = 3200;
 };
 
+/// The machine's own settings that the protocols change for a test and restore after it (also
+/// on abort): table [firmware_state]. Defaults are the firmwares' defaults (firmware_limits.hpp).
+struct FirmwareState {
+  /// Input shaper configured on the machine per axis, "type:freq_hz:damping" in the firmware's
+  /// spelling; empty when the machine has none configured (then nothing is turned off).
+  std::map<std::string, std::string> shaper;
+  double minimum_cruise_ratio = 0.5;     ///< Klipper [printer] minimum_cruise_ratio
+  double steps_per_mm_x = 80;            ///< Marlin M92 X (sizes the sweep above MIN_STEPS_PER_SEGMENT)
+  double steps_per_mm_y = 80;            ///< Marlin M92 Y
+  double min_segment_time_s = 0.020;     ///< Marlin M205 B (DEFAULT_MINSEGMENTTIME), s
+  double max_accel_xy_mm_s2 = 3000;      ///< Marlin/RRF M201 X/Y, mm/s^2
+  double retract_accel_mm_s2 = 3000;     ///< Marlin M204 R (moves without X/Y/Z steps), mm/s^2
+  double max_accel_e_mm_s2 = 3000;       ///< RRF M201 E, mm/s^2
+  double jerk_xy_mm_s = 15;              ///< RRF M566 X/Y (instantaneous speed change), mm/s
+};
+
 struct MachineProfile {
   std::string name;
   std::string kinematics = "cartesian";  ///< cartesian, corexy, delta
@@ -55,6 +74,7 @@ struct MachineProfile {
   PrintSettings print;
   TemperatureLimits temperature;
   Sensors sensors;
+  FirmwareState state;
   std::string source_path;
 
   /// Filament cross-section area, mm^2.

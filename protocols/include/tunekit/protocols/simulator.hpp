@@ -1,5 +1,6 @@
 #pragma once
-// tunekit's virtual printer: a Marlin-flavoured G-code machine with a simulated liquefier and
+// tunekit's virtual printer: a G-code machine following Marlin's, Klipper's or RepRapFirmware's
+// planner rules (SimConfig::firmware) with a simulated liquefier and
 // load cell, axes with resonant modes and an accelerometer, and injectable faults. It runs
 // in-process on any Transport (a socket pair in tests) or on a pseudo-terminal (SimPtyServer,
 // and the tunekit-sim executable). Its truth (the parameters it simulates) is written to
@@ -74,9 +75,30 @@ struct SimConfig {
   double cross_coupling = 0.05;  ///< share of one horizontal axis' response seen on the other
   double jerk_mm_s3 = 1e8;
   unsigned seed = 1;
+  // The firmware whose planner rules the simulator follows ("marlin", "klipper", "rrf"): M115
+  // names it, and moves run as that firmware plans them:
+  //   Klipper: every extrude-only move stops at both ends (toolhead.py Move.calc_junction) and
+  //     is accelerated at min(ACCEL, max_extrude_only_accel); longer than
+  //     max_extrude_only_distance it is refused ("!! Extrude only move too long"); a move's peak
+  //     speed is capped by minimum_cruise_ratio (toolhead.py flush: v^2 <= a L (1 - mcr)),
+  //     SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO= sets it.
+  //   Marlin: moves with fewer than MIN_STEPS_PER_SEGMENT (6) steps are joined with the next
+  //     (planner.cpp); a move shorter than M205 B (us, default 20000) is slowed to last that
+  //     long; M204 is capped by M201 (default X/Y 3000); extrude-only moves use M204 R.
+  //   RepRapFirmware: a reversal is joined at M566/2 (DDA.cpp MatchSpeeds); M204 applies to XY
+  //     moves only, extrude-only moves use M201 E; M410 is not an RRF command.
+  std::string firmware = "marlin";
+  double steps_per_mm = 160;                  ///< X/Y steps per mm (M92; the built-in profile's)
+  double max_extrude_only_distance_mm = 50;   ///< Klipper [extruder] max_extrude_only_distance
+  double max_extrude_only_accel_mm_s2 = 5000; ///< Klipper [extruder] max_extrude_only_accel
+  double minimum_cruise_ratio = 0.5;          ///< Klipper [printer] minimum_cruise_ratio
+  /// Whether M115 offers tunekit's sensor stream (Cap:TUNEKIT_SENSOR_STREAM:1); off, the
+  /// simulator is a firmware that cannot stream its sensors over the G-code link.
+  bool sensor_stream = true;
   std::vector<SimFault> faults;
 
   /// "key=value" options (tunekit-sim flags and `tunekit run --sim`), e.g. "tau_s=0.5",
+  /// "firmware=klipper", "steps_per_mm=160",
   /// "liquefier=physics", "mode_x=48:0.08" or "mode_x=48:0.08:0.7,95:0.05:0.3",
   /// "fault=garble@12", "fault=late-ok@12:300", "fault=drop@12", "fault=disconnect@40",
   /// "fault=error@30", "seed=3". InputError for unknown keys or bad values.
@@ -122,6 +144,14 @@ class Simulator {
   GcodeInterpreter interp_;
   std::optional<GcodeMove> pending_;
   double pending_entry_ = 0;
+  std::optional<std::array<double, 4>> carry_start_;  ///< Marlin: start of a move joined with the next
+  double min_segment_time_s_ = 0.020;                 ///< Marlin M205 B
+  double jerk_x_mm_s_ = 15, jerk_y_mm_s_ = 15;        ///< RRF M566
+  double mcr_ = 0.5;                                  ///< Klipper minimum_cruise_ratio
+  double junction_speed(const GcodeMove& a, const GcodeMove& b) const;
+  bool klipper() const { return cfg_.firmware == "klipper"; }
+  bool rrf() const { return cfg_.firmware == "rrf"; }
+  bool marlin() const { return !klipper() && !rrf(); }
   long received_count_ = 0;
   long last_n_ = 0;
   bool halted_ = false;
