@@ -10,6 +10,7 @@
 
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/rrf_accelerometer.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -39,6 +40,10 @@ std::string klipper_files_help() {
          "  of them; the axis comes from 'raw_data_x_' / 'raw_data_y_' in the name (or --axis), several files of one\n"
          "  axis are averaged as Klipper's calibrate_shaper.py does. SHAPER_CALIBRATE's calibration_data_x_<name>.csv\n"
          "  (freq,psd_x,psd_y,psd_z,psd_xyz, already normalized by Klipper) is accepted as well.\n"
+         "Feeding RepRapFirmware's files:\n"
+         "  M956 P0 S<samples> A0 X Y Z F\"raw_data_x_run1.csv\" writes 0:/sys/accelerometer/<name>.csv: 'Sample,X,Y,Z', rows of\n"
+         "  g, and a last line 'Rate <Hz>, overflows <n>' that gives the time base. Name the file raw_data_<axis>_*.csv\n"
+         "  in M956 (or pass --axis).\n"
          "  Other loggers: --time COL --accel COL [--accel COL...] (mm/s^2); a commanded-acceleration column\n"
          "  --excitation COL adds the frequency response H1 and coherence, and the modes are fitted to it.\n";
 }
@@ -126,6 +131,8 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
     ident::AxisSpectrum s;
     if (ident::is_calibration_data(bytes)) {
       s = ident::load_calibration_data(path, bytes, in.axis);
+    } else if (ident::is_rrf_accelerometer_csv(bytes)) {
+      s = ident::record_spectrum(ident::load_rrf_accelerometer_csv(path, bytes, in), welch);
     } else {
       const auto rec = ident::load_accel_csv(path, bytes, in);
       s = ident::record_spectrum(rec, welch);

@@ -44,7 +44,19 @@ struct Sensors {
   bool filament_encoder = false;
   bool camera = false;
   double accelerometer_rate_hz = 3200;
+  /// Klipper: the accelerometer chip (adxl345, lis2dw, lis3dh, mpu9250, mpu6050, icm20948,
+  /// bmi160; `accelerometer = "lis2dw"` in the profile) and its config section name
+  /// (`accelerometer_name = "lis2dw toolhead"`; default: the chip name, i.e. `[adxl345]`).
+  std::string accelerometer_chip = "adxl345";
+  std::string accelerometer_name;
+  /// Klipper: the load cell's config section name (`[load_cell]` or `[load_cell NAME]`).
+  std::string load_cell_name = "load_cell";
 };
+
+/// True for the accelerometer chips Klipper's API server streams (see klipper_sensors.hpp).
+bool is_klipper_accelerometer_chip(const std::string& chip);
+/// "adxl345, lis2dw, ..." for messages.
+std::string klipper_accelerometer_chips();
 
 struct MachineProfile {
   std::string name;
