@@ -14,6 +14,7 @@
 #include <string>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -32,6 +33,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "tunekit-capture: error: FRAMES must be 1..1000 and SETTLE_S 0..60\n");
     return 2;
   }
+  // OpenCV's back-ends log their own warnings (GStreamer: "no source element"); the one error line is ours.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
   cv::VideoCapture cap;
   const bool numeric = !device.empty() && device.find_first_not_of("0123456789") == std::string::npos;
   const bool opened = numeric ? cap.open(std::atoi(device.c_str())) : cap.open(device);
