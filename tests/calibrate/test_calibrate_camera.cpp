@@ -38,6 +38,7 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   REQUIRE(cam.contains("ring"));
   CHECK(cam["ring"]["phase_deg"].get<double>() == Approx(cam["ring"]["model_phase_deg"].get<double>()).margin(15));
   CHECK(cam["ring"]["gain"].get<double>() == Approx(cam["ring"]["model_gain"].get<double>()).epsilon(0.25));
+  CHECK(cam["ring"]["theta_from_phase_s"].get<double>() == Approx(theta).epsilon(0.5));
   // The report shows the photo with the measured edges.
   const std::string html = read_file_bytes(dir + "/report.html");
   CHECK(tunekit::test::embedded_png_base64_length(html, "linewidth_overlay") > 10000);

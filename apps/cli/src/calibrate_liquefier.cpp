@@ -366,6 +366,11 @@ void add_ring_prediction(nlohmann::json& r, double K, double tau, double theta) 
   const std::complex<double> G = K * std::exp(std::complex<double>(0, -w * theta)) / std::complex<double>(1, w * tau);
   r["ring"]["model_gain"] = std::abs(G);
   r["ring"]["model_phase_deg"] = std::arg(G) * 180 / std::numbers::pi;
+  // The dead time the ring's phase implies with the lines' tau: phase = -atan(w tau) - w theta.
+  // It does not depend on where the lines lie on their paths (the weak point of a photo whose
+  // placement on the bed is not known), only on the ring's start direction (+X).
+  const double lag = -r["ring"]["phase_deg"].get<double>() * std::numbers::pi / 180 - std::atan(w * tau);
+  r["ring"]["theta_from_phase_s"] = lag / w;
 }
 
 }  // namespace tunekit::cli

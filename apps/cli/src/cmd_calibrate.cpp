@@ -304,7 +304,10 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
       summary.push_back({{"label", "ring frequency"}, {"path", "liquefier.camera.ring.freq_hz"}, {"unit", "Hz"}});
       summary.push_back({{"label", "ring gain (measured)"}, {"path", "liquefier.camera.ring.gain"}, {"unit", "1"}});
       summary.push_back({{"label", "ring phase (measured)"}, {"path", "liquefier.camera.ring.phase_deg"}, {"unit", "deg"}});
-      summary.push_back({{"label", "ring phase (step model)"}, {"path", "liquefier.camera.ring.model_phase_deg"}, {"unit", "deg"}});
+      if (cam.results["ring"].contains("model_phase_deg")) {
+        summary.push_back({{"label", "ring phase (step model)"}, {"path", "liquefier.camera.ring.model_phase_deg"}, {"unit", "deg"}});
+        summary.push_back({{"label", "dead time from the ring's phase"}, {"path", "liquefier.camera.ring.theta_from_phase_s"}, {"unit", "s"}});
+      }
     }
     for (const auto& w : cam.results["warnings"]) env.warn(w.get<std::string>());
   }
