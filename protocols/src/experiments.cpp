@@ -10,6 +10,7 @@
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/gcode.hpp"
 #include "tunekit/protocols/trajectory.hpp"
 
@@ -73,6 +74,25 @@ std::vector<ProtocolSpec> make_specs() {
                 {"amplitude", 0.2, "", "relative extrusion modulation A"},
                 {"segments", 360, "", "straight segments per ring"},
                 {"z_mm", 0.2, "mm", "layer height / nozzle height of the ring"},
+                {"accel_mm_s2", 1000, "mm/s^2", "print acceleration"},
+                hotend},
+               {},
+               false});
+  s.push_back({"line-steps",
+               "the camera path's line test: straight lines along +X whose flow steps low -> high -> low part-way; "
+               "photographed, the width along each line is the liquefier's step response (t = s / v)",
+               {{"speed_mm_s", 20, "mm/s", "print speed v"},
+                {"lines", 3, "", "number of lines (printed one below the other)"},
+                {"lead_mm", 45, "mm", "length at the low flow before the step (several tau * v)"},
+                {"step_mm", 50, "mm", "length at the high flow"},
+                {"tail_mm", 55, "mm", "length at the low flow after the step"},
+                {"low_flow", 0.8, "", "low flow, relative to the profile's line width x layer height"},
+                {"high_flow", 1.5, "", "high flow, relative"},
+                {"spacing_mm", 6, "mm", "distance between the lines"},
+                {"center_x_mm", kMachineDefault, "mm", "middle of the lines in x (default: middle of the travel)"},
+                {"first_y_mm", kMachineDefault, "mm", "y of the first line (default: 50 mm below the middle)"},
+                {"z_mm", 0.2, "mm", "layer height / nozzle height"},
+                {"retract_mm", 0.8, "mm", "retraction after each line (primed again before the next)"},
                 {"accel_mm_s2", 1000, "mm/s^2", "print acceleration"},
                 hotend},
                {},
@@ -409,6 +429,10 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
                               num(v * 60, 1)));
     }
     g.push_back(d.wait_for_moves());
+  } else if (protocol == "line-steps") {
+    if (std::isnan(p["center_x_mm"])) p["center_x_mm"] = mid(profile, "x");
+    if (std::isnan(p["first_y_mm"])) p["first_y_mm"] = mid(profile, "y") - 50;
+    append_line_steps_gcode(g, p, profile, d);
   } else if (protocol == "axis-sweep") {
     if (axis_in != "x" && axis_in != "y") throw InputError(fmt::format("axis-sweep needs --axis x or y, not '{}'", axis_in));
     e.axis = axis_in;

@@ -50,6 +50,14 @@ class Reader {
     return *v;
   }
 
+  std::string text(const toml::table& t, const char* key, const std::string& fallback) const {
+    const auto* node = t.get(key);
+    if (!node) return fallback;
+    const auto v = node->value<std::string>();
+    if (!v || v->empty()) throw InputError(fmt::format("'{}' must be a non-empty string", key), where_of(*node));
+    return *v;
+  }
+
   const toml::table& section(const char* name, bool required) const {
     static const toml::table empty;
     const auto* t = root_.get_as<toml::table>(name);
@@ -141,8 +149,20 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
   p.temperature.heaters_off_on_abort = r.flag(tt, "heaters_off_on_abort", true);
 
   const auto& s = r.section("sensors", false);
-  p.sensors.accelerometer = r.flag(s, "accelerometer", false);
+  // accelerometer = true (an ADXL345) or the chip's name as Klipper's config section names it.
+  if (const auto* node = s.get("accelerometer"); node != nullptr && node->is_string()) {
+    p.sensors.accelerometer = true;
+    p.sensors.accelerometer_chip = *node->value<std::string>();
+    if (!is_klipper_accelerometer_chip(p.sensors.accelerometer_chip))
+      throw InputError(fmt::format("[sensors] accelerometer '{}' is not a chip Klipper reads ({})", p.sensors.accelerometer_chip,
+                                   klipper_accelerometer_chips()),
+                       r.where_of(*node));
+  } else {
+    p.sensors.accelerometer = r.flag(s, "accelerometer", false);
+  }
+  p.sensors.accelerometer_name = r.text(s, "accelerometer_name", p.sensors.accelerometer_chip);
   p.sensors.load_cell = r.flag(s, "load_cell", false);
+  p.sensors.load_cell_name = r.text(s, "load_cell_name", "load_cell");
   p.sensors.filament_encoder = r.flag(s, "filament_encoder", false);
   p.sensors.camera = r.flag(s, "camera", false);
   p.sensors.accelerometer_rate_hz = r.positive(s, "sensors", "accelerometer_rate_hz", false, 3200);

@@ -14,6 +14,7 @@
 #include "tunekit/protocols/dialect.hpp"
 #include "tunekit/protocols/journal.hpp"
 #include "tunekit/protocols/klipper_api.hpp"
+#include "tunekit/protocols/klipper_sensors.hpp"
 #include "tunekit/protocols/safety.hpp"
 #include "tunekit/protocols/serial_transport.hpp"
 #include "tunekit/protocols/simulator.hpp"
@@ -207,16 +208,9 @@ class GcodeSession : public Session {
 
 class KlipperSession : public Session {
  public:
-  KlipperSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo)
-      : client_(std::move(t), &j), rec_(rec), timeout_(lo.timeout) {
-    client_.on_message = [this](const nlohmann::json& m) {
-      if (!accel_on_ || m.value("tunekit", "") != "accel" || !m.contains("params")) return;
-      const auto& p = m["params"];
-      if (!p.contains("data")) return;
-      for (const auto& row : p["data"])
-        if (row.is_array() && row.size() >= 4)
-          rec_.accel(row[0].get<double>(), row[1].get<double>(), row[2].get<double>(), row[3].get<double>());
-    };
+  KlipperSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const Sensors& sensors)
+      : client_(std::move(t), &j), j_(j), rec_(rec), timeout_(lo.timeout), sensors_(sensors) {
+    client_.on_message = [this](const nlohmann::json& m) { on_message(m); };
     client_.on_batch = [&j] { j.flush(); };
   }
   FirmwareInfo identify() override {
@@ -233,17 +227,45 @@ class KlipperSession : public Session {
   }
   void record(const std::string& sensor, bool on) override {
     flush_script();
-    if (sensor != "accelerometer")
-      throw MachineError(fmt::format("Klipper's API server streams no {} data", sensor), client_.transport().describe());
-    if (on && !subscribed_) {
-      client_.call("adxl345/dump_adxl345", {{"sensor", "adxl345"}, {"response_template", {{"tunekit", "accel"}}}}, timeout_);
-      subscribed_ = true;
+    if (sensor == "accelerometer") {
+      if (on && !accel_subscribed_) {
+        const auto ep = klipper_accelerometer_endpoint(sensors_.accelerometer_chip, sensors_.accelerometer_name);
+        client_.call(ep.method, ep.params({{"tunekit", "accel"}}), timeout_);
+        accel_subscribed_ = true;
+      }
+      if (!on) client_.pump(kBatchWait);  // the last batch of samples
+      accel_on_ = on;
+      return;
     }
-    if (!on) client_.pump(std::chrono::milliseconds(100));  // trailing samples
-    accel_on_ = on;
+    if (sensor == "load_cell") {
+      if (on && !load_subscribed_) {
+        // The force stream, and the extruder's commanded motion on the same print-time clock:
+        // the feed column is the trapq's extruder velocity at each force sample's time.
+        const auto lc = klipper_load_cell_endpoint(sensors_.load_cell_name);
+        client_.call(lc.method, lc.params({{"tunekit", "load_cell"}}), timeout_);
+        const auto tq = klipper_trapq_endpoint("extruder");
+        client_.call(tq.method, tq.params({{"tunekit", "trapq_extruder"}}), timeout_);
+        load_subscribed_ = true;
+      }
+      if (!on) {
+        client_.pump(kBatchWait);
+        write_load_cell();
+      }
+      load_on_ = on;
+      return;
+    }
+    throw MachineError(fmt::format("Klipper's API server streams no {} data", sensor), client_.transport().describe());
   }
-  bool can_record(const std::string& sensor) const override { return sensor == "accelerometer"; }
-  void finish() override { flush_script(); }
+  void finish() override {
+    flush_script();
+    if (load_on_) {
+      client_.pump(kBatchWait);
+      write_load_cell();
+    }
+  }
+  bool can_record(const std::string& sensor) const override {
+    return sensor == "accelerometer" || sensor == "load_cell";
+  }
   void safe_state(const std::vector<std::string>& commands) override {
     try {
       std::string script;
@@ -252,9 +274,36 @@ class KlipperSession : public Session {
     } catch (const std::exception&) {
     }
   }
-  nlohmann::json stats() const override { return {{"api", "klipper"}}; }
+  nlohmann::json stats() const override {
+    return {{"api", "klipper"}, {"trapq_moves", extruder_.size()}, {"load_cell_raw_samples", load_raw_}};
+  }
 
  private:
+  // Klipper sends sensor batches every 0.5 s (bulk_sensor.py, BATCH_INTERVAL): wait a little longer.
+  static constexpr std::chrono::milliseconds kBatchWait{600};
+
+  void on_message(const nlohmann::json& m) {
+    if (!m.contains("params")) return;
+    const std::string tag = m.value("tunekit", "");
+    const auto& p = m["params"];
+    if (tag == "accel" && accel_on_) {
+      for (const auto& s : parse_accel_rows(p)) rec_.accel(s.time_s, s.x, s.y, s.z);
+    } else if (tag == "load_cell" && load_on_) {
+      // Kept as received (nothing is lost if the run fails before the feed is known).
+      auto& raw = j_.csv("load_cell_raw.csv", "time (s),force (N)");
+      for (const auto& s : parse_load_cell_rows(p, sensors_.load_cell_name)) {
+        raw.row(fmt::format("{:.6f},{:.5f}", s.time_s, s.force_N));
+        load_.push_back(s);
+        ++load_raw_;
+      }
+    } else if (tag == "trapq_extruder") {
+      extruder_.add(p);
+    }
+  }
+  void write_load_cell() {
+    for (const auto& s : load_) rec_.load_cell(s.time_s, extruder_.velocity_x_at(s.time_s), s.force_N);
+    load_.clear();
+  }
   void flush_script() {
     if (pending_.empty()) return;
     std::string script;
@@ -263,10 +312,15 @@ class KlipperSession : public Session {
     client_.call("gcode/script", {{"script", script}}, timeout_);
   }
   KlipperApiClient client_;
+  Journal& j_;
   Recorder& rec_;
   std::chrono::milliseconds timeout_;
+  Sensors sensors_;
   std::vector<std::string> pending_;
-  bool subscribed_ = false, accel_on_ = false;
+  std::vector<KlipperLoadCellSample> load_;
+  TrapqTimeline extruder_;
+  long load_raw_ = 0;
+  bool accel_subscribed_ = false, accel_on_ = false, load_subscribed_ = false, load_on_ = false;
 };
 
 std::string unique_dir(const std::string& base) {
@@ -338,7 +392,12 @@ RunResult run_experiment(const RunOptions& o) {
     write_file_atomic(journal.path("truth.json"), sim_cfg.truth().dump(2) + "\n");
     res.files["truth"] = journal.path("truth.json");
     if (port.empty()) {
-      server = std::make_unique<SimPtyServer>(sim_cfg);
+      std::function<void(Simulator&)> setup;
+      if (o.sim_bed)
+        setup = [bed = o.sim_bed](Simulator& s) {
+          s.deposit_sink = [bed](double t, const std::array<double, 4>& pos, double v, double q) { bed->deposit(t, pos, v, q); };
+        };
+      server = std::make_unique<SimPtyServer>(sim_cfg, setup);
       port = server->path();
     }
   }
@@ -375,7 +434,7 @@ RunResult run_experiment(const RunOptions& o) {
     progress(fmt::format("connecting to {}", port));
     const bool api = port.rfind("unix:", 0) == 0;
     auto transport = open_transport(port, o.baud);
-    if (api) session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link);
+    if (api) session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors);
     else session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag);
     session->firmware = session->identify();
     session->dialect = Dialect(session->firmware.firmware == Firmware::unknown ? dialect.firmware() : session->firmware.firmware);

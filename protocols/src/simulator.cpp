@@ -246,7 +246,7 @@ void Simulator::out_flush(const Emit& emit) {
   out_.clear();
 }
 
-void Simulator::step(const std::array<double, 4>& /*pos*/, const std::array<double, 4>& vel,
+void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 4>& vel,
                      const std::array<double, 4>& acc0, const std::array<double, 3>& accm, const std::array<double, 3>& acc1,
                      const Emit& emit) {
   const double h = dt_;
@@ -288,6 +288,11 @@ void Simulator::step(const std::array<double, 4>& /*pos*/, const std::array<doub
     liq_ += h * (area * ud - q_out) / cfg_.compliance_mm3_MPa;
     force = liq_ * area;
   }
+  if (deposit_sink) {
+    const double flow = cfg_.liquefier == "fopdt" ? (cfg_.K_N_per_mm_s != 0 ? std::max(0.0, liq_ / cfg_.K_N_per_mm_s) * area : 0.0)
+                                                   : std::pow(std::max(liq_, 0.0) / cfg_.k_MPa, 1.0 / cfg_.n_index);
+    deposit_sink(t_ + h, pos, std::hypot(vel[0], vel[1]), flow);
+  }
   t_ += h;
   ++step_;
   if (stream_accel_ && step_ % accel_every_ == 0) {
@@ -300,7 +305,8 @@ void Simulator::step(const std::array<double, 4>& /*pos*/, const std::array<doub
   }
   if (stream_load_ && step_ % load_every_ == 0) {
     const double f = cfg_.force_offset_N + force + cfg_.force_noise_N * normal_(rng_);
-    fmt::format_to(std::back_inserter(out_), "echo:TKL {:.6f} {:.5f} {:.5f}\n", t_, u, f);
+    if (load_cell_sink) load_cell_sink(t_, f);
+    else fmt::format_to(std::back_inserter(out_), "echo:TKL {:.6f} {:.5f} {:.5f}\n", t_, u, f);
     ++load_sent_;
   }
   if (out_.size() > 32768) out_flush(emit);
@@ -321,6 +327,7 @@ void Simulator::execute(const GcodeMove& m, double v_entry, double v_exit, const
   const double t0 = t_;
   const double T = prof.duration_s();
   const int n = static_cast<int>(std::floor(T / dt_ + 1e-9));
+  if (move_sink && n > 0) move_sink(t_, n * dt_, prof, m.start, u);
   for (int i = 0; i < n; ++i) {
     const double tau = i * dt_;
     const PathState s0 = prof.at(tau), sm = prof.at(tau + dt_ / 2), s1 = prof.at(tau + dt_);
@@ -542,7 +549,9 @@ void serve_simulator(Simulator& sim, Transport& t, const std::atomic<bool>& stop
   }
 }
 
-SimPtyServer::SimPtyServer(SimConfig config) : sim_(std::make_unique<Simulator>(std::move(config))) {
+SimPtyServer::SimPtyServer(SimConfig config, const std::function<void(Simulator&)>& setup)
+    : sim_(std::make_unique<Simulator>(std::move(config))) {
+  if (setup) setup(*sim_);
   master_ = ::posix_openpt(O_RDWR | O_NOCTTY);
   if (master_ < 0) throw MachineError("cannot create a pseudo-terminal (posix_openpt)");
   char name[256];

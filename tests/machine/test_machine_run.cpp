@@ -1,6 +1,6 @@
 // End-to-end tests of `tunekit run` against the simulated printer on a real pseudo-terminal:
 // refusal before any byte, fault injection with exit code 3 and the partial journal kept,
-// dry runs and help, and a fake Klipper API server streaming accelerometer data.
+// dry runs and help, and a fake Klipper API server (fake_klipper.hpp) streaming accelerometer data.
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
@@ -15,6 +15,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include "fake_klipper.hpp"
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/simulator.hpp"
@@ -157,101 +158,7 @@ TEST_CASE("a firmware error ends with exit 3 after the safe-state commands", "[m
   CHECK(csv_rows(dir + "/step.csv") == tunekit::test::read_json(dir + "/sim_stats.json")["load_cell_samples_sent"].get<std::size_t>());
 }
 
-namespace {
-
-/// A fake Klipper API server: a Unix socket speaking JSON + 0x03, backed by the simulator.
-/// gcode/script lines run on the simulator; adxl345/dump_adxl345 subscribes to its
-/// accelerometer, whose samples are sent as {"tk": ..., "params": {"data": [[t,x,y,z],...]}}.
-class FakeKlipper {
- public:
-  FakeKlipper(const std::string& path, tunekit::protocols::SimConfig config) : path_(path), sim_(std::move(config)) {
-    ::unlink(path.c_str());
-    listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM, 0);
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
-    REQUIRE(::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0);
-    REQUIRE(::listen(listen_fd_, 1) == 0);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~FakeKlipper() {
-    stop_ = true;
-    ::shutdown(listen_fd_, SHUT_RDWR);
-    ::close(listen_fd_);
-    thread_.join();
-    ::unlink(path_.c_str());
-  }
-  std::vector<std::string> scripts() {
-    std::lock_guard<std::mutex> l(mu_);
-    return scripts_;
-  }
-  long samples_sent() const { return sent_; }
-
- private:
-  void serve() {
-    const int fd = ::accept(listen_fd_, nullptr, nullptr);
-    if (fd < 0) return;
-    tunekit::protocols::FdTransport t(fd, "fake klipper");
-    tunekit::protocols::LineReader reader(t, '\x03');
-    nlohmann::json batch = nlohmann::json::array();
-    nlohmann::json templ;
-    sim_.accel_sink = [&](double tt, double x, double y, double z) { batch.push_back({tt, x, y, z}); };
-    auto send = [&](const nlohmann::json& m) { t.write(m.dump() + "\x03"); };
-    auto flush_data = [&] {
-      for (std::size_t i = 0; i < batch.size(); i += 200) {
-        nlohmann::json msg = templ;
-        nlohmann::json chunk = nlohmann::json::array();
-        for (std::size_t k = i; k < std::min(batch.size(), i + 200); ++k) chunk.push_back(batch[k]);
-        sent_ += static_cast<long>(chunk.size());
-        msg["params"] = {{"data", chunk}, {"overflows", 0}};
-        send(msg);
-      }
-      batch = nlohmann::json::array();
-    };
-    try {
-      while (!stop_) {
-        auto frame = reader.next(std::chrono::milliseconds(50));
-        if (!frame) continue;
-        const auto req = nlohmann::json::parse(*frame);
-        const auto id = req["id"];
-        const std::string method = req["method"];
-        if (method == "info") {
-          send({{"id", id}, {"result", {{"state", "ready"}, {"software_version", "v0.12.0-fake"}}}});
-        } else if (method == "adxl345/dump_adxl345") {
-          templ = req["params"]["response_template"];
-          sim_.set_streaming("accelerometer", true);
-          send({{"id", id}, {"result", {{"header", {"time", "x_acceleration", "y_acceleration", "z_acceleration"}}}}});
-        } else if (method == "gcode/script") {
-          const std::string script = req["params"]["script"];
-          {
-            std::lock_guard<std::mutex> l(mu_);
-            scripts_.push_back(script);
-          }
-          std::stringstream ss(script);
-          std::string line;
-          const tunekit::protocols::Simulator::Emit ignore = [](std::string_view) {};
-          while (std::getline(ss, line)) sim_.handle_line(line, ignore);
-          sim_.flush(ignore);
-          flush_data();
-          send({{"id", id}, {"result", nlohmann::json::object()}});
-        } else {
-          send({{"id", id}, {"error", {{"error", "WebRequestError"}, {"message", "unknown method"}}}});
-        }
-      }
-    } catch (const std::exception&) {
-    }
-  }
-  std::string path_;
-  tunekit::protocols::Simulator sim_;
-  int listen_fd_ = -1;
-  std::atomic<bool> stop_{false};
-  std::atomic<long> sent_{0};
-  std::mutex mu_;
-  std::vector<std::string> scripts_;
-  std::thread thread_;
-};
-
-}  // namespace
+using tunekit::test::FakeKlipper;
 
 TEST_CASE("a Klipper API server's accelerometer stream is recorded and analyzed", "[machine]") {
   const auto dir = scratch_dir("machine_klipper");

@@ -17,8 +17,11 @@
 #include <memory>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 
+#include "calibrate_liquefier.hpp"
 #include "tunekit/cli/agreement.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
@@ -53,6 +56,8 @@ struct CalibrateArgs {
   bool skip_liquefier = false;
   bool skip_axes = false;
   std::vector<std::string> sim_options;
+  std::string liquefier = "auto";  // auto, load-cell, camera
+  LiquefierCameraArgs camera;
   OutputOptions output;
 };
 
@@ -60,6 +65,7 @@ struct Experiment {
   std::string name;      // sub-directory and label
   std::string protocol;  // protocols::protocol_specs() name
   std::string axis;
+  std::map<std::string, double> params;  // protocol parameter overrides
 };
 
 nlohmann::json parse_json_file(const std::string& path) {
@@ -96,11 +102,13 @@ double num(const nlohmann::json& j, const std::string& path) {
 }
 
 // Series for the step plot: the measured record and each step's own fitted model.
-nlohmann::json step_plotdata(const std::string& csv, const nlohmann::json& step_results) {
-  const auto table = ident::read_csv(csv, {{"time", "feed", "force"}, "time"});
+nlohmann::json step_plotdata(const std::string& csv, const nlohmann::json& step_results, const std::string& in_col = "feed",
+                             const std::string& out_col = "force", const std::string& u_label = "feed (mm/s)",
+                             const std::string& y_label = "force (N)") {
+  const auto table = ident::read_csv(csv, {{"time", in_col, out_col}, "time"});
   const auto& t = table.column("time").values;
-  const auto& u = table.column("feed").values;
-  const auto& y = table.column("force").values;
+  const auto& u = table.column(in_col).values;
+  const auto& y = table.column(out_col).values;
   // Each step's model is drawn over the samples its fit used and nowhere else (not over the
   // warm-up from rest, which no step models).
   std::vector<double> yf(t.size(), std::nan(""));
@@ -117,7 +125,7 @@ nlohmann::json step_plotdata(const std::string& csv, const nlohmann::json& step_
   }
   // Thin very long records for the plot (every n-th sample).
   const std::size_t stride = std::max<std::size_t>(1, t.size() / 4000);
-  nlohmann::json d{{"u_label", "feed (mm/s)"}, {"y_label", "force (N)"}};
+  nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};
   std::vector<double> ts, us, ys, fs_;
   for (std::size_t i = 0; i < t.size(); i += stride) {
     ts.push_back(t[i]);
@@ -201,15 +209,21 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   const auto profile = !a.profile.empty() ? protocols::load_machine_profile(a.profile) : protocols::builtin_sim_profile();
 
   std::vector<Experiment> exps;
-  if (!a.skip_liquefier) {
-    if (!profile.sensors.load_cell) throw InputError("the liquefier tests need a load cell ([sensors] load_cell = true)", profile_path);
-    exps.push_back({"liquefier-step", "liquefier-step", ""});
-    exps.push_back({"liquefier-chirp", "liquefier-chirp", ""});
+  const bool camera_path =
+      !a.skip_liquefier && choose_liquefier_path(a.liquefier, profile, profile_path) == LiquefierPath::camera;
+  // Off a terminal the photo source must be known before anything is printed.
+  const bool can_prompt = ::isatty(STDIN_FILENO) != 0 && ctx.interactive;
+  if (camera_path) check_photo_source(a.camera, sim, can_prompt);
+  if (!a.skip_liquefier && !camera_path) {
+    exps.push_back({"liquefier-step", "liquefier-step", "", {}});
+    exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}});
   }
+  if (camera_path)
+    for (const auto& t : camera_tests()) exps.push_back({t.name, t.protocol, "", t.params});
   if (!a.skip_axes) {
     if (!profile.sensors.accelerometer) throw InputError("the axis sweeps need an accelerometer ([sensors] accelerometer = true)", profile_path);
-    exps.push_back({"axis-x", "axis-sweep", "x"});
-    exps.push_back({"axis-y", "axis-sweep", "y"});
+    exps.push_back({"axis-x", "axis-sweep", "x", {}});
+    exps.push_back({"axis-y", "axis-sweep", "y", {}});
   }
   if (exps.empty()) throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given");
 
@@ -230,9 +244,13 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   // the step test has measured one (it runs first).
   protocols::ChirpPlan chirp_plan = protocols::plan_liquefier_chirp(protocols::kLiteratureLiquefierTau_s);
   std::string chirp_basis = fmt::format("the literature time constant {} s", display_number(chirp_plan.expected_tau_s));
+  // The simulated camera photographs everything the simulated printer prints.
+  auto bed = camera_path && a.camera.camera == "sim" ? std::make_shared<protocols::SimPrintBed>() : nullptr;
   auto options_for = [&](const Experiment& e, bool dry) {
     protocols::RunOptions o;
     o.protocol = e.protocol;
+    o.params = e.params;
+    if (sim) o.sim_bed = bed;
     o.axis = e.axis.empty() ? "x" : e.axis;
     o.machine = sim ? "sim" : a.profile;
     o.port = a.port;
@@ -300,6 +318,36 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   std::vector<std::string> export_inputs;
 
   bar.begin("identify models", 3);
+  if (camera_path) {
+    auto cam = analyze_camera_prints(run_dir, a.camera, profile, runs, bed, can_prompt, ctx);
+    const std::string out = run_dir + "/analysis/step.json";
+    const auto j = analyze({"step", cam.width_csv, "--time", "time", "--input", "setpoint_width", "--output", "width",
+                            "--model", "fopdt"},
+                           out, ctx);
+    add_input(cam.width_csv);
+    add_input(cam.photo);
+    res["liquefier"]["step"] = j.at("results");
+    add_ring_prediction(cam.results, num(j.at("results"), "pooled.params.K.value"),
+                        num(j.at("results"), "pooled.params.tau_s.value"), num(j.at("results"), "pooled.params.theta_s.value"));
+    res["liquefier"]["camera"] = cam.results;
+    plot["step"] = step_plotdata(cam.width_csv, j.at("results"), "setpoint_width", "width", "set-point width (mm)", "width (mm)");
+    plot["linewidth"] = cam.linewidth_plot;
+    export_inputs.push_back(out);
+    summary.push_back({{"label", "liquefier time constant tau (line widths)"}, {"path", "liquefier.step.pooled.params.tau_s.value"}, {"unit", "s"}});
+    summary.push_back({{"label", "tau standard error"}, {"path", "liquefier.step.pooled.params.tau_s.stderr"}, {"unit", "s"}});
+    summary.push_back({{"label", "liquefier dead time theta"}, {"path", "liquefier.step.pooled.params.theta_s.value"}, {"unit", "s"}});
+    summary.push_back({{"label", "width gain K"}, {"path", "liquefier.step.pooled.params.K.value"}, {"unit", "1"}});
+    if (cam.results.contains("ring")) {
+      summary.push_back({{"label", "ring frequency"}, {"path", "liquefier.camera.ring.freq_hz"}, {"unit", "Hz"}});
+      summary.push_back({{"label", "ring gain (measured)"}, {"path", "liquefier.camera.ring.gain"}, {"unit", "1"}});
+      summary.push_back({{"label", "ring phase (measured)"}, {"path", "liquefier.camera.ring.phase_deg"}, {"unit", "deg"}});
+      if (cam.results["ring"].contains("model_phase_deg")) {
+        summary.push_back({{"label", "ring phase (step model)"}, {"path", "liquefier.camera.ring.model_phase_deg"}, {"unit", "deg"}});
+        summary.push_back({{"label", "dead time from the ring's phase"}, {"path", "liquefier.camera.ring.theta_from_phase_s"}, {"unit", "s"}});
+      }
+    }
+    for (const auto& w : cam.results["warnings"]) env.warn(w.get<std::string>());
+  }
   if (runs.count("liquefier-step")) {
     const auto& r = runs["liquefier-step"];
     const std::string csv = r.files.at("load_cell");
@@ -446,6 +494,16 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
   sub->add_flag("--skip-liquefier", a->skip_liquefier, "Leave out the liquefier step and chirp tests");
   sub->add_flag("--skip-axes", a->skip_axes, "Leave out the X and Y resonance sweeps");
   sub->add_option("--sim", a->sim_options, "Simulator truth and faults, KEY=VALUE (see 'tunekit run --help')");
+  sub->add_option("--liquefier", a->liquefier,
+                  "Liquefier path: load-cell (feed steps and chirp against a load cell), camera (printed line and ring "
+                  "tests, photographed), auto (load-cell when the profile has one, else camera)")
+      ->capture_default_str();
+  sub->add_option("--camera", a->camera.camera, "Camera path: 'sim' photographs the simulated printer's print");
+  sub->add_option("--photo", a->camera.photo, "Camera path: a photo of the printed tests from above (bed X to the right)");
+  sub->add_option("--camera-device", a->camera.camera_device,
+                  "Camera path: take the photo with this camera (e.g. /dev/video0; focus and exposure settle, frames averaged)");
+  sub->add_option("--px-per-mm", a->camera.px_per_mm, "Camera path: the photo's scale on the bed (px/mm)");
+  sub->add_option("--camera-frames", a->camera.frames, "Camera path: frames averaged from --camera-device")->capture_default_str();
   add_output_options(sub, a->output);
   sub->footer(
       "Examples:\n"
@@ -453,6 +511,17 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
       "  tunekit calibrate --machine sim --firmware marlin --out runs/demo\n"
       "  tunekit calibrate --machine /dev/ttyACM0 --profile my-printer.toml --firmware marlin \\\n"
       "                    --config Marlin/Configuration_adv.h\n"
+      "Liquefier paths (--liquefier):\n"
+      "  load-cell  feed steps and a chirp against a load cell (Klipper: [load_cell], read via load_cell/dump_force)\n"
+      "    tunekit calibrate --machine sim --liquefier load-cell\n"
+      "    tunekit calibrate --profile klipper-printer.toml --port unix:/tmp/klippy_uds --liquefier load-cell\n"
+      "  camera     prints a line test (flow steps along straight lines) and a ring test, then measures a photo:\n"
+      "    tunekit calibrate --machine sim --liquefier camera --camera sim        # the simulator photographs its print\n"
+      "    tunekit calibrate --profile p.toml --port /dev/ttyACM0 --liquefier camera --camera-device /dev/video0 \\\n"
+      "                      --px-per-mm 12\n"
+      "    tunekit calibrate --profile p.toml --port /dev/ttyACM0 --liquefier camera --photo tests.jpg --px-per-mm 12\n"
+      "    (on a terminal without --photo/--camera-device it asks for the photo's path once the tests are printed)\n"
+      "  auto       load-cell when the profile has one ([sensors] load_cell = true), else camera (the default)\n"
       "Every protocol is checked against the profile before anything is sent. On a terminal each step shows a\n"
       "progress bar with the time left; off a terminal only the diff and the report path are printed.");
   sub->callback([a, &ctx] { set_exit_code(run_calibrate(*a, ctx)); });

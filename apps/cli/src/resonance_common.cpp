@@ -11,6 +11,7 @@
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/klipper_spectrum.hpp"
+#include "tunekit/ident/rrf_accelerometer.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -43,6 +44,10 @@ std::string klipper_files_help() {
          "  and SHAPER_CALIBRATE's calibration_data_x_<name>.csv (freq,psd_x,psd_y,psd_z,psd_xyz), or several datasets\n"
          "  (freq,<name>,<name>...). Without 'shapers:' columns the PSD is as measured and gets Klipper's normalization\n"
          "  (divided by f + 0.1 Hz, damped below 10 Hz) before a shaper is chosen; with them it already has it.\n"
+         "Feeding RepRapFirmware's files:\n"
+         "  M956 P0 S<samples> A0 X Y Z F\"raw_data_x_run1.csv\" writes 0:/sys/accelerometer/<name>.csv: 'Sample,X,Y,Z', rows of\n"
+         "  g, and a last line 'Rate <Hz>, overflows <n>' that gives the time base. Name the file raw_data_<axis>_*.csv\n"
+         "  in M956 (or pass --axis).\n"
          "  Other loggers: --time COL --accel COL [--accel COL...] (mm/s^2); a commanded-acceleration column\n"
          "  --excitation COL adds the frequency response H1 and coherence, and the modes are fitted to it.\n";
 }
@@ -133,6 +138,8 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
       // Klipper's spectrum files: one or several datasets; measured PSDs unless the file has
       // shaper columns (then Klipper normalized them before writing).
       file_spectra = std::move(ident::read_klipper_spectrum(path, bytes, in.axis).datasets);
+    } else if (ident::is_rrf_accelerometer_csv(bytes)) {
+      file_spectra.push_back(ident::record_spectrum(ident::load_rrf_accelerometer_csv(path, bytes, in), welch));
     } else {
       const auto rec = ident::load_accel_csv(path, bytes, in);
       file_spectra.push_back(ident::record_spectrum(rec, welch));

@@ -11,6 +11,7 @@
 //   liquefier-sine      sine-dwell list of the feed (log-spaced frequencies), load cell recorded
 //   liquefier-chirp     linear chirp of the feed, load cell recorded
 //   ring-print          seed 001's ring: a circle printed with the feed modulated by A sin(N theta)
+//   line-steps          camera path: straight lines whose flow steps low -> high -> low (camera_prints.hpp)
 //   axis-sweep          resonance sweep: acceleration accel_per_hz * f, f rising at hz_per_sec
 //   axis-rectangle      seed 000's overshoot rectangle: XY rectangle with pauses, repeated
 

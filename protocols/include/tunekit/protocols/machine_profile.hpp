@@ -47,6 +47,13 @@ struct Sensors {
   bool filament_encoder = false;
   bool camera = false;
   double accelerometer_rate_hz = 3200;
+  /// Klipper: the accelerometer chip (adxl345, lis2dw, lis3dh, mpu9250, mpu6050, icm20948,
+  /// bmi160; `accelerometer = "lis2dw"` in the profile) and its config section name
+  /// (`accelerometer_name = "lis2dw toolhead"`; default: the chip name, i.e. `[adxl345]`).
+  std::string accelerometer_chip = "adxl345";
+  std::string accelerometer_name;
+  /// Klipper: the load cell's config section name (`[load_cell]` or `[load_cell NAME]`).
+  std::string load_cell_name = "load_cell";
 };
 
 /// The machine's own settings that the protocols change for a test and restore after it (also
@@ -64,6 +71,11 @@ struct FirmwareState {
   double max_accel_e_mm_s2 = 3000;       ///< RRF M201 E, mm/s^2
   double jerk_xy_mm_s = 15;              ///< RRF M566 X/Y (instantaneous speed change), mm/s
 };
+
+/// True for the accelerometer chips Klipper's API server streams (see klipper_sensors.hpp).
+bool is_klipper_accelerometer_chip(const std::string& chip);
+/// "adxl345, lis2dw, ..." for messages.
+std::string klipper_accelerometer_chips();
 
 struct MachineProfile {
   std::string name;

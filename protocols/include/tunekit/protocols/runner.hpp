@@ -21,6 +21,7 @@
 #include <chrono>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,7 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/gcode_link.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/protocols/sim_camera.hpp"
 
 namespace tunekit::protocols {
 
@@ -43,6 +45,9 @@ struct RunOptions {
   std::string file_tag;                  ///< names raw_data_<axis>_<tag>.csv; default: the UTC stamp
   std::string runs_root = "runs";
   std::vector<std::string> sim_options;  ///< SimConfig::from_options keys ("tau_s=0.5", "fault=drop@12")
+  /// "sim" only: what the simulated printer prints is laid down on this bed (for its camera,
+  /// sim_camera.hpp); several runs may share one bed.
+  std::shared_ptr<SimPrintBed> sim_bed;
   LinkOptions link;                      ///< timeouts and retries
   bool dry_run = false;                  ///< build and check only; RunResult::gcode is filled
   const std::atomic<bool>* abort_flag = nullptr;  ///< e.g. set by SIGINT

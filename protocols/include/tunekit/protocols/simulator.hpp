@@ -118,6 +118,19 @@ class Simulator {
 
   /// For Klipper-API style use: samples go to this callback instead of echo:TKA lines.
   std::function<void(double t_s, double ax, double ay, double az)> accel_sink;
+  /// Klipper-API style: load-cell samples (force in N, offset and noise included) go here
+  /// instead of echo:TKL lines.
+  std::function<void(double t_s, double force_N)> load_cell_sink;
+  /// Every executed move: its start (machine time, s), the time it ran (s, a whole number of
+  /// simulation steps), its velocity profile along the path, start position and unit direction
+  /// (X, Y, Z, E). A fake Klipper server turns these into motion_report/dump_trapq rows.
+  std::function<void(double t0_s, double duration_s, const Profile& profile, const std::array<double, 4>& start,
+                     const std::array<double, 4>& unit)>
+      move_sink;
+  /// Every simulation step: the nozzle position (X, Y, Z, E; mm), its XY speed (mm/s) and the
+  /// flow leaving the nozzle (mm^3/s, the simulated liquefier's output; never negative). The
+  /// simulated camera (sim_camera.hpp) lays the printed bead down from these.
+  std::function<void(double t_s, const std::array<double, 4>& pos, double speed_xy_mm_s, double flow_out_mm3_s)> deposit_sink;
   void set_streaming(const std::string& sensor, bool on);
   /// Runs any queued move to completion.
   void flush(const Emit& emit);
@@ -177,7 +190,9 @@ class Simulator {
 /// Serves a Simulator on a pseudo-terminal in a background thread.
 class SimPtyServer {
  public:
-  explicit SimPtyServer(SimConfig config);
+  /// `setup` (optional) is called with the simulator before the serving thread starts
+  /// (to attach sinks such as Simulator::deposit_sink without a race).
+  explicit SimPtyServer(SimConfig config, const std::function<void(Simulator&)>& setup = {});
   ~SimPtyServer();
   SimPtyServer(const SimPtyServer&) = delete;
   SimPtyServer& operator=(const SimPtyServer&) = delete;

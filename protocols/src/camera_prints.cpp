@@ -1,0 +1,95 @@
+#include "tunekit/protocols/camera_prints.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+
+namespace tunekit::protocols {
+namespace {
+
+std::string line_steps_num(double v, int decimals = 4) {
+  std::string s = fmt::format("{:.{}f}", v, decimals);
+  if (s.find('.') != std::string::npos) {
+    while (s.back() == '0') s.pop_back();
+    if (s.back() == '.') s.pop_back();
+  }
+  if (s == "-0") s = "0";
+  return s;
+}
+
+double line_steps_param(const std::map<std::string, double>& p, const char* k) {
+  const auto it = p.find(k);
+  if (it == p.end() || !(it->second > 0) || !std::isfinite(it->second))
+    throw InputError(fmt::format("line-steps parameter {} must be positive", k));
+  return it->second;
+}
+
+}  // namespace
+
+double PrintedLine::length_mm() const {
+  double l = 0;
+  for (const auto& s : path) l += s.length_mm;
+  return l;
+}
+
+std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& p, const MachineProfile& profile) {
+  const double v = line_steps_param(p, "speed_mm_s");
+  const double lead = line_steps_param(p, "lead_mm"), step = line_steps_param(p, "step_mm"), tail = line_steps_param(p, "tail_mm");
+  const double lo = line_steps_param(p, "low_flow"), hi = line_steps_param(p, "high_flow");
+  const double spacing = line_steps_param(p, "spacing_mm");
+  const int n = std::max(1, static_cast<int>(std::lround(line_steps_param(p, "lines"))));
+  const double e_per_mm = profile.line_area_mm2() / profile.filament_area_mm2();
+  const double total = lead + step + tail;
+  double cx = p.count("center_x_mm") ? p.at("center_x_mm") : std::nan("");
+  double y0 = p.count("first_y_mm") ? p.at("first_y_mm") : std::nan("");
+  const auto& ax = profile.axis("x");
+  const auto& ay = profile.axis("y");
+  if (std::isnan(cx)) cx = 0.5 * (ax.min_mm + ax.max_mm);
+  if (std::isnan(y0)) y0 = 0.5 * (ay.min_mm + ay.max_mm) - 50;
+  std::vector<PrintedLine> out;
+  for (int k = 0; k < n; ++k) {
+    PrintedLine l;
+    l.x0_mm = cx - total / 2;
+    l.y_mm = y0 - k * spacing;
+    for (const auto& [len, flow] : {std::pair{lead, lo}, std::pair{step, hi}, std::pair{tail, lo}})
+      l.path.push_back({len, v, e_per_mm * len * flow});
+    out.push_back(l);
+  }
+  return out;
+}
+
+void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::string, double>& p,
+                             const MachineProfile& profile, const Dialect& d) {
+  const auto lines = line_steps_layout(p, profile);
+  const double z = line_steps_param(p, "z_mm"), accel = line_steps_param(p, "accel_mm_s2");
+  const double retract = p.count("retract_mm") ? std::max(0.0, p.at("retract_mm")) : 0.0;
+  const double travel = std::min(100.0, profile.axis("x").max_velocity_mm_s);
+  // Retraction as fast as the profile allows (the safety check counts it as flow too), at most 30 mm/s.
+  const double retract_v = std::min({30.0, profile.extruder.max_velocity_mm_s,
+                                     0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2()});
+  g.push_back(fmt::format("; {} lines along +X, flow steps at {} mm and {} mm", lines.size(),
+                          line_steps_num(lines[0].path[0].length_mm), line_steps_num(lines[0].path[0].length_mm + lines[0].path[1].length_mm)));
+  g.push_back("G28");
+  g.push_back("G90");
+  g.push_back("M83 ; relative extrusion");
+  if (p.count("hotend_c") && p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
+  g.push_back(d.set_accel(std::min(accel, profile.axis("z").max_accel_mm_s2)));
+  g.push_back(fmt::format("G1 Z{} F{}", line_steps_num(z), line_steps_num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
+  g.push_back(d.set_accel(accel));
+  for (const auto& l : lines) {
+    g.push_back(fmt::format("G1 X{} Y{} F{}", line_steps_num(l.x0_mm), line_steps_num(l.y_mm), line_steps_num(travel * 60, 1)));
+    if (retract > 0) g.push_back(fmt::format("G1 E{} F{} ; prime", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
+    double x = l.x0_mm;
+    for (const auto& s : l.path) {
+      x += s.length_mm;
+      g.push_back(fmt::format("G1 X{} E{} F{}", line_steps_num(x), line_steps_num(s.feed_mm, 5), line_steps_num(s.speed_mm_s * 60, 1)));
+    }
+    if (retract > 0) g.push_back(fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
+  }
+  g.push_back(d.wait_for_moves());
+}
+
+}  // namespace tunekit::protocols

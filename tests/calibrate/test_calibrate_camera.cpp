@@ -1,0 +1,101 @@
+// The camera path of `tunekit calibrate`: the simulated printer prints the line and ring tests,
+// its camera photographs them, and tau and theta come back from the widths in the photo.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/image_io.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using tunekit::ident::read_file_bytes;
+
+}  // namespace
+
+TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from the photo", "[calibrate]") {
+  const std::string dir = tunekit::test::scratch_dir("calibrate_camera") + "/run";
+  const auto r = tunekit::test::run_cli(
+      {"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera", "sim", "--skip-axes", "--out", dir, "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto env = nlohmann::json::parse(r.out);
+  const auto& res = env.at("results");
+  // The simulator's truth, written with the printed run.
+  const auto truth = tunekit::test::read_json(dir + "/liquefier-lines/truth.json");
+  const double tau = truth.at("liquefier").at("tau_s").get<double>(), theta = truth.at("liquefier").at("theta_s").get<double>();
+  const auto& p = res.at("liquefier").at("step").at("pooled").at("params");
+  CHECK(p.at("tau_s").at("value").get<double>() == Approx(tau).epsilon(0.10));
+  CHECK(p.at("theta_s").at("value").get<double>() == Approx(theta).epsilon(0.20));
+  const auto& cam = res.at("liquefier").at("camera");
+  CHECK(cam.at("lines").size() == 3);
+  // The ring: measured phase at its frequency near what the step model predicts.
+  REQUIRE(cam.contains("ring"));
+  CHECK(cam["ring"]["phase_deg"].get<double>() == Approx(cam["ring"]["model_phase_deg"].get<double>()).margin(15));
+  CHECK(cam["ring"]["gain"].get<double>() == Approx(cam["ring"]["model_gain"].get<double>()).epsilon(0.25));
+  CHECK(cam["ring"]["theta_from_phase_s"].get<double>() == Approx(theta).epsilon(0.5));
+  // The report shows the photo with the measured edges.
+  const std::string html = read_file_bytes(dir + "/report.html");
+  CHECK(tunekit::test::embedded_png_base64_length(html, "linewidth_overlay") > 10000);
+  CHECK(tunekit::test::embedded_png_base64_length(html, "step") > 2000);
+  CHECK(fs::exists(dir + "/liquefier-camera/photo.png"));
+  // Pressure advance is designed from the camera's tau.
+  CHECK(res.at("compensators").at("settings").at("pa_k_s").get<double>() > 0);
+}
+
+TEST_CASE("calibrate camera path: a blank photo or an unopenable camera is one clear error, the printed runs kept",
+          "[calibrate]") {
+  const std::string base = tunekit::test::scratch_dir("calibrate_camera_errors");
+  // A photo of an empty bed.
+  cv::Mat blank(600, 900, CV_8U, cv::Scalar(60));
+  const std::string blank_png = base + "/blank.png";
+  tunekit::ident::write_png(blank_png, blank);
+  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--photo", blank_png,
+                                         "--px-per-mm", "12", "--skip-axes", "--out", base + "/r1"});
+  CHECK(r.code == 2);
+  CHECK(r.err.find("no printed line") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(fs::exists(base + "/r1/liquefier-lines/journal.jsonl"));
+  CHECK(tunekit::test::read_json(base + "/r1/liquefier-lines/run.json")["status"] == "complete");
+  CHECK(fs::exists(base + "/r1/liquefier-ring/journal.jsonl"));
+
+  const auto c = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera-device",
+                                         base + "/no-such-video-device", "--px-per-mm", "12", "--skip-axes", "--out",
+                                         base + "/r2"});
+  CHECK(c.code == 3);
+  CHECK(c.err.find("camera") != std::string::npos);
+  CHECK(std::count(c.err.begin(), c.err.end(), '\n') == 1);
+  CHECK(fs::exists(base + "/r2/liquefier-lines/journal.jsonl"));
+}
+
+TEST_CASE("calibrate camera path off a terminal without a photo source exits 2 before anything is printed",
+          "[calibrate]") {
+  const std::string base = tunekit::test::scratch_dir("calibrate_camera_noterm");
+  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--px-per-mm", "12",
+                                         "--skip-axes", "--out", base + "/r"});
+  CHECK(r.code == 2);
+  CHECK(r.err.find("--photo") != std::string::npos);
+  CHECK(!fs::exists(base + "/r"));
+  // --liquefier load-cell on a profile without one is refused the same way.
+  std::string profile = read_file_bytes(tunekit::test::dataset("machines/sim.toml"));
+  profile.replace(profile.find("load_cell = true"), 16, "load_cell = false");
+  const std::string path = base + "/no-cell.toml";
+  std::ofstream(path) << profile;
+  const auto l = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--profile", path, "--liquefier", "load-cell",
+                                         "--skip-axes", "--out", base + "/r2"});
+  CHECK(l.code == 2);
+  CHECK(l.err.find("load_cell") != std::string::npos);
+}
+
+TEST_CASE("calibrate --help shows the three liquefier paths with an example each", "[calibrate]") {
+  const auto r = tunekit::test::run_cli({"calibrate", "--help"});
+  REQUIRE(r.code == 0);
+  for (const char* s : {"--liquefier", "load-cell", "camera", "auto", "--camera sim", "--camera-device /dev/video0",
+                        "--photo tests.jpg", "--liquefier load-cell\n"})
+    CHECK(r.out.find(s) != std::string::npos);
+}
