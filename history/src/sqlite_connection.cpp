@@ -28,14 +28,34 @@ class SqliteConnection final : public Connection {
       db_ = nullptr;
       throw MachineError("cannot open the history database: " + msg, path_);
     }
-    sqlite3_busy_timeout(db_, kSqliteBusyTimeoutMs);
-    execute("PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA foreign_keys=ON");
+    try {
+      configure();
+    } catch (...) {
+      sqlite3_close(db_);
+      db_ = nullptr;
+      throw;
+    }
   }
   ~SqliteConnection() override {
     for (auto& [sql, stmt] : cache_) sqlite3_finalize(stmt);
     sqlite3_close(db_);
   }
 
+ private:
+  void configure() {
+    sqlite3_busy_timeout(db_, kSqliteBusyTimeoutMs);
+    // Switching a new file to WAL needs it to itself for a moment; processes opening the same
+    // new file at once may find it busy, without the busy handler being asked: wait and retry.
+    for (int waited_ms = 0;; waited_ms += 10) {
+      const int rc = sqlite3_exec(db_, "PRAGMA journal_mode=WAL", nullptr, nullptr, nullptr);
+      if (rc == SQLITE_OK) break;
+      if ((rc & 0xff) != SQLITE_BUSY || waited_ms >= kSqliteBusyTimeoutMs) fail(rc, sqlite3_errmsg(db_));
+      sqlite3_sleep(10);
+    }
+    execute("PRAGMA synchronous=FULL; PRAGMA foreign_keys=ON");
+  }
+
+ public:
   Backend backend() const override { return Backend::sqlite; }
   const std::string& name() const override { return path_; }
 
