@@ -46,6 +46,7 @@ struct HistoryArgs {
   std::string html_out = "fleet.html";
   std::vector<std::string> paths;
   bool machine_from_path = false;
+  bool show_runs = false;
 };
 
 nlohmann::json hist_number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
@@ -95,23 +96,45 @@ void hist_set_dotted(nlohmann::json& obj, const std::string& name, const nlohman
   (*cur)[name.substr(start)] = value;
 }
 
-nlohmann::json hist_series_json(const history::DriftSeries& d) {
-  nlohmann::json runs = nlohmann::json::array();
+// Runs as columns (one array per field, index = run - 1): a fleet's trend stays compact.
+nlohmann::json hist_series_json(const history::DriftSeries& d, bool with_runs) {
+  std::vector<std::int64_t> ids;
+  std::vector<std::string> times, words;
+  std::vector<nlohmann::json> values, errors, changes, thresholds;
+  std::vector<bool> drifted;
   for (const auto& p : d.points) {
-    nlohmann::json r{{"record_id", p.point.record_id}, {"run_utc", p.point.run_utc}, {"drifted", p.drifted},
-                     {"baseline", p.in_baseline}};
+    ids.push_back(p.point.record_id);
+    times.push_back(p.point.run_utc);
+    drifted.push_back(p.drifted);
     if (d.is_text) {
-      r["value"] = p.point.text;
+      words.push_back(p.point.text);
     } else {
-      r["value"] = hist_number(p.point.value);
-      r["stderr"] = hist_number(p.point.stderr_value);
-      r["change"] = hist_number(p.change);
-      r["change_pct"] = hist_number(p.change_pct);
-      r["threshold"] = hist_number(p.threshold);
+      values.push_back(hist_number(p.point.value));
+      errors.push_back(hist_number(p.point.stderr_value));
+      changes.push_back(hist_number(p.change_pct));
+      thresholds.push_back(hist_number(p.threshold));
     }
-    runs.push_back(r);
   }
-  nlohmann::json j{{"unit", d.unit}, {"runs", runs}, {"drifted", d.latest_drifted()}};
+  nlohmann::json runs{{"record_id", ids}, {"run_utc", times}, {"drifted", drifted}};
+  if (d.is_text) {
+    runs["value"] = words;
+  } else {
+    runs["value"] = values;
+    runs["stderr"] = errors;
+    runs["change_pct"] = changes;
+    runs["threshold"] = thresholds;
+  }
+  nlohmann::json j{{"unit", d.unit}, {"count", d.points.size()}, {"drifted", d.latest_drifted()}};
+  if (with_runs) j["runs"] = runs;
+  if (!d.points.empty()) {
+    const auto& last = d.points.back();
+    j["latest"] = {{"record_id", last.point.record_id}, {"run_utc", last.point.run_utc}};
+    if (d.is_text) j["latest"]["value"] = last.point.text;
+    else {
+      j["latest"]["value"] = hist_number(last.point.value);
+      j["latest"]["stderr"] = hist_number(last.point.stderr_value);
+    }
+  }
   if (d.is_text) {
     j["baseline"] = d.baseline_text;
   } else {
@@ -138,12 +161,15 @@ struct MachineTrend {
 MachineTrend hist_trend_of(history::Store& store, const std::string& machine, const HistoryArgs& a) {
   MachineTrend t;
   t.machine_id = machine;
-  const auto all = store.series(machine);
+  std::map<std::string, std::vector<history::SeriesPoint>> all;
+  if (a.quantities.empty()) all = store.series(machine);
+  else
+    for (const auto& q : a.quantities) all[q] = store.series(machine, q);
   const history::DriftOptions opt{a.baseline_runs, a.coverage_k};
   std::set<std::int64_t> records;
   for (const auto& name : hist_quantity_order(all, a.quantities)) {
     const auto it = all.find(name);
-    if (it == all.end()) continue;
+    if (it == all.end() || it->second.empty()) continue;
     for (const auto& p : it->second) records.insert(p.record_id);
     t.series.push_back(history::analyse_drift(name, it->second, opt));
   }
@@ -262,6 +288,8 @@ int hist_run_trend(const HistoryArgs& a, CliContext& ctx) {
                    {"baseline_runs", a.baseline_runs}, {"coverage_k", a.coverage_k}, {"require", a.output.require}});
   nlohmann::json list = nlohmann::json::array();
   int code = 0;
+  // Named machines: every run. The whole fleet: each quantity's summary (--runs for every run).
+  const bool with_runs = !a.machines.empty() || a.show_runs;
   for (const auto& machine : machines) {
     const auto t = hist_trend_of(store, machine, a);
     if (t.series.empty() && !a.machines.empty())
@@ -272,7 +300,7 @@ int hist_run_trend(const HistoryArgs& a, CliContext& ctx) {
     nlohmann::json qs = nlohmann::json::object(), drift = nlohmann::json::object();
     std::vector<std::string> drifted;
     for (const auto& s : t.series) {
-      qs[s.name] = hist_series_json(s);
+      qs[s.name] = hist_series_json(s, with_runs);
       if (!s.is_text) hist_set_dotted(drift, s.name, s.significant_change_pct());
       if (s.latest_drifted()) drifted.push_back(s.name);
     }
@@ -304,6 +332,16 @@ int hist_run_trend(const HistoryArgs& a, CliContext& ctx) {
       ctx.out << fmt::format("machine {}: {} runs, baseline = first {} run(s), drift beyond {:g} x combined standard error\n",
                              machine, t.runs, a.baseline_runs, a.coverage_k);
       for (const auto& s : t.series) {
+        if (!with_runs) {
+          const auto& p = s.points.back();
+          std::string value = s.is_text ? p.point.text : display_number(p.point.value) + " " + s.unit;
+          if (!s.is_text && std::isfinite(p.change_pct)) value += fmt::format(" ({:+.2f} %)", p.change_pct);
+          ctx.out << fmt::format("  {:<20} {} runs, latest {}{}\n", s.name, s.points.size(), value,
+                                 s.drifted_since ? fmt::format("  DRIFT since run {} ({})", *s.drifted_since + 1,
+                                                               s.points[*s.drifted_since].point.run_utc)
+                                                 : std::string());
+          continue;
+        }
         ctx.out << fmt::format("  {} ({})\n", s.name, s.unit);
         for (std::size_t i = 0; i < s.points.size(); ++i) {
           const auto& p = s.points[i];
@@ -312,7 +350,7 @@ int hist_run_trend(const HistoryArgs& a, CliContext& ctx) {
           std::string change;
           if (p.in_baseline) change = "baseline";
           else if (!s.is_text && std::isfinite(p.change_pct))
-            change = fmt::format("{:+.2f} % (limit {})", p.change_pct, display_number(p.threshold));
+            change = fmt::format("{:+.2f} % (limit ±{} {})", p.change_pct, display_number(p.threshold), s.unit);
           ctx.out << fmt::format("    {:>3}  {:<24}  {:<24} {:<28} {}\n", i + 1, p.point.run_utc, value, change,
                                  p.drifted ? "DRIFT" : "");
         }
@@ -576,6 +614,7 @@ void register_history(CLI::App& app, CliContext& ctx) {
                 "Drift when |change| > K x sqrt(u_run^2 + u_baseline^2) (1.96: 95 % interval of the difference)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  t->add_flag("--runs", trend->show_runs, "Every run of every machine (default: every run only for --machine)");
   t->footer(
       "A change within the combined uncertainty of the run and the baseline is not drift. drift.NAME is the latest\n"
       "run's change from the baseline in percent when it is drift, 0 otherwise; gate CI on it:\n"
