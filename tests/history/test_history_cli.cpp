@@ -26,15 +26,6 @@ namespace th = tunekit::history;
 
 namespace {
 
-#define FOR_EACH_BACKEND(db, name)                                                   \
-  const std::string backend_ = GENERATE(as<std::string>{}, "sqlite", "postgresql"); \
-  const auto db = tunekit::test::fresh_database(backend_, name);                    \
-  if (db.url.empty()) {                                                              \
-    WARN("skipped on " << backend_ << ": " << db.skip_reason);                       \
-    return;                                                                          \
-  }                                                                                  \
-  INFO("backend " << backend_)
-
 std::int64_t hist_count(th::Connection& c, const std::string& sql, const std::vector<th::Value>& p = {}) {
   return th::as_int(c.query(sql, p).at(0).at(0));
 }
@@ -76,7 +67,7 @@ std::string step_envelope(const std::string& command, double tau, double stderr_
 }  // namespace
 
 TEST_CASE("history cli: step --record stores the result with its input's digest, list and show read it back") {
-  FOR_EACH_BACKEND(db, "cli_step");
+  TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, "cli_step");
   const std::string csv = dataset("liquefier/synthetic_steps.csv");
   const auto r = run_cli({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--json", "--record",
                           "--machine-id", "printer-07", "--db", db.url});
@@ -134,7 +125,7 @@ TEST_CASE("history cli: --record without a machine id, a bad database and an unr
 }
 
 TEST_CASE("history cli: batch --record stores one record per dataset, import of its summary adds each once") {
-  FOR_EACH_BACKEND(db, "cli_batch");
+  TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, "cli_batch");
   const std::string dir = scratch_dir("history-batch-" + backend_);
   fs::create_directories(dir + "/data");
   fs::copy_file(dataset("liquefier/synthetic_steps.csv"), dir + "/data/steps.csv");
@@ -163,10 +154,29 @@ TEST_CASE("history cli: batch --record stores one record per dataset, import of 
   CHECK(nlohmann::json::parse(again.out)["results"]["counts"]["imported"] == 0);
   CHECK(nlohmann::json::parse(again.out)["results"]["counts"]["already_recorded"] == 2);
   CHECK(store.records("b2").size() == 2);
+
+  // A folder is searched: the summary is found (its results come before its schema_version),
+  // a JSON file that is not a tunekit result is listed as skipped.
+  fs::create_directories(dir + "/archive/sub");
+  fs::copy_file(dir + "/summary.json", dir + "/archive/sub/summary.json");
+  std::ofstream(dir + "/archive/other.json") << R"({"command": "not ours", "something": 1})";
+  const auto folder = run_cli({"history", "import", dir + "/archive", "--machine-id", "b3", "--db", db.url, "--json"});
+  INFO(folder.err);
+  REQUIRE(folder.code == 0);
+  const auto fj = nlohmann::json::parse(folder.out)["results"];
+  CHECK(fj["counts"]["imported"] == 2);
+  int skipped = 0;
+  for (const auto& r : fj["records"]) skipped += r["status"] == "skipped" ? 1 : 0;
+  CHECK(skipped == 1);
+  CHECK(store.records("b3").size() == 2);
+  // Named on the command line, the same file is an error.
+  const auto bad = run_cli({"history", "import", dir + "/archive/other.json", "--machine-id", "b3", "--db", db.url});
+  CHECK(bad.code == 2);
+  CHECK_THAT(bad.err, Catch::Contains("not a tunekit result"));
 }
 
 TEST_CASE("history cli: 32 processes recording concurrently into one database lose no row") {
-  FOR_EACH_BACKEND(db, "concurrent");
+  TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, "concurrent");
   const std::string dir = scratch_dir("history-concurrent-" + backend_);
   constexpr int kProcesses = 32, kEach = 8;
   // The database is new: the processes also race to create its schema.

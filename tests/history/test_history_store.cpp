@@ -21,16 +21,6 @@ using namespace tunekit::history;
 
 namespace {
 
-// Both backends; PostgreSQL's absence is stated, never silently passed.
-#define FOR_EACH_BACKEND(db, name)                                                   \
-  const std::string backend_ = GENERATE(as<std::string>{}, "sqlite", "postgresql"); \
-  const auto db = test::fresh_database(backend_, name);                             \
-  if (db.url.empty()) {                                                              \
-    WARN("skipped on " << backend_ << ": " << db.skip_reason);                       \
-    return;                                                                          \
-  }                                                                                  \
-  INFO("backend " << backend_)
-
 NewRecord sample_record(const std::string& machine, double tau, double freq) {
   NewRecord r;
   r.machine_id = machine;
@@ -58,7 +48,7 @@ void check_consistent(Connection& c) {
 }  // namespace
 
 TEST_CASE("history store: migrations run on open, once, and a newer schema is refused") {
-  FOR_EACH_BACKEND(db, "migrations");
+  TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, "migrations");
   {
     Store s(db.url);
     CHECK(s.schema_version() == kHistorySchemaVersion);
@@ -80,7 +70,7 @@ TEST_CASE("history store: migrations run on open, once, and a newer schema is re
 }
 
 TEST_CASE("history store: a record keeps its inputs' digests, tool version, UTC time and quantities") {
-  FOR_EACH_BACKEND(db, "record");
+  TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, "record");
   Store s(db.url);
   const std::string before = utc_now();
   const auto id = s.record(sample_record("printer-07", 0.45, 48.25));
@@ -130,7 +120,7 @@ TEST_CASE("history store: a record keeps its inputs' digests, tool version, UTC 
 }
 
 TEST_CASE("history store: an import recorded twice is kept once, live records always") {
-  FOR_EACH_BACKEND(db, "dedupe");
+  TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, "dedupe");
   Store s(db.url);
   auto r = sample_record("m1", 0.45, 48);
   r.source = "/archive/m1/runs/calibrate-20261101-120000";
@@ -147,7 +137,7 @@ TEST_CASE("history store: an import recorded twice is kept once, live records al
 }
 
 TEST_CASE("history store: bad machine ids and a failed record leave nothing behind") {
-  FOR_EACH_BACKEND(db, "bad_input");
+  TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, "bad_input");
   Store s(db.url);
   CHECK_THROWS_AS(s.record(sample_record("", 1, 1)), InputError);
   CHECK_THROWS_AS(s.record(sample_record(std::string(129, 'm'), 1, 1)), InputError);
@@ -161,7 +151,7 @@ TEST_CASE("history store: bad machine ids and a failed record leave nothing behi
 }
 
 TEST_CASE("history store: a process killed mid-record leaves the database consistent") {
-  FOR_EACH_BACKEND(db, "killed");
+  TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, "killed");
   { Store create(db.url); }
   std::mt19937 rng(7);
   std::int64_t seen_before = 0;

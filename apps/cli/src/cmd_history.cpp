@@ -494,6 +494,7 @@ struct ImportItem {
   fs::path file;  // the JSON result
   fs::path dir;   // its run directory (or its folder)
   fs::path root;  // the PATH given on the command line it was found under
+  bool found_in_folder = false;  // not named on the command line: skipped (and listed) when it is not a result
 };
 
 bool hist_looks_like_result(const fs::path& p) {
@@ -503,12 +504,13 @@ bool hist_looks_like_result(const fs::path& p) {
   } catch (const std::exception&) {
     return false;
   }
-  return head.find("\"schema_version\"") != std::string::npos && head.find("\"command\"") != std::string::npos;
+  // Envelope keys are sorted: "command" comes first, "schema_version" after the (long) results.
+  return head.find("\"command\"") != std::string::npos;
 }
 
 void hist_collect(const fs::path& root, const fs::path& dir, std::vector<ImportItem>& out) {
   if (fs::exists(dir / "results.json")) {  // a run directory: its analysis/*.json are parts of it
-    out.push_back({dir / "results.json", dir, root});
+    out.push_back({dir / "results.json", dir, root, dir != root});
     return;
   }
   std::vector<fs::path> entries;
@@ -516,7 +518,7 @@ void hist_collect(const fs::path& root, const fs::path& dir, std::vector<ImportI
   std::sort(entries.begin(), entries.end());
   for (const auto& e : entries) {
     if (fs::is_directory(e)) hist_collect(root, e, out);
-    else if (e.extension() == ".json" && hist_looks_like_result(e)) out.push_back({e, dir, root});
+    else if (e.extension() == ".json" && hist_looks_like_result(e)) out.push_back({e, dir, root, true});
   }
 }
 
@@ -549,14 +551,23 @@ int hist_run_import(const HistoryArgs& a, CliContext& ctx) {
     if (machine.empty())
       throw InputError("whose results are these? give --machine-id NAME, or --machine-from-path for archive/<machine>/...",
                        it.file.string());
-    nlohmann::json envelope;
-    try {
-      envelope = nlohmann::json::parse(ident::read_file_bytes(it.file.string()));
-    } catch (const nlohmann::json::parse_error& e) {
-      throw InputError(std::string("not valid JSON: ") + e.what(), it.file.string());
-    }
     const std::string source = fs::weakly_canonical(it.file.filename() == "results.json" ? it.dir : it.file).string();
-    for (auto& r : records_from_envelope(envelope, machine, source, hist_run_time(it.dir, it.file))) {
+    std::vector<history::NewRecord> records;
+    try {
+      nlohmann::json envelope;
+      try {
+        envelope = nlohmann::json::parse(ident::read_file_bytes(it.file.string()));
+      } catch (const nlohmann::json::parse_error& e) {
+        throw InputError(std::string("not valid JSON: ") + e.what(), it.file.string());
+      }
+      records = records_from_envelope(envelope, machine, source, hist_run_time(it.dir, it.file));
+    } catch (const InputError& e) {
+      if (!it.found_in_folder) throw;
+      list.push_back({{"source", source}, {"status", "skipped"}, {"reason", e.message()}});
+      if (!a.output.json) ctx.out << fmt::format("{:<16} {} ({})\n", "skipped", source, e.message());
+      continue;
+    }
+    for (auto& r : records) {
       r.deduplicate = true;  // importing an archive twice adds nothing
       const auto id = store.record(r);
       list.push_back({{"source", r.source}, {"machine_id", machine}, {"command", r.command},
