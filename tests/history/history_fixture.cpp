@@ -104,6 +104,7 @@ class PostgresServer {
     }
   }
   const std::string& skip_reason() const { return skip_reason_; }
+  std::string log() const { return started_ ? read_text(dir_ + "/server.log") : ""; }
   std::string create_database(const std::string& name) {
     const std::string base = "postgresql://tunekit@127.0.0.1:" + std::to_string(port_);
     auto admin = history::connect(base + "/postgres");
@@ -128,7 +129,14 @@ std::string db_name_of(const std::string& name) {
   return o.substr(0, 60);
 }
 
+std::unique_ptr<PostgresServer>& postgres_server() {
+  static std::unique_ptr<PostgresServer> server;
+  return server;
+}
+
 }  // namespace
+
+std::string postgres_server_log() { return postgres_server() ? postgres_server()->log() : ""; }
 
 TestDatabase fresh_database(const std::string& backend, const std::string& name) {
   TestDatabase db{backend, "", ""};
@@ -136,7 +144,8 @@ TestDatabase fresh_database(const std::string& backend, const std::string& name)
     db.url = scratch_dir("history-" + name) + "/history.sqlite";
     return db;
   }
-  static std::unique_ptr<PostgresServer> server = std::make_unique<PostgresServer>();
+  auto& server = postgres_server();
+  if (!server) server = std::make_unique<PostgresServer>();
   if (!server->skip_reason().empty()) {
     db.skip_reason = server->skip_reason();
     return db;

@@ -21,6 +21,9 @@ struct TestDatabase {
 /// started on first use; when its binaries are absent, url is empty and skip_reason says why.
 TestDatabase fresh_database(const std::string& backend, const std::string& name);
 
+/// The test PostgreSQL server's log so far ("" when none was started).
+std::string postgres_server_log();
+
 /// Starts `argv` (argv[0] a path) with stdout and stderr appended to `log_path`; returns its pid.
 pid_t spawn_process(const std::vector<std::string>& argv, const std::string& log_path);
 /// Waits for `pid`; returns its exit status (128 + signal when killed).
