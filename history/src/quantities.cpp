@@ -73,7 +73,7 @@ void liquefier_freq(QuantityList& out, const nlohmann::json* freq) {
   out.param("freq.theta_s", qty_at(*params, {"theta_s"}), "s");
 }
 
-void axes(QuantityList& out, const nlohmann::json* axes_json) {
+void axis_quantities(QuantityList& out, const nlohmann::json* axes_json) {
   if (axes_json == nullptr || !axes_json->is_object()) return;
   for (const auto& [axis, a] : axes_json->items()) {
     if (!a.is_object()) continue;
@@ -95,7 +95,7 @@ void axes(QuantityList& out, const nlohmann::json* axes_json) {
   }
 }
 
-void advance(QuantityList& out, const nlohmann::json* settings) {
+void advance_quantities(QuantityList& out, const nlohmann::json* settings) {
   if (settings == nullptr) return;
   out.number("pa_k_s", qty_at(*settings, {"pa_k_s"}), nullptr, "s");
   out.number("pa_smooth_s", qty_at(*settings, {"pa_smooth_s"}), nullptr, "s");
@@ -124,16 +124,16 @@ std::vector<Quantity> extract_quantities(const std::string& command, const nlohm
   if (command == "calibrate") {
     liquefier_step(out, qty_at(r, {"liquefier", "step"}));
     liquefier_freq(out, qty_at(r, {"liquefier", "freq"}));
-    axes(out, qty_at(r, {"axes"}));
-    advance(out, qty_at(r, {"compensators", "settings"}));
+    axis_quantities(out, qty_at(r, {"axes"}));
+    advance_quantities(out, qty_at(r, {"compensators", "settings"}));
   } else if (command == "step") {
     liquefier_step(out, &r);
   } else if (command == "freq") {
     liquefier_freq(out, &r);
   } else if (command == "shaper" || command == "resonance") {
-    axes(out, qty_at(r, {"axes"}));
+    axis_quantities(out, qty_at(r, {"axes"}));
   } else if (command == "export") {
-    advance(out, qty_at(r, {"settings"}));
+    advance_quantities(out, qty_at(r, {"settings"}));
   } else {
     other_params(out, command, r, 0);
   }

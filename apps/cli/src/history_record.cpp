@@ -1,6 +1,7 @@
 #include "tunekit/cli/history_record.hpp"
 
 #include <cstdlib>
+#include <filesystem>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -106,7 +107,10 @@ void record_result(const nlohmann::json& envelope, const OutputOptions& o, CliCo
   history::check_machine_id(o.machine_id);
   const std::string db = history_db(o);
   history::Store store(db);
-  const auto records = records_from_envelope(envelope, o.machine_id, o.record_source, "");
+  std::string source = o.record_source;
+  std::error_code ec;
+  if (!source.empty() && std::filesystem::exists(source, ec)) source = std::filesystem::weakly_canonical(source, ec).string();
+  const auto records = records_from_envelope(envelope, o.machine_id, source, "");
   std::vector<std::int64_t> ids;
   for (const auto& r : records)
     if (const auto id = store.record(r)) ids.push_back(*id);
