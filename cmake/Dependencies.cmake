@@ -91,6 +91,16 @@ if(NOT STB_FOUND)
   tunekit_missing("stb_image (image files)" "libstb-dev")
 endif()
 
+# The calibration history: SQLite (the embedded default) and libpq (a farm's PostgreSQL server).
+pkg_check_modules(SQLITE3 QUIET IMPORTED_TARGET sqlite3)
+if(NOT SQLITE3_FOUND)
+  tunekit_missing("SQLite 3 (calibration history)" "libsqlite3-dev")
+endif()
+pkg_check_modules(LIBPQ QUIET IMPORTED_TARGET libpq)
+if(NOT LIBPQ_FOUND)
+  tunekit_missing("libpq (PostgreSQL client, calibration history)" "libpq-dev")
+endif()
+
 if(TUNEKIT_BUILD_TESTS)
   find_package(Catch2 2 QUIET)
   if(NOT Catch2_FOUND)

@@ -105,6 +105,7 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
 
   const auto& m = r.section("machine", true);
   p.name = m["name"].value_or(std::string("unnamed machine"));
+  p.id = m["id"].value_or(std::string());
   p.kinematics = m["kinematics"].value_or(std::string("cartesian"));
   p.firmware = m["firmware"].value_or(std::string());
   if (p.kinematics != "cartesian" && p.kinematics != "corexy" && p.kinematics != "delta")

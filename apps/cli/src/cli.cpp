@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/history_record.hpp"
 #include "tunekit/fitting/error.hpp"
 
 #ifndef TUNEKIT_VERSION
@@ -17,13 +18,14 @@ thread_local int g_exit_code = 0;  // per thread: batch runs commands in paralle
 
 void set_exit_code(int code) { g_exit_code = code; }
 
-void add_output_options(CLI::App* sub, OutputOptions& o) {
+void add_output_options(CLI::App* sub, OutputOptions& o, bool recordable) {
   sub->add_flag("--json", o.json, "Print the results as JSON on stdout");
   // The long name is --json-file: --output names the output column in step and freq.
   sub->add_option("-o,--json-file", o.output_path, "Also write the JSON results to this file");
   sub->add_option("--require", o.require,
                    "CI threshold on a result, e.g. 'tau_s<0.6' or 'x.freq_hz>=35' (repeatable); exit 1 naming each "
                    "unmet one");
+  if (recordable) add_record_options(sub, o);
 }
 
 CLI::App* add_reserved_command(CLI::App& app, const std::string& name, const std::string& description) {
@@ -62,6 +64,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   register_batch(app, ctx);
   register_ports(app, ctx);
   register_inspect(app, ctx);
+  register_history(app, ctx);
 
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses from the back

@@ -25,6 +25,7 @@
 #include "tunekit/cli/agreement.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/history_record.hpp"
 #include "tunekit/cli/progress.hpp"
 #include "tunekit/cli/report.hpp"
 #include "tunekit/fitting/error.hpp"
@@ -226,6 +227,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     exps.push_back({"axis-y", "axis-sweep", "y", {}});
   }
   if (exps.empty()) throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given");
+  OutputOptions output = a.output;
+  prepare_record(output, profile.id);  // --record: a bad machine id or database fails before the machine moves
 
   // Each calibration keeps its own run directory: a used one is never written into again.
   std::string run_dir = a.out_dir;
@@ -474,7 +477,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     if (!diff.empty()) ctx.out << diff << (diff.back() == '\n' ? "" : "\n");
     ctx.out << fmt::format("report: {}\n", report);
   }
-  return emit(env, a.output, ctx);
+  output.record_source = run_dir;
+  return emit(env, output, ctx);
 }
 
 }  // namespace

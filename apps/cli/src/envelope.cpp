@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <openssl/evp.h>
 
+#include "tunekit/cli/history_record.hpp"
 #include "tunekit/cli/requirements.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
@@ -72,6 +73,7 @@ int emit(const Envelope& env, const OutputOptions& o, CliContext& ctx) {
     f << text;
     if (!f.flush()) throw InputError("cannot write the results file", o.output_path);
   }
+  if (o.record) record_result(j, o, ctx);
   for (const auto& w : env.warnings()) ctx.err << "tunekit: warning: " << w << "\n";
   int code = 0;
   for (const auto& r : outcomes) {

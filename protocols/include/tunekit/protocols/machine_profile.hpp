@@ -79,6 +79,7 @@ std::string klipper_accelerometer_chips();
 
 struct MachineProfile {
   std::string name;
+  std::string id;                        ///< the machine's id in the calibration history (may be empty)
   std::string kinematics = "cartesian";  ///< cartesian, corexy, delta
   std::string firmware;                  ///< marlin, klipper, rrf, prusa (may be empty: ask M115)
   std::map<std::string, AxisLimits> axes;  ///< "x", "y", "z"

@@ -26,9 +26,15 @@ struct OutputOptions {
   bool json = false;                 ///< print the JSON envelope on stdout
   std::string output_path;           ///< also write the JSON envelope to this file
   std::vector<std::string> require;  ///< CI thresholds, e.g. "tau_s<0.6"
+  // The calibration history (tunekit/cli/history_record.hpp): --record --machine-id NAME --db DB.
+  bool record = false;         ///< also store the result in the history database
+  std::string machine_id;      ///< whose result it is (calibrate falls back to the profile's [machine] id)
+  std::string db;              ///< SQLite file or postgresql:// URL (default: history.sqlite)
+  std::string record_source;   ///< set by the command: the run directory the result belongs to
 };
 
-/// Adds --json and -o/--output to a subcommand.
-void add_output_options(CLI::App* sub, OutputOptions& o);
+/// Adds --json, -o/--json-file and --require to a subcommand, and (unless `recordable` is
+/// false) the history options --record, --machine-id and --db.
+void add_output_options(CLI::App* sub, OutputOptions& o, bool recordable = true);
 
 }  // namespace tunekit::cli
