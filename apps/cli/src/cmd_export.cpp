@@ -90,6 +90,9 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   double freq_tau = fitting::kNaN;
   std::map<std::string, protocols::ShaperSetting> shapers;
   std::vector<std::string> sources;
+  // Operating points whose u is a volumetric flow (mm^3/s): converted to filament feed once the
+  // filament area is known.
+  std::vector<bool> point_is_flow;
 
   for (const auto& path : a.results) {
     const std::string bytes = ident::read_file_bytes(path);
@@ -114,8 +117,11 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
         in.tau_source = "step";
       }
       const auto& ops = dig(res, {"operating_points"});
+      const auto& u_unit = dig(res, {"units", "input"});
+      const bool flow_points = u_unit.is_string() && ident::is_volumetric_flow_unit(u_unit.get<std::string>());
       if (ops.is_array())
         for (const auto& op : ops) {
+          point_is_flow.push_back(flow_points);
           ident::LiquefierPoint p;
           p.feed_mm_s = number_at(dig(op, {"u"}), "operating_points[].u", path);
           p.gain = number_at(dig(op, {"K"}), "operating_points[].K", path);
@@ -183,6 +189,8 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     env.add_input(a.profile);
   }
   in.filament_area_mm2 = profile.filament_area_mm2();
+  for (std::size_t i = 0; i < in.points.size() && i < point_is_flow.size(); ++i)
+    if (point_is_flow[i]) in.points[i].feed_mm_s /= in.filament_area_mm2;  // mm^3/s -> mm/s of filament
   in.line_area_mm2 = profile.line_area_mm2();
   in.print_speed_mm_s = profile.print.speed_mm_s;
   in.print_accel_mm_s2 = profile.print.max_accel_mm_s2;
