@@ -1,6 +1,7 @@
 #pragma once
 // Rheometer (or capillary) data from CSV into SI units for the viscosity fits, with the unit
-// checks that catch the usual mix-ups. Columns, by name (case-insensitive), units in brackets:
+// checks that catch the usual mix-ups. Columns, by name (case-insensitive), units in brackets
+// or as a suffix (shear_rate_1_s, viscosity_Pa_s, temperature_C), or named in the options:
 //   shear_rate (1/s)                        required, > 0
 //   viscosity (Pa.s | mPa.s | cP | kPa.s)   or shear_stress (Pa | kPa | MPa), eta = tau / gamma
 //   temperature (degC | C | K)              optional if a temperature is given separately
@@ -26,6 +27,11 @@ struct RheologyCsvOptions {
   double temperature_degC = fitting::kNaN;
   /// degC -> K offset: 273.15 (SI) or 273 (the seed's code).
   double kelvin_offset = fitting::kKelvinOffset;
+  /// Column names for files whose headers are not the usual ones (a rheometer's export, another
+  /// language); empty: found by the names above. A named column must exist.
+  std::string shear_rate_column, viscosity_column, stress_column, temperature_column, pressure_column;
+  /// Units for columns whose names carry none (or carry a wrong one): override the header.
+  std::string viscosity_unit, stress_unit, temperature_unit;
 };
 
 struct RheologyTable {
