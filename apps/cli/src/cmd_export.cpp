@@ -3,6 +3,8 @@
 // into a Klipper printer.cfg, a Marlin Configuration_adv.h or a RepRapFirmware config.g.
 // By default only a unified diff is printed; --write applies it (backup + atomic rename).
 #include <cmath>
+#include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -200,6 +202,19 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   protocols::CompensatorSettings settings;
   settings.klipper_extruder = a.extruder;
   settings.rrf_drive = a.drive;
+  {
+    // The note that replaces a changed line's trailing comment: what set it, from which results, when.
+    std::string from;
+    for (const auto& path : a.results) from += (from.empty() ? "" : ", ") + std::filesystem::path(path).filename().string();
+    if (std::isfinite(a.pa_k) || !a.shaper_x.empty() || !a.shaper_y.empty())
+      from += from.empty() ? "the command line" : " and the command line";
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    ::gmtime_r(&now, &tm);
+    char day[16];
+    std::strftime(day, sizeof day, "%Y-%m-%d", &tm);
+    settings.change_note = fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : from, day);
+  }
   std::optional<ident::AdvanceDesign> design;
   const bool have_tau = std::isfinite(in.tau_s) || !in.points.empty();
   if (!a.no_pa && have_tau) {

@@ -45,6 +45,9 @@ struct CompensatorSettings {
   std::map<std::string, ShaperSetting> shapers;  ///< by axis "x", "y"
   std::string klipper_extruder = "extruder";     ///< Klipper section holding pressure_advance
   int rrf_drive = 0;                             ///< RepRapFirmware extruder drive (M572 D)
+  /// Replaces the trailing comment of a line whose value changes (the old comment described
+  /// the old value), e.g. "tunekit 2026-01-31: from step.json"; empty: comments are kept.
+  std::string change_note;
 };
 
 /// One value set in the file.
