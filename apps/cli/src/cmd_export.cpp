@@ -95,6 +95,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   // Operating points whose u is a volumetric flow (mm^3/s): converted to filament feed once the
   // filament area is known.
   std::vector<bool> point_is_flow;
+  std::vector<std::string> unnamed_axes;  // shaper results under a file stem instead of an axis
 
   for (const auto& path : a.results) {
     const std::string bytes = ident::read_file_bytes(path);
@@ -140,7 +141,14 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
         const auto& rec = dig(v, {"recommended"});
         if (!rec.is_object()) continue;
         if (axis != "x" && axis != "y") {
-          env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
+          if (axis == "z")
+            env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
+          else {
+            unnamed_axes.push_back(fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; run "
+                                               "'tunekit shaper' on it with --axis x or --axis y",
+                                               path, axis));
+            env.warn(unnamed_axes.back());
+          }
           continue;
         }
         protocols::ShaperSetting s;
@@ -235,8 +243,10 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     if (!a.shaper_y.empty()) shapers["y"] = parse_shaper_arg(a.shaper_y, "y");
     settings.shapers = shapers;
   }
-  if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty())
+  if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty()) {
+    if (!unnamed_axes.empty()) throw InputError("nothing to export; " + unnamed_axes.front());
     throw InputError("nothing to export: give results of 'tunekit step', 'freq' or 'shaper', or --pa-k / --shaper-x");
+  }
 
   auto result = protocols::export_config_file(fw, a.config, settings);
   env.add_input(a.config, result.original);
