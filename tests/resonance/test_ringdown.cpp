@@ -190,3 +190,18 @@ TEST_CASE("tunekit belts compares two plucks: frequencies, difference and tensio
   CHECK(weak.code == 1);
   CHECK(weak.err.find("no ring-down to measure") != std::string::npos);
 }
+
+TEST_CASE("ring-downs sampled from 400 Hz to 6.4 kHz give the same frequency and damping") {
+  for (double fs : {400.0, 1600.0, 6400.0}) {
+    INFO("fs " << fs);
+    DecayTruth tr;
+    tr.fs = fs;
+    tr.f_hz = 60.0;
+    tr.f2_hz = 120.0;
+    const auto res = ident::analyze_ringdown(synth_decay(tr, 21));
+    CHECK(res.sample_rate_hz == fs);
+    CHECK(res.freq_hz == Approx(tr.f_hz).epsilon(0.01));
+    CHECK(res.zeta == Approx(tr.zeta).epsilon(0.15));
+    CHECK(res.strongest_is_harmonic);
+  }
+}
