@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -151,17 +152,78 @@ std::pair<std::string, std::string> split_name_unit(std::string_view f) {
   return {std::string(f), {}};
 }
 
+namespace {
+
+struct UnitSuffix {
+  std::string_view suffix;  // lower case, with the leading '_'
+  std::string_view unit;    // canonical spelling
+};
+
+// Longest first, so "_pa_s" wins over "_s" and "_mm3_s" over "_s".
+constexpr UnitSuffix kUnitSuffixes[] = {
+    {"_mm3_s", "mm^3/s"}, {"_mpa_s", "mPa.s"}, {"_mm_s2", "mm/s^2"}, {"_pa_s", "Pa.s"}, {"_mm_s", "mm/s"},
+    {"_degc", "degC"},    {"_1_s", "1/s"},     {"_kpa", "kPa"},      {"_bar", "bar"},   {"_mm", "mm"},
+    {"_hz", "Hz"},        {"_ms", "ms"},       {"_us", "us"},        {"_pa", "Pa"},     {"_s", "s"},
+    {"_n", "N"},          {"_c", "degC"},      {"_k", "K"},
+};
+
+bool iends_with(std::string_view s, std::string_view suffix) {
+  return s.size() >= suffix.size() && iequals(s.substr(s.size() - suffix.size()), suffix);
+}
+
+// A header column matches a requested name by its name as written, else by its base name.
+// Returns the index, or `names.size()` when none matches.
+// A requested name with a unit suffix ("force_N") also finds the same name with that unit in
+// brackets ("force [N]").
+template <class Label, class Base, class Unit>
+std::size_t match_column(std::size_t n, Label label, Base base, Unit unit, std::string_view wanted) {
+  const std::string wname = split_name_unit(wanted).first;
+  for (std::size_t i = 0; i < n; ++i)
+    if (iequals(label(i), wname)) return i;
+  for (std::size_t i = 0; i < n; ++i)
+    if (iequals(base(i), wname)) return i;
+  const auto [wbase, wunit] = split_unit_suffix(wname);
+  if (!wunit.empty())
+    for (std::size_t i = 0; i < n; ++i)
+      if (iequals(base(i), wbase) && iequals(unit(i), wunit)) return i;
+  return n;
+}
+
+}  // namespace
+
+std::pair<std::string, std::string> split_unit_suffix(std::string_view name) {
+  name = trim(name);
+  for (const auto& s : kUnitSuffixes) {
+    if (!iends_with(name, s.suffix) || name.size() == s.suffix.size()) continue;
+    const std::string_view base = name.substr(0, name.size() - s.suffix.size());
+    if (base.back() == '_') continue;
+    return {std::string(base), std::string(s.unit)};
+  }
+  return {std::string(name), {}};
+}
+
+bool is_volumetric_flow_unit(std::string_view unit) {
+  std::string u;
+  for (char c : unit)
+    if (c != ' ' && c != '^') u.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
+  return u == "mm3/s" || u == "mm\xc2\xb3/s" || u == "mm3s-1" || u == "mm3*s-1" || u == "mm3.s-1";
+}
+
 const CsvColumn& CsvTable::column(std::string_view name) const {
-  for (const auto& c : columns)
-    if (iequals(c.name, name)) return c;
+  const std::size_t i = match_column(
+      columns.size(), [&](std::size_t k) -> const std::string& { return columns[k].name; },
+      [&](std::size_t k) -> const std::string& { return columns[k].base; },
+      [&](std::size_t k) -> const std::string& { return columns[k].unit; }, name);
+  if (i < columns.size()) return columns[i];
   throw InputError(fmt::format("no column '{}'; the file has: {}", name, join_names(header)),
                    source_location(path, header_line));
 }
 
 bool CsvTable::has_column(std::string_view name) const {
-  for (const auto& c : columns)
-    if (iequals(c.name, name)) return true;
-  return false;
+  return match_column(
+             columns.size(), [&](std::size_t k) -> const std::string& { return columns[k].name; },
+             [&](std::size_t k) -> const std::string& { return columns[k].base; },
+             [&](std::size_t k) -> const std::string& { return columns[k].unit; }, name) < columns.size();
 }
 
 std::string read_file_bytes(const std::string& path) {
@@ -230,40 +292,68 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
   }
   if (!header_found) throw InputError("no header row and no data (only comments or blank lines)", path);
 
-  std::vector<std::pair<std::string, std::string>> header;
+  struct HeaderName {
+    std::string label, base, unit;
+  };
+  std::vector<HeaderName> header;
   for (const auto& f : fields) {
-    header.push_back(split_name_unit(f.text));
-    t.header.push_back(header.back().first);
+    auto [label, unit] = split_name_unit(f.text);
+    std::string base = label;
+    if (unit.empty()) std::tie(base, unit) = split_unit_suffix(label);
+    header.push_back({label, base, unit});
+    t.header.push_back(label);
   }
   const std::size_t ncols = header.size();
+  auto find_in_header = [&](std::string_view name) {
+    return match_column(
+        ncols, [&](std::size_t i) -> const std::string& { return header[i].label; },
+        [&](std::size_t i) -> const std::string& { return header[i].base; },
+        [&](std::size_t i) -> const std::string& { return header[i].unit; }, name);
+  };
+
+  // The time column: given, or found by its usual names.
+  std::size_t time_source = ncols;
+  if (!options.time_column.empty()) {
+    time_source = find_in_header(options.time_column);
+    if (time_source == ncols)
+      throw InputError(fmt::format("no column '{}'; the file has: {}", split_name_unit(options.time_column).first,
+                                   join_names(t.header)),
+                       source_location(path, t.header_line));
+  } else if (options.find_time_column) {
+    for (const char* candidate : kTimeColumnNames) {
+      time_source = find_in_header(candidate);
+      if (time_source != ncols) break;
+    }
+    if (time_source == ncols)
+      throw InputError(fmt::format("no time column (looked for time, t, timestamp, with or without a unit such as "
+                                   "time_s); name it with --time; the file has: {}",
+                                   join_names(t.header)),
+                       source_location(path, t.header_line));
+  }
+  if (time_source != ncols) t.time_column = header[time_source].label;
 
   // Which file column feeds each requested column.
   std::vector<std::size_t> source;
   std::vector<std::string> wanted = options.columns;
   if (wanted.empty()) wanted = t.header;
-  if (!options.time_column.empty()) {
-    bool listed = false;
-    for (const auto& w : wanted) listed = listed || iequals(w, options.time_column);
-    if (!listed) wanted.insert(wanted.begin(), options.time_column);
-  }
+  std::size_t time_index = ncols;
   for (const auto& w : wanted) {
-    const auto [wname, wunit] = split_name_unit(w);
-    std::size_t found = ncols;
-    for (std::size_t i = 0; i < ncols; ++i)
-      if (iequals(header[i].first, wname)) {
-        found = i;
-        break;
-      }
+    const std::size_t found = find_in_header(w);
     if (found == ncols)
-      throw InputError(fmt::format("no column '{}'; the file has: {}", wname, join_names(t.header)),
+      throw InputError(fmt::format("no column '{}'; the file has: {}", split_name_unit(w).first, join_names(t.header)),
                        source_location(path, t.header_line));
+    if (found == time_source) time_index = source.size();
     source.push_back(found);
-    t.columns.push_back({header[found].first, header[found].second, {}});
+    t.columns.push_back({header[found].label, header[found].base, header[found].unit, {}});
   }
-  std::size_t time_index = t.columns.size();
-  if (!options.time_column.empty())
-    for (std::size_t k = 0; k < t.columns.size(); ++k)
-      if (iequals(t.columns[k].name, split_name_unit(options.time_column).first)) time_index = k;
+  if (time_source != ncols && time_index == ncols) {
+    time_index = 0;
+    source.insert(source.begin(), time_source);
+    t.columns.insert(t.columns.begin(),
+                     {header[time_source].label, header[time_source].base, header[time_source].unit, {}});
+  }
+  if (time_index == ncols) time_index = t.columns.size();
+  const bool check_time = options.time_must_increase;
 
   const std::size_t estimate = text.size() / std::max<std::size_t>(16, ncols * 8);
   for (auto& c : t.columns) c.values.reserve(estimate);
@@ -311,7 +401,7 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
     for (std::size_t k = 0; k < source.size(); ++k) {
       const double v = row_values[source[k]];
       auto& vals = t.columns[k].values;
-      if (k == time_index && !vals.empty()) {
+      if (k == time_index && check_time && !vals.empty()) {
         if (v == vals.back())
           throw InputError(fmt::format("duplicate time stamp {} in column '{}' (also on line {})", v,
                                        t.columns[k].name, prev_time_line),
@@ -339,6 +429,15 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
   }
   if (t.rows == 0)
     throw InputError("a header but no data rows", source_location(path, t.header_line));
+  // Time is in seconds everywhere else: convert a time column logged in ms or us.
+  if (time_index < t.columns.size()) {
+    auto& tc = t.columns[time_index];
+    const double scale = iequals(tc.unit, "ms") ? 1e-3 : (iequals(tc.unit, "us") ? 1e-6 : 1.0);
+    if (scale != 1.0) {
+      for (double& v : tc.values) v *= scale;
+      tc.unit = "s";
+    }
+  }
   return t;
 }
 

@@ -1,5 +1,7 @@
 #include "tunekit/ident/image_io.hpp"
 
+#include "tunekit/ident/exif_orientation.hpp"
+
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -80,6 +82,8 @@ cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageCol
     case 4: cv::cvtColor(raw, m, cv::COLOR_RGBA2BGR); break;
     default: break;
   }
+  // JPEG photos turned as their EXIF orientation says they are displayed.
+  m = apply_exif_orientation(m, jpeg_exif_orientation(bytes));
   return convert_color(m, color);
 }
 

@@ -42,7 +42,9 @@ std::vector<std::size_t> data_row_lines(std::string_view text, std::size_t heade
   return lines;
 }
 
-const CsvColumn* find_column(const CsvTable& t, std::initializer_list<const char*> names) {
+// The column named in the options (which must exist), else the first of the usual names.
+const CsvColumn* find_column(const CsvTable& t, const std::string& given, std::initializer_list<const char*> names) {
+  if (!given.empty()) return &t.column(given);
   for (const char* n : names)
     if (t.has_column(n)) return &t.column(n);
   return nullptr;
@@ -76,21 +78,26 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   };
   RheologyTable out;
   auto& d = out.data;
-  const auto* g = find_column(t, {"shear_rate", "shear rate", "shearrate", "gamma_dot"});
-  if (!g) throw InputError("no shear-rate column: name one 'shear_rate (1/s)'", source_location(path, t.header_line));
+  const auto* g = find_column(t, o.shear_rate_column, {"shear_rate", "shear rate", "shearrate", "gamma_dot"});
+  if (!g)
+    throw InputError("no shear-rate column: name one 'shear_rate (1/s)' or give it with --shear-rate COL",
+                     source_location(path, t.header_line));
   {
     const auto u = lower_nospace(g->unit);
     if (!(u.empty() || u == "1/s" || u == "s^-1" || u == "s-1" || u == "/s"))
       throw InputError("shear rate unit '" + g->unit + "' is not 1/s", source_location(path, t.header_line));
   }
-  const auto* eta = find_column(t, {"viscosity", "eta"});
-  const auto* tau = find_column(t, {"shear_stress", "shear stress", "stress", "tau"});
+  const auto* eta = o.stress_column.empty() ? find_column(t, o.viscosity_column, {"viscosity", "eta"}) : nullptr;
+  const auto* tau = o.viscosity_column.empty()
+                        ? find_column(t, o.stress_column, {"shear_stress", "shear stress", "stress", "tau"})
+                        : nullptr;
   if (!eta && !tau)
-    throw InputError("no viscosity column: name one 'viscosity (Pa.s)' or 'shear_stress (Pa)'",
+    throw InputError("no viscosity column: name one 'viscosity (Pa.s)' or 'shear_stress (Pa)', or give it with "
+                     "--viscosity COL",
                      source_location(path, t.header_line));
-  const auto* temp = find_column(t, {"temperature", "temp", "T"});
-  const auto* pres = find_column(t, {"pressure", "p"});
-  const auto* w = find_column(t, {"weight"});
+  const auto* temp = find_column(t, o.temperature_column, {"temperature", "temp", "T"});
+  const auto* pres = find_column(t, o.pressure_column, {"pressure", "p"});
+  const auto* w = find_column(t, {}, {"weight"});
 
   double vf = 1.0, sf = 1.0;
   std::string eta_unit;  // the unit the viscosities are read in, as stated (empty: not stated)
@@ -111,18 +118,20 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
     if (!o.viscosity_unit.empty())
       throw InputError("a viscosity unit was stated but the file has no viscosity column (it has shear_stress)",
                        source_location(path, t.header_line));
-    sf = pressure_unit_factor(tau->unit);
+    sf = pressure_unit_factor(o.stress_unit.empty() ? tau->unit : o.stress_unit);
   }
   enum class TUnit { none, degc, kelvin } tu = TUnit::none;
   if (temp) {
-    const auto u = lower_nospace(temp->unit);
+    const std::string& temp_unit = o.temperature_unit.empty() ? temp->unit : o.temperature_unit;
+    const auto u = lower_nospace(temp_unit);
     if (u == "degc" || u == "c" || u == "\xc2\xb0" "c" || u == "celsius") tu = TUnit::degc;
     else if (u == "k" || u == "kelvin") tu = TUnit::kelvin;
     else if (u.empty())
-      throw InputError("the temperature column has no unit: write 'temperature (degC)' or 'temperature (K)'",
+      throw InputError("the temperature column has no unit: write 'temperature (degC)' or 'temperature (K)', or give "
+                       "--temperature-unit degC|K",
                        source_location(path, t.header_line));
     else
-      throw InputError("unknown temperature unit '" + temp->unit + "' (use degC or K)", source_location(path, t.header_line));
+      throw InputError("unknown temperature unit '" + temp_unit + "' (use degC or K)", source_location(path, t.header_line));
     if (tu == TUnit::degc) out.notes.push_back(fmt::format("temperature: degC -> K (+{:g})", o.kelvin_offset));
   } else if (!std::isfinite(o.temperature_degC)) {
     throw InputError("no temperature: add a 'temperature (degC)' or '(K)' column, or give the temperature of the data",

@@ -150,6 +150,21 @@ std::size_t resolve_segment_length(const WelchOptions& o, double fs) {
   return n;
 }
 
+std::vector<double> padded_amplitude_spectrum(std::span<const double> x, std::size_t nfft) {
+  if (x.size() < 2 || nfft < x.size()) throw InputError("padded spectrum: nfft must be at least the record length");
+  const auto w = make_window(WindowType::hann, x.size());
+  double mean = 0;
+  for (double v : x) mean += v;
+  mean /= static_cast<double>(x.size());
+  RealFft fft(nfft);
+  double* in = fft.input();
+  for (std::size_t i = 0; i < nfft; ++i) in[i] = i < x.size() ? (x[i] - mean) * w[i] : 0.0;
+  fft.execute();
+  std::vector<double> mag(fft.bins());
+  for (std::size_t k = 0; k < mag.size(); ++k) mag[k] = std::abs(fft.bin(k));
+  return mag;
+}
+
 Spectrum welch_psd(std::span<const double> x, double fs, const WelchOptions& o) {
   const auto sp = plan_segments(x.size(), fs, o);
   const auto w = make_window(o.window, sp.nperseg, o.kaiser_beta);

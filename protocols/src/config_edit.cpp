@@ -14,6 +14,81 @@
 
 namespace tunekit::protocols {
 
+namespace {
+
+struct CommentNotePolicy {
+  std::vector<std::string> markers;
+  std::string note;
+};
+thread_local const CommentNotePolicy* g_comment_note = nullptr;
+
+// Start of the trailing comment of a line (npos if none): the first marker after code.
+std::size_t trailing_comment_at(const std::string& line, const std::vector<std::string>& markers,
+                                std::string* marker) {
+  const std::size_t first = line.find_first_not_of(" \t");
+  if (first == std::string::npos) return std::string::npos;
+  // A line that is commented out as a whole ("//#define X 1 // note") has its code after the
+  // leading marker.
+  std::size_t code = first;
+  for (const auto& m : markers)
+    if (line.compare(first, m.size(), m) == 0) {
+      code = first + m.size();
+      break;
+    }
+  std::size_t best = std::string::npos;
+  for (const auto& m : markers) {
+    for (std::size_t p = line.find(m, code + 1); p != std::string::npos; p = line.find(m, p + 1)) {
+      if (line[p - 1] != ' ' && line[p - 1] != '\t') continue;
+      if (p < best) {
+        best = p;
+        if (marker) *marker = m;
+      }
+      break;
+    }
+  }
+  return best;
+}
+
+std::string code_part(const std::string& line, std::size_t comment_at, const std::vector<std::string>& markers) {
+  std::string c = line.substr(0, comment_at == std::string::npos ? line.size() : comment_at);
+  const std::size_t b = c.find_first_not_of(" \t");
+  if (b == std::string::npos) return {};
+  c.erase(0, b);
+  for (const auto& m : markers)
+    if (c.compare(0, m.size(), m) == 0) {
+      c.erase(0, m.size());
+      break;
+    }
+  while (!c.empty() && (c.back() == ' ' || c.back() == '\t')) c.pop_back();
+  return c;
+}
+
+}  // namespace
+
+std::string replace_trailing_comment(const std::string& original, const std::string& edited,
+                                     const std::vector<std::string>& markers, const std::string& note) {
+  if (note.empty() || original == edited) return edited;
+  std::string marker;
+  const std::size_t at = trailing_comment_at(original, markers, &marker);
+  if (at == std::string::npos) return edited;
+  const std::string comment = original.substr(at);
+  if (edited.size() < comment.size() || edited.compare(edited.size() - comment.size(), comment.size(), comment) != 0)
+    return edited;  // the writer already rewrote the comment
+  const std::size_t edited_at = edited.size() - comment.size();
+  if (code_part(original, at, markers) == code_part(edited, edited_at, markers)) return edited;  // only uncommented
+  return edited.substr(0, edited_at) + marker + " " + note;
+}
+
+ScopedCommentNote::ScopedCommentNote(std::vector<std::string> markers, std::string note)
+    : previous_(g_comment_note) {
+  g_comment_note = note.empty() ? nullptr : new CommentNotePolicy{std::move(markers), std::move(note)};
+}
+
+ScopedCommentNote::~ScopedCommentNote() {
+  delete g_comment_note;
+  g_comment_note = static_cast<const CommentNotePolicy*>(previous_);
+}
+
 LineEditor::LineEditor(std::string_view text) {
   std::size_t pos = 0;
   while (pos < text.size()) {
@@ -40,6 +115,7 @@ LineEditor::LineEditor(std::string_view text) {
 
 void LineEditor::replace(std::size_t i, std::string text) {
   if (i >= lines_.size()) throw std::out_of_range("LineEditor::replace: no such line");
+  if (g_comment_note) text = replace_trailing_comment(lines_[i].text, text, g_comment_note->markers, g_comment_note->note);
   if (text == lines_[i].text)
     replaced_.erase(i);
   else

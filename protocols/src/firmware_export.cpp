@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -140,6 +141,9 @@ ExportResult export_config_text(ExportFirmware fw, const std::string& text, cons
   r.firmware = fw;
   r.path = path;
   r.original = text;
+  static const std::map<ExportFirmware, std::vector<std::string>> kCommentMarkers = {
+      {ExportFirmware::klipper, {"#", ";"}}, {ExportFirmware::marlin, {"//"}}, {ExportFirmware::rrf, {";"}}};
+  const ScopedCommentNote note(kCommentMarkers.at(fw), s.change_note);
   switch (fw) {
     case ExportFirmware::klipper: detail::write_klipper(r, s); break;
     case ExportFirmware::marlin: detail::write_marlin(r, s); break;

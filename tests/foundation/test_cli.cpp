@@ -69,3 +69,19 @@ TEST_CASE("the output option writes the same envelope to a file") {
   ss << f.rdbuf();
   CHECK(ss.str() == r.out);
 }
+
+TEST_CASE("an unknown command or option gets one error line with 'did you mean'") {
+  const auto c = tunekit::test::run_cli({"stpe", "log.csv"});
+  CHECK(c.code == 2);
+  CHECK(c.err == "tunekit: error: unknown command 'stpe'; did you mean 'step'?; 'tunekit --help' lists the commands\n");
+  const auto far = tunekit::test::run_cli({"frobnicate"});
+  CHECK(far.code == 2);
+  CHECK(far.err.find("unknown command 'frobnicate'") != std::string::npos);
+  CHECK(far.err.find("did you mean") == std::string::npos);
+  const auto o = tunekit::test::run_cli({"step", "log.csv", "--ouput", "force", "--inptu", "feed"});
+  CHECK(o.code == 2);
+  CHECK(o.err.find("unknown option '--ouput' for 'tunekit step'; did you mean '--output'?") != std::string::npos);
+  const auto v = tunekit::test::run_cli({"rheo", "data.csv", "--shear-rat=Scherrate"});
+  CHECK(v.code == 2);
+  CHECK(v.err.find("did you mean '--shear-rate'?") != std::string::npos);
+}

@@ -97,3 +97,47 @@ TEST_CASE("the reader throws InputError with the location for library users") {
     CHECK(e.location() == "lib.csv:3:3");
   }
 }
+
+TEST_CASE("unit suffixes in snake_case names are read as units, and the column is found with or without them") {
+  using tunekit::ident::split_unit_suffix;
+  CHECK(split_unit_suffix("flow_mm3_s") == std::pair<std::string, std::string>{"flow", "mm^3/s"});
+  CHECK(split_unit_suffix("shear_rate_1_s") == std::pair<std::string, std::string>{"shear_rate", "1/s"});
+  CHECK(split_unit_suffix("viscosity_Pa_s") == std::pair<std::string, std::string>{"viscosity", "Pa.s"});
+  CHECK(split_unit_suffix("temperature_C") == std::pair<std::string, std::string>{"temperature", "degC"});
+  CHECK(split_unit_suffix("force_N") == std::pair<std::string, std::string>{"force", "N"});
+  CHECK(split_unit_suffix("speed_mm_s") == std::pair<std::string, std::string>{"speed", "mm/s"});
+  CHECK(split_unit_suffix("T_K") == std::pair<std::string, std::string>{"T", "K"});
+  CHECK(split_unit_suffix("f_hz") == std::pair<std::string, std::string>{"f", "Hz"});
+  CHECK(split_unit_suffix("accel_x") == std::pair<std::string, std::string>{"accel_x", ""});
+  CHECK(split_unit_suffix("_s") == std::pair<std::string, std::string>{"_s", ""});
+  CHECK(split_unit_suffix("flow") == std::pair<std::string, std::string>{"flow", ""});
+  CHECK(tunekit::ident::is_volumetric_flow_unit("mm3/s"));
+  CHECK(tunekit::ident::is_volumetric_flow_unit("mm^3/s"));
+  CHECK(tunekit::ident::is_volumetric_flow_unit("mm\xc2\xb3/s"));
+  CHECK_FALSE(tunekit::ident::is_volumetric_flow_unit("mm/s"));
+
+  const auto t = tunekit::ident::parse_csv("time_ms,flow_mm3_s,force [N],shear_rate_1_s\n0,1,2,3\n10,4,5,6\n",
+                                           "mem.csv", {{"flow", "force_N", "shear_rate_1_s"}, "", true});
+  CHECK(t.time_column == "time_ms");
+  CHECK(t.header == std::vector<std::string>{"time_ms", "flow_mm3_s", "force", "shear_rate_1_s"});
+  CHECK(t.column("flow").unit == "mm^3/s");
+  CHECK(t.column("flow_mm3_s").values == std::vector<double>{1, 4});
+  CHECK(t.column("force").unit == "N");
+  CHECK(t.column("shear_rate").unit == "1/s");
+  // The time column, found by name, is converted from ms to s.
+  CHECK(t.column("time").unit == "s");
+  CHECK(t.column("time").values == std::vector<double>{0, 0.01});
+}
+
+TEST_CASE("the time column is found by its usual names, and its absence is one clear error") {
+  for (const char* h : {"t,y", "timestamp,y", "Time (s),y", "time_s,y"}) {
+    INFO(h);
+    const auto t = tunekit::ident::parse_csv(std::string(h) + "\n0,1\n1,2\n", "mem.csv", {{}, "", true});
+    REQUIRE_FALSE(t.time_column.empty());
+    CHECK(t.columns.front().name == t.time_column);
+  }
+  CHECK(tunekit::ident::parse_csv("#time,accel_x\n0,1\n1,2\n", "mem.csv", {{"accel_x"}, "", true}).time_column ==
+        "time");
+  CHECK_THROWS_WITH(tunekit::ident::parse_csv("when,y\n0,1\n", "mem.csv", {{}, "", true}),
+                    Catch::Contains("no time column") && Catch::Contains("the file has: when, y"));
+}

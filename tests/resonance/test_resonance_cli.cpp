@@ -155,8 +155,9 @@ TEST_CASE("bad accelerometer input exits 2 with the reason", "[resonance][cli]")
     CHECK(r.err.find("acc_x") != std::string::npos);
   }
   SECTION("fewer than two PSD segments") {
+    // shaper needs a spectrum; resonance would analyse such a record as a ring-down.
     const auto p = write_scratch("raw_data_x_short.csv", header + numeric_rows(0, 1.0 / 3200, 2500));
-    const auto r = run_cli({"resonance", p});
+    const auto r = run_cli({"shaper", p});
     CHECK(r.code == 2);
     CHECK(r.err.find("two segments") != std::string::npos);
   }
@@ -192,12 +193,35 @@ TEST_CASE("bad accelerometer input exits 2 with the reason", "[resonance][cli]")
     CHECK(r.code == 2);
     CHECK(r.err.find("irregular sampling") != std::string::npos);
   }
-  SECTION("unknown axis") {
-    const auto p = write_scratch("accel_log.csv", header + numeric_rows(0, 1.0 / 3200, 8000));
-    const auto r = run_cli({"resonance", p});
-    CHECK(r.code == 2);
-    CHECK(r.err.find("--axis") != std::string::npos);
-  }
+}
+
+TEST_CASE("a file whose name names no axis is analysed under its file stem, and needs --axis only to be exported",
+          "[resonance][cli]") {
+  const std::string csv = tunekit::test::to_klipper_csv(tunekit::test::synth_sweep(kTruthX, short_sweep(4)));
+  const auto p = write_scratch("accel_log.csv", csv);
+  const auto r = run_cli({"resonance", p, "--json", "--fit-min", "20", "--fit-max", "100"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto j = nlohmann::json::parse(r.out);
+  const auto& axes = j["results"]["axes"];
+  REQUIRE(axes.contains("accel_log"));
+  CHECK(axes["accel_log"]["freq_hz"].get<double>() == Approx(44.0).epsilon(0.02));
+  // The same file with --axis is the x axis.
+  const auto named = run_cli({"resonance", p, "--axis", "x", "--json", "--fit-min", "20", "--fit-max", "100"});
+  REQUIRE(named.code == 0);
+  CHECK(nlohmann::json::parse(named.out)["results"]["axes"].contains("x"));
+  // A shaper result under a file stem is not exported, and the warning says how to name the axis.
+  const std::string dir = tunekit::test::scratch_dir("stem_export");
+  const auto sh = run_cli({"shaper", p, "--json", "-o", dir + "/shaper.json"});
+  INFO(sh.err);
+  REQUIRE(sh.code == 0);
+  const std::string cfg = tunekit::test::write_scratch("stem_printer.cfg", "[printer]\nkinematics: cartesian\n");
+  const auto e = run_cli({"export", "-f", "klipper", "-c", cfg, dir + "/shaper.json"});
+  INFO(e.out << e.err);
+  CHECK(e.code == 2);
+  CHECK(e.err.find("names no axis") != std::string::npos);
+  CHECK(e.err.find("--axis x") != std::string::npos);
+  CHECK(e.out.find("shaper_freq") == std::string::npos);
 }
 
 TEST_CASE("a few clipped samples or a few dropped samples give a warning, not an error", "[resonance][cli]") {

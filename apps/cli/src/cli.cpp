@@ -1,7 +1,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <iostream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/history_record.hpp"
@@ -14,7 +20,87 @@
 namespace tunekit::cli {
 namespace {
 thread_local int g_exit_code = 0;  // per thread: batch runs commands in parallel
+
+// Optimal-string-alignment distance (Levenshtein with adjacent transpositions): "stpe" is one
+// edit from "step".
+std::size_t cli_edit_distance(const std::string& a, const std::string& b) {
+  const std::size_t n = a.size(), m = b.size();
+  std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1));
+  for (std::size_t i = 0; i <= n; ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= m; ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= n; ++i)
+    for (std::size_t j = 1; j <= m; ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[n][m];
 }
+
+// The candidate nearest to `word` when it is close enough to be a typo, else "".
+std::string cli_nearest(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = std::numeric_limits<std::size_t>::max();
+  for (const auto& c : candidates) {
+    const std::size_t dist = cli_edit_distance(word, c);
+    if (dist < best_d) {
+      best_d = dist;
+      best = c;
+    }
+  }
+  const std::size_t limit = std::max<std::size_t>(1, std::min<std::size_t>(3, word.size() / 3));
+  return best_d <= limit ? best : std::string();
+}
+
+bool cli_is_number(const std::string& s) {
+  char* end = nullptr;
+  std::strtod(s.c_str(), &end);
+  return !s.empty() && end == s.c_str() + s.size();
+}
+
+// "unknown command 'stpe'; did you mean 'step'?" for a first word that names no command, or
+// the same for an option the command does not have; empty when the arguments look fine.
+std::string cli_typo_message(CLI::App& app, const std::vector<std::string>& args) {
+  std::size_t cmd_at = args.size();
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--help" || args[i] == "-h" || args[i] == "--version") return {};
+    if (!args[i].empty() && args[i][0] != '-') {
+      cmd_at = i;
+      break;
+    }
+  }
+  if (cmd_at == args.size()) return {};
+  const std::string& cmd = args[cmd_at];
+  CLI::App* sub = nullptr;
+  std::vector<std::string> names;
+  for (auto* s : app.get_subcommands([](const CLI::App*) { return true; })) {
+    names.push_back(s->get_name());
+    if (s->get_name() == cmd) sub = s;
+  }
+  if (!sub) {
+    const std::string near = cli_nearest(cmd, names);
+    return fmt::format("unknown command '{}'{}; 'tunekit --help' lists the commands", cmd,
+                       near.empty() ? std::string() : fmt::format("; did you mean '{}'?", near));
+  }
+  std::vector<std::string> longs;
+  for (const auto* o : sub->get_options())
+    for (const auto& l : o->get_lnames()) longs.push_back("--" + l);
+  for (const auto* o : app.get_options())
+    for (const auto& l : o->get_lnames()) longs.push_back("--" + l);
+  for (std::size_t i = cmd_at + 1; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--") break;
+    if (a.size() < 3 || a.rfind("--", 0) != 0 || cli_is_number(a)) continue;
+    const std::string name = a.substr(0, a.find('='));
+    if (std::find(longs.begin(), longs.end(), name) != longs.end()) continue;
+    const std::string near = cli_nearest(name, longs);
+    return fmt::format("unknown option '{}' for 'tunekit {}'{}; 'tunekit {} --help' lists its options", name, cmd,
+                       near.empty() ? std::string() : fmt::format("; did you mean '{}'?", near), cmd);
+  }
+  return {};
+}
+
+}  // namespace
 
 void set_exit_code(int code) { g_exit_code = code; }
 
@@ -65,11 +151,20 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   register_ports(app, ctx);
   register_inspect(app, ctx);
   register_history(app, ctx);
+  register_belts(app, ctx);
 
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses from the back
     app.parse(reversed);
   } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() != 0) {
+      // CLI11 has no suggestions of its own ("A subcommand is required" for `tunekit stpe`).
+      const std::string typo = cli_typo_message(app, args);
+      if (!typo.empty()) {
+        err << "tunekit: error: " << typo << "\n";
+        return static_cast<int>(ExitCode::bad_input);
+      }
+    }
     const int code = app.exit(e, out, err);
     return code == 0 ? 0 : static_cast<int>(ExitCode::bad_input);
   } catch (const Error& e) {

@@ -3,6 +3,8 @@
 // into a Klipper printer.cfg, a Marlin Configuration_adv.h or a RepRapFirmware config.g.
 // By default only a unified diff is printed; --write applies it (backup + atomic rename).
 #include <cmath>
+#include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -93,6 +95,10 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   double freq_tau = fitting::kNaN;
   std::map<std::string, protocols::ShaperSetting> shapers;
   std::vector<std::string> sources;
+  // Operating points whose u is a volumetric flow (mm^3/s): converted to filament feed once the
+  // filament area is known.
+  std::vector<bool> point_is_flow;
+  std::vector<std::string> unnamed_axes;  // shaper results under a file stem instead of an axis
 
   // A Marlin build with FT_MOTION has FT_MOTION's shapers (firmware_limits.hpp).
   bool ft_motion = false;
@@ -126,8 +132,11 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
         in.tau_source = "step";
       }
       const auto& ops = dig(res, {"operating_points"});
+      const auto& u_unit = dig(res, {"units", "input"});
+      const bool flow_points = u_unit.is_string() && ident::is_volumetric_flow_unit(u_unit.get<std::string>());
       if (ops.is_array())
         for (const auto& op : ops) {
+          point_is_flow.push_back(flow_points);
           ident::LiquefierPoint p;
           p.feed_mm_s = number_at(dig(op, {"u"}), "operating_points[].u", path);
           p.gain = number_at(dig(op, {"K"}), "operating_points[].K", path);
@@ -144,7 +153,14 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
         const auto& rec = dig(v, {"recommended"});
         if (!rec.is_object()) continue;
         if (axis != "x" && axis != "y") {
-          env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
+          if (axis == "z")
+            env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
+          else {
+            unnamed_axes.push_back(fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; run "
+                                               "'tunekit shaper' on it with --axis x or --axis y",
+                                               path, axis));
+            env.warn(unnamed_axes.back());
+          }
           continue;
         }
         auto setting_of = [&](const nlohmann::json& c, const std::string& what) {
@@ -232,6 +248,8 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     env.add_input(a.profile);
   }
   in.filament_area_mm2 = profile.filament_area_mm2();
+  for (std::size_t i = 0; i < in.points.size() && i < point_is_flow.size(); ++i)
+    if (point_is_flow[i]) in.points[i].feed_mm_s /= in.filament_area_mm2;  // mm^3/s -> mm/s of filament
   in.line_area_mm2 = profile.line_area_mm2();
   in.print_speed_mm_s = profile.print.speed_mm_s;
   in.print_accel_mm_s2 = profile.print.max_accel_mm_s2;
@@ -248,6 +266,19 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     settings.extruder_index = n;
     settings.klipper_extruder = n == 0 ? "extruder" : "extruder" + a.extruder;
     if (!a.drive_given) settings.rrf_drive = n;
+  }
+  {
+    // The note that replaces a changed line's trailing comment: what set it, from which results, when.
+    std::string from;
+    for (const auto& path : a.results) from += (from.empty() ? "" : ", ") + std::filesystem::path(path).filename().string();
+    if (std::isfinite(a.pa_k) || !a.shaper_x.empty() || !a.shaper_y.empty())
+      from += from.empty() ? "the command line" : " and the command line";
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    ::gmtime_r(&now, &tm);
+    char day[16];
+    std::strftime(day, sizeof day, "%Y-%m-%d", &tm);
+    settings.change_note = fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : from, day);
   }
   std::optional<ident::AdvanceDesign> design;
   const bool have_tau = std::isfinite(in.tau_s) || !in.points.empty();
@@ -269,8 +300,10 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     if (!a.shaper_y.empty()) shapers["y"] = parse_shaper_arg(a.shaper_y, "y");
     settings.shapers = shapers;
   }
-  if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty())
+  if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty()) {
+    if (!unnamed_axes.empty()) throw InputError("nothing to export; " + unnamed_axes.front());
     throw InputError("nothing to export: give results of 'tunekit step', 'freq' or 'shaper', or --pa-k / --shaper-x");
+  }
 
   auto result = protocols::export_config_file(fw, a.config, settings);
   env.add_input(a.config, result.original);

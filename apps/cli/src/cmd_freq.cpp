@@ -21,9 +21,10 @@ namespace {
 
 struct FreqArgs {
   std::string file;
-  std::string time_column = "time";
+  std::string time_column;  // empty: found by name
   std::string input_column;
   std::string output_column;
+  std::string input_unit, output_unit;  // override the units in the column names
   std::string mode = "dwell";
   double freq_hz = 0;
   std::string fit_tf;
@@ -82,17 +83,22 @@ nlohmann::json bode_json(const std::vector<double>& f, const std::vector<std::co
 int run_freq(const FreqArgs& a, CliContext& ctx) {
   const std::string bytes = ident::read_file_bytes(a.file);
   ident::CsvOptions copt;
-  copt.columns = {a.time_column, a.output_column};
+  copt.columns = {a.output_column};
   if (!a.input_column.empty()) copt.columns.push_back(a.input_column);
   copt.time_column = a.time_column;
+  copt.find_time_column = a.time_column.empty();
   const auto table = ident::parse_csv(bytes, a.file, copt);
-  const auto& t_all = table.column(a.time_column).values;
+  const auto& t_all = table.column(table.time_column).values;
   const auto& ycol = table.column(a.output_column);
-  const std::string y_unit = unit_or_1(ycol.unit);
-  const std::string u_unit = a.input_column.empty() ? "1" : unit_or_1(table.column(a.input_column).unit);
+  const std::string y_unit = unit_or_1(a.output_unit.empty() ? ycol.unit : a.output_unit);
+  std::string u_unit = a.input_column.empty() ? "1" : unit_or_1(table.column(a.input_column).unit);
+  if (!a.input_unit.empty()) u_unit = a.input_unit;
+  if (ident::is_volumetric_flow_unit(u_unit)) u_unit = "mm^3/s";
 
   Envelope env("freq");
-  env.set_options({{"time_column", a.time_column},
+  env.set_options({{"time_column", table.time_column},
+                   {"input_unit", a.input_unit},
+                   {"output_unit", a.output_unit},
                    {"input_column", a.input_column},
                    {"output_column", a.output_column},
                    {"mode", a.mode},
@@ -253,7 +259,11 @@ void register_freq(CLI::App& app, CliContext& ctx) {
   auto* sub = app.add_subcommand(
       "freq", "Liquefier frequency response: sine dwell, broadband H1 and transfer-function fits");
   sub->add_option("file", args->file, "CSV log (time in s; units in column names, e.g. 'width (mm)')")->required();
-  sub->add_option("-t,--time", args->time_column, "Time column (s), strictly increasing")->capture_default_str();
+  sub->add_option("-t,--time", args->time_column,
+                  "Time column (s; ms and us are converted), strictly increasing; default: found by name (time, t, "
+                  "timestamp, time_s)");
+  sub->add_option("--input-unit", args->input_unit, "Unit of the input column when its name does not say it");
+  sub->add_option("--output-unit", args->output_unit, "Unit of the output column when its name does not say it");
   sub->add_option("-y,--output", args->output_column, "Output column (e.g. line width in mm, force in N)")
       ->required();
   sub->add_option("-i,--input", args->input_column, "Input column (e.g. set-point width in mm, feed in mm/s)");

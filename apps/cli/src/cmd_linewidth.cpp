@@ -20,6 +20,7 @@
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/camera_calibration.hpp"
+#include "tunekit/ident/charuco.hpp"
 #include "tunekit/ident/line_width.hpp"
 #include "tunekit/ident/overlay.hpp"
 #include "tunekit/ident/width_to_dynamics.hpp"
@@ -38,6 +39,9 @@ struct LinewidthArgs {
   std::string camera;
   std::string chessboard;
   double square_mm = 0;
+  std::string charuco;  // "5x7" squares; a ChArUco board instead of a chessboard
+  double marker_mm = 0;
+  std::string aruco_dict = "DICT_4X4_50";
   double reference_width_mm = 0;
   bool rectify = false;
   std::string polarity = "auto";
@@ -191,12 +195,20 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
   opt.step_px = a.step_px;
   opt.min_length_px = a.min_length_px;
 
-  if (!a.chessboard.empty()) {
-    const auto spec = ident::parse_chessboard_spec(a.chessboard, a.square_mm);
-    const auto det = ident::detect_chessboard(gray, spec);
+  if (!a.chessboard.empty() || !a.charuco.empty()) {
+    ident::ChessboardDetection det;
+    std::string board_name;
+    if (!a.charuco.empty()) {
+      const auto cs = ident::parse_charuco_spec(a.charuco, a.square_mm, a.marker_mm, a.aruco_dict);
+      det = ident::detect_charuco(gray, cs);
+      board_name = fmt::format("ChArUco {}x{} x {} mm ({})", cs.squares_x, cs.squares_y, cs.square_mm, cs.dictionary);
+    } else {
+      const auto spec = ident::parse_chessboard_spec(a.chessboard, a.square_mm);
+      det = ident::detect_chessboard(gray, spec);
+      board_name = fmt::format("chessboard {}x{} x {} mm", spec.cols, spec.rows, spec.square_mm);
+    }
     if (!det.found) {
-      const std::string msg = fmt::format("scale target not found: no {}x{} chessboard (inner corners) in the image",
-                                          spec.cols, spec.rows);
+      const std::string msg = fmt::format("scale target not found: no {} in the image", board_name);
       overlay_best_effort(a, run, nullptr, msg, ctx);
       throw InputError(msg, path);
     }
@@ -209,11 +221,11 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
         run.target_outline.emplace_back(static_cast<int>(std::lround(q[0] / q[2])),
                                         static_cast<int>(std::lround(q[1] / q[2])));
       }
-      run.scale_source = fmt::format("chessboard {}x{} x {} mm, rectified", spec.cols, spec.rows, spec.square_mm);
+      run.scale_source = board_name + ", rectified";
     } else {
       run.ppm = det.px_per_mm;
       run.target_outline = det.outline;
-      run.scale_source = fmt::format("chessboard {}x{} x {} mm", spec.cols, spec.rows, spec.square_mm);
+      run.scale_source = board_name;
     }
     opt.exclude_mask = cv::Mat::zeros(run.measured.size(), CV_8U);
     cv::fillConvexPoly(opt.exclude_mask, run.target_outline, cv::Scalar(255));
@@ -272,15 +284,18 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
 
 int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   if (!a.save_camera.empty()) return run_save_camera(a, ctx);
-  const int scales = (a.px_per_mm > 0) + !a.camera.empty() + !a.chessboard.empty() + (a.reference_width_mm > 0);
+  const bool board = !a.chessboard.empty() || !a.charuco.empty();
+  if (!a.chessboard.empty() && !a.charuco.empty()) throw InputError("give --chessboard or --charuco, not both");
+  if (!a.charuco.empty() && !(a.marker_mm > 0)) throw InputError("--charuco needs --square-mm and --marker-mm (mm)");
+  const int scales = (a.px_per_mm > 0) + !a.camera.empty() + board + (a.reference_width_mm > 0);
   if (scales == 0)
     throw InputError("no scale: give --px-per-mm, --camera PROFILE, --chessboard COLSxROWS --square-mm S, or "
                      "--reference-width-mm W");
-  if ((a.px_per_mm > 0) + (a.reference_width_mm > 0) + !a.chessboard.empty() > 1)
-    throw InputError("give only one of --px-per-mm, --chessboard and --reference-width-mm");
-  if (a.rectify && a.chessboard.empty() && a.camera.empty())
-    throw InputError("--rectify needs --chessboard or a --camera profile with a bed plane");
-  if (!a.chessboard.empty() && !(a.square_mm > 0)) throw InputError("--chessboard needs --square-mm (mm)");
+  if ((a.px_per_mm > 0) + (a.reference_width_mm > 0) + board > 1)
+    throw InputError("give only one of --px-per-mm, --chessboard (or --charuco) and --reference-width-mm");
+  if (a.rectify && !board && a.camera.empty())
+    throw InputError("--rectify needs --chessboard, --charuco or a --camera profile with a bed plane");
+  if (board && !(a.square_mm > 0)) throw InputError("--chessboard and --charuco need --square-mm (mm)");
   if (!a.profile_csv.empty() && a.images.size() != 1)
     throw InputError("--profile-csv maps one image's line to time: give exactly one image");
   if (!a.profile_csv.empty() && !(a.speed_mm_s > 0) && a.gcode.empty())
@@ -295,7 +310,7 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   if (!a.camera.empty()) {
     cam = ident::load_camera_profile(a.camera);
     env.add_input(a.camera);
-    if (!cam->has_bed_plane && a.px_per_mm <= 0 && a.chessboard.empty() && a.reference_width_mm <= 0)
+    if (!cam->has_bed_plane && a.px_per_mm <= 0 && !board && a.reference_width_mm <= 0)
       throw InputError("camera profile has no bed plane scale: add --px-per-mm, --chessboard or --reference-width-mm",
                        a.camera);
   }
@@ -484,6 +499,9 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   env.set_options({{"px_per_mm", a.px_per_mm},
                    {"camera", a.camera},
                    {"chessboard", a.chessboard},
+                   {"charuco", a.charuco},
+                   {"marker_mm", a.marker_mm},
+                   {"aruco_dict", a.aruco_dict},
                    {"square_mm", a.square_mm},
                    {"reference_width_mm", a.reference_width_mm},
                    {"rectify", a.rectify},
@@ -538,7 +556,14 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("--chessboard", args->chessboard,
                   "Chessboard in the scene (or, with --save-camera, in the calibration photos): inner corners "
                   "COLSxROWS, e.g. 9x6");
-  sub->add_option("--square-mm", args->square_mm, "Side of a chessboard square (mm)")->check(CLI::PositiveNumber);
+  sub->add_option("--square-mm", args->square_mm, "Side of a chessboard or ChArUco square (mm)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--charuco", args->charuco,
+                  "ChArUco board in the scene instead of a chessboard: squares SQUARESxSQUARES, e.g. 5x7 (found when "
+                  "partly covered or partly outside the picture; needs OpenCV's aruco module)");
+  sub->add_option("--marker-mm", args->marker_mm, "Side of a ChArUco board's ArUco markers (mm)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--aruco-dict", args->aruco_dict, "ArUco dictionary of the ChArUco board (default DICT_4X4_50)");
   sub->add_option("--reference-width-mm", args->reference_width_mm,
                   "Scale from a reference: the longest line in the image has this width (mm)")
       ->check(CLI::PositiveNumber);

@@ -30,7 +30,6 @@ struct RheoArgs {
   double t_ref_degc = kNaN;
   double temperature_degc = kNaN;
   double kelvin_offset = fitting::kKelvinOffset;
-  std::string viscosity_unit;
   std::string temperatures;  // LO:HI degC
   std::vector<std::string> fix;
   std::vector<std::string> free;
@@ -48,6 +47,8 @@ struct RheoArgs {
   std::vector<double> flows_mm3_s;
   double reference_flow_mm3_s = 3.0;
   std::string pressure_model = "boles";
+  std::string shear_rate_column, viscosity_column, stress_column, temperature_column, pressure_column;
+  std::string viscosity_unit, stress_unit, temperature_unit;
   OutputOptions output;
 };
 
@@ -107,7 +108,16 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
   ident::RheologyCsvOptions co;
   co.temperature_degC = a.temperature_degc;
   co.kelvin_offset = a.kelvin_offset;
+  co.shear_rate_column = a.shear_rate_column;
+  co.viscosity_column = a.viscosity_column;
+  co.stress_column = a.stress_column;
+  co.temperature_column = a.temperature_column;
+  co.pressure_column = a.pressure_column;
   co.viscosity_unit = a.viscosity_unit;
+  co.stress_unit = a.stress_unit;
+  co.temperature_unit = a.temperature_unit;
+  if (!a.viscosity_column.empty() && !a.stress_column.empty())
+    throw InputError("give --viscosity or --shear-stress, not both");
   if (!a.temperatures.empty()) std::tie(co.temperature_min_degC, co.temperature_max_degC) = parse_temperature_range(a.temperatures);
   if (!(a.kelvin_offset == fitting::kKelvinOffset || a.kelvin_offset == fitting::kKelvinOffsetThesis))
     throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (the seed's code)");
@@ -151,7 +161,15 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
                    {"cone_angle_deg", a.cone_angle_deg},
                    {"entrance_D_mm", a.entrance_D_mm},
                    {"reference_flow_mm3_s", a.reference_flow_mm3_s},
-                   {"pressure_model", a.pressure_model}});
+                   {"pressure_model", a.pressure_model},
+                   {"columns",
+                    {{"shear_rate", a.shear_rate_column},
+                     {"viscosity", a.viscosity_column},
+                     {"shear_stress", a.stress_column},
+                     {"temperature", a.temperature_column},
+                     {"pressure", a.pressure_column}}},
+                   {"units",
+                    {{"viscosity", a.viscosity_unit}, {"shear_stress", a.stress_unit}, {"temperature", a.temperature_unit}}}});
   for (const auto& n : table.notes) env.warn(a.file + ": " + n);
   for (const auto& w : table.warnings) env.warn(w);
 
@@ -312,6 +330,13 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
                   "Temperature shift for models other than cross-wlf: none, arrhenius, wlf, or auto "
                   "(arrhenius when the data hold several temperatures)")
       ->capture_default_str();
+  sub->add_option("--shear-rate", args->shear_rate_column, "Shear-rate column (1/s) when not named shear_rate");
+  sub->add_option("--viscosity", args->viscosity_column, "Viscosity column when not named viscosity or eta");
+  sub->add_option("--shear-stress", args->stress_column, "Shear-stress column (viscosity = stress / shear rate)");
+  sub->add_option("--temperature-col", args->temperature_column, "Temperature column when not named temperature");
+  sub->add_option("--pressure-col", args->pressure_column, "Pressure column when not named pressure");
+  sub->add_option("--stress-unit", args->stress_unit, "Unit of the shear-stress column: Pa, kPa, MPa");
+  sub->add_option("--temperature-unit", args->temperature_unit, "Unit of the temperature column: degC or K");
   sub->add_option("--t-ref", args->t_ref_degc, "Reference temperature of the shift (degC; default: the middle data temperature)");
   sub->add_option("--temperature", args->temperature_degc, "Temperature of every point when the file has no temperature column (degC)");
   sub->add_option("--kelvin-offset", args->kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (as the seed's code) (K)")

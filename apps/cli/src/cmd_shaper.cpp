@@ -109,7 +109,7 @@ int run_shaper(const ShaperCliArgs& a, CliContext& ctx) {
   res["axes"] = nlohmann::json::object();
   std::vector<std::pair<std::string, std::string>> csv_files;  // written once every axis succeeded
   for (const auto& r : axes) {
-    const std::string ax(1, r.axis);
+    const std::string& ax = r.label;
     ident::ShaperSelectionOptions so;
     so.scv_mm_s = a.scv_mm_s;
     so.max_smoothing_mm = a.max_smoothing_mm;

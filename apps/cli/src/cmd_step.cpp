@@ -19,8 +19,10 @@ namespace {
 
 struct StepArgs {
   std::string file;
-  std::string time_column = "time";
+  std::string time_column;  // empty: found by name
   std::string input_column;
+  std::string input_unit;   // overrides the unit in the input column's name
+  std::string output_unit;  // overrides the unit in the output column's name
   std::string output_column;
   std::string model = "fopdt";
   std::string group_column;
@@ -48,13 +50,15 @@ int run_step(const StepArgs& a, CliContext& ctx) {
     throw InputError("--min-step must be between 0 and 1 (a fraction of the input range)");
   const std::string bytes = ident::read_file_bytes(a.file);
   ident::CsvOptions copt;
-  copt.columns = {a.time_column, a.output_column};
+  copt.columns = {a.output_column};
   if (!a.input_column.empty()) copt.columns.push_back(a.input_column);
   if (!a.group_column.empty()) copt.columns.push_back(a.group_column);
+  copt.time_column = a.time_column;
+  copt.find_time_column = a.time_column.empty();
   // With --group the time restarts in every group: check monotonic time per group below.
-  if (a.group_column.empty()) copt.time_column = a.time_column;
+  copt.time_must_increase = a.group_column.empty();
   const auto table = ident::parse_csv(bytes, a.file, copt);
-  const auto& tcol = table.column(a.time_column);
+  const auto& tcol = table.column(table.time_column);
   const auto& ycol = table.column(a.output_column);
   if (table.rows < 10)
     throw InputError(fmt::format("too few samples ({}) for a step analysis; at least 10 are needed", table.rows),
@@ -64,10 +68,12 @@ int run_step(const StepArgs& a, CliContext& ctx) {
   opt.model = model;
   opt.detect.min_step_fraction = a.min_step_fraction;
   opt.detect.instant = ident::parse_step_instant(a.step_at);
-  opt.output_unit = unit_or_1(ycol.unit);
+  opt.output_unit = unit_or_1(a.output_unit.empty() ? ycol.unit : a.output_unit);
   std::string input_unit = "1";
   if (!a.input_column.empty()) input_unit = unit_or_1(table.column(a.input_column).unit);
   else if (!a.group_column.empty()) input_unit = unit_or_1(table.column(a.group_column).unit);
+  if (!a.input_unit.empty()) input_unit = a.input_unit;
+  if (ident::is_volumetric_flow_unit(input_unit)) input_unit = "mm^3/s";
   opt.input_unit = input_unit;
   opt.gain_unit = opt.output_unit + "/(" + input_unit + ")";
 
@@ -119,8 +125,10 @@ int run_step(const StepArgs& a, CliContext& ctx) {
   }
 
   Envelope env("step");
-  env.set_options({{"time_column", a.time_column},
+  env.set_options({{"time_column", table.time_column},
                    {"input_column", a.input_column},
+                   {"input_unit", a.input_unit},
+                   {"output_unit", a.output_unit},
                    {"output_column", a.output_column},
                    {"model", a.model},
                    {"group_column", a.group_column},
@@ -161,11 +169,16 @@ void register_step(CLI::App& app, CliContext& ctx) {
   auto args = std::make_shared<StepArgs>();
   auto* sub = app.add_subcommand("step", "Identify liquefier dynamics (K, tau, theta) from step-response logs");
   sub->add_option("file", args->file, "CSV log (time in s; units in column names, e.g. 'force (N)')")->required();
-  sub->add_option("-t,--time", args->time_column, "Time column (s)")->capture_default_str();
+  sub->add_option("-t,--time", args->time_column,
+                  "Time column (s; ms and us are converted); default: found by name (time, t, timestamp, time_s)");
   sub->add_option("-i,--input", args->input_column,
                   "Input column (e.g. feed rate, mm/s); its steps are found automatically");
   sub->add_option("-y,--output", args->output_column, "Output column (e.g. force in N, ooze length in mm)")
       ->required();
+  sub->add_option("--input-unit", args->input_unit,
+                  "Unit of the input column when its name does not say it (e.g. mm3/s for a volumetric flow, mm/s "
+                  "for filament feed); export places operating points by it");
+  sub->add_option("--output-unit", args->output_unit, "Unit of the output column when its name does not say it");
   sub->add_option("-m,--model", args->model,
                   "fo: first order K/(tau s+1); fopdt: with dead time theta (s), needs samples before each step")
       ->capture_default_str();
@@ -198,6 +211,7 @@ void register_step(CLI::App& app, CliContext& ctx) {
       "  tunekit step datasets/liquefier/holtrup_table_b1_ooze.csv --time t_s --output L_mm --group v_print_mm_s \\\n"
       "      --model fo          # seed 001 Table B.1: ooze length after a stop, one step per print speed\n"
       "  tunekit step ooze.csv --time t --output length --step-time 0 --step-size 20 --model fo\n"
+      "  tunekit step log.csv --input flow_mm3_s --output force_N   # time_s found by name, units from the names\n"
       "Exit codes: 2 bad input (no step found, constant output, NaN, too few samples, time not increasing),\n"
       "1 the fit failed (no convergence, or tau not identifiable because the record is too short).");
   sub->callback([args, &ctx] { set_exit_code(run_step(*args, ctx)); });

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <future>
 #include <map>
+#include <filesystem>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -58,7 +59,9 @@ void add_resonance_options(CLI::App* sub, ResonanceCliArgs& a) {
                   "Klipper spectrum files (resonances_<axis>_*.csv, calibration_data_<axis>_*.csv), or generic CSVs "
                   "with --time/--accel")
       ->required();
-  sub->add_option("--axis", a.axis, "Axis of every file: x, y or z (default: from the Klipper file name)");
+  sub->add_option("--axis", a.axis,
+                  "Axis of every file: x, y or z (default: from the Klipper file name; a file whose name names no "
+                  "axis is reported under its file stem, and needs --axis only to be exported)");
   sub->add_option("--time", a.time_column, "Time column (s), strictly increasing (default: time)");
   sub->add_option("--accel", a.accel_columns,
                   "Acceleration column(s) in mm/s^2, PSDs summed over them (default: accel_x accel_y accel_z)");
@@ -104,10 +107,48 @@ nlohmann::json resonance_options_json(const ResonanceCliArgs& a) {
           {"peak_threshold", a.peak_threshold},
           {"excitation_exponent", a.excitation_exponent},
           {"full_scale_mm_s2", a.full_scale_mm_s2},
-          {"no_frf", a.no_frf}};
+          {"no_frf", a.no_frf},
+          {"ringdown", a.ringdown},
+          {"channel", a.ringdown_channel},
+          {"min_strength", a.min_strength},
+          {"ringdown_min_hz", a.ringdown_min_hz},
+          {"ringdown_max_hz", a.ringdown_max_hz}};
 }
 
-std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelope& env) {
+std::string record_label(char axis, const std::string& path) {
+  if (axis != 0) return std::string(1, axis);
+  return std::filesystem::path(path).stem().string();
+}
+
+ident::RingdownOptions ringdown_options(const ResonanceCliArgs& a) {
+  ident::RingdownOptions o;
+  o.channel = a.ringdown_channel;
+  o.min_strength = a.min_strength;
+  o.min_hz = a.ringdown_min_hz;
+  o.max_hz = a.ringdown_max_hz;
+  if (!(o.min_strength > 0)) throw InputError("--min-strength must be positive");
+  return o;
+}
+
+void add_ringdown_options(CLI::App* sub, ResonanceCliArgs& a, bool with_flag) {
+  if (with_flag)
+    sub->add_flag("--ringdown", a.ringdown,
+                  "Analyse each file as a free decay (a plucked belt, a tapped toolhead): fundamental frequency and "
+                  "damping ratio from a time-domain fit of damped sinusoids. Chosen automatically for a record too "
+                  "short for Welch's method");
+  sub->add_option("--channel", a.ringdown_channel, "Ring-down: analyse this channel (default: the strongest)");
+  sub->add_option("--min-strength", a.min_strength,
+                  "Ring-down: refuse a record whose decay RMS is below this multiple of the noise floor (default 3)");
+  sub->add_option("--ringdown-min", a.ringdown_min_hz,
+                  fmt::format("Ring-down: lowest fundamental considered, Hz (default {:g})", a.ringdown_min_hz));
+  sub->add_option("--ringdown-max", a.ringdown_max_hz,
+                  a.ringdown_max_hz > 0
+                      ? fmt::format("Ring-down: highest line considered, Hz (default {:g})", a.ringdown_max_hz)
+                      : std::string("Ring-down: highest line considered, Hz (default 0.45 x the sample rate)"));
+}
+
+std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelope& env,
+                                               std::vector<ident::AccelRecord>* ringdown_records) {
   ident::WelchOptions welch = ident::klipper_welch_options();
   welch.window = ident::parse_window(a.window);
   welch.kaiser_beta = a.kaiser_beta;
@@ -127,7 +168,7 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
   in.axis = parse_axis(a.axis);
   in.full_scale_mm_s2 = a.full_scale_mm_s2;
 
-  std::map<char, std::vector<ident::AxisSpectrum>> by_axis;
+  std::map<std::string, std::vector<ident::AxisSpectrum>> by_axis;
   for (const auto& path : a.files) {
     const std::string bytes = ident::read_file_bytes(path);
     // The input's digest (tens of ms for a 20 MB raw file) is computed on a second core while
@@ -141,17 +182,20 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
     } else if (ident::is_rrf_accelerometer_csv(bytes)) {
       file_spectra.push_back(ident::record_spectrum(ident::load_rrf_accelerometer_csv(path, bytes, in), welch));
     } else {
-      const auto rec = ident::load_accel_csv(path, bytes, in);
+      auto rec = ident::load_accel_csv(path, bytes, in);
+      if (ringdown_records &&
+          (a.ringdown || rec.sampling.samples < 2 * ident::resolve_segment_length(welch, rec.sampling.sample_rate_hz))) {
+        if (!a.ringdown)
+          env.warn(fmt::format("{}: {:.3f} s at {:.0f} Hz is too short for Welch's method; analysed as a ring-down",
+                               path, rec.sampling.duration_s, rec.sampling.sample_rate_hz));
+        env.add_input_digest(path, digest.get(), bytes.size());
+        ringdown_records->push_back(std::move(rec));
+        continue;
+      }
       file_spectra.push_back(ident::record_spectrum(rec, welch));
     }
     env.add_input_digest(path, digest.get(), bytes.size());
-    for (auto& s : file_spectra) {
-      if (s.axis == 0)
-        throw InputError("cannot tell which axis this file measured (Klipper names them raw_data_x_*.csv, "
-                         "resonances_x_*.csv or calibration_data_y_*.csv); pass --axis x|y|z",
-                         path);
-      by_axis[s.axis].push_back(std::move(s));
-    }
+    for (auto& s : file_spectra) by_axis[record_label(s.axis, path)].push_back(std::move(s));
   }
   ident::ResonanceOptions ro;
   ro.fit_min_hz = a.fit_min_hz;
@@ -161,12 +205,14 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
   ro.excitation_exponent = a.excitation_exponent;
   ro.use_frf = !a.no_frf;
   std::vector<AxisResult> out;
-  for (auto& [axis, spectra] : by_axis) {
+  for (auto& [label, spectra] : by_axis) {
     // Spectra Klipper normalized (files with shaper columns) and measured ones (raw data, files
     // without them) of one axis are brought to Klipper's normalization before they are averaged,
     // as calibrate_shaper.py does; the datasets are kept as read.
     AxisResult r;
-    r.axis = axis;
+    r.axis = spectra.front().axis;
+    r.label = label;
+    const std::string& axis = label;
     const bool any_normalized = std::any_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
     const bool all_normalized = std::all_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
     if (any_normalized && !all_normalized) {

@@ -1,6 +1,9 @@
 #pragma once
 // Time-series CSV input. Columns are selected by name; a name may carry its unit in
-// brackets or parentheses ("force (N)", "time[s]"), and matching ignores case and the unit.
+// brackets or parentheses ("force (N)", "time[s]", "shear rate [1/s]") or as a snake_case
+// suffix as pandas and most loggers write it ("time_s", "flow_mm3_s", "force_N",
+// "shear_rate_1_s"); matching ignores case, and a column is found by its name as written or
+// by its name without the unit ("flow" finds "flow_mm3_s").
 // Lines starting with '#' are comments, except that a comment directly above the first
 // row of numbers is taken as the header when the file has no header of its own -- this is
 // how Klipper writes raw accelerometer data (`#time,accel_x,accel_y,accel_z`).
@@ -15,8 +18,9 @@
 namespace tunekit::ident {
 
 struct CsvColumn {
-  std::string name;  ///< header name without its unit, as written
-  std::string unit;  ///< unit from "name (unit)" or "name [unit]", empty if none
+  std::string name;  ///< header name as written, without a bracketed unit ("flow_mm3_s", "force")
+  std::string base;  ///< the name without a unit suffix as well ("flow", "force")
+  std::string unit;  ///< from "name (unit)", "name [unit]" or a suffix ("mm^3/s"), empty if none
   std::vector<double> values;
 };
 
@@ -25,6 +29,11 @@ struct CsvOptions {
   std::vector<std::string> columns;
   /// If not empty, this column must be present and strictly increasing.
   std::string time_column;
+  /// With time_column empty: find the time column by name (kTimeColumnNames, with or without a
+  /// unit), refuse the file when there is none. A time column in ms or us is converted to s.
+  bool find_time_column = false;
+  /// The time column must strictly increase (false: records whose time restarts, e.g. per group).
+  bool time_must_increase = true;
   /// Lines longer than this are refused (a file without newlines, a binary file).
   std::size_t max_line_bytes = std::size_t{1} << 20;
 };
@@ -35,6 +44,7 @@ struct CsvTable {
   std::vector<CsvColumn> columns;         ///< the selected columns, in the order requested
   std::size_t rows = 0;
   std::size_t header_line = 0;            ///< 1-based line number of the header
+  std::string time_column;                ///< the time column's name (given or found), empty if none
   std::vector<std::string> warnings;
 
   /// The selected column with this name; throws InputError naming the available columns.
@@ -52,6 +62,18 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
 
 /// Splits "force (N)" / "force[N]" into {"force", "N"}; trims spaces.
 std::pair<std::string, std::string> split_name_unit(std::string_view header_field);
+
+/// Splits a unit written as a snake_case suffix: "flow_mm3_s" -> {"flow", "mm^3/s"},
+/// "shear_rate_1_s" -> {"shear_rate", "1/s"}, "temperature_C" -> {"temperature", "degC"}.
+/// Recognised (case-insensitive, longest first): _1_s, _pa_s, _mpa_s, _mm3_s, _mm_s2, _mm_s,
+/// _mm, _hz, _ms, _us, _s, _n, _c, _degc, _k, _pa, _kpa, _bar. A name without one: {name, ""}.
+std::pair<std::string, std::string> split_unit_suffix(std::string_view name);
+
+/// True when `unit` is a volumetric flow in mm^3/s ("mm3/s", "mm^3/s", "mm\u00b3/s", "mm3 s-1").
+bool is_volumetric_flow_unit(std::string_view unit);
+
+/// Names a time column is found by when none is given (then also "time_s", "t (s)", ...).
+inline constexpr const char* kTimeColumnNames[] = {"time", "t", "#time", "timestamp"};
 
 /// Case-insensitive equality on ASCII.
 bool iequals(std::string_view a, std::string_view b);

@@ -6,7 +6,8 @@
 //
 // Readable: PNG (8 and 16 bit), JPEG (baseline and progressive), BMP, PNM (PGM/PPM), TGA, PSD
 // (composited), GIF (first frame), HDR is not accepted (float). TIFF is refused with a hint to
-// convert it to PNG, which keeps 16-bit depth.
+// convert it to PNG, which keeps 16-bit depth. A JPEG's EXIF orientation is applied
+// (exif_orientation.hpp), so a photo is measured as it is displayed.
 
 #include <string>
 

@@ -1,6 +1,7 @@
 #pragma once
 // Rheometer (or capillary) data from CSV into SI units for the viscosity fits, with the unit
-// checks that catch the usual mix-ups. Columns, by name (case-insensitive), units in brackets:
+// checks that catch the usual mix-ups. Columns, by name (case-insensitive), units in brackets
+// or as a suffix (shear_rate_1_s, viscosity_Pa_s, temperature_C), or named in the options:
 //   shear_rate (1/s)                        required, > 0
 //   viscosity (Pa.s | mPa.s | cP | P | kPa.s)  or shear_stress (Pa | kPa | MPa), eta = tau / gamma
 //                                           (P is the poise, 0.1 Pa.s, used by many compilations)
@@ -38,6 +39,12 @@ struct RheologyCsvOptions {
   /// Keep only the rows whose temperature lies in [min, max] degC (inclusive); NaN: no limit.
   double temperature_min_degC = fitting::kNaN;
   double temperature_max_degC = fitting::kNaN;
+  /// Column names for files whose headers are not the usual ones (a rheometer's export, another
+  /// language); empty: found by the names above. A named column must exist.
+  std::string shear_rate_column, viscosity_column, stress_column, temperature_column, pressure_column;
+  /// Units of the stress and temperature columns when their names carry none (or a wrong one):
+  /// override the header.
+  std::string stress_unit, temperature_unit;
 };
 
 /// Viscosities outside [kLowViscosity, kHighViscosity] Pa.s are unusual for a polymer melt at

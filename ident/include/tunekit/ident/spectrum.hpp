@@ -63,6 +63,11 @@ struct FrequencyResponse {
 /// Resolves segment_length 0 to its default for a sampling rate, and checks the options.
 std::size_t resolve_segment_length(const WelchOptions& o, double sample_rate_hz);
 
+/// Magnitude of the DFT of one windowed (Hann), mean-removed record zero-padded to `nfft`
+/// points (>= x.size()): bins k = 0..nfft/2 at k * fs / nfft Hz, in U (not a density). For
+/// locating peaks of a short record (a ring-down) more finely than its length resolves.
+std::vector<double> padded_amplitude_spectrum(std::span<const double> x, std::size_t nfft);
+
 /// Throws InputError when the record is shorter than two segments or options are invalid.
 Spectrum welch_psd(std::span<const double> x, double sample_rate_hz, const WelchOptions& options = {});
 CrossSpectrum welch_csd(std::span<const double> x, std::span<const double> y, double sample_rate_hz,

@@ -46,6 +46,29 @@ class LineEditor {
   std::map<std::size_t, std::vector<std::string>> inserted_;
 };
 
+/// The edited line with its trailing comment replaced by `marker + " " + note` when the edit
+/// changed the line's code and kept the original's trailing comment (a comment that described
+/// the old value, e.g. "pressure_advance: 0.05   ; tuned by hand" -> "pressure_advance: 0.041
+/// ; <note>"). A trailing comment starts at the first marker (e.g. "#", ";", "//") that
+/// follows code and white space. A line whose only change is being uncommented (Marlin's
+/// "//#define X" -> "#define X") keeps its comment, as does a line without one.
+std::string replace_trailing_comment(const std::string& original, const std::string& edited,
+                                     const std::vector<std::string>& markers, const std::string& note);
+
+/// While an instance lives, LineEditor::replace on the same thread passes every replacement
+/// through replace_trailing_comment with these markers and this note (the firmware writers
+/// need not know about it). An empty note disables it.
+class ScopedCommentNote {
+ public:
+  ScopedCommentNote(std::vector<std::string> markers, std::string note);
+  ~ScopedCommentNote();
+  ScopedCommentNote(const ScopedCommentNote&) = delete;
+  ScopedCommentNote& operator=(const ScopedCommentNote&) = delete;
+
+ private:
+  const void* previous_;
+};
+
 /// Formats a number with at most `decimals` decimals, trailing zeros removed ("0.04", "45.2",
 /// "3"). Negative zero prints as "0".
 std::string format_number(double v, int decimals);

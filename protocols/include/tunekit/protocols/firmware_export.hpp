@@ -50,6 +50,9 @@ struct CompensatorSettings {
   /// FT_MOTION's (FTM_DEFAULT_SHAPER_X/Y ...), the classic shaper and smooth linear advance are
   /// bypassed.
   bool marlin_ft_motion = false;
+  /// Replaces the trailing comment of a line whose value changes (the old comment described
+  /// the old value), e.g. "tunekit 2026-01-31: from step.json"; empty: comments are kept.
+  std::string change_note;
 };
 
 /// One value set in the file.

@@ -1,0 +1,187 @@
+#include "tunekit/fitting/damped_sinusoids.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/fitting/least_squares.hpp"
+
+namespace tunekit::fitting {
+
+std::vector<PencilComponent> matrix_pencil(const std::vector<double>& y, double fs_hz, int order, int pencil) {
+  using Mat = Eigen::MatrixXd;
+  const int n = static_cast<int>(y.size());
+  if (order < 1) throw InputError("matrix pencil: the order must be at least 1");
+  int L = pencil > 0 ? pencil : std::min(n / 3, 100);
+  L = std::max(L, order + 1);
+  if (n < 2 * L + 1 || !(fs_hz > 0))
+    throw InputError(fmt::format("matrix pencil: {} samples are too few for {} exponentials", n, order));
+  // Hankel data matrix Y (n-L) x (L+1); its dominant right singular vectors span the signal.
+  Mat Y(n - L, L + 1);
+  for (int r = 0; r < n - L; ++r)
+    for (int c = 0; c <= L; ++c) Y(r, c) = y[static_cast<std::size_t>(r + c)];
+  Eigen::BDCSVD<Mat> svd(Y, Eigen::ComputeThinV);
+  const Mat V = svd.matrixV().leftCols(order);
+  const Mat V1 = V.topRows(L);      // rows 0..L-1
+  const Mat V2 = V.bottomRows(L);   // rows 1..L
+  // The poles z are the eigenvalues of pinv(V1) V2 (order x order).
+  const Mat A = V1.completeOrthogonalDecomposition().solve(V2);
+  Eigen::EigenSolver<Mat> es(A);
+  if (es.info() != Eigen::Success) throw FitError("matrix pencil: the eigenvalue problem did not converge");
+  const Eigen::VectorXcd z = es.eigenvalues();
+
+  // Complex amplitudes h from the Vandermonde system y_k = sum h_i z_i^k (least squares).
+  Eigen::MatrixXcd Z(n, order);
+  for (int i = 0; i < order; ++i) {
+    std::complex<double> p(1.0, 0.0);
+    for (int k = 0; k < n; ++k) {
+      Z(k, i) = p;
+      p *= z(i);
+    }
+  }
+  Eigen::VectorXcd yc(n);
+  for (int k = 0; k < n; ++k) yc(k) = y[static_cast<std::size_t>(k)];
+  const Eigen::VectorXcd h = Z.completeOrthogonalDecomposition().solve(yc);
+
+  std::vector<PencilComponent> out;
+  for (int i = 0; i < order; ++i) {
+    const double wd = std::arg(z(i)) * fs_hz;  // rad/s
+    if (!(wd > 0)) continue;                   // conjugate twin or a real (non-oscillating) pole
+    const double sigma = -std::log(std::abs(z(i))) * fs_hz;
+    const double wn = std::hypot(wd, sigma);
+    PencilComponent c;
+    c.freq_hz = wn / (2 * std::numbers::pi);
+    c.zeta = sigma / wn;
+    c.amplitude = 2 * std::abs(h(i));
+    c.phase_rad = std::arg(h(i));
+    if (std::isfinite(c.freq_hz) && std::isfinite(c.zeta) && std::isfinite(c.amplitude)) out.push_back(c);
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.amplitude > b.amplitude; });
+  return out;
+}
+
+namespace {
+
+constexpr double kMinDampedZeta = 1e-5;
+constexpr double kMaxDampedZeta = 0.9;
+
+}  // namespace
+
+FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
+                               double freq_rel_bound) {
+  if (!(freq_rel_bound > 0 && freq_rel_bound < 1)) throw InputError("damped-sinusoid fit: the frequency bound must be in (0, 1)");
+  const int m = static_cast<int>(y.size());
+  const int nc = static_cast<int>(start.size());
+  if (nc == 0) throw InputError("damped-sinusoid fit: no components to fit");
+  if (m < 4 * nc + 10) throw InputError(fmt::format("damped-sinusoid fit: {} samples are too few", m));
+  const double nyquist = fs_hz / 2;
+  double mean = 0;
+  for (double v : y) mean += v;
+  mean /= m;
+
+  // Amplitudes and offset enter linearly: start them at their least-squares values for the
+  // start frequencies and dampings (one variable-projection step).
+  Eigen::MatrixXd D(m, 2 * nc + 1);
+  std::vector<double> z0(static_cast<std::size_t>(nc));
+  for (int i = 0; i < nc; ++i) {
+    const auto& s = start[static_cast<std::size_t>(i)];
+    z0[static_cast<std::size_t>(i)] = std::clamp(s.zeta, 2 * kMinDampedZeta, 0.5 * kMaxDampedZeta);
+    const double w = 2 * std::numbers::pi * s.freq_hz, z = z0[static_cast<std::size_t>(i)];
+    const double wd = w * std::sqrt(1 - z * z);
+    for (int k = 0; k < m; ++k) {
+      const double t = k / fs_hz, e = std::exp(-z * w * t);
+      D(k, 2 * i) = e * std::cos(wd * t);
+      D(k, 2 * i + 1) = e * std::sin(wd * t);
+    }
+  }
+  D.col(2 * nc).setOnes();
+  const Eigen::Map<const Eigen::VectorXd> yv(y.data(), m);
+  const Eigen::VectorXd lin = D.colPivHouseholderQr().solve(yv);
+
+  LsqProblem prob;
+  for (int i = 0; i < nc; ++i) {
+    const auto& s = start[static_cast<std::size_t>(i)];
+    prob.params.push_back({fmt::format("f{}_hz", i), "Hz", s.freq_hz, (1 - freq_rel_bound) * s.freq_hz,
+                           std::min((1 + freq_rel_bound) * s.freq_hz, nyquist)});
+    prob.params.push_back({fmt::format("zeta{}", i), "1", z0[static_cast<std::size_t>(i)], kMinDampedZeta, kMaxDampedZeta});
+    prob.params.push_back({fmt::format("a{}", i), "", std::isfinite(lin(2 * i)) ? lin(2 * i) : 0.0});
+    prob.params.push_back({fmt::format("b{}", i), "", std::isfinite(lin(2 * i + 1)) ? lin(2 * i + 1) : 0.0});
+  }
+  prob.params.push_back({"offset", "", std::isfinite(lin(2 * nc)) ? lin(2 * nc) : mean});
+  const int np = static_cast<int>(prob.params.size());
+  prob.num_residuals = m;
+  prob.observed = y;
+  prob.residuals_and_jacobian = [&y, fs_hz, nc, np, m](const double* p, double* r, double* J) {
+    const double two_pi = 2 * std::numbers::pi;
+    for (int k = 0; k < m; ++k) r[k] = p[np - 1] - y[static_cast<std::size_t>(k)];
+    if (J)
+      for (int k = 0; k < m; ++k) {
+        double* row = J + static_cast<std::ptrdiff_t>(k) * np;
+        std::fill(row, row + np, 0.0);
+        row[np - 1] = 1.0;
+      }
+    for (int i = 0; i < nc; ++i) {
+      const double f = p[4 * i], z = p[4 * i + 1], a = p[4 * i + 2], b = p[4 * i + 3];
+      const double w = two_pi * f, q = std::sqrt(1 - z * z), wd = w * q, sigma = z * w;
+      // Rotations by recurrence: exp(-sigma dt), cos/sin(wd dt) per sample (exact enough over
+      // a few thousand samples; renormalized every 256).
+      const double dt = 1.0 / fs_hz;
+      const double ed = std::exp(-sigma * dt), cd = std::cos(wd * dt), sd = std::sin(wd * dt);
+      double E = 1, C = 1, S = 0;
+      for (int k = 0; k < m; ++k) {
+        const double t = k * dt;
+        if ((k & 255) == 0) {
+          E = std::exp(-sigma * t);
+          C = std::cos(wd * t);
+          S = std::sin(wd * t);
+        }
+        const double g = a * C + b * S, h = -a * S + b * C;
+        r[k] += E * g;
+        if (J) {
+          double* row = J + static_cast<std::ptrdiff_t>(k) * np + 4 * i;
+          const double dy_dw = E * t * (-z * g + q * h);
+          const double dy_dz = E * t * (-w * g - (w * z / q) * h);
+          row[0] = dy_dw * two_pi;
+          row[1] = dy_dz;
+          row[2] = E * C;
+          row[3] = E * S;
+        }
+        const double E2 = E * ed, C2 = C * cd - S * sd, S2 = S * cd + C * sd;
+        E = E2;
+        C = C2;
+        S = S2;
+      }
+    }
+    for (int k = 0; k < m; ++k)
+      if (!std::isfinite(r[k])) return false;
+    return true;
+  };
+  LsqOptions opt;
+  opt.max_iterations = 200;
+  opt.function_tolerance = 1e-12;
+  opt.parameter_tolerance = 1e-12;
+  opt.gradient_tolerance = 1e-14;
+  return solve_least_squares("damped_sinusoids", prob, opt);
+}
+
+double damped_sinusoids_value(const FitResult& fit, double t) {
+  double y = fit.value("offset");
+  for (int i = 0;; ++i) {
+    const std::string fi = fmt::format("f{}_hz", i);
+    bool has = false;
+    for (const auto& p : fit.params) has = has || p.name == fi;
+    if (!has) break;
+    const double w = 2 * std::numbers::pi * fit.value(fi), z = fit.value(fmt::format("zeta{}", i));
+    const double wd = w * std::sqrt(1 - z * z);
+    y += std::exp(-z * w * t) *
+         (fit.value(fmt::format("a{}", i)) * std::cos(wd * t) + fit.value(fmt::format("b{}", i)) * std::sin(wd * t));
+  }
+  return y;
+}
+
+}  // namespace tunekit::fitting
