@@ -43,7 +43,6 @@ std::string delta_klipper_save_config(const ident::DeltaGeometry& g) {
     s += fmt::format("#*# arm_length = {:.6f}\n", g.rod_mm[i]);
     s += fmt::format("#*# position_endstop = {:.6f}\n", g.homed_height_mm + g.endstop_mm[i]);
   }
-  s += "#*#\n";
   return s;
 }
 
