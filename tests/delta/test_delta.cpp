@@ -8,6 +8,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
 #include "tunekit/ident/delta_kinematics.hpp"
 #include "tunekit/protocols/delta_export.hpp"
@@ -182,4 +183,25 @@ TEST_CASE("delta CLI: fits a probe CSV and exports, listed in --help") {
   CHECK(r.code == 2);
   r = test::run_cli({"--help"});
   CHECK(r.out.find("delta") != std::string::npos);
+}
+
+TEST_CASE("delta probe model agrees with an independent solution of the rod equations") {
+  // datasets/delta: heights computed by a separate Newton solution of the three rod
+  // equations (see its README), truth and nominal as in true_delta() / nominal_delta().
+  const auto t = ident::read_csv(test::dataset("delta/probes_simulated.csv"));
+  const auto &x = t.column("x_mm"), &y = t.column("y_mm"), &z = t.column("z_exact_mm");
+  REQUIRE(t.rows == 17);
+  for (std::size_t i = 0; i < t.rows; ++i)
+    CHECK(ident::delta_probe_height(nominal_delta(), true_delta(), x.values[i], y.values[i]) ==
+          Approx(z.values[i]).margin(1e-8));
+  const auto r = test::run_cli({"delta", test::dataset("delta/probes_simulated.csv"), "--radius", "105", "--rod", "215",
+                                "--height", "250", "--json"});
+  REQUIRE(r.code == 0);
+  const auto j = nlohmann::json::parse(r.out)["results"]["params"];
+  for (const auto& [name, truth] : std::vector<std::pair<std::string, double>>{
+           {"endstop_a", 0.35}, {"endstop_b", -0.20}, {"endstop_c", 0.10}, {"delta_radius", 104.2},
+           {"angle_a", 210.4}, {"angle_b", 329.7}}) {
+    INFO(name);
+    CHECK(std::abs(j[name]["value"].get<double>() - truth) < 4 * j[name]["stderr"].get<double>());
+  }
 }
