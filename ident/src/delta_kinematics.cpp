@@ -8,14 +8,14 @@
 namespace tunekit::ident {
 namespace {
 
-struct Vec3 {
+struct DkVec3 {
   double x, y, z;
 };
-Vec3 dk_sub(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3 dk_add(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec3 dk_scale(Vec3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-double dk_dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Vec3 dk_cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+DkVec3 dk_sub(DkVec3 a, DkVec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+DkVec3 dk_add(DkVec3 a, DkVec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+DkVec3 dk_scale(DkVec3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+double dk_dot(DkVec3 a, DkVec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+DkVec3 dk_cross(DkVec3 a, DkVec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 
 std::array<double, 2> dk_tower(const DeltaGeometry& g, int i) {
   const double a = g.angle_deg[static_cast<std::size_t>(i)] * std::numbers::pi / 180.0;
@@ -38,22 +38,22 @@ bool delta_carriages(const DeltaGeometry& g, const DeltaPoint& p, std::array<dou
 bool delta_position(const DeltaGeometry& g, const std::array<double, 3>& c, DeltaPoint& out) {
   // Trilateration of three spheres (centre: tower column at the carriage height, radius:
   // rod length), taking the intersection below the carriages. Tilt is applied after.
-  Vec3 p[3];
+  DkVec3 p[3];
   for (int i = 0; i < 3; ++i) {
     const auto t = dk_tower(g, i);
     p[i] = {t[0], t[1], c[static_cast<std::size_t>(i)]};
   }
   const double r1 = g.rod_mm[0], r2 = g.rod_mm[1], r3 = g.rod_mm[2];
-  const Vec3 s21 = dk_sub(p[1], p[0]), s31 = dk_sub(p[2], p[0]);
+  const DkVec3 s21 = dk_sub(p[1], p[0]), s31 = dk_sub(p[2], p[0]);
   const double d = std::sqrt(dk_dot(s21, s21));
   if (!(d > 0)) return false;
-  const Vec3 ex = dk_scale(s21, 1.0 / d);
+  const DkVec3 ex = dk_scale(s21, 1.0 / d);
   const double i = dk_dot(ex, s31);
-  const Vec3 vey = dk_sub(s31, dk_scale(ex, i));
+  const DkVec3 vey = dk_sub(s31, dk_scale(ex, i));
   const double ny = std::sqrt(dk_dot(vey, vey));
   if (!(ny > 0)) return false;
-  const Vec3 ey = dk_scale(vey, 1.0 / ny);
-  const Vec3 ez = dk_cross(ex, ey);
+  const DkVec3 ey = dk_scale(vey, 1.0 / ny);
+  const DkVec3 ez = dk_cross(ex, ey);
   const double j = dk_dot(ey, s31);
   const double x = (r1 * r1 - r2 * r2 + d * d) / (2 * d);
   const double y = (r1 * r1 - r3 * r3 + i * i + j * j) / (2 * j) - x * i / j;
@@ -61,7 +61,7 @@ bool delta_position(const DeltaGeometry& g, const std::array<double, 3>& c, Delt
   if (!(z2 >= 0)) return false;
   // ez points up for towers ordered counter-clockwise (A 210, B 330, C 90 degrees).
   const double zs = ez.z > 0 ? -std::sqrt(z2) : std::sqrt(z2);
-  const Vec3 q = dk_add(p[0], dk_add(dk_scale(ex, x), dk_add(dk_scale(ey, y), dk_scale(ez, zs))));
+  const DkVec3 q = dk_add(p[0], dk_add(dk_scale(ex, x), dk_add(dk_scale(ey, y), dk_scale(ez, zs))));
   out = {q.x, q.y, q.z - q.x * g.tilt_x - q.y * g.tilt_y};
   return std::isfinite(out.x) && std::isfinite(out.y) && std::isfinite(out.z);
 }
