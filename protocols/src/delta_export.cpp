@@ -46,18 +46,23 @@ std::string delta_klipper_save_config(const ident::DeltaGeometry& g) {
   return s;
 }
 
-std::string delta_marlin_gcode(const ident::DeltaGeometry& g) {
+std::string delta_marlin_gcode(const ident::DeltaGeometry& g, double probe_z_offset_mm) {
   delta_check_finite(g);
   delta_check_no_tilt(g, "Marlin");
+  if (!std::isfinite(probe_z_offset_mm)) throw InputError("Marlin probe z offset is not finite");
   if (g.rod_mm[0] != g.rod_mm[1] || g.rod_mm[1] != g.rod_mm[2])
     throw InputError("Marlin's M665 L holds one diagonal rod length; the three rods differ");
-  const double emax = std::max({g.endstop_mm[0], g.endstop_mm[1], g.endstop_mm[2]});
+  // Marlin moves a carriage down by -adj after it homes and then takes it to be at the top:
+  // a larger adjustment raises that carriage, the opposite of an endstop adjustment e here.
+  // adj_i = min(e) - e_i (all <= 0, as M666 requires) with delta height H + min(e); with a bed
+  // probe Marlin homes the nozzle at delta_height - probe z offset (M851 Z), so that is added.
+  const double emin = std::min({g.endstop_mm[0], g.endstop_mm[1], g.endstop_mm[2]});
   std::string s = "; delta calibration (tunekit delta)\n";
-  s += fmt::format("M665 H{:.3f} L{:.3f} R{:.3f} X{:.3f} Y{:.3f} Z{:.3f}\n", g.homed_height_mm + emax, g.rod_mm[0],
-                   g.radius_mm, g.angle_deg[0] - ident::kDeltaNominalAngles[0],
+  s += fmt::format("M665 H{:.3f} L{:.3f} R{:.3f} X{:.3f} Y{:.3f} Z{:.3f}\n", g.homed_height_mm + emin + probe_z_offset_mm,
+                   g.rod_mm[0], g.radius_mm, g.angle_deg[0] - ident::kDeltaNominalAngles[0],
                    g.angle_deg[1] - ident::kDeltaNominalAngles[1], g.angle_deg[2] - ident::kDeltaNominalAngles[2]);
-  s += fmt::format("M666 X{:.3f} Y{:.3f} Z{:.3f}\n", g.endstop_mm[0] - emax, g.endstop_mm[1] - emax,
-                   g.endstop_mm[2] - emax);
+  s += fmt::format("M666 X{:.3f} Y{:.3f} Z{:.3f}\n", emin - g.endstop_mm[0], emin - g.endstop_mm[1],
+                   emin - g.endstop_mm[2]);
   s += "M500\n";
   return s;
 }

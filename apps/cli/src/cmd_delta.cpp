@@ -30,6 +30,7 @@ struct DeltaArgs {
   std::string export_firmware;
   std::string export_file;
   double print_radius_mm = fitting::kNaN;
+  double marlin_probe_z_offset_mm = 0.0;
   OutputOptions output;
 };
 
@@ -101,7 +102,7 @@ int run_delta(const DeltaArgs& a, CliContext& ctx) {
   if (!a.export_firmware.empty()) {
     switch (fw) {
       case protocols::ExportFirmware::klipper: export_text = protocols::delta_klipper_save_config(cal.fitted); break;
-      case protocols::ExportFirmware::marlin: export_text = protocols::delta_marlin_gcode(cal.fitted); break;
+      case protocols::ExportFirmware::marlin: export_text = protocols::delta_marlin_gcode(cal.fitted, a.marlin_probe_z_offset_mm); break;
       case protocols::ExportFirmware::rrf: export_text = protocols::delta_rrf_gcode(cal.fitted, a.print_radius_mm); break;
     }
   }
@@ -150,6 +151,9 @@ void register_delta(CLI::App& app, CliContext& ctx) {
   sub->add_option("--export", args->export_firmware, "Print the fitted settings for klipper, marlin or rrf");
   sub->add_option("--export-file", args->export_file, "Write the exported settings to this file (atomically)");
   sub->add_option("--print-radius", args->print_radius_mm, "RepRapFirmware's M665 B, printable radius (mm)");
+  sub->add_option("--marlin-probe-z-offset", args->marlin_probe_z_offset_mm,
+                  "Marlin's M851 Z (mm): with a bed probe Marlin homes at M665 H minus it")
+      ->capture_default_str();
   add_output_options(sub, args->output);
   sub->footer(
       "Probe heights come from a CSV (probing over the machine link is not built in yet).\n"
