@@ -152,6 +152,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   register_inspect(app, ctx);
   register_history(app, ctx);
   register_belts(app, ctx);
+  register_delta(app, ctx);
 
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses from the back

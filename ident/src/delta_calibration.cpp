@@ -1,0 +1,154 @@
+// Delta calibration fit: see delta_calibration.hpp.
+#include "tunekit/ident/delta_calibration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/fitting/least_squares.hpp"
+
+namespace tunekit::ident {
+namespace {
+
+bool delta_factor_supported(int f) {
+  return std::find(std::begin(kDeltaFactorChoices), std::end(kDeltaFactorChoices), f) != std::end(kDeltaFactorChoices);
+}
+
+double delta_mean_rod(const DeltaGeometry& g) { return (g.rod_mm[0] + g.rod_mm[1] + g.rod_mm[2]) / 3.0; }
+
+}  // namespace
+
+std::vector<std::string> delta_factor_names(int factors) {
+  if (!delta_factor_supported(factors))
+    throw InputError(fmt::format("{} delta factors: use 3, 4, 6, 7, 8 or 9 (RepRapFirmware's G32 sets)", factors));
+  std::vector<std::string> n = {"endstop_a", "endstop_b", "endstop_c"};
+  if (factors >= 4) n.push_back("delta_radius");
+  if (factors >= 6) n.insert(n.end(), {"angle_a", "angle_b"});
+  if (factors == 7 || factors == 9) n.push_back("diagonal_rod");
+  if (factors >= 8) n.insert(n.end(), {"tilt_x", "tilt_y"});
+  return n;
+}
+
+DeltaGeometry delta_apply_factors(const DeltaGeometry& nominal, int factors, const std::vector<double>& v) {
+  const auto names = delta_factor_names(factors);
+  DeltaGeometry g = nominal;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const auto& n = names[k];
+    if (n == "endstop_a") g.endstop_mm[0] = v[k];
+    else if (n == "endstop_b") g.endstop_mm[1] = v[k];
+    else if (n == "endstop_c") g.endstop_mm[2] = v[k];
+    else if (n == "delta_radius") g.radius_mm = v[k];
+    else if (n == "angle_a") g.angle_deg[0] = v[k];
+    else if (n == "angle_b") g.angle_deg[1] = v[k];
+    else if (n == "diagonal_rod") {
+      const double shift = v[k] - delta_mean_rod(nominal);
+      for (auto& r : g.rod_mm) r += shift;
+    } else if (n == "tilt_x") g.tilt_x = v[k] / 100.0;
+    else if (n == "tilt_y") g.tilt_y = v[k] / 100.0;
+  }
+  return g;
+}
+
+DeltaFlatness delta_flatness(const std::vector<double>& h) {
+  DeltaFlatness f;
+  if (h.empty()) return f;
+  double s = 0, s2 = 0;
+  for (double v : h) {
+    s += v;
+    s2 += v * v;
+  }
+  const double n = static_cast<double>(h.size());
+  const double mean = s / n;
+  f.rms_mm = std::sqrt(s2 / n);
+  double ss = 0;
+  for (double v : h) ss += (v - mean) * (v - mean);
+  f.std_mm = std::sqrt(ss / n);
+  const auto [lo, hi] = std::minmax_element(h.begin(), h.end());
+  f.peak_to_peak_mm = *hi - *lo;
+  return f;
+}
+
+DeltaCalibration fit_delta_calibration(const DeltaGeometry& nominal, const std::vector<DeltaProbe>& probes,
+                                       int factors) {
+  const auto names = delta_factor_names(factors);
+  const std::size_t k = names.size();
+  if (probes.size() < k + 1)
+    throw InputError(fmt::format("{} probe points for a {}-factor delta calibration: need at least {}", probes.size(),
+                                 factors, k + 1));
+  for (const auto& p : probes) {
+    double h = 0;
+    if (!delta_true_height(nominal, nominal, p, h))
+      throw InputError(fmt::format("probe point ({:g}, {:g}) mm is out of the nominal delta's reach", p.x_mm, p.y_mm));
+  }
+  fitting::LsqProblem prob;
+  for (const auto& n : names) {
+    fitting::ParamSpec s;
+    s.name = n;
+    if (n.starts_with("endstop")) {
+      s.unit = "mm";
+      s.start = nominal.endstop_mm[static_cast<std::size_t>(n.back() - 'a')];
+    } else if (n == "delta_radius") {
+      s.unit = "mm";
+      s.start = nominal.radius_mm;
+      s.lower = 0.5 * nominal.radius_mm;
+      s.upper = 1.5 * nominal.radius_mm;
+    } else if (n.starts_with("angle")) {
+      s.unit = "deg";
+      s.start = nominal.angle_deg[static_cast<std::size_t>(n.back() - 'a')];
+    } else if (n == "diagonal_rod") {
+      s.unit = "mm";
+      s.start = delta_mean_rod(nominal);
+    } else {
+      s.unit = "%";
+      s.start = 100.0 * (n == "tilt_x" ? nominal.tilt_x : nominal.tilt_y);
+    }
+    prob.params.push_back(s);
+  }
+  const int m = static_cast<int>(probes.size());
+  prob.num_residuals = m;
+  prob.residuals_are_time_ordered = false;
+  for (const auto& p : probes) prob.observed.push_back(p.z_mm);
+  auto eval = [&nominal, &probes, factors](const std::vector<double>& v, double* r) {
+    const DeltaGeometry g = delta_apply_factors(nominal, factors, v);
+    for (std::size_t i = 0; i < probes.size(); ++i)
+      if (!delta_true_height(nominal, g, probes[i], r[i])) return false;
+    return true;
+  };
+  prob.residuals_and_jacobian = [&eval, k, m](const double* p, double* r, double* jac) {
+    std::vector<double> v(p, p + k);
+    if (!eval(v, r)) return false;
+    if (jac == nullptr) return true;
+    // Central differences with absolute steps (mm, degrees, percent): the factors are of
+    // order 1 or are absolute lengths, so a relative step would vanish at an adjustment of 0.
+    constexpr double step = 1e-5;
+    std::vector<double> rp(static_cast<std::size_t>(m)), rm(static_cast<std::size_t>(m));
+    for (std::size_t j = 0; j < k; ++j) {
+      v[j] = p[j] + step;
+      if (!eval(v, rp.data())) return false;
+      v[j] = p[j] - step;
+      if (!eval(v, rm.data())) return false;
+      v[j] = p[j];
+      for (int i = 0; i < m; ++i)
+        jac[static_cast<std::size_t>(i) * k + j] = (rp[static_cast<std::size_t>(i)] - rm[static_cast<std::size_t>(i)]) / (2 * step);
+    }
+    return true;
+  };
+  DeltaCalibration out;
+  out.nominal = nominal;
+  out.fit = fitting::solve_least_squares(fmt::format("delta_{}_factor", factors), prob);
+  std::vector<double> v;
+  for (const auto& q : out.fit.params) v.push_back(q.value);
+  out.fitted = delta_apply_factors(nominal, factors, v);
+  out.residual_mm.resize(probes.size());
+  if (!eval(v, out.residual_mm.data())) throw FitError("the fitted delta geometry cannot reach every probe point");
+  std::vector<double> before;
+  for (const auto& p : probes) before.push_back(p.z_mm);
+  out.before = delta_flatness(before);
+  out.after = delta_flatness(out.residual_mm);
+  return out;
+}
+
+}  // namespace tunekit::ident
