@@ -44,7 +44,7 @@ double wlf_shift(double T, double C1, double C2, double T_ref) {
 }
 
 const std::vector<CrossWlfMaterial>& cross_wlf_library() {
-  // Seed 001 Table 2.4 (PEEK, ABS) and appendix A initLibrary() (ULTEM 1010, whose temperature
+  // Holtrup 2019 Table 2.4 (PEEK, ABS) and appendix A initLibrary() (ULTEM 1010, whose temperature
   // range in the code, 343..400, is not in kelvin and is therefore left out).
   static const std::vector<CrossWlfMaterial> lib{
       {"PEEK", {0.4266, 124139, 2.89808e16, 403.15, 0, 36.041, 51.6}, 643, 723},

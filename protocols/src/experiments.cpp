@@ -64,9 +64,9 @@ std::vector<ProtocolSpec> make_specs() {
                {"load_cell"},
                false});
   s.push_back({"ring-print",
-               "seed 001's frequency test: a ring printed at constant speed with the extrusion modulated by "
+               "Holtrup's (2019) frequency test: a ring printed at constant speed with the extrusion modulated by "
                "(1 + amplitude sin(periods theta)); f = periods v / (2 pi R). Measure the width with 'tunekit linewidth'",
-               {{"radius_mm", 30, "mm", "ring radius R (seed 001 appendix D: 30 mm)"},
+               {{"radius_mm", 30, "mm", "ring radius R (Holtrup 2019 appendix D: 30 mm)"},
                 {"center_x_mm", kMachineDefault, "mm", "ring centre x (default: middle of the travel)"},
                 {"center_y_mm", kMachineDefault, "mm", "ring centre y (default: middle of the travel)"},
                 {"speed_mm_s", 20, "mm/s", "print speed v"},
@@ -111,13 +111,13 @@ std::vector<ProtocolSpec> make_specs() {
                {"accelerometer"},
                true});
   s.push_back({"axis-rectangle",
-               "seed 000's overshoot test: an XY rectangle with pauses at the corners, repeated; each axis sees "
+               "Hemminger's (UCLA, 2022) overshoot test: an XY rectangle with pauses at the corners, repeated; each axis sees "
                "step motions; the accelerometer is recorded",
                {{"width_mm", 40, "mm", "rectangle size along x"},
                 {"height_mm", 40, "mm", "rectangle size along y"},
                 {"speed_mm_s", 100, "mm/s", "move speed"},
                 {"accel_mm_s2", 3000, "mm/s^2", "move acceleration"},
-                {"repeats", 5, "", "rectangles (seed 000: 5)"},
+                {"repeats", 5, "", "rectangles (Hemminger 2022: 5)"},
                 {"pause_s", 0.3, "s", "pause at each corner"}},
                {"accelerometer"},
                false});

@@ -1,4 +1,4 @@
-// tunekit freq: liquefier frequency response (seed 001 ch. 4.3.3, appendices D-E): sine dwell at
+// tunekit freq: liquefier frequency response (Holtrup 2019 ch. 4.3.3, appendices D-E): sine dwell at
 // a known frequency, broadband H1 estimate with coherence, transfer-function fits to the
 // frequency response and by output error to the record.
 #include <algorithm>
@@ -289,7 +289,7 @@ void register_freq(CLI::App& app, CliContext& ctx) {
   sub->footer(
       "Examples:\n"
       "  tunekit freq datasets/liquefier/appendix_d/exp_07.csv --time time --output width \\\n"
-      "      --input setpoint_width --freq-hz 0.05305165 --json    # seed 001 appendix D, experiment 7\n"
+      "      --input setpoint_width --freq-hz 0.05305165 --json    # Holtrup 2019 appendix D, experiment 7\n"
       "  tunekit freq datasets/liquefier/synthetic_chirp.csv --time time --input feed --output force \\\n"
       "      --mode h1 --fit-tf 2,0 --fmax 40 --json\n"
       "  tunekit freq datasets/liquefier/synthetic_chirp.csv --time time --input feed --output force \\\n"

@@ -1,10 +1,10 @@
-// tunekit linewidth: calibrated width profiles of printed lines from photos (issue 6).
+// tunekit linewidth: calibrated width profiles of printed lines from photos.
 //
 // Scale comes from --px-per-mm, a camera profile (--camera, written by --save-camera), a
 // chessboard in the scene (--chessboard/--square-mm, optionally --rectify for a tilted
 // camera) or a line of known width (--reference-width-mm). Each line's profile (arc length,
 // width, edge confidence, flags) goes to the JSON envelope; --profile-csv maps one line to
-// time with the commanded speed (constant, or seed 001's sine-modulated ring) and writes the
+// time with the commanded speed (constant, or Holtrup's (2019) sine-modulated ring) and writes the
 // set-point width the feed implied, ready for `tunekit freq` / `tunekit step`.
 #include <algorithm>
 #include <cmath>
@@ -476,7 +476,7 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
                  {"direction", a.ring_clockwise ? "clockwise" : "counterclockwise"}};
       comment = fmt::format(
           "tunekit linewidth: ring profile of {} (line {}), N={} A={} mm v={} mm/s R={:.4f} mm -> f={:.6g} Hz\n"
-          "setpoint_width: seed 001 eq. 4.3",
+          "setpoint_width: Holtrup 2019 eq. 4.3",
           run.path, a.line, ring.n_sines, ring.amplitude_mm, ring.speed_mm_s, ring.radius_mm,
           ident::ring_frequency_hz(ring));
     } else {
@@ -592,7 +592,7 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("--setpoint-width-mm", args->setpoint_width_mm,
                   "Set-point (G-code) line width (mm); default: the measured mean")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--ring-sines", args->ring_sines, "Ring print: sines per rotation N (seed 001 eq. 4.2; 1)")
+  sub->add_option("--ring-sines", args->ring_sines, "Ring print: sines per rotation N (Holtrup 2019 eq. 4.2; 1)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--ring-amplitude-mm", args->ring_amplitude_mm, "Ring print: feeder offset amplitude A (mm)")
       ->check(CLI::PositiveNumber);

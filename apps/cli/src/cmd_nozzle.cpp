@@ -1,7 +1,7 @@
 // tunekit nozzle: the pressure drop of a melt through a nozzle (Hagen-Poiseuille, power-law
 // capillary with the Rabinowitsch correction, Bellini's three-zone model, Boles' model) from
 // rheology and geometry, and the inverse fit of K and n from measured flow and pressure (or
-// feeder force) at known temperature, as in the load-cell experiments of seed 001 sec. 5.3.
+// feeder force) at known temperature, as in the load-cell experiments of Holtrup 2019 sec. 5.3.
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -127,7 +127,7 @@ int run_nozzle(const NozzleArgs& a, CliContext& ctx) {
                    {"material", a.material},
                    {"reference_flow_mm3_s", a.reference_flow_mm3_s}});
   if (!(a.kelvin_offset == fitting::kKelvinOffset || a.kelvin_offset == fitting::kKelvinOffsetThesis))
-    throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (the seed's code)");
+    throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (Holtrup's (2019) code)");
   if (!a.fit_file.empty()) return run_fit(a, ctx, env);
 
   const auto g = geometry_of(a);
@@ -160,12 +160,12 @@ int run_nozzle(const NozzleArgs& a, CliContext& ctx) {
       const auto pl = fitting::holtrup_peek_power_law(a.temperature_degc);
       spec.model = fitting::ViscosityModel::power_law;
       spec.values = {{"K_Pa_s_n", pl.K_Pa_s_n}, {"n", pl.n}};
-      source = fmt::format("seed 001 eq. 5.10/5.11 at {:g} degC: K {:.6g} Pa.s^n, n {:.5f}", a.temperature_degc,
+      source = fmt::format("Holtrup 2019 eq. 5.10/5.11 at {:g} degC: K {:.6g} Pa.s^n, n {:.5f}", a.temperature_degc,
                            pl.K_Pa_s_n, pl.n);
     } else {
       const auto& mat = fitting::cross_wlf_material(a.material);
       spec = fitting::ViscositySpec::from_cross_wlf(mat.params);
-      source = mat.name + " Cross-WLF (seed 001 Table 2.4 / appendix A)";
+      source = mat.name + " Cross-WLF (Holtrup 2019 Table 2.4 / appendix A)";
       if (mat.T_min_K > 0 && (T_K < mat.T_min_K || T_K > mat.T_max_K))
         env.warn(fmt::format("{:.2f} K is outside {}'s validity range {:g}..{:g} K", T_K, mat.name, mat.T_min_K, mat.T_max_K));
     }
@@ -245,10 +245,10 @@ void register_nozzle(CLI::App& app, CliContext& ctx) {
   sub->add_option("--n", args->n, "Power-law index n (1)");
   sub->add_option("--mu", args->mu, "Newtonian viscosity (Pa.s)");
   sub->add_option("--material", args->material,
-                  "Cross-WLF material of seed 001 (PEEK, ABS, ULTEM1010) or peek-power-law (eq. 5.10/5.11); needs --temperature");
+                  "Cross-WLF material of Holtrup 2019 (PEEK, ABS, ULTEM1010) or peek-power-law (eq. 5.10/5.11); needs --temperature");
   sub->add_option("--rheology", args->rheology_json, "A 'tunekit rheo --json' result file to take the viscosity model from");
   sub->add_option("-T,--temperature", args->temperature_degc, "Melt temperature (degC)");
-  sub->add_option("--kelvin-offset", args->kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (the seed's code) (K)")
+  sub->add_option("--kelvin-offset", args->kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (Holtrup's (2019) code) (K)")
       ->capture_default_str();
   sub->add_option("-Q,--flow", args->flows_mm3_s, "Volumetric flow at the nozzle exit (mm3/s); repeatable");
   sub->add_option("--reference-flow", args->reference_flow_mm3_s, "Flow at which relative_tau is 1 (mm3/s)")->capture_default_str();
@@ -262,7 +262,7 @@ void register_nozzle(CLI::App& app, CliContext& ctx) {
   sub->add_option("--piston-diameter", args->piston_diameter_mm, "Diameter the feeder force acts on (mm), for a force column");
   add_output_options(sub, args->output);
   sub->footer(
-      "Defaults are seed 001's regular nozzle (Table 5.3): d 0.6 mm, l 4 mm, alpha 30 deg, D 5 mm.\n"
+      "Defaults are Holtrup's (2019) regular nozzle (Table 5.3): d 0.6 mm, l 4 mm, alpha 30 deg, D 5 mm.\n"
       "Examples:\n"
       "  tunekit nozzle --K 10114 --n 0.51 --flow 20 --cone-angle 45          # appendix F: 12.16 MPa\n"
       "  tunekit nozzle --material peek-power-law -T 405 --flow 3             # sec. 5.2.3: 4.98 MPa\n"

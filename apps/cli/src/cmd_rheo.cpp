@@ -120,7 +120,7 @@ int run_rheo(const RheoArgs& a, CliContext& ctx) {
     throw InputError("give --viscosity or --shear-stress, not both");
   if (!a.temperatures.empty()) std::tie(co.temperature_min_degC, co.temperature_max_degC) = parse_temperature_range(a.temperatures);
   if (!(a.kelvin_offset == fitting::kKelvinOffset || a.kelvin_offset == fitting::kKelvinOffsetThesis))
-    throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (the seed's code)");
+    throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (Holtrup's (2019) code)");
   const auto table = ident::parse_rheology_csv(bytes, a.file, co);
   const auto& data = table.data;
   const auto levels = data.temperature_levels_K();
@@ -339,7 +339,7 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
   sub->add_option("--temperature-unit", args->temperature_unit, "Unit of the temperature column: degC or K");
   sub->add_option("--t-ref", args->t_ref_degc, "Reference temperature of the shift (degC; default: the middle data temperature)");
   sub->add_option("--temperature", args->temperature_degc, "Temperature of every point when the file has no temperature column (degC)");
-  sub->add_option("--kelvin-offset", args->kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (as the seed's code) (K)")
+  sub->add_option("--kelvin-offset", args->kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (as Holtrup's (2019) code) (K)")
       ->capture_default_str();
   sub->add_option("--viscosity-unit", args->viscosity_unit,
                   "Unit of the viscosity column when its header states none: Pa.s, mPa.s, cP, P (poise) or kPa.s");

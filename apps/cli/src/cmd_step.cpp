@@ -1,5 +1,5 @@
 // tunekit step: identify liquefier dynamics (K, tau, theta) from step-response logs
-// (seed 001 ch. 4.4.2). Steps are found in the input column, or, for records without an input
+// (Holtrup 2019 ch. 4.4.2). Steps are found in the input column, or, for records without an input
 // channel (ooze after a stop, Table B.1), given by --step-time and --step-size / --group.
 #include <algorithm>
 #include <cmath>
@@ -94,7 +94,7 @@ int run_step(const StepArgs& a, CliContext& ctx) {
         for (std::size_t i = 0; i < table.rows; ++i) groups[0].push_back(i);
       }
       std::vector<ident::KnownStep> ks;
-      // Descending by the group value (the order of seed 001's tables: 50, 20, 12.2, 2 mm/s).
+      // Descending by the group value (the order of Holtrup's (2019) tables: 50, 20, 12.2, 2 mm/s).
       for (auto it = groups.rbegin(); it != groups.rend(); ++it) {
         ident::KnownStep k;
         const double du = std::isnan(a.step_size) ? it->first : a.step_size;
@@ -209,7 +209,7 @@ void register_step(CLI::App& app, CliContext& ctx) {
       "      --step-at first --json   # this data set's input changes exactly at sample instants\n"
       "  tunekit step runs/step-1/step.csv --input feed --output force   # a run of 'tunekit run liquefier-step'\n"
       "  tunekit step datasets/liquefier/holtrup_table_b1_ooze.csv --time t_s --output L_mm --group v_print_mm_s \\\n"
-      "      --model fo          # seed 001 Table B.1: ooze length after a stop, one step per print speed\n"
+      "      --model fo          # Holtrup 2019 Table B.1: ooze length after a stop, one step per print speed\n"
       "  tunekit step ooze.csv --time t --output length --step-time 0 --step-size 20 --model fo\n"
       "  tunekit step log.csv --input flow_mm3_s --output force_N   # time_s found by name, units from the names\n"
       "Exit codes: 2 bad input (no step found, constant output, NaN, too few samples, time not increasing),\n"

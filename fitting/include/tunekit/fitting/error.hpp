@@ -1,5 +1,5 @@
 #pragma once
-// Errors that carry the process exit code they map to (DESIGN.md "Conventions"):
+// Errors that carry the process exit code they map to:
 // 0 ok, 1 fit failed or a requirement unmet, 2 usage or bad input, 3 machine or transport failure.
 // The CLI prints them as one line: `tunekit: error: LOCATION: message`.
 

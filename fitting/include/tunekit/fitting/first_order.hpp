@@ -1,12 +1,12 @@
 #pragma once
-// First-order step-response models of the liquefier (seed 001 eq. 4.5-4.8, DESIGN.md "Liquefier"):
+// First-order step-response models of the liquefier (Holtrup 2019 eq. 4.5-4.8):
 //
 //   y(t) = y0                                           for t <= t_step + theta
 //   y(t) = y0 + K du (1 - exp(-(t - t_step - theta) / tau))  afterwards
 //
 // "fo" holds theta at 0 (first order), "fopdt" estimates it (first order plus dead time).
 // Fits use solve_least_squares with an analytic Jacobian, start from the log-incomplete-response
-// method (seed 001 eq. 4.4), and refuse (FitError) when tau cannot be seen in the record.
+// method (Holtrup 2019 eq. 4.4), and refuse (FitError) when tau cannot be seen in the record.
 
 #include <string>
 #include <vector>
@@ -44,7 +44,7 @@ struct StepStart {
   double linearity_r2 = 0; ///< R^2 of Z(t) = ln((y - y_ss)/(y0 - y_ss)) against t (0: method failed)
 };
 
-/// Seed 001 eq. 4.4: Z = ln((y - y_ss) / (y0 - y_ss)) is a straight line of slope -1/tau that
+/// Holtrup 2019 eq. 4.4: Z = ln((y - y_ss) / (y0 - y_ss)) is a straight line of slope -1/tau that
 /// crosses zero at t_step + theta. y_ss is unknown for a response that has not settled, so a few
 /// candidates beyond the last samples are tried and the one that makes Z most linear is kept.
 StepStart log_incomplete_start(const StepRecord& rec);

@@ -1,5 +1,5 @@
 #pragma once
-// The second-order grey-box liquefier model of seed 001 appendix C: feeder displacement x in,
+// The second-order grey-box liquefier model of Holtrup 2019 appendix C: feeder displacement x in,
 // nozzle displacement y out, through the feeder stiffness C_f, the melt's spring-damper
 // (C_t, D_t) and the nozzle damping D_n:
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Pressure drop of a melt through a printer nozzle (seed 001 sec. 2.2.1, 5.2.3, appendices F, J).
+// Pressure drop of a melt through a printer nozzle (Holtrup 2019 sec. 2.2.1, 5.2.3, appendices F, J).
 // SI units throughout: flow in m^3/s, lengths in m, angles in rad, pressures in Pa.
 //
 //   Hagen-Poiseuille (Newtonian)   dP = 128 mu l Q / (pi d^4)                               (eq. 2.1)
@@ -10,7 +10,7 @@
 //   Boles                          dP = K gw^n [1.18 / n^0.7 + 4 l / d + f(alpha)]          (eq. 2.6-2.7)
 //                                  f(alpha) = 2/(3 n sin a) [3 sin a / (4 n (1-cos a)^2 (1+2 cos a))]^n
 //
-// Seed extraction notes: eq. 2.4 as extracted lacks the (v/phi)^(1/m) factor and eq. 2.5 the
+// Notes on the thesis text as extracted: eq. 2.4 as extracted lacks the (v/phi)^(1/m) factor and eq. 2.5 the
 // square on D1/2; both are restored here (dimensionally required, and both reduce to
 // Hagen-Poiseuille for n = 1; the tests check that).
 //
@@ -75,7 +75,7 @@ double pressure_drop(PressureModel m, const ViscositySpec& v, double flow_m3_s, 
 double pressure_drop_slope(PressureModel m, const ViscositySpec& v, double flow_m3_s, double temperature_K,
                            const NozzleGeometry& g);
 
-/// Seed 001 eq. 5.10/5.11 as coded in sec. 5.2.3 (PEEK 450G power law fitted to Cross-WLF over
+/// Holtrup 2019 eq. 5.10/5.11 as coded in sec. 5.2.3 (PEEK 450G power law fitted to Cross-WLF over
 /// 600..950 1/s): K = 10^20.14448 T^-6.22882 Pa.s^n, n = 0.17651 + 8.956e-4 T, T in degC.
 struct PowerLawCoefficients {
   double K_Pa_s_n = 0;
@@ -83,7 +83,7 @@ struct PowerLawCoefficients {
 };
 PowerLawCoefficients holtrup_peek_power_law(double temperature_degC);
 
-/// Steady nozzle measurements (seed 001 sec. 5.3: load cell force -> pressure, flow from the
+/// Steady nozzle measurements (Holtrup 2019 sec. 5.3: load cell force -> pressure, flow from the
 /// feed rate, melt temperature from a thermal camera).
 struct NozzleFlowData {
   std::vector<double> flow_m3_s;

@@ -1,5 +1,5 @@
 #pragma once
-// Fitting melt viscosity models to rheometer data (seed 001 sec. 2.2.2, 5.2.3):
+// Fitting melt viscosity models to rheometer data (Holtrup 2019 sec. 2.2.2, 5.2.3):
 //  - weighted least squares on ln(eta) with bounds (Ceres), start values from a bounded global
 //    search (global_start.hpp), so no fit needs a guess from the user;
 //  - 95 % intervals: scale parameters (eta0, K, tau*, D1, lambda) are estimated as logarithms,
@@ -90,7 +90,7 @@ nlohmann::json to_json(const ModelComparison& c);
 
 /// Power law K gamma^(n-1) fitted to a viscosity model over [lo, hi] 1/s with `points`
 /// log-spaced shear rates (linear regression of log10 tau on log10 gamma). Params
-/// K_Pa_s_n and n. The seed's procedure (sec. 5.2.3): 600..950 1/s, 50 points.
+/// K_Pa_s_n and n. Holtrup's (2019) procedure (sec. 5.2.3): 600..950 1/s, 50 points.
 FitResult fit_power_law_window(const ViscositySpec& v, double temperature_K, double lo_1_s, double hi_1_s,
                                int points = 50, double pressure_Pa = 0);
 

@@ -1,6 +1,6 @@
 #pragma once
-// Melt viscosity models and temperature shifts (seed 001, Holtrup 2019, sec. 2.2.2 and
-// appendix A; DESIGN.md "Melt rheology").
+// Melt viscosity models and temperature shifts (Holtrup, Tuning liquefier dynamics, MSc thesis, University of Twente, 2019, sec. 2.2.2 and
+// appendix A).
 //
 //   Newtonian        eta = eta0
 //   power law        eta = K gamma^(n-1)
@@ -12,10 +12,10 @@
 // Temperature shifts a_T(T) (time-temperature superposition) for every model but Cross-WLF:
 //   Arrhenius  a_T = exp((Ea/R) (1/T - 1/T_ref))
 //   WLF        a_T = exp(-C1 (T - T_ref) / (C2 + T - T_ref))
-// The shift multiplies eta0 (Newtonian, Cross), K (power law, as in seed 001 sec. 5.2.3) and
+// The shift multiplies eta0 (Newtonian, Cross), K (power law, as in Holtrup 2019 sec. 5.2.3) and
 // eta0, eta_inf and lambda (Carreau-Yasuda). Temperatures are kelvin everywhere in here.
 //
-// Temperature convention: the seed's code converts degC with +273, SI is +273.15. Both are
+// Temperature convention: Holtrup's (2019) code converts degC with +273, SI is +273.15. Both are
 // explicit: celsius_to_kelvin(c, kKelvinOffsetThesis) reproduces the thesis' 346.4 Pa.s.
 
 #include <map>
@@ -26,7 +26,7 @@
 namespace tunekit::fitting {
 
 inline constexpr double kKelvinOffset = 273.15;        ///< SI: T[K] = T[degC] + 273.15
-inline constexpr double kKelvinOffsetThesis = 273.0;   ///< seed 001 appendix A code: + 273
+inline constexpr double kKelvinOffsetThesis = 273.0;   ///< Holtrup 2019 appendix A code: + 273
 inline constexpr double kGasConstant = 8.314462618;    ///< J/(mol K)
 
 inline double celsius_to_kelvin(double degc, double offset = kKelvinOffset) { return degc + offset; }
@@ -55,14 +55,14 @@ double carreau_yasuda_viscosity(double eta0_Pa_s, double eta_inf_Pa_s, double la
 double arrhenius_shift(double temperature_K, double Ea_J_per_mol, double T_ref_K);
 double wlf_shift(double temperature_K, double C1, double C2_K, double T_ref_K);
 
-/// A material of seed 001 Table 2.4 / appendix A (Solidworks 2018 data).
+/// A material of Holtrup 2019 Table 2.4 / appendix A (Solidworks 2018 data).
 struct CrossWlfMaterial {
   std::string name;
   CrossWlfParams params;
-  double T_min_K = 0;  ///< validity range; 0 when the seed gives none
+  double T_min_K = 0;  ///< validity range; 0 when Holtrup (2019) gives none
   double T_max_K = 0;
 };
-/// PEEK, ABS and ULTEM1010 as printed in the seed.
+/// PEEK, ABS and ULTEM1010 as printed in Holtrup (2019).
 const std::vector<CrossWlfMaterial>& cross_wlf_library();
 /// Case-insensitive lookup ("peek", "ULTEM1010"); InputError listing the known names.
 const CrossWlfMaterial& cross_wlf_material(std::string_view name);

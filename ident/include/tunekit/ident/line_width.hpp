@@ -1,5 +1,5 @@
 #pragma once
-// Width profiles of printed lines in an image (issue 6).
+// Width profiles of printed lines in an image.
 //
 // Pipeline: (1) a coarse, downsampled pass flattens the background (on a further-reduced copy:
 // a robust polynomial lighting surface, then morphological closing or opening of the rest, so
@@ -7,7 +7,7 @@
 // dark filament), thresholds and keeps elongated connected components; features far fainter
 // than the strongest line (< 30 % of its contrast) are dropped with a warning;
 // (2) each component is thinned to a skeleton, the longest path through it becomes the
-// centreline (closed loops such as seed 001's ring are cut and re-closed), which is smoothed
+// centreline (closed loops such as Holtrup's (2019) ring are cut and re-closed), which is smoothed
 // and resampled at a fixed arc-length step; (3) at every sample the full-resolution image is
 // read along the normal (averaged over a short stretch of the tangent) and a blurred-bar
 // model  I(u) = b0 + b1 u + c [Phi((u - a)/sigma) - Phi((u - b)/sigma)]  is fitted by damped

@@ -1,5 +1,5 @@
 #pragma once
-// From fitted rheology and nozzle geometry to the liquefier's flow dependence (seed 001
+// From fitted rheology and nozzle geometry to the liquefier's flow dependence (Holtrup 2019
 // sec. 4.5.1 and 5.2.3): the steady pressure drop dP(Q), the incremental flow resistance
 // R(Q) = d(dP)/dQ at each operating flow, and the relative time constant.
 //
@@ -25,7 +25,7 @@ struct LiquefierPredictionOptions {
   fitting::PressureModel model = fitting::PressureModel::boles;
   double temperature_K = 0;
   std::vector<double> flows_mm3_s{0.5, 1, 1.5, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20};
-  double reference_flow_mm3_s = 3.0;  ///< the seed's "average conditions"
+  double reference_flow_mm3_s = 3.0;  ///< Holtrup's (2019) "average conditions"
 };
 
 struct LiquefierPrediction {

@@ -1,5 +1,5 @@
 #pragma once
-// Axis resonances from accelerometer data (DESIGN.md "Axes"):
+// Axis resonances from accelerometer data:
 //   accelerometer CSV -> sampling and saturation checks -> Welch PSD (per channel, summed as
 //   Klipper does) and, with a commanded-acceleration channel, the H1 frequency response and
 //   coherence -> peak detection (half-power bandwidth start values) -> modal fit with 95 %

@@ -31,7 +31,7 @@ namespace tunekit::ident {
 struct RheologyCsvOptions {
   /// Temperature of every point when the file has no temperature column (degC); NaN: none.
   double temperature_degC = fitting::kNaN;
-  /// degC -> K offset: 273.15 (SI) or 273 (the seed's code).
+  /// degC -> K offset: 273.15 (SI) or 273 (Holtrup's (2019) code).
   double kelvin_offset = fitting::kKelvinOffset;
   /// Unit of the viscosity column when its header states none (Pa.s, mPa.s, cP, P, kPa.s);
   /// empty: the header's unit, else Pa.s. A header unit that disagrees is an InputError.

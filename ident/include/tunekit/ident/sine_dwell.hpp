@@ -1,5 +1,5 @@
 #pragma once
-// Sine dwell (seed 001 ch. 4.3.3 and appendices D-E): at a known frequency f, the record is
+// Sine dwell (Holtrup 2019 ch. 4.3.3 and appendices D-E): at a known frequency f, the record is
 // fitted by y(t) = offset + amplitude sin(2 pi f t + phase). The model is linear in
 // (offset, a, b) with a sin + b cos, so the least-squares solution is found exactly and then
 // polished by solve_least_squares in (amplitude, phase_deg, offset) to get their standard

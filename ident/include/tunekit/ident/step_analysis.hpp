@@ -1,5 +1,5 @@
 #pragma once
-// Step-response analysis of the liquefier (seed 001 ch. 4.4.2, Table 4.3): find the steps in the
+// Step-response analysis of the liquefier (Holtrup 2019 ch. 4.4.2, Table 4.3): find the steps in the
 // input channel, fit each rising and falling step on its own (first order, optionally with dead
 // time), pool all steps into one fit, tabulate K, tau, theta per operating point and fit a power
 // law to them for gain scheduling (the liquefier is not linear time-invariant).
@@ -85,7 +85,7 @@ struct StepAnalysisOptions {
 StepAnalysis analyze_steps(std::span<const double> t, std::span<const double> u, std::span<const double> y,
                            const StepAnalysisOptions& options = {});
 
-/// Analysis of records without an input channel (e.g. seed 001 Table B.1: ooze length after a
+/// Analysis of records without an input channel (e.g. Holtrup 2019 Table B.1: ooze length after a
 /// stop): each record is one step of size `du` at `t_step`; its operating point is `du`.
 struct KnownStep {
   fitting::StepRecord record;

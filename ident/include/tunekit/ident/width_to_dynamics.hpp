@@ -1,9 +1,9 @@
 #pragma once
-// From a width profile to a time signal (issue 6, part 3): the commanded speed along the path
+// From a width profile to a time signal: the commanded speed along the path
 // maps arc length to time, and the feed modulation gives the set-point width the feed implied,
 // so `tunekit step` / `tunekit freq` can identify the liquefier from photos.
 //
-// Ring print of seed 001 (section 4.3.3): the feeder position gets an offset A sin(N theta)
+// Ring print of Holtrup 2019 (section 4.3.3): the feeder position gets an offset A sin(N theta)
 // with theta the bed's rotary position, so with print speed v on a ring of radius R
 // theta = v t / R, the excitation frequency is f = N v / (2 pi R), and the set-point width is
 // (eq. 4.3)

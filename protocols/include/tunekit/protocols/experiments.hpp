@@ -10,10 +10,10 @@
 //   liquefier-step      extrusion-rate steps low -> high -> low ..., load cell recorded
 //   liquefier-sine      sine-dwell list of the feed (log-spaced frequencies), load cell recorded
 //   liquefier-chirp     linear chirp of the feed, load cell recorded
-//   ring-print          seed 001's ring: a circle printed with the feed modulated by A sin(N theta)
+//   ring-print          Holtrup's (2019) ring: a circle printed with the feed modulated by A sin(N theta)
 //   line-steps          camera path: straight lines whose flow steps low -> high -> low (camera_prints.hpp)
 //   axis-sweep          resonance sweep: acceleration accel_per_hz * f, f rising at hz_per_sec
-//   axis-rectangle      seed 000's overshoot rectangle: XY rectangle with pauses, repeated
+//   axis-rectangle      Hemminger's (UCLA, 2022) overshoot rectangle: XY rectangle with pauses, repeated
 
 #include <map>
 #include <string>
