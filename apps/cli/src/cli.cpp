@@ -62,6 +62,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   register_batch(app, ctx);
   register_ports(app, ctx);
   register_inspect(app, ctx);
+  register_overshoot(app, ctx);
 
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses from the back

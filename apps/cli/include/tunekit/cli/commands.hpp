@@ -37,5 +37,6 @@ void register_report(CLI::App& app, CliContext& ctx);
 void register_batch(CLI::App& app, CliContext& ctx);
 void register_ports(CLI::App& app, CliContext& ctx);
 void register_inspect(CLI::App& app, CliContext& ctx);
+void register_overshoot(CLI::App& app, CliContext& ctx);
 
 }  // namespace tunekit::cli

@@ -1,0 +1,123 @@
+// Axis overshoot and settling (tunekit overshoot) against the simulated printer: the simulator's
+// axis mode is known, so the true deviation of the toolhead after each corner is computed here in
+// closed form from the mode's frequency and damping and the commanded trapezoidal move, and held
+// against what tunekit measured from the accelerometer.
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+
+using tunekit::test::run_cli;
+
+namespace {
+
+struct TrueResponse {
+  double overshoot_mm = 0, settling_s = 0;
+};
+
+// A base-excited mode z'' + 2 zeta w z' + w^2 z = -a(t) (z: toolhead minus commanded position)
+// under the piecewise-constant acceleration of a trapezoidal move of length L at speed v and
+// acceleration A, by superposing the closed-form responses to acceleration steps.
+TrueResponse true_corner_response(double f_hz, double zeta, double L, double v, double A, double band_mm, double pause_s) {
+  const double w = 2 * std::numbers::pi * f_hz, wd = w * std::sqrt(1 - zeta * zeta);
+  double ta = v / A, tc = (L - v * v / A) / v;
+  if (tc < 0) {
+    ta = std::sqrt(L / A);
+    tc = 0;
+  }
+  const double T = 2 * ta + tc;
+  const std::pair<double, double> steps[] = {{0, A}, {ta, -A}, {ta + tc, -A}, {T, A}};
+  auto z = [&](double t) {
+    double s = 0;
+    for (const auto& [tk, ak] : steps) {
+      const double tau = t - tk;
+      if (tau <= 0) continue;
+      s += -ak / (w * w) *
+           (1 - std::exp(-zeta * w * tau) * (std::cos(wd * tau) + zeta / std::sqrt(1 - zeta * zeta) * std::sin(wd * tau)));
+    }
+    return s;
+  };
+  TrueResponse r;
+  double last_out = T;
+  for (double t = T; t <= T + pause_s; t += 1e-5) {
+    const double d = z(t);
+    r.overshoot_mm = std::max(r.overshoot_mm, d);
+    if (std::abs(d) > band_mm) last_out = t;
+  }
+  r.settling_s = last_out - T;
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("overshoot and settling time from the simulated accelerometer agree with the mode's true response within 10 %",
+          "[machine][e2e][overshoot]") {
+  const auto dir = tunekit::test::scratch_dir("machine_overshoot") + "/run";
+  const double v = 150, A = 5000, L = 40, pause = 0.6, band = 0.01;
+  const auto run = run_cli({"run", "axis-rectangle", "--machine", "sim", "--run-dir", dir, "--sim", "mode_x=40:0.05",
+                            "--sim", "mode_y=31:0.07", "-p", "speed_mm_s=150", "-p", "accel_mm_s2=5000", "-p",
+                            "pause_s=0.6", "-p", "repeats=2", "--json"});
+  INFO(run.err);
+  REQUIRE(run.code == 0);
+  const auto truth = tunekit::test::read_json(dir + "/truth.json")["axes"];
+  const auto os = run_cli({"overshoot", dir, "--band-mm", "0.01", "--json"});
+  INFO(os.err);
+  REQUIRE(os.code == 0);
+  const auto res = nlohmann::json::parse(os.out)["results"];
+  const auto corners = res["corners"];
+  REQUIRE(corners.size() == 8);  // 4 corners x 2 rectangles, one axis moving into each
+  for (const auto& c : corners) {
+    const std::string axis = c["axis"];
+    const auto& m = truth[axis]["modes"][0];
+    const auto tr = true_corner_response(m["freq_hz"].get<double>(), m["zeta"].get<double>(), L, v, A, band, pause);
+    INFO("corner " << c["index"].get<int>() << " axis " << axis << ": true overshoot " << tr.overshoot_mm
+                   << " mm, settling " << tr.settling_s << " s");
+    CHECK(std::abs(c["move_mm"].get<double>()) == Approx(L).epsilon(0.01));
+    CHECK(c["overshoot_mm"].get<double>() == Approx(tr.overshoot_mm).epsilon(0.10));
+    CHECK(c["settling_time_s"].get<double>() == Approx(tr.settling_s).epsilon(0.10));
+    CHECK(c["overshoot_pct"].get<double>() == Approx(100 * tr.overshoot_mm / L).epsilon(0.10));
+    // The residual vibration rings at the mode's damped frequency.
+    CHECK(c["residual_freq_hz"].get<double>() == Approx(m["freq_hz"].get<double>()).epsilon(0.05));
+  }
+}
+
+TEST_CASE("overshoot of a run without pauses is a bad-input error naming the file", "[machine][overshoot]") {
+  const auto csv = tunekit::test::write_scratch("overshoot_flat.csv", [] {
+    std::string s = "time,ax,ay,cx,cy\n";
+    for (int i = 0; i < 100; ++i) s += std::to_string(i * 0.001) + ",0,0,0,0\n";
+    return s;
+  }());
+  const auto r = run_cli({"overshoot", csv, "--accel-x", "ax", "--accel-y", "ay", "--cmd-x", "cx", "--cmd-y", "cy"});
+  CHECK(r.code == 2);
+  CHECK(r.err.find("no corner found") != std::string::npos);
+}
+
+TEST_CASE("overshoot grid mode maps overshoot and the figure of merit and puts the map in the report",
+          "[machine][e2e][overshoot]") {
+  const auto out = tunekit::test::scratch_dir("machine_overshoot_grid") + "/grid";
+  const auto r = run_cli({"overshoot", "-p", "speed_mm_s=100,200", "-p", "accel_mm_s2=1000,8000", "-p", "repeats=1",
+                          "--sim", "mode_x=40:0.05", "--sim", "mode_y=31:0.07", "--tolerance-mm", "0.03", "--out", out,
+                          "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto res = nlohmann::json::parse(r.out)["results"];
+  REQUIRE(res["grid"].size() == 4);
+  double os_low = 0, os_high = 0;
+  for (const auto& c : res["grid"]) {
+    if (c["accel_mm_s2"].get<double>() == 1000) os_low = std::max(os_low, c["overshoot_mm"].get<double>());
+    else os_high = std::max(os_high, c["overshoot_mm"].get<double>());
+    // Zero exactly where the tolerance is exceeded.
+    CHECK((c["figure_of_merit"].get<double>() > 0) == (c["overshoot_mm"].get<double>() <= 0.03));
+  }
+  CHECK(os_high > 2 * os_low);  // the overshoot grows with the acceleration
+  REQUIRE(res.contains("best"));
+  // The fastest setting within the tolerance: the largest figure of merit among the admissible cells.
+  for (const auto& c : res["grid"])
+    CHECK(c["figure_of_merit"].get<double>() <= res["best"]["figure_of_merit"].get<double>());
+  const auto html = tunekit::test::read_text(out + "/report.html");
+  CHECK(tunekit::test::embedded_png_base64_length(html, "overshoot_grid") > 1000);
+}
