@@ -4,6 +4,9 @@
 // against what tunekit measured from the accelerometer.
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
 #include <numbers>
 
 #include <catch2/catch.hpp>
@@ -22,6 +25,33 @@ struct TrueResponse {
 // A base-excited mode z'' + 2 zeta w z' + w^2 z = -a(t) (z: toolhead minus commanded position)
 // under the piecewise-constant acceleration of a trapezoidal move of length L at speed v and
 // acceleration A, by superposing the closed-form responses to acceleration steps.
+// The deviation z(t) itself (t from the start of the move), and the move's duration.
+struct TrueDeviation {
+  double T = 0;
+  std::function<double(double)> z;
+};
+
+TrueDeviation true_deviation(double f_hz, double zeta, double L, double v, double A) {
+  const double w = 2 * std::numbers::pi * f_hz, wd = w * std::sqrt(1 - zeta * zeta);
+  double ta = v / A, tc = (L - v * v / A) / v;
+  if (tc < 0) {
+    ta = std::sqrt(L / A);
+    tc = 0;
+  }
+  const double T = 2 * ta + tc;
+  const std::vector<std::pair<double, double>> steps{{0, A}, {ta, -A}, {ta + tc, -A}, {T, A}};
+  return {T, [=](double t) {
+            double s = 0;
+            for (const auto& [tk, ak] : steps) {
+              const double tau = t - tk;
+              if (tau <= 0) continue;
+              s += -ak / (w * w) *
+                   (1 - std::exp(-zeta * w * tau) * (std::cos(wd * tau) + zeta / std::sqrt(1 - zeta * zeta) * std::sin(wd * tau)));
+            }
+            return s;
+          }};
+}
+
 TrueResponse true_corner_response(double f_hz, double zeta, double L, double v, double A, double band_mm, double pause_s) {
   const double w = 2 * std::numbers::pi * f_hz, wd = w * std::sqrt(1 - zeta * zeta);
   double ta = v / A, tc = (L - v * v / A) / v;
@@ -150,4 +180,36 @@ TEST_CASE("overshoot grid mode maps overshoot and the figure of merit and puts t
     CHECK(c["figure_of_merit"].get<double>() <= res["best"]["figure_of_merit"].get<double>());
   const auto html = tunekit::test::read_text(out + "/report.html");
   CHECK(tunekit::test::embedded_png_base64_length(html, "overshoot_grid") > 1000);
+}
+
+TEST_CASE("overshoot from an encoder column agrees with the closed-form response within 10 %", "[machine][overshoot]") {
+  // An encoder log (position in mm) of one 40 mm move between two rests: commanded trapezoid plus
+  // the 35 Hz / 0.06 mode's deviation, sampled at 5 kHz with 1 um quantization.
+  const double f = 35, zeta = 0.06, L = 40, v = 120, A = 4000, rest = 0.3, pause = 0.7, band = 0.01;
+  const auto dev = true_deviation(f, zeta, L, v, A);
+  const double ta = v / A, tc = (L - v * v / A) / v;
+  auto cmd = [&](double t) {
+    if (t <= 0) return 0.0;
+    if (t < ta) return 0.5 * A * t * t;
+    if (t < ta + tc) return 0.5 * A * ta * ta + v * (t - ta);
+    if (t < dev.T) return L - 0.5 * A * (dev.T - t) * (dev.T - t);
+    return L;
+  };
+  std::string csv = "t_s,x_mm\n";
+  for (double t = 0; t < rest + dev.T + pause; t += 2e-4) {
+    const double x = 10 + cmd(t - rest) + dev.z(t - rest);
+    csv += std::to_string(t) + "," + std::to_string(std::round(x * 1000) / 1000) + "\n";
+  }
+  const auto path = tunekit::test::write_scratch("overshoot_encoder.csv", csv);
+  const auto tr = true_corner_response(f, zeta, L, v, A, band, pause);
+  const auto r = run_cli({"overshoot", path, "--time", "t_s", "--position-x", "x_mm", "--band-mm", "0.01", "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto c = nlohmann::json::parse(r.out)["results"]["corners"];
+  REQUIRE(c.size() == 1);
+  INFO("true overshoot " << tr.overshoot_mm << " mm, settling " << tr.settling_s << " s");
+  CHECK(c[0]["move_mm"].get<double>() == Approx(L).epsilon(0.001));
+  CHECK(c[0]["overshoot_mm"].get<double>() == Approx(tr.overshoot_mm).epsilon(0.10));
+  CHECK(c[0]["settling_time_s"].get<double>() == Approx(tr.settling_s).epsilon(0.10));
+  CHECK(c[0]["residual_freq_hz"].get<double>() == Approx(f).epsilon(0.03));
 }
