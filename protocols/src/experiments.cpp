@@ -86,13 +86,14 @@ std::vector<ProtocolSpec> make_specs() {
                {"accelerometer"},
                true});
   s.push_back({"axis-rectangle",
-               "seed 000's overshoot test: an XY rectangle with pauses at the corners, repeated; each axis sees "
-               "step motions; the accelerometer is recorded",
+               "the overshoot test of Hemminger, Improvements and Characterization of Error, Speed, and Capabilities "
+               "in Low-Cost Additive Manufacturing Systems, UCLA, 2022: an XY rectangle with pauses at the corners, "
+               "repeated; each axis sees step motions; the accelerometer is recorded (analyze: tunekit overshoot)",
                {{"width_mm", 40, "mm", "rectangle size along x"},
                 {"height_mm", 40, "mm", "rectangle size along y"},
                 {"speed_mm_s", 100, "mm/s", "move speed"},
                 {"accel_mm_s2", 3000, "mm/s^2", "move acceleration"},
-                {"repeats", 5, "", "rectangles (seed 000: 5)"},
+                {"repeats", 5, "", "rectangles (the thesis: 5)"},
                 {"pause_s", 0.3, "s", "pause at each corner"}},
                {"accelerometer"},
                false});

@@ -10,7 +10,7 @@
 //   liquefier-chirp     linear chirp of the feed, load cell recorded
 //   ring-print          seed 001's ring: a circle printed with the feed modulated by A sin(N theta)
 //   axis-sweep          resonance sweep: acceleration accel_per_hz * f, f rising at hz_per_sec
-//   axis-rectangle      seed 000's overshoot rectangle: XY rectangle with pauses, repeated
+//   axis-rectangle      Hemminger's (UCLA, 2022) overshoot rectangle: XY rectangle with pauses, repeated
 //   test-pattern        pads, line steps and rings ordered by the coverage planner (coverage_planner.hpp)
 
 #include <map>
