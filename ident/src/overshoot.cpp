@@ -171,6 +171,9 @@ OvershootAnalysis analyze_overshoot_accel(const std::vector<double>& t, const st
   bool in_motion = false;
   std::size_t motion_begin = 0;
   std::size_t i = 0;
+  // A record that starts inside a motion (e.g. the shaped tail of the move before recording
+  // began) has no known start velocity: skip to its first rest.
+  while (i < n && active(i)) ++i;
   while (i < n) {
     if (active(i)) {
       if (!in_motion) {
