@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 #include <numbers>
@@ -156,28 +157,38 @@ TEST_CASE("overshoot of a run without pauses is a bad-input error naming the fil
   CHECK(r.err.find("no corner found") != std::string::npos);
 }
 
-TEST_CASE("overshoot grid mode maps overshoot and the figure of merit and puts the map in the report",
+TEST_CASE("overshoot grid mode maps overshoot and the figure of merit, compares input shaping on/off, and puts the map in the report",
           "[machine][e2e][overshoot]") {
   const auto out = tunekit::test::scratch_dir("machine_overshoot_grid") + "/grid";
   const auto r = run_cli({"overshoot", "-p", "speed_mm_s=100,200", "-p", "accel_mm_s2=1000,8000", "-p", "repeats=1",
-                          "--sim", "mode_x=40:0.05", "--sim", "mode_y=31:0.07", "--tolerance-mm", "0.03", "--out", out,
-                          "--json"});
+                          "--sim", "mode_x=40:0.05", "--sim", "mode_y=31:0.07", "--shaper", "x=zv:40:0.05", "--shaper",
+                          "y=zv:31:0.07", "--tolerance-mm", "0.03", "--out", out, "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto res = nlohmann::json::parse(r.out)["results"];
-  REQUIRE(res["grid"].size() == 4);
+  REQUIRE(res["grid"].size() == 8);  // 2 speeds x 2 accelerations, shaping off and on
   double os_low = 0, os_high = 0;
+  std::map<std::pair<double, double>, double> off;
   for (const auto& c : res["grid"]) {
-    if (c["accel_mm_s2"].get<double>() == 1000) os_low = std::max(os_low, c["overshoot_mm"].get<double>());
-    else os_high = std::max(os_high, c["overshoot_mm"].get<double>());
     // Zero exactly where the tolerance is exceeded.
     CHECK((c["figure_of_merit"].get<double>() > 0) == (c["overshoot_mm"].get<double>() <= 0.03));
+    if (c["input_shaping"].get<bool>()) continue;
+    off[{c["speed_mm_s"].get<double>(), c["accel_mm_s2"].get<double>()}] = c["overshoot_mm"].get<double>();
+    if (c["accel_mm_s2"].get<double>() == 1000) os_low = std::max(os_low, c["overshoot_mm"].get<double>());
+    else os_high = std::max(os_high, c["overshoot_mm"].get<double>());
   }
   CHECK(os_high > 2 * os_low);  // the overshoot grows with the acceleration
-  REQUIRE(res.contains("best"));
-  // The fastest setting within the tolerance: the largest figure of merit among the admissible cells.
+  // A ZV shaper tuned to the simulated modes removes most of the residual vibration at every point.
   for (const auto& c : res["grid"])
-    CHECK(c["figure_of_merit"].get<double>() <= res["best"]["figure_of_merit"].get<double>());
+    if (c["input_shaping"].get<bool>())
+      CHECK(c["overshoot_mm"].get<double>() < 0.25 * off.at({c["speed_mm_s"].get<double>(), c["accel_mm_s2"].get<double>()}));
+  REQUIRE(res.contains("best"));
+  REQUIRE(res.contains("best_shaped"));
+  CHECK(res["best_shaped"]["accel_mm_s2"].get<double>() == 8000);  // shaped, the highest acceleration is within tolerance
+  for (const auto& c : res["grid"]) {
+    const auto& b = c["input_shaping"].get<bool>() ? res["best_shaped"] : res["best"];
+    CHECK(c["figure_of_merit"].get<double>() <= b["figure_of_merit"].get<double>());
+  }
   const auto html = tunekit::test::read_text(out + "/report.html");
   CHECK(tunekit::test::embedded_png_base64_length(html, "overshoot_grid") > 1000);
 }

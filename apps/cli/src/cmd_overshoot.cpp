@@ -38,6 +38,7 @@ struct OvershootArgs {
   std::string out_dir;
   std::string runs_root = "runs";
   double tolerance_mm = 0.05;
+  std::vector<std::string> shapers;  // grid mode on the simulator: AXIS=TYPE:FREQ[:DAMPING]
   bool traces = false;
   OutputOptions output;
 };
@@ -161,8 +162,20 @@ int run_grid(const OvershootArgs& a, CliContext& ctx) {
   struct Cell {
     double v, acc, overshoot_mm, settling_s, completion_s, fom = 0;
     std::string run_dir;
+    bool shaped = false;
   };
+  std::vector<std::string> shaper_opts;
+  for (const auto& sh : a.shapers) {
+    const auto eq = sh.find('=');
+    if (eq == std::string::npos || (sh.substr(0, eq) != "x" && sh.substr(0, eq) != "y"))
+      throw InputError(fmt::format("--shaper {}: expected AXIS=TYPE:FREQ_HZ[:DAMPING] with AXIS x or y", sh));
+    shaper_opts.push_back("shaper_" + sh);
+  }
+  if (!shaper_opts.empty() && a.machine != "sim")
+    throw InputError("--shaper compares shaping on/off on the simulator; on a machine run the grid twice, with the "
+                     "firmware's input shaper enabled and disabled");
   std::vector<Cell> cells;
+  for (const bool shaped : shaper_opts.empty() ? std::vector<bool>{false} : std::vector<bool>{false, true})
   for (double v : lists["speed_mm_s"])
     for (double acc : lists["accel_mm_s2"]) {
       protocols::RunOptions o;
@@ -170,10 +183,11 @@ int run_grid(const OvershootArgs& a, CliContext& ctx) {
       o.machine = a.machine;
       o.port = a.port;
       o.sim_options = a.sim;
+      if (shaped) o.sim_options.insert(o.sim_options.end(), shaper_opts.begin(), shaper_opts.end());
       for (const auto& [k, vals] : lists) o.params[k] = vals.front();
       o.params["speed_mm_s"] = v;
       o.params["accel_mm_s2"] = acc;
-      o.run_dir = fmt::format("{}/v{:g}_a{:g}", out, v, acc);
+      o.run_dir = fmt::format("{}/v{:g}_a{:g}{}", out, v, acc, shaped ? "_shaped" : "");
       o.file_tag = "rect";
       if (ctx.verbosity > 0) ctx.err << fmt::format("tunekit: grid point {:g} mm/s, {:g} mm/s^2\n", v, acc);
       const auto r = protocols::run_experiment(o);
@@ -184,15 +198,17 @@ int run_grid(const OvershootArgs& a, CliContext& ctx) {
         os = std::max(os, s.mean_overshoot_mm);
         st = std::max(st, s.mean_settling_time_s);
       }
-      cells.push_back({v, acc, os, st, an.motion_time_s, 0, r.run_dir});
+      cells.push_back({v, acc, os, st, an.motion_time_s, 0, r.run_dir, shaped});
     }
   double mean_t = 0;
   for (const auto& c : cells) mean_t += c.completion_s;
   mean_t /= static_cast<double>(cells.size());
   const Cell* best = nullptr;
+  const Cell* best_shaped = nullptr;
   for (auto& c : cells) {
     c.fom = ident::overshoot_figure_of_merit(c.overshoot_mm, a.tolerance_mm, c.completion_s, mean_t);
-    if (c.fom > 0 && (best == nullptr || c.fom > best->fom)) best = &c;
+    const Cell*& b = c.shaped ? best_shaped : best;
+    if (c.fom > 0 && (b == nullptr || c.fom > b->fom)) b = &c;
   }
 
   Envelope env("overshoot");
@@ -205,7 +221,8 @@ int run_grid(const OvershootArgs& a, CliContext& ctx) {
   for (const auto& c : cells)
     grid.push_back({{"speed_mm_s", c.v}, {"accel_mm_s2", c.acc}, {"overshoot_mm", c.overshoot_mm},
                     {"settling_time_s", c.settling_s}, {"completion_time_s", c.completion_s},
-                    {"figure_of_merit", c.fom}, {"run_dir", std::filesystem::relative(c.run_dir, out).string()}});
+                    {"figure_of_merit", c.fom}, {"input_shaping", c.shaped},
+                    {"run_dir", std::filesystem::relative(c.run_dir, out).string()}});
   res["grid"] = grid;
   res["mean_completion_time_s"] = mean_t;
   res["figure_of_merit"] = "normalized motion speed (mean completion time / completion time) where the overshoot "
@@ -220,6 +237,14 @@ int run_grid(const OvershootArgs& a, CliContext& ctx) {
   } else {
     env.warn(fmt::format("no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
   }
+  if (!shaper_opts.empty()) {
+    res["input_shapers"] = a.shapers;
+    if (best_shaped)
+      res["best_shaped"] = {{"speed_mm_s", best_shaped->v}, {"accel_mm_s2", best_shaped->acc},
+                            {"overshoot_mm", best_shaped->overshoot_mm}, {"completion_time_s", best_shaped->completion_s},
+                            {"figure_of_merit", best_shaped->fom}};
+    else env.warn(fmt::format("with input shaping no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
+  }
   nlohmann::json pd;
   pd["overshoot_grid"] = {{"tolerance_mm", a.tolerance_mm}, {"cells", grid}};
   protocols::write_file_atomic(out + "/results.json", env.dump());
@@ -228,10 +253,11 @@ int run_grid(const OvershootArgs& a, CliContext& ctx) {
   res["report"] = report;
   if (!a.output.json) {
     ctx.out << fmt::format("overshoot grid ({} points), tolerance {:g} mm: {}\n", cells.size(), a.tolerance_mm, out);
-    ctx.out << "  speed_mm_s accel_mm_s2 overshoot_mm settle_s completion_s   FOM\n";
+    ctx.out << "  shaping speed_mm_s accel_mm_s2 overshoot_mm settle_s completion_s   FOM\n";
     for (const auto& c : cells)
-      ctx.out << fmt::format("  {:>10g} {:>11g} {:>12.4f} {:>8.4f} {:>12.3f} {:>5.3f}{}\n", c.v, c.acc, c.overshoot_mm,
-                             c.settling_s, c.completion_s, c.fom, &c == best ? "  <- fastest within tolerance" : "");
+      ctx.out << fmt::format("  {:>7} {:>10g} {:>11g} {:>12.4f} {:>8.4f} {:>12.3f} {:>5.3f}{}\n", c.shaped ? "on" : "off", c.v,
+                             c.acc, c.overshoot_mm, c.settling_s, c.completion_s, c.fom,
+                             (&c == best || &c == best_shaped) ? "  <- fastest within tolerance" : "");
     ctx.out << "report: " << report << "\n";
   }
   return emit(env, a.output, ctx);
@@ -286,6 +312,9 @@ void register_overshoot(CLI::App& app, CliContext& ctx) {
   sub->add_option("--port", args->port, "Grid mode: the machine's port (see tunekit run)");
   sub->add_option("--sim", args->sim, "Grid mode: simulator option KEY=VALUE (repeatable), e.g. mode_x=40:0.05");
   sub->add_option("--tolerance-mm", args->tolerance_mm, "Grid mode: overshoot tolerance of the figure of merit (mm)")->capture_default_str();
+  sub->add_option("--shaper", args->shapers,
+                  "Grid mode on the simulator: also run the grid with input shaping AXIS=TYPE:FREQ_HZ[:DAMPING] "
+                  "(repeatable, e.g. x=zv:48) and compare shaping on/off");
   sub->add_option("--out", args->out_dir, "Grid mode: directory for the grid's runs, results.json and report.html");
   sub->add_option("--runs-root", args->runs_root, "Grid mode: default parent of --out")->capture_default_str();
   add_output_options(sub, args->output);
@@ -301,6 +330,8 @@ void register_overshoot(CLI::App& app, CliContext& ctx) {
       "  tunekit overshoot encoder.csv --time t_s --position-x x_mm --band-mm 0.02\n"
       "  tunekit overshoot -p speed_mm_s=50,100,200 -p accel_mm_s2=1000,3000,6000 --machine sim --tolerance-mm 0.03 \\\n"
       "      --out runs/os-grid      # writes runs/os-grid/report.html with the grid map\n"
+      "  tunekit overshoot -p accel_mm_s2=2000,5000,8000 --sim mode_x=48:0.08 --shaper x=zv:48 --shaper y=mzv:37 \\\n"
+      "      --out runs/os-shaped    # the same grid with input shaping off and on\n"
       "Exit codes: 2 bad input (no corner found, missing columns), 3 machine failure in grid mode.");
   sub->callback([args, &ctx] { set_exit_code(run_overshoot(*args, ctx)); });
 }

@@ -14,19 +14,23 @@ namespace tunekit::cli {
 Figure overshoot_grid_figure(const nlohmann::json& d) {
   Figure f;
   f.title = "Overshoot grid: speed x acceleration";
-  std::map<double, std::vector<std::pair<double, const nlohmann::json*>>> by_speed;
+  std::map<std::pair<bool, double>, std::vector<std::pair<double, const nlohmann::json*>>> by_speed;
   if (d.contains("cells"))
-    for (const auto& c : d["cells"]) by_speed[c.value("speed_mm_s", 0.0)].push_back({c.value("accel_mm_s2", 0.0), &c});
+    for (const auto& c : d["cells"])
+      by_speed[{c.value("input_shaping", false), c.value("speed_mm_s", 0.0)}].push_back({c.value("accel_mm_s2", 0.0), &c});
   Panel os{"Overshoot (mean over corners, worst axis)", "", "overshoot (mm)", false, false, {}, 1.2};
   Panel fom{"Figure of merit (normalized speed within tolerance, else 0)", "acceleration (mm/s^2)", "FOM", false, false, {}, 1.0};
   Panel ct{"Completion time of the motion", "", "time (s)", false, false, {}, 0.8};
   int color = 1;
   std::vector<double> ax_all;
-  for (auto& [v, cells] : by_speed) {
+  for (auto& [key, cells] : by_speed) {
+    const auto [shaped, v] = key;
     std::sort(cells.begin(), cells.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    Series so{fmt::format("{:g} mm/s", v), {}, {}, Series::Style::line, color};
-    Series sf{fmt::format("{:g} mm/s", v), {}, {}, Series::Style::line, color};
-    Series sc{"", {}, {}, Series::Style::line, color};
+    const auto style = shaped ? Series::Style::dashed : Series::Style::line;
+    const std::string label = fmt::format("{:g} mm/s{}", v, shaped ? " shaped" : "");
+    Series so{label, {}, {}, style, color};
+    Series sf{label, {}, {}, style, color};
+    Series sc{"", {}, {}, style, color};
     for (const auto& [acc, c] : cells) {
       so.x.push_back(acc);
       so.y.push_back(c->value("overshoot_mm", 0.0));
