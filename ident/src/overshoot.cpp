@@ -11,7 +11,7 @@
 namespace tunekit::ident {
 namespace {
 
-struct PauseWindow {
+struct OvershootPauseWindow {
   std::size_t begin = 0, end = 0;  // sample indices, end inclusive
   std::size_t motion_begin = 0;    // first sample of the motion before the pause
   double move[2] = {0, 0};         // commanded displacement per axis (mm)
@@ -166,7 +166,7 @@ OvershootAnalysis analyze_overshoot_accel(const std::vector<double>& t, const st
     return std::abs(cmd_ax[i]) > o.accel_zero_mm_s2 || std::abs(cmd_ay[i]) > o.accel_zero_mm_s2;
   };
   // Commanded velocity and displacement by integration, reset at every pause.
-  std::vector<PauseWindow> pauses;
+  std::vector<OvershootPauseWindow> pauses;
   double v[2] = {0, 0}, d[2] = {0, 0}, vpeak = 0;
   bool in_motion = false;
   std::size_t motion_begin = 0;

@@ -112,7 +112,7 @@ ident::OvershootAnalysis overshoot_from_csv(const OvershootArgs& a, std::vector<
   }
 }
 
-void print_analysis(std::ostream& os, const ident::OvershootAnalysis& r) {
+void print_overshoot_analysis(std::ostream& os, const ident::OvershootAnalysis& r) {
   os << fmt::format("{} corners from the {}; motion time {:.3f} s\n", r.corners.size(), r.source, r.motion_time_s);
   os << "  corner axis   move_mm  overshoot_mm     %   settle_s  resid_mm  resid_Hz\n";
   for (const auto& c : r.corners)
@@ -126,7 +126,7 @@ void print_analysis(std::ostream& os, const ident::OvershootAnalysis& r) {
                       s.mean_residual_amplitude_mm, s.median_residual_freq_hz);
 }
 
-std::vector<double> parse_list(const std::string& name, const std::string& v) {
+std::vector<double> parse_overshoot_grid_list(const std::string& name, const std::string& v) {
   std::vector<double> out;
   std::size_t b = 0;
   for (;;) {
@@ -143,12 +143,12 @@ std::vector<double> parse_list(const std::string& name, const std::string& v) {
   return out;
 }
 
-int run_grid(const OvershootArgs& a, CliContext& ctx) {
+int run_overshoot_grid(const OvershootArgs& a, CliContext& ctx) {
   std::map<std::string, std::vector<double>> lists;
   for (const auto& p : a.params) {
     const auto eq = p.find('=');
     if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE[,VALUE...]", p));
-    lists[p.substr(0, eq)] = parse_list(p.substr(0, eq), p.substr(eq + 1));
+    lists[p.substr(0, eq)] = parse_overshoot_grid_list(p.substr(0, eq), p.substr(eq + 1));
   }
   if (!lists.count("speed_mm_s")) lists["speed_mm_s"] = {protocols::protocol_spec("axis-rectangle").params[2].default_value};
   if (!lists.count("accel_mm_s2")) lists["accel_mm_s2"] = {protocols::protocol_spec("axis-rectangle").params[3].default_value};
@@ -268,7 +268,7 @@ int run_overshoot(const OvershootArgs& a, CliContext& ctx) {
   if (!(a.opt.tail_fraction > 0 && a.opt.tail_fraction < 1)) throw InputError("--tail must be between 0 and 1");
   if (!a.params.empty() || a.input.empty()) {
     if (!a.input.empty()) throw InputError("give either RUN (analyze) or -p lists (grid mode), not both");
-    return run_grid(a, ctx);
+    return run_overshoot_grid(a, ctx);
   }
   std::vector<std::string> inputs;
   const auto r = std::filesystem::is_directory(a.input) ? overshoot_from_run_dir(a.input, a.opt, inputs)
@@ -279,7 +279,7 @@ int run_overshoot(const OvershootArgs& a, CliContext& ctx) {
   for (const auto& in : inputs) env.add_input(in);
   env.results() = ident::to_json(r, a.traces);
   for (const auto& w : r.warnings) env.warn(w);
-  if (!a.output.json) print_analysis(ctx.out, r);
+  if (!a.output.json) print_overshoot_analysis(ctx.out, r);
   return emit(env, a.output, ctx);
 }
 
