@@ -266,6 +266,8 @@ int run_overshoot_grid(const OvershootArgs& a, CliContext& ctx) {
 int run_overshoot(const OvershootArgs& a, CliContext& ctx) {
   if (!(a.opt.band_mm > 0)) throw InputError("--band-mm must be positive (mm)");
   if (!(a.opt.tail_fraction > 0 && a.opt.tail_fraction < 1)) throw InputError("--tail must be between 0 and 1");
+  if (a.input.empty() && a.params.empty() && a.shapers.empty())
+    throw InputError("give a run directory or CSV to analyze, or -p speed_mm_s=...,... / -p accel_mm_s2=...,... for a grid");
   if (!a.params.empty() || a.input.empty()) {
     if (!a.input.empty()) throw InputError("give either RUN (analyze) or -p lists (grid mode), not both");
     return run_overshoot_grid(a, ctx);
