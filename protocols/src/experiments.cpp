@@ -11,6 +11,7 @@
 #include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
+#include "tunekit/protocols/coverage_planner.hpp"
 #include "tunekit/protocols/gcode.hpp"
 #include "tunekit/protocols/trajectory.hpp"
 
@@ -111,8 +112,9 @@ std::vector<ProtocolSpec> make_specs() {
                {"accelerometer"},
                true});
   s.push_back({"axis-rectangle",
-               "Hemminger's (UCLA, 2022) overshoot test: an XY rectangle with pauses at the corners, repeated; each axis sees "
-               "step motions; the accelerometer is recorded",
+               "the overshoot test of Hemminger, Improvements and Characterization of Error, Speed, and Capabilities "
+               "in Low-Cost Additive Manufacturing Systems, UCLA, 2022: an XY rectangle with pauses at the corners, "
+               "repeated; each axis sees step motions; the accelerometer is recorded (analyze: tunekit overshoot)",
                {{"width_mm", 40, "mm", "rectangle size along x"},
                 {"height_mm", 40, "mm", "rectangle size along y"},
                 {"speed_mm_s", 100, "mm/s", "move speed"},
@@ -120,6 +122,24 @@ std::vector<ProtocolSpec> make_specs() {
                 {"repeats", 5, "", "rectangles (Hemminger 2022: 5)"},
                 {"pause_s", 0.3, "s", "pause at each corner"}},
                {"accelerometer"},
+               false});
+  s.push_back({"test-pattern",
+               "test prints (pads for photos, line steps, rings) on one layer, ordered by the grid-based coverage "
+               "planner after Li and Yao, Coverage Path Planning Application on FDM 3D Printer, USC, 2018 (fewer "
+               "travels and retractions than a zigzag; zigzag=1 prints the zigzag for comparison)",
+               {{"pads", 4, "", "filled squares for photos"},
+                {"pad_mm", 20, "mm", "pad size"},
+                {"line_steps", 5, "", "single lines of rising length"},
+                {"line_mm", 30, "mm", "longest line"},
+                {"rings", 2, "", "two-line-wide rings"},
+                {"ring_radius_mm", 12, "mm", "ring radius"},
+                {"speed_mm_s", 40, "mm/s", "print speed"},
+                {"travel_speed_mm_s", 150, "mm/s", "travel speed"},
+                {"accel_mm_s2", 1500, "mm/s^2", "acceleration"},
+                {"z_mm", 0.2, "mm", "layer height / nozzle height"},
+                {"zigzag", 0, "", "1: plain zigzag order instead of the coverage planner"},
+                hotend},
+               {},
                false});
   return s;
 }
@@ -567,6 +587,50 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back(d.wait_for_moves());
     g.push_back(";@record accelerometer off");
     epilogue(g, restore);
+  } else if (protocol == "test-pattern") {
+    TestPatternSet set;
+    set.pads = static_cast<int>(std::lround(p.at("pads")));
+    set.pad_mm = positive("pad_mm");
+    set.line_steps = static_cast<int>(std::lround(p.at("line_steps")));
+    set.line_mm = positive("line_mm");
+    set.rings = static_cast<int>(std::lround(p.at("rings")));
+    set.ring_radius_mm = positive("ring_radius_mm");
+    CoverageMotion mo;
+    mo.print_speed_mm_s = positive("speed_mm_s");
+    mo.travel_speed_mm_s = positive("travel_speed_mm_s");
+    mo.accel_mm_s2 = positive("accel_mm_s2");
+    // The safety check counts a retraction's filament speed against the hot end's flow limit.
+    double retract = mo.retract_speed_mm_s;
+    if (profile.extruder.max_flow_mm3_s > 0) retract = std::min(retract, 0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2());
+    if (profile.extruder.max_velocity_mm_s > 0) retract = std::min(retract, 0.9 * profile.extruder.max_velocity_mm_s);
+    mo.retract_speed_mm_s = retract;
+    const auto plan = plan_test_patterns(set, profile, p.at("zigzag") != 0 ? "zigzag" : "pce", mo);
+    const auto other = plan_test_patterns(set, profile, p.at("zigzag") != 0 ? "pce" : "zigzag", mo);
+    for (const auto* pl : {&plan, &other})
+      g.push_back(fmt::format("; {} order: print {} mm, travel {} mm, {} retractions, estimated {} s", pl->planner,
+                              num(pl->stats.print_mm, 1), num(pl->stats.travel_mm, 1), pl->stats.retractions,
+                              num(pl->stats.time_s, 1)));
+    const double e_per_mm = profile.line_area_mm2() / profile.filament_area_mm2();
+    g.push_back("G28");
+    g.push_back("G90");
+    g.push_back("M83 ; relative extrusion");
+    if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
+    g.push_back(d.set_accel(std::min(mo.accel_mm_s2, profile.axis("z").max_accel_mm_s2)));
+    g.push_back(fmt::format("G1 Z{} F{}", num(positive("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
+    g.push_back(d.set_accel(mo.accel_mm_s2));
+    const auto& first = plan.moves.front();
+    g.push_back(fmt::format("G0 X{} Y{} F{}", num(first.x0), num(first.y0), num(mo.travel_speed_mm_s * 60, 1)));
+    for (const auto& m : plan.moves) {
+      if (m.extrude) {
+        g.push_back(fmt::format("G1 X{} Y{} E{} F{}", num(m.x1), num(m.y1),
+                                num(e_per_mm * std::hypot(m.x1 - m.x0, m.y1 - m.y0), 5), num(mo.print_speed_mm_s * 60, 1)));
+      } else {
+        g.push_back(fmt::format("G1 E-{} F{}", num(mo.retract_mm), num(mo.retract_speed_mm_s * 60, 1)));
+        g.push_back(fmt::format("G0 X{} Y{} F{}", num(m.x1), num(m.y1), num(mo.travel_speed_mm_s * 60, 1)));
+        g.push_back(fmt::format("G1 E{} F{}", num(mo.retract_mm), num(mo.retract_speed_mm_s * 60, 1)));
+      }
+    }
+    g.push_back(d.wait_for_moves());
   }
   e.estimated_duration_s = estimate_duration(g, kMachineJerk);
   return e;

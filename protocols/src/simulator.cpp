@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/input_shaper.hpp"
 
 #ifndef TUNEKIT_VERSION
 #define TUNEKIT_VERSION "0.1.0"
@@ -109,6 +110,16 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
         modes.push_back(sm);
       }
       c.modes[k.substr(5)] = modes;
+    } else if (k.rfind("shaper_", 0) == 0 && k.size() == 8 && (k[7] == 'x' || k[7] == 'y')) {
+      const auto parts = split(v, ':');
+      if (parts.size() < 2 || parts.size() > 3)
+        throw InputError(fmt::format("simulator option {}: '{}' is not TYPE:FREQ_HZ[:DAMPING]", k, v));
+      const double damping = parts.size() == 3 ? parse_double(k, parts[2]) : 0.1;
+      const auto sh = ident::design_shaper(ident::parse_shaper_type(parts[0]), pos(parse_double(k, parts[1])), damping);
+      std::vector<std::pair<double, double>> imp;
+      for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) imp.push_back({sh.amplitudes[i], sh.times_s[i]});
+      c.shapers[k.substr(7)] = imp;
+      c.shaper_names[k.substr(7)] = fmt::format("{}:{:g}:{:g}", parts[0], sh.freq_hz, damping);
     } else if (k == "fault") {
       const auto at = v.find('@');
       if (at == std::string::npos) throw InputError(fmt::format("simulator fault '{}' is not KIND@LINE", v));
@@ -180,6 +191,7 @@ nlohmann::json SimConfig::truth() const {
                   {"max_extrude_only_distance_mm", max_extrude_only_distance_mm},
                   {"max_extrude_only_accel_mm_s2", max_extrude_only_accel_mm_s2},
                   {"minimum_cruise_ratio", minimum_cruise_ratio}};
+  for (const auto& [axis, name] : shaper_names) j["input_shaper"][axis] = name;
   j["seed"] = seed;
   nlohmann::json faults = nlohmann::json::array();
   for (const auto& f : this->faults) faults.push_back(f.describe());
@@ -247,9 +259,36 @@ void Simulator::out_flush(const Emit& emit) {
 }
 
 void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 4>& vel,
-                     const std::array<double, 4>& acc0, const std::array<double, 3>& accm, const std::array<double, 3>& acc1,
-                     const Emit& emit) {
+                     const std::array<double, 4>& acc0_in, const std::array<double, 3>& accm_in,
+                     const std::array<double, 3>& acc1_in, const Emit& emit) {
   const double h = dt_;
+  std::array<double, 4> acc0 = acc0_in;
+  std::array<double, 3> accm = accm_in, acc1 = acc1_in;
+  if (!cfg_.shapers.empty()) {
+    // Input shaping: the commanded x/y acceleration is the sum of delayed, scaled copies.
+    std::size_t need = 1;
+    for (const auto& [axis, imp] : cfg_.shapers)
+      for (const auto& [a, t] : imp) need = std::max(need, static_cast<std::size_t>(std::lround(t / h)) + 1);
+    for (std::size_t ax = 0; ax < 2; ++ax) {
+      auto& hist = shape_hist_[ax];
+      if (hist.size() < need) hist.assign(need, {0.0, 0.0, 0.0});
+      hist[shape_pos_ % hist.size()] = {acc0_in[ax], accm_in[ax], acc1_in[ax]};
+      const auto it = cfg_.shapers.find(kAxisNames[ax]);
+      if (it == cfg_.shapers.end()) continue;
+      double s0 = 0, sm = 0, s1 = 0;
+      for (const auto& [a, t] : it->second) {
+        const std::size_t lag = static_cast<std::size_t>(std::lround(t / h));
+        const auto& e = hist[(shape_pos_ + hist.size() - lag % hist.size()) % hist.size()];
+        s0 += a * e[0];
+        sm += a * e[1];
+        s1 += a * e[2];
+      }
+      acc0[ax] = s0;
+      accm[ax] = sm;
+      acc1[ax] = s1;
+    }
+    ++shape_pos_;
+  }
   std::array<double, 3> meas{acc1[0], acc1[1], acc1[2]};
   for (std::size_t ax = 0; ax < 3; ++ax) {
     const auto it = cfg_.modes.find(kAxisNames[ax]);

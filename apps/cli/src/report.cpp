@@ -211,6 +211,9 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
       add(key, fmt::format("Axis {}: PSD with identified modes and the candidate shapers' responses", axis),
           psd_figure(pd[key], axis));
   }
+  if (pd.contains("overshoot_grid"))
+    add("overshoot_grid", "Overshoot, completion time and figure of merit over the speed x acceleration grid",
+        overshoot_grid_figure(pd["overshoot_grid"]));
   if (pd.contains("viscosity")) add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(pd["viscosity"]));
   if (pd.contains("linewidth")) {
     add("linewidth", "Line-width profile", linewidth_figure(pd["linewidth"]));

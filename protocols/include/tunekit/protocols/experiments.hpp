@@ -14,6 +14,7 @@
 //   line-steps          camera path: straight lines whose flow steps low -> high -> low (camera_prints.hpp)
 //   axis-sweep          resonance sweep: acceleration accel_per_hz * f, f rising at hz_per_sec
 //   axis-rectangle      Hemminger's (UCLA, 2022) overshoot rectangle: XY rectangle with pauses, repeated
+//   test-pattern        pads, line steps and rings ordered by the coverage planner (coverage_planner.hpp)
 
 #include <map>
 #include <string>

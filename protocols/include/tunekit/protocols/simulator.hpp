@@ -74,6 +74,11 @@ struct SimConfig {
   double accel_noise_mm_s2 = 20;
   double cross_coupling = 0.05;  ///< share of one horizontal axis' response seen on the other
   double jerk_mm_s3 = 1e8;
+  /// Input shaping of the commanded x/y motion, as the firmware applies it: the commanded
+  /// acceleration becomes sum_i A_i a(t - T_i) (impulses rounded to the simulation step).
+  /// Option "shaper_x=TYPE:FREQ_HZ[:DAMPING]" (damping default 0.1), e.g. "shaper_x=zv:48".
+  std::map<std::string, std::vector<std::pair<double, double>>> shapers;  ///< axis -> (A_i, T_i s)
+  std::map<std::string, std::string> shaper_names;                       ///< axis -> "zv:48:0.1"
   unsigned seed = 1;
   // The firmware whose planner rules the simulator follows ("marlin", "klipper", "rrf"): M115
   // names it, and moves run as that firmware plans them:
@@ -175,6 +180,9 @@ class Simulator {
   long step_ = 0;
   int accel_every_, load_every_;
   std::map<std::string, std::vector<std::array<double, 2>>> mode_state_;
+  // Unshaped commanded accelerations (start, middle, end of each step) of x and y, for shaping.
+  std::array<std::vector<std::array<double, 3>>, 2> shape_hist_;
+  std::size_t shape_pos_ = 0;
   std::vector<double> delay_;
   std::size_t delay_pos_ = 0;
   double liq_ = 0;  ///< FOPDT output (N) or pressure (MPa)

@@ -40,5 +40,6 @@ void register_inspect(CLI::App& app, CliContext& ctx);
 void register_history(CLI::App& app, CliContext& ctx);
 void register_belts(CLI::App& app, CliContext& ctx);
 void register_delta(CLI::App& app, CliContext& ctx);
+void register_overshoot(CLI::App& app, CliContext& ctx);
 
 }  // namespace tunekit::cli

@@ -33,6 +33,8 @@ Figure bode_figure(const nlohmann::json& d);
 Figure psd_figure(const nlohmann::json& d, const std::string& axis);
 Figure viscosity_figure(const nlohmann::json& d);
 Figure linewidth_figure(const nlohmann::json& d);
+/// overshoot_grid: {tolerance_mm, cells: [{speed_mm_s, accel_mm_s2, overshoot_mm, completion_time_s, figure_of_merit}]}
+Figure overshoot_grid_figure(const nlohmann::json& d);
 
 struct ReportImage {
   std::string id;       ///< e.g. "step", "psd_x"
