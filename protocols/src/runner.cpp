@@ -157,8 +157,10 @@ class Session {
 
 class GcodeSession : public Session {
  public:
-  GcodeSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const std::atomic<bool>* abort)
+  GcodeSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const std::atomic<bool>* abort,
+               SendGuard& guard)
       : t_(std::move(t)), link_(*t_, &j, lo) {
+    link_.guard = &guard;
     link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
     link_.on_batch = [&j] { j.flush(); };
     link_.abort_flag = abort;
@@ -193,8 +195,8 @@ class GcodeSession : public Session {
 
 class KlipperSession : public Session {
  public:
-  KlipperSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo)
-      : client_(std::move(t), &j), rec_(rec), timeout_(lo.timeout) {
+  KlipperSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, SendGuard& guard)
+      : client_(std::move(t), &j), rec_(rec), timeout_(lo.timeout), guard_(guard) {
     client_.on_message = [this](const nlohmann::json& m) {
       if (!accel_on_ || m.value("tunekit", "") != "accel" || !m.contains("params")) return;
       const auto& p = m["params"];
@@ -214,6 +216,9 @@ class KlipperSession : public Session {
     return f;
   }
   void send(const std::string& line) override {
+    if (const auto why = guard_.refuse(line))
+      throw MachineError(fmt::format("refused to send '{}': {} (nothing of it was sent)", line, *why),
+                         client_.transport().describe());
     pending_.push_back(line);
     if (pending_.size() >= 50) flush_script();
   }
@@ -250,6 +255,7 @@ class KlipperSession : public Session {
   KlipperApiClient client_;
   Recorder& rec_;
   std::chrono::milliseconds timeout_;
+  SendGuard& guard_;
   std::vector<std::string> pending_;
   bool subscribed_ = false, accel_on_ = false;
 };
@@ -278,10 +284,10 @@ RunResult run_experiment(const RunOptions& o) {
   const Dialect dialect(profile.firmware.empty() ? Firmware::marlin : firmware_from_name(profile.firmware));
 
   RunResult res;
-  res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect);
+  res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect, o.limits);
   res.gcode = res.experiment.gcode;
-  // The gate: nothing is opened or sent when the protocol exceeds the profile.
-  require_within_limits(res.gcode, profile, res.experiment.sensors);
+  // The gate: nothing is opened or sent when the protocol exceeds the profile or the caps.
+  require_within_limits(res.gcode, profile, res.experiment.sensors, o.limits);
   if (o.dry_run) {
     res.status = "dry-run";
     return res;
@@ -342,13 +348,14 @@ RunResult run_experiment(const RunOptions& o) {
     if (journal.has_csv(rec.commanded_file())) res.files["commanded_accel"] = journal.path(rec.commanded_file());
   };
 
+  SendGuard guard(profile);  // the last check of every line, in the link
   std::unique_ptr<Session> session;
   try {
     progress(fmt::format("connecting to {}", port));
     const bool api = port.rfind("unix:", 0) == 0;
     auto transport = open_transport(port, o.baud);
-    if (api) session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link);
-    else session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag);
+    if (api) session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, guard);
+    else session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag, guard);
     session->firmware = session->identify();
     session->dialect = Dialect(session->firmware.firmware == Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
     journal.event("firmware", {{"name", session->firmware.name},

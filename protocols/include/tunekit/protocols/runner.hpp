@@ -44,6 +44,7 @@ struct RunOptions {
   std::string runs_root = "runs";
   std::vector<std::string> sim_options;  ///< SimConfig::from_options keys ("tau_s=0.5", "fault=drop@12")
   LinkOptions link;                      ///< timeouts and retries
+  ProtocolLimits limits;                 ///< caps on the protocol's machine time, lines and bytes
   bool dry_run = false;                  ///< build and check only; RunResult::gcode is filled
   const std::atomic<bool>* abort_flag = nullptr;  ///< e.g. set by SIGINT
   std::function<void(const std::string&)> progress;  ///< human progress messages
