@@ -322,8 +322,10 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   }
   if (!a.gcode_out.empty()) batch.add(a.gcode_out, result.gcode);
   const Emission emission = prepare_emission(env, a.output);
-  if (!a.output.output_path.empty()) batch.add(a.output.output_path, emission.text);
+  const bool output_is_device = !a.output.output_path.empty() && is_special_output(a.output.output_path);
+  if (!a.output.output_path.empty() && !output_is_device) batch.add(a.output.output_path, emission.text);
   batch.commit();
+  if (output_is_device) write_output_text(a.output.output_path, emission.text);  // -o /dev/stdout: nothing to undo
 
   if (!a.output.json) {
     ctx.out << result.diff;

@@ -1,5 +1,6 @@
 #include "tunekit/cli/envelope.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <ostream>
 
@@ -127,9 +128,27 @@ Emission prepare_emission(const Envelope& env, const OutputOptions& o) {
   return e;
 }
 
+bool is_special_output(const std::string& path) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(path, ec);
+  return !ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) && !std::filesystem::is_directory(st);
+}
+
+void write_output_text(const std::string& path, const std::string& text) {
+  if (!is_special_output(path)) {
+    protocols::write_file_atomic(path, text);
+    return;
+  }
+  // A device or pipe (-o /dev/stdout): written in place, never replaced.
+  std::ofstream f(path, std::ios::binary);
+  if (!f) throw InputError("cannot write the results file", path);
+  f << text;
+  if (!f.flush()) throw InputError("cannot write the results file", path);
+}
+
 int finish_emission(const Envelope& env, const OutputOptions& o, const Emission& e, CliContext& ctx,
                     bool write_output_file) {
-  if (write_output_file && !o.output_path.empty()) protocols::write_file_atomic(o.output_path, e.text);
+  if (write_output_file && !o.output_path.empty()) write_output_text(o.output_path, e.text);
   if (o.json) ctx.out << e.text;
   for (const auto& w : env.warnings()) ctx.err << "tunekit: warning: " << utf8_or_latin1(w) << "\n";
   for (const auto& u : e.unmet) ctx.err << u;

@@ -25,7 +25,7 @@ std::pair<std::size_t, std::size_t> line_column_at(std::string_view text, std::s
   return {line, col};
 }
 
-std::string located(const std::string& path, std::string_view text, std::size_t pos) {
+std::string results_json_location(const std::string& path, std::string_view text, std::size_t pos) {
   const auto [line, col] = line_column_at(text, pos);
   return source_location(path, line, col);
 }
@@ -52,7 +52,7 @@ nlohmann::json parse_results_json(std::string_view text, const std::string& path
     const std::size_t pos = e.byte > 0 ? e.byte - 1 : 0;
     std::string what = e.what();
     if (const auto colon = what.rfind(": "); colon != std::string::npos) what = what.substr(colon + 2);
-    throw InputError(fmt::format("not valid JSON: {}", what), located(path, text, pos));
+    throw InputError(fmt::format("not valid JSON: {}", what), results_json_location(path, text, pos));
   } catch (const nlohmann::json::out_of_range& e) {
     // "number overflow parsing '1e400'": a number beyond a double. Locate the number.
     std::string what = e.what();
@@ -61,7 +61,7 @@ nlohmann::json parse_results_json(std::string_view text, const std::string& path
       const auto q2 = what.find('\'', q + 1);
       if (q2 != std::string::npos) pos = text.find(what.substr(q + 1, q2 - q - 1));
     }
-    const std::string where = pos == std::string::npos ? path : located(path, text, pos);
+    const std::string where = pos == std::string::npos ? path : results_json_location(path, text, pos);
     throw InputError("a number is beyond the range of a double (about 1.8e308)", where);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(fmt::format("not valid JSON: {}", e.what()), path);

@@ -73,6 +73,13 @@ Emission prepare_emission(const Envelope& env, const OutputOptions& o);
 int finish_emission(const Envelope& env, const OutputOptions& o, const Emission& e, CliContext& ctx,
                     bool write_output_file = true);
 
+/// True for an existing path that is neither a regular file nor a directory (a device such as
+/// /dev/stdout, a pipe): results are written into it in place instead of replacing it.
+bool is_special_output(const std::string& path);
+/// Writes a results file: atomically replaced when it is (or will be) a regular file, written
+/// in place when it is a device or pipe.
+void write_output_text(const std::string& path, const std::string& text);
+
 /// `bytes` as valid UTF-8: valid sequences are kept, every other byte becomes the UTF-8
 /// encoding of the Latin-1 code point of the same value.
 std::string utf8_or_latin1(std::string_view bytes);
