@@ -228,3 +228,13 @@ TEST_CASE("the link's last check refuses a non-finite or out-of-travel line and 
   CHECK_THROWS_AS(link.send("G1 X1000 F600"), tunekit::MachineError);
   CHECK(pair.second->read_some(std::chrono::milliseconds(100)).empty());
 }
+
+TEST_CASE("a machine that hangs up mid-write is a MachineError, not SIGPIPE", "[safety]") {
+  // Found by fuzz_gcode_reply: the firmware side closed the socket and the next write killed
+  // the process (exit 141) before the journal was flushed or the safe state sent.
+  auto pair = make_transport_pair();
+  pair.second->close();
+  CHECK_THROWS_AS(pair.first->write("N1 G1 X10*99\n"), tunekit::MachineError);
+  GcodeLink link(*pair.first, nullptr, {std::chrono::milliseconds(50), 0, true});
+  CHECK_THROWS_AS(link.send("G1 X10 F600"), tunekit::MachineError);
+}
