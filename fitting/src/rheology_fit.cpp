@@ -132,7 +132,7 @@ std::vector<PSpec> default_specs(const ViscosityFitOptions& o, const DataStats& 
     if (ps.fixed) ps.lo = -kInf, ps.hi = kInf;
   }
   for (const auto& [k, v] : o.fixed) {
-    if (std::none_of(p.begin(), p.end(), [&](const PSpec& ps) { return ps.name == k; }))
+    if (std::none_of(p.begin(), p.end(), [&key = k](const PSpec& ps) { return ps.name == key; }))
       throw InputError(strf("--fix %s: %s has no parameter of that name", k.c_str(), ViscositySpec{o.model, o.shift, {}}.name().c_str()));
     (void)v;
   }

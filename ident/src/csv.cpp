@@ -130,6 +130,47 @@ class LineReader {
   std::size_t line_no_ = 0;
 };
 
+/// UTF-16 text with a byte-order mark (FF FE little-endian, FE FF big-endian) as UTF-8;
+/// InputError for an odd length or an unpaired surrogate.
+std::string csv_utf16_to_utf8(std::string_view bytes, const std::string& path) {
+  const bool little = bytes[0] == '\xFF';
+  if (bytes.size() % 2 != 0)
+    throw InputError("the file starts with a UTF-16 byte-order mark but has an odd number of bytes", path);
+  auto unit = [&](std::size_t i) {
+    const auto a = static_cast<unsigned char>(bytes[i]), b = static_cast<unsigned char>(bytes[i + 1]);
+    return little ? static_cast<unsigned>(a | (b << 8)) : static_cast<unsigned>((a << 8) | b);
+  };
+  std::string out;
+  out.reserve(bytes.size() / 2);
+  std::size_t line = 1;
+  for (std::size_t i = 2; i + 1 < bytes.size(); i += 2) {
+    unsigned cp = unit(i);
+    if (cp >= 0xD800 && cp <= 0xDBFF && i + 3 < bytes.size() && unit(i + 2) >= 0xDC00 && unit(i + 2) <= 0xDFFF) {
+      cp = 0x10000 + ((cp - 0xD800) << 10) + (unit(i + 2) - 0xDC00);
+      i += 2;
+    } else if (cp >= 0xD800 && cp <= 0xDFFF) {
+      throw InputError("invalid UTF-16 text (an unpaired surrogate)", source_location(path, line));
+    }
+    if (cp == '\n') ++line;
+    if (cp < 0x80) {
+      out.push_back(static_cast<char>(cp));
+    } else if (cp < 0x800) {
+      out.push_back(static_cast<char>(0xC0 | (cp >> 6)));
+      out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
+    } else if (cp < 0x10000) {
+      out.push_back(static_cast<char>(0xE0 | (cp >> 12)));
+      out.push_back(static_cast<char>(0x80 | ((cp >> 6) & 0x3F)));
+      out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
+    } else {
+      out.push_back(static_cast<char>(0xF0 | (cp >> 18)));
+      out.push_back(static_cast<char>(0x80 | ((cp >> 12) & 0x3F)));
+      out.push_back(static_cast<char>(0x80 | ((cp >> 6) & 0x3F)));
+      out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 bool iequals(std::string_view a, std::string_view b) {
@@ -250,7 +291,14 @@ CsvTable read_csv(const std::string& path, const CsvOptions& options) {
 CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOptions& options) {
   CsvTable t;
   t.path = path;
-  if (text.size() >= 3 && std::memcmp(text.data(), "\xEF\xBB\xBF", 3) == 0) text.remove_prefix(3);
+  // Byte-order marks: UTF-16 text is decoded to UTF-8 first; any number of UTF-8 marks
+  // (editors that add one to a file that had one already) are dropped.
+  if (text.size() >= 2 && ((text[0] == '\xFF' && text[1] == '\xFE') || (text[0] == '\xFE' && text[1] == '\xFF'))) {
+    if (text.size() >= 4 && text[0] == '\xFF' && text[2] == '\0' && text[3] == '\0')
+      throw InputError("the file is UTF-32 text (byte-order mark FF FE 00 00); save it as UTF-8", source_location(path, 1));
+    return parse_csv(csv_utf16_to_utf8(text, path), path, options);
+  }
+  while (text.size() >= 3 && std::memcmp(text.data(), "\xEF\xBB\xBF", 3) == 0) text.remove_prefix(3);
   if (trim(text).empty() || text.find_first_not_of(" \t\r\n") == std::string_view::npos)
     throw InputError("empty file: no header and no data", path);
 

@@ -1,5 +1,7 @@
 #include "tunekit/ident/image_io.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include "tunekit/ident/exif_orientation.hpp"
 
 #include <cstring>
@@ -47,6 +49,17 @@ cv::Mat convert_color(const cv::Mat& m, ImageColor color) {
 
 }  // namespace
 
+namespace {
+std::atomic<std::uint64_t> g_max_image_pixels{kDefaultMaxImagePixels};
+}  // namespace
+
+void set_max_image_pixels(std::uint64_t pixels) {
+  if (pixels == 0) throw InputError("the image size limit must be at least one pixel");
+  g_max_image_pixels = pixels;
+}
+
+std::uint64_t max_image_pixels() { return g_max_image_pixels; }
+
 cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageColor color) {
   if (bytes.empty()) throw InputError("empty image file (0 bytes)", name);
   if (starts_with(bytes, "II*\0", 4) || starts_with(bytes, "MM\0*", 4))
@@ -62,6 +75,13 @@ cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageCol
                                  why ? why : "unknown"),
                      name);
   }
+  // The header's dimensions, before any pixel is decoded: a tiny file may claim a huge image.
+  const std::uint64_t pixels_claimed = static_cast<std::uint64_t>(std::max(w, 0)) * static_cast<std::uint64_t>(std::max(h, 0));
+  if (pixels_claimed > max_image_pixels())
+    throw InputError(fmt::format("image of {} x {} pixels ({:.1f} MP) exceeds the limit of {:.1f} MP (raise it with "
+                                 "--max-image-mp); nothing was decoded",
+                                 w, h, static_cast<double>(pixels_claimed) / 1e6, static_cast<double>(max_image_pixels()) / 1e6),
+                     name);
   if (stbi_is_hdr_from_memory(data, len)) throw InputError("cannot decode image: HDR (float) images are not supported", name);
   const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
   void* pixels = sixteen ? static_cast<void*>(stbi_load_16_from_memory(data, len, &w, &h, &n, 0))

@@ -89,6 +89,81 @@ double kernel_enbw_hz(WindowType w, double beta, std::size_t n, double fs) {
   return fs * s2 / (s1 * s1);
 }
 
+/// 1-based line of data row `row` (0-based) of a CSV whose header is on `header_line`:
+/// rows are the non-blank lines after it that are not comments.
+std::size_t resonance_row_line(std::string_view bytes, std::size_t header_line, std::size_t row) {
+  std::size_t line = 1, pos = 0, seen = 0;
+  while (pos < bytes.size()) {
+    const auto end = bytes.find('\n', pos);
+    const std::string_view l = bytes.substr(pos, end == std::string_view::npos ? std::string_view::npos : end - pos);
+    if (line > header_line) {
+      const auto first = l.find_first_not_of(" \t\r");
+      if (first != std::string_view::npos && l[first] != '#') {
+        if (seen == row) return line;
+        ++seen;
+      }
+    }
+    if (end == std::string_view::npos) break;
+    pos = end + 1;
+    ++line;
+  }
+  return 0;
+}
+
+/// Replaces non-physical samples of the acceleration columns (1..channels of `table`) by the
+/// mean of the nearest good samples on either side, with a located warning each (the first
+/// few listed); refuses a record with more than options.max_wild_fraction of them.
+void replace_wild_samples(CsvTable& table, std::string_view bytes, std::size_t channels, const AccelInputOptions& o,
+                          std::vector<std::string>& warnings) {
+  const double limit = o.full_scale_mm_s2 > 0 ? 2 * o.full_scale_mm_s2 : kMaxAccelerometerReading_mm_s2;
+  constexpr std::size_t kListed = 5;
+  for (std::size_t c = 1; c <= channels && c < table.columns.size(); ++c) {
+    auto& v = table.columns[c].values;
+    std::vector<std::size_t> wild;
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (!(std::abs(v[i]) <= limit)) wild.push_back(i);
+    if (wild.empty()) continue;
+    const std::string& name = table.columns[c].name;
+    auto where = [&](std::size_t row) {
+      const auto line = resonance_row_line(bytes, table.header_line, row);
+      return line ? source_location(table.path, line) : table.path;
+    };
+    if (static_cast<double>(wild.size()) > o.max_wild_fraction * static_cast<double>(v.size()) && wild.size() > 1)
+      throw InputError(fmt::format("{} samples of {} ({:.2g} %) are beyond any accelerometer's range (+-{:.6g} mm/s^2), "
+                                   "the first {} = {:g}; the record is corrupt (limit {:.2g} %)",
+                                   wild.size(), name, 100.0 * static_cast<double>(wild.size()) / static_cast<double>(v.size()),
+                                   limit, name, v[wild.front()], 100 * o.max_wild_fraction),
+                       where(wild.front()));
+    std::vector<bool> bad(v.size(), false);
+    for (const auto i : wild) bad[i] = true;
+    for (std::size_t k = 0; k < wild.size(); ++k) {
+      const std::size_t i = wild[k];
+      if (k < kListed)
+        warnings.push_back(fmt::format("{}: {} = {:g} mm/s^2 is beyond any accelerometer's range (+-{:.6g} mm/s^2); the "
+                                       "sample was replaced by the mean of its neighbours",
+                                       where(i), name, v[i], limit));
+      double sum = 0;
+      int count = 0;
+      for (std::size_t j = i; j-- > 0;)
+        if (!bad[j]) {
+          sum += v[j];
+          ++count;
+          break;
+        }
+      for (std::size_t j = i + 1; j < v.size(); ++j)
+        if (!bad[j]) {
+          sum += v[j];
+          ++count;
+          break;
+        }
+      v[i] = count ? sum / count : 0.0;
+    }
+    if (wild.size() > kListed)
+      warnings.push_back(fmt::format("{}: {} more samples of {} beyond the range were replaced", table.path,
+                                     wild.size() - kListed, name));
+  }
+}
+
 }  // namespace
 
 char axis_from_filename(const std::string& path) {
@@ -122,6 +197,7 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
   if (table.rows < 16)
     throw InputError(fmt::format("{} rows of accelerometer data; far too few for a spectrum", table.rows), path);
 
+  replace_wild_samples(table, bytes, accel.size(), o, r.warnings);
   std::vector<double> t = std::move(table.columns[0].values);
   const std::size_t n = t.size();
   std::vector<double> dt(n - 1);

@@ -19,63 +19,74 @@ namespace tunekit::protocols {
 namespace {
 
 constexpr double kMachineDefault = std::numeric_limits<double>::quiet_NaN();
-constexpr double kMachineJerk = 1e8;  // mm/s^3, for duration estimates only
+
+// Plausibility caps of the parameters (ProtocolParam::max_value). They are far above anything
+// an experiment on an FFF printer asks for and far below where the protocol arithmetic (and its
+// conversion of counts and milliseconds to whole numbers) could overflow; the machine's own
+// limits are checked on the generated G-code by the safety gate.
+constexpr double kMaxFeedMmS = 1000;        // filament feed, mm/s
+constexpr double kMaxSpeedMmS = 10000;      // toolhead speed, mm/s
+constexpr double kMaxAccelMmS2 = 1e6;       // mm/s^2
+constexpr double kMaxTimeS = 3600;          // one settle/hold/pause time, s
+constexpr double kMaxFreqHz = 1000;         // excitation frequency, Hz
+constexpr double kMaxLengthMm = 10000;      // sizes and positions, mm
+constexpr double kMaxTemperatureC = 500;    // set temperature, degC (the profile's hotend_max_c applies too)
+
 
 std::vector<ProtocolSpec> make_specs() {
-  const ProtocolParam hotend{"hotend_c", 210, "degC", "hot-end temperature set (and waited for) first; 0 leaves the heater alone"};
+  const ProtocolParam hotend{"hotend_c", 210, "degC", "hot-end temperature set (and waited for) first; 0 leaves the heater alone",
+                             ParamDomain::non_negative, kMaxTemperatureC};
   std::vector<ProtocolSpec> s;
   s.push_back({"liquefier-step",
                "extrusion-rate steps (low, then high/low cycles) with the load cell recording the filament force",
-               {{"feed_low_mm_s", 1.0, "mm/s", "filament feed before and between steps"},
-                {"feed_high_mm_s", 3.0, "mm/s", "filament feed during a step"},
-                {"settle_s", 3.0, "s", "time at the low feed before the first step"},
-                {"hold_s", 3.0, "s", "time at each level (several tau)"},
-                {"cycles", 2, "", "number of low -> high -> low cycles"},
-                {"accel_mm_s2", 2000, "mm/s^2", "filament acceleration of the feed changes"},
+               {{"feed_low_mm_s", 1.0, "mm/s", "filament feed before and between steps", ParamDomain::positive, kMaxFeedMmS},
+                {"feed_high_mm_s", 3.0, "mm/s", "filament feed during a step", ParamDomain::positive, kMaxFeedMmS},
+                {"settle_s", 3.0, "s", "time at the low feed before the first step", ParamDomain::positive, kMaxTimeS},
+                {"hold_s", 3.0, "s", "time at each level (several tau)", ParamDomain::positive, kMaxTimeS},
+                {"cycles", 2, "", "number of low -> high -> low cycles", ParamDomain::count, 1000},
+                {"accel_mm_s2", 2000, "mm/s^2", "filament acceleration of the feed changes", ParamDomain::positive, kMaxAccelMmS2},
                 hotend},
                {"load_cell"},
                false});
   s.push_back({"liquefier-sine",
                "sine-dwell list: the feed oscillates around a mean at log-spaced frequencies, load cell recorded",
-               {{"feed_mean_mm_s", 2.0, "mm/s", "mean filament feed"},
-                {"amplitude_mm_s", 1.0, "mm/s", "feed oscillation amplitude"},
-                {"freq_min_hz", 0.2, "Hz", "lowest frequency"},
-                {"freq_max_hz", 2.0, "Hz", "highest frequency"},
-                {"freq_count", 5, "", "number of frequencies (log-spaced)"},
-                {"periods", 4, "", "periods per frequency"},
-                {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase"},
-                {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments"},
+               {{"feed_mean_mm_s", 2.0, "mm/s", "mean filament feed", ParamDomain::positive, kMaxFeedMmS},
+                {"amplitude_mm_s", 1.0, "mm/s", "feed oscillation amplitude (below the mean)", ParamDomain::non_negative, kMaxFeedMmS},
+                {"freq_min_hz", 0.2, "Hz", "lowest frequency", ParamDomain::positive, kMaxFreqHz},
+                {"freq_max_hz", 2.0, "Hz", "highest frequency", ParamDomain::positive, kMaxFreqHz},
+                {"freq_count", 5, "", "number of frequencies (log-spaced)", ParamDomain::count, 1000},
+                {"periods", 4, "", "periods per frequency", ParamDomain::positive, 10000},
+                {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase", ParamDomain::positive, 10},
+                {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments", ParamDomain::positive, kMaxAccelMmS2},
                 hotend},
                {"load_cell"},
                false});
   s.push_back({"liquefier-chirp",
                "linear chirp of the feed from freq_min_hz to freq_max_hz, load cell recorded",
-               {{"feed_mean_mm_s", 2.0, "mm/s", "mean filament feed"},
-                {"amplitude_mm_s", 1.0, "mm/s", "feed oscillation amplitude"},
-                {"freq_min_hz", 0.1, "Hz", "start frequency"},
-                {"freq_max_hz", 3.0, "Hz", "end frequency"},
-                {"duration_s", 20, "s", "chirp duration"},
-                {"settle_s", 2.0, "s", "steady feed at the mean before the chirp"},
-                {"expected_tau_s", 0, "s",
-                 "expected liquefier time constant (0: none); when given, the frequency range, duration and settle "
-                 "time not set explicitly are sized from its corner 1/(2 pi tau)"},
-                {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase"},
-                {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments"},
+               {{"feed_mean_mm_s", 2.0, "mm/s", "mean filament feed", ParamDomain::positive, kMaxFeedMmS},
+                {"amplitude_mm_s", 1.0, "mm/s", "feed oscillation amplitude (below the mean)", ParamDomain::non_negative, kMaxFeedMmS},
+                {"freq_min_hz", 0.1, "Hz", "start frequency", ParamDomain::positive, kMaxFreqHz},
+                {"freq_max_hz", 3.0, "Hz", "end frequency", ParamDomain::positive, kMaxFreqHz},
+                {"duration_s", 20, "s", "chirp duration", ParamDomain::positive, kMaxTimeS},
+                {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase", ParamDomain::positive, 10},
+                {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments", ParamDomain::positive, kMaxAccelMmS2},
                 hotend},
                {"load_cell"},
                false});
   s.push_back({"ring-print",
-               "Holtrup's (2019) frequency test: a ring printed at constant speed with the extrusion modulated by "
-               "(1 + amplitude sin(periods theta)); f = periods v / (2 pi R). Measure the width with 'tunekit linewidth'",
-               {{"radius_mm", 30, "mm", "ring radius R (Holtrup 2019 appendix D: 30 mm)"},
-                {"center_x_mm", kMachineDefault, "mm", "ring centre x (default: middle of the travel)"},
-                {"center_y_mm", kMachineDefault, "mm", "ring centre y (default: middle of the travel)"},
-                {"speed_mm_s", 20, "mm/s", "print speed v"},
-                {"periods", 8, "", "sine periods N around the ring"},
-                {"amplitude", 0.2, "", "relative extrusion modulation A"},
-                {"segments", 360, "", "straight segments per ring"},
-                {"z_mm", 0.2, "mm", "layer height / nozzle height of the ring"},
-                {"accel_mm_s2", 1000, "mm/s^2", "print acceleration"},
+               "Holtrup's frequency test (Tuning liquefier dynamics, MSc thesis, University of Twente, 2019): a ring "
+               "printed at constant speed with the extrusion modulated by (1 + amplitude sin(periods theta)); "
+               "f = periods v / (2 pi R). Measure the width with 'tunekit linewidth'",
+               {{"radius_mm", 30, "mm", "ring radius R (Holtrup 2019, appendix D: 30 mm)", ParamDomain::positive, kMaxLengthMm},
+                {"center_x_mm", kMachineDefault, "mm", "ring centre x (default: middle of the travel)", ParamDomain::any, kMaxLengthMm},
+                {"center_y_mm", kMachineDefault, "mm", "ring centre y (default: middle of the travel)", ParamDomain::any, kMaxLengthMm},
+                {"speed_mm_s", 20, "mm/s", "print speed v", ParamDomain::positive, kMaxSpeedMmS},
+                {"periods", 8, "", "sine periods N around the ring", ParamDomain::count, 10000},
+                {"amplitude", 0.2, "", "relative extrusion modulation A (below 1, so the extrusion stays positive)",
+                 ParamDomain::non_negative, 1},
+                {"segments", 360, "", "straight segments per ring (at least 12)", ParamDomain::count, 100000},
+                {"z_mm", 0.2, "mm", "layer height / nozzle height of the ring", ParamDomain::positive, kMaxLengthMm},
+                {"accel_mm_s2", 1000, "mm/s^2", "print acceleration", ParamDomain::positive, kMaxAccelMmS2},
                 hotend},
                {},
                false});
@@ -83,15 +94,15 @@ std::vector<ProtocolSpec> make_specs() {
                "the camera path's line test: straight lines along +X whose flow steps low -> high -> low part-way; "
                "photographed, the width along each line is the liquefier's step response (t = s / v)",
                {{"speed_mm_s", 20, "mm/s", "print speed v"},
-                {"lines", 3, "", "number of lines (printed one below the other)"},
+                {"lines", 3, "", "number of lines (printed one below the other)", ParamDomain::count, 100},
                 {"lead_mm", 45, "mm", "length at the low flow before the step (several tau * v)"},
                 {"step_mm", 50, "mm", "length at the high flow"},
                 {"tail_mm", 55, "mm", "length at the low flow after the step"},
                 {"low_flow", 0.8, "", "low flow, relative to the profile's line width x layer height"},
                 {"high_flow", 1.5, "", "high flow, relative"},
                 {"spacing_mm", 6, "mm", "distance between the lines"},
-                {"center_x_mm", kMachineDefault, "mm", "middle of the lines in x (default: middle of the travel)"},
-                {"first_y_mm", kMachineDefault, "mm", "y of the first line (default: 50 mm below the middle)"},
+                {"center_x_mm", kMachineDefault, "mm", "middle of the lines in x (default: middle of the travel)", ParamDomain::any, kMaxLengthMm},
+                {"first_y_mm", kMachineDefault, "mm", "y of the first line (default: 50 mm below the middle)", ParamDomain::any, kMaxLengthMm},
                 {"z_mm", 0.2, "mm", "layer height / nozzle height"},
                 {"retract_mm", 0.8, "mm", "retraction after each line (primed again before the next)"},
                 {"accel_mm_s2", 1000, "mm/s^2", "print acceleration"},
@@ -101,43 +112,43 @@ std::vector<ProtocolSpec> make_specs() {
   s.push_back({"axis-sweep",
                "resonance sweep like Klipper's TEST_RESONANCES: back-and-forth moves whose acceleration is "
                "accel_per_hz * f while f rises at hz_per_sec; the accelerometer is recorded",
-               {{"freq_start_hz", 10, "Hz", "first frequency"},
-                {"freq_end_hz", 100, "Hz", "last frequency"},
-                {"hz_per_sec", 2, "Hz/s", "sweep rate"},
-                {"accel_per_hz", 60, "mm/s^2/Hz", "acceleration amplitude per Hz"},
-                {"center_mm", kMachineDefault, "mm", "position of the swept axis (default: middle of its travel)"},
-                {"other_mm", kMachineDefault, "mm", "position of the other horizontal axis (default: middle)"},
-                {"travel_speed_mm_s", 100, "mm/s", "speed of the move to the start position"},
-                {"settle_s", 0.3, "s", "recorded rest before and after the sweep"}},
+               {{"freq_start_hz", 10, "Hz", "first frequency", ParamDomain::positive, kMaxFreqHz},
+                {"freq_end_hz", 100, "Hz", "last frequency", ParamDomain::positive, kMaxFreqHz},
+                {"hz_per_sec", 2, "Hz/s", "sweep rate", ParamDomain::positive, kMaxFreqHz},
+                {"accel_per_hz", 60, "mm/s^2/Hz", "acceleration amplitude per Hz", ParamDomain::positive, kMaxAccelMmS2 / kMaxFreqHz},
+                {"center_mm", kMachineDefault, "mm", "position of the swept axis (default: middle of its travel)", ParamDomain::any, kMaxLengthMm},
+                {"other_mm", kMachineDefault, "mm", "position of the other horizontal axis (default: middle)", ParamDomain::any, kMaxLengthMm},
+                {"travel_speed_mm_s", 100, "mm/s", "speed of the move to the start position", ParamDomain::positive, kMaxSpeedMmS},
+                {"settle_s", 0.3, "s", "recorded rest before and after the sweep", ParamDomain::non_negative, kMaxTimeS}},
                {"accelerometer"},
                true});
   s.push_back({"axis-rectangle",
                "the overshoot test of Hemminger, Improvements and Characterization of Error, Speed, and Capabilities "
                "in Low-Cost Additive Manufacturing Systems, UCLA, 2022: an XY rectangle with pauses at the corners, "
                "repeated; each axis sees step motions; the accelerometer is recorded (analyze: tunekit overshoot)",
-               {{"width_mm", 40, "mm", "rectangle size along x"},
-                {"height_mm", 40, "mm", "rectangle size along y"},
-                {"speed_mm_s", 100, "mm/s", "move speed"},
-                {"accel_mm_s2", 3000, "mm/s^2", "move acceleration"},
-                {"repeats", 5, "", "rectangles (Hemminger 2022: 5)"},
-                {"pause_s", 0.3, "s", "pause at each corner"}},
+               {{"width_mm", 40, "mm", "rectangle size along x", ParamDomain::positive, kMaxLengthMm},
+                {"height_mm", 40, "mm", "rectangle size along y", ParamDomain::positive, kMaxLengthMm},
+                {"speed_mm_s", 100, "mm/s", "move speed", ParamDomain::positive, kMaxSpeedMmS},
+                {"accel_mm_s2", 3000, "mm/s^2", "move acceleration", ParamDomain::positive, kMaxAccelMmS2},
+                {"repeats", 5, "", "rectangles (Hemminger 2022: 5)", ParamDomain::count, 10000},
+                {"pause_s", 0.3, "s", "pause at each corner", ParamDomain::positive, kMaxTimeS}},
                {"accelerometer"},
                false});
   s.push_back({"test-pattern",
                "test prints (pads for photos, line steps, rings) on one layer, ordered by the grid-based coverage "
                "planner after Li and Yao, Coverage Path Planning Application on FDM 3D Printer, USC, 2018 (fewer "
                "travels and retractions than a zigzag; zigzag=1 prints the zigzag for comparison)",
-               {{"pads", 4, "", "filled squares for photos"},
+               {{"pads", 4, "", "filled squares for photos", ParamDomain::count, 100},
                 {"pad_mm", 20, "mm", "pad size"},
-                {"line_steps", 5, "", "single lines of rising length"},
+                {"line_steps", 5, "", "single lines of rising length", ParamDomain::count, 100},
                 {"line_mm", 30, "mm", "longest line"},
-                {"rings", 2, "", "two-line-wide rings"},
+                {"rings", 2, "", "two-line-wide rings", ParamDomain::count, 100},
                 {"ring_radius_mm", 12, "mm", "ring radius"},
                 {"speed_mm_s", 40, "mm/s", "print speed"},
                 {"travel_speed_mm_s", 150, "mm/s", "travel speed"},
                 {"accel_mm_s2", 1500, "mm/s^2", "acceleration"},
                 {"z_mm", 0.2, "mm", "layer height / nozzle height"},
-                {"zigzag", 0, "", "1: plain zigzag order instead of the coverage planner"},
+                {"zigzag", 0, "", "1: plain zigzag order instead of the coverage planner", ParamDomain::non_negative, 1},
                 hotend},
                {},
                false});
@@ -299,19 +310,6 @@ void record_feed_plan(Experiment& e, const FeedPlan& fp) {
                                     : "consecutive extrude-only moves blend: the labelled timing";
 }
 
-double estimate_duration(const std::vector<std::string>& gcode, double jerk) {
-  GcodeInterpreter in;
-  double t = 0;
-  for (const auto& l : gcode) {
-    const auto w = parse_gcode(l);
-    if (!w) continue;
-    const auto m = in.apply(*w);
-    if (m) t += Profile::move(m->length_mm(), 0, m->feed_mm_s, 0, m->accel_mm_s2, jerk).duration_s();
-    t += in.dwell_s();
-  }
-  return t;
-}
-
 }  // namespace
 
 const std::vector<ProtocolSpec>& protocol_specs() {
@@ -339,8 +337,56 @@ nlohmann::json Experiment::to_json() const {
   return j;
 }
 
+namespace {
+
+void check_param_domain(const std::string& protocol, const ProtocolParam& prm, double v) {
+  if (!std::isfinite(v))
+    throw InputError(fmt::format("{} parameter {} must be a finite number, not {}", protocol, prm.name, v));
+  const char* why = nullptr;
+  switch (prm.domain) {
+    case ParamDomain::positive:
+      if (!(v > 0)) why = "must be positive";
+      break;
+    case ParamDomain::non_negative:
+      if (v < 0 || std::signbit(v)) why = "must not be negative";
+      break;
+    case ParamDomain::count:
+      if (!(v >= 1) || v != std::floor(v)) why = "must be a whole number >= 1";
+      break;
+    case ParamDomain::any:
+      break;
+  }
+  if (!why && std::abs(v) > prm.max_value) why = "is beyond its plausible range";
+  if (why) {
+    const std::string lower = prm.domain == ParamDomain::any        ? fmt::format("-{:g}", prm.max_value)
+                              : prm.domain == ParamDomain::positive ? std::string("above 0")
+                              : prm.domain == ParamDomain::count    ? std::string("1")
+                                                                    : std::string("0");
+    throw InputError(fmt::format("{} parameter {} {} (accepted: {} to {:g}{}), not {:g}", protocol, prm.name, why, lower,
+                                 prm.max_value, prm.unit.empty() ? "" : " " + prm.unit, v));
+  }
+}
+
+/// Refuses a plan (lines and machine time worked out from the parameters) beyond the caps.
+void check_plan(const std::string& protocol, double lines, double duration_s, const ProtocolLimits& limits) {
+  if (!(duration_s <= limits.max_duration_s)) {
+    const std::string how_long = std::isfinite(duration_s) ? fmt::format("{:.4g} s ({:.3g} h)", duration_s, duration_s / 3600)
+                                                           : std::string("an unbounded time");
+    throw InputError(fmt::format("{} would take {} of machine time; the limit is {:g} s (change the parameters, or "
+                                 "raise it with --max-duration)",
+                                 protocol, how_long, limits.max_duration_s));
+  }
+  if (!(lines <= static_cast<double>(limits.max_lines)))
+    throw InputError(fmt::format("{} would need {:.4g} G-code lines; the limit is {} (change the parameters, or "
+                                 "raise it with --max-lines)",
+                                 protocol, lines, limits.max_lines));
+}
+
+}  // namespace
+
 Experiment build_experiment(const std::string& protocol, const std::map<std::string, double>& overrides,
-                            const std::string& axis_in, const MachineProfile& profile, const Dialect& d) {
+                            const std::string& axis_in, const MachineProfile& profile, const Dialect& d,
+                            const ProtocolLimits& limits) {
   const auto& spec = protocol_spec(protocol);
   Experiment e;
   e.protocol = protocol;
@@ -352,24 +398,25 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
       for (const auto& prm : spec.params) known += (known.empty() ? "" : ", ") + prm.name;
       throw InputError(fmt::format("protocol {} has no parameter '{}' (parameters: {})", protocol, k, known));
     }
-    if (!std::isfinite(v)) throw InputError(fmt::format("parameter {} must be a finite number", k));
     e.params[k] = v;
   }
+  // Every parameter in its domain (defaults that come from the machine are NaN until filled in).
+  for (const auto& prm : spec.params)
+    if (!(std::isnan(prm.default_value) && !overrides.count(prm.name))) check_param_domain(protocol, prm, e.params.at(prm.name));
   auto& p = e.params;
-  auto positive = [&](const char* k) {
-    if (!(p.at(k) > 0)) throw InputError(fmt::format("{} parameter {} must be positive, not {:g}", protocol, k, p.at(k)));
-    return p.at(k);
-  };
   auto& g = e.gcode;
+  // A second bound while generating, whatever the plan said: the memory a protocol takes stays
+  // bounded even if a plan below were wrong.
+  auto guard = [&] {
+    if (g.size() > limits.max_lines + 64)
+      throw InputError(fmt::format("{} exceeds {} G-code lines while being generated (--max-lines)", protocol, limits.max_lines));
+  };
   g.push_back(fmt::format("; tunekit {} on {}", protocol, profile.name));
 
   if (protocol == "liquefier-step") {
-    positive("feed_low_mm_s");
-    positive("feed_high_mm_s");
-    positive("hold_s");
-    positive("settle_s");
-    positive("accel_mm_s2");
-    const int cycles = static_cast<int>(std::lround(positive("cycles")));
+    const double cycles_d = p.at("cycles");
+    check_plan(protocol, 2 * cycles_d + 8, p.at("settle_s") + 2 * cycles_d * p.at("hold_s"), limits);
+    const int cycles = static_cast<int>(cycles_d);
     std::vector<std::string> restore;
     const FeedPlan fp = liquefier_prologue(g, restore, p, profile, d);
     record_feed_plan(e, fp);
@@ -383,41 +430,57 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back(";@record load_cell off");
     epilogue(g, restore);
   } else if (protocol == "liquefier-sine" || protocol == "liquefier-chirp") {
-    const double mean = positive("feed_mean_mm_s");
+    const double mean = p.at("feed_mean_mm_s");
     const double amp = p.at("amplitude_mm_s");
-    if (amp < 0 || amp >= mean) throw InputError("amplitude_mm_s must be in [0, feed_mean_mm_s) so the feed stays positive");
-    const double seg = positive("segment_s");
-    positive("accel_mm_s2");
+    if (amp >= mean) throw InputError("amplitude_mm_s must be in [0, feed_mean_mm_s) so the feed stays positive");
+    const double seg = p.at("segment_s");
     if (protocol == "liquefier-chirp" && p.at("expected_tau_s") != 0) {
-      const auto plan = plan_liquefier_chirp(positive("expected_tau_s"), seg);
+      const auto plan = plan_liquefier_chirp(p.at("expected_tau_s"), seg);
       for (const auto& [k, v] : {std::pair{"freq_min_hz", plan.freq_min_hz}, std::pair{"freq_max_hz", plan.freq_max_hz},
                                  std::pair{"duration_s", plan.duration_s}, std::pair{"settle_s", plan.settle_s}})
         if (!overrides.count(k)) p[k] = v;
     }
+    const double f0 = p.at("freq_min_hz"), f1 = p.at("freq_max_hz");
     std::vector<std::string> restore;
-    const FeedPlan fp = liquefier_prologue(g, restore, p, profile, d);
-    record_feed_plan(e, fp);
-    g.push_back(";@record load_cell on");
-    feed_move(g, fp, mean, protocol == "liquefier-chirp" ? positive("settle_s") : 2.0);  // steady state first
+    FeedPlan fp;
     if (protocol == "liquefier-sine") {
-      const double f0 = positive("freq_min_hz"), f1 = positive("freq_max_hz");
-      const int n = std::max(1, static_cast<int>(std::lround(positive("freq_count"))));
-      const double periods = positive("periods");
+      const int n = static_cast<int>(p.at("freq_count"));
+      const double periods = p.at("periods");
+      auto freq = [&](int i) { return n == 1 ? f0 : f0 * std::pow(f1 / f0, static_cast<double>(i) / (n - 1)); };
+      double lines = 0, seconds = 3;
       for (int i = 0; i < n; ++i) {
-        const double f = n == 1 ? f0 : f0 * std::pow(f1 / f0, static_cast<double>(i) / (n - 1));
+        const double f = freq(i), dt = std::min(seg, 1.0 / (20 * f));
+        lines += std::ceil(periods / f / dt) + 1;
+        seconds += periods / f;
+      }
+      check_plan(protocol, lines + 10, seconds, limits);
+      fp = liquefier_prologue(g, restore, p, profile, d);
+      record_feed_plan(e, fp);
+      g.push_back(";@record load_cell on");
+      feed_move(g, fp, mean, 2.0);  // steady state first
+      for (int i = 0; i < n; ++i) {
+        const double f = freq(i);
         const double dt = std::min(seg, 1.0 / (20 * f));
-        const int steps = static_cast<int>(std::ceil(periods / f / dt));
+        const long steps = static_cast<long>(std::ceil(periods / f / dt));
         g.push_back(fmt::format("; dwell at {} Hz", num(f, 4)));
-        for (int k = 0; k < steps; ++k)
-          feed_move(g, fp, mean + amp * std::sin(2 * std::numbers::pi * f * (k + 0.5) * dt), dt);
+        for (long k = 0; k < steps; ++k) {
+          feed_move(g, fp, mean + amp * std::sin(2 * std::numbers::pi * f * (static_cast<double>(k) + 0.5) * dt), dt);
+          guard();
+        }
       }
     } else {
-      const double f0 = positive("freq_min_hz"), f1 = positive("freq_max_hz"), T = positive("duration_s");
-      const int steps = static_cast<int>(std::ceil(T / seg));
-      for (int k = 0; k < steps; ++k) {
-        const double t = (k + 0.5) * seg;
+      const double T = p.at("duration_s");
+      check_plan(protocol, std::ceil(T / seg) + 10, T + p.at("settle_s") + 1, limits);
+      fp = liquefier_prologue(g, restore, p, profile, d);
+      record_feed_plan(e, fp);
+      g.push_back(";@record load_cell on");
+      feed_move(g, fp, mean, p.at("settle_s"));  // steady state first
+      const long steps = static_cast<long>(std::ceil(T / seg));
+      for (long k = 0; k < steps; ++k) {
+        const double t = (static_cast<double>(k) + 0.5) * seg;
         const double phase = 2 * std::numbers::pi * (f0 * t + 0.5 * (f1 - f0) / T * t * t);
         feed_move(g, fp, mean + amp * std::sin(phase), seg);
+        guard();
       }
     }
     feed_move(g, fp, mean, 1.0);
@@ -425,9 +488,11 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back(";@record load_cell off");
     epilogue(g, restore);
   } else if (protocol == "ring-print") {
-    const double R = positive("radius_mm"), v = positive("speed_mm_s"), A = p.at("amplitude");
-    const int N = static_cast<int>(std::lround(positive("periods")));
-    const int segs = std::max(12, static_cast<int>(std::lround(positive("segments"))));
+    const double R = p.at("radius_mm"), v = p.at("speed_mm_s"), A = p.at("amplitude");
+    if (A >= 1) throw InputError(fmt::format("ring-print parameter amplitude must be below 1 so the extrusion stays positive, not {:g}", A));
+    const int N = static_cast<int>(p.at("periods"));
+    const int segs = std::max(12, static_cast<int>(p.at("segments")));
+    check_plan(protocol, segs + 12.0, 2 * std::numbers::pi * R / v, limits);
     if (std::isnan(p["center_x_mm"])) p["center_x_mm"] = mid(profile, "x");
     if (std::isnan(p["center_y_mm"])) p["center_y_mm"] = mid(profile, "y");
     const double cx = p["center_x_mm"], cy = p["center_y_mm"];
@@ -437,9 +502,9 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back("G90");
     g.push_back("M83 ; relative extrusion");
     if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
-    g.push_back(d.set_accel(std::min(positive("accel_mm_s2"), profile.axis("z").max_accel_mm_s2)));
-    g.push_back(fmt::format("G1 Z{} F{}", num(positive("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
-    g.push_back(d.set_accel(positive("accel_mm_s2")));
+    g.push_back(d.set_accel(std::min(p.at("accel_mm_s2"), profile.axis("z").max_accel_mm_s2)));
+    g.push_back(fmt::format("G1 Z{} F{}", num(p.at("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
+    g.push_back(d.set_accel(p.at("accel_mm_s2")));
     g.push_back(fmt::format("G1 X{} Y{} F{}", num(cx + R), num(cy), num(std::min(100.0, v * 3) * 60, 1)));
     const double seg_len = 2 * R * std::sin(std::numbers::pi / segs);
     for (int k = 1; k <= segs; ++k) {
@@ -459,9 +524,11 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     const std::string other = axis_in == "x" ? "y" : "x";
     if (std::isnan(p["center_mm"])) p["center_mm"] = mid(profile, axis_in);
     if (std::isnan(p["other_mm"])) p["other_mm"] = mid(profile, other);
-    const double f0 = positive("freq_start_hz"), f1 = positive("freq_end_hz"), rate = positive("hz_per_sec");
-    const double aph = positive("accel_per_hz");
+    const double f0 = p.at("freq_start_hz"), f1 = p.at("freq_end_hz"), rate = p.at("hz_per_sec");
+    const double aph = p.at("accel_per_hz");
     if (f1 <= f0) throw InputError("freq_end_hz must exceed freq_start_hz");
+    // Half-periods of the sweep: the integral of 2 f dt = 2 f df / rate from f0 to f1; two lines each.
+    check_plan(protocol, 2 * (f1 * f1 - f0 * f0) / rate + 12, (f1 - f0) / rate + 2 * p.at("settle_s"), limits);
     const std::string A = axis_in == "x" ? "X" : "Y", O = axis_in == "x" ? "Y" : "X";
     const double axis_max_accel = profile.axis(axis_in).max_accel_mm_s2;
     // The sweep's moves, designed within the firmware's planner rules.
@@ -542,7 +609,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back("G90");
     g.push_back(d.set_accel(std::min(3000.0, axis_max_accel)));
     g.push_back(fmt::format("G1 {}{} {}{} F{}", A, num(p["center_mm"]), O, num(p["other_mm"]),
-                            num(positive("travel_speed_mm_s") * 60, 1)));
+                            num(p.at("travel_speed_mm_s") * 60, 1)));
     g.push_back(d.wait_for_moves());
     g.insert(g.end(), prologue.begin(), prologue.end());
     g.push_back(";@record accelerometer on");
@@ -553,6 +620,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
       g.push_back(d.set_accel(m.accel));
       pos += sign * m.dist;
       g.push_back(fmt::format("G1 {}{} F{}", A, num(pos, 5), num(m.vpk * 60, 3)));
+      guard();
       sign = -sign;
     }
     g.push_back(fmt::format("G4 P{}", std::lround(p["settle_s"] * 1000)));
@@ -560,13 +628,14 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back(";@record accelerometer off");
     epilogue(g, restore);
   } else if (protocol == "axis-rectangle") {
-    const double w = positive("width_mm"), h = positive("height_mm"), v = positive("speed_mm_s");
-    const int reps = static_cast<int>(std::lround(positive("repeats")));
-    const long pause_ms = std::lround(positive("pause_s") * 1000);
+    const double w = p.at("width_mm"), h = p.at("height_mm"), v = p.at("speed_mm_s");
+    const int reps = static_cast<int>(p.at("repeats"));
+    check_plan(protocol, 8.0 * reps + 12, (reps * 4 + 1) * p.at("pause_s") + reps * 2 * (w + h) / v, limits);
+    const long pause_ms = std::lround(p.at("pause_s") * 1000);
     const double x0 = mid(profile, "x") - w / 2, y0 = mid(profile, "y") - h / 2;
     g.push_back("G28");
     g.push_back("G90");
-    g.push_back(d.set_accel(positive("accel_mm_s2")));
+    g.push_back(d.set_accel(p.at("accel_mm_s2")));
     g.push_back(fmt::format("G1 X{} Y{} F{}", num(x0), num(y0), num(v * 60, 1)));
     g.push_back(d.wait_for_moves());
     // The overshoot is measured without the firmware's input shaping (restored after).
@@ -590,15 +659,15 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
   } else if (protocol == "test-pattern") {
     TestPatternSet set;
     set.pads = static_cast<int>(std::lround(p.at("pads")));
-    set.pad_mm = positive("pad_mm");
+    set.pad_mm = p.at("pad_mm");
     set.line_steps = static_cast<int>(std::lround(p.at("line_steps")));
-    set.line_mm = positive("line_mm");
+    set.line_mm = p.at("line_mm");
     set.rings = static_cast<int>(std::lround(p.at("rings")));
-    set.ring_radius_mm = positive("ring_radius_mm");
+    set.ring_radius_mm = p.at("ring_radius_mm");
     CoverageMotion mo;
-    mo.print_speed_mm_s = positive("speed_mm_s");
-    mo.travel_speed_mm_s = positive("travel_speed_mm_s");
-    mo.accel_mm_s2 = positive("accel_mm_s2");
+    mo.print_speed_mm_s = p.at("speed_mm_s");
+    mo.travel_speed_mm_s = p.at("travel_speed_mm_s");
+    mo.accel_mm_s2 = p.at("accel_mm_s2");
     // The safety check counts a retraction's filament speed against the hot end's flow limit.
     double retract = mo.retract_speed_mm_s;
     if (profile.extruder.max_flow_mm3_s > 0) retract = std::min(retract, 0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2());
@@ -616,7 +685,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     g.push_back("M83 ; relative extrusion");
     if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
     g.push_back(d.set_accel(std::min(mo.accel_mm_s2, profile.axis("z").max_accel_mm_s2)));
-    g.push_back(fmt::format("G1 Z{} F{}", num(positive("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
+    g.push_back(fmt::format("G1 Z{} F{}", num(p.at("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
     g.push_back(d.set_accel(mo.accel_mm_s2));
     const auto& first = plan.moves.front();
     g.push_back(fmt::format("G0 X{} Y{} F{}", num(first.x0), num(first.y0), num(mo.travel_speed_mm_s * 60, 1)));
@@ -632,7 +701,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     }
     g.push_back(d.wait_for_moves());
   }
-  e.estimated_duration_s = estimate_duration(g, kMachineJerk);
+  e.estimated_duration_s = estimate_gcode_duration_s(g);
   return e;
 }
 

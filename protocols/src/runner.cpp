@@ -169,8 +169,10 @@ class Session {
 
 class GcodeSession : public Session {
  public:
-  GcodeSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const std::atomic<bool>* abort)
+  GcodeSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const std::atomic<bool>* abort,
+               SendGuard& guard)
       : t_(std::move(t)), link_(*t_, &j, lo) {
+    link_.guard = &guard;
     link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
     link_.on_batch = [&j] { j.flush(); };
     link_.abort_flag = abort;
@@ -208,8 +210,9 @@ class GcodeSession : public Session {
 
 class KlipperSession : public Session {
  public:
-  KlipperSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const Sensors& sensors)
-      : client_(std::move(t), &j), j_(j), rec_(rec), timeout_(lo.timeout), sensors_(sensors) {
+  KlipperSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const Sensors& sensors,
+                 SendGuard& guard)
+      : client_(std::move(t), &j), j_(j), rec_(rec), timeout_(lo.timeout), sensors_(sensors), guard_(guard) {
     client_.on_message = [this](const nlohmann::json& m) { on_message(m); };
     client_.on_batch = [&j] { j.flush(); };
   }
@@ -222,6 +225,9 @@ class KlipperSession : public Session {
     return f;
   }
   void send(const std::string& line) override {
+    if (const auto why = guard_.refuse(line))
+      throw MachineError(fmt::format("refused to send '{}': {} (nothing of it was sent)", line, *why),
+                         client_.transport().describe());
     pending_.push_back(line);
     if (pending_.size() >= 50) flush_script();
   }
@@ -316,6 +322,7 @@ class KlipperSession : public Session {
   Recorder& rec_;
   std::chrono::milliseconds timeout_;
   Sensors sensors_;
+  SendGuard& guard_;
   std::vector<std::string> pending_;
   std::vector<KlipperLoadCellSample> load_;
   TrapqTimeline extruder_;
@@ -360,10 +367,10 @@ RunResult run_experiment(const RunOptions& o) {
   const Dialect dialect(fw_name.empty() ? Firmware::marlin : firmware_from_name(fw_name));
 
   RunResult res;
-  res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect);
+  res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect, o.limits);
   res.gcode = res.experiment.gcode;
-  // The gate: nothing is opened or sent when the protocol exceeds the profile.
-  require_within_limits(res.gcode, profile, res.experiment.sensors);
+  // The gate: nothing is opened or sent when the protocol exceeds the profile or the caps.
+  require_within_limits(res.gcode, profile, res.experiment.sensors, o.limits);
   if (o.dry_run) {
     res.status = "dry-run";
     return res;
@@ -429,13 +436,14 @@ RunResult run_experiment(const RunOptions& o) {
     if (journal.has_csv(rec.commanded_file())) res.files["commanded_accel"] = journal.path(rec.commanded_file());
   };
 
+  SendGuard guard(profile);  // the last check of every line, in the link
   std::unique_ptr<Session> session;
   try {
     progress(fmt::format("connecting to {}", port));
     const bool api = port.rfind("unix:", 0) == 0;
     auto transport = open_transport(port, o.baud);
-    if (api) session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors);
-    else session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag);
+    if (api) session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors, guard);
+    else session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag, guard);
     session->firmware = session->identify();
     session->dialect = Dialect(session->firmware.firmware == Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
     journal.event("firmware", {{"name", session->firmware.name},

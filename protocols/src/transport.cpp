@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <termios.h>
 #include <unistd.h>
@@ -70,7 +71,10 @@ std::optional<std::string> LineReader::next(std::chrono::milliseconds timeout) {
   }
 }
 
-FdTransport::FdTransport(int fd, std::string name) : fd_(fd), name_(std::move(name)) {}
+FdTransport::FdTransport(int fd, std::string name) : fd_(fd), name_(std::move(name)) {
+  struct stat st {};
+  is_socket_ = ::fstat(fd_, &st) == 0 && S_ISSOCK(st.st_mode);
+}
 FdTransport::~FdTransport() { close(); }
 
 void FdTransport::close() {
@@ -82,7 +86,10 @@ void FdTransport::write(std::string_view bytes) {
   if (fd_ < 0) throw MachineError("the connection is closed", name_);
   std::size_t done = 0;
   while (done < bytes.size()) {
-    const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
+    // A socket whose peer has gone must give EPIPE (a MachineError below), not SIGPIPE, which
+    // would end the process before the journal is flushed and the safe state is sent.
+    const ssize_t n = is_socket_ ? ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL)
+                                 : ::write(fd_, bytes.data() + done, bytes.size() - done);
     if (n < 0) {
       if (errno == EINTR) continue;
       if (errno == EAGAIN || errno == EWOULDBLOCK) {

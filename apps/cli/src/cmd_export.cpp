@@ -15,17 +15,56 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/results_json.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/protocols/config_edit.hpp"
 #include "tunekit/protocols/firmware_export.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 
 namespace tunekit::cli {
 namespace {
+
+// Plausibility caps of what export writes, whatever the firmware would accept (the firmware's
+// own bounds are checked by protocols::validate_settings). A value beyond them is a typing or
+// unit error (a value in ms given as s, a fit that ran away), never a printer's setting.
+// Advance K, s: 10 is Marlin's upper bound on M900 K (Marlin, Marlin/src/gcode/feature/advance/M900.cpp);
+// a liquefier with a 10 s lag could not print at all.
+constexpr double kPlausibleMaxAdvanceK_s = 10;
+// Smoothing time, s: one second is five times Klipper's own maximum pressure_advance_smooth_time.
+constexpr double kPlausibleMaxSmoothing_s = 1;
+// Shaper frequency, Hz: below 1 Hz a shaper delays every move by more than half a second (its
+// duration is about 0.5/f to 1.5/f); above 1000 Hz is beyond RepRapFirmware's own limit and any frame resonance.
+constexpr double kPlausibleMinShaperFreq_hz = 1;
+constexpr double kPlausibleMaxShaperFreq_hz = 1000;
+// Design flow, mm^3/s: ten times what the fastest high-flow hot ends melt.
+constexpr double kPlausibleMaxDesignFlow_mm3_s = 1000;
+
+/// Refuses non-finite and implausible values (exit 2) before anything is computed from them.
+void check_plausible(const protocols::CompensatorSettings& s) {
+  if (s.pa_k_s && !(*s.pa_k_s >= 0 && *s.pa_k_s <= kPlausibleMaxAdvanceK_s))
+    throw InputError(fmt::format("advance K {} s is not plausible (accepted: 0 to {} s)", *s.pa_k_s, kPlausibleMaxAdvanceK_s));
+  if (s.pa_smooth_s && !(*s.pa_smooth_s >= 0 && *s.pa_smooth_s <= kPlausibleMaxSmoothing_s))
+    throw InputError(fmt::format("smoothing time {} s is not plausible (accepted: 0 to {} s)", *s.pa_smooth_s,
+                                 kPlausibleMaxSmoothing_s));
+  for (const auto& [axis, sh] : s.shapers) {
+    if (!(sh.freq_hz >= kPlausibleMinShaperFreq_hz && sh.freq_hz <= kPlausibleMaxShaperFreq_hz))
+      throw InputError(fmt::format("{} shaper frequency {} Hz is not plausible (accepted: {} to {} Hz)", axis, sh.freq_hz,
+                                   kPlausibleMinShaperFreq_hz, kPlausibleMaxShaperFreq_hz));
+    if (!(sh.damping >= 0 && sh.damping < 1))
+      throw InputError(fmt::format("{} shaper damping ratio {} is not plausible (accepted: 0 to below 1)", axis, sh.damping));
+  }
+}
+
+/// An option given on the command line must be a finite number.
+void require_finite_option(const CLI::Option* opt, double v, const char* unit) {
+  if (opt && opt->count() > 0 && !std::isfinite(v))
+    throw InputError(fmt::format("{} must be a finite number ({}), not '{}'", opt->get_name(), unit, opt->as<std::string>()));
+}
 
 
 struct ExportArgs {
@@ -45,6 +84,9 @@ struct ExportArgs {
   bool write = false;
   std::string gcode_out;
   OutputOptions output;
+  const CLI::Option* pa_k_opt = nullptr;
+  const CLI::Option* pa_smooth_opt = nullptr;
+  const CLI::Option* design_flow_opt = nullptr;
 };
 
 double number_at(const nlohmann::json& j, const std::string& what, const std::string& path) {
@@ -90,6 +132,18 @@ protocols::ShaperSetting parse_shaper_arg(const std::string& arg, const std::str
 
 int run_export(const ExportArgs& a, CliContext& ctx) {
   const auto fw = protocols::parse_export_firmware(a.firmware);
+  require_finite_option(a.pa_k_opt, a.pa_k, "s");
+  require_finite_option(a.pa_smooth_opt, a.pa_smooth, "s");
+  require_finite_option(a.design_flow_opt, a.design_flow, "mm^3/s");
+  {
+    protocols::CompensatorSettings given;  // the options alone, checked before any design uses them
+    if (std::isfinite(a.pa_k)) given.pa_k_s = a.pa_k;
+    if (std::isfinite(a.pa_smooth)) given.pa_smooth_s = a.pa_smooth;
+    check_plausible(given);
+  }
+  if (std::isfinite(a.design_flow) && !(a.design_flow > 0 && a.design_flow <= kPlausibleMaxDesignFlow_mm3_s))
+    throw InputError(fmt::format("--design-flow {} mm^3/s is not plausible (accepted: above 0 to {} mm^3/s)", a.design_flow,
+                                 kPlausibleMaxDesignFlow_mm3_s));
   Envelope env("export");
   ident::AdvanceInputs in;
   double freq_tau = fitting::kNaN;
@@ -108,121 +162,123 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     cfg_text << cfg_in.rdbuf();
     ft_motion = cfg_in && protocols::marlin_ft_motion_enabled(cfg_text.str());
   }
-  for (const auto& path : a.results) {
-    const std::string bytes = ident::read_file_bytes(path);
-    env.add_input(path, bytes);
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(bytes);
-    } catch (const nlohmann::json::parse_error& e) {
-      throw InputError(fmt::format("not valid JSON: {}", e.what()), path);
-    }
-    const std::string cmd = j.value("command", std::string());
-    const auto& res = dig(j, {"results"});
-    if (!res.is_object()) throw InputError("no 'results' object: not a tunekit results file", path);
-    sources.push_back(cmd);
-    if (cmd == "step") {
-      const auto& params = dig(res, {"pooled", "params"});
-      if (params.is_object()) {
-        in.tau_s = number_at(dig(params, {"tau_s", "value"}), "pooled.params.tau_s.value", path);
-        in.tau_stderr_s = number_at(dig(params, {"tau_s", "stderr"}), "pooled.params.tau_s.stderr", path);
-        in.theta_s = number_at(dig(params, {"theta_s", "value"}), "pooled.params.theta_s.value", path);
-        in.gain = number_at(dig(params, {"K", "value"}), "pooled.params.K.value", path);
-        if (dig(params, {"K", "unit"}).is_string()) in.gain_unit = dig(params, {"K", "unit"}).get<std::string>();
-        in.tau_source = "step";
-      }
-      const auto& ops = dig(res, {"operating_points"});
-      const auto& u_unit = dig(res, {"units", "input"});
-      const bool flow_points = u_unit.is_string() && ident::is_volumetric_flow_unit(u_unit.get<std::string>());
-      if (ops.is_array())
-        for (const auto& op : ops) {
-          point_is_flow.push_back(flow_points);
-          ident::LiquefierPoint p;
-          p.feed_mm_s = number_at(dig(op, {"u"}), "operating_points[].u", path);
-          p.gain = number_at(dig(op, {"K"}), "operating_points[].K", path);
-          p.tau_s = number_at(dig(op, {"tau_s"}), "operating_points[].tau_s", path);
-          p.theta_s = number_at(dig(op, {"theta_s"}), "operating_points[].theta_s", path);
-          in.points.push_back(p);
+  std::string reading;  // the results file being read, for errors deep inside it
+  try {
+    for (const auto& path : a.results) {
+      reading = path;
+      const std::string bytes = ident::read_file_bytes(path);
+      env.add_input(path, bytes);
+      const nlohmann::json j = parse_results_json(bytes, path);
+      check_results_envelope(j, bytes, path);
+      const std::string cmd = j.value("command", std::string());
+      const auto& res = dig(j, {"results"});
+      if (!res.is_object()) throw InputError("no 'results' object: not a tunekit results file", path);
+      sources.push_back(cmd);
+      if (cmd == "step") {
+        const auto& params = dig(res, {"pooled", "params"});
+        if (params.is_object()) {
+          in.tau_s = number_at(dig(params, {"tau_s", "value"}), "pooled.params.tau_s.value", path);
+          in.tau_stderr_s = number_at(dig(params, {"tau_s", "stderr"}), "pooled.params.tau_s.stderr", path);
+          in.theta_s = number_at(dig(params, {"theta_s", "value"}), "pooled.params.theta_s.value", path);
+          in.gain = number_at(dig(params, {"K", "value"}), "pooled.params.K.value", path);
+          if (dig(params, {"K", "unit"}).is_string()) in.gain_unit = dig(params, {"K", "unit"}).get<std::string>();
+          in.tau_source = "step";
         }
-    } else if (cmd == "freq") {
-      freq_tau = number_at(dig(res, {"tf_fit", "params", "tau_s", "value"}), "tf_fit.params.tau_s.value", path);
-    } else if (cmd == "shaper") {
-      const auto& axes = dig(res, {"axes"});
-      if (!axes.is_object()) throw InputError("shaper results without 'axes'", path);
-      for (const auto& [axis, v] : axes.items()) {
-        const auto& rec = dig(v, {"recommended"});
-        if (!rec.is_object()) continue;
-        if (axis != "x" && axis != "y") {
-          if (axis == "z")
-            env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
-          else {
-            unnamed_axes.push_back(fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; run "
-                                               "'tunekit shaper' on it with --axis x or --axis y",
-                                               path, axis));
-            env.warn(unnamed_axes.back());
+        const auto& ops = dig(res, {"operating_points"});
+        const auto& u_unit = dig(res, {"units", "input"});
+        const bool flow_points = u_unit.is_string() && ident::is_volumetric_flow_unit(u_unit.get<std::string>());
+        if (ops.is_array())
+          for (const auto& op : ops) {
+            point_is_flow.push_back(flow_points);
+            ident::LiquefierPoint p;
+            p.feed_mm_s = number_at(dig(op, {"u"}), "operating_points[].u", path);
+            p.gain = number_at(dig(op, {"K"}), "operating_points[].K", path);
+            p.tau_s = number_at(dig(op, {"tau_s"}), "operating_points[].tau_s", path);
+            p.theta_s = number_at(dig(op, {"theta_s"}), "operating_points[].theta_s", path);
+            in.points.push_back(p);
           }
-          continue;
-        }
-        auto setting_of = [&](const nlohmann::json& c, const std::string& what) {
-          protocols::ShaperSetting s;
-          if (!c.contains("type") || !c["type"].is_string())
-            throw InputError(fmt::format("axes.{}.{}.type must be a string", axis, what), path);
-          s.type = c["type"].get<std::string>();
-          s.freq_hz = number_at(dig(c, {"freq_hz"}), what + ".freq_hz", path);
-          const double z = number_at(dig(c, {"damping"}), what + ".damping", path);
-          if (std::isfinite(z)) s.damping = z;
-          return s;
-        };
-        // The firmware must have the shaper and accept its damping (firmware_limits.hpp).
-        auto usable = [&](const protocols::ShaperSetting& s) {
-          const auto f = protocols::limits::find_shaper(fw, protocols::canonical_shaper_type(s.type), ft_motion);
-          return f && s.damping <= f->max_damping;
-        };
-        protocols::ShaperSetting s = setting_of(rec, "recommended");
-        if (!usable(s)) {
-          // The overall recommendation is not available on this firmware: the best-scoring
-          // candidate the firmware has (the results list every type's best frequency).
-          std::optional<protocols::ShaperSetting> best;
-          double best_score = 0;
-          for (const auto& c : dig(v, {"candidates"})) {
-            const auto cs = setting_of(c, "candidates[]");
-            const double score = number_at(dig(c, {"score"}), "candidates[].score", path);
-            if (!usable(cs) || !std::isfinite(score)) continue;
-            if (!best || score < best_score) {
-              best = cs;
-              best_score = score;
+      } else if (cmd == "freq") {
+        freq_tau = number_at(dig(res, {"tf_fit", "params", "tau_s", "value"}), "tf_fit.params.tau_s.value", path);
+      } else if (cmd == "shaper") {
+        const auto& axes = dig(res, {"axes"});
+        if (!axes.is_object()) throw InputError("shaper results without 'axes'", path);
+        for (const auto& [axis, v] : axes.items()) {
+          const auto& rec = dig(v, {"recommended"});
+          if (!rec.is_object()) continue;
+          if (axis != "x" && axis != "y") {
+            if (axis == "z")
+              env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
+            else {
+              unnamed_axes.push_back(fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; run "
+                                                 "'tunekit shaper' on it with --axis x or --axis y",
+                                                 path, axis));
+              env.warn(unnamed_axes.back());
             }
+            continue;
           }
-          if (!best)
-            throw InputError(fmt::format("axes.{}: the recommended shaper {} is not available in {} and no candidate "
-                                         "is ({} has {}{}); run 'tunekit shaper --firmware {}'",
-                                         axis, s.type, protocols::limits::firmware_title(fw),
-                                         protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw),
-                                         fw == protocols::ExportFirmware::marlin ? ": its input shaping is ZV only" : "",
-                                         protocols::to_string(fw)),
-                             path);
-          env.warn(fmt::format("{}: axis {}: the recommended {} shaper is not available in {} (it has {}); using the "
-                               "best-scoring candidate it has: {} at {:.1f} Hz",
-                               path, axis, s.type, protocols::limits::firmware_title(fw),
-                               protocols::limits::shaper_list(fw), best->type, best->freq_hz));
-          s = *best;
+          auto setting_of = [&](const nlohmann::json& c, const std::string& what) {
+            protocols::ShaperSetting s;
+            if (!c.contains("type") || !c["type"].is_string())
+              throw InputError(fmt::format("axes.{}.{}.type must be a string", axis, what), path);
+            s.type = c["type"].get<std::string>();
+            s.freq_hz = number_at(dig(c, {"freq_hz"}), what + ".freq_hz", path);
+            const double z = number_at(dig(c, {"damping"}), what + ".damping", path);
+            if (std::isfinite(z)) s.damping = z;
+            return s;
+          };
+          // The firmware must have the shaper and accept its damping (firmware_limits.hpp).
+          auto usable = [&](const protocols::ShaperSetting& s) {
+            const auto f = protocols::limits::find_shaper(fw, protocols::canonical_shaper_type(s.type), ft_motion);
+            return f && s.damping <= f->max_damping;
+          };
+          protocols::ShaperSetting s = setting_of(rec, "recommended");
+          if (!usable(s)) {
+            // The overall recommendation is not available on this firmware: the best-scoring
+            // candidate the firmware has (the results list every type's best frequency).
+            std::optional<protocols::ShaperSetting> best;
+            double best_score = 0;
+            for (const auto& c : dig(v, {"candidates"})) {
+              const auto cs = setting_of(c, "candidates[]");
+              const double score = number_at(dig(c, {"score"}), "candidates[].score", path);
+              if (!usable(cs) || !std::isfinite(score)) continue;
+              if (!best || score < best_score) {
+                best = cs;
+                best_score = score;
+              }
+            }
+            if (!best)
+              throw InputError(fmt::format("axes.{}: the recommended shaper {} is not available in {} and no candidate "
+                                           "is ({} has {}{}); run 'tunekit shaper --firmware {}'",
+                                           axis, s.type, protocols::limits::firmware_title(fw),
+                                           protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw),
+                                           fw == protocols::ExportFirmware::marlin ? ": its input shaping is ZV only" : "",
+                                           protocols::to_string(fw)),
+                               path);
+            env.warn(fmt::format("{}: axis {}: the recommended {} shaper is not available in {} (it has {}); using the "
+                                 "best-scoring candidate it has: {} at {:.1f} Hz",
+                                 path, axis, s.type, protocols::limits::firmware_title(fw),
+                                 protocols::limits::shaper_list(fw), best->type, best->freq_hz));
+            s = *best;
+          }
+          shapers[axis] = s;
         }
-        shapers[axis] = s;
+      } else if (cmd == "rheo") {
+        const auto& pred = dig(res, {"prediction"});
+        if (!pred.is_object()) throw InputError("rheo results without 'prediction'", path);
+        try {
+          in.rheo_flow_mm3_s = pred.at("flow_mm3_s").get<std::vector<double>>();
+          in.rheo_relative_tau = pred.at("relative_tau").get<std::vector<double>>();
+        } catch (const nlohmann::json::exception&) {
+          throw InputError("prediction.flow_mm3_s and prediction.relative_tau must be arrays of numbers", path);
+        }
+        in.rheo_reference_flow_mm3_s =
+            number_at(dig(pred, {"reference_flow_mm3_s"}), "prediction.reference_flow_mm3_s", path);
+      } else {
+        throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper or rheo)", cmd), path);
       }
-    } else if (cmd == "rheo") {
-      const auto& pred = dig(res, {"prediction"});
-      if (!pred.is_object()) throw InputError("rheo results without 'prediction'", path);
-      try {
-        in.rheo_flow_mm3_s = pred.at("flow_mm3_s").get<std::vector<double>>();
-        in.rheo_relative_tau = pred.at("relative_tau").get<std::vector<double>>();
-      } catch (const nlohmann::json::exception&) {
-        throw InputError("prediction.flow_mm3_s and prediction.relative_tau must be arrays of numbers", path);
-      }
-      in.rheo_reference_flow_mm3_s =
-          number_at(dig(pred, {"reference_flow_mm3_s"}), "prediction.reference_flow_mm3_s", path);
-    } else {
-      throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper or rheo)", cmd), path);
     }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("unexpected content in a results file: {}", e.what()), reading);
   }
   if (!std::isfinite(in.tau_s) && std::isfinite(freq_tau)) {
     in.tau_s = freq_tau;
@@ -304,6 +360,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     if (!unnamed_axes.empty()) throw InputError("nothing to export; " + unnamed_axes.front());
     throw InputError("nothing to export: give results of 'tunekit step', 'freq' or 'shaper', or --pa-k / --shaper-x");
   }
+  check_plausible(settings);
 
   auto result = protocols::export_config_file(fw, a.config, settings);
   env.add_input(a.config, result.original);
@@ -340,12 +397,25 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   res["schedule_gcode"] = schedule;
   res["written"] = false;
 
+  // Everything that will be written is computed first (configuration, backup, G-code, JSON);
+  // then all of it is written together or none of it (protocols::FileBatch).
   std::string backup;
+  protocols::FileBatch batch;
   if (a.write && result.changed()) {
-    backup = protocols::apply_export(result);
+    // Refuse to overwrite a file that changed since it was read.
+    if (ident::read_file_bytes(a.config) != result.original)
+      throw InputError("the configuration file changed since it was read; run the export again", a.config);
+    backup = protocols::backup_path_for(a.config);
     res["written"] = true;
+    batch.add(backup, result.original);
+    batch.add(a.config, result.updated);
   }
-  if (!a.gcode_out.empty()) protocols::write_file_atomic(a.gcode_out, result.gcode);
+  if (!a.gcode_out.empty()) batch.add(a.gcode_out, result.gcode);
+  const Emission emission = prepare_emission(env, a.output);
+  const bool output_is_device = !a.output.output_path.empty() && is_special_output(a.output.output_path);
+  if (!a.output.output_path.empty() && !output_is_device) batch.add(a.output.output_path, emission.text);
+  batch.commit();
+  if (output_is_device) write_output_text(a.output.output_path, emission.text);  // -o /dev/stdout: nothing to undo
 
   if (!a.output.json) {
     ctx.out << result.diff;
@@ -369,7 +439,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
       ctx.err << "tunekit: flow-dependent advance (for per-feature G-code; the firmware takes one number):\n"
               << schedule;
   }
-  return emit(env, a.output, ctx);
+  return finish_emission(env, a.output, emission, ctx, /*write_output_file=*/false);
 }
 
 }  // namespace
@@ -387,10 +457,10 @@ void register_export(CLI::App& app, CliContext& ctx) {
   sub->add_option("-p,--profile", args->profile,
                   "Machine profile TOML (filament diameter mm, line width/height mm, print speed mm/s, print and "
                   "extruder acceleration mm/s^2) for the smoothing time");
-  sub->add_option("--pa-k", args->pa_k, "Advance K in s (mm of filament per mm/s), instead of the results");
-  sub->add_option("--pa-smooth", args->pa_smooth,
+  args->pa_k_opt = sub->add_option("--pa-k", args->pa_k, "Advance K in s (mm of filament per mm/s), instead of the results");
+  args->pa_smooth_opt = sub->add_option("--pa-smooth", args->pa_smooth,
                   "Smoothing time in s (Klipper pressure_advance_smooth_time, Marlin ADVANCE_TAU), instead of the design");
-  sub->add_option("--design-flow", args->design_flow,
+  args->design_flow_opt = sub->add_option("--design-flow", args->design_flow,
                   "Volumetric flow in mm^3/s the single advance value is designed for (default: print speed x line "
                   "cross-section)");
   sub->add_option("--shaper-x", args->shaper_x, "X shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");

@@ -22,6 +22,7 @@
 #include "tunekit/ident/camera_calibration.hpp"
 #include "tunekit/ident/charuco.hpp"
 #include "tunekit/ident/line_width.hpp"
+#include "tunekit/ident/image_io.hpp"
 #include "tunekit/ident/overlay.hpp"
 #include "tunekit/ident/width_to_dynamics.hpp"
 #include "tunekit/ident/csv.hpp"
@@ -35,6 +36,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct LinewidthArgs {
   std::vector<std::string> images;
+  double max_image_mp = static_cast<double>(ident::kDefaultMaxImagePixels) / 1e6;
   double px_per_mm = 0;
   std::string camera;
   std::string chessboard;
@@ -283,6 +285,8 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
 }
 
 int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
+  if (!(a.max_image_mp > 0 && a.max_image_mp <= 1e5)) throw InputError("--max-image-mp must be in (0, 100000] megapixels");
+  ident::set_max_image_pixels(static_cast<std::uint64_t>(std::ceil(a.max_image_mp * 1e6)));
   if (!a.save_camera.empty()) return run_save_camera(a, ctx);
   const bool board = !a.chessboard.empty() || !a.charuco.empty();
   if (!a.chessboard.empty() && !a.charuco.empty()) throw InputError("give --chessboard or --charuco, not both");
@@ -548,6 +552,8 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("images", args->images,
                   "Photos of printed lines (PNG, JPEG, BMP, PNM; PNG and PNM may be 16 bit; TIFF: convert to PNG)")
       ->required();
+  sub->add_option("--max-image-mp", args->max_image_mp,
+                  "Refuse images whose header claims more pixels than this, before decoding (megapixels; default 100)");
   auto* ppm = sub->add_option("--px-per-mm", args->px_per_mm, "Image scale on the bed plane (px/mm)");
   ppm->check(CLI::PositiveNumber);
   sub->add_option("--camera", args->camera,

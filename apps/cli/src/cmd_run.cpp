@@ -34,6 +34,8 @@ struct RunArgs {
   double timeout_s = 10;
   int retries = 3;
   bool dry_run = false;
+  double max_duration_s = protocols::ProtocolLimits{}.max_duration_s;
+  std::size_t max_lines = protocols::ProtocolLimits{}.max_lines;
   OutputOptions output;
 };
 
@@ -68,6 +70,10 @@ int run_run(const RunArgs& a, CliContext& ctx) {
   if (!(a.timeout_s > 0)) throw InputError("--timeout must be positive (s)");
   o.link.timeout = std::chrono::milliseconds(static_cast<long>(std::lround(a.timeout_s * 1000)));
   o.link.max_retries = a.retries;
+  if (!(a.max_duration_s > 0) || !std::isfinite(a.max_duration_s)) throw InputError("--max-duration must be a positive number of seconds");
+  if (a.max_lines == 0) throw InputError("--max-lines must be at least 1");
+  o.limits.max_duration_s = a.max_duration_s;
+  o.limits.max_lines = a.max_lines;
   for (const auto& p : a.params) {
     const auto eq = p.find('=');
     if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE", p));
@@ -75,6 +81,7 @@ int run_run(const RunArgs& a, CliContext& ctx) {
     const std::string v = p.substr(eq + 1);
     const double d = std::strtod(v.c_str(), &end);
     if (v.empty() || end != v.c_str() + v.size()) throw InputError(fmt::format("-p {}: '{}' is not a number", p, v));
+    if (!std::isfinite(d)) throw InputError(fmt::format("-p {}: '{}' is not a finite number", p, v));
     o.params[p.substr(0, eq)] = d;
   }
   if (a.machine != "sim" && a.port.empty() && !a.dry_run)
@@ -151,6 +158,9 @@ void register_run(CLI::App& app, CliContext& ctx) {
   sub->add_option("--runs-root", args->runs_root, "Where run directories are created (default: runs)");
   sub->add_option("--timeout", args->timeout_s, "Silence allowed while waiting for the firmware's ok (s)");
   sub->add_option("--retries", args->retries, "Re-sends of a line nobody answered before giving up (count)");
+  sub->add_option("--max-duration", args->max_duration_s,
+                  "Refuse a protocol that takes longer than this much machine time (s; default 7200)");
+  sub->add_option("--max-lines", args->max_lines, "Refuse a protocol of more G-code lines than this (default 1000000)");
   sub->add_flag("--dry-run", args->dry_run, "Print the protocol's G-code (checked against the profile) instead of sending it");
   add_output_options(sub, args->output);
   sub->footer(protocols_help() +

@@ -1,4 +1,5 @@
 #include "tunekit/cli/report.hpp"
+#include "tunekit/cli/results_json.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -323,24 +324,23 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
 
 std::string write_report(const std::string& run_dir) {
   const std::string results_path = run_dir + "/results.json";
-  nlohmann::json env;
-  try {
-    env = nlohmann::json::parse(ident::read_file_bytes(results_path));
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(std::string("not valid JSON: ") + e.what(), results_path);
-  }
+  const nlohmann::json env = read_results_json(results_path);
   nlohmann::json pd = nlohmann::json::object();
   const std::string pd_path = run_dir + "/plotdata.json";
   if (std::filesystem::exists(pd_path)) {
-    try {
-      pd = nlohmann::json::parse(ident::read_file_bytes(pd_path));
-    } catch (const nlohmann::json::parse_error& e) {
-      throw InputError(std::string("not valid JSON: ") + e.what(), pd_path);
-    }
+    pd = parse_results_json(ident::read_file_bytes(pd_path), pd_path);
+    if (!pd.is_object()) throw InputError(fmt::format("plot data must be a JSON object, not {}", pd.type_name()), pd_path);
   }
-  const auto images = render_report_plots(run_dir, pd);
+  std::string html;
+  try {
+    const auto images = render_report_plots(run_dir, pd);
+    html = build_report_html(env, images);
+  } catch (const nlohmann::json::exception& e) {
+    // A member of an unexpected type deeper in the results or the plot data.
+    throw InputError(fmt::format("unexpected content in the results or plot data: {}", e.what()), results_path);
+  }
   const std::string out = run_dir + "/report.html";
-  protocols::write_file_atomic(out, build_report_html(env, images));
+  protocols::write_file_atomic(out, html);
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -102,16 +103,28 @@ RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::js
   std::vector<std::string> segs;
   flatten(results, segs, leaves);
   const auto want = split_path(r.path);
+  // A fit's diagnostics (observation counts, RMS, ...) are matched only when the path names
+  // them: a bare 'n' means the flow index n of a rheology fit, never the number of samples.
+  const bool wants_diagnostics = std::find(want.begin(), want.end(), "diagnostics") != want.end();
+  auto is_diagnostic = [](const Leaf& l) {
+    return std::find(l.segments.begin(), l.segments.end(), "diagnostics") != l.segments.end();
+  };
   std::vector<const Leaf*> found;
+  std::vector<const Leaf*> diagnostics_only;
   for (const auto& l : leaves)
-    if (matches(want, l.segments)) found.push_back(&l);
+    if (matches(want, l.segments)) (wants_diagnostics || !is_diagnostic(l) ? found : diagnostics_only).push_back(&l);
+  if (found.empty() && !diagnostics_only.empty())
+    throw InputError(fmt::format("--require '{}': no result named '{}'; the fit diagnostic '{}' is compared only when "
+                                 "named with its path",
+                                 r.expression, r.path, diagnostics_only.front()->path));
   if (found.empty()) throw InputError(fmt::format("--require '{}': no number named '{}' in the results", r.expression, r.path));
   // Prefer a number that is not inside an array (a pooled or summary value over one of a
-  // list), then the shortest path.
+  // list), then the shortest path, then a fitted parameter (a member of a "params" object).
+  auto is_param = [](const Leaf* l) { return l->segments.size() >= 2 && l->segments[l->segments.size() - 2] == "params"; };
   auto in_array = [](const Leaf* l) {
     return std::any_of(l->segments.begin(), l->segments.end(), [](const std::string& s) { return s.front() == '['; });
   };
-  auto key = [&](const Leaf* l) { return std::make_pair(in_array(l), l->segments.size()); };
+  auto key = [&](const Leaf* l) { return std::make_tuple(in_array(l), l->segments.size(), !is_param(l)); };
   std::stable_sort(found.begin(), found.end(), [&](const Leaf* a, const Leaf* b) { return key(a) < key(b); });
   std::vector<std::string> ties;
   for (const Leaf* l : found)

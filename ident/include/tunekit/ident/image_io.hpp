@@ -9,6 +9,7 @@
 // convert it to PNG, which keeps 16-bit depth. A JPEG's EXIF orientation is applied
 // (exif_orientation.hpp), so a photo is measured as it is displayed.
 
+#include <cstdint>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -21,9 +22,20 @@ enum class ImageColor {
   bgr,   ///< always 3 channels (BGR)
 };
 
+/// Images are refused before decoding when their header claims more pixels than this
+/// (width x height, read without decoding): 100 megapixels is four times the largest
+/// photo of a common camera (24 MP) and keeps a decoded 16-bit colour image below 1 GB.
+inline constexpr std::uint64_t kDefaultMaxImagePixels = 100'000'000;
+
+/// The limit in force for this process (default kDefaultMaxImagePixels); `tunekit linewidth
+/// --max-image-mp` changes it. 0 is refused (InputError).
+void set_max_image_pixels(std::uint64_t pixels);
+std::uint64_t max_image_pixels();
+
 /// Reads an image file as CV_8U or CV_16U (the file's depth), 1 or 3 channels as asked.
 /// Throws InputError ("cannot read image: no such file", "empty image file (0 bytes)",
-/// "cannot decode image: <reason>", "TIFF images are not supported ...") located at `path`.
+/// "cannot decode image: <reason>", "TIFF images are not supported ...", "image of W x H pixels
+/// exceeds the limit ...") located at `path`.
 cv::Mat read_image(const std::string& path, ImageColor color = ImageColor::keep);
 
 /// Decodes an image held in memory; `name` is the location used in error messages.

@@ -37,7 +37,17 @@ struct AccelInputOptions {
   double max_gap_s = 0.1;                  ///< a longer hole in the time column: refuse
   double max_missing_fraction = 0.01;      ///< more missing samples than this: refuse
   double max_jitter = 0.02;                ///< relative std. dev. of intervals before resampling
+  /// Samples beyond what an accelerometer can report are not measurements (a corrupted line,
+  /// a logger fault): up to this fraction of them is replaced by the mean of the neighbouring
+  /// good samples, each with a located warning; more is an InputError.
+  double max_wild_fraction = 0.001;
 };
+
+/// The largest acceleration any supported accelerometer reports, mm/s^2: +-16 g, the widest
+/// range of the ADXL345 (Analog Devices, ADXL345 data sheet, Rev. G, 2022), LIS2DW12 and
+/// MPU-6050/9250 that Klipper reads (Klipper, docs/Measuring_Resonances.md). A sample beyond it
+/// (or beyond twice full_scale_mm_s2 when that is given) is not physical.
+inline constexpr double kMaxAccelerometerReading_mm_s2 = 16 * 9806.65;
 
 struct SamplingReport {
   double sample_rate_hz = 0;   ///< 1 / median interval

@@ -16,6 +16,7 @@
 //   axis-rectangle      Hemminger's (UCLA, 2022) overshoot rectangle: XY rectangle with pauses, repeated
 //   test-pattern        pads, line steps and rings ordered by the coverage planner (coverage_planner.hpp)
 
+#include <cstddef>
 #include <map>
 #include <string>
 #include <vector>
@@ -24,15 +25,30 @@
 
 #include "tunekit/protocols/dialect.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/protocols/safety.hpp"
 
 namespace tunekit::protocols {
+
+/// What values a parameter accepts (checked before any G-code is generated). Every value must
+/// also be finite; `max_value` is a plausibility cap that keeps the arithmetic of the protocol
+/// (and its conversions to whole numbers) far from overflow. The machine's own limits are
+/// checked afterwards on the G-code by the safety gate (safety.hpp).
+enum class ParamDomain {
+  positive,      ///< > 0
+  non_negative,  ///< >= 0
+  any,           ///< any finite value (positions; the gate checks them against the travel)
+  count,         ///< a whole number >= 1
+};
 
 struct ProtocolParam {
   std::string name;  ///< with its unit: "feed_low_mm_s"
   double default_value = 0;
   std::string unit;  ///< "mm/s"
   std::string help;
+  ParamDomain domain = ParamDomain::positive;
+  double max_value = 1e6;  ///< |value| must not exceed this
 };
+
 
 struct ProtocolSpec {
   std::string name;
@@ -60,7 +76,11 @@ struct Experiment {
 
 /// Builds a protocol. `overrides` are "name" -> value; unknown names are an InputError.
 /// Parameters that depend on the machine (e.g. the sweep's centre) default from the profile.
+/// Every parameter is checked against its domain first (InputError naming it), then the
+/// protocol's line count and machine time are computed from the parameters and compared with
+/// `limits` before any G-code is generated, so no parameter can make it hang or exhaust memory.
 Experiment build_experiment(const std::string& protocol, const std::map<std::string, double>& overrides,
-                            const std::string& axis, const MachineProfile& profile, const Dialect& dialect);
+                            const std::string& axis, const MachineProfile& profile, const Dialect& dialect,
+                            const ProtocolLimits& limits = {});
 
 }  // namespace tunekit::protocols

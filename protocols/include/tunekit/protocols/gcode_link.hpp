@@ -11,7 +11,8 @@
 //    the timeout counts silence, not total time.
 //  - no line at all for `timeout`: the same numbered line is sent again (a dropped line);
 //    after `max_retries` such retries, MachineError.
-// Every line sent and every non-data line received is written to the journal.
+// Every line sent and every non-data line received is written to the journal. With a SendGuard,
+// a line it refuses is never written.
 
 #include <atomic>
 #include <chrono>
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "tunekit/protocols/journal.hpp"
+#include "tunekit/protocols/safety.hpp"
 #include "tunekit/protocols/transport.hpp"
 
 namespace tunekit::protocols {
@@ -51,6 +53,10 @@ class GcodeLink {
   std::function<void()> on_batch;
   /// Checked while waiting; when set, the wait ends with MachineError("interrupted").
   const std::atomic<bool>* abort_flag = nullptr;
+  /// When set, every command passes this last check before it is written: a refused line
+  /// (non-finite number, position outside the travel, ...) is never sent and ends the run with
+  /// MachineError (exit code 3; the runner then sends the safe-state commands).
+  SendGuard* guard = nullptr;
 
   /// Sends one command and waits for its "ok". Returns the informational lines received
   /// meanwhile (e.g. the M115 report). Throws MachineError as described above.

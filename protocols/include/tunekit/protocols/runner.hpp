@@ -49,6 +49,7 @@ struct RunOptions {
   /// sim_camera.hpp); several runs may share one bed.
   std::shared_ptr<SimPrintBed> sim_bed;
   LinkOptions link;                      ///< timeouts and retries
+  ProtocolLimits limits;                 ///< caps on the protocol's machine time, lines and bytes
   bool dry_run = false;                  ///< build and check only; RunResult::gcode is filled
   const std::atomic<bool>* abort_flag = nullptr;  ///< e.g. set by SIGINT
   std::function<void(const std::string&)> progress;  ///< human progress messages

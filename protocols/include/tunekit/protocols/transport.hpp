@@ -60,6 +60,7 @@ class FdTransport : public Transport {
  private:
   int fd_;
   std::string name_;
+  bool is_socket_ = false;  ///< written with send(MSG_NOSIGNAL): a closed peer is EPIPE, not SIGPIPE
 };
 
 /// Opens a tty device or pseudo-terminal slave (e.g. Klipper's /tmp/printer or tunekit-sim's

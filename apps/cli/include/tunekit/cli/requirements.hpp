@@ -5,8 +5,10 @@
 // `tau_s` finds `results.pooled.params.tau_s.value` (an object with a `value` stands for
 // its value) and `x.freq_hz` finds `results.axes.x...freq_hz`. Segments must appear in
 // order; among the matches a number outside any array wins over one inside an array, then
-// the one with the fewest path segments; a tie between different numbers is an error
-// listing the candidates. Full paths with indices
+// the one with the fewest path segments, then a fitted parameter (a member of a `params`
+// object); a tie between different numbers is an error listing the candidates. A fit's
+// diagnostics (`diagnostics.n`, the number of observations) are matched only when the path
+// says `diagnostics`: in `rheo`, `n` is the flow index. Full paths with indices
 // (`axes.x.modes[1].freq_hz`) are accepted too.
 
 #include <string>

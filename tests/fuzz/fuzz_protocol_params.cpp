@@ -1,0 +1,44 @@
+// Protocol parameter validation as a property: any protocol, any parameters (raw double bit
+// patterns, so every NaN, infinity, denormal and extreme is reachable) either are refused with
+// an InputError, or give G-code that the gate accepts and whose every word is a finite number.
+#include <cstdlib>
+#include <cstring>
+#include <map>
+
+#include "fuzz_common.hpp"
+#include "tunekit/protocols/dialect.hpp"
+#include "tunekit/protocols/experiments.hpp"
+#include "tunekit/protocols/runner.hpp"
+#include "tunekit/protocols/safety.hpp"
+
+using namespace tunekit::protocols;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < 2) return -1;
+  static const MachineProfile profile = builtin_sim_profile();
+  const auto& specs = protocol_specs();
+  const auto& spec = specs[data[0] % specs.size()];
+  const Firmware fw = data[1] % 3 == 0 ? Firmware::marlin : data[1] % 3 == 1 ? Firmware::klipper : Firmware::reprapfirmware;
+  const std::string axis = data[1] & 0x80 ? "y" : "x";
+  std::map<std::string, double> params;
+  for (std::size_t i = 2; i + 9 <= size; i += 9) {
+    double v;
+    std::memcpy(&v, data + i + 1, sizeof v);
+    params[spec.params[data[i] % spec.params.size()].name] = v;
+  }
+  ProtocolLimits limits;
+  limits.max_lines = 200000;  // keeps one execution fast; the property is the same
+  Experiment e;
+  try {
+    e = build_experiment(spec.name, params, axis, profile, Dialect(fw), limits);
+    require_within_limits(e.gcode, profile, e.sensors, limits);
+  } catch (const tunekit::InputError&) {
+    return 0;
+  }
+  for (const auto& l : e.gcode)
+    if (non_finite_word(l)) std::abort();  // the gate passed a non-finite number
+  SendGuard guard(profile);
+  for (const auto& l : e.gcode)
+    if (l.rfind(";@", 0) != 0 && guard.refuse(l)) std::abort();  // the gate and the link disagree
+  return 0;
+}

@@ -1,0 +1,25 @@
+// tunekit's results JSON read back: parsing with located errors, the envelope check, the
+// --require evaluation and the HTML report built from it.
+#include "fuzz_common.hpp"
+#include "tunekit/cli/report.hpp"
+#include "tunekit/cli/requirements.hpp"
+#include "tunekit/cli/results_json.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size > 65536) return -1;
+  const std::string text(tunekit::fuzz::as_text(data, size));
+  tunekit::fuzz::expect_result_or_error([&] {
+    const auto j = tunekit::cli::parse_results_json(text, "fuzz.json");
+    tunekit::cli::check_results_envelope(j, text, "fuzz.json");
+    for (const char* req : {"tau_s<0.6", "x.freq_hz>=40", "n<0.5"})
+      tunekit::fuzz::expect_result_or_error([&] {
+        tunekit::cli::evaluate_requirement(tunekit::cli::parse_requirement(req), j.contains("results") ? j["results"] : j);
+      });
+    try {
+      tunekit::cli::build_report_html(j, {});
+    } catch (const nlohmann::json::exception&) {
+      // write_report turns these into a located InputError (report.cpp); the builder may throw them.
+    }
+  });
+  return 0;
+}
