@@ -68,6 +68,11 @@ std::vector<ProtocolSpec> make_specs() {
                 {"freq_min_hz", 0.1, "Hz", "start frequency", ParamDomain::positive, kMaxFreqHz},
                 {"freq_max_hz", 3.0, "Hz", "end frequency", ParamDomain::positive, kMaxFreqHz},
                 {"duration_s", 20, "s", "chirp duration", ParamDomain::positive, kMaxTimeS},
+                {"settle_s", 2.0, "s", "steady feed at the mean before the chirp", ParamDomain::positive, kMaxTimeS},
+                {"expected_tau_s", 0, "s",
+                 "expected liquefier time constant (0: none); when given, the frequency range, duration and settle "
+                 "time not set explicitly are sized from its corner 1/(2 pi tau)",
+                 ParamDomain::non_negative, kMaxTimeS},
                 {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase", ParamDomain::positive, 10},
                 {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments", ParamDomain::positive, kMaxAccelMmS2},
                 hotend},
