@@ -42,7 +42,7 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   // The report shows the photo with the measured edges.
   const std::string html = read_file_bytes(dir + "/report.html");
   CHECK(tunekit::test::embedded_png_base64_length(html, "linewidth_overlay") > 10000);
-  CHECK(tunekit::test::embedded_png_base64_length(html, "step") > 2000);
+  CHECK(tunekit::test::embedded_image_base64_length(html, "step") > 2000);
   CHECK(fs::exists(dir + "/liquefier-camera/photo.png"));
   // Pressure advance is designed from the camera's tau.
   CHECK(res.at("compensators").at("settings").at("pa_k_s").get<double>() > 0);

@@ -25,9 +25,15 @@ namespace tp = tunekit::protocols;
 namespace {
 
 // The simulated printer's profile with its [sensors] section replaced.
-std::string klipper_profile(const std::string& dir, const std::string& sensors) {
+std::string klipper_profile(const std::string& dir, const std::string& sensors, bool klipper_planner = true) {
   std::string text = tunekit::test::read_text(tunekit::test::dataset("machines/sim.toml"));
-  text = text.substr(0, text.find("[sensors]")) + "[sensors]\n" + sensors;
+  // A Klipper printer: the protocols are built for Klipper's planner; the simulated machine's
+  // [firmware_state] is kept.
+  const auto fw = text.find("firmware = \"marlin\"");
+  if (klipper_planner && fw != std::string::npos) text.replace(fw, std::string("firmware = \"marlin\"").size(), "firmware = \"klipper\"");
+  const auto state = text.find("[firmware_state]");
+  text = text.substr(0, text.find("[sensors]")) + "[sensors]\n" + sensors + "\n" +
+         (state == std::string::npos ? std::string() : text.substr(state));
   const std::string path = dir + "/printer.toml";
   std::ofstream(path) << text;
   return path;
@@ -102,7 +108,7 @@ TEST_CASE("an axis sweep recorded under each Klipper accelerometer chip gives th
   const std::string sock = dir + "/klippy_uds";
   FakeKlipperConfig fake;
   fake.accelerometers = {c.section};
-  FakeKlipper server(sock, tp::SimConfig::from_options({"mode_x=" + std::to_string(c.f_mode) + ":0.06"}), fake);
+  FakeKlipper server(sock, tp::SimConfig::from_options({"mode_x=" + std::to_string(c.f_mode) + ":0.06", "firmware=klipper"}), fake);
   const auto profile = klipper_profile(dir, fmt::format("accelerometer = \"{}\"\naccelerometer_name = \"{}\"\nload_cell = false\n",
                                                         c.chip, c.section));
   const auto r = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", profile, "--port", "unix:" + sock, "--run-dir",
@@ -135,7 +141,9 @@ TEST_CASE("a liquefier step run on Klipper's load cell gives tau within 5 %", "[
                      tp::SimConfig::from_options({fmt::format("tau_s={}", tau), fmt::format("theta_s={}", theta),
                                                   "K=2.8"}),
                      fake);
-  const auto profile = klipper_profile(dir, "accelerometer = false\nload_cell = true\nload_cell_name = \"load_cell extruder\"\n");
+  // Built for a planner that blends extrude-only moves, so the trapq shows the labelled feeds.
+  const auto profile =
+      klipper_profile(dir, "accelerometer = false\nload_cell = true\nload_cell_name = \"load_cell extruder\"\n", false);
   const auto r = run_cli({"run", "liquefier-step", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/run",
                           "--json"});
   INFO(r.err);

@@ -190,7 +190,7 @@ TEST_CASE("overshoot grid mode maps overshoot and the figure of merit, compares 
     CHECK(c["figure_of_merit"].get<double>() <= b["figure_of_merit"].get<double>());
   }
   const auto html = tunekit::test::read_text(out + "/report.html");
-  CHECK(tunekit::test::embedded_png_base64_length(html, "overshoot_grid") > 1000);
+  CHECK(tunekit::test::embedded_image_base64_length(html, "overshoot_grid") > 1000);
 }
 
 TEST_CASE("overshoot from an encoder column agrees with the closed-form response within 10 %", "[machine][overshoot]") {

@@ -60,8 +60,12 @@ std::string independent_check(const std::vector<std::string>& gcode, const Machi
         }
         if (key == "F" && !(v > 0 && v / 60 <= max_v + 1e-6)) return "feed rate outside the profile: " + raw;
       }
-      if ((head == "M204" || head == "SET_VELOCITY_LIMIT") && !(v > 0 && v <= max_a + 1e-6))
-        return "acceleration outside the profile: " + raw;
+      // Klipper's SET_VELOCITY_LIMIT (klippy/toolhead.py cmd_SET_VELOCITY_LIMIT): ACCEL is an
+      // acceleration, MINIMUM_CRUISE_RATIO a fraction in [0, 1).
+      const bool is_accel = head == "M204" || (head == "SET_VELOCITY_LIMIT" && key == "ACCEL");
+      if (is_accel && !(v > 0 && v <= max_a + 1e-6)) return "acceleration outside the profile: " + raw;
+      if (head == "SET_VELOCITY_LIMIT" && key == "MINIMUM_CRUISE_RATIO" && !(v >= 0 && v < 1))
+        return "minimum cruise ratio outside [0, 1): " + raw;
       if ((head == "M104" || head == "M109") && key == "S" && !(v >= 0 && v <= p.temperature.hotend_max_c))
         return "temperature outside the profile: " + raw;
       if (head == "G4" && !(v >= 0)) return "negative dwell: " + raw;

@@ -265,7 +265,15 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     o.dry_run = dry;
     o.run_dir = run_dir + "/" + e.name;
     o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
-    if (e.protocol == "liquefier-chirp") o.params["expected_tau_s"] = chirp_plan.expected_tau_s;
+    if (e.protocol == "liquefier-chirp") {
+      o.params["expected_tau_s"] = chirp_plan.expected_tau_s;
+      // Staircase steps as long as the chirp's end allows (10 per period, at most 50 ms): Klipper
+      // stops after every extrude-only move, so fewer, longer moves keep the delivered feed close
+      // to the recorded staircase.
+      o.params["segment_s"] = std::min(0.05, 1.0 / (10 * chirp_plan.freq_max_hz));
+      // ... and as short a stop as the extruder allows: its own acceleration limit.
+      if (profile.extruder.max_accel_mm_s2 > 0) o.params["accel_mm_s2"] = profile.extruder.max_accel_mm_s2;
+    }
     return o;
   };
 
