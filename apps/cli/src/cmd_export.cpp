@@ -202,7 +202,11 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
       } else if (cmd == "shaper") {
         const auto& axes = dig(res, {"axes"});
         if (!axes.is_object()) throw InputError("shaper results without 'axes'", path);
-        for (const auto& [axis, v] : axes.items()) {
+        for (const auto& axis_item : axes.items()) {
+          // A plain variable, not a structured binding: the lambdas below capture it (clang 14
+          // refuses to capture a structured binding).
+          const std::string axis = axis_item.key();
+          const auto& v = axis_item.value();
           const auto& rec = dig(v, {"recommended"});
           if (!rec.is_object()) continue;
           if (axis != "x" && axis != "y") {
