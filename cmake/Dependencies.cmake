@@ -99,6 +99,12 @@ if(NOT STB_FOUND)
   tunekit_missing("stb_image (image files)" "libstb-dev")
 endif()
 
+# Zstandard: reading Shake&Tune's .stdata measurement files (ident/shaketune_stdata).
+pkg_check_modules(ZSTD QUIET IMPORTED_TARGET libzstd)
+if(NOT ZSTD_FOUND)
+  tunekit_missing("Zstandard (Shake&Tune .stdata files)" "libzstd-dev")
+endif()
+
 # The calibration history: SQLite (the embedded default) and libpq (a farm's PostgreSQL server).
 pkg_check_modules(SQLITE3 QUIET IMPORTED_TARGET sqlite3)
 if(NOT SQLITE3_FOUND)

@@ -13,6 +13,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/klipper_spectrum.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
+#include "tunekit/ident/shaketune_stdata.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -45,6 +46,9 @@ std::string klipper_files_help() {
          "  and SHAPER_CALIBRATE's calibration_data_x_<name>.csv (freq,psd_x,psd_y,psd_z,psd_xyz), or several datasets\n"
          "  (freq,<name>,<name>...). Without 'shapers:' columns the PSD is as measured and gets Klipper's normalization\n"
          "  (divided by f + 0.1 Hz, damped below 10 Hz) before a shaper is chosen; with them it already has it.\n"
+         "  Shake&Tune's measurement files (ShakeTune_results/*/<name>.stdata: Zstandard-compressed JSON lines of\n"
+         "  [t, accel_x, accel_y, accel_z] samples) are read directly; an input-shaper measurement (axis_X_...) gives its\n"
+         "  axis, any other measurement is reported under its name.\n"
          "Feeding RepRapFirmware's files:\n"
          "  M956 P0 S<samples> A0 X Y Z F\"raw_data_x_run1.csv\" writes 0:/sys/accelerometer/<name>.csv: 'Sample,X,Y,Z', rows of\n"
          "  g, and a last line 'Rate <Hz>, overflows <n>' that gives the time base. Name the file raw_data_<axis>_*.csv\n"
@@ -56,7 +60,8 @@ std::string klipper_files_help() {
 void add_resonance_options(CLI::App* sub, ResonanceCliArgs& a) {
   sub->add_option("files", a.files,
                   "Accelerometer CSVs: Klipper raw_data_<axis>_*.csv (#time,accel_x,accel_y,accel_z in s and mm/s^2), "
-                  "Klipper spectrum files (resonances_<axis>_*.csv, calibration_data_<axis>_*.csv), or generic CSVs "
+                  "Klipper spectrum files (resonances_<axis>_*.csv, calibration_data_<axis>_*.csv), Shake&Tune .stdata "
+                  "files, or generic CSVs "
                   "with --time/--accel")
       ->required();
   sub->add_option("--axis", a.axis,
@@ -179,6 +184,15 @@ std::vector<AxisResult> run_resonance_pipeline(const ResonanceCliArgs& a, Envelo
       // Klipper's spectrum files: one or several datasets; measured PSDs unless the file has
       // shaper columns (then Klipper normalized them before writing).
       file_spectra = std::move(ident::read_klipper_spectrum(path, bytes, in.axis).datasets);
+    } else if (ident::is_shaketune_stdata(bytes)) {
+      // Shake&Tune's .stdata: every measurement is a record; one without an axis in its name
+      // (a belt, a vibration run) is its own group under its measurement name.
+      for (auto& m : ident::load_shaketune_stdata(path, bytes, in)) {
+        auto s = ident::record_spectrum(m.record, welch);
+        by_axis[m.record.axis != 0 ? std::string(1, m.record.axis) : m.name].push_back(std::move(s));
+      }
+      env.add_input_digest(path, digest.get(), bytes.size());
+      continue;
     } else if (ident::is_rrf_accelerometer_csv(bytes)) {
       file_spectra.push_back(ident::record_spectrum(ident::load_rrf_accelerometer_csv(path, bytes, in), welch));
     } else {
