@@ -22,8 +22,9 @@ endif()
 # tunekit_install_library(TARGET NAME): installs library TARGET as tunekit::NAME with the headers
 # of its include/ folder. The libraries declare their include folder and the project's warning
 # flags for the build tree only; this makes both build-only in what is exported:
-#  - an include directory inside the source tree becomes $<BUILD_INTERFACE:...>, and the
-#    installed headers' folder $<INSTALL_INTERFACE:include> takes its place;
+#  - an include directory inside the source or build tree (a generated header) becomes
+#    $<BUILD_INTERFACE:...>, its headers are installed, and the installed headers' folder
+#    $<INSTALL_INTERFACE:include> takes its place;
 #  - tunekit_warnings (compile flags of this project, nothing to link) leaves the link interface
 #    (a static library passes its private dependencies on as $<LINK_ONLY:...>).
 function(tunekit_install_library target name)
@@ -34,13 +35,18 @@ function(tunekit_install_library target name)
   set_target_properties(${target} PROPERTIES EXPORT_NAME ${name})
 
   get_target_property(dirs ${target} INTERFACE_INCLUDE_DIRECTORIES)
+  if(NOT dirs)
+    set(dirs "")
+  endif()
   set(fixed_dirs "")
   foreach(dir IN LISTS dirs)
     set(in_source_tree OFF)
+    set(in_build_tree OFF)
     if(NOT dir MATCHES "^\\$<")
       cmake_path(IS_PREFIX PROJECT_SOURCE_DIR "${dir}" NORMALIZE in_source_tree)
+      cmake_path(IS_PREFIX PROJECT_BINARY_DIR "${dir}" NORMALIZE in_build_tree)
     endif()
-    if(NOT in_source_tree)
+    if(NOT in_source_tree AND NOT in_build_tree)
       list(APPEND fixed_dirs "${dir}")
     else()
       if(EXISTS "${dir}")
@@ -64,9 +70,12 @@ function(tunekit_install_library target name)
           LIBRARY DESTINATION "${CMAKE_INSTALL_LIBDIR}")
 endfunction()
 
-# One line per library, lowest layer first (scripts/check-layers holds the layer table).
+# One line per library, lowest layer first (scripts/check-layers holds the layer table). A
+# library that does not exist (yet) is skipped; every library an installed one links must be here.
+tunekit_install_library(tunekit_core core)
 tunekit_install_library(tunekit_fitting fitting)
 tunekit_install_library(tunekit_ident ident)
+tunekit_install_library(tunekit_vision vision)
 tunekit_install_library(tunekit_protocols protocols)
 tunekit_install_library(tunekit_history history)
 
