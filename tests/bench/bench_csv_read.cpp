@@ -42,10 +42,11 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::size_t rows = 0;
-  const double ms = tunekit::bench::median_ms([&] {
+  const auto timing = tunekit::bench::time_ms([&] {
     const auto t = tunekit::ident::read_csv(argv[1], {{"accel_x", "accel_y", "accel_z"}, "time"});
     rows = t.rows;
   });
-  fmt::print("read_csv {}: {} rows, median {:.1f} ms over 15 runs\n", argv[1], rows, ms);
+  fmt::print("read_csv {}: {} rows, median {:.1f} ms over 15 runs\n", argv[1], rows, timing.median_ms);
+  tunekit::bench::print_bench_line("csv_read", timing);
   return 0;
 }

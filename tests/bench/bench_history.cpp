@@ -40,9 +40,9 @@ double thread_cpu_ms() {
 // Medians of the wall time and of this thread's CPU time (the machine may be shared: the CPU
 // time says what the work costs, the wall time what a user waits).
 template <class F>
-std::pair<double, double> wall_and_cpu_ms(F&& f, int runs, int warmup) {
+std::pair<bench::Timing, double> wall_and_cpu_ms(F&& f, int runs, int warmup) {
   std::vector<double> cpu;
-  const double wall = bench::median_ms(
+  const bench::Timing wall = bench::time_ms(
       [&] {
         const double c0 = thread_cpu_ms();
         f();
@@ -85,9 +85,11 @@ int main(int argc, char** argv) {
   o.record_source = "runs/calibrate-bench";
   std::ostringstream sink;
   cli::CliContext ctx{sink, sink};
-  const auto [record_ms, record_cpu_ms] = wall_and_cpu_ms([&] { cli::record_result(envelope, o, ctx); }, 31, 3);
+  const auto [record_timing, record_cpu_ms] = wall_and_cpu_ms([&] { cli::record_result(envelope, o, ctx); }, 31, 3);
+  const double record_ms = record_timing.median_ms;
   std::printf("record one calibration (SQLite, %zu-byte result): median %.2f ms wall, %.2f ms CPU\n", envelope.dump().size(),
               record_ms, record_cpu_ms);
+  bench::print_bench_line("history_record", record_timing);
 
   // 2. 100 machines x 1,000 runs.
   const std::string db = fleet_db.empty() ? (dir / "fleet.sqlite").string() : fleet_db;
@@ -130,12 +132,16 @@ int main(int argc, char** argv) {
       std::exit(1);
     }
   };
-  const auto [one_ms, one_cpu] = wall_and_cpu_ms([&] { trend({"--machine", "printer-042"}); }, 15, 2);
+  const auto [one_timing, one_cpu] = wall_and_cpu_ms([&] { trend({"--machine", "printer-042"}); }, 15, 2);
+  const double one_ms = one_timing.median_ms;
   std::printf("trend of one machine, all 10 quantities, every run (100 machines x 1,000 runs): median %.1f ms wall, %.1f ms CPU\n",
               one_ms, one_cpu);
-  const auto [fleet_ms, fleet_cpu] = wall_and_cpu_ms([&] { trend({"-q", "x.freq_hz"}); }, 7, 1);
+  bench::print_bench_line("history_trend_machine", one_timing);
+  const auto [fleet_timing, fleet_cpu] = wall_and_cpu_ms([&] { trend({"-q", "x.freq_hz"}); }, 7, 1);
+  const double fleet_ms = fleet_timing.median_ms;
   std::printf("trend of x.freq_hz over the whole fleet (100 x 1,000 runs): median %.1f ms wall, %.1f ms CPU\n", fleet_ms,
               fleet_cpu);
+  bench::print_bench_line("history_trend_fleet", fleet_timing);
   fs::remove_all(dir);
   return 0;
 }

@@ -42,16 +42,18 @@ int main() {
     rec.y.push_back(fitting::step_response(t, 0, rec.du, 2.0, 2.0, 0.1, 1.0) + noise(rng));
   }
   double tau = 0, stderr_tau = 0;
-  const double fit_ms = bench::median_ms(
+  const auto fit_timing = bench::time_ms(
       [&] {
         const auto f = fitting::fit_step(rec, fitting::StepModel::fopdt);
         tau = f.value("tau_s");
         stderr_tau = f.param("tau_s").std_error;
       },
       15, 2);
+  const double fit_ms = fit_timing.median_ms;
   const double fit_cpu = median_cpu_ms([&] { (void)fitting::fit_step(rec, fitting::StepModel::fopdt); }, 15);
   std::printf("fopdt_fit_100k_samples: median wall %.2f ms, median cpu %.2f ms (tau_s %.4f +- %.4f)\n", fit_ms,
               fit_cpu, tau, stderr_tau);
+  bench::print_bench_line("fopdt_fit", fit_timing);
 
   // H1 over 1M samples: white input through a first-order low-pass, Hann, 4096-sample segments.
   std::vector<double> u(1000000), y(u.size());
@@ -65,13 +67,15 @@ int main() {
   ident::WelchOptions wo;
   wo.segment_length = 4096;
   std::size_t bins = 0;
-  const double h1_ms = bench::median_ms(
+  const auto h1_timing = bench::time_ms(
       [&] {
         const auto fr = ident::h1_estimate(u, y, 1000.0, wo);
         bins = fr.freq_hz.size();
       },
       9, 1);
+  const double h1_ms = h1_timing.median_ms;
   const double h1_cpu = median_cpu_ms([&] { (void)ident::h1_estimate(u, y, 1000.0, wo); }, 9);
   std::printf("h1_1M_samples: median wall %.2f ms, median cpu %.2f ms (%zu bins)\n", h1_ms, h1_cpu, bins);
+  bench::print_bench_line("h1_estimate", h1_timing);
   return 0;
 }

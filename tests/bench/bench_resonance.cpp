@@ -22,13 +22,15 @@
 #include <fmt/format.h>
 
 #include "../resonance/synth_sweep.hpp"
+#include "bench_common.hpp"
 #include "tunekit/cli/commands.hpp"
 
 namespace {
 
 // Runs `exe args...` with stdout and stderr to /dev/null; returns its exit code (or 127) and
 // adds the child's CPU time (user + system, ms) to `cpu_ms`.
-int run_process(const std::string& exe, const std::vector<std::string>& args, std::vector<double>& cpu_ms) {
+int run_process(const std::string& exe, const std::vector<std::string>& args, std::vector<double>& cpu_ms,
+                std::vector<double>& peak_rss_mb) {
   std::vector<char*> argv;
   std::vector<std::string> all{exe};
   all.insert(all.end(), args.begin(), args.end());
@@ -49,6 +51,7 @@ int run_process(const std::string& exe, const std::vector<std::string>& args, st
   struct rusage ru {};
   if (wait4(pid, &status, 0, &ru) != pid) return 127;
   cpu_ms.push_back(1e3 * (ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-3 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec));
+  peak_rss_mb.push_back(static_cast<double>(ru.ru_maxrss) / 1024.0);  // ru_maxrss is in KiB on Linux
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
 }
 
@@ -79,14 +82,14 @@ int main(int argc, char** argv) {
   fmt::print("wrote {} ({} samples, {:.1f} s at {} Hz)\n", csv, rec.t.size(), rec.t.back() - rec.t.front(),
              spec.sample_rate_hz);
   if (write_only) return 0;
-  std::vector<double> ms, cpu;
+  std::vector<double> ms, cpu, rss;
   std::string last;
   for (int r = 0; r < runs; ++r) {
     std::ostringstream out, err;
     std::vector<std::string> args = {"shaper", csv, "--json"};
     if (klipper) args.push_back("--klipper-compatible");
     const auto t0 = std::chrono::steady_clock::now();
-    const int code = exe.empty() ? tunekit::cli::run_cli(args, out, err) : run_process(exe, args, cpu);
+    const int code = exe.empty() ? tunekit::cli::run_cli(args, out, err) : run_process(exe, args, cpu, rss);
     const auto t1 = std::chrono::steady_clock::now();
     if (code != 0) {
       fmt::print(stderr, "tunekit shaper failed ({}): {}\n", code, err.str());
@@ -95,6 +98,7 @@ int main(int argc, char** argv) {
     ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     last = out.str();
   }
+  tunekit::bench::print_bench_line(exe.empty() ? "shaper_in_process" : "shaper_process", tunekit::bench::summarize_ms(ms));
   std::sort(ms.begin(), ms.end());
   fmt::print("tunekit shaper on 410k samples{}: median {:.1f} ms over {} runs (min {:.1f}, max {:.1f})\n",
              exe.empty() ? " (in-process)" : " (whole process " + exe + ")", ms[ms.size() / 2], runs, ms.front(),
@@ -103,6 +107,10 @@ int main(int argc, char** argv) {
     std::sort(cpu.begin(), cpu.end());
     fmt::print("  process CPU time (user + system): median {:.1f} ms (min {:.1f}, max {:.1f})\n", cpu[cpu.size() / 2],
                cpu.front(), cpu.back());
+    const auto peak = tunekit::bench::summarize_ms(rss);  // MB, not ms: same statistics
+    fmt::print("  peak resident memory: median {:.1f} MB (min {:.1f}, max {:.1f})\n", peak.median_ms, peak.min_ms,
+               peak.max_ms);
+    tunekit::bench::print_bench_line("shaper_process_rss", peak.median_ms, peak.min_ms, peak.max_ms, "MB", peak.runs);
   }
   return 0;
 }

@@ -11,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "bench_common.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/fitting/viscosity.hpp"
 
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
     cpu.push_back(1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
+  tunekit::bench::print_bench_line("cross_wlf_fit", tunekit::bench::summarize_ms(ms));
   std::sort(ms.begin(), ms.end());
   std::sort(cpu.begin(), cpu.end());
   std::printf("cross-wlf fit, %zu points, global start included: median %.1f ms wall (min %.1f, max %.1f), "
