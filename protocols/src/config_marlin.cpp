@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cctype>
+#include <iterator>
 #include <optional>
 
 #include <fmt/format.h>
@@ -12,6 +13,7 @@
 #include "export_writers.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
 #include "text_util.hpp"
 
 namespace tunekit::protocols::detail {
@@ -216,37 +218,68 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
     }
     return std::any_of(defs.begin(), defs.end(), [](const Define& d) { return !d.commented; });
   };
-  m.set_index(static_cast<std::size_t>(s.extruder_index));
-  if (s.pa_k_s) {
-    const bool ftm_k = !find_defines(m.editor(), "FTM_LINEAR_ADV_DEFAULT_K").empty();
-    if (!m.set(ftm_k ? "FTM_LINEAR_ADV_DEFAULT_K" : "ADVANCE_K", *s.pa_k_s, kDecimalsK))
-      throw InputError("FT_MOTION build without an ADVANCE_K or FTM_LINEAR_ADV_DEFAULT_K line", r.path);
+  // A printer that runs fixed-time motion with a file that does not build it: the file is not
+  // the running build's, and its classic lines would be bypassed; only the M493 G-code applies.
+  const bool file_has_ft = marlin_ft_motion_enabled(r.original);
+  if (s.marlin_ft_motion_live && !file_has_ft) {
+    r.warnings.push_back(fmt::format("{}: the printer runs fixed-time motion (M493 reports it enabled) but this file "
+                                     "does not enable FT_MOTION: it is not the running build's configuration; its "
+                                     "classic shaper and advance lines are left alone (FT_MOTION bypasses them) and the "
+                                     "settings are in the M493 G-code",
+                                     r.path));
+  } else {
+    m.set_index(static_cast<std::size_t>(s.extruder_index));
+    if (s.pa_k_s) {
+      const bool ftm_k = !find_defines(m.editor(), "FTM_LINEAR_ADV_DEFAULT_K").empty();
+      if (!m.set(ftm_k ? "FTM_LINEAR_ADV_DEFAULT_K" : "ADVANCE_K", *s.pa_k_s, kDecimalsK))
+        throw InputError("FT_MOTION build without an ADVANCE_K or FTM_LINEAR_ADV_DEFAULT_K line", r.path);
+    }
+    for (const auto& [axis, sh] : s.shapers) {
+      const std::string A = axis == "x" ? "X" : "Y";
+      const std::string type = firmware_shaper_name(ExportFirmware::marlin, sh.type, true);
+      if (!replace_token("FTM_DEFAULT_SHAPER_" + A, "ftMotionShaper_" + type))
+        throw InputError(fmt::format("FT_MOTION is enabled but there is no '#define FTM_DEFAULT_SHAPER_{}' line", A), r.path);
+      if (!m.set("FTM_SHAPING_DEFAULT_FREQ_" + A, sh.freq_hz, kDecimalsFreq))
+        throw InputError(fmt::format("no '#define FTM_SHAPING_DEFAULT_FREQ_{}' line", A), r.path);
+      if (!m.set("FTM_SHAPING_ZETA_" + A, sh.damping, kDecimalsZeta))
+        throw InputError(fmt::format("no '#define FTM_SHAPING_ZETA_{}' line", A), r.path);
+    }
   }
   if (s.pa_smooth_s)
     r.warnings.push_back(fmt::format("{}: FT_MOTION is enabled: it bypasses SMOOTH_LIN_ADVANCE (stepper.cpp isr()), so "
                                      "ADVANCE_TAU is not written",
                                      r.path));
-  for (const auto& [axis, sh] : s.shapers) {
-    const std::string A = axis == "x" ? "X" : "Y";
-    const std::string type = firmware_shaper_name(ExportFirmware::marlin, sh.type, true);
-    if (!replace_token("FTM_DEFAULT_SHAPER_" + A, "ftMotionShaper_" + type))
-      throw InputError(fmt::format("FT_MOTION is enabled but there is no '#define FTM_DEFAULT_SHAPER_{}' line", A), r.path);
-    if (!m.set("FTM_SHAPING_DEFAULT_FREQ_" + A, sh.freq_hz, kDecimalsFreq))
-      throw InputError(fmt::format("no '#define FTM_SHAPING_DEFAULT_FREQ_{}' line", A), r.path);
-    if (!m.set("FTM_SHAPING_ZETA_" + A, sh.damping, kDecimalsZeta))
-      throw InputError(fmt::format("no '#define FTM_SHAPING_ZETA_{}' line", A), r.path);
-  }
   r.updated = m.editor().render();
   r.diff = m.editor().unified_diff(r.path);
-  // M493's parameter letters differ between Marlin versions: no runtime shaping line is
-  // guessed; the compiled defaults are loaded with M502 and stored with M500.
   std::string g;
-  if (s.pa_k_s) g += fmt::format("M900 K{}\n", format_number(*s.pa_k_s, kDecimalsK));
-  if (!s.shapers.empty())
-    r.warnings.push_back(fmt::format("{}: FT_MOTION build: the shapers are written as FT_MOTION defaults; after "
-                                     "flashing send M502 then M500 (M493 sets them at run time, with version-specific "
-                                     "parameters)",
-                                     r.path));
+  if (s.marlin_ft_motion_live) {
+    // M493's letters as Marlin/src/gcode/feature/ft_motion/M493.cpp parses them (the version
+    // whose report the printer gave): S1 keeps fixed-time motion on; X/Y the shaper
+    // (1 ZV, 2 ZVD, 3 ZVDD, 4 ZVDDD, 5 EI, 6 2HEI, 7 3HEI, 8 MZV: ft_types.h order), set before
+    // A/B (frequency) and I/J (damping, accepted 0.01-1) which need a shaper on the axis;
+    // P1 K<gain> its linear advance.
+    std::string line = "M493 S1";
+    for (const auto& [axis, sh] : s.shapers) {
+      const std::string t = firmware_shaper_name(ExportFirmware::marlin, sh.type, true);
+      int number = 0;
+      for (std::size_t i = 0; i < std::size(limits::kMarlinFtMotionShapers); ++i)
+        if (t == limits::kMarlinFtMotionShapers[i].firmware_name) number = static_cast<int>(i) + 1;
+      const bool x = axis == "x";
+      line += fmt::format(" {}{} {}{} {}{}", x ? "X" : "Y", number, x ? "A" : "B", format_number(sh.freq_hz, kDecimalsFreq),
+                          x ? "I" : "J", format_number(std::max(0.01, sh.damping), kDecimalsZeta));
+    }
+    g += line + "\n";
+    if (s.pa_k_s) g += fmt::format("M493 P1 K{}\n", format_number(*s.pa_k_s, kDecimalsK));
+  } else {
+    // Known from the file only: M493's parameter letters differ between Marlin versions, so no
+    // runtime shaping line is guessed; the compiled defaults are loaded with M502 and stored with M500.
+    if (s.pa_k_s) g += fmt::format("M900 K{}\n", format_number(*s.pa_k_s, kDecimalsK));
+    if (!s.shapers.empty())
+      r.warnings.push_back(fmt::format("{}: FT_MOTION build: the shapers are written as FT_MOTION defaults; after "
+                                       "flashing send M502 then M500 (M493 sets them at run time, with version-specific "
+                                       "parameters)",
+                                       r.path));
+  }
   if (!g.empty()) g += "M500\n";
   r.gcode = g;
   if (r.updated != r.original)
@@ -259,6 +292,12 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
 void write_marlin(ExportResult& r, const CompensatorSettings& s) {
   const LineEditor original(r.original);
   MarlinEditor m(r);
+  // Fixed-time motion bypasses the classic shaper and smooth linear advance: nothing of them is
+  // touched (stepper.cpp isr()).
+  if (s.marlin_ft_motion) {
+    write_marlin_ft_motion(r, s, m);
+    return;
+  }
   bool tau_written = false;
   if (s.pa_k_s || s.pa_smooth_s) {
     if (!m.enable("LIN_ADVANCE"))
@@ -281,10 +320,6 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
     } else {
       tau_written = true;
     }
-  }
-  if (s.marlin_ft_motion) {
-    write_marlin_ft_motion(r, s, m);
-    return;
   }
   // SHAPING_MIN_FREQ sizes the shaping queue (stepper.h: shaping_echoes = max_step_rate /
   // shaping_min_freq / 2 + 3); a lower frequency overflows it ("IS will also misbehave!",

@@ -11,6 +11,7 @@
 
 #include "export_writers.hpp"
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/marlin_smoothing.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
 #include "text_util.hpp"
@@ -135,7 +136,8 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
 ExportResult export_config_text(ExportFirmware fw, const std::string& text, const std::string& path,
                                 const CompensatorSettings& settings) {
   CompensatorSettings s = settings;
-  if (fw == ExportFirmware::marlin && marlin_ft_motion_enabled(text)) s.marlin_ft_motion = true;
+  if (fw == ExportFirmware::marlin && (marlin_ft_motion_enabled(text) || s.marlin_ft_motion_live))
+    s.marlin_ft_motion = true;
   validate_settings(fw, s);
   ExportResult r;
   r.firmware = fw;
@@ -184,7 +186,11 @@ nlohmann::json ExportResult::to_json() const {
 std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::AdvanceDesign& d) {
   double w = ident::kAdvanceNaN;
   if (fw == ExportFirmware::klipper) w = d.window_triangular_s;
-  if (fw == ExportFirmware::marlin) w = d.window_box_s;
+  if (fw == ExportFirmware::marlin) {
+    // Marlin smooths with its own exponential cascade, designed on the written grid.
+    if (!std::isfinite(d.window_box_s) || d.window_box_s <= 0) return std::nullopt;
+    return ident::design_marlin_advance_tau(d.window_box_s, {}, std::pow(10.0, -detail::kDecimalsSmooth)).tau_s;
+  }
   if (!std::isfinite(w) || w <= 0) return std::nullopt;
   const double scale = std::pow(10.0, detail::kDecimalsSmooth);
   return std::max(1.0 / scale, std::ceil(w * scale - 1e-9) / scale);

@@ -1,4 +1,5 @@
 #include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/protocols/rrf_http.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
 
 #include <algorithm>
@@ -167,6 +168,16 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
   p.sensors.filament_encoder = r.flag(s, "filament_encoder", false);
   p.sensors.camera = r.flag(s, "camera", false);
   p.sensors.accelerometer_rate_hz = r.positive(s, "sensors", "accelerometer_rate_hz", false, 3200);
+
+  const auto& net = r.section("network", false);
+  p.http_address = r.text(net, "http", "");
+  if (!p.http_address.empty()) {
+    try {
+      (void)parse_http_address(p.http_address);
+    } catch (const InputError& e) {
+      throw InputError(e.message(), path);
+    }
+  }
 
   const auto& fs = r.section("firmware_state", false);
   for (const char* axis : {"x", "y"}) {

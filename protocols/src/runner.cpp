@@ -1,4 +1,6 @@
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/protocols/rrf_http.hpp"
+#include "tunekit/ident/rrf_accelerometer.hpp"
 
 #include <algorithm>
 #include <ctime>
@@ -156,7 +158,9 @@ class Session {
   virtual ~Session() = default;
   virtual FirmwareInfo identify() = 0;
   virtual void send(const std::string& line) = 0;
-  virtual void record(const std::string& sensor, bool on) = 0;
+  /// `window_s`: how long the recording is expected to last (RepRapFirmware's M956 takes a
+  /// sample count, not a stop command).
+  virtual void record(const std::string& sensor, bool on, double window_s) = 0;
   /// Whether this link can record `sensor` (checked before anything is sent: no heating or
   /// homing for a protocol whose data cannot be recorded).
   virtual bool can_record(const std::string& sensor) const = 0;
@@ -170,8 +174,8 @@ class Session {
 class GcodeSession : public Session {
  public:
   GcodeSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const std::atomic<bool>* abort,
-               SendGuard& guard)
-      : t_(std::move(t)), link_(*t_, &j, lo) {
+               SendGuard& guard, std::string http)
+      : t_(std::move(t)), link_(*t_, &j, lo), j_(j), rec_(rec), http_(std::move(http)) {
     link_.guard = &guard;
     link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
     link_.on_batch = [&j] { j.flush(); };
@@ -179,10 +183,24 @@ class GcodeSession : public Session {
   }
   FirmwareInfo identify() override {
     link_.reset_line_numbers();
-    return parse_m115(link_.send("M115"));
+    FirmwareInfo f = parse_m115(link_.send("M115"));
+    // Marlin's M115 names no FT_MOTION capability: ask M493 (a bare M493 only reports; a build
+    // without FT_MOTION answers "Unknown command"). With fixed-time motion active the classic
+    // shaper and smooth linear advance are bypassed, so settings go to M493.
+    if (f.firmware == Firmware::marlin) {
+      const auto ft = parse_m493_report(link_.send("M493"));
+      f.ft_motion = ft.present;
+      f.ft_motion_active = ft.active;
+    }
+    return f;
   }
   void send(const std::string& line) override { link_.send(line); }
-  void record(const std::string& sensor, bool on) override {
+  void record(const std::string& sensor, bool on, double window_s) override {
+    if (!firmware.sensor_stream() && rrf_file_accelerometer(sensor)) {
+      if (on) start_m956(window_s);
+      else fetch_m956();
+      return;
+    }
     // tunekit-sim streams with M4100 whichever firmware it follows.
     const std::string cmd = firmware.sensor_stream() ? Dialect(Firmware::marlin).sensor_stream(sensor, on)
                                                       : dialect.sensor_stream(sensor, on);
@@ -193,19 +211,73 @@ class GcodeSession : public Session {
                          t_->describe());
     link_.send(cmd);
   }
-  bool can_record(const std::string& /*sensor*/) const override { return firmware.sensor_stream(); }
+  bool can_record(const std::string& sensor) const override {
+    return firmware.sensor_stream() || rrf_file_accelerometer(sensor);
+  }
   void finish() override {}
   void safe_state(const std::vector<std::string>& commands) override {
     link_.send_best_effort(commands, std::chrono::milliseconds(300));
   }
   nlohmann::json stats() const override {
     const auto& s = link_.stats();
-    return {{"lines_sent", s.lines_sent}, {"resends", s.resends}, {"retries", s.retries}, {"busy", s.busy}, {"data_lines", s.data_lines}};
+    nlohmann::json j{{"lines_sent", s.lines_sent}, {"resends", s.resends}, {"retries", s.retries}, {"busy", s.busy}, {"data_lines", s.data_lines}};
+    if (!m956_files_.empty()) j["rrf_accelerometer_files"] = m956_files_;
+    return j;
   }
 
  private:
+  /// RepRapFirmware records its accelerometer into a file (M956); tunekit fetches it over the
+  /// board's web server (rrf_http.hpp), the only way RepRapFirmware offers to read a file.
+  bool rrf_file_accelerometer(const std::string& sensor) const {
+    return firmware.firmware == Firmware::reprapfirmware && sensor == "accelerometer" && !http_.empty();
+  }
+  void start_m956(double window_s) {
+    // Accelerometers.cpp: M955 P0 reports "... samples at <rate>Hz ..."; M956 takes a count.
+    const auto rate = parse_m955_rate_hz(link_.send("M955 P0"));
+    if (!rate)
+      throw MachineError("RepRapFirmware reports no accelerometer (M955 P0): configure it with M955 first", t_->describe());
+    m956_rate_hz_ = *rate;
+    // The window as planned plus a second: RepRapFirmware cannot stop a run early.
+    const long samples = std::lround(std::ceil(*rate * (std::max(0.0, window_s) + 1.0)));
+    m956_name_ = fmt::format("tunekit_{}.csv", m956_files_.size() + 1);
+    m956_window_s_ = window_s + 1.0;
+    link_.send(fmt::format("M956 P0 S{} A0 F\"{}\"", samples, m956_name_));
+  }
+  void fetch_m956() {
+    link_.send("M400");
+    const auto addr = parse_http_address(http_);
+    const std::string name = "0:/sys/accelerometer/" + m956_name_;
+    std::string bytes;
+    // The run ends after its sample count, in the board's time: poll, waiting G4 P250 between
+    // reads (on a real board 250 ms; the simulator's clock runs with the dwell).
+    const int polls = static_cast<int>(std::ceil(m956_window_s_ / 0.25)) + 40;
+    for (int i = 0;; ++i) {
+      bytes = rrf_download(addr, name, std::chrono::milliseconds(5000));
+      if (rrf_accelerometer_file_complete(bytes)) break;
+      if (i >= polls)
+        throw MachineError(fmt::format("the accelerometer file {} did not finish within {:.1f} s", name, polls * 0.25),
+                           addr.text());
+      link_.send("G4 P250");
+    }
+    const std::string local = "rrf_" + m956_name_;
+    write_file_atomic(j_.path(local), bytes);
+    m956_files_.push_back(local);
+    // The file as RepRapFirmware wrote it, read by the RRF reader (g -> mm/s^2, time from the rate).
+    ident::AccelInputOptions opts;
+    const auto rec = ident::load_rrf_accelerometer_csv(j_.path(local), bytes, opts);
+    const double dt = rec.sampling.sample_rate_hz > 0 ? 1.0 / rec.sampling.sample_rate_hz : 1.0 / m956_rate_hz_;
+    const std::size_t n = rec.channels.empty() ? 0 : rec.channels.front().size();
+    auto ch = [&](std::size_t c, std::size_t i) { return c < rec.channels.size() ? rec.channels[c][i] : 0.0; };
+    for (std::size_t i = 0; i < n; ++i) rec_.accel(static_cast<double>(i) * dt, ch(0, i), ch(1, i), ch(2, i));
+  }
   std::unique_ptr<Transport> t_;
   GcodeLink link_;
+  Journal& j_;
+  Recorder& rec_;
+  std::string http_;
+  std::string m956_name_;
+  double m956_rate_hz_ = 0, m956_window_s_ = 0;
+  std::vector<std::string> m956_files_;
 };
 
 class KlipperSession : public Session {
@@ -231,7 +303,7 @@ class KlipperSession : public Session {
     pending_.push_back(line);
     if (pending_.size() >= 50) flush_script();
   }
-  void record(const std::string& sensor, bool on) override {
+  void record(const std::string& sensor, bool on, double /*window_s*/) override {
     flush_script();
     if (sensor == "accelerometer") {
       if (on && !accel_subscribed_) {
@@ -443,22 +515,33 @@ RunResult run_experiment(const RunOptions& o) {
     const bool api = port.rfind("unix:", 0) == 0;
     auto transport = open_transport(port, o.baud);
     if (api) session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors, guard);
-    else session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag, guard);
+    else
+      session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag, guard,
+                                               server ? server->http_url() : profile.http_address);
     session->firmware = session->identify();
     session->dialect = Dialect(session->firmware.firmware == Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
     journal.event("firmware", {{"name", session->firmware.name},
                                {"version", session->firmware.version},
-                               {"dialect", to_string(session->dialect.firmware())}});
+                               {"dialect", to_string(session->dialect.firmware())},
+                               {"ft_motion", session->firmware.ft_motion},
+                               {"ft_motion_active", session->firmware.ft_motion_active}});
     summary["firmware"] = {{"name", session->firmware.name}, {"version", session->firmware.version}};
+    if (session->firmware.ft_motion)
+      summary["firmware"]["ft_motion"] = session->firmware.ft_motion_active ? "active" : "built, inactive";
     // Fail before heating and homing when the link cannot record what the protocol needs.
     for (const auto& sensor : res.experiment.sensors)
-      if (!session->can_record(sensor))
-        throw MachineError(fmt::format("the firmware ({}) cannot record {} data over this link (no tunekit sensor "
-                                       "stream; RepRapFirmware records its accelerometer with M956 into a file, which "
-                                       "tunekit does not fetch yet); nothing but M115 was sent",
-                                       session->firmware.name.empty() ? "unidentified" : session->firmware.name,
-                                       sensor),
-                           port);
+      if (!session->can_record(sensor)) {
+        const bool rrf = session->firmware.firmware == Firmware::reprapfirmware && sensor == "accelerometer";
+        throw MachineError(
+            fmt::format("the firmware ({}) cannot record {} data over this link ({}); nothing but M115 was sent",
+                        session->firmware.name.empty() ? "unidentified" : session->firmware.name, sensor,
+                        rrf ? "RepRapFirmware records its accelerometer with M956 into 0:/sys/accelerometer/ and offers "
+                              "no way to read a file over USB serial (M28/M29 write, M20 lists, M36/M38 describe a "
+                              "file); give the profile its web server, [network] http = \"http://HOST\", to fetch it "
+                              "with rr_download"
+                            : "no tunekit sensor stream"),
+            port);
+      }
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
     for (const auto& line : res.gcode) {
@@ -466,7 +549,16 @@ RunResult run_experiment(const RunOptions& o) {
       if (line.rfind(";@record ", 0) == 0) {
         const auto rest = line.substr(9);
         const auto sp = rest.find(' ');
-        session->record(rest.substr(0, sp), rest.substr(sp + 1) == "on");
+        const std::string sensor = rest.substr(0, sp);
+        const bool on = rest.substr(sp + 1) == "on";
+        double window_s = 0;
+        if (on) {
+          // The planned machine time up to this sensor's "off" directive.
+          const auto here = res.gcode.begin() + (&line - res.gcode.data());
+          const auto off = std::find(here, res.gcode.end(), ";@record " + sensor + " off");
+          window_s = estimate_gcode_duration_s(std::vector<std::string>(here, off));
+        }
+        session->record(sensor, on, window_s);
         continue;
       }
       if (line.empty() || line[0] == ';') continue;

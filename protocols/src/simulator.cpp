@@ -94,6 +94,12 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     else if (k == "sensor_stream") {
       if (v != "0" && v != "1") throw InputError("simulator option sensor_stream must be 0 or 1");
       c.sensor_stream = v == "1";
+    } else if (k == "rrf_http") {
+      if (v != "0" && v != "1") throw InputError("simulator option rrf_http must be 0 or 1");
+      c.rrf_http = v == "1";
+    } else if (k == "ft_motion") {
+      if (v != "none" && v != "off" && v != "on") throw InputError("simulator option ft_motion must be none, off or on");
+      c.ft_motion = v;
     } else if (k == "minimum_cruise_ratio") {
       c.minimum_cruise_ratio = parse_double(k, v);
       if (c.minimum_cruise_ratio < 0 || c.minimum_cruise_ratio >= 1)
@@ -187,6 +193,8 @@ nlohmann::json SimConfig::truth() const {
   j["accelerometer"] = {{"rate_hz", accel_rate_hz}, {"noise_mm_s2", accel_noise_mm_s2}, {"cross_coupling", cross_coupling}};
   j["jerk_mm_s3"] = jerk_mm_s3;
   j["firmware"] = firmware;
+  if (firmware == "marlin") j["ft_motion"] = ft_motion;
+  if (firmware == "rrf") j["rrf_http"] = rrf_http;
   j["planner"] = {{"steps_per_mm", steps_per_mm},
                   {"max_extrude_only_distance_mm", max_extrude_only_distance_mm},
                   {"max_extrude_only_accel_mm_s2", max_extrude_only_accel_mm_s2},
@@ -203,6 +211,7 @@ nlohmann::json SimConfig::truth() const {
 Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed) {
   dt_ = 1.0 / (cfg_.accel_rate_hz * 4);
   accel_every_ = 4;
+  ftm_active_ = cfg_.ft_motion == "on";
   load_every_ = std::max(1, static_cast<int>(std::lround(1.0 / (cfg_.load_cell_rate_hz * dt_))));
   for (const auto& [axis, modes] : cfg_.modes) mode_state_[axis].assign(modes.size(), {0.0, 0.0});
   delay_.assign(std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(cfg_.theta_s / dt_))), 0.0);
@@ -342,6 +351,20 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
     else fmt::format_to(std::back_inserter(out_), "echo:TKA {:.6f} {:.2f} {:.2f} {:.2f} {:.2f} {:.2f}\n", t_, ax, ay, az, acc1[0], acc1[1]);
     ++accel_sent_;
   }
+  if (capture_left_ > 0 && step_ % accel_every_ == 0) {
+    // An M956 run: sample number, then X, Y, Z in g (Accelerometers.cpp writes 3 decimals at
+    // 10-bit resolution); the trailer "Rate %u, overflows %u" once the samples are taken.
+    const double g = 9806.65;
+    const double ax = meas[0] + cfg_.cross_coupling * meas[1] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    const double ay = meas[1] + cfg_.cross_coupling * meas[0] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    const double az = 9810.0 + meas[2] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    fmt::format_to(std::back_inserter(capture_text_), "{},{:.3f},{:.3f},{:.3f}\n", capture_index_++, ax / g, ay / g, az / g);
+    if (--capture_left_ == 0) {
+      capture_text_ += fmt::format("Rate {}, overflows 0\n", std::lround(cfg_.accel_rate_hz));
+      std::lock_guard<std::mutex> lock(mu_);
+      files_[capture_name_] = capture_text_;
+    }
+  }
   if (stream_load_ && step_ % load_every_ == 0) {
     const double f = cfg_.force_offset_N + force + cfg_.force_noise_N * normal_(rng_);
     if (load_cell_sink) load_cell_sink(t_, f);
@@ -401,6 +424,113 @@ void Simulator::flush(const Emit& emit) {
     pending_entry_ = 0;
   }
   out_flush(emit);
+}
+
+std::optional<std::string> Simulator::file(const std::string& name) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  const auto it = files_.find(name);
+  if (it == files_.end()) return std::nullopt;
+  return it->second;
+}
+
+// RepRapFirmware's M956 (src/Accelerometers/Accelerometers.cpp StartAccelerometer): P, S and A
+// are required ("missing parameter"); X/Y/Z pick axes (all three when none is given; the
+// simulated board records all three); F"name" names the file under 0:/sys/accelerometer/,
+// otherwise <board>_<date>_<time>.csv; a run while one is collecting is refused.
+void Simulator::m956(std::string_view body, const GcodeWords& /*words*/, const Emit& emit) {
+  // The quoted file name is not parameters: parse the rest.
+  std::string rest(body);
+  if (const auto q = rest.find('"'); q != std::string::npos) {
+    const auto q2 = rest.find('"', q + 1);
+    rest.erase(q, q2 == std::string::npos ? std::string::npos : q2 - q + 1);
+  }
+  const auto parsed = parse_gcode(rest);
+  const GcodeWords w = parsed ? *parsed : GcodeWords{};
+  for (const char* k : {"P", "S", "A"})
+    if (!w.has(k)) {
+      emit(fmt::format("Error: M956: missing parameter '{}'\n", k));
+      return;
+    }
+  if (capture_left_ > 0) {
+    emit("Error: M956: Accelerometer is already collecting data\n");
+    return;
+  }
+  std::string name = "0_2024-01-01_00.00.00.csv";
+  if (const auto f = body.find("F\""); f != std::string_view::npos) {
+    const auto end = body.find('"', f + 2);
+    if (end != std::string_view::npos) name = std::string(body.substr(f + 2, end - f - 2));
+  }
+  capture_name_ = "0:/sys/accelerometer/" + name;
+  capture_left_ = std::max(1L, std::lround(w.get("S", 0)));
+  capture_index_ = 0;
+  capture_text_ = "Sample,X,Y,Z\n";
+  std::lock_guard<std::mutex> lock(mu_);
+  files_[capture_name_] = capture_text_;
+}
+
+// Marlin's M493 (Marlin/src/gcode/feature/ft_motion/M493.cpp), on a build without
+// HAS_DYNAMIC_FREQ: S on/off, X/Y shaper (0 NONE, 1 ZV, 2 ZVD, 3 ZVDD, 4 ZVDDD, 5 EI, 6 2HEI,
+// 7 3HEI, 8 MZV), A/B base frequency (needs a shaper on the axis), I/J zeta, P linear advance
+// on/off, K its gain; without parameters, or after a change that sets flag.report, it prints
+// say_shaping(). A build without FT_MOTION answers as gcode.cpp does for any unknown command.
+void Simulator::m493(const GcodeWords& w, const Emit& emit) {
+  if (cfg_.ft_motion == "none") {
+    emit("echo:Unknown command: \"M493\"\n");
+    return;
+  }
+  bool report = w.args.empty();
+  if (w.has("S")) {
+    const bool on = w.get("S", 0) != 0;
+    if (on != ftm_active_) report = true;
+    ftm_active_ = on;
+  }
+  static const char* const kNames[] = {"", "ZV", "ZVD", "ZVDD", "ZVDDD", "EI", "2 Hump EI", "3 Hump EI", "MZV"};
+  for (int a = 0; a < 2; ++a) {
+    const std::string letter = a == 0 ? "X" : "Y";
+    if (!w.has(letter)) continue;
+    const int sh = static_cast<int>(w.get(letter, 0));
+    if (sh < 0 || sh > 8) {
+      emit(fmt::format("?Invalid [{}] shaper.\n", letter));
+      return;
+    }
+    if (sh != ftm_shaper_[a]) report = true;
+    ftm_shaper_[a] = sh;
+  }
+  if (w.has("P")) {
+    ftm_la_ = w.get("P", 0) != 0;
+    report = true;
+    emit(ftm_la_ ? "Linear Advance enabled.\n" : "Linear Advance disabled.\n");
+  }
+  if (w.has("K")) {
+    const double k = w.get("K", 0);
+    if (k >= 0) {
+      ftm_k_ = k;
+      report = true;
+    } else {
+      emit("Linear Advance gain out of range.\n");
+    }
+  }
+  for (int a = 0; a < 2; ++a) {
+    const std::string f = a == 0 ? "A" : "B", z = a == 0 ? "I" : "J";
+    if (w.has(f)) {
+      if (ftm_shaper_[a] == 0) emit(fmt::format("Wrong mode for [{}] frequency.\n", f));
+      else {
+        ftm_freq_[a] = w.get(f, ftm_freq_[a]);
+        report = true;
+      }
+    }
+    if (w.has(z) && ftm_shaper_[a] != 0) ftm_zeta_[a] = w.get(z, ftm_zeta_[a]);
+  }
+  if (!report) return;
+  std::string l = fmt::format("Fixed-Time Motion {}abled", ftm_active_ ? "en" : "dis");
+  if (ftm_shaper_[0]) l += fmt::format(" with X axis {} shaping", kNames[ftm_shaper_[0]]);
+  if (ftm_shaper_[1]) l += fmt::format(" and with Y axis {} shaping", kNames[ftm_shaper_[1]]);
+  emit(l + ".\n");
+  if (ftm_shaper_[0] || ftm_shaper_[1]) {
+    emit(fmt::format("X static shaper frequency: {:.2f}Hz\n", ftm_freq_[0]));
+    emit(fmt::format("Y static shaper frequency: {:.2f} Hz\n", ftm_freq_[1]));
+  }
+  emit(ftm_la_ ? fmt::format("Linear Advance enabled. Gain: {:.2f}\n", ftm_k_) : std::string("Linear Advance disabled\n"));
 }
 
 bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
@@ -521,6 +651,18 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
       flush(emit);
       if (words->has("A")) set_streaming("accelerometer", words->get("A", 0) != 0);
       if (words->has("L")) set_streaming("load_cell", words->get("L", 0) != 0);
+    } else if (c == "M955" && rrf()) {
+      out_flush(emit);
+      // Accelerometers.cpp ConfigureAccelerometer without other parameters: the report.
+      emit(fmt::format("Accelerometer 0 type LIS3DH with orientation 20 samples at {}Hz with 10-bit resolution, SPI "
+                       "frequency 2000000\n",
+                       std::lround(cfg_.accel_rate_hz)));
+    } else if (c == "M956" && rrf()) {
+      flush(emit);
+      m956(nl.body, *words, emit);
+    } else if (c == "M493" && !klipper() && !rrf()) {
+      out_flush(emit);
+      m493(*words, emit);
     } else if (c == "M115") {
       out_flush(emit);
       if (klipper())
@@ -591,6 +733,7 @@ void serve_simulator(Simulator& sim, Transport& t, const std::atomic<bool>& stop
 SimPtyServer::SimPtyServer(SimConfig config, const std::function<void(Simulator&)>& setup)
     : sim_(std::make_unique<Simulator>(std::move(config))) {
   if (setup) setup(*sim_);
+  if (sim_->config().rrf_http && sim_->config().firmware == "rrf") http_ = std::make_unique<SimHttpServer>(*sim_);
   master_ = ::posix_openpt(O_RDWR | O_NOCTTY);
   if (master_ < 0) throw MachineError("cannot create a pseudo-terminal (posix_openpt)");
   char name[256];
@@ -621,6 +764,8 @@ SimPtyServer::~SimPtyServer() {
 }
 
 void SimPtyServer::stop() { stop_ = true; }
+
+std::string SimPtyServer::http_url() const { return http_ ? http_->url() : std::string(); }
 
 void SimPtyServer::wait() {
   if (thread_.joinable()) thread_.join();

@@ -129,7 +129,7 @@ TEST_CASE("garbled, dropped and late lines are recovered", "[machine]") {
 
 TEST_CASE("a disconnect ends with exit 3 and keeps every sample received", "[machine]") {
   const auto dir = scratch_dir("machine_disconnect") + "/run";
-  const auto r = run_cli({"run", "liquefier-step", "--run-dir", dir, "--sim", "fault=disconnect@10", "--timeout", "2"});
+  const auto r = run_cli({"run", "liquefier-step", "--run-dir", dir, "--sim", "fault=disconnect@11", "--timeout", "2"});  // line 3 is M493 on Marlin
   CHECK(r.code == 3);
   CHECK(r.err.find("partial run is kept in") != std::string::npos);
   const auto stats = tunekit::test::read_json(dir + "/sim_stats.json");

@@ -303,7 +303,7 @@ TEST_CASE("run_experiment: a disconnect is exit 3 and the journal keeps every sa
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = tunekit::test::scratch_dir("machine_api_disconnect") + "/run";
-  o.sim_options = {"fault=disconnect@10"};
+  o.sim_options = {"fault=disconnect@11"};  // N0 M110, M115, M493 (Marlin), then the protocol
   o.link.timeout = std::chrono::milliseconds(2000);
   try {
     run_experiment(o);

@@ -450,6 +450,16 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   }
   std::vector<std::string> export_args{"export", "--firmware", a.firmware, "--config", config, "--profile", profile_path};
   export_args.insert(export_args.end(), export_inputs.begin(), export_inputs.end());
+  // A Marlin printer that answered M493 with fixed-time motion enabled bypasses M593/M900 U:
+  // its settings go to M493 (runner.cpp reads the report into each run's summary).
+  const bool ft_live = std::any_of(runs.begin(), runs.end(), [](const auto& kv) {
+    const auto* ft = json_at(kv.second.summary, "firmware.ft_motion");
+    return ft != nullptr && ft->is_string() && ft->template get<std::string>() == "active";
+  });
+  if (ft_live && protocols::parse_export_firmware(a.firmware) == protocols::ExportFirmware::marlin) {
+    export_args.push_back("--marlin-ft-motion");
+    res["firmware_ft_motion"] = "active (M493): settings written as M493";
+  }
   if (a.write) export_args.push_back("--write");
   const auto ex = analyze(export_args, run_dir + "/analysis/export.json", ctx);
   res["compensators"] = ex.at("results");

@@ -69,6 +69,7 @@ void require_finite_option(const CLI::Option* opt, double v, const char* unit) {
 
 struct ExportArgs {
   std::string firmware;
+  bool marlin_ft_live = false;  ///< the running Marlin reported fixed-time motion active (M493)
   std::string config;
   std::vector<std::string> results;
   std::string profile;
@@ -160,7 +161,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     std::ifstream cfg_in(a.config, std::ios::binary);
     std::stringstream cfg_text;
     cfg_text << cfg_in.rdbuf();
-    ft_motion = cfg_in && protocols::marlin_ft_motion_enabled(cfg_text.str());
+    ft_motion = (cfg_in && protocols::marlin_ft_motion_enabled(cfg_text.str())) || a.marlin_ft_live;
   }
   std::string reading;  // the results file being read, for errors deep inside it
   try {
@@ -319,6 +320,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   protocols::CompensatorSettings settings;
   settings.klipper_extruder = a.extruder;
   settings.rrf_drive = a.drive;
+  settings.marlin_ft_motion_live = fw == protocols::ExportFirmware::marlin && a.marlin_ft_live;
   // --extruder N (a number): Klipper's [extruder] / [extruderN], Marlin's ADVANCE_K entry N
   // (M900 T), RepRapFirmware's drive N unless --drive is given.
   if (!a.extruder.empty() && a.extruder.find_first_not_of("0123456789") == std::string::npos) {
@@ -474,6 +476,9 @@ void register_export(CLI::App& app, CliContext& ctx) {
                   "Nth ADVANCE_K entry (M900 TN), RepRapFirmware drive N");
   sub->add_option("--drive", args->drive, "RepRapFirmware extruder drive number for M572 D (default: 0)")
       ->each([args](const std::string&) { args->drive_given = true; });
+  sub->add_flag("--marlin-ft-motion", args->marlin_ft_live,
+                "The running Marlin reports fixed-time motion enabled (M493): shapers among FT_MOTION's, runtime "
+                "G-code M493 instead of M593/M900 (tunekit calibrate sets it from the printer's answer)");
   sub->add_flag("--no-pa", args->no_pa, "Leave pressure/linear advance alone");
   sub->add_flag("--no-shaper", args->no_shaper, "Leave input shaping alone");
   sub->add_flag("--write", args->write,

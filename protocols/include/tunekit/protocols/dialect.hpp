@@ -29,7 +29,26 @@ struct FirmwareInfo {
   std::string version;  ///< best-effort version string
   std::map<std::string, bool> capabilities;  ///< Cap: lines
   bool sensor_stream() const;                ///< tunekit's M4100 streaming available
+  /// Marlin built with FT_MOTION (it answered M493), and whether fixed-time motion is active
+  /// (then the classic shaper and smooth linear advance are bypassed: stepper.cpp isr()).
+  /// Marlin's M115 has no FT_MOTION capability line (Marlin/src/gcode/host/M115.cpp): both come
+  /// from the M493 report (parse_m493_report).
+  bool ft_motion = false;
+  bool ft_motion_active = false;
 };
+
+/// What a Marlin machine answered to a bare M493 (Marlin/src/gcode/feature/ft_motion/M493.cpp:
+/// without parameters GcodeSuite::M493() reports with say_shaping(), whose first line is
+/// "Fixed-Time Motion enabled|disabled[ with X axis ZV shaping][ and with Y axis MZV shaping].").
+/// A build without FT_MOTION answers 'echo:Unknown command: "M493"' (gcode.cpp, STR_UNKNOWN_COMMAND).
+struct FtMotionReport {
+  bool present = false;  ///< the build has FT_MOTION
+  bool active = false;   ///< "Fixed-Time Motion enabled"
+  std::map<std::string, std::string> shapers;  ///< axis "x"/"y" -> shaper as reported ("ZV", "2 Hump EI", ...)
+  bool linear_advance = false;                 ///< "Linear Advance enabled. Gain: K"
+  double linear_advance_k = 0;
+};
+FtMotionReport parse_m493_report(const std::vector<std::string>& lines);
 
 /// Parses the lines a machine printed in answer to M115 (any order, other lines ignored).
 FirmwareInfo parse_m115(const std::vector<std::string>& lines);

@@ -50,6 +50,11 @@ struct CompensatorSettings {
   /// FT_MOTION's (FTM_DEFAULT_SHAPER_X/Y ...), the classic shaper and smooth linear advance are
   /// bypassed.
   bool marlin_ft_motion = false;
+  /// The running Marlin reported fixed-time motion active (its M493 report, runner.cpp): the
+  /// runtime G-code is M493 (Marlin/src/gcode/feature/ft_motion/M493.cpp letters: S1, X/Y shaper
+  /// 1-8, A/B frequency, I/J damping, P1 K advance) instead of M593/M900, and a configuration
+  /// without FT_MOTION is not the running build's: its classic lines are left alone.
+  bool marlin_ft_motion_live = false;
   /// Replaces the trailing comment of a line whose value changes (the old comment described
   /// the old value), e.g. "tunekit 2026-01-31: from step.json"; empty: comments are kept.
   std::string change_note;
@@ -99,9 +104,12 @@ ExportResult export_config_text(ExportFirmware fw, const std::string& text, cons
 ExportResult export_config_file(ExportFirmware fw, const std::string& path, const CompensatorSettings& s);
 
 /// The smoothing time `fw` takes from a design: Klipper's pressure_advance_smooth_time is the
-/// triangular window, Marlin's ADVANCE_TAU the box window, RepRapFirmware has none. Rounded up
-/// to the written precision (0.1 ms) so that the acceleration bound still holds. nullopt when
-/// the firmware has no such setting, or the design has no window or a zero one.
+/// triangular window; Marlin's ADVANCE_TAU is designed with Marlin's own exponential cascade
+/// (ident/marlin_smoothing.hpp: the extra extruder acceleration of a print acceleration step
+/// within the limit, at least one update period per stage; InputError beyond M900 U's 0.5 s);
+/// RepRapFirmware has none. Rounded up to the written precision (0.1 ms) so that the
+/// acceleration bound still holds. nullopt when the firmware has no such setting, or the design
+/// has no window or a zero one.
 std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::AdvanceDesign& d);
 
 /// Flow-dependent advance as runtime commands, one per scheduled flow (for a slicer's

@@ -88,6 +88,10 @@ struct MachineProfile {
   TemperatureLimits temperature;
   Sensors sensors;
   FirmwareState state;
+  /// [network] http = "http://HOST[:PORT]": RepRapFirmware's web server, through which tunekit
+  /// fetches the accelerometer files M956 writes (rrf_http.hpp; RepRapFirmware cannot send a
+  /// file over USB serial). Empty: serial only.
+  std::string http_address;
   std::string source_path;
 
   /// Filament cross-section area, mm^2.

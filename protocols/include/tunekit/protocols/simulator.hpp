@@ -100,6 +100,15 @@ struct SimConfig {
   /// Whether M115 offers tunekit's sensor stream (Cap:TUNEKIT_SENSOR_STREAM:1); off, the
   /// simulator is a firmware that cannot stream its sensors over the G-code link.
   bool sensor_stream = true;
+  /// Marlin only: the build's FT_MOTION (fixed-time motion, M493): "none" (not built: M493 is
+  /// an unknown command), "off" (built, M493 S0) or "on" (built and active, M493 S1). M493
+  /// answers as Marlin/src/gcode/feature/ft_motion/M493.cpp does (say_shaping()).
+  std::string ft_motion = "none";
+  /// RepRapFirmware only ("rrf_http=1"): the board's web server on 127.0.0.1 (an ephemeral
+  /// port), serving rr_download of the files M956 writes, as src/Networking/HttpResponder.cpp
+  /// does. M955 P0 reports the accelerometer and M956 P0 S<n> A<m> [F"name"] records n samples
+  /// into 0:/sys/accelerometer/ (src/Accelerometers/Accelerometers.cpp) in either case.
+  bool rrf_http = false;
   std::vector<SimFault> faults;
 
   /// "key=value" options (tunekit-sim flags and `tunekit run --sim`), e.g. "tau_s=0.5",
@@ -147,6 +156,8 @@ class Simulator {
   long load_cell_samples_sent() const { return load_sent_; }
   bool halted() const { return halted_; }
   double time_s() const { return t_; }
+  /// A file on the simulated board ("0:/sys/accelerometer/x.csv"), thread-safe; nullopt if absent.
+  std::optional<std::string> file(const std::string& name) const;
 
  private:
   struct Pending {
@@ -169,11 +180,25 @@ class Simulator {
   double junction_speed(const GcodeMove& a, const GcodeMove& b) const;
   bool klipper() const { return cfg_.firmware == "klipper"; }
   bool rrf() const { return cfg_.firmware == "rrf"; }
+  void m493(const GcodeWords& w, const Emit& emit);
+  void m956(std::string_view body, const GcodeWords& w, const Emit& emit);
   bool marlin() const { return !klipper() && !rrf(); }
   long received_count_ = 0;
   long last_n_ = 0;
   bool halted_ = false;
+  // Marlin FT_MOTION state (M493): active, shaper per axis (ftMotionShaper_t: 0 NONE .. 8 MZV),
+  // base frequency, zeta, linear advance on/off and gain.
+  bool ftm_active_ = false;
+  int ftm_shaper_[2] = {0, 0};
+  double ftm_freq_[2] = {37, 37};
+  double ftm_zeta_[2] = {0.1, 0.1};
+  bool ftm_la_ = false;
+  double ftm_k_ = 0;
   bool stream_accel_ = false, stream_load_ = false;
+  // RepRapFirmware M956 run: the file being written, samples still to take, the next number.
+  std::map<std::string, std::string> files_;
+  std::string capture_name_, capture_text_;
+  long capture_left_ = 0, capture_index_ = 0;
   // Physics state.
   double t_ = 0;
   double dt_;
@@ -195,6 +220,28 @@ class Simulator {
   std::vector<std::string> received_;
 };
 
+/// The simulated RepRapFirmware board's web server: GET /rr_download?name=<file> answers as
+/// src/Networking/HttpResponder.cpp SendFile/RejectMessage do ("HTTP/1.1 200 OK" with
+/// Content-Length and the bytes, or "HTTP/1.1 404 file not found"). Listens on 127.0.0.1.
+class SimHttpServer {
+ public:
+  explicit SimHttpServer(const Simulator& sim);
+  ~SimHttpServer();
+  SimHttpServer(const SimHttpServer&) = delete;
+  SimHttpServer& operator=(const SimHttpServer&) = delete;
+  std::string url() const;
+  long requests() const { return requests_; }
+
+ private:
+  void serve();
+  const Simulator& sim_;
+  int listen_fd_ = -1;
+  int port_ = 0;
+  std::atomic<bool> stop_{false};
+  std::atomic<long> requests_{0};
+  std::thread thread_;
+};
+
 /// Serves a Simulator on a pseudo-terminal in a background thread.
 class SimPtyServer {
  public:
@@ -212,10 +259,13 @@ class SimPtyServer {
   void wait();
   bool disconnected() const { return disconnected_; }
   Simulator& sim() { return *sim_; }
+  /// "http://127.0.0.1:PORT" of the simulated board's web server (SimConfig::rrf_http); empty without.
+  std::string http_url() const;
 
  private:
   void serve();
   std::unique_ptr<Simulator> sim_;
+  std::unique_ptr<SimHttpServer> http_;
   int master_ = -1;
   int slave_keepalive_ = -1;
   std::string slave_path_;
