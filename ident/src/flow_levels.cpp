@@ -146,6 +146,7 @@ void analyze_arrival_levels(StepAnalysis& a, const std::vector<StepRecord>& recs
     }
   }
   std::sort(groups.begin(), groups.end(), [](const Group& x, const Group& y) { return x.level() < y.level(); });
+  std::string not_white;
   for (const auto& g : groups) {
     ArrivalLevel l;
     l.u = g.level();
@@ -178,11 +179,17 @@ void analyze_arrival_levels(StepAnalysis& a, const std::vector<StepRecord>& recs
     if (g.idx.size() > 1) {
       std::vector<const FitResult*> members;
       for (std::size_t i : g.idx) members.push_back(&*a.steps[i].fit);
-      if (auto w = pooled_whiteness_warning(l.fit, members, fmt::format("arrival level u = {:.6g}", l.u)); !w.empty())
-        a.warnings.push_back(std::move(w));
+      if (!pooled_whiteness_warning(l.fit, members, "").empty())
+        not_white += fmt::format("{}{:.6g}", not_white.empty() ? "" : ", ", l.u);
     }
     a.arrival_levels.push_back(std::move(l));
   }
+  // One warning for all levels whose pooled fit is not white while their single-step fits are.
+  if (!not_white.empty())
+    a.warnings.push_back(fmt::format("arrival levels u = {}: the pooled fit's residuals are not white (Ljung-Box p < "
+                                     "{:g}) while the single-step fits' are: the rising and falling arrivals do not share "
+                                     "one K, tau and theta (see rising_minus_falling_tau_s)",
+                                     not_white, kWhitenessAlarmP));
   fit_level_trends(a, o);
 }
 

@@ -51,5 +51,31 @@ int main(int argc, char** argv) {
   const double cpu = median_cpu_ms_flow([&] { (void)ident::analyze_steps(s.t, s.u, s.y, o); }, runs);
   std::printf("flow_sweep_6_levels_%zu_samples: median wall %.2f ms, median cpu %.2f ms (%zu arrival levels, b %.4f)\n",
               s.t.size(), wall, cpu, levels, b);
+  // Where the time goes: the 14 single-step fits, and the pooled fit over all of them.
+  const auto det = ident::detect_steps(s.t, s.u, o.detect);
+  std::vector<fitting::StepRecord> recs;
+  std::size_t fitted = 0;
+  for (const auto& st : det) {
+    fitting::StepRecord r;
+    r.t.assign(s.t.begin() + static_cast<std::ptrdiff_t>(st.begin), s.t.begin() + static_cast<std::ptrdiff_t>(st.end));
+    r.y.assign(s.y.begin() + static_cast<std::ptrdiff_t>(st.begin), s.y.begin() + static_cast<std::ptrdiff_t>(st.end));
+    r.t_step = st.t_step_s;
+    r.du = st.u_after - st.u_before;
+    fitted += r.t.size();
+    recs.push_back(std::move(r));
+  }
+  std::vector<fitting::FitResult> fits;
+  const double singles = median_cpu_ms_flow(
+      [&] {
+        fits.clear();
+        for (const auto& r : recs) fits.push_back(fitting::fit_step(r, o.model));
+      },
+      runs);
+  int iterations = 0;
+  const double pooled = median_cpu_ms_flow(
+      [&] { iterations = fitting::fit_steps_pooled(recs, o.model, &fits.front()).diagnostics.iterations; }, runs);
+  std::printf("  of which: %zu single-step fits (%zu samples) median cpu %.2f ms; pooled fit over all steps (%zu + 3 "
+              "parameters, %d iterations) median cpu %.2f ms\n",
+              recs.size(), fitted, singles, recs.size(), iterations, pooled);
   return 0;
 }

@@ -13,6 +13,7 @@
 #include "tunekit/ident/step_analysis.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/flow_sweep_plan.hpp"
+#include "tunekit/protocols/runner.hpp"
 
 using namespace tunekit;
 
@@ -35,9 +36,9 @@ TEST_CASE("a synthetic flow sweep with tau = a Q^b at each arrival level gives e
   // 6 measured levels and the two turning levels; 14 steps.
   REQUIRE(a.steps.size() == 14);
   REQUIRE(a.arrival_levels.size() == 8);
-  int both = 0;
+  int both = 0, differ = 0;
   for (const auto& l : a.arrival_levels) {
-    INFO("level " << l.u << " tau " << l.fit.value("tau_s") << " truth " << tr.tau(l.u));
+    INFO("level " << l.u << " tau " << l.fit.value("tau_s") << " truth " << tr.tau(l.u) << " r-f " << l.rising_minus_falling_tau_s << " [" << l.rmf_ci95_lo << ", " << l.rmf_ci95_hi << "]");
     CHECK(l.fit.value("tau_s") == Approx(tr.tau(l.u)).epsilon(0.02));
     CHECK(l.fit.value("K") == Approx(tr.K).epsilon(0.02));
     CHECK(l.fit.value("theta_s") == Approx(tr.theta_s).margin(0.005));
@@ -46,12 +47,16 @@ TEST_CASE("a synthetic flow sweep with tau = a Q^b at each arrival level gives e
     CHECK(tr.tau(l.u) * 0.9999 <= l.fit.param("tau_s").ci95_hi);
     if (l.n_rising == 1 && l.n_falling == 1) {
       ++both;
-      // Rising and falling arrivals share the truth: their difference's interval holds 0.
-      CHECK(std::isfinite(l.rising_minus_falling_tau_s));
-      CHECK_FALSE(l.directions_differ());
+      // Rising and falling arrivals share the truth: their difference is a fraction of a per
+      // cent of tau, measured to within 0.5 % (its 95 % interval holds 0 at most levels; at
+      // 95 % a level may exclude it by chance).
+      CHECK(std::abs(l.rising_minus_falling_tau_s) < 0.005 * tr.tau(l.u));
+      CHECK(l.rmf_ci95_hi - l.rmf_ci95_lo < 0.01 * tr.tau(l.u));
+      differ += l.directions_differ() ? 1 : 0;
     }
   }
   CHECK(both == 6);
+  CHECK(differ <= 2);
   for (const double q : s.measured_flows) {
     const auto it = std::find_if(a.arrival_levels.begin(), a.arrival_levels.end(),
                                  [&](const auto& l) { return std::abs(l.u - q) < 1e-6 * q; });
