@@ -49,8 +49,11 @@ std::size_t settled_begin(std::span<const double> y, std::size_t begin, std::siz
   return begin;
 }
 
-// Groups steps by operating point (levels within 2 % of the largest level are one point),
-// fits each group pooled, and fits the trends.
+void group_by_operating_point(StepAnalysis& a, const std::vector<StepRecord>& recs, const std::vector<std::size_t>& ok,
+                              const StepAnalysisOptions& o);
+void fit_operating_point_trend(StepAnalysis& a);
+
+// The pooled fit over every step, the arrival levels, the operating points and their trends.
 void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnalysisOptions& o) {
   std::vector<std::size_t> ok;
   for (std::size_t i = 0; i < a.steps.size(); ++i)
@@ -66,6 +69,25 @@ void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnal
     if (ok.size() == 1 && recs.size() == 1) throw;
     a.warnings.push_back("pooled fit over all steps failed: " + e.message());
   }
+  if (a.pooled) {
+    std::vector<const FitResult*> members;
+    for (std::size_t i : ok) members.push_back(&*a.steps[i].fit);
+    if (auto w = pooled_whiteness_warning(*a.pooled, members, "pooled fit over all steps"); !w.empty())
+      a.warnings.push_back(std::move(w));
+  }
+  analyze_arrival_levels(a, recs, o);
+  if (o.operating_points_by_arrival) {
+    for (const auto& l : a.arrival_levels) a.operating_points.push_back({l.u, static_cast<int>(l.steps.size()), l.fit});
+  } else {
+    group_by_operating_point(a, recs, ok, o);
+  }
+  fit_operating_point_trend(a);
+}
+
+// Groups steps by operating point (levels within 2 % of the largest level are one point) and
+// fits each group pooled.
+void group_by_operating_point(StepAnalysis& a, const std::vector<StepRecord>& recs, const std::vector<std::size_t>& ok,
+                              const StepAnalysisOptions& o) {
   double umax = 0;
   for (const auto& s : a.steps) umax = std::max(umax, std::abs(s.step.operating_point()));
   const double tol = 0.02 * std::max(umax, 1e-300);
@@ -93,8 +115,20 @@ void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnal
         continue;
       }
     }
+    if (idx.size() > 1) {
+      std::vector<const FitResult*> members;
+      for (std::size_t i : idx) members.push_back(&*a.steps[i].fit);
+      if (auto w = pooled_whiteness_warning(op.fit, members, fmt::format("operating point u = {:.6g}", u)); !w.empty())
+        a.warnings.push_back(std::move(w));
+    }
     a.operating_points.push_back(std::move(op));
   }
+}
+
+// The power-law trends of the operating points.
+void fit_operating_point_trend(StepAnalysis& a) {
+  const std::string& unit = a.input_unit;
+  const std::string gain_unit = a.operating_points.empty() ? "1" : a.operating_points.front().fit.param("K").unit;
   std::vector<double> us, taus, ks;
   for (const auto& op : a.operating_points) {
     if (op.u > 0 && op.fit.value("tau_s") > 0 && op.fit.value("K") > 0) {
@@ -105,8 +139,8 @@ void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnal
   }
   if (us.size() >= 2) {
     try {
-      a.trend_tau = fit_power_law(us, taus, "tau_s", o.input_unit, "s");
-      a.trend_K = fit_power_law(us, ks, "K", o.input_unit, o.gain_unit);
+      a.trend_tau = fit_power_law(us, taus, "tau_s", unit, "s");
+      a.trend_K = fit_power_law(us, ks, "K", unit, gain_unit);
     } catch (const Error& e) {
       a.warnings.push_back("trend: " + e.message());
       a.trend_tau.reset();
@@ -330,6 +364,8 @@ nlohmann::json to_json(const StepAnalysis& a) {
   if (a.trend_tau) trend["tau_s"] = fitting::to_json(*a.trend_tau);
   if (a.trend_K) trend["K"] = fitting::to_json(*a.trend_K);
   out["trend"] = trend;
+  out["flow_levels"] = arrival_levels_json(a);
+  out["flow_trend"] = level_trends_json(a);
   return out;
 }
 

@@ -12,6 +12,7 @@
 #include "tunekit/protocols/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/coverage_planner.hpp"
+#include "tunekit/protocols/flow_sweep_plan.hpp"
 #include "tunekit/protocols/gcode.hpp"
 #include "tunekit/protocols/trajectory.hpp"
 
@@ -31,6 +32,7 @@ constexpr double kMaxTimeS = 3600;          // one settle/hold/pause time, s
 constexpr double kMaxFreqHz = 1000;         // excitation frequency, Hz
 constexpr double kMaxLengthMm = 10000;      // sizes and positions, mm
 constexpr double kMaxTemperatureC = 500;    // set temperature, degC (the profile's hotend_max_c applies too)
+constexpr double kMaxFlowMm3S = 1000;       // volumetric flow, mm^3/s
 
 
 std::vector<ProtocolSpec> make_specs() {
@@ -44,6 +46,26 @@ std::vector<ProtocolSpec> make_specs() {
                 {"settle_s", 3.0, "s", "time at the low feed before the first step", ParamDomain::positive, kMaxTimeS},
                 {"hold_s", 3.0, "s", "time at each level (several tau)", ParamDomain::positive, kMaxTimeS},
                 {"cycles", 2, "", "number of low -> high -> low cycles", ParamDomain::count, 1000},
+                {"accel_mm_s2", 2000, "mm/s^2", "filament acceleration of the feed changes", ParamDomain::positive, kMaxAccelMmS2},
+                hotend},
+               {"load_cell"},
+               false});
+  s.push_back({"liquefier-flow-sweep",
+               "feed steps up and down through flow levels spread over the hot end's range (each level reached "
+               "from below and from above), load cell recorded; tau, K, theta per level and their trend with flow",
+               {{"levels", 6, "", "measured flow levels, spaced geometrically between the turning flows", ParamDomain::count, 16},
+                {"flow_min_mm3_s", kMachineDefault, "mm^3/s",
+                 "lower turning flow, where the sweep starts and ends (default: flow_max_mm3_s / 10)", ParamDomain::positive,
+                 kMaxFlowMm3S},
+                {"flow_max_mm3_s", kMachineDefault, "mm^3/s",
+                 "upper turning flow (default: 90 % of the profile's max_flow_mm3_s, or of max_velocity_mm_s times "
+                 "the filament area when lower)",
+                 ParamDomain::positive, kMaxFlowMm3S},
+                {"expected_tau_s", 0.5, "s", "time constant expected at the lowest flow (the slowest)", ParamDomain::positive,
+                 kMaxTimeS},
+                {"hold_taus", 6, "", "time at each level in expected time constants", ParamDomain::positive, 1000},
+                {"settle_s", 3.0, "s", "time at the lowest flow before the first step", ParamDomain::positive, kMaxTimeS},
+                {"cycles", 1, "", "up-and-down sweeps", ParamDomain::count, 100},
                 {"accel_mm_s2", 2000, "mm/s^2", "filament acceleration of the feed changes", ParamDomain::positive, kMaxAccelMmS2},
                 hotend},
                {"load_cell"},
@@ -430,6 +452,48 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     for (int c = 0; c < cycles; ++c) {
       feed_move(g, fp, p["feed_high_mm_s"], p["hold_s"]);
       feed_move(g, fp, p["feed_low_mm_s"], p["hold_s"]);
+    }
+    g.push_back(d.wait_for_moves());
+    g.push_back(";@record load_cell off");
+    epilogue(g, restore);
+  } else if (protocol == "liquefier-flow-sweep") {
+    const double area = profile.filament_area_mm2();
+    if (std::isnan(p["flow_max_mm3_s"])) {
+      double limit = std::numeric_limits<double>::infinity();
+      if (profile.extruder.max_flow_mm3_s > 0) limit = profile.extruder.max_flow_mm3_s;
+      if (profile.extruder.max_velocity_mm_s > 0) limit = std::min(limit, profile.extruder.max_velocity_mm_s * area);
+      if (!std::isfinite(limit))
+        throw InputError("liquefier-flow-sweep needs the hot end's range: give flow_max_mm3_s, or max_flow_mm3_s in the "
+                         "profile's [extruder]");
+      p["flow_max_mm3_s"] = 0.9 * limit;
+    }
+    if (std::isnan(p["flow_min_mm3_s"])) p["flow_min_mm3_s"] = p["flow_max_mm3_s"] / 10;
+    const auto plan = plan_flow_sweep(p.at("flow_min_mm3_s"), p.at("flow_max_mm3_s"), static_cast<int>(p.at("levels")),
+                                      static_cast<int>(p.at("cycles")), p.at("expected_tau_s"), p.at("hold_taus"),
+                                      p.at("settle_s"));
+    double lines = 10;
+    for (double q : plan.sequence_mm3_s)
+      lines += std::ceil(q / area * plan.hold_s / std::max(profile.extruder.max_extrude_only_distance_mm, 1e-3)) + 1;
+    check_plan(protocol, lines, plan.duration_s(), limits);
+    std::vector<std::string> restore;
+    const FeedPlan fp = liquefier_prologue(g, restore, p, profile, d);
+    record_feed_plan(e, fp);
+    nlohmann::json levels = nlohmann::json::array();
+    std::string level_text;
+    for (double q : plan.measured_flows_mm3_s) {
+      levels.push_back(q);
+      level_text += (level_text.empty() ? "" : ", ") + num(q, 3);
+    }
+    e.excitation["measured_flows_mm3_s"] = levels;
+    e.excitation["turning_flows_mm3_s"] = {plan.flow_min_mm3_s, plan.flow_max_mm3_s};
+    e.excitation["hold_s"] = plan.hold_s;
+    g.push_back(fmt::format("; flow levels {} mm^3/s (ratio {}), turning at {} and {} mm^3/s, {} s each",
+                            level_text, num(plan.ratio, 3), num(plan.flow_min_mm3_s),
+                            num(plan.flow_max_mm3_s), num(plan.hold_s, 3)));
+    g.push_back(";@record load_cell on");
+    for (std::size_t i = 0; i < plan.sequence_mm3_s.size(); ++i) {
+      feed_move(g, fp, plan.sequence_mm3_s[i] / area, i == 0 ? plan.settle_s : plan.hold_s);
+      guard();
     }
     g.push_back(d.wait_for_moves());
     g.push_back(";@record load_cell off");

@@ -453,7 +453,7 @@ RunResult run_experiment(const RunOptions& o) {
   Journal journal(res.run_dir);
   const std::string axis_tag = res.experiment.axis.empty() ? "xy" : res.experiment.axis;
   const std::string tag = o.file_tag.empty() ? stamp : o.file_tag;
-  Recorder rec(journal, o.protocol == "liquefier-step" ? "step.csv" : "feed_force.csv",
+  Recorder rec(journal, o.protocol == "liquefier-step" || o.protocol == "liquefier-flow-sweep" ? "step.csv" : "feed_force.csv",
                fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag));
   write_file_atomic(journal.path("protocol.gcode"), join_lines(res.gcode));
   res.files["journal"] = journal.path("journal.jsonl");

@@ -1,5 +1,6 @@
 // tunekit calibrate: the technician's one command. It checks every experiment against the
-// machine profile before anything is sent, runs them (liquefier step test, liquefier chirp,
+// machine profile before anything is sent, runs them (liquefier flow sweep: feed steps up and
+// down through flow levels of the hot end's range; liquefier chirp;
 // axis sweeps of X and Y), identifies the models with the same commands a user would run by
 // hand (step, freq, shaper -- in-process, on the CSV files the run wrote), designs pressure
 // advance and input shaping, previews the firmware configuration change, and writes a run
@@ -193,6 +194,11 @@ void strip_prefix(nlohmann::json& j, const std::string& prefix) {
   }
 }
 
+// Smallest input change the flow sweep's analysis counts as a step, as a fraction of the feed's
+// range: the sweep's lowest neighbouring levels differ by (r - 1) q_min with r = 10^(1/7) for
+// its default 6 levels over a decade, 4 % of the range.
+constexpr double kSweepMinStepFraction = 0.02;
+
 std::string utc_stamp() {
   const std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -216,7 +222,9 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   const bool can_prompt = ::isatty(STDIN_FILENO) != 0 && ctx.interactive;
   if (camera_path) check_photo_source(a.camera, sim, can_prompt);
   if (!a.skip_liquefier && !camera_path) {
-    exps.push_back({"liquefier-step", "liquefier-step", "", {}});
+    // The step test is a flow sweep: every level reached from below and from above, so that tau,
+    // K and theta are known per arrival level (the liquefier's dynamics change with the flow).
+    exps.push_back({"liquefier-step", "liquefier-flow-sweep", "", {}});
     exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}});
   }
   if (camera_path)
@@ -299,7 +307,10 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     bar.end(runs[e.name].status);
     if (e.name == "liquefier-step") {  // identified at once: it sizes the chirp
       const std::string csv = runs[e.name].files.at("load_cell");
-      step_analysis = analyze({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--model", "fopdt"},
+      // The sweep's smallest steps (between the lowest levels) are a few % of its range; the
+      // operating points handed to export are the arrival levels (flow-dependent advance).
+      step_analysis = analyze({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--model", "fopdt",
+                               "--min-step", fmt::format("{}", kSweepMinStepFraction), "--operating-points", "arrival"},
                               run_dir + "/analysis/step.json", ctx);
     }
   }
@@ -368,6 +379,22 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     res["liquefier"]["step"] = j.at("results");
     plot["step"] = step_plotdata(csv, j.at("results"));
     export_inputs.push_back(out);
+    const double area = profile.filament_area_mm2();
+    std::vector<std::string> level_text;
+    for (auto& l : res["liquefier"]["step"]["flow_levels"]) {
+      l["flow_mm3_s"] = l.at("u").get<double>() * area;
+      if (l.at("n_rising").get<int>() > 0 && l.at("n_falling").get<int>() > 0)
+        level_text.push_back(fmt::format("{} mm^3/s: {} s", display_number(l["flow_mm3_s"].get<double>()),
+                                         display_number(l.at("tau_s").get<double>())));
+    }
+    if (!level_text.empty()) {
+      std::string joined;
+      for (const auto& t : level_text) joined += (joined.empty() ? "" : "; ") + t;
+      std::string trend;
+      if (const auto* b = json_at(res, "liquefier.step.flow_trend.tau_s.b"); b != nullptr && b->is_number())
+        trend = fmt::format(" (tau = a u^b, b = {})", display_number(b->get<double>()));
+      notes.push_back(fmt::format("flow sweep: tau at each level reached from both sides, {}{}", joined, trend));
+    }
     const std::string p = "liquefier.step.pooled.params.";
     row("liquefier time constant tau (step response)", p + "tau_s.value", "s", p + "tau_s.ci95");
     row("liquefier dead time theta (step response)", p + "theta_s.value", "s", p + "theta_s.ci95");
@@ -513,7 +540,7 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
   sub->add_option("-c,--config", a->config,
                   "Firmware configuration to update (default: a copy of the bundled example in the run directory)");
   sub->add_flag("--write", a->write, "Apply the configuration change (backup + atomic replace); default: preview the diff");
-  sub->add_flag("--skip-liquefier", a->skip_liquefier, "Leave out the liquefier step and chirp tests");
+  sub->add_flag("--skip-liquefier", a->skip_liquefier, "Leave out the liquefier flow sweep and chirp tests");
   sub->add_flag("--skip-axes", a->skip_axes, "Leave out the X and Y resonance sweeps");
   sub->add_option("--sim", a->sim_options, "Simulator truth and faults, KEY=VALUE (see 'tunekit run --help')");
   sub->add_option("--liquefier", a->liquefier,
@@ -534,7 +561,9 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
       "  tunekit calibrate --machine /dev/ttyACM0 --profile my-printer.toml --firmware marlin \\\n"
       "                    --config Marlin/Configuration_adv.h\n"
       "Liquefier paths (--liquefier):\n"
-      "  load-cell  feed steps and a chirp against a load cell (Klipper: [load_cell], read via load_cell/dump_force)\n"
+      "  load-cell  a flow sweep (feed steps up and down through 6 flow levels up to 90 % of the profile's\n"
+      "             max_flow_mm3_s, each level reached from both sides: tau, K, theta per level and tau = a u^b)\n"
+      "             and a chirp, against a load cell (Klipper: [load_cell], read via load_cell/dump_force)\n"
       "    tunekit calibrate --machine sim --liquefier load-cell\n"
       "    tunekit calibrate --profile klipper-printer.toml --port unix:/tmp/klippy_uds --liquefier load-cell\n"
       "  camera     prints a line test (flow steps along straight lines) and a ring test, then measures a photo:\n"

@@ -129,6 +129,10 @@ int run_run(const RunArgs& a, CliContext& ctx) {
     for (const auto& [role, path] : r.files) ctx.out << fmt::format("  {:<16} {}\n", role, path);
     if (r.files.count("load_cell") && a.protocol == "liquefier-step")
       ctx.out << fmt::format("analyze: tunekit step {} --time time --input feed --output force\n", r.files.at("load_cell"));
+    if (r.files.count("load_cell") && a.protocol == "liquefier-flow-sweep")
+      ctx.out << fmt::format("analyze: tunekit step {} --time time --input feed --output force --min-step 0.02 "
+                             "--operating-points arrival\n",
+                             r.files.at("load_cell"));
     if (r.files.count("accel"))
       ctx.out << fmt::format("analyze: tunekit resonance {} --axis {}\n", r.files.at("accel"), a.axis);
   }

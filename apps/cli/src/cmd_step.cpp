@@ -30,6 +30,7 @@ struct StepArgs {
   double step_size = std::numeric_limits<double>::quiet_NaN();
   double min_step_fraction = 0.1;
   std::string step_at = "midpoint";
+  std::string operating_points = "larger";
   OutputOptions output;
 };
 
@@ -68,6 +69,7 @@ int run_step(const StepArgs& a, CliContext& ctx) {
   opt.model = model;
   opt.detect.min_step_fraction = a.min_step_fraction;
   opt.detect.instant = ident::parse_step_instant(a.step_at);
+  opt.operating_points_by_arrival = a.operating_points == "arrival";
   opt.output_unit = unit_or_1(a.output_unit.empty() ? ycol.unit : a.output_unit);
   std::string input_unit = "1";
   if (!a.input_column.empty()) input_unit = unit_or_1(table.column(a.input_column).unit);
@@ -135,7 +137,8 @@ int run_step(const StepArgs& a, CliContext& ctx) {
                    {"step_time_s", a.step_time_s},
                    {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
                    {"min_step_fraction", a.min_step_fraction},
-                   {"step_at", a.input_column.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.step_at)}});
+                   {"step_at", a.input_column.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.step_at)},
+                   {"operating_points", a.operating_points}});
   env.add_input(a.file, bytes);
   env.results() = ident::to_json(res);
   env.results()["units"] = {{"input", input_unit}, {"output", opt.output_unit}, {"K", opt.gain_unit}, {"time", "s"}};
@@ -153,6 +156,24 @@ int run_step(const StepArgs& a, CliContext& ctx) {
     for (const auto& op : res.operating_points)
       print_fit_line(ctx.out, fmt::format("u = {:.4g} ({} step{})", op.u, op.n_steps, op.n_steps == 1 ? "" : "s"),
                      op.fit);
+    bool both = false;
+    for (const auto& l : res.arrival_levels) both = both || (l.n_rising > 0 && l.n_falling > 0);
+    if (both) {
+      ctx.out << "  arrival levels (rising/falling arrivals, tau rising - falling with its 95 % interval):\n";
+      for (const auto& l : res.arrival_levels) {
+        std::string rmf = "-";
+        if (std::isfinite(l.rmf_ci95_lo))
+          rmf = fmt::format("{:+.3g} s [{:+.3g}, {:+.3g}]{}", l.rising_minus_falling_tau_s, l.rmf_ci95_lo, l.rmf_ci95_hi,
+                            l.directions_differ() ? " differ" : "");
+        ctx.out << fmt::format("    u = {:<8.4g} {}/{}  tau = {:.4g} s  K = {:.4g}  theta = {:.3g} s  {}\n", l.u, l.n_rising,
+                               l.n_falling, l.fit.value("tau_s"), l.fit.value("K"), l.fit.value("theta_s"), rmf);
+      }
+      if (res.level_trends.tau) {
+        const auto& b = res.level_trends.tau->param("b");
+        ctx.out << fmt::format("  level trend: tau_s = {:.4g} * u^{:.3g} (b 95 %: [{:.3g}, {:.3g}])\n",
+                               res.level_trends.tau->value("a"), b.value, b.ci95_lo, b.ci95_hi);
+      }
+    }
     if (res.trend_tau)
       ctx.out << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g}   K = {:.4g} * u^{:.3g}\n",
                              res.trend_tau->value("a"), res.trend_tau->value("b"), res.trend_K->value("a"),
@@ -199,11 +220,21 @@ void register_step(CLI::App& app, CliContext& ctx) {
                   "Moves t_step and theta_s (s) by up to half a sample interval")
       ->check(CLI::IsMember({"midpoint", "first"}))
       ->capture_default_str();
+  sub->add_option("--operating-points", args->operating_points,
+                  "How operating_points group the steps: larger (the input level of larger magnitude of each step) or "
+                  "arrival (the level each step arrives at, as flow_levels; for a flow sweep). Export reads them")
+      ->check(CLI::IsMember({"larger", "arrival"}))
+      ->capture_default_str();
   add_output_options(sub, args->output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"
       "its own (start values by the log-incomplete-response method), then all steps pooled, then per operating\n"
       "point (the input level of larger magnitude) with a power-law trend tau_s = a u^b, K = a u^b.\n"
+      "Steps are also grouped by the level they arrive at (results 'flow_levels'): per level K, tau, theta with\n"
+      "95 % intervals, the counts of rising and falling arrivals and tau(rising) - tau(falling) with its interval;\n"
+      "'flow_trend' fits tau_s = a u^b, K = a u^b and theta_s = c0 + c1 u over them (a flow sweep: tunekit run\n"
+      "liquefier-flow-sweep). A pooled fit whose residuals are not white while its single-step fits' are is warned\n"
+      "about: the steps do not share one K, tau, theta.\n"
       "Examples:\n"
       "  tunekit step datasets/liquefier/synthetic_steps.csv --time time --input feed --output force \\\n"
       "      --step-at first --json   # this data set's input changes exactly at sample instants\n"

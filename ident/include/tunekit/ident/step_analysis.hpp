@@ -2,7 +2,10 @@
 // Step-response analysis of the liquefier (Holtrup 2019 ch. 4.4.2, Table 4.3): find the steps in the
 // input channel, fit each rising and falling step on its own (first order, optionally with dead
 // time), pool all steps into one fit, tabulate K, tau, theta per operating point and fit a power
-// law to them for gain scheduling (the liquefier is not linear time-invariant).
+// law to them for gain scheduling (the liquefier is not linear time-invariant). Steps are also
+// grouped by the level they arrive at (the state the liquefier settles in), with rising and
+// falling arrivals compared (flow_levels.cpp; the flow sweep of the liquefier-flow-sweep
+// protocol reaches every level from both sides).
 
 #include <optional>
 #include <span>
@@ -64,12 +67,39 @@ struct OperatingPoint {
   fitting::FitResult fit;  ///< pooled over the steps at this level
 };
 
+/// The steps that ARRIVE at one input level (u_after: the state the liquefier settles in),
+/// fitted together, with the difference between rising and falling arrivals.
+struct ArrivalLevel {
+  double u = 0;               ///< input level (input unit), mean of its arrivals' u_after
+  int n_rising = 0, n_falling = 0;
+  std::vector<std::size_t> steps;  ///< indices into StepAnalysis::steps (successful fits only)
+  fitting::FitResult fit;     ///< pooled over every arrival (a single step's fit for one)
+  /// tau of the rising arrivals minus tau of the falling ones (s) with its 95 % interval
+  /// (normal, from the two fits' standard errors); NaN unless both directions arrived.
+  double rising_minus_falling_tau_s = fitting::kNaN;
+  double rmf_ci95_lo = fitting::kNaN, rmf_ci95_hi = fitting::kNaN;
+  bool directions_differ() const { return rmf_ci95_lo > 0 || rmf_ci95_hi < 0; }
+};
+
+/// Trends of the arrival levels with the input level: tau_s = a u^b and K = a u^b (fitted in
+/// log space), theta_s = c0 + c1 u (a straight line: theta may be 0). Each with 95 % intervals
+/// from three levels on. Fitted over the levels reached from both directions when at least
+/// three are, else over every level.
+struct LevelTrends {
+  std::optional<fitting::FitResult> tau, K, theta;
+  bool both_directions_only = false;
+};
+
 struct StepAnalysis {
   std::vector<StepFit> steps;
   std::optional<fitting::FitResult> pooled;  ///< empty (with a warning) when the pooled fit fails
   std::vector<OperatingPoint> operating_points;
   std::optional<fitting::FitResult> trend_tau;  ///< tau_s = a * u^b, with >= 2 operating points
   std::optional<fitting::FitResult> trend_K;    ///< K = a * u^b
+  /// Steps grouped by the level they arrive at (flow_levels.cpp), sorted by u.
+  std::vector<ArrivalLevel> arrival_levels;
+  LevelTrends level_trends;
+  std::string input_unit = "1";  ///< unit of u, as StepAnalysisOptions::input_unit
   std::vector<std::string> warnings;
 };
 
@@ -79,6 +109,10 @@ struct StepAnalysisOptions {
   std::string output_unit = "1";
   std::string gain_unit = "1";
   std::string input_unit = "1";
+  /// How operating_points group the steps: false (default) by the level of larger magnitude
+  /// (DetectedStep::operating_point), true by the level each step arrives at (then they equal
+  /// arrival_levels; for a flow sweep, whose levels are reached from both sides).
+  bool operating_points_by_arrival = false;
 };
 
 /// Analysis of one record with an input channel.
@@ -98,7 +132,33 @@ StepAnalysis analyze_known_steps(const std::vector<KnownStep>& steps, const Step
 fitting::FitResult fit_power_law(std::span<const double> x, std::span<const double> y, const std::string& yname,
                                  const std::string& xunit, const std::string& yunit);
 
-/// JSON of a whole analysis: {steps[], pooled, operating_points[], trend}.
+/// Groups the successful step fits by the level they arrive at (levels within 2 % of each
+/// other are one), fits each group pooled and each direction on its own, fits the level
+/// trends, and warns where a pooled fit's residuals are not white while its single-step fits
+/// are (the steps do not share one K, tau, theta). `recs` are the steps' records, index for
+/// index with a.steps. Fills a.arrival_levels, a.level_trends and a.warnings.
+void analyze_arrival_levels(StepAnalysis& a, const std::vector<fitting::StepRecord>& recs,
+                            const StepAnalysisOptions& options);
+
+/// Ljung-Box p-value below which residuals count as not white in the pooled-fit warning.
+inline constexpr double kWhitenessAlarmP = 1e-3;
+
+/// The warning (empty when none) for a pooled fit over `members` single-step fits: its
+/// residuals are not white (p < kWhitenessAlarmP) while at least three quarters of the
+/// single-step fits' residuals are. `what` names the pooled fit ("pooled fit over all steps").
+std::string pooled_whiteness_warning(const fitting::FitResult& pooled, const std::vector<const fitting::FitResult*>& members,
+                                     const std::string& what);
+
+/// JSON of the arrival levels: [{u, unit, n_steps, n_rising, n_falling, tau_s, tau_ci95, K,
+/// K_ci95, theta_s, theta_ci95, rising_minus_falling_tau_s, rising_minus_falling_tau_ci95,
+/// directions_differ, fit}].
+nlohmann::json arrival_levels_json(const StepAnalysis& a);
+/// JSON of the level trends: {tau_s: {a, b, b_ci95, fit}, K: {a, b, b_ci95, fit},
+/// theta_s: {c0, c1, c1_ci95, fit}, levels_used}.
+nlohmann::json level_trends_json(const StepAnalysis& a);
+
+/// JSON of a whole analysis: {steps[], pooled, operating_points[], trend, flow_levels[],
+/// flow_trend}.
 nlohmann::json to_json(const StepAnalysis& a);
 
 }  // namespace tunekit::ident

@@ -8,6 +8,8 @@
 //
 // Protocols (parameter defaults in experiments.cpp, documented in docs/machine.md):
 //   liquefier-step      extrusion-rate steps low -> high -> low ..., load cell recorded
+//   liquefier-flow-sweep feed steps up and down through flow levels up to the hot end's limit, each level
+//                       reached from below and above (flow_sweep_plan.hpp), load cell recorded
 //   liquefier-sine      sine-dwell list of the feed (log-spaced frequencies), load cell recorded
 //   liquefier-chirp     linear chirp of the feed, load cell recorded
 //   ring-print          Holtrup's (2019) ring: a circle printed with the feed modulated by A sin(N theta)

@@ -1,0 +1,58 @@
+// End to end: `tunekit calibrate --machine sim` runs the liquefier flow sweep; on the simulator's
+// physics liquefier (pressure-driven power-law melt through the nozzle, whose time constant
+// tau = C k n Q^(n-1) falls with the flow Q) it recovers the true tau at each level.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+#include "tunekit/ident/csv.hpp"
+
+using tunekit::ident::read_file_bytes;
+
+TEST_CASE("calibrate's flow sweep on the physics liquefier recovers the true tau at each level within 5 %") {
+  const std::string dir = tunekit::test::scratch_dir("calibrate_flow_sweep") + "/run";
+  const auto cli = tunekit::test::run_cli(
+      {"calibrate", "--machine", "sim", "--skip-axes", "--sim", "liquefier=physics", "--out", dir});
+  INFO(cli.err);
+  REQUIRE(cli.code == 0);
+  const auto env = nlohmann::json::parse(read_file_bytes(dir + "/results.json"));
+  const auto& step = env.at("results").at("liquefier").at("step");
+  const auto truth = nlohmann::json::parse(read_file_bytes(dir + "/liquefier-step/truth.json")).at("liquefier");
+  REQUIRE(truth.at("model") == "physics");
+  const double C = truth.at("compliance_mm3_MPa").get<double>(), k = truth.at("k_MPa_s^n_per_mm3^n").get<double>(),
+               n = truth.at("n_index").get<double>(), area = truth.at("filament_area_mm2").get<double>();
+  // The linearised time constant of C dP/dt = A u - (P/k)^(1/n) at the flow Q.
+  auto true_tau = [&](double q) { return C * k * n * std::pow(q, n - 1); };
+
+  // The protocol that ran: 6 levels up to 90 % of the profile's max_flow_mm3_s (15 mm^3/s).
+  const auto& levels = step.at("flow_levels");
+  int both = 0;
+  double qmax = 0;
+  for (const auto& l : levels) {
+    const double q = l.at("flow_mm3_s").get<double>();
+    CHECK(q == Approx(l.at("u").get<double>() * area));
+    qmax = std::max(qmax, q);
+    if (l.at("n_rising").get<int>() == 0 || l.at("n_falling").get<int>() == 0) continue;
+    ++both;
+    const double tau = l.at("tau_s").get<double>();
+    INFO("flow " << q << " mm^3/s: tau " << tau << " s, truth " << true_tau(q) << " s");
+    CHECK(tau == Approx(true_tau(q)).epsilon(0.05));
+  }
+  CHECK(both == 6);
+  CHECK(qmax == Approx(13.5).epsilon(0.02));
+  // The trend's exponent: tau = C k n Q^(n-1), so b = n - 1.
+  const auto& b = step.at("flow_trend").at("tau_s");
+  INFO("b = " << b.at("b").get<double>());
+  CHECK(b.at("b").get<double>() == Approx(n - 1).margin(0.05));
+  // Export read the arrival levels as its operating points (flow-dependent advance).
+  const auto analysis = nlohmann::json::parse(read_file_bytes(dir + "/analysis/step.json")).at("results");
+  REQUIRE(analysis.at("operating_points").size() == levels.size());
+  for (std::size_t i = 0; i < levels.size(); ++i)
+    CHECK(analysis.at("operating_points")[i].at("tau_s").get<double>() == levels[i].at("tau_s").get<double>());
+  const auto& schedule = env.at("results").at("compensators").at("design").at("schedule");
+  CHECK(schedule.size() == levels.size());
+}
