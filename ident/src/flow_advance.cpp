@@ -295,8 +295,8 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
     if (ok(qd)) {
       const double step = (d.flow_max_mm3_s - d.flow_min_mm3_s) / nf;
       double lo = qd, hi = qd;
-      while (lo - step >= d.flow_min_mm3_s - 1e-12 && ok(lo - step)) lo -= step;
-      while (hi + step <= d.flow_max_mm3_s + 1e-12 && ok(hi + step)) hi += step;
+      while (lo > d.flow_min_mm3_s && ok(std::max(lo - step, d.flow_min_mm3_s))) lo = std::max(lo - step, d.flow_min_mm3_s);
+      while (hi < d.flow_max_mm3_s && ok(std::min(hi + step, d.flow_max_mm3_s))) hi = std::min(hi + step, d.flow_max_mm3_s);
       d.k_within_lo_mm3_s = lo;
       d.k_within_hi_mm3_s = hi;
     }

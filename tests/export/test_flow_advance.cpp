@@ -83,9 +83,11 @@ TEST_CASE("flow advance: the single K holds within 10 % over a stated range arou
   REQUIRE(std::isfinite(d.k_within_lo_mm3_s));
   CHECK(d.k_within_lo_mm3_s < 8);
   CHECK(d.k_within_hi_mm3_s > 8);
-  // K(Q) = c Q^b: |K(Qd) - K(Q)| = 0.1 K(Q) at Q = Qd (1.1)^(1/b) (below) and Qd (0.9)^(1/b) (above).
-  CHECK(d.k_within_lo_mm3_s == Approx(8 * std::pow(1.1, 1 / -0.45)).epsilon(0.01));
-  CHECK(d.k_within_hi_mm3_s == Approx(std::min(18.0, 8 * std::pow(0.9, 1 / -0.45))).epsilon(0.01));
+  // K(Q) = c Q^b (b < 0): below Qd, K(Q) - K(Qd) = 0.1 K(Q) at Q = Qd 0.9^(-1/b); above,
+  // K(Qd) - K(Q) = 0.1 K(Q) at Q = Qd 1.1^(-1/b).
+  const double b = -0.45;
+  CHECK(d.k_within_lo_mm3_s == Approx(8 * std::pow(0.9, -1 / b)).epsilon(0.01));
+  CHECK(d.k_within_hi_mm3_s == Approx(std::min(18.0, 8 * std::pow(1.1, -1 / b))).epsilon(0.01));
 }
 
 TEST_CASE("flow advance: Kalico parameters re-evaluated with Kalico's formula reproduce the designed advance within 5 %") {
