@@ -446,6 +446,10 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
                              100 * gap, qref));
     }
     settings.pa_k_s = flow->k_design_s;
+    // One design everywhere: the per-flow schedule and K follow the flow design (which uses the
+    // power-law trend when the step analysis gave one).
+    design->k_s = flow->k_design_s;
+    for (auto& s : design->schedule) s.k_s = ident::needed_advance_s(fin, s.flow_mm3_s);
     if (fw == protocols::ExportFirmware::kalico) {
       protocols::KalicoAdvanceSetting k;
       k.model = ident::to_string(flow->kalico.model);
@@ -589,6 +593,16 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
                              design->design_flow_mm3_s,
                              settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s)
                                                   : std::string());
+    if (flow) {
+      ctx.err << fmt::format("tunekit: the single K stays within 10 % of the need from {:.3g} to {:.3g} mm^3/s "
+                             "(identified {:.3g}-{:.3g} mm^3/s)\n",
+                             flow->k_within_lo_mm3_s, flow->k_within_hi_mm3_s, flow->flow_min_mm3_s, flow->flow_max_mm3_s);
+      ctx.err << fmt::format("tunekit: Kalico {}: linear_advance {:.4g} s, nonlinear_offset {:.4g} mm, "
+                             "linearization_velocity {:.4g} mm/s (within {:.1f} % of the need)\n",
+                             ident::to_string(flow->kalico.model), flow->kalico.linear_advance_s,
+                             flow->kalico.nonlinear_offset_mm, flow->kalico.linearization_velocity_mm_s,
+                             100 * flow->kalico.max_rel_error);
+    }
     // The design's notes say what it means (nothing to act on): informational lines, not warnings.
     if (design)
       for (const auto& n : design->notes) ctx.err << "tunekit: note: " << n << "\n";
