@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/flow_advance.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -90,17 +91,24 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
       throw InputError(fmt::format("two operating points at the same feed rate {} mm/s", pts[i].feed_mm_s));
 
   if (pts.size() >= 2) {
-    std::vector<double> q, k;
+    // The advance a flow needs is the stored volume over the flow, V(Q)/Q with V the integral of
+    // tau over 0..Q (flow_advance.hpp derives it), not tau(Q) itself.
+    FlowAdvanceInputs fin;
+    fin.filament_area_mm2 = af;
+    std::vector<double> q;
     for (const auto& p : pts) {
       q.push_back(p.feed_mm_s * af);
-      k.push_back(p.tau_s);
-      d.schedule.push_back({p.feed_mm_s * af, p.feed_mm_s, p.tau_s});
+      fin.levels.push_back({p.feed_mm_s * af, p.tau_s});
     }
-    d.k_s = interp(q, k, d.design_flow_mm3_s);
+    for (const auto& p : pts)
+      d.schedule.push_back({p.feed_mm_s * af, p.feed_mm_s, needed_advance_s(fin, p.feed_mm_s * af)});
+    d.k_s = needed_advance_s(fin, d.design_flow_mm3_s);
     d.k_source = "operating points";
+    d.notes.push_back("K at each flow is the stored melt volume over the flow (the integral of tau over 0..Q, divided by "
+                      "Q; tau held at the lowest level below it), not tau at that flow");
     if (d.design_flow_mm3_s < q.front() || d.design_flow_mm3_s > q.back())
       d.warnings.push_back(fmt::format("design flow {:.3g} mm^3/s lies outside the identified range {:.3g}-{:.3g} "
-                                       "mm^3/s: K is held at the nearest operating point",
+                                       "mm^3/s: tau is held at the nearest operating point there",
                                     d.design_flow_mm3_s, q.front(), q.back()));
     if (!finite(d.theta_s)) {
       std::vector<double> th;

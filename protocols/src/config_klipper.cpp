@@ -16,6 +16,7 @@
 #include <glob.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
@@ -27,6 +28,7 @@
 #include <fmt/ranges.h>
 
 #include "export_writers.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 #include "text_util.hpp"
 
@@ -306,7 +308,16 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
   auto num = [&](const std::string& sec, const std::string& opt, double v, int dec) {
     wants.push_back({sec, opt, format_number(v, dec), true, v, dec});
   };
-  if (s.pa_k_s) num(s.klipper_extruder, "pressure_advance", *s.pa_k_s, kDecimalsK);
+  if (s.pa_k_s && !s.kalico) num(s.klipper_extruder, "pressure_advance", *s.pa_k_s, kDecimalsK);
+  if (s.kalico) {
+    // Kalico's nonlinear model (KalicoAdvanceSetting): its options replace pressure_advance.
+    wants.push_back({s.klipper_extruder, "pressure_advance_model", s.kalico->model, false, 0, 0});
+    num(s.klipper_extruder, "linear_advance", s.kalico->linear_advance_s, kDecimalsKalico);
+    num(s.klipper_extruder, "nonlinear_offset", s.kalico->nonlinear_offset_mm, kDecimalsKalico);
+    num(s.klipper_extruder, "linearization_velocity", s.kalico->linearization_velocity_mm_s, kDecimalsKalico);
+    if (s.kalico->time_offset_s)
+      num(s.klipper_extruder, "pressure_advance_time_offset", *s.kalico->time_offset_s, kDecimalsKalico);
+  }
   if (s.pa_smooth_s) num(s.klipper_extruder, "pressure_advance_smooth_time", *s.pa_smooth_s, kDecimalsSmooth);
   for (const auto& [axis, sh] : s.shapers) {
     const std::string type = firmware_shaper_name(ExportFirmware::klipper, sh.type);
@@ -448,12 +459,40 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
   }
   if (!tail.empty()) ed.insert_before(ed.size(), tail);
 
+  if (s.kalico) {
+    // A nonlinear model does not read pressure_advance, and Klipper-style config checking refuses
+    // an option nobody reads ("Option '...' is not valid in section", klippy/configfile.py
+    // check_unused_options): the body's line is commented out.
+    for (const auto& sec : doc.main)
+      if (sec.name == s.klipper_extruder)
+        for (const auto& o : sec.opts)
+          if (o.name == "pressure_advance") {
+            ed.replace(o.line, "#" + ed.line(o.line));
+            r.changes.push_back({fmt::format("[{}] pressure_advance", s.klipper_extruder), o.value, "(commented out)",
+                                 o.line + 1, "section"});
+          }
+    if (find_opt(doc.block, s.klipper_extruder, "pressure_advance"))
+      r.warnings.push_back(fmt::format("{}: the SAVE_CONFIG block sets [{}] pressure_advance, which Kalico's {} model "
+                                       "does not read: remove it there before restarting",
+                                       r.path, s.klipper_extruder, s.kalico->model));
+  }
   r.updated = ed.render();
   r.diff = ed.unified_diff(r.path);
 
   // Runtime commands with the same values.
   std::string g;
-  if (s.pa_k_s || s.pa_smooth_s) {
+  if (s.kalico) {
+    // Kalico's runtime form (docs/Nonlinear_Pressure_Advance.md, "Setting values via G-Code";
+    // extruder.py cmd_SET_PRESSURE_ADVANCE reads MODEL, ADVANCE, OFFSET, VELOCITY, TIME_OFFSET).
+    g += "SET_PRESSURE_ADVANCE";
+    if (s.klipper_extruder != "extruder") g += " EXTRUDER=" + s.klipper_extruder;
+    g += " MODEL=" + s.kalico->model + " ADVANCE=" + format_number(s.kalico->linear_advance_s, kDecimalsKalico) +
+         " OFFSET=" + format_number(s.kalico->nonlinear_offset_mm, kDecimalsKalico) +
+         " VELOCITY=" + format_number(s.kalico->linearization_velocity_mm_s, kDecimalsKalico);
+    if (s.kalico->time_offset_s) g += " TIME_OFFSET=" + format_number(*s.kalico->time_offset_s, kDecimalsKalico);
+    if (s.pa_smooth_s) g += " SMOOTH_TIME=" + format_number(*s.pa_smooth_s, kDecimalsSmooth);
+    g += "\n";
+  } else if (s.pa_k_s || s.pa_smooth_s) {
     g += "SET_PRESSURE_ADVANCE";
     if (s.klipper_extruder != "extruder") g += " EXTRUDER=" + s.klipper_extruder;
     if (s.pa_k_s) g += " ADVANCE=" + format_number(*s.pa_k_s, kDecimalsK);
@@ -475,6 +514,29 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
   if (r.updated != r.original)
     r.notes.push_back("Klipper reads printer.cfg only at start-up: send RESTART after writing (or the G-code above to "
                       "apply the values now without a restart)");
+}
+
+void validate_kalico(const KalicoAdvanceSetting& k, std::vector<std::string>& bad) {
+  namespace L = tunekit::protocols::limits;
+  const bool known = std::any_of(std::begin(L::kKalicoAdvanceModels), std::end(L::kKalicoAdvanceModels),
+                                 [&](const char* m) { return k.model == m; });
+  if (!known || k.model == "linear")
+    bad.push_back(fmt::format("Kalico's nonlinear pressure_advance_model is tanh or recipr (klippy/kinematics/extruder.py), "
+                              "not '{}'",
+                              k.model));
+  if (!std::isfinite(k.linear_advance_s) || k.linear_advance_s < L::kKalicoLinearAdvanceMin_s)
+    bad.push_back(fmt::format("Kalico's linear_advance must be a number >= 0 (extruder.py minval=0.), not {}", k.linear_advance_s));
+  if (!std::isfinite(k.nonlinear_offset_mm) || k.nonlinear_offset_mm < L::kKalicoNonlinearOffsetMin_mm)
+    bad.push_back(fmt::format("Kalico's nonlinear_offset must be a number >= 0 (extruder.py minval=0.), not {}",
+                              k.nonlinear_offset_mm));
+  if (!std::isfinite(k.linearization_velocity_mm_s) || k.linearization_velocity_mm_s < 0 ||
+      (k.nonlinear_offset_mm > 0 && !(k.linearization_velocity_mm_s > 0)))
+    bad.push_back(fmt::format("Kalico's linearization_velocity must be above 0 when nonlinear_offset is set "
+                              "(extruder.py above=0.), not {}",
+                              k.linearization_velocity_mm_s));
+  if (k.time_offset_s && !(*k.time_offset_s >= L::kKalicoTimeOffsetMin_s && *k.time_offset_s <= L::kKalicoTimeOffsetMax_s))
+    bad.push_back(fmt::format("Kalico accepts pressure_advance_time_offset from {} to {} s (extruder.py); {} is out of range",
+                              L::kKalicoTimeOffsetMin_s, L::kKalicoTimeOffsetMax_s, *k.time_offset_s));
 }
 
 }  // namespace tunekit::protocols::detail

@@ -12,6 +12,9 @@ inline constexpr int kDecimalsFreq = 2;
 inline constexpr int kDecimalsZeta = 3;
 
 void write_klipper(ExportResult& r, const CompensatorSettings& s);
+/// Kalico's bounds (firmware_limits.hpp) on a nonlinear advance setting; appends violations.
+void validate_kalico(const KalicoAdvanceSetting& k, std::vector<std::string>& bad);
+inline constexpr int kDecimalsKalico = 6;  // Kalico reports these with %.6f (extruder.py get_msg)
 void write_marlin(ExportResult& r, const CompensatorSettings& s);
 void write_rrf(ExportResult& r, const CompensatorSettings& s);
 

@@ -45,14 +45,16 @@ bool marlin_ft_motion_enabled(const std::string& text) {
 ExportFirmware parse_export_firmware(const std::string& name) {
   const std::string n = text::lower(name);
   if (n == "klipper") return ExportFirmware::klipper;
+  if (n == "kalico") return ExportFirmware::kalico;
   if (n == "marlin") return ExportFirmware::marlin;
   if (n == "rrf" || n == "reprapfirmware" || n == "duet") return ExportFirmware::rrf;
-  throw InputError(fmt::format("unknown firmware '{}': use klipper, marlin or rrf", name));
+  throw InputError(fmt::format("unknown firmware '{}': use klipper, kalico, marlin or rrf", name));
 }
 
 std::string to_string(ExportFirmware fw) {
   switch (fw) {
     case ExportFirmware::klipper: return "klipper";
+    case ExportFirmware::kalico: return "kalico";
     case ExportFirmware::marlin: return "marlin";
     case ExportFirmware::rrf: return "rrf";
   }
@@ -81,7 +83,11 @@ std::string firmware_shaper_name(ExportFirmware fw, const std::string& type, boo
 
 void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
   std::vector<std::string> bad;
-  const std::string name = fw == ExportFirmware::klipper ? "Klipper" : fw == ExportFirmware::marlin ? "Marlin" : "RepRapFirmware";
+  const std::string name = limits::firmware_title(fw);
+  const bool klipper_like = fw == ExportFirmware::klipper || fw == ExportFirmware::kalico;
+  if (s.kalico && fw != ExportFirmware::kalico)
+    bad.push_back(fmt::format("the nonlinear advance model is Kalico's; {} does not read it", name));
+  if (s.kalico && fw == ExportFirmware::kalico) detail::validate_kalico(*s.kalico, bad);
   if (s.pa_k_s) {
     const double k = *s.pa_k_s;
     if (!std::isfinite(k) || k < 0)
@@ -95,7 +101,7 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
     const double t = *s.pa_smooth_s;
     if (!std::isfinite(t) || t < 0)
       bad.push_back(fmt::format("smoothing time {} s is negative or not a number", t));
-    else if (fw == ExportFirmware::klipper && (t <= 0 || t > kKlipperSmoothMax))
+    else if (klipper_like && (t <= 0 || t > kKlipperSmoothMax))
       bad.push_back(fmt::format("Klipper accepts pressure_advance_smooth_time above 0 and up to {} s "
                                 "(klippy/kinematics/extruder.py:15); {} is out of range",
                                 kKlipperSmoothMax, t));
@@ -144,10 +150,12 @@ ExportResult export_config_text(ExportFirmware fw, const std::string& text, cons
   r.path = path;
   r.original = text;
   static const std::map<ExportFirmware, std::vector<std::string>> kCommentMarkers = {
-      {ExportFirmware::klipper, {"#", ";"}}, {ExportFirmware::marlin, {"//"}}, {ExportFirmware::rrf, {";"}}};
+      {ExportFirmware::klipper, {"#", ";"}}, {ExportFirmware::kalico, {"#", ";"}}, {ExportFirmware::marlin, {"//"}},
+      {ExportFirmware::rrf, {";"}}};
   const ScopedCommentNote note(kCommentMarkers.at(fw), s.change_note);
   switch (fw) {
-    case ExportFirmware::klipper: detail::write_klipper(r, s); break;
+    case ExportFirmware::klipper:
+    case ExportFirmware::kalico: detail::write_klipper(r, s); break;
     case ExportFirmware::marlin: detail::write_marlin(r, s); break;
     case ExportFirmware::rrf: detail::write_rrf(r, s); break;
   }
@@ -185,7 +193,9 @@ nlohmann::json ExportResult::to_json() const {
 
 std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::AdvanceDesign& d) {
   double w = ident::kAdvanceNaN;
-  if (fw == ExportFirmware::klipper) w = d.window_triangular_s;
+  // Kalico's smoother is a 4th-order polynomial kernel whose peak (15/8) is below the
+  // triangle's 2: the triangular window is the safe choice for both.
+  if (fw == ExportFirmware::klipper || fw == ExportFirmware::kalico) w = d.window_triangular_s;
   if (fw == ExportFirmware::marlin) {
     // Marlin smooths with its own exponential cascade, designed on the written grid.
     if (!std::isfinite(d.window_box_s) || d.window_box_s <= 0) return std::nullopt;
@@ -204,6 +214,7 @@ std::string advance_schedule_gcode(ExportFirmware fw, const std::vector<ident::S
     const std::string flow = format_number(p.flow_mm3_s, 2);
     switch (fw) {
       case ExportFirmware::klipper:
+      case ExportFirmware::kalico:
         g += fmt::format("SET_PRESSURE_ADVANCE{} ADVANCE={} ; at {} mm^3/s\n",
                          s.klipper_extruder != "extruder" ? " EXTRUDER=" + s.klipper_extruder : std::string(), k, flow);
         break;

@@ -6,7 +6,8 @@ namespace tunekit::protocols::limits {
 
 std::vector<FirmwareShaper> shapers_of(ExportFirmware fw, bool ft_motion) {
   switch (fw) {
-    case ExportFirmware::klipper: return {std::begin(kKlipperShapers), std::end(kKlipperShapers)};
+    case ExportFirmware::klipper:
+    case ExportFirmware::kalico: return {std::begin(kKlipperShapers), std::end(kKlipperShapers)};
     case ExportFirmware::marlin:
       if (ft_motion) return {std::begin(kMarlinFtMotionShapers), std::end(kMarlinFtMotionShapers)};
       return {std::begin(kMarlinClassicShapers), std::end(kMarlinClassicShapers)};
@@ -37,6 +38,7 @@ std::vector<std::string> designable_shapers(ExportFirmware fw, bool ft_motion) {
 std::string firmware_title(ExportFirmware fw) {
   switch (fw) {
     case ExportFirmware::klipper: return "Klipper";
+    case ExportFirmware::kalico: return "Kalico";
     case ExportFirmware::marlin: return "Marlin";
     case ExportFirmware::rrf: return "RepRapFirmware";
   }

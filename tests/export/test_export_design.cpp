@@ -85,13 +85,16 @@ TEST_CASE("Flow-dependent advance from operating points and from a rheology pred
   in.design_flow_mm3_s = 3.0 * af;  // halfway between the 2 and 4 mm/s feed points
   auto d = ident::design_advance(in);
   CHECK(d.k_source == "operating points");
-  CHECK(d.k_s == Approx(0.035));
+  // K(Q) = V(Q)/Q, V the integral of tau (held at 0.06 s below the first point, linear between):
+  // V(3 af) = af (0.06 + (0.06 + 0.04)/2 + (0.04 + 0.035)/2) = 0.1475 af.
+  CHECK(d.k_s == Approx(0.1475 / 3));
   CHECK(d.theta_s == Approx(0.0275));
   REQUIRE(d.schedule.size() == 3);
   CHECK(d.schedule[0].flow_mm3_s == Approx(1.0 * af));
-  CHECK(d.schedule[2].k_s == Approx(0.03));
-  // A single number is wrong by (0.06 - 0.035) / 0.06 at the lowest flow.
-  CHECK(d.single_k_max_rel_error == Approx((0.06 - 0.035) / 0.06));
+  CHECK(d.schedule[0].k_s == Approx(0.06));
+  CHECK(d.schedule[2].k_s == Approx(0.18 / 4));  // V(4 af) = af (0.06 + 0.05 + 0.07)
+  // A single number is wrong by (0.06 - K) / 0.06 at the lowest flow.
+  CHECK(d.single_k_max_rel_error == Approx((0.06 - 0.1475 / 3) / 0.06));
   CHECK(d.trend_k1_s_per_mm3_s < 0);
 
   ident::AdvanceInputs rh = sim_inputs();

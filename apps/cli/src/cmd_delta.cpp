@@ -101,6 +101,7 @@ int run_delta(const DeltaArgs& a, CliContext& ctx) {
   const auto cal = ident::fit_delta_calibration(nominal, probes, a.factors);
   if (!a.export_firmware.empty()) {
     switch (fw) {
+      case protocols::ExportFirmware::kalico:
       case protocols::ExportFirmware::klipper: export_text = protocols::delta_klipper_save_config(cal.fitted); break;
       case protocols::ExportFirmware::marlin: export_text = protocols::delta_marlin_gcode(cal.fitted, a.marlin_probe_z_offset_mm); break;
       case protocols::ExportFirmware::rrf: export_text = protocols::delta_rrf_gcode(cal.fitted, a.print_radius_mm); break;

@@ -2,6 +2,7 @@
 // `tunekit step`, `freq`, `shaper` and `rheo` (or values on the command line) and write them
 // into a Klipper printer.cfg, a Marlin Configuration_adv.h or a RepRapFirmware config.g.
 // By default only a unified diff is printed; --write applies it (backup + atomic rename).
+#include <algorithm>
 #include <cmath>
 #include <ctime>
 #include <filesystem>
@@ -15,15 +16,19 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/plots.hpp"
 #include "tunekit/cli/results_json.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 #include "tunekit/protocols/firmware_export.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/protocols/gcode_advance.hpp"
+#include "tunekit/protocols/orca_profile.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 
 namespace tunekit::cli {
@@ -84,6 +89,10 @@ struct ExportArgs {
   bool no_shaper = false;
   bool write = false;
   std::string gcode_out;
+  std::string sliced_in, sliced_out;  // --gcode-in / --gcode-out (per-feature advance)
+  double hysteresis = 0.10;
+  std::string plot_out;  // --plot: the flow-dependent advance figure (SVG or PNG)
+  std::string orca_in, orca_out, orca_name = "tunekit flow-dependent advance";
   OutputOptions output;
   const CLI::Option* pa_k_opt = nullptr;
   const CLI::Option* pa_smooth_opt = nullptr;
@@ -154,6 +163,10 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   // filament area is known.
   std::vector<bool> point_is_flow;
   std::vector<std::string> unnamed_axes;  // shaper results under a file stem instead of an axis
+  std::optional<ident::TauPowerLaw> trend_tau_u;  // tau = a u^b over the operating points' u
+  std::vector<ident::FlowTau> levels;             // results.flow_levels (u or flow)
+  std::vector<bool> level_is_flow;
+  bool points_are_flow = false;
 
   // A Marlin build with FT_MOTION has FT_MOTION's shapers (firmware_limits.hpp).
   bool ft_motion = false;
@@ -185,9 +198,35 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
           if (dig(params, {"K", "unit"}).is_string()) in.gain_unit = dig(params, {"K", "unit"}).get<std::string>();
           in.tau_source = "step";
         }
+        // Power-law trend of tau over u (the operating points' input), and per-level 95 %
+        // intervals when the step analysis gives them (results.flow_levels[].tau_ci95).
+        const auto& ta = dig(res, {"trend", "tau_s", "params", "a", "value"});
+        const auto& tb = dig(res, {"trend", "tau_s", "params", "b", "value"});
+        if (ta.is_number() && tb.is_number()) trend_tau_u = ident::TauPowerLaw{ta.get<double>(), tb.get<double>()};
+        const auto& lvls = dig(res, {"flow_levels"});
+        if (lvls.is_array())
+          for (const auto& l : lvls) {
+            ident::FlowTau ft;
+            double u = number_at(dig(l, {"flow_mm3_s"}), "flow_levels[].flow_mm3_s", path);
+            const bool is_flow = std::isfinite(u);
+            if (!is_flow) u = number_at(dig(l, {"u"}), "flow_levels[].u", path);
+            ft.flow_mm3_s = u;
+            ft.tau_s = number_at(dig(l, {"tau_s"}), "flow_levels[].tau_s", path);
+            const auto& ci = dig(l, {"tau_ci95"});
+            if (ci.is_array() && ci.size() == 2) {
+              ft.tau_lo_s = number_at(ci[0], "flow_levels[].tau_ci95[0]", path);
+              ft.tau_hi_s = number_at(ci[1], "flow_levels[].tau_ci95[1]", path);
+            } else if (ci.is_object()) {
+              ft.tau_lo_s = number_at(dig(ci, {"lo"}), "flow_levels[].tau_ci95.lo", path);
+              ft.tau_hi_s = number_at(dig(ci, {"hi"}), "flow_levels[].tau_ci95.hi", path);
+            }
+            level_is_flow.push_back(is_flow);
+            levels.push_back(ft);
+          }
         const auto& ops = dig(res, {"operating_points"});
         const auto& u_unit = dig(res, {"units", "input"});
         const bool flow_points = u_unit.is_string() && ident::is_volumetric_flow_unit(u_unit.get<std::string>());
+        points_are_flow = flow_points;
         if (ops.is_array())
           for (const auto& op : ops) {
             point_is_flow.push_back(flow_points);
@@ -353,6 +392,79 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     settings.pa_smooth_s = protocols::smoothing_time_for(fw, *design);
     for (const auto& w : design->warnings) env.warn(w);
   }
+  // Flow-dependent design (flow_advance.hpp) when two or more levels were identified.
+  std::optional<ident::FlowAdvanceDesign> flow;
+  nlohmann::json flow_rheology;  // rheology cross-check of tau(Q), when a prediction was given
+  if (design && design->schedule.size() >= 2 && design->k_source == "operating points") {
+    ident::FlowAdvanceInputs fin;
+    fin.filament_area_mm2 = in.filament_area_mm2;
+    if (!levels.empty()) {
+      for (std::size_t i = 0; i < levels.size(); ++i) {
+        auto l = levels[i];
+        if (!level_is_flow[i] && !points_are_flow) l.flow_mm3_s *= in.filament_area_mm2;  // feed mm/s -> mm^3/s
+        fin.levels.push_back(l);
+      }
+    } else {
+      for (const auto& p : in.points)
+        if (std::isfinite(p.feed_mm_s) && std::isfinite(p.tau_s)) fin.levels.push_back({p.feed_mm_s * in.filament_area_mm2, p.tau_s});
+    }
+    if (trend_tau_u) {
+      // tau = a u^b with u a feed (mm/s): in flow, a (Q/A)^b = (a A^-b) Q^b.
+      ident::TauPowerLaw t = *trend_tau_u;
+      if (!points_are_flow) t.a *= std::pow(in.filament_area_mm2, -t.b);
+      fin.trend = t;
+    }
+    fin.design_flow_mm3_s = design->design_flow_mm3_s;
+    fin.theta_s = design->theta_s;
+    if (std::isfinite(in.print_accel_mm_s2) && in.print_accel_mm_s2 > 0) fin.orca_accels_mm_s2 = {in.print_accel_mm_s2};
+    flow = ident::design_flow_advance(fin);
+    for (const auto& w : flow->warnings) env.warn(w);
+    if (in.rheo_flow_mm3_s.size() >= 2 && in.rheo_flow_mm3_s.size() == in.rheo_relative_tau.size()) {
+      // Rheology cross-check: the predicted shape of tau(Q), scaled to the measured tau at the
+      // prediction's reference flow, against the measured tau(Q) over the identified flows.
+      const auto& rq = in.rheo_flow_mm3_s;
+      const auto& rr = in.rheo_relative_tau;
+      auto rel_at = [&](double q) {
+        if (q <= rq.front()) return rr.front();
+        if (q >= rq.back()) return rr.back();
+        const auto it = std::upper_bound(rq.begin(), rq.end(), q);
+        const std::size_t i = static_cast<std::size_t>(it - rq.begin());
+        return rr[i - 1] + (q - rq[i - 1]) / (rq[i] - rq[i - 1]) * (rr[i] - rr[i - 1]);
+      };
+      const double qref = std::isfinite(in.rheo_reference_flow_mm3_s) ? in.rheo_reference_flow_mm3_s : flow->design_flow_mm3_s;
+      const double scale = ident::flow_tau_s(fin, qref) / rel_at(qref);
+      std::vector<double> fq, ft;
+      double gap = 0;
+      for (const auto& c : flow->curve) {
+        fq.push_back(c.flow_mm3_s);
+        ft.push_back(scale * rel_at(c.flow_mm3_s));
+        gap = std::max(gap, std::abs(ft.back() - c.tau_s) / c.tau_s);
+      }
+      flow_rheology = nlohmann::json{{"flow_mm3_s", fq}, {"tau_pred_s", ft}, {"max_gap_rel", gap},
+                                     {"reference_flow_mm3_s", qref}};
+      if (gap > 0.2)
+        env.warn(fmt::format("the rheology prediction of tau(Q) differs from the measured one by up to {:.0f} % over the "
+                             "identified flows (scaled to agree at {:.3g} mm^3/s)",
+                             100 * gap, qref));
+    }
+    settings.pa_k_s = flow->k_design_s;
+    // One design everywhere: the per-flow schedule and K follow the flow design (which uses the
+    // power-law trend when the step analysis gave one).
+    design->k_s = flow->k_design_s;
+    for (auto& s : design->schedule) s.k_s = ident::needed_advance_s(fin, s.flow_mm3_s);
+    if (fw == protocols::ExportFirmware::kalico) {
+      protocols::KalicoAdvanceSetting k;
+      k.model = ident::to_string(flow->kalico.model);
+      k.linear_advance_s = flow->kalico.linear_advance_s;
+      k.nonlinear_offset_mm = flow->kalico.nonlinear_offset_mm;
+      k.linearization_velocity_mm_s = flow->kalico.linearization_velocity_mm_s;
+      if (std::isfinite(flow->kalico_time_offset_s)) k.time_offset_s = flow->kalico_time_offset_s;
+      settings.kalico = k;
+    }
+  }
+  if ((!a.orca_out.empty() || !a.sliced_out.empty()) && !design)
+    throw InputError("--orca-out and --gcode-out need an advance design: give the results of 'tunekit step' or --pa-k");
+  if (!a.sliced_in.empty() != !a.sliced_out.empty()) throw InputError("--gcode-in and --gcode-out go together");
   if (std::isfinite(a.pa_smooth)) {
     if (a.no_pa) throw InputError("--pa-smooth and --no-pa contradict each other");
     settings.pa_smooth_s = a.pa_smooth;
@@ -397,6 +509,12 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
                            {"damping", sh.damping}};
   res["settings"] = sj;
   res["design"] = design ? design->to_json() : nlohmann::json(nullptr);
+  res["flow_advance"] = flow ? flow->to_json() : nlohmann::json(nullptr);
+  if (flow && !flow_rheology.is_null()) res["flow_advance"]["rheology"] = flow_rheology;
+  if (!a.plot_out.empty()) {
+    if (!flow) throw InputError("--plot needs a flow-dependent advance: results of 'tunekit step' with two or more levels");
+    render_figure(flow_advance_figure(res["flow_advance"]), a.plot_out);
+  }
   res["export"] = result.to_json();
   const std::string schedule =
       design ? protocols::advance_schedule_gcode(fw, design->schedule, settings) : std::string();
@@ -417,6 +535,53 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     batch.add(a.config, result.updated);
   }
   if (!a.gcode_out.empty()) batch.add(a.gcode_out, result.gcode);
+  if (!a.orca_out.empty()) {
+    protocols::OrcaAdvanceProfile op;
+    op.fallback_k_s = *settings.pa_k_s;
+    if (flow) {
+      for (const auto& o : flow->orca) op.table.push_back(o);
+    } else {
+      const double acc = std::isfinite(in.print_accel_mm_s2) ? in.print_accel_mm_s2 : 0.0;
+      for (const auto& s : design->schedule) op.table.push_back({s.k_s, s.flow_mm3_s, acc});
+    }
+    if (op.table.size() < 2)
+      throw InputError("--orca-out needs a flow-dependent advance: results of 'tunekit step' with two or more levels");
+    std::string text;
+    if (!a.orca_in.empty()) {
+      const std::string base = ident::read_file_bytes(a.orca_in);
+      env.add_input(a.orca_in, base);
+      const auto m = protocols::merge_orca_filament_profile(base, op, a.orca_in);
+      text = m.text;
+      res["orca"] = {{"profile", a.orca_out}, {"merged_from", a.orca_in}, {"changed", m.changed_keys}, {"added", m.added_keys}};
+    } else {
+      text = protocols::new_orca_filament_profile(op, a.orca_name, "");
+      res["orca"] = {{"profile", a.orca_out}, {"merged_from", nullptr}};
+    }
+    res["orca"]["adaptive_pressure_advance_model"] = protocols::orca_model_text(op.table);
+    batch.add(a.orca_out, text);
+  }
+  if (!a.sliced_out.empty()) {
+    protocols::GcodeAdvanceOptions go;
+    go.firmware = fw;
+    go.hysteresis = a.hysteresis;
+    go.klipper_extruder = settings.klipper_extruder;
+    go.rrf_drive = settings.rrf_drive;
+    if (flow) {
+      for (const auto& c : flow->curve) go.k_of_flow.emplace_back(c.flow_mm3_s, c.k_need_s);
+    } else {
+      for (const auto& s : design->schedule) go.k_of_flow.emplace_back(s.flow_mm3_s, s.k_s);
+      if (go.k_of_flow.empty()) go.k_of_flow.emplace_back(design->design_flow_mm3_s, *settings.pa_k_s);
+    }
+    const std::string sliced = ident::read_file_bytes(a.sliced_in);
+    env.add_input(a.sliced_in, sliced);
+    const auto g = protocols::apply_gcode_advance(sliced, go, a.sliced_in);
+    nlohmann::json ch = nlohmann::json::array();
+    for (const auto& c : g.changes)
+      ch.push_back({{"line", c.line}, {"feature", c.feature}, {"flow_mm3_s", c.flow_mm3_s}, {"K_s", c.k_s}});
+    res["gcode_post"] = {{"in", a.sliced_in}, {"out", a.sliced_out}, {"features", g.features},
+                         {"hysteresis", a.hysteresis}, {"changes", ch}};
+    batch.add(a.sliced_out, g.text);
+  }
   const Emission emission = prepare_emission(env, a.output);
   const bool output_is_device = !a.output.output_path.empty() && is_special_output(a.output.output_path);
   if (!a.output.output_path.empty() && !output_is_device) batch.add(a.output.output_path, emission.text);
@@ -430,6 +595,16 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
                              design->design_flow_mm3_s,
                              settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s)
                                                   : std::string());
+    if (flow) {
+      ctx.err << fmt::format("tunekit: the single K stays within 10 % of the need from {:.3g} to {:.3g} mm^3/s "
+                             "(identified {:.3g}-{:.3g} mm^3/s)\n",
+                             flow->k_within_lo_mm3_s, flow->k_within_hi_mm3_s, flow->flow_min_mm3_s, flow->flow_max_mm3_s);
+      ctx.err << fmt::format("tunekit: Kalico {}: linear_advance {:.4g} s, nonlinear_offset {:.4g} mm, "
+                             "linearization_velocity {:.4g} mm/s (within {:.1f} % of the need)\n",
+                             ident::to_string(flow->kalico.model), flow->kalico.linear_advance_s,
+                             flow->kalico.nonlinear_offset_mm, flow->kalico.linearization_velocity_mm_s,
+                             100 * flow->kalico.max_rel_error);
+    }
     // The design's notes say what it means (nothing to act on): informational lines, not warnings.
     if (design)
       for (const auto& n : design->notes) ctx.err << "tunekit: note: " << n << "\n";
@@ -456,7 +631,9 @@ void register_export(CLI::App& app, CliContext& ctx) {
       "export", "Write pressure advance and input shaping into firmware configuration (diff preview; --write applies)");
   sub->add_option("results", args->results,
                   "JSON results of 'tunekit step', 'freq', 'shaper' and/or 'rheo' (any number, any order)");
-  sub->add_option("-f,--firmware", args->firmware, "Firmware dialect: klipper, marlin or rrf")->required();
+  sub->add_option("-f,--firmware", args->firmware,
+                  "Firmware dialect: klipper, kalico (nonlinear advance from two or more flow levels), marlin or rrf")
+      ->required();
   sub->add_option("-c,--config", args->config,
                   "Configuration file to edit: printer.cfg (klipper), Configuration_adv.h (marlin), config.g (rrf)")
       ->required();
@@ -484,6 +661,21 @@ void register_export(CLI::App& app, CliContext& ctx) {
   sub->add_flag("--write", args->write,
                 "Apply the change: timestamped backup FILE.YYYYmmdd-HHMMSS.bak, then atomic replacement");
   sub->add_option("--gcode", args->gcode_out, "Also write the settings as G-code to this file (Marlin: M900/M593/M500)");
+  sub->add_option("--orca-out", args->orca_out,
+                  "Write an OrcaSlicer filament profile with adaptive pressure advance (the need at each identified "
+                  "flow) to this file");
+  sub->add_option("--orca-in", args->orca_in,
+                  "OrcaSlicer filament profile to merge into (every other key kept byte for byte); default: a new "
+                  "profile");
+  sub->add_option("--orca-name", args->orca_name, "Name of a new OrcaSlicer profile");
+  sub->add_option("--gcode-in", args->sliced_in,
+                  "Sliced G-code (PrusaSlicer, OrcaSlicer or Cura ;TYPE: features) to give a per-feature advance");
+  sub->add_option("--gcode-out", args->sliced_out, "Where the post-processed G-code goes (written atomically)");
+  sub->add_option("--plot", args->plot_out,
+                  "Draw the advance against flow (need, 95 % band, each exported model, design flow) to FILE.svg/.png");
+  sub->add_option("--hysteresis", args->hysteresis,
+                  "Relative change of the advance needed before the post-processor writes a new value (default 0.1)")
+      ->check(CLI::Range(0.0, 0.99));
   add_output_options(sub, args->output);
   sub->footer(
       "Prints a unified diff of the configuration on stdout (a summary and the equivalent G-code on stderr);\n"
@@ -492,7 +684,12 @@ void register_export(CLI::App& app, CliContext& ctx) {
       "  tunekit export --firmware klipper --config printer.cfg --profile datasets/machines/sim.toml step.json shaper.json\n"
       "  tunekit export --firmware marlin --config Marlin/Configuration_adv.h --pa-k 0.045 --shaper-x zv:42:0.1 --write\n"
       "  tunekit export --firmware rrf --config sys/config.g step.json shaper.json rheo.json --json\n"
-      "  tunekit export -f klipper -c printer.cfg --shaper-x mzv:52.4 --shaper-y ei:38.1:0.12 --no-pa");
+      "  tunekit export -f klipper -c printer.cfg --shaper-x mzv:52.4 --shaper-y ei:38.1:0.12 --no-pa\n"
+      "  tunekit export -f kalico -c printer.cfg -p machine.toml sweep.json --orca-in PLA.json --orca-out PLA-tuned.json\n"
+      "  tunekit export -f klipper -c printer.cfg -p machine.toml sweep.json --gcode-in part.gcode --gcode-out part-pa.gcode\n"
+      "With two or more identified flow levels the advance is designed per flow (the stored melt volume, the\n"
+      "integral of tau over flow): Klipper/Marlin/RepRapFirmware get K at the design flow and the flow range\n"
+      "where it stays within 10 % of the need; Kalico its nonlinear model; OrcaSlicer the adaptive table.");
   sub->callback([args, &ctx] { set_exit_code(run_export(*args, ctx)); });
 }
 

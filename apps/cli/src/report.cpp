@@ -215,6 +215,9 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
   if (pd.contains("overshoot_grid"))
     add("overshoot_grid", "Overshoot, completion time and figure of merit over the speed x acceleration grid",
         overshoot_grid_figure(pd["overshoot_grid"]));
+  if (pd.contains("flow_advance"))
+    add("flow_advance", "Advance against flow: the need with its 95 % band, each exported model, the design flow",
+        flow_advance_figure(pd["flow_advance"]));
   if (pd.contains("viscosity")) add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(pd["viscosity"]));
   if (pd.contains("linewidth")) {
     add("linewidth", "Line-width profile", linewidth_figure(pd["linewidth"]));

@@ -59,7 +59,8 @@ struct AdvanceInputs {
   /// The gain is compared with 1 only when it is dimensionless (see gain_is_dimensionless).
   std::string gain_unit;
   std::string tau_source;  ///< "step", "freq", "command line"
-  /// Several operating points: flow-dependent advance (linear interpolation in flow).
+  /// Several operating points: flow-dependent advance K(Q) = V(Q)/Q, V the integral of tau over
+  /// 0..Q with tau interpolated linearly in flow (flow_advance.hpp derives it).
   std::vector<LiquefierPoint> points;
   /// Rheology prediction: tau(Q) / tau(Q_ref) at the given flows; scaled by tau_s, which is
   /// taken to be the time constant at reference_flow.

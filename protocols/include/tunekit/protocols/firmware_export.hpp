@@ -24,9 +24,11 @@
 
 namespace tunekit::protocols {
 
-enum class ExportFirmware { klipper, marlin, rrf };
+/// kalico: the Klipper fork (KalicoCrew/kalico) with nonlinear pressure advance; its printer.cfg
+/// is Klipper's dialect, edited by the same writer.
+enum class ExportFirmware { klipper, marlin, rrf, kalico };
 
-/// "klipper", "marlin", "rrf" (also "reprapfirmware", "duet"); InputError otherwise.
+/// "klipper", "kalico", "marlin", "rrf" (also "reprapfirmware", "duet"); InputError otherwise.
 ExportFirmware parse_export_firmware(const std::string& name);
 std::string to_string(ExportFirmware fw);
 
@@ -38,9 +40,23 @@ struct ShaperSetting {
   double damping = 0.1;
 };
 
+/// Kalico's nonlinear pressure advance ([extruder] options of Kalico's bleeding-edge-v2 branch,
+/// klippy/kinematics/extruder.py PANonLinearModel and ExtruderStepper; the formula is in
+/// klippy/chelper/kin_extruder.c and ident/flow_advance.hpp). Kalico's documentation (Nonlinear
+/// Pressure Advance) named the offset `linear_offset` in earlier versions; its current source
+/// reads `nonlinear_offset`, which is what is written.
+struct KalicoAdvanceSetting {
+  std::string model = "tanh";                 ///< pressure_advance_model: tanh or recipr
+  double linear_advance_s = 0;                ///< linear_advance (>= 0)
+  double nonlinear_offset_mm = 0;             ///< nonlinear_offset (>= 0)
+  double linearization_velocity_mm_s = 0;     ///< linearization_velocity (> 0 when the offset is)
+  std::optional<double> time_offset_s;        ///< pressure_advance_time_offset (-0.2..0.2 s)
+};
+
 /// The design values to write. Unset values are left alone in the configuration.
 struct CompensatorSettings {
-  std::optional<double> pa_k_s;       ///< advance K, s
+  std::optional<double> pa_k_s;       ///< advance K, s (Kalico: ignored when `kalico` is set)
+  std::optional<KalicoAdvanceSetting> kalico;  ///< Kalico only: the nonlinear model replaces pressure_advance
   std::optional<double> pa_smooth_s;  ///< the firmware's own smoothing time (Klipper smooth time, Marlin ADVANCE_TAU)
   std::map<std::string, ShaperSetting> shapers;  ///< by axis "x", "y"
   std::string klipper_extruder = "extruder";     ///< Klipper section holding pressure_advance

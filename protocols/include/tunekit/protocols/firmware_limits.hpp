@@ -54,6 +54,26 @@ inline constexpr double kKlipperMaxExtrudeOnlyDistance_mm = 50.0;
 /// mcr_pseudo_accel = max_accel * (1 - minimum_cruise_ratio) caps a short move's peak speed.
 inline constexpr double kKlipperMinimumCruiseRatioDefault = 0.5;
 
+// --- Kalico (KalicoCrew/kalico, GPLv3; branch bleeding-edge-v2 as of 2026-06) ---------------------
+/// klippy/kinematics/extruder.py ExtruderStepper: config.getchoice("pressure_advance_model",
+/// {"linear", "tanh", "recipr"}); PANonLinearModel: linear_advance minval=0., nonlinear_offset
+/// minval=0., linearization_velocity above=0. when nonlinear_offset is set.
+inline constexpr const char* kKalicoAdvanceModels[] = {"linear", "tanh", "recipr"};
+inline constexpr double kKalicoLinearAdvanceMin_s = 0.0;
+inline constexpr double kKalicoNonlinearOffsetMin_mm = 0.0;
+/// extruder.py: getfloat("pressure_advance_time_offset", 0.0, minval=-0.2, maxval=0.2).
+inline constexpr double kKalicoTimeOffsetMin_s = -0.2;
+inline constexpr double kKalicoTimeOffsetMax_s = 0.2;
+
+// --- OrcaSlicer (SoftFever/OrcaSlicer, AGPLv3) ---------------------------------------------------
+/// src/libslic3r/GCode/AdaptivePAInterpolator.cpp: the interpolated advance is rounded to 3
+/// decimals (std::round(pa * 1000.0) / 1000.0) and a negative result falls back to the
+/// profile's pressure_advance (AdaptivePAProcessor.cpp). src/libslic3r/PrintConfig.cpp:
+/// adaptive_pressure_advance_bridges max = 2; pressure_advance has no bound there beyond the
+/// firmware's. tunekit writes table values from 0 up to kOrcaAdvanceMax_s.
+inline constexpr int kOrcaAdvanceDecimals = 3;
+inline constexpr double kOrcaAdvanceMax_s = 2.0;
+
 // --- Marlin ----------------------------------------------------------------------------------
 /// Marlin/src/gcode/feature/advance/M900.cpp: `if (!WITHIN(K, 0, 10)) echo_value_oor('K')`.
 inline constexpr double kMarlinAdvanceKMax = 10.0;

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace tunekit::cli {
 
 struct Series {
@@ -42,6 +44,10 @@ void render_figure(const Figure& figure, const std::string& path);
 /// Where a logarithmic axis spanning 10^lo_exp .. 10^hi_exp is labelled (values, ascending):
 /// every decade and, when the span is at most three decades, 2x and 5x each decade.
 std::vector<double> log_axis_ticks(double lo_exp, double hi_exp);
+
+/// The flow-dependent advance figure (flow_advance_plot.cpp) from `tunekit export`'s
+/// results.flow_advance (optionally with a "rheology" member: flow_mm3_s, tau_pred_s, max_gap_rel).
+Figure flow_advance_figure(const nlohmann::json& flow_advance);
 
 /// render_figure for a ".png" path (InputError otherwise).
 void render_png(const Figure& figure, const std::string& path);

@@ -1,0 +1,355 @@
+#include "tunekit/ident/flow_advance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+
+namespace tunekit::ident {
+namespace {
+
+bool fa_finite(double v) { return std::isfinite(v); }
+
+nlohmann::json fa_num(double v) { return fa_finite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+/// The levels sorted by flow, with the bound `which` selected (-1 lower, 0 estimate, +1 upper).
+struct FaKnots {
+  std::vector<double> q, t;
+};
+
+FaKnots fa_knots(const FlowAdvanceInputs& in, int which) {
+  std::vector<FlowTau> lv = in.levels;
+  std::sort(lv.begin(), lv.end(), [](const FlowTau& a, const FlowTau& b) { return a.flow_mm3_s < b.flow_mm3_s; });
+  FaKnots k;
+  for (const auto& l : lv) {
+    double t = l.tau_s;
+    if (which < 0 && fa_finite(l.tau_lo_s)) t = l.tau_lo_s;
+    if (which > 0 && fa_finite(l.tau_hi_s)) t = l.tau_hi_s;
+    k.q.push_back(l.flow_mm3_s);
+    k.t.push_back(std::max(0.0, t));
+  }
+  return k;
+}
+
+/// tau of the piecewise-linear table (held outside the levels).
+double fa_table_tau(const FaKnots& k, double q) {
+  if (q <= k.q.front()) return k.t.front();
+  if (q >= k.q.back()) return k.t.back();
+  const auto it = std::upper_bound(k.q.begin(), k.q.end(), q);
+  const std::size_t i = static_cast<std::size_t>(it - k.q.begin());
+  const double s = (q - k.q[i - 1]) / (k.q[i] - k.q[i - 1]);
+  return k.t[i - 1] + s * (k.t[i] - k.t[i - 1]);
+}
+
+/// Exact integral of the piecewise-linear table from 0 to Q.
+double fa_table_volume(const FaKnots& k, double Q) {
+  if (Q <= 0) return 0;
+  double v = k.t.front() * std::min(Q, k.q.front());
+  for (std::size_t i = 1; i < k.q.size() && Q > k.q[i - 1]; ++i) {
+    const double hi = std::min(Q, k.q[i]);
+    v += 0.5 * (k.t[i - 1] + fa_table_tau(k, hi)) * (hi - k.q[i - 1]);
+  }
+  if (Q > k.q.back()) v += k.t.back() * (Q - k.q.back());
+  return v;
+}
+
+double fa_kalico_shape(KalicoModel m, double x) { return m == KalicoModel::tanh ? std::tanh(x) : 1.0 - 1.0 / (1.0 + x); }
+
+/// Relative-error fit of offset = la v + off f(v/lv) for a fixed lv; returns {la, off, max rel, rms rel}.
+struct FaTrial {
+  double la = 0, off = 0, max_rel = std::numeric_limits<double>::infinity(), rms_rel = 0;
+};
+
+FaTrial fa_fit_fixed(KalicoModel m, double lv, const std::vector<double>& v, const std::vector<double>& y) {
+  // Minimize sum ((la v + off g - y) / y)^2: weighted least squares in (la, off).
+  double s11 = 0, s12 = 0, s22 = 0, r1 = 0, r2 = 0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const double w = 1.0 / (y[i] * y[i]);
+    const double g1 = v[i], g2 = fa_kalico_shape(m, v[i] / lv);
+    s11 += w * g1 * g1;
+    s12 += w * g1 * g2;
+    s22 += w * g2 * g2;
+    r1 += w * g1 * y[i];
+    r2 += w * g2 * y[i];
+  }
+  FaTrial t;
+  const double det = s11 * s22 - s12 * s12;
+  if (det > 1e-12 * s11 * s22) {
+    t.la = (r1 * s22 - r2 * s12) / det;
+    t.off = (s11 * r2 - s12 * r1) / det;
+  }
+  // Kalico refuses negative values (extruder.py: minval=0.): fit the one-term models instead.
+  if (!(det > 1e-12 * s11 * s22) || t.la < 0 || t.off < 0) {
+    const FaTrial a{r1 / s11, 0.0};
+    const FaTrial b{0.0, r2 / s22};
+    auto cost = [&](const FaTrial& c) {
+      double e = 0;
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        const double r = (c.la * v[i] + c.off * fa_kalico_shape(m, v[i] / lv) - y[i]) / y[i];
+        e += r * r;
+      }
+      return e;
+    };
+    t = cost(a) <= cost(b) ? a : b;
+  }
+  double mx = 0, ss = 0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const double r = std::abs(t.la * v[i] + t.off * fa_kalico_shape(m, v[i] / lv) - y[i]) / y[i];
+    mx = std::max(mx, r);
+    ss += r * r;
+  }
+  t.max_rel = mx;
+  t.rms_rel = std::sqrt(ss / static_cast<double>(v.size()));
+  return t;
+}
+
+void fa_validate(const FlowAdvanceInputs& in) {
+  if (!(fa_finite(in.filament_area_mm2) && in.filament_area_mm2 > 0))
+    throw InputError("the flow-dependent advance needs a positive filament cross-section (mm^2)");
+  if (in.levels.size() < 2)
+    throw InputError(fmt::format("the flow-dependent advance needs at least two flow levels, not {}", in.levels.size()));
+  std::vector<double> qs;
+  for (const auto& l : in.levels) {
+    if (!(fa_finite(l.flow_mm3_s) && l.flow_mm3_s > 0))
+      throw InputError(fmt::format("flow level {} mm^3/s: flows must be positive", l.flow_mm3_s));
+    if (!(fa_finite(l.tau_s) && l.tau_s > 0))
+      throw InputError(fmt::format("flow level {} mm^3/s has tau {} s: it must be positive", l.flow_mm3_s, l.tau_s));
+    if ((fa_finite(l.tau_lo_s) && !(l.tau_lo_s <= l.tau_s)) || (fa_finite(l.tau_hi_s) && !(l.tau_hi_s >= l.tau_s)))
+      throw InputError(fmt::format("flow level {} mm^3/s: its 95 % interval [{}, {}] s does not hold tau {} s",
+                                   l.flow_mm3_s, l.tau_lo_s, l.tau_hi_s, l.tau_s));
+    qs.push_back(l.flow_mm3_s);
+  }
+  std::sort(qs.begin(), qs.end());
+  for (std::size_t i = 1; i < qs.size(); ++i)
+    if (qs[i] == qs[i - 1]) throw InputError(fmt::format("two flow levels at the same flow {} mm^3/s", qs[i]));
+  if (in.trend && !(fa_finite(in.trend->a) && in.trend->a > 0 && fa_finite(in.trend->b) && in.trend->b > -1))
+    throw InputError(fmt::format("tau trend a = {}, b = {}: a must be positive and b above -1 (the stored volume "
+                                 "a Q^(b+1)/(b+1) is finite only then)",
+                                 in.trend->a, in.trend->b));
+}
+
+}  // namespace
+
+std::string to_string(KalicoModel m) { return m == KalicoModel::tanh ? "tanh" : "recipr"; }
+
+double kalico_offset_mm(KalicoModel m, double linear_advance_s, double nonlinear_offset_mm,
+                        double linearization_velocity_mm_s, double v_mm_s) {
+  double pos = linear_advance_s * v_mm_s;
+  if (nonlinear_offset_mm != 0.0) {
+    const double rel = v_mm_s / linearization_velocity_mm_s;
+    pos += nonlinear_offset_mm * (m == KalicoModel::tanh ? std::tanh(rel) : (1. - 1. / (1. + rel)));
+  }
+  return pos;
+}
+
+double flow_tau_s(const FlowAdvanceInputs& in, double q, int which) {
+  const FaKnots k = fa_knots(in, which);
+  if (in.trend) {
+    const double est = in.trend->a * std::pow(std::max(q, 0.0), in.trend->b);
+    if (which == 0) return est;
+    const FaKnots k0 = fa_knots(in, 0);
+    return est * fa_table_tau(k, q) / fa_table_tau(k0, q);
+  }
+  return fa_table_tau(k, q);
+}
+
+double stored_volume_mm3(const FlowAdvanceInputs& in, double q, int which) {
+  if (q <= 0) return 0;
+  const FaKnots k = fa_knots(in, which);
+  if (in.trend) {
+    const double b = in.trend->b;
+    const double est = in.trend->a * std::pow(q, b + 1) / (b + 1);
+    if (which == 0) return est;
+    // The band of a trend: its estimate scaled by the levels' bound over their estimate.
+    const FaKnots k0 = fa_knots(in, 0);
+    return est * fa_table_volume(k, q) / fa_table_volume(k0, q);
+  }
+  return fa_table_volume(k, q);
+}
+
+double needed_advance_s(const FlowAdvanceInputs& in, double q, int which) {
+  if (!(q > 0)) throw InputError(fmt::format("the needed advance is defined for flows above 0, not {} mm^3/s", q));
+  return stored_volume_mm3(in, q, which) / q;
+}
+
+KalicoFit fit_kalico(const FlowAdvanceInputs& in, KalicoModel model, const std::vector<double>& flows) {
+  std::vector<double> v, y;
+  for (double q : flows) {
+    v.push_back(q / in.filament_area_mm2);
+    y.push_back(stored_volume_mm3(in, q) / in.filament_area_mm2);
+  }
+  const double vmin = *std::min_element(v.begin(), v.end());
+  const double vmax = *std::max_element(v.begin(), v.end());
+  // linearization_velocity: log grid from a twentieth of the slowest to twenty times the fastest
+  // filament speed, then a golden-section refinement around the best grid point.
+  const int n = 240;
+  const double lo = std::log(vmin / 20), hi = std::log(vmax * 20);
+  FaTrial best;
+  double best_lv = std::exp(lo);
+  int best_i = 0;
+  for (int i = 0; i <= n; ++i) {
+    const double lv = std::exp(lo + (hi - lo) * i / n);
+    const FaTrial t = fa_fit_fixed(model, lv, v, y);
+    if (t.max_rel < best.max_rel) {
+      best = t;
+      best_lv = lv;
+      best_i = i;
+    }
+  }
+  double a = lo + (hi - lo) * std::max(0, best_i - 1) / n, b = lo + (hi - lo) * std::min(n, best_i + 1) / n;
+  const double gr = (std::sqrt(5.0) - 1) / 2;
+  for (int it = 0; it < 40; ++it) {
+    const double c = b - gr * (b - a), d = a + gr * (b - a);
+    if (fa_fit_fixed(model, std::exp(c), v, y).max_rel < fa_fit_fixed(model, std::exp(d), v, y).max_rel) b = d;
+    else a = c;
+  }
+  const FaTrial refined = fa_fit_fixed(model, std::exp(0.5 * (a + b)), v, y);
+  if (refined.max_rel < best.max_rel) {
+    best = refined;
+    best_lv = std::exp(0.5 * (a + b));
+  }
+  KalicoFit f;
+  f.model = model;
+  f.linear_advance_s = best.la;
+  f.nonlinear_offset_mm = best.off;
+  f.linearization_velocity_mm_s = best_lv;
+  f.max_rel_error = best.max_rel;
+  f.rms_rel_error = best.rms_rel;
+  return f;
+}
+
+FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
+  fa_validate(in);
+  FlowAdvanceDesign d;
+  d.has_band = std::all_of(in.levels.begin(), in.levels.end(),
+                           [](const FlowTau& l) { return fa_finite(l.tau_lo_s) && fa_finite(l.tau_hi_s); });
+  const FaKnots k = fa_knots(in, 0);
+  d.flow_min_mm3_s = k.q.front();
+  d.flow_max_mm3_s = k.q.back();
+  d.design_flow_mm3_s = fa_finite(in.design_flow_mm3_s) ? in.design_flow_mm3_s : std::sqrt(k.q.front() * k.q.back());
+  if (!(d.design_flow_mm3_s > 0))
+    throw InputError(fmt::format("design flow must be above 0 mm^3/s, not {}", d.design_flow_mm3_s));
+  if (!fa_finite(in.design_flow_mm3_s))
+    d.notes.push_back(fmt::format("no design flow given: the geometric middle of the identified range, {:.3g} mm^3/s",
+                                  d.design_flow_mm3_s));
+  if (d.design_flow_mm3_s < d.flow_min_mm3_s || d.design_flow_mm3_s > d.flow_max_mm3_s)
+    d.warnings.push_back(fmt::format("design flow {:.3g} mm^3/s lies outside the identified flows {:.3g}-{:.3g} mm^3/s: "
+                                     "tau is held at the nearest level there",
+                                     d.design_flow_mm3_s, d.flow_min_mm3_s, d.flow_max_mm3_s));
+  d.k_design_s = needed_advance_s(in, d.design_flow_mm3_s);
+
+  // Curve over the identified range (linear in flow).
+  const int ns = std::max(8, in.samples);
+  std::vector<double> flows;
+  for (int i = 0; i < ns; ++i)
+    flows.push_back(d.flow_min_mm3_s + (d.flow_max_mm3_s - d.flow_min_mm3_s) * i / (ns - 1));
+
+  // Kalico: both models, the better one (smaller worst relative error) is written.
+  const KalicoFit ft = fit_kalico(in, KalicoModel::tanh, flows);
+  const KalicoFit fr = fit_kalico(in, KalicoModel::recipr, flows);
+  d.kalico = ft.max_rel_error <= fr.max_rel_error ? ft : fr;
+  d.kalico_other = ft.max_rel_error <= fr.max_rel_error ? fr : ft;
+  if (d.kalico.max_rel_error > 0.05)
+    d.warnings.push_back(fmt::format("Kalico's {} model reproduces the needed advance only within {:.1f} % over the "
+                                     "identified flows",
+                                     to_string(d.kalico.model), 100 * d.kalico.max_rel_error));
+  // pressure_advance_time_offset shifts the whole extruder motion earlier by that time
+  // (kin_extruder.c extruder_calc_position: move_time += es->time_offset): the dead time.
+  // Kalico accepts -0.2..0.2 s (extruder.py, minval=-0.2, maxval=0.2).
+  if (fa_finite(in.theta_s) && in.theta_s >= 0) {
+    d.kalico_time_offset_s = std::min(in.theta_s, 0.2);
+    if (in.theta_s > 0.2)
+      d.warnings.push_back(fmt::format("dead time {:.3g} s exceeds Kalico's pressure_advance_time_offset maximum of "
+                                       "0.2 s: written as 0.2 s",
+                                       in.theta_s));
+  }
+
+  for (double q : flows) {
+    FlowAdvanceSample s;
+    s.flow_mm3_s = q;
+    s.tau_s = flow_tau_s(in, q);
+    s.k_need_s = needed_advance_s(in, q);
+    s.offset_need_mm = stored_volume_mm3(in, q) / in.filament_area_mm2;
+    if (d.has_band) {
+      s.k_lo_s = needed_advance_s(in, q, -1);
+      s.k_hi_s = needed_advance_s(in, q, +1);
+    }
+    const double v = q / in.filament_area_mm2;
+    s.k_kalico_s = kalico_offset_mm(d.kalico.model, d.kalico.linear_advance_s, d.kalico.nonlinear_offset_mm,
+                                    d.kalico.linearization_velocity_mm_s, v) / v;
+    d.curve.push_back(s);
+  }
+
+  // The range around the design flow where the single K stays within the tolerance of the need
+  // (a fine scan of the identified range; the contiguous interval holding the design flow).
+  {
+    const int nf = 2000;
+    auto ok = [&](double q) {
+      const double need = needed_advance_s(in, q);
+      return std::abs(d.k_design_s - need) <= in.tolerance * need;
+    };
+    const double qd = std::clamp(d.design_flow_mm3_s, d.flow_min_mm3_s, d.flow_max_mm3_s);
+    if (ok(qd)) {
+      const double step = (d.flow_max_mm3_s - d.flow_min_mm3_s) / nf;
+      double lo = qd, hi = qd;
+      while (lo > d.flow_min_mm3_s && ok(std::max(lo - step, d.flow_min_mm3_s))) lo = std::max(lo - step, d.flow_min_mm3_s);
+      while (hi < d.flow_max_mm3_s && ok(std::min(hi + step, d.flow_max_mm3_s))) hi = std::min(hi + step, d.flow_max_mm3_s);
+      d.k_within_lo_mm3_s = lo;
+      d.k_within_hi_mm3_s = hi;
+    }
+  }
+
+  // OrcaSlicer table: the need at each identified level, for each acceleration.
+  std::vector<double> accels = in.orca_accels_mm_s2;
+  if (accels.empty()) accels.push_back(0.0);
+  std::sort(accels.begin(), accels.end());
+  accels.erase(std::unique(accels.begin(), accels.end()), accels.end());
+  for (double q : k.q)
+    for (double acc : accels) d.orca.push_back({needed_advance_s(in, q), q, acc});
+
+  d.notes.push_back("advance designed as the stored melt volume V(Q) = integral of tau over 0..Q (one first-order store, "
+                    "tau held at the lowest level below it); the single K at flow Q is V(Q)/Q");
+  if (!d.has_band) d.notes.push_back("no 95 % intervals per level: the advance is drawn without a band");
+  return d;
+}
+
+nlohmann::json FlowAdvanceDesign::to_json() const {
+  auto kal = [](const KalicoFit& f) {
+    return nlohmann::json{{"pressure_advance_model", to_string(f.model)},
+                          {"linear_advance_s", fa_num(f.linear_advance_s)},
+                          {"nonlinear_offset_mm", fa_num(f.nonlinear_offset_mm)},
+                          {"linearization_velocity_mm_s", fa_num(f.linearization_velocity_mm_s)},
+                          {"max_rel_error", fa_num(f.max_rel_error)},
+                          {"rms_rel_error", fa_num(f.rms_rel_error)}};
+  };
+  nlohmann::json curve_j = nlohmann::json::array();
+  for (const auto& s : curve)
+    curve_j.push_back({{"flow_mm3_s", fa_num(s.flow_mm3_s)},
+                       {"tau_s", fa_num(s.tau_s)},
+                       {"K_need_s", fa_num(s.k_need_s)},
+                       {"K_lo_s", fa_num(s.k_lo_s)},
+                       {"K_hi_s", fa_num(s.k_hi_s)},
+                       {"offset_need_mm", fa_num(s.offset_need_mm)},
+                       {"K_kalico_s", fa_num(s.k_kalico_s)}});
+  nlohmann::json orca_j = nlohmann::json::array();
+  for (const auto& o : orca)
+    orca_j.push_back({{"K_s", fa_num(o.k_s)}, {"flow_mm3_s", fa_num(o.flow_mm3_s)}, {"accel_mm_s2", fa_num(o.accel_mm_s2)}});
+  nlohmann::json kj = kal(kalico);
+  kj["pressure_advance_time_offset_s"] = fa_num(kalico_time_offset_s);
+  return {{"flow_range_mm3_s", {fa_num(flow_min_mm3_s), fa_num(flow_max_mm3_s)}},
+          {"design_flow_mm3_s", fa_num(design_flow_mm3_s)},
+          {"single", {{"K_s", fa_num(k_design_s)},
+                      {"within_10pct_flow_mm3_s", {fa_num(k_within_lo_mm3_s), fa_num(k_within_hi_mm3_s)}}}},
+          {"kalico", kj},
+          {"kalico_other_model", kal(kalico_other)},
+          {"orca", orca_j},
+          {"curve", curve_j},
+          {"has_band", has_band},
+          {"notes", notes},
+          {"warnings", warnings}};
+}
+
+}  // namespace tunekit::ident

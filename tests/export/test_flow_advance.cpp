@@ -1,0 +1,153 @@
+// Flow-dependent advance: the stored-volume design, its band, the single K's range, and the
+// Kalico fit re-evaluated with Kalico's own formula (written here from Kalico's source, not
+// from tunekit's evaluator).
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/ident/flow_advance.hpp"
+#include "tunekit/protocols/config_edit.hpp"
+
+using namespace tunekit;
+using Catch::Detail::Approx;
+
+namespace {
+
+// Kalico (KalicoCrew/kalico, bleeding-edge-v2, klippy/chelper/kin_extruder.c):
+//   pressure_advance_tanh_model_func:   position += linear_advance * pa_velocity;
+//                                        if (nonlinear_offset) position += nonlinear_offset * tanh(pa_velocity / linearization_velocity)
+//   pressure_advance_recipr_model_func: ... nonlinear_offset * (1. - 1. / (1. + pa_velocity / linearization_velocity))
+double kalico_reference(const std::string& model, double la, double off, double lv, double v) {
+  double pos = la * v;
+  if (off) {
+    const double rel = v / lv;
+    pos += model == "tanh" ? off * std::tanh(rel) : off * (1. - 1. / (1. + rel));
+  }
+  return pos;
+}
+
+/// The values as the export writes them (6 decimals, Kalico's own %.6f precision).
+double written(double v) { return std::stod(protocols::format_number(v, 6)); }
+
+ident::FlowAdvanceInputs power_law_levels(double a, double b, bool with_ci) {
+  ident::FlowAdvanceInputs in;
+  in.filament_area_mm2 = M_PI * 0.875 * 0.875;
+  for (double q : {2.0, 4.0, 6.5, 9.0, 13.0, 18.0}) {
+    ident::FlowTau l;
+    l.flow_mm3_s = q;
+    l.tau_s = a * std::pow(q, b);
+    if (with_ci) {
+      l.tau_lo_s = 0.9 * l.tau_s;
+      l.tau_hi_s = 1.1 * l.tau_s;
+    }
+    in.levels.push_back(l);
+  }
+  in.trend = ident::TauPowerLaw{a, b};
+  return in;
+}
+
+}  // namespace
+
+TEST_CASE("flow advance: a constant tau needs K = tau at every flow") {
+  ident::FlowAdvanceInputs in;
+  in.filament_area_mm2 = 2.405;
+  in.levels = {{2.0, 0.05}, {8.0, 0.05}, {15.0, 0.05}};
+  in.design_flow_mm3_s = 6;
+  const auto d = ident::design_flow_advance(in);
+  CHECK(d.k_design_s == Approx(0.05).epsilon(1e-12));
+  for (const auto& s : d.curve) CHECK(s.k_need_s == Approx(0.05).epsilon(1e-12));
+  CHECK(d.k_within_lo_mm3_s == Approx(2.0));
+  CHECK(d.k_within_hi_mm3_s == Approx(15.0));
+  CHECK(d.kalico.max_rel_error < 1e-6);
+}
+
+TEST_CASE("flow advance: the need is the integral of tau over flow, V(Q)/Q") {
+  // tau = a Q^b: V = a Q^(b+1)/(b+1), K = a Q^b/(b+1) (larger than tau(Q) when b < 0).
+  const double a = 0.09, b = -0.45;
+  auto in = power_law_levels(a, b, false);
+  for (double q : {1.0, 3.0, 10.0, 17.0})
+    CHECK(ident::needed_advance_s(in, q) == Approx(a * std::pow(q, b) / (b + 1)).epsilon(1e-12));
+  // The piecewise-linear table (no trend): tau held below the first level, exact trapezoids.
+  in.trend.reset();
+  const double t0 = a * std::pow(2.0, b), t1 = a * std::pow(4.0, b);
+  CHECK(ident::stored_volume_mm3(in, 1.5) == Approx(t0 * 1.5));
+  CHECK(ident::stored_volume_mm3(in, 4.0) == Approx(t0 * 2.0 + 0.5 * (t0 + t1) * 2.0));
+  CHECK_THROWS_AS(ident::needed_advance_s(in, 0.0), InputError);
+}
+
+TEST_CASE("flow advance: the single K holds within 10 % over a stated range around the design flow") {
+  const auto in0 = power_law_levels(0.09, -0.45, false);
+  auto in = in0;
+  in.design_flow_mm3_s = 8;
+  const auto d = ident::design_flow_advance(in);
+  REQUIRE(std::isfinite(d.k_within_lo_mm3_s));
+  CHECK(d.k_within_lo_mm3_s < 8);
+  CHECK(d.k_within_hi_mm3_s > 8);
+  // K(Q) = c Q^b (b < 0): below Qd, K(Q) - K(Qd) = 0.1 K(Q) at Q = Qd 0.9^(-1/b); above,
+  // K(Qd) - K(Q) = 0.1 K(Q) at Q = Qd 1.1^(-1/b).
+  const double b = -0.45;
+  CHECK(d.k_within_lo_mm3_s == Approx(8 * std::pow(0.9, -1 / b)).epsilon(0.01));
+  CHECK(d.k_within_hi_mm3_s == Approx(std::min(18.0, 8 * std::pow(1.1, -1 / b))).epsilon(0.01));
+}
+
+TEST_CASE("flow advance: Kalico parameters re-evaluated with Kalico's formula reproduce the designed advance within 5 %") {
+  for (double b : {-0.2, -0.45, -0.7}) {
+    auto in = power_law_levels(0.08, b, true);
+    in.theta_s = 0.03;
+    const auto d = ident::design_flow_advance(in);
+    const auto& k = d.kalico;
+    const std::string model = ident::to_string(k.model);
+    REQUIRE((model == "tanh" || model == "recipr"));
+    CHECK(k.linear_advance_s >= 0);
+    CHECK(k.nonlinear_offset_mm >= 0);
+    CHECK(k.linearization_velocity_mm_s > 0);
+    CHECK(d.kalico_time_offset_s == Approx(0.03));
+    const double la = written(k.linear_advance_s), off = written(k.nonlinear_offset_mm),
+                 lv = written(k.linearization_velocity_mm_s);
+    double worst = 0;
+    for (int i = 0; i <= 200; ++i) {
+      const double q = 2.0 + (18.0 - 2.0) * i / 200.0;
+      const double v = q / in.filament_area_mm2;
+      const double need_mm = ident::stored_volume_mm3(in, q) / in.filament_area_mm2;
+      worst = std::max(worst, std::abs(kalico_reference(model, la, off, lv, v) - need_mm) / need_mm);
+    }
+    INFO("b = " << b << ", model " << model << ", worst relative error " << worst);
+    CHECK(worst < 0.05);
+    // The chosen model is the better one.
+    CHECK(d.kalico.max_rel_error <= d.kalico_other.max_rel_error);
+  }
+}
+
+TEST_CASE("flow advance: the 95 % band brackets the need and the Orca table is the need at each level") {
+  auto in = power_law_levels(0.08, -0.4, true);
+  in.orca_accels_mm_s2 = {10000, 3000};
+  const auto d = ident::design_flow_advance(in);
+  REQUIRE(d.has_band);
+  for (const auto& s : d.curve) {
+    CHECK(s.k_lo_s <= s.k_need_s);
+    CHECK(s.k_hi_s >= s.k_need_s);
+    CHECK(s.k_lo_s == Approx(0.9 * s.k_need_s));
+  }
+  REQUIRE(d.orca.size() == 12);
+  for (std::size_t i = 1; i < d.orca.size(); ++i) {
+    CHECK(d.orca[i].flow_mm3_s >= d.orca[i - 1].flow_mm3_s);
+    if (d.orca[i].flow_mm3_s == d.orca[i - 1].flow_mm3_s) CHECK(d.orca[i].accel_mm_s2 > d.orca[i - 1].accel_mm_s2);
+  }
+  CHECK(d.orca.front().k_s == Approx(ident::needed_advance_s(in, 2.0)));
+}
+
+TEST_CASE("flow advance: bad levels are refused") {
+  ident::FlowAdvanceInputs in;
+  in.filament_area_mm2 = 2.4;
+  in.levels = {{2.0, 0.05}};
+  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  in.levels = {{2.0, 0.05}, {2.0, 0.04}};
+  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  in.levels = {{2.0, 0.05}, {4.0, -0.04}};
+  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  in.levels = {{2.0, 0.05, 0.06, 0.07}, {4.0, 0.04}};
+  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  in.levels = {{2.0, 0.05}, {4.0, 0.04}};
+  in.trend = ident::TauPowerLaw{0.1, -1.2};
+  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+}
