@@ -490,6 +490,9 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   if (a.write) export_args.push_back("--write");
   const auto ex = analyze(export_args, run_dir + "/analysis/export.json", ctx);
   res["compensators"] = ex.at("results");
+  // The report draws the advance the liquefier needs against flow (the export's flow design).
+  if (const auto* fa = json_at(res, "compensators.flow_advance"); fa != nullptr && fa->is_object())
+    plot["flow_advance"] = *fa;
   const auto* diff_node = json_at(ex.at("results"), "export.diff");
   const std::string diff = diff_node != nullptr && diff_node->is_string() ? diff_node->get<std::string>() : std::string();
   res["config_diff"] = diff;
