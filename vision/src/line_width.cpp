@@ -1,4 +1,4 @@
-#include "tunekit/ident/line_width.hpp"
+#include "tunekit/vision/line_width.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -13,10 +13,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "tunekit/fitting/error.hpp"
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/image_io.hpp"
 #include "tunekit/fitting/stats.hpp"
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -865,4 +865,4 @@ LineWidthResult measure_line_widths(const cv::Mat& gray_in, const LineWidthOptio
   return res;
 }
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision
