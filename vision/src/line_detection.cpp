@@ -42,12 +42,12 @@ constexpr double kLightingOutlierSigmas = 2.5;
 // The background model runs on a further-reduced copy whose short side keeps at least this many
 // samples (the lighting and bed texture it follows are smooth at that scale) ...
 constexpr int kBackgroundMinSide = 48;
-// ... reduced by at most this factor, so lines of the coarse image stay thinner than the
-// morphology window below.
+// ... reduced by at most this factor, so the local lighting and bed texture the morphology
+// below is meant to follow keep some detail.
 constexpr int kBackgroundMaxReduction = 4;
 // Morphology window (square, odd, px of the reduced copy): half its short side, at least 3 px
-// and at most 21 px, wider than any line so closing (or opening) removes the lines and leaves the
-// bed.
+// and at most 21 px. Closing (or opening) removes features narrower than the window -- the
+// lines -- and leaves the bed; a larger window would follow the lighting less closely.
 constexpr int kMorphKernelMinPx = 3;
 constexpr int kMorphKernelMaxPx = 21;
 // The blocky morphology result is smoothed with a Gaussian of a quarter of the window (at least

@@ -62,7 +62,8 @@ constexpr double kNeighbourEdgeMarginPx = 2.0;
 constexpr double kNeighbourContrastFraction = 0.5;
 constexpr int kNeighbourMinSamples = 2;
 // Confidence 1 / (1 + (stderr / 0.25 px)^2): a sample whose width is known to a quarter pixel
-// has confidence 0.5, the bias and spread the straight-line accuracy tests allow.
+// has confidence 0.5; a quarter pixel is the spread the straight-line accuracy target allows
+// (std <= 0.25 px).
 constexpr double kConfidenceStderrPx = 0.25;
 
 // Standard normal cdf Phi(z) and pdf phi(z) with one exponential: Abramowitz & Stegun 7.1.26
