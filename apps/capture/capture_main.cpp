@@ -19,7 +19,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "tunekit/fitting/error.hpp"
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/image_io.hpp"
 
 int main(int argc, char** argv) {
   if (argc < 3 || argc > 5) {
@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   cv::Mat avg;
   sum.convertTo(avg, CV_8U, 1.0 / got);
   try {
-    tunekit::ident::write_png(out, avg);
+    tunekit::vision::write_png(out, avg);
   } catch (const tunekit::Error& e) {
     std::fprintf(stderr, "tunekit: error: %s\n", e.formatted().c_str());
     return 2;

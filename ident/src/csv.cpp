@@ -267,22 +267,6 @@ bool CsvTable::has_column(std::string_view name) const {
              [&](std::size_t k) -> const std::string& { return columns[k].unit; }, name) < columns.size();
 }
 
-std::string read_file_bytes(const std::string& path) {
-  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f) throw InputError(fmt::format("cannot open: {}", std::strerror(errno)), path);
-  std::string data;
-  if (std::fseek(f.get(), 0, SEEK_END) == 0) {
-    const long size = std::ftell(f.get());
-    if (size > 0) data.reserve(static_cast<std::size_t>(size));
-    std::fseek(f.get(), 0, SEEK_SET);
-  }
-  char buf[1 << 16];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f.get())) > 0) data.append(buf, n);
-  if (std::ferror(f.get())) throw InputError(fmt::format("read error: {}", std::strerror(errno)), path);
-  return data;
-}
-
 CsvTable read_csv(const std::string& path, const CsvOptions& options) {
   const std::string data = read_file_bytes(path);
   return parse_csv(data, path, options);

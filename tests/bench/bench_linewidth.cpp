@@ -12,10 +12,10 @@
 #include <vector>
 
 #include <fmt/format.h>
-#include "../linewidth/synthetic_render.hpp"
+#include "../vision/synthetic_render.hpp"
 #include "bench_common.hpp"
-#include "tunekit/ident/image_io.hpp"
-#include "tunekit/ident/line_width.hpp"
+#include "tunekit/vision/image_io.hpp"
+#include "tunekit/vision/line_width.hpp"
 
 namespace rd = tunekit::test::render;
 using Clock = std::chrono::steady_clock;
@@ -34,16 +34,16 @@ void bench(int w, int h, double line_px, int runs) {
   ph.vignetting = 0.3;
   ph.blur_px = 1.2;
   const cv::Mat img = rd::photograph(cov, ph);
-  const std::string png = tunekit::ident::encode_png(img);
+  const std::string png = tunekit::vision::encode_png(img);
   std::vector<double> t_profile, t_decode, cpu_profile;
   std::size_t samples = 0;
   double mean_w = 0;
   for (int r = 0; r < runs; ++r) {
     const auto t0 = Clock::now();
-    const cv::Mat decoded = tunekit::ident::decode_image(png, "bench.png", tunekit::ident::ImageColor::gray);
+    const cv::Mat decoded = tunekit::vision::decode_image(png, "bench.png", tunekit::vision::ImageColor::gray);
     const auto t1 = Clock::now();
     const std::clock_t c1 = std::clock();
-    const auto res = tunekit::ident::measure_line_widths(tunekit::ident::to_gray_float(decoded));
+    const auto res = tunekit::vision::measure_line_widths(tunekit::vision::to_gray_float(decoded));
     const auto t2 = Clock::now();
     cpu_profile.push_back(1000.0 * static_cast<double>(std::clock() - c1) / CLOCKS_PER_SEC);
     t_decode.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());

@@ -9,7 +9,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/image_io.hpp"
 
 namespace {
 
@@ -54,7 +54,7 @@ TEST_CASE("calibrate camera path: a blank photo or an unopenable camera is one c
   // A photo of an empty bed.
   cv::Mat blank(600, 900, CV_8U, cv::Scalar(60));
   const std::string blank_png = base + "/blank.png";
-  tunekit::ident::write_png(blank_png, blank);
+  tunekit::vision::write_png(blank_png, blank);
   const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--photo", blank_png,
                                          "--px-per-mm", "12", "--skip-axes", "--out", base + "/r1"});
   CHECK(r.code == 2);

@@ -11,7 +11,7 @@
 #include "tunekit/cli/report.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/fitting/error.hpp"
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/image_io.hpp"
 
 using namespace tunekit::cli;
 
@@ -107,7 +107,7 @@ TEST_CASE("a PNG rendering of a figure has exactly its pixel size and is drawn")
   const auto dir = tunekit::test::scratch_dir("plots_png");
   const Figure f = step_figure(sample_plotdata()["step"]);
   render_png(f, dir + "/step.png");
-  const cv::Mat m = tunekit::ident::read_image(dir + "/step.png", tunekit::ident::ImageColor::bgr);
+  const cv::Mat m = tunekit::vision::read_image(dir + "/step.png", tunekit::vision::ImageColor::bgr);
   REQUIRE_FALSE(m.empty());
   CHECK(m.cols == f.width_px);
   CHECK(m.rows == f.height_px);

@@ -14,7 +14,7 @@
 #include "test_support.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/image_io.hpp"
 
 using tunekit::test::run_cli;
 using tunekit::test::scratch_dir;
@@ -77,7 +77,7 @@ TEST_CASE("bad results JSON is a located input error, not an internal error", "[
 }
 
 TEST_CASE("images whose header claims too many pixels are refused before decoding", "[safety]") {
-  using tunekit::ident::decode_image;
+  using tunekit::vision::decode_image;
   const auto t0 = std::chrono::steady_clock::now();
   // A 7 KB BMP claiming 9,437,280 x 64 pixels; PGMs claiming 30000^2 and 46000^2.
   for (const std::string& bytes : {bmp_claiming(9437280, 64, 7000), std::string("P5\n30000 30000\n255\n") + std::string(100, 'x'),
@@ -102,9 +102,9 @@ TEST_CASE("images whose header claims too many pixels are refused before decodin
   const auto limited = run_cli({"linewidth", small, "--px-per-mm", "20", "--max-image-mp", "1"});
   CHECK(limited.code == 2);
   CHECK(limited.err.find("exceeds the limit of 1.0 MP") != std::string::npos);
-  tunekit::ident::set_max_image_pixels(tunekit::ident::kDefaultMaxImagePixels);  // the CLI run above lowered it
+  tunekit::vision::set_max_image_pixels(tunekit::vision::kDefaultMaxImagePixels);  // the CLI run above lowered it
   CHECK_NOTHROW(decode_image(pgm, "two_mp.pgm"));
-  CHECK_THROWS_AS(tunekit::ident::set_max_image_pixels(0), tunekit::InputError);
+  CHECK_THROWS_AS(tunekit::vision::set_max_image_pixels(0), tunekit::InputError);
 }
 
 TEST_CASE("one wild accelerometer sample does not erase the resonance", "[safety]") {

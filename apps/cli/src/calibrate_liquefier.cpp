@@ -16,10 +16,10 @@
 
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/image_io.hpp"
-#include "tunekit/ident/line_width.hpp"
-#include "tunekit/ident/overlay.hpp"
-#include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/vision/image_io.hpp"
+#include "tunekit/vision/line_width.hpp"
+#include "tunekit/vision/overlay.hpp"
+#include "tunekit/vision/width_to_dynamics.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/experiments.hpp"
@@ -166,7 +166,7 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
     protocols::SimCameraFrame frame;
     photo = bed->photograph(protocols::SimCameraOptions{}, &frame);
     out.photo = dir + "/photo.png";
-    ident::write_png(out.photo, photo);
+    vision::write_png(out.photo, photo);
     map = {true, frame.x0_mm, frame.y1_mm, frame.px_per_mm};
   } else {
     std::string path = a.photo;
@@ -179,7 +179,7 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
       if (!std::getline(std::cin, path) || path.empty()) throw InputError("no photo file was given");
       while (!path.empty() && (path.back() == ' ' || path.back() == '\r')) path.pop_back();
     }
-    photo = ident::read_image(path, ident::ImageColor::gray);
+    photo = vision::read_image(path, vision::ImageColor::gray);
     out.photo = path;
     if (path != dir + "/photo.png") {
       // The photo is kept with the run.
@@ -189,24 +189,24 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   }
 
   // 2. The lines and the ring in it.
-  const cv::Mat gray = ident::to_gray_float(photo);
-  ident::LineWidthOptions lo;
+  const cv::Mat gray = vision::to_gray_float(photo);
+  vision::LineWidthOptions lo;
   lo.min_length_px = std::max(60.0, 20 * map.px_per_mm);
-  const auto measured = ident::measure_line_widths(gray, lo);
+  const auto measured = vision::measure_line_widths(gray, lo);
   out.overlay = dir + "/overlay.png";
   if (measured.lines.empty()) {
-    ident::write_overlay(out.overlay, ident::draw_overlay(photo, &measured, {}, "no printed line found"));
+    vision::write_overlay(out.overlay, vision::draw_overlay(photo, &measured, {}, "no printed line found"));
     throw InputError("the photo shows no printed line (is the print in the frame, in focus and lit?); the printed runs "
                      "are kept in " + run_dir,
                      out.photo);
   }
-  ident::write_overlay(out.overlay, ident::draw_overlay(photo, &measured, {}, ""));
+  vision::write_overlay(out.overlay, vision::draw_overlay(photo, &measured, {}, ""));
 
   const auto& line_run = runs.at("liquefier-lines");
   const auto layout = protocols::line_steps_layout(line_run.experiment.params, profile);
   const double v_line = layout.front().path.front().speed_mm_s;
-  std::vector<const ident::MeasuredLine*> straight;
-  const ident::MeasuredLine* ring = nullptr;
+  std::vector<const vision::MeasuredLine*> straight;
+  const vision::MeasuredLine* ring = nullptr;
   for (const auto& l : measured.lines) {
     if (l.closed || (l.bbox.width < 3 * l.bbox.height && l.bbox.height < 3 * l.bbox.width)) {
       if (ring == nullptr) ring = &l;
@@ -228,7 +228,7 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
                                    straight.size(), layout.size(), std::min(straight.size(), layout.size())));
 
   // 3. Widths along the lines -> one time record (line k starts 1 s after line k-1 ends).
-  std::vector<ident::TimedWidth> rows;
+  std::vector<vision::TimedWidth> rows;
   nlohmann::json lines_json = nlohmann::json::array();
   double t_offset = 0;
   nlohmann::json plot_line;
@@ -269,11 +269,11 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
       ww.push_back(w_mm[i]);
       cc.push_back(conf[i]);
     }
-    ident::PathMapping how;
+    vision::PathMapping how;
     how.offset_mm = ss.front();  // map_path counts along the profile from its first sample
     how.filament_diameter_mm = profile.extruder.filament_diameter_mm;
     how.layer_height_mm = line_run.experiment.params.at("z_mm");
-    auto timed = ident::map_path(ss, ww, cc, pl.path, how);
+    auto timed = vision::map_path(ss, ww, cc, pl.path, how);
     double mean_w = 0;
     for (auto& r : timed) {
       mean_w += r.width_mm;
@@ -295,7 +295,7 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   if (rows.empty()) throw InputError("no usable width samples on the printed lines", out.photo);
   out.width_csv = dir + "/line_widths.csv";
   protocols::write_file_atomic(out.width_csv,
-                               ident::timed_width_csv(rows, "widths along the line test (t = s / v per line, lines 1 s apart)"));
+                               vision::timed_width_csv(rows, "widths along the line test (t = s / v per line, lines 1 s apart)"));
 
   // 4. The ring: width against the angle travelled -> gain and phase at f = N v / (2 pi R).
   nlohmann::json ring_json;
@@ -304,14 +304,14 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
     const double R = rp.at("radius_mm"), v = rp.at("speed_mm_s"), A = rp.at("amplitude");
     const int N = static_cast<int>(std::lround(rp.at("periods"))), segs = static_cast<int>(std::lround(rp.at("segments")));
     std::vector<cv::Point2d> pts;
-    std::vector<const ident::WidthSample*> valid;
+    std::vector<const vision::WidthSample*> valid;
     for (const auto& s : ring->samples)
       if (s.valid()) {
         pts.emplace_back(map.known ? map.x(s.x_px) : s.x_px / map.px_per_mm, map.known ? map.y(s.y_px) : -s.y_px / map.px_per_mm);
         valid.push_back(&s);
       }
     if (pts.size() > 50) {
-      const cv::Vec3d c = ident::fit_circle(pts);
+      const cv::Vec3d c = vision::fit_circle(pts);
       const double cx = map.known ? rp.at("center_x_mm") : c[0], cy = map.known ? rp.at("center_y_mm") : c[1];
       std::vector<double> t, y, ysp;
       for (std::size_t i = 0; i < pts.size(); ++i) {

@@ -16,15 +16,16 @@
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
+#include "linewidth_command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/fitting/error.hpp"
-#include "tunekit/ident/camera_calibration.hpp"
-#include "tunekit/ident/charuco.hpp"
-#include "tunekit/ident/line_width.hpp"
-#include "tunekit/ident/image_io.hpp"
-#include "tunekit/ident/overlay.hpp"
-#include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/vision/camera_calibration.hpp"
+#include "tunekit/vision/charuco.hpp"
+#include "tunekit/vision/line_width.hpp"
+#include "tunekit/vision/image_io.hpp"
+#include "tunekit/vision/overlay.hpp"
+#include "tunekit/vision/width_to_dynamics.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/gcode.hpp"
@@ -32,59 +33,23 @@
 namespace tunekit::cli {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-struct LinewidthArgs {
-  std::vector<std::string> images;
-  double max_image_mp = static_cast<double>(ident::kDefaultMaxImagePixels) / 1e6;
-  double px_per_mm = 0;
-  std::string camera;
-  std::string chessboard;
-  double square_mm = 0;
-  std::string charuco;  // "5x7" squares; a ChArUco board instead of a chessboard
-  double marker_mm = 0;
-  std::string aruco_dict = "DICT_4X4_50";
-  double reference_width_mm = 0;
-  bool rectify = false;
-  std::string polarity = "auto";
-  double step_px = 1.0;
-  double min_length_px = 60.0;
-  bool allow_edge = false;
-  std::string overlay_dir;
-  std::string save_camera;
-  // Mapping to time.
-  std::string profile_csv;
-  int line = 1;
-  double speed_mm_s = 0;
-  double setpoint_width_mm = 0;
-  int ring_sines = 0;
-  double ring_amplitude_mm = 0;
-  double ring_radius_mm = 0;
-  double rod_radius_mm = 0;
-  double layer_height_mm = 0;
-  double ring_start_deg = 0;
-  bool ring_clockwise = false;
-  std::string gcode;
-  double filament_diameter_mm = 0;
-  double path_offset_mm = kNaN;
-  bool path_reversed = false;
-  OutputOptions output;
-};
-
-double r6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
-double r4(double v) { return std::isfinite(v) ? std::round(v * 1e4) / 1e4 : v; }
+using linewidth::ImageRun;
+using linewidth::kNaN;
+using linewidth::LinewidthArgs;
+using linewidth::r4;
+using linewidth::r6;
 
 std::string flag_names(std::uint8_t f) {
   std::string s;
   auto add = [&](const char* n) { s += (s.empty() ? "" : ","), s += n; };
-  if (f & ident::kFlagOutOfFrame) add("out_of_frame");
-  if (f & ident::kFlagOccluded) add("occluded");
-  if (f & ident::kFlagMerged) add("merged");
+  if (f & vision::kFlagOutOfFrame) add("out_of_frame");
+  if (f & vision::kFlagOccluded) add("occluded");
+  if (f & vision::kFlagMerged) add("merged");
   return s;
 }
 
 // Contiguous flagged stretches of a line, in mm of arc length.
-nlohmann::json stretches(const ident::MeasuredLine& l, double ppm) {
+nlohmann::json stretches(const vision::MeasuredLine& l, double ppm) {
   nlohmann::json out = nlohmann::json::array();
   const auto& s = l.samples;
   std::size_t i = 0;
@@ -104,56 +69,19 @@ nlohmann::json stretches(const ident::MeasuredLine& l, double ppm) {
   return out;
 }
 
-struct ImageRun {
-  std::string path;
-  cv::Mat measured;  // the (undistorted / rectified) grey image that was measured
-  double ppm = 0;
-  std::string scale_source;
-  std::vector<cv::Point> target_outline;
-  ident::LineWidthResult result;
-};
-
-// The extruding moves of a G-code file, in order (travel and extruder-only moves are skipped).
-std::vector<ident::PathSegment> gcode_path(const std::string& path, std::size_t& lines_read) {
-  const std::string text = ident::read_file_bytes(path);
-  protocols::GcodeInterpreter gi;
-  std::vector<ident::PathSegment> segs;
-  std::size_t lineno = 0, start = 0;
-  while (start <= text.size()) {
-    std::size_t end = text.find('\n', start);
-    if (end == std::string::npos) end = text.size();
-    ++lineno;
-    const std::string_view line(text.data() + start, end - start);
-    try {
-      if (const auto w = protocols::parse_gcode(line)) {
-        if (const auto m = gi.apply(*w)) {
-          const double de = m->end[3] - m->start[3];
-          if (!m->extruder_only() && de > 0 && m->length_mm() > 0)
-            segs.push_back({m->length_mm(), m->feed_mm_s, de});
-        }
-      }
-    } catch (const Error& e) {
-      throw InputError(e.message(), source_location(path, lineno));
-    }
-    start = end + 1;
-  }
-  lines_read = lineno;
-  if (segs.empty()) throw InputError("no extruding moves (G1 with X/Y and a positive E) in the G-code file", path);
-  return segs;
-}
 
 std::string overlay_path(const std::string& dir, const std::string& image) {
   return (std::filesystem::path(dir) / (std::filesystem::path(image).stem().string() + "_overlay.png")).string();
 }
 
 // Writes the overlay if asked; never lets a write failure hide the original error.
-void overlay_best_effort(const LinewidthArgs& a, const ImageRun& run, const ident::LineWidthResult* res,
+void overlay_best_effort(const LinewidthArgs& a, const ImageRun& run, const vision::LineWidthResult* res,
                          const std::string& message, CliContext& ctx) {
   if (a.overlay_dir.empty()) return;
   try {
     std::filesystem::create_directories(a.overlay_dir);
-    ident::write_overlay(overlay_path(a.overlay_dir, run.path),
-                         ident::draw_overlay(run.measured, res, run.target_outline, message));
+    vision::write_overlay(overlay_path(a.overlay_dir, run.path),
+                         vision::draw_overlay(run.measured, res, run.target_outline, message));
   } catch (const std::exception& e) {
     ctx.err << fmt::format("tunekit: warning: overlay not written: {}\n", e.what());
   }
@@ -161,15 +89,15 @@ void overlay_best_effort(const LinewidthArgs& a, const ImageRun& run, const iden
 
 int run_save_camera(const LinewidthArgs& a, CliContext& ctx) {
   if (a.chessboard.empty()) throw InputError("--save-camera needs --chessboard COLSxROWS and --square-mm");
-  const auto spec = ident::parse_chessboard_spec(a.chessboard, a.square_mm);
+  const auto spec = vision::parse_chessboard_spec(a.chessboard, a.square_mm);
   Envelope env("linewidth");
   std::vector<cv::Mat> grays;
   for (const auto& p : a.images) {
-    grays.push_back(ident::load_gray_image(p));
+    grays.push_back(vision::load_gray_image(p));
     env.add_input(p);
   }
   std::vector<int> skipped;
-  const auto prof = ident::calibrate_camera(grays, spec, &skipped);
+  const auto prof = vision::calibrate_camera(grays, spec, &skipped);
   for (int i : skipped)
     env.warn(fmt::format("{}: {}x{} chessboard not found; image not used", a.images[static_cast<std::size_t>(i)],
                          spec.cols, spec.rows));
@@ -183,30 +111,30 @@ int run_save_camera(const LinewidthArgs& a, CliContext& ctx) {
   return emit(env, a.output, ctx);
 }
 
-ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const std::optional<ident::CameraProfile>& cam,
+ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const std::optional<vision::CameraProfile>& cam,
                        CliContext& ctx) {
   ImageRun run;
   run.path = path;
-  cv::Mat gray = ident::load_gray_image(path);
-  if (cam) gray = ident::undistort_image(gray, *cam, path);
+  cv::Mat gray = vision::load_gray_image(path);
+  if (cam) gray = vision::undistort_image(gray, *cam, path);
   run.measured = gray;
-  ident::LineWidthOptions opt;
-  opt.polarity = a.polarity == "dark" ? ident::LinePolarity::dark
-                 : a.polarity == "light" ? ident::LinePolarity::light
-                                         : ident::LinePolarity::automatic;
+  vision::LineWidthOptions opt;
+  opt.polarity = a.polarity == "dark" ? vision::LinePolarity::dark
+                 : a.polarity == "light" ? vision::LinePolarity::light
+                                         : vision::LinePolarity::automatic;
   opt.step_px = a.step_px;
   opt.min_length_px = a.min_length_px;
 
   if (!a.chessboard.empty() || !a.charuco.empty()) {
-    ident::ChessboardDetection det;
+    vision::ChessboardDetection det;
     std::string board_name;
     if (!a.charuco.empty()) {
-      const auto cs = ident::parse_charuco_spec(a.charuco, a.square_mm, a.marker_mm, a.aruco_dict);
-      det = ident::detect_charuco(gray, cs);
+      const auto cs = vision::parse_charuco_spec(a.charuco, a.square_mm, a.marker_mm, a.aruco_dict);
+      det = vision::detect_charuco(gray, cs);
       board_name = fmt::format("ChArUco {}x{} x {} mm ({})", cs.squares_x, cs.squares_y, cs.square_mm, cs.dictionary);
     } else {
-      const auto spec = ident::parse_chessboard_spec(a.chessboard, a.square_mm);
-      det = ident::detect_chessboard(gray, spec);
+      const auto spec = vision::parse_chessboard_spec(a.chessboard, a.square_mm);
+      det = vision::detect_chessboard(gray, spec);
       board_name = fmt::format("chessboard {}x{} x {} mm", spec.cols, spec.rows, spec.square_mm);
     }
     if (!det.found) {
@@ -215,7 +143,7 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
       throw InputError(msg, path);
     }
     if (a.rectify) {
-      const auto rect = ident::rectify_to_plane(gray, det.img_to_mm, det.px_per_mm);
+      const auto rect = vision::rectify_to_plane(gray, det.img_to_mm, det.px_per_mm);
       run.measured = rect.image;
       run.ppm = rect.px_per_mm;
       for (const auto& p : det.outline) {
@@ -232,7 +160,7 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
     opt.exclude_mask = cv::Mat::zeros(run.measured.size(), CV_8U);
     cv::fillConvexPoly(opt.exclude_mask, run.target_outline, cv::Scalar(255));
   } else if (cam && cam->has_bed_plane && a.rectify) {
-    const auto rect = ident::rectify_to_plane(gray, cam->bed_img_to_mm, cam->px_per_mm);
+    const auto rect = vision::rectify_to_plane(gray, cam->bed_img_to_mm, cam->px_per_mm);
     run.measured = rect.image;
     run.ppm = rect.px_per_mm;
     run.scale_source = "camera profile bed plane, rectified";
@@ -243,7 +171,7 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
     run.ppm = a.px_per_mm;
     run.scale_source = "--px-per-mm";
   }
-  run.result = ident::measure_line_widths(run.measured, opt);
+  run.result = vision::measure_line_widths(run.measured, opt);
   const auto& res = run.result;
 
   if (a.reference_width_mm > 0) {
@@ -286,7 +214,7 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
 
 int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   if (!(a.max_image_mp > 0 && a.max_image_mp <= 1e5)) throw InputError("--max-image-mp must be in (0, 100000] megapixels");
-  ident::set_max_image_pixels(static_cast<std::uint64_t>(std::ceil(a.max_image_mp * 1e6)));
+  vision::set_max_image_pixels(static_cast<std::uint64_t>(std::ceil(a.max_image_mp * 1e6)));
   if (!a.save_camera.empty()) return run_save_camera(a, ctx);
   const bool board = !a.chessboard.empty() || !a.charuco.empty();
   if (!a.chessboard.empty() && !a.charuco.empty()) throw InputError("give --chessboard or --charuco, not both");
@@ -309,10 +237,10 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   if (a.ring_sines > 0 && !(a.ring_amplitude_mm > 0 && a.rod_radius_mm > 0 && a.layer_height_mm > 0))
     throw InputError("--ring-sines needs --ring-amplitude-mm, --rod-radius-mm and --layer-height-mm");
 
-  std::optional<ident::CameraProfile> cam;
+  std::optional<vision::CameraProfile> cam;
   Envelope env("linewidth");
   if (!a.camera.empty()) {
-    cam = ident::load_camera_profile(a.camera);
+    cam = vision::load_camera_profile(a.camera);
     env.add_input(a.camera);
     if (!cam->has_bed_plane && a.px_per_mm <= 0 && !board && a.reference_width_mm <= 0)
       throw InputError("camera profile has no bed plane scale: add --px-per-mm, --chessboard or --reference-width-mm",
@@ -341,7 +269,7 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
                      flags = nlohmann::json::array(), xs = nlohmann::json::array(), ys = nlohmann::json::array();
       for (const auto& s : l.samples) {
         s_mm.push_back(r6(s.s_px / run.ppm));
-        w_mm.push_back(s.valid() || (std::isfinite(s.width_px) && s.flags == ident::kFlagMerged)
+        w_mm.push_back(s.valid() || (std::isfinite(s.width_px) && s.flags == vision::kFlagMerged)
                            ? nlohmann::json(r6(s.width_px / run.ppm))
                            : nlohmann::json(nullptr));
         conf.push_back(r4(s.confidence));
@@ -383,122 +311,11 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   auto& results = env.results();
   results["images"] = images;
   results["lines"] = lines;
-  results["flag_bits"] = {{"out_of_frame", ident::kFlagOutOfFrame},
-                          {"occluded", ident::kFlagOccluded},
-                          {"merged", ident::kFlagMerged}};
+  results["flag_bits"] = {{"out_of_frame", vision::kFlagOutOfFrame},
+                          {"occluded", vision::kFlagOccluded},
+                          {"merged", vision::kFlagMerged}};
 
-  if (!a.profile_csv.empty()) {
-    const auto& run = runs.front();
-    if (a.line < 1 || a.line > static_cast<int>(run.result.lines.size()))
-      throw InputError(fmt::format("--line {}: the image has {} line(s)", a.line, run.result.lines.size()));
-    const auto& l = run.result.lines[static_cast<std::size_t>(a.line - 1)];
-    std::vector<double> w_mm, conf, s_mm;
-    std::vector<cv::Point2d> centres;
-    for (const auto& s : l.samples) {
-      w_mm.push_back(s.valid() ? s.width_px / run.ppm : kNaN);
-      conf.push_back(s.confidence);
-      s_mm.push_back(s.s_px / run.ppm);
-      centres.emplace_back(s.x_px, s.y_px);
-    }
-    const double mean_mm = l.mean_width_px / run.ppm;
-    double setpoint = a.setpoint_width_mm;
-    const bool setpoint_from_feed = !a.gcode.empty() && a.filament_diameter_mm > 0 && a.layer_height_mm > 0;
-    if (!(setpoint > 0) && !setpoint_from_feed) {
-      setpoint = mean_mm;
-      env.warn(fmt::format("no --setpoint-width-mm: the set-point width is taken as the measured mean {:.4f} mm",
-                           mean_mm));
-    }
-    std::vector<ident::TimedWidth> rows;
-    nlohmann::json mapping;
-    std::string comment;
-    if (!a.gcode.empty()) {
-      if (l.closed) throw InputError(fmt::format("line {} is a closed loop; --gcode maps open lines", a.line));
-      std::size_t nlines = 0;
-      const auto segs = gcode_path(a.gcode, nlines);
-      env.add_input(a.gcode);
-      ident::PathMapping how;
-      how.offset_mm = a.path_offset_mm;
-      how.reversed = a.path_reversed;
-      how.filament_diameter_mm = a.filament_diameter_mm;
-      how.layer_height_mm = a.layer_height_mm;
-      how.setpoint_width_mm = setpoint;
-      const bool from_feed = a.filament_diameter_mm > 0 && a.layer_height_mm > 0;
-      double total = 0, duration = 0;
-      for (const auto& sg : segs) {
-        total += sg.length_mm;
-        duration += sg.length_mm / sg.speed_mm_s;
-      }
-      const double prof_len = s_mm.empty() ? 0.0 : s_mm.back() - s_mm.front();
-      const double offset = std::isfinite(a.path_offset_mm) ? a.path_offset_mm : 0.5 * (total - prof_len);
-      if (prof_len > total * 1.05)
-        env.warn(fmt::format("the measured line ({:.2f} mm) is longer than the G-code's extruding path ({:.2f} mm): "
-                             "wrong file, scale or line?",
-                             prof_len, total));
-      rows = ident::map_path(s_mm, w_mm, conf, segs, how);
-      mapping = {{"kind", "gcode"},
-                 {"gcode", a.gcode},
-                 {"segments", segs.size()},
-                 {"path_length_mm", r6(total)},
-                 {"path_duration_s", r6(duration)},
-                 {"profile_length_mm", r6(prof_len)},
-                 {"offset_mm", r6(offset)},
-                 {"reversed", a.path_reversed},
-                 {"setpoint", from_feed ? "feed" : "constant"}};
-      if (from_feed) {
-        mapping["filament_diameter_mm"] = a.filament_diameter_mm;
-        mapping["layer_height_mm"] = a.layer_height_mm;
-      }
-      comment = fmt::format(
-          "tunekit linewidth: profile of {} (line {}) along the extruding moves of {} ({} segments, {:.3f} mm)\n"
-          "setpoint_width: {}",
-          run.path, a.line, a.gcode, segs.size(), total,
-          from_feed ? fmt::format("E (pi d^2/4) / (L h), d = {} mm, h = {} mm", a.filament_diameter_mm,
-                                  a.layer_height_mm)
-                    : fmt::format("constant {} mm", setpoint));
-    } else if (a.ring_sines > 0) {
-      if (!l.closed) throw InputError(fmt::format("line {} is not a closed ring; --ring-sines needs one", a.line));
-      std::vector<cv::Point2d> pts;
-      for (const auto& s : l.samples)
-        if (s.valid()) pts.emplace_back(s.x_px, s.y_px);
-      const cv::Vec3d circ = ident::fit_circle(pts);
-      ident::RingSine ring;
-      ring.n_sines = a.ring_sines;
-      ring.amplitude_mm = a.ring_amplitude_mm;
-      ring.speed_mm_s = a.speed_mm_s;
-      ring.radius_mm = a.ring_radius_mm > 0 ? a.ring_radius_mm : circ[2] / run.ppm;
-      ring.rod_radius_mm = a.rod_radius_mm;
-      ring.layer_height_mm = a.layer_height_mm;
-      ring.width_gcode_mm = setpoint;
-      rows = ident::map_ring(centres, w_mm, conf, {circ[0], circ[1]}, ring, a.ring_start_deg, a.ring_clockwise);
-      mapping = {{"kind", "ring"},
-                 {"frequency_hz", r6(ident::ring_frequency_hz(ring))},
-                 {"setpoint_amplitude_mm", r6(ident::ring_setpoint_amplitude_mm(ring))},
-                 {"ring_radius_mm", r6(ring.radius_mm)},
-                 {"measured_radius_mm", r6(circ[2] / run.ppm)},
-                 {"centre_px", {r4(circ[0]), r4(circ[1])}},
-                 {"start_deg", a.ring_start_deg},
-                 {"direction", a.ring_clockwise ? "clockwise" : "counterclockwise"}};
-      comment = fmt::format(
-          "tunekit linewidth: ring profile of {} (line {}), N={} A={} mm v={} mm/s R={:.4f} mm -> f={:.6g} Hz\n"
-          "setpoint_width: Holtrup 2019 eq. 4.3",
-          run.path, a.line, ring.n_sines, ring.amplitude_mm, ring.speed_mm_s, ring.radius_mm,
-          ident::ring_frequency_hz(ring));
-    } else {
-      rows = ident::map_constant_speed(s_mm, w_mm, conf, a.speed_mm_s, setpoint);
-      mapping = {{"kind", "constant_speed"}};
-      comment = fmt::format("tunekit linewidth: profile of {} (line {}) at a constant {} mm/s", run.path, a.line,
-                            a.speed_mm_s);
-    }
-    if (rows.size() < 3) throw FitError("measured nothing: fewer than 3 valid profile samples to map to time", run.path);
-    protocols::write_file_atomic(a.profile_csv, ident::timed_width_csv(rows, comment));
-    mapping["path"] = a.profile_csv;
-    mapping["rows"] = rows.size();
-    mapping["line"] = a.line;
-    mapping["speed_mm_s"] = a.speed_mm_s;
-    mapping["setpoint_width_mm"] = r6(setpoint);
-    mapping["duration_s"] = r6(rows.back().t_s - rows.front().t_s);
-    results["profile_csv"] = mapping;
-  }
+  if (!a.profile_csv.empty()) results["profile_csv"] = linewidth::write_profile_csv(a, runs.front(), env);
 
   env.set_options({{"px_per_mm", a.px_per_mm},
                    {"camera", a.camera},

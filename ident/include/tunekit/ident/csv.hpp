@@ -15,6 +15,8 @@
 #include <string_view>
 #include <vector>
 
+#include "tunekit/fitting/file_bytes.hpp"
+
 namespace tunekit::ident {
 
 struct CsvColumn {
@@ -78,7 +80,8 @@ inline constexpr const char* kTimeColumnNames[] = {"time", "t", "#time", "timest
 /// Case-insensitive equality on ASCII.
 bool iequals(std::string_view a, std::string_view b);
 
-/// Reads a whole file into memory; InputError if it cannot be opened or read.
-std::string read_file_bytes(const std::string& path);
+/// Reads a whole file into memory; InputError if it cannot be opened or read (declared with
+/// the error types in fitting, so libraries that read files without tables need no CSV header).
+using tunekit::read_file_bytes;
 
 }  // namespace tunekit::ident

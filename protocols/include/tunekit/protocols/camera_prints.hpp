@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/vision/width_to_dynamics.hpp"
 #include "tunekit/protocols/dialect.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 
@@ -19,7 +19,7 @@ namespace tunekit::protocols {
 /// One printed line of the test: it starts at (x0_mm, y_mm) and runs along +X through `path`.
 struct PrintedLine {
   double x0_mm = 0, y_mm = 0;
-  std::vector<ident::PathSegment> path;  ///< in print order (speed, length, filament)
+  std::vector<vision::PathSegment> path;  ///< in print order (speed, length, filament)
   double length_mm() const;
 };
 

@@ -1,4 +1,4 @@
-#include "tunekit/ident/camera_calibration.hpp"
+#include "tunekit/vision/camera_calibration.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 
 #include "tunekit/fitting/error.hpp"
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 namespace {
 
 cv::Mat to_u8(const cv::Mat& gray) {
@@ -277,4 +277,4 @@ Rectified rectify_to_plane(const cv::Mat& gray, const cv::Matx33d& img_to_mm, do
   return r;
 }
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

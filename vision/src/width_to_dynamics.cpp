@@ -1,4 +1,4 @@
-#include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/vision/width_to_dynamics.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 
 #include "tunekit/fitting/error.hpp"
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 double ring_frequency_hz(const RingSine& r) { return r.n_sines * r.speed_mm_s / (2.0 * M_PI * r.radius_mm); }
 
@@ -140,4 +140,4 @@ std::string timed_width_csv(const std::vector<TimedWidth>& rows, const std::stri
   return o.str();
 }
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

@@ -22,7 +22,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 enum class LinePolarity { automatic, dark, light };
 
@@ -93,4 +93,4 @@ LineWidthResult measure_line_widths(const cv::Mat& gray, const LineWidthOptions&
 /// Fills mean/std/valid_samples of a line from its samples.
 void summarize_line(MeasuredLine& line);
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

@@ -17,7 +17,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 struct RingSine {
   int n_sines = 0;             ///< N: sines per rotation
@@ -96,4 +96,4 @@ std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vec
 /// CSV text with columns `time (s)`, `s (mm)`, `width (mm)`, `setpoint_width (mm)`, `confidence`.
 std::string timed_width_csv(const std::vector<TimedWidth>& rows, const std::string& comment);
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

@@ -13,24 +13,24 @@
 #endif
 
 #include "tunekit/fitting/error.hpp"
-#include "tunekit/ident/charuco.hpp"
+#include "tunekit/vision/charuco.hpp"
 
 using namespace tunekit;
 
 TEST_CASE("ChArUco board specs are parsed and checked") {
-  const auto s = ident::parse_charuco_spec("5x7", 20, 15, "DICT_4X4_50");
+  const auto s = vision::parse_charuco_spec("5x7", 20, 15, "DICT_4X4_50");
   CHECK(s.squares_x == 5);
   CHECK(s.squares_y == 7);
-  CHECK_THROWS_AS(ident::parse_charuco_spec("5by7", 20, 15, "DICT_4X4_50"), InputError);
-  CHECK_THROWS_AS(ident::parse_charuco_spec("5x7", 20, 25, "DICT_4X4_50"), InputError);
-  if (ident::charuco_available())
-    CHECK_THROWS_WITH(ident::parse_charuco_spec("5x7", 20, 15, "DICT_9X9_1"), Catch::Contains("unknown ArUco dictionary"));
+  CHECK_THROWS_AS(vision::parse_charuco_spec("5by7", 20, 15, "DICT_4X4_50"), InputError);
+  CHECK_THROWS_AS(vision::parse_charuco_spec("5x7", 20, 25, "DICT_4X4_50"), InputError);
+  if (vision::charuco_available())
+    CHECK_THROWS_WITH(vision::parse_charuco_spec("5x7", 20, 15, "DICT_9X9_1"), Catch::Contains("unknown ArUco dictionary"));
 }
 
 TEST_CASE("a ChArUco board in perspective and partly covered gives the scale at its centre") {
-  if (!ident::charuco_available()) {
-    CHECK_THROWS_WITH(ident::detect_charuco(cv::Mat(100, 100, CV_8U, cv::Scalar(255)),
-                                            ident::parse_charuco_spec("5x7", 20, 15, "")),
+  if (!vision::charuco_available()) {
+    CHECK_THROWS_WITH(vision::detect_charuco(cv::Mat(100, 100, CV_8U, cv::Scalar(255)),
+                                            vision::parse_charuco_spec("5x7", 20, 15, "")),
                       Catch::Contains("libopencv-contrib-dev"));
     return;
   }
@@ -48,8 +48,8 @@ TEST_CASE("a ChArUco board in perspective and partly covered gives the scale at 
   board_img.copyTo(canvas(cv::Rect(300, 200, 1000, 1400)));
   // Cover one corner of the board (a printed part lying on it).
   cv::rectangle(canvas, cv::Rect(300, 200, 380, 300), cv::Scalar(90), cv::FILLED);
-  const auto spec = ident::parse_charuco_spec("5x7", 20, 15, "DICT_4X4_50");
-  const auto flat = ident::detect_charuco(canvas, spec);
+  const auto spec = vision::parse_charuco_spec("5x7", 20, 15, "DICT_4X4_50");
+  const auto flat = vision::detect_charuco(canvas, spec);
   REQUIRE(flat.found);
   CHECK(flat.corners.size() < 24u);  // some inner corners are covered
   CHECK(flat.px_per_mm == Approx(10.0).epsilon(0.01));
@@ -61,7 +61,7 @@ TEST_CASE("a ChArUco board in perspective and partly covered gives the scale at 
   const cv::Mat P = cv::getPerspectiveTransform(src, dst);
   cv::Mat seen;
   cv::warpPerspective(canvas, seen, P, canvas.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(255));
-  const auto tilted = ident::detect_charuco(seen, spec);
+  const auto tilted = vision::detect_charuco(seen, spec);
   REQUIRE(tilted.found);
   // The board-plane map undoes the perspective: every visible corner lands on the board's
   // 20 mm grid (origin at the first inner corner, covered or not).

@@ -14,7 +14,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 enum class ImageColor {
   keep,  ///< 1 channel for grey files, 3 channels (BGR) for colour; alpha is dropped
@@ -48,4 +48,4 @@ std::string encode_png(const cv::Mat& image);
 /// Writes encode_png(image) to `path`. Throws InputError when the file cannot be written.
 void write_png(const std::string& path, const cv::Mat& image);
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

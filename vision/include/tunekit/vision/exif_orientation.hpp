@@ -8,7 +8,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 /// The Orientation tag of a JPEG's APP1 Exif segment (IFD0), 1 ("top-left", nothing to do)
 /// when the bytes are not a JPEG, carry no Exif segment or tag, or the tag is out of range.
@@ -20,4 +20,4 @@ int jpeg_exif_orientation(std::string_view bytes);
 /// counter-clockwise; 1 and anything else: unchanged).
 cv::Mat apply_exif_orientation(const cv::Mat& image, int orientation);
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

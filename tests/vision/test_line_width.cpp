@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "synthetic_render.hpp"
-#include "tunekit/ident/line_width.hpp"
+#include "tunekit/vision/line_width.hpp"
 
 using namespace tunekit;
 namespace rd = tunekit::test::render;
@@ -19,7 +19,7 @@ struct Stats {
   int n = 0;
 };
 
-Stats width_stats(const ident::MeasuredLine& l) {
+Stats width_stats(const vision::MeasuredLine& l) {
   Stats s;
   s.mean = l.mean_width_px;
   s.std = l.std_width_px;
@@ -53,7 +53,7 @@ TEST_CASE("straight lines 6-40 px: bias <= 0.1 px and std <= 0.25 px with blur, 
     ph.noise = 2.0;
     ph.seed = seed++;
     const cv::Mat img = rd::photograph(cov, ph);
-    const auto res = ident::measure_line_widths(ident::to_gray_float(img));
+    const auto res = vision::measure_line_widths(vision::to_gray_float(img));
     INFO(fmt::format("width {} px at {} deg, {} line", c.w, c.angle_deg, c.dark ? "dark" : "light"));
     REQUIRE(res.lines.size() == 1);
     CHECK(res.light_lines == !c.dark);
@@ -80,7 +80,7 @@ TEST_CASE("a curved line (polyline with round joins) is followed and measured wi
   ph.blur_px = 1.0;
   ph.noise = 2.0;
   ph.vignetting = 0.2;
-  const auto res = ident::measure_line_widths(ident::to_gray_float(rd::photograph(cov, ph)));
+  const auto res = vision::measure_line_widths(vision::to_gray_float(rd::photograph(cov, ph)));
   REQUIRE(res.lines.size() == 1);
   const auto s = width_stats(res.lines[0]);
   INFO(fmt::format("mean {:.4f} std {:.4f} n {} length {:.1f}", s.mean, s.std, s.n, res.lines[0].length_px));
@@ -98,7 +98,7 @@ TEST_CASE("a ring with a sine-modulated width yields the amplitude within 3 % an
   ph.blur_px = 1.0;
   ph.noise = 2.0;
   ph.vignetting = 0.3;
-  const auto res = ident::measure_line_widths(ident::to_gray_float(rd::photograph(cov, ph)));
+  const auto res = vision::measure_line_widths(vision::to_gray_float(rd::photograph(cov, ph)));
   REQUIRE(res.lines.size() == 1);
   const auto& l = res.lines[0];
   CHECK(l.closed);
@@ -125,7 +125,7 @@ TEST_CASE("a ring with a sine-modulated width yields the amplitude within 3 % an
 
 TEST_CASE("a line running off the image is reported as touching the frame") {
   const auto cov = rd::coverage(320, 240, rd::straight_line(-50, 120, 200, 130, 10));
-  const auto res = ident::measure_line_widths(ident::to_gray_float(rd::photograph(cov, rd::Photo{})));
+  const auto res = vision::measure_line_widths(vision::to_gray_float(rd::photograph(cov, rd::Photo{})));
   REQUIRE(res.lines.size() == 1);
   CHECK(res.lines[0].touches_frame);
 }
@@ -135,7 +135,7 @@ TEST_CASE("an image of a bare bed has no lines") {
   ph.noise = 3.0;
   ph.vignetting = 0.4;
   const cv::Mat cov = cv::Mat::zeros(240, 320, CV_32F);
-  const auto res = ident::measure_line_widths(ident::to_gray_float(rd::photograph(cov, ph)));
+  const auto res = vision::measure_line_widths(vision::to_gray_float(rd::photograph(cov, ph)));
   CHECK(res.lines.empty());
 }
 
@@ -144,11 +144,11 @@ TEST_CASE("two lines close together are flagged as merged where a neighbour ente
   std::vector<rd::Sdf> parts{rd::straight_line(40, 200, 600, 200, 12),
                              rd::polyline({{40, 260}, {300, 260}, {340, 216}, {600, 216}}, 12)};
   const auto cov = rd::coverage(640, 400, rd::unite(parts));
-  const auto res = ident::measure_line_widths(ident::to_gray_float(rd::photograph(cov, rd::Photo{})));
+  const auto res = vision::measure_line_widths(vision::to_gray_float(rd::photograph(cov, rd::Photo{})));
   REQUIRE_FALSE(res.lines.empty());
   int merged = 0;
   for (const auto& l : res.lines)
     for (const auto& s : l.samples)
-      if (s.flags & ident::kFlagMerged) ++merged;
+      if (s.flags & vision::kFlagMerged) ++merged;
   CHECK(merged > 20);
 }

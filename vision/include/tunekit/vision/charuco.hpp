@@ -10,9 +10,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "tunekit/ident/camera_calibration.hpp"
+#include "tunekit/vision/camera_calibration.hpp"
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 /// A ChArUco board: squares_x x squares_y squares of square_mm, markers of marker_mm, from an
 /// ArUco dictionary by OpenCV name (DICT_4X4_50, DICT_5X5_100, DICT_6X6_250, ...).
@@ -38,4 +38,4 @@ bool charuco_available();
 /// absent. InputError when this build has no ChArUco support.
 ChessboardDetection detect_charuco(const cv::Mat& gray, const CharucoSpec& spec);
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

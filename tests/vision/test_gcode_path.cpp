@@ -15,8 +15,8 @@
 #include "synthetic_render.hpp"
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/image_io.hpp"
-#include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/vision/image_io.hpp"
+#include "tunekit/vision/width_to_dynamics.hpp"
 
 using namespace tunekit;
 namespace rd = tunekit::test::render;
@@ -54,7 +54,7 @@ TEST_CASE("G-code as commanded speed: photo of a feed step -> tunekit linewidth 
   ph.noise = 2.0;
   ph.vignetting = 0.3;
   const std::string img = dir + "/line.png";
-  ident::write_png(img, rd::photograph(rd::coverage(1000, 300, line), ph));
+  vision::write_png(img, rd::photograph(rd::coverage(1000, 300, line), ph));
 
   const std::string csv = dir + "/line.csv";
   const auto lw = run_cli({"linewidth", img, "--px-per-mm", "10", "--gcode", gcode, "--filament-diameter-mm", "1.75",

@@ -1,8 +1,8 @@
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/image_io.hpp"
 
 #include <algorithm>
 #include <atomic>
-#include "tunekit/ident/exif_orientation.hpp"
+#include "tunekit/vision/exif_orientation.hpp"
 
 #include <cstring>
 #include <filesystem>
@@ -16,9 +16,9 @@
 #include <stb_image_write.h>
 
 #include "tunekit/fitting/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/fitting/file_bytes.hpp"
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 namespace {
 
 bool starts_with(const std::string& s, const char* magic, std::size_t n) {
@@ -149,4 +149,4 @@ void write_png(const std::string& path, const cv::Mat& image) {
   if (!out) throw InputError("cannot write image: write error", path);
 }
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

@@ -9,8 +9,8 @@
 
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/exif_orientation.hpp"
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/exif_orientation.hpp"
+#include "tunekit/vision/image_io.hpp"
 
 using tunekit::test::dataset;
 
@@ -35,30 +35,30 @@ TEST_CASE("the EXIF orientation tag is read from a JPEG's APP1 segment") {
   for (int n : {1, 3, 6, 8}) {
     INFO(n);
     const auto bytes = tunekit::ident::read_file_bytes(dataset("images/Landscape_" + std::to_string(n) + ".jpg"));
-    CHECK(tunekit::ident::jpeg_exif_orientation(bytes) == n);
+    CHECK(tunekit::vision::jpeg_exif_orientation(bytes) == n);
   }
   // Not a JPEG, a damaged segment length, a truncated Exif block: 1, without reading past the end.
-  CHECK(tunekit::ident::jpeg_exif_orientation("") == 1);
-  CHECK(tunekit::ident::jpeg_exif_orientation("\x89PNG\r\n") == 1);
-  CHECK(tunekit::ident::jpeg_exif_orientation(std::string("\xFF\xD8\xFF\xE1\xFF\xFF" "Exif", 10)) == 1);
+  CHECK(tunekit::vision::jpeg_exif_orientation("") == 1);
+  CHECK(tunekit::vision::jpeg_exif_orientation("\x89PNG\r\n") == 1);
+  CHECK(tunekit::vision::jpeg_exif_orientation(std::string("\xFF\xD8\xFF\xE1\xFF\xFF" "Exif", 10)) == 1);
   const auto six = tunekit::ident::read_file_bytes(dataset("images/Landscape_6.jpg"));
   for (std::size_t cut : {std::size_t{30}, std::size_t{40}, std::size_t{60}, std::size_t{100}})
-    CHECK(tunekit::ident::jpeg_exif_orientation(six.substr(0, cut)) == 1);
+    CHECK(tunekit::vision::jpeg_exif_orientation(six.substr(0, cut)) == 1);
 }
 
 TEST_CASE("photos with EXIF orientations 3, 6 and 8 decode to the picture orientation 1 shows") {
-  const cv::Mat ref = tunekit::ident::read_image(dataset("images/Landscape_1.jpg"));
+  const cv::Mat ref = tunekit::vision::read_image(dataset("images/Landscape_1.jpg"));
   REQUIRE(ref.cols > ref.rows);  // a landscape picture
   const cv::Mat ref_small = small_gray(ref);
   for (int n : {3, 6, 8}) {
     INFO(n);
-    const cv::Mat m = tunekit::ident::read_image(dataset("images/Landscape_" + std::to_string(n) + ".jpg"));
+    const cv::Mat m = tunekit::vision::read_image(dataset("images/Landscape_" + std::to_string(n) + ".jpg"));
     CHECK(m.cols == ref.cols);
     CHECK(m.rows == ref.rows);
     CHECK(mean_abs_diff(small_gray(m), ref_small) < 6.0);
     // The stored pixels (the decoded image turned back) are another picture: portrait for 6
     // and 8, upside down for 3.
-    const cv::Mat stored = tunekit::ident::apply_exif_orientation(m, n == 6 ? 8 : (n == 8 ? 6 : 3));
+    const cv::Mat stored = tunekit::vision::apply_exif_orientation(m, n == 6 ? 8 : (n == 8 ? 6 : 3));
     if (n == 3) CHECK(mean_abs_diff(small_gray(stored), ref_small) > 20.0);
     else CHECK(stored.rows > stored.cols);
   }

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 /// A chessboard target: inner corners (cols x rows, e.g. a board of 10 x 7 squares has 9 x 6)
 /// and the side of a square (mm).
@@ -77,4 +77,4 @@ struct Rectified {
 Rectified rectify_to_plane(const cv::Mat& gray, const cv::Matx33d& img_to_mm, double px_per_mm,
                            double max_pixels = 40e6);
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

@@ -8,9 +8,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "tunekit/ident/line_width.hpp"
+#include "tunekit/vision/line_width.hpp"
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 /// Draws on a colour copy of `image` (any depth/channels; contrast-stretched to 8 bit).
 /// `result` may be null (nothing measured: only the target and message are drawn).
@@ -20,4 +20,4 @@ cv::Mat draw_overlay(const cv::Mat& image, const LineWidthResult* result, const 
 /// Writes an overlay image as PNG (whatever the extension). Throws InputError when it cannot be written.
 void write_overlay(const std::string& path, const cv::Mat& bgr);
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

@@ -13,8 +13,8 @@
 
 #include "synthetic_render.hpp"
 #include "test_support.hpp"
-#include "tunekit/ident/image_io.hpp"
-#include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/vision/image_io.hpp"
+#include "tunekit/vision/width_to_dynamics.hpp"
 
 using namespace tunekit;
 namespace rd = tunekit::test::render;
@@ -41,7 +41,7 @@ std::string fmtnum(double v) { return fmt::format("{:.9g}", v); }
 TEST_CASE("rendered sine-modulated ring photo -> tunekit linewidth -> tunekit freq gives the rendered gain and phase") {
   // The ring print (seed 001, section 4.3.3): N sines per rotation, feeder offset amplitude A,
   // print speed v, ring radius R, rod radius r_rod, layer height h, mean set-point width w_g.
-  ident::RingSine ring;
+  vision::RingSine ring;
   ring.n_sines = 3;
   ring.amplitude_mm = 0.06;
   ring.speed_mm_s = 10.0;
@@ -50,8 +50,8 @@ TEST_CASE("rendered sine-modulated ring photo -> tunekit linewidth -> tunekit fr
   ring.layer_height_mm = 0.2;
   ring.width_gcode_mm = 1.2;
   const double ppm = 10.0;  // px/mm
-  const double f_hz = ident::ring_frequency_hz(ring);
-  const double a_sp = ident::ring_setpoint_amplitude_mm(ring);  // about 0.24 mm
+  const double f_hz = vision::ring_frequency_hz(ring);
+  const double a_sp = vision::ring_setpoint_amplitude_mm(ring);  // about 0.24 mm
   REQUIRE(a_sp > 0.1);
 
   const RingCase cases[] = {
@@ -81,7 +81,7 @@ TEST_CASE("rendered sine-modulated ring photo -> tunekit linewidth -> tunekit fr
     ph.gradient = c.gradient;
     ph.seed = c.seed;
     const std::string img = (fs::path(dir) / "ring.png").string();
-    ident::write_png(img, rd::photograph(cov, ph));
+    vision::write_png(img, rd::photograph(cov, ph));
     const std::string csv = (fs::path(dir) / "ring.csv").string();
 
     const auto lw = run_cli({"linewidth", img, "--px-per-mm", fmtnum(ppm), "--json", "--overlay", dir + "/ov",

@@ -14,7 +14,7 @@
 
 #include "synthetic_render.hpp"
 #include "test_support.hpp"
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/image_io.hpp"
 
 using namespace tunekit;
 namespace rd = tunekit::test::render;
@@ -91,7 +91,7 @@ TEST_CASE("tilted camera: --chessboard --rectify measures widths in mm across th
   const cv::Matx33d H = plane_to_image(0.45, 0.05, 0.02, -25, -28, 150);
   const auto dir = test::scratch_dir("lw_rectify");
   const std::string img = dir + "/tilted.png";
-  ident::write_png(img, photo_of_plane(scene, H, 5));
+  vision::write_png(img, photo_of_plane(scene, H, 5));
 
   const auto rect = run_json({"linewidth", img, "--chessboard", "9x6", "--square-mm", fmt::format("{}", sq),
                               "--rectify", "--json", "--overlay", dir + "/ov"});
@@ -130,7 +130,7 @@ TEST_CASE("camera profile: --save-camera from chessboard views then --camera PRO
   unsigned seed = 20;
   for (std::size_t i = 0; i < std::size(poses); ++i) {
     const std::string p = fmt::format("{}/cal_{}.png", dir, i);
-    ident::write_png(p, photo_of_plane(board(sq), poses[i], seed++));
+    vision::write_png(p, photo_of_plane(board(sq), poses[i], seed++));
     cal.push_back(p);
   }
   const std::string profile = dir + "/cam.json";
@@ -148,7 +148,7 @@ TEST_CASE("camera profile: --save-camera from chessboard views then --camera PRO
   // A later photo from the measuring pose: two lines on the bed, no target in the scene.
   const auto scene = rd::unite({rd::straight_line(-5, 8, 50, 9, 1.0), rd::straight_line(-5, 24, 50, 22, 1.8)});
   const std::string shot = dir + "/shot.png";
-  ident::write_png(shot, photo_of_plane(scene, bed_pose, 40));
+  vision::write_png(shot, photo_of_plane(scene, bed_pose, 40));
   const auto jm = run_json({"linewidth", shot, "--camera", profile, "--rectify", "--json"});
   const auto w = widths(jm);
   REQUIRE(w.size() == 2);
@@ -160,7 +160,7 @@ TEST_CASE("camera profile: --save-camera from chessboard views then --camera PRO
 
   // A photo of another size than the calibrated one is refused.
   const std::string small = dir + "/small.png";
-  ident::write_png(small, cv::Mat(300, 400, CV_8U, cv::Scalar(128)));
+  vision::write_png(small, cv::Mat(300, 400, CV_8U, cv::Scalar(128)));
   const auto r = run_cli({"linewidth", small, "--camera", profile});
   CHECK(r.code == 2);
   CHECK(r.err.find("calibrated at 800x600") != std::string::npos);

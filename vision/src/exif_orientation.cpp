@@ -1,9 +1,9 @@
-#include "tunekit/ident/exif_orientation.hpp"
+#include "tunekit/vision/exif_orientation.hpp"
 
 #include <cstdint>
 #include <cstring>
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 namespace {
 
 std::uint16_t exif_u16(const unsigned char* p, bool little) {
@@ -86,4 +86,4 @@ cv::Mat apply_exif_orientation(const cv::Mat& m, int orientation) {
   return out;
 }
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

@@ -1,4 +1,4 @@
-#include "tunekit/ident/charuco.hpp"
+#include "tunekit/vision/charuco.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -13,7 +13,7 @@
 
 #include "tunekit/fitting/error.hpp"
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 namespace {
 
 #ifdef TUNEKIT_HAVE_ARUCO
@@ -138,4 +138,4 @@ ChessboardDetection detect_charuco(const cv::Mat& gray, const CharucoSpec& spec)
 #endif
 }
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

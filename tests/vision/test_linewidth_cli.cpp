@@ -14,11 +14,11 @@
 
 #include "synthetic_render.hpp"
 #include "test_support.hpp"
-#include "tunekit/ident/camera_calibration.hpp"
+#include "tunekit/vision/camera_calibration.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/image_io.hpp"
-#include "tunekit/ident/line_width.hpp"
-#include "tunekit/ident/width_to_dynamics.hpp"
+#include "tunekit/vision/image_io.hpp"
+#include "tunekit/vision/line_width.hpp"
+#include "tunekit/vision/width_to_dynamics.hpp"
 
 using namespace tunekit;
 namespace rd = tunekit::test::render;
@@ -29,7 +29,7 @@ namespace {
 
 std::string save(const std::string& dir, const std::string& name, const cv::Mat& img) {
   const std::string p = (fs::path(dir) / name).string();
-  ident::write_png(p, img);
+  vision::write_png(p, img);
   return p;
 }
 
@@ -72,7 +72,7 @@ TEST_CASE("linewidth --json lists lines with profile arrays and width_mm {mean, 
   }
   CHECK(j["results"]["images"][0]["px_per_mm"].get<double>() == 10.0);
   CHECK(fs::exists(dir + "/ov/two_overlay.png"));
-  const cv::Mat ov = ident::read_image(dir + "/ov/two_overlay.png");
+  const cv::Mat ov = vision::read_image(dir + "/ov/two_overlay.png");
   CHECK(ov.cols == 640);
   // Deterministic output.
   const auto r2 = run_cli({"linewidth", img, "--px-per-mm", "10", "--json", "--overlay", dir + "/ov"});
@@ -145,14 +145,14 @@ TEST_CASE("chessboard in the scene: scale within 0.2 % of the truth") {
   ph.vignetting = 0.3;
   ph.blur_px = 1.0;
   const cv::Mat photo = rd::photograph(cov, ph);
-  const auto det = ident::detect_chessboard(ident::to_gray_float(photo), ident::parse_chessboard_spec("9x6", sq_mm));
+  const auto det = vision::detect_chessboard(vision::to_gray_float(photo), vision::parse_chessboard_spec("9x6", sq_mm));
   REQUIRE(det.found);
   INFO(fmt::format("px/mm {:.5f} (truth {:.5f}), corner fit RMS {:.4f} px", det.px_per_mm, truth_ppm, det.fit_rms_px));
   CHECK(std::abs(det.px_per_mm / truth_ppm - 1) <= 0.002);
 }
 
 TEST_CASE("seed 001 eq. 4.3: set-point amplitude and ring frequency") {
-  ident::RingSine r;
+  vision::RingSine r;
   r.n_sines = 1;
   r.amplitude_mm = 0.1;
   r.speed_mm_s = 2;
@@ -160,10 +160,10 @@ TEST_CASE("seed 001 eq. 4.3: set-point amplitude and ring frequency") {
   r.rod_radius_mm = 2.5;
   r.layer_height_mm = 0.2;
   r.width_gcode_mm = 0.66;
-  CHECK(ident::ring_setpoint_amplitude_mm(r) == Approx(M_PI * 0.1 * 6.25 / 6.0));
-  CHECK(ident::ring_frequency_hz(r) == Approx(2.0 / (2 * M_PI * 30)));
-  CHECK(ident::ring_setpoint_width_mm(r, 0) == Approx(0.66 - M_PI * 0.1 * 6.25 / 6.0));
+  CHECK(vision::ring_setpoint_amplitude_mm(r) == Approx(M_PI * 0.1 * 6.25 / 6.0));
+  CHECK(vision::ring_frequency_hz(r) == Approx(2.0 / (2 * M_PI * 30)));
+  CHECK(vision::ring_setpoint_width_mm(r, 0) == Approx(0.66 - M_PI * 0.1 * 6.25 / 6.0));
   const double quarter = M_PI / 2 * 30 / 2;  // N v t / R = pi/2
-  CHECK(ident::ring_setpoint_width_mm(r, quarter) == Approx(0.66));
+  CHECK(vision::ring_setpoint_width_mm(r, quarter) == Approx(0.66));
 }
 

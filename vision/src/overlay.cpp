@@ -1,4 +1,4 @@
-#include "tunekit/ident/overlay.hpp"
+#include "tunekit/vision/overlay.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,9 +7,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "tunekit/fitting/error.hpp"
-#include "tunekit/ident/image_io.hpp"
+#include "tunekit/vision/image_io.hpp"
 
-namespace tunekit::ident {
+namespace tunekit::vision {
 
 cv::Mat draw_overlay(const cv::Mat& image, const LineWidthResult* result, const std::vector<cv::Point>& target_outline,
                      const std::string& message) {
@@ -73,4 +73,4 @@ cv::Mat draw_overlay(const cv::Mat& image, const LineWidthResult* result, const 
 
 void write_overlay(const std::string& path, const cv::Mat& bgr) { write_png(path, bgr); }
 
-}  // namespace tunekit::ident
+}  // namespace tunekit::vision

@@ -1,0 +1,30 @@
+#include "tunekit/fitting/file_bytes.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+
+namespace tunekit {
+
+std::string read_file_bytes(const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) throw InputError(fmt::format("cannot open: {}", std::strerror(errno)), path);
+  std::string data;
+  if (std::fseek(f.get(), 0, SEEK_END) == 0) {
+    const long size = std::ftell(f.get());
+    if (size > 0) data.reserve(static_cast<std::size_t>(size));
+    std::fseek(f.get(), 0, SEEK_SET);
+  }
+  char buf[1 << 16];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f.get())) > 0) data.append(buf, n);
+  if (std::ferror(f.get())) throw InputError(fmt::format("read error: {}", std::strerror(errno)), path);
+  return data;
+}
+
+}  // namespace tunekit

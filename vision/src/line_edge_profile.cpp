@@ -1,0 +1,346 @@
+// Line edge profile: the width at one station of the centreline. The photo is sampled across
+// the line (averaged along it), a neighbouring line inside the window is cut off at the valley
+// between them, and a blurred bar, I(u) = b0 + b1 u + c [Phi((u-a)/s) - Phi((u-b)/s)], is
+// fitted by Levenberg-Marquardt: the width is b - a with its standard error from the fit.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "line_width_stages.hpp"
+
+namespace tunekit::vision::detail {
+namespace {
+
+// Window across the line: the bar covers +-w0/2; 0.75 w0 leaves a quarter width of bed beyond
+// each edge, and 6 px more hold the edge's blur tail (3 sigma of the largest 2 px start value of
+// the blur) and the baseline samples at the window's ends.
+constexpr double kHalfWindowPerWidth = 0.75;
+constexpr double kHalfWindowMarginPx = 6.0;
+// The bar model has 6 parameters: fewer than 10 samples across the line leave too few degrees
+// of freedom for its standard error.
+constexpr int kBarMinSamples = 10;
+// Start values of the baseline: the mean of 3 samples at each end of the window.
+constexpr int kBaselineEndSamples = 3;
+// Edges start at the half-maximum crossings (a blurred step edge is at half its height); the
+// peak is looked for within half a width of the centre.
+constexpr double kHalfMaximum = 0.5;
+constexpr double kPeakSearchPerWidth = 0.5;
+// Start value of the blur: a twentieth of the width, within 0.4-2 px (a focused camera's edge
+// spread is about a pixel).
+constexpr double kBlurStartPerWidth = 0.25 * 0.2;
+constexpr double kBlurStartMinPx = 0.4;
+constexpr double kBlurStartMaxPx = 2.0;
+// Beyond 6 sigma Phi is 0 or 1 to within 1e-9: the edge term is not evaluated there.
+constexpr double kEdgeTailSigmas = 6.0;
+// Levenberg-Marquardt: damping starts at 1e-3, shrinks 4x after a good step (floor 1e-7), grows
+// 8x after a bad one; beyond 1e8 the steps are negligible and the fit has stalled. At most 40
+// iterations bound the cost of a station that does not settle; converged when the edges and the
+// blur move less than 1e-4 px (far below the 0.1 px bias the width is measured to).
+constexpr double kLmLambdaStart = 1e-3;
+constexpr double kLmLambdaShrink = 4.0;
+constexpr double kLmLambdaMin = 1e-7;
+constexpr double kLmLambdaGrow = 8.0;
+constexpr double kLmLambdaMax = 1e8;
+constexpr int kLmMaxIterations = 40;
+constexpr double kLmEdgeStepTolPx = 1e-4;
+// Domain of the bar: blur above 0.1 px (sharper is below the sampling and makes Phi a step the
+// Jacobian cannot follow), width above 1 px, positive contrast, both edges inside the window,
+// and blur below half the width plus 2 px (otherwise the "bar" is a blurred bump whose edges
+// are not determined).
+constexpr double kBarMinBlurPx = 0.1;
+constexpr double kBarMinWidthPx = 1.0;
+constexpr double kBarMaxBlurPerWidth = 0.5;
+constexpr double kBarMaxBlurMarginPx = 2.0;
+// Another line inside the window: at least 2 samples beyond 3 blur sigmas + 2 px of the edges
+// rising above half the bar's contrast.
+constexpr double kNeighbourEdgeSigmas = 3.0;
+constexpr double kNeighbourEdgeMarginPx = 2.0;
+constexpr double kNeighbourContrastFraction = 0.5;
+constexpr int kNeighbourMinSamples = 2;
+// Confidence 1 / (1 + (stderr / 0.25 px)^2): a sample whose width is known to a quarter pixel
+// has confidence 0.5; a quarter pixel is the spread the straight-line accuracy target allows
+// (std <= 0.25 px).
+constexpr double kConfidenceStderrPx = 0.25;
+
+// Standard normal cdf Phi(z) and pdf phi(z) with one exponential: Abramowitz & Stegun 7.1.26
+// for erf (absolute error < 1.5e-7, far below image noise), sharing exp(-z^2/2) with the pdf.
+inline void normal_cdf_pdf(double z, double& cdf, double& pdf) {
+  const double e = std::exp(-0.5 * z * z);
+  pdf = 0.3989422804014327 * e;
+  const double x = std::abs(z) * M_SQRT1_2;
+  const double t = 1.0 / (1.0 + 0.3275911 * x);
+  const double poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+  const double erf_abs = 1.0 - poly * e;
+  cdf = z >= 0 ? 0.5 * (1.0 + erf_abs) : 0.5 * (1.0 - erf_abs);
+}
+
+struct BarFit {
+  bool ok = false;
+  double b0 = 0, b1 = 0, c = 0, a = 0, b = 0, s = 1;
+  double var_w = kNaN;
+  bool neighbour = false;
+};
+
+// Fits I(u) = b0 + b1 u + c [Phi((u-a)/s) - Phi((u-b)/s)] to p[k] at u = u0 + k.
+BarFit fit_bar(const std::vector<double>& p, double u0, double w_guess) {
+  BarFit f;
+  const int n = static_cast<int>(p.size());
+  if (n < kBarMinSamples) return f;
+  const int e = kBaselineEndSamples;
+  double ml = 0, mr = 0;
+  for (int k = 0; k < e; ++k) {
+    ml += p[static_cast<std::size_t>(k)];
+    mr += p[static_cast<std::size_t>(n - 1 - k)];
+  }
+  ml /= e;
+  mr /= e;
+  const double ul = u0 + (e - 1) / 2.0, ur = u0 + n - 1 - (e - 1) / 2.0;
+  double th[6];
+  th[1] = (mr - ml) / (ur - ul);
+  th[0] = ml - th[1] * ul;
+  // Peak in the central region.
+  const int half = std::max(1, static_cast<int>(kPeakSearchPerWidth * w_guess));
+  const int mid = static_cast<int>(std::lround(-u0));
+  int kp = std::clamp(mid, 0, n - 1);
+  for (int k = std::max(0, mid - half); k <= std::min(n - 1, mid + half); ++k)
+    if (p[static_cast<std::size_t>(k)] - (th[0] + th[1] * (u0 + k)) >
+        p[static_cast<std::size_t>(kp)] - (th[0] + th[1] * (u0 + kp)))
+      kp = k;
+  auto base = [&](int k) { return th[0] + th[1] * (u0 + k); };
+  const double c0 = p[static_cast<std::size_t>(kp)] - base(kp);
+  if (!(c0 > 0)) return f;
+  auto above = [&](int k) { return p[static_cast<std::size_t>(k)] - base(k) > kHalfMaximum * c0; };
+  int kl = kp;
+  while (kl > 0 && above(kl - 1)) --kl;
+  int kr = kp;
+  while (kr < n - 1 && above(kr + 1)) ++kr;
+  if (kl == 0 || kr == n - 1) return f;
+  auto cross = [&](int k_in, int k_out) {
+    const double vi = p[static_cast<std::size_t>(k_in)] - base(k_in) - kHalfMaximum * c0;
+    const double vo = p[static_cast<std::size_t>(k_out)] - base(k_out) - kHalfMaximum * c0;
+    const double t = vi / (vi - vo);
+    return u0 + k_in + t * (k_out - k_in);
+  };
+  th[2] = c0;
+  th[3] = cross(kl, kl - 1);
+  th[4] = cross(kr, kr + 1);
+  th[5] = std::clamp(kBlurStartPerWidth * (th[4] - th[3]), kBlurStartMinPx, kBlurStartMaxPx);
+
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  auto eval = [&](const double* t, Mat6* JtJ, Vec6* Jtr) {
+    double rss = 0;
+    if (JtJ) {
+      JtJ->setZero();
+      Jtr->setZero();
+    }
+    const double inv_s = 1.0 / t[5];
+    for (int k = 0; k < n; ++k) {
+      const double u = u0 + k;
+      const double za = (u - t[3]) * inv_s, zb = (u - t[4]) * inv_s;
+      const bool ea = std::abs(za) <= kEdgeTailSigmas, eb = std::abs(zb) <= kEdgeTailSigmas;
+      double Pa = za > 0 ? 1.0 : 0.0, Pb = zb > 0 ? 1.0 : 0.0, fa = 0.0, fb = 0.0;
+      if (ea) normal_cdf_pdf(za, Pa, fa);
+      if (eb) normal_cdf_pdf(zb, Pb, fb);
+      const double r = t[0] + t[1] * u + t[2] * (Pa - Pb) - p[static_cast<std::size_t>(k)];
+      rss += r * r;
+      if (JtJ) {
+        const double j[6] = {1.0, u, Pa - Pb, -t[2] * fa * inv_s, t[2] * fb * inv_s, t[2] * (-fa * za + fb * zb) * inv_s};
+        const int m = (ea || eb) ? 6 : 3;  // far from both edges only the background and contrast terms move
+        for (int a = 0; a < m; ++a) {
+          (*Jtr)(a) += j[a] * r;
+          for (int b = 0; b <= a; ++b) (*JtJ)(a, b) += j[a] * j[b];
+        }
+      }
+    }
+    if (JtJ)
+      for (int a = 0; a < 6; ++a)
+        for (int b = a + 1; b < 6; ++b) (*JtJ)(a, b) = (*JtJ)(b, a);
+    return rss;
+  };
+  Mat6 JtJ, JtJ_t;
+  Vec6 Jtr, Jtr_t;
+  double cost = eval(th, &JtJ, &Jtr);
+  double lambda = kLmLambdaStart;
+  bool converged = false;
+  for (int it = 0; it < kLmMaxIterations && !converged; ++it) {
+    Mat6 A = JtJ;
+    for (int i = 0; i < 6; ++i) A(i, i) *= 1.0 + lambda;
+    const Vec6 step = A.ldlt().solve(-Jtr);
+    double trial[6];
+    for (int i = 0; i < 6; ++i) trial[i] = th[i] + step(i);
+    const bool in_domain = trial[5] > kBarMinBlurPx && trial[4] - trial[3] > kBarMinWidthPx && trial[2] > 0 &&
+                           trial[3] > u0 && trial[4] < u0 + n - 1 &&
+                           trial[5] < kBarMaxBlurPerWidth * (trial[4] - trial[3]) + kBarMaxBlurMarginPx;
+    const double new_cost = in_domain ? eval(trial, &JtJ_t, &Jtr_t) : std::numeric_limits<double>::infinity();
+    if (new_cost <= cost) {
+      std::copy(trial, trial + 6, th);
+      const bool small = std::abs(step(3)) < kLmEdgeStepTolPx && std::abs(step(4)) < kLmEdgeStepTolPx &&
+                         std::abs(step(5)) < kLmEdgeStepTolPx;
+      cost = new_cost;
+      JtJ = JtJ_t;
+      Jtr = Jtr_t;
+      lambda = std::max(lambda / kLmLambdaShrink, kLmLambdaMin);
+      if (small) converged = true;
+    } else {
+      lambda *= kLmLambdaGrow;
+      if (lambda > kLmLambdaMax) break;
+    }
+  }
+  if (!converged && lambda > kLmLambdaMax) {
+    // Stalled: whether the last steps were already negligible is unknown; report failure.
+    return f;
+  }
+  f.b0 = th[0];
+  f.b1 = th[1];
+  f.c = th[2];
+  f.a = th[3];
+  f.b = th[4];
+  f.s = th[5];
+  const double dof = std::max(1, n - 6);
+  const double s2 = cost / dof;
+  Eigen::LDLT<Mat6> ldlt(JtJ);
+  if (ldlt.info() != Eigen::Success) return f;
+  Vec6 d;
+  d << 0, 0, 0, -1, 1, 0;
+  const Vec6 x = ldlt.solve(d);
+  f.var_w = s2 * d.dot(x);
+  // Another line inside the window, beyond either edge?
+  int hits = 0;
+  for (int k = 0; k < n; ++k) {
+    const double u = u0 + k;
+    if (u > f.a - kNeighbourEdgeSigmas * f.s - kNeighbourEdgeMarginPx &&
+        u < f.b + kNeighbourEdgeSigmas * f.s + kNeighbourEdgeMarginPx)
+      continue;
+    if (p[static_cast<std::size_t>(k)] - (f.b0 + f.b1 * u) > kNeighbourContrastFraction * f.c) ++hits;
+  }
+  f.neighbour = hits >= kNeighbourMinSamples;
+  f.ok = std::isfinite(f.var_w) && f.var_w >= 0;
+  return f;
+}
+
+inline float bilinear(const cv::Mat& img, double x, double y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const double fx = x - x0, fy = y - y0;
+  const float* r0 = img.ptr<float>(y0);
+  const float* r1 = img.ptr<float>(std::min(y0 + 1, img.rows - 1));
+  const int x1 = std::min(x0 + 1, img.cols - 1);
+  return static_cast<float>((1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x1]));
+}
+
+}  // namespace
+
+std::vector<Station> stations_from(const std::vector<Pt>& p, bool closed) {
+  const std::size_t n = p.size();
+  std::vector<Station> st(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t i0, i1;
+    if (closed) {
+      i0 = (i + n - 1) % n;
+      i1 = (i + 1) % n;
+    } else {
+      i0 = i == 0 ? 0 : i - 1;
+      i1 = i + 1 >= n ? n - 1 : i + 1;
+    }
+    double tx = p[i1].x - p[i0].x, ty = p[i1].y - p[i0].y;
+    const double norm = std::hypot(tx, ty);
+    if (norm > 0) {
+      tx /= norm;
+      ty /= norm;
+    }
+    st[i] = {p[i], {-ty, tx}};
+  }
+  return st;
+}
+
+double measuring_half_window(double w0) { return kHalfWindowPerWidth * w0 + kHalfWindowMarginPx; }
+
+void measure_station(const cv::Mat& img, bool light, const Station& st, double half_window, double along_half,
+                     double w_guess, std::vector<double>& prof, WidthSample& out) {
+  out = WidthSample{};
+  out.x_px = st.c.x;
+  out.y_px = st.c.y;
+  out.nx = st.n.x;
+  out.ny = st.n.y;
+  out.width_px = kNaN;
+  const double tx = st.n.y, ty = -st.n.x;  // tangent
+  const int L = static_cast<int>(std::ceil(half_window));
+  const int taps = std::max(0, static_cast<int>(std::lround(along_half)));
+  // Window corners inside the image?
+  for (int sa : {-1, 1})
+    for (int sb : {-1, 1}) {
+      const double x = st.c.x + sa * L * st.n.x + sb * taps * tx, y = st.c.y + sa * L * st.n.y + sb * taps * ty;
+      if (!(x >= 0 && y >= 0 && x <= img.cols - 1.0 && y <= img.rows - 1.0)) {
+        out.flags |= kFlagOutOfFrame;
+        return;
+      }
+    }
+  prof.assign(static_cast<std::size_t>(2 * L + 1), 0.0);
+  const double sign = light ? 1.0 : -1.0;
+  const double inv = sign / (2 * taps + 1);
+  for (int k = -L; k <= L; ++k) {
+    double acc = 0;
+    for (int t = -taps; t <= taps; ++t)
+      acc += bilinear(img, st.c.x + k * st.n.x + t * tx, st.c.y + k * st.n.y + t * ty);
+    prof[static_cast<std::size_t>(k + L)] = acc * inv;
+  }
+  // A neighbouring line inside the window: cut the window at the valley between them (the
+  // lowest sample between this line's half-maximum and the next rise above it).
+  const int n = static_cast<int>(prof.size());
+  int lo_k = 0, hi_k = n - 1;
+  {
+    const int centre = L;
+    const int half_w = std::max(1, static_cast<int>(kPeakSearchPerWidth * w_guess));
+    double peak = -1e300, floor_v = 1e300;
+    int kpk = centre;
+    for (int k = std::max(0, centre - half_w); k <= std::min(n - 1, centre + half_w); ++k)
+      if (prof[static_cast<std::size_t>(k)] > peak) {
+        peak = prof[static_cast<std::size_t>(k)];
+        kpk = k;
+      }
+    for (double v : prof) floor_v = std::min(floor_v, v);
+    const double half = kHalfMaximum * (peak + floor_v);
+    auto scan = [&](int dir) {
+      int k = kpk;
+      while (k + dir >= 0 && k + dir < n && prof[static_cast<std::size_t>(k)] > half) k += dir;
+      int valley = k;
+      for (; k >= 0 && k < n; k += dir) {
+        if (prof[static_cast<std::size_t>(k)] < prof[static_cast<std::size_t>(valley)]) valley = k;
+        if (prof[static_cast<std::size_t>(k)] > half) return valley;
+      }
+      return -1;
+    };
+    const int vl = scan(-1), vr = scan(+1);
+    if (vl >= 0) {
+      lo_k = vl;
+      out.flags |= kFlagMerged;
+    }
+    if (vr >= 0) {
+      hi_k = vr;
+      out.flags |= kFlagMerged;
+    }
+  }
+  if (lo_k > 0 || hi_k < n - 1) {
+    prof = std::vector<double>(prof.begin() + lo_k, prof.begin() + hi_k + 1);
+  }
+  const BarFit f = fit_bar(prof, -L + lo_k, w_guess);
+  if (!f.ok) {
+    out.flags |= kFlagOccluded;
+    return;
+  }
+  out.width_px = f.b - f.a;
+  out.width_stderr_px = std::sqrt(f.var_w);
+  out.confidence = 1.0 / (1.0 + (out.width_stderr_px / kConfidenceStderrPx) * (out.width_stderr_px / kConfidenceStderrPx));
+  out.contrast = f.c;
+  out.blur_px = f.s;
+  const double mid = 0.5 * (f.a + f.b);
+  out.x_px = st.c.x + mid * st.n.x;
+  out.y_px = st.c.y + mid * st.n.y;
+  if (f.neighbour) out.flags |= kFlagMerged;
+}
+
+}  // namespace tunekit::vision::detail
