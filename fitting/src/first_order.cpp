@@ -270,24 +270,86 @@ class PooledStepCost final : public ceres::CostFunction {
   const StepRecord& r_;
 };
 
-// Covariance of the pooled fit from its (3 + steps)-square normal matrix J^T J, assembled from
-// each step's 4x4 block (normal_equations): s^2 (J^T J)^-1, what ceres::Covariance computes
+// The pooled fit's normal equations: each step's 4x4 block (normal_equations) added into the
+// (3 + steps)-square matrix; p = {K, tau_s, theta_s, y0_0, y0_1, ...}. Returns the residual
+// sum of squares.
+double pooled_normal_equations(const std::vector<StepRecord>& recs, const std::vector<double>& p, Eigen::MatrixXd& N,
+                               Eigen::VectorXd& g) {
+  const auto n = static_cast<Eigen::Index>(p.size());
+  N.setZero(n, n);
+  g.setZero(n);
+  double rss = 0;
+  for (std::size_t j = 0; j < recs.size(); ++j) {
+    const double q[4] = {p[0], p[1], p[2], p[3 + j]};
+    Eigen::Matrix4d JtJ;
+    Eigen::Vector4d Jtr;
+    rss += normal_equations(recs[j], q, JtJ, Jtr);
+    const Eigen::Index idx[4] = {0, 1, 2, 3 + static_cast<Eigen::Index>(j)};
+    for (int a = 0; a < 4; ++a) {
+      g(idx[a]) += Jtr(a);
+      for (int b = 0; b < 4; ++b) N(idx[a], idx[b]) += JtJ(a, b);
+    }
+  }
+  return rss;
+}
+
+// polish_start for the pooled fit: Levenberg-Marquardt on the small normal equations (one pass
+// over the samples per trial, no Jacobian stored), so that Ceres starts next to the optimum.
+void polish_pooled_start(const std::vector<StepRecord>& recs, std::vector<double>& p, const std::vector<double>& lo,
+                         const std::vector<double>& hi, const std::vector<bool>& fixed) {
+  const std::size_t n = p.size();
+  double lambda = 1e-3;
+  Eigen::MatrixXd N, N_q;
+  Eigen::VectorXd g, g_q;
+  double cost = pooled_normal_equations(recs, p, N, g);
+  std::vector<double> q(n);
+  for (int it = 0; it < 60; ++it) {
+    for (std::size_t j = 0; j < n; ++j)
+      if (fixed[j]) {
+        const auto e = static_cast<Eigen::Index>(j);
+        N.row(e).setZero();
+        N.col(e).setZero();
+        N(e, e) = 1;
+        g(e) = 0;
+      }
+    bool improved = false;
+    for (int tries = 0; tries < 12 && !improved; ++tries) {
+      Eigen::MatrixXd A = N;
+      for (Eigen::Index j = 0; j < A.rows(); ++j) A(j, j) += lambda * std::max(N(j, j), 1e-12);
+      const Eigen::VectorXd dp = A.ldlt().solve(-g);
+      for (std::size_t j = 0; j < n; ++j)
+        q[j] = fixed[j] ? p[j] : std::clamp(p[j] + dp(static_cast<Eigen::Index>(j)), lo[j], hi[j]);
+      const double c = pooled_normal_equations(recs, q, N_q, g_q);
+      if (std::isfinite(c) && c < cost) {
+        const double rel = (cost - c) / std::max(cost, 1e-300);
+        p = q;
+        cost = c;
+        N = N_q;
+        g = g_q;
+        lambda = std::max(lambda / 3, 1e-12);
+        improved = true;
+        if (rel < 1e-8) return;  // Ceres confirms the last digits
+      } else {
+        lambda *= 4;
+      }
+    }
+    if (!improved) return;
+  }
+}
+
+// Covariance of the pooled fit from its (3 + steps)-square normal matrix J^T J
+// (pooled_normal_equations): s^2 (J^T J)^-1, what ceres::Covariance computes
 // from the tall Jacobian with a dense SVD, at a cost independent of the number of samples.
 // Rank checks: the one ceres::Covariance applies (DENSE_SVD: ratio of the extreme singular values
 // of J below sqrt(min_reciprocal_condition)), and the one fill_covariance applies to single steps
 // (the same ratio after scaling the columns to unit length, below min_reciprocal_condition).
 void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, const LsqOptions& o) {
   const int n = static_cast<int>(f.params.size());
-  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(n, n);
-  for (std::size_t j = 0; j < recs.size(); ++j) {
-    const double p[4] = {f.params[0].value, f.params[1].value, f.params[2].value, f.params[3 + j].value};
-    Eigen::Matrix4d JtJ;
-    Eigen::Vector4d Jtr;
-    normal_equations(recs[j], p, JtJ, Jtr);
-    const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) N(idx[a], idx[b]) += JtJ(a, b);
-  }
+  std::vector<double> p;
+  for (const auto& prm : f.params) p.push_back(prm.value);
+  Eigen::MatrixXd N;
+  Eigen::VectorXd g;
+  pooled_normal_equations(recs, p, N, g);
   std::vector<int> free_idx;
   for (int j = 0; j < n; ++j)
     if (!f.params[static_cast<std::size_t>(j)].fixed) free_idx.push_back(j);
@@ -537,7 +599,7 @@ FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model,
   }
   // One residual block per step (PooledStepCost): Ceres eliminates the offsets y0_j and solves
   // a dense system in K, tau_s, theta_s only (DENSE_SCHUR), with the same Levenberg-Marquardt
-  // iteration, tolerances and bounds as solve_least_squares.
+  // iteration and bounds as solve_least_squares, from a start polished on the normal equations.
   quiet_solver_logging();
   const std::string name = model_name(model) + "_pooled";
   double shared[3];
@@ -547,6 +609,18 @@ FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model,
   }
   std::vector<double> y0(recs.size());
   for (std::size_t j = 0; j < recs.size(); ++j) y0[j] = prob.params[3 + j].start;
+  {
+    std::vector<double> p(k), lo(k), hi(k);
+    std::vector<bool> fixed(k);
+    for (std::size_t j = 0; j < k; ++j) {
+      p[j] = j < 3 ? shared[j] : y0[j - 3];
+      lo[j] = prob.params[j].lower;
+      hi[j] = prob.params[j].upper;
+      fixed[j] = prob.params[j].fixed;
+    }
+    polish_pooled_start(recs, p, lo, hi, fixed);
+    for (std::size_t j = 0; j < k; ++j) (j < 3 ? shared[j] : y0[j - 3]) = p[j];
+  }
   ceres::Problem::Options popt;
   popt.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(popt);
@@ -564,9 +638,12 @@ FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model,
   ordering->AddElementToGroup(shared, 1);
   so.linear_solver_ordering = ordering;
   so.max_num_iterations = options.max_iterations;
-  so.function_tolerance = options.function_tolerance;
+  // As in fit_step: the polished start is at the optimum to about 1e-8 in cost, Ceres confirms
+  // it; its default tolerances (1e-15) would have it shrink rejected steps for several
+  // iterations before giving up on the last digits.
+  so.function_tolerance = std::max(options.function_tolerance, 1e-12);
   so.gradient_tolerance = options.gradient_tolerance;
-  so.parameter_tolerance = options.parameter_tolerance;
+  so.parameter_tolerance = std::max(options.parameter_tolerance, 1e-12);
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
   so.num_threads = 1;
