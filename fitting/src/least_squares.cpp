@@ -9,6 +9,7 @@
 #include <ceres/ceres.h>
 #include <glog/logging.h>
 
+#include "solver_logging.hpp"
 #include "tunekit/fitting/error.hpp"
 #include "tunekit/fitting/stats.hpp"
 
@@ -83,6 +84,8 @@ std::string free_names(const LsqProblem& p) {
 }
 
 }  // namespace
+
+void quiet_solver_logging() { quiet_glog(); }
 
 double residual_variance_floor(const std::vector<double>& observed) {
   double scale = 1.0;

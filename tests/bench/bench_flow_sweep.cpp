@@ -1,13 +1,20 @@
 // Flow-sweep analysis benchmark: a 6-level liquefier flow sweep (the liquefier-flow-sweep
 // protocol's order: 14 steps, each level reached from below and above) at 1 kHz, about two
 // minutes of data, through the whole step analysis (step detection, 14 single-step FOPDT fits,
-// the pooled fit, the arrival levels with their rising/falling fits, the trends). Prints medians.
-//   build/tests/bench/bench_flow_sweep [runs]
+// the pooled fit, the arrival levels with their rising/falling fits, the trends). Prints medians
+// and the "BENCH flow_sweep_analysis" line scripts/bench reads (wall time of the whole analysis).
+//   build/tests/bench/bench_flow_sweep [runs] [--json FILE]
+// --json writes the analysis (every fit with its values and intervals) to FILE, to compare the
+// results of two builds.
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
+#include <fstream>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "../liquefier/synth_flow_sweep.hpp"
 #include "bench_common.hpp"
@@ -31,7 +38,12 @@ double median_cpu_ms_flow(F&& f, int runs) {
 
 int main(int argc, char** argv) {
   using namespace tunekit;
-  const int runs = argc > 1 ? std::max(1, std::stoi(argv[1])) : 9;
+  int runs = 9;
+  const char* json_path = nullptr;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--json") == 0 && i + 1 < argc) json_path = argv[++i];
+    else runs = std::max(1, std::stoi(argv[i]));
+  }
   test::SynthFlowSweepTruth tr;
   // 1.5 to 15 mm^3/s, 8 s per level (14 tau at the slowest level): 3 + 14 * 8 = 115 s.
   const auto s = test::synth_flow_sweep(tr, 6, 1.5, 15, 8.0, 3.0);
@@ -41,7 +53,7 @@ int main(int argc, char** argv) {
   o.operating_points_by_arrival = true;
   std::size_t levels = 0;
   double b = 0;
-  const double wall = bench::median_ms(
+  const bench::Timing wall = bench::time_ms(
       [&] {
         const auto a = ident::analyze_steps(s.t, s.u, s.y, o);
         levels = a.arrival_levels.size();
@@ -50,7 +62,12 @@ int main(int argc, char** argv) {
       runs, 1);
   const double cpu = median_cpu_ms_flow([&] { (void)ident::analyze_steps(s.t, s.u, s.y, o); }, runs);
   std::printf("flow_sweep_6_levels_%zu_samples: median wall %.2f ms, median cpu %.2f ms (%zu arrival levels, b %.4f)\n",
-              s.t.size(), wall, cpu, levels, b);
+              s.t.size(), wall.median_ms, cpu, levels, b);
+  bench::print_bench_line("flow_sweep_analysis", wall);
+  if (json_path != nullptr) {
+    std::ofstream out(json_path);
+    out << ident::to_json(ident::analyze_steps(s.t, s.u, s.y, o)).dump(1) << "\n";
+  }
   // Where the time goes: the 14 single-step fits, and the pooled fit over all of them.
   const auto det = ident::detect_steps(s.t, s.u, o.detect);
   std::vector<fitting::StepRecord> recs;

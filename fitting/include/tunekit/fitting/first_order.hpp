@@ -5,7 +5,7 @@
 //   y(t) = y0 + K du (1 - exp(-(t - t_step - theta) / tau))  afterwards
 //
 // "fo" holds theta at 0 (first order), "fopdt" estimates it (first order plus dead time).
-// Fits use solve_least_squares with an analytic Jacobian, start from the log-incomplete-response
+// Single-step fits use solve_least_squares with an analytic Jacobian, start from the log-incomplete-response
 // method (Holtrup 2019 eq. 4.4), and refuse (FitError) when tau cannot be seen in the record.
 
 #include <string>
@@ -58,7 +58,10 @@ double step_response(double t, double t_step, double du, double K, double tau_s,
 FitResult fit_step(const StepRecord& rec, StepModel model, const LsqOptions& options = {});
 
 /// Fits several steps with one K, tau_s and theta_s and an own y0 per step (y0_0, y0_1, ...).
-/// `start` (optional, may be null) gives K, tau_s, theta_s to start from.
+/// `start` (optional, may be null) gives K, tau_s, theta_s to start from. Solved with Ceres as
+/// one residual block per step (the offsets eliminated by the Schur complement), from a start
+/// polished on the normal equations; intervals from the (3 + steps)-square normal matrix, so the
+/// cost grows with the samples only through the model evaluations.
 FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model, const FitResult* start = nullptr,
                            const LsqOptions& options = {});
 
