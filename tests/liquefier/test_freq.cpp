@@ -1,4 +1,4 @@
-// Frequency response: sine dwell on seed 001 appendix D and on synthetic data, exact ZOH
+// Frequency response: sine dwell on Holtrup 2019 appendix D and on synthetic data, exact ZOH
 // simulation, broadband H1 through a known second-order system, transfer-function fits.
 #include <catch2/catch.hpp>
 

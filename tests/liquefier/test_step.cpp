@@ -1,4 +1,4 @@
-// Step-response identification: seed 001 Table B.1 against the thesis's own Table 4.3,
+// Step-response identification: Holtrup 2019 Table B.1 against the thesis's own Table 4.3,
 // synthetic recovery with known truth, Monte-Carlo interval coverage, step detection, CLI.
 #include <catch2/catch.hpp>
 

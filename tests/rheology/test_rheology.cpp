@@ -1,4 +1,4 @@
-// Melt rheology and nozzle pressure: seed 001 check values (datasets/rheology/check_values.csv),
+// Melt rheology and nozzle pressure: Holtrup 2019 check values (datasets/rheology/check_values.csv),
 // round trips of the fits from default bounds, model comparison, TTS and the inverse nozzle fit.
 #include <catch2/catch.hpp>
 
@@ -41,7 +41,7 @@ TEST_CASE("PEEK Cross-WLF at 400 degC and 1000 1/s: both temperature conventions
   CHECK(thesis == Approx(2.89808e16 * e / (3300099.99695341 * std::pow(g * e, 0.5734) + 1.0)).epsilon(1e-6));
 }
 
-TEST_CASE("power-law fits of PEEK Cross-WLF over 600-950 1/s (seed 001 sec. 5.2.3)") {
+TEST_CASE("power-law fits of PEEK Cross-WLF over 600-950 1/s (Holtrup 2019 sec. 5.2.3)") {
   const auto spec = ViscositySpec::from_cross_wlf(peek());
   struct Row {
     double degc, K, n;

@@ -151,7 +151,7 @@ TEST_CASE("chessboard in the scene: scale within 0.2 % of the truth") {
   CHECK(std::abs(det.px_per_mm / truth_ppm - 1) <= 0.002);
 }
 
-TEST_CASE("seed 001 eq. 4.3: set-point amplitude and ring frequency") {
+TEST_CASE("Holtrup 2019 eq. 4.3: set-point amplitude and ring frequency") {
   vision::RingSine r;
   r.n_sines = 1;
   r.amplitude_mm = 0.1;

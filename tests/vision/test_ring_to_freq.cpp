@@ -1,4 +1,4 @@
-// Issue 6, "Done when" line 2: a rendered photo of seed 001's sine-modulated ring goes through
+// A rendered photo of Holtrup's (2019) sine-modulated ring goes through
 // `tunekit linewidth` (profile CSV against time, set-point width from eq. 4.3) and then
 // `tunekit freq` (sine dwell) to the gain and phase lag that were rendered. The photos carry
 // blur, noise, strong vignetting and uneven lighting, so the detector must not take the dark
@@ -39,7 +39,7 @@ std::string fmtnum(double v) { return fmt::format("{:.9g}", v); }
 }  // namespace
 
 TEST_CASE("rendered sine-modulated ring photo -> tunekit linewidth -> tunekit freq gives the rendered gain and phase") {
-  // The ring print (seed 001, section 4.3.3): N sines per rotation, feeder offset amplitude A,
+  // The ring print (Holtrup 2019, section 4.3.3): N sines per rotation, feeder offset amplitude A,
   // print speed v, ring radius R, rod radius r_rod, layer height h, mean set-point width w_g.
   vision::RingSine ring;
   ring.n_sines = 3;
