@@ -269,7 +269,12 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     // The simulated printer runs the firmware being calibrated (its planner rules and dialect).
     if (sim && std::none_of(o.sim_options.begin(), o.sim_options.end(),
                             [](const std::string& s) { return s.rfind("firmware=", 0) == 0; }))
-      o.sim_options.push_back("firmware=" + protocols::to_string(protocols::parse_export_firmware(a.firmware)));
+    {
+      // Kalico is a Klipper fork: its G-code, API server and planner are Klipper's.
+      const auto fw = protocols::parse_export_firmware(a.firmware);
+      o.sim_options.push_back(
+          "firmware=" + (fw == protocols::ExportFirmware::kalico ? std::string("klipper") : protocols::to_string(fw)));
+    }
     o.dry_run = dry;
     o.run_dir = run_dir + "/" + e.name;
     o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
@@ -469,9 +474,9 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   std::string config = a.config;
   if (config.empty()) {
     const std::map<std::string, std::string> examples{
-        {"klipper", "printer.cfg"}, {"marlin", "Configuration_adv.h"}, {"rrf", "config.g"}};
+        {"klipper", "printer.cfg"}, {"kalico", "printer.cfg"}, {"marlin", "Configuration_adv.h"}, {"rrf", "config.g"}};
     const auto it = examples.find(a.firmware);
-    if (it == examples.end()) throw InputError("--firmware must be klipper, marlin or rrf");
+    if (it == examples.end()) throw InputError("--firmware must be klipper, kalico, marlin or rrf");
     config = run_dir + "/config/" + it->second;
     fs::copy_file(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/" + it->second, config, fs::copy_options::overwrite_existing);
   }
@@ -539,7 +544,7 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
   sub->add_option("-p,--profile", a->profile, "Machine profile TOML: limits (mm, mm/s, mm/s^2) and sensors");
   sub->add_option("--port", a->port, "Serial device, pseudo-terminal or unix:SOCKET of a real machine");
   sub->add_option("--out", a->out_dir, "Run directory (default: runs/calibrate-UTCSTAMP)");
-  sub->add_option("-f,--firmware", a->firmware, "Configuration dialect to update: klipper, marlin or rrf")->capture_default_str();
+  sub->add_option("-f,--firmware", a->firmware, "Configuration dialect to update: klipper, kalico, marlin or rrf")->capture_default_str();
   sub->add_option("-c,--config", a->config,
                   "Firmware configuration to update (default: a copy of the bundled example in the run directory)");
   sub->add_flag("--write", a->write, "Apply the configuration change (backup + atomic replace); default: preview the diff");
