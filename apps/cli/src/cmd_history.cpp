@@ -6,6 +6,7 @@
 //   tunekit history trend   [--machine M] [-q NAME]  each quantity against the machine's baseline
 //   tunekit history report  --out fleet.html         one row per machine, sparklines, drift flagged
 //   tunekit history import  PATH...                  run directories, results and batch summaries
+//                                                    (cmd_history_import.cpp)
 // Drift is a change from the baseline larger than the combined uncertainty of the two runs
 // (tunekit/history/drift.hpp); `--require 'drift.x.freq_hz>-5%'` gates CI on it.
 #include <algorithm>
@@ -31,23 +32,15 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 
+#include "history_args.hpp"
+
 namespace tunekit::cli {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct HistoryArgs {
-  OutputOptions output;
-  std::vector<std::string> machines;
-  std::vector<std::string> quantities;
-  std::int64_t record_id = 0;
-  std::size_t baseline_runs = 1;
-  double coverage_k = 1.96;
-  std::string html_out = "fleet.html";
-  std::vector<std::string> paths;
-  bool machine_from_path = false;
-  bool show_runs = false;
-};
+using history_cmd::HistoryArgs;
+using history_cmd::hist_run_import;
 
 nlohmann::json hist_number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
@@ -467,120 +460,6 @@ int hist_run_report(const HistoryArgs& a, CliContext& ctx) {
   env.results()["machines"] = rows;
   env.results()["report"] = a.html_out;
   if (!a.output.json) ctx.out << fmt::format("report: {}\n", a.html_out);
-  return emit(env, a.output, ctx);
-}
-
-// "calibrate-20261123-014501" in a run directory's name is when it ran; otherwise the
-// result file's modification time.
-std::string hist_run_time(const fs::path& dir, const fs::path& file) {
-  static const std::regex stamp(R"((\d{4})(\d{2})(\d{2})-(\d{2})(\d{2})(\d{2}))");
-  std::smatch m;
-  const std::string name = dir.filename().string();
-  if (std::regex_search(name, m, stamp))
-    return fmt::format("{}-{}-{}T{}:{}:{}.000Z", m[1].str(), m[2].str(), m[3].str(), m[4].str(), m[5].str(), m[6].str());
-  std::error_code ec;
-  const auto ft = fs::last_write_time(file, ec);
-  if (ec) return "";
-  const auto sys = std::chrono::file_clock::to_sys(ft);
-  const std::time_t tt = std::chrono::system_clock::to_time_t(sys);
-  std::tm tm{};
-  gmtime_r(&tt, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S.000Z", &tm);
-  return buf;
-}
-
-struct ImportItem {
-  fs::path file;  // the JSON result
-  fs::path dir;   // its run directory (or its folder)
-  fs::path root;  // the PATH given on the command line it was found under
-  bool found_in_folder = false;  // not named on the command line: skipped (and listed) when it is not a result
-};
-
-bool hist_looks_like_result(const fs::path& p) {
-  std::string head;
-  try {
-    head = ident::read_file_bytes(p.string()).substr(0, 4096);
-  } catch (const std::exception&) {
-    return false;
-  }
-  // Envelope keys are sorted: "command" comes first, "schema_version" after the (long) results.
-  return head.find("\"command\"") != std::string::npos;
-}
-
-void hist_collect(const fs::path& root, const fs::path& dir, std::vector<ImportItem>& out) {
-  if (fs::exists(dir / "results.json")) {  // a run directory: its analysis/*.json are parts of it
-    out.push_back({dir / "results.json", dir, root, dir != root});
-    return;
-  }
-  std::vector<fs::path> entries;
-  for (const auto& e : fs::directory_iterator(dir)) entries.push_back(e.path());
-  std::sort(entries.begin(), entries.end());
-  for (const auto& e : entries) {
-    if (fs::is_directory(e)) hist_collect(root, e, out);
-    else if (e.extension() == ".json" && hist_looks_like_result(e)) out.push_back({e, dir, root, true});
-  }
-}
-
-int hist_run_import(const HistoryArgs& a, CliContext& ctx) {
-  if (!a.output.machine_id.empty() && a.machine_from_path)
-    throw InputError("give either --machine-id or --machine-from-path, not both");
-  if (!a.output.machine_id.empty()) history::check_machine_id(a.output.machine_id);
-  std::vector<ImportItem> items;
-  for (const auto& p : a.paths) {
-    const fs::path path(p);
-    if (!fs::exists(path)) throw InputError("no such file or directory", p);
-    if (fs::is_directory(path)) hist_collect(path, path, items);
-    else items.push_back({path, path.parent_path(), path.parent_path()});
-  }
-  if (items.empty()) throw InputError("no tunekit results found (run directories with results.json, or result JSON files)");
-
-  history::Store store(history_db(a.output));
-  Envelope env("history import");
-  env.set_options({{"db", store.connection().name()}, {"paths", a.paths}, {"machine_id", a.output.machine_id},
-                   {"machine_from_path", a.machine_from_path}});
-  nlohmann::json list = nlohmann::json::array();
-  int imported = 0, duplicates = 0;
-  for (const auto& it : items) {
-    std::string machine = a.output.machine_id;
-    if (machine.empty() && a.machine_from_path) {
-      // archive/<machine>/...: the first folder under the PATH given.
-      const auto rel = fs::relative(it.dir, it.root);
-      machine = rel.empty() || rel == "." ? it.root.filename().string() : rel.begin()->string();
-    }
-    if (machine.empty())
-      throw InputError("whose results are these? give --machine-id NAME, or --machine-from-path for archive/<machine>/...",
-                       it.file.string());
-    const std::string source = fs::weakly_canonical(it.file.filename() == "results.json" ? it.dir : it.file).string();
-    std::vector<history::NewRecord> records;
-    try {
-      nlohmann::json envelope;
-      try {
-        envelope = nlohmann::json::parse(ident::read_file_bytes(it.file.string()));
-      } catch (const nlohmann::json::parse_error& e) {
-        throw InputError(std::string("not valid JSON: ") + e.what(), it.file.string());
-      }
-      records = records_from_envelope(envelope, machine, source, hist_run_time(it.dir, it.file));
-    } catch (const InputError& e) {
-      if (!it.found_in_folder) throw;
-      list.push_back({{"source", source}, {"status", "skipped"}, {"reason", e.message()}});
-      if (!a.output.json) ctx.out << fmt::format("{:<16} {} ({})\n", "skipped", source, e.message());
-      continue;
-    }
-    for (auto& r : records) {
-      r.deduplicate = true;  // importing an archive twice adds nothing
-      const auto id = store.record(r);
-      list.push_back({{"source", r.source}, {"machine_id", machine}, {"command", r.command},
-                      {"record_id", id ? nlohmann::json(*id) : nlohmann::json(nullptr)},
-                      {"status", id ? "imported" : "already recorded"}});
-      (id ? imported : duplicates)++;
-      if (!a.output.json)
-        ctx.out << fmt::format("{:<16} {} ({}, {})\n", id ? "imported" : "already recorded", r.source, machine, r.command);
-    }
-  }
-  env.results()["records"] = list;
-  env.results()["counts"] = {{"imported", imported}, {"already_recorded", duplicates}};
-  if (!a.output.json) ctx.out << fmt::format("{} imported, {} already recorded\n", imported, duplicates);
   return emit(env, a.output, ctx);
 }
 

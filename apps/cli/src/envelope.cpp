@@ -10,12 +10,10 @@
 #include "tunekit/cli/history_record.hpp"
 #include "tunekit/cli/requirements.hpp"
 #include "tunekit/fitting/error.hpp"
+#include "tunekit/fitting/version.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 
-#ifndef TUNEKIT_VERSION
-#define TUNEKIT_VERSION "0.0.0"
-#endif
 
 namespace tunekit::cli {
 
@@ -45,7 +43,7 @@ void Envelope::add_input_digest(const std::string& path, std::string sha256, std
 
 nlohmann::json Envelope::to_json() const {
   return {{"schema_version", kSchemaVersion},
-          {"tool", {{"name", "tunekit"}, {"version", TUNEKIT_VERSION}}},
+          {"tool", {{"name", "tunekit"}, {"version", fitting::kVersion}}},
           {"command", command_},
           {"options", options_},
           {"inputs", inputs_},

@@ -6,7 +6,7 @@
 // A line ";@epilogue" starts the lines that restore what the protocol changed for its test
 // (acceleration limits, cruise ratio, input shaping); the runner sends them also after an abort.
 //
-// Protocols (parameter defaults in experiments.cpp, documented in docs/machine.md):
+// Protocols (parameter defaults in protocol_specs.cpp, documented in docs/machine.md):
 //   liquefier-step      extrusion-rate steps low -> high -> low ..., load cell recorded
 //   liquefier-flow-sweep feed steps up and down through flow levels up to the hot end's limit, each level
 //                       reached from below and above (flow_sweep_plan.hpp), load cell recorded

@@ -51,8 +51,11 @@ struct SimFault {
   std::string describe() const;
 };
 
+/// The simulated liquefier's model (option "liquefier=fopdt|physics", parsed once).
+enum class LiquefierModel { fopdt, physics };
+
 struct SimConfig {
-  std::string liquefier = "fopdt";  ///< "fopdt" or "physics"
+  LiquefierModel liquefier = LiquefierModel::fopdt;
   // First order plus dead time, feed (mm/s) -> force (N).
   double K_N_per_mm_s = 3.5;
   double tau_s = 0.45;
@@ -178,11 +181,17 @@ class Simulator {
   double jerk_x_mm_s_ = 15, jerk_y_mm_s_ = 15;        ///< RRF M566
   double mcr_ = 0.5;                                  ///< Klipper minimum_cruise_ratio
   double junction_speed(const GcodeMove& a, const GcodeMove& b) const;
-  bool klipper() const { return cfg_.firmware == "klipper"; }
-  bool rrf() const { return cfg_.firmware == "rrf"; }
+  // The firmware whose rules apply (SimConfig::firmware, read once when the simulator starts).
+  enum class FirmwareRules { marlin, klipper, rrf };
+  FirmwareRules firmware_ = FirmwareRules::marlin;
+  bool klipper() const { return firmware_ == FirmwareRules::klipper; }
+  bool rrf() const { return firmware_ == FirmwareRules::rrf; }
   void m493(const GcodeWords& w, const Emit& emit);
   void m956(std::string_view body, const GcodeWords& w, const Emit& emit);
-  bool marlin() const { return !klipper() && !rrf(); }
+  bool marlin() const { return firmware_ == FirmwareRules::marlin; }
+  /// Applies the faults planned for the line just received (sim_faults.cpp): may corrupt `line`
+  /// or set `late_ms`; a value means handle_line returns it at once.
+  std::optional<bool> inject_faults(std::string& line, double& late_ms, const Emit& emit);
   long received_count_ = 0;
   long last_n_ = 0;
   bool halted_ = false;

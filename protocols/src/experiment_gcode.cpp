@@ -1,0 +1,192 @@
+// The protocols' shared G-code helpers: number formatting, extrude-only feeds as each firmware
+// plans them, the restore epilogue, input shaping off for a test, and the plan caps.
+#include "tunekit/protocols/experiments.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "tunekit/fitting/error.hpp"
+#include "tunekit/protocols/chirp_plan.hpp"
+#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/protocols/camera_prints.hpp"
+#include "tunekit/protocols/coverage_planner.hpp"
+#include "tunekit/protocols/flow_sweep_plan.hpp"
+#include "tunekit/protocols/gcode.hpp"
+#include "tunekit/protocols/trajectory.hpp"
+
+#include "experiment_gcode.hpp"
+
+namespace tunekit::protocols::experiment_gcode {
+
+double mid(const MachineProfile& p, const std::string& axis) {
+  const auto& a = p.axis(axis);
+  return 0.5 * (a.min_mm + a.max_mm);
+}
+
+std::string num(double v, int decimals) {
+  std::string s = fmt::format("{:.{}f}", v, decimals);
+  if (s.find('.') != std::string::npos) {
+    while (s.back() == '0') s.pop_back();
+    if (s.back() == '.') s.pop_back();
+  }
+  if (s == "-0") s = "0";
+  return s;
+}
+
+/// One constant-feed segment of `duration_s` at `feed_mm_s`, split into moves of at most
+/// max_len_mm. When the firmware stops after each move, the move's speed is raised so that the
+/// move with its ramps (d / v + v / a) still takes its share of the duration and delivers its
+/// share of the length: the staircase keeps its labelled timing.
+void feed_move(std::vector<std::string>& g, const FeedPlan& fp, double feed_mm_s, double duration_s) {
+  const double total = feed_mm_s * duration_s;
+  const int n = std::max(1, static_cast<int>(std::ceil(total / fp.max_len_mm - 1e-9)));
+  const double d = total / n, dt = duration_s / n;
+  double v = feed_mm_s;
+  if (fp.stops) {
+    const double a = fp.accel_mm_s2;
+    const double disc = a * a * dt * dt - 4 * a * d;
+    if (disc < 0)
+      throw InputError(fmt::format(
+          "a {:.4g} s feed segment of {:.4g} mm cannot keep its timing on a firmware that stops after every "
+          "extrude-only move (Klipper) at {:.0f} mm/s^2: it needs at least {:.0f} mm/s^2 (4 d / t^2) or a longer segment",
+          dt, d, a, 4 * d / (dt * dt)));
+    v = 0.5 * (a * dt - std::sqrt(disc));
+  }
+  for (int i = 0; i < n; ++i) g.push_back(fmt::format("G1 E{} F{}", num(d, 5), num(v * 60, 3)));
+}
+
+/// The acceleration commands for extrude-only moves, per firmware, and their restore lines:
+/// Klipper caps them by SET_VELOCITY_LIMIT ACCEL and max_extrude_only_accel (extruder.py
+/// check_move); Marlin plans moves without X/Y/Z steps with the retract acceleration M204 R
+/// (planner.cpp); RepRapFirmware applies M204 to XY moves only (DDA.cpp "apply M204
+/// acceleration limits to XY moves"), so M201 E limits them.
+FeedPlan extruder_accel(std::vector<std::string>& g, std::vector<std::string>& restore, double a,
+                        const MachineProfile& profile, const Dialect& d) {
+  FeedPlan fp;
+  fp.max_len_mm = profile.extruder.max_extrude_only_distance_mm;
+  switch (d.firmware()) {
+    case Firmware::klipper:
+      g.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(a, 0)));
+      restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(profile.print.max_accel_mm_s2, 0)));
+      fp.stops = true;
+      fp.accel_mm_s2 = std::min(a, profile.extruder.max_accel_mm_s2);
+      break;
+    case Firmware::reprapfirmware:
+      g.push_back(fmt::format("M201 E{}", num(a, 0)));
+      restore.push_back(fmt::format("M201 E{}", num(profile.state.max_accel_e_mm_s2, 0)));
+      fp.accel_mm_s2 = a;
+      break;
+    default:
+      g.push_back(fmt::format("M204 R{}", num(a, 0)));
+      restore.push_back(fmt::format("M204 R{}", num(profile.state.retract_accel_mm_s2, 0)));
+      fp.accel_mm_s2 = a;
+      break;
+  }
+  return fp;
+}
+
+FeedPlan liquefier_prologue(std::vector<std::string>& g, std::vector<std::string>& restore,
+                            const std::map<std::string, double>& p, const MachineProfile& profile, const Dialect& d) {
+  g.push_back("M83 ; relative extrusion");
+  if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
+  return extruder_accel(g, restore, p.at("accel_mm_s2"), profile, d);
+}
+
+/// Appends the restore lines after the ";@epilogue" marker: the runner also sends them after
+/// an abort (after stopping motion).
+void epilogue(std::vector<std::string>& g, const std::vector<std::string>& restore) {
+  if (restore.empty()) return;
+  g.push_back(";@epilogue");
+  g.insert(g.end(), restore.begin(), restore.end());
+}
+
+/// "type:freq:zeta" of the profile's [firmware_state].
+struct StateShaper {
+  std::string type;
+  std::string freq, zeta;
+};
+StateShaper split_state_shaper(const std::string& v) {
+  StateShaper s;
+  const auto a = v.find(':'), b = v.rfind(':');
+  s.type = v.substr(0, a);
+  s.freq = v.substr(a + 1, b - a - 1);
+  s.zeta = v.substr(b + 1);
+  return s;
+}
+
+/// Input shaping off for a test and its restore lines, per firmware, when the profile says the
+/// machine has shaping configured ([firmware_state] shaper_x/y): Klipper as its resonance tester
+/// (SET_INPUT_SHAPER with zero frequencies), Marlin M593 F0 (M593.cpp: without X/Y every shaped
+/// axis), RepRapFirmware M593 P"none".
+void shaping_off(const MachineProfile& profile, const Dialect& d, std::vector<std::string>& prologue,
+                 std::vector<std::string>& restore, nlohmann::json& changed) {
+  const auto& shaper = profile.state.shaper;
+  if (shaper.empty()) return;
+  switch (d.firmware()) {
+    case Firmware::klipper: {
+      prologue.push_back("SET_INPUT_SHAPER SHAPER_FREQ_X=0 SHAPER_FREQ_Y=0");
+      std::string r = "SET_INPUT_SHAPER";
+      for (const auto& [ax, v] : shaper) {
+        const auto sv = split_state_shaper(v);
+        const std::string U = ax == "x" ? "X" : "Y";
+        r += fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", U, sv.type, U, sv.freq, U, sv.zeta);
+      }
+      restore.push_back(r);
+      changed.push_back("input_shaper");
+      break;
+    }
+    case Firmware::reprapfirmware: {
+      prologue.push_back("M593 P\"none\"");
+      const auto sv = split_state_shaper(shaper.begin()->second);
+      restore.push_back(fmt::format("M593 P\"{}\" F{} S{}", sv.type, sv.freq, sv.zeta));
+      changed.push_back("M593");
+      break;
+    }
+    default:
+      prologue.push_back("M593 F0");
+      for (const auto& [ax, v] : shaper) {
+        const auto sv = split_state_shaper(v);
+        restore.push_back(fmt::format("M593 {} F{} D{}", ax == "x" ? "X" : "Y", sv.freq, sv.zeta));
+      }
+      changed.push_back("M593");
+      break;
+  }
+}
+
+/// Records how the staircase is timed on this firmware (the analysis uses the recorded feed).
+void record_feed_plan(Experiment& e, const FeedPlan& fp) {
+  e.excitation["extrude_only_moves_stop"] = fp.stops;
+  e.excitation["extrude_only_accel_mm_s2"] = fp.accel_mm_s2;
+  e.excitation["max_extrude_only_distance_mm"] = fp.max_len_mm;
+  e.excitation["timing"] = fp.stops ? "each move's speed raised so that with its stop it takes its labelled time"
+                                    : "consecutive extrude-only moves blend: the labelled timing";
+}
+
+
+/// Refuses a plan (lines and machine time worked out from the parameters) beyond the caps.
+void check_plan(const std::string& protocol, double lines, double duration_s, const ProtocolLimits& limits) {
+  if (!(duration_s <= limits.max_duration_s)) {
+    const std::string how_long = std::isfinite(duration_s) ? fmt::format("{:.4g} s ({:.3g} h)", duration_s, duration_s / 3600)
+                                                           : std::string("an unbounded time");
+    throw InputError(fmt::format("{} would take {} of machine time; the limit is {:g} s (change the parameters, or "
+                                 "raise it with --max-duration)",
+                                 protocol, how_long, limits.max_duration_s));
+  }
+  if (!(lines <= static_cast<double>(limits.max_lines)))
+    throw InputError(fmt::format("{} would need {:.4g} G-code lines; the limit is {} (change the parameters, or "
+                                 "raise it with --max-lines)",
+                                 protocol, lines, limits.max_lines));
+}
+
+/// A second bound while generating, whatever the plan said: the memory a protocol takes stays
+/// bounded even if a plan were wrong.
+void guard_line_count(const std::vector<std::string>& g, const ProtocolLimits& limits, const std::string& protocol) {
+  if (g.size() > limits.max_lines + 64)
+    throw InputError(fmt::format("{} exceeds {} G-code lines while being generated (--max-lines)", protocol, limits.max_lines));
+}
+
+}  // namespace tunekit::protocols::experiment_gcode
