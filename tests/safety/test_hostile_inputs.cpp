@@ -79,8 +79,11 @@ TEST_CASE("bad results JSON is a located input error, not an internal error", "[
 TEST_CASE("images whose header claims too many pixels are refused before decoding", "[safety]") {
   using tunekit::vision::decode_image;
   const auto t0 = std::chrono::steady_clock::now();
-  // A 7 KB BMP claiming 9,437,280 x 64 pixels; PGMs claiming 30000^2 and 46000^2.
-  for (const std::string& bytes : {bmp_claiming(9437280, 64, 7000), std::string("P5\n30000 30000\n255\n") + std::string(100, 'x'),
+  // A 7 KB BMP claiming 9,437,280 x 64 pixels; a top-down BMP (negative height) claiming
+  // 14852 x 45747 (a libFuzzer finding: the negative height passed the check); PGMs claiming
+  // 30000^2 and 46000^2.
+  for (const std::string& bytes : {bmp_claiming(9437280, 64, 7000), bmp_claiming(14852, 0xFFFF4D4Du, 16),
+                                   std::string("P5\n30000 30000\n255\n") + std::string(100, 'x'),
                                    std::string("P5\n46000 46000\n255\n") + std::string(100, 'x')}) {
     try {
       decode_image(bytes, "claim.img");

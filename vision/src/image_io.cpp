@@ -4,6 +4,7 @@
 #include <atomic>
 #include "tunekit/vision/exif_orientation.hpp"
 
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -76,11 +77,17 @@ cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageCol
                      name);
   }
   // The header's dimensions, before any pixel is decoded: a tiny file may claim a huge image.
-  const std::uint64_t pixels_claimed = static_cast<std::uint64_t>(std::max(w, 0)) * static_cast<std::uint64_t>(std::max(h, 0));
+  // Magnitudes: a top-down BMP stores a negative height, which stb's info call passes on as
+  // it is, while its decoder allocates for the magnitude (a libFuzzer finding: a 29-byte BMP
+  // claiming 14852 x -45747 pixels passed a check that clamped negatives to zero).
+  const std::uint64_t w_claimed = static_cast<std::uint64_t>(std::llabs(static_cast<long long>(w)));
+  const std::uint64_t h_claimed = static_cast<std::uint64_t>(std::llabs(static_cast<long long>(h)));
+  const std::uint64_t pixels_claimed = w_claimed * h_claimed;
   if (pixels_claimed > max_image_pixels())
     throw InputError(fmt::format("image of {} x {} pixels ({:.1f} MP) exceeds the limit of {:.1f} MP (raise it with "
                                  "--max-image-mp); nothing was decoded",
-                                 w, h, static_cast<double>(pixels_claimed) / 1e6, static_cast<double>(max_image_pixels()) / 1e6),
+                                 w_claimed, h_claimed, static_cast<double>(pixels_claimed) / 1e6,
+                                 static_cast<double>(max_image_pixels()) / 1e6),
                      name);
   if (stbi_is_hdr_from_memory(data, len)) throw InputError("cannot decode image: HDR (float) images are not supported", name);
   const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
