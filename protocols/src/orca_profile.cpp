@@ -220,7 +220,11 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
   std::vector<Edit> edits;
   OrcaMergeResult r;
   std::vector<std::pair<std::string, std::string>> missing;
-  for (const auto& [key, value] : want) {
+  for (const auto& wanted : want) {
+    // Plain references, not a structured binding: the lambda captures the key (clang 14, which
+    // builds the fuzz harnesses, refuses to capture a structured binding).
+    const std::string& key = wanted.first;
+    const std::string& value = wanted.second;
     const auto it = std::find_if(members.begin(), members.end(), [&](const OrcaMember& m) { return m.key == key; });
     if (it == members.end()) {
       missing.emplace_back(key, value);

@@ -220,7 +220,6 @@ class Simulator {
   std::vector<double> delay_;
   std::size_t delay_pos_ = 0;
   double liq_ = 0;  ///< FOPDT output (N) or pressure (MPa)
-  double last_feed_ = 0;
   std::mt19937 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
   std::string out_;
