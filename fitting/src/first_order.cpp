@@ -51,25 +51,28 @@ double mean_of(const std::vector<double>& v, std::size_t b, std::size_t e) {
 
 // Residuals model - y and the Jacobian for one record; p = {K, tau, theta, y0}; columns of the
 // Jacobian row are placed at cols[0..3] of a row of width `width`.
+/// The step model at sample i of one record and its derivatives by K, tau and theta (by y0: 1).
+struct StepModelPoint {
+  double m, dK, dtau, dtheta;
+};
+StepModelPoint step_model_at(const StepRecord& r, std::size_t i, double K, double tau, double theta, double y0) {
+  const double s = r.t[i] - r.t_step - theta;
+  if (s <= 0) return {y0, 0, 0, 0};
+  const double e = std::exp(-s / tau);
+  return {y0 + K * r.du * (1 - e), r.du * (1 - e), -K * r.du * e * s / (tau * tau), -K * r.du * e / tau};
+}
+
 void step_residuals(const StepRecord& r, double K, double tau, double theta, double y0, double* res, double* jac,
                     std::size_t width, const std::size_t cols[4]) {
   const std::size_t n = r.t.size();
   for (std::size_t i = 0; i < n; ++i) {
-    const double s = r.t[i] - r.t_step - theta;
-    double m = y0, dK = 0, dtau = 0, dtheta = 0;
-    if (s > 0) {
-      const double e = std::exp(-s / tau);
-      m = y0 + K * r.du * (1 - e);
-      dK = r.du * (1 - e);
-      dtau = -K * r.du * e * s / (tau * tau);
-      dtheta = -K * r.du * e / tau;
-    }
-    res[i] = m - r.y[i];
+    const StepModelPoint p = step_model_at(r, i, K, tau, theta, y0);
+    res[i] = p.m - r.y[i];
     if (jac != nullptr) {
       double* row = jac + i * width;
-      row[cols[0]] = dK;
-      row[cols[1]] = dtau;
-      row[cols[2]] = dtheta;
+      row[cols[0]] = p.dK;
+      row[cols[1]] = p.dtau;
+      row[cols[2]] = p.dtheta;
       row[cols[3]] = 1.0;
     }
   }
@@ -246,20 +249,12 @@ class PooledStepCost final : public ceres::CostFunction {
     const std::size_t n = r_.t.size();
     const double K = p[0][0], tau = p[0][1], theta = p[0][2], y0 = p[1][0];
     for (std::size_t i = 0; i < n; ++i) {
-      const double s = r_.t[i] - r_.t_step - theta;
-      double m = y0, dK = 0, dtau = 0, dtheta = 0;
-      if (s > 0) {
-        const double e = std::exp(-s / tau);
-        m = y0 + K * r_.du * (1 - e);
-        dK = r_.du * (1 - e);
-        dtau = -K * r_.du * e * s / (tau * tau);
-        dtheta = -K * r_.du * e / tau;
-      }
-      res[i] = m - r_.y[i];
+      const StepModelPoint m = step_model_at(r_, i, K, tau, theta, y0);
+      res[i] = m.m - r_.y[i];
       if (j_shared != nullptr) {
-        j_shared[3 * i] = dK;
-        j_shared[3 * i + 1] = dtau;
-        j_shared[3 * i + 2] = dtheta;
+        j_shared[3 * i] = m.dK;
+        j_shared[3 * i + 1] = m.dtau;
+        j_shared[3 * i + 2] = m.dtheta;
       }
       if (j_y0 != nullptr) j_y0[i] = 1.0;
     }
