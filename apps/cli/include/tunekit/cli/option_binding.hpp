@@ -41,4 +41,16 @@ CLI::Option* add_choice_option(CLI::App* sub, const std::string& names, T& targe
   return opt;
 }
 
+/// Adds `--name WORD` that sets `target` to parse(WORD), with the library's own parser (which
+/// throws InputError for an unknown word) and name for the default shown by --help.
+template <class T, class Parse, class Name>
+CLI::Option* add_parsed_option(CLI::App* sub, const std::string& names, T& target, Parse parse, Name name,
+                               const std::string& description) {
+  auto* opt = sub->add_option_function<std::string>(
+      names, [&target, parse](const std::string& word) { target = parse(word); }, description);
+  opt->type_name("TEXT");
+  opt->default_str(name(target));
+  return opt;
+}
+
 }  // namespace tunekit::cli
