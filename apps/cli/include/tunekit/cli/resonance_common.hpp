@@ -36,12 +36,6 @@ struct AxisResult {
   ident::AxisModes modes;
 };
 
-/// A file read, as the envelope lists it.
-struct InputDigest {
-  std::string path;
-  std::string sha256;  ///< lower-case hex of the bytes read
-  std::size_t size_bytes = 0;
-};
 
 /// What analyze_accel_files() found.
 struct AccelAnalysis {
