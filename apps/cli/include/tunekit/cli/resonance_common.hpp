@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "tunekit/cli/input_digest.hpp"
 #include "tunekit/ident/resonance.hpp"
 #include "tunekit/ident/spectrum.hpp"
 
