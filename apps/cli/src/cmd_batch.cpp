@@ -17,7 +17,7 @@
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/requirements.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
 namespace tunekit::cli {

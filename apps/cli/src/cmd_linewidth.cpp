@@ -19,7 +19,7 @@
 #include "linewidth_command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/vision/camera_calibration.hpp"
 #include "tunekit/vision/charuco.hpp"
 #include "tunekit/vision/line_width.hpp"

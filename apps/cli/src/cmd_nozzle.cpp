@@ -11,7 +11,7 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/ident/csv.hpp"

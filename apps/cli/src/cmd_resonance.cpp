@@ -8,7 +8,7 @@
 #include "resonance_common.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/ringdown.hpp"
 
 namespace tunekit::cli {

@@ -15,7 +15,7 @@
 #include "resonance_common.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/input_shaper.hpp"
 #include "tunekit/ident/klipper_spectrum.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
