@@ -21,7 +21,7 @@
 #include "tunekit/cli/step_command.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/requirements.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
 namespace tunekit::cli {

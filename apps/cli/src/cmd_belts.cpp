@@ -11,7 +11,7 @@
 #include "tunekit/cli/belts_command.hpp"
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
 namespace tunekit::cli {

@@ -35,7 +35,7 @@
 #include "tunekit/cli/history_record.hpp"
 #include "tunekit/cli/progress.hpp"
 #include "tunekit/cli/report.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/first_order.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/input_shaper.hpp"

@@ -11,7 +11,7 @@
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/delta_command.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
 #include "tunekit/protocols/atomic_file.hpp"

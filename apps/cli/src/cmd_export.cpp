@@ -21,7 +21,7 @@
 #include "tunekit/cli/plots.hpp"
 #include "tunekit/cli/results_json.hpp"
 #include "tunekit/fitting/fit_result.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"

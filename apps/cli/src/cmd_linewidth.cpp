@@ -22,7 +22,7 @@
 #include "tunekit/cli/linewidth_command.hpp"
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/vision/camera_calibration.hpp"
 #include "tunekit/vision/charuco.hpp"
 #include "tunekit/vision/line_width.hpp"

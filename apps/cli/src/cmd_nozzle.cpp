@@ -13,7 +13,7 @@
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/nozzle_command.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/ident/csv.hpp"

@@ -16,7 +16,7 @@
 #include "tunekit/cli/overshoot_command.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/report.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/overshoot.hpp"
 #include "tunekit/protocols/atomic_file.hpp"

@@ -10,7 +10,7 @@
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/resonance_command.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/ringdown.hpp"
 
 namespace tunekit::cli {

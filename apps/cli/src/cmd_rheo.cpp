@@ -15,7 +15,7 @@
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/cli/rheo_command.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/liquefier_prediction.hpp"

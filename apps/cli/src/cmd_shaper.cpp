@@ -16,7 +16,7 @@
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/shaper_command.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/klipper_spectrum.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"

@@ -13,7 +13,7 @@
 #include "tunekit/cli/step_command.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 

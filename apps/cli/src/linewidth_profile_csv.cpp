@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 
 #include "linewidth_profile_csv.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/gcode.hpp"

@@ -10,7 +10,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 
 namespace tunekit::cli {

@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/klipper_spectrum.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
