@@ -15,8 +15,8 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
-#include "tunekit/fitting/version.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/core/version.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/simulator.hpp"
 
@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
                  "theta_s=0.04 (s), force_noise_N=0.02 (N), load_cell_rate_hz=200 (Hz), mode_x=48:0.08[:weight] "
                  "(Hz:damping ratio), accel_rate_hz=3200 (Hz), accel_noise_mm_s2=20 (mm/s^2), jerk_mm_s3=1e8 (mm/s^3), "
                  "seed=1, fault=drop@N|garble@N|late-ok@N:MS|disconnect@N|error@N (N: received line count)");
-  app.set_version_flag("--version", std::string("tunekit-sim ") + tunekit::fitting::kVersion);
+  app.set_version_flag("--version", std::string("tunekit-sim ") + tunekit::core::kVersion);
   app.footer(
       "The pseudo-terminal's path is printed on stdout; the simulator runs until interrupted or a\n"
       "disconnect fault fires. Machine time advances with executed motion only, faster than real time.\n"

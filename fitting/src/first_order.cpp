@@ -12,7 +12,7 @@
 
 #include "tunekit/fitting/stats.hpp"
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "number_text.hpp"
 #include "solver_logging.hpp"
 

@@ -6,7 +6,7 @@
 
 #include <nlopt.hpp>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::fitting {
 namespace {

@@ -5,7 +5,7 @@
 #include <limits>
 #include <vector>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::fitting {
 

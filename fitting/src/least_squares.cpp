@@ -10,7 +10,7 @@
 #include <glog/logging.h>
 
 #include "solver_logging.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::fitting {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/least_squares.hpp"
 #include "tunekit/fitting/stats.hpp"
 

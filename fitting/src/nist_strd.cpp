@@ -8,7 +8,7 @@
 
 #include <ceres/jet.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::fitting {
 namespace {

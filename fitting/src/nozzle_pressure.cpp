@@ -6,7 +6,7 @@
 #include <limits>
 #include <numbers>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/global_start.hpp"
 
 namespace tunekit::fitting {

@@ -5,7 +5,7 @@
 #include <map>
 #include <tuple>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::fitting {

@@ -9,7 +9,7 @@
 #include <cstdarg>
 #include <cstdio>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/profile_likelihood.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "rheology_fit_detail.hpp"

@@ -4,7 +4,7 @@
 #include <cctype>
 #include <cmath>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::fitting {
 namespace {

@@ -4,7 +4,7 @@
 #include <cstdlib>
 
 #include "connections.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::history {
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::history {
 

@@ -8,7 +8,7 @@
 #include <cstdlib>
 
 #include "connections.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::history {
 namespace {

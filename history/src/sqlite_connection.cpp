@@ -13,7 +13,7 @@
 #include <fmt/format.h>
 
 #include "connections.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::history {
 namespace {

@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::history {
 namespace {

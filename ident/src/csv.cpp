@@ -12,7 +12,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -172,15 +172,6 @@ std::string csv_utf16_to_utf8(std::string_view bytes, const std::string& path) {
 }
 
 }  // namespace
-
-bool iequals(std::string_view a, std::string_view b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const auto ca = static_cast<unsigned char>(a[i]), cb = static_cast<unsigned char>(b[i]);
-    if (std::tolower(ca) != std::tolower(cb)) return false;
-  }
-  return true;
-}
 
 std::pair<std::string, std::string> split_name_unit(std::string_view f) {
   f = trim(f);

@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/least_squares.hpp"
 
 namespace tunekit::ident {

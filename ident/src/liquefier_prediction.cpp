@@ -4,7 +4,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::ident {
 

@@ -8,16 +8,12 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/text.hpp"
 
 namespace tunekit::ident {
 namespace {
-
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 // Linear interpolation of (t, x) onto t0 + i dt.
 std::vector<double> resample(const std::vector<double>& t, const std::vector<double>& x, double t0, double dt,
@@ -169,7 +165,7 @@ void replace_wild_samples(CsvTable& table, std::string_view bytes, std::size_t c
 char axis_from_filename(const std::string& path) {
   std::string base = path;
   if (const auto slash = base.find_last_of('/'); slash != std::string::npos) base = base.substr(slash + 1);
-  base = lower(base);
+  base = core::lower(base);
   for (const char* prefix : {"raw_data_", "calibration_data_", "resonances_"}) {
     const auto pos = base.find(prefix);
     if (pos == std::string::npos) continue;
@@ -247,7 +243,7 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
   }
 
   for (std::size_t c = 1; c <= accel.size(); ++c) {
-    r.channel_names.push_back(lower(table.columns[c].name));
+    r.channel_names.push_back(core::lower(table.columns[c].name));
     r.channels.push_back(std::move(table.columns[c].values));
   }
   if (!o.excitation_column.empty()) {

@@ -8,7 +8,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/fitting/damped_sinusoids.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/spectrum.hpp"
 

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <zstd.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::ident {
 namespace {

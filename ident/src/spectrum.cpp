@@ -8,7 +8,7 @@
 #include <fftw3.h>
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
 namespace tunekit::ident {

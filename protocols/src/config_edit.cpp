@@ -9,7 +9,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 
 namespace tunekit::protocols {

@@ -121,7 +121,7 @@ std::optional<std::string> parse_line(std::vector<Section>& secs, const std::str
   const auto sep = t.find_first_of(":=");
   if (sep == std::string::npos) return std::nullopt;
   Opt o;
-  o.name = text::lower(trim(t.substr(0, sep)));
+  o.name = core::lower(trim(t.substr(0, sep)));
   o.sep = t.substr(sep, 1);
   o.line = index;
   std::size_t vb = sep + 1;
@@ -274,7 +274,7 @@ struct Want {
 
 bool same_value(const Want& w, const std::string& existing) {
   if (w.numeric) return same_number(existing, w.number, w.decimals);
-  return text::lower(trim(existing)) == text::lower(w.value);
+  return core::lower(trim(existing)) == core::lower(w.value);
 }
 
 const Opt* find_opt(const std::vector<Section>& secs, const std::string& section, const std::string& option,

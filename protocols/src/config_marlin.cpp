@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 
 #include "export_writers.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
 #include "text_util.hpp"

@@ -12,7 +12,7 @@
 #include <fmt/format.h>
 
 #include "export_writers.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 #include "text_util.hpp"
 
@@ -213,7 +213,7 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
       const std::string old_p = param_value(t, 'P'), old_f = param_value(t, 'F'), old_s = param_value(t, 'S');
       std::string bare_p = old_p;
       bare_p.erase(std::remove(bare_p.begin(), bare_p.end(), '"'), bare_p.end());
-      if (text::lower(bare_p) != type) {
+      if (core::lower(bare_p) != type) {
         t = set_param(t, 'P', "\"" + type + "\"");
         r.changes.push_back({"M593 P", old_p, "\"" + type + "\"", *m593 + 1, "command"});
       }

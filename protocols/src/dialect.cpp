@@ -41,7 +41,7 @@ std::string to_string(Firmware f) {
 }
 
 Firmware firmware_from_name(const std::string& name) {
-  const std::string n = text::lower(name);
+  const std::string n = core::lower(name);
   if (n == "marlin") return Firmware::marlin;
   if (n == "prusa") return Firmware::prusa;
   if (n == "klipper") return Firmware::klipper;
@@ -67,7 +67,7 @@ FirmwareInfo parse_m115(const std::vector<std::string>& lines) {
     if (line.find("FIRMWARE_NAME:") == std::string::npos || info.firmware != Firmware::unknown) continue;
     info.name = field(line, "FIRMWARE_NAME");
     info.version = field(line, "FIRMWARE_VERSION");
-    const std::string n = text::lower(info.name);
+    const std::string n = core::lower(info.name);
     if (n.find("prusa") != std::string::npos) info.firmware = Firmware::prusa;
     else if (n.find("klipper") != std::string::npos) info.firmware = Firmware::klipper;
     else if (n.find("reprapfirmware") != std::string::npos) info.firmware = Firmware::reprapfirmware;

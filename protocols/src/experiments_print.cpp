@@ -9,7 +9,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"

@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 
 #include "export_writers.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/marlin_smoothing.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
@@ -43,7 +43,7 @@ bool marlin_ft_motion_enabled(const std::string& text) {
 }
 
 ExportFirmware parse_export_firmware(const std::string& name) {
-  const std::string n = text::lower(name);
+  const std::string n = core::lower(name);
   if (n == "klipper") return ExportFirmware::klipper;
   if (n == "kalico") return ExportFirmware::kalico;
   if (n == "marlin") return ExportFirmware::marlin;
@@ -62,7 +62,7 @@ std::string to_string(ExportFirmware fw) {
 }
 
 std::string canonical_shaper_type(const std::string& type) {
-  const std::string t = text::lower(type);
+  const std::string t = core::lower(type);
   if (t == "ei2" || t == "2hei" || t == "2-hump-ei") return "2hump_ei";
   if (t == "ei3" || t == "3hei" || t == "3-hump-ei") return "3hump_ei";
   return t;

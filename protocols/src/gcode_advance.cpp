@@ -8,7 +8,7 @@
 #include <fmt/format.h>
 
 #include "export_writers.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 
 namespace tunekit::protocols {

@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 
 namespace tunekit::protocols {

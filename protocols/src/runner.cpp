@@ -11,13 +11,14 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/dialect.hpp"
 #include "tunekit/protocols/journal.hpp"
 #include "tunekit/protocols/klipper_api.hpp"
 #include "tunekit/protocols/klipper_sensors.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/protocols/sim_camera.hpp"
 #include "tunekit/protocols/serial_transport.hpp"
 #include "tunekit/protocols/simulator.hpp"
 

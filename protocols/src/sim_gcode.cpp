@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 
 #include "sim_constants.hpp"
-#include "tunekit/fitting/version.hpp"
+#include "tunekit/core/version.hpp"
 #include "tunekit/protocols/simulator.hpp"
 
 namespace tunekit::protocols {
@@ -229,17 +229,17 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     } else if (c == "M115") {
       out_flush(emit);
       if (klipper())
-        emit(fmt::format("FIRMWARE_NAME:Klipper FIRMWARE_VERSION:v0.13.0-tunekit-sim-{}\n", fitting::kVersion));
+        emit(fmt::format("FIRMWARE_NAME:Klipper FIRMWARE_VERSION:v0.13.0-tunekit-sim-{}\n", core::kVersion));
       else if (rrf())
         emit(fmt::format("FIRMWARE_NAME: RepRapFirmware for tunekit-sim FIRMWARE_VERSION: 3.5.1 ELECTRONICS: tunekit-sim "
                          "{} FIRMWARE_DATE: 2024-01-01\n",
-                         fitting::kVersion));
+                         core::kVersion));
       else
         emit(fmt::format("FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
                          "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
                          "UUID:00000000-0000-0000-0000-000000000000\n"
                          "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
-                         fitting::kVersion));
+                         core::kVersion));
       if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
     } else if (c == "M105") {
       out_flush(emit);

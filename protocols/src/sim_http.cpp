@@ -12,7 +12,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/simulator.hpp"
 
 namespace tunekit::protocols {

@@ -16,7 +16,7 @@
 #include <fmt/format.h>
 
 #include "sim_constants.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/input_shaper.hpp"
 
 namespace tunekit::protocols {

@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
 #include "tunekit/ident/delta_kinematics.hpp"

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/config_edit.hpp"
 #include "tunekit/protocols/firmware_export.hpp"
 

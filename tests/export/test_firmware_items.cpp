@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/firmware_export.hpp"
 
 using namespace tunekit;

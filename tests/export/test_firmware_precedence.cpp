@@ -16,7 +16,7 @@
 #include <string_view>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/firmware_export.hpp"
 #include "tunekit/protocols/firmware_limits.hpp"
 

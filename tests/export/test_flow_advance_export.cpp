@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/protocols/firmware_export.hpp"
 #include "tunekit/protocols/gcode_advance.hpp"

@@ -21,7 +21,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/marlin_smoothing.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
 #include "tunekit/protocols/firmware_export.hpp"

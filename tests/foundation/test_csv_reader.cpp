@@ -5,7 +5,7 @@
 #include <string>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
 using tunekit::test::run_cli;

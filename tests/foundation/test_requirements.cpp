@@ -5,7 +5,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/cli/requirements.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 using tunekit::cli::evaluate_requirement;
 using tunekit::cli::parse_requirement;

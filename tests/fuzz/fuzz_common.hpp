@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::fuzz {
 

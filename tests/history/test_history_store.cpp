@@ -11,7 +11,7 @@
 
 #include "history_fixture.hpp"
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/history/drift.hpp"
 #include "tunekit/history/quantities.hpp"
 #include "tunekit/history/store.hpp"

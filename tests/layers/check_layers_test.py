@@ -15,7 +15,7 @@ import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-LIBRARIES = ("fitting", "ident", "vision", "history", "protocols", "apps")
+LIBRARIES = ("core", "fitting", "ident", "vision", "history", "protocols", "apps")
 SUFFIXES = (".hpp", ".h", ".cpp")
 
 
@@ -80,6 +80,10 @@ def main():
 
     # 2. Planted upward or sideways includes fail with FILE:LINE in the message.
     cases = [
+        ("core includes fitting", lambda t: first_source(t, "core/src"),
+         '#include "tunekit/fitting/stats.hpp"', "tunekit/fitting/stats.hpp"),
+        ("core includes ident in a public header", lambda t: "core/include/tunekit/core/error.hpp",
+         "#include <tunekit/ident/csv.hpp>", "tunekit/ident/csv.hpp"),
         ("fitting includes protocols", lambda t: first_source(t, "fitting/src"),
          '#include "tunekit/protocols/machine_profile.hpp"', "tunekit/protocols/machine_profile.hpp"),
         ("fitting includes ident with <>", lambda t: first_source(t, "fitting/src"),
@@ -107,8 +111,11 @@ def main():
         elif len([l for l in out.splitlines() if ": error: " in l]) != 1:
             failures.append(f"{what}: expected exactly one violation, got:\n{out}")
 
-    # 3. Allowed includes stay allowed: protocols may include vision, apps may include history.
+    # 3. Allowed includes stay allowed: protocols may include vision, apps may include history,
+    #    every library may include core.
     tree = fresh("allowed")
+    for library in ("fitting", "ident", "vision", "history", "protocols"):
+        plant(tree, first_source(tree, f"{library}/src"), '#include "tunekit/core/error.hpp"')
     plant(tree, first_source(tree, "protocols/src"), '#include "tunekit/vision/line_width.hpp"')
     plant(tree, "apps/tunekit_main.cpp", '#include "tunekit/history/store.hpp"')
     code, out = run(check, tree)

@@ -9,7 +9,7 @@
 
 #include "synth_flow_sweep.hpp"
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/flow_sweep_plan.hpp"

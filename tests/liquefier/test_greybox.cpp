@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/greybox.hpp"
 
 using namespace tunekit;

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/first_order.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/step_analysis.hpp"

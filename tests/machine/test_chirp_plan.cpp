@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/protocols/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"

@@ -33,7 +33,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
 #include "tunekit/protocols/dialect.hpp"

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/gcode.hpp"

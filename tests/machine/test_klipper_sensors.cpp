@@ -11,7 +11,7 @@
 
 #include "fake_klipper.hpp"
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/klipper_sensors.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 

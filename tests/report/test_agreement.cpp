@@ -3,7 +3,7 @@
 
 #include "tunekit/cli/agreement.hpp"
 #include "tunekit/cli/warning_advice.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
 
 using namespace tunekit::cli;

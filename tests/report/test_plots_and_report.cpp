@@ -10,7 +10,7 @@
 #include "test_support.hpp"
 #include "tunekit/cli/report.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/vision/image_io.hpp"
 
 using namespace tunekit::cli;

@@ -13,7 +13,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/fitting/damped_sinusoids.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/ringdown.hpp"
 
 using namespace tunekit;

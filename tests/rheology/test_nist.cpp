@@ -14,7 +14,7 @@
 #include <string>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/nist_strd.hpp"
 
 using namespace tunekit::fitting;

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <random>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/fitting/viscosity.hpp"

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/least_squares.hpp"
 #include "tunekit/fitting/profile_likelihood.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"

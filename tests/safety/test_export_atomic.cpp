@@ -17,7 +17,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 
 using tunekit::test::read_text;

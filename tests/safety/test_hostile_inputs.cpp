@@ -12,7 +12,7 @@
 
 #include "../resonance/synth_sweep.hpp"
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/vision/image_io.hpp"
 

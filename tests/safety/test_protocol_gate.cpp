@@ -14,7 +14,7 @@
 #include <catch2/catch.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/gcode_link.hpp"

@@ -15,7 +15,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/cli/requirements.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 using tunekit::test::run_cli;
 namespace fs = std::filesystem;

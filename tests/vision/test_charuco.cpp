@@ -12,7 +12,7 @@
 #include <opencv2/aruco/charuco.hpp>
 #endif
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/vision/charuco.hpp"
 
 using namespace tunekit;

@@ -9,7 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/vision/line_width.hpp"
 

@@ -11,7 +11,7 @@
 #include <opencv2/aruco/charuco.hpp>
 #endif
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::vision {
 namespace {

@@ -16,8 +16,8 @@
 #include <stb_image.h>
 #include <stb_image_write.h>
 
-#include "tunekit/fitting/error.hpp"
-#include "tunekit/fitting/file_bytes.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::vision {
 namespace {

@@ -14,7 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "line_width_stages.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/vision/image_io.hpp"
 
 namespace tunekit::vision {

@@ -5,7 +5,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/cli/report.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::cli {
 

@@ -14,7 +14,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/vision/line_width.hpp"

@@ -11,8 +11,8 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/history_record.hpp"
-#include "tunekit/fitting/error.hpp"
-#include "tunekit/fitting/version.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/core/version.hpp"
 
 
 namespace tunekit::cli {
@@ -127,7 +127,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
                "Fits liquefier dynamics, melt rheology and axis resonances, and exports pressure advance\n"
                "and input shaper settings to Marlin, Klipper and RepRapFirmware.",
                "tunekit"};
-  app.set_version_flag("--version", std::string("tunekit ") + fitting::kVersion);
+  app.set_version_flag("--version", std::string("tunekit ") + core::kVersion);
   app.add_flag("-v,--verbose", ctx.verbosity, "More output on stderr (repeat for more)");
   app.require_subcommand(1);
   app.fallthrough();

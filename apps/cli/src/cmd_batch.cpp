@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -15,9 +16,12 @@
 #include <fmt/format.h>
 
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/rheo_command.hpp"
+#include "tunekit/cli/shaper_command.hpp"
+#include "tunekit/cli/step_command.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/requirements.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
 namespace tunekit::cli {
@@ -33,7 +37,8 @@ struct BatchArgs {
 
 struct Job {
   std::string file;
-  std::vector<std::string> args;  // empty: skipped
+  std::vector<std::string> args;  // the equivalent command line, for the summary; empty: skipped
+  std::function<Envelope()> analyze;  // the command's compute(), as its envelope
   std::string skip_reason;
   int code = 0;
   std::string err;
@@ -82,10 +87,28 @@ Job plan_job(const std::string& path) {
   auto has = [&](const char* c) { return std::find(cols.begin(), cols.end(), c) != cols.end(); };
   if (has("accel_x") || has("accel_y") || has("accel_z") || (has("freq") && has("psd_x"))) {
     j.args = {"shaper", path};
+    j.analyze = [path] {
+      ShaperOptions o;
+      o.accel.files = {path};
+      return to_envelope(compute_shaper(o));
+    };
   } else if (has("feed") && has("force") && has("time")) {
     j.args = {"step", path, "--time", "time", "--input", "feed", "--output", "force"};
+    j.analyze = [path] {
+      StepOptions o;
+      o.file = path;
+      o.time_column = "time";
+      o.input_column = "feed";
+      o.output_column = "force";
+      return to_envelope(compute_step(o));
+    };
   } else if (has("shear_rate") && has("viscosity")) {
     j.args = {"rheo", path};
+    j.analyze = [path] {
+      RheoOptions o;
+      o.file = path;
+      return to_envelope(compute_rheo(o));
+    };
   } else {
     j.skip_reason = "no known columns (accel_x.., freq+psd_x, time+feed+force, shear_rate+viscosity)";
   }
@@ -104,16 +127,29 @@ int run_batch(const BatchArgs& a, CliContext& ctx) {
   std::vector<Requirement> requirements;
   for (const auto& r : a.output.require) requirements.push_back(parse_requirement(r));
 
-  // Worker threads take jobs in order; each command runs in-process exactly as on the command line.
+  // Worker threads take jobs in order; each runs the command's compute() and reports it as the
+  // command with --json would (the envelope on stdout, warnings and errors on stderr).
   std::atomic<std::size_t> next{0};
   auto worker = [&] {
     for (std::size_t i = next++; i < jobs.size(); i = next++) {
       Job& j = jobs[i];
-      if (j.args.empty()) continue;
-      auto args = j.args;
-      args.push_back("--json");
+      if (!j.analyze) continue;
       std::ostringstream out, err;
-      j.code = run_cli(args, out, err);
+      CliContext job_ctx{out, err};
+      try {
+        OutputOptions as_json;
+        as_json.json = true;
+        j.code = emit(j.analyze(), as_json, job_ctx);
+      } catch (const Error& e) {
+        err << e.formatted() << "\n";
+        j.code = static_cast<int>(e.code());
+      } catch (const std::bad_alloc&) {
+        err << "tunekit: error: out of memory\n";
+        j.code = static_cast<int>(ExitCode::bad_input);
+      } catch (const std::exception& e) {
+        err << "tunekit: error: internal error: " << e.what() << "\n";
+        j.code = static_cast<int>(ExitCode::fit_failed);
+      }
       j.err = err.str();
       if (j.code == 0 || j.code == 1) {
         try {

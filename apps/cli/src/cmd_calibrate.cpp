@@ -1,10 +1,10 @@
 // tunekit calibrate: the technician's one command. It checks every experiment against the
 // machine profile before anything is sent, runs them (liquefier flow sweep: feed steps up and
 // down through flow levels of the hot end's range; liquefier chirp;
-// axis sweeps of X and Y), identifies the models with the same commands a user would run by
-// hand (step, freq, shaper -- in-process, on the CSV files the run wrote), designs pressure
-// advance and input shaping, previews the firmware configuration change, and writes a run
-// directory:
+// axis sweeps of X and Y), identifies the models with the functions behind the commands a user
+// would run by hand (compute_step, compute_freq, compute_shaper on the CSV files the run wrote;
+// their typed outcomes), designs pressure advance and input shaping (compute_export), previews
+// the firmware configuration change, and writes a run directory:
 //   RUN_DIR/results.json     the envelope: every identified value, compensators, summary
 //   RUN_DIR/plotdata.json    the series behind the report's plots
 //   RUN_DIR/report.html      one self-contained page (rebuild with `tunekit report RUN_DIR`)
@@ -23,13 +23,19 @@
 #include <fmt/format.h>
 
 #include "calibrate_liquefier.hpp"
+#include "calibrate_plotdata.hpp"
 #include "tunekit/cli/agreement.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/export_command.hpp"
+#include "tunekit/cli/freq_command.hpp"
+#include "tunekit/cli/results_json.hpp"
+#include "tunekit/cli/shaper_command.hpp"
+#include "tunekit/cli/step_command.hpp"
 #include "tunekit/cli/history_record.hpp"
 #include "tunekit/cli/progress.hpp"
 #include "tunekit/cli/report.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/first_order.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/input_shaper.hpp"
@@ -70,116 +76,37 @@ struct Experiment {
   std::map<std::string, double> params;  // protocol parameter overrides
 };
 
-nlohmann::json parse_json_file(const std::string& path) {
+// Runs an analysis as a user's command would (the same compute function), keeping its message and
+// exit code but saying which analysis failed.
+template <class Fn>
+auto calibrate_analysis(const char* command, Fn&& compute) {
   try {
-    return nlohmann::json::parse(ident::read_file_bytes(path));
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(std::string("not valid JSON: ") + e.what(), path);
-  }
-}
-
-// Runs an analysis command in-process, exactly as a user would on the command line, writing
-// its JSON envelope to `json_path`. Errors keep their own message and exit code.
-nlohmann::json analyze(const std::vector<std::string>& args, const std::string& json_path, CliContext& ctx) {
-  std::vector<std::string> full = args;
-  full.insert(full.end(), {"-o", json_path});
-  std::ostringstream out, err;
-  const int code = run_cli(full, out, err);
-  if (code != 0) {
-    std::string msg = err.str();
-    while (!msg.empty() && msg.back() == '\n') msg.pop_back();
+    return compute();
+  } catch (const Error& e) {
+    std::string msg = e.formatted();
     const std::string prefix = "tunekit: error: ";
     if (msg.rfind(prefix, 0) == 0) msg = msg.substr(prefix.size());
-    const std::string what = fmt::format("'tunekit {}' failed: {}", args.front(), msg);
-    if (code == static_cast<int>(ExitCode::fit_failed)) throw FitError(what);
+    const std::string what = fmt::format("'tunekit {}' failed: {}", command, msg);
+    if (e.code() == ExitCode::fit_failed) throw FitError(what);
     throw InputError(what);
   }
-  if (ctx.verbosity > 0) ctx.err << out.str();
-  return parse_json_file(json_path);
 }
 
-double num(const nlohmann::json& j, const std::string& path) {
-  const auto* v = json_at(j, path);
-  return (v != nullptr && v->is_number()) ? v->get<double>() : std::nan("");
+// Writes an analysis' JSON envelope where the run keeps it (RUN_DIR/analysis/NAME.json, the file the
+// command's --json-file would write) and returns the document as written.
+template <class Outcome>
+nlohmann::json keep_analysis(const Outcome& outcome, const std::string& json_path, CliContext& ctx) {
+  if (ctx.verbosity > 0) print_text(outcome, ctx.err);
+  const std::string text = prepare_emission(to_envelope(outcome), OutputOptions{}).text;
+  write_output_text(json_path, text);
+  return nlohmann::json::parse(text);
 }
 
-// Series for the step plot: the measured record and each step's own fitted model.
-nlohmann::json step_plotdata(const std::string& csv, const nlohmann::json& step_results, const std::string& in_col = "feed",
-                             const std::string& out_col = "force", const std::string& u_label = "feed (mm/s)",
-                             const std::string& y_label = "force (N)") {
-  const auto table = ident::read_csv(csv, {{"time", in_col, out_col}, "time"});
-  const auto& t = table.column("time").values;
-  const auto& u = table.column(in_col).values;
-  const auto& y = table.column(out_col).values;
-  // Each step's model is drawn over the samples its fit used and nowhere else (not over the
-  // warm-up from rest, which no step models).
-  std::vector<double> yf(t.size(), std::nan(""));
-  for (const auto& s : step_results.at("steps")) {
-    if (!s.contains("params") || !s.contains("fit_samples")) continue;
-    const auto begin = s["fit_samples"].at(0).get<std::size_t>(), end = std::min(s["fit_samples"].at(1).get<std::size_t>(), t.size());
-    const double ts = s.value("t_step_s", 0.0);
-    const double du = s.value("u_after", 0.0) - s.value("u_before", 0.0);
-    const auto& p = s["params"];
-    const double K = num(p, "K.value"), tau = num(p, "tau_s.value"), y0 = num(p, "y0.value");
-    double theta = num(p, "theta_s.value");
-    if (!std::isfinite(theta)) theta = 0;
-    for (std::size_t i = begin; i < end; ++i) yf[i] = fitting::step_response(t[i], ts, du, K, tau, theta, y0);
-  }
-  // Thin very long records for the plot (every n-th sample).
-  const std::size_t stride = std::max<std::size_t>(1, t.size() / 4000);
-  nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};
-  std::vector<double> ts, us, ys, fs_;
-  for (std::size_t i = 0; i < t.size(); i += stride) {
-    ts.push_back(t[i]);
-    us.push_back(u[i]);
-    ys.push_back(y[i]);
-    fs_.push_back(yf[i]);
-  }
-  d["t_s"] = ts;
-  d["u"] = us;
-  d["y"] = ys;
-  d["y_fit"] = fs_;
-  return d;
-}
-
-nlohmann::json bode_plotdata(const nlohmann::json& freq_results) {
-  nlohmann::json d;
-  const auto& b = freq_results.at("h1").at("bode");
-  d["freq_hz"] = b.at("freq_hz");
-  d["mag_db"] = b.at("magnitude_db");
-  d["phase_deg"] = b.at("phase_deg");
-  if (b.contains("coherence")) d["coherence"] = b["coherence"];
-  // The model the summary reports: the output-error fit on the chirp record when there is one.
-  for (const auto& [key, label] : {std::pair{"tf_oe_fit", "output-error fit (record)"}, std::pair{"tf_fit", "fitted model"}}) {
-    if (!freq_results.contains(key) || !freq_results[key].contains("bode")) continue;
-    const auto& m = freq_results[key]["bode"];
-    d["model"] = {{"freq_hz", m.at("freq_hz")}, {"mag_db", m.at("magnitude_db")}, {"phase_deg", m.at("phase_deg")}, {"label", label}};
-    break;
-  }
-  return d;
-}
-
-nlohmann::json psd_plotdata(const nlohmann::json& axis) {
-  nlohmann::json d;
-  const auto& psd = axis.at("psd");
-  d["freq_hz"] = psd.at("freq_hz");
-  d["psd"] = psd.at("psd");
-  d["modes"] = nlohmann::json::array();
-  double zeta = 0.1;
-  for (const auto& m : axis.value("modes", nlohmann::json::array())) {
-    d["modes"].push_back({{"freq_hz", m.value("freq_hz", 0.0)}});
-  }
-  if (axis.contains("zeta") && axis["zeta"].is_number()) zeta = axis["zeta"].get<double>();
-  // Each candidate shaper's remaining vibration against frequency, at the identified damping.
-  std::vector<double> f = psd.at("freq_hz").get<std::vector<double>>();
-  d["shapers"] = nlohmann::json::array();
-  for (const auto& c : axis.value("candidates", nlohmann::json::array())) {
-    const auto type = ident::parse_shaper_type(c.at("type").get<std::string>());
-    const auto shaper = ident::design_shaper(type, c.at("freq_hz").get<double>(), c.value("damping", 0.1),
-                                             ident::kDefaultVibrationTolerance, ident::EiDesign::damped_fit);
-    d["shapers"].push_back({{"type", c.at("type")}, {"freq_hz", f}, {"response", ident::residual_vibration_curve(shaper, f, zeta)}});
-  }
-  return d;
+// An estimate for the agreement check from a fitted parameter with its 95 % interval; false when
+// it has none or it is not finite.
+bool calibrate_estimate(const fitting::Param& p, const std::string& method, Estimate& out) {
+  out = {method, p.value, p.ci95_lo, p.ci95_hi};
+  return std::isfinite(out.value) && std::isfinite(out.ci95_lo) && std::isfinite(out.ci95_hi);
 }
 
 // Paths inside the run directory are written relative to it, so that results.json does not
@@ -296,9 +223,10 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   ProgressBar bar(ctx, static_cast<int>(exps.size()) + 3);
   std::map<std::string, protocols::RunResult> runs;
   nlohmann::json step_analysis;
+  std::optional<StepOutcome> step_outcome;
   for (const auto& e : exps) {
-    if (e.name == "liquefier-chirp" && step_analysis.is_object()) {
-      const double tau = num(step_analysis.at("results"), "pooled.params.tau_s.value");
+    if (e.name == "liquefier-chirp" && step_outcome && step_outcome->analysis.pooled) {
+      const double tau = step_outcome->analysis.pooled->value("tau_s");
       if (std::isfinite(tau) && tau > 0) {
         chirp_plan = protocols::plan_liquefier_chirp(tau);
         chirp_basis = fmt::format("the step test's time constant {} s", display_number(tau));
@@ -313,9 +241,16 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
       const std::string csv = runs[e.name].files.at("load_cell");
       // The sweep's smallest steps (between the lowest levels) are a few % of its range; the
       // operating points handed to export are the arrival levels (flow-dependent advance).
-      step_analysis = analyze({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--model", "fopdt",
-                               "--min-step", fmt::format("{}", kSweepMinStepFraction), "--operating-points", "arrival"},
-                              run_dir + "/analysis/step.json", ctx);
+      StepOptions so;
+      so.file = csv;
+      so.time_column = "time";
+      so.input_column = "feed";
+      so.output_column = "force";
+      so.analysis.model = fitting::StepModel::fopdt;
+      so.analysis.detect.min_step_fraction = kSweepMinStepFraction;
+      so.analysis.operating_points_by_arrival = true;
+      step_outcome = calibrate_analysis("step", [&] { return compute_step(so); });
+      step_analysis = keep_analysis(*step_outcome, run_dir + "/analysis/step.json", ctx);
     }
   }
 
@@ -342,21 +277,29 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     summary.push_back(r);
   };
   std::vector<std::string> export_inputs;
+  std::optional<fitting::Param> step_tau;  // the liquefier's tau from the step analysis, for the agreement
 
   bar.begin("identify models", 3);
   if (camera_path) {
     auto cam = analyze_camera_prints(run_dir, a.camera, profile, runs, bed, can_prompt, ctx);
     const std::string out = run_dir + "/analysis/step.json";
-    const auto j = analyze({"step", cam.width_csv, "--time", "time", "--input", "setpoint_width", "--output", "width",
-                            "--model", "fopdt"},
-                           out, ctx);
+    StepOptions so;
+    so.file = cam.width_csv;
+    so.time_column = "time";
+    so.input_column = "setpoint_width";
+    so.output_column = "width";
+    so.analysis.model = fitting::StepModel::fopdt;
+    const auto width_steps = calibrate_analysis("step", [&] { return compute_step(so); });
+    const auto j = keep_analysis(width_steps, out, ctx);
     add_input(cam.width_csv);
     add_input(cam.photo);
     res["liquefier"]["step"] = j.at("results");
-    add_ring_prediction(cam.results, num(j.at("results"), "pooled.params.K.value"),
-                        num(j.at("results"), "pooled.params.tau_s.value"), num(j.at("results"), "pooled.params.theta_s.value"));
+    const auto& pooled = width_steps.analysis.pooled;
+    if (pooled) step_tau = pooled->param("tau_s");
+    add_ring_prediction(cam.results, pooled ? pooled->value("K") : std::nan(""),
+                        pooled ? pooled->value("tau_s") : std::nan(""), pooled ? pooled->value("theta_s") : std::nan(""));
     res["liquefier"]["camera"] = cam.results;
-    plot["step"] = step_plotdata(cam.width_csv, j.at("results"), "setpoint_width", "width", "set-point width (mm)", "width (mm)");
+    plot["step"] = step_plotdata(cam.width_csv, width_steps.analysis, "setpoint_width", "width", "set-point width (mm)", "width (mm)");
     plot["linewidth"] = cam.linewidth_plot;
     export_inputs.push_back(out);
     summary.push_back({{"label", "liquefier time constant tau (line widths)"}, {"path", "liquefier.step.pooled.params.tau_s.value"}, {"unit", "s"}});
@@ -381,7 +324,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const auto& j = step_analysis;
     add_input(csv);
     res["liquefier"]["step"] = j.at("results");
-    plot["step"] = step_plotdata(csv, j.at("results"));
+    plot["step"] = step_plotdata(csv, step_outcome->analysis);
+    if (step_outcome->analysis.pooled) step_tau = step_outcome->analysis.pooled->param("tau_s");
     export_inputs.push_back(out);
     const double area = profile.filament_area_mm2();
     std::vector<std::string> level_text;
@@ -395,8 +339,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
       std::string joined;
       for (const auto& t : level_text) joined += (joined.empty() ? "" : "; ") + t;
       std::string trend;
-      if (const auto* b = json_at(res, "liquefier.step.flow_trend.tau_s.b"); b != nullptr && b->is_number())
-        trend = fmt::format(" (tau = a u^b, b = {})", display_number(b->get<double>()));
+      if (const auto& tau_trend = step_outcome->analysis.level_trends.tau)
+        trend = fmt::format(" (tau = a u^b, b = {})", display_number(tau_trend->value("b")));
       notes.push_back(fmt::format("flow sweep: tau at each level reached from both sides, {}{}", joined, trend));
     }
     const std::string p = "liquefier.step.pooled.params.";
@@ -414,12 +358,19 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const auto table = ident::read_csv(csv, {{"time"}, "time"});
     const auto& tt = table.column("time").values;
     const double fs = tt.size() > 1 ? static_cast<double>(tt.size() - 1) / (tt.back() - tt.front()) : 0.0;
-    const auto fmt_num = [](double v) { return fmt::format("{:.6g}", v); };
-    const auto j = analyze({"freq", csv, "--time", "time", "--input", "feed", "--output", "force", "--mode", "oe",
-                            "--fit-tf", "1,0", "--tf-delay", "--fmax", fmt_num(chirp_plan.analysis_fmax_hz), "--segment",
-                            std::to_string(chirp_plan.welch_segment_samples(fs)), "--tmin",
-                            fmt_num(chirp_plan.analysis_start_s)},
-                           out, ctx);
+    FreqOptions fo;
+    fo.file = csv;
+    fo.time_column = "time";
+    fo.input_column = "feed";
+    fo.output_column = "force";
+    fo.mode = FreqMode::oe;
+    fo.fit_tf = "1,0";  // first order with dead time
+    fo.tf_delay = true;
+    fo.fmax_hz = chirp_plan.analysis_fmax_hz;
+    fo.welch.segment_length = chirp_plan.welch_segment_samples(fs);
+    fo.tmin_s = chirp_plan.analysis_start_s;
+    const auto chirp = calibrate_analysis("freq", [&] { return compute_freq(fo); });
+    const auto j = keep_analysis(chirp, out, ctx);
     add_input(csv);
     res["liquefier"]["freq"] = j.at("results");
     res["liquefier"]["chirp_plan"] = {{"expected_tau_s", chirp_plan.expected_tau_s},
@@ -441,8 +392,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
                                 chirp_plan.welch_segment_samples(fs),
                                 display_number(fs / static_cast<double>(chirp_plan.welch_segment_samples(fs)))));
     Estimate by_step, by_freq;
-    if (estimate_from_param(json_at(res, "liquefier.step.pooled.params.tau_s"), "step response", by_step) &&
-        estimate_from_param(json_at(res, "liquefier.freq.tf_oe_fit.params.tau_s"), "frequency response", by_freq)) {
+    if (step_tau && chirp.oe_fit && calibrate_estimate(*step_tau, "step response", by_step) &&
+        calibrate_estimate(chirp.oe_fit->param("tau_s"), "frequency response", by_freq)) {
       auto a = compare_estimates("liquefier time constant tau", "s", by_step, by_freq);
       a["id"] = "tau";
       if (!a.at("agree").get<bool>()) env.warn(a.at("statement").get<std::string>());
@@ -455,7 +406,11 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const std::string csv = runs[name].files.at("accel");
     const std::string out = run_dir + "/analysis/shaper_" + axis + ".json";
     // The recommendation is made among the target firmware's shapers (and its damping bounds).
-    const auto j = analyze({"shaper", csv, "--axis", axis, "--firmware", a.firmware}, out, ctx);
+    ShaperOptions so;
+    so.accel.files = {csv};
+    so.accel.input.axis = axis[0];
+    so.firmware = protocols::parse_export_firmware(a.firmware);
+    const auto j = keep_analysis(calibrate_analysis("shaper", [&] { return compute_shaper(so); }), out, ctx);
     add_input(csv);
     res["axes"][axis] = j.at("results").at("axes").at(axis);
     plot[std::string("psd_") + axis] = psd_plotdata(res["axes"][axis]);
@@ -479,38 +434,47 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     config = run_dir + "/config/" + it->second;
     fs::copy_file(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/" + it->second, config, fs::copy_options::overwrite_existing);
   }
-  std::vector<std::string> export_args{"export", "--firmware", a.firmware, "--config", config, "--profile", profile_path};
-  export_args.insert(export_args.end(), export_inputs.begin(), export_inputs.end());
+  ExportOptions eo;
+  eo.firmware = a.firmware;
+  eo.config = config;
+  eo.profile = profile_path;
+  eo.results = export_inputs;
   // A Marlin printer that answered M493 with fixed-time motion enabled bypasses M593/M900 U:
   // its settings go to M493 (runner.cpp reads the report into each run's summary).
   const bool ft_live = std::any_of(runs.begin(), runs.end(), [](const auto& kv) {
-    const auto* ft = json_at(kv.second.summary, "firmware.ft_motion");
-    return ft != nullptr && ft->is_string() && ft->template get<std::string>() == "active";
+    static const nlohmann::json::json_pointer ft_motion("/firmware/ft_motion");
+    const auto& summary = kv.second.summary;
+    return summary.contains(ft_motion) && summary.at(ft_motion) == "active";
   });
   if (ft_live && protocols::parse_export_firmware(a.firmware) == protocols::ExportFirmware::marlin) {
-    export_args.push_back("--marlin-ft-motion");
+    eo.marlin_ft_live = true;
     res["firmware_ft_motion"] = "active (M493): settings written as M493";
   }
-  if (a.write) export_args.push_back("--write");
-  const auto ex = analyze(export_args, run_dir + "/analysis/export.json", ctx);
+  eo.write = a.write;
+  const auto exported = calibrate_analysis("export", [&] { return compute_export(eo); });
+  {
+    OutputOptions keep;
+    keep.json = true;  // the summary lines go to the verbose stream only
+    keep.output_path = run_dir + "/analysis/export.json";
+    std::ostringstream quiet_out, quiet_err;
+    CliContext quiet{quiet_out, quiet_err};
+    calibrate_analysis("export", [&] { return commit_export(exported, keep, quiet); });
+    if (ctx.verbosity > 0) print_text(exported, ctx.err);
+  }
+  const auto ex = read_results_json(run_dir + "/analysis/export.json");
   res["compensators"] = ex.at("results");
   // The report draws the advance the liquefier needs against flow (the export's flow design).
-  if (const auto* fa = json_at(res, "compensators.flow_advance"); fa != nullptr && fa->is_object())
-    plot["flow_advance"] = *fa;
-  const auto* diff_node = json_at(ex.at("results"), "export.diff");
-  const std::string diff = diff_node != nullptr && diff_node->is_string() ? diff_node->get<std::string>() : std::string();
+  if (exported.flow) plot["flow_advance"] = res["compensators"]["flow_advance"];
+  const std::string diff = exported.change.diff;
   res["config_diff"] = diff;
   protocols::write_file_atomic(run_dir + "/config/changes.diff", diff);
-  if (json_at(res, "compensators.settings.pa_k_s") != nullptr && res["compensators"]["settings"]["pa_k_s"].is_number())
-    row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
-  if (json_at(res, "compensators.settings.pa_smooth_s") != nullptr &&
-      res["compensators"]["settings"]["pa_smooth_s"].is_number())
-    row("advance smoothing time", "compensators.settings.pa_smooth_s", "s", "", "designed");
+  if (exported.settings.pa_k_s) row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
+  if (exported.settings.pa_smooth_s) row("advance smoothing time", "compensators.settings.pa_smooth_s", "s", "", "designed");
   bar.end(diff.empty() ? "configuration already up to date" : "configuration diff ready");
   res["summary"] = summary;
   res["agreement"] = agreement;
-  if (const auto* dn = json_at(res, "compensators.design.notes"); dn != nullptr && dn->is_array())
-    for (const auto& n : *dn) notes.push_back(n);
+  if (exported.design)
+    for (const auto& n : exported.design->notes) notes.push_back(n);
   res["notes"] = notes;
   for (const auto& w : ex.value("warnings", std::vector<std::string>{})) {
     nlohmann::json wj = w;

@@ -7,9 +7,11 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/delta_command.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
@@ -18,21 +20,6 @@
 
 namespace tunekit::cli {
 namespace {
-
-struct DeltaArgs {
-  std::string probes_csv;
-  int factors = 6;
-  double radius_mm = fitting::kNaN;
-  std::vector<double> rod_mm;
-  double height_mm = fitting::kNaN;
-  std::vector<double> angles_deg = {210.0, 330.0, 90.0};
-  std::vector<double> endstops_mm = {0.0, 0.0, 0.0};
-  std::string export_firmware;
-  std::string export_file;
-  double print_radius_mm = fitting::kNaN;
-  double marlin_probe_z_offset_mm = 0.0;
-  OutputOptions output;
-};
 
 const ident::CsvColumn& delta_column(const ident::CsvTable& t, const std::string& axis, const std::string& hdr) {
   for (const std::string& n : {axis, axis + "_mm"})
@@ -44,7 +31,7 @@ const ident::CsvColumn& delta_column(const ident::CsvTable& t, const std::string
   throw InputError(fmt::format("no '{0}_mm' (or '{0} (mm)') column; the probe CSV has x_mm,y_mm,z_mm", axis), hdr);
 }
 
-ident::DeltaGeometry delta_nominal(const DeltaArgs& a) {
+ident::DeltaGeometry delta_nominal(const DeltaOptions& a) {
   if (!(a.radius_mm > 0)) throw InputError("give the firmware's delta radius: --radius (mm, > 0)");
   if (!std::isfinite(a.height_mm)) throw InputError("give the firmware's homed height: --height (mm)");
   if (a.rod_mm.size() != 1 && a.rod_mm.size() != 3)
@@ -80,33 +67,48 @@ nlohmann::json delta_flatness_json(const ident::DeltaFlatness& f) {
   return {{"rms_mm", f.rms_mm}, {"std_mm", f.std_mm}, {"peak_to_peak_mm", f.peak_to_peak_mm}};
 }
 
-int run_delta(const DeltaArgs& a, CliContext& ctx) {
-  Envelope env("delta");
-  env.set_options({{"factors", a.factors}, {"export", a.export_firmware}, {"export_file", a.export_file}});
+}  // namespace
+
+DeltaOutcome compute_delta(const DeltaOptions& a) {
+  DeltaOutcome outcome;
+  outcome.options = a;
   (void)ident::delta_factor_names(a.factors);
   const auto nominal = delta_nominal(a);
-  std::string export_text;
-  protocols::ExportFirmware fw{};
-  if (!a.export_firmware.empty()) fw = protocols::parse_export_firmware(a.export_firmware);
+  if (!a.export_firmware.empty()) outcome.firmware = protocols::parse_export_firmware(a.export_firmware);
   if (!a.export_file.empty() && a.export_firmware.empty()) throw InputError("--export-file needs --export FIRMWARE");
 
   const std::string bytes = ident::read_file_bytes(a.probes_csv);
-  env.add_input(a.probes_csv, bytes);
+  outcome.input = input_digest(a.probes_csv, bytes);
   const auto t = ident::parse_csv(bytes, a.probes_csv);
   const auto hdr = source_location(a.probes_csv, t.header_line);
   const auto &xc = delta_column(t, "x", hdr), &yc = delta_column(t, "y", hdr), &zc = delta_column(t, "z", hdr);
   std::vector<ident::DeltaProbe> probes;
   for (std::size_t i = 0; i < t.rows; ++i) probes.push_back({xc.values[i], yc.values[i], zc.values[i]});
+  outcome.probe_count = probes.size();
 
-  const auto cal = ident::fit_delta_calibration(nominal, probes, a.factors);
-  if (!a.export_firmware.empty()) {
-    switch (fw) {
+  outcome.calibration = ident::fit_delta_calibration(nominal, probes, a.factors);
+  const auto& cal = outcome.calibration;
+  if (outcome.firmware) {
+    switch (*outcome.firmware) {
       case protocols::ExportFirmware::kalico:
-      case protocols::ExportFirmware::klipper: export_text = protocols::delta_klipper_save_config(cal.fitted); break;
-      case protocols::ExportFirmware::marlin: export_text = protocols::delta_marlin_gcode(cal.fitted, a.marlin_probe_z_offset_mm); break;
-      case protocols::ExportFirmware::rrf: export_text = protocols::delta_rrf_gcode(cal.fitted, a.print_radius_mm); break;
+      case protocols::ExportFirmware::klipper: outcome.export_text = protocols::delta_klipper_save_config(cal.fitted); break;
+      case protocols::ExportFirmware::marlin:
+        outcome.export_text = protocols::delta_marlin_gcode(cal.fitted, a.marlin_probe_z_offset_mm);
+        break;
+      case protocols::ExportFirmware::rrf: outcome.export_text = protocols::delta_rrf_gcode(cal.fitted, a.print_radius_mm); break;
     }
   }
+  outcome.warnings = cal.fit.warnings;
+  if (!a.export_file.empty()) protocols::write_file_atomic(a.export_file, outcome.export_text);
+  return outcome;
+}
+
+Envelope to_envelope(const DeltaOutcome& o) {
+  const DeltaOptions& a = o.options;
+  const auto& cal = o.calibration;
+  Envelope env("delta");
+  env.set_options({{"factors", a.factors}, {"export", a.export_firmware}, {"export_file", a.export_file}});
+  add_input(env, o.input);
   auto& res = env.results();
   res = fitting::to_json(cal.fit);
   res["nominal"] = delta_geometry_json(cal.nominal);
@@ -114,54 +116,65 @@ int run_delta(const DeltaArgs& a, CliContext& ctx) {
   res["flatness_before"] = delta_flatness_json(cal.before);
   res["flatness_after"] = delta_flatness_json(cal.after);
   res["residual_mm"] = cal.residual_mm;
-  if (!export_text.empty()) res["export"] = {{"firmware", protocols::to_string(fw)}, {"text", export_text}};
-  for (const auto& w : cal.fit.warnings) env.warn(w);
-  if (!a.export_file.empty()) protocols::write_file_atomic(a.export_file, export_text);
-  if (!a.output.json) {
-    ctx.out << fmt::format("{}: {} probe points, {}-factor delta calibration\n", a.probes_csv, probes.size(), a.factors);
-    for (const auto& q : cal.fit.params)
-      ctx.out << fmt::format("  {:<14} {:>12.4f} {:<4} +- {:.4f}  95% [{:.4f}, {:.4f}]\n", q.name, q.value, q.unit,
-                             q.std_error, q.ci95_lo, q.ci95_hi);
-    ctx.out << fmt::format("  flatness before: rms {:.4f} mm, peak-to-peak {:.4f} mm\n", cal.before.rms_mm,
-                           cal.before.peak_to_peak_mm);
-    ctx.out << fmt::format("  flatness after:  rms {:.4f} mm, peak-to-peak {:.4f} mm\n", cal.after.rms_mm,
-                           cal.after.peak_to_peak_mm);
-    if (!export_text.empty()) {
-      if (a.export_file.empty()) ctx.out << export_text;
-      else ctx.out << fmt::format("  {} settings written to {}\n", protocols::to_string(fw), a.export_file);
-    }
-  }
-  return emit(env, a.output, ctx);
+  if (o.firmware && !o.export_text.empty())
+    res["export"] = {{"firmware", protocols::to_string(*o.firmware)}, {"text", o.export_text}};
+  for (const auto& w : o.warnings) env.warn(w);
+  return env;
 }
+
+void print_text(const DeltaOutcome& o, std::ostream& os) {
+  const DeltaOptions& a = o.options;
+  const auto& cal = o.calibration;
+  os << fmt::format("{}: {} probe points, {}-factor delta calibration\n", a.probes_csv, o.probe_count, a.factors);
+  for (const auto& q : cal.fit.params)
+    os << fmt::format("  {:<14} {:>12.4f} {:<4} +- {:.4f}  95% [{:.4f}, {:.4f}]\n", q.name, q.value, q.unit,
+                      q.std_error, q.ci95_lo, q.ci95_hi);
+  os << fmt::format("  flatness before: rms {:.4f} mm, peak-to-peak {:.4f} mm\n", cal.before.rms_mm,
+                    cal.before.peak_to_peak_mm);
+  os << fmt::format("  flatness after:  rms {:.4f} mm, peak-to-peak {:.4f} mm\n", cal.after.rms_mm,
+                    cal.after.peak_to_peak_mm);
+  if (o.firmware && !o.export_text.empty()) {
+    if (a.export_file.empty()) os << o.export_text;
+    else os << fmt::format("  {} settings written to {}\n", protocols::to_string(*o.firmware), a.export_file);
+  }
+}
+
+namespace {
+
+struct DeltaCommand {
+  DeltaOptions options;
+  OutputOptions output;
+};
 
 }  // namespace
 
 void register_delta(CLI::App& app, CliContext& ctx) {
-  auto args = std::make_shared<DeltaArgs>();
+  auto cmd = std::make_shared<DeltaCommand>();
+  DeltaOptions& o = cmd->options;
   auto* sub = app.add_subcommand("delta", "Delta printer calibration: fit geometric errors to probe heights, export");
-  sub->add_option("probes", args->probes_csv, "CSV of probe heights: x_mm,y_mm,z_mm (G30 S-1 trigger heights)")
+  sub->add_option("probes", o.probes_csv, "CSV of probe heights: x_mm,y_mm,z_mm (G30 S-1 trigger heights)")
       ->required();
-  sub->add_option("-f,--factors", args->factors,
+  sub->add_option("-f,--factors", o.factors,
                   "Factors: 3 endstops, 4 +radius, 6 +tower angles A/B, 7 +rod, 8 = 6 +bed tilt, 9 = 7 +tilt")
       ->capture_default_str();
-  sub->add_option("--radius", args->radius_mm, "Firmware's delta radius while probing (mm)");
-  sub->add_option("--rod", args->rod_mm, "Firmware's diagonal rod length, one or three values (mm)")->delimiter(',');
-  sub->add_option("--height", args->height_mm, "Firmware's homed height H (mm; Klipper: position_endstop - endstop adjustment)");
-  sub->add_option("--angles", args->angles_deg, "Firmware's tower angles A,B,C (deg)")->delimiter(',')->capture_default_str();
-  sub->add_option("--endstops", args->endstops_mm, "Firmware's endstop adjustments A,B,C (mm)")->delimiter(',')->capture_default_str();
-  sub->add_option("--export", args->export_firmware, "Print the fitted settings for klipper, marlin or rrf");
-  sub->add_option("--export-file", args->export_file, "Write the exported settings to this file (atomically)");
-  sub->add_option("--print-radius", args->print_radius_mm, "RepRapFirmware's M665 B, printable radius (mm)");
-  sub->add_option("--marlin-probe-z-offset", args->marlin_probe_z_offset_mm,
+  sub->add_option("--radius", o.radius_mm, "Firmware's delta radius while probing (mm)");
+  sub->add_option("--rod", o.rod_mm, "Firmware's diagonal rod length, one or three values (mm)")->delimiter(',');
+  sub->add_option("--height", o.height_mm, "Firmware's homed height H (mm; Klipper: position_endstop - endstop adjustment)");
+  sub->add_option("--angles", o.angles_deg, "Firmware's tower angles A,B,C (deg)")->delimiter(',')->capture_default_str();
+  sub->add_option("--endstops", o.endstops_mm, "Firmware's endstop adjustments A,B,C (mm)")->delimiter(',')->capture_default_str();
+  sub->add_option("--export", o.export_firmware, "Print the fitted settings for klipper, marlin or rrf");
+  sub->add_option("--export-file", o.export_file, "Write the exported settings to this file (atomically)");
+  sub->add_option("--print-radius", o.print_radius_mm, "RepRapFirmware's M665 B, printable radius (mm)");
+  sub->add_option("--marlin-probe-z-offset", o.marlin_probe_z_offset_mm,
                   "Marlin's M851 Z (mm): with a bed probe Marlin homes at M665 H minus it")
       ->capture_default_str();
-  add_output_options(sub, args->output);
+  add_output_options(sub, cmd->output);
   sub->footer(
       "Probe heights come from a CSV (probing over the machine link is not built in yet).\n"
       "Factor sets as RepRapFirmware's G32; the 6-factor set is Klipper's DELTA_CALIBRATE set.\n"
       "Example:\n"
       "  tunekit delta probes.csv --radius 105 --rod 215 --height 250 --factors 6 --export klipper");
-  sub->callback([args, &ctx] { set_exit_code(run_delta(*args, ctx)); });
+  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_delta(cmd->options), cmd->output, ctx)); });
 }
 
 }  // namespace tunekit::cli

@@ -17,10 +17,11 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/export_command.hpp"
 #include "tunekit/cli/plots.hpp"
 #include "tunekit/cli/results_json.hpp"
 #include "tunekit/fitting/fit_result.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
@@ -32,9 +33,8 @@
 #include "tunekit/protocols/orca_profile.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 
-#include "export_args.hpp"
 
-namespace tunekit::cli::export_cmd {
+namespace tunekit::cli {
 namespace {
 
 // Plausibility caps of what export writes, whatever the firmware would accept (the firmware's
@@ -87,11 +87,11 @@ const nlohmann::json& dig(const nlohmann::json& j, std::initializer_list<const c
 
 }  // namespace
 
-int run_export(const ExportArgs& a, CliContext& ctx) {
+ExportOutcome compute_export(const ExportOptions& a) {
+  ExportOutcome outcome;
+  outcome.options = a;
   const auto fw = protocols::parse_export_firmware(a.firmware);
-  require_finite_option(a.pa_k_opt, a.pa_k, "s");
-  require_finite_option(a.pa_smooth_opt, a.pa_smooth, "s");
-  require_finite_option(a.design_flow_opt, a.design_flow, "mm^3/s");
+  outcome.firmware = fw;
   {
     protocols::CompensatorSettings given;  // the options alone, checked before any design uses them
     if (std::isfinite(a.pa_k)) given.pa_k_s = a.pa_k;
@@ -101,7 +101,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   if (std::isfinite(a.design_flow) && !(a.design_flow > 0 && a.design_flow <= kPlausibleMaxDesignFlow_mm3_s))
     throw InputError(fmt::format("--design-flow {} mm^3/s is not plausible (accepted: above 0 to {} mm^3/s)", a.design_flow,
                                  kPlausibleMaxDesignFlow_mm3_s));
-  Envelope env("export");
+  Envelope& env = outcome.envelope;
   ident::AdvanceInputs in;
   double freq_tau = fitting::kNaN;
   std::map<std::string, protocols::ShaperSetting> shapers;
@@ -303,7 +303,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   in.extruder_accel_limit_mm_s2 = profile.extruder.max_accel_mm_s2;
   in.design_flow_mm3_s = a.design_flow;
 
-  protocols::CompensatorSettings settings;
+  protocols::CompensatorSettings& settings = outcome.settings;
   settings.klipper_extruder = a.extruder;
   settings.rrf_drive = a.drive;
   settings.marlin_ft_motion_live = fw == protocols::ExportFirmware::marlin && a.marlin_ft_live;
@@ -328,7 +328,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     std::strftime(day, sizeof day, "%Y-%m-%d", &tm);
     settings.change_note = fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : from, day);
   }
-  std::optional<ident::AdvanceDesign> design;
+  std::optional<ident::AdvanceDesign>& design = outcome.design;
   const bool have_tau = std::isfinite(in.tau_s) || !in.points.empty();
   if (!a.no_pa && have_tau) {
     if (a.profile.empty())
@@ -340,7 +340,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     for (const auto& w : design->warnings) env.warn(w);
   }
   // Flow-dependent design (flow_advance.hpp) when two or more levels were identified.
-  std::optional<ident::FlowAdvanceDesign> flow;
+  std::optional<ident::FlowAdvanceDesign>& flow = outcome.flow;
   nlohmann::json flow_rheology;  // rheology cross-check of tau(Q), when a prediction was given
   if (design && design->schedule.size() >= 2 && design->k_source == "operating points") {
     ident::FlowAdvanceInputs fin;
@@ -427,7 +427,8 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
   }
   check_plausible(settings);
 
-  auto result = protocols::export_config_file(fw, a.config, settings);
+  outcome.change = protocols::export_config_file(fw, a.config, settings);
+  const auto& result = outcome.change;
   env.add_input(a.config, result.original);
   for (const auto& w : result.warnings) env.warn(w);
 
@@ -463,20 +464,16 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
     render_figure(flow_advance_figure(res["flow_advance"]), a.plot_out);
   }
   res["export"] = result.to_json();
-  const std::string schedule =
-      design ? protocols::advance_schedule_gcode(fw, design->schedule, settings) : std::string();
-  res["schedule_gcode"] = schedule;
+  outcome.schedule_gcode = design ? protocols::advance_schedule_gcode(fw, design->schedule, settings) : std::string();
+  res["schedule_gcode"] = outcome.schedule_gcode;
   res["written"] = false;
 
   // Everything that will be written is computed first (configuration, backup, G-code, JSON);
   // then all of it is written together or none of it (protocols::FileBatch).
-  std::string backup;
-  protocols::FileBatch batch;
+  protocols::FileBatch& batch = outcome.files;
   if (a.write && result.changed()) {
-    // Refuse to overwrite a file that changed since it was read.
-    if (ident::read_file_bytes(a.config) != result.original)
-      throw InputError("the configuration file changed since it was read; run the export again", a.config);
-    backup = protocols::backup_path_for(a.config);
+    outcome.backup = protocols::backup_path_for(a.config);
+    const std::string& backup = outcome.backup;
     res["written"] = true;
     batch.add(backup, result.original);
     batch.add(a.config, result.updated);
@@ -529,14 +526,32 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
                          {"hysteresis", a.hysteresis}, {"changes", ch}};
     batch.add(a.sliced_out, g.text);
   }
-  const Emission emission = prepare_emission(env, a.output);
-  const bool output_is_device = !a.output.output_path.empty() && is_special_output(a.output.output_path);
-  if (!a.output.output_path.empty() && !output_is_device) batch.add(a.output.output_path, emission.text);
-  batch.commit();
-  if (output_is_device) write_output_text(a.output.output_path, emission.text);  // -o /dev/stdout: nothing to undo
+  return outcome;
+}
 
-  if (!a.output.json) {
-    ctx.out << result.diff;
+void print_text(const ExportOutcome& o, std::ostream& os) { os << o.change.diff; }
+
+int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContext& ctx) {
+  const ExportOptions& a = o.options;
+  const auto& result = o.change;
+  const auto& design = o.design;
+  const auto& flow = o.flow;
+  const auto& settings = o.settings;
+  const auto& env = o.envelope;
+  const std::string& schedule = o.schedule_gcode;
+  const std::string& backup = o.backup;
+  protocols::FileBatch batch = o.files;
+  // Refuse to overwrite a file that changed since it was read.
+  if (a.write && result.changed() && ident::read_file_bytes(a.config) != result.original)
+    throw InputError("the configuration file changed since it was read; run the export again", a.config);
+  const Emission emission = prepare_emission(env, output);
+  const bool output_is_device = !output.output_path.empty() && is_special_output(output.output_path);
+  if (!output.output_path.empty() && !output_is_device) batch.add(output.output_path, emission.text);
+  batch.commit();
+  if (output_is_device) write_output_text(output.output_path, emission.text);  // -o /dev/stdout: nothing to undo
+
+  if (!output.json) {
+    print_text(o, ctx.out);
     if (design)
       ctx.err << fmt::format("tunekit: advance K = {:.4g} s ({}) at {:.3g} mm^3/s{}\n", design->k_s, design->k_source,
                              design->design_flow_mm3_s,
@@ -567,7 +582,7 @@ int run_export(const ExportArgs& a, CliContext& ctx) {
       ctx.err << "tunekit: flow-dependent advance (for per-feature G-code; the firmware takes one number):\n"
               << schedule;
   }
-  return finish_emission(env, a.output, emission, ctx, /*write_output_file=*/false);
+  return finish_emission(env, output, emission, ctx, /*write_output_file=*/false);
 }
 
-}  // namespace tunekit::cli::export_cmd
+}  // namespace tunekit::cli

@@ -1,4 +1,4 @@
-// tunekit export's command line: its options bound to ExportArgs, the help text, and the
+// tunekit export's command line: its options bound to ExportOptions, the help text, and the
 // parsing of option values (the command itself is cmd_export.cpp).
 #include <algorithm>
 #include <cmath>
@@ -14,10 +14,11 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/export_command.hpp"
 #include "tunekit/cli/plots.hpp"
 #include "tunekit/cli/results_json.hpp"
 #include "tunekit/fitting/fit_result.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
@@ -30,16 +31,33 @@
 #include "tunekit/protocols/machine_profile.hpp"
 
 
-#include "export_args.hpp"
 
 namespace tunekit::cli {
-namespace export_cmd {
+namespace {
 
-/// An option given on the command line must be a finite number.
-void require_finite_option(const CLI::Option* opt, double v, const char* unit) {
-  if (opt && opt->count() > 0 && !std::isfinite(v))
-    throw InputError(fmt::format("{} must be a finite number ({}), not '{}'", opt->get_name(), unit, opt->as<std::string>()));
+struct ExportCommand {
+  ExportOptions options;
+  OutputOptions output;
+};
+
+// An option whose value must be a finite number: "nan", "inf" and "1e400" are refused with the
+// words the user typed.
+CLI::Option* export_finite_option(CLI::App* sub, const std::string& name, double& target, const char* unit,
+                                  const std::string& description) {
+  return sub
+      ->add_option_function<std::string>(
+          name,
+          [&target, name, unit](const std::string& raw) {
+            double v = 0;
+            if (!CLI::detail::lexical_cast(raw, v)) throw CLI::ConversionError("Could not convert: " + name + " = " + raw);
+            if (!std::isfinite(v)) throw InputError(fmt::format("{} must be a finite number ({}), not '{}'", name, unit, raw));
+            target = v;
+          },
+          description)
+      ->type_name("FLOAT");
 }
+
+}  // namespace
 
 protocols::ShaperSetting parse_shaper_arg(const std::string& arg, const std::string& axis) {
   // TYPE:FREQ[:ZETA]
@@ -65,61 +83,60 @@ protocols::ShaperSetting parse_shaper_arg(const std::string& arg, const std::str
   return s;
 }
 
-}  // namespace export_cmd
 
 void register_export(CLI::App& app, CliContext& ctx) {
-  using export_cmd::ExportArgs;
-  auto args = std::make_shared<ExportArgs>();
+  auto cmd = std::make_shared<ExportCommand>();
+  ExportOptions& o = cmd->options;
   auto* sub = app.add_subcommand(
       "export", "Write pressure advance and input shaping into firmware configuration (diff preview; --write applies)");
-  sub->add_option("results", args->results,
+  sub->add_option("results", o.results,
                   "JSON results of 'tunekit step', 'freq', 'shaper' and/or 'rheo' (any number, any order)");
-  sub->add_option("-f,--firmware", args->firmware,
+  sub->add_option("-f,--firmware", o.firmware,
                   "Firmware dialect: klipper, kalico (nonlinear advance from two or more flow levels), marlin or rrf")
       ->required();
-  sub->add_option("-c,--config", args->config,
+  sub->add_option("-c,--config", o.config,
                   "Configuration file to edit: printer.cfg (klipper), Configuration_adv.h (marlin), config.g (rrf)")
       ->required();
-  sub->add_option("-p,--profile", args->profile,
+  sub->add_option("-p,--profile", o.profile,
                   "Machine profile TOML (filament diameter mm, line width/height mm, print speed mm/s, print and "
                   "extruder acceleration mm/s^2) for the smoothing time");
-  args->pa_k_opt = sub->add_option("--pa-k", args->pa_k, "Advance K in s (mm of filament per mm/s), instead of the results");
-  args->pa_smooth_opt = sub->add_option("--pa-smooth", args->pa_smooth,
-                  "Smoothing time in s (Klipper pressure_advance_smooth_time, Marlin ADVANCE_TAU), instead of the design");
-  args->design_flow_opt = sub->add_option("--design-flow", args->design_flow,
-                  "Volumetric flow in mm^3/s the single advance value is designed for (default: print speed x line "
-                  "cross-section)");
-  sub->add_option("--shaper-x", args->shaper_x, "X shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
-  sub->add_option("--shaper-y", args->shaper_y, "Y shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
-  sub->add_option("--extruder", args->extruder,
+  export_finite_option(sub, "--pa-k", o.pa_k, "s", "Advance K in s (mm of filament per mm/s), instead of the results");
+  export_finite_option(sub, "--pa-smooth", o.pa_smooth, "s",
+                       "Smoothing time in s (Klipper pressure_advance_smooth_time, Marlin ADVANCE_TAU), instead of the design");
+  export_finite_option(sub, "--design-flow", o.design_flow, "mm^3/s",
+                       "Volumetric flow in mm^3/s the single advance value is designed for (default: print speed x line "
+                       "cross-section)");
+  sub->add_option("--shaper-x", o.shaper_x, "X shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
+  sub->add_option("--shaper-y", o.shaper_y, "Y shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
+  sub->add_option("--extruder", o.extruder,
                   "Extruder: a Klipper section name (default: extruder), or a number N: Klipper [extruderN], Marlin's "
                   "Nth ADVANCE_K entry (M900 TN), RepRapFirmware drive N");
-  sub->add_option("--drive", args->drive, "RepRapFirmware extruder drive number for M572 D (default: 0)")
-      ->each([args](const std::string&) { args->drive_given = true; });
-  sub->add_flag("--marlin-ft-motion", args->marlin_ft_live,
+  sub->add_option("--drive", o.drive, "RepRapFirmware extruder drive number for M572 D (default: 0)")
+      ->each([&opts = o](const std::string&) { opts.drive_given = true; });
+  sub->add_flag("--marlin-ft-motion", o.marlin_ft_live,
                 "The running Marlin reports fixed-time motion enabled (M493): shapers among FT_MOTION's, runtime "
                 "G-code M493 instead of M593/M900 (tunekit calibrate sets it from the printer's answer)");
-  sub->add_flag("--no-pa", args->no_pa, "Leave pressure/linear advance alone");
-  sub->add_flag("--no-shaper", args->no_shaper, "Leave input shaping alone");
-  sub->add_flag("--write", args->write,
+  sub->add_flag("--no-pa", o.no_pa, "Leave pressure/linear advance alone");
+  sub->add_flag("--no-shaper", o.no_shaper, "Leave input shaping alone");
+  sub->add_flag("--write", o.write,
                 "Apply the change: timestamped backup FILE.YYYYmmdd-HHMMSS.bak, then atomic replacement");
-  sub->add_option("--gcode", args->gcode_out, "Also write the settings as G-code to this file (Marlin: M900/M593/M500)");
-  sub->add_option("--orca-out", args->orca_out,
+  sub->add_option("--gcode", o.gcode_out, "Also write the settings as G-code to this file (Marlin: M900/M593/M500)");
+  sub->add_option("--orca-out", o.orca_out,
                   "Write an OrcaSlicer filament profile with adaptive pressure advance (the need at each identified "
                   "flow) to this file");
-  sub->add_option("--orca-in", args->orca_in,
+  sub->add_option("--orca-in", o.orca_in,
                   "OrcaSlicer filament profile to merge into (every other key kept byte for byte); default: a new "
                   "profile");
-  sub->add_option("--orca-name", args->orca_name, "Name of a new OrcaSlicer profile");
-  sub->add_option("--gcode-in", args->sliced_in,
+  sub->add_option("--orca-name", o.orca_name, "Name of a new OrcaSlicer profile");
+  sub->add_option("--gcode-in", o.sliced_in,
                   "Sliced G-code (PrusaSlicer, OrcaSlicer or Cura ;TYPE: features) to give a per-feature advance");
-  sub->add_option("--gcode-out", args->sliced_out, "Where the post-processed G-code goes (written atomically)");
-  sub->add_option("--plot", args->plot_out,
+  sub->add_option("--gcode-out", o.sliced_out, "Where the post-processed G-code goes (written atomically)");
+  sub->add_option("--plot", o.plot_out,
                   "Draw the advance against flow (need, 95 % band, each exported model, design flow) to FILE.svg/.png");
-  sub->add_option("--hysteresis", args->hysteresis,
+  sub->add_option("--hysteresis", o.hysteresis,
                   "Relative change of the advance needed before the post-processor writes a new value (default 0.1)")
       ->check(CLI::Range(0.0, 0.99));
-  add_output_options(sub, args->output);
+  add_output_options(sub, cmd->output);
   sub->footer(
       "Prints a unified diff of the configuration on stdout (a summary and the equivalent G-code on stderr);\n"
       "nothing is written without --write. Running it again after --write changes nothing.\n"
@@ -133,7 +150,7 @@ void register_export(CLI::App& app, CliContext& ctx) {
       "With two or more identified flow levels the advance is designed per flow (the stored melt volume, the\n"
       "integral of tau over flow): Klipper/Marlin/RepRapFirmware get K at the design flow and the flow range\n"
       "where it stays within 10 % of the need; Kalico its nonlinear model; OrcaSlicer the adaptive table.");
-  sub->callback([args, &ctx] { set_exit_code(export_cmd::run_export(*args, ctx)); });
+  sub->callback([cmd, &ctx] { set_exit_code(commit_export(compute_export(cmd->options), cmd->output, ctx)); });
 }
 
 }  // namespace tunekit::cli

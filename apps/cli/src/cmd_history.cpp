@@ -25,7 +25,7 @@
 #include "tunekit/cli/history_record.hpp"
 #include "tunekit/cli/report.hpp"
 #include "tunekit/cli/requirements.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/history/drift.hpp"
 #include "tunekit/history/quantities.hpp"
 #include "tunekit/history/store.hpp"

@@ -7,42 +7,33 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/inspect_command.hpp"
 #include "tunekit/ident/csv.hpp"
 
 namespace tunekit::cli {
-namespace {
 
-struct InspectArgs {
-  std::string file;
-  std::string time_column;
-  std::vector<std::string> columns;
-  OutputOptions output;
-};
-
-int run_inspect(const InspectArgs& a, CliContext& ctx) {
+InspectOutcome compute_inspect(const InspectOptions& a) {
   ident::CsvOptions opt;
   opt.columns = a.columns;
   opt.time_column = a.time_column;
   const std::string bytes = ident::read_file_bytes(a.file);
   const auto table = ident::parse_csv(bytes, a.file, opt);
 
-  Envelope env("inspect");
-  env.set_options({{"time_column", a.time_column}, {"columns", a.columns}});
-  env.add_input(a.file, bytes);
-  auto& res = env.results();
-  res["rows"] = table.rows;
-  res["header"] = table.header;
-  nlohmann::json cols = nlohmann::json::array();
+  InspectOutcome outcome;
+  outcome.options = a;
+  outcome.input = input_digest(a.file, bytes);
+  outcome.rows = table.rows;
+  outcome.header = table.header;
   for (const auto& c : table.columns) {
     const auto [lo, hi] = std::minmax_element(c.values.begin(), c.values.end());
     double mean = 0;
     for (double v : c.values) mean += v;
     mean /= static_cast<double>(c.values.size());
-    cols.push_back({{"name", c.name}, {"unit", c.unit}, {"min", *lo}, {"max", *hi}, {"mean", mean}});
+    outcome.columns.push_back({c.name, c.unit, *lo, *hi, mean});
   }
-  res["columns"] = cols;
   if (!a.time_column.empty() && table.rows >= 2) {
     const auto& t = table.column(a.time_column).values;
     const double span = t.back() - t.front();
@@ -52,40 +43,67 @@ int run_inspect(const InspectArgs& a, CliContext& ctx) {
       min_dt = std::min(min_dt, t[i] - t[i - 1]);
     }
     const double mean_dt = span / static_cast<double>(t.size() - 1);
-    res["time"] = {{"span_s", span}, {"sample_rate_hz", 1.0 / mean_dt}, {"min_dt_s", min_dt}, {"max_dt_s", max_dt}};
+    outcome.timing = InspectTiming{span, 1.0 / mean_dt, min_dt, max_dt};
     if (max_dt > 1.5 * mean_dt)
-      env.warn(fmt::format("{}: irregular sampling: the largest gap is {:.3g} s, {:.1f} times the mean interval",
-                           a.file, max_dt, max_dt / mean_dt));
+      outcome.warnings.push_back(
+          fmt::format("{}: irregular sampling: the largest gap is {:.3g} s, {:.1f} times the mean interval", a.file,
+                      max_dt, max_dt / mean_dt));
   }
-  for (const auto& w : table.warnings) env.warn(w);
-  if (!a.output.json) {
-    ctx.out << fmt::format("{}: {} rows, {} columns\n", a.file, table.rows, table.header.size());
-    for (const auto& c : cols)
-      ctx.out << fmt::format("  {:<16} [{}]  min {:.6g}  max {:.6g}  mean {:.6g}\n", c["name"].get<std::string>(),
-                             c["unit"].get<std::string>(), c["min"].get<double>(), c["max"].get<double>(),
-                             c["mean"].get<double>());
-    if (res.contains("time"))
-      ctx.out << fmt::format("  time span {:.6g} s, {:.6g} Hz mean sampling\n", res["time"]["span_s"].get<double>(),
-                             res["time"]["sample_rate_hz"].get<double>());
-  }
-  return emit(env, a.output, ctx);
+  outcome.warnings.insert(outcome.warnings.end(), table.warnings.begin(), table.warnings.end());
+  return outcome;
 }
+
+Envelope to_envelope(const InspectOutcome& o) {
+  Envelope env("inspect");
+  env.set_options({{"time_column", o.options.time_column}, {"columns", o.options.columns}});
+  add_input(env, o.input);
+  auto& res = env.results();
+  res["rows"] = o.rows;
+  res["header"] = o.header;
+  nlohmann::json cols = nlohmann::json::array();
+  for (const auto& c : o.columns)
+    cols.push_back({{"name", c.name}, {"unit", c.unit}, {"min", c.min}, {"max", c.max}, {"mean", c.mean}});
+  res["columns"] = cols;
+  if (o.timing)
+    res["time"] = {{"span_s", o.timing->span_s},
+                   {"sample_rate_hz", o.timing->sample_rate_hz},
+                   {"min_dt_s", o.timing->min_dt_s},
+                   {"max_dt_s", o.timing->max_dt_s}};
+  for (const auto& w : o.warnings) env.warn(w);
+  return env;
+}
+
+void print_text(const InspectOutcome& o, std::ostream& os) {
+  os << fmt::format("{}: {} rows, {} columns\n", o.options.file, o.rows, o.header.size());
+  for (const auto& c : o.columns)
+    os << fmt::format("  {:<16} [{}]  min {:.6g}  max {:.6g}  mean {:.6g}\n", c.name, c.unit, c.min, c.max, c.mean);
+  if (o.timing)
+    os << fmt::format("  time span {:.6g} s, {:.6g} Hz mean sampling\n", o.timing->span_s, o.timing->sample_rate_hz);
+}
+
+namespace {
+
+struct InspectCommand {
+  InspectOptions options;
+  OutputOptions output;
+};
 
 }  // namespace
 
 void register_inspect(CLI::App& app, CliContext& ctx) {
-  auto args = std::make_shared<InspectArgs>();
+  auto cmd = std::make_shared<InspectCommand>();
+  InspectOptions& o = cmd->options;
   auto* sub = app.add_subcommand("inspect", "Check that a time-series CSV is readable and summarize it");
-  sub->add_option("file", args->file, "CSV file (comment lines start with '#'; units allowed in names: 'force (N)')")
+  sub->add_option("file", o.file, "CSV file (comment lines start with '#'; units allowed in names: 'force (N)')")
       ->required();
-  sub->add_option("-t,--time", args->time_column, "Name of the time column (s); must strictly increase");
-  sub->add_option("-c,--columns", args->columns, "Columns to read (default: all)");
-  add_output_options(sub, args->output);
+  sub->add_option("-t,--time", o.time_column, "Name of the time column (s); must strictly increase");
+  sub->add_option("-c,--columns", o.columns, "Columns to read (default: all)");
+  add_output_options(sub, cmd->output);
   sub->footer(
       "Examples:\n"
       "  tunekit inspect datasets/liquefier/holtrup_table_b1_ooze.csv\n"
       "  tunekit inspect adxl345-x.csv --time time --json     # a Klipper raw accelerometer file");
-  sub->callback([args, &ctx] { set_exit_code(run_inspect(*args, ctx)); });
+  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_inspect(cmd->options), cmd->output, ctx)); });
 }
 
 }  // namespace tunekit::cli

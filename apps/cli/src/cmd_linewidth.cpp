@@ -16,10 +16,13 @@
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
-#include "linewidth_command.hpp"
+#include "linewidth_profile_csv.hpp"
+#include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/linewidth_command.hpp"
+#include "tunekit/cli/option_binding.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/vision/camera_calibration.hpp"
 #include "tunekit/vision/charuco.hpp"
 #include "tunekit/vision/line_width.hpp"
@@ -35,7 +38,6 @@ namespace {
 
 using linewidth::ImageRun;
 using linewidth::kNaN;
-using linewidth::LinewidthArgs;
 using linewidth::r4;
 using linewidth::r6;
 
@@ -75,55 +77,26 @@ std::string overlay_path(const std::string& dir, const std::string& image) {
 }
 
 // Writes the overlay if asked; never lets a write failure hide the original error.
-void overlay_best_effort(const LinewidthArgs& a, const ImageRun& run, const vision::LineWidthResult* res,
-                         const std::string& message, CliContext& ctx) {
+void overlay_best_effort(const LinewidthOptions& a, const ImageRun& run, const vision::LineWidthResult* res,
+                         const std::string& message, std::ostream& err) {
   if (a.overlay_dir.empty()) return;
   try {
     std::filesystem::create_directories(a.overlay_dir);
     vision::write_overlay(overlay_path(a.overlay_dir, run.path),
                          vision::draw_overlay(run.measured, res, run.target_outline, message));
   } catch (const std::exception& e) {
-    ctx.err << fmt::format("tunekit: warning: overlay not written: {}\n", e.what());
+    err << fmt::format("tunekit: warning: overlay not written: {}\n", e.what());
   }
 }
 
-int run_save_camera(const LinewidthArgs& a, CliContext& ctx) {
-  if (a.chessboard.empty()) throw InputError("--save-camera needs --chessboard COLSxROWS and --square-mm");
-  const auto spec = vision::parse_chessboard_spec(a.chessboard, a.square_mm);
-  Envelope env("linewidth");
-  std::vector<cv::Mat> grays;
-  for (const auto& p : a.images) {
-    grays.push_back(vision::load_gray_image(p));
-    env.add_input(p);
-  }
-  std::vector<int> skipped;
-  const auto prof = vision::calibrate_camera(grays, spec, &skipped);
-  for (int i : skipped)
-    env.warn(fmt::format("{}: {}x{} chessboard not found; image not used", a.images[static_cast<std::size_t>(i)],
-                         spec.cols, spec.rows));
-  protocols::write_file_atomic(a.save_camera, prof.to_json().dump(2) + "\n");
-  env.set_options({{"chessboard", a.chessboard}, {"square_mm", a.square_mm}, {"save_camera", a.save_camera}});
-  env.results()["camera"] = prof.to_json();
-  env.results()["camera_profile_path"] = a.save_camera;
-  if (!a.output.json)
-    ctx.out << fmt::format("camera profile {}: {} images, reprojection RMS {:.3f} px, bed scale {:.4f} px/mm\n",
-                           a.save_camera, prof.images_used, prof.rms_reprojection_px, prof.px_per_mm);
-  return emit(env, a.output, ctx);
-}
-
-ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const std::optional<vision::CameraProfile>& cam,
-                       CliContext& ctx) {
+ImageRun measure_image(const LinewidthOptions& a, const std::string& path, const std::optional<vision::CameraProfile>& cam,
+                       std::ostream& err) {
   ImageRun run;
   run.path = path;
   cv::Mat gray = vision::load_gray_image(path);
   if (cam) gray = vision::undistort_image(gray, *cam, path);
   run.measured = gray;
-  vision::LineWidthOptions opt;
-  opt.polarity = a.polarity == "dark" ? vision::LinePolarity::dark
-                 : a.polarity == "light" ? vision::LinePolarity::light
-                                         : vision::LinePolarity::automatic;
-  opt.step_px = a.step_px;
-  opt.min_length_px = a.min_length_px;
+  vision::LineWidthOptions opt = a.detection;
 
   if (!a.chessboard.empty() || !a.charuco.empty()) {
     vision::ChessboardDetection det;
@@ -139,7 +112,7 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
     }
     if (!det.found) {
       const std::string msg = fmt::format("scale target not found: no {} in the image", board_name);
-      overlay_best_effort(a, run, nullptr, msg, ctx);
+      overlay_best_effort(a, run, nullptr, msg, err);
       throw InputError(msg, path);
     }
     if (a.rectify) {
@@ -177,7 +150,7 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
   if (a.reference_width_mm > 0) {
     if (res.lines.empty() || !(res.lines.front().valid_samples > 0)) {
       const std::string msg = "scale target not found: no line of the reference width was measured";
-      overlay_best_effort(a, run, &res, msg, ctx);
+      overlay_best_effort(a, run, &res, msg, err);
       throw InputError(msg, path);
     }
     run.ppm = res.lines.front().mean_width_px / a.reference_width_mm;
@@ -186,7 +159,7 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
   if (res.lines.empty()) {
     std::string msg = "no line found";
     for (const auto& w : res.warnings) msg += ": " + w;
-    overlay_best_effort(a, run, &res, msg, ctx);
+    overlay_best_effort(a, run, &res, msg, err);
     throw FitError(msg, path);
   }
   if (!a.allow_edge) {
@@ -197,7 +170,7 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
             fmt::format("line {} touches the frame edge (it spans x {}..{}, y {}..{} px of {}x{}); reframe the photo "
                         "or pass --allow-edge to measure it with out-of-frame stretches flagged",
                         i + 1, b.x, b.x + b.width, b.y, b.y + b.height, res.width, res.height);
-        overlay_best_effort(a, run, &res, msg, ctx);
+        overlay_best_effort(a, run, &res, msg, err);
         throw InputError(msg, path);
       }
   }
@@ -205,17 +178,42 @@ ImageRun measure_image(const LinewidthArgs& a, const std::string& path, const st
   for (const auto& l : res.lines) valid += l.valid_samples;
   if (valid == 0) {
     const std::string msg = "measured nothing: every profile sample is flagged (occluded, merged or out of frame)";
-    overlay_best_effort(a, run, &res, msg, ctx);
+    overlay_best_effort(a, run, &res, msg, err);
     throw FitError(msg, path);
   }
-  overlay_best_effort(a, run, &res, "", ctx);
+  overlay_best_effort(a, run, &res, "", err);
   return run;
 }
 
-int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
+LinewidthOutcome compute_linewidth_camera(const LinewidthOptions& a) {
+  if (a.chessboard.empty()) throw InputError("--save-camera needs --chessboard COLSxROWS and --square-mm");
+  const auto spec = vision::parse_chessboard_spec(a.chessboard, a.square_mm);
+  LinewidthOutcome outcome;
+  outcome.options = a;
+  std::vector<cv::Mat> grays;
+  for (const auto& p : a.images) {
+    grays.push_back(vision::load_gray_image(p));
+    outcome.inputs.push_back(input_digest(p, ident::read_file_bytes(p)));
+  }
+  std::vector<int> skipped;
+  outcome.camera = vision::calibrate_camera(grays, spec, &skipped);
+  for (int i : skipped)
+    outcome.warnings.push_back(fmt::format("{}: {}x{} chessboard not found; image not used",
+                                           a.images[static_cast<std::size_t>(i)], spec.cols, spec.rows));
+  protocols::write_file_atomic(a.save_camera, outcome.camera->to_json().dump(2) + "\n");
+  return outcome;
+}
+
+std::string linewidth_polarity_name(vision::LinePolarity p) {
+  return p == vision::LinePolarity::dark ? "dark" : p == vision::LinePolarity::light ? "light" : "auto";
+}
+
+}  // namespace
+
+LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err) {
   if (!(a.max_image_mp > 0 && a.max_image_mp <= 1e5)) throw InputError("--max-image-mp must be in (0, 100000] megapixels");
   vision::set_max_image_pixels(static_cast<std::uint64_t>(std::ceil(a.max_image_mp * 1e6)));
-  if (!a.save_camera.empty()) return run_save_camera(a, ctx);
+  if (!a.save_camera.empty()) return compute_linewidth_camera(a);
   const bool board = !a.chessboard.empty() || !a.charuco.empty();
   if (!a.chessboard.empty() && !a.charuco.empty()) throw InputError("give --chessboard or --charuco, not both");
   if (!a.charuco.empty() && !(a.marker_mm > 0)) throw InputError("--charuco needs --square-mm and --marker-mm (mm)");
@@ -237,40 +235,69 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   if (a.ring_sines > 0 && !(a.ring_amplitude_mm > 0 && a.rod_radius_mm > 0 && a.layer_height_mm > 0))
     throw InputError("--ring-sines needs --ring-amplitude-mm, --rod-radius-mm and --layer-height-mm");
 
+  LinewidthOutcome outcome;
+  outcome.options = a;
   std::optional<vision::CameraProfile> cam;
-  Envelope env("linewidth");
   if (!a.camera.empty()) {
     cam = vision::load_camera_profile(a.camera);
-    env.add_input(a.camera);
+    outcome.inputs.push_back(input_digest(a.camera, ident::read_file_bytes(a.camera)));
     if (!cam->has_bed_plane && a.px_per_mm <= 0 && !board && a.reference_width_mm <= 0)
       throw InputError("camera profile has no bed plane scale: add --px-per-mm, --chessboard or --reference-width-mm",
                        a.camera);
   }
-  nlohmann::json images = nlohmann::json::array();
-  nlohmann::json lines = nlohmann::json::array();
   std::vector<ImageRun> runs;
   for (const auto& path : a.images) {
-    runs.push_back(measure_image(a, path, cam, ctx));
-    env.add_input(path);
+    runs.push_back(measure_image(a, path, cam, err));
+    outcome.inputs.push_back(input_digest(path, ident::read_file_bytes(path)));
     const auto& run = runs.back();
     const auto& res = run.result;
-    images.push_back({{"file", path},
+    for (const auto& w : res.warnings) outcome.warnings.push_back(fmt::format("{}: {}", path, w));
+    for (std::size_t k = 0; k < res.lines.size(); ++k) {
+      const auto& l = res.lines[k];
+      const double valid_frac = l.samples.empty() ? 0.0 : static_cast<double>(l.valid_samples) / l.samples.size();
+      if (valid_frac < 0.5)
+        outcome.warnings.push_back(
+            fmt::format("{}: line {}: only {:.0f} % of the profile is measured", path, k + 1, 100 * valid_frac));
+    }
+    outcome.images.push_back({run.path, run.ppm, run.scale_source, run.result});
+  }
+  if (!a.profile_csv.empty())
+    outcome.profile_csv = linewidth::write_profile_csv(a, runs.front(), outcome.warnings, outcome.inputs);
+  return outcome;
+}
+
+Envelope to_envelope(const LinewidthOutcome& o) {
+  const LinewidthOptions& a = o.options;
+  Envelope env("linewidth");
+  for (const auto& d : o.inputs) add_input(env, d);
+  for (const auto& w : o.warnings) env.warn(w);
+  if (o.camera) {
+    env.set_options({{"chessboard", a.chessboard}, {"square_mm", a.square_mm}, {"save_camera", a.save_camera}});
+    env.results()["camera"] = o.camera->to_json();
+    env.results()["camera_profile_path"] = a.save_camera;
+    return env;
+  }
+  nlohmann::json images = nlohmann::json::array();
+  nlohmann::json lines = nlohmann::json::array();
+  for (const auto& run : o.images) {
+    const auto& res = run.result;
+    const double ppm = run.px_per_mm;
+    images.push_back({{"file", run.path},
                       {"width_px", res.width},
                       {"height_px", res.height},
-                      {"px_per_mm", r6(run.ppm)},
+                      {"px_per_mm", r6(ppm)},
                       {"scale_source", run.scale_source},
                       {"polarity", res.light_lines ? "light" : "dark"},
                       {"noise", r4(res.noise_sigma)},
                       {"lines_found", res.lines.size()}});
-    for (const auto& w : res.warnings) env.warn(fmt::format("{}: {}", path, w));
     for (std::size_t k = 0; k < res.lines.size(); ++k) {
       const auto& l = res.lines[k];
       nlohmann::json s_mm = nlohmann::json::array(), w_mm = nlohmann::json::array(), conf = nlohmann::json::array(),
                      flags = nlohmann::json::array(), xs = nlohmann::json::array(), ys = nlohmann::json::array();
       for (const auto& s : l.samples) {
-        s_mm.push_back(r6(s.s_px / run.ppm));
+        s_mm.push_back(r6(s.s_px / ppm));
         w_mm.push_back(s.valid() || (std::isfinite(s.width_px) && s.flags == vision::kFlagMerged)
-                           ? nlohmann::json(r6(s.width_px / run.ppm))
+                           ? nlohmann::json(r6(s.width_px / ppm))
                            : nlohmann::json(nullptr));
         conf.push_back(r4(s.confidence));
         flags.push_back(s.flags);
@@ -279,26 +306,23 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
       }
       std::vector<double> ws;
       for (const auto& s : l.samples)
-        if (s.valid()) ws.push_back(s.width_px / run.ppm);
+        if (s.valid()) ws.push_back(s.width_px / ppm);
       std::sort(ws.begin(), ws.end());
       const double med = ws.empty() ? kNaN : ws[ws.size() / 2];
-      const double valid_frac = l.samples.empty() ? 0.0 : static_cast<double>(l.valid_samples) / l.samples.size();
-      if (valid_frac < 0.5)
-        env.warn(fmt::format("{}: line {}: only {:.0f} % of the profile is measured", path, k + 1, 100 * valid_frac));
-      lines.push_back({{"image", path},
+      lines.push_back({{"image", run.path},
                        {"index", k + 1},
                        {"closed", l.closed},
                        {"touches_frame", l.touches_frame},
-                       {"length_mm", r6(l.length_px / run.ppm)},
+                       {"length_mm", r6(l.length_px / ppm)},
                        {"samples", l.samples.size()},
                        {"valid_samples", l.valid_samples},
                        {"width_mm",
-                        {{"mean", r6(l.mean_width_px / run.ppm)},
-                         {"std", r6(l.std_width_px / run.ppm)},
+                        {{"mean", r6(l.mean_width_px / ppm)},
+                         {"std", r6(l.std_width_px / ppm)},
                          {"median", r6(med)},
                          {"unit", "mm"}}},
                        {"width_px", {{"mean", r4(l.mean_width_px)}, {"std", r4(l.std_width_px)}}},
-                       {"stretches", stretches(l, run.ppm)},
+                       {"stretches", stretches(l, ppm)},
                        {"profile",
                         {{"s_mm", s_mm},
                          {"width_mm", w_mm},
@@ -314,8 +338,7 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
   results["flag_bits"] = {{"out_of_frame", vision::kFlagOutOfFrame},
                           {"occluded", vision::kFlagOccluded},
                           {"merged", vision::kFlagMerged}};
-
-  if (!a.profile_csv.empty()) results["profile_csv"] = linewidth::write_profile_csv(a, runs.front(), env);
+  if (!o.profile_csv.is_null()) results["profile_csv"] = o.profile_csv;
 
   env.set_options({{"px_per_mm", a.px_per_mm},
                    {"camera", a.camera},
@@ -326,9 +349,9 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
                    {"square_mm", a.square_mm},
                    {"reference_width_mm", a.reference_width_mm},
                    {"rectify", a.rectify},
-                   {"polarity", a.polarity},
-                   {"step_px", a.step_px},
-                   {"min_length_px", a.min_length_px},
+                   {"polarity", linewidth_polarity_name(a.detection.polarity)},
+                   {"step_px", a.detection.step_px},
+                   {"min_length_px", a.detection.min_length_px},
                    {"allow_edge", a.allow_edge},
                    {"overlay", a.overlay_dir},
                    {"profile_csv", a.profile_csv},
@@ -343,104 +366,127 @@ int run_linewidth(const LinewidthArgs& a, CliContext& ctx) {
                    {"ring_start_deg", a.ring_start_deg},
                    {"ring_clockwise", a.ring_clockwise},
                    {"gcode", a.gcode},
-                   {"filament_diameter_mm", a.filament_diameter_mm},
-                   {"path_offset_mm", std::isfinite(a.path_offset_mm) ? nlohmann::json(a.path_offset_mm)
+                   {"filament_diameter_mm", a.path.filament_diameter_mm},
+                   {"path_offset_mm", std::isfinite(a.path.offset_mm) ? nlohmann::json(a.path.offset_mm)
                                                                        : nlohmann::json(nullptr)},
-                   {"path_reversed", a.path_reversed}});
-  if (!a.output.json) {
-    for (const auto& l : lines)
-      ctx.out << fmt::format("{} line {}: width {:.4f} mm (std {:.4f} mm), {} of {} samples, length {:.2f} mm{}\n",
-                             l["image"].get<std::string>(), l["index"].get<int>(),
-                             l["width_mm"]["mean"].get<double>(), l["width_mm"]["std"].get<double>(),
-                             l["valid_samples"].get<int>(), l["samples"].get<int>(), l["length_mm"].get<double>(),
-                             l["closed"].get<bool>() ? " (closed loop)" : "");
-    if (results.contains("profile_csv"))
-      ctx.out << fmt::format("profile written to {} ({} rows)\n", a.profile_csv,
-                             results["profile_csv"]["rows"].get<std::size_t>());
-  }
-  return emit(env, a.output, ctx);
+                   {"path_reversed", a.path.reversed}});
+  return env;
 }
+
+void print_text(const LinewidthOutcome& o, std::ostream& os) {
+  if (o.camera) {
+    os << fmt::format("camera profile {}: {} images, reprojection RMS {:.3f} px, bed scale {:.4f} px/mm\n",
+                      o.options.save_camera, o.camera->images_used, o.camera->rms_reprojection_px, o.camera->px_per_mm);
+    return;
+  }
+  for (const auto& run : o.images)
+    for (std::size_t k = 0; k < run.result.lines.size(); ++k) {
+      const auto& l = run.result.lines[k];
+      const double ppm = run.px_per_mm;
+      os << fmt::format("{} line {}: width {:.4f} mm (std {:.4f} mm), {} of {} samples, length {:.2f} mm{}\n",
+                        run.path, k + 1, r6(l.mean_width_px / ppm), r6(l.std_width_px / ppm), l.valid_samples,
+                        l.samples.size(), r6(l.length_px / ppm), l.closed ? " (closed loop)" : "");
+    }
+  if (!o.profile_csv.is_null())
+    os << fmt::format("profile written to {} ({} rows)\n", o.options.profile_csv,
+                      o.profile_csv["rows"].get<std::size_t>());
+}
+
+namespace {
+
+struct LinewidthCommand {
+  LinewidthOptions options;
+  OutputOptions output;
+};
 
 }  // namespace
 
 void register_linewidth(CLI::App& app, CliContext& ctx) {
-  auto args = std::make_shared<LinewidthArgs>();
+  auto cmd = std::make_shared<LinewidthCommand>();
+  LinewidthOptions& o = cmd->options;
   auto* sub = app.add_subcommand("linewidth", "Calibrated width profiles of printed lines from photos");
-  sub->add_option("images", args->images,
+  sub->add_option("images", o.images,
                   "Photos of printed lines (PNG, JPEG, BMP, PNM; PNG and PNM may be 16 bit; TIFF: convert to PNG)")
       ->required();
-  sub->add_option("--max-image-mp", args->max_image_mp,
-                  "Refuse images whose header claims more pixels than this, before decoding (megapixels; default 100)");
-  auto* ppm = sub->add_option("--px-per-mm", args->px_per_mm, "Image scale on the bed plane (px/mm)");
+  sub->add_option("--max-image-mp", o.max_image_mp,
+                  "Refuse images whose header claims more pixels than this, before decoding (megapixels)")
+      ->capture_default_str();
+  auto* ppm = sub->add_option("--px-per-mm", o.px_per_mm, "Image scale on the bed plane (px/mm)");
   ppm->check(CLI::PositiveNumber);
-  sub->add_option("--camera", args->camera,
+  sub->add_option("--camera", o.camera,
                   "Camera profile (JSON from --save-camera): removes lens distortion; its bed plane gives the scale "
                   "(px/mm)");
-  sub->add_option("--chessboard", args->chessboard,
+  sub->add_option("--chessboard", o.chessboard,
                   "Chessboard in the scene (or, with --save-camera, in the calibration photos): inner corners "
                   "COLSxROWS, e.g. 9x6");
-  sub->add_option("--square-mm", args->square_mm, "Side of a chessboard or ChArUco square (mm)")
+  sub->add_option("--square-mm", o.square_mm, "Side of a chessboard or ChArUco square (mm)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--charuco", args->charuco,
+  sub->add_option("--charuco", o.charuco,
                   "ChArUco board in the scene instead of a chessboard: squares SQUARESxSQUARES, e.g. 5x7 (found when "
                   "partly covered or partly outside the picture; needs OpenCV's aruco module)");
-  sub->add_option("--marker-mm", args->marker_mm, "Side of a ChArUco board's ArUco markers (mm)")
+  sub->add_option("--marker-mm", o.marker_mm, "Side of a ChArUco board's ArUco markers (mm)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--aruco-dict", args->aruco_dict, "ArUco dictionary of the ChArUco board (default DICT_4X4_50)");
-  sub->add_option("--reference-width-mm", args->reference_width_mm,
+  sub->add_option("--aruco-dict", o.aruco_dict, "ArUco dictionary of the ChArUco board")
+      ->capture_default_str();
+  sub->add_option("--reference-width-mm", o.reference_width_mm,
                   "Scale from a reference: the longest line in the image has this width (mm)")
       ->check(CLI::PositiveNumber);
-  sub->add_flag("--rectify", args->rectify,
+  sub->add_flag("--rectify", o.rectify,
                 "Warp the photo onto the bed plane first (perspective of a tilted camera; needs --chessboard or a "
                 "--camera bed plane)");
-  sub->add_option("--polarity", args->polarity, "Line brightness against the bed: auto, dark or light")
-      ->check(CLI::IsMember({"auto", "dark", "light"}));
-  sub->add_option("--step-px", args->step_px, "Spacing of profile samples along the line (px)")
+  add_choice_option<vision::LinePolarity>(sub, "--polarity", o.detection.polarity,
+                                          {{"auto", vision::LinePolarity::automatic},
+                                           {"dark", vision::LinePolarity::dark},
+                                           {"light", vision::LinePolarity::light}},
+                                          "Line brightness against the bed: auto, dark or light");
+  sub->add_option("--step-px", o.detection.step_px, "Spacing of profile samples along the line (px)")
+      ->capture_default_str()
       ->check(CLI::Range(0.25, 100.0));
-  sub->add_option("--min-length-px", args->min_length_px, "Ignore features shorter than this (px of centreline)")
+  sub->add_option("--min-length-px", o.detection.min_length_px, "Ignore features shorter than this (px of centreline)")
+      ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  sub->add_flag("--allow-edge", args->allow_edge,
+  sub->add_flag("--allow-edge", o.allow_edge,
                 "Measure lines that touch the frame edge (their out-of-frame stretches are flagged) instead of failing");
-  sub->add_option("--overlay", args->overlay_dir,
+  sub->add_option("--overlay", o.overlay_dir,
                   "Write check images (edges, centreline, flags) to this directory as <image>_overlay.png");
-  sub->add_option("--save-camera", args->save_camera,
+  sub->add_option("--save-camera", o.save_camera,
                   "Calibrate the camera from the IMAGES (chessboard photos; the first lies on the bed) and write the "
                   "profile (JSON) here; nothing is measured");
-  sub->add_option("--profile-csv", args->profile_csv,
+  sub->add_option("--profile-csv", o.profile_csv,
                   "Write line --line's profile against time: columns time (s), s (mm), width (mm), setpoint_width (mm), "
                   "confidence");
-  sub->add_option("--line", args->line, "Line (1 = longest) written by --profile-csv")->check(CLI::PositiveNumber);
-  sub->add_option("--speed-mm-s", args->speed_mm_s, "Commanded print speed along the line (mm/s)")
+  sub->add_option("--line", o.line, "Line (1 = longest) written by --profile-csv")->check(CLI::PositiveNumber);
+  sub->add_option("--speed-mm-s", o.speed_mm_s, "Commanded print speed along the line (mm/s)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--setpoint-width-mm", args->setpoint_width_mm,
+  sub->add_option("--setpoint-width-mm", o.setpoint_width_mm,
                   "Set-point (G-code) line width (mm); default: the measured mean")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--ring-sines", args->ring_sines, "Ring print: sines per rotation N (Holtrup 2019 eq. 4.2; 1)")
+  sub->add_option("--ring-sines", o.ring_sines, "Ring print: sines per rotation N (Holtrup 2019 eq. 4.2; 1)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--ring-amplitude-mm", args->ring_amplitude_mm, "Ring print: feeder offset amplitude A (mm)")
+  sub->add_option("--ring-amplitude-mm", o.ring_amplitude_mm, "Ring print: feeder offset amplitude A (mm)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--ring-radius-mm", args->ring_radius_mm, "Ring print: ring radius R (mm); default: measured")
+  sub->add_option("--ring-radius-mm", o.ring_radius_mm, "Ring print: ring radius R (mm); default: measured")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--rod-radius-mm", args->rod_radius_mm, "Ring print: feed rod (filament) radius (mm)")
+  sub->add_option("--rod-radius-mm", o.rod_radius_mm, "Ring print: feed rod (filament) radius (mm)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--layer-height-mm", args->layer_height_mm, "Ring print: layer height (mm)")
+  sub->add_option("--layer-height-mm", o.layer_height_mm, "Ring print: layer height (mm)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--ring-start-deg", args->ring_start_deg,
+  sub->add_option("--ring-start-deg", o.ring_start_deg,
                   "Ring print: where theta = 0 is, as an angle in the photo (deg, counterclockwise from +x)");
-  sub->add_flag("--ring-clockwise", args->ring_clockwise, "Ring print: the nozzle ran clockwise as seen in the photo");
-  sub->add_option("--gcode", args->gcode,
+  sub->add_flag("--ring-clockwise", o.ring_clockwise, "Ring print: the nozzle ran clockwise as seen in the photo");
+  sub->add_option("--gcode", o.gcode,
                   "G-code that printed the line (with --profile-csv): its extruding moves give the commanded speed "
                   "(F, mm/min in the file) along the path, and with --filament-diameter-mm and --layer-height-mm the "
                   "set-point width E (pi d^2/4) / (L h) (mm)");
-  sub->add_option("--filament-diameter-mm", args->filament_diameter_mm,
+  sub->add_option("--filament-diameter-mm", o.path.filament_diameter_mm,
                   "With --gcode: filament diameter d (mm) for the set-point width from the feed")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--path-offset-mm", args->path_offset_mm,
+  sub->add_option("--path-offset-mm", o.path.offset_mm,
                   "With --gcode: path length (mm) before the profile's first sample; default: profile centred on the "
                   "path");
-  sub->add_flag("--path-reversed", args->path_reversed,
+  sub->add_flag("--path-reversed", o.path.reversed,
                 "With --gcode: the nozzle ran from the profile's end (right/bottom in the photo) to its start");
-  add_output_options(sub, args->output);
+  add_output_options(sub, cmd->output);
   sub->footer(
       "Examples:\n"
       "  tunekit linewidth lines.png --px-per-mm 20 --json --overlay check/\n"
@@ -455,7 +501,9 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
       "      --input setpoint_width --output width --json\n"
       "Exit codes: 0 measured, 1 nothing measured (no line found), 2 bad input (unreadable image, line touching\n"
       "the frame edge, scale target not found).");
-  sub->callback([args, &ctx] { set_exit_code(run_linewidth(*args, ctx)); });
+  sub->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_linewidth(cmd->options, ctx.err), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

@@ -3,15 +3,17 @@
 // rheology and geometry, and the inverse fit of K and n from measured flow and pressure (or
 // feeder force) at known temperature, as in the load-cell experiments of Holtrup 2019 sec. 5.3.
 #include <cmath>
-#include <fstream>
 #include <memory>
 #include <numbers>
 
 #include <fmt/format.h>
 
+#include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/cli/nozzle_command.hpp"
+#include "tunekit/cli/option_binding.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/ident/csv.hpp"
@@ -21,40 +23,27 @@
 namespace tunekit::cli {
 namespace {
 
-struct NozzleArgs {
-  std::string model = "boles";
-  double K = fitting::kNaN, n = fitting::kNaN, mu = fitting::kNaN;
-  std::string material;
-  std::string rheology_json;
-  double temperature_degc = fitting::kNaN;
-  double kelvin_offset = fitting::kKelvinOffset;
-  std::vector<double> flows_mm3_s;
-  double reference_flow_mm3_s = 3.0;
-  double d_mm = 0.6, l_mm = 4.0, cone_deg = 30.0, D_mm = 5.0, melt_length_mm = 10.0;
-  std::string fit_file;
-  double piston_diameter_mm = fitting::kNaN;
-  OutputOptions output;
-};
+constexpr double kNozzleRadPerDeg = std::numbers::pi / 180.0;
 
-fitting::NozzleGeometry geometry_of(const NozzleArgs& a) {
-  fitting::NozzleGeometry g;
-  g.d_m = a.d_mm * 1e-3;
-  g.l_m = a.l_mm * 1e-3;
-  g.cone_half_angle_rad = a.cone_deg * std::numbers::pi / 180.0;
-  g.D_m = a.D_mm * 1e-3;
-  g.melt_length_m = a.melt_length_mm * 1e-3;
-  fitting::validate(g);
-  return g;
+/// A length in mm (or an angle in degrees) as the command line and the JSON show it, from the SI
+/// value the library holds: rounded to 12 significant digits so that 0.6 mm reads 0.6 again.
+double nozzle_display_value(double si, double per_si) {
+  return std::stod(fmt::format("{:.12g}", si * per_si));
 }
 
-nlohmann::json geometry_json(const NozzleArgs& a) {
-  return {{"d_mm", a.d_mm}, {"l_mm", a.l_mm}, {"cone_half_angle_deg", a.cone_deg}, {"D_mm", a.D_mm},
-          {"melt_length_mm", a.melt_length_mm}};
+nlohmann::json nozzle_geometry_json(const fitting::NozzleGeometry& g) {
+  return {{"d_mm", nozzle_display_value(g.d_m, 1e3)},
+          {"l_mm", nozzle_display_value(g.l_m, 1e3)},
+          {"cone_half_angle_deg", nozzle_display_value(g.cone_half_angle_rad, 1 / kNozzleRadPerDeg)},
+          {"D_mm", nozzle_display_value(g.D_m, 1e3)},
+          {"melt_length_mm", nozzle_display_value(g.melt_length_m, 1e3)}};
 }
 
-int run_fit(const NozzleArgs& a, CliContext& ctx, Envelope& env) {
+NozzleFit compute_nozzle_fit(const NozzleOptions& a, NozzleOutcome& outcome) {
   const std::string bytes = ident::read_file_bytes(a.fit_file);
-  env.add_input(a.fit_file, bytes);
+  outcome.input_path = a.fit_file;
+  outcome.input_sha256 = sha256_hex(bytes);
+  outcome.input_size_bytes = bytes.size();
   const auto t = ident::parse_csv(bytes, a.fit_file);
   const auto hdr = source_location(a.fit_file, t.header_line);
   if (!t.has_column("flow")) throw InputError("no 'flow (mm3/s)' column", hdr);
@@ -103,45 +92,29 @@ int run_fit(const NozzleArgs& a, CliContext& ctx, Envelope& env) {
     d.pressure_Pa.push_back(p[i]);
     d.temperature_K.push_back(T[i]);
   }
-  const auto model = fitting::parse_pressure_model(a.model);
-  const auto fit = fitting::fit_nozzle_rheology(d, model, geometry_of(a));
-  auto& res = env.results();
-  res = fitting::to_json(fit);
-  res["geometry"] = geometry_json(a);
-  res["pressure_model"] = fitting::to_string(model);
-  for (const auto& w : fit.warnings) env.warn(w);
-  if (!a.output.json) {
-    ctx.out << fmt::format("{}: {} measurements, {} model\n", a.fit_file, t.rows, fit.model);
-    for (const auto& q : fit.params)
-      ctx.out << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", q.name, q.value, q.unit, q.ci95_lo, q.ci95_hi);
-    ctx.out << fmt::format("  rms(ln dP) {:.4g}, R2 {:.5f}\n", fit.diagnostics.rms, fit.diagnostics.r2);
-  }
-  return emit(env, a.output, ctx);
+  fitting::validate(a.prediction.geometry);
+  NozzleFit out;
+  out.rows = t.rows;
+  out.fit = fitting::fit_nozzle_rheology(d, a.prediction.model, a.prediction.geometry);
+  outcome.warnings.insert(outcome.warnings.end(), out.fit.warnings.begin(), out.fit.warnings.end());
+  return out;
 }
 
-int run_nozzle(const NozzleArgs& a, CliContext& ctx) {
-  Envelope env("nozzle");
-  env.set_options({{"model", a.model},
-                   {"geometry", geometry_json(a)},
-                   {"kelvin_offset", a.kelvin_offset},
-                   {"material", a.material},
-                   {"reference_flow_mm3_s", a.reference_flow_mm3_s}});
-  if (!(a.kelvin_offset == fitting::kKelvinOffset || a.kelvin_offset == fitting::kKelvinOffsetThesis))
-    throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (Holtrup's (2019) code)");
-  if (!a.fit_file.empty()) return run_fit(a, ctx, env);
-
-  const auto g = geometry_of(a);
-  const auto model = fitting::parse_pressure_model(a.model);
+NozzleForward compute_nozzle_forward(const NozzleOptions& a, NozzleOutcome& outcome) {
+  const fitting::NozzleGeometry& g = a.prediction.geometry;
+  fitting::validate(g);
+  const auto model = a.prediction.model;
   const int sources = (std::isfinite(a.K) || std::isfinite(a.n) ? 1 : 0) + (std::isfinite(a.mu) ? 1 : 0) +
                       (a.material.empty() ? 0 : 1) + (a.rheology_json.empty() ? 0 : 1);
   if (sources != 1)
     throw InputError("give the rheology one way: --K and --n, --mu, --material NAME, or --rheology FIT.json");
   if (a.flows_mm3_s.empty()) throw InputError("give at least one --flow (mm3/s)");
+  NozzleForward out;
   const double T_K = std::isfinite(a.temperature_degc) ? a.temperature_degc + a.kelvin_offset : fitting::kNaN;
 
   // Every source becomes a viscosity function of shear rate and temperature.
   fitting::ViscositySpec spec;
-  std::string source;
+  std::string& source = out.rheology;
   if (std::isfinite(a.K) || std::isfinite(a.n)) {
     if (!(a.K > 0) || !(a.n > 0 && a.n <= 1.5)) throw InputError("--K (Pa.s^n) must be > 0 and --n in (0, 1.5]");
     spec.model = fitting::ViscosityModel::power_law;
@@ -167,15 +140,17 @@ int run_nozzle(const NozzleArgs& a, CliContext& ctx) {
       spec = fitting::ViscositySpec::from_cross_wlf(mat.params);
       source = mat.name + " Cross-WLF (Holtrup 2019 Table 2.4 / appendix A)";
       if (mat.T_min_K > 0 && (T_K < mat.T_min_K || T_K > mat.T_max_K))
-        env.warn(fmt::format("{:.2f} K is outside {}'s validity range {:g}..{:g} K", T_K, mat.name, mat.T_min_K, mat.T_max_K));
+        outcome.warnings.push_back(fmt::format("{:.2f} K is outside {}'s validity range {:g}..{:g} K", T_K, mat.name,
+                                               mat.T_min_K, mat.T_max_K));
     }
   } else {
     if (!std::isfinite(T_K)) throw InputError("--rheology needs the melt --temperature (degC)");
     const std::string bytes = ident::read_file_bytes(a.rheology_json);
-    env.add_input(a.rheology_json, bytes);
-    nlohmann::json j;
+    outcome.input_path = a.rheology_json;
+    outcome.input_sha256 = sha256_hex(bytes);
+    outcome.input_size_bytes = bytes.size();
     try {
-      j = nlohmann::json::parse(bytes);
+      const nlohmann::json j = nlohmann::json::parse(bytes);
       const auto& r = j.contains("results") ? j["results"] : j;
       spec = fitting::parse_viscosity_spec_name(r.at("model").get<std::string>());
       for (const auto& [k, v] : r.at("params").items()) spec.values[k] = v.at("value").get<double>();
@@ -189,78 +164,153 @@ int run_nozzle(const NozzleArgs& a, CliContext& ctx) {
       !std::isfinite(T_K))
     throw InputError("this rheology is temperature dependent; give --temperature (degC)");
 
-  nlohmann::json rows = nlohmann::json::array();
-  std::vector<double> dps;
   for (double q : a.flows_mm3_s) {
     if (!(q > 0)) throw InputError(fmt::format("--flow must be positive (got {:g} mm3/s)", q));
     const double Q = q * 1e-9;
-    const auto lp = fitting::local_power_law(spec, Q, g.d_m, T_eval);
-    nlohmann::json all;
+    NozzlePoint pt;
+    pt.flow_mm3_s = q;
+    pt.local = fitting::local_power_law(spec, Q, g.d_m, T_eval);
     for (auto m : {fitting::PressureModel::hagen_poiseuille, fitting::PressureModel::power_law_capillary,
                    fitting::PressureModel::bellini, fitting::PressureModel::boles})
-      all[fitting::to_string(m)] = fitting::pressure_drop(m, spec, Q, T_eval, g);
-    const double dp = fitting::pressure_drop(model, spec, Q, T_eval, g);
-    dps.push_back(dp);
-    rows.push_back({{"flow_mm3_s", q},
-                    {"pressure_drop_Pa", dp},
-                    {"pressure_drop_MPa", dp * 1e-6},
-                    {"wall_shear_rate_1_s", lp.wall_shear_rate_1_s},
-                    {"K_Pa_s_n", lp.K_Pa_s_n},
-                    {"n", lp.n},
-                    {"all_models_Pa", all}});
+      pt.all_models_Pa[fitting::to_string(m)] = fitting::pressure_drop(m, spec, Q, T_eval, g);
+    pt.pressure_drop_Pa = fitting::pressure_drop(model, spec, Q, T_eval, g);
+    out.points.push_back(std::move(pt));
   }
-  auto& res = env.results();
-  res["pressure_model"] = fitting::to_string(model);
-  res["rheology"] = source;
-  res["geometry"] = geometry_json(a);
-  if (std::isfinite(T_K)) res["temperature_K"] = T_K;
-  res["points"] = rows;
+  out.temperature_K = T_K;
   if (std::isfinite(T_K) || spec.model == fitting::ViscosityModel::power_law) {
-    ident::LiquefierPredictionOptions po;
-    po.geometry = g;
-    po.model = model;
+    ident::LiquefierPredictionOptions po = a.prediction;
     po.temperature_K = std::isfinite(T_K) ? T_K : 1.0;  // a power law without shift ignores it
     po.flows_mm3_s = a.flows_mm3_s;
-    po.reference_flow_mm3_s = a.reference_flow_mm3_s;
-    res["prediction"] = ident::to_json(ident::predict_liquefier(spec, po));
+    out.prediction = ident::predict_liquefier(spec, po);
   }
-  if (!a.output.json) {
-    ctx.out << fmt::format("{} pressure drop, {}\n", fitting::to_string(model), source);
-    ctx.out << fmt::format("  nozzle d {:g} mm, l {:g} mm, cone half angle {:g} deg, D {:g} mm\n", a.d_mm, a.l_mm, a.cone_deg, a.D_mm);
-    for (std::size_t i = 0; i < rows.size(); ++i)
-      ctx.out << fmt::format("  Q {:8.4g} mm3/s: dP {:8.4f} MPa (wall shear rate {:.4g} 1/s)\n", a.flows_mm3_s[i],
-                             dps[i] * 1e-6, rows[i]["wall_shear_rate_1_s"].get<double>());
+  return out;
+}
+
+}  // namespace
+
+NozzleOutcome compute_nozzle(const NozzleOptions& a) {
+  NozzleOutcome outcome;
+  outcome.options = a;
+  if (!(a.kelvin_offset == fitting::kKelvinOffset || a.kelvin_offset == fitting::kKelvinOffsetThesis))
+    throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (Holtrup's (2019) code)");
+  if (!a.fit_file.empty()) outcome.fit = compute_nozzle_fit(a, outcome);
+  else outcome.forward = compute_nozzle_forward(a, outcome);
+  return outcome;
+}
+
+Envelope to_envelope(const NozzleOutcome& o) {
+  const NozzleOptions& a = o.options;
+  const std::string model = fitting::to_string(a.prediction.model);
+  Envelope env("nozzle");
+  env.set_options({{"model", model},
+                   {"geometry", nozzle_geometry_json(a.prediction.geometry)},
+                   {"kelvin_offset", a.kelvin_offset},
+                   {"material", a.material},
+                   {"reference_flow_mm3_s", a.prediction.reference_flow_mm3_s}});
+  if (!o.input_path.empty()) env.add_input_digest(o.input_path, o.input_sha256, o.input_size_bytes);
+  auto& res = env.results();
+  if (o.fit) {
+    res = fitting::to_json(o.fit->fit);
+  } else if (o.forward) {
+    const NozzleForward& f = *o.forward;
+    res["rheology"] = f.rheology;
+    if (std::isfinite(f.temperature_K)) res["temperature_K"] = f.temperature_K;
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& p : f.points) {
+      nlohmann::json all;
+      for (const auto& [name, dp] : p.all_models_Pa) all[name] = dp;
+      rows.push_back({{"flow_mm3_s", p.flow_mm3_s},
+                      {"pressure_drop_Pa", p.pressure_drop_Pa},
+                      {"pressure_drop_MPa", p.pressure_drop_Pa * 1e-6},
+                      {"wall_shear_rate_1_s", p.local.wall_shear_rate_1_s},
+                      {"K_Pa_s_n", p.local.K_Pa_s_n},
+                      {"n", p.local.n},
+                      {"all_models_Pa", all}});
+    }
+    res["points"] = rows;
+    if (f.prediction) res["prediction"] = ident::to_json(*f.prediction);
   }
-  return emit(env, a.output, ctx);
+  res["geometry"] = nozzle_geometry_json(a.prediction.geometry);
+  res["pressure_model"] = model;
+  for (const auto& w : o.warnings) env.warn(w);
+  return env;
+}
+
+void print_text(const NozzleOutcome& o, std::ostream& os) {
+  const NozzleOptions& a = o.options;
+  if (o.fit) {
+    const auto& fit = o.fit->fit;
+    os << fmt::format("{}: {} measurements, {} model\n", a.fit_file, o.fit->rows, fit.model);
+    for (const auto& q : fit.params)
+      os << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", q.name, q.value, q.unit, q.ci95_lo, q.ci95_hi);
+    os << fmt::format("  rms(ln dP) {:.4g}, R2 {:.5f}\n", fit.diagnostics.rms, fit.diagnostics.r2);
+    return;
+  }
+  if (!o.forward) return;
+  const auto& g = a.prediction.geometry;
+  os << fmt::format("{} pressure drop, {}\n", fitting::to_string(a.prediction.model), o.forward->rheology);
+  os << fmt::format("  nozzle d {:g} mm, l {:g} mm, cone half angle {:g} deg, D {:g} mm\n",
+                    nozzle_display_value(g.d_m, 1e3), nozzle_display_value(g.l_m, 1e3),
+                    nozzle_display_value(g.cone_half_angle_rad, 1 / kNozzleRadPerDeg), nozzle_display_value(g.D_m, 1e3));
+  for (const auto& p : o.forward->points)
+    os << fmt::format("  Q {:8.4g} mm3/s: dP {:8.4f} MPa (wall shear rate {:.4g} 1/s)\n", p.flow_mm3_s,
+                      p.pressure_drop_Pa * 1e-6, p.local.wall_shear_rate_1_s);
+}
+
+namespace {
+
+struct NozzleCommand {
+  NozzleOptions options;
+  OutputOptions output;
+};
+
+/// `--name V` in display units (mm, degrees) setting an SI member as V * numerator / denominator
+/// (the old arithmetic: mm * 1e-3, deg * pi / 180); the default shown is the member's current
+/// value in display units.
+CLI::Option* add_nozzle_si_option(CLI::App* sub, const std::string& names, double& si_target, double numerator,
+                                  double denominator, const std::string& description) {
+  auto* opt = sub->add_option_function<double>(
+      names, [&si_target, numerator, denominator](double v) { si_target = v * numerator / denominator; }, description);
+  opt->default_str(fmt::format("{:g}", nozzle_display_value(si_target, denominator / numerator)));
+  return opt;
 }
 
 }  // namespace
 
 void register_nozzle(CLI::App& app, CliContext& ctx) {
-  auto args = std::make_shared<NozzleArgs>();
+  auto cmd = std::make_shared<NozzleCommand>();
+  NozzleOptions& o = cmd->options;
+  fitting::NozzleGeometry& g = o.prediction.geometry;
   auto* sub = app.add_subcommand("nozzle", "Nozzle pressure drop from rheology and geometry, and its inverse fit");
-  sub->add_option("--model", args->model, "Pressure-drop model: boles, bellini, power-law (capillary, Rabinowitsch) or hagen-poiseuille")
-      ->capture_default_str();
-  sub->add_option("--K", args->K, "Power-law consistency K (Pa.s^n)");
-  sub->add_option("--n", args->n, "Power-law index n (1)");
-  sub->add_option("--mu", args->mu, "Newtonian viscosity (Pa.s)");
-  sub->add_option("--material", args->material,
+  add_choice_option<fitting::PressureModel>(
+      sub, "--model", o.prediction.model,
+      {{"boles", fitting::PressureModel::boles},
+       {"bellini", fitting::PressureModel::bellini},
+       {"power-law", fitting::PressureModel::power_law_capillary},
+       {"hagen-poiseuille", fitting::PressureModel::hagen_poiseuille}},
+      "Pressure-drop model: boles, bellini, power-law (capillary, Rabinowitsch) or hagen-poiseuille");
+  sub->add_option("--K", o.K, "Power-law consistency K (Pa.s^n)");
+  sub->add_option("--n", o.n, "Power-law index n (1)");
+  sub->add_option("--mu", o.mu, "Newtonian viscosity (Pa.s)");
+  sub->add_option("--material", o.material,
                   "Cross-WLF material of Holtrup 2019 (PEEK, ABS, ULTEM1010) or peek-power-law (eq. 5.10/5.11); needs --temperature");
-  sub->add_option("--rheology", args->rheology_json, "A 'tunekit rheo --json' result file to take the viscosity model from");
-  sub->add_option("-T,--temperature", args->temperature_degc, "Melt temperature (degC)");
-  sub->add_option("--kelvin-offset", args->kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (Holtrup's (2019) code) (K)")
+  sub->add_option("--rheology", o.rheology_json, "A 'tunekit rheo --json' result file to take the viscosity model from");
+  sub->add_option("-T,--temperature", o.temperature_degc, "Melt temperature (degC)");
+  sub->add_option("--kelvin-offset", o.kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (Holtrup's (2019) code) (K)")
       ->capture_default_str();
-  sub->add_option("-Q,--flow", args->flows_mm3_s, "Volumetric flow at the nozzle exit (mm3/s); repeatable");
-  sub->add_option("--reference-flow", args->reference_flow_mm3_s, "Flow at which relative_tau is 1 (mm3/s)")->capture_default_str();
-  sub->add_option("--nozzle-d", args->d_mm, "Nozzle channel diameter d (mm)")->capture_default_str();
-  sub->add_option("--nozzle-l", args->l_mm, "Nozzle land length l (mm)")->capture_default_str();
-  sub->add_option("--cone-angle", args->cone_deg, "Cone half angle alpha (degrees; Bellini's beta is twice this)")->capture_default_str();
-  sub->add_option("--entrance-D", args->D_mm, "Melt room / entrance diameter D (mm)")->capture_default_str();
-  sub->add_option("--melt-length", args->melt_length_mm, "Bellini's melt room length L1 (mm)")->capture_default_str();
-  sub->add_option("--fit", args->fit_file,
+  sub->add_option("-Q,--flow", o.flows_mm3_s, "Volumetric flow at the nozzle exit (mm3/s); repeatable");
+  sub->add_option("--reference-flow", o.prediction.reference_flow_mm3_s, "Flow at which relative_tau is 1 (mm3/s)")
+      ->capture_default_str();
+  add_nozzle_si_option(sub, "--nozzle-d", g.d_m, 1e-3, 1, "Nozzle channel diameter d (mm)");
+  add_nozzle_si_option(sub, "--nozzle-l", g.l_m, 1e-3, 1, "Nozzle land length l (mm)");
+  add_nozzle_si_option(sub, "--cone-angle", g.cone_half_angle_rad, std::numbers::pi, 180.0,
+                       "Cone half angle alpha (degrees; Bellini's beta is twice this)");
+  add_nozzle_si_option(sub, "--entrance-D", g.D_m, 1e-3, 1, "Melt room / entrance diameter D (mm)");
+  add_nozzle_si_option(sub, "--melt-length", g.melt_length_m, 1e-3, 1, "Bellini's melt room length L1 (mm)");
+  sub->add_option("--fit", o.fit_file,
                   "Inverse fit: CSV with flow (mm3/s), pressure (MPa|Pa|bar) or force (N), temperature (degC|K)");
-  sub->add_option("--piston-diameter", args->piston_diameter_mm, "Diameter the feeder force acts on (mm), for a force column");
-  add_output_options(sub, args->output);
+  sub->add_option("--piston-diameter", o.piston_diameter_mm, "Diameter the feeder force acts on (mm), for a force column");
+  add_output_options(sub, cmd->output);
   sub->footer(
       "Defaults are Holtrup's (2019) regular nozzle (Table 5.3): d 0.6 mm, l 4 mm, alpha 30 deg, D 5 mm.\n"
       "Examples:\n"
@@ -269,7 +319,7 @@ void register_nozzle(CLI::App& app, CliContext& ctx) {
       "  tunekit nozzle --material PEEK -T 405 --flow 1.5 --flow 3 --flow 6 --model bellini --json\n"
       "  tunekit nozzle --rheology peek_fit.json -T 405 --flow 3 --json       # results.prediction\n"
       "  tunekit nozzle --fit datasets/rheology/nozzle_pressure_synthetic.csv --json   # fit K, n (and Ea)");
-  sub->callback([args, &ctx] { set_exit_code(run_nozzle(*args, ctx)); });
+  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_nozzle(cmd->options), cmd->output, ctx)); });
 }
 
 }  // namespace tunekit::cli

@@ -11,10 +11,12 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/overshoot_command.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/report.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/overshoot.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
@@ -22,26 +24,6 @@
 
 namespace tunekit::cli {
 namespace {
-
-struct OvershootArgs {
-  std::string input;
-  std::string time_column = "time";
-  std::string accel_x = "accel_x", accel_y = "accel_y";
-  std::string cmd_x, cmd_y;  // commanded acceleration columns of a CSV
-  std::string pos_x, pos_y;  // encoder / position columns of a CSV
-  ident::OvershootOptions opt;
-  // Grid mode.
-  std::vector<std::string> params;
-  std::string machine = "sim";
-  std::string port;
-  std::vector<std::string> sim;
-  std::string out_dir;
-  std::string runs_root = "runs";
-  double tolerance_mm = 0.05;
-  std::vector<std::string> shapers;  // grid mode on the simulator: AXIS=TYPE:FREQ[:DAMPING]
-  bool traces = false;
-  OutputOptions output;
-};
 
 std::vector<std::string> overshoot_files_matching(const std::string& dir, const std::string& prefix) {
   std::vector<std::string> out;
@@ -54,7 +36,7 @@ std::vector<std::string> overshoot_files_matching(const std::string& dir, const 
 }
 
 ident::OvershootAnalysis overshoot_from_run_dir(const std::string& dir, const ident::OvershootOptions& o,
-                                                std::vector<std::string>& inputs) {
+                                                std::vector<InputDigest>* inputs) {
   const auto raw = overshoot_files_matching(dir, "raw_data_");
   const auto cmd = overshoot_files_matching(dir, "commanded_accel_");
   if (raw.size() != 1 || cmd.size() != 1)
@@ -72,7 +54,8 @@ ident::OvershootAnalysis overshoot_from_run_dir(const std::string& dir, const id
   const auto c = ident::read_csv(cmd[0], co);
   if (a.rows != c.rows)
     throw InputError(fmt::format("{} has {} rows but {} has {}: not one time base", raw[0], a.rows, cmd[0], c.rows), dir);
-  inputs = {raw[0], cmd[0]};
+  if (inputs)
+    *inputs = {input_digest(raw[0], ident::read_file_bytes(raw[0])), input_digest(cmd[0], ident::read_file_bytes(cmd[0]))};
   try {
     return ident::analyze_overshoot_accel(a.column("time").values, a.column("accel_x").values, a.column("accel_y").values,
                                           c.column("accel_x").values, c.column("accel_y").values, o);
@@ -82,8 +65,7 @@ ident::OvershootAnalysis overshoot_from_run_dir(const std::string& dir, const id
   }
 }
 
-ident::OvershootAnalysis overshoot_from_csv(const OvershootArgs& a, std::vector<std::string>& inputs) {
-  inputs = {a.input};
+ident::OvershootAnalysis overshoot_from_csv(const OvershootOptions& a, std::vector<InputDigest>& inputs) {
   ident::CsvOptions co;
   co.time_column = a.time_column;
   co.columns = {a.time_column};
@@ -98,14 +80,15 @@ ident::OvershootAnalysis overshoot_from_csv(const OvershootArgs& a, std::vector<
     co.columns.insert(co.columns.end(), {a.accel_x, a.accel_y, a.cmd_x, a.cmd_y});
   }
   const auto t = ident::read_csv(a.input, co);
+  inputs = {input_digest(a.input, ident::read_file_bytes(a.input))};
   try {
     if (position)
       return ident::analyze_overshoot_position(t.column(a.time_column).values,
                                                a.pos_x.empty() ? std::vector<double>{} : t.column(a.pos_x).values,
-                                               a.pos_y.empty() ? std::vector<double>{} : t.column(a.pos_y).values, a.opt);
+                                               a.pos_y.empty() ? std::vector<double>{} : t.column(a.pos_y).values, a.analysis);
     return ident::analyze_overshoot_accel(t.column(a.time_column).values, t.column(a.accel_x).values,
                                           t.column(a.accel_y).values, t.column(a.cmd_x).values, t.column(a.cmd_y).values,
-                                          a.opt);
+                                          a.analysis);
   } catch (const Error& e) {
     if (!e.location().empty()) throw;
     throw InputError(e.message(), a.input);
@@ -143,8 +126,9 @@ std::vector<double> parse_overshoot_grid_list(const std::string& name, const std
   return out;
 }
 
-int run_overshoot_grid(const OvershootArgs& a, CliContext& ctx) {
-  std::map<std::string, std::vector<double>> lists;
+OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome& outcome, std::ostream* progress) {
+  OvershootGrid g;
+  auto& lists = g.lists;
   for (const auto& p : a.params) {
     const auto eq = p.find('=');
     if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE[,VALUE...]", p));
@@ -156,14 +140,10 @@ int run_overshoot_grid(const OvershootArgs& a, CliContext& ctx) {
     if (k != "speed_mm_s" && k != "accel_mm_s2" && v.size() != 1)
       throw InputError(fmt::format("-p {}: only speed_mm_s and accel_mm_s2 take lists", k));
   if (!(a.tolerance_mm > 0)) throw InputError("--tolerance-mm must be positive (mm)");
-  const std::string out = a.out_dir.empty() ? a.runs_root + "/overshoot-grid" : a.out_dir;
+  const std::string out = a.out_dir.empty() ? a.run.runs_root + "/overshoot-grid" : a.out_dir;
+  g.out_dir = out;
   std::filesystem::create_directories(out);
 
-  struct Cell {
-    double v, acc, overshoot_mm, settling_s, completion_s, fom = 0;
-    std::string run_dir;
-    bool shaped = false;
-  };
   std::vector<std::string> shaper_opts;
   for (const auto& sh : a.shapers) {
     const auto eq = sh.find('=');
@@ -171,155 +151,191 @@ int run_overshoot_grid(const OvershootArgs& a, CliContext& ctx) {
       throw InputError(fmt::format("--shaper {}: expected AXIS=TYPE:FREQ_HZ[:DAMPING] with AXIS x or y", sh));
     shaper_opts.push_back("shaper_" + sh);
   }
-  if (!shaper_opts.empty() && a.machine != "sim")
+  if (!shaper_opts.empty() && a.run.machine != "sim")
     throw InputError("--shaper compares shaping on/off on the simulator; on a machine run the grid twice, with the "
                      "firmware's input shaper enabled and disabled");
-  std::vector<Cell> cells;
+  auto& cells = g.cells;
   for (const bool shaped : shaper_opts.empty() ? std::vector<bool>{false} : std::vector<bool>{false, true})
   for (double v : lists["speed_mm_s"])
     for (double acc : lists["accel_mm_s2"]) {
-      protocols::RunOptions o;
+      protocols::RunOptions o = a.run;
       o.protocol = "axis-rectangle";
-      o.machine = a.machine;
-      o.port = a.port;
-      o.sim_options = a.sim;
       if (shaped) o.sim_options.insert(o.sim_options.end(), shaper_opts.begin(), shaper_opts.end());
       for (const auto& [k, vals] : lists) o.params[k] = vals.front();
       o.params["speed_mm_s"] = v;
       o.params["accel_mm_s2"] = acc;
       o.run_dir = fmt::format("{}/v{:g}_a{:g}{}", out, v, acc, shaped ? "_shaped" : "");
       o.file_tag = "rect";
-      if (ctx.verbosity > 0) ctx.err << fmt::format("tunekit: grid point {:g} mm/s, {:g} mm/s^2\n", v, acc);
+      if (progress) *progress << fmt::format("tunekit: grid point {:g} mm/s, {:g} mm/s^2\n", v, acc);
       const auto r = protocols::run_experiment(o);
-      std::vector<std::string> inputs;
-      const auto an = overshoot_from_run_dir(r.run_dir, a.opt, inputs);
+      const auto an = overshoot_from_run_dir(r.run_dir, a.analysis, nullptr);
       double os = 0, st = 0;
       for (const auto& s : an.axes) {
         os = std::max(os, s.mean_overshoot_mm);
         st = std::max(st, s.mean_settling_time_s);
       }
-      cells.push_back({v, acc, os, st, an.motion_time_s, 0, r.run_dir, shaped});
+      cells.push_back({v, acc, os, st, an.motion_time_s, 0, std::filesystem::relative(r.run_dir, out).string(), shaped});
     }
   double mean_t = 0;
-  for (const auto& c : cells) mean_t += c.completion_s;
+  for (const auto& c : cells) mean_t += c.completion_time_s;
   mean_t /= static_cast<double>(cells.size());
-  const Cell* best = nullptr;
-  const Cell* best_shaped = nullptr;
-  for (auto& c : cells) {
-    c.fom = ident::overshoot_figure_of_merit(c.overshoot_mm, a.tolerance_mm, c.completion_s, mean_t);
-    const Cell*& b = c.shaped ? best_shaped : best;
-    if (c.fom > 0 && (b == nullptr || c.fom > b->fom)) b = &c;
+  g.mean_completion_time_s = mean_t;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    auto& c = cells[i];
+    c.figure_of_merit = ident::overshoot_figure_of_merit(c.overshoot_mm, a.tolerance_mm, c.completion_time_s, mean_t);
+    auto& b = c.input_shaping ? g.best_shaped : g.best;
+    if (c.figure_of_merit > 0 && (!b || c.figure_of_merit > cells[*b].figure_of_merit)) b = i;
   }
+  if (!g.best) outcome.warnings.push_back(fmt::format("no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
+  if (!shaper_opts.empty() && !g.best_shaped)
+    outcome.warnings.push_back(
+        fmt::format("with input shaping no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
+  return g;
+}
 
+nlohmann::json overshoot_grid_json(const OvershootGrid& g) {
+  nlohmann::json grid = nlohmann::json::array();
+  for (const auto& c : g.cells)
+    grid.push_back({{"speed_mm_s", c.speed_mm_s}, {"accel_mm_s2", c.accel_mm_s2}, {"overshoot_mm", c.overshoot_mm},
+                    {"settling_time_s", c.settling_time_s}, {"completion_time_s", c.completion_time_s},
+                    {"figure_of_merit", c.figure_of_merit}, {"input_shaping", c.input_shaping},
+                    {"run_dir", c.run_dir}});
+  return grid;
+}
+
+nlohmann::json overshoot_best_json(const OvershootGridCell& c) {
+  return {{"speed_mm_s", c.speed_mm_s}, {"accel_mm_s2", c.accel_mm_s2}, {"overshoot_mm", c.overshoot_mm},
+          {"completion_time_s", c.completion_time_s}, {"figure_of_merit", c.figure_of_merit}};
+}
+
+Envelope overshoot_grid_envelope(const OvershootOutcome& o) {
+  const OvershootOptions& a = o.options;
+  const OvershootGrid& g = *o.grid;
   Envelope env("overshoot");
   nlohmann::json lj = nlohmann::json::object();
-  for (const auto& [k, v] : lists) lj[k] = v;
-  env.set_options({{"grid", lj}, {"machine", a.machine}, {"sim", a.sim}, {"tolerance_mm", a.tolerance_mm},
-                   {"band_mm", a.opt.band_mm}});
+  for (const auto& [k, v] : g.lists) lj[k] = v;
+  env.set_options({{"grid", lj}, {"machine", a.run.machine}, {"sim", a.run.sim_options}, {"tolerance_mm", a.tolerance_mm},
+                   {"band_mm", a.analysis.band_mm}});
   auto& res = env.results();
-  nlohmann::json grid = nlohmann::json::array();
-  for (const auto& c : cells)
-    grid.push_back({{"speed_mm_s", c.v}, {"accel_mm_s2", c.acc}, {"overshoot_mm", c.overshoot_mm},
-                    {"settling_time_s", c.settling_s}, {"completion_time_s", c.completion_s},
-                    {"figure_of_merit", c.fom}, {"input_shaping", c.shaped},
-                    {"run_dir", std::filesystem::relative(c.run_dir, out).string()}});
-  res["grid"] = grid;
-  res["mean_completion_time_s"] = mean_t;
+  res["grid"] = overshoot_grid_json(g);
+  res["mean_completion_time_s"] = g.mean_completion_time_s;
   res["figure_of_merit"] = "normalized motion speed (mean completion time / completion time) where the overshoot "
                            "is within the tolerance, else 0 (Hemminger, 2022)";
-  if (best) {
-    res["best"] = {{"speed_mm_s", best->v}, {"accel_mm_s2", best->acc}, {"overshoot_mm", best->overshoot_mm},
-                   {"completion_time_s", best->completion_s}, {"figure_of_merit", best->fom}};
+  if (g.best) {
+    res["best"] = overshoot_best_json(g.cells[*g.best]);
     res["summary"] = nlohmann::json::array({{{"label", "fastest speed within tolerance"}, {"path", "best.speed_mm_s"}, {"unit", "mm/s"}},
                                             {{"label", "its acceleration"}, {"path", "best.accel_mm_s2"}, {"unit", "mm/s^2"}},
                                             {{"label", "its overshoot"}, {"path", "best.overshoot_mm"}, {"unit", "mm"}},
                                             {{"label", "its completion time"}, {"path", "best.completion_time_s"}, {"unit", "s"}}});
-  } else {
-    env.warn(fmt::format("no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
   }
-  if (!shaper_opts.empty()) {
+  if (!a.shapers.empty()) {
     res["input_shapers"] = a.shapers;
-    if (best_shaped)
-      res["best_shaped"] = {{"speed_mm_s", best_shaped->v}, {"accel_mm_s2", best_shaped->acc},
-                            {"overshoot_mm", best_shaped->overshoot_mm}, {"completion_time_s", best_shaped->completion_s},
-                            {"figure_of_merit", best_shaped->fom}};
-    else env.warn(fmt::format("with input shaping no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
+    if (g.best_shaped) res["best_shaped"] = overshoot_best_json(g.cells[*g.best_shaped]);
   }
-  nlohmann::json pd;
-  pd["overshoot_grid"] = {{"tolerance_mm", a.tolerance_mm}, {"cells", grid}};
-  protocols::write_file_atomic(out + "/results.json", env.dump());
-  protocols::write_file_atomic(out + "/plotdata.json", pd.dump(2) + "\n");
-  const std::string report = write_report(out);
-  res["report"] = report;
-  if (!a.output.json) {
-    ctx.out << fmt::format("overshoot grid ({} points), tolerance {:g} mm: {}\n", cells.size(), a.tolerance_mm, out);
-    ctx.out << "  shaping speed_mm_s accel_mm_s2 overshoot_mm settle_s completion_s   FOM\n";
-    for (const auto& c : cells)
-      ctx.out << fmt::format("  {:>7} {:>10g} {:>11g} {:>12.4f} {:>8.4f} {:>12.3f} {:>5.3f}{}\n", c.shaped ? "on" : "off", c.v,
-                             c.acc, c.overshoot_mm, c.settling_s, c.completion_s, c.fom,
-                             (&c == best || &c == best_shaped) ? "  <- fastest within tolerance" : "");
-    ctx.out << "report: " << report << "\n";
-  }
-  return emit(env, a.output, ctx);
-}
-
-int run_overshoot(const OvershootArgs& a, CliContext& ctx) {
-  if (!(a.opt.band_mm > 0)) throw InputError("--band-mm must be positive (mm)");
-  if (!(a.opt.tail_fraction > 0 && a.opt.tail_fraction < 1)) throw InputError("--tail must be between 0 and 1");
-  if (a.input.empty() && a.params.empty() && a.shapers.empty())
-    throw InputError("give a run directory or CSV to analyze, or -p speed_mm_s=...,... / -p accel_mm_s2=...,... for a grid");
-  if (!a.params.empty() || a.input.empty()) {
-    if (!a.input.empty()) throw InputError("give either RUN (analyze) or -p lists (grid mode), not both");
-    return run_overshoot_grid(a, ctx);
-  }
-  std::vector<std::string> inputs;
-  const auto r = std::filesystem::is_directory(a.input) ? overshoot_from_run_dir(a.input, a.opt, inputs)
-                                                       : overshoot_from_csv(a, inputs);
-  Envelope env("overshoot");
-  env.set_options({{"band_mm", a.opt.band_mm}, {"tail_fraction", a.opt.tail_fraction}, {"min_pause_s", a.opt.min_pause_s},
-                   {"min_move_mm", a.opt.min_move_mm}, {"drift_order", a.opt.drift_order}});
-  for (const auto& in : inputs) env.add_input(in);
-  env.results() = ident::to_json(r, a.traces);
-  for (const auto& w : r.warnings) env.warn(w);
-  if (!a.output.json) print_overshoot_analysis(ctx.out, r);
-  return emit(env, a.output, ctx);
+  if (!g.report.empty()) res["report"] = g.report;
+  for (const auto& w : o.warnings) env.warn(w);
+  return env;
 }
 
 }  // namespace
 
+OvershootOutcome compute_overshoot(const OvershootOptions& a, std::ostream* progress) {
+  if (!(a.analysis.band_mm > 0)) throw InputError("--band-mm must be positive (mm)");
+  if (!(a.analysis.tail_fraction > 0 && a.analysis.tail_fraction < 1)) throw InputError("--tail must be between 0 and 1");
+  if (a.input.empty() && a.params.empty() && a.shapers.empty())
+    throw InputError("give a run directory or CSV to analyze, or -p speed_mm_s=...,... / -p accel_mm_s2=...,... for a grid");
+  OvershootOutcome outcome;
+  outcome.options = a;
+  if (!a.params.empty() || a.input.empty()) {
+    if (!a.input.empty()) throw InputError("give either RUN (analyze) or -p lists (grid mode), not both");
+    outcome.grid = compute_overshoot_grid(a, outcome, progress);
+    // results.json is the envelope without the report's path, as the report reads it.
+    const std::string out = outcome.grid->out_dir;
+    nlohmann::json pd;
+    pd["overshoot_grid"] = {{"tolerance_mm", a.tolerance_mm}, {"cells", overshoot_grid_json(*outcome.grid)}};
+    protocols::write_file_atomic(out + "/results.json", overshoot_grid_envelope(outcome).dump());
+    protocols::write_file_atomic(out + "/plotdata.json", pd.dump(2) + "\n");
+    outcome.grid->report = write_report(out);
+    return outcome;
+  }
+  outcome.analysis = std::filesystem::is_directory(a.input) ? overshoot_from_run_dir(a.input, a.analysis, &outcome.inputs)
+                                                            : overshoot_from_csv(a, outcome.inputs);
+  outcome.warnings = outcome.analysis->warnings;
+  return outcome;
+}
+
+Envelope to_envelope(const OvershootOutcome& o) {
+  if (o.grid) return overshoot_grid_envelope(o);
+  const OvershootOptions& a = o.options;
+  Envelope env("overshoot");
+  env.set_options({{"band_mm", a.analysis.band_mm}, {"tail_fraction", a.analysis.tail_fraction},
+                   {"min_pause_s", a.analysis.min_pause_s}, {"min_move_mm", a.analysis.min_move_mm},
+                   {"drift_order", a.analysis.drift_order}});
+  for (const auto& in : o.inputs) add_input(env, in);
+  if (o.analysis) env.results() = ident::to_json(*o.analysis, a.traces);
+  for (const auto& w : o.warnings) env.warn(w);
+  return env;
+}
+
+void print_text(const OvershootOutcome& o, std::ostream& os) {
+  if (o.analysis) print_overshoot_analysis(os, *o.analysis);
+  if (!o.grid) return;
+  const OvershootGrid& g = *o.grid;
+  os << fmt::format("overshoot grid ({} points), tolerance {:g} mm: {}\n", g.cells.size(), o.options.tolerance_mm,
+                    g.out_dir);
+  os << "  shaping speed_mm_s accel_mm_s2 overshoot_mm settle_s completion_s   FOM\n";
+  for (std::size_t i = 0; i < g.cells.size(); ++i) {
+    const auto& c = g.cells[i];
+    os << fmt::format("  {:>7} {:>10g} {:>11g} {:>12.4f} {:>8.4f} {:>12.3f} {:>5.3f}{}\n", c.input_shaping ? "on" : "off",
+                      c.speed_mm_s, c.accel_mm_s2, c.overshoot_mm, c.settling_time_s, c.completion_time_s,
+                      c.figure_of_merit, (g.best == i || g.best_shaped == i) ? "  <- fastest within tolerance" : "");
+  }
+  os << "report: " << g.report << "\n";
+}
+
+namespace {
+
+struct OvershootCommand {
+  OvershootOptions options;
+  OutputOptions output;
+};
+
+}  // namespace
+
 void register_overshoot(CLI::App& app, CliContext& ctx) {
-  auto args = std::make_shared<OvershootArgs>();
+  auto cmd = std::make_shared<OvershootCommand>();
+  OvershootOptions& o = cmd->options;
   auto* sub = app.add_subcommand("overshoot", "Axis overshoot and settling at corners (axis-rectangle runs); grid of speeds and accelerations");
-  sub->add_option("run", args->input,
+  sub->add_option("run", o.input,
                   "A run directory of 'tunekit run axis-rectangle' or a CSV (time in s); omit it for grid mode");
-  sub->add_option("--band-mm", args->opt.band_mm, "Settling band, +- mm around the settled position")->capture_default_str();
-  sub->add_option("--tail", args->opt.tail_fraction, "Share of each pause taken as settled (drift reference)")->capture_default_str();
-  sub->add_option("--drift-order", args->opt.drift_order,
+  sub->add_option("--band-mm", o.analysis.band_mm, "Settling band, +- mm around the settled position")->capture_default_str();
+  sub->add_option("--tail", o.analysis.tail_fraction, "Share of each pause taken as settled (drift reference)")->capture_default_str();
+  sub->add_option("--drift-order", o.analysis.drift_order,
                   "Accelerometer: order of the polynomial drift removed from each pause's integrated position (1-5)")
       ->check(CLI::Range(1, 5))
       ->capture_default_str();
-  sub->add_option("--min-pause", args->opt.min_pause_s, "Shortest rest that counts as a corner (s)")->capture_default_str();
-  sub->add_option("--min-move", args->opt.min_move_mm, "Smallest move of an axis into a corner that is reported (mm)")->capture_default_str();
-  sub->add_option("-t,--time", args->time_column, "CSV: time column (s)")->capture_default_str();
-  sub->add_option("--accel-x", args->accel_x, "CSV: measured x acceleration column (mm/s^2)")->capture_default_str();
-  sub->add_option("--accel-y", args->accel_y, "CSV: measured y acceleration column (mm/s^2)")->capture_default_str();
-  sub->add_option("--cmd-x", args->cmd_x, "CSV: commanded x acceleration column (mm/s^2)");
-  sub->add_option("--cmd-y", args->cmd_y, "CSV: commanded y acceleration column (mm/s^2)");
-  sub->add_option("--position-x", args->pos_x, "CSV: x position / encoder column (mm); instead of the accelerometer");
-  sub->add_option("--position-y", args->pos_y, "CSV: y position / encoder column (mm)");
-  sub->add_flag("--traces", args->traces, "Include each corner's deviation trace in the JSON");
-  sub->add_option("-p,--param", args->params,
+  sub->add_option("--min-pause", o.analysis.min_pause_s, "Shortest rest that counts as a corner (s)")->capture_default_str();
+  sub->add_option("--min-move", o.analysis.min_move_mm, "Smallest move of an axis into a corner that is reported (mm)")->capture_default_str();
+  sub->add_option("-t,--time", o.time_column, "CSV: time column (s)")->capture_default_str();
+  sub->add_option("--accel-x", o.accel_x, "CSV: measured x acceleration column (mm/s^2)")->capture_default_str();
+  sub->add_option("--accel-y", o.accel_y, "CSV: measured y acceleration column (mm/s^2)")->capture_default_str();
+  sub->add_option("--cmd-x", o.cmd_x, "CSV: commanded x acceleration column (mm/s^2)");
+  sub->add_option("--cmd-y", o.cmd_y, "CSV: commanded y acceleration column (mm/s^2)");
+  sub->add_option("--position-x", o.pos_x, "CSV: x position / encoder column (mm); instead of the accelerometer");
+  sub->add_option("--position-y", o.pos_y, "CSV: y position / encoder column (mm)");
+  sub->add_flag("--traces", o.traces, "Include each corner's deviation trace in the JSON");
+  sub->add_option("-p,--param", o.params,
                   "Grid mode: axis-rectangle parameter NAME=V1,V2,... (speed_mm_s and accel_mm_s2 take lists; others one value)");
-  sub->add_option("-m,--machine", args->machine, "Grid mode: 'sim' or a machine profile TOML")->capture_default_str();
-  sub->add_option("--port", args->port, "Grid mode: the machine's port (see tunekit run)");
-  sub->add_option("--sim", args->sim, "Grid mode: simulator option KEY=VALUE (repeatable), e.g. mode_x=40:0.05");
-  sub->add_option("--tolerance-mm", args->tolerance_mm, "Grid mode: overshoot tolerance of the figure of merit (mm)")->capture_default_str();
-  sub->add_option("--shaper", args->shapers,
+  sub->add_option("-m,--machine", o.run.machine, "Grid mode: 'sim' or a machine profile TOML")->capture_default_str();
+  sub->add_option("--port", o.run.port, "Grid mode: the machine's port (see tunekit run)");
+  sub->add_option("--sim", o.run.sim_options, "Grid mode: simulator option KEY=VALUE (repeatable), e.g. mode_x=40:0.05");
+  sub->add_option("--tolerance-mm", o.tolerance_mm, "Grid mode: overshoot tolerance of the figure of merit (mm)")->capture_default_str();
+  sub->add_option("--shaper", o.shapers,
                   "Grid mode on the simulator: also run the grid with input shaping AXIS=TYPE:FREQ_HZ[:DAMPING] "
                   "(repeatable, e.g. x=zv:48) and compare shaping on/off");
-  sub->add_option("--out", args->out_dir, "Grid mode: directory for the grid's runs, results.json and report.html");
-  sub->add_option("--runs-root", args->runs_root, "Grid mode: default parent of --out")->capture_default_str();
-  add_output_options(sub, args->output);
+  sub->add_option("--out", o.out_dir, "Grid mode: directory for the grid's runs, results.json and report.html");
+  sub->add_option("--runs-root", o.run.runs_root, "Grid mode: default parent of --out")->capture_default_str();
+  add_output_options(sub, cmd->output);
   sub->footer(
       "The overshoot is the largest excursion past the settled position after the commanded motion into a corner\n"
       "ends; the settling time runs from that end until the deviation stays within --band-mm. From an\n"
@@ -335,7 +351,9 @@ void register_overshoot(CLI::App& app, CliContext& ctx) {
       "  tunekit overshoot -p accel_mm_s2=2000,5000,8000 --sim mode_x=48:0.08 --shaper x=zv:48 --shaper y=mzv:37 \\\n"
       "      --out runs/os-shaped    # the same grid with input shaping off and on\n"
       "Exit codes: 2 bad input (no corner found, missing columns), 3 machine failure in grid mode.");
-  sub->callback([args, &ctx] { set_exit_code(run_overshoot(*args, ctx)); });
+  sub->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_overshoot(cmd->options, ctx.verbosity > 0 ? &ctx.err : nullptr), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

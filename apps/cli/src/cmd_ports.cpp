@@ -4,22 +4,20 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/ports_command.hpp"
 #include "tunekit/protocols/serial_transport.hpp"
 
 namespace tunekit::cli {
-namespace {
 
-struct PortsArgs {
-  OutputOptions output;
-};
+PortsOutcome compute_ports(const PortsOptions&) { return {protocols::list_serial_ports()}; }
 
-int run_ports(const PortsArgs& a, CliContext& ctx) {
-  const auto ports = protocols::list_serial_ports();
+Envelope to_envelope(const PortsOutcome& o) {
   Envelope env("ports");
   nlohmann::json list = nlohmann::json::array();
-  for (const auto& p : ports) {
+  for (const auto& p : o.ports) {
     nlohmann::json j{{"path", p.path}, {"description", p.description}, {"transport", p.transport}};
     if (p.usb_vid >= 0) {
       j["usb_vid"] = fmt::format("{:04x}", p.usb_vid);
@@ -29,28 +27,36 @@ int run_ports(const PortsArgs& a, CliContext& ctx) {
     list.push_back(j);
   }
   env.results()["ports"] = list;
-  if (!a.output.json) {
-    if (ports.empty()) ctx.out << "no serial ports found\n";
-    for (const auto& p : ports)
-      ctx.out << fmt::format("{:<20} {:<10} {}{}\n", p.path, p.transport, p.description,
-                             p.usb_vid >= 0 ? fmt::format(" [{:04x}:{:04x}]", p.usb_vid, p.usb_pid) : "");
-  }
-  return emit(env, a.output, ctx);
+  return env;
 }
+
+void print_text(const PortsOutcome& o, std::ostream& os) {
+  if (o.ports.empty()) os << "no serial ports found\n";
+  for (const auto& p : o.ports)
+    os << fmt::format("{:<20} {:<10} {}{}\n", p.path, p.transport, p.description,
+                      p.usb_vid >= 0 ? fmt::format(" [{:04x}:{:04x}]", p.usb_vid, p.usb_pid) : "");
+}
+
+namespace {
+
+struct PortsCommand {
+  PortsOptions options;
+  OutputOptions output;
+};
 
 }  // namespace
 
 void register_ports(CLI::App& app, CliContext& ctx) {
-  auto args = std::make_shared<PortsArgs>();
+  auto cmd = std::make_shared<PortsCommand>();
   auto* sub = app.add_subcommand("ports", "List serial ports");
-  add_output_options(sub, args->output);
+  add_output_options(sub, cmd->output);
   sub->footer(
       "Pseudo-terminals (Klipper's /tmp/printer, tunekit-sim's link) are not serial ports and are not\n"
       "listed; give them to 'tunekit run --port' directly.\n"
       "Examples:\n"
       "  tunekit ports\n"
       "  tunekit ports --json");
-  sub->callback([args, &ctx] { set_exit_code(run_ports(*args, ctx)); });
+  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_ports(cmd->options), cmd->output, ctx)); });
 }
 
 }  // namespace tunekit::cli

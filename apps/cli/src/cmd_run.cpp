@@ -11,7 +11,7 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
 

@@ -8,32 +8,17 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/step_command.hpp"
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/cli/option_binding.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
 namespace tunekit::cli {
 namespace {
-
-struct StepArgs {
-  std::string file;
-  std::string time_column;  // empty: found by name
-  std::string input_column;
-  std::string input_unit;   // overrides the unit in the input column's name
-  std::string output_unit;  // overrides the unit in the output column's name
-  std::string output_column;
-  std::string model = "fopdt";
-  std::string group_column;
-  double step_time_s = 0;
-  double step_size = std::numeric_limits<double>::quiet_NaN();
-  double min_step_fraction = 0.1;
-  std::string step_at = "midpoint";
-  std::string operating_points = "larger";
-  OutputOptions output;
-};
-
 
 void print_fit_line(std::ostream& os, const std::string& label, const fitting::FitResult& f) {
   auto pm = [&](const char* n) {
@@ -45,9 +30,17 @@ void print_fit_line(std::ostream& os, const std::string& label, const fitting::F
                     f.diagnostics.rms, f.diagnostics.r2);
 }
 
-int run_step(const StepArgs& a, CliContext& ctx) {
-  const auto model = fitting::parse_step_model(a.model);
-  if (!(a.min_step_fraction > 0 && a.min_step_fraction < 1))
+}  // namespace
+
+std::string step_model_option_name(fitting::StepModel model) { return model == fitting::StepModel::fo ? "fo" : "fopdt"; }
+std::string step_instant_option_name(ident::StepInstant instant) {
+  return instant == ident::StepInstant::first_sample ? "first" : "midpoint";
+}
+
+StepOutcome compute_step(const StepOptions& a) {
+  StepOutcome outcome;
+  outcome.options = a;
+  if (!(a.analysis.detect.min_step_fraction > 0 && a.analysis.detect.min_step_fraction < 1))
     throw InputError("--min-step must be between 0 and 1 (a fraction of the input range)");
   const std::string bytes = ident::read_file_bytes(a.file);
   ident::CsvOptions copt;
@@ -65,11 +58,7 @@ int run_step(const StepArgs& a, CliContext& ctx) {
     throw InputError(fmt::format("too few samples ({}) for a step analysis; at least 10 are needed", table.rows),
                      a.file);
 
-  ident::StepAnalysisOptions opt;
-  opt.model = model;
-  opt.detect.min_step_fraction = a.min_step_fraction;
-  opt.detect.instant = ident::parse_step_instant(a.step_at);
-  opt.operating_points_by_arrival = a.operating_points == "arrival";
+  ident::StepAnalysisOptions opt = a.analysis;
   opt.output_unit = unit_or_1(a.output_unit.empty() ? ycol.unit : a.output_unit);
   std::string input_unit = "1";
   if (!a.input_column.empty()) input_unit = unit_or_1(table.column(a.input_column).unit);
@@ -79,7 +68,7 @@ int run_step(const StepArgs& a, CliContext& ctx) {
   opt.input_unit = input_unit;
   opt.gain_unit = opt.output_unit + "/(" + input_unit + ")";
 
-  ident::StepAnalysis res;
+  ident::StepAnalysis& res = outcome.analysis;
   try {
     if (!a.input_column.empty()) {
       if (!a.group_column.empty() || !std::isnan(a.step_size))
@@ -126,106 +115,123 @@ int run_step(const StepArgs& a, CliContext& ctx) {
     throw;
   }
 
+  outcome.time_column = table.time_column;
+  outcome.input_sha256 = sha256_hex(bytes);
+  outcome.input_size_bytes = bytes.size();
+  outcome.input_unit = input_unit;
+  outcome.output_unit = opt.output_unit;
+  outcome.gain_unit = opt.gain_unit;
+  outcome.warnings = table.warnings;
+  outcome.warnings.insert(outcome.warnings.end(), res.warnings.begin(), res.warnings.end());
+  return outcome;
+}
+
+Envelope to_envelope(const StepOutcome& o) {
+  const StepOptions& a = o.options;
   Envelope env("step");
-  env.set_options({{"time_column", table.time_column},
+  env.set_options({{"time_column", o.time_column},
                    {"input_column", a.input_column},
                    {"input_unit", a.input_unit},
                    {"output_unit", a.output_unit},
                    {"output_column", a.output_column},
-                   {"model", a.model},
+                   {"model", step_model_option_name(a.analysis.model)},
                    {"group_column", a.group_column},
                    {"step_time_s", a.step_time_s},
                    {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
-                   {"min_step_fraction", a.min_step_fraction},
-                   {"step_at", a.input_column.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.step_at)},
-                   {"operating_points", a.operating_points}});
-  env.add_input(a.file, bytes);
-  env.results() = ident::to_json(res);
-  env.results()["units"] = {{"input", input_unit}, {"output", opt.output_unit}, {"K", opt.gain_unit}, {"time", "s"}};
-  for (const auto& w : table.warnings) env.warn(w);
-  for (const auto& w : res.warnings) env.warn(w);
-  if (!a.output.json) {
-    ctx.out << fmt::format("{}: {} step(s), model {}\n", a.file, res.steps.size(), fitting::model_name(model));
-    for (const auto& s : res.steps) {
-      const std::string label = fmt::format("step {} {} @{:.4g}s", s.step.index, s.step.rising() ? "up" : "down",
-                                            s.step.t_step_s);
-      if (s.fit) print_fit_line(ctx.out, label, *s.fit);
-      else ctx.out << fmt::format("  {:<22} failed: {}\n", label, s.error);
-    }
-    if (res.pooled) print_fit_line(ctx.out, "pooled", *res.pooled);
-    for (const auto& op : res.operating_points)
-      print_fit_line(ctx.out, fmt::format("u = {:.4g} ({} step{})", op.u, op.n_steps, op.n_steps == 1 ? "" : "s"),
-                     op.fit);
-    bool both = false;
-    for (const auto& l : res.arrival_levels) both = both || (l.n_rising > 0 && l.n_falling > 0);
-    if (both) {
-      ctx.out << "  arrival levels (rising/falling arrivals, tau rising - falling with its 95 % interval):\n";
-      for (const auto& l : res.arrival_levels) {
-        std::string rmf = "-";
-        if (std::isfinite(l.rmf_ci95_lo))
-          rmf = fmt::format("{:+.3g} s [{:+.3g}, {:+.3g}]{}", l.rising_minus_falling_tau_s, l.rmf_ci95_lo, l.rmf_ci95_hi,
-                            l.directions_differ() ? " differ" : "");
-        ctx.out << fmt::format("    u = {:<8.4g} {}/{}  tau = {:.4g} s  K = {:.4g}  theta = {:.3g} s  {}\n", l.u, l.n_rising,
-                               l.n_falling, l.fit.value("tau_s"), l.fit.value("K"), l.fit.value("theta_s"), rmf);
-      }
-      if (res.level_trends.tau) {
-        const auto& b = res.level_trends.tau->param("b");
-        ctx.out << fmt::format("  level trend: tau_s = {:.4g} * u^{:.3g} (b 95 %: [{:.3g}, {:.3g}])\n",
-                               res.level_trends.tau->value("a"), b.value, b.ci95_lo, b.ci95_hi);
-      }
-    }
-    if (res.trend_tau)
-      ctx.out << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g}   K = {:.4g} * u^{:.3g}\n",
-                             res.trend_tau->value("a"), res.trend_tau->value("b"), res.trend_K->value("a"),
-                             res.trend_K->value("b"));
-    ctx.out << fmt::format("  K in {}, y0 in {}; 95 % intervals in the JSON (--json)\n", opt.gain_unit,
-                           opt.output_unit);
-  }
-  return emit(env, a.output, ctx);
+                   {"min_step_fraction", a.analysis.detect.min_step_fraction},
+                   {"step_at", a.input_column.empty() ? nlohmann::json(nullptr)
+                                                      : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))},
+                   {"operating_points", a.analysis.operating_points_by_arrival ? "arrival" : "larger"}});
+  env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
+  env.results() = ident::to_json(o.analysis);
+  env.results()["units"] = {{"input", o.input_unit}, {"output", o.output_unit}, {"K", o.gain_unit}, {"time", "s"}};
+  for (const auto& w : o.warnings) env.warn(w);
+  return env;
 }
+
+void print_text(const StepOutcome& o, std::ostream& os) {
+  const ident::StepAnalysis& res = o.analysis;
+  os << fmt::format("{}: {} step(s), model {}\n", o.options.file, res.steps.size(), fitting::model_name(o.options.analysis.model));
+  for (const auto& s : res.steps) {
+    const std::string label = fmt::format("step {} {} @{:.4g}s", s.step.index, s.step.rising() ? "up" : "down",
+                                          s.step.t_step_s);
+    if (s.fit) print_fit_line(os, label, *s.fit);
+    else os << fmt::format("  {:<22} failed: {}\n", label, s.error);
+  }
+  if (res.pooled) print_fit_line(os, "pooled", *res.pooled);
+  for (const auto& op : res.operating_points)
+    print_fit_line(os, fmt::format("u = {:.4g} ({} step{})", op.u, op.n_steps, op.n_steps == 1 ? "" : "s"), op.fit);
+  bool both = false;
+  for (const auto& l : res.arrival_levels) both = both || (l.n_rising > 0 && l.n_falling > 0);
+  if (both) {
+    os << "  arrival levels (rising/falling arrivals, tau rising - falling with its 95 % interval):\n";
+    for (const auto& l : res.arrival_levels) {
+      std::string rmf = "-";
+      if (std::isfinite(l.rmf_ci95_lo))
+        rmf = fmt::format("{:+.3g} s [{:+.3g}, {:+.3g}]{}", l.rising_minus_falling_tau_s, l.rmf_ci95_lo, l.rmf_ci95_hi,
+                          l.directions_differ() ? " differ" : "");
+      os << fmt::format("    u = {:<8.4g} {}/{}  tau = {:.4g} s  K = {:.4g}  theta = {:.3g} s  {}\n", l.u, l.n_rising,
+                        l.n_falling, l.fit.value("tau_s"), l.fit.value("K"), l.fit.value("theta_s"), rmf);
+    }
+    if (res.level_trends.tau) {
+      const auto& b = res.level_trends.tau->param("b");
+      os << fmt::format("  level trend: tau_s = {:.4g} * u^{:.3g} (b 95 %: [{:.3g}, {:.3g}])\n",
+                        res.level_trends.tau->value("a"), b.value, b.ci95_lo, b.ci95_hi);
+    }
+  }
+  if (res.trend_tau)
+    os << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g}   K = {:.4g} * u^{:.3g}\n", res.trend_tau->value("a"),
+                      res.trend_tau->value("b"), res.trend_K->value("a"), res.trend_K->value("b"));
+  os << fmt::format("  K in {}, y0 in {}; 95 % intervals in the JSON (--json)\n", o.gain_unit, o.output_unit);
+}
+
+namespace {
+struct StepCommand {
+  StepOptions options;
+  OutputOptions output;
+};
 
 }  // namespace
 
 void register_step(CLI::App& app, CliContext& ctx) {
-  auto args = std::make_shared<StepArgs>();
+  auto cmd = std::make_shared<StepCommand>();
+  StepOptions& o = cmd->options;
   auto* sub = app.add_subcommand("step", "Identify liquefier dynamics (K, tau, theta) from step-response logs");
-  sub->add_option("file", args->file, "CSV log (time in s; units in column names, e.g. 'force (N)')")->required();
-  sub->add_option("-t,--time", args->time_column,
+  sub->add_option("file", o.file, "CSV log (time in s; units in column names, e.g. 'force (N)')")->required();
+  sub->add_option("-t,--time", o.time_column,
                   "Time column (s; ms and us are converted); default: found by name (time, t, timestamp, time_s)");
-  sub->add_option("-i,--input", args->input_column,
+  sub->add_option("-i,--input", o.input_column,
                   "Input column (e.g. feed rate, mm/s); its steps are found automatically");
-  sub->add_option("-y,--output", args->output_column, "Output column (e.g. force in N, ooze length in mm)")
+  sub->add_option("-y,--output", o.output_column, "Output column (e.g. force in N, ooze length in mm)")
       ->required();
-  sub->add_option("--input-unit", args->input_unit,
+  sub->add_option("--input-unit", o.input_unit,
                   "Unit of the input column when its name does not say it (e.g. mm3/s for a volumetric flow, mm/s "
                   "for filament feed); export places operating points by it");
-  sub->add_option("--output-unit", args->output_unit, "Unit of the output column when its name does not say it");
-  sub->add_option("-m,--model", args->model,
-                  "fo: first order K/(tau s+1); fopdt: with dead time theta (s), needs samples before each step")
-      ->capture_default_str();
-  sub->add_option("--group", args->group_column,
+  sub->add_option("--output-unit", o.output_unit, "Unit of the output column when its name does not say it");
+  add_choice_option<fitting::StepModel>(
+      sub, "-m,--model", o.analysis.model, {{"fo", fitting::StepModel::fo}, {"fopdt", fitting::StepModel::fopdt}},
+      "fo: first order K/(tau s+1); fopdt: with dead time theta (s), needs samples before each step");
+  sub->add_option("--group", o.group_column,
                   "Without --input: split the rows by this column's value (e.g. print speed, mm/s); each group is "
                   "one step of that size at --step-time, time restarting per group");
-  sub->add_option("--step-time", args->step_time_s, "Without --input: when the step happened (s)")
+  sub->add_option("--step-time", o.step_time_s, "Without --input: when the step happened (s)")
       ->capture_default_str();
-  sub->add_option("--step-size", args->step_size,
+  sub->add_option("--step-size", o.step_size,
                   "Without --input: the input change (input units, e.g. the print speed before a stop in mm/s)");
-  sub->add_option("--min-step", args->min_step_fraction,
+  sub->add_option("--min-step", o.analysis.detect.min_step_fraction,
                   "A change of the input larger than this fraction of its range is a step (1)")
       ->capture_default_str();
-  sub->add_option("--step-at", args->step_at,
+  add_choice_option<ident::StepInstant>(sub, "--step-at", o.analysis.detect.instant,
+                  {{"midpoint", ident::StepInstant::midpoint}, {"first", ident::StepInstant::first_sample}},
                   "With --input: when the input changed between the last sample at the old level and the first at "
                   "the new one. midpoint: half-way (interpolated; for logs sampled independently of the changes, "
                   "e.g. a printer's); first: at the first new sample (input changes exactly at sample instants). "
-                  "Moves t_step and theta_s (s) by up to half a sample interval")
-      ->check(CLI::IsMember({"midpoint", "first"}))
-      ->capture_default_str();
-  sub->add_option("--operating-points", args->operating_points,
+                  "Moves t_step and theta_s (s) by up to half a sample interval");
+  add_choice_option<bool>(sub, "--operating-points", o.analysis.operating_points_by_arrival,
+                  {{"larger", false}, {"arrival", true}},
                   "How operating_points group the steps: larger (the input level of larger magnitude of each step) or "
-                  "arrival (the level each step arrives at, as flow_levels; for a flow sweep). Export reads them")
-      ->check(CLI::IsMember({"larger", "arrival"}))
-      ->capture_default_str();
-  add_output_options(sub, args->output);
+                  "arrival (the level each step arrives at, as flow_levels; for a flow sweep). Export reads them");
+  add_output_options(sub, cmd->output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"
       "its own (start values by the log-incomplete-response method), then all steps pooled, then per operating\n"
@@ -245,7 +251,7 @@ void register_step(CLI::App& app, CliContext& ctx) {
       "  tunekit step log.csv --input flow_mm3_s --output force_N   # time_s found by name, units from the names\n"
       "Exit codes: 2 bad input (no step found, constant output, NaN, too few samples, time not increasing),\n"
       "1 the fit failed (no convergence, or tau not identifiable because the record is too short).");
-  sub->callback([args, &ctx] { set_exit_code(run_step(*args, ctx)); });
+  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_step(cmd->options), cmd->output, ctx)); });
 }
 
 }  // namespace tunekit::cli

@@ -9,8 +9,8 @@
 
 #include "tunekit/cli/history_record.hpp"
 #include "tunekit/cli/requirements.hpp"
-#include "tunekit/fitting/error.hpp"
-#include "tunekit/fitting/version.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/core/version.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 
@@ -43,7 +43,7 @@ void Envelope::add_input_digest(const std::string& path, std::string sha256, std
 
 nlohmann::json Envelope::to_json() const {
   return {{"schema_version", kSchemaVersion},
-          {"tool", {{"name", "tunekit"}, {"version", fitting::kVersion}}},
+          {"tool", {{"name", "tunekit"}, {"version", core::kVersion}}},
           {"command", command_},
           {"options", options_},
           {"inputs", inputs_},

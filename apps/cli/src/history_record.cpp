@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/history/quantities.hpp"
 
 namespace tunekit::cli {

@@ -9,8 +9,8 @@
 
 #include <fmt/format.h>
 
-#include "linewidth_command.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "linewidth_profile_csv.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 #include "tunekit/protocols/gcode.hpp"
@@ -20,8 +20,8 @@ namespace tunekit::cli::linewidth {
 namespace {
 
 // The extruding moves of a G-code file, in order (travel and extruder-only moves are skipped).
-std::vector<vision::PathSegment> gcode_path(const std::string& path, std::size_t& lines_read) {
-  const std::string text = read_file_bytes(path);
+std::vector<vision::PathSegment> gcode_path(const std::string& path, std::size_t& lines_read, std::string& text) {
+  text = read_file_bytes(path);
   protocols::GcodeInterpreter gi;
   std::vector<vision::PathSegment> segs;
   std::size_t lineno = 0, start = 0;
@@ -50,7 +50,8 @@ std::vector<vision::PathSegment> gcode_path(const std::string& path, std::size_t
 
 }  // namespace
 
-nlohmann::json write_profile_csv(const LinewidthArgs& a, const ImageRun& run, Envelope& env) {
+nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run, std::vector<std::string>& warnings,
+                                 std::vector<InputDigest>& inputs) {
   if (a.line < 1 || a.line > static_cast<int>(run.result.lines.size()))
     throw InputError(fmt::format("--line {}: the image has {} line(s)", a.line, run.result.lines.size()));
   const auto& l = run.result.lines[static_cast<std::size_t>(a.line - 1)];
@@ -64,10 +65,10 @@ nlohmann::json write_profile_csv(const LinewidthArgs& a, const ImageRun& run, En
   }
   const double mean_mm = l.mean_width_px / run.ppm;
   double setpoint = a.setpoint_width_mm;
-  const bool setpoint_from_feed = !a.gcode.empty() && a.filament_diameter_mm > 0 && a.layer_height_mm > 0;
+  const bool setpoint_from_feed = !a.gcode.empty() && a.path.filament_diameter_mm > 0 && a.layer_height_mm > 0;
   if (!(setpoint > 0) && !setpoint_from_feed) {
     setpoint = mean_mm;
-    env.warn(fmt::format("no --setpoint-width-mm: the set-point width is taken as the measured mean {:.4f} mm",
+    warnings.push_back(fmt::format("no --setpoint-width-mm: the set-point width is taken as the measured mean {:.4f} mm",
                          mean_mm));
   }
   std::vector<vision::TimedWidth> rows;
@@ -76,24 +77,22 @@ nlohmann::json write_profile_csv(const LinewidthArgs& a, const ImageRun& run, En
   if (!a.gcode.empty()) {
     if (l.closed) throw InputError(fmt::format("line {} is a closed loop; --gcode maps open lines", a.line));
     std::size_t nlines = 0;
-    const auto segs = gcode_path(a.gcode, nlines);
-    env.add_input(a.gcode);
-    vision::PathMapping how;
-    how.offset_mm = a.path_offset_mm;
-    how.reversed = a.path_reversed;
-    how.filament_diameter_mm = a.filament_diameter_mm;
+    std::string gcode_bytes;
+    const auto segs = gcode_path(a.gcode, nlines, gcode_bytes);
+    inputs.push_back(input_digest(a.gcode, gcode_bytes));
+    vision::PathMapping how = a.path;
     how.layer_height_mm = a.layer_height_mm;
     how.setpoint_width_mm = setpoint;
-    const bool from_feed = a.filament_diameter_mm > 0 && a.layer_height_mm > 0;
+    const bool from_feed = a.path.filament_diameter_mm > 0 && a.layer_height_mm > 0;
     double total = 0, duration = 0;
     for (const auto& sg : segs) {
       total += sg.length_mm;
       duration += sg.length_mm / sg.speed_mm_s;
     }
     const double prof_len = s_mm.empty() ? 0.0 : s_mm.back() - s_mm.front();
-    const double offset = std::isfinite(a.path_offset_mm) ? a.path_offset_mm : 0.5 * (total - prof_len);
+    const double offset = std::isfinite(a.path.offset_mm) ? a.path.offset_mm : 0.5 * (total - prof_len);
     if (prof_len > total * 1.05)
-      env.warn(fmt::format("the measured line ({:.2f} mm) is longer than the G-code's extruding path ({:.2f} mm): "
+      warnings.push_back(fmt::format("the measured line ({:.2f} mm) is longer than the G-code's extruding path ({:.2f} mm): "
                            "wrong file, scale or line?",
                            prof_len, total));
     rows = vision::map_path(s_mm, w_mm, conf, segs, how);
@@ -104,17 +103,17 @@ nlohmann::json write_profile_csv(const LinewidthArgs& a, const ImageRun& run, En
                {"path_duration_s", r6(duration)},
                {"profile_length_mm", r6(prof_len)},
                {"offset_mm", r6(offset)},
-               {"reversed", a.path_reversed},
+               {"reversed", a.path.reversed},
                {"setpoint", from_feed ? "feed" : "constant"}};
     if (from_feed) {
-      mapping["filament_diameter_mm"] = a.filament_diameter_mm;
+      mapping["filament_diameter_mm"] = a.path.filament_diameter_mm;
       mapping["layer_height_mm"] = a.layer_height_mm;
     }
     comment = fmt::format(
         "tunekit linewidth: profile of {} (line {}) along the extruding moves of {} ({} segments, {:.3f} mm)\n"
         "setpoint_width: {}",
         run.path, a.line, a.gcode, segs.size(), total,
-        from_feed ? fmt::format("E (pi d^2/4) / (L h), d = {} mm, h = {} mm", a.filament_diameter_mm,
+        from_feed ? fmt::format("E (pi d^2/4) / (L h), d = {} mm, h = {} mm", a.path.filament_diameter_mm,
                                 a.layer_height_mm)
                   : fmt::format("constant {} mm", setpoint));
   } else if (a.ring_sines > 0) {

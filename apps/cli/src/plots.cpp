@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 #include <plplot/plstream.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit::cli {
 namespace {

@@ -10,7 +10,7 @@
 #include <openssl/evp.h>
 
 #include "tunekit/cli/warning_advice.hpp"
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 

@@ -15,7 +15,8 @@
 #include <string_view>
 #include <vector>
 
-#include "tunekit/fitting/file_bytes.hpp"
+#include "tunekit/core/file_bytes.hpp"
+#include "tunekit/core/text.hpp"
 
 namespace tunekit::ident {
 
@@ -77,11 +78,11 @@ bool is_volumetric_flow_unit(std::string_view unit);
 /// Names a time column is found by when none is given (then also "time_s", "t (s)", ...).
 inline constexpr const char* kTimeColumnNames[] = {"time", "t", "#time", "timestamp"};
 
-/// Case-insensitive equality on ASCII.
-bool iequals(std::string_view a, std::string_view b);
+/// Case-insensitive equality on ASCII (core's, used by the column matching above).
+using core::iequals;
 
 /// Reads a whole file into memory; InputError if it cannot be opened or read (declared with
-/// the error types in fitting, so libraries that read files without tables need no CSV header).
+/// the error types in core, so libraries that read files without tables need no CSV header).
 using tunekit::read_file_bytes;
 
 }  // namespace tunekit::ident

@@ -5,6 +5,9 @@
 // liquefier's step response (Holtrup, Tuning liquefier dynamics, MSc thesis, University of
 // Twente, 2019, ch. 4.3: line width as the liquefier's output). Parameters and defaults are
 // listed by `tunekit run --help` (protocol line-steps).
+//
+// The path segments are vision's (the width-to-time mapping reads them): code that includes
+// this header links tunekit_vision as well (protocols links it privately).
 
 #include <map>
 #include <string>

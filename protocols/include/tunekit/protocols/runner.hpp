@@ -30,9 +30,12 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/gcode_link.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
-#include "tunekit/protocols/sim_camera.hpp"
 
 namespace tunekit::protocols {
+
+/// The simulated camera's print bed (sim_camera.hpp; declared only, so that this header and the
+/// code that runs experiments need no OpenCV).
+class SimPrintBed;
 
 struct RunOptions {
   std::string protocol;                  ///< see protocol_specs()

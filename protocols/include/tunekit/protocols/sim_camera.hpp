@@ -12,6 +12,9 @@
 //
 // The camera looks straight down: image x runs along the bed's +X, image y along -Y, at
 // `px_per_mm`; the frame covers everything printed plus a margin.
+//
+// Uses OpenCV types (cv::Mat): code that includes this header links tunekit_vision as well
+// (protocols links it privately).
 
 #include <array>
 #include <mutex>

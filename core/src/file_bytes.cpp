@@ -1,4 +1,4 @@
-#include "tunekit/fitting/file_bytes.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 #include <cerrno>
 #include <cstdio>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/fitting/error.hpp"
+#include "tunekit/core/error.hpp"
 
 namespace tunekit {
 

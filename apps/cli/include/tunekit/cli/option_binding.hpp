@@ -1,0 +1,56 @@
+#pragma once
+// Binding a command-line word to a library enum (or flag) in place, so that the default shown
+// by --help is the library's own default and no command restates it.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+namespace tunekit::cli {
+
+/// Adds `--name WORD` that sets `target` to the value named by WORD. `choices` pairs each word
+/// with its value; the default shown is the word of `target`'s current value. A word not in
+/// `choices` is a usage error listing the words.
+template <class T>
+CLI::Option* add_choice_option(CLI::App* sub, const std::string& names, T& target,
+                               const std::vector<std::pair<std::string, T>>& choices, const std::string& description) {
+  std::string type = "TEXT:{";
+  std::string current;
+  for (std::size_t i = 0; i < choices.size(); ++i) {
+    type += (i ? "," : "") + choices[i].first;
+    if (current.empty() && choices[i].second == target) current = choices[i].first;
+  }
+  type += "}";
+  auto* opt = sub->add_option_function<std::string>(
+      names,
+      [&target, choices, names](const std::string& word) {
+        for (const auto& c : choices)
+          if (c.first == word) {
+            target = c.second;
+            return;
+          }
+        std::string list;
+        for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c.first;
+        throw CLI::ValidationError(names, "'" + word + "' is not one of " + list);
+      },
+      description);
+  opt->type_name(type);
+  if (!current.empty()) opt->default_str(current);
+  return opt;
+}
+
+/// Adds `--name WORD` that sets `target` to parse(WORD), with the library's own parser (which
+/// throws InputError for an unknown word) and name for the default shown by --help.
+template <class T, class Parse, class Name>
+CLI::Option* add_parsed_option(CLI::App* sub, const std::string& names, T& target, Parse parse, Name name,
+                               const std::string& description) {
+  auto* opt = sub->add_option_function<std::string>(
+      names, [&target, parse](const std::string& word) { target = parse(word); }, description);
+  opt->type_name("TEXT");
+  opt->default_str(name(target));
+  return opt;
+}
+
+}  // namespace tunekit::cli

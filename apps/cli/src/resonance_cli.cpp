@@ -1,0 +1,231 @@
+// The command-line binding and JSON of the accelerometer options and results `tunekit
+// resonance`, `tunekit shaper` and `tunekit belts` share (resonance_cli.hpp).
+#include "resonance_cli.hpp"
+
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "tunekit/core/error.hpp"
+#include "tunekit/fitting/fit_result.hpp"
+
+namespace tunekit::cli {
+namespace {
+
+std::vector<double> resonance_pair(double a, double b) { return {a, b}; }
+
+// "kaiser (default, Klipper), hann, hamming, rect" with the library's default first.
+std::string resonance_window_words(ident::WindowType def) {
+  std::string s = ident::to_string(def) + " (default, Klipper)";
+  for (auto w : {ident::WindowType::kaiser, ident::WindowType::hann, ident::WindowType::hamming,
+                 ident::WindowType::rectangular})
+    if (w != def) s += ", " + ident::to_string(w);
+  return s;
+}
+
+// "constant (default, Klipper), linear, none" with the library's default first.
+std::string resonance_detrend_words(ident::Detrend def) {
+  std::string s = detrend_name(def) + " (default, Klipper)";
+  for (auto d : {ident::Detrend::constant, ident::Detrend::linear, ident::Detrend::none})
+    if (d != def) s += ", " + detrend_name(d);
+  return s;
+}
+
+}  // namespace
+
+std::string klipper_files_help() {
+  return "Feeding Klipper's files:\n"
+         "  Raw accelerometer data (TEST_RESONANCES AXIS=X OUTPUT=raw_data, or ACCELEROMETER_MEASURE) is written as\n"
+         "  /tmp/raw_data_x_<name>.csv with the header '#time,accel_x,accel_y,accel_z' (s, mm/s^2). Pass one or more\n"
+         "  of them; the axis comes from 'raw_data_x_' / 'raw_data_y_' in the name (or --axis), several files of one\n"
+         "  axis are averaged for the modes (for the shaper, each counts separately, as in Klipper's calibrate_shaper.py).\n"
+         "  Klipper's spectrum files are read as its calibrate_shaper.py reads them: TEST_RESONANCES' resonances_x_<name>.csv\n"
+         "  and SHAPER_CALIBRATE's calibration_data_x_<name>.csv (freq,psd_x,psd_y,psd_z,psd_xyz), or several datasets\n"
+         "  (freq,<name>,<name>...). Without 'shapers:' columns the PSD is as measured and gets Klipper's normalization\n"
+         "  (divided by f + 0.1 Hz, damped below 10 Hz) before a shaper is chosen; with them it already has it.\n"
+         "  Shake&Tune's measurement files (ShakeTune_results/*/<name>.stdata: Zstandard-compressed JSON lines of\n"
+         "  [t, accel_x, accel_y, accel_z] samples) are read directly; an input-shaper measurement (axis_X_...) gives its\n"
+         "  axis, any other measurement is reported under its name.\n"
+         "Feeding RepRapFirmware's files:\n"
+         "  M956 P0 S<samples> A0 X Y Z F\"raw_data_x_run1.csv\" writes 0:/sys/accelerometer/<name>.csv: 'Sample,X,Y,Z', rows of\n"
+         "  g, and a last line 'Rate <Hz>, overflows <n>' that gives the time base. Name the file raw_data_<axis>_*.csv\n"
+         "  in M956 (or pass --axis).\n"
+         "  Other loggers: --time COL --accel COL [--accel COL...] (mm/s^2); a commanded-acceleration column\n"
+         "  --excitation COL adds the frequency response H1 and coherence, and the modes are fitted to it.\n";
+}
+
+void add_accel_files_options(CLI::App* sub, AccelFilesOptions& o, OutputOptions& output) {
+  sub->add_option("files", o.files,
+                  "Accelerometer CSVs: Klipper raw_data_<axis>_*.csv (#time,accel_x,accel_y,accel_z in s and mm/s^2), "
+                  "Klipper spectrum files (resonances_<axis>_*.csv, calibration_data_<axis>_*.csv), Shake&Tune .stdata "
+                  "files, or generic CSVs "
+                  "with --time/--accel")
+      ->required();
+  sub->add_option_function<std::string>(
+      "--axis", [&o](const std::string& s) { o.input.axis = parse_axis_name(s); },
+      "Axis of every file: x, y or z (default: from the Klipper file name; a file whose name names no "
+      "axis is reported under its file stem, and needs --axis only to be exported)");
+  sub->add_option("--time", o.input.time_column,
+                  fmt::format("Time column (s), strictly increasing (default: {})", o.input.time_column));
+  sub->add_option("--accel", o.input.accel_columns,
+                  "Acceleration column(s) in mm/s^2, PSDs summed over them (default: accel_x accel_y accel_z)");
+  sub->add_option("--excitation", o.input.excitation_column,
+                  "Commanded-acceleration column (mm/s^2): adds the H1 frequency response and coherence, and the modes "
+                  "are fitted to the FRF");
+  sub->add_option_function<std::string>(
+      "--window", [&o](const std::string& s) { o.welch.window = ident::parse_window(s); },
+      "Welch window: " + resonance_window_words(o.welch.window));
+  sub->add_option("--kaiser-beta", o.welch.kaiser_beta,
+                  fmt::format("Kaiser window beta (dimensionless, default {:g} as Klipper)", o.welch.kaiser_beta));
+  sub->add_option("--segment", o.welch.segment_length,
+                  "Welch segment length in samples (default 2^ceil(log2(fs * 0.5 s)), Klipper's choice)");
+  sub->add_option("--overlap", o.welch.overlap,
+                  fmt::format("Welch segment overlap, fraction 0..0.95 (default {:g})", o.welch.overlap));
+  sub->add_option_function<std::string>(
+      "--detrend", [&o](const std::string& s) { o.welch.detrend = parse_detrend_name(s); },
+      "Per-segment detrending: " + resonance_detrend_words(o.welch.detrend));
+  sub->add_option("--fit-min", o.modes.fit_min_hz,
+                  fmt::format("Lowest frequency searched for modes, Hz (default {:g})", o.modes.fit_min_hz));
+  sub->add_option("--fit-max", o.modes.fit_max_hz,
+                  fmt::format("Highest frequency searched for modes, Hz (default {:g}, where Klipper's sweep ends)",
+                              o.modes.fit_max_hz));
+  sub->add_option("--max-modes", o.modes.max_modes,
+                  fmt::format("Most modes fitted per axis (default {})", o.modes.max_modes));
+  sub->add_option("--peak-threshold", o.modes.peak_threshold,
+                  fmt::format("Ignore peaks lower than this fraction of the highest (whitened PSD), 0..1 (default {:g})",
+                              o.modes.peak_threshold));
+  sub->add_option("--excitation-exponent", o.modes.excitation_exponent,
+                  "p in the excitation spectrum shape f^p (dimensionless; default 2 for raw sweeps with amplitude "
+                  "accel_per_hz*f, 1 for spectra Klipper normalized)");
+  sub->add_option("--full-scale", o.input.full_scale_mm_s2,
+                  "Accelerometer range in mm/s^2 for clipping detection (default: detect flat-topped extremes; "
+                  "ADXL345 at +-16 g is 156906)");
+  sub->add_option("--plot-max", o.max_plot_hz,
+                  fmt::format("Highest frequency of the PSD arrays in the JSON, Hz (default {:g})", o.max_plot_hz));
+  sub->add_flag_callback("--no-frf", [&o] { o.modes.use_frf = false; },
+                         "Fit the PSD even when an excitation column gives the FRF");
+  add_output_options(sub, output);
+}
+
+void add_ringdown_options(CLI::App* sub, ident::RingdownOptions& o, bool* ringdown_flag) {
+  if (ringdown_flag)
+    sub->add_flag("--ringdown", *ringdown_flag,
+                  "Analyse each file as a free decay (a plucked belt, a tapped toolhead): fundamental frequency and "
+                  "damping ratio from a time-domain fit of damped sinusoids. Chosen automatically for a record too "
+                  "short for Welch's method");
+  sub->add_option("--channel", o.channel, "Ring-down: analyse this channel (default: the strongest)");
+  sub->add_option("--min-strength", o.min_strength,
+                  fmt::format("Ring-down: refuse a record whose decay RMS is below this multiple of the noise floor "
+                              "(default {:g})",
+                              o.min_strength));
+  sub->add_option("--ringdown-min", o.min_hz,
+                  fmt::format("Ring-down: lowest fundamental considered, Hz (default {:g})", o.min_hz));
+  sub->add_option("--ringdown-max", o.max_hz,
+                  o.max_hz > 0 ? fmt::format("Ring-down: highest line considered, Hz (default {:g})", o.max_hz)
+                               : std::string("Ring-down: highest line considered, Hz (default 0.45 x the sample rate)"));
+}
+
+void check_ringdown_options(const ident::RingdownOptions& o) {
+  if (!(o.min_strength > 0)) throw InputError("--min-strength must be positive");
+}
+
+nlohmann::json accel_options_json(const AccelFilesOptions& a, bool ringdown, const ident::RingdownOptions& r) {
+  return {{"axis", a.input.axis != 0 ? std::string(1, a.input.axis) : std::string()},
+          {"time_column", a.input.time_column},
+          {"accel_columns", a.input.accel_columns},
+          {"excitation_column", a.input.excitation_column},
+          {"window", ident::to_string(a.welch.window)},
+          {"kaiser_beta", a.welch.kaiser_beta},
+          {"segment", a.welch.segment_length},
+          {"overlap", a.welch.overlap},
+          {"detrend", detrend_name(a.welch.detrend)},
+          {"fit_min_hz", a.modes.fit_min_hz},
+          {"fit_max_hz", a.modes.fit_max_hz},
+          {"max_modes", a.modes.max_modes},
+          {"peak_threshold", a.modes.peak_threshold},
+          {"excitation_exponent", a.modes.excitation_exponent},
+          {"full_scale_mm_s2", a.input.full_scale_mm_s2},
+          {"no_frf", !a.modes.use_frf},
+          {"ringdown", ringdown},
+          {"channel", r.channel},
+          {"min_strength", r.min_strength},
+          {"ringdown_min_hz", r.min_hz},
+          {"ringdown_max_hz", r.max_hz}};
+}
+
+void add_accel_inputs(const AccelAnalysis& analysis, Envelope& env) {
+  for (const auto& d : analysis.inputs) env.add_input_digest(d.path, d.sha256, d.size_bytes);
+  for (const auto& w : analysis.warnings) env.warn(w);
+}
+
+nlohmann::json modes_json(const ident::AxisModes& m) {
+  nlohmann::json arr = nlohmann::json::array();
+  for (const auto& e : m.modes)
+    arr.push_back({{"freq_hz", e.freq_hz},
+                   {"zeta", e.zeta},
+                   {"freq_ci95", resonance_pair(e.freq_ci95_lo, e.freq_ci95_hi)},
+                   {"zeta_ci95", resonance_pair(e.zeta_ci95_lo, e.zeta_ci95_hi)},
+                   {"freq_stderr_hz", e.freq_stderr_hz},
+                   {"zeta_stderr", e.zeta_stderr},
+                   {"gain", e.gain}});
+  return arr;
+}
+
+nlohmann::json spectrum_json(const ident::AxisSpectrum& s, double max_hz) {
+  nlohmann::json j;
+  std::vector<double> f, p, px, py, pz;
+  for (std::size_t b = 0; b < s.freq_hz.size(); ++b) {
+    if (s.freq_hz[b] > max_hz) break;
+    f.push_back(s.freq_hz[b]);
+    p.push_back(s.psd_sum[b]);
+    if (!s.psd_x.empty()) px.push_back(s.psd_x[b]);
+    if (!s.psd_y.empty()) py.push_back(s.psd_y[b]);
+    if (!s.psd_z.empty()) pz.push_back(s.psd_z[b]);
+  }
+  j["freq_hz"] = f;
+  j["psd"] = p;
+  if (!px.empty()) j["psd_x"] = px;
+  if (!py.empty()) j["psd_y"] = py;
+  if (!pz.empty()) j["psd_z"] = pz;
+  j["unit"] = s.klipper_normalized ? "(mm/s^2)^2/Hz/Hz (Klipper-normalized)" : "(mm/s^2)^2/Hz";
+  j["klipper_normalized"] = s.klipper_normalized;
+  j["window"] = ident::to_string(s.welch.window);
+  j["segment_length"] = s.segment_length;
+  j["segments"] = s.segments;
+  j["sample_rate_hz"] = s.sample_rate_hz;
+  j["resolution_hz"] = s.segment_length > 0 ? s.sample_rate_hz / static_cast<double>(s.segment_length) : 0.0;
+  j["files"] = s.files;
+  if (s.frf && s.frf->h.size() >= f.size()) {
+    std::vector<double> mag, ph, coh;
+    for (std::size_t b = 0; b < f.size(); ++b) {
+      mag.push_back(std::abs(s.frf->h[b]));
+      ph.push_back(std::arg(s.frf->h[b]) * 180.0 / std::numbers::pi);
+      coh.push_back(s.frf->coherence[b]);
+    }
+    j["frf"] = {{"freq_hz", f}, {"magnitude", mag}, {"phase_deg", ph}, {"coherence", coh}};
+  }
+  return j;
+}
+
+nlohmann::json fit_json(const ident::AxisModes& m) {
+  nlohmann::json j;
+  j["method"] = m.method.empty() ? "none" : m.method;
+  j["band_hz"] = resonance_pair(m.band_lo_hz, m.band_hi_hz);
+  nlohmann::json peaks = nlohmann::json::array();
+  for (const auto& p : m.peaks) peaks.push_back({{"freq_hz", p.freq_hz}, {"half_power_zeta", p.half_power_zeta}});
+  j["peaks"] = peaks;
+  if (m.fit) {
+    j["diagnostics"] = fitting::to_json(m.fit->fit.diagnostics);
+    j["variance_inflation"] = m.fit->variance_inflation;
+    j["direct_term"] = m.fit->direct_term;
+    if (m.method == "psd") j["noise_floor"] = m.fit->noise_floor;
+  }
+  j["dominant_mode"] = m.dominant;
+  return j;
+}
+
+}  // namespace tunekit::cli
