@@ -1,0 +1,37 @@
+#pragma once
+// What the single-step fit (first_order.cpp) and the pooled fit (first_order_pooled.cpp) of
+// first-order step responses share: the record checks, the model with its derivatives at one
+// sample, the residuals, and the identifiability check. Private to the fitting library.
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "tunekit/fitting/first_order.hpp"
+
+namespace tunekit::fitting::first_order_detail {
+
+constexpr double kTauMaxFactor = 100.0;  // tau may be at most this many record lengths
+
+/// InputError unless the record has increasing, finite times and finite outputs.
+void check_record(const StepRecord& r, const std::string& what);
+/// Mean of v[b, e).
+double mean_of(const std::vector<double>& v, std::size_t b, std::size_t e);
+
+/// The model y0 + K du (1 - exp(-(t - t_step - theta)/tau)) at sample i and its derivatives.
+struct StepModelPoint {
+  double m, dK, dtau, dtheta;
+};
+StepModelPoint step_model_at(const StepRecord& r, std::size_t i, double K, double tau, double theta, double y0);
+
+/// Residuals (model - data) of every sample into res, and, when jac is not null, the Jacobian
+/// row-major with `width` columns, K, tau, theta and y0 in columns cols[0..3].
+void step_residuals(const StepRecord& r, double K, double tau, double theta, double y0, double* res, double* jac,
+                    std::size_t width, const std::size_t cols[4]);
+
+/// FitError when tau_s ran to its bound or is not determined, or theta_s ran to its bound.
+void check_identifiable(const FitResult& f, const StepRecord* rec, double duration, bool have_stderr);
+/// Time from the step to the last sample (s).
+double response_duration(const StepRecord& r);
+
+}  // namespace tunekit::fitting::first_order_detail
