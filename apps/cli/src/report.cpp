@@ -65,33 +65,6 @@ std::string display_number(double v) {
   return fmt::format("{:.4g}", v);
 }
 
-const nlohmann::json* json_at(const nlohmann::json& root, const std::string& path) {
-  const nlohmann::json* cur = &root;
-  std::size_t i = 0;
-  while (i < path.size()) {
-    if (path[i] == '.') {
-      ++i;
-      continue;
-    }
-    if (path[i] == '[') {
-      const std::size_t close = path.find(']', i);
-      if (close == std::string::npos || !cur->is_array()) return nullptr;
-      const std::size_t idx = std::stoul(path.substr(i + 1, close - i - 1));
-      if (idx >= cur->size()) return nullptr;
-      cur = &(*cur)[idx];
-      i = close + 1;
-      continue;
-    }
-    std::size_t end = path.find_first_of(".[", i);
-    if (end == std::string::npos) end = path.size();
-    const std::string key = path.substr(i, end - i);
-    if (!cur->is_object() || !cur->contains(key)) return nullptr;
-    cur = &(*cur)[key];
-    i = end;
-  }
-  return cur;
-}
-
 Figure step_figure(const nlohmann::json& d) {
   Figure f;
   f.title = "Liquefier step response";
@@ -331,7 +304,7 @@ std::string write_report(const std::string& run_dir) {
   nlohmann::json pd = nlohmann::json::object();
   const std::string pd_path = run_dir + "/plotdata.json";
   if (std::filesystem::exists(pd_path)) {
-    pd = parse_results_json(ident::read_file_bytes(pd_path), pd_path);
+    pd = read_json_file(pd_path);
     if (!pd.is_object()) throw InputError(fmt::format("plot data must be a JSON object, not {}", pd.type_name()), pd_path);
   }
   std::string html;

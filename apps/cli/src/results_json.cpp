@@ -68,10 +68,18 @@ nlohmann::json parse_results_json(std::string_view text, const std::string& path
   }
 }
 
-nlohmann::json read_results_json(const std::string& path) {
-  const std::string bytes = ident::read_file_bytes(path);
-  auto j = parse_results_json(bytes, path);
-  check_results_envelope(j, bytes, path);
+nlohmann::json read_json_file(const std::string& path, std::string* bytes) {
+  std::string text = ident::read_file_bytes(path);
+  auto j = parse_results_json(text, path);
+  if (bytes != nullptr) *bytes = std::move(text);
+  return j;
+}
+
+nlohmann::json read_results_json(const std::string& path, std::string* bytes) {
+  std::string text;
+  auto j = read_json_file(path, &text);
+  check_results_envelope(j, text, path);
+  if (bytes != nullptr) *bytes = std::move(text);
   return j;
 }
 
