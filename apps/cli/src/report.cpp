@@ -1,4 +1,5 @@
 #include "tunekit/cli/report.hpp"
+#include "tunekit/cli/report_command.hpp"
 #include "tunekit/cli/results_json.hpp"
 
 #include <cmath>
@@ -298,7 +299,10 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
   return h.str();
 }
 
-std::string write_report(const std::string& run_dir) {
+ReportOutcome compute_report(const ReportOptions& options) {
+  ReportOutcome outcome;
+  outcome.options = options;
+  const std::string& run_dir = options.run_dir;
   const std::string results_path = run_dir + "/results.json";
   const nlohmann::json env = read_results_json(results_path);
   nlohmann::json pd = nlohmann::json::object();
@@ -309,15 +313,19 @@ std::string write_report(const std::string& run_dir) {
   }
   std::string html;
   try {
-    const auto images = render_report_plots(run_dir, pd);
-    html = build_report_html(env, images);
+    outcome.images = render_report_plots(run_dir, pd);
+    html = build_report_html(env, outcome.images);
   } catch (const nlohmann::json::exception& e) {
     // A member of an unexpected type deeper in the results or the plot data.
     throw InputError(fmt::format("unexpected content in the results or plot data: {}", e.what()), results_path);
   }
-  const std::string out = run_dir + "/report.html";
-  protocols::write_file_atomic(out, html);
-  return out;
+  outcome.html_path = run_dir + "/report.html";
+  protocols::write_file_atomic(outcome.html_path, html);
+  return outcome;
 }
+
+void print_text(const ReportOutcome& outcome, std::ostream& os) { os << outcome.html_path << "\n"; }
+
+std::string write_report(const std::string& run_dir) { return compute_report({run_dir}).html_path; }
 
 }  // namespace tunekit::cli
