@@ -4,7 +4,7 @@
 // directory (protocols/runner.hpp), or with dry_run only build and check its G-code. The shape of
 // a command is described in tunekit/cli/command.hpp.
 
-#include <map>
+#include <chrono>
 #include <optional>
 #include <ostream>
 #include <string>
