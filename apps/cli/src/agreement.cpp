@@ -4,7 +4,8 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/cli/report.hpp"
+#include "tunekit/cli/json_access.hpp"
+#include "tunekit/cli/report.hpp"  // display_number()
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::cli {
@@ -39,8 +40,8 @@ nlohmann::json compare_estimates(const std::string& quantity, const std::string&
 
 bool estimate_from_param(const nlohmann::json* p, const std::string& method, Estimate& out) {
   if (p == nullptr || !p->is_object()) return false;
-  const auto* v = json_at(*p, "value");
-  const auto* ci = json_at(*p, "ci95");
+  const auto* v = find_at(*p, nlohmann::json::json_pointer("/value"));
+  const auto* ci = find_at(*p, nlohmann::json::json_pointer("/ci95"));
   if (v == nullptr || !v->is_number() || ci == nullptr || !ci->is_array() || ci->size() != 2 || !(*ci)[0].is_number() ||
       !(*ci)[1].is_number())
     return false;

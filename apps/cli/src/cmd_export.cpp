@@ -18,6 +18,7 @@
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/export_command.hpp"
+#include "tunekit/cli/json_access.hpp"
 #include "tunekit/cli/plots.hpp"
 #include "tunekit/cli/results_json.hpp"
 #include "tunekit/fitting/fit_result.hpp"
@@ -74,17 +75,6 @@ double number_at(const nlohmann::json& j, const std::string& what, const std::st
   return j.get<double>();
 }
 
-/// j[a][b]... or null when any level is missing.
-const nlohmann::json& dig(const nlohmann::json& j, std::initializer_list<const char*> keys) {
-  static const nlohmann::json null_json;
-  const nlohmann::json* cur = &j;
-  for (const char* k : keys) {
-    if (!cur->is_object() || !cur->contains(k)) return null_json;
-    cur = &(*cur)[k];
-  }
-  return *cur;
-}
-
 }  // namespace
 
 ExportOutcome compute_export(const ExportOptions& a) {
@@ -127,74 +117,78 @@ ExportOutcome compute_export(const ExportOptions& a) {
   try {
     for (const auto& path : a.results) {
       reading = path;
-      const std::string bytes = ident::read_file_bytes(path);
+      std::string bytes;
+      const nlohmann::json j = read_results_json(path, &bytes);
       env.add_input(path, bytes);
-      const nlohmann::json j = parse_results_json(bytes, path);
-      check_results_envelope(j, bytes, path);
       const std::string cmd = j.value("command", std::string());
-      const auto& res = dig(j, {"results"});
+      const auto& res = value_at_or_null(j, "/results"_json_pointer);
       if (!res.is_object()) throw InputError("no 'results' object: not a tunekit results file", path);
       sources.push_back(cmd);
       if (cmd == "step") {
-        const auto& params = dig(res, {"pooled", "params"});
+        const auto& params = value_at_or_null(res, "/pooled/params"_json_pointer);
         if (params.is_object()) {
-          in.tau_s = number_at(dig(params, {"tau_s", "value"}), "pooled.params.tau_s.value", path);
-          in.tau_stderr_s = number_at(dig(params, {"tau_s", "stderr"}), "pooled.params.tau_s.stderr", path);
-          in.theta_s = number_at(dig(params, {"theta_s", "value"}), "pooled.params.theta_s.value", path);
-          in.gain = number_at(dig(params, {"K", "value"}), "pooled.params.K.value", path);
-          if (dig(params, {"K", "unit"}).is_string()) in.gain_unit = dig(params, {"K", "unit"}).get<std::string>();
+          in.tau_s =
+              number_at(value_at_or_null(params, "/tau_s/value"_json_pointer), "pooled.params.tau_s.value", path);
+          in.tau_stderr_s =
+              number_at(value_at_or_null(params, "/tau_s/stderr"_json_pointer), "pooled.params.tau_s.stderr", path);
+          in.theta_s =
+              number_at(value_at_or_null(params, "/theta_s/value"_json_pointer), "pooled.params.theta_s.value", path);
+          in.gain = number_at(value_at_or_null(params, "/K/value"_json_pointer), "pooled.params.K.value", path);
+          if (const auto& unit = value_at_or_null(params, "/K/unit"_json_pointer); unit.is_string())
+            in.gain_unit = unit.get<std::string>();
           in.tau_source = "step";
         }
         // Power-law trend of tau over u (the operating points' input), and per-level 95 %
         // intervals when the step analysis gives them (results.flow_levels[].tau_ci95).
-        const auto& ta = dig(res, {"trend", "tau_s", "params", "a", "value"});
-        const auto& tb = dig(res, {"trend", "tau_s", "params", "b", "value"});
+        const auto& ta = value_at_or_null(res, "/trend/tau_s/params/a/value"_json_pointer);
+        const auto& tb = value_at_or_null(res, "/trend/tau_s/params/b/value"_json_pointer);
         if (ta.is_number() && tb.is_number()) trend_tau_u = ident::TauPowerLaw{ta.get<double>(), tb.get<double>()};
-        const auto& lvls = dig(res, {"flow_levels"});
+        const auto& lvls = value_at_or_null(res, "/flow_levels"_json_pointer);
         if (lvls.is_array())
           for (const auto& l : lvls) {
             ident::FlowTau ft;
-            double u = number_at(dig(l, {"flow_mm3_s"}), "flow_levels[].flow_mm3_s", path);
+            double u = number_at(value_at_or_null(l, "/flow_mm3_s"_json_pointer), "flow_levels[].flow_mm3_s", path);
             const bool is_flow = std::isfinite(u);
-            if (!is_flow) u = number_at(dig(l, {"u"}), "flow_levels[].u", path);
+            if (!is_flow) u = number_at(value_at_or_null(l, "/u"_json_pointer), "flow_levels[].u", path);
             ft.flow_mm3_s = u;
-            ft.tau_s = number_at(dig(l, {"tau_s"}), "flow_levels[].tau_s", path);
-            const auto& ci = dig(l, {"tau_ci95"});
+            ft.tau_s = number_at(value_at_or_null(l, "/tau_s"_json_pointer), "flow_levels[].tau_s", path);
+            const auto& ci = value_at_or_null(l, "/tau_ci95"_json_pointer);
             if (ci.is_array() && ci.size() == 2) {
               ft.tau_lo_s = number_at(ci[0], "flow_levels[].tau_ci95[0]", path);
               ft.tau_hi_s = number_at(ci[1], "flow_levels[].tau_ci95[1]", path);
             } else if (ci.is_object()) {
-              ft.tau_lo_s = number_at(dig(ci, {"lo"}), "flow_levels[].tau_ci95.lo", path);
-              ft.tau_hi_s = number_at(dig(ci, {"hi"}), "flow_levels[].tau_ci95.hi", path);
+              ft.tau_lo_s = number_at(value_at_or_null(ci, "/lo"_json_pointer), "flow_levels[].tau_ci95.lo", path);
+              ft.tau_hi_s = number_at(value_at_or_null(ci, "/hi"_json_pointer), "flow_levels[].tau_ci95.hi", path);
             }
             level_is_flow.push_back(is_flow);
             levels.push_back(ft);
           }
-        const auto& ops = dig(res, {"operating_points"});
-        const auto& u_unit = dig(res, {"units", "input"});
+        const auto& ops = value_at_or_null(res, "/operating_points"_json_pointer);
+        const auto& u_unit = value_at_or_null(res, "/units/input"_json_pointer);
         const bool flow_points = u_unit.is_string() && ident::is_volumetric_flow_unit(u_unit.get<std::string>());
         points_are_flow = flow_points;
         if (ops.is_array())
           for (const auto& op : ops) {
             point_is_flow.push_back(flow_points);
             ident::LiquefierPoint p;
-            p.feed_mm_s = number_at(dig(op, {"u"}), "operating_points[].u", path);
-            p.gain = number_at(dig(op, {"K"}), "operating_points[].K", path);
-            p.tau_s = number_at(dig(op, {"tau_s"}), "operating_points[].tau_s", path);
-            p.theta_s = number_at(dig(op, {"theta_s"}), "operating_points[].theta_s", path);
+            p.feed_mm_s = number_at(value_at_or_null(op, "/u"_json_pointer), "operating_points[].u", path);
+            p.gain = number_at(value_at_or_null(op, "/K"_json_pointer), "operating_points[].K", path);
+            p.tau_s = number_at(value_at_or_null(op, "/tau_s"_json_pointer), "operating_points[].tau_s", path);
+            p.theta_s = number_at(value_at_or_null(op, "/theta_s"_json_pointer), "operating_points[].theta_s", path);
             in.points.push_back(p);
           }
       } else if (cmd == "freq") {
-        freq_tau = number_at(dig(res, {"tf_fit", "params", "tau_s", "value"}), "tf_fit.params.tau_s.value", path);
+        freq_tau = number_at(value_at_or_null(res, "/tf_fit/params/tau_s/value"_json_pointer),
+                             "tf_fit.params.tau_s.value", path);
       } else if (cmd == "shaper") {
-        const auto& axes = dig(res, {"axes"});
+        const auto& axes = value_at_or_null(res, "/axes"_json_pointer);
         if (!axes.is_object()) throw InputError("shaper results without 'axes'", path);
         for (const auto& axis_item : axes.items()) {
           // A plain variable, not a structured binding: the lambdas below capture it (clang 14
           // refuses to capture a structured binding).
           const std::string axis = axis_item.key();
           const auto& v = axis_item.value();
-          const auto& rec = dig(v, {"recommended"});
+          const auto& rec = value_at_or_null(v, "/recommended"_json_pointer);
           if (!rec.is_object()) continue;
           if (axis != "x" && axis != "y") {
             if (axis == "z")
@@ -212,8 +206,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
             if (!c.contains("type") || !c["type"].is_string())
               throw InputError(fmt::format("axes.{}.{}.type must be a string", axis, what), path);
             s.type = c["type"].get<std::string>();
-            s.freq_hz = number_at(dig(c, {"freq_hz"}), what + ".freq_hz", path);
-            const double z = number_at(dig(c, {"damping"}), what + ".damping", path);
+            s.freq_hz = number_at(value_at_or_null(c, "/freq_hz"_json_pointer), what + ".freq_hz", path);
+            const double z = number_at(value_at_or_null(c, "/damping"_json_pointer), what + ".damping", path);
             if (std::isfinite(z)) s.damping = z;
             return s;
           };
@@ -228,9 +222,9 @@ ExportOutcome compute_export(const ExportOptions& a) {
             // candidate the firmware has (the results list every type's best frequency).
             std::optional<protocols::ShaperSetting> best;
             double best_score = 0;
-            for (const auto& c : dig(v, {"candidates"})) {
+            for (const auto& c : value_at_or_null(v, "/candidates"_json_pointer)) {
               const auto cs = setting_of(c, "candidates[]");
-              const double score = number_at(dig(c, {"score"}), "candidates[].score", path);
+              const double score = number_at(value_at_or_null(c, "/score"_json_pointer), "candidates[].score", path);
               if (!usable(cs) || !std::isfinite(score)) continue;
               if (!best || score < best_score) {
                 best = cs;
@@ -254,7 +248,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
           shapers[axis] = s;
         }
       } else if (cmd == "rheo") {
-        const auto& pred = dig(res, {"prediction"});
+        const auto& pred = value_at_or_null(res, "/prediction"_json_pointer);
         if (!pred.is_object()) throw InputError("rheo results without 'prediction'", path);
         try {
           in.rheo_flow_mm3_s = pred.at("flow_mm3_s").get<std::vector<double>>();
@@ -262,8 +256,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
         } catch (const nlohmann::json::exception&) {
           throw InputError("prediction.flow_mm3_s and prediction.relative_tau must be arrays of numbers", path);
         }
-        in.rheo_reference_flow_mm3_s =
-            number_at(dig(pred, {"reference_flow_mm3_s"}), "prediction.reference_flow_mm3_s", path);
+        in.rheo_reference_flow_mm3_s = number_at(value_at_or_null(pred, "/reference_flow_mm3_s"_json_pointer),
+                                                 "prediction.reference_flow_mm3_s", path);
       } else {
         throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper or rheo)", cmd), path);
       }

@@ -11,21 +11,18 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/history_command.hpp"
 #include "tunekit/cli/history_record.hpp"
-#include "tunekit/cli/report.hpp"
-#include "tunekit/cli/requirements.hpp"
+#include "tunekit/cli/results_json.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/history/drift.hpp"
-#include "tunekit/history/quantities.hpp"
 #include "tunekit/history/store.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
 
-#include "history_args.hpp"
+#include "history_common.hpp"
 
-namespace tunekit::cli::history_cmd {
+namespace tunekit::cli {
+namespace history_cmd {
 namespace {
 
 namespace fs = std::filesystem;
@@ -84,10 +81,15 @@ void hist_collect(const fs::path& root, const fs::path& dir, std::vector<ImportI
 
 }  // namespace
 
-int hist_run_import(const HistoryArgs& a, CliContext& ctx) {
-  if (!a.output.machine_id.empty() && a.machine_from_path)
+}  // namespace history_cmd
+
+HistoryImportOutcome compute_history_import(const HistoryOptions& a) {
+  using namespace history_cmd;
+  HistoryImportOutcome out;
+  out.options = a;
+  if (!a.machine_id.empty() && a.machine_from_path)
     throw InputError("give either --machine-id or --machine-from-path, not both");
-  if (!a.output.machine_id.empty()) history::check_machine_id(a.output.machine_id);
+  if (!a.machine_id.empty()) history::check_machine_id(a.machine_id);
   std::vector<ImportItem> items;
   for (const auto& p : a.paths) {
     const fs::path path(p);
@@ -96,15 +98,10 @@ int hist_run_import(const HistoryArgs& a, CliContext& ctx) {
     else items.push_back({path, path.parent_path(), path.parent_path()});
   }
   if (items.empty()) throw InputError("no tunekit results found (run directories with results.json, or result JSON files)");
-
-  history::Store store(history_db(a.output));
-  Envelope env("history import");
-  env.set_options({{"db", store.connection().name()}, {"paths", a.paths}, {"machine_id", a.output.machine_id},
-                   {"machine_from_path", a.machine_from_path}});
-  nlohmann::json list = nlohmann::json::array();
-  int imported = 0, duplicates = 0;
+  history::Store store(hist_db_of(a));
+  out.db = store.connection().name();
   for (const auto& it : items) {
-    std::string machine = a.output.machine_id;
+    std::string machine = a.machine_id;
     if (machine.empty() && a.machine_from_path) {
       // archive/<machine>/...: the first folder under the PATH given.
       const auto rel = fs::relative(it.dir, it.root);
@@ -116,34 +113,55 @@ int hist_run_import(const HistoryArgs& a, CliContext& ctx) {
     const std::string source = fs::weakly_canonical(it.file.filename() == "results.json" ? it.dir : it.file).string();
     std::vector<history::NewRecord> records;
     try {
-      nlohmann::json envelope;
-      try {
-        envelope = nlohmann::json::parse(ident::read_file_bytes(it.file.string()));
-      } catch (const nlohmann::json::parse_error& e) {
-        throw InputError(std::string("not valid JSON: ") + e.what(), it.file.string());
-      }
+      const nlohmann::json envelope = read_json_file(it.file.string());
       records = records_from_envelope(envelope, machine, source, hist_run_time(it.dir, it.file));
     } catch (const InputError& e) {
       if (!it.found_in_folder) throw;
-      list.push_back({{"source", source}, {"status", "skipped"}, {"reason", e.message()}});
-      if (!a.output.json) ctx.out << fmt::format("{:<16} {} ({})\n", "skipped", source, e.message());
+      // A syntax error keeps its line and column.
+      const std::string at = it.file.string() + ":";
+      const bool located = e.location().rfind(at, 0) == 0;
+      out.entries.push_back(
+          {source, "skipped", located ? e.location() + ": " + e.message() : e.message(), "", "", std::nullopt});
       continue;
     }
     for (auto& r : records) {
       r.deduplicate = true;  // importing an archive twice adds nothing
       const auto id = store.record(r);
-      list.push_back({{"source", r.source}, {"machine_id", machine}, {"command", r.command},
-                      {"record_id", id ? nlohmann::json(*id) : nlohmann::json(nullptr)},
-                      {"status", id ? "imported" : "already recorded"}});
-      (id ? imported : duplicates)++;
-      if (!a.output.json)
-        ctx.out << fmt::format("{:<16} {} ({}, {})\n", id ? "imported" : "already recorded", r.source, machine, r.command);
+      out.entries.push_back({r.source, id ? "imported" : "already recorded", "", machine, r.command, id});
+      (id ? out.imported : out.already_recorded)++;
     }
   }
-  env.results()["records"] = list;
-  env.results()["counts"] = {{"imported", imported}, {"already_recorded", duplicates}};
-  if (!a.output.json) ctx.out << fmt::format("{} imported, {} already recorded\n", imported, duplicates);
-  return emit(env, a.output, ctx);
+  return out;
 }
 
-}  // namespace tunekit::cli::history_cmd
+Envelope to_envelope(const HistoryImportOutcome& o) {
+  const auto& a = o.options;
+  Envelope env("history import");
+  env.set_options(
+      {{"db", o.db}, {"paths", a.paths}, {"machine_id", a.machine_id}, {"machine_from_path", a.machine_from_path}});
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& e : o.entries) {
+    if (e.status == "skipped") {
+      list.push_back({{"source", e.source}, {"status", e.status}, {"reason", e.reason}});
+      continue;
+    }
+    list.push_back({{"source", e.source},
+                    {"machine_id", e.machine_id},
+                    {"command", e.command},
+                    {"record_id", e.record_id ? nlohmann::json(*e.record_id) : nlohmann::json(nullptr)},
+                    {"status", e.status}});
+  }
+  env.results()["records"] = list;
+  env.results()["counts"] = {{"imported", o.imported}, {"already_recorded", o.already_recorded}};
+  return env;
+}
+
+void print_text(const HistoryImportOutcome& o, std::ostream& os) {
+  for (const auto& e : o.entries) {
+    if (e.status == "skipped") os << fmt::format("{:<16} {} ({})\n", "skipped", e.source, e.reason);
+    else os << fmt::format("{:<16} {} ({}, {})\n", e.status, e.source, e.machine_id, e.command);
+  }
+  os << fmt::format("{} imported, {} already recorded\n", o.imported, o.already_recorded);
+}
+
+}  // namespace tunekit::cli

@@ -1,4 +1,5 @@
 #include "tunekit/cli/report.hpp"
+#include "tunekit/cli/report_command.hpp"
 #include "tunekit/cli/results_json.hpp"
 
 #include <cmath>
@@ -63,33 +64,6 @@ std::string image_mime(const std::string& path) {
 std::string display_number(double v) {
   if (!std::isfinite(v)) return "n/a";
   return fmt::format("{:.4g}", v);
-}
-
-const nlohmann::json* json_at(const nlohmann::json& root, const std::string& path) {
-  const nlohmann::json* cur = &root;
-  std::size_t i = 0;
-  while (i < path.size()) {
-    if (path[i] == '.') {
-      ++i;
-      continue;
-    }
-    if (path[i] == '[') {
-      const std::size_t close = path.find(']', i);
-      if (close == std::string::npos || !cur->is_array()) return nullptr;
-      const std::size_t idx = std::stoul(path.substr(i + 1, close - i - 1));
-      if (idx >= cur->size()) return nullptr;
-      cur = &(*cur)[idx];
-      i = close + 1;
-      continue;
-    }
-    std::size_t end = path.find_first_of(".[", i);
-    if (end == std::string::npos) end = path.size();
-    const std::string key = path.substr(i, end - i);
-    if (!cur->is_object() || !cur->contains(key)) return nullptr;
-    cur = &(*cur)[key];
-    i = end;
-  }
-  return cur;
 }
 
 Figure step_figure(const nlohmann::json& d) {
@@ -325,26 +299,33 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
   return h.str();
 }
 
-std::string write_report(const std::string& run_dir) {
+ReportOutcome compute_report(const ReportOptions& options) {
+  ReportOutcome outcome;
+  outcome.options = options;
+  const std::string& run_dir = options.run_dir;
   const std::string results_path = run_dir + "/results.json";
   const nlohmann::json env = read_results_json(results_path);
   nlohmann::json pd = nlohmann::json::object();
   const std::string pd_path = run_dir + "/plotdata.json";
   if (std::filesystem::exists(pd_path)) {
-    pd = parse_results_json(ident::read_file_bytes(pd_path), pd_path);
+    pd = read_json_file(pd_path);
     if (!pd.is_object()) throw InputError(fmt::format("plot data must be a JSON object, not {}", pd.type_name()), pd_path);
   }
   std::string html;
   try {
-    const auto images = render_report_plots(run_dir, pd);
-    html = build_report_html(env, images);
+    outcome.images = render_report_plots(run_dir, pd);
+    html = build_report_html(env, outcome.images);
   } catch (const nlohmann::json::exception& e) {
     // A member of an unexpected type deeper in the results or the plot data.
     throw InputError(fmt::format("unexpected content in the results or plot data: {}", e.what()), results_path);
   }
-  const std::string out = run_dir + "/report.html";
-  protocols::write_file_atomic(out, html);
-  return out;
+  outcome.html_path = run_dir + "/report.html";
+  protocols::write_file_atomic(outcome.html_path, html);
+  return outcome;
 }
+
+void print_text(const ReportOutcome& outcome, std::ostream& os) { os << outcome.html_path << "\n"; }
+
+std::string write_report(const std::string& run_dir) { return compute_report({run_dir}).html_path; }
 
 }  // namespace tunekit::cli

@@ -12,37 +12,46 @@
 namespace tunekit::cli {
 namespace {
 
-struct Leaf {
-  std::vector<std::string> segments;  // "modes[0]" is one segment "modes" followed by "[0]"
-  std::string path;
+struct RequirementLeaf {
+  std::vector<std::string> segments;  // "modes[0]" is one segment "modes" followed by "[0]"; a final "value" dropped
+  nlohmann::json::json_pointer pointer;
+  std::string path;  // dotted, as shown to users
   double value;
 };
 
-void flatten(const nlohmann::json& j, std::vector<std::string>& segs, std::vector<Leaf>& out) {
+// Every number in `j`, with its path.
+void requirement_leaves(const nlohmann::json& j, std::vector<std::string>& segs, nlohmann::json::json_pointer& ptr,
+                        std::vector<RequirementLeaf>& out) {
   if (j.is_number()) {
     std::string path;
     for (const auto& s : segs) path += (s.front() == '[' || path.empty()) ? s : "." + s;
     auto effective = segs;
     if (!effective.empty() && effective.back() == "value") effective.pop_back();
-    out.push_back({effective, path, j.get<double>()});
+    out.push_back({effective, ptr, path, j.get<double>()});
     return;
   }
   if (j.is_object()) {
     for (const auto& [k, v] : j.items()) {
       segs.push_back(k);
-      flatten(v, segs, out);
+      ptr /= k;
+      requirement_leaves(v, segs, ptr, out);
+      ptr.pop_back();
       segs.pop_back();
     }
   } else if (j.is_array()) {
     for (std::size_t i = 0; i < j.size(); ++i) {
       segs.push_back("[" + std::to_string(i) + "]");
-      flatten(j[i], segs, out);
+      ptr /= i;
+      requirement_leaves(j[i], segs, ptr, out);
+      ptr.pop_back();
       segs.pop_back();
     }
   }
 }
 
-std::vector<std::string> split_path(const std::string& p) {
+}  // namespace
+
+std::vector<std::string> split_requirement_path(const std::string& p) {
   std::vector<std::string> segs;
   std::string cur;
   for (char c : p) {
@@ -63,16 +72,13 @@ std::vector<std::string> split_path(const std::string& p) {
   return segs;
 }
 
-// The wanted segments appear in order in `have`, and the last ones coincide.
-bool matches(const std::vector<std::string>& want, const std::vector<std::string>& have) {
-  if (want.empty() || have.empty() || want.back() != have.back()) return false;
+bool requirement_path_matches(const std::vector<std::string>& wanted, const std::vector<std::string>& number) {
+  if (wanted.empty() || number.empty() || wanted.back() != number.back()) return false;
   std::size_t i = 0;
-  for (const auto& h : have)
-    if (i < want.size() && h == want[i]) ++i;
-  return i == want.size();
+  for (const auto& h : number)
+    if (i < wanted.size() && h == wanted[i]) ++i;
+  return i == wanted.size();
 }
-
-}  // namespace
 
 Requirement parse_requirement(const std::string& expr) {
   static const char* ops[] = {"<=", ">=", "==", "!=", "<", ">"};
@@ -99,20 +105,22 @@ Requirement parse_requirement(const std::string& expr) {
 }
 
 RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::json& results) {
-  std::vector<Leaf> leaves;
+  std::vector<RequirementLeaf> leaves;
   std::vector<std::string> segs;
-  flatten(results, segs, leaves);
-  const auto want = split_path(r.path);
+  nlohmann::json::json_pointer ptr;
+  requirement_leaves(results, segs, ptr, leaves);
+  const auto want = split_requirement_path(r.path);
   // A fit's diagnostics (observation counts, RMS, ...) are matched only when the path names
   // them: a bare 'n' means the flow index n of a rheology fit, never the number of samples.
   const bool wants_diagnostics = std::find(want.begin(), want.end(), "diagnostics") != want.end();
-  auto is_diagnostic = [](const Leaf& l) {
+  auto is_diagnostic = [](const RequirementLeaf& l) {
     return std::find(l.segments.begin(), l.segments.end(), "diagnostics") != l.segments.end();
   };
-  std::vector<const Leaf*> found;
-  std::vector<const Leaf*> diagnostics_only;
+  std::vector<const RequirementLeaf*> found;
+  std::vector<const RequirementLeaf*> diagnostics_only;
   for (const auto& l : leaves)
-    if (matches(want, l.segments)) (wants_diagnostics || !is_diagnostic(l) ? found : diagnostics_only).push_back(&l);
+    if (requirement_path_matches(want, l.segments))
+      (wants_diagnostics || !is_diagnostic(l) ? found : diagnostics_only).push_back(&l);
   if (found.empty() && !diagnostics_only.empty())
     throw InputError(fmt::format("--require '{}': no result named '{}'; the fit diagnostic '{}' is compared only when "
                                  "named with its path",
@@ -120,14 +128,17 @@ RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::js
   if (found.empty()) throw InputError(fmt::format("--require '{}': no number named '{}' in the results", r.expression, r.path));
   // Prefer a number that is not inside an array (a pooled or summary value over one of a
   // list), then the shortest path, then a fitted parameter (a member of a "params" object).
-  auto is_param = [](const Leaf* l) { return l->segments.size() >= 2 && l->segments[l->segments.size() - 2] == "params"; };
-  auto in_array = [](const Leaf* l) {
+  auto is_param = [](const RequirementLeaf* l) {
+    return l->segments.size() >= 2 && l->segments[l->segments.size() - 2] == "params";
+  };
+  auto in_array = [](const RequirementLeaf* l) {
     return std::any_of(l->segments.begin(), l->segments.end(), [](const std::string& s) { return s.front() == '['; });
   };
-  auto key = [&](const Leaf* l) { return std::make_tuple(in_array(l), l->segments.size(), !is_param(l)); };
-  std::stable_sort(found.begin(), found.end(), [&](const Leaf* a, const Leaf* b) { return key(a) < key(b); });
+  auto key = [&](const RequirementLeaf* l) { return std::make_tuple(in_array(l), l->segments.size(), !is_param(l)); };
+  std::stable_sort(found.begin(), found.end(),
+                   [&](const RequirementLeaf* a, const RequirementLeaf* b) { return key(a) < key(b); });
   std::vector<std::string> ties;
-  for (const Leaf* l : found)
+  for (const RequirementLeaf* l : found)
     if (key(l) == key(found.front()) && l->value != found.front()->value) ties.push_back(l->path);
   if (!ties.empty()) {
     std::string list = found.front()->path;
@@ -137,6 +148,7 @@ RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::js
   RequirementOutcome o;
   o.requirement = r;
   o.resolved_path = found.front()->path;
+  o.pointer = found.front()->pointer;
   o.value = found.front()->value;
   const double v = o.value, t = r.threshold;
   if (r.op == "<") o.met = v < t;

@@ -50,8 +50,14 @@ nlohmann::json parse_results_json(std::string_view text, const std::string& path
   } catch (const nlohmann::json::parse_error& e) {
     // e.byte is 1-based: the byte at which the parser stopped.
     const std::size_t pos = e.byte > 0 ? e.byte - 1 : 0;
+    // "[json.exception.parse_error.101] parse error at line 1, column 1: syntax error while parsing
+    // value - invalid literal; last read: 'g'": the location is ours, the rest says what is wrong.
     std::string what = e.what();
-    if (const auto colon = what.rfind(": "); colon != std::string::npos) what = what.substr(colon + 2);
+    if (const auto column = what.find(", column "); column != std::string::npos) {
+      if (const auto colon = what.find(": ", column); colon != std::string::npos) what = what.substr(colon + 2);
+    } else if (const auto bracket = what.find("] "); bracket != std::string::npos) {
+      what = what.substr(bracket + 2);
+    }
     throw InputError(fmt::format("not valid JSON: {}", what), results_json_location(path, text, pos));
   } catch (const nlohmann::json::out_of_range& e) {
     // "number overflow parsing '1e400'": a number beyond a double. Locate the number.
@@ -68,10 +74,18 @@ nlohmann::json parse_results_json(std::string_view text, const std::string& path
   }
 }
 
-nlohmann::json read_results_json(const std::string& path) {
-  const std::string bytes = ident::read_file_bytes(path);
-  auto j = parse_results_json(bytes, path);
-  check_results_envelope(j, bytes, path);
+nlohmann::json read_json_file(const std::string& path, std::string* bytes) {
+  std::string text = ident::read_file_bytes(path);
+  auto j = parse_results_json(text, path);
+  if (bytes != nullptr) *bytes = std::move(text);
+  return j;
+}
+
+nlohmann::json read_results_json(const std::string& path, std::string* bytes) {
+  std::string text;
+  auto j = read_json_file(path, &text);
+  check_results_envelope(j, text, path);
+  if (bytes != nullptr) *bytes = std::move(text);
   return j;
 }
 

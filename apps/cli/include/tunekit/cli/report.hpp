@@ -24,6 +24,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tunekit/cli/json_access.hpp"  // json_at(): the summary rows' dotted paths
 #include "tunekit/cli/plots.hpp"
 
 namespace tunekit::cli {
@@ -54,8 +55,5 @@ std::string write_report(const std::string& run_dir);
 
 /// Formats a number for display with 4 significant digits ("0.4512", "1.25e+04").
 std::string display_number(double v);
-
-/// Looks up "a.b[2].c" in a JSON value; nullptr when absent.
-const nlohmann::json* json_at(const nlohmann::json& root, const std::string& path);
 
 }  // namespace tunekit::cli
