@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Dense>
+
 #include "tunekit/fitting/first_order.hpp"
 
 namespace tunekit::fitting::first_order_detail {
@@ -28,6 +30,10 @@ StepModelPoint step_model_at(const StepRecord& r, std::size_t i, double K, doubl
 /// row-major with `width` columns, K, tau, theta and y0 in columns cols[0..3].
 void step_residuals(const StepRecord& r, double K, double tau, double theta, double y0, double* res, double* jac,
                     std::size_t width, const std::size_t cols[4]);
+
+/// The Gauss-Newton normal equations J'J and J'r of one step at p = {K, tau_s, theta_s, y0};
+/// returns the residual sum of squares.
+double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr);
 
 /// FitError when tau_s ran to its bound or is not determined, or theta_s ran to its bound.
 void check_identifiable(const FitResult& f, const StepRecord* rec, double duration, bool have_stderr);
