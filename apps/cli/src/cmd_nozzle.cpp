@@ -11,6 +11,7 @@
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
+#include "tunekit/cli/results_json.hpp"
 #include "tunekit/cli/nozzle_command.hpp"
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/core/error.hpp"
@@ -145,12 +146,12 @@ NozzleForward compute_nozzle_forward(const NozzleOptions& a, NozzleOutcome& outc
     }
   } else {
     if (!std::isfinite(T_K)) throw InputError("--rheology needs the melt --temperature (degC)");
-    const std::string bytes = ident::read_file_bytes(a.rheology_json);
+    std::string bytes;
+    const nlohmann::json j = read_json_file(a.rheology_json, &bytes);  // a syntax error is located there
     outcome.input_path = a.rheology_json;
     outcome.input_sha256 = sha256_hex(bytes);
     outcome.input_size_bytes = bytes.size();
     try {
-      const nlohmann::json j = nlohmann::json::parse(bytes);
       const auto& r = j.contains("results") ? j["results"] : j;
       spec = fitting::parse_viscosity_spec_name(r.at("model").get<std::string>());
       for (const auto& [k, v] : r.at("params").items()) spec.values[k] = v.at("value").get<double>();
