@@ -26,9 +26,10 @@ extern "C" void on_signal(int) { g_stop = true; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"tunekit-sim: a simulated 3D printer (Marlin-flavoured G-code on a pseudo-terminal) with a liquefier,\n"
-               "a load cell, resonant axes and an accelerometer, for tunekit's experiment protocols.",
-               "tunekit-sim"};
+  CLI::App app{
+      "tunekit-sim: a simulated 3D printer (Marlin-flavoured G-code on a pseudo-terminal) with a liquefier,\n"
+      "a load cell, resonant axes and an accelerometer, for tunekit's experiment protocols.",
+      "tunekit-sim"};
   std::string link, truth_path, received_path;
   std::vector<std::string> options;
   app.add_option("--link", link, "Also make this symlink to the pseudo-terminal (like Klipper's /tmp/printer)");

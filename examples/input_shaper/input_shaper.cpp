@@ -28,12 +28,12 @@ int main(int argc, char** argv) {
   std::printf("resonance %.1f Hz, damping ratio %.3f\n", freq_hz, zeta);
 
   try {
-    for (id::ShaperType type : {id::ShaperType::zv, id::ShaperType::mzv, id::ShaperType::ei,
-                                id::ShaperType::two_hump_ei}) {
+    for (id::ShaperType type :
+         {id::ShaperType::zv, id::ShaperType::mzv, id::ShaperType::ei, id::ShaperType::two_hump_ei}) {
       // 1. The impulse sequence, designed at the measured frequency and damping. The EI family
       //    is designed as Klipper runs it (Singhose's damped fits); vibration tolerance 5 %.
-      const id::Shaper s = id::design_shaper(type, freq_hz, zeta, id::kDefaultVibrationTolerance,
-                                             id::EiDesign::damped_fit);
+      const id::Shaper s =
+          id::design_shaper(type, freq_hz, zeta, id::kDefaultVibrationTolerance, id::EiDesign::damped_fit);
       std::printf("%-8s %zu impulses over %5.1f ms:", id::to_string(type).c_str(), s.amplitudes.size(),
                   1e3 * s.duration_s());
       for (std::size_t i = 0; i < s.amplitudes.size(); ++i)
@@ -44,11 +44,12 @@ int main(int argc, char** argv) {
       //    where the shaper was designed for, e.g. because the toolhead's load changed.
       // 3. Cost: smoothing at 5000 mm/s^2 (square-corner velocity 5 mm/s), and the largest
       //    acceleration with at most 0.12 mm of smoothing.
-      std::printf("         vibration left at 0.8 f %4.1f %%, at f %4.1f %%, at 1.2 f %4.1f %%; "
-                  "smoothing %.3f mm; max accel %.0f mm/s^2\n",
-                  100 * id::residual_vibration(s, 0.8 * freq_hz, zeta), 100 * id::residual_vibration(s, freq_hz, zeta),
-                  100 * id::residual_vibration(s, 1.2 * freq_hz, zeta), id::shaper_smoothing(s, 5000.0, 5.0),
-                  id::shaper_max_accel(s, 5.0, 0.12));
+      std::printf(
+          "         vibration left at 0.8 f %4.1f %%, at f %4.1f %%, at 1.2 f %4.1f %%; "
+          "smoothing %.3f mm; max accel %.0f mm/s^2\n",
+          100 * id::residual_vibration(s, 0.8 * freq_hz, zeta), 100 * id::residual_vibration(s, freq_hz, zeta),
+          100 * id::residual_vibration(s, 1.2 * freq_hz, zeta), id::shaper_smoothing(s, 5000.0, 5.0),
+          id::shaper_max_accel(s, 5.0, 0.12));
     }
   } catch (const std::exception& e) {  // e.g. a non-positive frequency or damping ratio >= 1
     std::fprintf(stderr, "input_shaper: %s\n", e.what());

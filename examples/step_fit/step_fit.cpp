@@ -24,10 +24,10 @@ int main() {
   // 1. The log: time (s) and force (N), and when and by how much the feed rate changed.
   //    Samples before the step give y0 and let the fit see where the response starts.
   fit::StepRecord rec;
-  rec.t_step = 2.0;               // s
-  rec.du = 1.5;                   // mm/s: the feed rate went from 1.0 to 2.5 mm/s
-  rec.output_unit = "N";          // unit of y and y0
-  rec.gain_unit = "N/(mm/s)";     // unit of K
+  rec.t_step = 2.0;                                               // s
+  rec.du = 1.5;                                                   // mm/s: the feed rate went from 1.0 to 2.5 mm/s
+  rec.output_unit = "N";                                          // unit of y and y0
+  rec.gain_unit = "N/(mm/s)";                                     // unit of K
   const double K = 12.0, tau_s = 0.6, theta_s = 0.15, y0 = 15.0;  // the "unknown" truth
   std::mt19937 rng(1);
   std::normal_distribution<double> noise(0.0, 0.15);
@@ -53,8 +53,8 @@ int main() {
   //    correlated, i.e. the model misses some dynamics).
   std::printf("model %s, %d samples\n", result.model.c_str(), result.diagnostics.num_observations);
   for (const fit::Param& p : result.params)
-    std::printf("%-8s %9.4f %-9s (95 %% interval %.4f to %.4f)\n", p.name.c_str(), p.value, p.unit.c_str(),
-                p.ci95_lo, p.ci95_hi);
+    std::printf("%-8s %9.4f %-9s (95 %% interval %.4f to %.4f)\n", p.name.c_str(), p.value, p.unit.c_str(), p.ci95_lo,
+                p.ci95_hi);
   std::printf("r2 %.5f, rms %.4f N, residual whiteness p %.3f\n", result.diagnostics.r2, result.diagnostics.rms,
               result.diagnostics.whiteness_p);
   return 0;

@@ -66,7 +66,8 @@ int main() {
     // 4. Use the fits: a ViscositySpec evaluates the fitted model anywhere.
     const double gamma = 1000.0;
     std::printf("viscosity at %.0f 1/s: Cross %.1f Pa.s, power law %.1f Pa.s\n", gamma,
-                fit::spec_from_fit(cross_fit).viscosity(gamma, T_K), fit::spec_from_fit(power_fit).viscosity(gamma, T_K));
+                fit::spec_from_fit(cross_fit).viscosity(gamma, T_K),
+                fit::spec_from_fit(power_fit).viscosity(gamma, T_K));
   } catch (const std::exception& e) {  // tunekit's InputError / FitError say what is wrong
     std::fprintf(stderr, "viscosity_fit: %s\n", e.what());
     return 1;

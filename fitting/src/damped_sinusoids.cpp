@@ -27,8 +27,8 @@ std::vector<PencilComponent> matrix_pencil(const std::vector<double>& y, double 
     for (int c = 0; c <= L; ++c) Y(r, c) = y[static_cast<std::size_t>(r + c)];
   Eigen::BDCSVD<Mat> svd(Y, Eigen::ComputeThinV);
   const Mat V = svd.matrixV().leftCols(order);
-  const Mat V1 = V.topRows(L);      // rows 0..L-1
-  const Mat V2 = V.bottomRows(L);   // rows 1..L
+  const Mat V1 = V.topRows(L);     // rows 0..L-1
+  const Mat V2 = V.bottomRows(L);  // rows 1..L
   // The poles z are the eigenvalues of pinv(V1) V2 (order x order).
   const Mat A = V1.completeOrthogonalDecomposition().solve(V2);
   Eigen::EigenSolver<Mat> es(A);
@@ -74,7 +74,8 @@ constexpr double kMaxDampedZeta = 0.9;
 
 FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
                                double freq_rel_bound) {
-  if (!(freq_rel_bound > 0 && freq_rel_bound < 1)) throw InputError("damped-sinusoid fit: the frequency bound must be in (0, 1)");
+  if (!(freq_rel_bound > 0 && freq_rel_bound < 1))
+    throw InputError("damped-sinusoid fit: the frequency bound must be in (0, 1)");
   const int m = static_cast<int>(y.size());
   const int nc = static_cast<int>(start.size());
   if (nc == 0) throw InputError("damped-sinusoid fit: no components to fit");
@@ -108,7 +109,8 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
     const auto& s = start[static_cast<std::size_t>(i)];
     prob.params.push_back({fmt::format("f{}_hz", i), "Hz", s.freq_hz, (1 - freq_rel_bound) * s.freq_hz,
                            std::min((1 + freq_rel_bound) * s.freq_hz, nyquist)});
-    prob.params.push_back({fmt::format("zeta{}", i), "1", z0[static_cast<std::size_t>(i)], kMinDampedZeta, kMaxDampedZeta});
+    prob.params.push_back(
+        {fmt::format("zeta{}", i), "1", z0[static_cast<std::size_t>(i)], kMinDampedZeta, kMaxDampedZeta});
     prob.params.push_back({fmt::format("a{}", i), "", std::isfinite(lin(2 * i)) ? lin(2 * i) : 0.0});
     prob.params.push_back({fmt::format("b{}", i), "", std::isfinite(lin(2 * i + 1)) ? lin(2 * i + 1) : 0.0});
   }

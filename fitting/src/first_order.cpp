@@ -28,8 +28,8 @@ void check_record(const StepRecord& r, const std::string& what) {
   for (std::size_t i = 0; i < r.t.size(); ++i) {
     if (!std::isfinite(r.t[i]) || !std::isfinite(r.y[i])) throw InputError(what + ": NaN or infinite sample");
     if (i > 0 && !(r.t[i] > r.t[i - 1]))
-      throw InputError(what + ": time is not increasing at sample " + std::to_string(i + 1) + " (t = " + text::g4(r.t[i]) +
-                       " s)");
+      throw InputError(what + ": time is not increasing at sample " + std::to_string(i + 1) +
+                       " (t = " + text::g4(r.t[i]) + " s)");
   }
   if (!(std::abs(r.du) > 0) || !std::isfinite(r.du)) throw InputError(what + ": the input step size is zero");
   const auto [lo, hi] = std::minmax_element(r.y.begin(), r.y.end());
@@ -90,7 +90,6 @@ std::array<double, 3> line_fit(const std::vector<double>& t, const std::vector<d
   const double r2 = szz > 0 ? (stz * stz) / (stt * szz) : 0;
   return {mz - b * mt, b, r2};
 }
-
 
 // Accumulates J^T J (4x4), J^T r and the residual sum of squares for one record without storing
 // the Jacobian (100k samples cost a few milliseconds).
@@ -328,9 +327,9 @@ FitResult fit_step(const StepRecord& r, StepModel model, const LsqOptions& optio
   for (double t : r.t)
     if (t < r.t_step) ++before;
   if (model == StepModel::fopdt && before < 3)
-    throw FitError(
-        "fopdt: theta_s and y0 cannot both be identified without samples before the step (" + std::to_string(before) +
-        " found); include the steady state before the step or use the first-order model (fo)");
+    throw FitError("fopdt: theta_s and y0 cannot both be identified without samples before the step (" +
+                   std::to_string(before) +
+                   " found); include the steady state before the step or use the first-order model (fo)");
   const double duration = response_duration(r);
   const StepStart st = log_incomplete_start(r);
 
@@ -346,11 +345,11 @@ FitResult fit_step(const StepRecord& r, StepModel model, const LsqOptions& optio
   auto solve_from = [&](const StepStart& s) {
     LsqProblem prob;
     const double tmin = r.t.size() > 1 ? (r.t[1] - r.t[0]) * 1e-3 : 1e-9;
-    prob.params = {{"K", r.gain_unit, s.K},
-                   {"tau_s", "s", s.tau_s, std::max(tmin, 1e-9), kTauMaxFactor * duration},
-                   {"theta_s", "s", model == StepModel::fo ? 0.0 : s.theta_s, 0.0, 0.9 * duration,
-                    model == StepModel::fo},
-                   {"y0", r.output_unit, s.y0}};
+    prob.params = {
+        {"K", r.gain_unit, s.K},
+        {"tau_s", "s", s.tau_s, std::max(tmin, 1e-9), kTauMaxFactor * duration},
+        {"theta_s", "s", model == StepModel::fo ? 0.0 : s.theta_s, 0.0, 0.9 * duration, model == StepModel::fo},
+        {"y0", r.output_unit, s.y0}};
     {
       double p[4], lo[4], hi[4];
       bool fixed[4];

@@ -144,7 +144,8 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
   const int k = static_cast<int>(free_idx.size());
   Eigen::MatrixXd A(k, k);
   for (int a = 0; a < k; ++a)
-    for (int b = 0; b < k; ++b) A(a, b) = N(free_idx[static_cast<std::size_t>(a)], free_idx[static_cast<std::size_t>(b)]);
+    for (int b = 0; b < k; ++b)
+      A(a, b) = N(free_idx[static_cast<std::size_t>(a)], free_idx[static_cast<std::size_t>(b)]);
   Eigen::VectorXd d(k);
   for (int a = 0; a < k; ++a) d(a) = 1.0 / std::sqrt(std::max(A(a, a), 1e-300));
   const Eigen::MatrixXd S = d.asDiagonal() * A * d.asDiagonal();

@@ -24,12 +24,18 @@ nlohmann::json to_json(const Param& p) {
 }
 
 nlohmann::json to_json(const Diagnostics& d) {
-  return {{"converged", d.converged},     {"n", d.num_observations},
-          {"k", d.num_parameters},        {"iterations", d.iterations},
-          {"rss", d.rss},                 {"rms", d.rms},
-          {"r2", d.r2},                   {"aic", d.aic},
-          {"bic", d.bic},                 {"whiteness_p", d.whiteness_p},
-          {"whiteness_lags", d.whiteness_lags}, {"solver", d.solver}};
+  return {{"converged", d.converged},
+          {"n", d.num_observations},
+          {"k", d.num_parameters},
+          {"iterations", d.iterations},
+          {"rss", d.rss},
+          {"rms", d.rms},
+          {"r2", d.r2},
+          {"aic", d.aic},
+          {"bic", d.bic},
+          {"whiteness_p", d.whiteness_p},
+          {"whiteness_lags", d.whiteness_lags},
+          {"solver", d.solver}};
 }
 
 nlohmann::json to_json(const FitResult& r) {

@@ -21,8 +21,7 @@ struct SearchContext {
 
   std::vector<double> full(const std::vector<double>& z) const {
     std::vector<double> x = base;
-    for (std::size_t k = 0; k < free_idx.size(); ++k)
-      x[free_idx[k]] = log_scale[k] ? std::exp(z[k]) : z[k];
+    for (std::size_t k = 0; k < free_idx.size(); ++k) x[free_idx[k]] = log_scale[k] ? std::exp(z[k]) : z[k];
     return x;
   }
 
@@ -134,8 +133,8 @@ FitResult solve_with_global_start(const std::string& model, LsqProblem prob, con
   const auto gs = global_start(search != nullptr ? *search : prob, global);
   for (std::size_t j = 0; j < prob.params.size(); ++j) prob.params[j].start = gs.start[j];
   auto fit = solve_least_squares(model, prob, options);
-  fit.diagnostics.solver = "global start: CRS2-LM + BOBYQA, " + std::to_string(gs.evaluations) +
-                           " evaluations; then " + fit.diagnostics.solver;
+  fit.diagnostics.solver = "global start: CRS2-LM + BOBYQA, " + std::to_string(gs.evaluations) + " evaluations; then " +
+                           fit.diagnostics.solver;
   return fit;
 }
 

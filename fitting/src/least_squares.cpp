@@ -95,8 +95,8 @@ double residual_variance_floor(const std::vector<double>& observed) {
   return sigma * sigma;
 }
 
-void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res,
-                               const std::vector<double>& observed, bool time_ordered) {
+void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res, const std::vector<double>& observed,
+                               bool time_ordered) {
   auto& d = r.diagnostics;
   const double n = static_cast<double>(res.size());
   double rss = 0;
@@ -148,8 +148,8 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
     else ++n_free;
   }
   if (prob.num_residuals < n_free)
-    throw InputError(model + ": " + std::to_string(prob.num_residuals) + " data points for " +
-                     std::to_string(n_free) + " free parameters (" + free_names(prob) + ")");
+    throw InputError(model + ": " + std::to_string(prob.num_residuals) + " data points for " + std::to_string(n_free) +
+                     " free parameters (" + free_names(prob) + ")");
 
   std::vector<double> x(static_cast<std::size_t>(n));
   for (int j = 0; j < n; ++j) {
@@ -192,8 +192,8 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
         !summary.IsSolutionUsable())
       throw FitError(model + ": the solver failed: " + summary.message + " (" + summary.BriefReport() + ")");
     if (summary.termination_type == ceres::NO_CONVERGENCE && opt.require_convergence)
-      throw FitError(model + ": did not converge in " + std::to_string(opt.max_iterations) +
-                     " iterations (" + summary.BriefReport() + ")");
+      throw FitError(model + ": did not converge in " + std::to_string(opt.max_iterations) + " iterations (" +
+                     summary.BriefReport() + ")");
   }
   for (double v : x)
     if (!std::isfinite(v)) throw FitError(model + ": the solution is not finite (" + r.diagnostics.solver + ")");
@@ -215,8 +215,7 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
 
   std::vector<double> cov(static_cast<std::size_t>(n * n), kNaN);
   if (opt.compute_covariance && n_free > 0) {
-    if (dof <= 0)
-      throw FitError(model + ": as many parameters as data points; no uncertainty can be estimated");
+    if (dof <= 0) throw FitError(model + ": as many parameters as data points; no uncertainty can be estimated");
     ceres::Covariance::Options co;
     co.algorithm_type = ceres::DENSE_SVD;
     co.min_reciprocal_condition_number = opt.min_reciprocal_condition;

@@ -163,13 +163,15 @@ ModalFit fit_modal_psd(const std::vector<double>& freq, const std::vector<double
         eval_h(p, modes, fj[b * nk + j], h, jac != nullptr ? dh.data() : nullptr);
         m += w * std::norm(h);
         if (jac != nullptr)
-          for (int q = 0; q < 3 * modes + 1; ++q) dm[static_cast<std::size_t>(q)] += w * 2 * std::real(std::conj(h) * dh[static_cast<std::size_t>(q)]);
+          for (int q = 0; q < 3 * modes + 1; ++q)
+            dm[static_cast<std::size_t>(q)] += w * 2 * std::real(std::conj(h) * dh[static_cast<std::size_t>(q)]);
       }
       if (!(m > 0) || !std::isfinite(m)) return false;
       r[b] = std::log(m) - logy[b];
       if (jac != nullptr) {
         dm[static_cast<std::size_t>(np - 1)] = 1.0;
-        for (int q = 0; q < np; ++q) jac[b * static_cast<std::size_t>(np) + static_cast<std::size_t>(q)] = dm[static_cast<std::size_t>(q)] / m;
+        for (int q = 0; q < np; ++q)
+          jac[b * static_cast<std::size_t>(np) + static_cast<std::size_t>(q)] = dm[static_cast<std::size_t>(q)] / m;
       }
     }
     return true;
@@ -207,8 +209,9 @@ ModalFit fit_modal_psd(const std::vector<double>& freq, const std::vector<double
       last_error = e.message();
       continue;
     }
-    if (stage > 0) out.warnings.push_back("modal fit: " + std::string(stage == 1 ? "noise floor" : "noise floor and direct term") +
-                                          " held fixed (" + last_error + ")");
+    if (stage > 0)
+      out.warnings.push_back("modal fit: " + std::string(stage == 1 ? "noise floor" : "noise floor and direct term") +
+                             " held fixed (" + last_error + ")");
     // Residuals at the solution for the inflation factor and the model curve.
     std::vector<double> p;
     for (const auto& q : out.fit.params) p.push_back(q.value);
@@ -277,8 +280,10 @@ ModalFit fit_modal_frf(const std::vector<double>& freq, const std::vector<cd>& h
       r[2 * b + 1] = e.imag();
       if (jac != nullptr)
         for (int q = 0; q < np; ++q) {
-          jac[(2 * b) * static_cast<std::size_t>(np) + static_cast<std::size_t>(q)] = dm[static_cast<std::size_t>(q)].real() * scale;
-          jac[(2 * b + 1) * static_cast<std::size_t>(np) + static_cast<std::size_t>(q)] = dm[static_cast<std::size_t>(q)].imag() * scale;
+          jac[(2 * b) * static_cast<std::size_t>(np) + static_cast<std::size_t>(q)] =
+              dm[static_cast<std::size_t>(q)].real() * scale;
+          jac[(2 * b + 1) * static_cast<std::size_t>(np) + static_cast<std::size_t>(q)] =
+              dm[static_cast<std::size_t>(q)].imag() * scale;
         }
     }
     return true;

@@ -18,12 +18,12 @@ using Jet = ceres::Jet<double, kMaxParams>;
 
 template <class T>
 T eval_model(const std::string& name, const T* b, double x) {
-  using std::atan;
-  using std::exp;
-  using std::pow;
   using ceres::atan;
   using ceres::exp;
   using ceres::pow;
+  using std::atan;
+  using std::exp;
+  using std::pow;
   const T one(1.0);
   if (name == "Misra1a" || name == "BoxBOD") return b[0] * (one - exp(-b[1] * x));
   if (name == "Misra1b") return b[0] * (one - pow(one + b[1] * x / 2.0, -2.0));
@@ -69,9 +69,9 @@ std::vector<double> numbers_in(const std::string& s) {
 }  // namespace
 
 std::vector<std::string> nist_supported_problems() {
-  return {"Misra1a", "Chwirut2", "Chwirut1", "Lanczos3", "Gauss1",   "Gauss2",  "DanWood", "Misra1b",
-          "Kirby2",  "Hahn1",    "MGH17",    "Lanczos1", "Lanczos2", "Gauss3",  "Misra1c", "Misra1d",
-          "Roszman1", "MGH09",   "Thurber",  "BoxBOD",   "Rat42",    "MGH10",   "Eckerle4", "Rat43", "Bennett5"};
+  return {"Misra1a", "Chwirut2", "Chwirut1", "Lanczos3", "Gauss1",   "Gauss2",  "DanWood", "Misra1b",  "Kirby2",
+          "Hahn1",   "MGH17",    "Lanczos1", "Lanczos2", "Gauss3",   "Misra1c", "Misra1d", "Roszman1", "MGH09",
+          "Thurber", "BoxBOD",   "Rat42",    "MGH10",    "Eckerle4", "Rat43",   "Bennett5"};
 }
 
 double nist_model(const std::string& name, const double* b, double x) { return eval_model<double>(name, b, x); }
@@ -110,9 +110,11 @@ NistProblem read_nist_problem(const std::string& path) {
       const auto eq = line.find('=');
       std::string lhs = line.substr(0, eq == std::string::npos ? 0 : eq);
       lhs.erase(std::remove(lhs.begin(), lhs.end(), ' '), lhs.end());
-      if (eq != std::string::npos && lhs.size() >= 2 && lhs[0] == 'b' && std::isdigit(static_cast<unsigned char>(lhs[1]))) {
+      if (eq != std::string::npos && lhs.size() >= 2 && lhs[0] == 'b' &&
+          std::isdigit(static_cast<unsigned char>(lhs[1]))) {
         const auto v = numbers_in(line.substr(eq + 1));
-        if (v.size() != 4) throw InputError("expected start 1, start 2, value, std. deviation", path + ":" + std::to_string(ln));
+        if (v.size() != 4)
+          throw InputError("expected start 1, start 2, value, std. deviation", path + ":" + std::to_string(ln));
         p.start1.push_back(v[0]);
         p.start2.push_back(v[1]);
         p.certified.push_back(v[2]);

@@ -140,12 +140,14 @@ PowerLawCoefficients holtrup_peek_power_law(double T) {
 FitResult fit_nozzle_rheology(const NozzleFlowData& d, PressureModel model, const NozzleGeometry& g, double T_ref_K) {
   validate(g);
   const std::size_t n = d.flow_m3_s.size();
-  if (d.pressure_Pa.size() != n || d.temperature_K.size() != n) throw InputError("nozzle data columns differ in length");
+  if (d.pressure_Pa.size() != n || d.temperature_K.size() != n)
+    throw InputError("nozzle data columns differ in length");
   std::vector<double> levels;
   for (std::size_t i = 0; i < n; ++i) {
     if (!(d.flow_m3_s[i] > 0)) throw InputError("point " + std::to_string(i + 1) + ": flows must be positive");
     if (!(d.pressure_Pa[i] > 0)) throw InputError("point " + std::to_string(i + 1) + ": pressures must be positive");
-    if (!(d.temperature_K[i] > 0)) throw InputError("point " + std::to_string(i + 1) + ": temperatures must be positive (K)");
+    if (!(d.temperature_K[i] > 0))
+      throw InputError("point " + std::to_string(i + 1) + ": temperatures must be positive (K)");
     bool seen = false;
     for (double l : levels) seen = seen || std::abs(l - d.temperature_K[i]) <= 0.05;
     if (!seen) levels.push_back(d.temperature_K[i]);
@@ -157,8 +159,8 @@ FitResult fit_nozzle_rheology(const NozzleFlowData& d, PressureModel model, cons
   const double inf = std::numeric_limits<double>::infinity();
   LsqProblem prob;
   // ln K (or ln mu) is estimated; exp-transformed below.
-  prob.params.push_back({newtonian ? "mu_Pa_s" : "K_Pa_s_n", newtonian ? "Pa.s" : "Pa.s^n", std::log(1e3), std::log(1e-2),
-                         std::log(1e9)});
+  prob.params.push_back({newtonian ? "mu_Pa_s" : "K_Pa_s_n", newtonian ? "Pa.s" : "Pa.s^n", std::log(1e3),
+                         std::log(1e-2), std::log(1e9)});
   if (!newtonian) prob.params.push_back({"n", "1", 0.5, 0.05, 1.0});
   if (shifted) {
     prob.params.push_back({"Ea_J_per_mol", "J/mol", 1e5, 1e3, 1e6});

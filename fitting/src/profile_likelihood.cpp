@@ -35,7 +35,8 @@ class PlProfile {
     if (auto it = solved_.find(v); it != solved_.end()) return it->second.first;
     // Warm start from the nearest point already solved.
     auto it = solved_.lower_bound(v);
-    if (it == solved_.end() || (it != solved_.begin() && std::abs(std::prev(it)->first - v) < std::abs(it->first - v))) --it;
+    if (it == solved_.end() || (it != solved_.begin() && std::abs(std::prev(it)->first - v) < std::abs(it->first - v)))
+      --it;
     const auto& start = it->second.second;
     for (std::size_t q = 0; q < prob_.params.size(); ++q) prob_.params[q].start = start[q];
     prob_.params[j_].start = v;
@@ -69,7 +70,8 @@ struct PlSetup {
 };
 
 PlSetup pl_setup(const LsqProblem& problem, const FitResult& fit, int index, const ProfileOptions& o) {
-  if (index < 0 || static_cast<std::size_t>(index) >= fit.params.size() || problem.params[static_cast<std::size_t>(index)].fixed)
+  if (index < 0 || static_cast<std::size_t>(index) >= fit.params.size() ||
+      problem.params[static_cast<std::size_t>(index)].fixed)
     throw InputError("profile likelihood: parameter " + std::to_string(index) + " is not a free parameter");
   const auto& p = fit.params[static_cast<std::size_t>(index)];
   if (!(p.std_error > 0) || !std::isfinite(p.std_error))
@@ -86,8 +88,8 @@ PlSetup pl_setup(const LsqProblem& problem, const FitResult& fit, int index, con
 }
 
 // One end: direction +1 (upper) or -1 (lower).
-std::pair<double, bool> pl_end(PlProfile& prof, const ParamSpec& spec, double estimate, const PlSetup& s,
-                                    int dir, const ProfileOptions& o) {
+std::pair<double, bool> pl_end(PlProfile& prof, const ParamSpec& spec, double estimate, const PlSetup& s, int dir,
+                               const ProfileOptions& o) {
   const double bound = dir > 0 ? spec.upper : spec.lower;
   auto g = [&](double v) { return (prof.rss(v) - s.rss_min) / s.s2 - s.threshold; };
   double inside = estimate, step = s.half_width;
@@ -147,7 +149,8 @@ int apply_profile_intervals(const LsqProblem& problem, FitResult& fit, const Pro
     for (std::size_t k = 0; k < n; ++k)
       if (k != j && !fit.params[k].fixed) max_r = std::max(max_r, std::abs(correlation(fit, j, k)));
     const auto s = pl_setup(problem, fit, static_cast<int>(j), o);
-    bool unreliable = max_r > o.max_correlation || p.value - s.half_width <= spec.lower || p.value + s.half_width >= spec.upper;
+    bool unreliable =
+        max_r > o.max_correlation || p.value - s.half_width <= spec.lower || p.value + s.half_width >= spec.upper;
     PlProfile prof(problem, fit, static_cast<int>(j), o);
     if (!unreliable) {
       // Curvature: at the Wald ends the profile must sit at the threshold (it does exactly for a
@@ -171,7 +174,9 @@ int apply_profile_intervals(const LsqProblem& problem, FitResult& fit, const Pro
     if (lo_b || hi_b)
       fit.warnings.push_back("the 95 % profile-likelihood interval of " + p.name +
                              " is not closed by the data (it reaches " +
-                             (lo_b && hi_b ? "both ends of the search" : lo_b ? "the lower end of the search" : "the upper end of the search") +
+                             (lo_b && hi_b ? "both ends of the search"
+                              : lo_b       ? "the lower end of the search"
+                                           : "the upper end of the search") +
                              ")");
   }
   return solves;

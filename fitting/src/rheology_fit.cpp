@@ -46,21 +46,26 @@ double default_T_ref(const std::vector<double>& levels) {
 void validate_data(const RheologyData& d) {
   const std::size_t n = d.size();
   if (n == 0) throw InputError("no rheology data points");
-  if (d.viscosity_Pa_s.size() != n || d.temperature_K.size() != n || (!d.pressure_Pa.empty() && d.pressure_Pa.size() != n) ||
-      (!d.weight.empty() && d.weight.size() != n))
+  if (d.viscosity_Pa_s.size() != n || d.temperature_K.size() != n ||
+      (!d.pressure_Pa.empty() && d.pressure_Pa.size() != n) || (!d.weight.empty() && d.weight.size() != n))
     throw InputError("rheology data columns differ in length");
   for (std::size_t i = 0; i < n; ++i) {
-    if (!(d.shear_rate_1_s[i] > 0)) throw InputError(strf("point %zu: the shear rate must be positive (is %g)", i + 1, d.shear_rate_1_s[i]));
-    if (!(d.viscosity_Pa_s[i] > 0)) throw InputError(strf("point %zu: the viscosity must be positive (is %g)", i + 1, d.viscosity_Pa_s[i]));
-    if (!(d.temperature_K[i] > 0)) throw InputError(strf("point %zu: the temperature must be positive in kelvin (is %g)", i + 1, d.temperature_K[i]));
+    if (!(d.shear_rate_1_s[i] > 0))
+      throw InputError(strf("point %zu: the shear rate must be positive (is %g)", i + 1, d.shear_rate_1_s[i]));
+    if (!(d.viscosity_Pa_s[i] > 0))
+      throw InputError(strf("point %zu: the viscosity must be positive (is %g)", i + 1, d.viscosity_Pa_s[i]));
+    if (!(d.temperature_K[i] > 0))
+      throw InputError(
+          strf("point %zu: the temperature must be positive in kelvin (is %g)", i + 1, d.temperature_K[i]));
     if (!d.weight.empty() && !(d.weight[i] > 0)) throw InputError(strf("point %zu: weights must be positive", i + 1));
   }
 }
 
 void finish_params(FitResult& fit, const std::vector<PSpec>& specs) {
-  fit.warnings.erase(std::remove_if(fit.warnings.begin(), fit.warnings.end(),
-                                    [](const std::string& w) { return w.find("ended on its bound") != std::string::npos; }),
-                     fit.warnings.end());
+  fit.warnings.erase(
+      std::remove_if(fit.warnings.begin(), fit.warnings.end(),
+                     [](const std::string& w) { return w.find("ended on its bound") != std::string::npos; }),
+      fit.warnings.end());
   for (std::size_t j = 0; j < specs.size(); ++j) {
     auto& p = fit.params[j];
     const auto& s = specs[j];
@@ -79,14 +84,15 @@ void finish_params(FitResult& fit, const std::vector<PSpec>& specs) {
       if (lo_cut) p.ci95_lo = s.lo;
       if (hi_cut) p.ci95_hi = s.hi;
       if (lo_cut || hi_cut)
-        fit.warnings.push_back(strf("the 95 %% interval of %s reaches its search bound (%.6g %s); the data do not bound it",
-                                    s.name.c_str(), lo_cut ? s.lo : s.hi, s.unit.c_str()));
+        fit.warnings.push_back(
+            strf("the 95 %% interval of %s reaches its search bound (%.6g %s); the data do not bound it",
+                 s.name.c_str(), lo_cut ? s.lo : s.hi, s.unit.c_str()));
     }
     if (!s.fixed) {
       const double lo = s.log ? std::log(s.lo) : s.lo, hi = s.log ? std::log(s.hi) : s.hi;
       if (raw <= lo + 1e-9 * std::max(1.0, std::abs(lo)) || raw >= hi - 1e-9 * std::max(1.0, std::abs(hi)))
         fit.warnings.push_back(strf("%s ended on its bound (%.6g %s); the data do not determine it well",
-                                           s.name.c_str(), p.value, s.unit.c_str()));
+                                    s.name.c_str(), p.value, s.unit.c_str()));
     }
   }
 }
@@ -126,7 +132,8 @@ struct Evaluator {
       case ViscosityModel::power_law: return power_law_viscosity(v[0] * aT, v[1], g);
       case ViscosityModel::cross: return cross_viscosity(v[0] * aT, v[1], v[2], g);
       case ViscosityModel::cross_wlf: return cross_wlf_viscosity({v[0], v[1], v[2], v[3], v[4], v[5], v[6]}, g, T, p);
-      case ViscosityModel::carreau_yasuda: return carreau_yasuda_viscosity(v[0] * aT, v[1] * aT, v[2] * aT, v[3], v[4], g);
+      case ViscosityModel::carreau_yasuda:
+        return carreau_yasuda_viscosity(v[0] * aT, v[1] * aT, v[2] * aT, v[3], v[4], g);
     }
     return kNaN;
   }
@@ -137,7 +144,9 @@ std::vector<PSpec> default_specs(const ViscosityFitOptions& o, const DataStats& 
   const double e_lo = s.eta_min / 10, e_hi = s.eta_max * 1e4;
   const double T_min = s.levels.front();
   switch (o.model) {
-    case ViscosityModel::newtonian: p.push_back({"eta0_Pa_s", "Pa.s", true, s.eta_min / 10, s.eta_max * 10, s.eta_med}); break;
+    case ViscosityModel::newtonian:
+      p.push_back({"eta0_Pa_s", "Pa.s", true, s.eta_min / 10, s.eta_max * 10, s.eta_med});
+      break;
     case ViscosityModel::power_law:
       p.push_back({"K_Pa_s_n", "Pa.s^n", true, 1e-3, 1e10, s.eta_med * std::sqrt(s.g_med)});
       p.push_back({"n", "1", false, 0.01, 1.5, 0.5});
@@ -184,12 +193,14 @@ std::vector<PSpec> default_specs(const ViscosityFitOptions& o, const DataStats& 
   }
   for (const auto& [k, v] : o.fixed) {
     if (std::none_of(p.begin(), p.end(), [&key = k](const PSpec& ps) { return ps.name == key; }))
-      throw InputError(strf("--fix %s: %s has no parameter of that name", k.c_str(), ViscositySpec{o.model, o.shift, {}}.name().c_str()));
+      throw InputError(strf("--fix %s: %s has no parameter of that name", k.c_str(),
+                            ViscositySpec{o.model, o.shift, {}}.name().c_str()));
     (void)v;
   }
   for (const auto& k : o.free)
     if (std::none_of(p.begin(), p.end(), [&](const PSpec& ps) { return ps.name == k; }))
-      throw InputError(strf("--free %s: %s has no parameter of that name", k.c_str(), ViscositySpec{o.model, o.shift, {}}.name().c_str()));
+      throw InputError(strf("--free %s: %s has no parameter of that name", k.c_str(),
+                            ViscositySpec{o.model, o.shift, {}}.name().c_str()));
   return p;
 }
 
@@ -210,9 +221,10 @@ FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) 
   const std::string name = ViscositySpec{o.model, o.shift, {}}.name();
   const bool temp_model = o.model == ViscosityModel::cross_wlf || o.shift != TemperatureShift::none;
   if (!temp_model && st.levels.size() > 1)
-    throw InputError(strf("%s: the data hold %zu temperatures (%.2f..%.2f K); a model without a temperature "
-                                 "shift needs data at one temperature (choose a shift: arrhenius or wlf)",
-                                 name.c_str(), st.levels.size(), st.levels.front(), st.levels.back()));
+    throw InputError(
+        strf("%s: the data hold %zu temperatures (%.2f..%.2f K); a model without a temperature "
+             "shift needs data at one temperature (choose a shift: arrhenius or wlf)",
+             name.c_str(), st.levels.size(), st.levels.front(), st.levels.back()));
   const double T_ref = std::isfinite(o.T_ref_K) ? o.T_ref_K : default_T_ref(st.levels);
   const auto specs = default_specs(o, st, T_ref);
   if (temp_model) {
@@ -226,23 +238,29 @@ FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) 
     }
     if (o.model != ViscosityModel::cross_wlf) ++t_params;  // the reference eta0 / K
     if (st.levels.size() < 2)
-      throw InputError(strf("%s is temperature dependent but the data hold a single temperature (%.2f K); "
-                                   "measure at two or more temperatures or fit a model without a shift",
-                                   name.c_str(), st.levels.front()));
+      throw InputError(
+          strf("%s is temperature dependent but the data hold a single temperature (%.2f K); "
+               "measure at two or more temperatures or fit a model without a shift",
+               name.c_str(), st.levels.front()));
     if (static_cast<int>(st.levels.size()) < t_params)
-      throw InputError(strf("%s: %d temperature parameters need data at %d or more temperatures, the data hold %zu; "
-                                   "hold one with --fix (e.g. --fix D2_K=<glass transition in K>)",
-                                   name.c_str(), t_params, t_params, st.levels.size()));
+      throw InputError(
+          strf("%s: %d temperature parameters need data at %d or more temperatures, the data hold %zu; "
+               "hold one with --fix (e.g. --fix D2_K=<glass transition in K>)",
+               name.c_str(), t_params, t_params, st.levels.size()));
   }
   const int k = free_count(specs);
   if (static_cast<int>(data.size()) <= k)
-    throw InputError(strf("%s: %zu data points for %d free parameters; need more points than parameters",
-                                 name.c_str(), data.size(), k));
+    throw InputError(strf("%s: %zu data points for %d free parameters; need more points than parameters", name.c_str(),
+                          data.size(), k));
 
   LsqProblem prob;
   for (const auto& s : specs) {
-    ParamSpec ps{s.name, s.unit, s.log ? std::log(s.start) : s.start, s.log ? std::log(s.lo) : s.lo,
-                 s.log ? std::log(s.hi) : s.hi, s.fixed};
+    ParamSpec ps{s.name,
+                 s.unit,
+                 s.log ? std::log(s.start) : s.start,
+                 s.log ? std::log(s.lo) : s.lo,
+                 s.log ? std::log(s.hi) : s.hi,
+                 s.fixed};
     if (s.fixed) ps.lower = -kInf, ps.upper = kInf;
     prob.params.push_back(ps);
   }
@@ -272,7 +290,8 @@ FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) 
         for (std::size_t j = 0; j < is_log.size(); ++j) v[j] = is_log[j] ? std::exp(p[j]) : p[j];
         for (std::size_t k = 0; k < idx.size(); ++k) {
           const auto i = idx[k];
-          const double e = ev(v, data.shear_rate_1_s[i], data.temperature_K[i], data.pressure_Pa.empty() ? 0.0 : data.pressure_Pa[i]);
+          const double e = ev(v, data.shear_rate_1_s[i], data.temperature_K[i],
+                              data.pressure_Pa.empty() ? 0.0 : data.pressure_Pa[i]);
           if (!(e > 0) || !std::isfinite(e)) return false;
           r[k] = sw[i] * (std::log(e) - ln_obs[i]);
         }
@@ -380,20 +399,24 @@ FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) 
     // The WLF ridge: with few temperatures D1, D2 and A1 trade off against each other.
     std::vector<std::size_t> t_idx;
     for (std::size_t j = 0; j < specs.size(); ++j)
-      if (!specs[j].fixed && (specs[j].name == "D1_Pa_s" || specs[j].name == "D2_K" || specs[j].name == "A1" || specs[j].name == "A2_K"))
+      if (!specs[j].fixed &&
+          (specs[j].name == "D1_Pa_s" || specs[j].name == "D2_K" || specs[j].name == "A1" || specs[j].name == "A2_K"))
         t_idx.push_back(j);
     double max_r = 0;
     for (std::size_t a = 0; a < t_idx.size(); ++a)
-      for (std::size_t b = a + 1; b < t_idx.size(); ++b) max_r = std::max(max_r, std::abs(correlation(fit, t_idx[a], t_idx[b])));
-    const bool d2_free = std::any_of(t_idx.begin(), t_idx.end(), [&](std::size_t j) { return specs[j].name == "D2_K"; });
+      for (std::size_t b = a + 1; b < t_idx.size(); ++b)
+        max_r = std::max(max_r, std::abs(correlation(fit, t_idx[a], t_idx[b])));
+    const bool d2_free =
+        std::any_of(t_idx.begin(), t_idx.end(), [&](std::size_t j) { return specs[j].name == "D2_K"; });
     if (d2_free && t_idx.size() >= 2 && max_r > kRidgeCorrelation) {
       std::string names;
       for (auto j : t_idx) names += (names.empty() ? "" : ", ") + specs[j].name;
-      fit.warnings.push_back(strf("%s are not separately identifiable from %zu temperatures (correlation up to %.4f); fix "
-                                  "D2_K at the polymer's glass transition (--fix D2_K=...), or measure more temperatures. "
-                                  "What the data determine: n, tau_star_Pa and the viscosity at each measured temperature "
-                                  "(derived; the zero-shear viscosity where the data reach the plateau)",
-                                  names.c_str(), st.levels.size(), max_r));
+      fit.warnings.push_back(
+          strf("%s are not separately identifiable from %zu temperatures (correlation up to %.4f); fix "
+               "D2_K at the polymer's glass transition (--fix D2_K=...), or measure more temperatures. "
+               "What the data determine: n, tau_star_Pa and the viscosity at each measured temperature "
+               "(derived; the zero-shear viscosity where the data reach the plateau)",
+               names.c_str(), st.levels.size(), max_r));
     }
   }
   finish_params(fit, specs);
@@ -409,7 +432,8 @@ ViscositySpec spec_from_fit(const FitResult& fit) {
 std::vector<ViscosityFitOptions> default_candidates(const RheologyData& data, const ViscosityFitOptions& base) {
   std::vector<ViscosityFitOptions> c;
   const bool multi = data.temperature_levels_K().size() > 1;
-  for (auto m : {ViscosityModel::newtonian, ViscosityModel::power_law, ViscosityModel::cross, ViscosityModel::carreau_yasuda}) {
+  for (auto m :
+       {ViscosityModel::newtonian, ViscosityModel::power_law, ViscosityModel::cross, ViscosityModel::carreau_yasuda}) {
     ViscosityFitOptions o = base;
     o.fixed.clear();
     o.free.clear();

@@ -34,8 +34,9 @@ TtsResult time_temperature_superposition(const RheologyData& data, double T_ref_
   validate_data(data);
   const auto st = stats_of(data);
   if (st.levels.size() < 2)
-    throw InputError(strf("time-temperature superposition needs data at two or more temperatures (the data hold one, %.2f K)",
-                                 st.levels.front()));
+    throw InputError(
+        strf("time-temperature superposition needs data at two or more temperatures (the data hold one, %.2f K)",
+             st.levels.front()));
   TtsResult t;
   t.T_ref_K = std::isfinite(T_ref_K) ? T_ref_K : default_T_ref(st.levels);
   // Reference level index: the level nearest T_ref.
@@ -152,7 +153,8 @@ nlohmann::json to_json(const TtsResult& t) {
 }
 
 bool SuperpositionCheck::superposes() const {
-  return reversals.empty() && std::all_of(levels.begin(), levels.end(), [](const auto& l) { return l.on_master_curve; });
+  return reversals.empty() &&
+         std::all_of(levels.begin(), levels.end(), [](const auto& l) { return l.on_master_curve; });
 }
 
 SuperpositionCheck check_superposition(const RheologyData& data, double T_ref_K, double alpha) {
@@ -176,7 +178,8 @@ SuperpositionCheck check_superposition(const RheologyData& data, double T_ref_K,
   for (std::size_t i = 0; i < n; ++i) {
     const auto k = level_index(data.temperature_K[i]);
     const double a = t.shift_factor[k];
-    const double r = std::log(cross_viscosity(eta0 * a, ts, nn, data.shear_rate_1_s[i])) - std::log(data.viscosity_Pa_s[i]);
+    const double r =
+        std::log(cross_viscosity(eta0 * a, ts, nn, data.shear_rate_1_s[i])) - std::log(data.viscosity_Pa_s[i]);
     rss_master[k] += r * r;
     ++count[k];
     per[k].shear_rate_1_s.push_back(data.shear_rate_1_s[i]);
@@ -204,7 +207,9 @@ SuperpositionCheck check_superposition(const RheologyData& data, double T_ref_K,
       rss_own[k] = kNaN;
     }
   }
-  const double s2 = pooled_dof > 0 ? std::max(pooled / pooled_dof, residual_variance_floor({std::log(data.viscosity_Pa_s[0])})) : kNaN;
+  const double s2 = pooled_dof > 0
+                        ? std::max(pooled / pooled_dof, residual_variance_floor({std::log(data.viscosity_Pa_s[0])}))
+                        : kNaN;
   for (std::size_t k = 0; k < L; ++k) {
     SuperpositionLevel l;
     l.temperature_K = t.temperatures_K[k];
@@ -228,7 +233,8 @@ SuperpositionCheck check_superposition(const RheologyData& data, double T_ref_K,
   for (std::size_t k = 0; k + 1 < L; ++k) {
     const auto& a = c.levels[k];
     const auto& b = c.levels[k + 1];
-    if (b.shift_lo > a.shift_hi) c.reversals.push_back({a.temperature_K, b.temperature_K, b.shift_factor / a.shift_factor});
+    if (b.shift_lo > a.shift_hi)
+      c.reversals.push_back({a.temperature_K, b.temperature_K, b.shift_factor / a.shift_factor});
   }
   if (!c.reversals.empty()) {
     // A master curve across a transition fits neither side, so every temperature would look
@@ -296,13 +302,15 @@ nlohmann::json to_json(const SuperpositionCheck& c) {
     levels.push_back(j);
   }
   nlohmann::json rev = nlohmann::json::array();
-  for (const auto& r : c.reversals) rev.push_back({{"lower_K", r.lower_K}, {"upper_K", r.upper_K}, {"a_T_ratio", r.ratio}});
-  return {{"test", "F test of each temperature's own Cross fit against the master curve (Cross at T_ref with a shift a_T)"},
-          {"alpha", c.alpha},
-          {"reference_temperature_K", c.tts.T_ref_K},
-          {"superposes", c.superposes()},
-          {"levels", levels},
-          {"reversals", rev}};
+  for (const auto& r : c.reversals)
+    rev.push_back({{"lower_K", r.lower_K}, {"upper_K", r.upper_K}, {"a_T_ratio", r.ratio}});
+  return {
+      {"test", "F test of each temperature's own Cross fit against the master curve (Cross at T_ref with a shift a_T)"},
+      {"alpha", c.alpha},
+      {"reference_temperature_K", c.tts.T_ref_K},
+      {"superposes", c.superposes()},
+      {"levels", levels},
+      {"reversals", rev}};
 }
 
 }  // namespace tunekit::fitting

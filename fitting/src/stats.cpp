@@ -16,9 +16,7 @@ double t_multiplier(double confidence, double dof) {
   return boost::math::quantile(boost::math::students_t_distribution<>(dof), p);
 }
 
-int default_whiteness_lags(std::size_t n) {
-  return static_cast<int>(std::clamp<std::size_t>(n / 4, 1, 20));
-}
+int default_whiteness_lags(std::size_t n) { return static_cast<int>(std::clamp<std::size_t>(n / 4, 1, 20)); }
 
 WhitenessTest ljung_box(std::span<const double> r, int lags) {
   WhitenessTest t;

@@ -37,7 +37,9 @@ double carreau_yasuda_viscosity(double eta0, double eta_inf, double lambda, doub
   return eta_inf + (eta0 - eta_inf) * std::pow(1.0 + std::pow(lambda * g, a), (n - 1.0) / a);
 }
 
-double arrhenius_shift(double T, double Ea, double T_ref) { return std::exp(Ea / kGasConstant * (1.0 / T - 1.0 / T_ref)); }
+double arrhenius_shift(double T, double Ea, double T_ref) {
+  return std::exp(Ea / kGasConstant * (1.0 / T - 1.0 / T_ref));
+}
 
 double wlf_shift(double T, double C1, double C2, double T_ref) {
   return std::exp(-C1 * (T - T_ref) / (C2 + T - T_ref));
@@ -129,10 +131,11 @@ double ViscositySpec::viscosity(double g, double T, double p) const {
     case ViscosityModel::power_law: return power_law_viscosity(v("K_Pa_s_n") * aT, v("n"), g);
     case ViscosityModel::cross: return cross_viscosity(v("eta0_Pa_s") * aT, v("tau_star_Pa"), v("n"), g);
     case ViscosityModel::cross_wlf:
-      return cross_wlf_viscosity({v("n"), v("tau_star_Pa"), v("D1_Pa_s"), v("D2_K"), v("D3_K_per_Pa"), v("A1"), v("A2_K")},
-                                 g, T, p);
+      return cross_wlf_viscosity(
+          {v("n"), v("tau_star_Pa"), v("D1_Pa_s"), v("D2_K"), v("D3_K_per_Pa"), v("A1"), v("A2_K")}, g, T, p);
     case ViscosityModel::carreau_yasuda:
-      return carreau_yasuda_viscosity(v("eta0_Pa_s") * aT, v("eta_inf_Pa_s") * aT, v("lambda_s") * aT, v("a"), v("n"), g);
+      return carreau_yasuda_viscosity(v("eta0_Pa_s") * aT, v("eta_inf_Pa_s") * aT, v("lambda_s") * aT, v("a"), v("n"),
+                                      g);
   }
   return 0;
 }
@@ -153,8 +156,9 @@ std::string ViscositySpec::name() const {
 ViscositySpec ViscositySpec::from_cross_wlf(const CrossWlfParams& c) {
   ViscositySpec s;
   s.model = ViscosityModel::cross_wlf;
-  s.values = {{"n", c.n},       {"tau_star_Pa", c.tau_star_Pa}, {"D1_Pa_s", c.D1_Pa_s}, {"D2_K", c.D2_K},
-              {"D3_K_per_Pa", c.D3_K_per_Pa}, {"A1", c.A1}, {"A2_K", c.A2_K}};
+  s.values = {{"n", c.n},       {"tau_star_Pa", c.tau_star_Pa}, {"D1_Pa_s", c.D1_Pa_s},
+              {"D2_K", c.D2_K}, {"D3_K_per_Pa", c.D3_K_per_Pa}, {"A1", c.A1},
+              {"A2_K", c.A2_K}};
   return s;
 }
 

@@ -14,7 +14,8 @@ double DriftSeries::significant_change_pct() const {
 
 DriftSeries analyse_drift(const std::string& name, const std::vector<SeriesPoint>& series, const DriftOptions& o) {
   if (o.baseline_runs == 0) throw InputError("the baseline needs at least one run");
-  if (!(o.coverage_k > 0) || !std::isfinite(o.coverage_k)) throw InputError("the coverage factor must be a positive number");
+  if (!(o.coverage_k > 0) || !std::isfinite(o.coverage_k))
+    throw InputError("the coverage factor must be a positive number");
   DriftSeries d;
   d.name = name;
   if (series.empty()) return d;

@@ -14,7 +14,8 @@ namespace tunekit::history {
 namespace {
 
 // Column type OIDs (PostgreSQL's src/include/catalog/pg_type.dat).
-constexpr Oid kPgBool = 16, kPgInt8 = 20, kPgInt2 = 21, kPgInt4 = 23, kPgFloat4 = 700, kPgFloat8 = 701, kPgNumeric = 1700;
+constexpr Oid kPgBool = 16, kPgInt8 = 20, kPgInt2 = 21, kPgInt4 = 23, kPgFloat4 = 700, kPgFloat8 = 701,
+              kPgNumeric = 1700;
 
 std::string pg_one_line(std::string s) {
   for (auto& c : s)
@@ -78,8 +79,8 @@ class PostgresConnection final : public Connection {
       else continue;
       values[i] = text[i].c_str();
     }
-    PGresult* r = PQexecParams(conn_, sql.c_str(), static_cast<int>(params.size()), nullptr, values.data(), nullptr,
-                               nullptr, 0);
+    PGresult* r =
+        PQexecParams(conn_, sql.c_str(), static_cast<int>(params.size()), nullptr, values.data(), nullptr, nullptr, 0);
     check(r);
     std::vector<Row> rows;
     const int nr = PQntuples(r), nc = PQnfields(r);
@@ -141,6 +142,8 @@ class PostgresConnection final : public Connection {
 
 }  // namespace
 
-std::unique_ptr<Connection> connect_postgresql(const std::string& url) { return std::make_unique<PostgresConnection>(url); }
+std::unique_ptr<Connection> connect_postgresql(const std::string& url) {
+  return std::make_unique<PostgresConnection>(url);
+}
 
 }  // namespace tunekit::history

@@ -29,8 +29,10 @@ class QuantityList {
     if (p == nullptr || seen_.count(name)) return;
     Quantity q{name, qty_number(p), std::nan(""), "", unit};
     if (!std::isfinite(q.value)) return;
-    if (p->is_object() && p->contains("stderr") && (*p)["stderr"].is_number()) q.stderr_value = (*p)["stderr"].get<double>();
-    if (p->is_object() && p->contains("unit") && (*p)["unit"].is_string() && unit.empty()) q.unit = (*p)["unit"].get<std::string>();
+    if (p->is_object() && p->contains("stderr") && (*p)["stderr"].is_number())
+      q.stderr_value = (*p)["stderr"].get<double>();
+    if (p->is_object() && p->contains("unit") && (*p)["unit"].is_string() && unit.empty())
+      q.unit = (*p)["unit"].get<std::string>();
     add(std::move(q));
   }
   void number(const std::string& name, const nlohmann::json* v, const nlohmann::json* se, const std::string& unit) {
@@ -80,7 +82,8 @@ void axis_quantities(QuantityList& out, const nlohmann::json* axes_json) {
     const auto* modes = qty_at(a, {"modes"});
     if (modes != nullptr && modes->is_array() && !modes->empty()) {
       std::size_t dom = 0;
-      if (const auto* d = qty_at(a, {"fit", "dominant_mode"}); d != nullptr && d->is_number_integer() && d->get<long>() >= 0 &&
+      if (const auto* d = qty_at(a, {"fit", "dominant_mode"}); d != nullptr && d->is_number_integer() &&
+                                                               d->get<long>() >= 0 &&
                                                                static_cast<std::size_t>(d->get<long>()) < modes->size())
         dom = static_cast<std::size_t>(d->get<long>());
       const auto& m = (*modes)[dom];
@@ -141,8 +144,8 @@ std::vector<Quantity> extract_quantities(const std::string& command, const nlohm
 }
 
 const std::vector<std::string>& headline_quantities() {
-  static const std::vector<std::string> names{"tau_s",       "theta_s",  "K",        "x.freq_hz", "x.zeta",
-                                              "x.shaper",    "y.freq_hz", "y.zeta",  "y.shaper",  "pa_k_s"};
+  static const std::vector<std::string> names{"tau_s",    "theta_s",   "K",      "x.freq_hz", "x.zeta",
+                                              "x.shaper", "y.freq_hz", "y.zeta", "y.shaper",  "pa_k_s"};
   return names;
 }
 

@@ -23,8 +23,8 @@ constexpr int kSqliteBusyTimeoutMs = 60000;  // many printers recording into one
 class SqliteConnection final : public Connection {
  public:
   explicit SqliteConnection(std::string path) : path_(std::move(path)) {
-    const int rc = sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX,
-                                   nullptr);
+    const int rc =
+        sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, nullptr);
     if (rc != SQLITE_OK) {
       const std::string msg = db_ != nullptr ? sqlite3_errmsg(db_) : sqlite3_errstr(rc);
       sqlite3_close(db_);
@@ -89,7 +89,8 @@ class SqliteConnection final : public Connection {
       int rc = SQLITE_OK;
       if (std::holds_alternative<std::monostate>(v)) rc = sqlite3_bind_null(stmt, idx);
       else if (const auto* n = std::get_if<std::int64_t>(&v)) rc = sqlite3_bind_int64(stmt, idx, *n);
-      else if (const auto* d = std::get_if<double>(&v)) rc = std::isfinite(*d) ? sqlite3_bind_double(stmt, idx, *d) : sqlite3_bind_null(stmt, idx);
+      else if (const auto* d = std::get_if<double>(&v))
+        rc = std::isfinite(*d) ? sqlite3_bind_double(stmt, idx, *d) : sqlite3_bind_null(stmt, idx);
       else {
         const auto& s = std::get<std::string>(v);
         rc = sqlite3_bind_text(stmt, idx, s.data(), static_cast<int>(s.size()), SQLITE_TRANSIENT);
@@ -144,7 +145,8 @@ class SqliteConnection final : public Connection {
     const int primary = rc & 0xff;
     // A file that is not a database, or one that is not tunekit's, is bad input; everything
     // else (locked past the timeout, disk full, I/O) is a failure of the storage.
-    if (primary == SQLITE_NOTADB || primary == SQLITE_ERROR || primary == SQLITE_CONSTRAINT || primary == SQLITE_MISMATCH)
+    if (primary == SQLITE_NOTADB || primary == SQLITE_ERROR || primary == SQLITE_CONSTRAINT ||
+        primary == SQLITE_MISMATCH)
       throw InputError("history database: " + msg, path_);
     throw MachineError("history database: " + msg, path_);
   }

@@ -52,11 +52,13 @@ const Migration kMigrations[] = {
      " unit TEXT NOT NULL,"
      " PRIMARY KEY (record_id, name));\n"
      // Covering: a trend reads its series from the index alone, in order.
-     "CREATE INDEX quantities_series ON quantities (machine_id, name, run_utc, record_id, value, stderr, text_value, unit);\n"},
+     "CREATE INDEX quantities_series ON quantities (machine_id, name, run_utc, record_id, value, stderr, text_value, "
+     "unit);\n"},
 };
 
 std::string with_backend_types(std::string sql, Backend b) {
-  const std::string id = b == Backend::sqlite ? "INTEGER PRIMARY KEY" : "BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY";
+  const std::string id =
+      b == Backend::sqlite ? "INTEGER PRIMARY KEY" : "BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY";
   for (std::size_t p; (p = sql.find("@ID@")) != std::string::npos;) sql.replace(p, 4, id);
   return sql;
 }
@@ -112,7 +114,8 @@ void check_machine_id(const std::string& id) {
   if (id.size() > 128) throw InputError("the machine id is longer than 128 characters: " + id.substr(0, 40) + "...");
   for (unsigned char c : id)
     if (c < 0x20 || c == 0x7f) throw InputError("the machine id contains a control character");
-  if (id.front() == ' ' || id.back() == ' ') throw InputError("the machine id begins or ends with a space: '" + id + "'");
+  if (id.front() == ' ' || id.back() == ' ')
+    throw InputError("the machine id begins or ends with a space: '" + id + "'");
 }
 
 Store::Store(const std::string& db) : Store(connect(db)) {}
@@ -129,7 +132,8 @@ void Store::migrate() {
   // On PostgreSQL, processes opening a new database at once wait here for the first one's
   // migrations instead of racing to create the same tables; SQLite's BEGIN IMMEDIATE already
   // serializes them.
-  if (db_->backend() == Backend::postgresql) db_->query(fmt::format("SELECT pg_advisory_xact_lock({})", kMigrationLockKey));
+  if (db_->backend() == Backend::postgresql)
+    db_->query(fmt::format("SELECT pg_advisory_xact_lock({})", kMigrationLockKey));
   db_->execute(
       "CREATE TABLE IF NOT EXISTS schema_migrations (version INTEGER PRIMARY KEY, description TEXT NOT NULL, "
       "applied_utc TEXT NOT NULL)");
@@ -191,9 +195,9 @@ std::vector<MachineSummary> Store::machines() {
 
 std::vector<RecordSummary> Store::records(const std::string& machine_id) {
   std::vector<RecordSummary> out;
-  for (const auto& row : db_->query(fmt::format("SELECT {} FROM records WHERE machine_id = $1 ORDER BY run_utc, id",
-                                                kSummaryColumns),
-                                    {machine_id}))
+  for (const auto& row :
+       db_->query(fmt::format("SELECT {} FROM records WHERE machine_id = $1 ORDER BY run_utc, id", kSummaryColumns),
+                  {machine_id}))
     out.push_back(summary_from(row));
   return out;
 }
@@ -204,7 +208,8 @@ std::optional<StoredRecord> Store::get(std::int64_t id) {
   StoredRecord rec;
   static_cast<RecordSummary&>(rec) = summary_from(rows[0]);
   rec.envelope = as_text(rows[0][10]);
-  for (const auto& r : db_->query("SELECT path, sha256, bytes FROM record_inputs WHERE record_id = $1 ORDER BY path", {id}))
+  for (const auto& r :
+       db_->query("SELECT path, sha256, bytes FROM record_inputs WHERE record_id = $1 ORDER BY path", {id}))
     rec.inputs.push_back({as_text(r[0]), as_text(r[1]), is_null(r[2]) ? -1 : as_int(r[2])});
   for (const auto& r : db_->query(
            "SELECT name, value, stderr, text_value, unit FROM quantities WHERE record_id = $1 ORDER BY name", {id}))

@@ -41,7 +41,8 @@ void split(std::string_view line, char delim, std::vector<Field>& out) {
   std::size_t start = 0;
   while (true) {
     const std::size_t end = line.find(delim, start);
-    const std::string_view raw = line.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
+    const std::string_view raw =
+        line.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
     std::size_t lead = 0;
     while (lead < raw.size() && (raw[lead] == ' ' || raw[lead] == '\t')) ++lead;
     out.push_back({trim(raw), start + lead + 1});
@@ -112,9 +113,11 @@ class LineReader {
     const void* nl = std::memchr(begin, '\n', text_.size() - pos_);
     const std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
     if (len > max_len_)
-      throw InputError(fmt::format("line is {} bytes long, more than the {} allowed (a file without line breaks, or not a CSV file?)",
-                                   len, max_len_),
-                       source_location(path_, line_no_));
+      throw InputError(
+          fmt::format(
+              "line is {} bytes long, more than the {} allowed (a file without line breaks, or not a CSV file?)", len,
+              max_len_),
+          source_location(path_, line_no_));
     line = std::string_view(begin, len);
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     pos_ += len + 1;
@@ -270,7 +273,8 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
   // (editors that add one to a file that had one already) are dropped.
   if (text.size() >= 2 && ((text[0] == '\xFF' && text[1] == '\xFE') || (text[0] == '\xFE' && text[1] == '\xFF'))) {
     if (text.size() >= 4 && text[0] == '\xFF' && text[2] == '\0' && text[3] == '\0')
-      throw InputError("the file is UTF-32 text (byte-order mark FF FE 00 00); save it as UTF-8", source_location(path, 1));
+      throw InputError("the file is UTF-32 text (byte-order mark FF FE 00 00); save it as UTF-8",
+                       source_location(path, 1));
     return parse_csv(csv_utf16_to_utf8(text, path), path, options);
   }
   while (text.size() >= 3 && std::memcmp(text.data(), "\xEF\xBB\xBF", 3) == 0) text.remove_prefix(3);
@@ -404,14 +408,16 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
         const std::size_t col = static_cast<std::size_t>(b - row_begin) + 1;
         double v;
         if (text.empty())
-          throw InputError(fmt::format("empty field in column '{}'", t.header[nf]), source_location(path, line_no, col));
+          throw InputError(fmt::format("empty field in column '{}'", t.header[nf]),
+                           source_location(path, line_no, col));
         if (!parse_number(text, v))
           throw InputError(fmt::format("'{}' in column '{}' is not a number", text.substr(0, 40), t.header[nf]),
                            source_location(path, line_no, col));
         if (std::isnan(v))
           throw InputError(fmt::format("NaN in column '{}'", t.header[nf]), source_location(path, line_no, col));
         if (std::isinf(v))
-          throw InputError(fmt::format("infinite value in column '{}'", t.header[nf]), source_location(path, line_no, col));
+          throw InputError(fmt::format("infinite value in column '{}'", t.header[nf]),
+                           source_location(path, line_no, col));
         row_values[nf] = v;
         row_columns[nf] = col;
       }
@@ -420,18 +426,19 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
       p = q + 1;
     }
     if (nf != ncols)
-      throw InputError(fmt::format("{} fields, but the header has {} columns", nf, ncols), source_location(path, line_no));
+      throw InputError(fmt::format("{} fields, but the header has {} columns", nf, ncols),
+                       source_location(path, line_no));
     for (std::size_t k = 0; k < source.size(); ++k) {
       const double v = row_values[source[k]];
       auto& vals = t.columns[k].values;
       if (k == time_index && check_time && !vals.empty()) {
         if (v == vals.back())
-          throw InputError(fmt::format("duplicate time stamp {} in column '{}' (also on line {})", v,
-                                       t.columns[k].name, prev_time_line),
+          throw InputError(fmt::format("duplicate time stamp {} in column '{}' (also on line {})", v, t.columns[k].name,
+                                       prev_time_line),
                            source_location(path, line_no, row_columns[source[k]]));
         if (v < vals.back())
-          throw InputError(fmt::format("time goes backwards in column '{}': {} after {} (line {})", t.columns[k].name, v,
-                                       vals.back(), prev_time_line),
+          throw InputError(fmt::format("time goes backwards in column '{}': {} after {} (line {})", t.columns[k].name,
+                                       v, vals.back(), prev_time_line),
                            source_location(path, line_no, row_columns[source[k]]));
       }
       vals.push_back(v);
@@ -450,8 +457,7 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
     if (tl.empty() || tl.front() == '#') continue;
     consume(tl, lines.line_no());
   }
-  if (t.rows == 0)
-    throw InputError("a header but no data rows", source_location(path, t.header_line));
+  if (t.rows == 0) throw InputError("a header but no data rows", source_location(path, t.header_line));
   // Time is in seconds everywhere else: convert a time column logged in ms or us.
   if (time_index < t.columns.size()) {
     auto& tc = t.columns[time_index];

@@ -132,7 +132,8 @@ DeltaCalibration fit_delta_calibration(const DeltaGeometry& nominal, const std::
       if (!eval(v, rm.data())) return false;
       v[j] = p[j];
       for (int i = 0; i < m; ++i)
-        jac[static_cast<std::size_t>(i) * k + j] = (rp[static_cast<std::size_t>(i)] - rm[static_cast<std::size_t>(i)]) / (2 * step);
+        jac[static_cast<std::size_t>(i) * k + j] =
+            (rp[static_cast<std::size_t>(i)] - rm[static_cast<std::size_t>(i)]) / (2 * step);
     }
     return true;
   };

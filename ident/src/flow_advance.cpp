@@ -56,7 +56,9 @@ double fa_table_volume(const FaKnots& k, double Q) {
   return v;
 }
 
-double fa_kalico_shape(KalicoModel m, double x) { return m == KalicoModel::tanh ? std::tanh(x) : 1.0 - 1.0 / (1.0 + x); }
+double fa_kalico_shape(KalicoModel m, double x) {
+  return m == KalicoModel::tanh ? std::tanh(x) : 1.0 - 1.0 / (1.0 + x);
+}
 
 /// Relative-error fit of offset = la v + off f(v/lv) for a fixed lv; returns {la, off, max rel, rms rel}.
 struct FaTrial {
@@ -110,7 +112,8 @@ void fa_validate(const FlowAdvanceInputs& in) {
   if (!(fa_finite(in.filament_area_mm2) && in.filament_area_mm2 > 0))
     throw InputError("the flow-dependent advance needs a positive filament cross-section (mm^2)");
   if (in.levels.size() < 2)
-    throw InputError(fmt::format("the flow-dependent advance needs at least two flow levels, not {}", in.levels.size()));
+    throw InputError(
+        fmt::format("the flow-dependent advance needs at least two flow levels, not {}", in.levels.size()));
   std::vector<double> qs;
   for (const auto& l : in.levels) {
     if (!(fa_finite(l.flow_mm3_s) && l.flow_mm3_s > 0))
@@ -126,9 +129,10 @@ void fa_validate(const FlowAdvanceInputs& in) {
   for (std::size_t i = 1; i < qs.size(); ++i)
     if (qs[i] == qs[i - 1]) throw InputError(fmt::format("two flow levels at the same flow {} mm^3/s", qs[i]));
   if (in.trend && !(fa_finite(in.trend->a) && in.trend->a > 0 && fa_finite(in.trend->b) && in.trend->b > -1))
-    throw InputError(fmt::format("tau trend a = {}, b = {}: a must be positive and b above -1 (the stored volume "
-                                 "a Q^(b+1)/(b+1) is finite only then)",
-                                 in.trend->a, in.trend->b));
+    throw InputError(
+        fmt::format("tau trend a = {}, b = {}: a must be positive and b above -1 (the stored volume "
+                    "a Q^(b+1)/(b+1) is finite only then)",
+                    in.trend->a, in.trend->b));
 }
 
 }  // namespace
@@ -236,16 +240,16 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
     d.notes.push_back(fmt::format("no design flow given: the geometric middle of the identified range, {:.3g} mm^3/s",
                                   d.design_flow_mm3_s));
   if (d.design_flow_mm3_s < d.flow_min_mm3_s || d.design_flow_mm3_s > d.flow_max_mm3_s)
-    d.warnings.push_back(fmt::format("design flow {:.3g} mm^3/s lies outside the identified flows {:.3g}-{:.3g} mm^3/s: "
-                                     "tau is held at the nearest level there",
-                                     d.design_flow_mm3_s, d.flow_min_mm3_s, d.flow_max_mm3_s));
+    d.warnings.push_back(
+        fmt::format("design flow {:.3g} mm^3/s lies outside the identified flows {:.3g}-{:.3g} mm^3/s: "
+                    "tau is held at the nearest level there",
+                    d.design_flow_mm3_s, d.flow_min_mm3_s, d.flow_max_mm3_s));
   d.k_design_s = needed_advance_s(in, d.design_flow_mm3_s);
 
   // Curve over the identified range (linear in flow).
   const int ns = std::max(8, in.samples);
   std::vector<double> flows;
-  for (int i = 0; i < ns; ++i)
-    flows.push_back(d.flow_min_mm3_s + (d.flow_max_mm3_s - d.flow_min_mm3_s) * i / (ns - 1));
+  for (int i = 0; i < ns; ++i) flows.push_back(d.flow_min_mm3_s + (d.flow_max_mm3_s - d.flow_min_mm3_s) * i / (ns - 1));
 
   // Kalico: both models, the better one (smaller worst relative error) is written.
   const KalicoFit ft = fit_kalico(in, KalicoModel::tanh, flows);
@@ -253,18 +257,20 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   d.kalico = ft.max_rel_error <= fr.max_rel_error ? ft : fr;
   d.kalico_other = ft.max_rel_error <= fr.max_rel_error ? fr : ft;
   if (d.kalico.max_rel_error > 0.05)
-    d.warnings.push_back(fmt::format("Kalico's {} model reproduces the needed advance only within {:.1f} % over the "
-                                     "identified flows",
-                                     to_string(d.kalico.model), 100 * d.kalico.max_rel_error));
+    d.warnings.push_back(
+        fmt::format("Kalico's {} model reproduces the needed advance only within {:.1f} % over the "
+                    "identified flows",
+                    to_string(d.kalico.model), 100 * d.kalico.max_rel_error));
   // pressure_advance_time_offset shifts the whole extruder motion earlier by that time
   // (kin_extruder.c extruder_calc_position: move_time += es->time_offset): the dead time.
   // Kalico accepts -0.2..0.2 s (extruder.py, minval=-0.2, maxval=0.2).
   if (fa_finite(in.theta_s) && in.theta_s >= 0) {
     d.kalico_time_offset_s = std::min(in.theta_s, 0.2);
     if (in.theta_s > 0.2)
-      d.warnings.push_back(fmt::format("dead time {:.3g} s exceeds Kalico's pressure_advance_time_offset maximum of "
-                                       "0.2 s: written as 0.2 s",
-                                       in.theta_s));
+      d.warnings.push_back(
+          fmt::format("dead time {:.3g} s exceeds Kalico's pressure_advance_time_offset maximum of "
+                      "0.2 s: written as 0.2 s",
+                      in.theta_s));
   }
 
   for (double q : flows) {
@@ -279,7 +285,8 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
     }
     const double v = q / in.filament_area_mm2;
     s.k_kalico_s = kalico_offset_mm(d.kalico.model, d.kalico.linear_advance_s, d.kalico.nonlinear_offset_mm,
-                                    d.kalico.linearization_velocity_mm_s, v) / v;
+                                    d.kalico.linearization_velocity_mm_s, v) /
+                   v;
     d.curve.push_back(s);
   }
 
@@ -295,8 +302,10 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
     if (ok(qd)) {
       const double step = (d.flow_max_mm3_s - d.flow_min_mm3_s) / nf;
       double lo = qd, hi = qd;
-      while (lo > d.flow_min_mm3_s && ok(std::max(lo - step, d.flow_min_mm3_s))) lo = std::max(lo - step, d.flow_min_mm3_s);
-      while (hi < d.flow_max_mm3_s && ok(std::min(hi + step, d.flow_max_mm3_s))) hi = std::min(hi + step, d.flow_max_mm3_s);
+      while (lo > d.flow_min_mm3_s && ok(std::max(lo - step, d.flow_min_mm3_s)))
+        lo = std::max(lo - step, d.flow_min_mm3_s);
+      while (hi < d.flow_max_mm3_s && ok(std::min(hi + step, d.flow_max_mm3_s)))
+        hi = std::min(hi + step, d.flow_max_mm3_s);
       d.k_within_lo_mm3_s = lo;
       d.k_within_hi_mm3_s = hi;
     }
@@ -310,8 +319,9 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   for (double q : k.q)
     for (double acc : accels) d.orca.push_back({needed_advance_s(in, q), q, acc});
 
-  d.notes.push_back("advance designed as the stored melt volume V(Q) = integral of tau over 0..Q (one first-order store, "
-                    "tau held at the lowest level below it); the single K at flow Q is V(Q)/Q");
+  d.notes.push_back(
+      "advance designed as the stored melt volume V(Q) = integral of tau over 0..Q (one first-order store, "
+      "tau held at the lowest level below it); the single K at flow Q is V(Q)/Q");
   if (!d.has_band) d.notes.push_back("no 95 % intervals per level: the advance is drawn without a band");
   return d;
 }
@@ -336,13 +346,15 @@ nlohmann::json FlowAdvanceDesign::to_json() const {
                        {"K_kalico_s", fa_num(s.k_kalico_s)}});
   nlohmann::json orca_j = nlohmann::json::array();
   for (const auto& o : orca)
-    orca_j.push_back({{"K_s", fa_num(o.k_s)}, {"flow_mm3_s", fa_num(o.flow_mm3_s)}, {"accel_mm_s2", fa_num(o.accel_mm_s2)}});
+    orca_j.push_back(
+        {{"K_s", fa_num(o.k_s)}, {"flow_mm3_s", fa_num(o.flow_mm3_s)}, {"accel_mm_s2", fa_num(o.accel_mm_s2)}});
   nlohmann::json kj = kal(kalico);
   kj["pressure_advance_time_offset_s"] = fa_num(kalico_time_offset_s);
   return {{"flow_range_mm3_s", {fa_num(flow_min_mm3_s), fa_num(flow_max_mm3_s)}},
           {"design_flow_mm3_s", fa_num(design_flow_mm3_s)},
-          {"single", {{"K_s", fa_num(k_design_s)},
-                      {"within_10pct_flow_mm3_s", {fa_num(k_within_lo_mm3_s), fa_num(k_within_hi_mm3_s)}}}},
+          {"single",
+           {{"K_s", fa_num(k_design_s)},
+            {"within_10pct_flow_mm3_s", {fa_num(k_within_lo_mm3_s), fa_num(k_within_hi_mm3_s)}}}},
           {"kalico", kj},
           {"kalico_other_model", kal(kalico_other)},
           {"orca", orca_j},

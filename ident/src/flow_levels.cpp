@@ -114,10 +114,11 @@ std::string pooled_whiteness_warning(const FitResult& pooled, const std::vector<
     if (m->diagnostics.whiteness_p >= kWhitenessAlarmP) ++white;
   }
   if (tested < 2 || 4 * white < 3 * tested) return {};
-  return fmt::format("{}: its residuals are not white (Ljung-Box p = {:.2g}) while {} of the {} single-step fits' "
-                     "are: the steps do not share one K, tau and theta (the dynamics change with the level; see the "
-                     "arrival levels and their trend)",
-                     what, p, white, tested);
+  return fmt::format(
+      "{}: its residuals are not white (Ljung-Box p = {:.2g}) while {} of the {} single-step fits' "
+      "are: the steps do not share one K, tau and theta (the dynamics change with the level; see the "
+      "arrival levels and their trend)",
+      what, p, white, tested);
 }
 
 void analyze_arrival_levels(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnalysisOptions& o) {
@@ -186,10 +187,11 @@ void analyze_arrival_levels(StepAnalysis& a, const std::vector<StepRecord>& recs
   }
   // One warning for all levels whose pooled fit is not white while their single-step fits are.
   if (!not_white.empty())
-    a.warnings.push_back(fmt::format("arrival levels u = {}: the pooled fit's residuals are not white (Ljung-Box p < "
-                                     "{:g}) while the single-step fits' are: the rising and falling arrivals do not share "
-                                     "one K, tau and theta (see rising_minus_falling_tau_s)",
-                                     not_white, kWhitenessAlarmP));
+    a.warnings.push_back(
+        fmt::format("arrival levels u = {}: the pooled fit's residuals are not white (Ljung-Box p < "
+                    "{:g}) while the single-step fits' are: the rising and falling arrivals do not share "
+                    "one K, tau and theta (see rising_minus_falling_tau_s)",
+                    not_white, kWhitenessAlarmP));
   fit_level_trends(a, o);
 }
 
@@ -212,9 +214,11 @@ nlohmann::json arrival_levels_json(const StepAnalysis& a) {
                    {"theta_s", theta.value},
                    {"theta_ci95", flow_level_ci95(theta)},
                    {"rising_minus_falling_tau_s", flow_level_number(l.rising_minus_falling_tau_s)},
-                   {"rising_minus_falling_tau_ci95",
-                    std::isfinite(l.rmf_ci95_lo) ? nlohmann::json::array({l.rmf_ci95_lo, l.rmf_ci95_hi}) : nlohmann::json(nullptr)},
-                   {"directions_differ", std::isfinite(l.rmf_ci95_lo) ? nlohmann::json(l.directions_differ()) : nlohmann::json(nullptr)},
+                   {"rising_minus_falling_tau_ci95", std::isfinite(l.rmf_ci95_lo)
+                                                         ? nlohmann::json::array({l.rmf_ci95_lo, l.rmf_ci95_hi})
+                                                         : nlohmann::json(nullptr)},
+                   {"directions_differ",
+                    std::isfinite(l.rmf_ci95_lo) ? nlohmann::json(l.directions_differ()) : nlohmann::json(nullptr)},
                    {"fit", fitting::to_json(l.fit)}});
   }
   return out;
@@ -225,14 +229,20 @@ nlohmann::json level_trends_json(const StepAnalysis& a) {
   const auto& t = a.level_trends;
   auto power = [](const FitResult& f) {
     const auto &pa = f.param("a"), &pb = f.param("b");
-    return nlohmann::json{{"a", pa.value}, {"a_ci95", flow_level_ci95(pa)}, {"b", pb.value}, {"b_ci95", flow_level_ci95(pb)},
+    return nlohmann::json{{"a", pa.value},
+                          {"a_ci95", flow_level_ci95(pa)},
+                          {"b", pb.value},
+                          {"b_ci95", flow_level_ci95(pb)},
                           {"fit", fitting::to_json(f)}};
   };
   if (t.tau) out["tau_s"] = power(*t.tau);
   if (t.K) out["K"] = power(*t.K);
   if (t.theta) {
     const auto &c0 = t.theta->param("c0"), &c1 = t.theta->param("c1");
-    out["theta_s"] = {{"c0", c0.value}, {"c0_ci95", flow_level_ci95(c0)}, {"c1", c1.value}, {"c1_ci95", flow_level_ci95(c1)},
+    out["theta_s"] = {{"c0", c0.value},
+                      {"c0_ci95", flow_level_ci95(c0)},
+                      {"c1", c1.value},
+                      {"c1_ci95", flow_level_ci95(c1)},
                       {"fit", fitting::to_json(*t.theta)}};
   }
   out["levels_used"] = t.both_directions_only ? "levels reached from both directions" : "every arrival level";

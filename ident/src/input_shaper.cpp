@@ -26,11 +26,10 @@ void normalize(Shaper& s) {
 const std::vector<ShaperInfo>& infos() {
   // Minimum frequencies as Klipper chose them (projected max_accel about 1500 mm/s^2); ZVDD,
   // which Klipper does not define, gets the 2-hump EI value (same duration, 1.5 periods).
-  static const std::vector<ShaperInfo> v = {
-      {ShaperType::zv, 21.0, 0.99},          {ShaperType::mzv, 23.0, 0.99},
-      {ShaperType::zvd, 29.0, 0.99},         {ShaperType::zvdd, 39.0, 0.99},
-      {ShaperType::ei, 29.0, 0.4},           {ShaperType::two_hump_ei, 39.0, 0.3},
-      {ShaperType::three_hump_ei, 48.0, 0.2}};
+  static const std::vector<ShaperInfo> v = {{ShaperType::zv, 21.0, 0.99},          {ShaperType::mzv, 23.0, 0.99},
+                                            {ShaperType::zvd, 29.0, 0.99},         {ShaperType::zvdd, 39.0, 0.99},
+                                            {ShaperType::ei, 29.0, 0.4},           {ShaperType::two_hump_ei, 39.0, 0.3},
+                                            {ShaperType::three_hump_ei, 48.0, 0.2}};
   return v;
 }
 
@@ -66,8 +65,8 @@ ShaperType parse_shaper_type(const std::string& name) {
 }
 
 const std::vector<ShaperType>& all_shaper_types() {
-  static const std::vector<ShaperType> v = {ShaperType::zv,   ShaperType::mzv, ShaperType::zvd,
-                                            ShaperType::zvdd, ShaperType::ei,  ShaperType::two_hump_ei,
+  static const std::vector<ShaperType> v = {ShaperType::zv,           ShaperType::mzv, ShaperType::zvd,
+                                            ShaperType::zvdd,         ShaperType::ei,  ShaperType::two_hump_ei,
                                             ShaperType::three_hump_ei};
   return v;
 }

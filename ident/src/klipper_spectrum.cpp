@@ -72,12 +72,19 @@ std::string csv_escape_name(const std::string& name) {
   return name.find(',') != std::string::npos ? "\"" + s + "\"" : s;
 }
 
-std::vector<double> interp_onto(const std::vector<double>& fx, const std::vector<double>& x, const std::vector<double>& fq) {
+std::vector<double> interp_onto(const std::vector<double>& fx, const std::vector<double>& x,
+                                const std::vector<double>& fq) {
   std::vector<double> y(fq.size());
   std::size_t j = 0;
   for (std::size_t i = 0; i < fq.size(); ++i) {
-    if (fq[i] <= fx.front()) { y[i] = x.front(); continue; }
-    if (fq[i] >= fx.back()) { y[i] = x.back(); continue; }
+    if (fq[i] <= fx.front()) {
+      y[i] = x.front();
+      continue;
+    }
+    if (fq[i] >= fx.back()) {
+      y[i] = x.back();
+      continue;
+    }
     while (j + 2 < fx.size() && fx[j + 1] < fq[i]) ++j;
     const double u = (fq[i] - fx[j]) / (fx[j + 1] - fx[j]);
     y[i] = x[j] + u * (x[j + 1] - x[j]);
@@ -127,14 +134,16 @@ KlipperSpectrumFile read_klipper_spectrum(const std::string& path, std::string_v
     co.columns.insert(co.columns.end(), names.begin(), names.end());
   }
   const CsvTable t = parse_csv(bytes, path, co);
-  if (t.rows < 8) throw InputError(fmt::format("the spectrum file has {} frequencies; at least 8 are needed", t.rows), path);
+  if (t.rows < 8)
+    throw InputError(fmt::format("the spectrum file has {} frequencies; at least 8 are needed", t.rows), path);
   const auto& f = t.columns[0].values;
   if (f.front() < 0) throw InputError("the spectrum file has a negative frequency", path);
   for (std::size_t c = 1; c < t.columns.size(); ++c)
     for (std::size_t r = 0; r < t.rows; ++r)
       if (t.columns[c].values[r] < 0)
-        throw InputError(fmt::format("negative PSD {} in column '{}' at {} Hz", t.columns[c].values[r], t.columns[c].name, f[r]),
-                         path);
+        throw InputError(
+            fmt::format("negative PSD {} in column '{}' at {} Hz", t.columns[c].values[r], t.columns[c].name, f[r]),
+            path);
 
   // Klipper writes the bins rounded to 0.1 Hz: the bin width is the median step.
   std::vector<double> df(f.size() - 1);
@@ -155,8 +164,8 @@ KlipperSpectrumFile read_klipper_spectrum(const std::string& path, std::string_v
   };
   auto check_signal = [&](const std::vector<double>& p, const std::string& name) {
     if (!(*std::max_element(p.begin(), p.end()) > 0))
-      throw InputError(fmt::format("the PSD in column '{}' is zero everywhere; the accelerometer recorded nothing", name),
-                       path);
+      throw InputError(
+          fmt::format("the PSD in column '{}' is zero everywhere; the accelerometer recorded nothing", name), path);
   };
   if (one_dataset) {
     AxisSpectrum s = make("psd_xyz");
@@ -202,7 +211,8 @@ std::string write_klipper_spectrum(const std::vector<KlipperSpectrumColumn>& dat
   const auto grid = klipper_spectrum_grid(datasets, max_freq_hz);
   for (const auto& s : shapers)
     if (s.response.size() < grid.size())
-      throw InputError(fmt::format("shaper {} has {} response values for {} rows", s.name, s.response.size(), grid.size()));
+      throw InputError(
+          fmt::format("shaper {} has {} response values for {} rows", s.name, s.response.size(), grid.size()));
   std::vector<std::vector<double>> cols;
   std::string out = "freq,";
   if (datasets.size() == 1) {

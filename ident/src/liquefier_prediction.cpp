@@ -12,7 +12,8 @@ LiquefierPrediction predict_liquefier(const fitting::ViscositySpec& v, const Liq
   fitting::validate(o.geometry);
   if (!(o.temperature_K > 0)) throw InputError("liquefier prediction: the temperature must be positive (K)");
   if (!(o.reference_flow_mm3_s > 0))
-    throw InputError(fmt::format("liquefier prediction: the reference flow must be positive (is {:g} mm3/s)", o.reference_flow_mm3_s));
+    throw InputError(fmt::format("liquefier prediction: the reference flow must be positive (is {:g} mm3/s)",
+                                 o.reference_flow_mm3_s));
   if (o.flows_mm3_s.empty()) throw InputError("liquefier prediction: no flows given");
   LiquefierPrediction p;
   p.temperature_K = o.temperature_K;
@@ -47,8 +48,9 @@ nlohmann::json to_json(const LiquefierPrediction& p) {
           {"relative_tau", p.relative_tau},
           {"wall_shear_rate_1_s", p.wall_shear_rate_1_s},
           {"flow_index_n", p.flow_index_n},
-          {"note", "tau(Q) = C dP/dQ with a flow-independent compliance C; relative_tau = "
-                   "(dP/dQ)(Q) / (dP/dQ)(reference_flow) also scales pressure advance"}};
+          {"note",
+           "tau(Q) = C dP/dQ with a flow-independent compliance C; relative_tau = "
+           "(dP/dQ)(Q) / (dP/dQ)(reference_flow) also scales pressure advance"}};
 }
 
 }  // namespace tunekit::ident

@@ -49,8 +49,8 @@ MarlinTauDesign design_marlin_advance_tau(double box_window_s, const MarlinSmoot
                                           double resolution_s) {
   check_marlin_filter(filter);
   if (!std::isfinite(box_window_s) || box_window_s <= 0)
-    throw InputError(fmt::format("the smoothing design needs a positive box window (K r a / a_max), not {} s",
-                                 box_window_s));
+    throw InputError(
+        fmt::format("the smoothing design needs a positive box window (K r a / a_max), not {} s", box_window_s));
   if (!std::isfinite(resolution_s) || resolution_s <= 0)
     throw InputError(fmt::format("tau resolution must be > 0 s, not {}", resolution_s));
   const double slope_max = 1.0 / box_window_s;
@@ -60,9 +60,9 @@ MarlinTauDesign design_marlin_advance_tau(double box_window_s, const MarlinSmoot
   const long cap = static_cast<long>(std::ceil(kMarlinTauMax_s / resolution_s - 1e-9));
   // Start at the continuous estimate c(N) * box and walk on the grid to the shortest tau that
   // meets the limit (the peak slope falls as tau grows).
-  long s = std::clamp(static_cast<long>(std::ceil(marlin_smoothing_continuous_peak_factor(filter.order) *
-                                                  box_window_s / resolution_s)),
-                      1L, cap + 1);
+  long s = std::clamp(
+      static_cast<long>(std::ceil(marlin_smoothing_continuous_peak_factor(filter.order) * box_window_s / resolution_s)),
+      1L, cap + 1);
   while (s <= cap && !meets(s)) ++s;
   while (s > 1 && meets(s - 1)) --s;
   if (s > cap || !meets(s))
@@ -76,12 +76,14 @@ MarlinTauDesign design_marlin_advance_tau(double box_window_s, const MarlinSmoot
   d.tau_s = std::max(d.required_tau_s, d.floor_tau_s);
   d.extra_accel_per_box_mm_s2 = marlin_smoothing_peak_slope_per_s(d.tau_s, filter) * box_window_s;
   if (d.tau_s > d.required_tau_s)
-    d.notes.push_back(fmt::format("ADVANCE_TAU raised from {:.4g} s to {:.4g} s: below one update period per stage "
-                                  "({} stages at {:g} Hz) the filter smooths nothing",
-                                  d.required_tau_s, d.tau_s, filter.order, filter.update_hz));
-  d.notes.push_back(fmt::format("ADVANCE_TAU {:.4g} s is also how far Marlin looks ahead into the planner: the "
-                                "buffered moves must cover it",
-                                d.tau_s));
+    d.notes.push_back(
+        fmt::format("ADVANCE_TAU raised from {:.4g} s to {:.4g} s: below one update period per stage "
+                    "({} stages at {:g} Hz) the filter smooths nothing",
+                    d.required_tau_s, d.tau_s, filter.order, filter.update_hz));
+  d.notes.push_back(
+      fmt::format("ADVANCE_TAU {:.4g} s is also how far Marlin looks ahead into the planner: the "
+                  "buffered moves must cover it",
+                  d.tau_s));
   return d;
 }
 

@@ -34,7 +34,8 @@ std::vector<double> overshoot_baseline(const std::vector<double>& t, std::size_t
     for (int j = 1; j < m; ++j) pw[static_cast<std::size_t>(j)] = pw[static_cast<std::size_t>(j - 1)] * x;
     for (int i = 0; i < m; ++i) {
       aty[static_cast<std::size_t>(i)] += pw[static_cast<std::size_t>(i)] * y[k];
-      for (int j = 0; j < m; ++j) ata[static_cast<std::size_t>(i * m + j)] += pw[static_cast<std::size_t>(i)] * pw[static_cast<std::size_t>(j)];
+      for (int j = 0; j < m; ++j)
+        ata[static_cast<std::size_t>(i * m + j)] += pw[static_cast<std::size_t>(i)] * pw[static_cast<std::size_t>(j)];
     }
   }
   // Gaussian elimination with partial pivoting (m <= 6).
@@ -42,16 +43,19 @@ std::vector<double> overshoot_baseline(const std::vector<double>& t, std::size_t
   for (int col = 0; col < m; ++col) {
     int piv = col;
     for (int r = col + 1; r < m; ++r)
-      if (std::abs(ata[static_cast<std::size_t>(r * m + col)]) > std::abs(ata[static_cast<std::size_t>(piv * m + col)])) piv = r;
+      if (std::abs(ata[static_cast<std::size_t>(r * m + col)]) > std::abs(ata[static_cast<std::size_t>(piv * m + col)]))
+        piv = r;
     if (piv != col) {
-      for (int j = 0; j < m; ++j) std::swap(ata[static_cast<std::size_t>(col * m + j)], ata[static_cast<std::size_t>(piv * m + j)]);
+      for (int j = 0; j < m; ++j)
+        std::swap(ata[static_cast<std::size_t>(col * m + j)], ata[static_cast<std::size_t>(piv * m + j)]);
       std::swap(c[static_cast<std::size_t>(col)], c[static_cast<std::size_t>(piv)]);
     }
     const double d = ata[static_cast<std::size_t>(col * m + col)];
     if (std::abs(d) < 1e-300) continue;
     for (int r = col + 1; r < m; ++r) {
       const double f = ata[static_cast<std::size_t>(r * m + col)] / d;
-      for (int j = col; j < m; ++j) ata[static_cast<std::size_t>(r * m + j)] -= f * ata[static_cast<std::size_t>(col * m + j)];
+      for (int j = col; j < m; ++j)
+        ata[static_cast<std::size_t>(r * m + j)] -= f * ata[static_cast<std::size_t>(col * m + j)];
       c[static_cast<std::size_t>(r)] -= f * c[static_cast<std::size_t>(col)];
     }
   }
@@ -214,7 +218,8 @@ OvershootAnalysis analyze_overshoot_accel(const std::vector<double>& t, const st
   int corner = 0;
   for (const auto& p : pauses) {
     const std::size_t len = p.end - p.begin + 1;
-    const std::size_t tail = p.begin + static_cast<std::size_t>(std::floor((1 - o.tail_fraction) * static_cast<double>(len)));
+    const std::size_t tail =
+        p.begin + static_cast<std::size_t>(std::floor((1 - o.tail_fraction) * static_cast<double>(len)));
     bool any = false;
     for (int a = 0; a < 2; ++a) {
       if (std::abs(p.move[a]) < o.min_move_mm) continue;
@@ -289,10 +294,12 @@ OvershootAnalysis analyze_overshoot_position(const std::vector<double>& t, const
     if (t[i - 1] - t[b] < o.min_pause_s) continue;
     Rest r{b, i - 1, {0, 0}};
     const std::size_t len = r.e - r.b + 1;
-    const std::size_t tail = r.b + static_cast<std::size_t>(std::floor((1 - o.tail_fraction) * static_cast<double>(len)));
+    const std::size_t tail =
+        r.b + static_cast<std::size_t>(std::floor((1 - o.tail_fraction) * static_cast<double>(len)));
     for (int a = 0; a < 2; ++a)
       if (!col[a]->empty())
-        r.settled[a] = std::accumulate(col[a]->begin() + static_cast<long>(tail), col[a]->begin() + static_cast<long>(r.e + 1), 0.0) /
+        r.settled[a] = std::accumulate(col[a]->begin() + static_cast<long>(tail),
+                                       col[a]->begin() + static_cast<long>(r.e + 1), 0.0) /
                        static_cast<double>(r.e + 1 - tail);
     rests.push_back(r);
   }
@@ -304,7 +311,8 @@ OvershootAnalysis analyze_overshoot_position(const std::vector<double>& t, const
     const auto& r = rests[k];
     const std::size_t m0 = prev.e + 1;
     const std::size_t len = r.e - r.b + 1;
-    const std::size_t tail = r.b + static_cast<std::size_t>(std::floor((1 - o.tail_fraction) * static_cast<double>(len)));
+    const std::size_t tail =
+        r.b + static_cast<std::size_t>(std::floor((1 - o.tail_fraction) * static_cast<double>(len)));
     bool any = false;
     double end_time = t[r.b];
     for (int a = 0; a < 2; ++a) {
@@ -385,7 +393,8 @@ nlohmann::json to_json(const OvershootAnalysis& a, bool with_traces) {
   return j;
 }
 
-double overshoot_figure_of_merit(double overshoot_mm, double tolerance_mm, double completion_s, double mean_completion_s) {
+double overshoot_figure_of_merit(double overshoot_mm, double tolerance_mm, double completion_s,
+                                 double mean_completion_s) {
   if (!(completion_s > 0) || !(mean_completion_s > 0)) return 0;
   return overshoot_mm <= tolerance_mm ? mean_completion_s / completion_s : 0.0;
 }

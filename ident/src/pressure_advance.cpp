@@ -63,7 +63,8 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
   d.area_ratio = al / af;
   d.gain = in.gain;
   d.theta_s = in.theta_s;
-  if (finite(in.tau_s) && in.tau_s < 0) throw InputError(fmt::format("time constant tau must be >= 0 s, not {}", in.tau_s));
+  if (finite(in.tau_s) && in.tau_s < 0)
+    throw InputError(fmt::format("time constant tau must be >= 0 s, not {}", in.tau_s));
 
   d.design_flow_mm3_s = in.design_flow_mm3_s;
   if (!finite(d.design_flow_mm3_s)) {
@@ -71,7 +72,8 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
       throw InputError("the advance design needs a print speed (mm/s) or a design flow (mm^3/s)");
     d.design_flow_mm3_s = in.print_speed_mm_s * al;
   }
-  if (!(d.design_flow_mm3_s > 0)) throw InputError(fmt::format("design flow must be > 0 mm^3/s, not {}", d.design_flow_mm3_s));
+  if (!(d.design_flow_mm3_s > 0))
+    throw InputError(fmt::format("design flow must be > 0 mm^3/s, not {}", d.design_flow_mm3_s));
   d.design_feed_mm_s = d.design_flow_mm3_s / af;
 
   // Flow-dependent advance, from measured operating points (preferred) or the rheology shape.
@@ -79,12 +81,13 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
   for (const auto& p : in.points)
     if (finite(p.feed_mm_s) && finite(p.tau_s)) pts.push_back(p);
   if (pts.size() != in.points.size())
-    d.warnings.push_back(fmt::format("{} operating point(s) without feed rate or tau were left out",
-                                     in.points.size() - pts.size()));
+    d.warnings.push_back(
+        fmt::format("{} operating point(s) without feed rate or tau were left out", in.points.size() - pts.size()));
   std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) { return a.feed_mm_s < b.feed_mm_s; });
   for (const auto& p : pts) {
     if (p.tau_s < 0 || p.feed_mm_s <= 0)
-      throw InputError(fmt::format("operating point at {} mm/s has tau {} s: both must be positive", p.feed_mm_s, p.tau_s));
+      throw InputError(
+          fmt::format("operating point at {} mm/s has tau {} s: both must be positive", p.feed_mm_s, p.tau_s));
   }
   for (std::size_t i = 1; i < pts.size(); ++i)
     if (pts[i].feed_mm_s == pts[i - 1].feed_mm_s)
@@ -104,12 +107,14 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
       d.schedule.push_back({p.feed_mm_s * af, p.feed_mm_s, needed_advance_s(fin, p.feed_mm_s * af)});
     d.k_s = needed_advance_s(fin, d.design_flow_mm3_s);
     d.k_source = "operating points";
-    d.notes.push_back("K at each flow is the stored melt volume over the flow (the integral of tau over 0..Q, divided by "
-                      "Q; tau held at the lowest level below it), not tau at that flow");
+    d.notes.push_back(
+        "K at each flow is the stored melt volume over the flow (the integral of tau over 0..Q, divided by "
+        "Q; tau held at the lowest level below it), not tau at that flow");
     if (d.design_flow_mm3_s < q.front() || d.design_flow_mm3_s > q.back())
-      d.warnings.push_back(fmt::format("design flow {:.3g} mm^3/s lies outside the identified range {:.3g}-{:.3g} "
-                                       "mm^3/s: tau is held at the nearest operating point there",
-                                    d.design_flow_mm3_s, q.front(), q.back()));
+      d.warnings.push_back(
+          fmt::format("design flow {:.3g} mm^3/s lies outside the identified range {:.3g}-{:.3g} "
+                      "mm^3/s: tau is held at the nearest operating point there",
+                      d.design_flow_mm3_s, q.front(), q.back()));
     if (!finite(d.theta_s)) {
       std::vector<double> th;
       for (const auto& p : pts) th.push_back(p.theta_s);
@@ -131,13 +136,13 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
     }
     // relative_tau is relative to the reference flow; the pooled tau is taken to be tau there.
     const double rel_ref = finite(in.rheo_reference_flow_mm3_s) ? interp(q, rel, in.rheo_reference_flow_mm3_s) : 1.0;
-    for (std::size_t i = 0; i < q.size(); ++i)
-      d.schedule.push_back({q[i], q[i] / af, in.tau_s * rel[i] / rel_ref});
+    for (std::size_t i = 0; i < q.size(); ++i) d.schedule.push_back({q[i], q[i] / af, in.tau_s * rel[i] / rel_ref});
     d.k_s = in.tau_s * interp(q, rel, d.design_flow_mm3_s) / rel_ref;
     d.k_source = "rheology";
-    d.notes.push_back(fmt::format("flow dependence predicted from rheology, scaled so that K = tau = {:.4g} s at the "
-                                  "reference flow {:.3g} mm^3/s",
-                                  in.tau_s, finite(in.rheo_reference_flow_mm3_s) ? in.rheo_reference_flow_mm3_s : q.front()));
+    d.notes.push_back(
+        fmt::format("flow dependence predicted from rheology, scaled so that K = tau = {:.4g} s at the "
+                    "reference flow {:.3g} mm^3/s",
+                    in.tau_s, finite(in.rheo_reference_flow_mm3_s) ? in.rheo_reference_flow_mm3_s : q.front()));
   } else if (finite(in.tau_s)) {
     d.k_s = in.tau_s;
     d.k_stderr_s = in.tau_stderr_s;
@@ -175,21 +180,21 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
     d.single_k_max_rel_error = worst;
   }
 
-  if (finite(d.theta_s) && finite(in.print_speed_mm_s))
-    d.theta_track_mm = d.theta_s * in.print_speed_mm_s;
+  if (finite(d.theta_s) && finite(in.print_speed_mm_s)) d.theta_track_mm = d.theta_s * in.print_speed_mm_s;
   if (finite(d.theta_s) && d.theta_s > 0)
-    d.notes.push_back(fmt::format("dead time theta = {:.4g} s is not cancelled by advance: after every speed change "
-                                  "the flow is wrong for theta{}",
-                                  d.theta_s,
-                                  finite(d.theta_track_mm) ? fmt::format(", about {:.3g} mm of line at print speed",
-                                                                         d.theta_track_mm)
-                                                           : std::string()));
+    d.notes.push_back(
+        fmt::format("dead time theta = {:.4g} s is not cancelled by advance: after every speed change "
+                    "the flow is wrong for theta{}",
+                    d.theta_s,
+                    finite(d.theta_track_mm) ? fmt::format(", about {:.3g} mm of line at print speed", d.theta_track_mm)
+                                             : std::string()));
   // Comparing the gain with 1 means something only when input and output share units (flow in,
   // flow out): a feed in mm/s against a force in N has no natural "1".
   if (finite(d.gain) && std::abs(d.gain - 1.0) > 0.05 && gain_is_dimensionless(in.gain_unit))
-    d.warnings.push_back(fmt::format("steady-state gain {:.4g} differs from 1: the delivered flow is off by that "
-                                     "factor, a flow-rate (extrusion multiplier) matter, not part of K",
-                                     d.gain));
+    d.warnings.push_back(
+        fmt::format("steady-state gain {:.4g} differs from 1: the delivered flow is off by that "
+                    "factor, a flow-rate (extrusion multiplier) matter, not part of K",
+                    d.gain));
 
   const bool limits = finite(in.print_accel_mm_s2) && in.print_accel_mm_s2 > 0 &&
                       finite(in.extruder_accel_limit_mm_s2) && in.extruder_accel_limit_mm_s2 > 0;

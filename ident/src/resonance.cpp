@@ -33,8 +33,14 @@ std::vector<double> interp(const std::vector<double>& fx, const std::vector<doub
   std::vector<double> y(fq.size());
   std::size_t j = 0;
   for (std::size_t i = 0; i < fq.size(); ++i) {
-    if (fq[i] <= fx.front()) { y[i] = x.front(); continue; }
-    if (fq[i] >= fx.back()) { y[i] = x.back(); continue; }
+    if (fq[i] <= fx.front()) {
+      y[i] = x.front();
+      continue;
+    }
+    if (fq[i] >= fx.back()) {
+      y[i] = x.back();
+      continue;
+    }
     while (j + 2 < fx.size() && fx[j + 1] < fq[i]) ++j;
     const double u = (fq[i] - fx[j]) / (fx[j + 1] - fx[j]);
     y[i] = x[j] + u * (x[j + 1] - x[j]);
@@ -125,19 +131,21 @@ void replace_wild_samples(CsvTable& table, std::string_view bytes, std::size_t c
       return line ? source_location(table.path, line) : table.path;
     };
     if (static_cast<double>(wild.size()) > o.max_wild_fraction * static_cast<double>(v.size()) && wild.size() > 1)
-      throw InputError(fmt::format("{} samples of {} ({:.2g} %) are beyond any accelerometer's range (+-{:.6g} mm/s^2), "
-                                   "the first {} = {:g}; the record is corrupt (limit {:.2g} %)",
-                                   wild.size(), name, 100.0 * static_cast<double>(wild.size()) / static_cast<double>(v.size()),
-                                   limit, name, v[wild.front()], 100 * o.max_wild_fraction),
-                       where(wild.front()));
+      throw InputError(
+          fmt::format("{} samples of {} ({:.2g} %) are beyond any accelerometer's range (+-{:.6g} mm/s^2), "
+                      "the first {} = {:g}; the record is corrupt (limit {:.2g} %)",
+                      wild.size(), name, 100.0 * static_cast<double>(wild.size()) / static_cast<double>(v.size()),
+                      limit, name, v[wild.front()], 100 * o.max_wild_fraction),
+          where(wild.front()));
     std::vector<bool> bad(v.size(), false);
     for (const auto i : wild) bad[i] = true;
     for (std::size_t k = 0; k < wild.size(); ++k) {
       const std::size_t i = wild[k];
       if (k < kListed)
-        warnings.push_back(fmt::format("{}: {} = {:g} mm/s^2 is beyond any accelerometer's range (+-{:.6g} mm/s^2); the "
-                                       "sample was replaced by the mean of its neighbours",
-                                       where(i), name, v[i], limit));
+        warnings.push_back(
+            fmt::format("{}: {} = {:g} mm/s^2 is beyond any accelerometer's range (+-{:.6g} mm/s^2); the "
+                        "sample was replaced by the mean of its neighbours",
+                        where(i), name, v[i], limit));
       double sum = 0;
       int count = 0;
       for (std::size_t j = i; j-- > 0;)
@@ -221,21 +229,24 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
   }
   const double mean_dt = regular > 0 ? sum / static_cast<double>(regular) : med;
   s.jitter = regular > 1 ? std::sqrt(std::max(0.0, sum2 / static_cast<double>(regular) - mean_dt * mean_dt)) / med : 0;
-  if (s.max_gap_s > o.max_gap_s || static_cast<double>(s.missing_samples) > o.max_missing_fraction * static_cast<double>(n))
-    throw InputError(fmt::format("irregular sampling: {} gap(s) in the time column, {} samples missing ({:.2f} %), the "
-                                 "longest {:.4g} s after t = {:.6g} s (limits: {:.3g} s, {:.2g} %); record again or cut "
-                                 "the file at the gap",
-                                 s.gaps, s.missing_samples, 100.0 * static_cast<double>(s.missing_samples) / static_cast<double>(n),
-                                 s.max_gap_s, gap_at, o.max_gap_s, 100 * o.max_missing_fraction),
-                     path);
+  if (s.max_gap_s > o.max_gap_s ||
+      static_cast<double>(s.missing_samples) > o.max_missing_fraction * static_cast<double>(n))
+    throw InputError(
+        fmt::format("irregular sampling: {} gap(s) in the time column, {} samples missing ({:.2f} %), the "
+                    "longest {:.4g} s after t = {:.6g} s (limits: {:.3g} s, {:.2g} %); record again or cut "
+                    "the file at the gap",
+                    s.gaps, s.missing_samples, 100.0 * static_cast<double>(s.missing_samples) / static_cast<double>(n),
+                    s.max_gap_s, gap_at, o.max_gap_s, 100 * o.max_missing_fraction),
+        path);
   const bool need_resample = s.gaps > 0 || s.jitter > o.max_jitter;
   if (need_resample) {
     s.sample_rate_hz = 1.0 / med;
     const std::size_t m = static_cast<std::size_t>(std::floor(s.duration_s / med)) + 1;
     s.resampled = true;
-    r.warnings.push_back(fmt::format("{}: irregular sampling ({} gap(s), {} missing samples, interval jitter {:.2g} %); "
-                                     "resampled linearly at {:.6g} Hz",
-                                     path, s.gaps, s.missing_samples, 100 * s.jitter, s.sample_rate_hz));
+    r.warnings.push_back(
+        fmt::format("{}: irregular sampling ({} gap(s), {} missing samples, interval jitter {:.2g} %); "
+                    "resampled linearly at {:.6g} Hz",
+                    path, s.gaps, s.missing_samples, 100 * s.jitter, s.sample_rate_hz));
     for (std::size_t c = 1; c < table.columns.size(); ++c)
       table.columns[c].values = resample(t, table.columns[c].values, t.front(), med, m);
   } else {
@@ -257,9 +268,10 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
     if (*hi > *lo) any_signal = true;
   }
   if (!any_signal)
-    throw InputError("the acceleration columns are all zero (or constant): the accelerometer recorded nothing; check "
-                     "its wiring and that the test moved the axis",
-                     path);
+    throw InputError(
+        "the acceleration columns are all zero (or constant): the accelerometer recorded nothing; check "
+        "its wiring and that the test moved the axis",
+        path);
   if (!r.excitation.empty()) {
     const auto [lo, hi] = std::minmax_element(r.excitation.begin(), r.excitation.end());
     if (!(*hi > *lo)) throw InputError("the excitation column '" + o.excitation_column + "' is constant", path);
@@ -270,14 +282,16 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
     if (rep.samples == 0) continue;
     const double frac = static_cast<double>(rep.samples) / static_cast<double>(r.channels[c].size());
     if (frac > o.max_clipped_fraction)
-      throw InputError(fmt::format("{} is clipped: {} samples ({:.2f} %) sit at the sensor limit +-{:.6g} mm/s^2 (limit "
-                                   "{:.2g} %); the resonance peaks would be cut off. Lower accel_per_hz or raise the "
-                                   "accelerometer's range",
-                                   rep.channel, rep.samples, 100 * frac, rep.limit_mm_s2, 100 * o.max_clipped_fraction),
-                       path);
-    r.warnings.push_back(fmt::format("{}: {} has {} clipped samples ({:.3f} %) at +-{:.6g} mm/s^2; the strongest peak may "
-                                     "be underestimated",
-                                     path, rep.channel, rep.samples, 100 * frac, rep.limit_mm_s2));
+      throw InputError(
+          fmt::format("{} is clipped: {} samples ({:.2f} %) sit at the sensor limit +-{:.6g} mm/s^2 (limit "
+                      "{:.2g} %); the resonance peaks would be cut off. Lower accel_per_hz or raise the "
+                      "accelerometer's range",
+                      rep.channel, rep.samples, 100 * frac, rep.limit_mm_s2, 100 * o.max_clipped_fraction),
+          path);
+    r.warnings.push_back(
+        fmt::format("{}: {} has {} clipped samples ({:.3f} %) at +-{:.6g} mm/s^2; the strongest peak may "
+                    "be underestimated",
+                    path, rep.channel, rep.samples, 100 * frac, rep.limit_mm_s2));
     r.clipping.push_back(rep);
   }
   return r;
@@ -410,8 +424,7 @@ std::vector<Peak> find_peaks(const std::vector<double>& f, const std::vector<dou
     for (std::size_t j = c.i; j-- > 0;) {
       if (w[j] > c.h) break;
       lmin = std::min(lmin, w[j]);
-      if (lcross < 0 && w[j] < 0.5 * c.h)
-        lcross = fw[j] + (0.5 * c.h - w[j]) / (w[j + 1] - w[j]) * (fw[j + 1] - fw[j]);
+      if (lcross < 0 && w[j] < 0.5 * c.h) lcross = fw[j] + (0.5 * c.h - w[j]) / (w[j + 1] - w[j]) * (fw[j + 1] - fw[j]);
     }
     for (std::size_t j = c.i + 1; j < w.size(); ++j) {
       if (w[j] > c.h) break;

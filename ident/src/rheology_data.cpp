@@ -73,9 +73,7 @@ double pressure_unit_factor(std::string_view unit) {
 RheologyTable parse_rheology_csv(std::string_view text, const std::string& path, const RheologyCsvOptions& o) {
   const auto t = parse_csv(text, path);
   const auto lines = data_row_lines(text, t.header_line);
-  auto at = [&](std::size_t row) {
-    return row < lines.size() ? source_location(path, lines[row]) : path;
-  };
+  auto at = [&](std::size_t row) { return row < lines.size() ? source_location(path, lines[row]) : path; };
   RheologyTable out;
   auto& d = out.data;
   const auto* g = find_column(t, o.shear_rate_column, {"shear_rate", "shear rate", "shearrate", "gamma_dot"});
@@ -92,9 +90,10 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
                         ? find_column(t, o.stress_column, {"shear_stress", "shear stress", "stress", "tau"})
                         : nullptr;
   if (!eta && !tau)
-    throw InputError("no viscosity column: name one 'viscosity (Pa.s)' or 'shear_stress (Pa)', or give it with "
-                     "--viscosity COL",
-                     source_location(path, t.header_line));
+    throw InputError(
+        "no viscosity column: name one 'viscosity (Pa.s)' or 'shear_stress (Pa)', or give it with "
+        "--viscosity COL",
+        source_location(path, t.header_line));
   const auto* temp = find_column(t, o.temperature_column, {"temperature", "temp", "T"});
   const auto* pres = find_column(t, o.pressure_column, {"pressure", "p"});
   const auto* w = find_column(t, {}, {"weight"});
@@ -106,9 +105,9 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
     if (!o.viscosity_unit.empty()) {
       const double given = viscosity_unit_factor(o.viscosity_unit);
       if (!eta->unit.empty() && viscosity_unit_factor(eta->unit) != given)
-        throw InputError("the viscosity column says '" + eta->unit + "' but the stated viscosity unit is '" +
-                             o.viscosity_unit + "'",
-                         source_location(path, t.header_line));
+        throw InputError(
+            "the viscosity column says '" + eta->unit + "' but the stated viscosity unit is '" + o.viscosity_unit + "'",
+            source_location(path, t.header_line));
       eta_unit = o.viscosity_unit;
     }
     vf = viscosity_unit_factor(eta_unit);
@@ -124,14 +123,20 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   if (temp) {
     const std::string& temp_unit = o.temperature_unit.empty() ? temp->unit : o.temperature_unit;
     const auto u = lower_nospace(temp_unit);
-    if (u == "degc" || u == "c" || u == "\xc2\xb0" "c" || u == "celsius") tu = TUnit::degc;
+    if (u == "degc" || u == "c" ||
+        u == "\xc2\xb0"
+             "c" ||
+        u == "celsius")
+      tu = TUnit::degc;
     else if (u == "k" || u == "kelvin") tu = TUnit::kelvin;
     else if (u.empty())
-      throw InputError("the temperature column has no unit: write 'temperature (degC)' or 'temperature (K)', or give "
-                       "--temperature-unit degC|K",
-                       source_location(path, t.header_line));
+      throw InputError(
+          "the temperature column has no unit: write 'temperature (degC)' or 'temperature (K)', or give "
+          "--temperature-unit degC|K",
+          source_location(path, t.header_line));
     else
-      throw InputError("unknown temperature unit '" + temp_unit + "' (use degC or K)", source_location(path, t.header_line));
+      throw InputError("unknown temperature unit '" + temp_unit + "' (use degC or K)",
+                       source_location(path, t.header_line));
     if (tu == TUnit::degc) out.notes.push_back(fmt::format("temperature: degC -> K (+{:g})", o.kelvin_offset));
   } else if (!std::isfinite(o.temperature_degC)) {
     throw InputError("no temperature: add a 'temperature (degC)' or '(K)' column, or give the temperature of the data",
@@ -158,7 +163,8 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
     if (eta) {
       e = eta->values[i] * vf;
       if (!(e > 0)) throw InputError(fmt::format("non-positive viscosity {:g}", eta->values[i]), at(i));
-      if (tau && tau->values[i] > 0) stress_ratio.push_back(tau->values[i] * pressure_unit_factor(tau->unit) / (gi * e));
+      if (tau && tau->values[i] > 0)
+        stress_ratio.push_back(tau->values[i] * pressure_unit_factor(tau->unit) / (gi * e));
     } else {
       const double s = tau->values[i] * sf;
       if (!(s > 0)) throw InputError(fmt::format("non-positive shear stress {:g}", tau->values[i]), at(i));
@@ -171,14 +177,16 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
       if (tu == TUnit::kelvin) {
         if (v < 273.15)
           throw InputError(fmt::format("temperature {:g} K is below 0 degC; the values look like degC but the "
-                                       "column says K (write 'temperature (degC)')", v),
+                                       "column says K (write 'temperature (degC)')",
+                                       v),
                            at(i));
         if (v > 1200) throw InputError(fmt::format("temperature {:g} K is implausible for a polymer melt", v), at(i));
         TK = v;
       } else {
         if (v > 600)
           throw InputError(fmt::format("temperature {:g} degC is above 600 degC; the values look like kelvin but the "
-                                       "column says degC (write 'temperature (K)')", v),
+                                       "column says degC (write 'temperature (K)')",
+                                       v),
                            at(i));
         if (v < -50) throw InputError(fmt::format("temperature {:g} degC is implausible for a polymer melt", v), at(i));
         TK = v + o.kelvin_offset;
@@ -207,8 +215,7 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   }
   if (d.size() == 0) {
     if (select_T)
-      throw InputError(fmt::format("no data rows at {:g}..{:g} degC ({} rows outside)", t_lo, t_hi, skipped),
-                       path);
+      throw InputError(fmt::format("no data rows at {:g}..{:g} degC ({} rows outside)", t_lo, t_hi, skipped), path);
     throw InputError("no data rows", path);
   }
   if (select_T)
@@ -229,10 +236,11 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
         if (!(g1 > g0 * (1 + 1e-9))) continue;
         const double s0 = d.viscosity_Pa_s[i0] * g0, s1 = d.viscosity_Pa_s[i1] * g1;
         if (s1 < s0 * (1 - kStressDropTolerance)) {
-          out.warnings.push_back(fmt::format(
-              "{}: the shear stress falls from {:g} to {:g} Pa as the shear rate rises from {:g} to {:g} 1/s at {:g} K; "
-              "a melt's flow curve rises (flow instability, or a column or unit mix-up)",
-              at(kept_row[i1]), s0, s1, g0, g1, T));
+          out.warnings.push_back(
+              fmt::format("{}: the shear stress falls from {:g} to {:g} Pa as the shear rate rises from {:g} to {:g} "
+                          "1/s at {:g} K; "
+                          "a melt's flow curve rises (flow instability, or a column or unit mix-up)",
+                          at(kept_row[i1]), s0, s1, g0, g1, T));
           break;
         }
       }
@@ -240,24 +248,30 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   }
   if (!stress_ratio.empty()) {
     // eta = tau / gamma must hold row by row; a factor between the columns is a unit mix-up.
-    std::nth_element(stress_ratio.begin(), stress_ratio.begin() + static_cast<long>(stress_ratio.size() / 2), stress_ratio.end());
+    std::nth_element(stress_ratio.begin(), stress_ratio.begin() + static_cast<long>(stress_ratio.size() / 2),
+                     stress_ratio.end());
     const double r = stress_ratio[stress_ratio.size() / 2];
     if (!(r > 0.8 && r < 1.25))
-      throw InputError(fmt::format("the viscosity and shear_stress columns disagree: shear_stress / shear_rate is {:.4g} times "
-                                   "the viscosity (median over the rows); one of their units is wrong",
-                                   r),
-                       source_location(path, t.header_line));
+      throw InputError(
+          fmt::format("the viscosity and shear_stress columns disagree: shear_stress / shear_rate is {:.4g} times "
+                      "the viscosity (median over the rows); one of their units is wrong",
+                      r),
+          source_location(path, t.header_line));
   }
-  const std::string stated = eta ? (eta_unit.empty() ? std::string("read as Pa.s, no unit stated") : "stated as " + eta_unit)
-                                 : "from shear_stress / shear_rate";
+  const std::string stated =
+      eta ? (eta_unit.empty() ? std::string("read as Pa.s, no unit stated") : "stated as " + eta_unit)
+          : "from shear_stress / shear_rate";
   if (e_hi > kHighViscosity)
-    out.warnings.push_back(fmt::format(
-        "{}: viscosity {:g} Pa.s ({}) is above {:g} Pa.s, high for a polymer melt; real for high-Tg polymers near their "
-        "processing window or high molecular weights, but a column in mPa.s or P read as Pa.s looks the same: check the unit",
-        at(e_hi_row), e_hi, stated, kHighViscosity));
+    out.warnings.push_back(
+        fmt::format("{}: viscosity {:g} Pa.s ({}) is above {:g} Pa.s, high for a polymer melt; real for high-Tg "
+                    "polymers near their "
+                    "processing window or high molecular weights, but a column in mPa.s or P read as Pa.s looks the "
+                    "same: check the unit",
+                    at(e_hi_row), e_hi, stated, kHighViscosity));
   if (e_lo < kLowViscosity)
-    out.warnings.push_back(fmt::format("{}: viscosity {:g} Pa.s ({}) is below {:g} Pa.s, low for a polymer melt; check the unit",
-                                       at(e_lo_row), e_lo, stated, kLowViscosity));
+    out.warnings.push_back(
+        fmt::format("{}: viscosity {:g} Pa.s ({}) is below {:g} Pa.s, low for a polymer melt; check the unit",
+                    at(e_lo_row), e_lo, stated, kLowViscosity));
   return out;
 }
 

@@ -98,9 +98,10 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
   const std::size_t start = impact + settle;
   const auto min_len = static_cast<std::size_t>(std::max(4.0 * fs / o.min_hz, 0.05 * fs));
   if (start + static_cast<std::size_t>(0.02 * fs) > n)
-    throw InputError(fmt::format("the record ends {:.3f} s after its impact (at {:.3f} s): there is no decay to analyse",
-                                 static_cast<double>(n - std::min(n, impact)) / fs, static_cast<double>(impact) / fs),
-                     rec.path);
+    throw InputError(
+        fmt::format("the record ends {:.3f} s after its impact (at {:.3f} s): there is no decay to analyse",
+                    static_cast<double>(n - std::min(n, impact)) / fs, static_cast<double>(impact) / fs),
+        rec.path);
   const std::size_t len = std::min(n - start, static_cast<std::size_t>(o.max_window_s * fs));
   r.impact_s = static_cast<double>(impact) / fs;
   r.window_start_s = static_cast<double>(start) / fs;
@@ -264,16 +265,19 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
   r.damped_freq_hz = r.freq_hz * std::sqrt(1 - r.zeta * r.zeta);
   for (std::size_t i = 1; i < starts.size(); ++i) r.other_lines_hz.push_back(r.fit.value(fmt::format("f{}_hz", i)));
   if (r.fit.diagnostics.whiteness_p < 0.01)
-    r.warnings.push_back(fmt::format("{}: the fit's residuals are not white (p = {:.2g}): other motion than the fitted "
-                                     "lines; the intervals are optimistic",
-                                     ch.name, r.fit.diagnostics.whiteness_p));
+    r.warnings.push_back(
+        fmt::format("{}: the fit's residuals are not white (p = {:.2g}): other motion than the fitted "
+                    "lines; the intervals are optimistic",
+                    ch.name, r.fit.diagnostics.whiteness_p));
   return r;
 }
 
 nlohmann::json to_json(const RingdownResult& r) {
   nlohmann::json ch = nlohmann::json::array();
   for (const auto& c : r.channels)
-    ch.push_back({{"name", c.name}, {"signal_rms_mm_s2", c.signal_rms}, {"noise_rms_mm_s2", c.noise_rms},
+    ch.push_back({{"name", c.name},
+                  {"signal_rms_mm_s2", c.signal_rms},
+                  {"noise_rms_mm_s2", c.noise_rms},
                   {"strength", c.strength}});
   return {{"file", r.path},
           {"channel", r.channel},

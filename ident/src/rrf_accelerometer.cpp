@@ -65,7 +65,8 @@ AccelRecord load_rrf_accelerometer_csv(const std::string& path, std::string_view
                        source_location(path, 1));
     axes.push_back(static_cast<char>(head[k][0] - 'X' + 'x'));
   }
-  if (axes.empty()) throw InputError("RepRapFirmware accelerometer header 'Sample' lists no axis", source_location(path, 1));
+  if (axes.empty())
+    throw InputError("RepRapFirmware accelerometer header 'Sample' lists no axis", source_location(path, 1));
 
   AccelRecord r;
   r.path = path;
@@ -86,7 +87,8 @@ AccelRecord load_rrf_accelerometer_csv(const std::string& path, std::string_view
     if (l.rfind("Rate ", 0) == 0) {
       unsigned rate_u = 0, ov = 0;
       if (std::sscanf(std::string(l).c_str(), "Rate %u, overflows %u", &rate_u, &ov) != 2 || rate_u == 0)
-        throw InputError(fmt::format("a bad trailer '{}' (RepRapFirmware writes 'Rate <Hz>, overflows <n>')", l), where);
+        throw InputError(fmt::format("a bad trailer '{}' (RepRapFirmware writes 'Rate <Hz>, overflows <n>')", l),
+                         where);
       rate = rate_u;
       overflows = ov;
       trailer = true;
@@ -97,7 +99,8 @@ AccelRecord load_rrf_accelerometer_csv(const std::string& path, std::string_view
     const auto f = rrf_split_fields(l);
     double sample = 0;
     if (f.size() != axes.size() + 1 || !rrf_parse_number(f[0], sample))
-      throw InputError(fmt::format("expected 'sample,{}' values, got '{}'", axes.size() == 3 ? "X,Y,Z" : "axes", l), where);
+      throw InputError(fmt::format("expected 'sample,{}' values, got '{}'", axes.size() == 3 ? "X,Y,Z" : "axes", l),
+                       where);
     if (std::lround(sample) != static_cast<long>(ch[0].size()))
       throw InputError(fmt::format("sample number {} out of order (expected {})", f[0], ch[0].size()), where);
     for (std::size_t k = 0; k < axes.size(); ++k) {
@@ -107,21 +110,24 @@ AccelRecord load_rrf_accelerometer_csv(const std::string& path, std::string_view
     }
   }
   if (!trailer)
-    throw InputError("no 'Rate <Hz>, overflows <n>' line at the end: the recording did not finish (RepRapFirmware writes "
-                     "it last), so the sample rate is unknown",
-                     source_location(path, lines.size()));
+    throw InputError(
+        "no 'Rate <Hz>, overflows <n>' line at the end: the recording did not finish (RepRapFirmware writes "
+        "it last), so the sample rate is unknown",
+        source_location(path, lines.size()));
   if (ch[0].size() < 16)
     throw InputError(fmt::format("{} rows of accelerometer data; far too few for a spectrum", ch[0].size()), path);
   if (overflows > 0)
-    r.warnings.push_back(fmt::format("{}: the accelerometer's FIFO overflowed {} time(s) during the run; samples are "
-                                     "missing and the spectrum is smeared",
-                                     path, overflows));
+    r.warnings.push_back(
+        fmt::format("{}: the accelerometer's FIFO overflowed {} time(s) during the run; samples are "
+                    "missing and the spectrum is smeared",
+                    path, overflows));
   bool any_signal = false;
   for (const auto& c : ch) any_signal |= *std::max_element(c.begin(), c.end()) > *std::min_element(c.begin(), c.end());
   if (!any_signal)
-    throw InputError("the acceleration columns are constant: the accelerometer recorded nothing; check its wiring and "
-                     "that the test moved the axis",
-                     path);
+    throw InputError(
+        "the acceleration columns are constant: the accelerometer recorded nothing; check its wiring and "
+        "that the test moved the axis",
+        path);
   for (std::size_t k = 0; k < axes.size(); ++k) {
     r.channel_names.push_back(std::string("accel_") + axes[k]);
     r.channels.push_back(std::move(ch[k]));

@@ -32,11 +32,12 @@ std::string stdata_decompress(const std::string& path, std::string_view bytes) {
                        path);
     out.append(chunk.data(), ob.pos);
     if (out.size() > kMaxStdataBytes)
-      throw InputError(fmt::format("decompresses to more than {} bytes; not a Shake&Tune measurement file", kMaxStdataBytes),
-                       path);
+      throw InputError(
+          fmt::format("decompresses to more than {} bytes; not a Shake&Tune measurement file", kMaxStdataBytes), path);
     if (in.pos == in.size && ob.pos < ob.size) break;
   }
-  if (last != 0) throw InputError("the Zstandard stream ends in the middle of a frame (a truncated .stdata file)", path);
+  if (last != 0)
+    throw InputError("the Zstandard stream ends in the middle of a frame (a truncated .stdata file)", path);
   return out;
 }
 
@@ -52,8 +53,9 @@ char stdata_axis_from_name(const std::string& name) {
 }  // namespace
 
 bool is_shaketune_stdata(std::string_view bytes) {
-  return bytes.size() >= 4 && static_cast<unsigned char>(bytes[0]) == 0x28 && static_cast<unsigned char>(bytes[1]) == 0xB5 &&
-         static_cast<unsigned char>(bytes[2]) == 0x2F && static_cast<unsigned char>(bytes[3]) == 0xFD;
+  return bytes.size() >= 4 && static_cast<unsigned char>(bytes[0]) == 0x28 &&
+         static_cast<unsigned char>(bytes[1]) == 0xB5 && static_cast<unsigned char>(bytes[2]) == 0x2F &&
+         static_cast<unsigned char>(bytes[3]) == 0xFD;
 }
 
 std::vector<StdataMeasurement> load_shaketune_stdata(const std::string& path, std::string_view bytes,
@@ -75,8 +77,8 @@ std::vector<StdataMeasurement> load_shaketune_stdata(const std::string& path, st
       throw InputError(fmt::format("decompressed line {} is not JSON ({})", line_no, ex.what()), path);
     }
     if (!m.is_object() || !m.contains("samples") || !m["samples"].is_array())
-      throw InputError(fmt::format("decompressed line {} is not a Shake&Tune measurement (no \"samples\" array)", line_no),
-                       path);
+      throw InputError(
+          fmt::format("decompressed line {} is not a Shake&Tune measurement (no \"samples\" array)", line_no), path);
     StdataMeasurement meas;
     meas.name = m.contains("name") && m["name"].is_string() ? m["name"].get<std::string>()
                                                             : fmt::format("measurement_{}", out.size() + 1);
@@ -89,8 +91,8 @@ std::vector<StdataMeasurement> load_shaketune_stdata(const std::string& path, st
     std::size_t k = 0;
     for (const auto& s : samples) {
       if (!s.is_array() || s.size() != 4)
-        throw InputError(fmt::format("measurement '{}', sample {}: expected [time, accel_x, accel_y, accel_z]", meas.name, k),
-                         path);
+        throw InputError(
+            fmt::format("measurement '{}', sample {}: expected [time, accel_x, accel_y, accel_z]", meas.name, k), path);
       double v[4];
       for (std::size_t c = 0; c < 4; ++c) {
         if (!s[c].is_number())

@@ -83,8 +83,8 @@ fitting::FitResult fit_sine(std::span<const double> t, std::span<const double> y
     }
     return true;
   };
-  auto f = fitting::solve_least_squares(fmt::format("sine: offset + amplitude sin(2 pi {:.6g} t + phase)", freq_hz),
-                                        prob);
+  auto f =
+      fitting::solve_least_squares(fmt::format("sine: offset + amplitude sin(2 pi {:.6g} t + phase)", freq_hz), prob);
   // Normalize to amplitude >= 0 and phase in (-180, 180].
   for (auto& p : f.params) {
     if (p.name == "amplitude" && p.value < 0) {
@@ -108,9 +108,10 @@ fitting::FitResult fit_sine(std::span<const double> t, std::span<const double> y
       p.ci95_hi += shift;
     }
   if (!(f.value("amplitude") > 2 * f.param("amplitude").std_error))
-    f.warnings.push_back(fmt::format("the amplitude ({:.3g}) is within two standard errors of zero; the phase is "
-                                     "poorly determined",
-                                     f.value("amplitude")));
+    f.warnings.push_back(
+        fmt::format("the amplitude ({:.3g}) is within two standard errors of zero; the phase is "
+                    "poorly determined",
+                    f.value("amplitude")));
   return f;
 }
 
@@ -123,7 +124,8 @@ SineDwell sine_dwell(std::span<const double> t, std::span<const double> y, doubl
   s.input = fit_sine(t, u, freq_hz, u_unit);
   const auto& Ay = s.output.param("amplitude");
   const auto& Au = s.input->param("amplitude");
-  const double dof = static_cast<double>(s.output.diagnostics.num_observations + s.input->diagnostics.num_observations - 6);
+  const double dof =
+      static_cast<double>(s.output.diagnostics.num_observations + s.input->diagnostics.num_observations - 6);
   const double tq = fitting::t_multiplier(0.95, dof);
   s.gain.name = "gain";
   s.gain.unit = y_unit + "/" + u_unit;

@@ -80,9 +80,10 @@ SegmentPlan plan_segments(std::size_t n, double fs, const WelchOptions& o) {
   const auto noverlap = static_cast<std::size_t>(std::floor(o.overlap * static_cast<double>(nperseg)));
   const std::size_t step = nperseg - noverlap;
   if (n < nperseg + step)
-    throw InputError(fmt::format("the record has {} samples; Welch's method needs at least two segments of {} "
-                                 "samples ({} s at {} Hz); record longer or use a shorter segment",
-                                 n, nperseg, static_cast<double>(nperseg + step) / fs, fs));
+    throw InputError(
+        fmt::format("the record has {} samples; Welch's method needs at least two segments of {} "
+                    "samples ({} s at {} Hz); record longer or use a shorter segment",
+                    n, nperseg, static_cast<double>(nperseg + step) / fs, fs));
   return {nperseg, step, (n - nperseg) / step + 1};
 }
 
@@ -242,8 +243,7 @@ CrossSpectrum welch_csd(std::span<const double> x, std::span<const double> y, do
   return c;
 }
 
-FrequencyResponse h1_estimate(std::span<const double> x, std::span<const double> y, double fs,
-                              const WelchOptions& o) {
+FrequencyResponse h1_estimate(std::span<const double> x, std::span<const double> y, double fs, const WelchOptions& o) {
   const auto c = welch_csd(x, y, fs, o);
   FrequencyResponse r;
   r.freq_hz = c.freq_hz;

@@ -166,13 +166,12 @@ std::vector<DetectedStep> detect_steps(std::span<const double> t, std::span<cons
   if (n < 10) throw InputError(fmt::format("too few samples ({}) for a step analysis; at least 10 are needed", n));
   const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
   const double range = *hi - *lo;
-  if (!(range > 1e-12 * std::max(1.0, std::abs(*hi))))
-    throw InputError("no step found: the input column is constant");
+  if (!(range > 1e-12 * std::max(1.0, std::abs(*hi)))) throw InputError("no step found: the input column is constant");
   const double thr = o.min_step_fraction * range;
   // Change points: the input leaves the current level by more than thr; the transition ends when
   // the sample-to-sample change falls below thr / 4.
   struct Change {
-    std::size_t first;  // first sample away from the old level
+    std::size_t first;    // first sample away from the old level
     std::size_t settled;  // first sample at the new level
   };
   std::vector<Change> changes;
@@ -359,7 +358,8 @@ nlohmann::json to_json(const StepAnalysis& a) {
                    {"stderr", stderr_j},
                    {"fit", fitting::to_json(op.fit)}});
   }
-  json out{{"steps", steps}, {"pooled", a.pooled ? fitting::to_json(*a.pooled) : json(nullptr)}, {"operating_points", ops}};
+  json out{
+      {"steps", steps}, {"pooled", a.pooled ? fitting::to_json(*a.pooled) : json(nullptr)}, {"operating_points", ops}};
   json trend = json::object();
   if (a.trend_tau) trend["tau_s"] = fitting::to_json(*a.trend_tau);
   if (a.trend_K) trend["K"] = fitting::to_json(*a.trend_K);

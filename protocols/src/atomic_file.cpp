@@ -33,7 +33,8 @@ void fsync_directory(const std::filesystem::path& dir) {
 std::string stage_temporary(const std::string& path, std::string_view content) {
   const std::filesystem::path target(path);
   const std::filesystem::path dir = target.parent_path();
-  std::string tmpl = (dir.empty() ? std::string(".") : dir.string()) + "/." + target.filename().string() + ".tmp.XXXXXX";
+  std::string tmpl =
+      (dir.empty() ? std::string(".") : dir.string()) + "/." + target.filename().string() + ".tmp.XXXXXX";
   std::vector<char> name(tmpl.begin(), tmpl.end());
   name.push_back('\0');
   const int fd = ::mkstemp(name.data());
@@ -106,7 +107,8 @@ void FileBatch::commit(const std::function<void(const std::string&)>& before_ren
     const auto st = std::filesystem::status(f.path, ec);
     if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
       throw InputError("cannot write: it exists and is not a regular file (nothing was changed)", f.path);
-    previous.push_back(std::filesystem::exists(st) ? std::optional<std::string>(ident::read_file_bytes(f.path)) : std::nullopt);
+    previous.push_back(std::filesystem::exists(st) ? std::optional<std::string>(ident::read_file_bytes(f.path))
+                                                   : std::nullopt);
   }
   std::vector<std::string> temps;
   auto remove_temps = [&](std::size_t from) {

@@ -65,6 +65,8 @@ steps_per_mm_y = 160
 
 }  // namespace
 
-MachineProfile builtin_sim_profile() { return parse_machine_profile(kSimProfile, "<built-in simulated printer profile>"); }
+MachineProfile builtin_sim_profile() {
+  return parse_machine_profile(kSimProfile, "<built-in simulated printer profile>");
+}
 
 }  // namespace tunekit::protocols

@@ -37,7 +37,8 @@ double PrintedLine::length_mm() const {
 
 std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& p, const MachineProfile& profile) {
   const double v = line_steps_param(p, "speed_mm_s");
-  const double lead = line_steps_param(p, "lead_mm"), step = line_steps_param(p, "step_mm"), tail = line_steps_param(p, "tail_mm");
+  const double lead = line_steps_param(p, "lead_mm"), step = line_steps_param(p, "step_mm"),
+               tail = line_steps_param(p, "tail_mm");
   const double lo = line_steps_param(p, "low_flow"), hi = line_steps_param(p, "high_flow");
   const double spacing = line_steps_param(p, "spacing_mm");
   const int n = std::max(1, static_cast<int>(std::lround(line_steps_param(p, "lines"))));
@@ -68,26 +69,32 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
   const double retract = p.count("retract_mm") ? std::max(0.0, p.at("retract_mm")) : 0.0;
   const double travel = std::min(100.0, profile.axis("x").max_velocity_mm_s);
   // Retraction as fast as the profile allows (the safety check counts it as flow too), at most 30 mm/s.
-  const double retract_v = std::min({30.0, profile.extruder.max_velocity_mm_s,
-                                     0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2()});
+  const double retract_v = std::min(
+      {30.0, profile.extruder.max_velocity_mm_s, 0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2()});
   g.push_back(fmt::format("; {} lines along +X, flow steps at {} mm and {} mm", lines.size(),
-                          line_steps_num(lines[0].path[0].length_mm), line_steps_num(lines[0].path[0].length_mm + lines[0].path[1].length_mm)));
+                          line_steps_num(lines[0].path[0].length_mm),
+                          line_steps_num(lines[0].path[0].length_mm + lines[0].path[1].length_mm)));
   g.push_back("G28");
   g.push_back("G90");
   g.push_back("M83 ; relative extrusion");
   if (p.count("hotend_c") && p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
   g.push_back(d.set_accel(std::min(accel, profile.axis("z").max_accel_mm_s2)));
-  g.push_back(fmt::format("G1 Z{} F{}", line_steps_num(z), line_steps_num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
+  g.push_back(fmt::format("G1 Z{} F{}", line_steps_num(z),
+                          line_steps_num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
   g.push_back(d.set_accel(accel));
   for (const auto& l : lines) {
-    g.push_back(fmt::format("G1 X{} Y{} F{}", line_steps_num(l.x0_mm), line_steps_num(l.y_mm), line_steps_num(travel * 60, 1)));
-    if (retract > 0) g.push_back(fmt::format("G1 E{} F{} ; prime", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
+    g.push_back(
+        fmt::format("G1 X{} Y{} F{}", line_steps_num(l.x0_mm), line_steps_num(l.y_mm), line_steps_num(travel * 60, 1)));
+    if (retract > 0)
+      g.push_back(fmt::format("G1 E{} F{} ; prime", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
     double x = l.x0_mm;
     for (const auto& s : l.path) {
       x += s.length_mm;
-      g.push_back(fmt::format("G1 X{} E{} F{}", line_steps_num(x), line_steps_num(s.feed_mm, 5), line_steps_num(s.speed_mm_s * 60, 1)));
+      g.push_back(fmt::format("G1 X{} E{} F{}", line_steps_num(x), line_steps_num(s.feed_mm, 5),
+                              line_steps_num(s.speed_mm_s * 60, 1)));
     }
-    if (retract > 0) g.push_back(fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
+    if (retract > 0)
+      g.push_back(fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
   }
   g.push_back(d.wait_for_moves());
 }

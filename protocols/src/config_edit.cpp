@@ -23,8 +23,7 @@ struct CommentNotePolicy {
 thread_local const CommentNotePolicy* g_comment_note = nullptr;
 
 // Start of the trailing comment of a line (npos if none): the first marker after code.
-std::size_t trailing_comment_at(const std::string& line, const std::vector<std::string>& markers,
-                                std::string* marker) {
+std::size_t trailing_comment_at(const std::string& line, const std::vector<std::string>& markers, std::string* marker) {
   const std::size_t first = line.find_first_not_of(" \t");
   if (first == std::string::npos) return std::string::npos;
   // A line that is commented out as a whole ("//#define X 1 // note") has its code after the
@@ -79,8 +78,7 @@ std::string replace_trailing_comment(const std::string& original, const std::str
   return edited.substr(0, edited_at) + marker + " " + note;
 }
 
-ScopedCommentNote::ScopedCommentNote(std::vector<std::string> markers, std::string note)
-    : previous_(g_comment_note) {
+ScopedCommentNote::ScopedCommentNote(std::vector<std::string> markers, std::string note) : previous_(g_comment_note) {
   g_comment_note = note.empty() ? nullptr : new CommentNotePolicy{std::move(markers), std::move(note)};
 }
 
@@ -115,11 +113,10 @@ LineEditor::LineEditor(std::string_view text) {
 
 void LineEditor::replace(std::size_t i, std::string text) {
   if (i >= lines_.size()) throw std::out_of_range("LineEditor::replace: no such line");
-  if (g_comment_note) text = replace_trailing_comment(lines_[i].text, text, g_comment_note->markers, g_comment_note->note);
-  if (text == lines_[i].text)
-    replaced_.erase(i);
-  else
-    replaced_[i] = std::move(text);
+  if (g_comment_note)
+    text = replace_trailing_comment(lines_[i].text, text, g_comment_note->markers, g_comment_note->note);
+  if (text == lines_[i].text) replaced_.erase(i);
+  else replaced_[i] = std::move(text);
 }
 
 void LineEditor::insert_before(std::size_t i, const std::vector<std::string>& lines) {

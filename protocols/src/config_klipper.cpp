@@ -66,14 +66,14 @@ struct Section {
 /// One definition of an option in the regular part, in Klipper's reading order.
 struct Definition {
   std::string section, option, value;
-  std::string file;  // empty: the edited file itself
+  std::string file;      // empty: the edited file itself
   std::size_t line = 0;  // 0-based
 };
 
 struct Doc {
   std::vector<Section> main;
   std::vector<Section> block;
-  std::optional<std::size_t> header;  // first line of a valid AUTOSAVE_HEADER
+  std::optional<std::size_t> header;         // first line of a valid AUTOSAVE_HEADER
   std::optional<std::size_t> ignored_block;  // a "#*#" block Klipper does not read
   std::vector<std::string> includes;
   std::vector<Definition> regular;  // body and includes, in reading order
@@ -472,9 +472,10 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
                                  o.line + 1, "section"});
           }
     if (find_opt(doc.block, s.klipper_extruder, "pressure_advance"))
-      r.warnings.push_back(fmt::format("{}: the SAVE_CONFIG block sets [{}] pressure_advance, which Kalico's {} model "
-                                       "does not read: remove it there before restarting",
-                                       r.path, s.klipper_extruder, s.kalico->model));
+      r.warnings.push_back(
+          fmt::format("{}: the SAVE_CONFIG block sets [{}] pressure_advance, which Kalico's {} model "
+                      "does not read: remove it there before restarting",
+                      r.path, s.klipper_extruder, s.kalico->model));
   }
   r.updated = ed.render();
   r.diff = ed.unified_diff(r.path);
@@ -505,15 +506,16 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
       std::string a = axis;
       std::transform(a.begin(), a.end(), a.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
       g += fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", a,
-                       firmware_shaper_name(ExportFirmware::klipper, sh.type), a, format_number(sh.freq_hz, kDecimalsFreq), a,
-                       format_number(sh.damping, kDecimalsZeta));
+                       firmware_shaper_name(ExportFirmware::klipper, sh.type), a,
+                       format_number(sh.freq_hz, kDecimalsFreq), a, format_number(sh.damping, kDecimalsZeta));
     }
     g += "\n";
   }
   r.gcode = g;
   if (r.updated != r.original)
-    r.notes.push_back("Klipper reads printer.cfg only at start-up: send RESTART after writing (or the G-code above to "
-                      "apply the values now without a restart)");
+    r.notes.push_back(
+        "Klipper reads printer.cfg only at start-up: send RESTART after writing (or the G-code above to "
+        "apply the values now without a restart)");
 }
 
 void validate_kalico(const KalicoAdvanceSetting& k, std::vector<std::string>& bad) {
@@ -521,22 +523,27 @@ void validate_kalico(const KalicoAdvanceSetting& k, std::vector<std::string>& ba
   const bool known = std::any_of(std::begin(L::kKalicoAdvanceModels), std::end(L::kKalicoAdvanceModels),
                                  [&](const char* m) { return k.model == m; });
   if (!known || k.model == "linear")
-    bad.push_back(fmt::format("Kalico's nonlinear pressure_advance_model is tanh or recipr (klippy/kinematics/extruder.py), "
-                              "not '{}'",
-                              k.model));
+    bad.push_back(
+        fmt::format("Kalico's nonlinear pressure_advance_model is tanh or recipr (klippy/kinematics/extruder.py), "
+                    "not '{}'",
+                    k.model));
   if (!std::isfinite(k.linear_advance_s) || k.linear_advance_s < L::kKalicoLinearAdvanceMin_s)
-    bad.push_back(fmt::format("Kalico's linear_advance must be a number >= 0 (extruder.py minval=0.), not {}", k.linear_advance_s));
+    bad.push_back(fmt::format("Kalico's linear_advance must be a number >= 0 (extruder.py minval=0.), not {}",
+                              k.linear_advance_s));
   if (!std::isfinite(k.nonlinear_offset_mm) || k.nonlinear_offset_mm < L::kKalicoNonlinearOffsetMin_mm)
     bad.push_back(fmt::format("Kalico's nonlinear_offset must be a number >= 0 (extruder.py minval=0.), not {}",
                               k.nonlinear_offset_mm));
   if (!std::isfinite(k.linearization_velocity_mm_s) || k.linearization_velocity_mm_s < 0 ||
       (k.nonlinear_offset_mm > 0 && !(k.linearization_velocity_mm_s > 0)))
-    bad.push_back(fmt::format("Kalico's linearization_velocity must be above 0 when nonlinear_offset is set "
-                              "(extruder.py above=0.), not {}",
-                              k.linearization_velocity_mm_s));
-  if (k.time_offset_s && !(*k.time_offset_s >= L::kKalicoTimeOffsetMin_s && *k.time_offset_s <= L::kKalicoTimeOffsetMax_s))
-    bad.push_back(fmt::format("Kalico accepts pressure_advance_time_offset from {} to {} s (extruder.py); {} is out of range",
-                              L::kKalicoTimeOffsetMin_s, L::kKalicoTimeOffsetMax_s, *k.time_offset_s));
+    bad.push_back(
+        fmt::format("Kalico's linearization_velocity must be above 0 when nonlinear_offset is set "
+                    "(extruder.py above=0.), not {}",
+                    k.linearization_velocity_mm_s));
+  if (k.time_offset_s &&
+      !(*k.time_offset_s >= L::kKalicoTimeOffsetMin_s && *k.time_offset_s <= L::kKalicoTimeOffsetMax_s))
+    bad.push_back(
+        fmt::format("Kalico accepts pressure_advance_time_offset from {} to {} s (extruder.py); {} is out of range",
+                    L::kKalicoTimeOffsetMin_s, L::kKalicoTimeOffsetMax_s, *k.time_offset_s));
 }
 
 }  // namespace tunekit::protocols::detail

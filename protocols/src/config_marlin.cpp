@@ -74,7 +74,9 @@ std::vector<Define> find_defines(const LineEditor& ed, const std::string& name) 
   return out;
 }
 
-std::string uncomment(const std::string& t, const Define& d) { return t.substr(0, d.indent_end) + t.substr(d.define_at); }
+std::string uncomment(const std::string& t, const Define& d) {
+  return t.substr(0, d.indent_end) + t.substr(d.define_at);
+}
 
 /// The number inside a value token ("0.15f" -> "0.15", "{ 0.22 }" -> "0.22").
 std::string bare_number(std::string v) {
@@ -156,9 +158,10 @@ class MarlinEditor {
         continue;
       }
       if (index_ > 0 && !d.value.empty())
-        r_.warnings.push_back(fmt::format("{}:{}: {} holds one value for every extruder; it is set for all, not only "
-                                          "extruder {}",
-                                          r_.path, d0.line + 1, name, index_));
+        r_.warnings.push_back(
+            fmt::format("{}:{}: {} holds one value for every extruder; it is set for all, not only "
+                        "extruder {}",
+                        r_.path, d0.line + 1, name, index_));
       const std::string old_num = bare_number(d.value);
       if (!d0.commented && !d.value.empty() && same_number(old_num, v, decimals)) continue;
       std::string nv = format_number(v, decimals);
@@ -174,7 +177,8 @@ class MarlinEditor {
       } else {
         const std::size_t spaces = rest.find_first_not_of(" \t");
         if (spaces != std::string::npos && spaces > 0) {
-          const std::ptrdiff_t width = static_cast<std::ptrdiff_t>(spaces) + static_cast<std::ptrdiff_t>(d.value.size()) -
+          const std::ptrdiff_t width = static_cast<std::ptrdiff_t>(spaces) +
+                                       static_cast<std::ptrdiff_t>(d.value.size()) -
                                        static_cast<std::ptrdiff_t>(nv.size());
           rest = std::string(static_cast<std::size_t>(std::max<std::ptrdiff_t>(1, width)), ' ') + rest.substr(spaces);
         }
@@ -222,11 +226,12 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
   // the running build's, and its classic lines would be bypassed; only the M493 G-code applies.
   const bool file_has_ft = marlin_ft_motion_enabled(r.original);
   if (s.marlin_ft_motion_live && !file_has_ft) {
-    r.warnings.push_back(fmt::format("{}: the printer runs fixed-time motion (M493 reports it enabled) but this file "
-                                     "does not enable FT_MOTION: it is not the running build's configuration; its "
-                                     "classic shaper and advance lines are left alone (FT_MOTION bypasses them) and the "
-                                     "settings are in the M493 G-code",
-                                     r.path));
+    r.warnings.push_back(
+        fmt::format("{}: the printer runs fixed-time motion (M493 reports it enabled) but this file "
+                    "does not enable FT_MOTION: it is not the running build's configuration; its "
+                    "classic shaper and advance lines are left alone (FT_MOTION bypasses them) and the "
+                    "settings are in the M493 G-code",
+                    r.path));
   } else {
     m.set_index(static_cast<std::size_t>(s.extruder_index));
     if (s.pa_k_s) {
@@ -238,7 +243,8 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
       const std::string A = axis == "x" ? "X" : "Y";
       const std::string type = firmware_shaper_name(ExportFirmware::marlin, sh.type, true);
       if (!replace_token("FTM_DEFAULT_SHAPER_" + A, "ftMotionShaper_" + type))
-        throw InputError(fmt::format("FT_MOTION is enabled but there is no '#define FTM_DEFAULT_SHAPER_{}' line", A), r.path);
+        throw InputError(fmt::format("FT_MOTION is enabled but there is no '#define FTM_DEFAULT_SHAPER_{}' line", A),
+                         r.path);
       if (!m.set("FTM_SHAPING_DEFAULT_FREQ_" + A, sh.freq_hz, kDecimalsFreq))
         throw InputError(fmt::format("no '#define FTM_SHAPING_DEFAULT_FREQ_{}' line", A), r.path);
       if (!m.set("FTM_SHAPING_ZETA_" + A, sh.damping, kDecimalsZeta))
@@ -246,9 +252,10 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
     }
   }
   if (s.pa_smooth_s)
-    r.warnings.push_back(fmt::format("{}: FT_MOTION is enabled: it bypasses SMOOTH_LIN_ADVANCE (stepper.cpp isr()), so "
-                                     "ADVANCE_TAU is not written",
-                                     r.path));
+    r.warnings.push_back(
+        fmt::format("{}: FT_MOTION is enabled: it bypasses SMOOTH_LIN_ADVANCE (stepper.cpp isr()), so "
+                    "ADVANCE_TAU is not written",
+                    r.path));
   r.updated = m.editor().render();
   r.diff = m.editor().unified_diff(r.path);
   std::string g;
@@ -265,8 +272,9 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
       for (std::size_t i = 0; i < std::size(limits::kMarlinFtMotionShapers); ++i)
         if (t == limits::kMarlinFtMotionShapers[i].firmware_name) number = static_cast<int>(i) + 1;
       const bool x = axis == "x";
-      line += fmt::format(" {}{} {}{} {}{}", x ? "X" : "Y", number, x ? "A" : "B", format_number(sh.freq_hz, kDecimalsFreq),
-                          x ? "I" : "J", format_number(std::max(0.01, sh.damping), kDecimalsZeta));
+      line +=
+          fmt::format(" {}{} {}{} {}{}", x ? "X" : "Y", number, x ? "A" : "B", format_number(sh.freq_hz, kDecimalsFreq),
+                      x ? "I" : "J", format_number(std::max(0.01, sh.damping), kDecimalsZeta));
     }
     g += line + "\n";
     if (s.pa_k_s) g += fmt::format("M493 P1 K{}\n", format_number(*s.pa_k_s, kDecimalsK));
@@ -275,16 +283,18 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
     // runtime shaping line is guessed; the compiled defaults are loaded with M502 and stored with M500.
     if (s.pa_k_s) g += fmt::format("M900 K{}\n", format_number(*s.pa_k_s, kDecimalsK));
     if (!s.shapers.empty())
-      r.warnings.push_back(fmt::format("{}: FT_MOTION build: the shapers are written as FT_MOTION defaults; after "
-                                       "flashing send M502 then M500 (M493 sets them at run time, with version-specific "
-                                       "parameters)",
-                                       r.path));
+      r.warnings.push_back(
+          fmt::format("{}: FT_MOTION build: the shapers are written as FT_MOTION defaults; after "
+                      "flashing send M502 then M500 (M493 sets them at run time, with version-specific "
+                      "parameters)",
+                      r.path));
   }
   if (!g.empty()) g += "M500\n";
   r.gcode = g;
   if (r.updated != r.original)
-    r.notes.push_back("Marlin uses the values stored in EEPROM (M500) over the compiled defaults in this file: after "
-                      "flashing the new build, send M502 (load the compiled values) then M500 (store them)");
+    r.notes.push_back(
+        "Marlin uses the values stored in EEPROM (M500) over the compiled defaults in this file: after "
+        "flashing the new build, send M502 (load the compiled values) then M500 (store them)");
 }
 
 }  // namespace
@@ -301,22 +311,25 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
   bool tau_written = false;
   if (s.pa_k_s || s.pa_smooth_s) {
     if (!m.enable("LIN_ADVANCE"))
-      r.warnings.push_back(fmt::format("{}: no LIN_ADVANCE line; in Marlin bugfix-2.1.x it lives in Configuration.h: "
-                                       "enable it there",
-                                       r.path));
+      r.warnings.push_back(
+          fmt::format("{}: no LIN_ADVANCE line; in Marlin bugfix-2.1.x it lives in Configuration.h: "
+                      "enable it there",
+                      r.path));
   }
   m.set_index(static_cast<std::size_t>(s.extruder_index));
   if (s.pa_k_s && !m.set("ADVANCE_K", *s.pa_k_s, kDecimalsK))
     throw InputError("no '#define ADVANCE_K' line: this does not look like a Marlin 2.x Configuration_adv.h", r.path);
   if (s.pa_smooth_s) {
     if (!m.enable("SMOOTH_LIN_ADVANCE")) {
-      r.warnings.push_back(fmt::format("{}: no SMOOTH_LIN_ADVANCE line (Marlin before 2.1.3 has none): ADVANCE_TAU "
-                                       "not written and U left out of M900",
-                                       r.path));
+      r.warnings.push_back(
+          fmt::format("{}: no SMOOTH_LIN_ADVANCE line (Marlin before 2.1.3 has none): ADVANCE_TAU "
+                      "not written and U left out of M900",
+                      r.path));
     } else if (!m.set("ADVANCE_TAU", *s.pa_smooth_s, kDecimalsSmooth)) {
-      r.warnings.push_back(fmt::format("{}: SMOOTH_LIN_ADVANCE is present but no '#define ADVANCE_TAU' line: "
-                                       "ADVANCE_TAU not written",
-                                       r.path));
+      r.warnings.push_back(
+          fmt::format("{}: SMOOTH_LIN_ADVANCE is present but no '#define ADVANCE_TAU' line: "
+                      "ADVANCE_TAU not written",
+                      r.path));
     } else {
       tau_written = true;
     }
@@ -334,17 +347,19 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
     if (active && !active->value.empty()) {
       const double v = std::strtod(bare_number(active->value).c_str(), nullptr);
       if (min_new < v)
-        throw InputError(fmt::format("{}:{}: SHAPING_MIN_FREQ is {} Hz but the shaper frequency {} Hz is lower; Marlin "
-                                     "sizes its shaping queue for SHAPING_MIN_FREQ and misbehaves below it "
-                                     "(Marlin/src/module/stepper.h shaping_echoes); lower SHAPING_MIN_FREQ by hand "
-                                     "if the board's RAM allows it",
-                                     r.path, active->line + 1, bare_number(active->value), format_number(min_new, 2)));
+        throw InputError(
+            fmt::format("{}:{}: SHAPING_MIN_FREQ is {} Hz but the shaper frequency {} Hz is lower; Marlin "
+                        "sizes its shaping queue for SHAPING_MIN_FREQ and misbehaves below it "
+                        "(Marlin/src/module/stepper.h shaping_echoes); lower SHAPING_MIN_FREQ by hand "
+                        "if the board's RAM allows it",
+                        r.path, active->line + 1, bare_number(active->value), format_number(min_new, 2)));
     } else {
       double compiled = 1e300;
       for (const char* A : {"X", "Y"}) {
         if (!is_enabled(original, std::string("INPUT_SHAPING_") + A)) continue;
         for (const auto& d : find_defines(original, std::string("SHAPING_FREQ_") + A))
-          if (!d.commented && !d.value.empty()) compiled = std::min(compiled, std::strtod(bare_number(d.value).c_str(), nullptr));
+          if (!d.commented && !d.value.empty())
+            compiled = std::min(compiled, std::strtod(bare_number(d.value).c_str(), nullptr));
       }
       if (compiled < 1e300 && compiled > 0 && min_new < compiled)
         r.warnings.push_back(fmt::format(
@@ -390,9 +405,10 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
     // this one, its line is left out (the new build, flashed, has both).
     const bool other_shaped = is_enabled(original, A == "X" ? "INPUT_SHAPING_Y" : "INPUT_SHAPING_X");
     if (!is_enabled(original, "INPUT_SHAPING_" + A) && other_shaped) {
-      r.warnings.push_back(fmt::format("{}: the running build has no INPUT_SHAPING_{}: its M593 line is left out (on "
-                                       "such a build 'M593 {}' would set the other axis); flash the new build",
-                                       r.path, A, A));
+      r.warnings.push_back(
+          fmt::format("{}: the running build has no INPUT_SHAPING_{}: its M593 line is left out (on "
+                      "such a build 'M593 {}' would set the other axis); flash the new build",
+                      r.path, A, A));
       continue;
     }
     g += fmt::format("M593 {} F{} D{}\n", A, format_number(sh.freq_hz, kDecimalsFreq),
@@ -404,9 +420,10 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
   // defaults (Marlin/src/MarlinCore.cpp setup(): settings.first_load(), "Load data from EEPROM if
   // available (or use defaults)"; M502 resets to the compiled ones, M500 stores them).
   if (r.updated != r.original)
-    r.notes.push_back("Marlin uses the values stored in EEPROM (M500) over the compiled defaults in this file: after "
-                      "flashing the new build, send M502 (load the compiled values) then M500 (store them); or send "
-                      "the G-code above (it ends with M500) to the running printer");
+    r.notes.push_back(
+        "Marlin uses the values stored in EEPROM (M500) over the compiled defaults in this file: after "
+        "flashing the new build, send M502 (load the compiled values) then M500 (store them); or send "
+        "the G-code above (it ends with M500) to the running printer");
 }
 
 }  // namespace tunekit::protocols::detail

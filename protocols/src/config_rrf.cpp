@@ -79,8 +79,7 @@ std::optional<ParamPos> find_param(const std::string& t, const Command& c, char 
 std::string set_param(const std::string& t, char letter, const std::string& value) {
   const auto c = parse_command(t);
   if (!c) return t;
-  if (const auto p = find_param(t, *c, letter))
-    return t.substr(0, p->value_begin) + value + t.substr(p->value_end);
+  if (const auto p = find_param(t, *c, letter)) return t.substr(0, p->value_begin) + value + t.substr(p->value_end);
   std::size_t end = c->code_end;
   while (end > c->args_begin && text::is_blank(t[end - 1])) --end;
   return t.substr(0, end) + " " + std::string(1, letter) + value + t.substr(end);
@@ -199,8 +198,9 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
     }
   }
   if (s.pa_smooth_s)
-    r.warnings.push_back("RepRapFirmware has no pressure-advance smoothing time: the extruder's M201 E acceleration "
-                         "limit applies instead; smoothing time not written");
+    r.warnings.push_back(
+        "RepRapFirmware has no pressure-advance smoothing time: the extruder's M201 E acceleration "
+        "limit applies instead; smoothing time not written");
 
   std::string axis;
   const ShaperSetting* sh = rrf_single_shaper(s, r.warnings, &axis);
@@ -251,8 +251,9 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
                      format_number(sh->freq_hz, kDecimalsFreq), format_number(sh->damping, kDecimalsZeta));
   r.gcode = g;
   if (r.updated != r.original)
-    r.notes.push_back("RepRapFirmware runs config.g at start-up: restart the board (M999) after writing, or send the "
-                      "G-code above to apply the values now");
+    r.notes.push_back(
+        "RepRapFirmware runs config.g at start-up: restart the board (M999) after writing, or send the "
+        "G-code above to apply the values now");
 }
 
 }  // namespace tunekit::protocols::detail

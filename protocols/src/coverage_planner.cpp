@@ -38,9 +38,10 @@ CoverageGrid coverage_build_grid(const TestPatternSet& s, const MachineProfile& 
   const auto& ay = p.axis("y");
   constexpr double kMargin = 5;
   if (width > ax.max_mm - ax.min_mm - 2 * kMargin || height > ay.max_mm - ay.min_mm - 2 * kMargin)
-    throw InputError(fmt::format("the test patterns ({:.0f} x {:.0f} mm) do not fit the bed ({:.0f} x {:.0f} mm less "
-                                 "{:g} mm margins)",
-                                 width, height, ax.max_mm - ax.min_mm, ay.max_mm - ay.min_mm, kMargin));
+    throw InputError(
+        fmt::format("the test patterns ({:.0f} x {:.0f} mm) do not fit the bed ({:.0f} x {:.0f} mm less "
+                    "{:g} mm margins)",
+                    width, height, ax.max_mm - ax.min_mm, ay.max_mm - ay.min_mm, kMargin));
   CoverageGrid g;
   g.cell = w;
   g.nx = static_cast<int>(std::ceil(width / w));
@@ -56,7 +57,8 @@ CoverageGrid coverage_build_grid(const TestPatternSet& s, const MachineProfile& 
   if (s.pads > 0) {
     for (int k = 0; k < s.pads; ++k)
       for (double px = 0; px < s.pad_mm; px += w)
-        for (double py = 0; py < s.pad_mm; py += w) set_cell(k * (s.pad_mm + s.spacing_mm) + px + 0.5 * w, y + py + 0.5 * w);
+        for (double py = 0; py < s.pad_mm; py += w)
+          set_cell(k * (s.pad_mm + s.spacing_mm) + px + 0.5 * w, y + py + 0.5 * w);
     y += s.pad_mm + s.spacing_mm;
   }
   if (s.line_steps > 0) {
@@ -159,7 +161,8 @@ std::vector<std::pair<int, int>> coverage_order_pce(const CoverageGrid& g) {
 
 CoveragePlan plan_test_patterns(const TestPatternSet& set, const MachineProfile& profile, const std::string& planner,
                                 const CoverageMotion& motion) {
-  if (planner != "pce" && planner != "zigzag") throw InputError(fmt::format("unknown planner '{}' (pce, zigzag)", planner));
+  if (planner != "pce" && planner != "zigzag")
+    throw InputError(fmt::format("unknown planner '{}' (pce, zigzag)", planner));
   const CoverageGrid g = coverage_build_grid(set, profile);
   const auto order = planner == "pce" ? coverage_order_pce(g) : coverage_order_zigzag(g);
   CoveragePlan plan;

@@ -58,9 +58,10 @@ std::string delta_marlin_gcode(const ident::DeltaGeometry& g, double probe_z_off
   // probe Marlin homes the nozzle at delta_height - probe z offset (M851 Z), so that is added.
   const double emin = std::min({g.endstop_mm[0], g.endstop_mm[1], g.endstop_mm[2]});
   std::string s = "; delta calibration (tunekit delta)\n";
-  s += fmt::format("M665 H{:.3f} L{:.3f} R{:.3f} X{:.3f} Y{:.3f} Z{:.3f}\n", g.homed_height_mm + emin + probe_z_offset_mm,
-                   g.rod_mm[0], g.radius_mm, g.angle_deg[0] - ident::kDeltaNominalAngles[0],
-                   g.angle_deg[1] - ident::kDeltaNominalAngles[1], g.angle_deg[2] - ident::kDeltaNominalAngles[2]);
+  s += fmt::format("M665 H{:.3f} L{:.3f} R{:.3f} X{:.3f} Y{:.3f} Z{:.3f}\n",
+                   g.homed_height_mm + emin + probe_z_offset_mm, g.rod_mm[0], g.radius_mm,
+                   g.angle_deg[0] - ident::kDeltaNominalAngles[0], g.angle_deg[1] - ident::kDeltaNominalAngles[1],
+                   g.angle_deg[2] - ident::kDeltaNominalAngles[2]);
   s += fmt::format("M666 X{:.3f} Y{:.3f} Z{:.3f}\n", emin - g.endstop_mm[0], emin - g.endstop_mm[1],
                    emin - g.endstop_mm[2]);
   s += "M500\n";

@@ -99,11 +99,13 @@ FtMotionReport parse_m493_report(const std::vector<std::string>& lines) {
         const std::string tag = tag_axis[0], axis = tag_axis[1];
         std::size_t p = line.find(tag);
         // X's " with " is the first one not preceded by " and" (Y's).
-        if (axis == "x" && p != std::string::npos && p >= 4 && line.compare(p - 4, 4, " and") == 0) p = std::string::npos;
+        if (axis == "x" && p != std::string::npos && p >= 4 && line.compare(p - 4, 4, " and") == 0)
+          p = std::string::npos;
         if (p == std::string::npos) continue;
         const auto ax = line.find(" axis ", p);
         const auto end = line.find(" shaping", ax == std::string::npos ? p : ax);
-        if (ax != std::string::npos && end != std::string::npos && end > ax + 6) r.shapers[axis] = line.substr(ax + 6, end - ax - 6);
+        if (ax != std::string::npos && end != std::string::npos && end > ax + 6)
+          r.shapers[axis] = line.substr(ax + 6, end - ax - 6);
       }
       continue;
     }

@@ -52,7 +52,8 @@ void feed_move(std::vector<std::string>& g, const FeedPlan& fp, double feed_mm_s
     if (disc < 0)
       throw InputError(fmt::format(
           "a {:.4g} s feed segment of {:.4g} mm cannot keep its timing on a firmware that stops after every "
-          "extrude-only move (Klipper) at {:.0f} mm/s^2: it needs at least {:.0f} mm/s^2 (4 d / t^2) or a longer segment",
+          "extrude-only move (Klipper) at {:.0f} mm/s^2: it needs at least {:.0f} mm/s^2 (4 d / t^2) or a longer "
+          "segment",
           dt, d, a, 4 * d / (dt * dt)));
     v = 0.5 * (a * dt - std::sqrt(disc));
   }
@@ -133,7 +134,8 @@ void shaping_off(const MachineProfile& profile, const Dialect& d, std::vector<st
       for (const auto& [ax, v] : shaper) {
         const auto sv = split_state_shaper(v);
         const std::string U = ax == "x" ? "X" : "Y";
-        r += fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", U, sv.type, U, sv.freq, U, sv.zeta);
+        r +=
+            fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", U, sv.type, U, sv.freq, U, sv.zeta);
       }
       restore.push_back(r);
       changed.push_back("input_shaper");
@@ -166,27 +168,30 @@ void record_feed_plan(Experiment& e, const FeedPlan& fp) {
                                     : "consecutive extrude-only moves blend: the labelled timing";
 }
 
-
 /// Refuses a plan (lines and machine time worked out from the parameters) beyond the caps.
 void check_plan(const std::string& protocol, double lines, double duration_s, const ProtocolLimits& limits) {
   if (!(duration_s <= limits.max_duration_s)) {
-    const std::string how_long = std::isfinite(duration_s) ? fmt::format("{:.4g} s ({:.3g} h)", duration_s, duration_s / 3600)
-                                                           : std::string("an unbounded time");
-    throw InputError(fmt::format("{} would take {} of machine time; the limit is {:g} s (change the parameters, or "
-                                 "raise it with --max-duration)",
-                                 protocol, how_long, limits.max_duration_s));
+    const std::string how_long = std::isfinite(duration_s)
+                                     ? fmt::format("{:.4g} s ({:.3g} h)", duration_s, duration_s / 3600)
+                                     : std::string("an unbounded time");
+    throw InputError(
+        fmt::format("{} would take {} of machine time; the limit is {:g} s (change the parameters, or "
+                    "raise it with --max-duration)",
+                    protocol, how_long, limits.max_duration_s));
   }
   if (!(lines <= static_cast<double>(limits.max_lines)))
-    throw InputError(fmt::format("{} would need {:.4g} G-code lines; the limit is {} (change the parameters, or "
-                                 "raise it with --max-lines)",
-                                 protocol, lines, limits.max_lines));
+    throw InputError(
+        fmt::format("{} would need {:.4g} G-code lines; the limit is {} (change the parameters, or "
+                    "raise it with --max-lines)",
+                    protocol, lines, limits.max_lines));
 }
 
 /// A second bound while generating, whatever the plan said: the memory a protocol takes stays
 /// bounded even if a plan were wrong.
 void guard_line_count(const std::vector<std::string>& g, const ProtocolLimits& limits, const std::string& protocol) {
   if (g.size() > limits.max_lines + 64)
-    throw InputError(fmt::format("{} exceeds {} G-code lines while being generated (--max-lines)", protocol, limits.max_lines));
+    throw InputError(
+        fmt::format("{} exceeds {} G-code lines while being generated (--max-lines)", protocol, limits.max_lines));
 }
 
 }  // namespace tunekit::protocols::experiment_gcode

@@ -50,8 +50,7 @@ void check_param_domain(const std::string& protocol, const ProtocolParam& prm, d
     case ParamDomain::count:
       if (!(v >= 1) || v != std::floor(v)) why = "must be a whole number >= 1";
       break;
-    case ParamDomain::any:
-      break;
+    case ParamDomain::any: break;
   }
   if (!why && std::abs(v) > prm.max_value) why = "is beyond its plausible range";
   if (why) {
@@ -59,8 +58,8 @@ void check_param_domain(const std::string& protocol, const ProtocolParam& prm, d
                               : prm.domain == ParamDomain::positive ? std::string("above 0")
                               : prm.domain == ParamDomain::count    ? std::string("1")
                                                                     : std::string("0");
-    throw InputError(fmt::format("{} parameter {} {} (accepted: {} to {:g}{}), not {:g}", protocol, prm.name, why, lower,
-                                 prm.max_value, prm.unit.empty() ? "" : " " + prm.unit, v));
+    throw InputError(fmt::format("{} parameter {} {} (accepted: {} to {:g}{}), not {:g}", protocol, prm.name, why,
+                                 lower, prm.max_value, prm.unit.empty() ? "" : " " + prm.unit, v));
   }
 }
 
@@ -84,7 +83,8 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
   }
   // Every parameter in its domain (defaults that come from the machine are NaN until filled in).
   for (const auto& prm : spec.params)
-    if (!(std::isnan(prm.default_value) && !overrides.count(prm.name))) check_param_domain(protocol, prm, e.params.at(prm.name));
+    if (!(std::isnan(prm.default_value) && !overrides.count(prm.name)))
+      check_param_domain(protocol, prm, e.params.at(prm.name));
   auto& g = e.gcode;
   g.push_back(fmt::format("; tunekit {} on {}", protocol, profile.name));
   const experiment_gcode::ExperimentRequest request{protocol, overrides, axis_in, profile, d, limits};

@@ -32,7 +32,8 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
   auto& g = e.gcode;
   auto guard = [&] { guard_line_count(g, r.limits, r.protocol); };
   if (protocol == "axis-sweep") {
-    if (axis_in != "x" && axis_in != "y") throw InputError(fmt::format("axis-sweep needs --axis x or y, not '{}'", axis_in));
+    if (axis_in != "x" && axis_in != "y")
+      throw InputError(fmt::format("axis-sweep needs --axis x or y, not '{}'", axis_in));
     e.axis = axis_in;
     const std::string other = axis_in == "x" ? "y" : "x";
     if (std::isnan(p["center_mm"])) p["center_mm"] = mid(profile, axis_in);
@@ -86,7 +87,8 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
         // MINIMUM_CRUISE_RATIO=0 and input shaping off.
         prologue.push_back("SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO=0");
         restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={} MINIMUM_CRUISE_RATIO={}",
-                                      num(profile.print.max_accel_mm_s2, 0), num(profile.state.minimum_cruise_ratio, 3)));
+                                      num(profile.print.max_accel_mm_s2, 0),
+                                      num(profile.state.minimum_cruise_ratio, 3)));
         changed.push_back("minimum_cruise_ratio");
         break;
       case Firmware::reprapfirmware:
@@ -170,7 +172,8 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
     g.push_back(";@record accelerometer on");
     g.push_back(fmt::format("G4 P{}", pause_ms));
     for (int r = 0; r < reps; ++r) {
-      for (const auto& corner : {std::pair{x0 + w, y0}, std::pair{x0 + w, y0 + h}, std::pair{x0, y0 + h}, std::pair{x0, y0}}) {
+      for (const auto& corner :
+           {std::pair{x0 + w, y0}, std::pair{x0 + w, y0 + h}, std::pair{x0, y0 + h}, std::pair{x0, y0}}) {
         g.push_back(fmt::format("G1 X{} Y{} F{}", num(corner.first), num(corner.second), num(v * 60, 1)));
         g.push_back(fmt::format("G4 P{}", pause_ms));
       }

@@ -54,14 +54,15 @@ bool build_liquefier_experiment(const ExperimentRequest& r, Experiment& e) {
       if (profile.extruder.max_flow_mm3_s > 0) limit = profile.extruder.max_flow_mm3_s;
       if (profile.extruder.max_velocity_mm_s > 0) limit = std::min(limit, profile.extruder.max_velocity_mm_s * area);
       if (!std::isfinite(limit))
-        throw InputError("liquefier-flow-sweep needs the hot end's range: give flow_max_mm3_s, or max_flow_mm3_s in the "
-                         "profile's [extruder]");
+        throw InputError(
+            "liquefier-flow-sweep needs the hot end's range: give flow_max_mm3_s, or max_flow_mm3_s in the "
+            "profile's [extruder]");
       p["flow_max_mm3_s"] = 0.9 * limit;
     }
     if (std::isnan(p["flow_min_mm3_s"])) p["flow_min_mm3_s"] = p["flow_max_mm3_s"] / 10;
-    const auto plan = plan_flow_sweep(p.at("flow_min_mm3_s"), p.at("flow_max_mm3_s"), static_cast<int>(p.at("levels")),
-                                      static_cast<int>(p.at("cycles")), p.at("expected_tau_s"), p.at("hold_taus"),
-                                      p.at("settle_s"));
+    const auto plan =
+        plan_flow_sweep(p.at("flow_min_mm3_s"), p.at("flow_max_mm3_s"), static_cast<int>(p.at("levels")),
+                        static_cast<int>(p.at("cycles")), p.at("expected_tau_s"), p.at("hold_taus"), p.at("settle_s"));
     double lines = 10;
     for (double q : plan.sequence_mm3_s)
       lines += std::ceil(q / area * plan.hold_s / std::max(profile.extruder.max_extrude_only_distance_mm, 1e-3)) + 1;
@@ -78,9 +79,9 @@ bool build_liquefier_experiment(const ExperimentRequest& r, Experiment& e) {
     e.excitation["measured_flows_mm3_s"] = levels;
     e.excitation["turning_flows_mm3_s"] = {plan.flow_min_mm3_s, plan.flow_max_mm3_s};
     e.excitation["hold_s"] = plan.hold_s;
-    g.push_back(fmt::format("; flow levels {} mm^3/s (ratio {}), turning at {} and {} mm^3/s, {} s each",
-                            level_text, num(plan.ratio, 3), num(plan.flow_min_mm3_s),
-                            num(plan.flow_max_mm3_s), num(plan.hold_s, 3)));
+    g.push_back(fmt::format("; flow levels {} mm^3/s (ratio {}), turning at {} and {} mm^3/s, {} s each", level_text,
+                            num(plan.ratio, 3), num(plan.flow_min_mm3_s), num(plan.flow_max_mm3_s),
+                            num(plan.hold_s, 3)));
     g.push_back(";@record load_cell on");
     for (std::size_t i = 0; i < plan.sequence_mm3_s.size(); ++i) {
       feed_move(g, fp, plan.sequence_mm3_s[i] / area, i == 0 ? plan.settle_s : plan.hold_s);

@@ -31,7 +31,9 @@ bool build_print_experiment(const ExperimentRequest& r, Experiment& e) {
   auto& g = e.gcode;
   if (protocol == "ring-print") {
     const double R = p.at("radius_mm"), v = p.at("speed_mm_s"), A = p.at("amplitude");
-    if (A >= 1) throw InputError(fmt::format("ring-print parameter amplitude must be below 1 so the extrusion stays positive, not {:g}", A));
+    if (A >= 1)
+      throw InputError(
+          fmt::format("ring-print parameter amplitude must be below 1 so the extrusion stays positive, not {:g}", A));
     const int N = static_cast<int>(p.at("periods"));
     const int segs = std::max(12, static_cast<int>(p.at("segments")));
     check_plan(protocol, segs + 12.0, 2 * std::numbers::pi * R / v, limits);
@@ -45,7 +47,8 @@ bool build_print_experiment(const ExperimentRequest& r, Experiment& e) {
     g.push_back("M83 ; relative extrusion");
     if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
     g.push_back(d.set_accel(std::min(p.at("accel_mm_s2"), profile.axis("z").max_accel_mm_s2)));
-    g.push_back(fmt::format("G1 Z{} F{}", num(p.at("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
+    g.push_back(
+        fmt::format("G1 Z{} F{}", num(p.at("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
     g.push_back(d.set_accel(p.at("accel_mm_s2")));
     g.push_back(fmt::format("G1 X{} Y{} F{}", num(cx + R), num(cy), num(std::min(100.0, v * 3) * 60, 1)));
     const double seg_len = 2 * R * std::sin(std::numbers::pi / segs);
@@ -74,7 +77,8 @@ bool build_print_experiment(const ExperimentRequest& r, Experiment& e) {
     mo.accel_mm_s2 = p.at("accel_mm_s2");
     // The safety check counts a retraction's filament speed against the hot end's flow limit.
     double retract = mo.retract_speed_mm_s;
-    if (profile.extruder.max_flow_mm3_s > 0) retract = std::min(retract, 0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2());
+    if (profile.extruder.max_flow_mm3_s > 0)
+      retract = std::min(retract, 0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2());
     if (profile.extruder.max_velocity_mm_s > 0) retract = std::min(retract, 0.9 * profile.extruder.max_velocity_mm_s);
     mo.retract_speed_mm_s = retract;
     const auto plan = plan_test_patterns(set, profile, p.at("zigzag") != 0 ? "zigzag" : "pce", mo);
@@ -89,14 +93,16 @@ bool build_print_experiment(const ExperimentRequest& r, Experiment& e) {
     g.push_back("M83 ; relative extrusion");
     if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
     g.push_back(d.set_accel(std::min(mo.accel_mm_s2, profile.axis("z").max_accel_mm_s2)));
-    g.push_back(fmt::format("G1 Z{} F{}", num(p.at("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
+    g.push_back(
+        fmt::format("G1 Z{} F{}", num(p.at("z_mm")), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
     g.push_back(d.set_accel(mo.accel_mm_s2));
     const auto& first = plan.moves.front();
     g.push_back(fmt::format("G0 X{} Y{} F{}", num(first.x0), num(first.y0), num(mo.travel_speed_mm_s * 60, 1)));
     for (const auto& m : plan.moves) {
       if (m.extrude) {
         g.push_back(fmt::format("G1 X{} Y{} E{} F{}", num(m.x1), num(m.y1),
-                                num(e_per_mm * std::hypot(m.x1 - m.x0, m.y1 - m.y0), 5), num(mo.print_speed_mm_s * 60, 1)));
+                                num(e_per_mm * std::hypot(m.x1 - m.x0, m.y1 - m.y0), 5),
+                                num(mo.print_speed_mm_s * 60, 1)));
       } else {
         g.push_back(fmt::format("G1 E-{} F{}", num(mo.retract_mm), num(mo.retract_speed_mm_s * 60, 1)));
         g.push_back(fmt::format("G0 X{} Y{} F{}", num(m.x1), num(m.y1), num(mo.travel_speed_mm_s * 60, 1)));

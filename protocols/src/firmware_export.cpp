@@ -72,8 +72,8 @@ std::string firmware_shaper_name(ExportFirmware fw, const std::string& type, boo
   const std::string t = canonical_shaper_type(type);
   if (const auto s = limits::find_shaper(fw, t, ft_motion)) return s->firmware_name;
   if (fw == ExportFirmware::marlin && ft_motion)
-    throw InputError(fmt::format("Marlin's FT_MOTION has no '{}' input shaper (it has {})", type,
-                                 limits::shaper_list(fw, true)));
+    throw InputError(
+        fmt::format("Marlin's FT_MOTION has no '{}' input shaper (it has {})", type, limits::shaper_list(fw, true)));
   if (fw == ExportFirmware::rrf && t == "zvddd") return "zvddd";
   if (fw == ExportFirmware::marlin)
     throw InputError(fmt::format("Marlin's input shaping is ZV only; '{}' is not available (choose zv)", type));
@@ -90,23 +90,24 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
   if (s.kalico && fw == ExportFirmware::kalico) detail::validate_kalico(*s.kalico, bad);
   if (s.pa_k_s) {
     const double k = *s.pa_k_s;
-    if (!std::isfinite(k) || k < 0)
-      bad.push_back(fmt::format("advance K {} s is negative or not a number", k));
+    if (!std::isfinite(k) || k < 0) bad.push_back(fmt::format("advance K {} s is negative or not a number", k));
     else if (fw == ExportFirmware::marlin && k > kMarlinKMax)
-      bad.push_back(fmt::format("Marlin accepts K from 0 to {} (M900 K, Marlin/src/gcode/feature/advance/M900.cpp); {} is "
-                                "out of range",
-                                kMarlinKMax, k));
+      bad.push_back(
+          fmt::format("Marlin accepts K from 0 to {} (M900 K, Marlin/src/gcode/feature/advance/M900.cpp); {} is "
+                      "out of range",
+                      kMarlinKMax, k));
   }
   if (s.pa_smooth_s) {
     const double t = *s.pa_smooth_s;
-    if (!std::isfinite(t) || t < 0)
-      bad.push_back(fmt::format("smoothing time {} s is negative or not a number", t));
+    if (!std::isfinite(t) || t < 0) bad.push_back(fmt::format("smoothing time {} s is negative or not a number", t));
     else if (klipper_like && (t <= 0 || t > kKlipperSmoothMax))
-      bad.push_back(fmt::format("Klipper accepts pressure_advance_smooth_time above 0 and up to {} s "
-                                "(klippy/kinematics/extruder.py:15); {} is out of range",
-                                kKlipperSmoothMax, t));
+      bad.push_back(
+          fmt::format("Klipper accepts pressure_advance_smooth_time above 0 and up to {} s "
+                      "(klippy/kinematics/extruder.py:15); {} is out of range",
+                      kKlipperSmoothMax, t));
     else if (fw == ExportFirmware::marlin && t > kMarlinTauMax)
-      bad.push_back(fmt::format("Marlin accepts ADVANCE_TAU (M900 U) from 0 to {} s; {} is out of range", kMarlinTauMax, t));
+      bad.push_back(
+          fmt::format("Marlin accepts ADVANCE_TAU (M900 U) from 0 to {} s; {} is out of range", kMarlinTauMax, t));
   }
   for (const auto& [axis, sh] : s.shapers) {
     if (axis != "x" && axis != "y") {
@@ -126,9 +127,11 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
     if (!std::isfinite(sh.freq_hz) || sh.freq_hz <= 0)
       bad.push_back(fmt::format("{}: shaper frequency must be positive, not {} Hz", axis, sh.freq_hz));
     else if (fw == ExportFirmware::rrf && (sh.freq_hz < kRrfFreqMin || sh.freq_hz > kRrfFreqMax))
-      bad.push_back(fmt::format("{}: RepRapFirmware accepts shaper frequencies from {:.2f} to {:.0f} Hz (src/Movement/AxisShaper.cpp:81-82); {} is "
-                                "out of range",
-                                axis, kRrfFreqMin, kRrfFreqMax, sh.freq_hz));
+      bad.push_back(
+          fmt::format("{}: RepRapFirmware accepts shaper frequencies from {:.2f} to {:.0f} Hz "
+                      "(src/Movement/AxisShaper.cpp:81-82); {} is "
+                      "out of range",
+                      axis, kRrfFreqMin, kRrfFreqMax, sh.freq_hz));
     if (!std::isfinite(sh.damping) || sh.damping < 0 || sh.damping >= 1)
       bad.push_back(fmt::format("{}: damping ratio must be at least 0 and below 1, not {}", axis, sh.damping));
   }
@@ -150,7 +153,9 @@ ExportResult export_config_text(ExportFirmware fw, const std::string& text, cons
   r.path = path;
   r.original = text;
   static const std::map<ExportFirmware, std::vector<std::string>> kCommentMarkers = {
-      {ExportFirmware::klipper, {"#", ";"}}, {ExportFirmware::kalico, {"#", ";"}}, {ExportFirmware::marlin, {"//"}},
+      {ExportFirmware::klipper, {"#", ";"}},
+      {ExportFirmware::kalico, {"#", ";"}},
+      {ExportFirmware::marlin, {"//"}},
       {ExportFirmware::rrf, {";"}}};
   const ScopedCommentNote note(kCommentMarkers.at(fw), s.change_note);
   switch (fw) {
@@ -186,8 +191,13 @@ nlohmann::json ExportResult::to_json() const {
   nlohmann::json ch = nlohmann::json::array();
   for (const auto& c : changes)
     ch.push_back({{"key", c.key}, {"old", c.old_value}, {"new", c.new_value}, {"line", c.line}, {"where", c.where}});
-  return {{"firmware", to_string(firmware)}, {"config", path},         {"changed", changed()},
-          {"changes", ch},                  {"warnings", warnings},    {"notes", notes}, {"diff", diff},
+  return {{"firmware", to_string(firmware)},
+          {"config", path},
+          {"changed", changed()},
+          {"changes", ch},
+          {"warnings", warnings},
+          {"notes", notes},
+          {"diff", diff},
           {"gcode", gcode}};
 }
 

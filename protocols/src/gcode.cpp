@@ -104,7 +104,9 @@ std::optional<GcodeWords> parse_gcode(std::string_view line) {
         continue;
       }
       std::size_t k = j + 1;
-      while (k < rest.size() && !std::isalpha(static_cast<unsigned char>(rest[k])) && !std::isspace(static_cast<unsigned char>(rest[k]))) ++k;
+      while (k < rest.size() && !std::isalpha(static_cast<unsigned char>(rest[k])) &&
+             !std::isspace(static_cast<unsigned char>(rest[k])))
+        ++k;
       const std::string key(1, static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
       const auto value_text = std::string_view(rest).substr(j + 1, k - j - 1);
       if (const auto v = to_number(value_text)) w.args[key] = *v;
@@ -117,7 +119,8 @@ std::optional<GcodeWords> parse_gcode(std::string_view line) {
       const auto eq = tokens[k].find('=');
       if (eq == std::string_view::npos) continue;
       std::string key;
-      for (char c : tokens[k].substr(0, eq)) key.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+      for (char c : tokens[k].substr(0, eq))
+        key.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
       const auto value_text = tokens[k].substr(eq + 1);
       if (const auto v = to_number(value_text)) w.args[key] = *v;
       else w.text_args[key] = std::string(value_text);

@@ -194,8 +194,8 @@ GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvan
     }
   }
   if (blocks.empty())
-    throw InputError("no ';TYPE:' feature comments: slice with PrusaSlicer, OrcaSlicer or Cura (they mark every feature)",
-                     path);
+    throw InputError(
+        "no ';TYPE:' feature comments: slice with PrusaSlicer, OrcaSlicer or Cura (they mark every feature)", path);
 
   // Pass 2: decide the changes (with the file's own advance commands in order).
   GcodeAdvanceResult r;

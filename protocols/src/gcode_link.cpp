@@ -54,7 +54,8 @@ std::vector<std::string> GcodeLink::send(const std::string& command) {
   if (guard)
     if (const auto why = guard->refuse(command)) {
       if (journal_) journal_->error("refused to send a line", {{"line", command}, {"reason", *why}});
-      throw MachineError(fmt::format("refused to send '{}': {} (nothing of it was sent)", command, *why), t_.describe());
+      throw MachineError(fmt::format("refused to send '{}': {} (nothing of it was sent)", command, *why),
+                         t_.describe());
     }
   const long n = ++line_no_;
   history_[n] = command;

@@ -24,7 +24,8 @@ void KlipperApiClient::handle(const std::string& frame, long want_id, std::optio
   if (on_message) on_message(msg);
 }
 
-nlohmann::json KlipperApiClient::call(const std::string& method, nlohmann::json params, std::chrono::milliseconds timeout) {
+nlohmann::json KlipperApiClient::call(const std::string& method, nlohmann::json params,
+                                      std::chrono::milliseconds timeout) {
   const long id = next_id_++;
   nlohmann::json req{{"id", id}, {"method", method}, {"params", std::move(params)}};
   const std::string text = req.dump();
@@ -46,7 +47,8 @@ nlohmann::json KlipperApiClient::call(const std::string& method, nlohmann::json 
   }
   if (response->contains("error")) {
     const auto& e = (*response)["error"];
-    throw MachineError(fmt::format("Klipper refused {}: {}", method, e.is_object() && e.contains("message") ? e["message"].dump() : e.dump()),
+    throw MachineError(fmt::format("Klipper refused {}: {}", method,
+                                   e.is_object() && e.contains("message") ? e["message"].dump() : e.dump()),
                        t_->describe());
   }
   return response->value("result", nlohmann::json::object());

@@ -62,7 +62,8 @@ std::string klipper_object_name(const std::string& section) {
 KlipperEndpoint klipper_accelerometer_endpoint(const std::string& chip, const std::string& section) {
   for (const auto& c : kKlipperChips)
     if (chip == c.chip)
-      return {fmt::format("{}/dump_{}", c.module, c.module), "sensor", klipper_object_name(section.empty() ? chip : section)};
+      return {fmt::format("{}/dump_{}", c.module, c.module), "sensor",
+              klipper_object_name(section.empty() ? chip : section)};
   throw InputError(fmt::format("'{}' is not an accelerometer Klipper reads ({})", chip, klipper_accelerometer_chips()));
 }
 
@@ -77,11 +78,13 @@ KlipperEndpoint klipper_trapq_endpoint(const std::string& trapq_name) {
 std::vector<KlipperLoadCellSample> parse_load_cell_rows(const nlohmann::json& params, const std::string& section) {
   std::vector<KlipperLoadCellSample> out;
   for (const auto& row : data_rows(params)) {
-    if (!row.is_array() || row.size() < 2) throw MachineError("Klipper sent a load-cell row that is not [time, force, ...]");
+    if (!row.is_array() || row.size() < 2)
+      throw MachineError("Klipper sent a load-cell row that is not [time, force, ...]");
     if (row[1].is_null())
-      throw MachineError(fmt::format("the load cell [{}] sends no force: it is not calibrated or not tared "
-                                     "(run LOAD_CELL_CALIBRATE and LOAD_CELL_TARE in Klipper)",
-                                     section));
+      throw MachineError(
+          fmt::format("the load cell [{}] sends no force: it is not calibrated or not tared "
+                      "(run LOAD_CELL_CALIBRATE and LOAD_CELL_TARE in Klipper)",
+                      section));
     out.push_back({finite_number(row[0], "load-cell time"), finite_number(row[1], "force") * kNewtonPerGramForce});
   }
   return out;
@@ -90,7 +93,8 @@ std::vector<KlipperLoadCellSample> parse_load_cell_rows(const nlohmann::json& pa
 std::vector<KlipperAccelSample> parse_accel_rows(const nlohmann::json& params) {
   std::vector<KlipperAccelSample> out;
   for (const auto& row : data_rows(params)) {
-    if (!row.is_array() || row.size() < 4) throw MachineError("Klipper sent an accelerometer row that is not [time, x, y, z]");
+    if (!row.is_array() || row.size() < 4)
+      throw MachineError("Klipper sent an accelerometer row that is not [time, x, y, z]");
     out.push_back({finite_number(row[0], "sample time"), finite_number(row[1], "x acceleration"),
                    finite_number(row[2], "y acceleration"), finite_number(row[3], "z acceleration")});
   }
@@ -99,9 +103,11 @@ std::vector<KlipperAccelSample> parse_accel_rows(const nlohmann::json& params) {
 
 void TrapqTimeline::add(const nlohmann::json& params) {
   for (const auto& row : data_rows(params)) {
-    if (!row.is_array() || row.size() < 6 || !row[4].is_array() || row[4].size() < 3 || !row[5].is_array() || row[5].size() < 3)
-      throw MachineError("Klipper sent a trapq row that is not [time, duration, start_velocity, acceleration, "
-                         "start_position, direction]");
+    if (!row.is_array() || row.size() < 6 || !row[4].is_array() || row[4].size() < 3 || !row[5].is_array() ||
+        row[5].size() < 3)
+      throw MachineError(
+          "Klipper sent a trapq row that is not [time, duration, start_velocity, acceleration, "
+          "start_position, direction]");
     TrapqMove m;
     m.print_time_s = finite_number(row[0], "trapq time");
     m.duration_s = finite_number(row[1], "trapq duration");
@@ -114,11 +120,13 @@ void TrapqTimeline::add(const nlohmann::json& params) {
     moves_.push_back(m);
   }
   // Batches arrive in time order, each in time order; keep the list sorted anyway.
-  std::stable_sort(moves_.begin(), moves_.end(), [](const auto& a, const auto& b) { return a.print_time_s < b.print_time_s; });
+  std::stable_sort(moves_.begin(), moves_.end(),
+                   [](const auto& a, const auto& b) { return a.print_time_s < b.print_time_s; });
 }
 
 double TrapqTimeline::velocity_x_at(double t) const {
-  auto it = std::upper_bound(moves_.begin(), moves_.end(), t, [](double v, const TrapqMove& m) { return v < m.print_time_s; });
+  auto it = std::upper_bound(moves_.begin(), moves_.end(), t,
+                             [](double v, const TrapqMove& m) { return v < m.print_time_s; });
   if (it == moves_.begin()) return 0;
   const TrapqMove& m = *std::prev(it);
   const double dt = t - m.print_time_s;

@@ -98,7 +98,8 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
   try {
     root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
-    throw InputError(std::string(e.description()), source_location(path, e.source().begin.line, e.source().begin.column));
+    throw InputError(std::string(e.description()),
+                     source_location(path, e.source().begin.line, e.source().begin.column));
   }
   Reader r(root, path);
   MachineProfile p;
@@ -122,7 +123,8 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
     a.min_mm = r.number(*t, sec, "min_mm", 0);
     a.max_mm = r.number(*t, sec, "max_mm", 0);
     if (!(a.max_mm > a.min_mm))
-      throw InputError(fmt::format("[{}] max_mm ({}) must exceed min_mm ({})", sec, a.max_mm, a.min_mm), r.where_of(node));
+      throw InputError(fmt::format("[{}] max_mm ({}) must exceed min_mm ({})", sec, a.max_mm, a.min_mm),
+                       r.where_of(node));
     a.max_velocity_mm_s = r.positive(*t, sec, "max_velocity_mm_s", true, 0);
     a.max_accel_mm_s2 = r.positive(*t, sec, "max_accel_mm_s2", true, 0);
     p.axes[name] = a;
@@ -156,8 +158,8 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
     p.sensors.accelerometer = true;
     p.sensors.accelerometer_chip = *node->value<std::string>();
     if (!is_klipper_accelerometer_chip(p.sensors.accelerometer_chip))
-      throw InputError(fmt::format("[sensors] accelerometer '{}' is not a chip Klipper reads ({})", p.sensors.accelerometer_chip,
-                                   klipper_accelerometer_chips()),
+      throw InputError(fmt::format("[sensors] accelerometer '{}' is not a chip Klipper reads ({})",
+                                   p.sensors.accelerometer_chip, klipper_accelerometer_chips()),
                        r.where_of(*node));
   } else {
     p.sensors.accelerometer = r.flag(s, "accelerometer", false);
@@ -185,8 +187,9 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
     if (const auto* node = fs.get(key)) {
       const auto v = node->value<std::string>();
       if (!v || std::count(v->begin(), v->end(), ':') != 2)
-        throw InputError(fmt::format("[firmware_state] {} must be \"type:freq_hz:damping\", e.g. \"mzv:48.6:0.1\"", key),
-                         r.where_of(*node));
+        throw InputError(
+            fmt::format("[firmware_state] {} must be \"type:freq_hz:damping\", e.g. \"mzv:48.6:0.1\"", key),
+            r.where_of(*node));
       p.state.shaper[axis] = *v;
     }
   }

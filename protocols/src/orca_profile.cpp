@@ -17,9 +17,9 @@ namespace {
 /// One top-level member's byte spans.
 struct OrcaMember {
   std::string key;
-  std::size_t begin = 0;        // opening quote of the key
+  std::size_t begin = 0;  // opening quote of the key
   std::size_t value_begin = 0;
-  std::size_t value_end = 0;    // one past the value
+  std::size_t value_end = 0;  // one past the value
 };
 
 class OrcaScanner {
@@ -151,17 +151,20 @@ std::string orca_model_text(const std::vector<ident::OrcaPoint>& table) {
   std::vector<ident::OrcaPoint> t = table;
   for (const auto& p : t) {
     if (!(std::isfinite(p.k_s) && p.k_s >= 0 && p.k_s <= L::kOrcaAdvanceMax_s))
-      throw InputError(fmt::format("refusing to write OrcaSlicer's adaptive pressure advance: advance {} s is outside "
-                                   "0..{} s",
-                                   p.k_s, L::kOrcaAdvanceMax_s));
+      throw InputError(
+          fmt::format("refusing to write OrcaSlicer's adaptive pressure advance: advance {} s is outside "
+                      "0..{} s",
+                      p.k_s, L::kOrcaAdvanceMax_s));
     if (!(std::isfinite(p.flow_mm3_s) && p.flow_mm3_s > 0))
-      throw InputError(fmt::format("refusing to write OrcaSlicer's adaptive pressure advance: flow {} mm^3/s is not "
-                                   "positive",
-                                   p.flow_mm3_s));
+      throw InputError(
+          fmt::format("refusing to write OrcaSlicer's adaptive pressure advance: flow {} mm^3/s is not "
+                      "positive",
+                      p.flow_mm3_s));
     if (!(std::isfinite(p.accel_mm_s2) && p.accel_mm_s2 >= 0))
-      throw InputError(fmt::format("refusing to write OrcaSlicer's adaptive pressure advance: acceleration {} mm/s^2 "
-                                   "is negative or not a number",
-                                   p.accel_mm_s2));
+      throw InputError(
+          fmt::format("refusing to write OrcaSlicer's adaptive pressure advance: acceleration {} mm/s^2 "
+                      "is negative or not a number",
+                      p.accel_mm_s2));
   }
   std::stable_sort(t.begin(), t.end(), [](const auto& a, const auto& b) {
     return a.flow_mm3_s != b.flow_mm3_s ? a.flow_mm3_s < b.flow_mm3_s : a.accel_mm_s2 < b.accel_mm_s2;
@@ -171,23 +174,26 @@ std::string orca_model_text(const std::vector<ident::OrcaPoint>& table) {
   for (const auto& p : t) {
     const std::string flow = format_number(p.flow_mm3_s, 2), acc = format_number(std::round(p.accel_mm_s2), 0);
     if (!seen.insert({flow, acc}).second)
-      throw InputError(fmt::format("two OrcaSlicer advance lines at flow {} mm^3/s and acceleration {} mm/s^2 (OrcaSlicer "
-                                   "interpolates over distinct flows)",
-                                   flow, acc));
+      throw InputError(
+          fmt::format("two OrcaSlicer advance lines at flow {} mm^3/s and acceleration {} mm/s^2 (OrcaSlicer "
+                      "interpolates over distinct flows)",
+                      flow, acc));
     if (!out.empty()) out += "\n";
     out += format_number(p.k_s, L::kOrcaAdvanceDecimals) + "," + flow + "," + acc;
   }
   return out;
 }
 
-std::vector<std::pair<std::string, std::string>> json_top_level_members(const std::string& text, const std::string& path) {
+std::vector<std::pair<std::string, std::string>> json_top_level_members(const std::string& text,
+                                                                        const std::string& path) {
   OrcaScanner sc(text, path);
   std::vector<std::pair<std::string, std::string>> out;
   for (const auto& m : sc.members()) out.emplace_back(m.key, text.substr(m.begin, m.value_end - m.begin));
   return out;
 }
 
-OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaAdvanceProfile& p, const std::string& path) {
+OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaAdvanceProfile& p,
+                                            const std::string& path) {
   {
     nlohmann::json j;
     try {
@@ -197,8 +203,9 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
     }
     if (!j.is_object()) throw InputError("an OrcaSlicer profile is a JSON object", path);
     if (j.contains("type") && j["type"].is_string() && j["type"] != "filament")
-      throw InputError(fmt::format("this is an OrcaSlicer '{}' profile, not a filament profile", j["type"].get<std::string>()),
-                       path);
+      throw InputError(
+          fmt::format("this is an OrcaSlicer '{}' profile, not a filament profile", j["type"].get<std::string>()),
+          path);
   }
   if (!(std::isfinite(p.fallback_k_s) && p.fallback_k_s >= 0 && p.fallback_k_s <= limits::kOrcaAdvanceMax_s))
     throw InputError(fmt::format("refusing to write OrcaSlicer's pressure_advance {} s (0..{} s)", p.fallback_k_s,
@@ -271,7 +278,8 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
       add += ",";
       add += one_line_object ? " " : eol + ind;
       add += orca_json_string(key) + ": ";
-      add += multiline ? "[" + eol + elem_ind + orca_json_string(value) + eol + ind + "]" : "[" + orca_json_string(value) + "]";
+      add += multiline ? "[" + eol + elem_ind + orca_json_string(value) + eol + ind + "]"
+                       : "[" + orca_json_string(value) + "]";
       r.added_keys.push_back(key);
     }
     edits.push_back({last.value_end, last.value_end, add});
@@ -280,14 +288,16 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
   r.text = text;
   for (const auto& e : edits) r.text.replace(e.begin, e.end - e.begin, e.text);
   try {
-    if (!nlohmann::json::parse(r.text).is_object()) throw InputError("internal error: the merged profile is not an object", path);
+    if (!nlohmann::json::parse(r.text).is_object())
+      throw InputError("internal error: the merged profile is not an object", path);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(fmt::format("internal error: the merged profile is not valid JSON ({})", e.what()), path);
   }
   return r;
 }
 
-std::string new_orca_filament_profile(const OrcaAdvanceProfile& p, const std::string& name, const std::string& inherits) {
+std::string new_orca_filament_profile(const OrcaAdvanceProfile& p, const std::string& name,
+                                      const std::string& inherits) {
   if (!(std::isfinite(p.fallback_k_s) && p.fallback_k_s >= 0 && p.fallback_k_s <= limits::kOrcaAdvanceMax_s))
     throw InputError(fmt::format("refusing to write OrcaSlicer's pressure_advance {} s (0..{} s)", p.fallback_k_s,
                                  limits::kOrcaAdvanceMax_s));

@@ -27,98 +27,113 @@ constexpr double kMachineDefault = std::numeric_limits<double>::quiet_NaN();
 // an experiment on an FFF printer asks for and far below where the protocol arithmetic (and its
 // conversion of counts and milliseconds to whole numbers) could overflow; the machine's own
 // limits are checked on the generated G-code by the safety gate.
-constexpr double kMaxFeedMmS = 1000;        // filament feed, mm/s
-constexpr double kMaxSpeedMmS = 10000;      // toolhead speed, mm/s
-constexpr double kMaxAccelMmS2 = 1e6;       // mm/s^2
-constexpr double kMaxTimeS = 3600;          // one settle/hold/pause time, s
-constexpr double kMaxFreqHz = 1000;         // excitation frequency, Hz
-constexpr double kMaxLengthMm = 10000;      // sizes and positions, mm
-constexpr double kMaxTemperatureC = 500;    // set temperature, degC (the profile's hotend_max_c applies too)
-constexpr double kMaxFlowMm3S = 1000;       // volumetric flow, mm^3/s
-
+constexpr double kMaxFeedMmS = 1000;      // filament feed, mm/s
+constexpr double kMaxSpeedMmS = 10000;    // toolhead speed, mm/s
+constexpr double kMaxAccelMmS2 = 1e6;     // mm/s^2
+constexpr double kMaxTimeS = 3600;        // one settle/hold/pause time, s
+constexpr double kMaxFreqHz = 1000;       // excitation frequency, Hz
+constexpr double kMaxLengthMm = 10000;    // sizes and positions, mm
+constexpr double kMaxTemperatureC = 500;  // set temperature, degC (the profile's hotend_max_c applies too)
+constexpr double kMaxFlowMm3S = 1000;     // volumetric flow, mm^3/s
 
 std::vector<ProtocolSpec> make_specs() {
-  const ProtocolParam hotend{"hotend_c", 210, "degC", "hot-end temperature set (and waited for) first; 0 leaves the heater alone",
-                             ParamDomain::non_negative, kMaxTemperatureC};
+  const ProtocolParam hotend{"hotend_c",
+                             210,
+                             "degC",
+                             "hot-end temperature set (and waited for) first; 0 leaves the heater alone",
+                             ParamDomain::non_negative,
+                             kMaxTemperatureC};
   std::vector<ProtocolSpec> s;
-  s.push_back({"liquefier-step",
-               "extrusion-rate steps (low, then high/low cycles) with the load cell recording the filament force",
-               {{"feed_low_mm_s", 1.0, "mm/s", "filament feed before and between steps", ParamDomain::positive, kMaxFeedMmS},
-                {"feed_high_mm_s", 3.0, "mm/s", "filament feed during a step", ParamDomain::positive, kMaxFeedMmS},
-                {"settle_s", 3.0, "s", "time at the low feed before the first step", ParamDomain::positive, kMaxTimeS},
-                {"hold_s", 3.0, "s", "time at each level (several tau)", ParamDomain::positive, kMaxTimeS},
-                {"cycles", 2, "", "number of low -> high -> low cycles", ParamDomain::count, 1000},
-                {"accel_mm_s2", 2000, "mm/s^2", "filament acceleration of the feed changes", ParamDomain::positive, kMaxAccelMmS2},
-                hotend},
-               {"load_cell"},
-               false});
-  s.push_back({"liquefier-flow-sweep",
-               "feed steps up and down through flow levels spread over the hot end's range (each level reached "
-               "from below and from above), load cell recorded; tau, K, theta per level and their trend with flow",
-               {{"levels", 6, "", "measured flow levels, spaced geometrically between the turning flows", ParamDomain::count, 16},
-                {"flow_min_mm3_s", kMachineDefault, "mm^3/s",
-                 "lower turning flow, where the sweep starts and ends (default: flow_max_mm3_s / 10)", ParamDomain::positive,
-                 kMaxFlowMm3S},
-                {"flow_max_mm3_s", kMachineDefault, "mm^3/s",
-                 "upper turning flow (default: 90 % of the profile's max_flow_mm3_s, or of max_velocity_mm_s times "
-                 "the filament area when lower)",
-                 ParamDomain::positive, kMaxFlowMm3S},
-                {"expected_tau_s", 0.5, "s", "time constant expected at the lowest flow (the slowest)", ParamDomain::positive,
-                 kMaxTimeS},
-                {"hold_taus", 6, "", "time at each level in expected time constants", ParamDomain::positive, 1000},
-                {"settle_s", 3.0, "s", "time at the lowest flow before the first step", ParamDomain::positive, kMaxTimeS},
-                {"cycles", 1, "", "up-and-down sweeps", ParamDomain::count, 100},
-                {"accel_mm_s2", 2000, "mm/s^2", "filament acceleration of the feed changes", ParamDomain::positive, kMaxAccelMmS2},
-                hotend},
-               {"load_cell"},
-               false});
-  s.push_back({"liquefier-sine",
-               "sine-dwell list: the feed oscillates around a mean at log-spaced frequencies, load cell recorded",
-               {{"feed_mean_mm_s", 2.0, "mm/s", "mean filament feed", ParamDomain::positive, kMaxFeedMmS},
-                {"amplitude_mm_s", 1.0, "mm/s", "feed oscillation amplitude (below the mean)", ParamDomain::non_negative, kMaxFeedMmS},
-                {"freq_min_hz", 0.2, "Hz", "lowest frequency", ParamDomain::positive, kMaxFreqHz},
-                {"freq_max_hz", 2.0, "Hz", "highest frequency", ParamDomain::positive, kMaxFreqHz},
-                {"freq_count", 5, "", "number of frequencies (log-spaced)", ParamDomain::count, 1000},
-                {"periods", 4, "", "periods per frequency", ParamDomain::positive, 10000},
-                {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase", ParamDomain::positive, 10},
-                {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments", ParamDomain::positive, kMaxAccelMmS2},
-                hotend},
-               {"load_cell"},
-               false});
-  s.push_back({"liquefier-chirp",
-               "linear chirp of the feed from freq_min_hz to freq_max_hz, load cell recorded",
-               {{"feed_mean_mm_s", 2.0, "mm/s", "mean filament feed", ParamDomain::positive, kMaxFeedMmS},
-                {"amplitude_mm_s", 1.0, "mm/s", "feed oscillation amplitude (below the mean)", ParamDomain::non_negative, kMaxFeedMmS},
-                {"freq_min_hz", 0.1, "Hz", "start frequency", ParamDomain::positive, kMaxFreqHz},
-                {"freq_max_hz", 3.0, "Hz", "end frequency", ParamDomain::positive, kMaxFreqHz},
-                {"duration_s", 20, "s", "chirp duration", ParamDomain::positive, kMaxTimeS},
-                {"settle_s", 2.0, "s", "steady feed at the mean before the chirp", ParamDomain::positive, kMaxTimeS},
-                {"expected_tau_s", 0, "s",
-                 "expected liquefier time constant (0: none); when given, the frequency range, duration and settle "
-                 "time not set explicitly are sized from its corner 1/(2 pi tau)",
-                 ParamDomain::non_negative, kMaxTimeS},
-                {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase", ParamDomain::positive, 10},
-                {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments", ParamDomain::positive, kMaxAccelMmS2},
-                hotend},
-               {"load_cell"},
-               false});
-  s.push_back({"ring-print",
-               "Holtrup's frequency test (Tuning liquefier dynamics, MSc thesis, University of Twente, 2019): a ring "
-               "printed at constant speed with the extrusion modulated by (1 + amplitude sin(periods theta)); "
-               "f = periods v / (2 pi R). Measure the width with 'tunekit linewidth'",
-               {{"radius_mm", 30, "mm", "ring radius R (Holtrup 2019, appendix D: 30 mm)", ParamDomain::positive, kMaxLengthMm},
-                {"center_x_mm", kMachineDefault, "mm", "ring centre x (default: middle of the travel)", ParamDomain::any, kMaxLengthMm},
-                {"center_y_mm", kMachineDefault, "mm", "ring centre y (default: middle of the travel)", ParamDomain::any, kMaxLengthMm},
-                {"speed_mm_s", 20, "mm/s", "print speed v", ParamDomain::positive, kMaxSpeedMmS},
-                {"periods", 8, "", "sine periods N around the ring", ParamDomain::count, 10000},
-                {"amplitude", 0.2, "", "relative extrusion modulation A (below 1, so the extrusion stays positive)",
-                 ParamDomain::non_negative, 1},
-                {"segments", 360, "", "straight segments per ring (at least 12)", ParamDomain::count, 100000},
-                {"z_mm", 0.2, "mm", "layer height / nozzle height of the ring", ParamDomain::positive, kMaxLengthMm},
-                {"accel_mm_s2", 1000, "mm/s^2", "print acceleration", ParamDomain::positive, kMaxAccelMmS2},
-                hotend},
-               {},
-               false});
+  s.push_back(
+      {"liquefier-step",
+       "extrusion-rate steps (low, then high/low cycles) with the load cell recording the filament force",
+       {{"feed_low_mm_s", 1.0, "mm/s", "filament feed before and between steps", ParamDomain::positive, kMaxFeedMmS},
+        {"feed_high_mm_s", 3.0, "mm/s", "filament feed during a step", ParamDomain::positive, kMaxFeedMmS},
+        {"settle_s", 3.0, "s", "time at the low feed before the first step", ParamDomain::positive, kMaxTimeS},
+        {"hold_s", 3.0, "s", "time at each level (several tau)", ParamDomain::positive, kMaxTimeS},
+        {"cycles", 2, "", "number of low -> high -> low cycles", ParamDomain::count, 1000},
+        {"accel_mm_s2", 2000, "mm/s^2", "filament acceleration of the feed changes", ParamDomain::positive,
+         kMaxAccelMmS2},
+        hotend},
+       {"load_cell"},
+       false});
+  s.push_back(
+      {"liquefier-flow-sweep",
+       "feed steps up and down through flow levels spread over the hot end's range (each level reached "
+       "from below and from above), load cell recorded; tau, K, theta per level and their trend with flow",
+       {{"levels", 6, "", "measured flow levels, spaced geometrically between the turning flows", ParamDomain::count,
+         16},
+        {"flow_min_mm3_s", kMachineDefault, "mm^3/s",
+         "lower turning flow, where the sweep starts and ends (default: flow_max_mm3_s / 10)", ParamDomain::positive,
+         kMaxFlowMm3S},
+        {"flow_max_mm3_s", kMachineDefault, "mm^3/s",
+         "upper turning flow (default: 90 % of the profile's max_flow_mm3_s, or of max_velocity_mm_s times "
+         "the filament area when lower)",
+         ParamDomain::positive, kMaxFlowMm3S},
+        {"expected_tau_s", 0.5, "s", "time constant expected at the lowest flow (the slowest)", ParamDomain::positive,
+         kMaxTimeS},
+        {"hold_taus", 6, "", "time at each level in expected time constants", ParamDomain::positive, 1000},
+        {"settle_s", 3.0, "s", "time at the lowest flow before the first step", ParamDomain::positive, kMaxTimeS},
+        {"cycles", 1, "", "up-and-down sweeps", ParamDomain::count, 100},
+        {"accel_mm_s2", 2000, "mm/s^2", "filament acceleration of the feed changes", ParamDomain::positive,
+         kMaxAccelMmS2},
+        hotend},
+       {"load_cell"},
+       false});
+  s.push_back(
+      {"liquefier-sine",
+       "sine-dwell list: the feed oscillates around a mean at log-spaced frequencies, load cell recorded",
+       {{"feed_mean_mm_s", 2.0, "mm/s", "mean filament feed", ParamDomain::positive, kMaxFeedMmS},
+        {"amplitude_mm_s", 1.0, "mm/s", "feed oscillation amplitude (below the mean)", ParamDomain::non_negative,
+         kMaxFeedMmS},
+        {"freq_min_hz", 0.2, "Hz", "lowest frequency", ParamDomain::positive, kMaxFreqHz},
+        {"freq_max_hz", 2.0, "Hz", "highest frequency", ParamDomain::positive, kMaxFreqHz},
+        {"freq_count", 5, "", "number of frequencies (log-spaced)", ParamDomain::count, 1000},
+        {"periods", 4, "", "periods per frequency", ParamDomain::positive, 10000},
+        {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase", ParamDomain::positive, 10},
+        {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments", ParamDomain::positive, kMaxAccelMmS2},
+        hotend},
+       {"load_cell"},
+       false});
+  s.push_back(
+      {"liquefier-chirp",
+       "linear chirp of the feed from freq_min_hz to freq_max_hz, load cell recorded",
+       {{"feed_mean_mm_s", 2.0, "mm/s", "mean filament feed", ParamDomain::positive, kMaxFeedMmS},
+        {"amplitude_mm_s", 1.0, "mm/s", "feed oscillation amplitude (below the mean)", ParamDomain::non_negative,
+         kMaxFeedMmS},
+        {"freq_min_hz", 0.1, "Hz", "start frequency", ParamDomain::positive, kMaxFreqHz},
+        {"freq_max_hz", 3.0, "Hz", "end frequency", ParamDomain::positive, kMaxFreqHz},
+        {"duration_s", 20, "s", "chirp duration", ParamDomain::positive, kMaxTimeS},
+        {"settle_s", 2.0, "s", "steady feed at the mean before the chirp", ParamDomain::positive, kMaxTimeS},
+        {"expected_tau_s", 0, "s",
+         "expected liquefier time constant (0: none); when given, the frequency range, duration and settle "
+         "time not set explicitly are sized from its corner 1/(2 pi tau)",
+         ParamDomain::non_negative, kMaxTimeS},
+        {"segment_s", 0.02, "s", "duration of one constant-feed move of the staircase", ParamDomain::positive, 10},
+        {"accel_mm_s2", 3000, "mm/s^2", "filament acceleration between segments", ParamDomain::positive, kMaxAccelMmS2},
+        hotend},
+       {"load_cell"},
+       false});
+  s.push_back(
+      {"ring-print",
+       "Holtrup's frequency test (Tuning liquefier dynamics, MSc thesis, University of Twente, 2019): a ring "
+       "printed at constant speed with the extrusion modulated by (1 + amplitude sin(periods theta)); "
+       "f = periods v / (2 pi R). Measure the width with 'tunekit linewidth'",
+       {{"radius_mm", 30, "mm", "ring radius R (Holtrup 2019, appendix D: 30 mm)", ParamDomain::positive, kMaxLengthMm},
+        {"center_x_mm", kMachineDefault, "mm", "ring centre x (default: middle of the travel)", ParamDomain::any,
+         kMaxLengthMm},
+        {"center_y_mm", kMachineDefault, "mm", "ring centre y (default: middle of the travel)", ParamDomain::any,
+         kMaxLengthMm},
+        {"speed_mm_s", 20, "mm/s", "print speed v", ParamDomain::positive, kMaxSpeedMmS},
+        {"periods", 8, "", "sine periods N around the ring", ParamDomain::count, 10000},
+        {"amplitude", 0.2, "", "relative extrusion modulation A (below 1, so the extrusion stays positive)",
+         ParamDomain::non_negative, 1},
+        {"segments", 360, "", "straight segments per ring (at least 12)", ParamDomain::count, 100000},
+        {"z_mm", 0.2, "mm", "layer height / nozzle height of the ring", ParamDomain::positive, kMaxLengthMm},
+        {"accel_mm_s2", 1000, "mm/s^2", "print acceleration", ParamDomain::positive, kMaxAccelMmS2},
+        hotend},
+       {},
+       false});
   s.push_back({"line-steps",
                "the camera path's line test: straight lines along +X whose flow steps low -> high -> low part-way; "
                "photographed, the width along each line is the liquefier's step response (t = s / v)",
@@ -130,27 +145,34 @@ std::vector<ProtocolSpec> make_specs() {
                 {"low_flow", 0.8, "", "low flow, relative to the profile's line width x layer height"},
                 {"high_flow", 1.5, "", "high flow, relative"},
                 {"spacing_mm", 6, "mm", "distance between the lines"},
-                {"center_x_mm", kMachineDefault, "mm", "middle of the lines in x (default: middle of the travel)", ParamDomain::any, kMaxLengthMm},
-                {"first_y_mm", kMachineDefault, "mm", "y of the first line (default: 50 mm below the middle)", ParamDomain::any, kMaxLengthMm},
+                {"center_x_mm", kMachineDefault, "mm", "middle of the lines in x (default: middle of the travel)",
+                 ParamDomain::any, kMaxLengthMm},
+                {"first_y_mm", kMachineDefault, "mm", "y of the first line (default: 50 mm below the middle)",
+                 ParamDomain::any, kMaxLengthMm},
                 {"z_mm", 0.2, "mm", "layer height / nozzle height"},
                 {"retract_mm", 0.8, "mm", "retraction after each line (primed again before the next)"},
                 {"accel_mm_s2", 1000, "mm/s^2", "print acceleration"},
                 hotend},
                {},
                false});
-  s.push_back({"axis-sweep",
-               "resonance sweep like Klipper's TEST_RESONANCES: back-and-forth moves whose acceleration is "
-               "accel_per_hz * f while f rises at hz_per_sec; the accelerometer is recorded",
-               {{"freq_start_hz", 10, "Hz", "first frequency", ParamDomain::positive, kMaxFreqHz},
-                {"freq_end_hz", 100, "Hz", "last frequency", ParamDomain::positive, kMaxFreqHz},
-                {"hz_per_sec", 2, "Hz/s", "sweep rate", ParamDomain::positive, kMaxFreqHz},
-                {"accel_per_hz", 60, "mm/s^2/Hz", "acceleration amplitude per Hz", ParamDomain::positive, kMaxAccelMmS2 / kMaxFreqHz},
-                {"center_mm", kMachineDefault, "mm", "position of the swept axis (default: middle of its travel)", ParamDomain::any, kMaxLengthMm},
-                {"other_mm", kMachineDefault, "mm", "position of the other horizontal axis (default: middle)", ParamDomain::any, kMaxLengthMm},
-                {"travel_speed_mm_s", 100, "mm/s", "speed of the move to the start position", ParamDomain::positive, kMaxSpeedMmS},
-                {"settle_s", 0.3, "s", "recorded rest before and after the sweep", ParamDomain::non_negative, kMaxTimeS}},
-               {"accelerometer"},
-               true});
+  s.push_back(
+      {"axis-sweep",
+       "resonance sweep like Klipper's TEST_RESONANCES: back-and-forth moves whose acceleration is "
+       "accel_per_hz * f while f rises at hz_per_sec; the accelerometer is recorded",
+       {{"freq_start_hz", 10, "Hz", "first frequency", ParamDomain::positive, kMaxFreqHz},
+        {"freq_end_hz", 100, "Hz", "last frequency", ParamDomain::positive, kMaxFreqHz},
+        {"hz_per_sec", 2, "Hz/s", "sweep rate", ParamDomain::positive, kMaxFreqHz},
+        {"accel_per_hz", 60, "mm/s^2/Hz", "acceleration amplitude per Hz", ParamDomain::positive,
+         kMaxAccelMmS2 / kMaxFreqHz},
+        {"center_mm", kMachineDefault, "mm", "position of the swept axis (default: middle of its travel)",
+         ParamDomain::any, kMaxLengthMm},
+        {"other_mm", kMachineDefault, "mm", "position of the other horizontal axis (default: middle)", ParamDomain::any,
+         kMaxLengthMm},
+        {"travel_speed_mm_s", 100, "mm/s", "speed of the move to the start position", ParamDomain::positive,
+         kMaxSpeedMmS},
+        {"settle_s", 0.3, "s", "recorded rest before and after the sweep", ParamDomain::non_negative, kMaxTimeS}},
+       {"accelerometer"},
+       true});
   s.push_back({"axis-rectangle",
                "the overshoot test of Hemminger, Improvements and Characterization of Error, Speed, and Capabilities "
                "in Low-Cost Additive Manufacturing Systems, UCLA, 2022: an XY rectangle with pauses at the corners, "
@@ -163,27 +185,27 @@ std::vector<ProtocolSpec> make_specs() {
                 {"pause_s", 0.3, "s", "pause at each corner", ParamDomain::positive, kMaxTimeS}},
                {"accelerometer"},
                false});
-  s.push_back({"test-pattern",
-               "test prints (pads for photos, line steps, rings) on one layer, ordered by the grid-based coverage "
-               "planner after Li and Yao, Coverage Path Planning Application on FDM 3D Printer, USC, 2018 (fewer "
-               "travels and retractions than a zigzag; zigzag=1 prints the zigzag for comparison)",
-               {{"pads", 4, "", "filled squares for photos", ParamDomain::count, 100},
-                {"pad_mm", 20, "mm", "pad size"},
-                {"line_steps", 5, "", "single lines of rising length", ParamDomain::count, 100},
-                {"line_mm", 30, "mm", "longest line"},
-                {"rings", 2, "", "two-line-wide rings", ParamDomain::count, 100},
-                {"ring_radius_mm", 12, "mm", "ring radius"},
-                {"speed_mm_s", 40, "mm/s", "print speed"},
-                {"travel_speed_mm_s", 150, "mm/s", "travel speed"},
-                {"accel_mm_s2", 1500, "mm/s^2", "acceleration"},
-                {"z_mm", 0.2, "mm", "layer height / nozzle height"},
-                {"zigzag", 0, "", "1: plain zigzag order instead of the coverage planner", ParamDomain::non_negative, 1},
-                hotend},
-               {},
-               false});
+  s.push_back(
+      {"test-pattern",
+       "test prints (pads for photos, line steps, rings) on one layer, ordered by the grid-based coverage "
+       "planner after Li and Yao, Coverage Path Planning Application on FDM 3D Printer, USC, 2018 (fewer "
+       "travels and retractions than a zigzag; zigzag=1 prints the zigzag for comparison)",
+       {{"pads", 4, "", "filled squares for photos", ParamDomain::count, 100},
+        {"pad_mm", 20, "mm", "pad size"},
+        {"line_steps", 5, "", "single lines of rising length", ParamDomain::count, 100},
+        {"line_mm", 30, "mm", "longest line"},
+        {"rings", 2, "", "two-line-wide rings", ParamDomain::count, 100},
+        {"ring_radius_mm", 12, "mm", "ring radius"},
+        {"speed_mm_s", 40, "mm/s", "print speed"},
+        {"travel_speed_mm_s", 150, "mm/s", "travel speed"},
+        {"accel_mm_s2", 1500, "mm/s^2", "acceleration"},
+        {"z_mm", 0.2, "mm", "layer height / nozzle height"},
+        {"zigzag", 0, "", "1: plain zigzag order instead of the coverage planner", ParamDomain::non_negative, 1},
+        hotend},
+       {},
+       false});
   return s;
 }
-
 
 }  // namespace
 

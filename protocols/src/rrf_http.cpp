@@ -96,7 +96,8 @@ std::string url_encode(std::string_view v) {
 
 HttpReply http_get(const HttpAddress& to, const std::string& path_and_query, std::chrono::milliseconds timeout) {
   HttpSocket sock(http_connect(to));
-  const std::string req = fmt::format("GET {} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n\r\n", path_and_query, to.host);
+  const std::string req =
+      fmt::format("GET {} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n\r\n", path_and_query, to.host);
   for (std::size_t sent = 0; sent < req.size();) {
     const ssize_t n = ::send(sock.fd(), req.data() + sent, req.size() - sent, MSG_NOSIGNAL);
     if (n < 0) {
@@ -113,8 +114,11 @@ HttpReply http_get(const HttpAddress& to, const std::string& path_and_query, std
     if (header_end != std::string::npos && content_length >= 0 &&
         data.size() >= header_end + 4 + static_cast<std::size_t>(content_length))
       break;
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0) throw MachineError(fmt::format("no complete reply to GET {} within {} ms", path_and_query, timeout.count()), to.text());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0)
+      throw MachineError(fmt::format("no complete reply to GET {} within {} ms", path_and_query, timeout.count()),
+                         to.text());
     pollfd p{sock.fd(), POLLIN, 0};
     const int pr = ::poll(&p, 1, static_cast<int>(left.count()));
     if (pr < 0 && errno == EINTR) continue;

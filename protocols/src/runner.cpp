@@ -53,7 +53,10 @@ int parse_numbers(std::string_view s, double* out, int max) {
 class Recorder {
  public:
   Recorder(Journal& j, std::string load_cell_file, std::string accel_file, std::string commanded_file)
-      : j_(j), load_file_(std::move(load_cell_file)), accel_file_(std::move(accel_file)), cmd_file_(std::move(commanded_file)) {}
+      : j_(j),
+        load_file_(std::move(load_cell_file)),
+        accel_file_(std::move(accel_file)),
+        cmd_file_(std::move(commanded_file)) {}
 
   void load_cell(double t, double feed, double force) {
     auto& c = j_.csv(load_file_, "time (s),feed (mm/s),force (N)");
@@ -116,8 +119,8 @@ class Session {
 
 class GcodeSession : public Session {
  public:
-  GcodeSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const std::atomic<bool>* abort,
-               SendGuard& guard, std::string http)
+  GcodeSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo,
+               const std::atomic<bool>* abort, SendGuard& guard, std::string http)
       : t_(std::move(t)), link_(*t_, &j, lo), j_(j), rec_(rec), http_(std::move(http)) {
     link_.guard = &guard;
     link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
@@ -146,12 +149,13 @@ class GcodeSession : public Session {
     }
     // tunekit-sim streams with M4100 whichever firmware it follows.
     const std::string cmd = firmware.sensor_stream() ? Dialect(Firmware::marlin).sensor_stream(sensor, on)
-                                                      : dialect.sensor_stream(sensor, on);
+                                                     : dialect.sensor_stream(sensor, on);
     if (cmd.empty() || !firmware.sensor_stream())
-      throw MachineError(fmt::format("the firmware ({}) does not stream {} data over this link (it reports no "
-                                     "Cap:TUNEKIT_SENSOR_STREAM); use Klipper's API socket (--port unix:PATH) or tunekit-sim",
-                                     firmware.name.empty() ? "unidentified" : firmware.name, sensor),
-                         t_->describe());
+      throw MachineError(
+          fmt::format("the firmware ({}) does not stream {} data over this link (it reports no "
+                      "Cap:TUNEKIT_SENSOR_STREAM); use Klipper's API socket (--port unix:PATH) or tunekit-sim",
+                      firmware.name.empty() ? "unidentified" : firmware.name, sensor),
+          t_->describe());
     link_.send(cmd);
   }
   bool can_record(const std::string& sensor) const override {
@@ -163,7 +167,11 @@ class GcodeSession : public Session {
   }
   nlohmann::json stats() const override {
     const auto& s = link_.stats();
-    nlohmann::json j{{"lines_sent", s.lines_sent}, {"resends", s.resends}, {"retries", s.retries}, {"busy", s.busy}, {"data_lines", s.data_lines}};
+    nlohmann::json j{{"lines_sent", s.lines_sent},
+                     {"resends", s.resends},
+                     {"retries", s.retries},
+                     {"busy", s.busy},
+                     {"data_lines", s.data_lines}};
     if (!m956_files_.empty()) j["rrf_accelerometer_files"] = m956_files_;
     return j;
   }
@@ -178,7 +186,8 @@ class GcodeSession : public Session {
     // Accelerometers.cpp: M955 P0 reports "... samples at <rate>Hz ..."; M956 takes a count.
     const auto rate = parse_m955_rate_hz(link_.send("M955 P0"));
     if (!rate)
-      throw MachineError("RepRapFirmware reports no accelerometer (M955 P0): configure it with M955 first", t_->describe());
+      throw MachineError("RepRapFirmware reports no accelerometer (M955 P0): configure it with M955 first",
+                         t_->describe());
     m956_rate_hz_ = *rate;
     // The window as planned plus a second: RepRapFirmware cannot stop a run early.
     const long samples = std::lround(std::ceil(*rate * (std::max(0.0, window_s) + 1.0)));
@@ -394,8 +403,9 @@ RunResult run_experiment(const RunOptions& o) {
   Journal journal(res.run_dir);
   const std::string axis_tag = res.experiment.axis.empty() ? "xy" : res.experiment.axis;
   const std::string tag = o.file_tag.empty() ? stamp : o.file_tag;
-  Recorder rec(journal, o.protocol == "liquefier-step" || o.protocol == "liquefier-flow-sweep" ? "step.csv" : "feed_force.csv",
-               fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag));
+  Recorder rec(
+      journal, o.protocol == "liquefier-step" || o.protocol == "liquefier-flow-sweep" ? "step.csv" : "feed_force.csv",
+      fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag));
   write_file_atomic(journal.path("protocol.gcode"), join_lines(res.gcode));
   res.files["journal"] = journal.path("journal.jsonl");
   res.files["gcode"] = journal.path("protocol.gcode");
@@ -415,7 +425,9 @@ RunResult run_experiment(const RunOptions& o) {
       std::function<void(Simulator&)> setup;
       if (o.sim_bed)
         setup = [bed = o.sim_bed](Simulator& s) {
-          s.deposit_sink = [bed](double t, const std::array<double, 4>& pos, double v, double q) { bed->deposit(t, pos, v, q); };
+          s.deposit_sink = [bed](double t, const std::array<double, 4>& pos, double v, double q) {
+            bed->deposit(t, pos, v, q);
+          };
         };
       server = std::make_unique<SimPtyServer>(sim_cfg, setup);
       port = server->path();
@@ -440,7 +452,8 @@ RunResult run_experiment(const RunOptions& o) {
                                      {"disconnected", server->disconnected()},
                                      {"halted", server->sim().halted()},
                                      {"machine_time_s", server->sim().time_s()}}
-                              .dump(2) + "\n");
+                              .dump(2) +
+                          "\n");
     res.files["sim_received"] = journal.path("sim_received.gcode");
   };
   auto list_files = [&] {
@@ -455,12 +468,14 @@ RunResult run_experiment(const RunOptions& o) {
     progress(fmt::format("connecting to {}", port));
     const bool api = port.rfind("unix:", 0) == 0;
     auto transport = open_transport(port, o.baud);
-    if (api) session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors, guard);
+    if (api)
+      session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors, guard);
     else
       session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag, guard,
                                                server ? server->http_url() : profile.http_address);
     session->firmware = session->identify();
-    session->dialect = Dialect(session->firmware.firmware == Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
+    session->dialect =
+        Dialect(session->firmware.firmware == Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
     journal.event("firmware", {{"name", session->firmware.name},
                                {"version", session->firmware.version},
                                {"dialect", to_string(session->dialect.firmware())},
@@ -474,13 +489,14 @@ RunResult run_experiment(const RunOptions& o) {
       if (!session->can_record(sensor)) {
         const bool rrf = session->firmware.firmware == Firmware::reprapfirmware && sensor == "accelerometer";
         throw MachineError(
-            fmt::format("the firmware ({}) cannot record {} data over this link ({}); nothing but M115 was sent",
-                        session->firmware.name.empty() ? "unidentified" : session->firmware.name, sensor,
-                        rrf ? "RepRapFirmware records its accelerometer with M956 into 0:/sys/accelerometer/ and offers "
-                              "no way to read a file over USB serial (M28/M29 write, M20 lists, M36/M38 describe a "
-                              "file); give the profile its web server, [network] http = \"http://HOST\", to fetch it "
-                              "with rr_download"
-                            : "no tunekit sensor stream"),
+            fmt::format(
+                "the firmware ({}) cannot record {} data over this link ({}); nothing but M115 was sent",
+                session->firmware.name.empty() ? "unidentified" : session->firmware.name, sensor,
+                rrf ? "RepRapFirmware records its accelerometer with M956 into 0:/sys/accelerometer/ and offers "
+                      "no way to read a file over USB serial (M28/M29 write, M20 lists, M36/M38 describe a "
+                      "file); give the profile its web server, [network] http = \"http://HOST\", to fetch it "
+                      "with rr_download"
+                    : "no tunekit sensor stream"),
             port);
       }
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,

@@ -63,7 +63,8 @@ template <class Add>
 void check_settings(const GcodeWords& w, const GcodeInterpreter& in, const MachineProfile& p, Add add) {
   if ((w.command == "M104" || w.command == "M109") && in.hotend_c) {
     if (*in.hotend_c > p.temperature.hotend_max_c + kLimitTolerance)
-      add(fmt::format("hot-end temperature {:g} degC exceeds hotend_max_c {:g}", *in.hotend_c, p.temperature.hotend_max_c));
+      add(fmt::format("hot-end temperature {:g} degC exceeds hotend_max_c {:g}", *in.hotend_c,
+                      p.temperature.hotend_max_c));
     if (*in.hotend_c < 0) add(fmt::format("hot-end temperature {:g} degC is negative", *in.hotend_c));
   }
   if ((w.command == "M140" || w.command == "M190") && in.bed_c) {
@@ -75,8 +76,7 @@ void check_settings(const GcodeWords& w, const GcodeInterpreter& in, const Machi
     add(fmt::format("feed rate F{:g} is not positive", w.get("F", 0)));
   if ((w.command == "M204" || w.command == "SET_VELOCITY_LIMIT") && !(in.accel_mm_s2() > 0))
     add(fmt::format("acceleration {:g} mm/s^2 is not positive", in.accel_mm_s2()));
-  if (w.command == "G4" && (!(in.dwell_s() >= 0)))
-    add(fmt::format("dwell {:g} s is negative", in.dwell_s()));
+  if (w.command == "G4" && (!(in.dwell_s() >= 0))) add(fmt::format("dwell {:g} s is negative", in.dwell_s()));
 }
 
 /// Travel of one move against the profile (the part of the check the send guard repeats).
@@ -92,7 +92,8 @@ void check_travel(const GcodeMove& move, const MachineProfile& p, Add add) {
     }
     const auto& a = p.axes.at(name);
     if (!(move.end[k] >= a.min_mm - kLimitTolerance && move.end[k] <= a.max_mm + kLimitTolerance))
-      add(fmt::format("{} position {:g} mm is outside the travel {:g}..{:g} mm", name, move.end[k], a.min_mm, a.max_mm));
+      add(fmt::format("{} position {:g} mm is outside the travel {:g}..{:g} mm", name, move.end[k], a.min_mm,
+                      a.max_mm));
   }
   if (!(move.feed_mm_s > 0)) add(fmt::format("feed rate {:g} mm/s is not positive", move.feed_mm_s));
 }
@@ -142,7 +143,9 @@ std::optional<std::string> non_finite_word(std::string_view line) {
       return body.substr(k, e - k);
     }
     ++k;
-    while (k < body.size() && !std::isalpha(static_cast<unsigned char>(body[k])) && !std::isspace(static_cast<unsigned char>(body[k]))) ++k;
+    while (k < body.size() && !std::isalpha(static_cast<unsigned char>(body[k])) &&
+           !std::isspace(static_cast<unsigned char>(body[k])))
+      ++k;
   }
   return std::nullopt;
 }
@@ -173,13 +176,16 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
                          : s == "filament_encoder" ? p.sensors.filament_encoder
                          : s == "camera"           ? p.sensors.camera
                                                    : false;
-    if (!present) out.push_back({0, "", fmt::format("the protocol needs a {} and the profile has none ([sensors] {} = true)", s, s)});
+    if (!present)
+      out.push_back(
+          {0, "", fmt::format("the protocol needs a {} and the profile has none ([sensors] {} = true)", s, s)});
   }
   // Size first: a protocol beyond the caps is not interpreted line by line.
   std::size_t bytes = 0;
   for (const auto& l : gcode) bytes += l.size() + 1;
   if (gcode.size() > limits.max_lines)
-    out.push_back({0, "", fmt::format("{} G-code lines exceed the limit of {} (--max-lines)", gcode.size(), limits.max_lines)});
+    out.push_back(
+        {0, "", fmt::format("{} G-code lines exceed the limit of {} (--max-lines)", gcode.size(), limits.max_lines)});
   if (bytes > limits.max_bytes)
     out.push_back({0, "", fmt::format("{} bytes of G-code exceed the limit of {} bytes", bytes, limits.max_bytes)});
   if (!out.empty() && (gcode.size() > limits.max_lines || bytes > limits.max_bytes)) return out;
@@ -220,18 +226,22 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
       const double ae = move->accel_mm_s2 * std::abs(u[3]);
       const double flow = ve * p.filament_area_mm2();
       if (ve > p.extruder.max_velocity_mm_s + tol)
-        add(fmt::format("filament feed {:.6g} mm/s exceeds [extruder] max_velocity_mm_s {:g}", ve, p.extruder.max_velocity_mm_s));
+        add(fmt::format("filament feed {:.6g} mm/s exceeds [extruder] max_velocity_mm_s {:g}", ve,
+                        p.extruder.max_velocity_mm_s));
       if (flow > p.extruder.max_flow_mm3_s + tol)
         add(fmt::format("volumetric flow {:.6g} mm^3/s exceeds max_flow_mm3_s {:g}", flow, p.extruder.max_flow_mm3_s));
       if (ae > p.extruder.max_accel_mm_s2 + tol)
-        add(fmt::format("filament acceleration {:.6g} mm/s^2 exceeds [extruder] max_accel_mm_s2 {:g}", ae, p.extruder.max_accel_mm_s2));
+        add(fmt::format("filament acceleration {:.6g} mm/s^2 exceeds [extruder] max_accel_mm_s2 {:g}", ae,
+                        p.extruder.max_accel_mm_s2));
     }
   }
   if (out.empty()) {
     const double t = estimate_gcode_duration_s(gcode);
     if (!(t <= limits.max_duration_s))
-      out.push_back({0, "", fmt::format("the protocol takes {:.4g} s of machine time, more than the limit of {:g} s (--max-duration)",
-                                        t, limits.max_duration_s)});
+      out.push_back(
+          {0, "",
+           fmt::format("the protocol takes {:.4g} s of machine time, more than the limit of {:g} s (--max-duration)", t,
+                       limits.max_duration_s)});
   }
   return out;
 }
@@ -241,8 +251,9 @@ void require_within_limits(const std::vector<std::string>& gcode, const MachineP
   const auto v = check_protocol(gcode, profile, sensors, limits);
   if (v.empty()) return;
   constexpr std::size_t kListed = 20;
-  std::string msg = fmt::format("refused: the protocol exceeds the machine profile in {} place{} (nothing was sent): ",
-                                v.size(), v.size() == 1 ? "" : "s");
+  std::string msg =
+      fmt::format("refused: the protocol exceeds the machine profile in {} place{} (nothing was sent): ", v.size(),
+                  v.size() == 1 ? "" : "s");
   for (std::size_t i = 0; i < v.size() && i < kListed; ++i) {
     if (i) msg += "; ";
     if (v[i].line) msg += fmt::format("G-code line {} '{}': ", v[i].line, v[i].gcode);

@@ -9,9 +9,9 @@
 namespace tunekit::protocols {
 namespace {
 
-constexpr double kSimCamPieceMm = 0.05;      // bead pieces are merged up to this length
-constexpr double kSimCamMinSpeed = 0.5;      // mm/s: a (nearly) standing nozzle lays no bead piece
-constexpr double kSimCamMaxWidthMm = 3.0;    // a blob, not a line
+constexpr double kSimCamPieceMm = 0.05;    // bead pieces are merged up to this length
+constexpr double kSimCamMinSpeed = 0.5;    // mm/s: a (nearly) standing nozzle lays no bead piece
+constexpr double kSimCamMaxWidthMm = 3.0;  // a blob, not a line
 
 double sim_cam_segment_distance(double px, double py, double ax, double ay, double bx, double by) {
   const double dx = bx - ax, dy = by - ay;

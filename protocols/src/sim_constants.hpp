@@ -46,7 +46,8 @@ inline constexpr double kStepCountSlack = 1e-9;
 // --- Firmware rules (G-code command table) ---
 /// Marlin Configuration.h DEFAULT_MAX_ACCELERATION {3000, 3000, 100, 10000} and
 /// DEFAULT_RETRACT_ACCELERATION 3000, applied as G-code when the simulator starts.
-inline constexpr std::array<const char*, 2> kMarlinDefaultAccelerationGcode{"M201 X3000 Y3000 Z100 E10000", "M204 R3000"};
+inline constexpr std::array<const char*, 2> kMarlinDefaultAccelerationGcode{"M201 X3000 Y3000 Z100 E10000",
+                                                                            "M204 R3000"};
 /// RepRapFirmware: the M201 of a typical config.g.
 inline constexpr const char* kRrfDefaultAccelerationGcode = "M201 X3000 Y3000 Z100 E3000";
 /// Marlin Configuration_adv.h MIN_STEPS_PER_SEGMENT: a move with fewer steps is joined with the

@@ -112,7 +112,8 @@ void Simulator::m493(const GcodeWords& w, const Emit& emit) {
     emit(fmt::format("X static shaper frequency: {:.2f}Hz\n", ftm_freq_[0]));
     emit(fmt::format("Y static shaper frequency: {:.2f} Hz\n", ftm_freq_[1]));
   }
-  emit(ftm_la_ ? fmt::format("Linear Advance enabled. Gain: {:.2f}\n", ftm_k_) : std::string("Linear Advance disabled\n"));
+  emit(ftm_la_ ? fmt::format("Linear Advance enabled. Gain: {:.2f}\n", ftm_k_)
+               : std::string("Linear Advance disabled\n"));
 }
 
 bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
@@ -146,7 +147,8 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     }
     if (*nl.number != last_n_ + 1) {
       out_flush(emit);
-      emit(fmt::format("Error:Line Number is not Last Line Number+1, Last Line: {}\nResend: {}\nok\n", last_n_, last_n_ + 1));
+      emit(fmt::format("Error:Line Number is not Last Line Number+1, Last Line: {}\nResend: {}\nok\n", last_n_,
+                       last_n_ + 1));
       return true;
     }
     last_n_ = *nl.number;
@@ -167,7 +169,8 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
           return true;
         }
         double steps = 0;
-        for (std::size_t k = 0; k < 3; ++k) steps = std::max(steps, std::abs(m->end[k] - m->start[k]) * cfg_.steps_per_mm);
+        for (std::size_t k = 0; k < 3; ++k)
+          steps = std::max(steps, std::abs(m->end[k] - m->start[k]) * cfg_.steps_per_mm);
         if (marlin() && !m->extruder_only() && std::lround(steps) < sim::kMarlinMinStepsPerSegment) {
           carry_start_ = m->start;  // Configuration_adv.h MIN_STEPS_PER_SEGMENT 6
         } else {
@@ -194,8 +197,12 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     } else if (c == "M205" && words->has("B")) {
       min_segment_time_s_ = words->get("B", sim::kMarlinDefaultMinSegmentTime_us) * sim::kSecondsPerMicrosecond;
     } else if (c == "M566") {
-      if (words->has("X")) jerk_x_mm_s_ = std::max(sim::kRrfMinimumJerk_mm_s, words->get("X", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
-      if (words->has("Y")) jerk_y_mm_s_ = std::max(sim::kRrfMinimumJerk_mm_s, words->get("Y", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
+      if (words->has("X"))
+        jerk_x_mm_s_ =
+            std::max(sim::kRrfMinimumJerk_mm_s, words->get("X", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
+      if (words->has("Y"))
+        jerk_y_mm_s_ =
+            std::max(sim::kRrfMinimumJerk_mm_s, words->get("Y", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
     } else if (c == "SET_VELOCITY_LIMIT") {
       interp_.apply(*words);
       if (words->has("MINIMUM_CRUISE_RATIO")) mcr_ = words->get("MINIMUM_CRUISE_RATIO", mcr_);
@@ -217,9 +224,10 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     } else if (c == "M955" && rrf()) {
       out_flush(emit);
       // Accelerometers.cpp ConfigureAccelerometer without other parameters: the report.
-      emit(fmt::format("Accelerometer 0 type LIS3DH with orientation 20 samples at {}Hz with 10-bit resolution, SPI "
-                       "frequency 2000000\n",
-                       std::lround(cfg_.accel_rate_hz)));
+      emit(
+          fmt::format("Accelerometer 0 type LIS3DH with orientation 20 samples at {}Hz with 10-bit resolution, SPI "
+                      "frequency 2000000\n",
+                      std::lround(cfg_.accel_rate_hz)));
     } else if (c == "M956" && rrf()) {
       flush(emit);
       m956(nl.body, *words, emit);
@@ -231,15 +239,17 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
       if (klipper())
         emit(fmt::format("FIRMWARE_NAME:Klipper FIRMWARE_VERSION:v0.13.0-tunekit-sim-{}\n", core::kVersion));
       else if (rrf())
-        emit(fmt::format("FIRMWARE_NAME: RepRapFirmware for tunekit-sim FIRMWARE_VERSION: 3.5.1 ELECTRONICS: tunekit-sim "
-                         "{} FIRMWARE_DATE: 2024-01-01\n",
-                         core::kVersion));
+        emit(fmt::format(
+            "FIRMWARE_NAME: RepRapFirmware for tunekit-sim FIRMWARE_VERSION: 3.5.1 ELECTRONICS: tunekit-sim "
+            "{} FIRMWARE_DATE: 2024-01-01\n",
+            core::kVersion));
       else
-        emit(fmt::format("FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
-                         "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
-                         "UUID:00000000-0000-0000-0000-000000000000\n"
-                         "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
-                         core::kVersion));
+        emit(fmt::format(
+            "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
+            "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
+            "UUID:00000000-0000-0000-0000-000000000000\n"
+            "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
+            core::kVersion));
       if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
     } else if (c == "M105") {
       out_flush(emit);

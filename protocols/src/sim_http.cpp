@@ -43,7 +43,8 @@ void sim_http_send_all(int fd, const std::string& s) {
 
 /// HttpResponder.cpp RejectMessage: "HTTP/1.1 %u %s\r\nConnection: close\r\n" ... then a page.
 std::string sim_http_reject(const std::string& response, int code) {
-  return fmt::format("HTTP/1.1 {} {}\r\nConnection: close\r\n\r\n<html><body>{}</body></html>", code, response, response);
+  return fmt::format("HTTP/1.1 {} {}\r\nConnection: close\r\n\r\n<html><body>{}</body></html>", code, response,
+                     response);
 }
 
 }  // namespace

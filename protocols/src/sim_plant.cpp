@@ -129,8 +129,9 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
     force = liq_ * area;
   }
   if (deposit_sink) {
-    const double flow = cfg_.liquefier == LiquefierModel::fopdt ? (cfg_.K_N_per_mm_s != 0 ? std::max(0.0, liq_ / cfg_.K_N_per_mm_s) * area : 0.0)
-                                                   : std::pow(std::max(liq_, 0.0) / cfg_.k_MPa, 1.0 / cfg_.n_index);
+    const double flow = cfg_.liquefier == LiquefierModel::fopdt
+                            ? (cfg_.K_N_per_mm_s != 0 ? std::max(0.0, liq_ / cfg_.K_N_per_mm_s) * area : 0.0)
+                            : std::pow(std::max(liq_, 0.0) / cfg_.k_MPa, 1.0 / cfg_.n_index);
     deposit_sink(t_ + h, pos, std::hypot(vel[0], vel[1]), flow);
   }
   t_ += h;
@@ -140,7 +141,9 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
     const double ay = meas[1] + cfg_.cross_coupling * meas[0] + cfg_.accel_noise_mm_s2 * normal_(rng_);
     const double az = sim::kAccelRestZ_mm_s2 + meas[2] + cfg_.accel_noise_mm_s2 * normal_(rng_);
     if (accel_sink) accel_sink(t_, ax, ay, az);
-    else fmt::format_to(std::back_inserter(out_), "echo:TKA {:.6f} {:.2f} {:.2f} {:.2f} {:.2f} {:.2f}\n", t_, ax, ay, az, acc1[0], acc1[1]);
+    else
+      fmt::format_to(std::back_inserter(out_), "echo:TKA {:.6f} {:.2f} {:.2f} {:.2f} {:.2f} {:.2f}\n", t_, ax, ay, az,
+                     acc1[0], acc1[1]);
     ++accel_sent_;
   }
   if (capture_left_ > 0 && step_ % accel_every_ == 0) {
@@ -150,7 +153,8 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
     const double ax = meas[0] + cfg_.cross_coupling * meas[1] + cfg_.accel_noise_mm_s2 * normal_(rng_);
     const double ay = meas[1] + cfg_.cross_coupling * meas[0] + cfg_.accel_noise_mm_s2 * normal_(rng_);
     const double az = sim::kAccelRestZ_mm_s2 + meas[2] + cfg_.accel_noise_mm_s2 * normal_(rng_);
-    fmt::format_to(std::back_inserter(capture_text_), "{},{:.3f},{:.3f},{:.3f}\n", capture_index_++, ax / g, ay / g, az / g);
+    fmt::format_to(std::back_inserter(capture_text_), "{},{:.3f},{:.3f},{:.3f}\n", capture_index_++, ax / g, ay / g,
+                   az / g);
     if (--capture_left_ == 0) {
       capture_text_ += fmt::format("Rate {}, overflows 0\n", std::lround(cfg_.accel_rate_hz));
       std::lock_guard<std::mutex> lock(mu_);

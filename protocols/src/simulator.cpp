@@ -42,9 +42,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
-const char* liquefier_model_name(LiquefierModel m) {
-  return m == LiquefierModel::fopdt ? "fopdt" : "physics";
-}
+const char* liquefier_model_name(LiquefierModel m) { return m == LiquefierModel::fopdt ? "fopdt" : "physics"; }
 
 }  // namespace
 
@@ -90,20 +88,21 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
       if (v != "0" && v != "1") throw InputError("simulator option rrf_http must be 0 or 1");
       c.rrf_http = v == "1";
     } else if (k == "ft_motion") {
-      if (v != "none" && v != "off" && v != "on") throw InputError("simulator option ft_motion must be none, off or on");
+      if (v != "none" && v != "off" && v != "on")
+        throw InputError("simulator option ft_motion must be none, off or on");
       c.ft_motion = v;
     } else if (k == "minimum_cruise_ratio") {
       c.minimum_cruise_ratio = parse_double(k, v);
       if (c.minimum_cruise_ratio < 0 || c.minimum_cruise_ratio >= 1)
         throw InputError("simulator option minimum_cruise_ratio must be in [0, 1)");
-    }
-    else if (k.rfind("mode_", 0) == 0 && k.size() == 6) {
+    } else if (k.rfind("mode_", 0) == 0 && k.size() == 6) {
       std::vector<SimMode> modes;
       for (const auto& m : split(v, ',')) {
         const auto parts = split(m, ':');
         if (parts.size() < 2 || parts.size() > 3)
           throw InputError(fmt::format("simulator option {}: '{}' is not FREQ_HZ:ZETA[:WEIGHT]", k, m));
-        SimMode sm{pos(parse_double(k, parts[0])), pos(parse_double(k, parts[1])), parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultModeWeight};
+        SimMode sm{pos(parse_double(k, parts[0])), pos(parse_double(k, parts[1])),
+                   parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultModeWeight};
         if (sm.zeta >= 1) throw InputError(fmt::format("simulator option {}: damping ratio must be below 1", k));
         modes.push_back(sm);
       }
@@ -134,7 +133,8 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
       else if (kind == "garble") f.kind = SimFault::Kind::garble;
       else if (kind == "disconnect") f.kind = SimFault::Kind::disconnect;
       else if (kind == "error") f.kind = SimFault::Kind::error;
-      else throw InputError(fmt::format("unknown simulator fault '{}' (drop, garble, late-ok, disconnect, error)", kind));
+      else
+        throw InputError(fmt::format("unknown simulator fault '{}' (drop, garble, late-ok, disconnect, error)", kind));
       f.at_line = static_cast<long>(pos(parse_double(k, rest)));
       c.faults.push_back(f);
     } else {
@@ -147,12 +147,9 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
 nlohmann::json SimConfig::truth() const {
   nlohmann::json j;
   const double area = std::numbers::pi / 4 * filament_diameter_mm * filament_diameter_mm;
-  nlohmann::json liq{{"model", liquefier_model_name(liquefier)},
-                     {"input", "feed (mm/s), commanded filament feed"},
-                     {"output", "force (N), load cell"},
-                     {"theta_s", theta_s},
-                     {"force_offset_N", force_offset_N},
-                     {"force_noise_N", force_noise_N},
+  nlohmann::json liq{{"model", liquefier_model_name(liquefier)}, {"input", "feed (mm/s), commanded filament feed"},
+                     {"output", "force (N), load cell"},         {"theta_s", theta_s},
+                     {"force_offset_N", force_offset_N},         {"force_noise_N", force_noise_N},
                      {"load_cell_rate_hz", load_cell_rate_hz}};
   if (liquefier == LiquefierModel::fopdt) {
     liq["K"] = K_N_per_mm_s;
@@ -182,7 +179,8 @@ nlohmann::json SimConfig::truth() const {
     axes[axis] = {{"modes", ms}};
   }
   j["axes"] = axes;
-  j["accelerometer"] = {{"rate_hz", accel_rate_hz}, {"noise_mm_s2", accel_noise_mm_s2}, {"cross_coupling", cross_coupling}};
+  j["accelerometer"] = {
+      {"rate_hz", accel_rate_hz}, {"noise_mm_s2", accel_noise_mm_s2}, {"cross_coupling", cross_coupling}};
   j["jerk_mm_s3"] = jerk_mm_s3;
   j["firmware"] = firmware;
   if (firmware == "marlin") j["ft_motion"] = ft_motion;

@@ -58,7 +58,9 @@ Profile Profile::move(double d, double v_entry, double v_max, double v_exit, dou
   v_max = std::max(v_max, 1e-9);
   v_entry = std::max(0.0, v_entry);
   v_exit = std::min(std::max(0.0, v_exit), v_max);
-  auto need = [&](double vc) { return ramp_distance(v_entry, vc, a_max, j_max) + ramp_distance(vc, v_exit, a_max, j_max); };
+  auto need = [&](double vc) {
+    return ramp_distance(v_entry, vc, a_max, j_max) + ramp_distance(vc, v_exit, a_max, j_max);
+  };
   double vc = v_max;
   // Entering faster than this move's speed: slow down to it first (no search).
   if (v_entry <= v_max && need(vc) > d) {

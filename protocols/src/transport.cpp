@@ -59,7 +59,8 @@ std::optional<std::string> LineReader::next(std::chrono::milliseconds timeout) {
   if (auto l = buffered()) return l;
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() < 0) return std::nullopt;
     std::string chunk = t_.read_some(left);
     if (chunk.empty()) {

@@ -91,8 +91,9 @@ int main(int argc, char** argv) {
   int iterations = 0;
   const double pooled = median_cpu_ms_flow(
       [&] { iterations = fitting::fit_steps_pooled(recs, o.model, &fits.front()).diagnostics.iterations; }, runs);
-  std::printf("  of which: %zu single-step fits (%zu samples) median cpu %.2f ms; pooled fit over all steps (%zu + 3 "
-              "parameters, %d iterations) median cpu %.2f ms\n",
-              recs.size(), fitted, singles, recs.size(), iterations, pooled);
+  std::printf(
+      "  of which: %zu single-step fits (%zu samples) median cpu %.2f ms; pooled fit over all steps (%zu + 3 "
+      "parameters, %d iterations) median cpu %.2f ms\n",
+      recs.size(), fitted, singles, recs.size(), iterations, pooled);
   return 0;
 }

@@ -67,7 +67,8 @@ int main(int argc, char** argv) {
   }
   if (results.empty()) {
     std::ostringstream out, err;
-    const int code = cli::run_cli({"calibrate", "--machine", "sim", "--out", (dir / "run").string(), "--json"}, out, err);
+    const int code =
+        cli::run_cli({"calibrate", "--machine", "sim", "--out", (dir / "run").string(), "--json"}, out, err);
     if (code != 0) {
       std::fprintf(stderr, "calibrate failed: %s\n", err.str().c_str());
       return 1;
@@ -87,8 +88,8 @@ int main(int argc, char** argv) {
   cli::CliContext ctx{sink, sink};
   const auto [record_timing, record_cpu_ms] = wall_and_cpu_ms([&] { cli::record_result(envelope, o, ctx); }, 31, 3);
   const double record_ms = record_timing.median_ms;
-  std::printf("record one calibration (SQLite, %zu-byte result): median %.2f ms wall, %.2f ms CPU\n", envelope.dump().size(),
-              record_ms, record_cpu_ms);
+  std::printf("record one calibration (SQLite, %zu-byte result): median %.2f ms wall, %.2f ms CPU\n",
+              envelope.dump().size(), record_ms, record_cpu_ms);
   bench::print_bench_line("history_record", record_timing);
 
   // 2. 100 machines x 1,000 runs.
@@ -105,7 +106,8 @@ int main(int argc, char** argv) {
         r.command = "calibrate";
         r.tool_version = "0.1.0";
         r.envelope_schema = 1;
-        r.run_utc = fmt::format("2026-{:02d}-{:02d}T{:02d}:{:02d}:00.000Z", 1 + run / 100, 1 + (run / 4) % 25, run % 24, m % 60);
+        r.run_utc = fmt::format("2026-{:02d}-{:02d}T{:02d}:{:02d}:00.000Z", 1 + run / 100, 1 + (run / 4) % 25, run % 24,
+                                m % 60);
         r.envelope_sha256 = std::string(64, '0');
         r.envelope = "{}";
         r.inputs = {{"axis-x/raw_data_x_tunekit.csv", std::string(64, '1'), 1000000}};
@@ -134,13 +136,15 @@ int main(int argc, char** argv) {
   };
   const auto [one_timing, one_cpu] = wall_and_cpu_ms([&] { trend({"--machine", "printer-042"}); }, 15, 2);
   const double one_ms = one_timing.median_ms;
-  std::printf("trend of one machine, all 10 quantities, every run (100 machines x 1,000 runs): median %.1f ms wall, %.1f ms CPU\n",
-              one_ms, one_cpu);
+  std::printf(
+      "trend of one machine, all 10 quantities, every run (100 machines x 1,000 runs): median %.1f ms wall, %.1f ms "
+      "CPU\n",
+      one_ms, one_cpu);
   bench::print_bench_line("history_trend_machine", one_timing);
   const auto [fleet_timing, fleet_cpu] = wall_and_cpu_ms([&] { trend({"-q", "x.freq_hz"}); }, 7, 1);
   const double fleet_ms = fleet_timing.median_ms;
-  std::printf("trend of x.freq_hz over the whole fleet (100 x 1,000 runs): median %.1f ms wall, %.1f ms CPU\n", fleet_ms,
-              fleet_cpu);
+  std::printf("trend of x.freq_hz over the whole fleet (100 x 1,000 runs): median %.1f ms wall, %.1f ms CPU\n",
+              fleet_ms, fleet_cpu);
   bench::print_bench_line("history_trend_fleet", fleet_timing);
   fs::remove_all(dir);
   return 0;

@@ -55,10 +55,12 @@ void bench(int w, int h, double line_px, int runs) {
     samples = res.lines[0].samples.size();
     mean_w = res.lines[0].mean_width_px;
   }
-  fmt::print("{}x{} one line ({} px wide, {} profile samples, measured {:.3f} px): profile median {:.1f} ms "
-             "(CPU {:.1f} ms), PNG decode median {:.1f} ms ({} runs)\n",
-             w, h, line_px, samples, mean_w, median(t_profile), median(cpu_profile), median(t_decode), runs);
-  tunekit::bench::print_bench_line(fmt::format("linewidth_{}x{}", w, h).c_str(), tunekit::bench::summarize_ms(t_profile));
+  fmt::print(
+      "{}x{} one line ({} px wide, {} profile samples, measured {:.3f} px): profile median {:.1f} ms "
+      "(CPU {:.1f} ms), PNG decode median {:.1f} ms ({} runs)\n",
+      w, h, line_px, samples, mean_w, median(t_profile), median(cpu_profile), median(t_decode), runs);
+  tunekit::bench::print_bench_line(fmt::format("linewidth_{}x{}", w, h).c_str(),
+                                   tunekit::bench::summarize_ms(t_profile));
 }
 
 }  // namespace

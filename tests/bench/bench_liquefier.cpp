@@ -51,8 +51,8 @@ int main() {
       15, 2);
   const double fit_ms = fit_timing.median_ms;
   const double fit_cpu = median_cpu_ms([&] { (void)fitting::fit_step(rec, fitting::StepModel::fopdt); }, 15);
-  std::printf("fopdt_fit_100k_samples: median wall %.2f ms, median cpu %.2f ms (tau_s %.4f +- %.4f)\n", fit_ms,
-              fit_cpu, tau, stderr_tau);
+  std::printf("fopdt_fit_100k_samples: median wall %.2f ms, median cpu %.2f ms (tau_s %.4f +- %.4f)\n", fit_ms, fit_cpu,
+              tau, stderr_tau);
   bench::print_bench_line("fopdt_fit", fit_timing);
 
   // H1 over 1M samples: white input through a first-order low-pass, Hann, 4096-sample segments.

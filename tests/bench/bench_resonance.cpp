@@ -50,7 +50,8 @@ int run_process(const std::string& exe, const std::vector<std::string>& args, st
   int status = 0;
   struct rusage ru {};
   if (wait4(pid, &status, 0, &ru) != pid) return 127;
-  cpu_ms.push_back(1e3 * (ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-3 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec));
+  cpu_ms.push_back(1e3 * (ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+                   1e-3 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec));
   peak_rss_mb.push_back(static_cast<double>(ru.ru_maxrss) / 1024.0);  // ru_maxrss is in KiB on Linux
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
 }
@@ -98,7 +99,8 @@ int main(int argc, char** argv) {
     ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     last = out.str();
   }
-  tunekit::bench::print_bench_line(exe.empty() ? "shaper_in_process" : "shaper_process", tunekit::bench::summarize_ms(ms));
+  tunekit::bench::print_bench_line(exe.empty() ? "shaper_in_process" : "shaper_process",
+                                   tunekit::bench::summarize_ms(ms));
   std::sort(ms.begin(), ms.end());
   fmt::print("tunekit shaper on 410k samples{}: median {:.1f} ms over {} runs (min {:.1f}, max {:.1f})\n",
              exe.empty() ? " (in-process)" : " (whole process " + exe + ")", ms[ms.size() / 2], runs, ms.front(),

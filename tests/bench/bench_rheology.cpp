@@ -45,9 +45,10 @@ int main(int argc, char** argv) {
   tunekit::bench::print_bench_line("cross_wlf_fit", tunekit::bench::summarize_ms(ms));
   std::sort(ms.begin(), ms.end());
   std::sort(cpu.begin(), cpu.end());
-  std::printf("cross-wlf fit, %zu points, global start included: median %.1f ms wall (min %.1f, max %.1f), "
-              "median %.1f ms CPU, over %d runs\n",
-              d.size(), ms[ms.size() / 2], ms.front(), ms.back(), cpu[cpu.size() / 2], runs);
+  std::printf(
+      "cross-wlf fit, %zu points, global start included: median %.1f ms wall (min %.1f, max %.1f), "
+      "median %.1f ms CPU, over %d runs\n",
+      d.size(), ms[ms.size() / 2], ms.front(), ms.back(), cpu[cpu.size() / 2], runs);
   std::printf("  n %.4f  tau_star %.5g Pa  D1 %.4g Pa.s  D2 %.2f K  A1 %.3f  (%d iterations)\n", fit.value("n"),
               fit.value("tau_star_Pa"), fit.value("D1_Pa_s"), fit.value("D2_K"), fit.value("A1"),
               fit.diagnostics.iterations);

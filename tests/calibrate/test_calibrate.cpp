@@ -110,8 +110,9 @@ TEST_CASE("calibrate never writes into a used run directory") {
   std::ofstream(dir + "/results.json") << "{}";
   const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--out", dir});
   CHECK(r.code == 2);
-  CHECK(r.err == "tunekit: error: " + dir + ": the run directory already exists; give a new --out (or leave it out for "
-                 "runs/calibrate-UTCSTAMP)\n");
+  CHECK(r.err == "tunekit: error: " + dir +
+                     ": the run directory already exists; give a new --out (or leave it out for "
+                     "runs/calibrate-UTCSTAMP)\n");
   CHECK(tunekit::ident::read_file_bytes(dir + "/results.json") == "{}");
 }
 
@@ -143,7 +144,9 @@ TEST_CASE("calibrate: step and frequency-response taus agree and the frequency i
   // interval, narrower than 0.3 %, then ends a few 1e-5 s short of the truth. Analysing the
   // delivered feed instead of the recorded one is the open follow-up.)
   const double truth = nlohmann::json::parse(read_file_bytes(run.dir + "/liquefier-step/truth.json"))
-                           .at("liquefier").at("tau_s").get<double>();
+                           .at("liquefier")
+                           .at("tau_s")
+                           .get<double>();
   CHECK(step_lo <= truth);
   CHECK(truth <= step_hi);
   CHECK(freq.at("value").get<double>() == Approx(truth).epsilon(0.005));

@@ -20,15 +20,16 @@ using tunekit::ident::read_file_bytes;
 
 TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from the photo", "[calibrate]") {
   const std::string dir = tunekit::test::scratch_dir("calibrate_camera") + "/run";
-  const auto r = tunekit::test::run_cli(
-      {"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera", "sim", "--skip-axes", "--out", dir, "--json"});
+  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera", "sim",
+                                         "--skip-axes", "--out", dir, "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto env = nlohmann::json::parse(r.out);
   const auto& res = env.at("results");
   // The simulator's truth, written with the printed run.
   const auto truth = tunekit::test::read_json(dir + "/liquefier-lines/truth.json");
-  const double tau = truth.at("liquefier").at("tau_s").get<double>(), theta = truth.at("liquefier").at("theta_s").get<double>();
+  const double tau = truth.at("liquefier").at("tau_s").get<double>(),
+               theta = truth.at("liquefier").at("theta_s").get<double>();
   const auto& p = res.at("liquefier").at("step").at("pooled").at("params");
   CHECK(p.at("tau_s").at("value").get<double>() == Approx(tau).epsilon(0.10));
   CHECK(p.at("theta_s").at("value").get<double>() == Approx(theta).epsilon(0.20));

@@ -51,7 +51,7 @@ TEST_CASE("calibrate --firmware klipper on heavily damped axes picks Klipper sha
   // zeta 0.35 on X: above ei's 0.4? no, but above 2hump_ei's 0.3 and 3hump_ei's 0.2; zeta 0.45
   // on Y is above every EI bound: only zv, mzv, zvd remain.
   const auto r = calibrate_firmware("calibrate_klipper_damped", {"--firmware", "klipper", "--skip-liquefier", "--sim",
-                                                        "mode_x=48:0.35", "--sim", "mode_y=37:0.45"});
+                                                                 "mode_x=48:0.35", "--sim", "mode_y=37:0.45"});
   INFO(r.cli.err);
   REQUIRE(r.cli.code == 0);
   check_shapers_are_the_firmwares(r, tkp::ExportFirmware::klipper);

@@ -109,9 +109,9 @@ TEST_CASE("delta fit: 6-factor 95 % intervals cover each true error in 90-99 % o
   const auto n = nominal_delta();
   const auto t = true_delta();
   const auto pts = protocols::delta_probe_pattern(85, 2, 8);
-  const std::vector<std::pair<std::string, double>> truth = {
-      {"endstop_a", 0.35}, {"endstop_b", -0.20}, {"endstop_c", 0.10},
-      {"delta_radius", 104.2}, {"angle_a", 210.4}, {"angle_b", 329.7}};
+  const std::vector<std::pair<std::string, double>> truth = {{"endstop_a", 0.35}, {"endstop_b", -0.20},
+                                                             {"endstop_c", 0.10}, {"delta_radius", 104.2},
+                                                             {"angle_a", 210.4},  {"angle_b", 329.7}};
   std::vector<int> covered(truth.size(), 0);
   constexpr int draws = 200;
   for (int d = 0; d < draws; ++d) {
@@ -160,7 +160,8 @@ TEST_CASE("delta export: values a firmware cannot hold are refused") {
 
 TEST_CASE("delta CLI: fits a probe CSV and exports, listed in --help") {
   const auto n = nominal_delta();
-  const auto probes = protocols::simulate_delta_probes(n, true_delta(), protocols::delta_probe_pattern(85, 2, 8), 0.01, 7);
+  const auto probes =
+      protocols::simulate_delta_probes(n, true_delta(), protocols::delta_probe_pattern(85, 2, 8), 0.01, 7);
   std::ostringstream csv;
   csv << "x_mm,y_mm,z_mm\n";
   for (const auto& p : probes) csv << p.x_mm << "," << p.y_mm << "," << p.z_mm << "\n";
@@ -198,9 +199,12 @@ TEST_CASE("delta probe model agrees with an independent solution of the rod equa
                                 "--height", "250", "--json"});
   REQUIRE(r.code == 0);
   const auto j = nlohmann::json::parse(r.out)["results"]["params"];
-  for (const auto& [name, truth] : std::vector<std::pair<std::string, double>>{
-           {"endstop_a", 0.35}, {"endstop_b", -0.20}, {"endstop_c", 0.10}, {"delta_radius", 104.2},
-           {"angle_a", 210.4}, {"angle_b", 329.7}}) {
+  for (const auto& [name, truth] : std::vector<std::pair<std::string, double>>{{"endstop_a", 0.35},
+                                                                               {"endstop_b", -0.20},
+                                                                               {"endstop_c", 0.10},
+                                                                               {"delta_radius", 104.2},
+                                                                               {"angle_a", 210.4},
+                                                                               {"angle_b", 329.7}}) {
     INFO(name);
     CHECK(std::abs(j[name]["value"].get<double>() - truth) < 4 * j[name]["stderr"].get<double>());
   }

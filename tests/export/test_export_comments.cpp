@@ -13,8 +13,8 @@ using tunekit::protocols::replace_trailing_comment;
 TEST_CASE("replace_trailing_comment: a changed value's comment becomes the note, other comments stay") {
   const std::vector<std::string> klipper{"#", ";"};
   CHECK(replace_trailing_comment("pressure_advance: 0.05   ; tuned by hand with the tower test",
-                                 "pressure_advance: 0.041   ; tuned by hand with the tower test", klipper, "NOTE") ==
-        "pressure_advance: 0.041   ; NOTE");
+                                 "pressure_advance: 0.041   ; tuned by hand with the tower test", klipper,
+                                 "NOTE") == "pressure_advance: 0.041   ; NOTE");
   CHECK(replace_trailing_comment("shaper_freq_x: 40 # old", "shaper_freq_x: 45.2 # old", klipper, "NOTE") ==
         "shaper_freq_x: 45.2 # NOTE");
   // No comment, no note, or no change: the edit is kept as it is.
@@ -24,8 +24,9 @@ TEST_CASE("replace_trailing_comment: a changed value's comment becomes the note,
         "pressure_advance: 0.04 ; x");
   // Marlin: uncommenting a feature keeps its comment; a new value replaces it.
   const std::vector<std::string> marlin{"//"};
-  CHECK(replace_trailing_comment("//#define LIN_ADVANCE          // Linear Advance", "#define LIN_ADVANCE          // Linear Advance",
-                                 marlin, "NOTE") == "#define LIN_ADVANCE          // Linear Advance");
+  CHECK(replace_trailing_comment("//#define LIN_ADVANCE          // Linear Advance",
+                                 "#define LIN_ADVANCE          // Linear Advance", marlin,
+                                 "NOTE") == "#define LIN_ADVANCE          // Linear Advance");
   CHECK(replace_trailing_comment("  #define ADVANCE_K 0.22    // Unit: mm compression per 1mm/s extruder speed",
                                  "  #define ADVANCE_K 0.05    // Unit: mm compression per 1mm/s extruder speed", marlin,
                                  "NOTE") == "  #define ADVANCE_K 0.05    // NOTE");
@@ -44,7 +45,8 @@ TEST_CASE("tunekit export over a hand-tuned pressure_advance with a comment writ
   REQUIRE(r.code == 0);
   const std::string after = tunekit::test::read_text(cfg);
   CHECK(after.find("tuned by hand") == std::string::npos);
-  CHECK(after.find("pressure_advance: 0.041   ; set by tunekit export from the command line on 20") != std::string::npos);
+  CHECK(after.find("pressure_advance: 0.041   ; set by tunekit export from the command line on 20") !=
+        std::string::npos);
   CHECK(after.find("max_extrude_only_distance: 100 ; unrelated, unchanged\n") != std::string::npos);
   // Without a note (the library default) the comment is kept as before.
   tunekit::protocols::CompensatorSettings s;

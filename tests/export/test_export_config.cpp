@@ -127,7 +127,8 @@ TEST_CASE("Klipper: a value set above and in the SAVE_CONFIG block is edited abo
   CHECK_FALSE(export_config_text(ExportFirmware::klipper, r.updated, "p.cfg", s).changed());
 }
 
-TEST_CASE("Klipper: without a SAVE_CONFIG block a missing section is appended, and a missing final newline is handled") {
+TEST_CASE(
+    "Klipper: without a SAVE_CONFIG block a missing section is appended, and a missing final newline is handled") {
   const std::string cfg = "[printer]\nkinematics: cartesian";
   CompensatorSettings s;
   s.shapers["y"] = {"2hump_ei", 61.25, 0.1};
@@ -282,10 +283,8 @@ TEST_CASE("The CLI refuses out-of-range values with exit 2 and leaves the file a
   std::filesystem::copy_file(tunekit::test::dataset("firmware/Configuration_adv.h"), cfg);
   const std::string before = tunekit::test::read_text(cfg);
   const std::vector<std::vector<std::string>> cases = {
-      {"--pa-k", "10.5"},
-      {"--pa-k", "0.04", "--pa-smooth", "0.6"},
-      {"--shaper-x", "zv:-40"},
-      {"--shaper-y", "zv:40:1.0"},
+      {"--pa-k", "10.5"},          {"--pa-k", "0.04", "--pa-smooth", "0.6"},
+      {"--shaper-x", "zv:-40"},    {"--shaper-y", "zv:40:1.0"},
       {"--shaper-x", "ei:40:0.1"},
   };
   for (const auto& extra : cases) {

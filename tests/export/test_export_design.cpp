@@ -61,8 +61,7 @@ TEST_CASE("Advance design: K = tau, dead time reported, window from the machine 
   CHECK(d.k_s == Approx(0.045));
   CHECK(d.area_ratio == Approx(in.line_area_mm2 / in.filament_area_mm2));
   CHECK(d.design_flow_mm3_s == Approx(in.print_speed_mm_s * in.line_area_mm2));
-  CHECK(d.window_box_s * in.extruder_accel_limit_mm_s2 ==
-        Approx(d.k_s * in.print_accel_mm_s2 * d.area_ratio));
+  CHECK(d.window_box_s * in.extruder_accel_limit_mm_s2 == Approx(d.k_s * in.print_accel_mm_s2 * d.area_ratio));
   CHECK(d.theta_track_mm == Approx(0.03 * in.print_speed_mm_s));
   bool theta_note = false;
   for (const auto& n : d.notes) theta_note |= n.find("not cancelled") != std::string::npos;
@@ -117,9 +116,16 @@ TEST_CASE("tunekit export: preview by default, --write applies with a backup, a 
   const std::string cfg = dir + "/printer.cfg";
   std::filesystem::copy_file(tunekit::test::dataset("firmware/printer.cfg"), cfg);
   const std::string before = tunekit::test::read_text(cfg);
-  const std::vector<std::string> base = {"export",         "--firmware",       "klipper",          "--config", cfg,
-                                         "--profile",      tunekit::test::dataset("machines/sim.toml"),
-                                         fixture("step.json"), fixture("shaper.json"), fixture("freq.json")};
+  const std::vector<std::string> base = {"export",
+                                         "--firmware",
+                                         "klipper",
+                                         "--config",
+                                         cfg,
+                                         "--profile",
+                                         tunekit::test::dataset("machines/sim.toml"),
+                                         fixture("step.json"),
+                                         fixture("shaper.json"),
+                                         fixture("freq.json")};
 
   const auto preview = tunekit::test::run_cli(base);
   INFO(preview.err);
@@ -171,9 +177,16 @@ TEST_CASE("tunekit export --json: deterministic envelope with settings, design, 
   const std::string dir = tunekit::test::scratch_dir("export_json");
   const std::string cfg = dir + "/Configuration_adv.h";
   std::filesystem::copy_file(tunekit::test::dataset("firmware/Configuration_adv.h"), cfg);
-  const std::vector<std::string> args = {"export", "-f", "marlin", "-c", cfg,
-                                         "-p", tunekit::test::dataset("machines/sim.toml"),
-                                         fixture("step.json"), fixture("shaper_zv.json"), fixture("rheo.json"),
+  const std::vector<std::string> args = {"export",
+                                         "-f",
+                                         "marlin",
+                                         "-c",
+                                         cfg,
+                                         "-p",
+                                         tunekit::test::dataset("machines/sim.toml"),
+                                         fixture("step.json"),
+                                         fixture("shaper_zv.json"),
+                                         fixture("rheo.json"),
                                          "--json"};
   const auto a = tunekit::test::run_cli(args);
   INFO(a.err);

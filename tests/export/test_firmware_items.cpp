@@ -112,9 +112,8 @@ TEST_CASE("export takes the best-scoring candidate the firmware has when the rec
       {"type": "zv", "freq_hz": 44.2, "damping": 0.1, "score": 0.030},
       {"type": "mzv", "freq_hz": 49.0, "damping": 0.1, "score": 0.020},
       {"type": "ei", "freq_hz": 52.4, "damping": 0.1, "score": 0.010}]}}}})");
-  const std::string cfg = tunekit::test::write_scratch("cand_Configuration_adv.h",
-                                                       tunekit::test::read_text(tunekit::test::dataset(
-                                                           "firmware/Configuration_adv.h")));
+  const std::string cfg = tunekit::test::write_scratch(
+      "cand_Configuration_adv.h", tunekit::test::read_text(tunekit::test::dataset("firmware/Configuration_adv.h")));
   auto run = tunekit::test::run_cli({"export", "-f", "marlin", "-c", cfg, results, "--json"});
   INFO(run.err);
   REQUIRE(run.code == 0);

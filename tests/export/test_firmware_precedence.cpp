@@ -63,11 +63,13 @@ std::string refusal(ExportFirmware fw, const CompensatorSettings& s, const std::
 
 TEST_CASE("Klipper: an option in the body and in SAVE_CONFIG is written in the body, which Klipper uses") {
   // configfile.py _strip_duplicates comments out the block's pressure_advance: 0.05 is in force.
-  const std::string cfg = cat({"[extruder]\npressure_advance: 0.05\n\n", kHeader, "#*# [extruder]\n#*# pressure_advance = 0.08\n"});
+  const std::string cfg =
+      cat({"[extruder]\npressure_advance: 0.05\n\n", kHeader, "#*# [extruder]\n#*# pressure_advance = 0.08\n"});
   CompensatorSettings s;
   s.pa_k_s = 0.4497;
   const auto r = export_config_text(ExportFirmware::klipper, cfg, "p.cfg", s);
-  CHECK(r.updated == cat({"[extruder]\npressure_advance: 0.4497\n\n", kHeader, "#*# [extruder]\n#*# pressure_advance = 0.08\n"}));
+  CHECK(r.updated ==
+        cat({"[extruder]\npressure_advance: 0.4497\n\n", kHeader, "#*# [extruder]\n#*# pressure_advance = 0.08\n"}));
   REQUIRE(r.changes.size() == 1);
   CHECK(r.changes[0].line == 2);
   // No warning claims the block overrides the body; the block copy is reported as ignored.
@@ -79,27 +81,32 @@ TEST_CASE("Klipper: an option in the body and in SAVE_CONFIG is written in the b
 }
 
 TEST_CASE("Klipper: an option only in SAVE_CONFIG is edited there") {
-  const std::string cfg = cat({"[printer]\nkinematics: corexy\n\n", kHeader, "#*# [input_shaper]\n#*# shaper_type_x = ei\n#*# shaper_freq_x = 40\n"});
+  const std::string cfg = cat({"[printer]\nkinematics: corexy\n\n", kHeader,
+                               "#*# [input_shaper]\n#*# shaper_type_x = ei\n#*# shaper_freq_x = 40\n"});
   CompensatorSettings s;
   s.shapers["x"] = {"mzv", 49, 0.1};
   const auto r = export_config_text(ExportFirmware::klipper, cfg, "p.cfg", s);
-  CHECK(r.updated == cat({"[printer]\nkinematics: corexy\n\n", kHeader, "#*# [input_shaper]\n#*# shaper_type_x = mzv\n#*# shaper_freq_x = 49\n"
-                         "#*# damping_ratio_x = 0.1\n"}));
+  CHECK(r.updated == cat({"[printer]\nkinematics: corexy\n\n", kHeader,
+                          "#*# [input_shaper]\n#*# shaper_type_x = mzv\n#*# shaper_freq_x = 49\n"
+                          "#*# damping_ratio_x = 0.1\n"}));
 }
 
 TEST_CASE("Klipper: a section in the body and another option in SAVE_CONFIG: each value where Klipper reads it") {
   // [input_shaper] shaper_freq_x is in the body, shaper_type_x only in the block.
-  const std::string cfg = cat({"[input_shaper]\nshaper_freq_x: 40\n\n", kHeader, "#*# [input_shaper]\n#*# shaper_type_x = ei\n#*# shaper_freq_x = 45\n"});
+  const std::string cfg = cat({"[input_shaper]\nshaper_freq_x: 40\n\n", kHeader,
+                               "#*# [input_shaper]\n#*# shaper_type_x = ei\n#*# shaper_freq_x = 45\n"});
   CompensatorSettings s;
   s.shapers["x"] = {"mzv", 49, 0.1};
   const auto r = export_config_text(ExportFirmware::klipper, cfg, "p.cfg", s);
-  CHECK(r.updated == cat({"[input_shaper]\nshaper_freq_x: 49\ndamping_ratio_x: 0.1\n\n", kHeader, "#*# [input_shaper]\n#*# shaper_type_x = mzv\n#*# shaper_freq_x = 45\n"}));
+  CHECK(r.updated == cat({"[input_shaper]\nshaper_freq_x: 49\ndamping_ratio_x: 0.1\n\n", kHeader,
+                          "#*# [input_shaper]\n#*# shaper_type_x = mzv\n#*# shaper_freq_x = 45\n"}));
 }
 
 TEST_CASE("Klipper: a value set in an included file is overridden after the includes, in the body") {
   const std::string dir = tunekit::test::scratch_dir("klipper_include");
   write(dir + "/shaper.cfg", "[input_shaper]\nshaper_type_x: ei\nshaper_freq_x: 55\n");
-  const std::string cfg = cat({"[include shaper.cfg]\n\n[printer]\nkinematics: corexy\n\n", kHeader, "#*# [extruder]\n#*# pid_kp = 26.2\n"});
+  const std::string cfg = cat(
+      {"[include shaper.cfg]\n\n[printer]\nkinematics: corexy\n\n", kHeader, "#*# [extruder]\n#*# pid_kp = 26.2\n"});
   const std::string path = dir + "/printer.cfg";
   write(path, cfg);
   CompensatorSettings s;
@@ -117,7 +124,8 @@ TEST_CASE("Klipper: a value set in an included file is overridden after the incl
 
 TEST_CASE("Klipper: a SAVE_CONFIG block Klipper does not read is not written into") {
   // A line after the header without the "#*# " prefix: _find_autosave_data gives up on the block.
-  const std::string cfg = cat({"[printer]\nkinematics: corexy\n\n", kHeader, "#*# [extruder]\n#*#pressure_advance = 0.08\n"});
+  const std::string cfg =
+      cat({"[printer]\nkinematics: corexy\n\n", kHeader, "#*# [extruder]\n#*#pressure_advance = 0.08\n"});
   CompensatorSettings s;
   s.pa_k_s = 0.05;
   const auto r = export_config_text(ExportFirmware::klipper, cfg, "p.cfg", s);

@@ -15,7 +15,8 @@ namespace {
 
 // Kalico (KalicoCrew/kalico, bleeding-edge-v2, klippy/chelper/kin_extruder.c):
 //   pressure_advance_tanh_model_func:   position += linear_advance * pa_velocity;
-//                                        if (nonlinear_offset) position += nonlinear_offset * tanh(pa_velocity / linearization_velocity)
+//                                        if (nonlinear_offset) position += nonlinear_offset * tanh(pa_velocity /
+//                                        linearization_velocity)
 //   pressure_advance_recipr_model_func: ... nonlinear_offset * (1. - 1. / (1. + pa_velocity / linearization_velocity))
 double kalico_reference(const std::string& model, double la, double off, double lv, double v) {
   double pos = la * v;
@@ -90,7 +91,8 @@ TEST_CASE("flow advance: the single K holds within 10 % over a stated range arou
   CHECK(d.k_within_hi_mm3_s == Approx(std::min(18.0, 8 * std::pow(1.1, -1 / b))).epsilon(0.01));
 }
 
-TEST_CASE("flow advance: Kalico parameters re-evaluated with Kalico's formula reproduce the designed advance within 5 %") {
+TEST_CASE(
+    "flow advance: Kalico parameters re-evaluated with Kalico's formula reproduce the designed advance within 5 %") {
   for (double b : {-0.2, -0.45, -0.7}) {
     auto in = power_law_levels(0.08, b, true);
     in.theta_s = 0.03;

@@ -76,8 +76,9 @@ std::vector<std::pair<double, double>> k_table() { return {{1.0, 0.060}, {4.0, 0
 }  // namespace
 
 TEST_CASE("kalico export: the nonlinear model replaces pressure_advance in [extruder], byte-exact elsewhere") {
-  const std::string cfg = "[printer]\nkinematics: corexy\n\n[extruder]\nstep_pin: PA1\npressure_advance: 0.04  # old\n"
-                          "pressure_advance_smooth_time: 0.03\n\n[heater_bed]\nheater_pin: PB1\n";
+  const std::string cfg =
+      "[printer]\nkinematics: corexy\n\n[extruder]\nstep_pin: PA1\npressure_advance: 0.04  # old\n"
+      "pressure_advance_smooth_time: 0.03\n\n[heater_bed]\nheater_pin: PB1\n";
   protocols::CompensatorSettings s;
   protocols::KalicoAdvanceSetting k;
   k.model = "recipr";
@@ -99,13 +100,16 @@ TEST_CASE("kalico export: the nonlinear model replaces pressure_advance in [extr
   // Kalico's bounds.
   auto bad = s;
   bad.kalico->time_offset_s = 0.25;
-  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad), InputError);
+  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad),
+                  InputError);
   bad = s;
   bad.kalico->linearization_velocity_mm_s = 0;
-  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad), InputError);
+  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad),
+                  InputError);
   bad = s;
   bad.kalico->nonlinear_offset_mm = std::nan("");
-  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad), InputError);
+  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad),
+                  InputError);
   CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::klipper, cfg, "printer.cfg", s), InputError);
 }
 
@@ -231,7 +235,8 @@ TEST_CASE("gcode post-processor: the flow of a feature and the firmware's comman
   const auto r = protocols::apply_gcode_advance(g.str(), o, "a.gcode");
   REQUIRE(r.changes.size() == 1);
   CHECK(r.changes[0].flow_mm3_s == Catch::Detail::Approx(4.5).epsilon(1e-6));
-  CHECK(r.text.find(";TYPE:Internal infill\nM900 K0.0472 ; tunekit: Internal infill at 4.5 mm^3/s\n") != std::string::npos);
+  CHECK(r.text.find(";TYPE:Internal infill\nM900 K0.0472 ; tunekit: Internal infill at 4.5 mm^3/s\n") !=
+        std::string::npos);
   o.firmware = protocols::ExportFirmware::rrf;
   CHECK(protocols::apply_gcode_advance(g.str(), o, "a.gcode").text.find("M572 D0 S0.0472") != std::string::npos);
   // No diameter known, no features, a value beyond the firmware's bounds: refused.
@@ -252,10 +257,26 @@ TEST_CASE("tunekit export of a flow sweep: Kalico config, merged OrcaSlicer prof
   const std::string sliced = tunekit::test::write_scratch("flow_advance_sliced.gcode", generated_gcode("\n"));
   const std::string orca_in = tunekit::test::dataset("slicer/orca_phrozen_pla_arco_0.4.json");
   const std::string sweep = tunekit::test::dataset("../tests/export/fixtures/step_sweep.json");
-  const auto r = tunekit::test::run_cli({"export", "-f", "kalico", "-c", cfg, "-p",
-                                         tunekit::test::dataset("machines/sim.toml"), sweep, "--orca-in", orca_in,
-                                         "--orca-out", dir + "/orca.json", "--gcode-in", sliced, "--gcode-out",
-                                         dir + "/tuned.gcode", "--plot", dir + "/flow.svg", "--json", "--write"});
+  const auto r = tunekit::test::run_cli({"export",
+                                         "-f",
+                                         "kalico",
+                                         "-c",
+                                         cfg,
+                                         "-p",
+                                         tunekit::test::dataset("machines/sim.toml"),
+                                         sweep,
+                                         "--orca-in",
+                                         orca_in,
+                                         "--orca-out",
+                                         dir + "/orca.json",
+                                         "--gcode-in",
+                                         sliced,
+                                         "--gcode-out",
+                                         dir + "/tuned.gcode",
+                                         "--plot",
+                                         dir + "/flow.svg",
+                                         "--json",
+                                         "--write"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto j = nlohmann::json::parse(r.out)["results"];

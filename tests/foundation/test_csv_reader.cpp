@@ -38,8 +38,8 @@ TEST_CASE("a well-formed CSV with units in names is read by column name") {
 }
 
 TEST_CASE("Klipper raw accelerometer files take their header from the comment line") {
-  const auto t = tunekit::ident::parse_csv("#time,accel_x,accel_y,accel_z\n100.0,1,2,3\n100.0003125,4,5,6\n",
-                                           "raw.csv", {{"accel_x", "accel_z"}, "time"});
+  const auto t = tunekit::ident::parse_csv("#time,accel_x,accel_y,accel_z\n100.0,1,2,3\n100.0003125,4,5,6\n", "raw.csv",
+                                           {{"accel_x", "accel_z"}, "time"});
   CHECK(t.rows == 2);
   CHECK(t.column("accel_z").values == std::vector<double>{3, 6});
   CHECK(t.column("time").values[1] == Approx(100.0003125));
@@ -70,16 +70,20 @@ TEST_CASE("malformed CSV inputs are refused with file, line, column and reason")
   expect_rejected("text.csv", "time,y\n0,1\n1,abc\n", ":3:3", "'abc' in column 'y' is not a number");
   expect_rejected("nan.csv", "time,y\n0,1\n1,NaN\n", ":3:3", "NaN in column 'y'");
   expect_rejected("inf.csv", "time,y\n0,1\n1,-inf\n", ":3:3", "infinite value in column 'y'");
-  expect_rejected("backwards.csv", "time,y\n0,1\n2,2\n1,3\n", ":4:1", "time goes backwards in column 'time': 1 after 2 (line 3)");
-  expect_rejected("duplicate.csv", "time,y\n0,1\n1,2\n1,3\n", ":4:1", "duplicate time stamp 1 in column 'time' (also on line 3)");
+  expect_rejected("backwards.csv", "time,y\n0,1\n2,2\n1,3\n", ":4:1",
+                  "time goes backwards in column 'time': 1 after 2 (line 3)");
+  expect_rejected("duplicate.csv", "time,y\n0,1\n1,2\n1,3\n", ":4:1",
+                  "duplicate time stamp 1 in column 'time' (also on line 3)");
   expect_rejected("empty_field.csv", "time,y\n0,\n", ":2:3", "empty field in column 'y'");
-  expect_rejected("numbers_first.csv", "0,1\n1,2\n", ":1", "the first row holds numbers, not column names; add a header row (e.g. 'time (s),force (N)')");
+  expect_rejected("numbers_first.csv", "0,1\n1,2\n", ":1",
+                  "the first row holds numbers, not column names; add a header row (e.g. 'time (s),force (N)')");
 }
 
 TEST_CASE("a 10 MB line without a newline is refused without reading it as data") {
   const std::string huge(10u << 20, '7');
-  expect_rejected("huge_line.csv", huge, ":1",
-                  "line is 10485760 bytes long, more than the 1048576 allowed (a file without line breaks, or not a CSV file?)");
+  expect_rejected(
+      "huge_line.csv", huge, ":1",
+      "line is 10485760 bytes long, more than the 1048576 allowed (a file without line breaks, or not a CSV file?)");
 }
 
 TEST_CASE("a file that does not exist is an input error") {

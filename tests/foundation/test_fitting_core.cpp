@@ -59,7 +59,10 @@ TEST_CASE("fewer data points than parameters is bad input") {
   LsqProblem p;
   p.params = {{"a", "1", 1}, {"b", "1", 1}};
   p.num_residuals = 1;
-  p.residuals = [](const double* q, double* r) { r[0] = q[0] + q[1]; return true; };
+  p.residuals = [](const double* q, double* r) {
+    r[0] = q[0] + q[1];
+    return true;
+  };
   CHECK_THROWS_AS(solve_least_squares("tiny", p), tunekit::InputError);
 }
 

@@ -39,8 +39,8 @@ TEST_CASE("malformed, unknown and ambiguous requirements are usage errors") {
 
 TEST_CASE("an unmet requirement exits 1 and names each unmet requirement, met ones exit 0") {
   const auto path = tunekit::test::write_scratch("req.csv", "time,y\n0,1\n1,2\n2,4\n");
-  auto r = tunekit::test::run_cli({"inspect", path, "--time", "time", "--require", "rows>=3", "--require",
-                                   "span_s<1.5", "--require", "sample_rate_hz>2"});
+  auto r = tunekit::test::run_cli({"inspect", path, "--time", "time", "--require", "rows>=3", "--require", "span_s<1.5",
+                                   "--require", "sample_rate_hz>2"});
   CHECK(r.code == 1);
   CHECK(r.err.find("requirement not met: span_s<1.5 (time.span_s = 2)") != std::string::npos);
   CHECK(r.err.find("requirement not met: sample_rate_hz>2 (time.sample_rate_hz = 1)") != std::string::npos);

@@ -9,6 +9,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   (void)limited;
   const std::string bytes(tunekit::fuzz::as_text(data, size));
   tunekit::fuzz::expect_result_or_error([&] { tunekit::vision::decode_image(bytes, "fuzz.img"); });
-  tunekit::fuzz::expect_result_or_error([&] { tunekit::vision::decode_image(bytes, "fuzz.img", tunekit::vision::ImageColor::gray); });
+  tunekit::fuzz::expect_result_or_error(
+      [&] { tunekit::vision::decode_image(bytes, "fuzz.img", tunekit::vision::ImageColor::gray); });
   return 0;
 }

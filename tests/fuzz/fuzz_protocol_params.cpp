@@ -18,7 +18,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const MachineProfile profile = builtin_sim_profile();
   const auto& specs = protocol_specs();
   const auto& spec = specs[data[0] % specs.size()];
-  const Firmware fw = data[1] % 3 == 0 ? Firmware::marlin : data[1] % 3 == 1 ? Firmware::klipper : Firmware::reprapfirmware;
+  const Firmware fw = data[1] % 3 == 0   ? Firmware::marlin
+                      : data[1] % 3 == 1 ? Firmware::klipper
+                                         : Firmware::reprapfirmware;
   const std::string axis = data[1] & 0x80 ? "y" : "x";
   std::map<std::string, double> params;
   for (std::size_t i = 2; i + 9 <= size; i += 9) {

@@ -13,7 +13,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     tunekit::cli::check_results_envelope(j, text, "fuzz.json");
     for (const char* req : {"tau_s<0.6", "x.freq_hz>=40", "n<0.5"})
       tunekit::fuzz::expect_result_or_error([&] {
-        tunekit::cli::evaluate_requirement(tunekit::cli::parse_requirement(req), j.contains("results") ? j["results"] : j);
+        tunekit::cli::evaluate_requirement(tunekit::cli::parse_requirement(req),
+                                           j.contains("results") ? j["results"] : j);
       });
     try {
       tunekit::cli::build_report_html(j, {});

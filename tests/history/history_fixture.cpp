@@ -39,7 +39,8 @@ std::string postgres_bin_dir() {
   std::vector<fs::path> found;
   std::error_code ec;
   for (const auto& d : fs::directory_iterator("/usr/lib/postgresql", ec))
-    if (fs::exists(d.path() / "bin" / "pg_ctl") && fs::exists(d.path() / "bin" / "initdb")) found.push_back(d.path() / "bin");
+    if (fs::exists(d.path() / "bin" / "pg_ctl") && fs::exists(d.path() / "bin" / "initdb"))
+      found.push_back(d.path() / "bin");
   if (found.empty()) return "";
   std::sort(found.begin(), found.end(), [](const fs::path& a, const fs::path& b) {
     return std::atoi(a.parent_path().filename().c_str()) < std::atoi(b.parent_path().filename().c_str());
@@ -54,7 +55,8 @@ int free_tcp_port() {
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   a.sin_port = 0;
   socklen_t len = sizeof a;
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
     ::close(fd);
     throw std::runtime_error("no free TCP port on 127.0.0.1");
   }
@@ -68,8 +70,9 @@ class PostgresServer {
   PostgresServer() {
     bin_ = postgres_bin_dir();
     if (bin_.empty()) {
-      skip_reason_ = "PostgreSQL server binaries not found under /usr/lib/postgresql/*/bin (scripts/install-deps installs "
-                     "the Debian package postgresql)";
+      skip_reason_ =
+          "PostgreSQL server binaries not found under /usr/lib/postgresql/*/bin (scripts/install-deps installs "
+          "the Debian package postgresql)";
       return;
     }
     char tmpl[] = "/tmp/tunekit-pg-XXXXXX";

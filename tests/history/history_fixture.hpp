@@ -33,11 +33,11 @@ int wait_process(pid_t pid);
 
 /// Runs the rest of the test case once per backend (Catch2 GENERATE), with `db` its fresh
 /// database; where PostgreSQL's binaries are absent that run says why and ends.
-#define TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, name)                                              \
-  const std::string backend_ = GENERATE(as<std::string>{}, "sqlite", "postgresql");            \
-  const auto db = ::tunekit::test::fresh_database(backend_, name);                             \
-  if (db.url.empty()) {                                                                         \
-    WARN("skipped on " << backend_ << ": " << db.skip_reason);                                  \
-    return;                                                                                     \
-  }                                                                                             \
+#define TUNEKIT_FOR_EACH_HISTORY_BACKEND(db, name)                                  \
+  const std::string backend_ = GENERATE(as<std::string>{}, "sqlite", "postgresql"); \
+  const auto db = ::tunekit::test::fresh_database(backend_, name);                  \
+  if (db.url.empty()) {                                                             \
+    WARN("skipped on " << backend_ << ": " << db.skip_reason);                      \
+    return;                                                                         \
+  }                                                                                 \
   INFO("backend " << backend_)

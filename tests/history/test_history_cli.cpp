@@ -79,7 +79,8 @@ TEST_CASE("history cli: step --record stores the result with its input's digest,
   REQUIRE(recs.size() == 1);
   CHECK(recs[0]["command"] == "step");
   CHECK(recs[0]["tool_version"] == env["tool"]["version"]);
-  const auto show = run_cli({"history", "show", std::to_string(recs[0]["record_id"].get<long>()), "--db", db.url, "--json"});
+  const auto show =
+      run_cli({"history", "show", std::to_string(recs[0]["record_id"].get<long>()), "--db", db.url, "--json"});
   REQUIRE(show.code == 0);
   const auto rec = nlohmann::json::parse(show.out)["results"];
   CHECK(rec["inputs"][0]["sha256"] == tunekit::cli::sha256_file(csv));
@@ -118,8 +119,8 @@ TEST_CASE("history cli: --record without a machine id, a bad database and an unr
   CHECK_THAT(down.err, Catch::StartsWith("tunekit: error: postgresql://tunekit@127.0.0.1:1/tunekit: cannot connect"));
   CHECK(std::count(down.err.begin(), down.err.end(), '\n') == 1);
   // Calibrate checks the id and the database before the machine moves: no run directory is made.
-  auto cal = run_cli({"calibrate", "--machine", "sim", "--skip-liquefier", "--record", "--db", dir + "/h.sqlite", "--out",
-                      dir + "/never"});
+  auto cal = run_cli({"calibrate", "--machine", "sim", "--skip-liquefier", "--record", "--db", dir + "/h.sqlite",
+                      "--out", dir + "/never"});
   CHECK(cal.code == 2);
   CHECK_FALSE(fs::exists(dir + "/never"));
 }
@@ -130,8 +131,8 @@ TEST_CASE("history cli: batch --record stores one record per dataset, import of 
   fs::create_directories(dir + "/data");
   fs::copy_file(dataset("liquefier/synthetic_steps.csv"), dir + "/data/steps.csv");
   fs::copy_file(dataset("rheology/peek_cross_wlf_synthetic.csv"), dir + "/data/rheo.csv");
-  const auto b = run_cli({"batch", dir + "/data", "-j", "1", "-o", dir + "/summary.json", "--record", "--machine-id", "b1",
-                          "--db", db.url});
+  const auto b = run_cli({"batch", dir + "/data", "-j", "1", "-o", dir + "/summary.json", "--record", "--machine-id",
+                          "b1", "--db", db.url});
   REQUIRE(b.code == 0);
   th::Store store(db.url);
   const auto recs = store.records("b1");
@@ -146,10 +147,12 @@ TEST_CASE("history cli: batch --record stores one record per dataset, import of 
   CHECK(commands == std::set<std::string>{"rheo", "step"});
   CHECK(store.series("b1", "tau_s").size() == 1);
 
-  const auto imp = run_cli({"history", "import", dir + "/summary.json", "--machine-id", "b2", "--db", db.url, "--json"});
+  const auto imp =
+      run_cli({"history", "import", dir + "/summary.json", "--machine-id", "b2", "--db", db.url, "--json"});
   REQUIRE(imp.code == 0);
   CHECK(nlohmann::json::parse(imp.out)["results"]["counts"]["imported"] == 2);
-  const auto again = run_cli({"history", "import", dir + "/summary.json", "--machine-id", "b2", "--db", db.url, "--json"});
+  const auto again =
+      run_cli({"history", "import", dir + "/summary.json", "--machine-id", "b2", "--db", db.url, "--json"});
   REQUIRE(again.code == 0);
   CHECK(nlohmann::json::parse(again.out)["results"]["counts"]["imported"] == 0);
   CHECK(nlohmann::json::parse(again.out)["results"]["counts"]["already_recorded"] == 2);
@@ -182,7 +185,8 @@ TEST_CASE("history cli: 32 processes recording concurrently into one database lo
   // The database is new: the processes also race to create its schema.
   std::vector<pid_t> pids;
   for (int p = 0; p < kProcesses; ++p) {
-    std::vector<std::string> argv{TUNEKIT_EXE, "history", "import", "--db", db.url, "--machine-id", fmt_machine(p), "--json"};
+    std::vector<std::string> argv{TUNEKIT_EXE, "history",      "import",       "--db",
+                                  db.url,      "--machine-id", fmt_machine(p), "--json"};
     for (int i = 0; i < kEach; ++i) {
       const std::string f = dir + "/p" + std::to_string(p) + "_" + std::to_string(i) + ".json";
       std::ofstream(f) << step_envelope("step", p * 1000 + i, 0.01);
@@ -206,8 +210,9 @@ TEST_CASE("history cli: 32 processes recording concurrently into one database lo
     for (const auto& x : s) values.insert(x.value);
     for (int i = 0; i < kEach; ++i) CHECK(values.count(p * 1000 + i) == 1);
   }
-  CHECK(hist_count(c, "SELECT COUNT(*) FROM records r WHERE n_quantities <> (SELECT COUNT(*) FROM quantities q "
-                      "WHERE q.record_id = r.id)") == 0);
+  CHECK(hist_count(c,
+                   "SELECT COUNT(*) FROM records r WHERE n_quantities <> (SELECT COUNT(*) FROM quantities q "
+                   "WHERE q.record_id = r.id)") == 0);
 }
 
 TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the run where it exceeds the uncertainty") {
@@ -220,8 +225,9 @@ TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the r
   const std::vector<double> freq_hz = kDriftFreqsHz;
   for (std::size_t i = 0; i < freq_hz.size(); ++i) {
     const std::string run = fmt_run_dir(dir, i);
-    const auto r = run_cli({"calibrate", "--machine", "sim", "--profile", profile, "--skip-liquefier", "--sim",
-                            "mode_x=" + std::to_string(freq_hz[i]) + ":0.08", "--out", run, "--record", "--db", db, "--json"});
+    const auto r =
+        run_cli({"calibrate", "--machine", "sim", "--profile", profile, "--skip-liquefier", "--sim",
+                 "mode_x=" + std::to_string(freq_hz[i]) + ":0.08", "--out", run, "--record", "--db", db, "--json"});
     INFO(r.err);
     REQUIRE(r.code == 0);
   }
@@ -247,8 +253,8 @@ TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the r
   REQUIRE(first > 1);      // the first small steps are within the uncertainty ...
   REQUIRE(first < n - 2);  // ... and the belt goes well beyond it
   for (std::size_t i = 0; i < n; ++i) {
-    INFO("run " << i + 1 << ": " << runs["value"][i] << " +- " << runs["stderr"][i] << ", change " << runs["change_pct"][i]
-                << " %, limit " << runs["threshold"][i]);
+    INFO("run " << i + 1 << ": " << runs["value"][i] << " +- " << runs["stderr"][i] << ", change "
+                << runs["change_pct"][i] << " %, limit " << runs["threshold"][i]);
     CHECK(runs["drifted"][i].get<bool>() == (i >= first));
   }
   REQUIRE(x["drifted_since"].is_object());
@@ -261,10 +267,12 @@ TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the r
   CHECK(m["drift"]["x"]["freq_hz"].get<double>() == Approx(drop_pct).margin(1.0));
 
   // The CI gate: the belt dropped more than 5 %, not more than 15 %.
-  const auto gate = run_cli({"history", "trend", "--machine", "belt-sim", "--db", db, "--require", "drift.x.freq_hz>-5%"});
+  const auto gate =
+      run_cli({"history", "trend", "--machine", "belt-sim", "--db", db, "--require", "drift.x.freq_hz>-5%"});
   CHECK(gate.code == 1);
   CHECK_THAT(gate.err, Catch::Contains("requirement not met: drift.x.freq_hz>-5%"));
-  CHECK(run_cli({"history", "trend", "--machine", "belt-sim", "--db", db, "--require", "drift.x.freq_hz>-15%"}).code == 0);
+  CHECK(run_cli({"history", "trend", "--machine", "belt-sim", "--db", db, "--require", "drift.x.freq_hz>-15%"}).code ==
+        0);
   CHECK(run_cli({"history", "trend", "--machine", "belt-sim", "--db", db, "--require", "tau_s<5%"}).code == 2);
 
   // Text output names the run the drift began with.
@@ -279,11 +287,13 @@ TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the r
       WARN("import check skipped on " << backend << ": " << other.skip_reason);
       continue;
     }
-    const auto imp = run_cli({"history", "import", dir + "/archive", "--machine-from-path", "--db", other.url, "--json"});
+    const auto imp =
+        run_cli({"history", "import", dir + "/archive", "--machine-from-path", "--db", other.url, "--json"});
     INFO(imp.err);
     REQUIRE(imp.code == 0);
     CHECK(nlohmann::json::parse(imp.out)["results"]["counts"]["imported"] == freq_hz.size());
-    const auto t2 = run_cli({"history", "trend", "--machine", "belt-sim", "-q", "x.freq_hz", "--db", other.url, "--json"});
+    const auto t2 =
+        run_cli({"history", "trend", "--machine", "belt-sim", "-q", "x.freq_hz", "--db", other.url, "--json"});
     INFO(t2.err);
     REQUIRE(t2.code == 0);
     const auto x2 = nlohmann::json::parse(t2.out)["results"]["machines"][0]["quantities"]["x.freq_hz"];

@@ -29,8 +29,10 @@ NewRecord sample_record(const std::string& machine, double tau, double freq) {
   r.envelope_schema = 1;
   r.envelope_sha256 = std::string(64, 'a');
   r.envelope = R"({"command":"calibrate"})";
-  r.inputs = {{"axis-x/raw_data_x_tunekit.csv", std::string(64, 'b'), 1234}, {"liquefier-step/load.csv", std::string(64, 'c'), 99}};
-  r.quantities = {{"tau_s", tau, 0.01, "", "s"}, {"x.freq_hz", freq, 0.2, "", "Hz"}, {"x.shaper", NAN, NAN, "mzv", "1"}};
+  r.inputs = {{"axis-x/raw_data_x_tunekit.csv", std::string(64, 'b'), 1234},
+              {"liquefier-step/load.csv", std::string(64, 'c'), 99}};
+  r.quantities = {
+      {"tau_s", tau, 0.01, "", "s"}, {"x.freq_hz", freq, 0.2, "", "Hz"}, {"x.shaper", NAN, NAN, "mzv", "1"}};
   return r;
 }
 
@@ -38,10 +40,21 @@ std::int64_t count(Connection& c, const std::string& sql) { return as_int(c.quer
 
 // Every record has exactly the inputs and quantities it says, and nothing points at a missing record.
 void check_consistent(Connection& c) {
-  CHECK(count(c, "SELECT COUNT(*) FROM records r WHERE n_quantities <> (SELECT COUNT(*) FROM quantities q WHERE q.record_id = r.id)") == 0);
-  CHECK(count(c, "SELECT COUNT(*) FROM records r WHERE n_inputs <> (SELECT COUNT(*) FROM record_inputs i WHERE i.record_id = r.id)") == 0);
-  CHECK(count(c, "SELECT COUNT(*) FROM quantities q WHERE NOT EXISTS (SELECT 1 FROM records r WHERE r.id = q.record_id)") == 0);
-  CHECK(count(c, "SELECT COUNT(*) FROM record_inputs i WHERE NOT EXISTS (SELECT 1 FROM records r WHERE r.id = i.record_id)") == 0);
+  CHECK(count(c,
+              "SELECT COUNT(*) FROM records r WHERE n_quantities <> (SELECT COUNT(*) FROM quantities q WHERE "
+              "q.record_id = r.id)") == 0);
+  CHECK(count(c,
+              "SELECT COUNT(*) FROM records r WHERE n_inputs <> (SELECT COUNT(*) FROM record_inputs i WHERE "
+              "i.record_id = r.id)") == 0);
+  CHECK(
+      count(c,
+            "SELECT COUNT(*) FROM quantities q WHERE NOT EXISTS (SELECT 1 FROM records r WHERE r.id = q.record_id)") ==
+      0);
+  CHECK(
+      count(
+          c,
+          "SELECT COUNT(*) FROM record_inputs i WHERE NOT EXISTS (SELECT 1 FROM records r WHERE r.id = i.record_id)") ==
+      0);
   if (c.backend() == Backend::sqlite) CHECK(as_text(c.query("PRAGMA integrity_check").at(0).at(0)) == "ok");
 }
 
@@ -181,7 +194,8 @@ TEST_CASE("history store: a process killed mid-record leaves the database consis
   // PostgreSQL logs a client that died inside a transaction: at least one kill hit a record
   // halfway (the server rolled it back).
   if (backend_ == "postgresql")
-    CHECK_THAT(test::postgres_server_log(), Catch::Contains("unexpected EOF on client connection with an open transaction"));
+    CHECK_THAT(test::postgres_server_log(),
+               Catch::Contains("unexpected EOF on client connection with an open transaction"));
   Store s(db.url);
   CHECK(seen_before > 0);  // the child did write records before it was killed
   CHECK(count(s.connection(), "SELECT COUNT(*) FROM quantities") == seen_before * 403);
@@ -218,7 +232,8 @@ TEST_CASE("history drift: a change within the combined uncertainty is not drift"
   CHECK_FALSE(two.points[1].drifted);  // part of the baseline
   CHECK_THROWS_AS(analyse_drift("x", s, {0, 1.96}), InputError);
   // Words: the shaper chosen changed.
-  const std::vector<SeriesPoint> w{{1, "t", NAN, NAN, "mzv", "1"}, {2, "t", NAN, NAN, "mzv", "1"}, {3, "t", NAN, NAN, "ei", "1"}};
+  const std::vector<SeriesPoint> w{
+      {1, "t", NAN, NAN, "mzv", "1"}, {2, "t", NAN, NAN, "mzv", "1"}, {3, "t", NAN, NAN, "ei", "1"}};
   const auto dw = analyse_drift("x.shaper", w, {});
   CHECK(dw.is_text);
   CHECK_FALSE(dw.points[1].drifted);
@@ -255,7 +270,8 @@ TEST_CASE("history quantities: taken from calibrate, step and shaper results by 
   REQUIRE(step.size() == 3);
   CHECK(step[0].name == "tau_s");
   // Other commands: fitted parameters under "params".
-  const auto rheo = extract_quantities("rheo", nlohmann::json::parse(R"({"fits": {"power_law": {"params": {"n": {"value": 0.52, "stderr": 0.01}}}}})"));
+  const auto rheo = extract_quantities(
+      "rheo", nlohmann::json::parse(R"({"fits": {"power_law": {"params": {"n": {"value": 0.52, "stderr": 0.01}}}}})"));
   REQUIRE(rheo.size() == 1);
   CHECK(rheo[0].name == "rheo.n");
 }

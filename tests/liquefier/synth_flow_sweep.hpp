@@ -21,7 +21,7 @@ struct SynthFlowSweep {
 struct SynthFlowSweepTruth {
   double a = 0.7, b = -0.5;  ///< tau_s = a Q^b
   double K = 0.8, theta_s = 0.04, y0 = 0.5;
-  double noise = 0.002;      ///< output noise standard deviation
+  double noise = 0.002;  ///< output noise standard deviation
   double rate_hz = 1000;
   double tau(double q) const { return a * std::pow(q, b); }
 };
@@ -37,8 +37,8 @@ inline SynthFlowSweep synth_flow_sweep(const SynthFlowSweepTruth& tr, int levels
   };
   std::vector<Step> steps;
   for (std::size_t i = 1; i < plan.sequence_mm3_s.size(); ++i)
-    steps.push_back({settle_s + static_cast<double>(i - 1) * hold_s, plan.sequence_mm3_s[i] - plan.sequence_mm3_s[i - 1],
-                     tr.tau(plan.sequence_mm3_s[i])});
+    steps.push_back({settle_s + static_cast<double>(i - 1) * hold_s,
+                     plan.sequence_mm3_s[i] - plan.sequence_mm3_s[i - 1], tr.tau(plan.sequence_mm3_s[i])});
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, tr.noise);
   const double end = plan.duration_s();

@@ -55,8 +55,8 @@ TEST_CASE("tunekit step reads time_s/flow_mm3_s/force_N without --time, and expo
 
   const std::string cfg = dir + "/Configuration_adv.h";
   std::filesystem::copy_file(tunekit::test::dataset("firmware/Configuration_adv.h"), cfg);
-  const auto e = run_cli({"export", "-f", "marlin", "-c", cfg, "-p", tunekit::test::dataset("machines/sim.toml"),
-                          step_json, "--json"});
+  const auto e = run_cli(
+      {"export", "-f", "marlin", "-c", cfg, "-p", tunekit::test::dataset("machines/sim.toml"), step_json, "--json"});
   INFO(e.err);
   REQUIRE(e.code == 0);
   const auto ej = nlohmann::json::parse(e.out);

@@ -29,7 +29,9 @@ ident::StepAnalysis analyze(const test::SynthFlowSweep& s) {
 
 }  // namespace
 
-TEST_CASE("a synthetic flow sweep with tau = a Q^b at each arrival level gives each level's tau within 2 % and b within 0.05") {
+TEST_CASE(
+    "a synthetic flow sweep with tau = a Q^b at each arrival level gives each level's tau within 2 % and b within "
+    "0.05") {
   test::SynthFlowSweepTruth tr;
   const auto s = test::synth_flow_sweep(tr, 6, 1.5, 15, 5.0, 3.0);
   const auto a = analyze(s);
@@ -38,7 +40,8 @@ TEST_CASE("a synthetic flow sweep with tau = a Q^b at each arrival level gives e
   REQUIRE(a.arrival_levels.size() == 8);
   int both = 0, differ = 0;
   for (const auto& l : a.arrival_levels) {
-    INFO("level " << l.u << " tau " << l.fit.value("tau_s") << " truth " << tr.tau(l.u) << " r-f " << l.rising_minus_falling_tau_s << " [" << l.rmf_ci95_lo << ", " << l.rmf_ci95_hi << "]");
+    INFO("level " << l.u << " tau " << l.fit.value("tau_s") << " truth " << tr.tau(l.u) << " r-f "
+                  << l.rising_minus_falling_tau_s << " [" << l.rmf_ci95_lo << ", " << l.rmf_ci95_hi << "]");
     CHECK(l.fit.value("tau_s") == Approx(tr.tau(l.u)).epsilon(0.02));
     CHECK(l.fit.value("K") == Approx(tr.K).epsilon(0.02));
     CHECK(l.fit.value("theta_s") == Approx(tr.theta_s).margin(0.005));
@@ -84,7 +87,8 @@ TEST_CASE("a synthetic flow sweep with tau = a Q^b at each arrival level gives e
   REQUIRE(a.pooled);
   CHECK(a.pooled->diagnostics.whiteness_p < ident::kWhitenessAlarmP);
   bool warned = false;
-  for (const auto& w : a.warnings) warned = warned || w.find("pooled fit over all steps: its residuals are not white") == 0;
+  for (const auto& w : a.warnings)
+    warned = warned || w.find("pooled fit over all steps: its residuals are not white") == 0;
   CHECK(warned);
 }
 
@@ -174,6 +178,6 @@ TEST_CASE("liquefier-flow-sweep reaches every level from below and above, within
   CHECK_THROWS_AS(protocols::plan_flow_sweep(5, 5, 6, 1, 0.5, 6, 3), InputError);
   // A flow above the hot end's limit is refused by the safety gate.
   const auto e = protocols::build_experiment("liquefier-flow-sweep", {{"flow_max_mm3_s", 40}}, "", profile,
-                                            protocols::Dialect(protocols::Firmware::marlin));
+                                             protocols::Dialect(protocols::Firmware::marlin));
   CHECK_FALSE(protocols::check_protocol(e.gcode, profile, e.sensors).empty());
 }

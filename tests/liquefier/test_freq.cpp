@@ -84,8 +84,8 @@ TEST_CASE("tunekit freq: the line-width call works on appendix D experiment 7") 
   CHECK(j["gain"]["value"].get<double>() == Approx(0.226 / 0.785).epsilon(0.03));
   CHECK(j.contains("phase_lag_deg"));
   CHECK(j["freq_hz"] == 0.05305165);
-  const auto text = run_cli({"freq", exp_path(7), "--time", "time", "--output", "width", "--input",
-                             "setpoint_width", "--freq-hz", "0.05305165"});
+  const auto text = run_cli({"freq", exp_path(7), "--time", "time", "--output", "width", "--input", "setpoint_width",
+                             "--freq-hz", "0.05305165"});
   CHECK(text.code == 0);
   CHECK(text.out.find("phase lag") != std::string::npos);
 }
@@ -138,7 +138,8 @@ TEST_CASE("ZOH simulation is exact for steps, including fractional delays") {
   const double wd = wn * std::sqrt(1 - z * z);
   for (std::size_t k = 0; k < y2.size(); k += 7) {
     const double tk = k * dt;
-    const double exact = 1 - std::exp(-z * wn * tk) * (std::cos(wd * tk) + z / std::sqrt(1 - z * z) * std::sin(wd * tk));
+    const double exact =
+        1 - std::exp(-z * wn * tk) * (std::cos(wd * tk) + z / std::sqrt(1 - z * z) * std::sin(wd * tk));
     REQUIRE(y2[k] == Approx(exact).margin(1e-9));
   }
   CHECK(std::abs(so.response(3.0)) == Approx(1 / (2 * z)).epsilon(1e-12));
@@ -251,8 +252,8 @@ TEST_CASE("output-error fit of a transfer function with dead time to a random-st
 }
 
 TEST_CASE("tunekit freq --mode h1 / oe on the synthetic chirp data set") {
-  auto r = run_cli({"freq", dataset("liquefier/synthetic_chirp.csv"), "--time", "time", "--input", "feed",
-                    "--output", "force", "--mode", "h1", "--fit-tf", "2,0", "--fmax", "40", "--json"});
+  auto r = run_cli({"freq", dataset("liquefier/synthetic_chirp.csv"), "--time", "time", "--input", "feed", "--output",
+                    "force", "--mode", "h1", "--fit-tf", "2,0", "--fmax", "40", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   auto j = nlohmann::json::parse(r.out)["results"];
@@ -277,7 +278,8 @@ TEST_CASE("tunekit freq --mode h1 / oe on the synthetic chirp data set") {
   CHECK(run_cli({"freq", exp_path(7), "--time", "time", "--output", "width", "--mode", "h1"}).code == 2);
   std::ostringstream csv;
   csv << "time,u,y\n";
-  for (int i = 0; i < 200; ++i) csv << i * 0.01 + (i % 2) * 0.004 << "," << std::sin(i * 0.3) << "," << std::cos(i * 0.2) << "\n";
+  for (int i = 0; i < 200; ++i)
+    csv << i * 0.01 + (i % 2) * 0.004 << "," << std::sin(i * 0.3) << "," << std::cos(i * 0.2) << "\n";
   const auto irregular =
       run_cli({"freq", write_scratch("irregular.csv", csv.str()), "--input", "u", "--output", "y", "--mode", "h1"});
   CHECK(irregular.err.find("uniform sampling") != std::string::npos);

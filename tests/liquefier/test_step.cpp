@@ -238,7 +238,8 @@ TEST_CASE("a record that starts from rest: the warm-up is not the first step's b
   // Only the settled part of the first level (after the warm-up) was used as the baseline.
   CHECK(t[a.steps[0].step.begin] > 1.5);
   CHECK(f.value("y0") == Approx(0.5 + K * u_low).margin(0.01));
-  for (const auto& [name, truth] : std::vector<std::pair<std::string, double>>{{"K", K}, {"tau_s", tau}, {"theta_s", theta}}) {
+  for (const auto& [name, truth] :
+       std::vector<std::pair<std::string, double>>{{"K", K}, {"tau_s", tau}, {"theta_s", theta}}) {
     INFO(name);
     // The tail of the warm-up (below the noise) is not in the model, so the 95 % intervals
     // (0.01-0.3 % wide here) are not held to the truth; the estimates are within 1 %.
@@ -276,8 +277,8 @@ TEST_CASE("tunekit step on the synthetic data set recovers the truth written in 
 }
 
 TEST_CASE("tunekit step on Table B.1 by print-speed groups gives per-speed fits and a trend") {
-  const auto r = run_cli({"step", dataset("liquefier/holtrup_table_b1_ooze.csv"), "--time", "t_s", "--output",
-                          "L_mm", "--group", "v_print_mm_s", "--model", "fo", "--json"});
+  const auto r = run_cli({"step", dataset("liquefier/holtrup_table_b1_ooze.csv"), "--time", "t_s", "--output", "L_mm",
+                          "--group", "v_print_mm_s", "--model", "fo", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto j = nlohmann::json::parse(r.out)["results"];
@@ -326,7 +327,8 @@ TEST_CASE("tunekit step fails clearly: exit 2 for bad input, exit 1 for a fit th
   auto step_u = [](int i) { return i < 50 ? 1.0 : 2.0; };
   auto resp = [](int i) { return i < 50 ? 1.0 : 2.0 - std::exp(-(i - 50) / 20.0) + 0.001 * (i % 3); };
   const auto no_step = csv("no_step.csv", resp, [](int) { return 1.0; });
-  const auto flat = csv("flat.csv", [](int) { return 3.0; }, step_u);
+  const auto flat = csv(
+      "flat.csv", [](int) { return 3.0; }, step_u);
   const auto few = csv("few.csv", resp, step_u, 6);
   auto run = [](const std::string& f) {
     return run_cli({"step", f, "--time", "time", "--input", "feed", "--output", "force"});
@@ -348,8 +350,9 @@ TEST_CASE("tunekit step fails clearly: exit 2 for bad input, exit 1 for a fit th
   CHECK(r.code == 2);
   CHECK((r.err.find("increas") != std::string::npos || r.err.find("backwards") != std::string::npos));
   // Too short to see tau: a ramp that never bends.
-  const auto ramp = csv("ramp.csv", [](int i) { return i < 100 ? 1.0 : 1.0 + 0.01 * (i - 100) + 0.0005 * (i % 2); },
-                        [](int i) { return i < 100 ? 1.0 : 2.0; });
+  const auto ramp = csv(
+      "ramp.csv", [](int i) { return i < 100 ? 1.0 : 1.0 + 0.01 * (i - 100) + 0.0005 * (i % 2); },
+      [](int i) { return i < 100 ? 1.0 : 2.0; });
   r = run(ramp);
   CHECK(r.code == 1);
   CHECK(r.err.find("not identifiable") != std::string::npos);

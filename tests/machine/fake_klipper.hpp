@@ -120,8 +120,8 @@ class FakeKlipper {
   // One executed move -> trapq entries: the profile cut into 1 ms pieces of constant
   // acceleration, pieces of equal acceleration merged (cruise and constant-acceleration phases
   // become one entry each, as Klipper's accel/cruise/decel entries).
-  void add_trapq(double t0, double duration, const tunekit::protocols::Profile& prof, const std::array<double, 4>& start,
-                 const std::array<double, 4>& u) {
+  void add_trapq(double t0, double duration, const tunekit::protocols::Profile& prof,
+                 const std::array<double, 4>& start, const std::array<double, 4>& u) {
     const double piece = 1e-3;
     const bool xy = u[0] != 0 || u[1] != 0;
     const double e_ratio = u[3];
@@ -141,14 +141,22 @@ class FakeKlipper {
         return true;
       };
       if (e_ratio != 0 && !extend(last_e, e_ratio)) {
-        trapq_["extruder"].push_back({pt, b - a, sa.vel_mm_s * e_ratio, acc * e_ratio,
-                                      {start[3] + e_ratio * sa.pos_mm, 0.0, 0.0}, {1.0, xy ? 1.0 : 0.0, 0.0}});
+        trapq_["extruder"].push_back({pt,
+                                      b - a,
+                                      sa.vel_mm_s * e_ratio,
+                                      acc * e_ratio,
+                                      {start[3] + e_ratio * sa.pos_mm, 0.0, 0.0},
+                                      {1.0, xy ? 1.0 : 0.0, 0.0}});
         last_e = &trapq_["extruder"].back();
       }
       if (xyz_norm > 0 && !extend(last_t, xyz_norm)) {
-        trapq_["toolhead"].push_back({pt, b - a, sa.vel_mm_s * xyz_norm, acc * xyz_norm,
-                                      {start[0] + u[0] * sa.pos_mm, start[1] + u[1] * sa.pos_mm, start[2] + u[2] * sa.pos_mm},
-                                      {u[0] / xyz_norm, u[1] / xyz_norm, u[2] / xyz_norm}});
+        trapq_["toolhead"].push_back(
+            {pt,
+             b - a,
+             sa.vel_mm_s * xyz_norm,
+             acc * xyz_norm,
+             {start[0] + u[0] * sa.pos_mm, start[1] + u[1] * sa.pos_mm, start[2] + u[2] * sa.pos_mm},
+             {u[0] / xyz_norm, u[1] / xyz_norm, u[2] / xyz_norm}});
         last_t = &trapq_["toolhead"].back();
       }
     }
@@ -183,7 +191,8 @@ class FakeKlipper {
         for (std::size_t k = i; k < std::min(rows.size(), i + 200); ++k) chunk.push_back(rows[k]);
         for (const auto& templ : templates) {
           nlohmann::json msg = templ;
-          msg["params"] = sensor ? nlohmann::json{{"data", chunk}, {"errors", 0}, {"overflows", 0}} : nlohmann::json{{"data", chunk}};
+          msg["params"] = sensor ? nlohmann::json{{"data", chunk}, {"errors", 0}, {"overflows", 0}}
+                                 : nlohmann::json{{"data", chunk}};
           send(msg);
         }
         if (!templates.empty()) sent += static_cast<long>(chunk.size());
@@ -233,7 +242,8 @@ class FakeKlipper {
           continue;
         }
         const auto& [key, values] = ep->second;
-        const std::string value = params.contains(key) && params[key].is_string() ? params[key].get<std::string>() : "None";
+        const std::string value =
+            params.contains(key) && params[key].is_string() ? params[key].get<std::string>() : "None";
         if (values.count(value) == 0) {
           error("The value '" + value + "' is not valid for " + key);
           continue;
@@ -262,7 +272,8 @@ class FakeKlipper {
   tunekit::protocols::Simulator sim_;
   FakeKlipperConfig fake_;
   std::map<std::string, std::pair<std::string, std::set<std::string>>> endpoints_;  // method -> (key, values)
-  std::map<std::string, nlohmann::json> trapq_{{"toolhead", nlohmann::json::array()}, {"extruder", nlohmann::json::array()}};
+  std::map<std::string, nlohmann::json> trapq_{{"toolhead", nlohmann::json::array()},
+                                               {"extruder", nlohmann::json::array()}};
   int listen_fd_ = -1;
   std::atomic<bool> stop_{false};
   std::atomic<long> sent_{0}, load_sent_{0};

@@ -50,8 +50,8 @@ TEST_CASE("the chirp protocol sizes itself from expected_tau_s unless a paramete
   CHECK(e.params.at("duration_s") == plan.duration_s);
   CHECK(e.params.at("settle_s") == plan.settle_s);
   CHECK(e.estimated_duration_s > plan.settle_s + plan.duration_s);
-  const auto given = build_experiment("liquefier-chirp", {{"expected_tau_s", 0.3}, {"duration_s", 30}}, "x", profile,
-                                      Dialect());
+  const auto given =
+      build_experiment("liquefier-chirp", {{"expected_tau_s", 0.3}, {"duration_s", 30}}, "x", profile, Dialect());
   CHECK(given.params.at("duration_s") == 30);
   CHECK(given.params.at("freq_min_hz") == plan.freq_min_hz);
   const auto plain = build_experiment("liquefier-chirp", {}, "x", profile, Dialect());

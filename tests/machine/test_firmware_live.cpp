@@ -60,9 +60,10 @@ std::vector<std::string> sim_answer(Simulator& sim, const std::string& line) {
 }  // namespace
 
 TEST_CASE("Marlin M493 reports: fixed-time motion present, active, its shapers and advance", "[machine]") {
-  const auto on = parse_m493_report({"Fixed-Time Motion enabled with X axis ZV shaping and with Y axis 2 Hump EI shaping.",
-                                     "X static shaper frequency: 41.00Hz", "Y static shaper frequency: 37.50 Hz",
-                                     "Linear Advance enabled. Gain: 0.05", "ok"});
+  const auto on =
+      parse_m493_report({"Fixed-Time Motion enabled with X axis ZV shaping and with Y axis 2 Hump EI shaping.",
+                         "X static shaper frequency: 41.00Hz", "Y static shaper frequency: 37.50 Hz",
+                         "Linear Advance enabled. Gain: 0.05", "ok"});
   CHECK(on.present);
   CHECK(on.active);
   CHECK(on.shapers.at("x") == "ZV");
@@ -127,7 +128,8 @@ TEST_CASE("a live Marlin with FT_MOTION active is detected from M493, and its se
   s.shapers["x"] = {"mzv", 45.2, 0.1};
   s.shapers["y"] = {"zv", 38, 0.08};
   s.marlin_ft_motion_live = true;
-  const std::string cfg = tunekit::ident::read_file_bytes(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/Configuration_adv.h");
+  const std::string cfg =
+      tunekit::ident::read_file_bytes(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/Configuration_adv.h");
   const auto r = export_config_text(ExportFirmware::marlin, cfg, "Configuration_adv.h", s);
   CHECK(r.gcode == "M493 S1 X8 A45.2 I0.1 Y1 B38 J0.08\nM493 P1 K0.045\nM500\n");
   CHECK(r.gcode.find("M593") == std::string::npos);
@@ -143,8 +145,9 @@ TEST_CASE("calibrate on a simulated Marlin running FT_MOTION writes M493, on a c
   for (const char* mode : {"on", "none"}) {
     INFO(mode);
     const std::string dir = tunekit::test::scratch_dir(std::string("calibrate_ft_") + mode) + "/run";
-    const auto cli = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--firmware", "marlin", "--skip-liquefier",
-                                             "--out", dir, "--sim", std::string("ft_motion=") + mode});
+    const auto cli =
+        tunekit::test::run_cli({"calibrate", "--machine", "sim", "--firmware", "marlin", "--skip-liquefier", "--out",
+                                dir, "--sim", std::string("ft_motion=") + mode});
     INFO(cli.err);
     REQUIRE(cli.code == 0);
     const auto res = nlohmann::json::parse(tunekit::ident::read_file_bytes(dir + "/results.json")).at("results");
@@ -184,7 +187,8 @@ TEST_CASE("RepRapFirmware's files over its web server: addresses, M955 rate, fin
   CHECK_THROWS_AS(rrf_download(addr, "0:/sys/accelerometer/none.csv", std::chrono::milliseconds(3000)), MachineError);
 }
 
-TEST_CASE("axis-sweep on RepRapFirmware records with M956 and fetches the file over the board's web server", "[machine]") {
+TEST_CASE("axis-sweep on RepRapFirmware records with M956 and fetches the file over the board's web server",
+          "[machine]") {
   const std::string dir = tunekit::test::scratch_dir("rrf_m956_fetch");
   RunOptions o;
   o.protocol = "axis-sweep";

@@ -118,7 +118,8 @@ TEST_CASE("Klipper's sweep sets MINIMUM_CRUISE_RATIO=0 and input shaping off, an
   CHECK(at("SET_INPUT_SHAPER SHAPER_TYPE_X=mzv SHAPER_FREQ_X=48.6 DAMPING_RATIO_X=0.1") > epi);
 }
 
-TEST_CASE("Marlin and RepRapFirmware sweeps turn shaping off and restore it, with their planner settings", "[machine]") {
+TEST_CASE("Marlin and RepRapFirmware sweeps turn shaping off and restore it, with their planner settings",
+          "[machine]") {
   auto profile = builtin_sim_profile();
   profile.state.shaper["x"] = "mzv:48.6:0.1";
   profile.state.shaper["y"] = "mzv:40:0.12";
@@ -174,8 +175,9 @@ TEST_CASE("Marlin's sweep is designed above MIN_STEPS_PER_SEGMENT or refused wit
   }
 }
 
-TEST_CASE("liquefier sine and chirp staircases keep their labelled timing on Klipper, which stops each extrude-only move",
-          "[machine]") {
+TEST_CASE(
+    "liquefier sine and chirp staircases keep their labelled timing on Klipper, which stops each extrude-only move",
+    "[machine]") {
   const auto profile = builtin_sim_profile();
   for (double accel : {800.0, 5000.0}) {
     INFO(accel);

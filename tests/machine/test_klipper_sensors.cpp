@@ -30,7 +30,8 @@ std::string klipper_profile(const std::string& dir, const std::string& sensors, 
   // A Klipper printer: the protocols are built for Klipper's planner; the simulated machine's
   // [firmware_state] is kept.
   const auto fw = text.find("firmware = \"marlin\"");
-  if (klipper_planner && fw != std::string::npos) text.replace(fw, std::string("firmware = \"marlin\"").size(), "firmware = \"klipper\"");
+  if (klipper_planner && fw != std::string::npos)
+    text.replace(fw, std::string("firmware = \"marlin\"").size(), "firmware = \"klipper\"");
   const auto state = text.find("[firmware_state]");
   text = text.substr(0, text.find("[sensors]")) + "[sensors]\n" + sensors + "\n" +
          (state == std::string::npos ? std::string() : text.substr(state));
@@ -71,7 +72,8 @@ TEST_CASE("Klipper sensor endpoints: chip, section and mux key as Klipper regist
 
 TEST_CASE("Klipper sensor rows: grams to newtons, an uncalibrated cell refused, the trapq's feed", "[machine]") {
   // docs/API_Server.md, load_cell/dump_force: {"params":{"data":[[3292.432935, 40.65, 562534, -234467]]}}
-  const auto s = tp::parse_load_cell_rows(nlohmann::json::parse(R"({"data":[[3292.432935, 40.65, 562534, -234467]]})"), "load_cell");
+  const auto s = tp::parse_load_cell_rows(nlohmann::json::parse(R"({"data":[[3292.432935, 40.65, 562534, -234467]]})"),
+                                          "load_cell");
   REQUIRE(s.size() == 1);
   CHECK(s[0].time_s == Approx(3292.432935));
   CHECK(s[0].force_N == Approx(40.65 * 9.80665e-3));
@@ -99,20 +101,22 @@ TEST_CASE("an axis sweep recorded under each Klipper accelerometer chip gives th
   };
   // The same mode under every chip (52.5 Hz, damping 0.06, as the adxl345 test of
   // test_machine_run.cpp): what differs is only the endpoint and object name the data come from.
-  const auto c = GENERATE(Chip{"adxl345", "adxl345", 52.5}, Chip{"lis2dw", "lis2dw toolhead", 52.5},
-                          Chip{"lis3dh", "lis3dh", 52.5}, Chip{"mpu9250", "mpu9250 bed", 52.5},
-                          Chip{"mpu6050", "mpu9250", 52.5}, Chip{"icm20948", "icm20948 hotend", 52.5},
-                          Chip{"bmi160", "bmi160 toolhead", 52.5});
+  const auto c =
+      GENERATE(Chip{"adxl345", "adxl345", 52.5}, Chip{"lis2dw", "lis2dw toolhead", 52.5},
+               Chip{"lis3dh", "lis3dh", 52.5}, Chip{"mpu9250", "mpu9250 bed", 52.5}, Chip{"mpu6050", "mpu9250", 52.5},
+               Chip{"icm20948", "icm20948 hotend", 52.5}, Chip{"bmi160", "bmi160 toolhead", 52.5});
   INFO(c.chip << " [" << c.section << "]");
   const auto dir = scratch_dir(std::string("klipper_chip_") + c.chip);
   const std::string sock = dir + "/klippy_uds";
   FakeKlipperConfig fake;
   fake.accelerometers = {c.section};
-  FakeKlipper server(sock, tp::SimConfig::from_options({"mode_x=" + std::to_string(c.f_mode) + ":0.06", "firmware=klipper"}), fake);
-  const auto profile = klipper_profile(dir, fmt::format("accelerometer = \"{}\"\naccelerometer_name = \"{}\"\nload_cell = false\n",
-                                                        c.chip, c.section));
-  const auto r = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", profile, "--port", "unix:" + sock, "--run-dir",
-                          dir + "/run", "-p", "freq_start_hz=35", "-p", "freq_end_hz=70", "-p", "hz_per_sec=3", "--json"});
+  FakeKlipper server(
+      sock, tp::SimConfig::from_options({"mode_x=" + std::to_string(c.f_mode) + ":0.06", "firmware=klipper"}), fake);
+  const auto profile = klipper_profile(
+      dir, fmt::format("accelerometer = \"{}\"\naccelerometer_name = \"{}\"\nload_cell = false\n", c.chip, c.section));
+  const auto r =
+      run_cli({"run", "axis-sweep", "--axis", "x", "--machine", profile, "--port", "unix:" + sock, "--run-dir",
+               dir + "/run", "-p", "freq_start_hz=35", "-p", "freq_end_hz=70", "-p", "hz_per_sec=3", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   // The subscription went to the chip's own endpoint with the section's object name.
@@ -137,15 +141,14 @@ TEST_CASE("a liquefier step run on Klipper's load cell gives tau within 5 %", "[
   const double tau = 0.38, theta = 0.05;
   FakeKlipperConfig fake;
   fake.load_cell = "load_cell extruder";
-  FakeKlipper server(sock,
-                     tp::SimConfig::from_options({fmt::format("tau_s={}", tau), fmt::format("theta_s={}", theta),
-                                                  "K=2.8"}),
-                     fake);
+  FakeKlipper server(
+      sock, tp::SimConfig::from_options({fmt::format("tau_s={}", tau), fmt::format("theta_s={}", theta), "K=2.8"}),
+      fake);
   // Built for a planner that blends extrude-only moves, so the trapq shows the labelled feeds.
   const auto profile =
       klipper_profile(dir, "accelerometer = false\nload_cell = true\nload_cell_name = \"load_cell extruder\"\n", false);
-  const auto r = run_cli({"run", "liquefier-step", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/run",
-                          "--json"});
+  const auto r = run_cli(
+      {"run", "liquefier-step", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/run", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   bool force = false, trapq = false;
@@ -162,7 +165,8 @@ TEST_CASE("a liquefier step run on Klipper's load cell gives tau within 5 %", "[
   const auto text = tunekit::test::read_text(csv);
   CHECK(text.find(",1.00000,") != std::string::npos);
   CHECK(text.find(",3.00000,") != std::string::npos);
-  const auto fit = run_cli({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--model", "fopdt", "--json"});
+  const auto fit =
+      run_cli({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--model", "fopdt", "--json"});
   INFO(fit.err);
   REQUIRE(fit.code == 0);
   const auto p = nlohmann::json::parse(fit.out)["results"]["pooled"]["params"];
@@ -170,7 +174,8 @@ TEST_CASE("a liquefier step run on Klipper's load cell gives tau within 5 %", "[
   CHECK(p["K"]["value"].get<double>() == Approx(2.8).epsilon(0.05));
 }
 
-TEST_CASE("an uncalibrated Klipper load cell or an unknown sensor name ends with exit 3 and the journal kept", "[machine]") {
+TEST_CASE("an uncalibrated Klipper load cell or an unknown sensor name ends with exit 3 and the journal kept",
+          "[machine]") {
   const auto dir = scratch_dir("klipper_load_cell_bad");
   {
     const std::string sock = dir + "/uds1";
@@ -179,7 +184,8 @@ TEST_CASE("an uncalibrated Klipper load cell or an unknown sensor name ends with
     fake.load_cell_calibrated = false;
     FakeKlipper server(sock, tp::SimConfig{}, fake);
     const auto profile = klipper_profile(dir, "load_cell = true\n");
-    const auto r = run_cli({"run", "liquefier-step", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/r1"});
+    const auto r =
+        run_cli({"run", "liquefier-step", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/r1"});
     CHECK(r.code == 3);
     CHECK(r.err.find("not calibrated") != std::string::npos);
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
@@ -192,7 +198,8 @@ TEST_CASE("an uncalibrated Klipper load cell or an unknown sensor name ends with
     fake.accelerometers = {"lis2dw"};
     FakeKlipper server(sock, tp::SimConfig{}, fake);
     const auto profile = klipper_profile(dir, "accelerometer = \"lis2dw\"\naccelerometer_name = \"lis2dw toolhead\"\n");
-    const auto r = run_cli({"run", "axis-sweep", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/r2"});
+    const auto r =
+        run_cli({"run", "axis-sweep", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/r2"});
     CHECK(r.code == 3);
     CHECK(r.err.find("The value 'toolhead' is not valid for sensor") != std::string::npos);
     CHECK(tunekit::test::read_json(dir + "/r2/run.json")["status"] == "failed");

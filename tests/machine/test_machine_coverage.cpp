@@ -24,7 +24,8 @@ TEST_CASE("coverage planner travels less and retracts less than the zigzag on th
   const auto pce = plan_test_patterns(set, profile, "pce", motion);
   const auto zz = plan_test_patterns(set, profile, "zigzag", motion);
   INFO("pce travel " << pce.stats.travel_mm << " mm, " << pce.stats.retractions << " retractions, " << pce.stats.time_s
-                     << " s; zigzag " << zz.stats.travel_mm << " mm, " << zz.stats.retractions << ", " << zz.stats.time_s << " s");
+                     << " s; zigzag " << zz.stats.travel_mm << " mm, " << zz.stats.retractions << ", "
+                     << zz.stats.time_s << " s");
   CHECK(pce.stats.travel_mm < zz.stats.travel_mm);
   CHECK(pce.stats.retractions < zz.stats.retractions);
   CHECK(pce.stats.time_s < zz.stats.time_s);

@@ -79,9 +79,9 @@ TEST_CASE("liquefier-step with the simulator's defaults (200 Hz load cell) ident
 
 TEST_CASE("axis-sweep on the simulator identifies the mode within 20 %", "[machine][e2e]") {
   const auto dir = tunekit::test::scratch_dir("machine_e2e_sweep") + "/run";
-  const auto run = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", "sim", "--run-dir", dir, "--sim",
-                            "mode_x=52:0.07", "-p", "freq_start_hz=20", "-p", "freq_end_hz=90", "-p", "hz_per_sec=5",
-                            "--json"});
+  const auto run =
+      run_cli({"run", "axis-sweep", "--axis", "x", "--machine", "sim", "--run-dir", dir, "--sim", "mode_x=52:0.07",
+               "-p", "freq_start_hz=20", "-p", "freq_end_hz=90", "-p", "hz_per_sec=5", "--json"});
   INFO(run.err);
   REQUIRE(run.code == 0);
   const std::string csv = nlohmann::json::parse(run.out)["results"]["files"]["accel"];

@@ -47,13 +47,15 @@ TrueDeviation true_deviation(double f_hz, double zeta, double L, double v, doubl
               const double tau = t - tk;
               if (tau <= 0) continue;
               s += -ak / (w * w) *
-                   (1 - std::exp(-zeta * w * tau) * (std::cos(wd * tau) + zeta / std::sqrt(1 - zeta * zeta) * std::sin(wd * tau)));
+                   (1 - std::exp(-zeta * w * tau) *
+                            (std::cos(wd * tau) + zeta / std::sqrt(1 - zeta * zeta) * std::sin(wd * tau)));
             }
             return s;
           }};
 }
 
-TrueResponse true_corner_response(double f_hz, double zeta, double L, double v, double A, double band_mm, double pause_s) {
+TrueResponse true_corner_response(double f_hz, double zeta, double L, double v, double A, double band_mm,
+                                  double pause_s) {
   const double w = 2 * std::numbers::pi * f_hz, wd = w * std::sqrt(1 - zeta * zeta);
   double ta = v / A, tc = (L - v * v / A) / v;
   if (tc < 0) {
@@ -68,7 +70,8 @@ TrueResponse true_corner_response(double f_hz, double zeta, double L, double v, 
       const double tau = t - tk;
       if (tau <= 0) continue;
       s += -ak / (w * w) *
-           (1 - std::exp(-zeta * w * tau) * (std::cos(wd * tau) + zeta / std::sqrt(1 - zeta * zeta) * std::sin(wd * tau)));
+           (1 -
+            std::exp(-zeta * w * tau) * (std::cos(wd * tau) + zeta / std::sqrt(1 - zeta * zeta) * std::sin(wd * tau)));
     }
     return s;
   };
@@ -88,9 +91,16 @@ TrueResponse true_corner_response(double f_hz, double zeta, double L, double v, 
 // Runs axis-rectangle on the simulator with known modes and returns the overshoot results.
 nlohmann::json overshoot_sim_run(const std::string& name, const std::vector<std::string>& extra_sim) {
   const auto dir = tunekit::test::scratch_dir(name) + "/run";
-  std::vector<std::string> args{"run", "axis-rectangle", "--machine", "sim", "--run-dir", dir, "--sim", "mode_x=40:0.05",
-                                "--sim", "mode_y=31:0.07", "-p", "speed_mm_s=150", "-p", "accel_mm_s2=5000", "-p",
-                                "pause_s=0.6", "-p", "repeats=2", "--json"};
+  std::vector<std::string> args{"run",       "axis-rectangle",
+                                "--machine", "sim",
+                                "--run-dir", dir,
+                                "--sim",     "mode_x=40:0.05",
+                                "--sim",     "mode_y=31:0.07",
+                                "-p",        "speed_mm_s=150",
+                                "-p",        "accel_mm_s2=5000",
+                                "-p",        "pause_s=0.6",
+                                "-p",        "repeats=2",
+                                "--json"};
   for (const auto& e : extra_sim) {
     args.push_back("--sim");
     args.push_back(e);
@@ -116,7 +126,8 @@ TEST_CASE("overshoot and settling time per corner agree with the mode's true res
   for (const auto& c : corners) {
     const std::string axis = c["axis"];
     const auto& m = res["truth"][axis]["modes"][0];
-    const auto tr = true_corner_response(m["freq_hz"].get<double>(), m["zeta"].get<double>(), kOsL, kOsV, kOsA, kOsBand, kOsPause);
+    const auto tr =
+        true_corner_response(m["freq_hz"].get<double>(), m["zeta"].get<double>(), kOsL, kOsV, kOsA, kOsBand, kOsPause);
     INFO("corner " << c["index"].get<int>() << " axis " << axis << ": true overshoot " << tr.overshoot_mm
                    << " mm, settling " << tr.settling_s << " s");
     CHECK(std::abs(c["move_mm"].get<double>()) == Approx(kOsL).epsilon(0.01));
@@ -128,15 +139,17 @@ TEST_CASE("overshoot and settling time per corner agree with the mode's true res
   }
 }
 
-TEST_CASE("overshoot and settling time averaged over the repeats agree with the true response within 10 % (noisy sensor)",
-          "[machine][e2e][overshoot]") {
+TEST_CASE(
+    "overshoot and settling time averaged over the repeats agree with the true response within 10 % (noisy sensor)",
+    "[machine][e2e][overshoot]") {
   // The simulator's default accelerometer: 20 mm/s^2 noise per sample, 5 % cross-coupling.
   // Single corners scatter by up to ~15 % (integrated noise); the rectangle's repeats are
   // averaged, as the thesis averages its five.
   const auto res = overshoot_sim_run("machine_overshoot_noisy", {});
   for (const char* axis : {"x", "y"}) {
     const auto& m = res["truth"][axis]["modes"][0];
-    const auto tr = true_corner_response(m["freq_hz"].get<double>(), m["zeta"].get<double>(), kOsL, kOsV, kOsA, kOsBand, kOsPause);
+    const auto tr =
+        true_corner_response(m["freq_hz"].get<double>(), m["zeta"].get<double>(), kOsL, kOsV, kOsA, kOsBand, kOsPause);
     const auto& s = res["axes"][axis];
     INFO("axis " << axis << ": true overshoot " << tr.overshoot_mm << " mm, settling " << tr.settling_s << " s");
     CHECK(s["corners"].get<int>() == 4);
@@ -157,12 +170,31 @@ TEST_CASE("overshoot of a run without pauses is a bad-input error naming the fil
   CHECK(r.err.find("no corner found") != std::string::npos);
 }
 
-TEST_CASE("overshoot grid mode maps overshoot and the figure of merit, compares input shaping on/off, and puts the map in the report",
-          "[machine][e2e][overshoot]") {
+TEST_CASE(
+    "overshoot grid mode maps overshoot and the figure of merit, compares input shaping on/off, and puts the map in "
+    "the report",
+    "[machine][e2e][overshoot]") {
   const auto out = tunekit::test::scratch_dir("machine_overshoot_grid") + "/grid";
-  const auto r = run_cli({"overshoot", "-p", "speed_mm_s=100,200", "-p", "accel_mm_s2=1000,8000", "-p", "repeats=1",
-                          "--sim", "mode_x=40:0.05", "--sim", "mode_y=31:0.07", "--shaper", "x=zv:40:0.05", "--shaper",
-                          "y=zv:31:0.07", "--tolerance-mm", "0.03", "--out", out, "--json"});
+  const auto r = run_cli({"overshoot",
+                          "-p",
+                          "speed_mm_s=100,200",
+                          "-p",
+                          "accel_mm_s2=1000,8000",
+                          "-p",
+                          "repeats=1",
+                          "--sim",
+                          "mode_x=40:0.05",
+                          "--sim",
+                          "mode_y=31:0.07",
+                          "--shaper",
+                          "x=zv:40:0.05",
+                          "--shaper",
+                          "y=zv:31:0.07",
+                          "--tolerance-mm",
+                          "0.03",
+                          "--out",
+                          out,
+                          "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto res = nlohmann::json::parse(r.out)["results"];
@@ -181,10 +213,12 @@ TEST_CASE("overshoot grid mode maps overshoot and the figure of merit, compares 
   // A ZV shaper tuned to the simulated modes removes most of the residual vibration at every point.
   for (const auto& c : res["grid"])
     if (c["input_shaping"].get<bool>())
-      CHECK(c["overshoot_mm"].get<double>() < 0.25 * off.at({c["speed_mm_s"].get<double>(), c["accel_mm_s2"].get<double>()}));
+      CHECK(c["overshoot_mm"].get<double>() <
+            0.25 * off.at({c["speed_mm_s"].get<double>(), c["accel_mm_s2"].get<double>()}));
   REQUIRE(res.contains("best"));
   REQUIRE(res.contains("best_shaped"));
-  CHECK(res["best_shaped"]["accel_mm_s2"].get<double>() == 8000);  // shaped, the highest acceleration is within tolerance
+  CHECK(res["best_shaped"]["accel_mm_s2"].get<double>() ==
+        8000);  // shaped, the highest acceleration is within tolerance
   for (const auto& c : res["grid"]) {
     const auto& b = c["input_shaping"].get<bool>() ? res["best_shaped"] : res["best"];
     CHECK(c["figure_of_merit"].get<double>() <= b["figure_of_merit"].get<double>());

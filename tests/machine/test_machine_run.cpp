@@ -41,9 +41,9 @@ std::size_t csv_rows(const std::string& path) {
 TEST_CASE("run --help lists the protocols with parameters and units", "[machine]") {
   const auto r = run_cli({"run", "--help"});
   CHECK(r.code == 0);
-  for (const char* s : {"liquefier-step", "liquefier-sine", "liquefier-chirp", "ring-print", "axis-sweep",
-                        "axis-rectangle", "feed_high_mm_s", "[mm/s]", "hz_per_sec", "[Hz/s]", "accel_per_hz",
-                        "[mm/s^2/Hz]", "--dry-run"})
+  for (const char* s :
+       {"liquefier-step", "liquefier-sine", "liquefier-chirp", "ring-print", "axis-sweep", "axis-rectangle",
+        "feed_high_mm_s", "[mm/s]", "hz_per_sec", "[Hz/s]", "accel_per_hz", "[mm/s^2/Hz]", "--dry-run"})
     CHECK(r.out.find(s) != std::string::npos);
 }
 
@@ -52,7 +52,7 @@ TEST_CASE("run --dry-run prints the checked G-code and sends nothing", "[machine
   const auto r = run_cli({"run", "liquefier-step", "--dry-run", "-p", "feed_high_mm_s=4", "--runs-root", dir});
   REQUIRE(r.code == 0);
   CHECK(r.out.find("G1 E12 F240") != std::string::npos);  // 4 mm/s for 3 s
-  CHECK(r.out.find("M109 R210") != std::string::npos);  // waits from either side (Marlin M104_M109.cpp)
+  CHECK(r.out.find("M109 R210") != std::string::npos);    // waits from either side (Marlin M104_M109.cpp)
   CHECK(fs::is_empty(dir));
   const auto j = run_cli({"run", "axis-sweep", "--axis", "y", "--dry-run", "--json"});
   REQUIRE(j.code == 0);
@@ -104,15 +104,16 @@ TEST_CASE("liquefier-step on the simulator writes a complete run directory", "[m
 TEST_CASE("garbled, dropped and late lines are recovered", "[machine]") {
   const auto base = scratch_dir("machine_recover");
   SECTION("garbled line: resend") {
-    const auto r = run_cli({"run", "liquefier-step", "--run-dir", base + "/garble", "--sim", "fault=garble@8", "--json"});
+    const auto r =
+        run_cli({"run", "liquefier-step", "--run-dir", base + "/garble", "--sim", "fault=garble@8", "--json"});
     INFO(r.err);
     REQUIRE(r.code == 0);
     CHECK(nlohmann::json::parse(r.out)["results"]["link"]["resends"] == 1);
     CHECK(tunekit::test::read_text(base + "/garble/journal.jsonl").find("Resend: 7") != std::string::npos);
   }
   SECTION("dropped line: retry after the timeout") {
-    const auto r = run_cli({"run", "liquefier-step", "--run-dir", base + "/drop", "--sim", "fault=drop@9", "--timeout",
-                            "0.3", "--json"});
+    const auto r = run_cli(
+        {"run", "liquefier-step", "--run-dir", base + "/drop", "--sim", "fault=drop@9", "--timeout", "0.3", "--json"});
     INFO(r.err);
     REQUIRE(r.code == 0);
     CHECK(nlohmann::json::parse(r.out)["results"]["link"]["retries"] == 1);
@@ -129,7 +130,8 @@ TEST_CASE("garbled, dropped and late lines are recovered", "[machine]") {
 
 TEST_CASE("a disconnect ends with exit 3 and keeps every sample received", "[machine]") {
   const auto dir = scratch_dir("machine_disconnect") + "/run";
-  const auto r = run_cli({"run", "liquefier-step", "--run-dir", dir, "--sim", "fault=disconnect@11", "--timeout", "2"});  // line 3 is M493 on Marlin
+  const auto r = run_cli({"run", "liquefier-step", "--run-dir", dir, "--sim", "fault=disconnect@11", "--timeout",
+                          "2"});  // line 3 is M493 on Marlin
   CHECK(r.code == 3);
   CHECK(r.err.find("partial run is kept in") != std::string::npos);
   const auto stats = tunekit::test::read_json(dir + "/sim_stats.json");
@@ -155,7 +157,8 @@ TEST_CASE("a firmware error ends with exit 3 after the safe-state commands", "[m
   CHECK(after.find("\nM410\n") != std::string::npos);
   CHECK(after.find("\nM104 S0\n") != std::string::npos);
   CHECK(after.find("\nM140 S0\n") != std::string::npos);
-  CHECK(csv_rows(dir + "/step.csv") == tunekit::test::read_json(dir + "/sim_stats.json")["load_cell_samples_sent"].get<std::size_t>());
+  CHECK(csv_rows(dir + "/step.csv") ==
+        tunekit::test::read_json(dir + "/sim_stats.json")["load_cell_samples_sent"].get<std::size_t>());
 }
 
 using tunekit::test::FakeKlipper;

@@ -71,9 +71,10 @@ TEST_CASE("firmware identification from M115 reports", "[machine]") {
   CHECK(k.version == "v0.12.0-85");
   CHECK(parse_m115({"FIRMWARE_NAME: RepRapFirmware for Duet 3 MB6HC FIRMWARE_VERSION: 3.5.1 ELECTRONICS: Duet 3"})
             .firmware == Firmware::reprapfirmware);
-  CHECK(parse_m115({"FIRMWARE_NAME:Prusa-Firmware-Buddy 5.1.0 (Github) SOURCE_CODE_URL:x"}).firmware == Firmware::prusa);
-  const auto sim = parse_m115({"FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim 0.1.0) MACHINE_TYPE:tunekit-sim",
-                               "Cap:TUNEKIT_SENSOR_STREAM:1"});
+  CHECK(parse_m115({"FIRMWARE_NAME:Prusa-Firmware-Buddy 5.1.0 (Github) SOURCE_CODE_URL:x"}).firmware ==
+        Firmware::prusa);
+  const auto sim = parse_m115(
+      {"FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim 0.1.0) MACHINE_TYPE:tunekit-sim", "Cap:TUNEKIT_SENSOR_STREAM:1"});
   CHECK(sim.sensor_stream());
   CHECK(Dialect(Firmware::klipper).set_accel(3000) == "SET_VELOCITY_LIMIT ACCEL=3000");
   CHECK(Dialect(Firmware::reprapfirmware).set_accel(3000) == "M204 P3000 T3000");
@@ -125,7 +126,8 @@ TEST_CASE("safety check lists every violation at once", "[machine]") {
     CHECK(check_protocol(e.gcode, profile, e.sensors).empty());
     CHECK(e.estimated_duration_s > 0);
   }
-  CHECK_THROWS_AS(build_experiment("liquefier-step", {{"no_such_param", 1}}, "x", profile, Dialect()), tunekit::InputError);
+  CHECK_THROWS_AS(build_experiment("liquefier-step", {{"no_such_param", 1}}, "x", profile, Dialect()),
+                  tunekit::InputError);
 }
 
 namespace {
@@ -133,7 +135,8 @@ namespace {
 /// An in-process simulator on one end of a socket pair, the link on the other.
 struct InProcess {
   explicit InProcess(std::vector<std::string> opts)
-      : sim(SimConfig::from_options(opts)), pair(make_transport_pair()),
+      : sim(SimConfig::from_options(opts)),
+        pair(make_transport_pair()),
         thread([this] { serve_simulator(sim, *pair.second, stop); }) {}
   ~InProcess() {
     stop = true;
@@ -151,9 +154,9 @@ TEST_CASE("line protocol recovers from a garbled line with Resend", "[machine]")
   InProcess ip({"fault=garble@3"});
   Journal j(tunekit::test::scratch_dir("machine_link_garble"));
   GcodeLink link(*ip.pair.first, &j, {std::chrono::milliseconds(2000), 2, true});
-  link.reset_line_numbers();            // line 1
-  link.send("M83");                     // line 2
-  link.send("G1 E1 F60");               // line 3: garbled, resent
+  link.reset_line_numbers();  // line 1
+  link.send("M83");           // line 2
+  link.send("G1 E1 F60");     // line 3: garbled, resent
   link.send("M400");
   CHECK(link.stats().resends == 1);
   const auto rx = ip.sim.received();
@@ -332,7 +335,8 @@ TEST_CASE("run_experiment: a firmware error is exit 3 after the safe-state comma
   CHECK(after.find("\nM104 S0\n") != std::string::npos);
   CHECK(after.find("\nM140 S0\n") != std::string::npos);
   const auto stats = nlohmann::json::parse(read_all(o.run_dir + "/sim_stats.json"));
-  CHECK(tunekit::ident::read_csv(o.run_dir + "/step.csv", {{}, "time"}).rows == stats["load_cell_samples_sent"].get<std::size_t>());
+  CHECK(tunekit::ident::read_csv(o.run_dir + "/step.csv", {{}, "time"}).rows ==
+        stats["load_cell_samples_sent"].get<std::size_t>());
 }
 
 TEST_CASE("run_experiment: garbled and dropped lines are recovered", "[machine]") {

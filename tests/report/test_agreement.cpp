@@ -14,7 +14,8 @@ TEST_CASE("two estimates agree when their difference is within the combined 95 %
   const auto ok = compare_estimates("tau", "s", step, {"frequency response", 0.49, 0.45, 0.53});
   CHECK(ok.at("agree").get<bool>());
   CHECK(ok.at("combined_half_width").get<double>() == Approx(0.05));
-  CHECK(ok.at("statement").get<std::string>().find("agree within their combined 95 % uncertainty") != std::string::npos);
+  CHECK(ok.at("statement").get<std::string>().find("agree within their combined 95 % uncertainty") !=
+        std::string::npos);
   const auto bad = compare_estimates("tau", "s", step, {"frequency response", 0.51, 0.47, 0.55});
   CHECK_FALSE(bad.at("agree").get<bool>());
   CHECK(bad.at("statement").get<std::string>().find("do NOT agree") != std::string::npos);

@@ -42,7 +42,10 @@ nlohmann::json sample_plotdata() {
     ph.push_back(-std::atan(0.45 * w) * 180 / M_PI - 0.04 * w * 180 / M_PI);
     coh.push_back(0.95);
   }
-  pd["bode"] = {{"freq_hz", f}, {"mag_db", mag}, {"phase_deg", ph}, {"coherence", coh},
+  pd["bode"] = {{"freq_hz", f},
+                {"mag_db", mag},
+                {"phase_deg", ph},
+                {"coherence", coh},
                 {"model", {{"freq_hz", f}, {"mag_db", mag}, {"phase_deg", ph}}}};
   auto fp = linspace(5, 200, 300);
   std::vector<double> psd, resp;
@@ -50,7 +53,9 @@ nlohmann::json sample_plotdata() {
     psd.push_back(1e4 / (std::pow(1 - (fi / 44) * (fi / 44), 2) + std::pow(0.1 * fi / 44, 2)));
     resp.push_back(std::abs(std::cos(M_PI * fi / 88)));
   }
-  pd["psd_x"] = {{"freq_hz", fp}, {"psd", psd}, {"modes", {{{"freq_hz", 44.0}}}},
+  pd["psd_x"] = {{"freq_hz", fp},
+                 {"psd", psd},
+                 {"modes", {{{"freq_hz", 44.0}}}},
                  {"shapers", {{{"type", "zv"}, {"freq_hz", fp}, {"response", resp}}}}};
   auto g = linspace(1, 4, 30);
   std::vector<double> sr, eta;
@@ -58,8 +63,12 @@ nlohmann::json sample_plotdata() {
     sr.push_back(std::pow(10, gi));
     eta.push_back(1000 / (1 + std::pow(sr.back() / 100, 0.6)));
   }
-  pd["viscosity"] = {{"series", {{{"temperature_K", 673}, {"shear_rate_1_s", sr}, {"viscosity_Pa_s", eta},
-                                  {"fit_shear_rate_1_s", sr}, {"fit_viscosity_Pa_s", eta}}}}};
+  pd["viscosity"] = {{"series",
+                      {{{"temperature_K", 673},
+                        {"shear_rate_1_s", sr},
+                        {"viscosity_Pa_s", eta},
+                        {"fit_shear_rate_1_s", sr},
+                        {"fit_viscosity_Pa_s", eta}}}}};
   auto s = linspace(0, 188, 500);
   std::vector<double> w, sp;
   for (double si : s) {
@@ -87,8 +96,10 @@ TEST_CASE("each plot type renders an SVG of the expected size with its curves dr
   const auto dir = tunekit::test::scratch_dir("plots");
   const auto images = render_report_plots(dir, sample_plotdata());
   REQUIRE(images.size() == 5);
-  const std::map<std::string, std::pair<int, int>> expected{{"step", {960, 760}},      {"bode", {960, 760}},
-                                                            {"psd_x", {960, 720}},     {"viscosity", {960, 640}},
+  const std::map<std::string, std::pair<int, int>> expected{{"step", {960, 760}},
+                                                            {"bode", {960, 760}},
+                                                            {"psd_x", {960, 720}},
+                                                            {"viscosity", {960, 640}},
                                                             {"linewidth", {960, 420}}};
   for (const auto& img : images) {
     INFO(img.id);
@@ -96,7 +107,8 @@ TEST_CASE("each plot type renders an SVG of the expected size with its curves dr
     const std::string svg = tunekit::ident::read_file_bytes(img.path);
     REQUIRE(svg.find("<svg") != std::string::npos);
     const auto [w, h] = expected.at(img.id);
-    CHECK(svg.find("width=\"" + std::to_string(w) + "pt\" height=\"" + std::to_string(h) + "pt\"") != std::string::npos);
+    CHECK(svg.find("width=\"" + std::to_string(w) + "pt\" height=\"" + std::to_string(h) + "pt\"") !=
+          std::string::npos);
     std::size_t paths = 0;
     for (auto pos = svg.find("<path"); pos != std::string::npos; pos = svg.find("<path", pos + 1)) ++paths;
     CHECK(paths > 100);  // axes, glyphs of the labels, curves
@@ -140,15 +152,21 @@ TEST_CASE("a figure without data is refused") {
 TEST_CASE("the report embeds every plot and its summary numbers equal results.json") {
   const auto dir = tunekit::test::scratch_dir("report_run");
   nlohmann::json env = {{"schema_version", 1}, {"command", "calibrate"}, {"tool", {{"version", "test"}}}};
-  env["results"] = {{"machine", "test machine"},
-                    {"compensators", {{"pressure_advance", {{"k_s", 0.4512345678}, {"smooth_time_s", 0.04}}}}},
-                    {"axes", {{"x", {{"modes", {{{"freq_hz", 44.123456}, {"freq_ci95", {43.9, 44.35}}, {"zeta", 0.0712}}}}}}}},
-                    {"summary", {{{"label", "pressure advance K"}, {"path", "compensators.pressure_advance.k_s"}, {"unit", "s"},
-                                  {"basis", "designed"}},
-                                 {{"label", "x resonance"}, {"path", "axes.x.modes[0].freq_hz"}, {"unit", "Hz"},
-                                  {"ci_path", "axes.x.modes[0].freq_ci95"}},
-                                 {{"label", "x damping"}, {"path", "axes.x.modes[0].zeta"}, {"unit", "1"}}}},
-                    {"config_diff", "--- a\n+++ b\n-pressure_advance = 0\n+pressure_advance = 0.451\n"}};
+  env["results"] = {
+      {"machine", "test machine"},
+      {"compensators", {{"pressure_advance", {{"k_s", 0.4512345678}, {"smooth_time_s", 0.04}}}}},
+      {"axes", {{"x", {{"modes", {{{"freq_hz", 44.123456}, {"freq_ci95", {43.9, 44.35}}, {"zeta", 0.0712}}}}}}}},
+      {"summary",
+       {{{"label", "pressure advance K"},
+         {"path", "compensators.pressure_advance.k_s"},
+         {"unit", "s"},
+         {"basis", "designed"}},
+        {{"label", "x resonance"},
+         {"path", "axes.x.modes[0].freq_hz"},
+         {"unit", "Hz"},
+         {"ci_path", "axes.x.modes[0].freq_ci95"}},
+        {{"label", "x damping"}, {"path", "axes.x.modes[0].zeta"}, {"unit", "1"}}}},
+      {"config_diff", "--- a\n+++ b\n-pressure_advance = 0\n+pressure_advance = 0.451\n"}};
   std::ofstream(dir + "/results.json") << env.dump(2);
   auto pd = sample_plotdata();
   {  // a stand-in for the line-width overlay photo: any PNG

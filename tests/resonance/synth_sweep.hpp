@@ -63,9 +63,7 @@ inline SynthRecord synth_sweep(const std::vector<SynthMode>& modes, const SweepS
     const double a = cmd(t);
     double y = s.direct * a;
     for (std::size_t k = 0; k < modes.size(); ++k) y += modes[k].gain * x[k];
-    auto clip = [&](double val) {
-      return s.clip_mm_s2 > 0 ? std::clamp(val, -s.clip_mm_s2, s.clip_mm_s2) : val;
-    };
+    auto clip = [&](double val) { return s.clip_mm_s2 > 0 ? std::clamp(val, -s.clip_mm_s2, s.clip_mm_s2) : val; };
     r.t[i] = s.t0_s + t;
     r.cmd[i] = a;
     r.ax[i] = clip(y + noise(rng));
@@ -95,9 +93,10 @@ inline std::string to_klipper_csv(const SynthRecord& r, bool with_cmd = false) {
   out.reserve(r.t.size() * (with_cmd ? 60 : 48));
   char buf[160];
   for (std::size_t i = 0; i < r.t.size(); ++i) {
-    const int len = with_cmd ? std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,%.6f\n", r.t[i], r.ax[i], r.ay[i],
-                                             r.az[i], r.cmd[i])
-                             : std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f\n", r.t[i], r.ax[i], r.ay[i], r.az[i]);
+    const int len =
+        with_cmd
+            ? std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,%.6f\n", r.t[i], r.ax[i], r.ay[i], r.az[i], r.cmd[i])
+            : std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f\n", r.t[i], r.ax[i], r.ay[i], r.az[i]);
     out.append(buf, static_cast<std::size_t>(len));
   }
   return out;

@@ -162,8 +162,8 @@ TEST_CASE("a spectrum file tunekit writes in Klipper's layout reads back to the 
   for (const std::string name : {"resonances_x_20220317_143228.csv", "resonances_x_20250208_212836.csv"}) {
     INFO(name);
     const std::string out = dir + "/calibration_data_x_" + name;
-    const auto w = run_cli({"shaper", dataset("klipper_spectra/" + name), "--klipper-compatible", "--klipper-csv", out,
-                            "--json"});
+    const auto w =
+        run_cli({"shaper", dataset("klipper_spectra/" + name), "--klipper-compatible", "--klipper-csv", out, "--json"});
     INFO(w.err);
     REQUIRE(w.code == 0);
     const auto first = nlohmann::json::parse(w.out)["results"]["axes"]["x"];
@@ -199,7 +199,8 @@ TEST_CASE("several recordings of one axis count separately and round-trip throug
   const auto both = nlohmann::json::parse(w.out)["results"]["axes"]["x"];
   CHECK(both["selection"]["datasets"] == 2);
   // Klipper's calibrate_shaper.py given both files: vibrations are the worst over the two.
-  check_against_klipper(both, klipper_reference().at("resonances_x_20220317_143228.csv+resonances_x_20250208_212836.csv"));
+  check_against_klipper(both,
+                        klipper_reference().at("resonances_x_20220317_143228.csv+resonances_x_20250208_212836.csv"));
   const std::string text = read_text(out);
   // One column per recording, named as given (Klipper names them by the file name it was given).
   CHECK(text.rfind("freq," + a + "," + b + ",shapers:", 0) == 0);
@@ -258,7 +259,8 @@ TEST_CASE("bad Klipper spectrum files exit 2 with the reason", "[resonance][shap
   std::string good;
   for (int b = 0; b < 20; ++b) good += std::to_string(1.5 * b) + ",1,1,1,3\n";
   SECTION("negative PSD") {
-    const auto p = write_scratch("resonances_x_negative.csv", "freq,psd_x,psd_y,psd_z,psd_xyz\n" + good + "31.0,1,1,1,-3\n");
+    const auto p =
+        write_scratch("resonances_x_negative.csv", "freq,psd_x,psd_y,psd_z,psd_xyz\n" + good + "31.0,1,1,1,-3\n");
     const auto r = run_cli({"shaper", p, "--klipper-compatible"});
     CHECK(r.code == 2);
     CHECK(r.err.find("negative PSD") != std::string::npos);

@@ -7,8 +7,8 @@
 #include "tunekit/ident/resonance.hpp"
 
 using namespace tunekit;
-using tunekit::test::SynthMode;
 using tunekit::test::SweepSpec;
+using tunekit::test::SynthMode;
 
 namespace {
 

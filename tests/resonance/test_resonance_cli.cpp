@@ -31,13 +31,13 @@ const std::vector<SynthMode> kTruthX = {{44.0, 0.06, 1.0}};
 const std::vector<SynthMode> kTruthY = {{37.0, 0.05, 1.0}, {71.0, 0.07, 0.5}};
 
 const std::string& x_file() {
-  static const std::string p =
-      write_scratch("raw_data_x_test.csv", tunekit::test::to_klipper_csv(tunekit::test::synth_sweep(kTruthX, short_sweep(1))));
+  static const std::string p = write_scratch(
+      "raw_data_x_test.csv", tunekit::test::to_klipper_csv(tunekit::test::synth_sweep(kTruthX, short_sweep(1))));
   return p;
 }
 const std::string& y_file() {
-  static const std::string p =
-      write_scratch("raw_data_y_test.csv", tunekit::test::to_klipper_csv(tunekit::test::synth_sweep(kTruthY, short_sweep(2))));
+  static const std::string p = write_scratch(
+      "raw_data_y_test.csv", tunekit::test::to_klipper_csv(tunekit::test::synth_sweep(kTruthY, short_sweep(2))));
   return p;
 }
 
@@ -79,7 +79,8 @@ TEST_CASE("resonance --json reports modes with intervals and the PSD for each ax
     CHECK(psd["window"] == "kaiser");
   }
   // The dominant mode is exposed for CI thresholds.
-  const auto req = run_cli({"resonance", x_file(), "--fit-min", "20", "--fit-max", "100", "--require", "x.freq_hz>=50"});
+  const auto req =
+      run_cli({"resonance", x_file(), "--fit-min", "20", "--fit-max", "100", "--require", "x.freq_hz>=50"});
   CHECK(req.code == 1);
   CHECK(req.err.find("requirement not met") != std::string::npos);
 }

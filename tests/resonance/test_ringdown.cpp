@@ -23,9 +23,9 @@ using tunekit::test::run_cli;
 namespace {
 
 struct DecayTruth {
-  double f_hz = 110.0, zeta = 0.02, amp = 400.0;          // fundamental
-  double f2_hz = 220.0, zeta2 = 0.01, amp2 = 1200.0;      // its harmonic, three times as strong
-  double noise = 20.0;                                     // mm/s^2, white
+  double f_hz = 110.0, zeta = 0.02, amp = 400.0;      // fundamental
+  double f2_hz = 220.0, zeta2 = 0.01, amp2 = 1200.0;  // its harmonic, three times as strong
+  double noise = 20.0;                                // mm/s^2, white
   double fs = 3200.0;
 };
 
@@ -64,8 +64,10 @@ TEST_CASE("matrix pencil finds the frequencies and dampings of two noiseless dam
   std::vector<double> y;
   for (int k = 0; k < 600; ++k) {
     const double t = k / fs;
-    y.push_back(3 * std::exp(-0.01 * 2 * std::numbers::pi * 50 * t) * std::cos(2 * std::numbers::pi * 50 * t * std::sqrt(1 - 1e-4)) +
-                1 * std::exp(-0.03 * 2 * std::numbers::pi * 120 * t) * std::sin(2 * std::numbers::pi * 120 * t * std::sqrt(1 - 9e-4)));
+    y.push_back(3 * std::exp(-0.01 * 2 * std::numbers::pi * 50 * t) *
+                    std::cos(2 * std::numbers::pi * 50 * t * std::sqrt(1 - 1e-4)) +
+                1 * std::exp(-0.03 * 2 * std::numbers::pi * 120 * t) *
+                    std::sin(2 * std::numbers::pi * 120 * t * std::sqrt(1 - 9e-4)));
   }
   const auto c = fitting::matrix_pencil(y, fs, 4);
   REQUIRE(c.size() == 2);
@@ -76,7 +78,8 @@ TEST_CASE("matrix pencil finds the frequencies and dampings of two noiseless dam
   CHECK(c[1].zeta == Approx(0.03).epsilon(1e-4));
 }
 
-TEST_CASE("a synthetic ring-down whose harmonic is stronger gives the fundamental within 1 % and its damping within 15 %") {
+TEST_CASE(
+    "a synthetic ring-down whose harmonic is stronger gives the fundamental within 1 % and its damping within 15 %") {
   const DecayTruth tr;
   const auto res = ident::analyze_ringdown(synth_decay(tr, 1));
   CHECK(res.strongest_peak_hz == Approx(tr.f2_hz).epsilon(0.01));
@@ -170,8 +173,8 @@ TEST_CASE("a real recording without a pluck is refused with exit 1, also when it
 }
 
 TEST_CASE("tunekit belts compares two plucks: frequencies, difference and tension ratio") {
-  const auto r = run_cli({"belts", dataset("belts/adxl345-belt_A_1_cut.csv"), dataset("belts/adxl345-belt_B_1_cut.csv"),
-                          "--json"});
+  const auto r = run_cli(
+      {"belts", dataset("belts/adxl345-belt_A_1_cut.csv"), dataset("belts/adxl345-belt_B_1_cut.csv"), "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto res = nlohmann::json::parse(r.out)["results"];
@@ -185,8 +188,8 @@ TEST_CASE("tunekit belts compares two plucks: frequencies, difference and tensio
   CHECK(res["tension_ratio"].get<double>() == Approx((fa / fb) * (fa / fb)));
   CHECK(res["difference_ci95"][0].get<double>() < res["difference_hz"].get<double>());
   // A weak pluck on either side: exit 1.
-  const auto weak = run_cli({"belts", dataset("belts/adxl345-belt_A_1_cut.csv"),
-                             dataset("belts/adxl345-20260214_124041_no_pluck.csv")});
+  const auto weak = run_cli(
+      {"belts", dataset("belts/adxl345-belt_A_1_cut.csv"), dataset("belts/adxl345-20260214_124041_no_pluck.csv")});
   CHECK(weak.code == 1);
   CHECK(weak.err.find("no ring-down to measure") != std::string::npos);
 }

@@ -17,7 +17,8 @@ using tunekit::test::write_scratch;
 
 namespace {
 
-std::string to_rrf_m956(const tunekit::test::SynthRecord& r, unsigned rate_hz, unsigned overflows, const char* axes = "XYZ") {
+std::string to_rrf_m956(const tunekit::test::SynthRecord& r, unsigned rate_hz, unsigned overflows,
+                        const char* axes = "XYZ") {
   std::string out = "Sample";
   for (const char* a = axes; *a != 0; ++a) out += std::string(",") + *a;
   out += "\n";
@@ -87,7 +88,8 @@ TEST_CASE("an RRF M956 file of one axis, with overflows, named by RRF's date pat
 }
 
 TEST_CASE("a failed or unfinished RRF M956 run exits 2 with the file and line", "[resonance][cli]") {
-  const auto failed = write_scratch("raw_data_x_failed.csv", "Sample,X,Y,Z\nFailed to collect data from accelerometer\n");
+  const auto failed =
+      write_scratch("raw_data_x_failed.csv", "Sample,X,Y,Z\nFailed to collect data from accelerometer\n");
   const auto a = run_cli({"resonance", failed});
   CHECK(a.code == 2);
   CHECK(a.err.find("raw_data_x_failed.csv:2:") != std::string::npos);

@@ -84,8 +84,7 @@ TEST_CASE("every shaper leaves under 5 % vibration at its design frequency (EI f
     }
 }
 
-TEST_CASE("EI is insensitive: within +-10 % of the design frequency vibration stays near the tolerance",
-          "[shaper]") {
+TEST_CASE("EI is insensitive: within +-10 % of the design frequency vibration stays near the tolerance", "[shaper]") {
   for (double z : {0.0, 0.1}) {
     const auto ei = design_shaper(ShaperType::ei, 50.0, z);
     const auto zv = design_shaper(ShaperType::zv, 50.0, z);
@@ -103,7 +102,8 @@ TEST_CASE("residual vibration curve on a uniform grid equals the direct formula"
   std::vector<double> f;
   for (int i = 0; i < 300; ++i) f.push_back(0.78125 * i);
   const auto curve = residual_vibration_curve(s, f, 0.12);
-  for (std::size_t i = 0; i < f.size(); i += 7) CHECK(curve[i] == Approx(residual_vibration(s, f[i], 0.12)).margin(1e-10));
+  for (std::size_t i = 0; i < f.size(); i += 7)
+    CHECK(curve[i] == Approx(residual_vibration(s, f[i], 0.12)).margin(1e-10));
 }
 
 TEST_CASE("smoothing of ZV has the closed form and max_accel reaches the target smoothing", "[shaper]") {

@@ -29,9 +29,10 @@ void check_problem(const std::string& name) {
     auto o = solve_nist_problem(p, start);
     const bool plain_ok = o.solved && o.min_lre_params >= 6.0 && o.min_lre_sd >= 3.0;
     if (!plain_ok) o = solve_nist_problem(p, start, /*global=*/true);
-    std::printf("NIST %-9s start %d%s: params %4.1f digits, std. dev. %4.1f digits, rss %4.1f digits, %d iterations%s%s\n",
-                name.c_str(), start, o.global_search ? " (global search)" : "", o.min_lre_params, o.min_lre_sd,
-                o.lre_rss, o.iterations, o.solved ? "" : ": ", o.error.c_str());
+    std::printf(
+        "NIST %-9s start %d%s: params %4.1f digits, std. dev. %4.1f digits, rss %4.1f digits, %d iterations%s%s\n",
+        name.c_str(), start, o.global_search ? " (global search)" : "", o.min_lre_params, o.min_lre_sd, o.lre_rss,
+        o.iterations, o.solved ? "" : ": ", o.error.c_str());
     INFO(name << " start " << start << (o.global_search ? " with global search" : "") << ": " << o.error);
     CHECK(o.solved);
     CHECK(o.min_lre_params >= 6.0);
@@ -45,8 +46,8 @@ void check_problem(const std::string& name) {
 }  // namespace
 
 TEST_CASE("NIST StRD: the problems of the issue from both starts") {
-  for (const char* name : {"BoxBOD", "Misra1a", "Misra1b", "Eckerle4", "Rat42", "Rat43", "MGH09", "Thurber", "Bennett5",
-                           "DanWood"})
+  for (const char* name :
+       {"BoxBOD", "Misra1a", "Misra1b", "Eckerle4", "Rat42", "Rat43", "MGH09", "Thurber", "Bennett5", "DanWood"})
     check_problem(name);
 }
 

@@ -173,7 +173,8 @@ TEST_CASE("model comparison prefers Cross over a power law on Cross data, and Ca
 
   RheologyData cy = d;
   for (std::size_t i = 0; i < cy.size(); ++i)
-    cy.viscosity_Pa_s[i] = carreau_yasuda_viscosity(3000, 0, 0.05, 1.5, 0.4, cy.shear_rate_1_s[i]) * std::exp(noise(rng));
+    cy.viscosity_Pa_s[i] =
+        carreau_yasuda_viscosity(3000, 0, 0.05, 1.5, 0.4, cy.shear_rate_1_s[i]) * std::exp(noise(rng));
   ViscosityFitOptions o;
   o.model = ViscosityModel::carreau_yasuda;
   const auto fit = fit_viscosity(cy, o);
@@ -193,7 +194,8 @@ TEST_CASE("Cross with an Arrhenius shift and time-temperature superposition") {
       const double g = std::pow(10.0, i * 4.0 / 14);
       d.shear_rate_1_s.push_back(g);
       d.temperature_K.push_back(T);
-      d.viscosity_Pa_s.push_back(cross_viscosity(3000 * arrhenius_shift(T, Ea, Tref), 8e4, 0.4, g) * std::exp(noise(rng)));
+      d.viscosity_Pa_s.push_back(cross_viscosity(3000 * arrhenius_shift(T, Ea, Tref), 8e4, 0.4, g) *
+                                 std::exp(noise(rng)));
     }
   ViscosityFitOptions o;
   o.model = ViscosityModel::cross;
@@ -233,7 +235,8 @@ TEST_CASE("inverse nozzle fit recovers K, n and Ea from Boles pressure drops") {
     for (double q : {1.0, 1.5, 3.0, 4.5, 6.0}) {
       d.flow_m3_s.push_back(q * 1e-9);
       d.temperature_K.push_back(T);
-      d.pressure_Pa.push_back(boles_dp(7988 * arrhenius_shift(T, 150e3, Tref), 0.539, q * 1e-9, g) * std::exp(noise(rng)));
+      d.pressure_Pa.push_back(boles_dp(7988 * arrhenius_shift(T, 150e3, Tref), 0.539, q * 1e-9, g) *
+                              std::exp(noise(rng)));
     }
   const auto fit = fit_nozzle_rheology(d, PressureModel::boles, g);
   check_within_ci(fit, "K_Pa_s_n", 7988);

@@ -48,9 +48,9 @@ TEST_CASE("rheo --model cross-wlf --json: parameters, comparison and prediction"
     if (p["flow_mm3_s"][i].get<double>() == 3.0) CHECK(p["relative_tau"][i].get<double>() == Approx(1.0));
   CHECK(res["power_law"]["fits"].size() == 3);
   // Deterministic output.
-  const auto again = run_cli({"rheo", dataset("rheology/peek_cross_wlf_synthetic.csv"), "--model", "cross-wlf", "--json",
-                              "--nozzle-d", "0.6", "--nozzle-l", "4", "--cone-angle", "30", "--entrance-D", "5",
-                              "--predict-at", "405", "--reference-flow", "3", "--power-law-window", "600:950"});
+  const auto again = run_cli({"rheo", dataset("rheology/peek_cross_wlf_synthetic.csv"), "--model", "cross-wlf",
+                              "--json", "--nozzle-d", "0.6", "--nozzle-l", "4", "--cone-angle", "30", "--entrance-D",
+                              "5", "--predict-at", "405", "--reference-flow", "3", "--power-law-window", "600:950"});
   CHECK(again.out == r.out);
 }
 
@@ -64,8 +64,9 @@ TEST_CASE("rheo refuses bad input with exit code 2 and the reason") {
     CHECK(r.err.find("rheo_neg.csv:3") != std::string::npos);
   }
   SECTION("a single temperature for a temperature-dependent model") {
-    const auto f = write_scratch("rheo_oneT.csv", head + "1,3000,400\n10,2500,400\n100,1200,400\n1000,350,400\n"
-                                                         "3000,180,400\n10000,80,400\n");
+    const auto f = write_scratch("rheo_oneT.csv", head +
+                                                      "1,3000,400\n10,2500,400\n100,1200,400\n1000,350,400\n"
+                                                      "3000,180,400\n10000,80,400\n");
     const auto r = run_cli({"rheo", f, "--model", "cross-wlf"});
     CHECK(r.code == 2);
     CHECK(r.err.find("single temperature") != std::string::npos);
@@ -78,8 +79,9 @@ TEST_CASE("rheo refuses bad input with exit code 2 and the reason") {
   }
   SECTION("viscosity in mPa.s labelled Pa.s: let through with a warning that names the row and the unit") {
     // Magnitude alone cannot prove a unit mix-up (real melts exceed 1e6 Pa.s), so it is a warning.
-    const auto f = write_scratch("rheo_mpa.csv", head + "1,3.0e6,400\n10,2.5e6,400\n100,1.2e6,400\n1000,3.5e5,400\n"
-                                                        "3000,1.8e5,400\n");
+    const auto f = write_scratch("rheo_mpa.csv", head +
+                                                     "1,3.0e6,400\n10,2.5e6,400\n100,1.2e6,400\n1000,3.5e5,400\n"
+                                                     "3000,1.8e5,400\n");
     const auto r = run_cli({"rheo", f, "--model", "cross", "--no-compare"});
     INFO(r.err);
     CHECK(r.code == 0);
@@ -88,8 +90,9 @@ TEST_CASE("rheo refuses bad input with exit code 2 and the reason") {
   }
   SECTION("a flow curve that falls is let through with a located warning") {
     // eta drops 100-fold while gamma rises 10-fold: the stress falls (a mix-up or instability).
-    const auto f = write_scratch("rheo_falling_stress.csv", head + "1,3000,400\n10,2500,400\n100,25,400\n1000,20,400\n"
-                                                                   "3000,15,400\n");
+    const auto f = write_scratch("rheo_falling_stress.csv", head +
+                                                                "1,3000,400\n10,2500,400\n100,25,400\n1000,20,400\n"
+                                                                "3000,15,400\n");
     const auto r = run_cli({"rheo", f, "--model", "cross", "--no-compare"});
     INFO(r.err);
     CHECK(r.err.find("rheo_falling_stress.csv:4: the shear stress falls from 25000 to 2500 Pa") != std::string::npos);
@@ -129,8 +132,9 @@ TEST_CASE("rheo refuses bad input with exit code 2 and the reason") {
     CHECK(r.code == 0);
   }
   SECTION("degC values in a column labelled K") {
-    const auto f = write_scratch("rheo_k.csv", "shear_rate (1/s),viscosity (Pa.s),temperature (K)\n1,3000,180\n"
-                                               "10,2500,180\n100,1200,200\n1000,350,200\n");
+    const auto f = write_scratch("rheo_k.csv",
+                                 "shear_rate (1/s),viscosity (Pa.s),temperature (K)\n1,3000,180\n"
+                                 "10,2500,180\n100,1200,200\n1000,350,200\n");
     const auto r = run_cli({"rheo", f, "--model", "cross-wlf"});
     CHECK(r.code == 2);
     CHECK(r.err.find("look like degC") != std::string::npos);
@@ -185,11 +189,14 @@ TEST_CASE("nozzle: forward examples of the seed and the inverse fit") {
   }
 }
 
-TEST_CASE("rheo fits a rheometer export with its own column names through --shear-rate, --viscosity and --temperature-col") {
+TEST_CASE(
+    "rheo fits a rheometer export with its own column names through --shear-rate, --viscosity and --temperature-col") {
   // The synthetic PEEK set rewritten as a German-language rheometer export: semicolons, units in
   // brackets with UTF-8 symbols, names the reader cannot guess.
   const std::string src = tunekit::test::read_text(dataset("rheology/peek_cross_wlf_synthetic.csv"));
-  std::string body = "Messpunkt;Scherrate [1/s];Viskosit\xc3\xa4t [Pa\xc2\xb7s];Temperatur [\xc2\xb0" "C]\n";
+  std::string body =
+      "Messpunkt;Scherrate [1/s];Viskosit\xc3\xa4t [Pa\xc2\xb7s];Temperatur [\xc2\xb0"
+      "C]\n";
   std::istringstream in(src);
   std::string line;
   int row = 0;
@@ -210,8 +217,8 @@ TEST_CASE("rheo fits a rheometer export with its own column names through --shea
                           "--viscosity", "Viskosit\xc3\xa4t", "--temperature-col", "Temperatur"});
   INFO(r.err);
   REQUIRE(r.code == 0);
-  const auto ref = run_cli({"rheo", dataset("rheology/peek_cross_wlf_synthetic.csv"), "--model", "cross-wlf",
-                            "--no-compare", "--json"});
+  const auto ref = run_cli(
+      {"rheo", dataset("rheology/peek_cross_wlf_synthetic.csv"), "--model", "cross-wlf", "--no-compare", "--json"});
   REQUIRE(ref.code == 0);
   const auto j = nlohmann::json::parse(r.out)["results"];
   const auto k = nlohmann::json::parse(ref.out)["results"];

@@ -120,8 +120,9 @@ TEST_CASE("the WLF ridge is named, and what the data determine is reported with 
   const auto fit = fit_viscosity(data, o);
   bool named = false;
   for (const auto& w : fit.warnings)
-    named = named || (w.find("D1_Pa_s, D2_K, A1 are not separately identifiable from 3 temperatures") != std::string::npos &&
-                      w.find("fix D2_K at the polymer's glass transition") != std::string::npos);
+    named = named ||
+            (w.find("D1_Pa_s, D2_K, A1 are not separately identifiable from 3 temperatures") != std::string::npos &&
+             w.find("fix D2_K at the polymer's glass transition") != std::string::npos);
   CHECK(named);
   // eta0 at each measured temperature: a derived quantity whose interval covers the truth and is tight.
   REQUIRE(fit.derived.size() == 6);  // eta0 and eta at the median shear rate, per temperature
@@ -240,7 +241,8 @@ TEST_CASE("rheo: no nulls where numbers belong, and every could-not-fit reason f
   SECTION("intervals of parameters that end on a bound stay numbers") {
     // Newtonian-looking data fitted with Cross: tau* runs to its bound, its ln interval is wide.
     std::string rows;
-    for (int i = 0; i < 8; ++i) rows += std::to_string(std::pow(10.0, i * 0.5)) + "," + std::to_string(800 + 3 * (i % 2)) + ",200\n";
+    for (int i = 0; i < 8; ++i)
+      rows += std::to_string(std::pow(10.0, i * 0.5)) + "," + std::to_string(800 + 3 * (i % 2)) + ",200\n";
     const auto f = write_scratch("rheo_cross_on_bound.csv", head + rows);
     const auto r = run_cli({"rheo", f, "--model", "cross", "--json"});
     INFO(r.err);
@@ -254,8 +256,9 @@ TEST_CASE("rheo: no nulls where numbers belong, and every could-not-fit reason f
 }
 
 TEST_CASE("nozzle --fit: R2 is a number when the pressures do not vary") {
-  const auto f = write_scratch("nozzle_flat.csv", "flow (mm3/s),pressure (MPa),temperature (degC)\n1.5,4.0,405\n3,4.0,405\n"
-                                                  "6,4.0,405\n4.5,4.0,405\n");
+  const auto f = write_scratch("nozzle_flat.csv",
+                               "flow (mm3/s),pressure (MPa),temperature (degC)\n1.5,4.0,405\n3,4.0,405\n"
+                               "6,4.0,405\n4.5,4.0,405\n");
   const auto r = run_cli({"nozzle", "--fit", f, "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);

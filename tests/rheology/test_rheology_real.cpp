@@ -18,7 +18,8 @@ TEST_CASE("real curves: the para-polyimidazole above 1e6 Pa.s is fitted, not ref
     REQUIRE(r.code == 0);
     // Poise converted, the 1.4e6 Pa.s plateau at 275 degC let through with its line named.
     CHECK(r.err.find("viscosity: P -> Pa.s (x 0.1)") != std::string::npos);
-    CHECK(r.err.find("polyimidazole_melt_viscosity.csv:11: viscosity 1.44883e+06 Pa.s (stated as P) is above 1e+06 Pa.s") !=
+    CHECK(r.err.find(
+              "polyimidazole_melt_viscosity.csv:11: viscosity 1.44883e+06 Pa.s (stated as P) is above 1e+06 Pa.s") !=
           std::string::npos);
     // The 275 degC rows (a second source in the compilation) lie below the 300 degC curve.
     CHECK(r.err.find("the viscosity rises between 275 degC and 300 degC") != std::string::npos);
@@ -26,7 +27,8 @@ TEST_CASE("real curves: the para-polyimidazole above 1e6 Pa.s is fitted, not ref
     CHECK(j["results"]["superposition"]["superposes"] == false);
   }
   SECTION("300-350 degC with Cross-WLF: fitted and converged, the WLF ridge named") {
-    const auto r = run_cli({"rheo", file, "--temperatures", "300:350", "--model", "cross-wlf", "--no-compare", "--json"});
+    const auto r =
+        run_cli({"rheo", file, "--temperatures", "300:350", "--model", "cross-wlf", "--no-compare", "--json"});
     INFO(r.err);
     REQUIRE(r.code == 0);
     const auto j = nlohmann::json::parse(r.out);

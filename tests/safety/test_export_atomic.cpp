@@ -149,8 +149,8 @@ TEST_CASE("a file batch that fails on a later rename puts back the files it alre
   b.add(dir + "/new", "new file");
   b.add(dir + "/c", "new c");
   CHECK_THROWS_AS(b.commit([&](const std::string& target) {
-                    if (target == dir + "/c") throw std::runtime_error("simulated failure");
-                  }),
+    if (target == dir + "/c") throw std::runtime_error("simulated failure");
+  }),
                   tunekit::InputError);
   CHECK(read_text(dir + "/a") == "old a");
   CHECK_FALSE(fs::exists(dir + "/new"));
@@ -167,15 +167,16 @@ TEST_CASE("export refuses non-finite and absurd values before writing anything",
   const auto dir = scratch_dir("export_absurd");
   const std::string cfg = dir + "/printer.cfg";
   std::ofstream(cfg, std::ios::binary) << kLatin1Config;
-  for (const std::vector<std::string>& extra : std::vector<std::vector<std::string>>{{"--pa-k", "1e308"},
-                                                                                      {"--pa-k", "nan"},
-                                                                                      {"--pa-k", "inf"},
-                                                                                      {"--pa-k", "-0.1"},
-                                                                                      {"--shaper-x", "zv:1e-300"},
-                                                                                      {"--shaper-x", "zv:nan"},
-                                                                                      {"--shaper-x", "mzv:45:inf"},
-                                                                                      {"--pa-k", "0.05", "--pa-smooth", "nan"},
-                                                                                      {"--pa-k", "0.05", "--design-flow", "inf"}}) {
+  for (const std::vector<std::string>& extra :
+       std::vector<std::vector<std::string>>{{"--pa-k", "1e308"},
+                                             {"--pa-k", "nan"},
+                                             {"--pa-k", "inf"},
+                                             {"--pa-k", "-0.1"},
+                                             {"--shaper-x", "zv:1e-300"},
+                                             {"--shaper-x", "zv:nan"},
+                                             {"--shaper-x", "mzv:45:inf"},
+                                             {"--pa-k", "0.05", "--pa-smooth", "nan"},
+                                             {"--pa-k", "0.05", "--design-flow", "inf"}}) {
     std::vector<std::string> args{"export", "-f", "klipper", "-c", cfg, "--write"};
     args.insert(args.end(), extra.begin(), extra.end());
     const auto r = run_cli(args);

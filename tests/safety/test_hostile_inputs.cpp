@@ -47,7 +47,8 @@ std::string bmp_claiming(std::uint32_t width, std::uint32_t height, std::size_t 
 TEST_CASE("bad results JSON is a located input error, not an internal error", "[safety]") {
   const auto dir = scratch_dir("hostile_results_json");
   const std::string cfg = write_file(dir, "printer.cfg", "[extruder]\npressure_advance: 0.02\n");
-  const auto overflow = write_file(dir, "overflow.json", "{\n  \"command\": \"step\",\n  \"results\": {\"x\": 1e400}\n}\n");
+  const auto overflow =
+      write_file(dir, "overflow.json", "{\n  \"command\": \"step\",\n  \"results\": {\"x\": 1e400}\n}\n");
   auto r = run_cli({"export", "-f", "klipper", "-c", cfg, overflow});
   CHECK(r.code == 2);
   CHECK(r.err.find(overflow + ":3:") != std::string::npos);

@@ -92,7 +92,8 @@ const std::vector<double>& hostile_values() {
 
 }  // namespace
 
-TEST_CASE("property: every protocol and parameter with hostile values is refused or gives G-code inside the profile", "[safety]") {
+TEST_CASE("property: every protocol and parameter with hostile values is refused or gives G-code inside the profile",
+          "[safety]") {
   const auto profile = builtin_sim_profile();
   std::size_t refused = 0, accepted = 0;
   for (const auto& spec : protocol_specs()) {
@@ -182,7 +183,8 @@ TEST_CASE("unbounded protocols are refused before they are generated", "[safety]
   }
   // The caps are configurable: a 45-minute sweep passes the default 2 h cap; a 30-minute cap refuses it.
   CHECK(run_cli({"run", "axis-sweep", "--dry-run", "--json", "-p", "hz_per_sec=0.033333"}).code == 0);
-  const auto capped = run_cli({"run", "axis-sweep", "--dry-run", "-p", "hz_per_sec=0.033333", "--max-duration", "1800"});
+  const auto capped =
+      run_cli({"run", "axis-sweep", "--dry-run", "-p", "hz_per_sec=0.033333", "--max-duration", "1800"});
   CHECK(capped.code == 2);
   CHECK(capped.err.find("--max-duration") != std::string::npos);
   const auto lines = run_cli({"run", "axis-sweep", "--dry-run", "--max-lines", "1000"});
@@ -192,8 +194,9 @@ TEST_CASE("unbounded protocols are refused before they are generated", "[safety]
 
 TEST_CASE("the gate lists non-finite words and non-positive feed and acceleration", "[safety]") {
   const auto profile = builtin_sim_profile();
-  const std::vector<std::string> g{"G28", "M204 Sinf", "G1 Yinf Finf", "G1 Y-nan Finf", "G1 X10 F0",
-                                   "SET_VELOCITY_LIMIT ACCEL=nan", "G1 E1e999 F60", "M204 S0", "G1 X20 F600"};
+  const std::vector<std::string> g{"G28",           "M204 Sinf", "G1 Yinf Finf",
+                                   "G1 Y-nan Finf", "G1 X10 F0", "SET_VELOCITY_LIMIT ACCEL=nan",
+                                   "G1 E1e999 F60", "M204 S0",   "G1 X20 F600"};
   const auto v = check_protocol(g, profile, {});
   std::string all;
   for (const auto& x : v) all += x.what + "\n";
@@ -221,7 +224,7 @@ TEST_CASE("the link's last check refuses a non-finite or out-of-travel line and 
   CHECK(guard.refuse("G1 X500").value().find("outside the travel") != std::string::npos);
   CHECK(guard.refuse("G91") == std::nullopt);
   CHECK(guard.refuse("G1 X-20").value().find("x position -10") != std::string::npos);  // relative: 10 - 20
-  CHECK(guard.refuse("G1 X5") == std::nullopt);                                           // the refused line changed nothing
+  CHECK(guard.refuse("G1 X5") == std::nullopt);  // the refused line changed nothing
   CHECK(guard.refuse("M109 S400").value().find("hotend_max_c") != std::string::npos);
 
   auto pair = make_transport_pair();

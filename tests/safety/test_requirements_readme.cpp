@@ -69,7 +69,8 @@ std::vector<std::string> readme_require_examples(const std::string& readme) {
     if (continued) line.pop_back();
     cmd += line + " ";
     if (continued) continue;
-    if (cmd.find("build/apps/tunekit ") != std::string::npos && cmd.find("--require") != std::string::npos) out.push_back(cmd);
+    if (cmd.find("build/apps/tunekit ") != std::string::npos && cmd.find("--require") != std::string::npos)
+      out.push_back(cmd);
     cmd.clear();
   }
   return out;
@@ -92,7 +93,8 @@ TEST_CASE("requirements: a bare name resolves to the fitted parameter, not to a 
   // The diagnostic is compared when named.
   CHECK(evaluate_requirement(parse_requirement("diagnostics.n>=100"), results).value == 120);
   // Only a diagnostic of that name: refused, naming the path to write.
-  const auto step_like = nlohmann::json::parse(R"({"pooled": {"params": {"tau_s": {"value": 0.4}}, "diagnostics": {"n": 3000}}})");
+  const auto step_like =
+      nlohmann::json::parse(R"({"pooled": {"params": {"tau_s": {"value": 0.4}}, "diagnostics": {"n": 3000}}})");
   try {
     evaluate_requirement(parse_requirement("n>10"), step_like);
     FAIL("a bare n compared the sample count");
@@ -102,15 +104,15 @@ TEST_CASE("requirements: a bare name resolves to the fitted parameter, not to a 
 }
 
 TEST_CASE("requirements: rheo --require 'n<0.5' compares the flow index", "[safety]") {
-  const auto r = run_cli({"rheo", tunekit::test::dataset("rheology/peek_cross_wlf_synthetic.csv"), "--model", "cross-wlf",
-                          "--require", "n<0.5", "--json"});
+  const auto r = run_cli({"rheo", tunekit::test::dataset("rheology/peek_cross_wlf_synthetic.csv"), "--model",
+                          "cross-wlf", "--require", "n<0.5", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto j = nlohmann::json::parse(r.out);
   CHECK(j["requirements"][0]["path"] == "params.n.value");
   CHECK(j["requirements"][0]["value"].get<double>() == Approx(j["results"]["params"]["n"]["value"].get<double>()));
-  const auto step = run_cli({"step", tunekit::test::dataset("liquefier/synthetic_steps.csv"), "--time", "time", "--input",
-                             "feed", "--output", "force", "--require", "n>10"});
+  const auto step = run_cli({"step", tunekit::test::dataset("liquefier/synthetic_steps.csv"), "--time", "time",
+                             "--input", "feed", "--output", "force", "--require", "n>10"});
   CHECK(step.code == 2);
   CHECK(step.err.find("diagnostics.n") != std::string::npos);
 }

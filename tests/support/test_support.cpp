@@ -29,7 +29,8 @@ CliRun run_exe(const std::string& args) {
   static int calls = 0;
   const auto dir = std::filesystem::path(TUNEKIT_TEST_TMP_DIR) / "run_exe";
   std::filesystem::create_directories(dir);
-  const std::string err_path = (dir / ("stderr." + std::to_string(::getpid()) + "." + std::to_string(++calls))).string();
+  const std::string err_path =
+      (dir / ("stderr." + std::to_string(::getpid()) + "." + std::to_string(++calls))).string();
   const std::string cmd = std::string(TUNEKIT_EXE) + " " + args + " 2>" + err_path;
   CliRun r;
   FILE* p = ::popen(cmd.c_str(), "r");
@@ -48,7 +49,8 @@ CliRun run_exe(const std::string& args) {
 
 namespace {
 
-std::size_t embedded_base64_length(const std::string& html, const std::string& id, const std::vector<std::string>& mimes) {
+std::size_t embedded_base64_length(const std::string& html, const std::string& id,
+                                   const std::vector<std::string>& mimes) {
   const std::string open = "<figure id=\"plot-" + id + "\"><img alt=\"";
   auto pos = html.find(open);
   if (pos == std::string::npos) return 0;

@@ -57,7 +57,7 @@ inline Sdf straight_line(double x0, double y0, double x1, double y1, double w) {
   const double len = std::hypot(x1 - x0, y1 - y0);
   const double tx = (x1 - x0) / len, ty = (y1 - y0) / len;
   return [=](double x, double y) {
-    const double u = (x - x0) * tx + (y - y0) * ty;  // along
+    const double u = (x - x0) * tx + (y - y0) * ty;   // along
     const double v = -(x - x0) * ty + (y - y0) * tx;  // across
     const double du = std::abs(u - 0.5 * len) - 0.5 * len;
     const double dv = std::abs(v) - 0.5 * w;
@@ -120,12 +120,12 @@ inline Sdf warped(Sdf sd, cv::Matx33d Hinv, double scale) {
 }
 
 struct Photo {
-  double bed = 200;          ///< bed brightness (grey levels)
-  double line = 60;          ///< line brightness
-  double blur_px = 1.0;      ///< Gaussian PSF sigma (px); 0 = none
-  double vignetting = 0.0;   ///< relative falloff at the image corners
-  double gradient = 0.0;     ///< uneven lighting: relative brightness change from the left to the right edge
-  double noise = 0.0;        ///< Gaussian noise sigma (grey levels)
+  double bed = 200;         ///< bed brightness (grey levels)
+  double line = 60;         ///< line brightness
+  double blur_px = 1.0;     ///< Gaussian PSF sigma (px); 0 = none
+  double vignetting = 0.0;  ///< relative falloff at the image corners
+  double gradient = 0.0;    ///< uneven lighting: relative brightness change from the left to the right edge
+  double noise = 0.0;       ///< Gaussian noise sigma (grey levels)
   unsigned seed = 1;
 };
 

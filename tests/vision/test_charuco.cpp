@@ -24,13 +24,14 @@ TEST_CASE("ChArUco board specs are parsed and checked") {
   CHECK_THROWS_AS(vision::parse_charuco_spec("5by7", 20, 15, "DICT_4X4_50"), InputError);
   CHECK_THROWS_AS(vision::parse_charuco_spec("5x7", 20, 25, "DICT_4X4_50"), InputError);
   if (vision::charuco_available())
-    CHECK_THROWS_WITH(vision::parse_charuco_spec("5x7", 20, 15, "DICT_9X9_1"), Catch::Contains("unknown ArUco dictionary"));
+    CHECK_THROWS_WITH(vision::parse_charuco_spec("5x7", 20, 15, "DICT_9X9_1"),
+                      Catch::Contains("unknown ArUco dictionary"));
 }
 
 TEST_CASE("a ChArUco board in perspective and partly covered gives the scale at its centre") {
   if (!vision::charuco_available()) {
     CHECK_THROWS_WITH(vision::detect_charuco(cv::Mat(100, 100, CV_8U, cv::Scalar(255)),
-                                            vision::parse_charuco_spec("5x7", 20, 15, "")),
+                                             vision::parse_charuco_spec("5x7", 20, 15, "")),
                       Catch::Contains("libopencv-contrib-dev"));
     return;
   }

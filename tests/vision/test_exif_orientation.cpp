@@ -40,7 +40,9 @@ TEST_CASE("the EXIF orientation tag is read from a JPEG's APP1 segment") {
   // Not a JPEG, a damaged segment length, a truncated Exif block: 1, without reading past the end.
   CHECK(tunekit::vision::jpeg_exif_orientation("") == 1);
   CHECK(tunekit::vision::jpeg_exif_orientation("\x89PNG\r\n") == 1);
-  CHECK(tunekit::vision::jpeg_exif_orientation(std::string("\xFF\xD8\xFF\xE1\xFF\xFF" "Exif", 10)) == 1);
+  CHECK(tunekit::vision::jpeg_exif_orientation(std::string("\xFF\xD8\xFF\xE1\xFF\xFF"
+                                                           "Exif",
+                                                           10)) == 1);
   const auto six = tunekit::ident::read_file_bytes(dataset("images/Landscape_6.jpg"));
   for (std::size_t cut : {std::size_t{30}, std::size_t{40}, std::size_t{60}, std::size_t{100}})
     CHECK(tunekit::vision::jpeg_exif_orientation(six.substr(0, cut)) == 1);

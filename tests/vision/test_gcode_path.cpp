@@ -23,11 +23,12 @@ namespace rd = tunekit::test::render;
 using tunekit::test::run_cli;
 namespace fs = std::filesystem;
 
-TEST_CASE("G-code as commanded speed: photo of a feed step -> tunekit linewidth --gcode -> tunekit step finds the lag") {
+TEST_CASE(
+    "G-code as commanded speed: photo of a feed step -> tunekit linewidth --gcode -> tunekit step finds the lag") {
   const double d = 1.75, h = 0.2, area = M_PI * 0.25 * d * d;
-  const double v = 20.0;                     // mm/s (F1200)
+  const double v = 20.0;                       // mm/s (F1200)
   const double w1 = 1.0, w2 = 1.4, tau = 0.4;  // mm, mm, s
-  const double l1 = 30.0, l2 = 60.0;         // mm of path before / after the feed step
+  const double l1 = 30.0, l2 = 60.0;           // mm of path before / after the feed step
   const double e1 = w1 * l1 * h / area, e2 = w2 * l2 * h / area;
   const auto dir = test::scratch_dir("lw_gcode");
   const std::string gcode = dir + "/line.gcode";

@@ -34,8 +34,8 @@ TEST_CASE("straight lines 6-40 px: bias <= 0.1 px and std <= 0.25 px with blur, 
     double w, angle_deg;
     bool dark;
   };
-  const Case cases[] = {{6, 0, true},    {6, 33, false},  {8.5, 71, true},  {10, 12, true},  {14.3, 90, false},
-                        {20, 45, true},  {25.7, 5, false}, {32, 58, true},  {40, 21, true},  {40, 84, false}};
+  const Case cases[] = {{6, 0, true},   {6, 33, false},   {8.5, 71, true}, {10, 12, true}, {14.3, 90, false},
+                        {20, 45, true}, {25.7, 5, false}, {32, 58, true},  {40, 21, true}, {40, 84, false}};
   unsigned seed = 11;
   for (const auto& c : cases) {
     const int W = 640, H = 480;
@@ -43,8 +43,9 @@ TEST_CASE("straight lines 6-40 px: bias <= 0.1 px and std <= 0.25 px with blur, 
     const double cx = 0.5 * W + 3.3, cy = 0.5 * H - 2.7;
     const double sa = std::abs(std::sin(a));
     const double L = sa > 1e-9 ? std::min(half, (0.5 * H - c.w - 10) / sa) : half;
-    const auto cov = rd::coverage(W, H, rd::straight_line(cx - std::cos(a) * L, cy - std::sin(a) * L,
-                                                         cx + std::cos(a) * L, cy + std::sin(a) * L, c.w));
+    const auto cov = rd::coverage(
+        W, H,
+        rd::straight_line(cx - std::cos(a) * L, cy - std::sin(a) * L, cx + std::cos(a) * L, cy + std::sin(a) * L, c.w));
     rd::Photo ph;
     ph.bed = c.dark ? 210 : 45;
     ph.line = c.dark ? 70 : 190;
@@ -91,9 +92,8 @@ TEST_CASE("a curved line (polyline with round joins) is followed and measured wi
 
 TEST_CASE("a ring with a sine-modulated width yields the amplitude within 3 % and the phase within 3 deg") {
   const double cx = 400.4, cy = 398.7, R = 300, w0 = 14, amp = 2.0, N = 3, phase = 0.7;
-  const auto cov = rd::coverage(800, 800, rd::ring(cx, cy, R, [&](double phi) {
-                                  return w0 + amp * std::cos(N * phi - phase);
-                                }));
+  const auto cov =
+      rd::coverage(800, 800, rd::ring(cx, cy, R, [&](double phi) { return w0 + amp * std::cos(N * phi - phase); }));
   rd::Photo ph;
   ph.blur_px = 1.0;
   ph.noise = 2.0;

@@ -43,8 +43,8 @@ nlohmann::json parse(const test::CliRun& r) {
 
 TEST_CASE("linewidth --json lists lines with profile arrays and width_mm {mean, std} and writes the overlay") {
   const auto dir = test::scratch_dir("lw_json");
-  const auto cov = rd::coverage(640, 480, rd::unite({rd::straight_line(60, 140, 580, 150, 11.0),
-                                                     rd::straight_line(60, 330, 580, 310, 23.0)}));
+  const auto cov = rd::coverage(
+      640, 480, rd::unite({rd::straight_line(60, 140, 580, 150, 11.0), rd::straight_line(60, 330, 580, 310, 23.0)}));
   rd::Photo ph;
   ph.noise = 2.0;
   ph.vignetting = 0.3;
@@ -137,9 +137,10 @@ TEST_CASE("linewidth errors: unreadable, empty, no line, touching the frame, no 
 TEST_CASE("chessboard in the scene: scale within 0.2 % of the truth") {
   // 10 x 7 squares of 24 px = 4 mm: 6 px/mm; inner corners 9 x 6.
   const double sq_px = 24.0, sq_mm = 4.0, truth_ppm = sq_px / sq_mm;
-  const auto cov = rd::coverage(800, 600, rd::unite({rd::chessboard(60.3, 40.6, 10, 7, sq_px),
-                                                     rd::straight_line(80, 420, 720, 440, 12.0),
-                                                     rd::straight_line(80, 520, 720, 505, 18.0)}));
+  const auto cov =
+      rd::coverage(800, 600,
+                   rd::unite({rd::chessboard(60.3, 40.6, 10, 7, sq_px), rd::straight_line(80, 420, 720, 440, 12.0),
+                              rd::straight_line(80, 520, 720, 505, 18.0)}));
   rd::Photo ph;
   ph.noise = 2.0;
   ph.vignetting = 0.3;
@@ -166,4 +167,3 @@ TEST_CASE("Holtrup 2019 eq. 4.3: set-point amplitude and ring frequency") {
   const double quarter = M_PI / 2 * 30 / 2;  // N v t / R = pi/2
   CHECK(vision::ring_setpoint_width_mm(r, quarter) == Approx(0.66));
 }
-

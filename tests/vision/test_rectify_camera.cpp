@@ -83,10 +83,12 @@ std::vector<std::pair<double, double>> widths(const nlohmann::json& j) {
 
 }  // namespace
 
-TEST_CASE("tilted camera: --chessboard --rectify measures widths in mm across the bed (without it the perspective shows)") {
+TEST_CASE(
+    "tilted camera: --chessboard --rectify measures widths in mm across the bed (without it the perspective shows)") {
   const double sq = 5.0;  // mm
   // Two lines on the bed below the board, 1.2 mm and 2.0 mm wide, 70 mm long.
-  const auto scene = rd::unite({board(sq), rd::straight_line(-10, 42, 60, 42, 1.2), rd::straight_line(-10, 54, 60, 54, 2.0)});
+  const auto scene =
+      rd::unite({board(sq), rd::straight_line(-10, 42, 60, 42, 1.2), rd::straight_line(-10, 54, 60, 54, 2.0)});
   // Camera tilted by 0.45 rad about x (strong keystone), board near the top of the frame.
   const cv::Matx33d H = plane_to_image(0.45, 0.05, 0.02, -25, -28, 150);
   const auto dir = test::scratch_dir("lw_rectify");
@@ -97,8 +99,8 @@ TEST_CASE("tilted camera: --chessboard --rectify measures widths in mm across th
                               "--rectify", "--json", "--overlay", dir + "/ov"});
   const auto wr = widths(rect);
   REQUIRE(wr.size() == 2);
-  INFO(fmt::format("rectified: {:.4f} mm (std {:.4f}), {:.4f} mm (std {:.4f})", wr[0].first, wr[0].second,
-                   wr[1].first, wr[1].second));
+  INFO(fmt::format("rectified: {:.4f} mm (std {:.4f}), {:.4f} mm (std {:.4f})", wr[0].first, wr[0].second, wr[1].first,
+                   wr[1].second));
   CHECK(wr[0].first == Approx(1.2).margin(0.02));
   CHECK(wr[1].first == Approx(2.0).margin(0.02));
   CHECK(wr[0].second < 0.02);
@@ -109,7 +111,8 @@ TEST_CASE("tilted camera: --chessboard --rectify measures widths in mm across th
   // The same photo with only the scale at the board's centre: the lines lie elsewhere on the
   // tilted bed, where the image scale differs, so their widths come out wrong by more than 5 %;
   // that is what --rectify removes.
-  const auto plain = run_json({"linewidth", img, "--chessboard", "9x6", "--square-mm", fmt::format("{}", sq), "--json"});
+  const auto plain =
+      run_json({"linewidth", img, "--chessboard", "9x6", "--square-mm", fmt::format("{}", sq), "--json"});
   const auto wp = widths(plain);
   REQUIRE(wp.size() == 2);
   INFO(fmt::format("not rectified: {:.4f} and {:.4f} mm", wp[0].first, wp[1].first));
@@ -122,10 +125,9 @@ TEST_CASE("camera profile: --save-camera from chessboard views then --camera PRO
   const auto dir = test::scratch_dir("lw_camera");
   // The first view is the measuring pose (board lying on the bed); the others vary the pose.
   const cv::Matx33d bed_pose = plane_to_image(0.35, -0.05, 0.03, -22, -10, 160);
-  const cv::Matx33d poses[] = {bed_pose, plane_to_image(-0.3, 0.25, -0.1, -20, -15, 150),
-                               plane_to_image(0.1, -0.4, 0.2, -25, -12, 140),
-                               plane_to_image(-0.25, -0.3, 0.6, -15, -20, 170),
-                               plane_to_image(0.4, 0.3, -0.4, -25, -5, 155)};
+  const cv::Matx33d poses[] = {
+      bed_pose, plane_to_image(-0.3, 0.25, -0.1, -20, -15, 150), plane_to_image(0.1, -0.4, 0.2, -25, -12, 140),
+      plane_to_image(-0.25, -0.3, 0.6, -15, -20, 170), plane_to_image(0.4, 0.3, -0.4, -25, -5, 155)};
   std::vector<std::string> cal = {"linewidth"};
   unsigned seed = 20;
   for (std::size_t i = 0; i < std::size(poses); ++i) {
@@ -152,8 +154,8 @@ TEST_CASE("camera profile: --save-camera from chessboard views then --camera PRO
   const auto jm = run_json({"linewidth", shot, "--camera", profile, "--rectify", "--json"});
   const auto w = widths(jm);
   REQUIRE(w.size() == 2);
-  INFO(fmt::format("camera profile, rectified: {:.4f} mm (std {:.4f}), {:.4f} mm (std {:.4f})", w[0].first,
-                   w[0].second, w[1].first, w[1].second));
+  INFO(fmt::format("camera profile, rectified: {:.4f} mm (std {:.4f}), {:.4f} mm (std {:.4f})", w[0].first, w[0].second,
+                   w[1].first, w[1].second));
   CHECK(w[0].first == Approx(1.0).margin(0.02));
   CHECK(w[1].first == Approx(1.8).margin(0.02));
   CHECK(jm["results"]["images"][0]["scale_source"] == "camera profile bed plane, rectified");

@@ -25,12 +25,12 @@ namespace {
 
 struct RingCase {
   const char* name;
-  double gain;           // rendered width amplitude / set-point amplitude
-  double lag_deg;        // rendered phase lag of the width behind the set-point (deg)
-  double start_deg;      // view angle of theta = 0 (deg, counterclockwise from +x)
-  bool dark_line;        // dark filament on a light bed, or light on dark
-  double vignetting;     // relative falloff at the corners
-  double gradient;       // relative lighting change left to right
+  double gain;        // rendered width amplitude / set-point amplitude
+  double lag_deg;     // rendered phase lag of the width behind the set-point (deg)
+  double start_deg;   // view angle of theta = 0 (deg, counterclockwise from +x)
+  bool dark_line;     // dark filament on a light bed, or light on dark
+  double vignetting;  // relative falloff at the corners
+  double gradient;    // relative lighting change left to right
   unsigned seed;
 };
 
@@ -66,12 +66,11 @@ TEST_CASE("rendered sine-modulated ring photo -> tunekit linewidth -> tunekit fr
     // width lags eq. 4.3's set-point w_g - a_sp cos(N v t / R) by `lag`.
     const double start = c.start_deg * M_PI / 180.0, lag = c.lag_deg * M_PI / 180.0;
     const double w = 640, h = 640, cx = 0.5 * w + 1.3, cy = 0.5 * h - 0.8;
-    const auto cov = rd::coverage(static_cast<int>(w), static_cast<int>(h),
-                                  rd::ring(cx, cy, ring.radius_mm * ppm, [&](double phi) {
-                                    const double width_mm =
-                                        ring.width_gcode_mm - c.gain * a_sp * std::cos(ring.n_sines * (phi - start) - lag);
-                                    return width_mm * ppm;
-                                  }));
+    const auto cov = rd::coverage(
+        static_cast<int>(w), static_cast<int>(h), rd::ring(cx, cy, ring.radius_mm * ppm, [&](double phi) {
+          const double width_mm = ring.width_gcode_mm - c.gain * a_sp * std::cos(ring.n_sines * (phi - start) - lag);
+          return width_mm * ppm;
+        }));
     rd::Photo ph;
     ph.bed = c.dark_line ? 205 : 50;
     ph.line = c.dark_line ? 70 : 185;
@@ -84,12 +83,30 @@ TEST_CASE("rendered sine-modulated ring photo -> tunekit linewidth -> tunekit fr
     vision::write_png(img, rd::photograph(cov, ph));
     const std::string csv = (fs::path(dir) / "ring.csv").string();
 
-    const auto lw = run_cli({"linewidth", img, "--px-per-mm", fmtnum(ppm), "--json", "--overlay", dir + "/ov",
-                             "--speed-mm-s", fmtnum(ring.speed_mm_s), "--ring-sines", std::to_string(ring.n_sines),
-                             "--ring-amplitude-mm", fmtnum(ring.amplitude_mm), "--ring-radius-mm",
-                             fmtnum(ring.radius_mm), "--rod-radius-mm", fmtnum(ring.rod_radius_mm),
-                             "--layer-height-mm", fmtnum(ring.layer_height_mm), "--setpoint-width-mm",
-                             fmtnum(ring.width_gcode_mm), "--ring-start-deg", fmtnum(c.start_deg), "--profile-csv",
+    const auto lw = run_cli({"linewidth",
+                             img,
+                             "--px-per-mm",
+                             fmtnum(ppm),
+                             "--json",
+                             "--overlay",
+                             dir + "/ov",
+                             "--speed-mm-s",
+                             fmtnum(ring.speed_mm_s),
+                             "--ring-sines",
+                             std::to_string(ring.n_sines),
+                             "--ring-amplitude-mm",
+                             fmtnum(ring.amplitude_mm),
+                             "--ring-radius-mm",
+                             fmtnum(ring.radius_mm),
+                             "--rod-radius-mm",
+                             fmtnum(ring.rod_radius_mm),
+                             "--layer-height-mm",
+                             fmtnum(ring.layer_height_mm),
+                             "--setpoint-width-mm",
+                             fmtnum(ring.width_gcode_mm),
+                             "--ring-start-deg",
+                             fmtnum(c.start_deg),
+                             "--profile-csv",
                              csv});
     INFO(lw.err);
     REQUIRE(lw.code == 0);
@@ -114,8 +131,8 @@ TEST_CASE("rendered sine-modulated ring photo -> tunekit linewidth -> tunekit fr
     const auto& sd = jf["results"]["sine_dwell"];
     const double gain = sd["gain"]["value"].get<double>();
     const double lag_deg = sd["phase_lag_deg"]["value"].get<double>();
-    INFO(fmt::format("gain {:.4f} (rendered {}), phase lag {:.3f} deg (rendered {})", gain, c.gain, lag_deg,
-                     c.lag_deg));
+    INFO(
+        fmt::format("gain {:.4f} (rendered {}), phase lag {:.3f} deg (rendered {})", gain, c.gain, lag_deg, c.lag_deg));
     CHECK(std::abs(gain / c.gain - 1) <= 0.03);
     CHECK(std::abs(lag_deg - c.lag_deg) <= 3.0);
     // The reported 95 % intervals are honest about it.

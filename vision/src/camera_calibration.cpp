@@ -89,7 +89,8 @@ ChessboardDetection detect_chessboard(const cv::Mat& gray, const ChessboardSpec&
     found = false;
   }
   if (!found) {
-    found = cv::findChessboardCorners(u8, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+    found =
+        cv::findChessboardCorners(u8, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
     if (found)
       cv::cornerSubPix(u8, corners, cv::Size(5, 5), cv::Size(-1, -1),
                        cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-3));
@@ -134,7 +135,8 @@ nlohmann::json CameraProfile::to_json() const {
   j["dist_coeffs"] = dist_coeffs;
   j["rms_reprojection_px"] = rms_reprojection_px;
   j["images_used"] = images_used;
-  j["target"] = {{"type", "chessboard"}, {"inner_corners", {target.cols, target.rows}}, {"square_mm", target.square_mm}};
+  j["target"] = {
+      {"type", "chessboard"}, {"inner_corners", {target.cols, target.rows}}, {"square_mm", target.square_mm}};
   if (has_bed_plane) {
     j["bed_plane"] = {{"img_to_mm", mat_json(bed_img_to_mm)}, {"px_per_mm", px_per_mm}};
   }
@@ -170,7 +172,8 @@ CameraProfile CameraProfile::from_json(const nlohmann::json& j, const std::strin
   return p;
 }
 
-CameraProfile calibrate_camera(const std::vector<cv::Mat>& grays, const ChessboardSpec& spec, std::vector<int>* skipped) {
+CameraProfile calibrate_camera(const std::vector<cv::Mat>& grays, const ChessboardSpec& spec,
+                               std::vector<int>* skipped) {
   std::vector<std::vector<cv::Point3f>> obj;
   std::vector<std::vector<cv::Point2f>> img;
   CameraProfile p;
@@ -272,7 +275,8 @@ Rectified rectify_to_plane(const cv::Mat& gray, const cv::Matx33d& img_to_mm, do
   const cv::Matx33d S(ppm, 0, -x0 * ppm, 0, ppm, -y0 * ppm, 0, 0, 1);
   r.img_to_rect = S * img_to_mm;
   r.px_per_mm = ppm;
-  const cv::Size size(static_cast<int>(std::ceil((x1 - x0) * ppm)) + 1, static_cast<int>(std::ceil((y1 - y0) * ppm)) + 1);
+  const cv::Size size(static_cast<int>(std::ceil((x1 - x0) * ppm)) + 1,
+                      static_cast<int>(std::ceil((y1 - y0) * ppm)) + 1);
   cv::warpPerspective(gray, r.image, cv::Mat(r.img_to_rect), size, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   return r;
 }

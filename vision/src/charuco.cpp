@@ -19,14 +19,22 @@ namespace {
 #ifdef TUNEKIT_HAVE_ARUCO
 const std::map<std::string, cv::aruco::PREDEFINED_DICTIONARY_NAME>& charuco_dictionaries() {
   static const std::map<std::string, cv::aruco::PREDEFINED_DICTIONARY_NAME> m = {
-      {"DICT_4X4_50", cv::aruco::DICT_4X4_50},     {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
-      {"DICT_4X4_250", cv::aruco::DICT_4X4_250},   {"DICT_4X4_1000", cv::aruco::DICT_4X4_1000},
-      {"DICT_5X5_50", cv::aruco::DICT_5X5_50},     {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
-      {"DICT_5X5_250", cv::aruco::DICT_5X5_250},   {"DICT_5X5_1000", cv::aruco::DICT_5X5_1000},
-      {"DICT_6X6_50", cv::aruco::DICT_6X6_50},     {"DICT_6X6_100", cv::aruco::DICT_6X6_100},
-      {"DICT_6X6_250", cv::aruco::DICT_6X6_250},   {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
-      {"DICT_7X7_50", cv::aruco::DICT_7X7_50},     {"DICT_7X7_100", cv::aruco::DICT_7X7_100},
-      {"DICT_7X7_250", cv::aruco::DICT_7X7_250},   {"DICT_7X7_1000", cv::aruco::DICT_7X7_1000},
+      {"DICT_4X4_50", cv::aruco::DICT_4X4_50},
+      {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
+      {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
+      {"DICT_4X4_1000", cv::aruco::DICT_4X4_1000},
+      {"DICT_5X5_50", cv::aruco::DICT_5X5_50},
+      {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
+      {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
+      {"DICT_5X5_1000", cv::aruco::DICT_5X5_1000},
+      {"DICT_6X6_50", cv::aruco::DICT_6X6_50},
+      {"DICT_6X6_100", cv::aruco::DICT_6X6_100},
+      {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
+      {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
+      {"DICT_7X7_50", cv::aruco::DICT_7X7_50},
+      {"DICT_7X7_100", cv::aruco::DICT_7X7_100},
+      {"DICT_7X7_250", cv::aruco::DICT_7X7_250},
+      {"DICT_7X7_1000", cv::aruco::DICT_7X7_1000},
       {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}};
   return m;
 }
@@ -67,8 +75,8 @@ CharucoSpec parse_charuco_spec(const std::string& text, double square_mm, double
   s.dictionary = dictionary.empty() ? "DICT_4X4_50" : dictionary;
 #ifdef TUNEKIT_HAVE_ARUCO
   if (!charuco_dictionaries().count(s.dictionary))
-    throw InputError(fmt::format("unknown ArUco dictionary '{}' (e.g. DICT_4X4_50, DICT_5X5_100, DICT_6X6_250)",
-                                 s.dictionary));
+    throw InputError(
+        fmt::format("unknown ArUco dictionary '{}' (e.g. DICT_4X4_50, DICT_5X5_100, DICT_6X6_250)", s.dictionary));
   const int markers = (a * b) / 2;
   const auto dict = cv::aruco::getPredefinedDictionary(charuco_dictionaries().at(s.dictionary));
   if (dict->bytesList.rows < markers)
@@ -83,8 +91,9 @@ ChessboardDetection detect_charuco(const cv::Mat& gray, const CharucoSpec& spec)
 #ifndef TUNEKIT_HAVE_ARUCO
   (void)gray;
   (void)spec;
-  throw InputError("ChArUco boards need OpenCV's aruco module, which this build was made without "
-                   "(Debian: libopencv-contrib-dev); use a chessboard (--chessboard)");
+  throw InputError(
+      "ChArUco boards need OpenCV's aruco module, which this build was made without "
+      "(Debian: libopencv-contrib-dev); use a chessboard (--chessboard)");
 #else
   cv::Mat u8;
   if (gray.depth() == CV_16U) gray.convertTo(u8, CV_8U, 1.0 / 257.0);

@@ -11,8 +11,10 @@ std::uint16_t exif_u16(const unsigned char* p, bool little) {
 }
 
 std::uint32_t exif_u32(const unsigned char* p, bool little) {
-  return little ? (std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16) | (std::uint32_t{p[3]} << 24))
-                : ((std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]});
+  return little ? (std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16) |
+                   (std::uint32_t{p[3]} << 24))
+                : ((std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+                   std::uint32_t{p[3]});
 }
 
 // Orientation from a TIFF header + IFD0 (the APP1 payload after "Exif\0\0"), 1 if absent.

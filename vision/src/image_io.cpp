@@ -34,8 +34,7 @@ cv::Mat convert_color(const cv::Mat& m, ImageColor color) {
   const int ch = m.channels();
   cv::Mat out;
   switch (color) {
-    case ImageColor::keep:
-      return m;
+    case ImageColor::keep: return m;
     case ImageColor::gray:
       if (ch == 1) return m;
       cv::cvtColor(m, out, cv::COLOR_BGR2GRAY);
@@ -89,7 +88,8 @@ cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageCol
                                  w_claimed, h_claimed, static_cast<double>(pixels_claimed) / 1e6,
                                  static_cast<double>(max_image_pixels()) / 1e6),
                      name);
-  if (stbi_is_hdr_from_memory(data, len)) throw InputError("cannot decode image: HDR (float) images are not supported", name);
+  if (stbi_is_hdr_from_memory(data, len))
+    throw InputError("cannot decode image: HDR (float) images are not supported", name);
   const bool sixteen = stbi_is_16_bit_from_memory(data, len) != 0;
   void* pixels = sixteen ? static_cast<void*>(stbi_load_16_from_memory(data, len, &w, &h, &n, 0))
                          : static_cast<void*>(stbi_load_from_memory(data, len, &w, &h, &n, 0));
@@ -123,10 +123,8 @@ cv::Mat read_image(const std::string& path, ImageColor color) {
 std::string encode_png(const cv::Mat& image) {
   if (image.empty()) throw InputError("cannot encode an empty image as PNG");
   cv::Mat m8;
-  if (image.depth() == CV_8U)
-    m8 = image;
-  else if (image.depth() == CV_16U)
-    image.convertTo(m8, CV_8U, 1.0 / 257.0);
+  if (image.depth() == CV_8U) m8 = image;
+  else if (image.depth() == CV_16U) image.convertTo(m8, CV_8U, 1.0 / 257.0);
   else
     throw InputError(fmt::format("cannot encode an image of OpenCV type {} as PNG (8 or 16 bit only)", image.type()));
   cv::Mat rgb;
@@ -141,8 +139,8 @@ std::string encode_png(const cv::Mat& image) {
   auto sink = [](void* ctx, void* data, int size) {
     static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
   };
-  const int ok = stbi_write_png_to_func(sink, &out, rgb.cols, rgb.rows, rgb.channels(), rgb.data,
-                                        static_cast<int>(rgb.step[0]));
+  const int ok =
+      stbi_write_png_to_func(sink, &out, rgb.cols, rgb.rows, rgb.channels(), rgb.data, static_cast<int>(rgb.step[0]));
   if (!ok || out.empty()) throw InputError("PNG encoding failed");
   return out;
 }

@@ -191,8 +191,7 @@ std::optional<Centreline> trace_centreline(const Coarse& c, const cv::Mat& label
   for (int h = 1; h < nh; ++h) {
     if (hs.at<int>(h, cv::CC_STAT_AREA) > std::max(kLoopHoleMinAreaPx, kLoopHoleMinAreaPerHalfWidthSq * dmax * dmax))
       closed = true;
-    else
-      m.setTo(1, hl == h);
+    else m.setTo(1, hl == h);
   }
   cv::Mat sk = m.clone();
   thin(sk);
@@ -201,7 +200,8 @@ std::optional<Centreline> trace_centreline(const Coarse& c, const cv::Mat& label
     for (int x = 0; x < sk.cols; ++x)
       if (sk.at<uchar>(y, x)) dts.push_back(dt.at<float>(y, x));
   if (dts.size() < 3) return std::nullopt;
-  const double w0 = std::max(kMinWidthStartPx, (2.0 * median_of(dts) - kWidthFromDistanceOffsetPx) * scale);  // full-res px
+  const double w0 =
+      std::max(kMinWidthStartPx, (2.0 * median_of(dts) - kWidthFromDistanceOffsetPx) * scale);  // full-res px
 
   if (closed) {
     // Cut the loop next to its first pixel so the longest path runs once around it.
@@ -265,8 +265,8 @@ std::optional<Centreline> trace_centreline(const Coarse& c, const cv::Mat& label
   return cl;
 }
 
-void recentre_centreline(const cv::Mat& gray, bool light, Centreline& cl, double half_window,
-                         const LineWidthOptions& o, std::vector<double>& prof) {
+void recentre_centreline(const cv::Mat& gray, bool light, Centreline& cl, double half_window, const LineWidthOptions& o,
+                         std::vector<double>& prof) {
   std::vector<Pt>& q = cl.points;
   const bool closed = cl.closed;
   std::vector<Station> st = stations_from(q, closed);

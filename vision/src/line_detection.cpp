@@ -146,9 +146,9 @@ Coarse coarse_detect(const cv::Mat& gray, const LineWidthOptions& o, std::vector
   c.f = o.coarse_factor > 0 ? o.coarse_factor : pick_coarse_factor(gray.cols, gray.rows);
   cv::Mat coarse;
   if (c.f > 1)
-    cv::resize(gray, coarse, cv::Size(std::max(1, gray.cols / c.f), std::max(1, gray.rows / c.f)), 0, 0, cv::INTER_AREA);
-  else
-    coarse = gray;
+    cv::resize(gray, coarse, cv::Size(std::max(1, gray.cols / c.f), std::max(1, gray.rows / c.f)), 0, 0,
+               cv::INTER_AREA);
+  else coarse = gray;
   c.sx = static_cast<double>(gray.cols) / coarse.cols;
   c.sy = static_cast<double>(gray.rows) / coarse.rows;
 
@@ -161,9 +161,9 @@ Coarse coarse_detect(const cv::Mat& gray, const LineWidthOptions& o, std::vector
   const int g = std::clamp(std::min(coarse.cols, coarse.rows) / kBackgroundMinSide, 1, kBackgroundMaxReduction);
   cv::Mat tiny;
   if (g > 1)
-    cv::resize(coarse, tiny, cv::Size(std::max(1, coarse.cols / g), std::max(1, coarse.rows / g)), 0, 0, cv::INTER_AREA);
-  else
-    tiny = coarse;
+    cv::resize(coarse, tiny, cv::Size(std::max(1, coarse.cols / g), std::max(1, coarse.rows / g)), 0, 0,
+               cv::INTER_AREA);
+  else tiny = coarse;
   // A scale target in the scene (half dark squares) is neither bed nor line: keep it out of the
   // lighting fit and the polarity vote.
   cv::Mat tiny_ex;
@@ -225,8 +225,8 @@ Coarse coarse_detect(const cv::Mat& gray, const LineWidthOptions& o, std::vector
   cv::minMaxLoc(c.contrast, nullptr, &maxc);
   c.mask = cv::Mat::zeros(coarse.size(), CV_8U);
   if (!(maxc > 0) || maxc < kMinPeakSnr * c.noise) {
-    warnings.push_back(fmt::format("no feature stands out of the background (largest contrast {:.3g}, noise {:.3g})",
-                                   maxc, c.noise));
+    warnings.push_back(
+        fmt::format("no feature stands out of the background (largest contrast {:.3g}, noise {:.3g})", maxc, c.noise));
     return c;
   }
   cv::Mat c8;

@@ -149,7 +149,8 @@ BarFit fit_bar(const std::vector<double>& p, double u0, double w_guess) {
       const double r = t[0] + t[1] * u + t[2] * (Pa - Pb) - p[static_cast<std::size_t>(k)];
       rss += r * r;
       if (JtJ) {
-        const double j[6] = {1.0, u, Pa - Pb, -t[2] * fa * inv_s, t[2] * fb * inv_s, t[2] * (-fa * za + fb * zb) * inv_s};
+        const double j[6] = {
+            1.0, u, Pa - Pb, -t[2] * fa * inv_s, t[2] * fb * inv_s, t[2] * (-fa * za + fb * zb) * inv_s};
         const int m = (ea || eb) ? 6 : 3;  // far from both edges only the background and contrast terms move
         for (int a = 0; a < m; ++a) {
           (*Jtr)(a) += j[a] * r;
@@ -334,7 +335,8 @@ void measure_station(const cv::Mat& img, bool light, const Station& st, double h
   }
   out.width_px = f.b - f.a;
   out.width_stderr_px = std::sqrt(f.var_w);
-  out.confidence = 1.0 / (1.0 + (out.width_stderr_px / kConfidenceStderrPx) * (out.width_stderr_px / kConfidenceStderrPx));
+  out.confidence =
+      1.0 / (1.0 + (out.width_stderr_px / kConfidenceStderrPx) * (out.width_stderr_px / kConfidenceStderrPx));
   out.contrast = f.c;
   out.blur_px = f.s;
   const double mid = 0.5 * (f.a + f.b);

@@ -142,7 +142,8 @@ LineWidthResult measure_line_widths(const cv::Mat& gray_in, const LineWidthOptio
     const double wmed = median_of(ws);
     for (auto& s : line.samples) {
       if (!std::isfinite(s.width_px)) continue;
-      if (s.contrast < kOccludedContrastFraction * line.median_contrast || s.width_stderr_px > kOccludedRelStderr * s.width_px)
+      if (s.contrast < kOccludedContrastFraction * line.median_contrast ||
+          s.width_stderr_px > kOccludedRelStderr * s.width_px)
         s.flags |= kFlagOccluded;
       if (s.width_px > kMergedWidthFactor * wmed) s.flags |= kFlagMerged;
       if (s.flags & kFlagOccluded) s.width_px = kNaN;
@@ -162,9 +163,10 @@ LineWidthResult measure_line_widths(const cv::Mat& gray_in, const LineWidthOptio
     const auto dropped = std::count_if(res.lines.begin(), res.lines.end(), faint);
     if (dropped > 0) {
       res.lines.erase(std::remove_if(res.lines.begin(), res.lines.end(), faint), res.lines.end());
-      res.warnings.push_back(fmt::format("ignored {} faint feature(s) with less than {:.0f} % of the strongest line's "
-                                         "contrast (shadows or uneven lighting, not lines)",
-                                         dropped, 100 * kFaintFraction));
+      res.warnings.push_back(
+          fmt::format("ignored {} faint feature(s) with less than {:.0f} % of the strongest line's "
+                      "contrast (shadows or uneven lighting, not lines)",
+                      dropped, 100 * kFaintFraction));
     }
   }
   std::stable_sort(res.lines.begin(), res.lines.end(),

@@ -83,9 +83,9 @@ void smooth_seq(std::vector<T>& v, double sigma, bool closed, Get get, Set set) 
 struct Centreline {
   std::vector<Pt> points;
   bool closed = false;
-  double w0 = 0;         ///< start value of the width (full-resolution px)
-  double sigma = 0;      ///< smoothing applied along it (samples); reused for the re-centring
-  cv::Rect bbox;         ///< full-resolution px
+  double w0 = 0;     ///< start value of the width (full-resolution px)
+  double sigma = 0;  ///< smoothing applied along it (samples); reused for the re-centring
+  cv::Rect bbox;     ///< full-resolution px
   bool touches_frame = false;
 };
 
@@ -96,8 +96,8 @@ std::optional<Centreline> trace_centreline(const Coarse& c, const cv::Mat& label
 
 /// Moves the centreline onto the mid-points between the fitted edges of a subset of stations
 /// (the skeleton of the coarse mask is off by up to a coarse pixel).
-void recentre_centreline(const cv::Mat& gray, bool light, Centreline& cl, double half_window,
-                         const LineWidthOptions& o, std::vector<double>& prof);
+void recentre_centreline(const cv::Mat& gray, bool light, Centreline& cl, double half_window, const LineWidthOptions& o,
+                         std::vector<double>& prof);
 
 // ---------------------------------------------------------------- edge profile
 

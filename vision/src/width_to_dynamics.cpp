@@ -79,8 +79,9 @@ std::vector<TimedWidth> map_ring(const std::vector<cv::Point2d>& centre_px, cons
   }
   std::sort(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return a.t_s < b.t_s; });
   // Equal times (two samples at the same angle) would break a strictly increasing time column.
-  rows.erase(std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
-             rows.end());
+  rows.erase(
+      std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
+      rows.end());
   return rows;
 }
 
@@ -95,7 +96,8 @@ std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vec
                                  const PathMapping& how) {
   double total = 0;
   for (const auto& p : path) {
-    if (!(p.length_mm >= 0) || !(p.speed_mm_s > 0)) throw InputError("path segments need a length >= 0 and a speed > 0");
+    if (!(p.length_mm >= 0) || !(p.speed_mm_s > 0))
+      throw InputError("path segments need a length >= 0 and a speed > 0");
     total += p.length_mm;
   }
   if (path.empty() || !(total > 0)) throw InputError("the commanded path is empty (no extruding moves)");
@@ -116,17 +118,17 @@ std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vec
     const double along = how.reversed ? (s_mm.back() - s_mm[i]) : (s_mm[i] - s_mm.front());
     const double sp = offset + along;
     if (sp < 0 || sp > total) continue;
-    const auto k = static_cast<std::size_t>(
-        std::clamp<std::ptrdiff_t>(std::upper_bound(s0.begin(), s0.end(), sp) - s0.begin() - 1, 0,
-                                   static_cast<std::ptrdiff_t>(path.size()) - 1));
+    const auto k = static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(
+        std::upper_bound(s0.begin(), s0.end(), sp) - s0.begin() - 1, 0, static_cast<std::ptrdiff_t>(path.size()) - 1));
     const double t = t0[k] + (sp - s0[k]) / path[k].speed_mm_s;
     const double w_sp = from_feed ? feed_setpoint_width_mm(path[k], how.filament_diameter_mm, how.layer_height_mm)
                                   : how.setpoint_width_mm;
     rows.push_back({t, sp, width_mm[i], w_sp, confidence[i]});
   }
   std::sort(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return a.t_s < b.t_s; });
-  rows.erase(std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
-             rows.end());
+  rows.erase(
+      std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
+      rows.end());
   return rows;
 }
 

@@ -16,8 +16,8 @@ nlohmann::json compare_estimates(const std::string& quantity, const std::string&
     if (!std::isfinite(e->value) || !std::isfinite(e->ci95_lo) || !std::isfinite(e->ci95_hi))
       throw InputError(fmt::format("{} from the {}: value or interval is not a finite number", quantity, e->method));
     if (!(e->ci95_lo <= e->value && e->value <= e->ci95_hi))
-      throw InputError(fmt::format("{} from the {}: the interval [{:g}, {:g}] does not contain the value {:g}", quantity,
-                                   e->method, e->ci95_lo, e->ci95_hi, e->value));
+      throw InputError(fmt::format("{} from the {}: the interval [{:g}, {:g}] does not contain the value {:g}",
+                                   quantity, e->method, e->ci95_lo, e->ci95_hi, e->value));
   }
   const double ha = 0.5 * (a.ci95_hi - a.ci95_lo), hb = 0.5 * (b.ci95_hi - b.ci95_lo);
   const double combined = std::hypot(ha, hb);
@@ -27,15 +27,19 @@ nlohmann::json compare_estimates(const std::string& quantity, const std::string&
     return fmt::format("{} {} [{}, {}] {}", e.method, display_number(e.value), display_number(e.ci95_lo),
                        display_number(e.ci95_hi), unit);
   };
-  const std::string statement =
-      fmt::format("{}: {} and {} {} within their combined 95 % uncertainty (difference {} {} {} {} {})", quantity,
-                  est(a), est(b), agree ? "agree" : "do NOT agree", display_number(diff), unit, agree ? "<=" : ">",
-                  display_number(combined), unit);
+  const std::string statement = fmt::format(
+      "{}: {} and {} {} within their combined 95 % uncertainty (difference {} {} {} {} {})", quantity, est(a), est(b),
+      agree ? "agree" : "do NOT agree", display_number(diff), unit, agree ? "<=" : ">", display_number(combined), unit);
   nlohmann::json ests = nlohmann::json::array();
   for (const auto* e : {&a, &b})
     ests.push_back({{"method", e->method}, {"value", e->value}, {"ci95", {e->ci95_lo, e->ci95_hi}}});
-  return {{"quantity", quantity}, {"unit", unit},         {"estimates", ests}, {"difference", diff},
-          {"combined_half_width", combined}, {"agree", agree}, {"statement", statement}};
+  return {{"quantity", quantity},
+          {"unit", unit},
+          {"estimates", ests},
+          {"difference", diff},
+          {"combined_half_width", combined},
+          {"agree", agree},
+          {"statement", statement}};
 }
 
 bool estimate_from_param(const nlohmann::json* p, const std::string& method, Estimate& out) {

@@ -64,7 +64,8 @@ std::string capture_from_device(const LiquefierCameraArgs& a, const std::string&
   // Next to the running tunekit when installed side by side.
   std::error_code ec;
   const auto self = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec && fs::exists(self.parent_path() / "tunekit-capture")) exe = (self.parent_path() / "tunekit-capture").string();
+  if (!ec && fs::exists(self.parent_path() / "tunekit-capture"))
+    exe = (self.parent_path() / "tunekit-capture").string();
   const std::string frames = std::to_string(a.frames), settle = fmt::format("{}", a.settle_s);
   const pid_t pid = ::fork();
   if (pid < 0) throw MachineError("cannot start the camera helper (fork failed)", a.camera_device);
@@ -120,9 +121,10 @@ LiquefierPath choose_liquefier_path(const std::string& choice, const protocols::
   if (choice == "camera") return LiquefierPath::camera;
   if (choice == "load-cell") {
     if (!profile.sensors.load_cell)
-      throw InputError("--liquefier load-cell needs a load cell ([sensors] load_cell = true); without one use "
-                       "--liquefier camera",
-                       profile_path);
+      throw InputError(
+          "--liquefier load-cell needs a load cell ([sensors] load_cell = true); without one use "
+          "--liquefier camera",
+          profile_path);
     return LiquefierPath::load_cell;
   }
   if (choice == "auto") return profile.sensors.load_cell ? LiquefierPath::load_cell : LiquefierPath::camera;
@@ -133,16 +135,20 @@ void check_photo_source(const LiquefierCameraArgs& a, bool sim_machine, bool can
   const int sources = (a.camera.empty() ? 0 : 1) + (a.photo.empty() ? 0 : 1) + (a.camera_device.empty() ? 0 : 1);
   if (sources > 1) throw InputError("give one photo source: --camera sim, --photo FILE or --camera-device DEVICE");
   if (!a.camera.empty() && a.camera != "sim")
-    throw InputError(fmt::format("--camera '{}': only 'sim' (the simulated printer's camera); a real camera is "
-                                 "--camera-device DEVICE",
-                                 a.camera));
-  if (a.camera == "sim" && !sim_machine) throw InputError("--camera sim photographs the simulated printer: use it with --machine sim");
+    throw InputError(
+        fmt::format("--camera '{}': only 'sim' (the simulated printer's camera); a real camera is "
+                    "--camera-device DEVICE",
+                    a.camera));
+  if (a.camera == "sim" && !sim_machine)
+    throw InputError("--camera sim photographs the simulated printer: use it with --machine sim");
   if (a.camera.empty() && a.px_per_mm <= 0)
-    throw InputError("the camera path needs the photo's scale on the bed: --px-per-mm (e.g. from 'tunekit linewidth "
-                     "--chessboard ... --save-camera')");
+    throw InputError(
+        "the camera path needs the photo's scale on the bed: --px-per-mm (e.g. from 'tunekit linewidth "
+        "--chessboard ... --save-camera')");
   if (sources == 0 && !can_prompt)
-    throw InputError("the camera path needs a photo of the printed tests and this is not a terminal to ask for one: "
-                     "give --photo FILE, --camera-device DEVICE (or --camera sim with --machine sim)");
+    throw InputError(
+        "the camera path needs a photo of the printed tests and this is not a terminal to ask for one: "
+        "give --photo FILE, --camera-device DEVICE (or --camera sim with --machine sim)");
 }
 
 std::vector<CameraTest> camera_tests() {
@@ -153,7 +159,8 @@ std::vector<CameraTest> camera_tests() {
 CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
                                      const protocols::MachineProfile& profile,
                                      std::map<std::string, protocols::RunResult>& runs,
-                                     const std::shared_ptr<protocols::SimPrintBed>& bed, bool can_prompt, CliContext& ctx) {
+                                     const std::shared_ptr<protocols::SimPrintBed>& bed, bool can_prompt,
+                                     CliContext& ctx) {
   const std::string dir = run_dir + "/liquefier-camera";
   fs::create_directories(dir);
   CameraAnalysis out;
@@ -196,9 +203,11 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   out.overlay = dir + "/overlay.png";
   if (measured.lines.empty()) {
     vision::write_overlay(out.overlay, vision::draw_overlay(photo, &measured, {}, "no printed line found"));
-    throw InputError("the photo shows no printed line (is the print in the frame, in focus and lit?); the printed runs "
-                     "are kept in " + run_dir,
-                     out.photo);
+    throw InputError(
+        "the photo shows no printed line (is the print in the frame, in focus and lit?); the printed runs "
+        "are kept in " +
+            run_dir,
+        out.photo);
   }
   vision::write_overlay(out.overlay, vision::draw_overlay(photo, &measured, {}, ""));
 
@@ -215,10 +224,11 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
     }
   }
   if (straight.empty())
-    throw InputError(fmt::format("the photo shows {} printed feature(s) but none of the line test's straight lines along "
-                                 "X (photograph with the bed's X axis to the right)",
-                                 measured.lines.size()),
-                     out.photo);
+    throw InputError(
+        fmt::format("the photo shows {} printed feature(s) but none of the line test's straight lines along "
+                    "X (photograph with the bed's X axis to the right)",
+                    measured.lines.size()),
+        out.photo);
   // Printed first = highest Y = topmost in the photo.
   std::sort(straight.begin(), straight.end(), [](const auto* p, const auto* q) { return p->bbox.y < q->bbox.y; });
   nlohmann::json warnings = nlohmann::json::array();
@@ -294,20 +304,22 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   }
   if (rows.empty()) throw InputError("no usable width samples on the printed lines", out.photo);
   out.width_csv = dir + "/line_widths.csv";
-  protocols::write_file_atomic(out.width_csv,
-                               vision::timed_width_csv(rows, "widths along the line test (t = s / v per line, lines 1 s apart)"));
+  protocols::write_file_atomic(
+      out.width_csv, vision::timed_width_csv(rows, "widths along the line test (t = s / v per line, lines 1 s apart)"));
 
   // 4. The ring: width against the angle travelled -> gain and phase at f = N v / (2 pi R).
   nlohmann::json ring_json;
   if (ring != nullptr && runs.count("liquefier-ring")) {
     const auto& rp = runs.at("liquefier-ring").experiment.params;
     const double R = rp.at("radius_mm"), v = rp.at("speed_mm_s"), A = rp.at("amplitude");
-    const int N = static_cast<int>(std::lround(rp.at("periods"))), segs = static_cast<int>(std::lround(rp.at("segments")));
+    const int N = static_cast<int>(std::lround(rp.at("periods"))),
+              segs = static_cast<int>(std::lround(rp.at("segments")));
     std::vector<cv::Point2d> pts;
     std::vector<const vision::WidthSample*> valid;
     for (const auto& s : ring->samples)
       if (s.valid()) {
-        pts.emplace_back(map.known ? map.x(s.x_px) : s.x_px / map.px_per_mm, map.known ? map.y(s.y_px) : -s.y_px / map.px_per_mm);
+        pts.emplace_back(map.known ? map.x(s.x_px) : s.x_px / map.px_per_mm,
+                         map.known ? map.y(s.y_px) : -s.y_px / map.px_per_mm);
         valid.push_back(&s);
       }
     if (pts.size() > 50) {
@@ -346,12 +358,9 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
     warnings.push_back("no ring found in the photo: no gain and phase from the ring test");
   }
 
-  out.results = {{"photo", out.photo},
-                 {"overlay", out.overlay},
-                 {"px_per_mm", map.px_per_mm},
-                 {"placement", map.known ? "camera frame" : "line end"},
-                 {"lines", lines_json},
-                 {"width_record", out.width_csv},
+  out.results = {{"photo", out.photo},         {"overlay", out.overlay},
+                 {"px_per_mm", map.px_per_mm}, {"placement", map.known ? "camera frame" : "line end"},
+                 {"lines", lines_json},        {"width_record", out.width_csv},
                  {"warnings", warnings}};
   if (!ring_json.is_null()) out.results["ring"] = ring_json;
   plot_line["overlay_png"] = fs::relative(out.overlay, run_dir).generic_string();

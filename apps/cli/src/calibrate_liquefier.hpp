@@ -53,10 +53,10 @@ struct CameraTest {
 std::vector<CameraTest> camera_tests();
 
 struct CameraAnalysis {
-  std::string photo;       ///< the photo used (in the run directory)
-  std::string overlay;     ///< the photo with the measured edges (PNG, in the run directory)
-  std::string width_csv;   ///< time, setpoint width, width of the line test (for `tunekit step`)
-  nlohmann::json results;  ///< lines, ring (gain and phase), warnings
+  std::string photo;              ///< the photo used (in the run directory)
+  std::string overlay;            ///< the photo with the measured edges (PNG, in the run directory)
+  std::string width_csv;          ///< time, setpoint width, width of the line test (for `tunekit step`)
+  nlohmann::json results;         ///< lines, ring (gain and phase), warnings
   nlohmann::json linewidth_plot;  ///< plotdata.json "linewidth"
 };
 
@@ -66,7 +66,8 @@ struct CameraAnalysis {
 CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
                                      const protocols::MachineProfile& profile,
                                      std::map<std::string, protocols::RunResult>& runs,
-                                     const std::shared_ptr<protocols::SimPrintBed>& bed, bool can_prompt, CliContext& ctx);
+                                     const std::shared_ptr<protocols::SimPrintBed>& bed, bool can_prompt,
+                                     CliContext& ctx);
 
 /// The ring's gain and phase, added to the camera analysis once tau and theta are known from
 /// the lines (the model's prediction at the ring frequency is reported beside the measurement).

@@ -63,10 +63,14 @@ nlohmann::json bode_plotdata(const nlohmann::json& freq_results) {
   d["phase_deg"] = b.at("phase_deg");
   if (b.contains("coherence")) d["coherence"] = b["coherence"];
   // The model the summary reports: the output-error fit on the chirp record when there is one.
-  for (const auto& [key, label] : {std::pair{"tf_oe_fit", "output-error fit (record)"}, std::pair{"tf_fit", "fitted model"}}) {
+  for (const auto& [key, label] :
+       {std::pair{"tf_oe_fit", "output-error fit (record)"}, std::pair{"tf_fit", "fitted model"}}) {
     if (!freq_results.contains(key) || !freq_results[key].contains("bode")) continue;
     const auto& m = freq_results[key]["bode"];
-    d["model"] = {{"freq_hz", m.at("freq_hz")}, {"mag_db", m.at("magnitude_db")}, {"phase_deg", m.at("phase_deg")}, {"label", label}};
+    d["model"] = {{"freq_hz", m.at("freq_hz")},
+                  {"mag_db", m.at("magnitude_db")},
+                  {"phase_deg", m.at("phase_deg")},
+                  {"label", label}};
     break;
   }
   return d;
@@ -90,7 +94,8 @@ nlohmann::json psd_plotdata(const nlohmann::json& axis) {
     const auto type = ident::parse_shaper_type(c.at("type").get<std::string>());
     const auto shaper = ident::design_shaper(type, c.at("freq_hz").get<double>(), c.value("damping", 0.1),
                                              ident::kDefaultVibrationTolerance, ident::EiDesign::damped_fit);
-    d["shapers"].push_back({{"type", c.at("type")}, {"freq_hz", f}, {"response", ident::residual_vibration_curve(shaper, f, zeta)}});
+    d["shapers"].push_back(
+        {{"type", c.at("type")}, {"freq_hz", f}, {"response", ident::residual_vibration_curve(shaper, f, zeta)}});
   }
   return d;
 }

@@ -16,9 +16,9 @@ double calibrate_param(const fitting::FitResult& f, const std::string& name);
 
 /// The measured record (time s, input, output; thinned to about 4000 points) and each step's own
 /// fitted model over the samples its fit used.
-nlohmann::json step_plotdata(const std::string& csv, const ident::StepAnalysis& steps, const std::string& in_col = "feed",
-                             const std::string& out_col = "force", const std::string& u_label = "feed (mm/s)",
-                             const std::string& y_label = "force (N)");
+nlohmann::json step_plotdata(const std::string& csv, const ident::StepAnalysis& steps,
+                             const std::string& in_col = "feed", const std::string& out_col = "force",
+                             const std::string& u_label = "feed (mm/s)", const std::string& y_label = "force (N)");
 /// Magnitude and phase of the measured frequency response and of the fitted models (the results of
 /// `tunekit freq`).
 nlohmann::json bode_plotdata(const nlohmann::json& freq_results);

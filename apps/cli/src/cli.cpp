@@ -14,7 +14,6 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/version.hpp"
 
-
 namespace tunekit::cli {
 namespace {
 thread_local int g_exit_code = 0;  // per thread: batch runs commands in parallel
@@ -30,7 +29,8 @@ std::size_t cli_edit_distance(const std::string& a, const std::string& b) {
     for (std::size_t j = 1; j <= m; ++j) {
       const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
       d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
     }
   return d[n][m];
 }
@@ -107,8 +107,8 @@ void add_output_options(CLI::App* sub, OutputOptions& o, bool recordable) {
   // The long name is --json-file: --output names the output column in step and freq.
   sub->add_option("-o,--json-file", o.output_path, "Also write the JSON results to this file");
   sub->add_option("--require", o.require,
-                   "CI threshold on a result, e.g. 'tau_s<0.6' or 'x.freq_hz>=35' (repeatable); exit 1 naming each "
-                   "unmet one");
+                  "CI threshold on a result, e.g. 'tau_s<0.6' or 'x.freq_hz>=35' (repeatable); exit 1 naming each "
+                  "unmet one");
   if (recordable) add_record_options(sub, o);
 }
 
@@ -123,16 +123,18 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   CliContext ctx{out, err};
   ctx.interactive = ::isatty(STDERR_FILENO) != 0;
   g_exit_code = 0;
-  CLI::App app{"tunekit: system identification and calibration for extrusion 3D printers.\n"
-               "Fits liquefier dynamics, melt rheology and axis resonances, and exports pressure advance\n"
-               "and input shaper settings to Marlin, Klipper and RepRapFirmware.",
-               "tunekit"};
+  CLI::App app{
+      "tunekit: system identification and calibration for extrusion 3D printers.\n"
+      "Fits liquefier dynamics, melt rheology and axis resonances, and exports pressure advance\n"
+      "and input shaper settings to Marlin, Klipper and RepRapFirmware.",
+      "tunekit"};
   app.set_version_flag("--version", std::string("tunekit ") + core::kVersion);
   app.add_flag("-v,--verbose", ctx.verbosity, "More output on stderr (repeat for more)");
   app.require_subcommand(1);
   app.fallthrough();
-  app.footer("Exit codes: 0 ok, 1 fit failed or requirement unmet, 2 usage or bad input, 3 machine failure.\n"
-             "Run 'tunekit COMMAND --help' for a command's options and examples.");
+  app.footer(
+      "Exit codes: 0 ok, 1 fit failed or requirement unmet, 2 usage or bad input, 3 machine failure.\n"
+      "Run 'tunekit COMMAND --help' for a command's options and examples.");
 
   register_step(app, ctx);
   register_freq(app, ctx);

@@ -37,7 +37,7 @@ struct BatchArgs {
 
 struct Job {
   std::string file;
-  std::vector<std::string> args;  // the equivalent command line, for the summary; empty: skipped
+  std::vector<std::string> args;      // the equivalent command line, for the summary; empty: skipped
   std::function<Envelope()> analyze;  // the command's compute(), as its envelope
   std::string skip_reason;
   int code = 0;
@@ -67,7 +67,8 @@ std::vector<std::string> sniff_columns(const std::string& path) {
     std::istringstream hs(header);
     while (std::getline(hs, field, ',')) {
       auto name = ident::split_name_unit(field).first;
-      std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      std::transform(name.begin(), name.end(), name.begin(),
+                     [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
       cols.push_back(name);
     }
     return cols;
@@ -190,7 +191,8 @@ int run_batch(const BatchArgs& a, CliContext& ctx) {
         for (const auto& r : requirements) {
           try {
             const auto o = evaluate_requirement(r, j.results);
-            reqs.push_back({{"expression", r.expression}, {"path", o.resolved_path}, {"value", o.value}, {"met", o.met}});
+            reqs.push_back(
+                {{"expression", r.expression}, {"path", o.resolved_path}, {"value", o.value}, {"met", o.met}});
             if (!o.met) {
               code = static_cast<int>(ExitCode::fit_failed);
               ctx.err << fmt::format("tunekit: {}: requirement not met: {} ({} = {:.6g})\n", j.file, r.expression,

@@ -80,10 +80,10 @@ Envelope to_envelope(const BeltsOutcome& o) {
 
 void print_text(const BeltsOutcome& o, std::ostream& os) {
   const double diff = o.difference_hz, diff_se = o.difference_stderr_hz;
-  os << fmt::format("belt A ({}): {:.2f} Hz +- {:.2g} ({}, strength {:.1f})\n", o.options.file_a,
-                    o.a.damped_freq_hz, o.a.freq_stderr_hz, o.a.channel, o.a.strength);
-  os << fmt::format("belt B ({}): {:.2f} Hz +- {:.2g} ({}, strength {:.1f})\n", o.options.file_b,
-                    o.b.damped_freq_hz, o.b.freq_stderr_hz, o.b.channel, o.b.strength);
+  os << fmt::format("belt A ({}): {:.2f} Hz +- {:.2g} ({}, strength {:.1f})\n", o.options.file_a, o.a.damped_freq_hz,
+                    o.a.freq_stderr_hz, o.a.channel, o.a.strength);
+  os << fmt::format("belt B ({}): {:.2f} Hz +- {:.2g} ({}, strength {:.1f})\n", o.options.file_b, o.b.damped_freq_hz,
+                    o.b.freq_stderr_hz, o.b.channel, o.b.strength);
   os << fmt::format("difference A - B: {:+.2f} Hz [{:+.2f}, {:+.2f}]   tension ratio (fA/fB)^2: {:.3f}\n", diff,
                     diff - 1.96 * diff_se, diff + 1.96 * diff_se, o.tension_ratio);
 }
@@ -98,8 +98,9 @@ struct BeltsCommand {
 void register_belts(CLI::App& app, CliContext& ctx) {
   auto cmd = std::make_shared<BeltsCommand>();
   BeltsOptions& o = cmd->options;
-  auto* sub = app.add_subcommand("belts", "Compare two belts from a pluck recording of each: frequencies, difference, "
-                                          "tension ratio");
+  auto* sub = app.add_subcommand("belts",
+                                 "Compare two belts from a pluck recording of each: frequencies, difference, "
+                                 "tension ratio");
   sub->add_option("belt_a", o.file_a, "Accelerometer CSV of belt A's pluck (#time,accel_x,accel_y,accel_z)")
       ->required();
   sub->add_option("belt_b", o.file_b, "Accelerometer CSV of belt B's pluck")->required();

@@ -138,9 +138,12 @@ std::string utc_stamp() {
 int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   const bool sim = a.machine == "sim";
   if (!sim && a.profile.empty())
-    throw InputError("a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
-  const std::string profile_path = !a.profile.empty() ? a.profile : std::string(TUNEKIT_DATASETS_DIR) + "/machines/sim.toml";
-  const auto profile = !a.profile.empty() ? protocols::load_machine_profile(a.profile) : protocols::builtin_sim_profile();
+    throw InputError(
+        "a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
+  const std::string profile_path =
+      !a.profile.empty() ? a.profile : std::string(TUNEKIT_DATASETS_DIR) + "/machines/sim.toml";
+  const auto profile =
+      !a.profile.empty() ? protocols::load_machine_profile(a.profile) : protocols::builtin_sim_profile();
 
   std::vector<Experiment> exps;
   const bool camera_path =
@@ -157,7 +160,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   if (camera_path)
     for (const auto& t : camera_tests()) exps.push_back({t.name, t.protocol, "", t.params});
   if (!a.skip_axes) {
-    if (!profile.sensors.accelerometer) throw InputError("the axis sweeps need an accelerometer ([sensors] accelerometer = true)", profile_path);
+    if (!profile.sensors.accelerometer)
+      throw InputError("the axis sweeps need an accelerometer ([sensors] accelerometer = true)", profile_path);
     exps.push_back({"axis-x", "axis-sweep", "x", {}});
     exps.push_back({"axis-y", "axis-sweep", "y", {}});
   }
@@ -195,8 +199,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     o.sim_options = a.sim_options;
     // The simulated printer runs the firmware being calibrated (its planner rules and dialect).
     if (sim && std::none_of(o.sim_options.begin(), o.sim_options.end(),
-                            [](const std::string& s) { return s.rfind("firmware=", 0) == 0; }))
-    {
+                            [](const std::string& s) { return s.rfind("firmware=", 0) == 0; })) {
       // Kalico is a Klipper fork: its G-code, API server and planner are Klipper's.
       const auto fw = protocols::parse_export_firmware(a.firmware);
       o.sim_options.push_back(
@@ -260,8 +263,12 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   auto add_input = [&](const std::string& path) {
     env.add_input(fs::relative(path, run_dir).generic_string(), ident::read_file_bytes(path));
   };
-  env.set_options({{"machine", a.machine}, {"profile", a.profile.empty() ? "builtin" : a.profile},
-                   {"firmware", a.firmware}, {"config", a.config}, {"write", a.write}, {"sim", a.sim_options}});
+  env.set_options({{"machine", a.machine},
+                   {"profile", a.profile.empty() ? "builtin" : a.profile},
+                   {"firmware", a.firmware},
+                   {"config", a.config},
+                   {"write", a.write},
+                   {"sim", a.sim_options}});
   nlohmann::json& res = env.results();
   nlohmann::json plot = nlohmann::json::object();
   res["machine"] = profile.name;
@@ -297,22 +304,33 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const auto& pooled = width_steps.analysis.pooled;
     if (pooled) step_tau = pooled->param("tau_s");
     add_ring_prediction(cam.results, pooled ? pooled->value("K") : std::nan(""),
-                        pooled ? pooled->value("tau_s") : std::nan(""), pooled ? pooled->value("theta_s") : std::nan(""));
+                        pooled ? pooled->value("tau_s") : std::nan(""),
+                        pooled ? pooled->value("theta_s") : std::nan(""));
     res["liquefier"]["camera"] = cam.results;
-    plot["step"] = step_plotdata(cam.width_csv, width_steps.analysis, "setpoint_width", "width", "set-point width (mm)", "width (mm)");
+    plot["step"] = step_plotdata(cam.width_csv, width_steps.analysis, "setpoint_width", "width", "set-point width (mm)",
+                                 "width (mm)");
     plot["linewidth"] = cam.linewidth_plot;
     export_inputs.push_back(out);
-    summary.push_back({{"label", "liquefier time constant tau (line widths)"}, {"path", "liquefier.step.pooled.params.tau_s.value"}, {"unit", "s"}});
-    summary.push_back({{"label", "tau standard error"}, {"path", "liquefier.step.pooled.params.tau_s.stderr"}, {"unit", "s"}});
-    summary.push_back({{"label", "liquefier dead time theta"}, {"path", "liquefier.step.pooled.params.theta_s.value"}, {"unit", "s"}});
+    summary.push_back({{"label", "liquefier time constant tau (line widths)"},
+                       {"path", "liquefier.step.pooled.params.tau_s.value"},
+                       {"unit", "s"}});
+    summary.push_back(
+        {{"label", "tau standard error"}, {"path", "liquefier.step.pooled.params.tau_s.stderr"}, {"unit", "s"}});
+    summary.push_back({{"label", "liquefier dead time theta"},
+                       {"path", "liquefier.step.pooled.params.theta_s.value"},
+                       {"unit", "s"}});
     summary.push_back({{"label", "width gain K"}, {"path", "liquefier.step.pooled.params.K.value"}, {"unit", "1"}});
     if (cam.results.contains("ring")) {
       summary.push_back({{"label", "ring frequency"}, {"path", "liquefier.camera.ring.freq_hz"}, {"unit", "Hz"}});
       summary.push_back({{"label", "ring gain (measured)"}, {"path", "liquefier.camera.ring.gain"}, {"unit", "1"}});
-      summary.push_back({{"label", "ring phase (measured)"}, {"path", "liquefier.camera.ring.phase_deg"}, {"unit", "deg"}});
+      summary.push_back(
+          {{"label", "ring phase (measured)"}, {"path", "liquefier.camera.ring.phase_deg"}, {"unit", "deg"}});
       if (cam.results["ring"].contains("model_phase_deg")) {
-        summary.push_back({{"label", "ring phase (step model)"}, {"path", "liquefier.camera.ring.model_phase_deg"}, {"unit", "deg"}});
-        summary.push_back({{"label", "dead time from the ring's phase"}, {"path", "liquefier.camera.ring.theta_from_phase_s"}, {"unit", "s"}});
+        summary.push_back(
+            {{"label", "ring phase (step model)"}, {"path", "liquefier.camera.ring.model_phase_deg"}, {"unit", "deg"}});
+        summary.push_back({{"label", "dead time from the ring's phase"},
+                           {"path", "liquefier.camera.ring.theta_from_phase_s"},
+                           {"unit", "s"}});
       }
     }
     for (const auto& w : cam.results["warnings"]) env.warn(w.get<std::string>());
@@ -385,12 +403,13 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     plot["bode"] = bode_plotdata(j.at("results"));
     const std::string p = "liquefier.freq.tf_oe_fit.params.";
     row("tau from the frequency response (chirp, output-error fit)", p + "tau_s.value", "s", p + "tau_s.ci95");
-    notes.push_back(fmt::format("chirp sized from {}: corner {} Hz, {}-{} Hz over {} s, Welch segments of {} samples "
-                                "({} Hz bins)",
-                                chirp_basis, display_number(chirp_plan.corner_hz), display_number(chirp_plan.freq_min_hz),
-                                display_number(chirp_plan.freq_max_hz), display_number(chirp_plan.duration_s),
-                                chirp_plan.welch_segment_samples(fs),
-                                display_number(fs / static_cast<double>(chirp_plan.welch_segment_samples(fs)))));
+    notes.push_back(
+        fmt::format("chirp sized from {}: corner {} Hz, {}-{} Hz over {} s, Welch segments of {} samples "
+                    "({} Hz bins)",
+                    chirp_basis, display_number(chirp_plan.corner_hz), display_number(chirp_plan.freq_min_hz),
+                    display_number(chirp_plan.freq_max_hz), display_number(chirp_plan.duration_s),
+                    chirp_plan.welch_segment_samples(fs),
+                    display_number(fs / static_cast<double>(chirp_plan.welch_segment_samples(fs)))));
     Estimate by_step, by_freq;
     if (step_tau && chirp.oe_fit && calibrate_estimate(*step_tau, "step response", by_step) &&
         calibrate_estimate(chirp.oe_fit->param("tau_s"), "frequency response", by_freq)) {
@@ -432,7 +451,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const auto it = examples.find(a.firmware);
     if (it == examples.end()) throw InputError("--firmware must be klipper, kalico, marlin or rrf");
     config = run_dir + "/config/" + it->second;
-    fs::copy_file(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/" + it->second, config, fs::copy_options::overwrite_existing);
+    fs::copy_file(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/" + it->second, config,
+                  fs::copy_options::overwrite_existing);
   }
   ExportOptions eo;
   eo.firmware = a.firmware;
@@ -468,8 +488,10 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   const std::string diff = exported.change.diff;
   res["config_diff"] = diff;
   protocols::write_file_atomic(run_dir + "/config/changes.diff", diff);
-  if (exported.settings.pa_k_s) row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
-  if (exported.settings.pa_smooth_s) row("advance smoothing time", "compensators.settings.pa_smooth_s", "s", "", "designed");
+  if (exported.settings.pa_k_s)
+    row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
+  if (exported.settings.pa_smooth_s)
+    row("advance smoothing time", "compensators.settings.pa_smooth_s", "s", "", "designed");
   bar.end(diff.empty() ? "configuration already up to date" : "configuration diff ready");
   res["summary"] = summary;
   res["agreement"] = agreement;
@@ -507,10 +529,12 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
   sub->add_option("-p,--profile", a->profile, "Machine profile TOML: limits (mm, mm/s, mm/s^2) and sensors");
   sub->add_option("--port", a->port, "Serial device, pseudo-terminal or unix:SOCKET of a real machine");
   sub->add_option("--out", a->out_dir, "Run directory (default: runs/calibrate-UTCSTAMP)");
-  sub->add_option("-f,--firmware", a->firmware, "Configuration dialect to update: klipper, kalico, marlin or rrf")->capture_default_str();
+  sub->add_option("-f,--firmware", a->firmware, "Configuration dialect to update: klipper, kalico, marlin or rrf")
+      ->capture_default_str();
   sub->add_option("-c,--config", a->config,
                   "Firmware configuration to update (default: a copy of the bundled example in the run directory)");
-  sub->add_flag("--write", a->write, "Apply the configuration change (backup + atomic replace); default: preview the diff");
+  sub->add_flag("--write", a->write,
+                "Apply the configuration change (backup + atomic replace); default: preview the diff");
   sub->add_flag("--skip-liquefier", a->skip_liquefier, "Leave out the liquefier flow sweep and chirp tests");
   sub->add_flag("--skip-axes", a->skip_axes, "Leave out the X and Y resonance sweeps");
   sub->add_option("--sim", a->sim_options, "Simulator truth and faults, KEY=VALUE (see 'tunekit run --help')");
@@ -519,11 +543,14 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
                   "tests, photographed), auto (load-cell when the profile has one, else camera)")
       ->capture_default_str();
   sub->add_option("--camera", a->camera.camera, "Camera path: 'sim' photographs the simulated printer's print");
-  sub->add_option("--photo", a->camera.photo, "Camera path: a photo of the printed tests from above (bed X to the right)");
-  sub->add_option("--camera-device", a->camera.camera_device,
-                  "Camera path: take the photo with this camera (e.g. /dev/video0; focus and exposure settle, frames averaged)");
+  sub->add_option("--photo", a->camera.photo,
+                  "Camera path: a photo of the printed tests from above (bed X to the right)");
+  sub->add_option(
+      "--camera-device", a->camera.camera_device,
+      "Camera path: take the photo with this camera (e.g. /dev/video0; focus and exposure settle, frames averaged)");
   sub->add_option("--px-per-mm", a->camera.px_per_mm, "Camera path: the photo's scale on the bed (px/mm)");
-  sub->add_option("--camera-frames", a->camera.frames, "Camera path: frames averaged from --camera-device")->capture_default_str();
+  sub->add_option("--camera-frames", a->camera.frames, "Camera path: frames averaged from --camera-device")
+      ->capture_default_str();
   add_output_options(sub, a->output);
   sub->footer(
       "Examples:\n"
@@ -538,7 +565,8 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
       "    tunekit calibrate --machine sim --liquefier load-cell\n"
       "    tunekit calibrate --profile klipper-printer.toml --port unix:/tmp/klippy_uds --liquefier load-cell\n"
       "  camera     prints a line test (flow steps along straight lines) and a ring test, then measures a photo:\n"
-      "    tunekit calibrate --machine sim --liquefier camera --camera sim        # the simulator photographs its print\n"
+      "    tunekit calibrate --machine sim --liquefier camera --camera sim        # the simulator photographs its "
+      "print\n"
       "    tunekit calibrate --profile p.toml --port /dev/ttyACM0 --liquefier camera --camera-device /dev/video0 \\\n"
       "                      --px-per-mm 12\n"
       "    tunekit calibrate --profile p.toml --port /dev/ttyACM0 --liquefier camera --photo tests.jpg --px-per-mm 12\n"

@@ -54,12 +54,9 @@ ident::DeltaGeometry delta_nominal(const DeltaOptions& a) {
 }
 
 nlohmann::json delta_geometry_json(const ident::DeltaGeometry& g) {
-  return {{"delta_radius_mm", g.radius_mm},
-          {"diagonal_rod_mm", g.rod_mm},
-          {"tower_angle_deg", g.angle_deg},
-          {"endstop_adjustment_mm", g.endstop_mm},
-          {"homed_height_mm", g.homed_height_mm},
-          {"tilt_x_percent", g.tilt_x * 100.0},
+  return {{"delta_radius_mm", g.radius_mm},       {"diagonal_rod_mm", g.rod_mm},
+          {"tower_angle_deg", g.angle_deg},       {"endstop_adjustment_mm", g.endstop_mm},
+          {"homed_height_mm", g.homed_height_mm}, {"tilt_x_percent", g.tilt_x * 100.0},
           {"tilt_y_percent", g.tilt_y * 100.0}};
 }
 
@@ -91,11 +88,15 @@ DeltaOutcome compute_delta(const DeltaOptions& a) {
   if (outcome.firmware) {
     switch (*outcome.firmware) {
       case protocols::ExportFirmware::kalico:
-      case protocols::ExportFirmware::klipper: outcome.export_text = protocols::delta_klipper_save_config(cal.fitted); break;
+      case protocols::ExportFirmware::klipper:
+        outcome.export_text = protocols::delta_klipper_save_config(cal.fitted);
+        break;
       case protocols::ExportFirmware::marlin:
         outcome.export_text = protocols::delta_marlin_gcode(cal.fitted, a.marlin_probe_z_offset_mm);
         break;
-      case protocols::ExportFirmware::rrf: outcome.export_text = protocols::delta_rrf_gcode(cal.fitted, a.print_radius_mm); break;
+      case protocols::ExportFirmware::rrf:
+        outcome.export_text = protocols::delta_rrf_gcode(cal.fitted, a.print_radius_mm);
+        break;
     }
   }
   outcome.warnings = cal.fit.warnings;
@@ -152,16 +153,20 @@ void register_delta(CLI::App& app, CliContext& ctx) {
   auto cmd = std::make_shared<DeltaCommand>();
   DeltaOptions& o = cmd->options;
   auto* sub = app.add_subcommand("delta", "Delta printer calibration: fit geometric errors to probe heights, export");
-  sub->add_option("probes", o.probes_csv, "CSV of probe heights: x_mm,y_mm,z_mm (G30 S-1 trigger heights)")
-      ->required();
+  sub->add_option("probes", o.probes_csv, "CSV of probe heights: x_mm,y_mm,z_mm (G30 S-1 trigger heights)")->required();
   sub->add_option("-f,--factors", o.factors,
                   "Factors: 3 endstops, 4 +radius, 6 +tower angles A/B, 7 +rod, 8 = 6 +bed tilt, 9 = 7 +tilt")
       ->capture_default_str();
   sub->add_option("--radius", o.radius_mm, "Firmware's delta radius while probing (mm)");
   sub->add_option("--rod", o.rod_mm, "Firmware's diagonal rod length, one or three values (mm)")->delimiter(',');
-  sub->add_option("--height", o.height_mm, "Firmware's homed height H (mm; Klipper: position_endstop - endstop adjustment)");
-  sub->add_option("--angles", o.angles_deg, "Firmware's tower angles A,B,C (deg)")->delimiter(',')->capture_default_str();
-  sub->add_option("--endstops", o.endstops_mm, "Firmware's endstop adjustments A,B,C (mm)")->delimiter(',')->capture_default_str();
+  sub->add_option("--height", o.height_mm,
+                  "Firmware's homed height H (mm; Klipper: position_endstop - endstop adjustment)");
+  sub->add_option("--angles", o.angles_deg, "Firmware's tower angles A,B,C (deg)")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--endstops", o.endstops_mm, "Firmware's endstop adjustments A,B,C (mm)")
+      ->delimiter(',')
+      ->capture_default_str();
   sub->add_option("--export", o.export_firmware, "Print the fitted settings for klipper, marlin or rrf");
   sub->add_option("--export-file", o.export_file, "Write the exported settings to this file (atomically)");
   sub->add_option("--print-radius", o.print_radius_mm, "RepRapFirmware's M665 B, printable radius (mm)");

@@ -34,7 +34,6 @@
 #include "tunekit/protocols/orca_profile.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 
-
 namespace tunekit::cli {
 namespace {
 
@@ -56,16 +55,18 @@ constexpr double kPlausibleMaxDesignFlow_mm3_s = 1000;
 /// Refuses non-finite and implausible values (exit 2) before anything is computed from them.
 void check_plausible(const protocols::CompensatorSettings& s) {
   if (s.pa_k_s && !(*s.pa_k_s >= 0 && *s.pa_k_s <= kPlausibleMaxAdvanceK_s))
-    throw InputError(fmt::format("advance K {} s is not plausible (accepted: 0 to {} s)", *s.pa_k_s, kPlausibleMaxAdvanceK_s));
+    throw InputError(
+        fmt::format("advance K {} s is not plausible (accepted: 0 to {} s)", *s.pa_k_s, kPlausibleMaxAdvanceK_s));
   if (s.pa_smooth_s && !(*s.pa_smooth_s >= 0 && *s.pa_smooth_s <= kPlausibleMaxSmoothing_s))
     throw InputError(fmt::format("smoothing time {} s is not plausible (accepted: 0 to {} s)", *s.pa_smooth_s,
                                  kPlausibleMaxSmoothing_s));
   for (const auto& [axis, sh] : s.shapers) {
     if (!(sh.freq_hz >= kPlausibleMinShaperFreq_hz && sh.freq_hz <= kPlausibleMaxShaperFreq_hz))
-      throw InputError(fmt::format("{} shaper frequency {} Hz is not plausible (accepted: {} to {} Hz)", axis, sh.freq_hz,
-                                   kPlausibleMinShaperFreq_hz, kPlausibleMaxShaperFreq_hz));
+      throw InputError(fmt::format("{} shaper frequency {} Hz is not plausible (accepted: {} to {} Hz)", axis,
+                                   sh.freq_hz, kPlausibleMinShaperFreq_hz, kPlausibleMaxShaperFreq_hz));
     if (!(sh.damping >= 0 && sh.damping < 1))
-      throw InputError(fmt::format("{} shaper damping ratio {} is not plausible (accepted: 0 to below 1)", axis, sh.damping));
+      throw InputError(
+          fmt::format("{} shaper damping ratio {} is not plausible (accepted: 0 to below 1)", axis, sh.damping));
   }
 }
 
@@ -89,8 +90,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
     check_plausible(given);
   }
   if (std::isfinite(a.design_flow) && !(a.design_flow > 0 && a.design_flow <= kPlausibleMaxDesignFlow_mm3_s))
-    throw InputError(fmt::format("--design-flow {} mm^3/s is not plausible (accepted: above 0 to {} mm^3/s)", a.design_flow,
-                                 kPlausibleMaxDesignFlow_mm3_s));
+    throw InputError(fmt::format("--design-flow {} mm^3/s is not plausible (accepted: above 0 to {} mm^3/s)",
+                                 a.design_flow, kPlausibleMaxDesignFlow_mm3_s));
   Envelope& env = outcome.envelope;
   ident::AdvanceInputs in;
   double freq_tau = fitting::kNaN;
@@ -99,7 +100,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
   // Operating points whose u is a volumetric flow (mm^3/s): converted to filament feed once the
   // filament area is known.
   std::vector<bool> point_is_flow;
-  std::vector<std::string> unnamed_axes;  // shaper results under a file stem instead of an axis
+  std::vector<std::string> unnamed_axes;          // shaper results under a file stem instead of an axis
   std::optional<ident::TauPowerLaw> trend_tau_u;  // tau = a u^b over the operating points' u
   std::vector<ident::FlowTau> levels;             // results.flow_levels (u or flow)
   std::vector<bool> level_is_flow;
@@ -192,11 +193,13 @@ ExportOutcome compute_export(const ExportOptions& a) {
           if (!rec.is_object()) continue;
           if (axis != "x" && axis != "y") {
             if (axis == "z")
-              env.warn(fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
+              env.warn(
+                  fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
             else {
-              unnamed_axes.push_back(fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; run "
-                                                 "'tunekit shaper' on it with --axis x or --axis y",
-                                                 path, axis));
+              unnamed_axes.push_back(
+                  fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; run "
+                              "'tunekit shaper' on it with --axis x or --axis y",
+                              path, axis));
               env.warn(unnamed_axes.back());
             }
             continue;
@@ -232,17 +235,19 @@ ExportOutcome compute_export(const ExportOptions& a) {
               }
             }
             if (!best)
-              throw InputError(fmt::format("axes.{}: the recommended shaper {} is not available in {} and no candidate "
-                                           "is ({} has {}{}); run 'tunekit shaper --firmware {}'",
-                                           axis, s.type, protocols::limits::firmware_title(fw),
-                                           protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw),
-                                           fw == protocols::ExportFirmware::marlin ? ": its input shaping is ZV only" : "",
-                                           protocols::to_string(fw)),
-                               path);
-            env.warn(fmt::format("{}: axis {}: the recommended {} shaper is not available in {} (it has {}); using the "
-                                 "best-scoring candidate it has: {} at {:.1f} Hz",
-                                 path, axis, s.type, protocols::limits::firmware_title(fw),
-                                 protocols::limits::shaper_list(fw), best->type, best->freq_hz));
+              throw InputError(
+                  fmt::format("axes.{}: the recommended shaper {} is not available in {} and no candidate "
+                              "is ({} has {}{}); run 'tunekit shaper --firmware {}'",
+                              axis, s.type, protocols::limits::firmware_title(fw),
+                              protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw),
+                              fw == protocols::ExportFirmware::marlin ? ": its input shaping is ZV only" : "",
+                              protocols::to_string(fw)),
+                  path);
+            env.warn(
+                fmt::format("{}: axis {}: the recommended {} shaper is not available in {} (it has {}); using the "
+                            "best-scoring candidate it has: {} at {:.1f} Hz",
+                            path, axis, s.type, protocols::limits::firmware_title(fw),
+                            protocols::limits::shaper_list(fw), best->type, best->freq_hz));
             s = *best;
           }
           shapers[axis] = s;
@@ -270,9 +275,10 @@ ExportOutcome compute_export(const ExportOptions& a) {
     in.tau_source = "freq";
   } else if (std::isfinite(in.tau_s) && std::isfinite(freq_tau) &&
              std::abs(freq_tau - in.tau_s) > 0.2 * std::max(in.tau_s, freq_tau)) {
-    env.warn(fmt::format("the step response gives tau = {:.4g} s, the frequency response {:.4g} s: they differ by more "
-                         "than 20 %; the step value is used",
-                         in.tau_s, freq_tau));
+    env.warn(
+        fmt::format("the step response gives tau = {:.4g} s, the frequency response {:.4g} s: they differ by more "
+                    "than 20 %; the step value is used",
+                    in.tau_s, freq_tau));
   }
   if (std::isfinite(a.pa_k)) {
     in.tau_s = a.pa_k;
@@ -312,7 +318,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
   {
     // The note that replaces a changed line's trailing comment: what set it, from which results, when.
     std::string from;
-    for (const auto& path : a.results) from += (from.empty() ? "" : ", ") + std::filesystem::path(path).filename().string();
+    for (const auto& path : a.results)
+      from += (from.empty() ? "" : ", ") + std::filesystem::path(path).filename().string();
     if (std::isfinite(a.pa_k) || !a.shaper_x.empty() || !a.shaper_y.empty())
       from += from.empty() ? "the command line" : " and the command line";
     const std::time_t now = std::time(nullptr);
@@ -320,14 +327,16 @@ ExportOutcome compute_export(const ExportOptions& a) {
     ::gmtime_r(&now, &tm);
     char day[16];
     std::strftime(day, sizeof day, "%Y-%m-%d", &tm);
-    settings.change_note = fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : from, day);
+    settings.change_note =
+        fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : from, day);
   }
   std::optional<ident::AdvanceDesign>& design = outcome.design;
   const bool have_tau = std::isfinite(in.tau_s) || !in.points.empty();
   if (!a.no_pa && have_tau) {
     if (a.profile.empty())
-      env.warn("no --profile: assuming 1.75 mm filament, a 0.45 x 0.2 mm line at 60 mm/s, and no acceleration limits "
-               "(the smoothing time is not designed)");
+      env.warn(
+          "no --profile: assuming 1.75 mm filament, a 0.45 x 0.2 mm line at 60 mm/s, and no acceleration limits "
+          "(the smoothing time is not designed)");
     design = ident::design_advance(in);
     settings.pa_k_s = design->k_s;
     settings.pa_smooth_s = protocols::smoothing_time_for(fw, *design);
@@ -347,7 +356,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
       }
     } else {
       for (const auto& p : in.points)
-        if (std::isfinite(p.feed_mm_s) && std::isfinite(p.tau_s)) fin.levels.push_back({p.feed_mm_s * in.filament_area_mm2, p.tau_s});
+        if (std::isfinite(p.feed_mm_s) && std::isfinite(p.tau_s))
+          fin.levels.push_back({p.feed_mm_s * in.filament_area_mm2, p.tau_s});
     }
     if (trend_tau_u) {
       // tau = a u^b with u a feed (mm/s): in flow, a (Q/A)^b = (a A^-b) Q^b.
@@ -372,7 +382,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
         const std::size_t i = static_cast<std::size_t>(it - rq.begin());
         return rr[i - 1] + (q - rq[i - 1]) / (rq[i] - rq[i - 1]) * (rr[i] - rr[i - 1]);
       };
-      const double qref = std::isfinite(in.rheo_reference_flow_mm3_s) ? in.rheo_reference_flow_mm3_s : flow->design_flow_mm3_s;
+      const double qref =
+          std::isfinite(in.rheo_reference_flow_mm3_s) ? in.rheo_reference_flow_mm3_s : flow->design_flow_mm3_s;
       const double scale = ident::flow_tau_s(fin, qref) / rel_at(qref);
       std::vector<double> fq, ft;
       double gap = 0;
@@ -381,12 +392,13 @@ ExportOutcome compute_export(const ExportOptions& a) {
         ft.push_back(scale * rel_at(c.flow_mm3_s));
         gap = std::max(gap, std::abs(ft.back() - c.tau_s) / c.tau_s);
       }
-      flow_rheology = nlohmann::json{{"flow_mm3_s", fq}, {"tau_pred_s", ft}, {"max_gap_rel", gap},
-                                     {"reference_flow_mm3_s", qref}};
+      flow_rheology =
+          nlohmann::json{{"flow_mm3_s", fq}, {"tau_pred_s", ft}, {"max_gap_rel", gap}, {"reference_flow_mm3_s", qref}};
       if (gap > 0.2)
-        env.warn(fmt::format("the rheology prediction of tau(Q) differs from the measured one by up to {:.0f} % over the "
-                             "identified flows (scaled to agree at {:.3g} mm^3/s)",
-                             100 * gap, qref));
+        env.warn(
+            fmt::format("the rheology prediction of tau(Q) differs from the measured one by up to {:.0f} % over the "
+                        "identified flows (scaled to agree at {:.3g} mm^3/s)",
+                        100 * gap, qref));
     }
     settings.pa_k_s = flow->k_design_s;
     // One design everywhere: the per-flow schedule and K follow the flow design (which uses the
@@ -426,18 +438,18 @@ ExportOutcome compute_export(const ExportOptions& a) {
   env.add_input(a.config, result.original);
   for (const auto& w : result.warnings) env.warn(w);
 
-  env.set_options({{"firmware", protocols::to_string(fw)},
-                   {"config", a.config},
-                   {"profile", a.profile},
-                   {"pa_k_s", std::isfinite(a.pa_k) ? nlohmann::json(a.pa_k) : nlohmann::json(nullptr)},
-                   {"pa_smooth_s", std::isfinite(a.pa_smooth) ? nlohmann::json(a.pa_smooth) : nlohmann::json(nullptr)},
-                   {"design_flow_mm3_s",
-                    std::isfinite(a.design_flow) ? nlohmann::json(a.design_flow) : nlohmann::json(nullptr)},
-                   {"shaper_x", a.shaper_x},
-                   {"shaper_y", a.shaper_y},
-                   {"no_pa", a.no_pa},
-                   {"no_shaper", a.no_shaper},
-                   {"write", a.write}});
+  env.set_options(
+      {{"firmware", protocols::to_string(fw)},
+       {"config", a.config},
+       {"profile", a.profile},
+       {"pa_k_s", std::isfinite(a.pa_k) ? nlohmann::json(a.pa_k) : nlohmann::json(nullptr)},
+       {"pa_smooth_s", std::isfinite(a.pa_smooth) ? nlohmann::json(a.pa_smooth) : nlohmann::json(nullptr)},
+       {"design_flow_mm3_s", std::isfinite(a.design_flow) ? nlohmann::json(a.design_flow) : nlohmann::json(nullptr)},
+       {"shaper_x", a.shaper_x},
+       {"shaper_y", a.shaper_y},
+       {"no_pa", a.no_pa},
+       {"no_shaper", a.no_shaper},
+       {"write", a.write}});
 
   auto& res = env.results();
   nlohmann::json sj = nlohmann::json::object();
@@ -454,7 +466,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
   res["flow_advance"] = flow ? flow->to_json() : nlohmann::json(nullptr);
   if (flow && !flow_rheology.is_null()) res["flow_advance"]["rheology"] = flow_rheology;
   if (!a.plot_out.empty()) {
-    if (!flow) throw InputError("--plot needs a flow-dependent advance: results of 'tunekit step' with two or more levels");
+    if (!flow)
+      throw InputError("--plot needs a flow-dependent advance: results of 'tunekit step' with two or more levels");
     render_figure(flow_advance_figure(res["flow_advance"]), a.plot_out);
   }
   res["export"] = result.to_json();
@@ -490,7 +503,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
       env.add_input(a.orca_in, base);
       const auto m = protocols::merge_orca_filament_profile(base, op, a.orca_in);
       text = m.text;
-      res["orca"] = {{"profile", a.orca_out}, {"merged_from", a.orca_in}, {"changed", m.changed_keys}, {"added", m.added_keys}};
+      res["orca"] = {
+          {"profile", a.orca_out}, {"merged_from", a.orca_in}, {"changed", m.changed_keys}, {"added", m.added_keys}};
     } else {
       text = protocols::new_orca_filament_profile(op, a.orca_name, "");
       res["orca"] = {{"profile", a.orca_out}, {"merged_from", nullptr}};
@@ -516,8 +530,11 @@ ExportOutcome compute_export(const ExportOptions& a) {
     nlohmann::json ch = nlohmann::json::array();
     for (const auto& c : g.changes)
       ch.push_back({{"line", c.line}, {"feature", c.feature}, {"flow_mm3_s", c.flow_mm3_s}, {"K_s", c.k_s}});
-    res["gcode_post"] = {{"in", a.sliced_in}, {"out", a.sliced_out}, {"features", g.features},
-                         {"hysteresis", a.hysteresis}, {"changes", ch}};
+    res["gcode_post"] = {{"in", a.sliced_in},
+                         {"out", a.sliced_out},
+                         {"features", g.features},
+                         {"hysteresis", a.hysteresis},
+                         {"changes", ch}};
     batch.add(a.sliced_out, g.text);
   }
   return outcome;
@@ -547,29 +564,28 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
   if (!output.json) {
     print_text(o, ctx.out);
     if (design)
-      ctx.err << fmt::format("tunekit: advance K = {:.4g} s ({}) at {:.3g} mm^3/s{}\n", design->k_s, design->k_source,
-                             design->design_flow_mm3_s,
-                             settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s)
-                                                  : std::string());
+      ctx.err << fmt::format(
+          "tunekit: advance K = {:.4g} s ({}) at {:.3g} mm^3/s{}\n", design->k_s, design->k_source,
+          design->design_flow_mm3_s,
+          settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s) : std::string());
     if (flow) {
-      ctx.err << fmt::format("tunekit: the single K stays within 10 % of the need from {:.3g} to {:.3g} mm^3/s "
-                             "(identified {:.3g}-{:.3g} mm^3/s)\n",
-                             flow->k_within_lo_mm3_s, flow->k_within_hi_mm3_s, flow->flow_min_mm3_s, flow->flow_max_mm3_s);
-      ctx.err << fmt::format("tunekit: Kalico {}: linear_advance {:.4g} s, nonlinear_offset {:.4g} mm, "
-                             "linearization_velocity {:.4g} mm/s (within {:.1f} % of the need)\n",
-                             ident::to_string(flow->kalico.model), flow->kalico.linear_advance_s,
-                             flow->kalico.nonlinear_offset_mm, flow->kalico.linearization_velocity_mm_s,
-                             100 * flow->kalico.max_rel_error);
+      ctx.err << fmt::format(
+          "tunekit: the single K stays within 10 % of the need from {:.3g} to {:.3g} mm^3/s "
+          "(identified {:.3g}-{:.3g} mm^3/s)\n",
+          flow->k_within_lo_mm3_s, flow->k_within_hi_mm3_s, flow->flow_min_mm3_s, flow->flow_max_mm3_s);
+      ctx.err << fmt::format(
+          "tunekit: Kalico {}: linear_advance {:.4g} s, nonlinear_offset {:.4g} mm, "
+          "linearization_velocity {:.4g} mm/s (within {:.1f} % of the need)\n",
+          ident::to_string(flow->kalico.model), flow->kalico.linear_advance_s, flow->kalico.nonlinear_offset_mm,
+          flow->kalico.linearization_velocity_mm_s, 100 * flow->kalico.max_rel_error);
     }
     // The design's notes say what it means (nothing to act on): informational lines, not warnings.
     if (design)
       for (const auto& n : design->notes) ctx.err << "tunekit: note: " << n << "\n";
     if (!result.changed())
       ctx.err << fmt::format("tunekit: {} already has these settings; nothing to change\n", a.config);
-    else if (a.write)
-      ctx.err << fmt::format("tunekit: wrote {} (backup: {})\n", a.config, backup);
-    else
-      ctx.err << "tunekit: preview only; add --write to apply (a timestamped backup is kept)\n";
+    else if (a.write) ctx.err << fmt::format("tunekit: wrote {} (backup: {})\n", a.config, backup);
+    else ctx.err << "tunekit: preview only; add --write to apply (a timestamped backup is kept)\n";
     if (!result.gcode.empty()) ctx.err << "tunekit: the same settings as G-code:\n" << result.gcode;
     for (const auto& n : result.notes) ctx.err << "tunekit: " << n << "\n";
     if (!schedule.empty() && design && design->schedule.size() >= 2)

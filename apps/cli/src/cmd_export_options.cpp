@@ -30,8 +30,6 @@
 #include "tunekit/protocols/orca_profile.hpp"
 #include "tunekit/protocols/machine_profile.hpp"
 
-
-
 namespace tunekit::cli {
 namespace {
 
@@ -49,8 +47,10 @@ CLI::Option* export_finite_option(CLI::App* sub, const std::string& name, double
           name,
           [&target, name, unit](const std::string& raw) {
             double v = 0;
-            if (!CLI::detail::lexical_cast(raw, v)) throw CLI::ConversionError("Could not convert: " + name + " = " + raw);
-            if (!std::isfinite(v)) throw InputError(fmt::format("{} must be a finite number ({}), not '{}'", name, unit, raw));
+            if (!CLI::detail::lexical_cast(raw, v))
+              throw CLI::ConversionError("Could not convert: " + name + " = " + raw);
+            if (!std::isfinite(v))
+              throw InputError(fmt::format("{} must be a finite number ({}), not '{}'", name, unit, raw));
             target = v;
           },
           description)
@@ -83,7 +83,6 @@ protocols::ShaperSetting parse_shaper_arg(const std::string& arg, const std::str
   return s;
 }
 
-
 void register_export(CLI::App& app, CliContext& ctx) {
   auto cmd = std::make_shared<ExportCommand>();
   ExportOptions& o = cmd->options;
@@ -101,11 +100,13 @@ void register_export(CLI::App& app, CliContext& ctx) {
                   "Machine profile TOML (filament diameter mm, line width/height mm, print speed mm/s, print and "
                   "extruder acceleration mm/s^2) for the smoothing time");
   export_finite_option(sub, "--pa-k", o.pa_k, "s", "Advance K in s (mm of filament per mm/s), instead of the results");
-  export_finite_option(sub, "--pa-smooth", o.pa_smooth, "s",
-                       "Smoothing time in s (Klipper pressure_advance_smooth_time, Marlin ADVANCE_TAU), instead of the design");
-  export_finite_option(sub, "--design-flow", o.design_flow, "mm^3/s",
-                       "Volumetric flow in mm^3/s the single advance value is designed for (default: print speed x line "
-                       "cross-section)");
+  export_finite_option(
+      sub, "--pa-smooth", o.pa_smooth, "s",
+      "Smoothing time in s (Klipper pressure_advance_smooth_time, Marlin ADVANCE_TAU), instead of the design");
+  export_finite_option(
+      sub, "--design-flow", o.design_flow, "mm^3/s",
+      "Volumetric flow in mm^3/s the single advance value is designed for (default: print speed x line "
+      "cross-section)");
   sub->add_option("--shaper-x", o.shaper_x, "X shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
   sub->add_option("--shaper-y", o.shaper_y, "Y shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
   sub->add_option("--extruder", o.extruder,
@@ -141,12 +142,16 @@ void register_export(CLI::App& app, CliContext& ctx) {
       "Prints a unified diff of the configuration on stdout (a summary and the equivalent G-code on stderr);\n"
       "nothing is written without --write. Running it again after --write changes nothing.\n"
       "Examples:\n"
-      "  tunekit export --firmware klipper --config printer.cfg --profile datasets/machines/sim.toml step.json shaper.json\n"
-      "  tunekit export --firmware marlin --config Marlin/Configuration_adv.h --pa-k 0.045 --shaper-x zv:42:0.1 --write\n"
+      "  tunekit export --firmware klipper --config printer.cfg --profile datasets/machines/sim.toml step.json "
+      "shaper.json\n"
+      "  tunekit export --firmware marlin --config Marlin/Configuration_adv.h --pa-k 0.045 --shaper-x zv:42:0.1 "
+      "--write\n"
       "  tunekit export --firmware rrf --config sys/config.g step.json shaper.json rheo.json --json\n"
       "  tunekit export -f klipper -c printer.cfg --shaper-x mzv:52.4 --shaper-y ei:38.1:0.12 --no-pa\n"
-      "  tunekit export -f kalico -c printer.cfg -p machine.toml sweep.json --orca-in PLA.json --orca-out PLA-tuned.json\n"
-      "  tunekit export -f klipper -c printer.cfg -p machine.toml sweep.json --gcode-in part.gcode --gcode-out part-pa.gcode\n"
+      "  tunekit export -f kalico -c printer.cfg -p machine.toml sweep.json --orca-in PLA.json --orca-out "
+      "PLA-tuned.json\n"
+      "  tunekit export -f klipper -c printer.cfg -p machine.toml sweep.json --gcode-in part.gcode --gcode-out "
+      "part-pa.gcode\n"
       "With two or more identified flow levels the advance is designed per flow (the stored melt volume, the\n"
       "integral of tau over flow): Klipper/Marlin/RepRapFirmware get K at the design flow and the flow range\n"
       "where it stays within 10 % of the need; Kalico its nonlinear model; OrcaSlicer the adaptive table.");

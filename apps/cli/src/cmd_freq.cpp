@@ -127,9 +127,10 @@ FreqOutcome compute_freq(const FreqOptions& a) {
     if (!(a.freq_hz > 0)) throw InputError("sine dwell needs the excitation frequency: --freq-hz F (Hz)");
     if (!a.fit_tf.empty()) throw InputError("--fit-tf needs broadband data: use --mode h1 or --mode oe");
     freq_located(a.file, [&] {
-      o.dwell = ident::sine_dwell(t_all, ycol.values, a.freq_hz,
-                                  a.input_column.empty() ? std::span<const double>() : table.column(a.input_column).values,
-                                  o.output_unit, o.input_unit);
+      o.dwell =
+          ident::sine_dwell(t_all, ycol.values, a.freq_hz,
+                            a.input_column.empty() ? std::span<const double>() : table.column(a.input_column).values,
+                            o.output_unit, o.input_unit);
     });
     for (const auto& w : o.dwell->output.warnings) o.warnings.push_back("output: " + w);
     if (o.dwell->input)
@@ -141,9 +142,11 @@ FreqOutcome compute_freq(const FreqOptions& a) {
   if (a.input_column.empty()) throw InputError("--mode " + mode + " needs the input column: --input COL");
   if (a.mode == FreqMode::oe && a.fit_tf.empty()) throw InputError("--mode oe needs the model structure: --fit-tf P,Z");
   // The broadband analyses use the record from --tmin on (a start-up transient left out).
-  const auto first = static_cast<std::ptrdiff_t>(std::lower_bound(t_all.begin(), t_all.end(), a.tmin_s) - t_all.begin());
+  const auto first =
+      static_cast<std::ptrdiff_t>(std::lower_bound(t_all.begin(), t_all.end(), a.tmin_s) - t_all.begin());
   const std::vector<double> t(t_all.begin() + first, t_all.end());
-  const std::vector<double> u(table.column(a.input_column).values.begin() + first, table.column(a.input_column).values.end());
+  const std::vector<double> u(table.column(a.input_column).values.begin() + first,
+                              table.column(a.input_column).values.end());
   const std::vector<double> y(ycol.values.begin() + first, ycol.values.end());
   if (t.size() < 16)
     throw InputError(fmt::format("too few samples ({}) for a spectral estimate{}", t.size(),
@@ -267,8 +270,8 @@ void print_text(const FreqOutcome& o, std::ostream& os) {
   }
   if (!o.broadband) return;
   const auto& bb = *o.broadband;
-  os << fmt::format("{}: H1 estimate, {:.6g} Hz sampling, {} segments of {} samples, {} bins {:.4g}-{:.4g} Hz\n", a.file,
-                    bb.sample_rate_hz, bb.segments, bb.segment_length, bb.freq_hz.size(), bb.freq_hz.front(),
+  os << fmt::format("{}: H1 estimate, {:.6g} Hz sampling, {} segments of {} samples, {} bins {:.4g}-{:.4g} Hz\n",
+                    a.file, bb.sample_rate_hz, bb.segments, bb.segment_length, bb.freq_hz.size(), bb.freq_hz.front(),
                     bb.freq_hz.back());
   auto print_fit = [&](const char* label, const fitting::FitResult& r) {
     os << fmt::format("  {} {}:", label, r.model);
@@ -289,27 +292,28 @@ struct FreqCommand {
 void register_freq(CLI::App& app, CliContext& ctx) {
   auto cmd = std::make_shared<FreqCommand>();
   FreqOptions& o = cmd->options;
-  auto* sub = app.add_subcommand(
-      "freq", "Liquefier frequency response: sine dwell, broadband H1 and transfer-function fits");
+  auto* sub =
+      app.add_subcommand("freq", "Liquefier frequency response: sine dwell, broadband H1 and transfer-function fits");
   sub->add_option("file", o.file, "CSV log (time in s; units in column names, e.g. 'width (mm)')")->required();
   sub->add_option("-t,--time", o.time_column,
                   "Time column (s; ms and us are converted), strictly increasing; default: found by name (time, t, "
                   "timestamp, time_s)");
   sub->add_option("--input-unit", o.input_unit, "Unit of the input column when its name does not say it");
   sub->add_option("--output-unit", o.output_unit, "Unit of the output column when its name does not say it");
-  sub->add_option("-y,--output", o.output_column, "Output column (e.g. line width in mm, force in N)")
-      ->required();
+  sub->add_option("-y,--output", o.output_column, "Output column (e.g. line width in mm, force in N)")->required();
   sub->add_option("-i,--input", o.input_column, "Input column (e.g. set-point width in mm, feed in mm/s)");
-  add_choice_option<FreqMode>(sub, "--mode", o.mode, {{"dwell", FreqMode::dwell}, {"h1", FreqMode::h1}, {"oe", FreqMode::oe}},
-                  "dwell: sine fit at --freq-hz (non-uniform sampling allowed); h1: broadband H1 estimate with "
-                  "coherence; oe: h1, TF fit, then output-error refinement on the record");
+  add_choice_option<FreqMode>(
+      sub, "--mode", o.mode, {{"dwell", FreqMode::dwell}, {"h1", FreqMode::h1}, {"oe", FreqMode::oe}},
+      "dwell: sine fit at --freq-hz (non-uniform sampling allowed); h1: broadband H1 estimate with "
+      "coherence; oe: h1, TF fit, then output-error refinement on the record");
   sub->add_option("-f,--freq-hz", o.freq_hz, "Excitation frequency for --mode dwell (Hz)");
   sub->add_option("--fit-tf", o.fit_tf, "Fit a transfer function with P,Z poles and zeros (P 1-3, Z 0-2)");
   sub->add_flag("--tf-delay", o.tf_delay, "Include a dead time theta_s (s) in the fitted transfer function");
   sub->add_option("--segment", o.welch.segment_length,
                   "Welch segment length (samples; default: a power of two giving about 16 segments)");
-  add_parsed_option(sub, "--window", o.welch.window, ident::parse_window,
-                    [](ident::WindowType w) { return ident::to_string(w); }, "Welch window: hann, hamming, kaiser, rect");
+  add_parsed_option(
+      sub, "--window", o.welch.window, ident::parse_window, [](ident::WindowType w) { return ident::to_string(w); },
+      "Welch window: hann, hamming, kaiser, rect");
   sub->add_option("--fmin", o.fmin_hz, "Lowest frequency reported and fitted (Hz)");
   sub->add_option("--fmax", o.fmax_hz, "Highest frequency reported and fitted (Hz; default Nyquist)");
   sub->add_option("--tmin", o.tmin_s,

@@ -50,7 +50,9 @@ Envelope to_envelope(const HistoryListOutcome& o) {
   if (o.options.machines.empty()) {
     nlohmann::json list = nlohmann::json::array();
     for (const auto& m : o.machines)
-      list.push_back({{"machine_id", m.machine_id}, {"runs", m.runs}, {"first_run_utc", m.first_run_utc},
+      list.push_back({{"machine_id", m.machine_id},
+                      {"runs", m.runs},
+                      {"first_run_utc", m.first_run_utc},
                       {"last_run_utc", m.last_run_utc}});
     env.results()["machines"] = list;
   } else {
@@ -58,8 +60,13 @@ Envelope to_envelope(const HistoryListOutcome& o) {
     for (const auto& [machine, recs] : o.records) {
       nlohmann::json list = nlohmann::json::array();
       for (const auto& r : recs)
-        list.push_back({{"record_id", r.id}, {"run_utc", r.run_utc}, {"recorded_utc", r.recorded_utc}, {"command", r.command},
-                        {"tool_version", r.tool_version}, {"source", r.source}, {"inputs", r.n_inputs},
+        list.push_back({{"record_id", r.id},
+                        {"run_utc", r.run_utc},
+                        {"recorded_utc", r.recorded_utc},
+                        {"command", r.command},
+                        {"tool_version", r.tool_version},
+                        {"source", r.source},
+                        {"inputs", r.n_inputs},
                         {"quantities", r.n_quantities}});
       per[machine] = list;
     }
@@ -158,7 +165,8 @@ CLI::App* hist_sub(CLI::App* parent, const std::string& name, const std::string&
 }  // namespace
 
 void register_history(CLI::App& app, CliContext& ctx) {
-  auto* hist = app.add_subcommand("history", "Calibration history per machine: list, show, trend and drift, fleet report, import");
+  auto* hist = app.add_subcommand("history",
+                                  "Calibration history per machine: list, show, trend and drift, fleet report, import");
   hist->require_subcommand(1);
   hist->footer(
       "Record with any calibrate, batch or analysis command: --record --machine-id NAME [--db DB].\n"
@@ -204,7 +212,8 @@ void register_history(CLI::App& app, CliContext& ctx) {
   });
 
   auto report = std::make_shared<HistoryCommand>();
-  auto* r = hist_sub(hist, "report", "Fleet HTML report: one row per machine, sparklines, drifted quantities flagged", *report);
+  auto* r = hist_sub(hist, "report", "Fleet HTML report: one row per machine, sparklines, drifted quantities flagged",
+                     *report);
   r->add_option("--out", report->options.html_out, "HTML file to write")->capture_default_str();
   r->add_option("-m,--machine", report->options.machines, "Machine id (repeatable; default: every machine)");
   r->add_option("-q,--quantity", report->options.quantities,
@@ -219,7 +228,8 @@ void register_history(CLI::App& app, CliContext& ctx) {
       [report, &ctx] { set_exit_code(report_outcome(compute_history_report(report->options), report->output, ctx)); });
 
   auto imp = std::make_shared<HistoryCommand>();
-  auto* i = hist_sub(hist, "import", "Import run directories, result files and batch summaries (folders are searched)", *imp);
+  auto* i =
+      hist_sub(hist, "import", "Import run directories, result files and batch summaries (folders are searched)", *imp);
   i->add_option("paths", imp->options.paths, "Run directories, result JSON files, batch summaries or folders of them")
       ->required();
   i->add_option("--machine-id", imp->options.machine_id, "The machine all these results belong to");

@@ -34,7 +34,8 @@ std::string hist_run_time(const fs::path& dir, const fs::path& file) {
   std::smatch m;
   const std::string name = dir.filename().string();
   if (std::regex_search(name, m, stamp))
-    return fmt::format("{}-{}-{}T{}:{}:{}.000Z", m[1].str(), m[2].str(), m[3].str(), m[4].str(), m[5].str(), m[6].str());
+    return fmt::format("{}-{}-{}T{}:{}:{}.000Z", m[1].str(), m[2].str(), m[3].str(), m[4].str(), m[5].str(),
+                       m[6].str());
   std::error_code ec;
   const auto ft = fs::last_write_time(file, ec);
   if (ec) return "";
@@ -48,9 +49,9 @@ std::string hist_run_time(const fs::path& dir, const fs::path& file) {
 }
 
 struct ImportItem {
-  fs::path file;  // the JSON result
-  fs::path dir;   // its run directory (or its folder)
-  fs::path root;  // the PATH given on the command line it was found under
+  fs::path file;                 // the JSON result
+  fs::path dir;                  // its run directory (or its folder)
+  fs::path root;                 // the PATH given on the command line it was found under
   bool found_in_folder = false;  // not named on the command line: skipped (and listed) when it is not a result
 };
 
@@ -97,7 +98,8 @@ HistoryImportOutcome compute_history_import(const HistoryOptions& a) {
     if (fs::is_directory(path)) hist_collect(path, path, items);
     else items.push_back({path, path.parent_path(), path.parent_path()});
   }
-  if (items.empty()) throw InputError("no tunekit results found (run directories with results.json, or result JSON files)");
+  if (items.empty())
+    throw InputError("no tunekit results found (run directories with results.json, or result JSON files)");
   history::Store store(hist_db_of(a));
   out.db = store.connection().name();
   for (const auto& it : items) {
@@ -108,8 +110,9 @@ HistoryImportOutcome compute_history_import(const HistoryOptions& a) {
       machine = rel.empty() || rel == "." ? it.root.filename().string() : rel.begin()->string();
     }
     if (machine.empty())
-      throw InputError("whose results are these? give --machine-id NAME, or --machine-from-path for archive/<machine>/...",
-                       it.file.string());
+      throw InputError(
+          "whose results are these? give --machine-id NAME, or --machine-from-path for archive/<machine>/...",
+          it.file.string());
     const std::string source = fs::weakly_canonical(it.file.filename() == "results.json" ? it.dir : it.file).string();
     std::vector<history::NewRecord> records;
     try {

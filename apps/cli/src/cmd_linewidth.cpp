@@ -71,7 +71,6 @@ nlohmann::json stretches(const vision::MeasuredLine& l, double ppm) {
   return out;
 }
 
-
 std::string overlay_path(const std::string& dir, const std::string& image) {
   return (std::filesystem::path(dir) / (std::filesystem::path(image).stem().string() + "_overlay.png")).string();
 }
@@ -83,14 +82,14 @@ void overlay_best_effort(const LinewidthOptions& a, const ImageRun& run, const v
   try {
     std::filesystem::create_directories(a.overlay_dir);
     vision::write_overlay(overlay_path(a.overlay_dir, run.path),
-                         vision::draw_overlay(run.measured, res, run.target_outline, message));
+                          vision::draw_overlay(run.measured, res, run.target_outline, message));
   } catch (const std::exception& e) {
     err << fmt::format("tunekit: warning: overlay not written: {}\n", e.what());
   }
 }
 
-ImageRun measure_image(const LinewidthOptions& a, const std::string& path, const std::optional<vision::CameraProfile>& cam,
-                       std::ostream& err) {
+ImageRun measure_image(const LinewidthOptions& a, const std::string& path,
+                       const std::optional<vision::CameraProfile>& cam, std::ostream& err) {
   ImageRun run;
   run.path = path;
   cv::Mat gray = vision::load_gray_image(path);
@@ -166,10 +165,10 @@ ImageRun measure_image(const LinewidthOptions& a, const std::string& path, const
     for (std::size_t i = 0; i < res.lines.size(); ++i)
       if (res.lines[i].touches_frame) {
         const auto& b = res.lines[i].bbox;
-        const std::string msg =
-            fmt::format("line {} touches the frame edge (it spans x {}..{}, y {}..{} px of {}x{}); reframe the photo "
-                        "or pass --allow-edge to measure it with out-of-frame stretches flagged",
-                        i + 1, b.x, b.x + b.width, b.y, b.y + b.height, res.width, res.height);
+        const std::string msg = fmt::format(
+            "line {} touches the frame edge (it spans x {}..{}, y {}..{} px of {}x{}); reframe the photo "
+            "or pass --allow-edge to measure it with out-of-frame stretches flagged",
+            i + 1, b.x, b.x + b.width, b.y, b.y + b.height, res.width, res.height);
         overlay_best_effort(a, run, &res, msg, err);
         throw InputError(msg, path);
       }
@@ -211,7 +210,8 @@ std::string linewidth_polarity_name(vision::LinePolarity p) {
 }  // namespace
 
 LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err) {
-  if (!(a.max_image_mp > 0 && a.max_image_mp <= 1e5)) throw InputError("--max-image-mp must be in (0, 100000] megapixels");
+  if (!(a.max_image_mp > 0 && a.max_image_mp <= 1e5))
+    throw InputError("--max-image-mp must be in (0, 100000] megapixels");
   vision::set_max_image_pixels(static_cast<std::uint64_t>(std::ceil(a.max_image_mp * 1e6)));
   if (!a.save_camera.empty()) return compute_linewidth_camera(a);
   const bool board = !a.chessboard.empty() || !a.charuco.empty();
@@ -219,8 +219,9 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
   if (!a.charuco.empty() && !(a.marker_mm > 0)) throw InputError("--charuco needs --square-mm and --marker-mm (mm)");
   const int scales = (a.px_per_mm > 0) + !a.camera.empty() + board + (a.reference_width_mm > 0);
   if (scales == 0)
-    throw InputError("no scale: give --px-per-mm, --camera PROFILE, --chessboard COLSxROWS --square-mm S, or "
-                     "--reference-width-mm W");
+    throw InputError(
+        "no scale: give --px-per-mm, --camera PROFILE, --chessboard COLSxROWS --square-mm S, or "
+        "--reference-width-mm W");
   if ((a.px_per_mm > 0) + (a.reference_width_mm > 0) + board > 1)
     throw InputError("give only one of --px-per-mm, --chessboard (or --charuco) and --reference-width-mm");
   if (a.rectify && !board && a.camera.empty())
@@ -231,7 +232,8 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
   if (!a.profile_csv.empty() && !(a.speed_mm_s > 0) && a.gcode.empty())
     throw InputError("--profile-csv needs the commanded print speed: --speed-mm-s (mm/s) or --gcode FILE");
   if (!a.gcode.empty() && a.profile_csv.empty()) throw InputError("--gcode maps a profile to time: add --profile-csv");
-  if (!a.gcode.empty() && a.ring_sines > 0) throw InputError("give either --gcode or the ring's --ring-sines, not both");
+  if (!a.gcode.empty() && a.ring_sines > 0)
+    throw InputError("give either --gcode or the ring's --ring-sines, not both");
   if (a.ring_sines > 0 && !(a.ring_amplitude_mm > 0 && a.rod_radius_mm > 0 && a.layer_height_mm > 0))
     throw InputError("--ring-sines needs --ring-amplitude-mm, --rod-radius-mm and --layer-height-mm");
 
@@ -309,67 +311,62 @@ Envelope to_envelope(const LinewidthOutcome& o) {
         if (s.valid()) ws.push_back(s.width_px / ppm);
       std::sort(ws.begin(), ws.end());
       const double med = ws.empty() ? kNaN : ws[ws.size() / 2];
-      lines.push_back({{"image", run.path},
-                       {"index", k + 1},
-                       {"closed", l.closed},
-                       {"touches_frame", l.touches_frame},
-                       {"length_mm", r6(l.length_px / ppm)},
-                       {"samples", l.samples.size()},
-                       {"valid_samples", l.valid_samples},
-                       {"width_mm",
-                        {{"mean", r6(l.mean_width_px / ppm)},
-                         {"std", r6(l.std_width_px / ppm)},
-                         {"median", r6(med)},
-                         {"unit", "mm"}}},
-                       {"width_px", {{"mean", r4(l.mean_width_px)}, {"std", r4(l.std_width_px)}}},
-                       {"stretches", stretches(l, ppm)},
-                       {"profile",
-                        {{"s_mm", s_mm},
-                         {"width_mm", w_mm},
-                         {"confidence", conf},
-                         {"flags", flags},
-                         {"x_px", xs},
-                         {"y_px", ys}}}});
+      lines.push_back(
+          {{"image", run.path},
+           {"index", k + 1},
+           {"closed", l.closed},
+           {"touches_frame", l.touches_frame},
+           {"length_mm", r6(l.length_px / ppm)},
+           {"samples", l.samples.size()},
+           {"valid_samples", l.valid_samples},
+           {"width_mm",
+            {{"mean", r6(l.mean_width_px / ppm)},
+             {"std", r6(l.std_width_px / ppm)},
+             {"median", r6(med)},
+             {"unit", "mm"}}},
+           {"width_px", {{"mean", r4(l.mean_width_px)}, {"std", r4(l.std_width_px)}}},
+           {"stretches", stretches(l, ppm)},
+           {"profile",
+            {{"s_mm", s_mm}, {"width_mm", w_mm}, {"confidence", conf}, {"flags", flags}, {"x_px", xs}, {"y_px", ys}}}});
     }
   }
   auto& results = env.results();
   results["images"] = images;
   results["lines"] = lines;
-  results["flag_bits"] = {{"out_of_frame", vision::kFlagOutOfFrame},
-                          {"occluded", vision::kFlagOccluded},
-                          {"merged", vision::kFlagMerged}};
+  results["flag_bits"] = {
+      {"out_of_frame", vision::kFlagOutOfFrame}, {"occluded", vision::kFlagOccluded}, {"merged", vision::kFlagMerged}};
   if (!o.profile_csv.is_null()) results["profile_csv"] = o.profile_csv;
 
-  env.set_options({{"px_per_mm", a.px_per_mm},
-                   {"camera", a.camera},
-                   {"chessboard", a.chessboard},
-                   {"charuco", a.charuco},
-                   {"marker_mm", a.marker_mm},
-                   {"aruco_dict", a.aruco_dict},
-                   {"square_mm", a.square_mm},
-                   {"reference_width_mm", a.reference_width_mm},
-                   {"rectify", a.rectify},
-                   {"polarity", linewidth_polarity_name(a.detection.polarity)},
-                   {"step_px", a.detection.step_px},
-                   {"min_length_px", a.detection.min_length_px},
-                   {"allow_edge", a.allow_edge},
-                   {"overlay", a.overlay_dir},
-                   {"profile_csv", a.profile_csv},
-                   {"line", a.line},
-                   {"speed_mm_s", a.speed_mm_s},
-                   {"setpoint_width_mm", a.setpoint_width_mm},
-                   {"ring_sines", a.ring_sines},
-                   {"ring_amplitude_mm", a.ring_amplitude_mm},
-                   {"ring_radius_mm", a.ring_radius_mm},
-                   {"rod_radius_mm", a.rod_radius_mm},
-                   {"layer_height_mm", a.layer_height_mm},
-                   {"ring_start_deg", a.ring_start_deg},
-                   {"ring_clockwise", a.ring_clockwise},
-                   {"gcode", a.gcode},
-                   {"filament_diameter_mm", a.path.filament_diameter_mm},
-                   {"path_offset_mm", std::isfinite(a.path.offset_mm) ? nlohmann::json(a.path.offset_mm)
-                                                                       : nlohmann::json(nullptr)},
-                   {"path_reversed", a.path.reversed}});
+  env.set_options(
+      {{"px_per_mm", a.px_per_mm},
+       {"camera", a.camera},
+       {"chessboard", a.chessboard},
+       {"charuco", a.charuco},
+       {"marker_mm", a.marker_mm},
+       {"aruco_dict", a.aruco_dict},
+       {"square_mm", a.square_mm},
+       {"reference_width_mm", a.reference_width_mm},
+       {"rectify", a.rectify},
+       {"polarity", linewidth_polarity_name(a.detection.polarity)},
+       {"step_px", a.detection.step_px},
+       {"min_length_px", a.detection.min_length_px},
+       {"allow_edge", a.allow_edge},
+       {"overlay", a.overlay_dir},
+       {"profile_csv", a.profile_csv},
+       {"line", a.line},
+       {"speed_mm_s", a.speed_mm_s},
+       {"setpoint_width_mm", a.setpoint_width_mm},
+       {"ring_sines", a.ring_sines},
+       {"ring_amplitude_mm", a.ring_amplitude_mm},
+       {"ring_radius_mm", a.ring_radius_mm},
+       {"rod_radius_mm", a.rod_radius_mm},
+       {"layer_height_mm", a.layer_height_mm},
+       {"ring_start_deg", a.ring_start_deg},
+       {"ring_clockwise", a.ring_clockwise},
+       {"gcode", a.gcode},
+       {"filament_diameter_mm", a.path.filament_diameter_mm},
+       {"path_offset_mm", std::isfinite(a.path.offset_mm) ? nlohmann::json(a.path.offset_mm) : nlohmann::json(nullptr)},
+       {"path_reversed", a.path.reversed}});
   return env;
 }
 
@@ -383,9 +380,9 @@ void print_text(const LinewidthOutcome& o, std::ostream& os) {
     for (std::size_t k = 0; k < run.result.lines.size(); ++k) {
       const auto& l = run.result.lines[k];
       const double ppm = run.px_per_mm;
-      os << fmt::format("{} line {}: width {:.4f} mm (std {:.4f} mm), {} of {} samples, length {:.2f} mm{}\n",
-                        run.path, k + 1, r6(l.mean_width_px / ppm), r6(l.std_width_px / ppm), l.valid_samples,
-                        l.samples.size(), r6(l.length_px / ppm), l.closed ? " (closed loop)" : "");
+      os << fmt::format("{} line {}: width {:.4f} mm (std {:.4f} mm), {} of {} samples, length {:.2f} mm{}\n", run.path,
+                        k + 1, r6(l.mean_width_px / ppm), r6(l.std_width_px / ppm), l.valid_samples, l.samples.size(),
+                        r6(l.length_px / ppm), l.closed ? " (closed loop)" : "");
     }
   if (!o.profile_csv.is_null())
     os << fmt::format("profile written to {} ({} rows)\n", o.options.profile_csv,
@@ -426,8 +423,7 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
                   "partly covered or partly outside the picture; needs OpenCV's aruco module)");
   sub->add_option("--marker-mm", o.marker_mm, "Side of a ChArUco board's ArUco markers (mm)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--aruco-dict", o.aruco_dict, "ArUco dictionary of the ChArUco board")
-      ->capture_default_str();
+  sub->add_option("--aruco-dict", o.aruco_dict, "ArUco dictionary of the ChArUco board")->capture_default_str();
   sub->add_option("--reference-width-mm", o.reference_width_mm,
                   "Scale from a reference: the longest line in the image has this width (mm)")
       ->check(CLI::PositiveNumber);
@@ -445,16 +441,18 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("--min-length-px", o.detection.min_length_px, "Ignore features shorter than this (px of centreline)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  sub->add_flag("--allow-edge", o.allow_edge,
-                "Measure lines that touch the frame edge (their out-of-frame stretches are flagged) instead of failing");
+  sub->add_flag(
+      "--allow-edge", o.allow_edge,
+      "Measure lines that touch the frame edge (their out-of-frame stretches are flagged) instead of failing");
   sub->add_option("--overlay", o.overlay_dir,
                   "Write check images (edges, centreline, flags) to this directory as <image>_overlay.png");
   sub->add_option("--save-camera", o.save_camera,
                   "Calibrate the camera from the IMAGES (chessboard photos; the first lies on the bed) and write the "
                   "profile (JSON) here; nothing is measured");
-  sub->add_option("--profile-csv", o.profile_csv,
-                  "Write line --line's profile against time: columns time (s), s (mm), width (mm), setpoint_width (mm), "
-                  "confidence");
+  sub->add_option(
+      "--profile-csv", o.profile_csv,
+      "Write line --line's profile against time: columns time (s), s (mm), width (mm), setpoint_width (mm), "
+      "confidence");
   sub->add_option("--line", o.line, "Line (1 = longest) written by --profile-csv")->check(CLI::PositiveNumber);
   sub->add_option("--speed-mm-s", o.speed_mm_s, "Commanded print speed along the line (mm/s)")
       ->check(CLI::PositiveNumber);
@@ -469,8 +467,7 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--rod-radius-mm", o.rod_radius_mm, "Ring print: feed rod (filament) radius (mm)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--layer-height-mm", o.layer_height_mm, "Ring print: layer height (mm)")
-      ->check(CLI::PositiveNumber);
+  sub->add_option("--layer-height-mm", o.layer_height_mm, "Ring print: layer height (mm)")->check(CLI::PositiveNumber);
   sub->add_option("--ring-start-deg", o.ring_start_deg,
                   "Ring print: where theta = 0 is, as an angle in the photo (deg, counterclockwise from +x)");
   sub->add_flag("--ring-clockwise", o.ring_clockwise, "Ring print: the nozzle ran clockwise as seen in the photo");
@@ -501,9 +498,8 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
       "      --input setpoint_width --output width --json\n"
       "Exit codes: 0 measured, 1 nothing measured (no line found), 2 bad input (unreadable image, line touching\n"
       "the frame edge, scale target not found).");
-  sub->callback([cmd, &ctx] {
-    set_exit_code(report_outcome(compute_linewidth(cmd->options, ctx.err), cmd->output, ctx));
-  });
+  sub->callback(
+      [cmd, &ctx] { set_exit_code(report_outcome(compute_linewidth(cmd->options, ctx.err), cmd->output, ctx)); });
 }
 
 }  // namespace tunekit::cli

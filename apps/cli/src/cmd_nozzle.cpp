@@ -28,9 +28,7 @@ constexpr double kNozzleRadPerDeg = std::numbers::pi / 180.0;
 
 /// A length in mm (or an angle in degrees) as the command line and the JSON show it, from the SI
 /// value the library holds: rounded to 12 significant digits so that 0.6 mm reads 0.6 again.
-double nozzle_display_value(double si, double per_si) {
-  return std::stod(fmt::format("{:.12g}", si * per_si));
-}
+double nozzle_display_value(double si, double per_si) { return std::stod(fmt::format("{:.12g}", si * per_si)); }
 
 nlohmann::json nozzle_geometry_json(const fitting::NozzleGeometry& g) {
   return {{"d_mm", nozzle_display_value(g.d_m, 1e3)},
@@ -74,10 +72,12 @@ NozzleFit compute_nozzle_fit(const NozzleOptions& a, NozzleOutcome& outcome) {
     const auto& tc = t.column("temperature");
     for (double v : tc.values) {
       if (tc.unit == "K") {
-        if (v < 273.15) throw InputError(fmt::format("temperature {:g} K is below 0 degC; the values look like degC", v), hdr);
+        if (v < 273.15)
+          throw InputError(fmt::format("temperature {:g} K is below 0 degC; the values look like degC", v), hdr);
         T.push_back(v);
       } else if (tc.unit == "degC" || tc.unit == "C") {
-        if (v > 600) throw InputError(fmt::format("temperature {:g} degC is above 600 degC; the values look like kelvin", v), hdr);
+        if (v > 600)
+          throw InputError(fmt::format("temperature {:g} degC is above 600 degC; the values look like kelvin", v), hdr);
         T.push_back(v + a.kelvin_offset);
       } else {
         throw InputError("the temperature column needs a unit: 'temperature (degC)' or '(K)'", hdr);
@@ -243,7 +243,8 @@ void print_text(const NozzleOutcome& o, std::ostream& os) {
     const auto& fit = o.fit->fit;
     os << fmt::format("{}: {} measurements, {} model\n", a.fit_file, o.fit->rows, fit.model);
     for (const auto& q : fit.params)
-      os << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", q.name, q.value, q.unit, q.ci95_lo, q.ci95_hi);
+      os << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", q.name, q.value, q.unit, q.ci95_lo,
+                        q.ci95_hi);
     os << fmt::format("  rms(ln dP) {:.4g}, R2 {:.5f}\n", fit.diagnostics.rms, fit.diagnostics.r2);
     return;
   }
@@ -252,7 +253,8 @@ void print_text(const NozzleOutcome& o, std::ostream& os) {
   os << fmt::format("{} pressure drop, {}\n", fitting::to_string(a.prediction.model), o.forward->rheology);
   os << fmt::format("  nozzle d {:g} mm, l {:g} mm, cone half angle {:g} deg, D {:g} mm\n",
                     nozzle_display_value(g.d_m, 1e3), nozzle_display_value(g.l_m, 1e3),
-                    nozzle_display_value(g.cone_half_angle_rad, 1 / kNozzleRadPerDeg), nozzle_display_value(g.D_m, 1e3));
+                    nozzle_display_value(g.cone_half_angle_rad, 1 / kNozzleRadPerDeg),
+                    nozzle_display_value(g.D_m, 1e3));
   for (const auto& p : o.forward->points)
     os << fmt::format("  Q {:8.4g} mm3/s: dP {:8.4f} MPa (wall shear rate {:.4g} 1/s)\n", p.flow_mm3_s,
                       p.pressure_drop_Pa * 1e-6, p.local.wall_shear_rate_1_s);
@@ -294,10 +296,13 @@ void register_nozzle(CLI::App& app, CliContext& ctx) {
   sub->add_option("--n", o.n, "Power-law index n (1)");
   sub->add_option("--mu", o.mu, "Newtonian viscosity (Pa.s)");
   sub->add_option("--material", o.material,
-                  "Cross-WLF material of Holtrup 2019 (PEEK, ABS, ULTEM1010) or peek-power-law (eq. 5.10/5.11); needs --temperature");
-  sub->add_option("--rheology", o.rheology_json, "A 'tunekit rheo --json' result file to take the viscosity model from");
+                  "Cross-WLF material of Holtrup 2019 (PEEK, ABS, ULTEM1010) or peek-power-law (eq. 5.10/5.11); needs "
+                  "--temperature");
+  sub->add_option("--rheology", o.rheology_json,
+                  "A 'tunekit rheo --json' result file to take the viscosity model from");
   sub->add_option("-T,--temperature", o.temperature_degc, "Melt temperature (degC)");
-  sub->add_option("--kelvin-offset", o.kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (Holtrup's (2019) code) (K)")
+  sub->add_option("--kelvin-offset", o.kelvin_offset,
+                  "degC to K offset: 273.15 (SI) or 273 (Holtrup's (2019) code) (K)")
       ->capture_default_str();
   sub->add_option("-Q,--flow", o.flows_mm3_s, "Volumetric flow at the nozzle exit (mm3/s); repeatable");
   sub->add_option("--reference-flow", o.prediction.reference_flow_mm3_s, "Flow at which relative_tau is 1 (mm3/s)")
@@ -310,7 +315,8 @@ void register_nozzle(CLI::App& app, CliContext& ctx) {
   add_nozzle_si_option(sub, "--melt-length", g.melt_length_m, 1e-3, 1, "Bellini's melt room length L1 (mm)");
   sub->add_option("--fit", o.fit_file,
                   "Inverse fit: CSV with flow (mm3/s), pressure (MPa|Pa|bar) or force (N), temperature (degC|K)");
-  sub->add_option("--piston-diameter", o.piston_diameter_mm, "Diameter the feeder force acts on (mm), for a force column");
+  sub->add_option("--piston-diameter", o.piston_diameter_mm,
+                  "Diameter the feeder force acts on (mm), for a force column");
   add_output_options(sub, cmd->output);
   sub->footer(
       "Defaults are Holtrup's (2019) regular nozzle (Table 5.3): d 0.6 mm, l 4 mm, alpha 30 deg, D 5 mm.\n"

@@ -53,12 +53,15 @@ ident::OvershootAnalysis overshoot_from_run_dir(const std::string& dir, const id
   co.time_column = "time";
   const auto c = ident::read_csv(cmd[0], co);
   if (a.rows != c.rows)
-    throw InputError(fmt::format("{} has {} rows but {} has {}: not one time base", raw[0], a.rows, cmd[0], c.rows), dir);
+    throw InputError(fmt::format("{} has {} rows but {} has {}: not one time base", raw[0], a.rows, cmd[0], c.rows),
+                     dir);
   if (inputs)
-    *inputs = {input_digest(raw[0], ident::read_file_bytes(raw[0])), input_digest(cmd[0], ident::read_file_bytes(cmd[0]))};
+    *inputs = {input_digest(raw[0], ident::read_file_bytes(raw[0])),
+               input_digest(cmd[0], ident::read_file_bytes(cmd[0]))};
   try {
-    return ident::analyze_overshoot_accel(a.column("time").values, a.column("accel_x").values, a.column("accel_y").values,
-                                          c.column("accel_x").values, c.column("accel_y").values, o);
+    return ident::analyze_overshoot_accel(a.column("time").values, a.column("accel_x").values,
+                                          a.column("accel_y").values, c.column("accel_x").values,
+                                          c.column("accel_y").values, o);
   } catch (const Error& e) {
     if (!e.location().empty()) throw;
     throw InputError(e.message(), raw[0]);
@@ -75,20 +78,21 @@ ident::OvershootAnalysis overshoot_from_csv(const OvershootOptions& a, std::vect
     if (!a.pos_y.empty()) co.columns.push_back(a.pos_y);
   } else {
     if (a.cmd_x.empty() || a.cmd_y.empty())
-      throw InputError("a CSV needs --position-x/--position-y (encoder, mm) or --cmd-x and --cmd-y (commanded "
-                       "acceleration, mm/s^2) with the accelerometer columns");
+      throw InputError(
+          "a CSV needs --position-x/--position-y (encoder, mm) or --cmd-x and --cmd-y (commanded "
+          "acceleration, mm/s^2) with the accelerometer columns");
     co.columns.insert(co.columns.end(), {a.accel_x, a.accel_y, a.cmd_x, a.cmd_y});
   }
   const auto t = ident::read_csv(a.input, co);
   inputs = {input_digest(a.input, ident::read_file_bytes(a.input))};
   try {
     if (position)
-      return ident::analyze_overshoot_position(t.column(a.time_column).values,
-                                               a.pos_x.empty() ? std::vector<double>{} : t.column(a.pos_x).values,
-                                               a.pos_y.empty() ? std::vector<double>{} : t.column(a.pos_y).values, a.analysis);
+      return ident::analyze_overshoot_position(
+          t.column(a.time_column).values, a.pos_x.empty() ? std::vector<double>{} : t.column(a.pos_x).values,
+          a.pos_y.empty() ? std::vector<double>{} : t.column(a.pos_y).values, a.analysis);
     return ident::analyze_overshoot_accel(t.column(a.time_column).values, t.column(a.accel_x).values,
-                                          t.column(a.accel_y).values, t.column(a.cmd_x).values, t.column(a.cmd_y).values,
-                                          a.analysis);
+                                          t.column(a.accel_y).values, t.column(a.cmd_x).values,
+                                          t.column(a.cmd_y).values, a.analysis);
   } catch (const Error& e) {
     if (!e.location().empty()) throw;
     throw InputError(e.message(), a.input);
@@ -103,10 +107,11 @@ void print_overshoot_analysis(std::ostream& os, const ident::OvershootAnalysis& 
                       c.move_mm, c.overshoot_mm, c.overshoot_pct, c.settling_time_s, c.settled ? ' ' : '*',
                       c.residual_amplitude_mm, c.residual_freq_hz);
   for (const auto& s : r.axes)
-    os << fmt::format("  axis {}: mean overshoot {:.4f} mm (max {:.4f}), mean settling {:.4f} s, residual {:.4f} mm at "
-                      "{:.1f} Hz\n",
-                      s.axis, s.mean_overshoot_mm, s.max_overshoot_mm, s.mean_settling_time_s,
-                      s.mean_residual_amplitude_mm, s.median_residual_freq_hz);
+    os << fmt::format(
+        "  axis {}: mean overshoot {:.4f} mm (max {:.4f}), mean settling {:.4f} s, residual {:.4f} mm at "
+        "{:.1f} Hz\n",
+        s.axis, s.mean_overshoot_mm, s.max_overshoot_mm, s.mean_settling_time_s, s.mean_residual_amplitude_mm,
+        s.median_residual_freq_hz);
 }
 
 std::vector<double> parse_overshoot_grid_list(const std::string& name, const std::string& v) {
@@ -134,8 +139,10 @@ OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome
     if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE[,VALUE...]", p));
     lists[p.substr(0, eq)] = parse_overshoot_grid_list(p.substr(0, eq), p.substr(eq + 1));
   }
-  if (!lists.count("speed_mm_s")) lists["speed_mm_s"] = {protocols::protocol_spec("axis-rectangle").params[2].default_value};
-  if (!lists.count("accel_mm_s2")) lists["accel_mm_s2"] = {protocols::protocol_spec("axis-rectangle").params[3].default_value};
+  if (!lists.count("speed_mm_s"))
+    lists["speed_mm_s"] = {protocols::protocol_spec("axis-rectangle").params[2].default_value};
+  if (!lists.count("accel_mm_s2"))
+    lists["accel_mm_s2"] = {protocols::protocol_spec("axis-rectangle").params[3].default_value};
   for (const auto& [k, v] : lists)
     if (k != "speed_mm_s" && k != "accel_mm_s2" && v.size() != 1)
       throw InputError(fmt::format("-p {}: only speed_mm_s and accel_mm_s2 take lists", k));
@@ -152,30 +159,32 @@ OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome
     shaper_opts.push_back("shaper_" + sh);
   }
   if (!shaper_opts.empty() && a.run.machine != "sim")
-    throw InputError("--shaper compares shaping on/off on the simulator; on a machine run the grid twice, with the "
-                     "firmware's input shaper enabled and disabled");
+    throw InputError(
+        "--shaper compares shaping on/off on the simulator; on a machine run the grid twice, with the "
+        "firmware's input shaper enabled and disabled");
   auto& cells = g.cells;
   for (const bool shaped : shaper_opts.empty() ? std::vector<bool>{false} : std::vector<bool>{false, true})
-  for (double v : lists["speed_mm_s"])
-    for (double acc : lists["accel_mm_s2"]) {
-      protocols::RunOptions o = a.run;
-      o.protocol = "axis-rectangle";
-      if (shaped) o.sim_options.insert(o.sim_options.end(), shaper_opts.begin(), shaper_opts.end());
-      for (const auto& [k, vals] : lists) o.params[k] = vals.front();
-      o.params["speed_mm_s"] = v;
-      o.params["accel_mm_s2"] = acc;
-      o.run_dir = fmt::format("{}/v{:g}_a{:g}{}", out, v, acc, shaped ? "_shaped" : "");
-      o.file_tag = "rect";
-      if (progress) *progress << fmt::format("tunekit: grid point {:g} mm/s, {:g} mm/s^2\n", v, acc);
-      const auto r = protocols::run_experiment(o);
-      const auto an = overshoot_from_run_dir(r.run_dir, a.analysis, nullptr);
-      double os = 0, st = 0;
-      for (const auto& s : an.axes) {
-        os = std::max(os, s.mean_overshoot_mm);
-        st = std::max(st, s.mean_settling_time_s);
+    for (double v : lists["speed_mm_s"])
+      for (double acc : lists["accel_mm_s2"]) {
+        protocols::RunOptions o = a.run;
+        o.protocol = "axis-rectangle";
+        if (shaped) o.sim_options.insert(o.sim_options.end(), shaper_opts.begin(), shaper_opts.end());
+        for (const auto& [k, vals] : lists) o.params[k] = vals.front();
+        o.params["speed_mm_s"] = v;
+        o.params["accel_mm_s2"] = acc;
+        o.run_dir = fmt::format("{}/v{:g}_a{:g}{}", out, v, acc, shaped ? "_shaped" : "");
+        o.file_tag = "rect";
+        if (progress) *progress << fmt::format("tunekit: grid point {:g} mm/s, {:g} mm/s^2\n", v, acc);
+        const auto r = protocols::run_experiment(o);
+        const auto an = overshoot_from_run_dir(r.run_dir, a.analysis, nullptr);
+        double os = 0, st = 0;
+        for (const auto& s : an.axes) {
+          os = std::max(os, s.mean_overshoot_mm);
+          st = std::max(st, s.mean_settling_time_s);
+        }
+        cells.push_back(
+            {v, acc, os, st, an.motion_time_s, 0, std::filesystem::relative(r.run_dir, out).string(), shaped});
       }
-      cells.push_back({v, acc, os, st, an.motion_time_s, 0, std::filesystem::relative(r.run_dir, out).string(), shaped});
-    }
   double mean_t = 0;
   for (const auto& c : cells) mean_t += c.completion_time_s;
   mean_t /= static_cast<double>(cells.size());
@@ -186,7 +195,8 @@ OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome
     auto& b = c.input_shaping ? g.best_shaped : g.best;
     if (c.figure_of_merit > 0 && (!b || c.figure_of_merit > cells[*b].figure_of_merit)) b = i;
   }
-  if (!g.best) outcome.warnings.push_back(fmt::format("no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
+  if (!g.best)
+    outcome.warnings.push_back(fmt::format("no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
   if (!shaper_opts.empty() && !g.best_shaped)
     outcome.warnings.push_back(
         fmt::format("with input shaping no grid point keeps the overshoot within {:g} mm", a.tolerance_mm));
@@ -196,16 +206,23 @@ OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome
 nlohmann::json overshoot_grid_json(const OvershootGrid& g) {
   nlohmann::json grid = nlohmann::json::array();
   for (const auto& c : g.cells)
-    grid.push_back({{"speed_mm_s", c.speed_mm_s}, {"accel_mm_s2", c.accel_mm_s2}, {"overshoot_mm", c.overshoot_mm},
-                    {"settling_time_s", c.settling_time_s}, {"completion_time_s", c.completion_time_s},
-                    {"figure_of_merit", c.figure_of_merit}, {"input_shaping", c.input_shaping},
+    grid.push_back({{"speed_mm_s", c.speed_mm_s},
+                    {"accel_mm_s2", c.accel_mm_s2},
+                    {"overshoot_mm", c.overshoot_mm},
+                    {"settling_time_s", c.settling_time_s},
+                    {"completion_time_s", c.completion_time_s},
+                    {"figure_of_merit", c.figure_of_merit},
+                    {"input_shaping", c.input_shaping},
                     {"run_dir", c.run_dir}});
   return grid;
 }
 
 nlohmann::json overshoot_best_json(const OvershootGridCell& c) {
-  return {{"speed_mm_s", c.speed_mm_s}, {"accel_mm_s2", c.accel_mm_s2}, {"overshoot_mm", c.overshoot_mm},
-          {"completion_time_s", c.completion_time_s}, {"figure_of_merit", c.figure_of_merit}};
+  return {{"speed_mm_s", c.speed_mm_s},
+          {"accel_mm_s2", c.accel_mm_s2},
+          {"overshoot_mm", c.overshoot_mm},
+          {"completion_time_s", c.completion_time_s},
+          {"figure_of_merit", c.figure_of_merit}};
 }
 
 Envelope overshoot_grid_envelope(const OvershootOutcome& o) {
@@ -214,19 +231,24 @@ Envelope overshoot_grid_envelope(const OvershootOutcome& o) {
   Envelope env("overshoot");
   nlohmann::json lj = nlohmann::json::object();
   for (const auto& [k, v] : g.lists) lj[k] = v;
-  env.set_options({{"grid", lj}, {"machine", a.run.machine}, {"sim", a.run.sim_options}, {"tolerance_mm", a.tolerance_mm},
+  env.set_options({{"grid", lj},
+                   {"machine", a.run.machine},
+                   {"sim", a.run.sim_options},
+                   {"tolerance_mm", a.tolerance_mm},
                    {"band_mm", a.analysis.band_mm}});
   auto& res = env.results();
   res["grid"] = overshoot_grid_json(g);
   res["mean_completion_time_s"] = g.mean_completion_time_s;
-  res["figure_of_merit"] = "normalized motion speed (mean completion time / completion time) where the overshoot "
-                           "is within the tolerance, else 0 (Hemminger, 2022)";
+  res["figure_of_merit"] =
+      "normalized motion speed (mean completion time / completion time) where the overshoot "
+      "is within the tolerance, else 0 (Hemminger, 2022)";
   if (g.best) {
     res["best"] = overshoot_best_json(g.cells[*g.best]);
-    res["summary"] = nlohmann::json::array({{{"label", "fastest speed within tolerance"}, {"path", "best.speed_mm_s"}, {"unit", "mm/s"}},
-                                            {{"label", "its acceleration"}, {"path", "best.accel_mm_s2"}, {"unit", "mm/s^2"}},
-                                            {{"label", "its overshoot"}, {"path", "best.overshoot_mm"}, {"unit", "mm"}},
-                                            {{"label", "its completion time"}, {"path", "best.completion_time_s"}, {"unit", "s"}}});
+    res["summary"] = nlohmann::json::array(
+        {{{"label", "fastest speed within tolerance"}, {"path", "best.speed_mm_s"}, {"unit", "mm/s"}},
+         {{"label", "its acceleration"}, {"path", "best.accel_mm_s2"}, {"unit", "mm/s^2"}},
+         {{"label", "its overshoot"}, {"path", "best.overshoot_mm"}, {"unit", "mm"}},
+         {{"label", "its completion time"}, {"path", "best.completion_time_s"}, {"unit", "s"}}});
   }
   if (!a.shapers.empty()) {
     res["input_shapers"] = a.shapers;
@@ -241,9 +263,11 @@ Envelope overshoot_grid_envelope(const OvershootOutcome& o) {
 
 OvershootOutcome compute_overshoot(const OvershootOptions& a, std::ostream* progress) {
   if (!(a.analysis.band_mm > 0)) throw InputError("--band-mm must be positive (mm)");
-  if (!(a.analysis.tail_fraction > 0 && a.analysis.tail_fraction < 1)) throw InputError("--tail must be between 0 and 1");
+  if (!(a.analysis.tail_fraction > 0 && a.analysis.tail_fraction < 1))
+    throw InputError("--tail must be between 0 and 1");
   if (a.input.empty() && a.params.empty() && a.shapers.empty())
-    throw InputError("give a run directory or CSV to analyze, or -p speed_mm_s=...,... / -p accel_mm_s2=...,... for a grid");
+    throw InputError(
+        "give a run directory or CSV to analyze, or -p speed_mm_s=...,... / -p accel_mm_s2=...,... for a grid");
   OvershootOutcome outcome;
   outcome.options = a;
   if (!a.params.empty() || a.input.empty()) {
@@ -258,8 +282,9 @@ OvershootOutcome compute_overshoot(const OvershootOptions& a, std::ostream* prog
     outcome.grid->report = write_report(out);
     return outcome;
   }
-  outcome.analysis = std::filesystem::is_directory(a.input) ? overshoot_from_run_dir(a.input, a.analysis, &outcome.inputs)
-                                                            : overshoot_from_csv(a, outcome.inputs);
+  outcome.analysis = std::filesystem::is_directory(a.input)
+                         ? overshoot_from_run_dir(a.input, a.analysis, &outcome.inputs)
+                         : overshoot_from_csv(a, outcome.inputs);
   outcome.warnings = outcome.analysis->warnings;
   return outcome;
 }
@@ -268,8 +293,10 @@ Envelope to_envelope(const OvershootOutcome& o) {
   if (o.grid) return overshoot_grid_envelope(o);
   const OvershootOptions& a = o.options;
   Envelope env("overshoot");
-  env.set_options({{"band_mm", a.analysis.band_mm}, {"tail_fraction", a.analysis.tail_fraction},
-                   {"min_pause_s", a.analysis.min_pause_s}, {"min_move_mm", a.analysis.min_move_mm},
+  env.set_options({{"band_mm", a.analysis.band_mm},
+                   {"tail_fraction", a.analysis.tail_fraction},
+                   {"min_pause_s", a.analysis.min_pause_s},
+                   {"min_move_mm", a.analysis.min_move_mm},
                    {"drift_order", a.analysis.drift_order}});
   for (const auto& in : o.inputs) add_input(env, in);
   if (o.analysis) env.results() = ident::to_json(*o.analysis, a.traces);
@@ -286,9 +313,10 @@ void print_text(const OvershootOutcome& o, std::ostream& os) {
   os << "  shaping speed_mm_s accel_mm_s2 overshoot_mm settle_s completion_s   FOM\n";
   for (std::size_t i = 0; i < g.cells.size(); ++i) {
     const auto& c = g.cells[i];
-    os << fmt::format("  {:>7} {:>10g} {:>11g} {:>12.4f} {:>8.4f} {:>12.3f} {:>5.3f}{}\n", c.input_shaping ? "on" : "off",
-                      c.speed_mm_s, c.accel_mm_s2, c.overshoot_mm, c.settling_time_s, c.completion_time_s,
-                      c.figure_of_merit, (g.best == i || g.best_shaped == i) ? "  <- fastest within tolerance" : "");
+    os << fmt::format("  {:>7} {:>10g} {:>11g} {:>12.4f} {:>8.4f} {:>12.3f} {:>5.3f}{}\n",
+                      c.input_shaping ? "on" : "off", c.speed_mm_s, c.accel_mm_s2, c.overshoot_mm, c.settling_time_s,
+                      c.completion_time_s, c.figure_of_merit,
+                      (g.best == i || g.best_shaped == i) ? "  <- fastest within tolerance" : "");
   }
   os << "report: " << g.report << "\n";
 }
@@ -305,17 +333,22 @@ struct OvershootCommand {
 void register_overshoot(CLI::App& app, CliContext& ctx) {
   auto cmd = std::make_shared<OvershootCommand>();
   OvershootOptions& o = cmd->options;
-  auto* sub = app.add_subcommand("overshoot", "Axis overshoot and settling at corners (axis-rectangle runs); grid of speeds and accelerations");
+  auto* sub = app.add_subcommand(
+      "overshoot", "Axis overshoot and settling at corners (axis-rectangle runs); grid of speeds and accelerations");
   sub->add_option("run", o.input,
                   "A run directory of 'tunekit run axis-rectangle' or a CSV (time in s); omit it for grid mode");
-  sub->add_option("--band-mm", o.analysis.band_mm, "Settling band, +- mm around the settled position")->capture_default_str();
-  sub->add_option("--tail", o.analysis.tail_fraction, "Share of each pause taken as settled (drift reference)")->capture_default_str();
+  sub->add_option("--band-mm", o.analysis.band_mm, "Settling band, +- mm around the settled position")
+      ->capture_default_str();
+  sub->add_option("--tail", o.analysis.tail_fraction, "Share of each pause taken as settled (drift reference)")
+      ->capture_default_str();
   sub->add_option("--drift-order", o.analysis.drift_order,
                   "Accelerometer: order of the polynomial drift removed from each pause's integrated position (1-5)")
       ->check(CLI::Range(1, 5))
       ->capture_default_str();
-  sub->add_option("--min-pause", o.analysis.min_pause_s, "Shortest rest that counts as a corner (s)")->capture_default_str();
-  sub->add_option("--min-move", o.analysis.min_move_mm, "Smallest move of an axis into a corner that is reported (mm)")->capture_default_str();
+  sub->add_option("--min-pause", o.analysis.min_pause_s, "Shortest rest that counts as a corner (s)")
+      ->capture_default_str();
+  sub->add_option("--min-move", o.analysis.min_move_mm, "Smallest move of an axis into a corner that is reported (mm)")
+      ->capture_default_str();
   sub->add_option("-t,--time", o.time_column, "CSV: time column (s)")->capture_default_str();
   sub->add_option("--accel-x", o.accel_x, "CSV: measured x acceleration column (mm/s^2)")->capture_default_str();
   sub->add_option("--accel-y", o.accel_y, "CSV: measured y acceleration column (mm/s^2)")->capture_default_str();
@@ -324,12 +357,15 @@ void register_overshoot(CLI::App& app, CliContext& ctx) {
   sub->add_option("--position-x", o.pos_x, "CSV: x position / encoder column (mm); instead of the accelerometer");
   sub->add_option("--position-y", o.pos_y, "CSV: y position / encoder column (mm)");
   sub->add_flag("--traces", o.traces, "Include each corner's deviation trace in the JSON");
-  sub->add_option("-p,--param", o.params,
-                  "Grid mode: axis-rectangle parameter NAME=V1,V2,... (speed_mm_s and accel_mm_s2 take lists; others one value)");
+  sub->add_option(
+      "-p,--param", o.params,
+      "Grid mode: axis-rectangle parameter NAME=V1,V2,... (speed_mm_s and accel_mm_s2 take lists; others one value)");
   sub->add_option("-m,--machine", o.run.machine, "Grid mode: 'sim' or a machine profile TOML")->capture_default_str();
   sub->add_option("--port", o.run.port, "Grid mode: the machine's port (see tunekit run)");
-  sub->add_option("--sim", o.run.sim_options, "Grid mode: simulator option KEY=VALUE (repeatable), e.g. mode_x=40:0.05");
-  sub->add_option("--tolerance-mm", o.tolerance_mm, "Grid mode: overshoot tolerance of the figure of merit (mm)")->capture_default_str();
+  sub->add_option("--sim", o.run.sim_options,
+                  "Grid mode: simulator option KEY=VALUE (repeatable), e.g. mode_x=40:0.05");
+  sub->add_option("--tolerance-mm", o.tolerance_mm, "Grid mode: overshoot tolerance of the figure of merit (mm)")
+      ->capture_default_str();
   sub->add_option("--shaper", o.shapers,
                   "Grid mode on the simulator: also run the grid with input shaping AXIS=TYPE:FREQ_HZ[:DAMPING] "
                   "(repeatable, e.g. x=zv:48) and compare shaping on/off");
@@ -346,13 +382,15 @@ void register_overshoot(CLI::App& app, CliContext& ctx) {
       "Examples:\n"
       "  tunekit run axis-rectangle --machine sim --run-dir runs/rect && tunekit overshoot runs/rect\n"
       "  tunekit overshoot encoder.csv --time t_s --position-x x_mm --band-mm 0.02\n"
-      "  tunekit overshoot -p speed_mm_s=50,100,200 -p accel_mm_s2=1000,3000,6000 --machine sim --tolerance-mm 0.03 \\\n"
+      "  tunekit overshoot -p speed_mm_s=50,100,200 -p accel_mm_s2=1000,3000,6000 --machine sim --tolerance-mm 0.03 "
+      "\\\n"
       "      --out runs/os-grid      # writes runs/os-grid/report.html with the grid map\n"
       "  tunekit overshoot -p accel_mm_s2=2000,5000,8000 --sim mode_x=48:0.08 --shaper x=zv:48 --shaper y=mzv:37 \\\n"
       "      --out runs/os-shaped    # the same grid with input shaping off and on\n"
       "Exit codes: 2 bad input (no corner found, missing columns), 3 machine failure in grid mode.");
   sub->callback([cmd, &ctx] {
-    set_exit_code(report_outcome(compute_overshoot(cmd->options, ctx.verbosity > 0 ? &ctx.err : nullptr), cmd->output, ctx));
+    set_exit_code(
+        report_outcome(compute_overshoot(cmd->options, ctx.verbosity > 0 ? &ctx.err : nullptr), cmd->output, ctx));
   });
 }
 

@@ -13,7 +13,9 @@ void register_report(CLI::App& app, CliContext& ctx) {
   sub->add_option("run_dir", options->run_dir, "Run directory written by 'tunekit calibrate' (holds results.json)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  sub->footer("Example:\n  tunekit report runs/20261122-sim-1\nWrites RUN_DIR/report.html (plots embedded; opens offline) and prints its path.");
+  sub->footer(
+      "Example:\n  tunekit report runs/20261122-sim-1\nWrites RUN_DIR/report.html (plots embedded; opens offline) and "
+      "prints its path.");
   sub->callback([options, &ctx] { print_text(compute_report(*options), ctx.out); });
 }
 

@@ -18,8 +18,7 @@ namespace tunekit::cli {
 ResonanceOutcome compute_resonance(const ResonanceOptions& a) {
   ResonanceOutcome outcome;
   outcome.options = a;
-  outcome.analysis =
-      analyze_accel_files(a.accel, a.ringdown ? RingdownDiversion::all : RingdownDiversion::too_short);
+  outcome.analysis = analyze_accel_files(a.accel, a.ringdown ? RingdownDiversion::all : RingdownDiversion::too_short);
   const auto& decays = outcome.analysis.ringdown_records;
   if (!decays.empty()) check_ringdown_options(a.ringdown_options);
   for (const auto& rec : decays) {
@@ -65,13 +64,14 @@ Envelope to_envelope(const ResonanceOutcome& o) {
 void print_text(const ResonanceOutcome& o, std::ostream& os) {
   for (const auto& lr : o.ringdowns) {
     const auto& r = lr.result;
-    os << fmt::format("{}: ring-down in {} (strength {:.1f}): f = {:.2f} Hz [{:.2f}, {:.2f}]   zeta = {:.4f} "
-                      "[{:.4f}, {:.4f}]{}\n",
-                      r.path, r.channel, r.strength, r.freq_hz, r.freq_ci95_lo, r.freq_ci95_hi, r.zeta, r.zeta_ci95_lo,
-                      r.zeta_ci95_hi,
-                      r.strongest_is_harmonic ? fmt::format(" (the strongest line, {:.2f} Hz, is its harmonic {})",
-                                                            r.strongest_peak_hz, r.harmonic_number)
-                                              : std::string());
+    os << fmt::format(
+        "{}: ring-down in {} (strength {:.1f}): f = {:.2f} Hz [{:.2f}, {:.2f}]   zeta = {:.4f} "
+        "[{:.4f}, {:.4f}]{}\n",
+        r.path, r.channel, r.strength, r.freq_hz, r.freq_ci95_lo, r.freq_ci95_hi, r.zeta, r.zeta_ci95_lo,
+        r.zeta_ci95_hi,
+        r.strongest_is_harmonic ? fmt::format(" (the strongest line, {:.2f} Hz, is its harmonic {})",
+                                              r.strongest_peak_hz, r.harmonic_number)
+                                : std::string());
   }
   for (const auto& r : o.analysis.axes) {
     os << fmt::format("{} {}: {} file(s), {} Welch segments of {} samples, {} modes ({} fit)\n",

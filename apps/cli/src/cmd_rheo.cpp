@@ -40,7 +40,8 @@ std::pair<double, double> rheo_parse_window(const std::string& s) {
 std::pair<double, double> parse_temperature_range(const std::string& s) {
   const auto c = s.find(':');
   const auto bad = [&] {
-    return InputError("--temperatures: expected LO:HI in degC, e.g. 300:350 (either side may be empty), got '" + s + "'");
+    return InputError("--temperatures: expected LO:HI in degC, e.g. 300:350 (either side may be empty), got '" + s +
+                      "'");
   };
   if (c == std::string::npos) throw bad();
   auto side = [&](const std::string& x) {
@@ -88,7 +89,8 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
   ident::RheologyCsvOptions co = a.csv;
   if (!co.viscosity_column.empty() && !co.stress_column.empty())
     throw InputError("give --viscosity or --shear-stress, not both");
-  if (!a.temperatures.empty()) std::tie(co.temperature_min_degC, co.temperature_max_degC) = parse_temperature_range(a.temperatures);
+  if (!a.temperatures.empty())
+    std::tie(co.temperature_min_degC, co.temperature_max_degC) = parse_temperature_range(a.temperatures);
   if (!(co.kelvin_offset == fitting::kKelvinOffset || co.kelvin_offset == fitting::kKelvinOffsetThesis))
     throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (Holtrup's (2019) code)");
   const auto table = ident::parse_rheology_csv(bytes, a.file, co);
@@ -103,15 +105,16 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
   const bool auto_model = a.model == "auto";
   if (!auto_model) primary.model = fitting::parse_viscosity_model(a.model);
   if (a.shift == "auto")
-    primary.shift = (multi && primary.model != fitting::ViscosityModel::cross_wlf) ? fitting::TemperatureShift::arrhenius
-                                                                                  : fitting::TemperatureShift::none;
-  else
-    primary.shift = fitting::parse_temperature_shift(a.shift);
+    primary.shift = (multi && primary.model != fitting::ViscosityModel::cross_wlf)
+                        ? fitting::TemperatureShift::arrhenius
+                        : fitting::TemperatureShift::none;
+  else primary.shift = fitting::parse_temperature_shift(a.shift);
   if (primary.model == fitting::ViscosityModel::cross_wlf && primary.shift != fitting::TemperatureShift::none)
     throw InputError("--shift: cross-wlf carries its own (WLF) temperature dependence; leave --shift at auto or none");
   if (auto_model && (!a.fix.empty() || !a.free.empty()))
     throw InputError("--fix/--free name parameters of one model; choose it with --model");
-  if (auto_model && !a.compare) throw InputError("--model auto picks the best model by AIC; it cannot be combined with --no-compare");
+  if (auto_model && !a.compare)
+    throw InputError("--model auto picks the best model by AIC; it cannot be combined with --no-compare");
 
   o.num_points = data.size();
   o.temperatures_K = levels;
@@ -125,7 +128,9 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
       // The requested configuration replaces its default twin (it may carry --fix/--free).
       const std::string want = fitting::ViscositySpec{primary.model, primary.shift, {}}.name();
       cands.erase(std::remove_if(cands.begin(), cands.end(),
-                                 [&](const auto& c) { return fitting::ViscositySpec{c.model, c.shift, {}}.name() == want; }),
+                                 [&](const auto& c) {
+                                   return fitting::ViscositySpec{c.model, c.shift, {}}.name() == want;
+                                 }),
                   cands.end());
       fit = fitting::fit_viscosity(data, primary);  // throws with the reason when it cannot be fitted
       cands.insert(cands.begin(), primary);
@@ -166,20 +171,24 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
     try {
       const auto sc = fitting::check_superposition(data, primary.T_ref_K);
       o.superposition = sc;
-      const auto degc = [&](double K) { return fmt::format("{:g} degC", std::round((K - co.kelvin_offset) * 100) / 100); };
+      const auto degc = [&](double K) {
+        return fmt::format("{:g} degC", std::round((K - co.kelvin_offset) * 100) / 100);
+      };
       std::string off;
       for (const auto& l : sc.levels)
         if (!l.on_master_curve) off += (off.empty() ? "" : ", ") + degc(l.temperature_K);
       if (!off.empty())
-        o.warnings.push_back(fmt::format("the curves at {} do not lie on the master curve of the other temperatures (F test, p < {:g}): "
-                             "a transition, a degraded sample or a change of mechanism; one temperature-shift model "
-                             "cannot hold them (select a range with --temperatures)",
-                             off, sc.alpha));
+        o.warnings.push_back(
+            fmt::format("the curves at {} do not lie on the master curve of the other temperatures (F test, p < {:g}): "
+                        "a transition, a degraded sample or a change of mechanism; one temperature-shift model "
+                        "cannot hold them (select a range with --temperatures)",
+                        off, sc.alpha));
       for (const auto& r : sc.reversals)
-        o.warnings.push_back(fmt::format("the viscosity rises between {} and {} (shift factor x{:.3g}): a transition between these "
-                             "temperatures (e.g. a liquid-crystalline melt turning isotropic) or curves of different samples; "
-                             "fit each side on its own with --temperatures",
-                             degc(r.lower_K), degc(r.upper_K), r.ratio));
+        o.warnings.push_back(fmt::format(
+            "the viscosity rises between {} and {} (shift factor x{:.3g}): a transition between these "
+            "temperatures (e.g. a liquid-crystalline melt turning isotropic) or curves of different samples; "
+            "fit each side on its own with --temperatures",
+            degc(r.lower_K), degc(r.upper_K), r.ratio));
     } catch (const Error& e) {
       if (a.tts) throw;
       o.warnings.push_back("superposition check not done: " + e.message());
@@ -263,47 +272,48 @@ void print_text(const RheoOutcome& o, std::ostream& os) {
   const Envelope env = to_envelope(o);  // the comparison, superposition and prediction as reported
   const auto& res = env.results();
   {
-    os << fmt::format("{}: {} points at {} temperature(s); model {}\n", a.file, o.num_points, o.temperatures_K.size(), fit.model);
+    os << fmt::format("{}: {} points at {} temperature(s); model {}\n", a.file, o.num_points, o.temperatures_K.size(),
+                      fit.model);
     for (const auto& p : fit.params) {
-      if (p.fixed)
-        os << fmt::format("  {:<14} {:>12.6g} {:<8} (held)\n", p.name, p.value, p.unit);
+      if (p.fixed) os << fmt::format("  {:<14} {:>12.6g} {:<8} (held)\n", p.name, p.value, p.unit);
       else
         os << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]{}\n", p.name, p.value, p.unit, p.ci95_lo,
-                               p.ci95_hi, p.ci95_method == "profile-likelihood" ? " (profile likelihood)" : "");
+                          p.ci95_hi, p.ci95_method == "profile-likelihood" ? " (profile likelihood)" : "");
     }
     for (const auto& p : fit.derived)
       os << fmt::format("  {:<26} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", p.name, p.value, p.unit, p.ci95_lo,
-                             p.ci95_hi);
+                        p.ci95_hi);
     if (res.contains("superposition"))
       for (const auto& l : res["superposition"]["levels"])
         os << fmt::format("  a_T at {:.2f} K: {:.4g} [{:.4g}, {:.4g}]{}\n", l["temperature_K"].get<double>(),
-                               l["a_T"].get<double>(), l["a_T_ci95"][0].get<double>(), l["a_T_ci95"][1].get<double>(),
-                               l["on_master_curve"].get<bool>() ? "" : "  NOT on the master curve");
+                          l["a_T"].get<double>(), l["a_T_ci95"][0].get<double>(), l["a_T_ci95"][1].get<double>(),
+                          l["on_master_curve"].get<bool>() ? "" : "  NOT on the master curve");
     os << fmt::format("  rms(ln eta) {:.4g}, R2 {:.5f}, AIC {:.2f}\n", fit.diagnostics.rms, fit.diagnostics.r2,
-                           fit.diagnostics.aic);
+                      fit.diagnostics.aic);
     if (res.contains("model_comparison")) {
       os << "  model comparison (AIC):\n";
       for (const auto& e : res["model_comparison"]["models"]) {
         if (e["ok"].get<bool>())
           os << fmt::format("    {:<26} k={} dAIC {:8.2f} weight {:.3f}\n", e["model"].get<std::string>(),
-                                 e["num_parameters"].get<int>(), e["delta_aic"].get<double>(),
-                                 e["akaike_weight"].get<double>());
+                            e["num_parameters"].get<int>(), e["delta_aic"].get<double>(),
+                            e["akaike_weight"].get<double>());
         else
-          os << fmt::format("    {:<26} not fitted: {}\n", e["model"].get<std::string>(), e["error"].get<std::string>());
+          os << fmt::format("    {:<26} not fitted: {}\n", e["model"].get<std::string>(),
+                            e["error"].get<std::string>());
       }
     }
     if (res.contains("power_law"))
       for (const auto& f : res["power_law"]["fits"])
         os << fmt::format("  power law at {:.2f} K: K {:.6g} Pa.s^n, n {:.5f}\n", f["temperature_K"].get<double>(),
-                               f["params"]["K_Pa_s_n"]["value"].get<double>(), f["params"]["n"]["value"].get<double>());
+                          f["params"]["K_Pa_s_n"]["value"].get<double>(), f["params"]["n"]["value"].get<double>());
     if (res.contains("prediction")) {
       const auto& p = res["prediction"];
       os << fmt::format("  liquefier at {:.2f} K ({}): flow mm3/s, dP MPa, dP/dQ Pa.s/mm3, relative tau\n",
-                             p["temperature_K"].get<double>(), p["pressure_model"].get<std::string>());
+                        p["temperature_K"].get<double>(), p["pressure_model"].get<std::string>());
       for (std::size_t i = 0; i < p["flow_mm3_s"].size(); ++i)
         os << fmt::format("    {:8.3g} {:10.4g} {:12.5g} {:8.4f}\n", p["flow_mm3_s"][i].get<double>(),
-                               p["pressure_drop_Pa"][i].get<double>() * 1e-6, p["dP_dQ_Pa_s_per_mm3"][i].get<double>(),
-                               p["relative_tau"][i].get<double>());
+                          p["pressure_drop_Pa"][i].get<double>() * 1e-6, p["dP_dQ_Pa_s_per_mm3"][i].get<double>(),
+                          p["relative_tau"][i].get<double>());
     }
   }
 }
@@ -325,8 +335,7 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
                   "CSV with shear_rate (1/s), viscosity (Pa.s|mPa.s) or shear_stress (Pa), temperature (degC|K), "
                   "optional pressure (Pa) and weight")
       ->required();
-  sub->add_option("-m,--model", o.model,
-                  "newtonian, power-law, cross, cross-wlf, carreau-yasuda, or auto (lowest AIC)")
+  sub->add_option("-m,--model", o.model, "newtonian, power-law, cross, cross-wlf, carreau-yasuda, or auto (lowest AIC)")
       ->capture_default_str();
   sub->add_option("--shift", o.shift,
                   "Temperature shift for models other than cross-wlf: none, arrhenius, wlf, or auto "
@@ -339,9 +348,12 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
   sub->add_option("--pressure-col", o.csv.pressure_column, "Pressure column when not named pressure");
   sub->add_option("--stress-unit", o.csv.stress_unit, "Unit of the shear-stress column: Pa, kPa, MPa");
   sub->add_option("--temperature-unit", o.csv.temperature_unit, "Unit of the temperature column: degC or K");
-  sub->add_option("--t-ref", o.t_ref_degc, "Reference temperature of the shift (degC; default: the middle data temperature)");
-  sub->add_option("--temperature", o.csv.temperature_degC, "Temperature of every point when the file has no temperature column (degC)");
-  sub->add_option("--kelvin-offset", o.csv.kelvin_offset, "degC to K offset: 273.15 (SI) or 273 (as Holtrup's (2019) code) (K)")
+  sub->add_option("--t-ref", o.t_ref_degc,
+                  "Reference temperature of the shift (degC; default: the middle data temperature)");
+  sub->add_option("--temperature", o.csv.temperature_degC,
+                  "Temperature of every point when the file has no temperature column (degC)");
+  sub->add_option("--kelvin-offset", o.csv.kelvin_offset,
+                  "degC to K offset: 273.15 (SI) or 273 (as Holtrup's (2019) code) (K)")
       ->capture_default_str();
   sub->add_option("--viscosity-unit", o.csv.viscosity_unit,
                   "Unit of the viscosity column when its header states none: Pa.s, mPa.s, cP, P (poise) or kPa.s");
@@ -350,14 +362,18 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
   sub->add_option("--fix", o.fix,
                   "Hold a parameter at a value, NAME=VALUE in the parameter's SI unit (e.g. D2_K=416); repeatable. "
                   "cross-wlf holds A2_K=51.6 K and D3_K_per_Pa=0 by default");
-  sub->add_option("--free", o.free, "Estimate a parameter held by default (A2_K, D3_K_per_Pa, eta_inf_Pa_s); repeatable");
-  sub->add_flag_callback("--no-compare", [&opts = o] { opts.compare = false; }, "Fit only the chosen model (no AIC comparison)");
+  sub->add_option("--free", o.free,
+                  "Estimate a parameter held by default (A2_K, D3_K_per_Pa, eta_inf_Pa_s); repeatable");
+  sub->add_flag_callback(
+      "--no-compare", [&opts = o] { opts.compare = false; }, "Fit only the chosen model (no AIC comparison)");
   sub->add_flag("--tts", o.tts, "Time-temperature superposition: shift factors a_T (1) and the master curve");
-  sub->add_option("--power-law-window", o.power_law_window,
-                  "Fit K (Pa.s^n) and n of a power law to the fitted model over LOW:HIGH shear rates (1/s), e.g. 600:950");
+  sub->add_option(
+      "--power-law-window", o.power_law_window,
+      "Fit K (Pa.s^n) and n of a power law to the fitted model over LOW:HIGH shear rates (1/s), e.g. 600:950");
   sub->add_option("--power-law-points", o.power_law_points, "Log-spaced points in the power-law window (count)")
       ->capture_default_str();
-  sub->add_option("--power-law-at", o.power_law_at_degc, "Temperatures of the power-law fits (degC; default: the data's)");
+  sub->add_option("--power-law-at", o.power_law_at_degc,
+                  "Temperatures of the power-law fits (degC; default: the data's)");
   // The geometry is kept in m and rad (fitting::NozzleGeometry, with its defaults); the command
   // line speaks mm and degrees.
   const auto mm = [](double m) { return fmt::format("{:g}", m * 1e3); };
@@ -369,25 +385,28 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
          },
          "Nozzle channel diameter d (mm); enables the liquefier prediction")
       ->type_name("FLOAT");
-  sub->add_option_function<double>("--nozzle-l", [&geometry](double v) { geometry.l_m = v * 1e-3; },
-                                   "Nozzle land length l (mm)")
+  sub->add_option_function<double>(
+         "--nozzle-l", [&geometry](double v) { geometry.l_m = v * 1e-3; }, "Nozzle land length l (mm)")
       ->type_name("FLOAT")
       ->default_str(mm(geometry.l_m));
-  sub->add_option_function<double>("--cone-angle",
-                                   [&geometry](double v) { geometry.cone_half_angle_rad = v * std::numbers::pi / 180.0; },
-                                   "Nozzle cone half angle alpha (degrees)")
+  sub->add_option_function<double>(
+         "--cone-angle", [&geometry](double v) { geometry.cone_half_angle_rad = v * std::numbers::pi / 180.0; },
+         "Nozzle cone half angle alpha (degrees)")
       ->type_name("FLOAT")
-      ->default_str(fmt::format("{:g}", std::round(geometry.cone_half_angle_rad * 180.0 / std::numbers::pi * 1e9) / 1e9));
-  sub->add_option_function<double>("--entrance-D", [&geometry](double v) { geometry.D_m = v * 1e-3; },
-                                   "Melt room / entrance diameter D (mm)")
+      ->default_str(
+          fmt::format("{:g}", std::round(geometry.cone_half_angle_rad * 180.0 / std::numbers::pi * 1e9) / 1e9));
+  sub->add_option_function<double>(
+         "--entrance-D", [&geometry](double v) { geometry.D_m = v * 1e-3; }, "Melt room / entrance diameter D (mm)")
       ->type_name("FLOAT")
       ->default_str(mm(geometry.D_m));
-  sub->add_option("--predict-at", o.predict_at_degc, "Melt temperature of the prediction (degC; default: the middle data temperature)");
+  sub->add_option("--predict-at", o.predict_at_degc,
+                  "Melt temperature of the prediction (degC; default: the middle data temperature)");
   sub->add_option("--flows", o.prediction.flows_mm3_s, "Operating flows of the prediction (mm3/s)");
-  sub->add_option("--reference-flow", o.prediction.reference_flow_mm3_s, "Flow at which relative_tau is 1 (mm3/s)")->capture_default_str();
-  add_parsed_option(sub, "--pressure-model", o.prediction.model, fitting::parse_pressure_model,
-                    [](fitting::PressureModel m) { return fitting::to_string(m); },
-                    "boles, bellini, power-law or hagen-poiseuille");
+  sub->add_option("--reference-flow", o.prediction.reference_flow_mm3_s, "Flow at which relative_tau is 1 (mm3/s)")
+      ->capture_default_str();
+  add_parsed_option(
+      sub, "--pressure-model", o.prediction.model, fitting::parse_pressure_model,
+      [](fitting::PressureModel m) { return fitting::to_string(m); }, "boles, bellini, power-law or hagen-poiseuille");
   add_output_options(sub, cmd->output);
   sub->footer(
       "Examples:\n"

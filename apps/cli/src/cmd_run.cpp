@@ -62,7 +62,9 @@ RunOutcome compute_run(const RunCommandOptions& a) {
   }
   outcome.options.run.params = o.params;
   if (o.machine != "sim" && o.port.empty() && !o.dry_run)
-    throw InputError("--port is needed with a machine profile (a serial device, a PTY such as /tmp/printer, or unix:/tmp/klippy_uds)");
+    throw InputError(
+        "--port is needed with a machine profile (a serial device, a PTY such as /tmp/printer, or "
+        "unix:/tmp/klippy_uds)");
   if (o.machine != "sim" && o.port.empty()) o.port = "(dry run)";
   g_interrupted = false;
   o.abort_flag = &g_interrupted;

@@ -26,10 +26,9 @@ namespace {
 
 // The types considered with the identified damping, in the order the candidates are reported.
 const std::vector<ident::ShaperType>& shaper_identified_types() {
-  static const std::vector<ident::ShaperType> v = {ident::ShaperType::zv,          ident::ShaperType::mzv,
-                                                   ident::ShaperType::zvd,         ident::ShaperType::ei,
-                                                   ident::ShaperType::zvdd,        ident::ShaperType::two_hump_ei,
-                                                   ident::ShaperType::three_hump_ei};
+  static const std::vector<ident::ShaperType> v = {
+      ident::ShaperType::zv,   ident::ShaperType::mzv,         ident::ShaperType::zvd,          ident::ShaperType::ei,
+      ident::ShaperType::zvdd, ident::ShaperType::two_hump_ei, ident::ShaperType::three_hump_ei};
   return v;
 }
 
@@ -47,8 +46,9 @@ std::string shaper_csv_path_for_axis(const std::string& pattern, const std::stri
   const auto pos = pattern.find("{axis}");
   if (pos == std::string::npos) {
     if (n_axes > 1)
-      throw InputError("--klipper-csv needs '{axis}' in the file name when several axes are analysed, e.g. "
-                       "calibration_data_{axis}.csv");
+      throw InputError(
+          "--klipper-csv needs '{axis}' in the file name when several axes are analysed, e.g. "
+          "calibration_data_{axis}.csv");
     return pattern;
   }
   return pattern.substr(0, pos) + axis + pattern.substr(pos + 6);
@@ -79,8 +79,8 @@ void shaper_choose_damping(const ShaperOptions& a, const AxisResult& r, ident::S
 
 // The recommendation is made among the target firmware's shapers only, each within the
 // firmware's damping bound for it (firmware_limits.hpp).
-void shaper_restrict_to_firmware(protocols::ExportFirmware fw, const std::string& ax,
-                                 ident::ShaperSelectionOptions& so, std::vector<std::string>& warnings) {
+void shaper_restrict_to_firmware(protocols::ExportFirmware fw, const std::string& ax, ident::ShaperSelectionOptions& so,
+                                 std::vector<std::string>& warnings) {
   std::vector<ident::ShaperType> allowed;
   std::vector<std::string> dropped;
   for (const auto t : so.types) {
@@ -93,10 +93,10 @@ void shaper_restrict_to_firmware(protocols::ExportFirmware fw, const std::string
     allowed.push_back(t);
   }
   if (allowed.empty())
-    throw InputError(fmt::format("axis {}: none of the shapers considered is available in {} ({}) at the design "
-                                 "damping {:.3f}",
-                                 ax, protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw),
-                                 so.design_damping_ratio));
+    throw InputError(fmt::format(
+        "axis {}: none of the shapers considered is available in {} ({}) at the design "
+        "damping {:.3f}",
+        ax, protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw), so.design_damping_ratio));
   if (!dropped.empty())
     warnings.push_back(fmt::format("axis {}: design damping {:.3f} is above {}'s bound for {}: not considered", ax,
                                    so.design_damping_ratio, protocols::limits::firmware_title(fw),
@@ -157,10 +157,10 @@ ShaperOutcome compute_shaper(const ShaperOptions& a) {
       const auto grid = ident::klipper_spectrum_grid(cols, so.max_freq_hz);
       std::vector<ident::KlipperShaperColumn> shaper_cols;
       for (const auto& c : out.choice.candidates) {
-        const auto sh = ident::design_shaper(c.type, c.freq_hz, c.damping_ratio, ident::kDefaultVibrationTolerance,
-                                             so.ei_design);
-        shaper_cols.push_back({ident::to_string(c.type), c.freq_hz,
-                               ident::shaper_response(sh, grid, so.test_damping_ratios)});
+        const auto sh =
+            ident::design_shaper(c.type, c.freq_hz, c.damping_ratio, ident::kDefaultVibrationTolerance, so.ei_design);
+        shaper_cols.push_back(
+            {ident::to_string(c.type), c.freq_hz, ident::shaper_response(sh, grid, so.test_damping_ratios)});
       }
       out.klipper_csv = shaper_csv_path_for_axis(a.klipper_csv, r.label, n_axes);
       csv_files.emplace_back(out.klipper_csv, ident::write_klipper_spectrum(cols, shaper_cols, so.max_freq_hz));
@@ -198,7 +198,8 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
       "--klipper-compatible: zv mzv ei 2hump_ei 3hump_ei)");
   sub->add_option("--scv", o.selection.scv_mm_s,
                   fmt::format("Square-corner velocity for smoothing, mm/s (default {:g})", o.selection.scv_mm_s));
-  sub->add_option("--max-smoothing", o.selection.max_smoothing_mm, "Largest acceptable smoothing, mm (default: no limit)");
+  sub->add_option("--max-smoothing", o.selection.max_smoothing_mm,
+                  "Largest acceptable smoothing, mm (default: no limit)");
   sub->add_option("--damping-ratio", o.damping_ratio,
                   fmt::format("Design damping ratio (dimensionless; default: identified, or {:g} with "
                               "--klipper-compatible)",
@@ -219,14 +220,15 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
       "--firmware", [&o](const std::string& s) { o.firmware = protocols::parse_export_firmware(s); },
       "Recommend among this firmware's shapers only (klipper, marlin or rrf), each within the firmware's "
       "damping bound for it");
-  sub->footer(klipper_files_help() +
-              "\nExamples:\n"
-              "  tunekit shaper /tmp/raw_data_x_*.csv /tmp/raw_data_y_*.csv\n"
-              "  tunekit shaper /tmp/raw_data_x_*.csv --klipper-compatible --json   # compare with calibrate_shaper.py\n"
-              "  tunekit shaper /tmp/calibration_data_y_20240101.csv --max-smoothing 0.2\n"
-              "  tunekit shaper /tmp/resonances_x_20240101.csv --klipper-compatible   # same as calibrate_shaper.py\n"
-              "  tunekit shaper /tmp/raw_data_x_*.csv --klipper-csv calibration_data_{axis}.csv\n"
-              "  tunekit shaper log.csv --axis x --accel ax --excitation ax_cmd --json -o shaper.json");
+  sub->footer(
+      klipper_files_help() +
+      "\nExamples:\n"
+      "  tunekit shaper /tmp/raw_data_x_*.csv /tmp/raw_data_y_*.csv\n"
+      "  tunekit shaper /tmp/raw_data_x_*.csv --klipper-compatible --json   # compare with calibrate_shaper.py\n"
+      "  tunekit shaper /tmp/calibration_data_y_20240101.csv --max-smoothing 0.2\n"
+      "  tunekit shaper /tmp/resonances_x_20240101.csv --klipper-compatible   # same as calibrate_shaper.py\n"
+      "  tunekit shaper /tmp/raw_data_x_*.csv --klipper-csv calibration_data_{axis}.csv\n"
+      "  tunekit shaper log.csv --axis x --accel ax --excitation ax_cmd --json -o shaper.json");
   sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_shaper(cmd->options), cmd->output, ctx)); });
 }
 

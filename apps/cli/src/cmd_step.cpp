@@ -32,7 +32,9 @@ void print_fit_line(std::ostream& os, const std::string& label, const fitting::F
 
 }  // namespace
 
-std::string step_model_option_name(fitting::StepModel model) { return model == fitting::StepModel::fo ? "fo" : "fopdt"; }
+std::string step_model_option_name(fitting::StepModel model) {
+  return model == fitting::StepModel::fo ? "fo" : "fopdt";
+}
 std::string step_instant_option_name(ident::StepInstant instant) {
   return instant == ident::StepInstant::first_sample ? "first" : "midpoint";
 }
@@ -95,12 +97,11 @@ StepOutcome compute_step(const StepOptions& a) {
         k.record.du = du;
         for (std::size_t i : it->second) {
           if (!k.record.t.empty() && !(tcol.values[i] > k.record.t.back()))
-            throw InputError(fmt::format("time is not increasing ({} s after {} s){}", tcol.values[i],
-                                         k.record.t.back(),
-                                         a.group_column.empty() ? std::string()
-                                                                : fmt::format(" in group {} = {:g}", a.group_column,
-                                                                              it->first)),
-                             source_location(a.file, table.header_line + i + 1));
+            throw InputError(
+                fmt::format("time is not increasing ({} s after {} s){}", tcol.values[i], k.record.t.back(),
+                            a.group_column.empty() ? std::string()
+                                                   : fmt::format(" in group {} = {:g}", a.group_column, it->first)),
+                source_location(a.file, table.header_line + i + 1));
           k.record.t.push_back(tcol.values[i]);
           k.record.y.push_back(ycol.values[i]);
         }
@@ -129,19 +130,20 @@ StepOutcome compute_step(const StepOptions& a) {
 Envelope to_envelope(const StepOutcome& o) {
   const StepOptions& a = o.options;
   Envelope env("step");
-  env.set_options({{"time_column", o.time_column},
-                   {"input_column", a.input_column},
-                   {"input_unit", a.input_unit},
-                   {"output_unit", a.output_unit},
-                   {"output_column", a.output_column},
-                   {"model", step_model_option_name(a.analysis.model)},
-                   {"group_column", a.group_column},
-                   {"step_time_s", a.step_time_s},
-                   {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
-                   {"min_step_fraction", a.analysis.detect.min_step_fraction},
-                   {"step_at", a.input_column.empty() ? nlohmann::json(nullptr)
-                                                      : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))},
-                   {"operating_points", a.analysis.operating_points_by_arrival ? "arrival" : "larger"}});
+  env.set_options(
+      {{"time_column", o.time_column},
+       {"input_column", a.input_column},
+       {"input_unit", a.input_unit},
+       {"output_unit", a.output_unit},
+       {"output_column", a.output_column},
+       {"model", step_model_option_name(a.analysis.model)},
+       {"group_column", a.group_column},
+       {"step_time_s", a.step_time_s},
+       {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
+       {"min_step_fraction", a.analysis.detect.min_step_fraction},
+       {"step_at", a.input_column.empty() ? nlohmann::json(nullptr)
+                                          : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))},
+       {"operating_points", a.analysis.operating_points_by_arrival ? "arrival" : "larger"}});
   env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
   env.results() = ident::to_json(o.analysis);
   env.results()["units"] = {{"input", o.input_unit}, {"output", o.output_unit}, {"K", o.gain_unit}, {"time", "s"}};
@@ -151,10 +153,11 @@ Envelope to_envelope(const StepOutcome& o) {
 
 void print_text(const StepOutcome& o, std::ostream& os) {
   const ident::StepAnalysis& res = o.analysis;
-  os << fmt::format("{}: {} step(s), model {}\n", o.options.file, res.steps.size(), fitting::model_name(o.options.analysis.model));
+  os << fmt::format("{}: {} step(s), model {}\n", o.options.file, res.steps.size(),
+                    fitting::model_name(o.options.analysis.model));
   for (const auto& s : res.steps) {
-    const std::string label = fmt::format("step {} {} @{:.4g}s", s.step.index, s.step.rising() ? "up" : "down",
-                                          s.step.t_step_s);
+    const std::string label =
+        fmt::format("step {} {} @{:.4g}s", s.step.index, s.step.rising() ? "up" : "down", s.step.t_step_s);
     if (s.fit) print_fit_line(os, label, *s.fit);
     else os << fmt::format("  {:<22} failed: {}\n", label, s.error);
   }
@@ -202,8 +205,7 @@ void register_step(CLI::App& app, CliContext& ctx) {
                   "Time column (s; ms and us are converted); default: found by name (time, t, timestamp, time_s)");
   sub->add_option("-i,--input", o.input_column,
                   "Input column (e.g. feed rate, mm/s); its steps are found automatically");
-  sub->add_option("-y,--output", o.output_column, "Output column (e.g. force in N, ooze length in mm)")
-      ->required();
+  sub->add_option("-y,--output", o.output_column, "Output column (e.g. force in N, ooze length in mm)")->required();
   sub->add_option("--input-unit", o.input_unit,
                   "Unit of the input column when its name does not say it (e.g. mm3/s for a volumetric flow, mm/s "
                   "for filament feed); export places operating points by it");
@@ -214,23 +216,23 @@ void register_step(CLI::App& app, CliContext& ctx) {
   sub->add_option("--group", o.group_column,
                   "Without --input: split the rows by this column's value (e.g. print speed, mm/s); each group is "
                   "one step of that size at --step-time, time restarting per group");
-  sub->add_option("--step-time", o.step_time_s, "Without --input: when the step happened (s)")
-      ->capture_default_str();
+  sub->add_option("--step-time", o.step_time_s, "Without --input: when the step happened (s)")->capture_default_str();
   sub->add_option("--step-size", o.step_size,
                   "Without --input: the input change (input units, e.g. the print speed before a stop in mm/s)");
   sub->add_option("--min-step", o.analysis.detect.min_step_fraction,
                   "A change of the input larger than this fraction of its range is a step (1)")
       ->capture_default_str();
-  add_choice_option<ident::StepInstant>(sub, "--step-at", o.analysis.detect.instant,
-                  {{"midpoint", ident::StepInstant::midpoint}, {"first", ident::StepInstant::first_sample}},
-                  "With --input: when the input changed between the last sample at the old level and the first at "
-                  "the new one. midpoint: half-way (interpolated; for logs sampled independently of the changes, "
-                  "e.g. a printer's); first: at the first new sample (input changes exactly at sample instants). "
-                  "Moves t_step and theta_s (s) by up to half a sample interval");
-  add_choice_option<bool>(sub, "--operating-points", o.analysis.operating_points_by_arrival,
-                  {{"larger", false}, {"arrival", true}},
-                  "How operating_points group the steps: larger (the input level of larger magnitude of each step) or "
-                  "arrival (the level each step arrives at, as flow_levels; for a flow sweep). Export reads them");
+  add_choice_option<ident::StepInstant>(
+      sub, "--step-at", o.analysis.detect.instant,
+      {{"midpoint", ident::StepInstant::midpoint}, {"first", ident::StepInstant::first_sample}},
+      "With --input: when the input changed between the last sample at the old level and the first at "
+      "the new one. midpoint: half-way (interpolated; for logs sampled independently of the changes, "
+      "e.g. a printer's); first: at the first new sample (input changes exactly at sample instants). "
+      "Moves t_step and theta_s (s) by up to half a sample interval");
+  add_choice_option<bool>(
+      sub, "--operating-points", o.analysis.operating_points_by_arrival, {{"larger", false}, {"arrival", true}},
+      "How operating_points group the steps: larger (the input level of larger magnitude of each step) or "
+      "arrival (the level each step arrives at, as flow_levels; for a flow sweep). Export reads them");
   add_output_options(sub, cmd->output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"

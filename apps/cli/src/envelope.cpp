@@ -14,7 +14,6 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/protocols/atomic_file.hpp"
 
-
 namespace tunekit::cli {
 
 std::string sha256_hex(std::string_view bytes) {
@@ -112,7 +111,8 @@ Emission prepare_emission(const Envelope& env, const OutputOptions& o) {
   if (!outcomes.empty()) {
     nlohmann::json reqs = nlohmann::json::array();
     for (const auto& r : outcomes)
-      reqs.push_back({{"expression", r.requirement.expression}, {"path", r.resolved_path}, {"value", r.value}, {"met", r.met}});
+      reqs.push_back(
+          {{"expression", r.requirement.expression}, {"path", r.resolved_path}, {"value", r.value}, {"met", r.met}});
     j["requirements"] = reqs;
   }
   make_utf8(j);
@@ -130,7 +130,8 @@ Emission prepare_emission(const Envelope& env, const OutputOptions& o) {
 bool is_special_output(const std::string& path) {
   std::error_code ec;
   const auto st = std::filesystem::status(path, ec);
-  return !ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) && !std::filesystem::is_directory(st);
+  return !ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) &&
+         !std::filesystem::is_directory(st);
 }
 
 void write_output_text(const std::string& path, const std::string& text) {

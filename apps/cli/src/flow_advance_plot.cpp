@@ -31,7 +31,8 @@ Figure flow_advance_figure(const nlohmann::json& fa) {
   f.height_px = 760;
   const auto& curve = fa.at("curve");
   const auto q = fap_column(curve, "flow_mm3_s");
-  Panel p{"Advance the liquefier needs, V(Q)/Q, and what each export gives", "", "advance K (s)", false, false, {}, 1.6};
+  Panel p{
+      "Advance the liquefier needs, V(Q)/Q, and what each export gives", "", "advance K (s)", false, false, {}, 1.6};
   p.series.push_back({"needed K(Q)", q, fap_column(curve, "K_need_s"), Series::Style::line, 1});
   const auto lo = fap_column(curve, "K_lo_s"), hi = fap_column(curve, "K_hi_s");
   if (fap_all_finite(lo) && fap_all_finite(hi)) {
@@ -40,23 +41,26 @@ Figure flow_advance_figure(const nlohmann::json& fa) {
   }
   const auto kk = fap_column(curve, "K_kalico_s");
   if (fap_all_finite(kk)) {
-    const std::string model = fa.contains("kalico") ? fa["kalico"].value("pressure_advance_model", std::string("?")) : "?";
+    const std::string model =
+        fa.contains("kalico") ? fa["kalico"].value("pressure_advance_model", std::string("?")) : "?";
     p.series.push_back({fmt::format("Kalico {}", model), q, kk, Series::Style::line, 3});
   }
   double k_single = std::nan(""), qd = std::nan("");
   if (fa.contains("single") && fa["single"].contains("K_s") && fa["single"]["K_s"].is_number())
     k_single = fa["single"]["K_s"].get<double>();
-  if (fa.contains("design_flow_mm3_s") && fa["design_flow_mm3_s"].is_number()) qd = fa["design_flow_mm3_s"].get<double>();
+  if (fa.contains("design_flow_mm3_s") && fa["design_flow_mm3_s"].is_number())
+    qd = fa["design_flow_mm3_s"].get<double>();
   if (std::isfinite(k_single) && !q.empty())
-    p.series.push_back({"Klipper / Marlin / RRF single K", {q.front(), q.back()}, {k_single, k_single},
-                        Series::Style::dashed, 4});
+    p.series.push_back(
+        {"Klipper / Marlin / RRF single K", {q.front(), q.back()}, {k_single, k_single}, Series::Style::dashed, 4});
   if (fa.contains("orca") && fa["orca"].is_array() && !fa["orca"].empty())
     p.series.push_back({"OrcaSlicer table", fap_column(fa["orca"], "flow_mm3_s"), fap_column(fa["orca"], "K_s"),
                         Series::Style::points, 5});
   if (std::isfinite(qd) && std::isfinite(k_single)) {
     double top = k_single;
     for (double v : hi.empty() || !fap_all_finite(hi) ? fap_column(curve, "K_need_s") : hi) top = std::max(top, v);
-    p.series.push_back({fmt::format("design flow {:.3g} mm^3/s", qd), {qd, qd}, {0.0, top * 1.05}, Series::Style::dashed, 6});
+    p.series.push_back(
+        {fmt::format("design flow {:.3g} mm^3/s", qd), {qd, qd}, {0.0, top * 1.05}, Series::Style::dashed, 6});
   }
   Panel t{"Time constant against flow", "volumetric flow (mm^3/s)", "tau (s)", false, false, {}, 1.0};
   t.series.push_back({"identified tau(Q)", q, fap_column(curve, "tau_s"), Series::Style::line, 1});
@@ -68,7 +72,8 @@ Figure flow_advance_figure(const nlohmann::json& fa) {
       rt = r["tau_pred_s"].get<std::vector<double>>();
     }
     if (!rq.empty() && rq.size() == rt.size()) {
-      const double gap = r.contains("max_gap_rel") && r["max_gap_rel"].is_number() ? r["max_gap_rel"].get<double>() : std::nan("");
+      const double gap =
+          r.contains("max_gap_rel") && r["max_gap_rel"].is_number() ? r["max_gap_rel"].get<double>() : std::nan("");
       t.series.push_back({std::isfinite(gap) ? fmt::format("rheology prediction (gap up to {:.0f} %)", 100 * gap)
                                              : std::string("rheology prediction"),
                           rq, rt, Series::Style::dashed, 2});

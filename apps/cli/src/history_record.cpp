@@ -36,7 +36,8 @@ history::NewRecord record_from(const nlohmann::json& env, const std::string& mac
   r.source = source;
   r.run_utc = run_utc;
   r.inputs = record_inputs_of(env.contains("inputs") ? env["inputs"] : nlohmann::json());
-  r.quantities = history::extract_quantities(r.command, env.contains("results") ? env["results"] : nlohmann::json::object());
+  r.quantities =
+      history::extract_quantities(r.command, env.contains("results") ? env["results"] : nlohmann::json::object());
   r.envelope = env.dump();
   r.envelope_sha256 = sha256_hex(r.envelope);
   return r;
@@ -64,7 +65,8 @@ void prepare_record(OutputOptions& o, const std::string& profile_machine_id) {
   if (!o.record) return;
   if (o.machine_id.empty()) o.machine_id = profile_machine_id;
   if (o.machine_id.empty())
-    throw InputError("--record needs the machine's id: --machine-id NAME, or id = \"NAME\" under [machine] in the profile");
+    throw InputError(
+        "--record needs the machine's id: --machine-id NAME, or id = \"NAME\" under [machine] in the profile");
   history::check_machine_id(o.machine_id);
   history::Store store(history_db(o));  // creates or migrates it now, not after the run
 }
@@ -103,13 +105,15 @@ std::vector<history::NewRecord> records_from_envelope(const nlohmann::json& env,
 
 void record_result(const nlohmann::json& envelope, const OutputOptions& o, CliContext& ctx) {
   if (o.machine_id.empty())
-    throw InputError("--record needs the machine's id: --machine-id NAME (or [machine] id in the profile for calibrate)");
+    throw InputError(
+        "--record needs the machine's id: --machine-id NAME (or [machine] id in the profile for calibrate)");
   history::check_machine_id(o.machine_id);
   const std::string db = history_db(o);
   history::Store store(db);
   std::string source = o.record_source;
   std::error_code ec;
-  if (!source.empty() && std::filesystem::exists(source, ec)) source = std::filesystem::weakly_canonical(source, ec).string();
+  if (!source.empty() && std::filesystem::exists(source, ec))
+    source = std::filesystem::weakly_canonical(source, ec).string();
   const auto records = records_from_envelope(envelope, o.machine_id, source, "");
   std::vector<std::int64_t> ids;
   for (const auto& r : records)

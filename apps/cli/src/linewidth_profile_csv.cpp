@@ -34,8 +34,7 @@ std::vector<vision::PathSegment> gcode_path(const std::string& path, std::size_t
       if (const auto w = protocols::parse_gcode(line)) {
         if (const auto m = gi.apply(*w)) {
           const double de = m->end[3] - m->start[3];
-          if (!m->extruder_only() && de > 0 && m->length_mm() > 0)
-            segs.push_back({m->length_mm(), m->feed_mm_s, de});
+          if (!m->extruder_only() && de > 0 && m->length_mm() > 0) segs.push_back({m->length_mm(), m->feed_mm_s, de});
         }
       }
     } catch (const Error& e) {
@@ -68,8 +67,8 @@ nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run,
   const bool setpoint_from_feed = !a.gcode.empty() && a.path.filament_diameter_mm > 0 && a.layer_height_mm > 0;
   if (!(setpoint > 0) && !setpoint_from_feed) {
     setpoint = mean_mm;
-    warnings.push_back(fmt::format("no --setpoint-width-mm: the set-point width is taken as the measured mean {:.4f} mm",
-                         mean_mm));
+    warnings.push_back(
+        fmt::format("no --setpoint-width-mm: the set-point width is taken as the measured mean {:.4f} mm", mean_mm));
   }
   std::vector<vision::TimedWidth> rows;
   nlohmann::json mapping;
@@ -92,9 +91,10 @@ nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run,
     const double prof_len = s_mm.empty() ? 0.0 : s_mm.back() - s_mm.front();
     const double offset = std::isfinite(a.path.offset_mm) ? a.path.offset_mm : 0.5 * (total - prof_len);
     if (prof_len > total * 1.05)
-      warnings.push_back(fmt::format("the measured line ({:.2f} mm) is longer than the G-code's extruding path ({:.2f} mm): "
-                           "wrong file, scale or line?",
-                           prof_len, total));
+      warnings.push_back(
+          fmt::format("the measured line ({:.2f} mm) is longer than the G-code's extruding path ({:.2f} mm): "
+                      "wrong file, scale or line?",
+                      prof_len, total));
     rows = vision::map_path(s_mm, w_mm, conf, segs, how);
     mapping = {{"kind", "gcode"},
                {"gcode", a.gcode},
@@ -113,9 +113,9 @@ nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run,
         "tunekit linewidth: profile of {} (line {}) along the extruding moves of {} ({} segments, {:.3f} mm)\n"
         "setpoint_width: {}",
         run.path, a.line, a.gcode, segs.size(), total,
-        from_feed ? fmt::format("E (pi d^2/4) / (L h), d = {} mm, h = {} mm", a.path.filament_diameter_mm,
-                                a.layer_height_mm)
-                  : fmt::format("constant {} mm", setpoint));
+        from_feed
+            ? fmt::format("E (pi d^2/4) / (L h), d = {} mm, h = {} mm", a.path.filament_diameter_mm, a.layer_height_mm)
+            : fmt::format("constant {} mm", setpoint));
   } else if (a.ring_sines > 0) {
     if (!l.closed) throw InputError(fmt::format("line {} is not a closed ring; --ring-sines needs one", a.line));
     std::vector<cv::Point2d> pts;
@@ -147,8 +147,8 @@ nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run,
   } else {
     rows = vision::map_constant_speed(s_mm, w_mm, conf, a.speed_mm_s, setpoint);
     mapping = {{"kind", "constant_speed"}};
-    comment = fmt::format("tunekit linewidth: profile of {} (line {}) at a constant {} mm/s", run.path, a.line,
-                          a.speed_mm_s);
+    comment =
+        fmt::format("tunekit linewidth: profile of {} (line {}) at a constant {} mm/s", run.path, a.line, a.speed_mm_s);
   }
   if (rows.size() < 3) throw FitError("measured nothing: fewer than 3 valid profile samples to map to time", run.path);
   protocols::write_file_atomic(a.profile_csv, vision::timed_width_csv(rows, comment));

@@ -17,9 +17,16 @@ Figure overshoot_grid_figure(const nlohmann::json& d) {
   std::map<std::pair<bool, double>, std::vector<std::pair<double, const nlohmann::json*>>> by_speed;
   if (d.contains("cells"))
     for (const auto& c : d["cells"])
-      by_speed[{c.value("input_shaping", false), c.value("speed_mm_s", 0.0)}].push_back({c.value("accel_mm_s2", 0.0), &c});
+      by_speed[{c.value("input_shaping", false), c.value("speed_mm_s", 0.0)}].push_back(
+          {c.value("accel_mm_s2", 0.0), &c});
   Panel os{"Overshoot (mean over corners, worst axis)", "", "overshoot (mm)", false, false, {}, 1.2};
-  Panel fom{"Figure of merit (normalized speed within tolerance, else 0)", "acceleration (mm/s^2)", "FOM", false, false, {}, 1.0};
+  Panel fom{"Figure of merit (normalized speed within tolerance, else 0)",
+            "acceleration (mm/s^2)",
+            "FOM",
+            false,
+            false,
+            {},
+            1.0};
   Panel ct{"Completion time of the motion", "", "time (s)", false, false, {}, 0.8};
   int color = 1;
   std::vector<double> ax_all;

@@ -157,7 +157,8 @@ void render_figure(const Figure& fig, const std::string& path) {
             ry.add(ay);
           }
         }
-      if (!rx.valid() || !ry.valid()) throw InputError(fmt::format("panel '{}' has no finite data to plot", p.title), path);
+      if (!rx.valid() || !ry.valid())
+        throw InputError(fmt::format("panel '{}' has no finite data to plot", p.title), path);
       if (fig.share_x && shared_x.valid()) rx = shared_x;
       if (!p.log_x) rx.pad(0.0);
       if (rx.hi == rx.lo) rx.pad(0.05);
@@ -216,10 +217,11 @@ void render_figure(const Figure& fig, const std::string& path) {
         }
         PLFLT lw, lh;
         pls->col0(15);
-        pls->legend(&lw, &lh, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX, PL_POSITION_RIGHT | PL_POSITION_TOP | PL_POSITION_INSIDE,
-                    0.01, 0.01, 0.08, 0, 15, 1, 0, 0, static_cast<PLINT>(labels.size()), opts.data(), 1.0, 0.9, 1.6, 1.0,
-                    colors.data(), text.data(), nullptr, nullptr, nullptr, nullptr, colors.data(), styles.data(),
-                    widths.data(), sym_colors.data(), sym_scales.data(), sym_numbers.data(), symbols.data());
+        pls->legend(&lw, &lh, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
+                    PL_POSITION_RIGHT | PL_POSITION_TOP | PL_POSITION_INSIDE, 0.01, 0.01, 0.08, 0, 15, 1, 0, 0,
+                    static_cast<PLINT>(labels.size()), opts.data(), 1.0, 0.9, 1.6, 1.0, colors.data(), text.data(),
+                    nullptr, nullptr, nullptr, nullptr, colors.data(), styles.data(), widths.data(), sym_colors.data(),
+                    sym_scales.data(), sym_numbers.data(), symbols.data());
       }
     }
     if (!fig.title.empty()) {

@@ -38,8 +38,9 @@ void ProgressBar::draw() {
   const double left = f > 0.01 ? std::max(0.0, elapsed / f - elapsed) : estimate_s_ - elapsed;
   const int width = 30;
   const int filled = static_cast<int>(f * width);
-  ctx_.err << fmt::format("\r[{}/{}] [{}{}] {:3.0f}%  {:<28.28}  {:>4.0f} s left ", index_, total_, std::string(filled, '#'),
-                          std::string(width - filled, '-'), 100 * f, label_, std::max(0.0, left))
+  ctx_.err << fmt::format("\r[{}/{}] [{}{}] {:3.0f}%  {:<28.28}  {:>4.0f} s left ", index_, total_,
+                          std::string(filled, '#'), std::string(width - filled, '-'), 100 * f, label_,
+                          std::max(0.0, left))
            << std::flush;
 }
 
@@ -53,7 +54,8 @@ void ProgressBar::end(const std::string& summary) {
   if (!ctx_.interactive) return;
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   std::lock_guard lock(mutex_);
-  ctx_.err << fmt::format("\r\033[K[{}/{}] {} ({:.1f} s): {}\n", index_, total_, label_, elapsed, summary) << std::flush;
+  ctx_.err << fmt::format("\r\033[K[{}/{}] {} ({:.1f} s): {}\n", index_, total_, label_, elapsed, summary)
+           << std::flush;
 }
 
 }  // namespace tunekit::cli

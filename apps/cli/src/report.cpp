@@ -131,7 +131,8 @@ Figure psd_figure(const nlohmann::json& d, const std::string& axis) {
   int sc = 2;
   if (d.contains("shapers"))
     for (const auto& sh : d["shapers"]) {
-      s.series.push_back({sh.value("type", std::string("?")), vec(sh, "freq_hz"), vec(sh, "response"), Series::Style::line, sc});
+      s.series.push_back(
+          {sh.value("type", std::string("?")), vec(sh, "freq_hz"), vec(sh, "response"), Series::Style::line, sc});
       sc = sc % 8 + 1;
     }
   f.panels = {p};
@@ -192,14 +193,16 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
   if (pd.contains("flow_advance"))
     add("flow_advance", "Advance against flow: the need with its 95 % band, each exported model, the design flow",
         flow_advance_figure(pd["flow_advance"]));
-  if (pd.contains("viscosity")) add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(pd["viscosity"]));
+  if (pd.contains("viscosity"))
+    add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(pd["viscosity"]));
   if (pd.contains("linewidth")) {
     add("linewidth", "Line-width profile", linewidth_figure(pd["linewidth"]));
     // The photo with the detected edges and centreline, shown beside its profile.
     const std::string overlay = pd["linewidth"].value("overlay_png", std::string());
     if (!overlay.empty()) {
       const std::string path = run_dir + "/" + overlay;
-      if (!std::filesystem::exists(path)) throw InputError("the line-width overlay named in plotdata.json is missing", path);
+      if (!std::filesystem::exists(path))
+        throw InputError("the line-width overlay named in plotdata.json is missing", path);
       images.push_back({"linewidth_overlay", "Photo overlay: detected edges and centreline", path});  // a PNG photo
     }
   }
@@ -237,7 +240,8 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
     << "figure{margin:1em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:.9em}\n"
     << "pre{background:#f7f7f7;border:1px solid #ddd;padding:.8em;overflow-x:auto;font-size:.85em}\n"
     << ".warn{color:#a15c00}.todo{color:#333}.ci{color:#444;font-variant-numeric:tabular-nums}\n"
-    << ".agree{border-left:4px solid #2c7a2c;padding-left:.6em}.disagree{border-left:4px solid #b00;padding-left:.6em}\n"
+    << ".agree{border-left:4px solid #2c7a2c;padding-left:.6em}.disagree{border-left:4px solid "
+       "#b00;padding-left:.6em}\n"
     << "</style>\n</head>\n<body>\n";
   h << "<h1>tunekit calibration report</h1>\n";
   const std::string machine = results.value("machine", std::string());
@@ -254,9 +258,8 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
       const auto* v = json_at(results, path);
       if (v == nullptr || !v->is_number()) continue;
       h << "<tr><td>" << html_escape(row.value("label", path)) << "</td><td class=\"num\" data-path=\""
-        << html_escape(path) << "\" data-value=\"" << v->dump() << "\">" << display_number(v->get<double>())
-        << "</td>" << interval_cell(results, row) << "<td>" << html_escape(row.value("unit", std::string()))
-        << "</td></tr>\n";
+        << html_escape(path) << "\" data-value=\"" << v->dump() << "\">" << display_number(v->get<double>()) << "</td>"
+        << interval_cell(results, row) << "<td>" << html_escape(row.value("unit", std::string())) << "</td></tr>\n";
     }
   h << "</table>\n";
 
@@ -274,8 +277,8 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
     h << "<h2>Warnings</h2>\n<ul id=\"warnings\">\n";
     for (const auto& w : env["warnings"]) {
       const std::string text = w.get<std::string>();
-      h << "<li class=\"warn\">" << html_escape(text) << "<br><span class=\"todo\">What to do: "
-        << html_escape(advice_for_warning(text)) << "</span></li>\n";
+      h << "<li class=\"warn\">" << html_escape(text)
+        << "<br><span class=\"todo\">What to do: " << html_escape(advice_for_warning(text)) << "</span></li>\n";
     }
     h << "</ul>\n";
   }
@@ -288,13 +291,14 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
   if (!images.empty()) h << "<h2>Plots</h2>\n";
   for (const auto& img : images) {
     const std::string bytes = ident::read_file_bytes(img.path);
-    h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html_escape(img.caption) << "\" src=\"data:"
-      << image_mime(img.path) << ";base64," << base64(bytes) << "\"><figcaption>" << html_escape(img.caption)
-      << "</figcaption></figure>\n";
+    h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html_escape(img.caption)
+      << "\" src=\"data:" << image_mime(img.path) << ";base64," << base64(bytes) << "\"><figcaption>"
+      << html_escape(img.caption) << "</figcaption></figure>\n";
   }
   if (results.contains("config_diff") && results["config_diff"].is_string() &&
       !results["config_diff"].get<std::string>().empty())
-    h << "<h2>Configuration changes</h2>\n<pre>" << html_escape(results["config_diff"].get<std::string>()) << "</pre>\n";
+    h << "<h2>Configuration changes</h2>\n<pre>" << html_escape(results["config_diff"].get<std::string>())
+      << "</pre>\n";
   h << "</body>\n</html>\n";
   return h.str();
 }
@@ -309,7 +313,8 @@ ReportOutcome compute_report(const ReportOptions& options) {
   const std::string pd_path = run_dir + "/plotdata.json";
   if (std::filesystem::exists(pd_path)) {
     pd = read_json_file(pd_path);
-    if (!pd.is_object()) throw InputError(fmt::format("plot data must be a JSON object, not {}", pd.type_name()), pd_path);
+    if (!pd.is_object())
+      throw InputError(fmt::format("plot data must be a JSON object, not {}", pd.type_name()), pd_path);
   }
   std::string html;
   try {

@@ -122,10 +122,12 @@ RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::js
     if (requirement_path_matches(want, l.segments))
       (wants_diagnostics || !is_diagnostic(l) ? found : diagnostics_only).push_back(&l);
   if (found.empty() && !diagnostics_only.empty())
-    throw InputError(fmt::format("--require '{}': no result named '{}'; the fit diagnostic '{}' is compared only when "
-                                 "named with its path",
-                                 r.expression, r.path, diagnostics_only.front()->path));
-  if (found.empty()) throw InputError(fmt::format("--require '{}': no number named '{}' in the results", r.expression, r.path));
+    throw InputError(
+        fmt::format("--require '{}': no result named '{}'; the fit diagnostic '{}' is compared only when "
+                    "named with its path",
+                    r.expression, r.path, diagnostics_only.front()->path));
+  if (found.empty())
+    throw InputError(fmt::format("--require '{}': no number named '{}' in the results", r.expression, r.path));
   // Prefer a number that is not inside an array (a pooled or summary value over one of a
   // list), then the shortest path, then a fitted parameter (a member of a "params" object).
   auto is_param = [](const RequirementLeaf* l) {
@@ -143,7 +145,8 @@ RequirementOutcome evaluate_requirement(const Requirement& r, const nlohmann::js
   if (!ties.empty()) {
     std::string list = found.front()->path;
     for (const auto& t : ties) list += ", " + t;
-    throw InputError(fmt::format("--require '{}': '{}' is ambiguous ({}); give a longer path", r.expression, r.path, list));
+    throw InputError(
+        fmt::format("--require '{}': '{}' is ambiguous ({}); give a longer path", r.expression, r.path, list));
   }
   RequirementOutcome o;
   o.requirement = r;

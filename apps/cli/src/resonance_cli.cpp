@@ -21,8 +21,8 @@ std::vector<double> resonance_pair(double a, double b) { return {a, b}; }
 // "kaiser (default, Klipper), hann, hamming, rect" with the library's default first.
 std::string resonance_window_words(ident::WindowType def) {
   std::string s = ident::to_string(def) + " (default, Klipper)";
-  for (auto w : {ident::WindowType::kaiser, ident::WindowType::hann, ident::WindowType::hamming,
-                 ident::WindowType::rectangular})
+  for (auto w :
+       {ident::WindowType::kaiser, ident::WindowType::hann, ident::WindowType::hamming, ident::WindowType::rectangular})
     if (w != def) s += ", " + ident::to_string(w);
   return s;
 }
@@ -42,17 +42,24 @@ std::string klipper_files_help() {
          "  Raw accelerometer data (TEST_RESONANCES AXIS=X OUTPUT=raw_data, or ACCELEROMETER_MEASURE) is written as\n"
          "  /tmp/raw_data_x_<name>.csv with the header '#time,accel_x,accel_y,accel_z' (s, mm/s^2). Pass one or more\n"
          "  of them; the axis comes from 'raw_data_x_' / 'raw_data_y_' in the name (or --axis), several files of one\n"
-         "  axis are averaged for the modes (for the shaper, each counts separately, as in Klipper's calibrate_shaper.py).\n"
-         "  Klipper's spectrum files are read as its calibrate_shaper.py reads them: TEST_RESONANCES' resonances_x_<name>.csv\n"
-         "  and SHAPER_CALIBRATE's calibration_data_x_<name>.csv (freq,psd_x,psd_y,psd_z,psd_xyz), or several datasets\n"
-         "  (freq,<name>,<name>...). Without 'shapers:' columns the PSD is as measured and gets Klipper's normalization\n"
+         "  axis are averaged for the modes (for the shaper, each counts separately, as in Klipper's "
+         "calibrate_shaper.py).\n"
+         "  Klipper's spectrum files are read as its calibrate_shaper.py reads them: TEST_RESONANCES' "
+         "resonances_x_<name>.csv\n"
+         "  and SHAPER_CALIBRATE's calibration_data_x_<name>.csv (freq,psd_x,psd_y,psd_z,psd_xyz), or several "
+         "datasets\n"
+         "  (freq,<name>,<name>...). Without 'shapers:' columns the PSD is as measured and gets Klipper's "
+         "normalization\n"
          "  (divided by f + 0.1 Hz, damped below 10 Hz) before a shaper is chosen; with them it already has it.\n"
          "  Shake&Tune's measurement files (ShakeTune_results/*/<name>.stdata: Zstandard-compressed JSON lines of\n"
-         "  [t, accel_x, accel_y, accel_z] samples) are read directly; an input-shaper measurement (axis_X_...) gives its\n"
+         "  [t, accel_x, accel_y, accel_z] samples) are read directly; an input-shaper measurement (axis_X_...) gives "
+         "its\n"
          "  axis, any other measurement is reported under its name.\n"
          "Feeding RepRapFirmware's files:\n"
-         "  M956 P0 S<samples> A0 X Y Z F\"raw_data_x_run1.csv\" writes 0:/sys/accelerometer/<name>.csv: 'Sample,X,Y,Z', rows of\n"
-         "  g, and a last line 'Rate <Hz>, overflows <n>' that gives the time base. Name the file raw_data_<axis>_*.csv\n"
+         "  M956 P0 S<samples> A0 X Y Z F\"raw_data_x_run1.csv\" writes 0:/sys/accelerometer/<name>.csv: "
+         "'Sample,X,Y,Z', rows of\n"
+         "  g, and a last line 'Rate <Hz>, overflows <n>' that gives the time base. Name the file "
+         "raw_data_<axis>_*.csv\n"
          "  in M956 (or pass --axis).\n"
          "  Other loggers: --time COL --accel COL [--accel COL...] (mm/s^2); a commanded-acceleration column\n"
          "  --excitation COL adds the frequency response H1 and coherence, and the modes are fitted to it.\n";
@@ -95,9 +102,10 @@ void add_accel_files_options(CLI::App* sub, AccelFilesOptions& o, OutputOptions&
                               o.modes.fit_max_hz));
   sub->add_option("--max-modes", o.modes.max_modes,
                   fmt::format("Most modes fitted per axis (default {})", o.modes.max_modes));
-  sub->add_option("--peak-threshold", o.modes.peak_threshold,
-                  fmt::format("Ignore peaks lower than this fraction of the highest (whitened PSD), 0..1 (default {:g})",
-                              o.modes.peak_threshold));
+  sub->add_option(
+      "--peak-threshold", o.modes.peak_threshold,
+      fmt::format("Ignore peaks lower than this fraction of the highest (whitened PSD), 0..1 (default {:g})",
+                  o.modes.peak_threshold));
   sub->add_option("--excitation-exponent", o.modes.excitation_exponent,
                   "p in the excitation spectrum shape f^p (dimensionless; default 2 for raw sweeps with amplitude "
                   "accel_per_hz*f, 1 for spectra Klipper normalized)");
@@ -106,8 +114,8 @@ void add_accel_files_options(CLI::App* sub, AccelFilesOptions& o, OutputOptions&
                   "ADXL345 at +-16 g is 156906)");
   sub->add_option("--plot-max", o.max_plot_hz,
                   fmt::format("Highest frequency of the PSD arrays in the JSON, Hz (default {:g})", o.max_plot_hz));
-  sub->add_flag_callback("--no-frf", [&o] { o.modes.use_frf = false; },
-                         "Fit the PSD even when an excitation column gives the FRF");
+  sub->add_flag_callback(
+      "--no-frf", [&o] { o.modes.use_frf = false; }, "Fit the PSD even when an excitation column gives the FRF");
   add_output_options(sub, output);
 }
 
@@ -125,8 +133,9 @@ void add_ringdown_options(CLI::App* sub, ident::RingdownOptions& o, bool* ringdo
   sub->add_option("--ringdown-min", o.min_hz,
                   fmt::format("Ring-down: lowest fundamental considered, Hz (default {:g})", o.min_hz));
   sub->add_option("--ringdown-max", o.max_hz,
-                  o.max_hz > 0 ? fmt::format("Ring-down: highest line considered, Hz (default {:g})", o.max_hz)
-                               : std::string("Ring-down: highest line considered, Hz (default 0.45 x the sample rate)"));
+                  o.max_hz > 0
+                      ? fmt::format("Ring-down: highest line considered, Hz (default {:g})", o.max_hz)
+                      : std::string("Ring-down: highest line considered, Hz (default 0.45 x the sample rate)"));
 }
 
 void check_ringdown_options(const ident::RingdownOptions& o) {

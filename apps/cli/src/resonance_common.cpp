@@ -88,9 +88,10 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
           rec.sampling.samples < 2 * ident::resolve_segment_length(welch, rec.sampling.sample_rate_hz);
       if (ringdown == RingdownDiversion::all || (ringdown == RingdownDiversion::too_short && too_short)) {
         if (ringdown != RingdownDiversion::all)
-          result.warnings.push_back(fmt::format("{}: {:.3f} s at {:.0f} Hz is too short for Welch's method; analysed as "
-                                                "a ring-down",
-                                                path, rec.sampling.duration_s, rec.sampling.sample_rate_hz));
+          result.warnings.push_back(
+              fmt::format("{}: {:.3f} s at {:.0f} Hz is too short for Welch's method; analysed as "
+                          "a ring-down",
+                          path, rec.sampling.duration_s, rec.sampling.sample_rate_hz));
         record_input();
         result.ringdown_records.push_back(std::move(rec));
         continue;

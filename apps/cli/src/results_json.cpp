@@ -94,7 +94,8 @@ void check_results_envelope(const nlohmann::json& j, std::string_view text, cons
     throw InputError(fmt::format("a tunekit results file is a JSON object, not {}", j.type_name()), path);
   auto require = [&](const char* key, bool ok, const char* what) {
     if (j.contains(key) && !ok)
-      throw InputError(fmt::format("\"{}\" must be {}, not {}", key, what, j[key].type_name()), member_location(path, text, key));
+      throw InputError(fmt::format("\"{}\" must be {}, not {}", key, what, j[key].type_name()),
+                       member_location(path, text, key));
   };
   require("command", j.contains("command") && j["command"].is_string(), "a string");
   require("results", j.contains("results") && j["results"].is_object(), "an object");
@@ -104,7 +105,8 @@ void check_results_envelope(const nlohmann::json& j, std::string_view text, cons
   if (j.contains("warnings"))
     for (const auto& w : j["warnings"])
       if (!w.is_string())
-        throw InputError(fmt::format("\"warnings\" must hold strings, not {}", w.type_name()), member_location(path, text, "warnings"));
+        throw InputError(fmt::format("\"warnings\" must hold strings, not {}", w.type_name()),
+                         member_location(path, text, "warnings"));
   require("tool", j.contains("tool") && j["tool"].is_object(), "an object");
   if (j.contains("tool") && j["tool"].contains("version") && !j["tool"]["version"].is_string())
     throw InputError("\"tool\".\"version\" must be a string", member_location(path, text, "version"));

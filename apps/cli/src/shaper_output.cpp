@@ -103,10 +103,10 @@ void print_text(const ShaperOutcome& o, std::ostream& os) {
     }
     for (const auto& c : x.choice.candidates) {
       // Klipper-compatible: max_accel as Klipper suggests it (rounded to 100 mm/s^2).
-      const std::string accel = o.options.klipper_compatible
-                                    ? fmt::format("suggested max_accel <= {:.0f} mm/s^2",
-                                                  shaper_klipper_suggested_accel(c.max_accel_mm_s2))
-                                    : fmt::format("max_accel {:.0f} mm/s^2", c.max_accel_mm_s2);
+      const std::string accel =
+          o.options.klipper_compatible
+              ? fmt::format("suggested max_accel <= {:.0f} mm/s^2", shaper_klipper_suggested_accel(c.max_accel_mm_s2))
+              : fmt::format("max_accel {:.0f} mm/s^2", c.max_accel_mm_s2);
       os << fmt::format("  {:<9} {:6.1f} Hz  damping {:.3f}  vibrations {:5.1f} %  smoothing {:.3f} mm  {}\n",
                         ident::to_string(c.type), c.freq_hz, c.damping_ratio, 100 * c.vibrations, c.smoothing_mm,
                         accel);

@@ -18,10 +18,10 @@ namespace tunekit::fitting {
 
 /// One damped sinusoid found by the matrix pencil.
 struct PencilComponent {
-  double freq_hz = 0;     ///< natural frequency, Hz
-  double zeta = 0;        ///< damping ratio (negative for a growing component)
-  double amplitude = 0;   ///< initial amplitude at k = 0, y's unit
-  double phase_rad = 0;   ///< at k = 0: amplitude * cos(w_d t + phase)
+  double freq_hz = 0;    ///< natural frequency, Hz
+  double zeta = 0;       ///< damping ratio (negative for a growing component)
+  double amplitude = 0;  ///< initial amplitude at k = 0, y's unit
+  double phase_rad = 0;  ///< at k = 0: amplitude * cos(w_d t + phase)
 };
 
 /// Matrix-pencil estimate of the damped sinusoids in a real record `y` sampled at `fs_hz`:

@@ -26,10 +26,10 @@ std::string model_name(StepModel m);
 /// The samples of one step: time (s), output, when the input changed and by how much.
 /// Samples before t_step (the steady state before the step) determine y0 and theta.
 struct StepRecord {
-  std::vector<double> t;  ///< s, increasing
-  std::vector<double> y;  ///< output samples
-  double t_step = 0;      ///< s, when the input changed
-  double du = 1;          ///< input change u_after - u_before (nonzero)
+  std::vector<double> t;          ///< s, increasing
+  std::vector<double> y;          ///< output samples
+  double t_step = 0;              ///< s, when the input changed
+  double du = 1;                  ///< input change u_after - u_before (nonzero)
   std::string output_unit = "1";  ///< unit of y (and y0)
   std::string gain_unit = "1";    ///< unit of K (output unit per input unit)
 };
@@ -40,8 +40,8 @@ struct StepStart {
   double tau_s = 1;
   double theta_s = 0;
   double y0 = 0;
-  double y_ss = 0;         ///< steady-state value assumed for the log transform
-  double linearity_r2 = 0; ///< R^2 of Z(t) = ln((y - y_ss)/(y0 - y_ss)) against t (0: method failed)
+  double y_ss = 0;          ///< steady-state value assumed for the log transform
+  double linearity_r2 = 0;  ///< R^2 of Z(t) = ln((y - y_ss)/(y0 - y_ss)) against t (0: method failed)
 };
 
 /// Holtrup 2019 eq. 4.4: Z = ln((y - y_ss) / (y0 - y_ss)) is a straight line of slope -1/tau that

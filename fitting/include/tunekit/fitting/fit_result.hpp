@@ -20,7 +20,7 @@ struct Param {
   double std_error = kNaN;
   double ci95_lo = kNaN;
   double ci95_hi = kNaN;
-  std::string unit;  ///< SI unit, e.g. "s", "Pa.s^n", "1" for dimensionless
+  std::string unit;    ///< SI unit, e.g. "s", "Pa.s^n", "1" for dimensionless
   bool fixed = false;  ///< held at its start value, not estimated
   /// How the interval was computed: "wald" (linearised, Student-t), "profile-likelihood"
   /// (profile_likelihood.hpp), or empty when not stated. Serialized as "ci95_method".

@@ -17,8 +17,8 @@
 namespace tunekit::fitting {
 
 struct GlobalStartOptions {
-  int max_evaluations = 2500;        ///< CRS2-LM budget (objective evaluations)
-  int local_evaluations = 800;       ///< BOBYQA budget
+  int max_evaluations = 2500;   ///< CRS2-LM budget (objective evaluations)
+  int local_evaluations = 800;  ///< BOBYQA budget
   unsigned seed = 20190101;
   /// Multistart: also polish each parameter set listed here (e.g. a user's or a published
   /// start); the lowest cost wins.
@@ -37,8 +37,7 @@ GlobalStartResult global_start(const LsqProblem& problem, const GlobalStartOptio
 /// global_start (on `search`, when given, else on `problem`; same parameters), then
 /// solve_least_squares on `problem` from the best start found. The FitResult's
 /// diagnostics.solver names the global stage too.
-FitResult solve_with_global_start(const std::string& model, LsqProblem problem,
-                                  const GlobalStartOptions& global = {}, const LsqOptions& options = {},
-                                  const LsqProblem* search = nullptr);
+FitResult solve_with_global_start(const std::string& model, LsqProblem problem, const GlobalStartOptions& global = {},
+                                  const LsqOptions& options = {}, const LsqProblem* search = nullptr);
 
 }  // namespace tunekit::fitting

@@ -41,9 +41,9 @@ struct GreyBoxCombinations {
 GreyBoxCombinations greybox_combinations(const GreyBoxParams& p);
 
 struct GreyBoxFitOptions {
-  double C_f = 1;            ///< value of the feeder stiffness (N/m)
-  bool fix_C_f = true;       ///< false only to demonstrate that all four are not identifiable
-  bool fit_gain = true;      ///< also fit a DC gain K (output units per input unit)
+  double C_f = 1;        ///< value of the feeder stiffness (N/m)
+  bool fix_C_f = true;   ///< false only to demonstrate that all four are not identifiable
+  bool fit_gain = true;  ///< also fit a DC gain K (output units per input unit)
   std::string gain_unit = "1";
 };
 

@@ -44,10 +44,10 @@ using ResidualJacobianFunction = std::function<bool(const double* p, double* res
 struct LsqProblem {
   std::vector<ParamSpec> params;
   int num_residuals = 0;
-  ResidualFunction residuals;                      ///< numeric (central) differences
+  ResidualFunction residuals;                       ///< numeric (central) differences
   ResidualJacobianFunction residuals_and_jacobian;  ///< preferred when set
-  std::vector<double> observed;  ///< optional: the data, to report R^2 = 1 - rss/tss
-  bool residuals_are_time_ordered = true;  ///< run the whiteness test on residual order
+  std::vector<double> observed;                     ///< optional: the data, to report R^2 = 1 - rss/tss
+  bool residuals_are_time_ordered = true;           ///< run the whiteness test on residual order
 };
 
 struct LsqOptions {
@@ -67,8 +67,7 @@ struct LsqOptions {
 /// Solves the problem; throws FitError when the solver fails, the solution is not finite,
 /// the iteration limit was reached (if require_convergence) or the covariance is singular
 /// (if compute_covariance). The message names the parameters involved.
-FitResult solve_least_squares(const std::string& model, const LsqProblem& problem,
-                              const LsqOptions& options = {});
+FitResult solve_least_squares(const std::string& model, const LsqProblem& problem, const LsqOptions& options = {});
 
 /// Relative resolution of a residual: residual variances below (this * the largest |observed|,
 /// or * 1 without observations)^2 count as zero. AIC and BIC use max(rss / n, floor), so an
@@ -80,7 +79,7 @@ double residual_variance_floor(const std::vector<double>& observed);
 /// Fills r.diagnostics statistics (rss, rms, r2, aic, bic, whiteness) from residuals.
 /// Every statistic is finite for finite residuals: AIC/BIC floor the residual variance, and
 /// R^2 of data that do not vary is 1 for a fit within the floor and 0 otherwise (with a warning).
-void fill_residual_diagnostics(FitResult& r, const std::vector<double>& residuals,
-                               const std::vector<double>& observed, bool time_ordered);
+void fill_residual_diagnostics(FitResult& r, const std::vector<double>& residuals, const std::vector<double>& observed,
+                               bool time_ordered);
 
 }  // namespace tunekit::fitting

@@ -61,12 +61,12 @@ struct ModalFitOptions {
 };
 
 struct ModalFit {
-  FitResult fit;  ///< parameters freq_hz_k, zeta_k, gain_k (k = 1..), direct, floor
+  FitResult fit;                    ///< parameters freq_hz_k, zeta_k, gain_k (k = 1..), direct, floor
   std::vector<ModeEstimate> modes;  ///< sorted by frequency
   double direct_term = 0;
-  double noise_floor = 0;          ///< in the data's units
-  double variance_inflation = 1;   ///< applied to the covariance
-  std::vector<double> model;       ///< fitted PSD (or |FRF|) at the data frequencies
+  double noise_floor = 0;         ///< in the data's units
+  double variance_inflation = 1;  ///< applied to the covariance
+  std::vector<double> model;      ///< fitted PSD (or |FRF|) at the data frequencies
   std::vector<std::string> warnings;
 };
 
@@ -80,8 +80,7 @@ ModalFit fit_modal_psd(const std::vector<double>& freq_hz, const std::vector<dou
 /// Fits H(f) to a measured frequency response (e.g. the H1 estimate) on bins with
 /// coherence >= min_coherence, minimizing the relative complex error |model - h| / |h|.
 ModalFit fit_modal_frf(const std::vector<double>& freq_hz, const std::vector<std::complex<double>>& h,
-                       const std::vector<double>& coherence, double min_coherence,
-                       const std::vector<ModeStart>& starts, const SpectralKernel& kernel,
-                       const ModalFitOptions& options = {});
+                       const std::vector<double>& coherence, double min_coherence, const std::vector<ModeStart>& starts,
+                       const SpectralKernel& kernel, const ModalFitOptions& options = {});
 
 }  // namespace tunekit::fitting

@@ -43,13 +43,13 @@ double log_relative_error(double estimate, double certified);
 
 struct NistOutcome {
   std::string problem;
-  int start = 1;                 ///< 1 or 2
-  bool global_search = false;    ///< the start came from the global search
-  bool solved = false;           ///< the fit returned (converged, covariance computed)
-  std::string error;             ///< the FitError message when not solved
+  int start = 1;               ///< 1 or 2
+  bool global_search = false;  ///< the start came from the global search
+  bool solved = false;         ///< the fit returned (converged, covariance computed)
+  std::string error;           ///< the FitError message when not solved
   std::vector<double> estimate, std_error;
-  double min_lre_params = 0;     ///< fewest correct digits over the parameters
-  double min_lre_sd = 0;         ///< fewest correct digits over the standard deviations
+  double min_lre_params = 0;  ///< fewest correct digits over the parameters
+  double min_lre_sd = 0;      ///< fewest correct digits over the standard deviations
   double lre_rss = 0;
   int iterations = 0;
 };

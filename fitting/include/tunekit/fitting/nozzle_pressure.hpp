@@ -27,11 +27,11 @@
 namespace tunekit::fitting {
 
 struct NozzleGeometry {
-  double d_m = 0.6e-3;              ///< nozzle channel (land) diameter
-  double l_m = 4e-3;                ///< land length
+  double d_m = 0.6e-3;                              ///< nozzle channel (land) diameter
+  double l_m = 4e-3;                                ///< land length
   double cone_half_angle_rad = 0.5235987755982988;  ///< alpha (Boles); Bellini's beta = 2 alpha
-  double D_m = 5e-3;                ///< melt room / entrance diameter
-  double melt_length_m = 10e-3;     ///< Bellini's L1 (the seed: any 1..30 mm changes dP < 5 %)
+  double D_m = 5e-3;                                ///< melt room / entrance diameter
+  double melt_length_m = 10e-3;                     ///< Bellini's L1 (the seed: any 1..30 mm changes dP < 5 %)
 };
 
 /// Throws InputError for non-positive or inconsistent dimensions (d >= D, alpha outside (0, 90 deg)).

@@ -97,8 +97,8 @@ FitResult fit_power_law_window(const ViscositySpec& v, double temperature_K, dou
 struct TtsResult {
   double T_ref_K = kNaN;
   std::vector<double> temperatures_K;
-  std::vector<double> shift_factor;      ///< a_T per temperature (1 at T_ref)
-  std::vector<double> shift_factor_lo;   ///< 95 % interval
+  std::vector<double> shift_factor;     ///< a_T per temperature (1 at T_ref)
+  std::vector<double> shift_factor_lo;  ///< 95 % interval
   std::vector<double> shift_factor_hi;
   FitResult reference_fit;  ///< Cross at T_ref with ln a_T per other temperature
   FitResult arrhenius;      ///< Ea_J_per_mol fitted to ln a_T (needs >= 2 other temperatures)
@@ -129,10 +129,10 @@ struct SuperpositionLevel {
   double temperature_K = kNaN;
   int points = 0;
   double shift_factor = kNaN, shift_lo = kNaN, shift_hi = kNaN;  ///< a_T and its 95 % interval
-  double rms_master_ln = kNaN;  ///< rms of ln(viscosity) residuals on the master curve
-  double rms_own_ln = kNaN;     ///< rms of the temperature's own Cross fit (NaN: < 5 points)
+  double rms_master_ln = kNaN;                                   ///< rms of ln(viscosity) residuals on the master curve
+  double rms_own_ln = kNaN;  ///< rms of the temperature's own Cross fit (NaN: < 5 points)
   double f_statistic = kNaN;
-  double p_value = kNaN;        ///< NaN when not tested (too few points)
+  double p_value = kNaN;  ///< NaN when not tested (too few points)
   bool on_master_curve = true;
   /// Side of the reversals (0 below the first): with a transition each side is tested against
   /// its own master curve (rms_master_ln, the statistic and the verdict are the side's).

@@ -1,6 +1,6 @@
 #pragma once
-// Melt viscosity models and temperature shifts (Holtrup, Tuning liquefier dynamics, MSc thesis, University of Twente, 2019, sec. 2.2.2 and
-// appendix A).
+// Melt viscosity models and temperature shifts (Holtrup, Tuning liquefier dynamics, MSc thesis, University of Twente,
+// 2019, sec. 2.2.2 and appendix A).
 //
 //   Newtonian        eta = eta0
 //   power law        eta = K gamma^(n-1)
@@ -25,9 +25,9 @@
 
 namespace tunekit::fitting {
 
-inline constexpr double kKelvinOffset = 273.15;        ///< SI: T[K] = T[degC] + 273.15
-inline constexpr double kKelvinOffsetThesis = 273.0;   ///< Holtrup 2019 appendix A code: + 273
-inline constexpr double kGasConstant = 8.314462618;    ///< J/(mol K)
+inline constexpr double kKelvinOffset = 273.15;       ///< SI: T[K] = T[degC] + 273.15
+inline constexpr double kKelvinOffsetThesis = 273.0;  ///< Holtrup 2019 appendix A code: + 273
+inline constexpr double kGasConstant = 8.314462618;   ///< J/(mol K)
 
 inline double celsius_to_kelvin(double degc, double offset = kKelvinOffset) { return degc + offset; }
 
@@ -70,7 +70,7 @@ const CrossWlfMaterial& cross_wlf_material(std::string_view name);
 enum class ViscosityModel { newtonian, power_law, cross, cross_wlf, carreau_yasuda };
 enum class TemperatureShift { none, arrhenius, wlf };
 
-std::string to_string(ViscosityModel m);   ///< "newtonian", "power-law", "cross", "cross-wlf", "carreau-yasuda"
+std::string to_string(ViscosityModel m);    ///< "newtonian", "power-law", "cross", "cross-wlf", "carreau-yasuda"
 std::string to_string(TemperatureShift s);  ///< "none", "arrhenius", "wlf"
 /// Accepts the names above (and '_' for '-'); InputError otherwise.
 ViscosityModel parse_viscosity_model(std::string_view name);

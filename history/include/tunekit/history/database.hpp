@@ -67,8 +67,8 @@ class Transaction {
 
 /// Helpers to read a Value.
 bool is_null(const Value& v);
-std::int64_t as_int(const Value& v);     ///< integers, or text holding one
-double as_double(const Value& v);        ///< NaN for NULL
-std::string as_text(const Value& v);     ///< "" for NULL
+std::int64_t as_int(const Value& v);  ///< integers, or text holding one
+double as_double(const Value& v);     ///< NaN for NULL
+std::string as_text(const Value& v);  ///< "" for NULL
 
 }  // namespace tunekit::history

@@ -27,10 +27,10 @@ struct DriftOptions {
 
 struct DriftPoint {
   SeriesPoint point;
-  double change = 0;          ///< value - baseline, in the quantity's unit
-  double change_pct = 0;      ///< 100 (value - baseline) / |baseline|; NaN when the baseline is 0
-  double threshold = 0;       ///< k sqrt(u_i^2 + u_b^2), in the quantity's unit
-  bool in_baseline = false;   ///< one of the baseline runs
+  double change = 0;         ///< value - baseline, in the quantity's unit
+  double change_pct = 0;     ///< 100 (value - baseline) / |baseline|; NaN when the baseline is 0
+  double threshold = 0;      ///< k sqrt(u_i^2 + u_b^2), in the quantity's unit
+  bool in_baseline = false;  ///< one of the baseline runs
   bool drifted = false;
 };
 

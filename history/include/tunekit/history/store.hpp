@@ -52,7 +52,7 @@ struct NewRecord {
   bool deduplicate = false;  ///< import: skip it when this machine already has this source with these results
   std::vector<InputDigest> inputs;
   std::vector<Quantity> quantities;
-  std::string envelope;      ///< the result's JSON text
+  std::string envelope;  ///< the result's JSON text
 };
 
 struct RecordSummary {

@@ -42,12 +42,12 @@ struct CsvOptions {
 };
 
 struct CsvTable {
-  std::string path;                       ///< as given, used in messages
-  std::vector<std::string> header;        ///< every column name in the file (units stripped)
-  std::vector<CsvColumn> columns;         ///< the selected columns, in the order requested
+  std::string path;                 ///< as given, used in messages
+  std::vector<std::string> header;  ///< every column name in the file (units stripped)
+  std::vector<CsvColumn> columns;   ///< the selected columns, in the order requested
   std::size_t rows = 0;
-  std::size_t header_line = 0;            ///< 1-based line number of the header
-  std::string time_column;                ///< the time column's name (given or found), empty if none
+  std::size_t header_line = 0;  ///< 1-based line number of the header
+  std::string time_column;      ///< the time column's name (given or found), empty if none
   std::vector<std::string> warnings;
 
   /// The selected column with this name; throws InputError naming the available columns.

@@ -42,11 +42,11 @@ struct DeltaFlatness {
 DeltaFlatness delta_flatness(const std::vector<double>& heights_mm);
 
 struct DeltaCalibration {
-  fitting::FitResult fit;        ///< the factors with standard errors and 95 % intervals
-  DeltaGeometry nominal;         ///< the geometry the firmware ran while probing
-  DeltaGeometry fitted;          ///< nominal with the fitted factors applied
+  fitting::FitResult fit;           ///< the factors with standard errors and 95 % intervals
+  DeltaGeometry nominal;            ///< the geometry the firmware ran while probing
+  DeltaGeometry fitted;             ///< nominal with the fitted factors applied
   std::vector<double> residual_mm;  ///< height left at each probe point under `fitted`
-  DeltaFlatness before, after;   ///< probe heights as measured, and the residuals
+  DeltaFlatness before, after;      ///< probe heights as measured, and the residuals
 };
 
 /// Fits `factors` geometric errors to the probe heights. Throws InputError for too few or

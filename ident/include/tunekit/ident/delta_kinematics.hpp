@@ -21,13 +21,13 @@
 namespace tunekit::ident {
 
 struct DeltaGeometry {
-  double radius_mm = 0;                       ///< delta radius R (tower column to centre, minus effector offsets)
-  std::array<double, 3> rod_mm{};             ///< diagonal rod length L per tower
+  double radius_mm = 0;            ///< delta radius R (tower column to centre, minus effector offsets)
+  std::array<double, 3> rod_mm{};  ///< diagonal rod length L per tower
   std::array<double, 3> angle_deg{210.0, 330.0, 90.0};  ///< tower angle about the centre
-  std::array<double, 3> endstop_mm{};         ///< endstop adjustment e per tower
-  double homed_height_mm = 0;                 ///< H
-  double tilt_x = 0;                          ///< bed tilt: dz per mm of x (fraction, RRF M666 A / 100)
-  double tilt_y = 0;                          ///< bed tilt: dz per mm of y (fraction, RRF M666 B / 100)
+  std::array<double, 3> endstop_mm{};                   ///< endstop adjustment e per tower
+  double homed_height_mm = 0;                           ///< H
+  double tilt_x = 0;                                    ///< bed tilt: dz per mm of x (fraction, RRF M666 A / 100)
+  double tilt_y = 0;                                    ///< bed tilt: dz per mm of y (fraction, RRF M666 B / 100)
 };
 
 /// Nominal tower angles (degrees) of towers A, B, C.

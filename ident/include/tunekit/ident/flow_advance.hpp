@@ -74,10 +74,10 @@ double kalico_offset_mm(KalicoModel m, double linear_advance_s, double nonlinear
 
 struct KalicoFit {
   KalicoModel model = KalicoModel::tanh;
-  double linear_advance_s = kAdvanceNaN;          ///< `linear_advance`, s (mm per mm/s)
-  double nonlinear_offset_mm = kAdvanceNaN;       ///< `nonlinear_offset`, mm of filament
+  double linear_advance_s = kAdvanceNaN;             ///< `linear_advance`, s (mm per mm/s)
+  double nonlinear_offset_mm = kAdvanceNaN;          ///< `nonlinear_offset`, mm of filament
   double linearization_velocity_mm_s = kAdvanceNaN;  ///< `linearization_velocity`, mm/s of filament
-  double max_rel_error = kAdvanceNaN;  ///< max |fit - need| / need over the fitted flows
+  double max_rel_error = kAdvanceNaN;                ///< max |fit - need| / need over the fitted flows
   double rms_rel_error = kAdvanceNaN;
 };
 
@@ -89,8 +89,8 @@ struct OrcaPoint {
 };
 
 struct FlowAdvanceInputs {
-  std::vector<FlowTau> levels;          ///< >= 2 levels with distinct positive flows
-  std::optional<TauPowerLaw> trend;     ///< used for tau(Q) instead of interpolation when given
+  std::vector<FlowTau> levels;       ///< >= 2 levels with distinct positive flows
+  std::optional<TauPowerLaw> trend;  ///< used for tau(Q) instead of interpolation when given
   double filament_area_mm2 = kAdvanceNaN;
   double design_flow_mm3_s = kAdvanceNaN;  ///< flow the single-number K is designed for
   double theta_s = kAdvanceNaN;            ///< identified dead time (Kalico's time offset)
@@ -120,10 +120,10 @@ struct FlowAdvanceDesign {
   /// Flows (within the identified range) where the single K is within the tolerance of the need.
   double k_within_lo_mm3_s = kAdvanceNaN;
   double k_within_hi_mm3_s = kAdvanceNaN;
-  KalicoFit kalico;                 ///< the better of the two models
-  KalicoFit kalico_other;           ///< the other model, for the record
+  KalicoFit kalico;                           ///< the better of the two models
+  KalicoFit kalico_other;                     ///< the other model, for the record
   double kalico_time_offset_s = kAdvanceNaN;  ///< `pressure_advance_time_offset` = theta (clamped)
-  std::vector<OrcaPoint> orca;      ///< sorted by flow, then acceleration
+  std::vector<OrcaPoint> orca;                ///< sorted by flow, then acceleration
   std::vector<FlowAdvanceSample> curve;
   bool has_band = false;
   std::vector<std::string> notes;

@@ -89,27 +89,27 @@ double shaper_max_accel(const Shaper& s, double scv_mm_s = 5.0, double target_sm
 struct ShaperCandidate {
   ShaperType type = ShaperType::zv;
   double freq_hz = 0;
-  double damping_ratio = 0;   ///< the damping ratio the shaper is designed for (firmware setting)
-  double vibrations = 0;      ///< remaining vibration fraction, worst over the test damping ratios
-  double smoothing_mm = 0;    ///< at 5000 mm/s^2 and the square-corner velocity
+  double damping_ratio = 0;  ///< the damping ratio the shaper is designed for (firmware setting)
+  double vibrations = 0;     ///< remaining vibration fraction, worst over the test damping ratios
+  double smoothing_mm = 0;   ///< at 5000 mm/s^2 and the square-corner velocity
   double max_accel_mm_s2 = 0;
-  double score = 0;           ///< smoothing * (v^1.5 + 0.2 v + 0.01)
+  double score = 0;  ///< smoothing * (v^1.5 + 0.2 v + 0.01)
 };
 
 struct ShaperSelectionOptions {
   std::vector<ShaperType> types = {ShaperType::zv, ShaperType::mzv, ShaperType::ei, ShaperType::two_hump_ei,
                                    ShaperType::three_hump_ei};
-  double design_damping_ratio = 0.1;                 ///< damping the shapers are designed for
+  double design_damping_ratio = 0.1;                             ///< damping the shapers are designed for
   std::vector<double> test_damping_ratios = {0.075, 0.1, 0.15};  ///< vibrations are pessimized over these
-  double scv_mm_s = 5.0;                             ///< square-corner velocity
-  double max_smoothing_mm = 0;                       ///< 0: no limit
+  double scv_mm_s = 5.0;                                         ///< square-corner velocity
+  double max_smoothing_mm = 0;                                   ///< 0: no limit
   /// PSD bins above max(max_freq_hz, highest shaper frequency tried) are ignored (Klipper's rule).
   double max_freq_hz = 200.0;
-  double max_shaper_freq_hz = 200.0;                 ///< shaper frequencies tried are below this
-  EiDesign ei_design = EiDesign::damped_fit;         ///< how the EI family is designed
+  double max_shaper_freq_hz = 200.0;          ///< shaper frequencies tried are below this
+  EiDesign ei_design = EiDesign::damped_fit;  ///< how the EI family is designed
   double freq_step_hz = 0.2;
-  double vibration_reduction = 20.0;                 ///< PSD below max/this is not counted
-  double target_smoothing_mm = 0.12;                 ///< for max_accel
+  double vibration_reduction = 20.0;  ///< PSD below max/this is not counted
+  double target_smoothing_mm = 0.12;  ///< for max_accel
 };
 
 struct ShaperSelection {

@@ -32,9 +32,9 @@ struct KlipperSpectrumFile {
   /// (from psd_xyz); the several-datasets layout fills psd_sum only. Each carries
   /// klipper_normalized = has_shapers, and files = {path} (one dataset) or {column name}.
   std::vector<AxisSpectrum> datasets;
-  std::vector<std::string> dataset_names;  ///< "psd_xyz", or the names in the header
-  bool has_shapers = false;                ///< the header has a `shapers:` column
-  std::vector<std::string> shaper_columns; ///< e.g. "mzv(56.6)", as written
+  std::vector<std::string> dataset_names;   ///< "psd_xyz", or the names in the header
+  bool has_shapers = false;                 ///< the header has a `shapers:` column
+  std::vector<std::string> shaper_columns;  ///< e.g. "mzv(56.6)", as written
 };
 
 /// Reads a spectrum file already in memory. `axis` ('x', 'y', 'z' or 0: from the file name).

@@ -35,9 +35,9 @@ struct LiquefierPrediction {
   std::vector<double> flow_mm3_s;
   std::vector<double> pressure_drop_Pa;
   std::vector<double> dP_dQ_Pa_s_per_mm3;
-  std::vector<double> relative_tau;        ///< 1 at the reference flow
-  std::vector<double> wall_shear_rate_1_s; ///< with the Rabinowitsch correction
-  std::vector<double> flow_index_n;        ///< local power-law index at the wall
+  std::vector<double> relative_tau;         ///< 1 at the reference flow
+  std::vector<double> wall_shear_rate_1_s;  ///< with the Rabinowitsch correction
+  std::vector<double> flow_index_n;         ///< local power-law index at the wall
 };
 
 /// InputError for a non-positive flow or temperature or an invalid geometry.

@@ -51,9 +51,9 @@ double marlin_smoothing_continuous_peak_factor(int order);
 inline constexpr double kMarlinTauMax_s = 0.5;
 
 struct MarlinTauDesign {
-  double tau_s = 0;                    ///< ADVANCE_TAU to write (multiple of resolution_s)
-  double required_tau_s = 0;           ///< shortest tau meeting the limit, before the floor
-  double floor_tau_s = 0;              ///< order / update_hz: one update period per stage
+  double tau_s = 0;                      ///< ADVANCE_TAU to write (multiple of resolution_s)
+  double required_tau_s = 0;             ///< shortest tau meeting the limit, before the floor
+  double floor_tau_s = 0;                ///< order / update_hz: one update period per stage
   double extra_accel_per_box_mm_s2 = 0;  ///< extra extruder acceleration at tau_s / limit (<= 1)
   std::vector<std::string> notes;
 };

@@ -36,17 +36,17 @@ struct OvershootOptions {
 };
 
 struct CornerResult {
-  int index = 0;                   ///< 0-based corner number in time order
-  std::string axis;                ///< "x" or "y"
-  double t_motion_start_s = 0;     ///< start of the commanded motion into the corner (s)
-  double t_motion_end_s = 0;       ///< end of the commanded motion (s)
-  double move_mm = 0;              ///< signed move length of this axis
-  double overshoot_mm = 0;         ///< max excursion past the settled position, >= 0 (mm)
-  double overshoot_pct = 0;        ///< overshoot_mm / |move_mm| * 100
-  double settling_time_s = 0;      ///< from t_motion_end_s until |deviation| stays within the band (s)
-  bool settled = true;             ///< false: still outside the band at the pause's tail
-  double residual_amplitude_mm = 0;  ///< max |deviation| after the motion ended (mm)
-  double residual_freq_hz = 0;     ///< 0 when fewer than two extrema above the band
+  int index = 0;                          ///< 0-based corner number in time order
+  std::string axis;                       ///< "x" or "y"
+  double t_motion_start_s = 0;            ///< start of the commanded motion into the corner (s)
+  double t_motion_end_s = 0;              ///< end of the commanded motion (s)
+  double move_mm = 0;                     ///< signed move length of this axis
+  double overshoot_mm = 0;                ///< max excursion past the settled position, >= 0 (mm)
+  double overshoot_pct = 0;               ///< overshoot_mm / |move_mm| * 100
+  double settling_time_s = 0;             ///< from t_motion_end_s until |deviation| stays within the band (s)
+  bool settled = true;                    ///< false: still outside the band at the pause's tail
+  double residual_amplitude_mm = 0;       ///< max |deviation| after the motion ended (mm)
+  double residual_freq_hz = 0;            ///< 0 when fewer than two extrema above the band
   std::vector<double> t_s, deviation_mm;  ///< the reconstructed deviation over the pause
 };
 

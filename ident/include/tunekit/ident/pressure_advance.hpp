@@ -92,18 +92,18 @@ struct AdvanceDesign {
   std::string k_source;             ///< "pooled", "operating points", "rheology"
   double design_flow_mm3_s = kAdvanceNaN;
   double design_feed_mm_s = kAdvanceNaN;
-  double area_ratio = kAdvanceNaN;  ///< r = line cross-section / filament area
+  double area_ratio = kAdvanceNaN;           ///< r = line cross-section / filament area
   double window_box_s = kAdvanceNaN;         ///< shortest box window (Marlin ADVANCE_TAU reading)
   double window_triangular_s = kAdvanceNaN;  ///< shortest triangular window (Klipper smooth time)
   double theta_s = kAdvanceNaN;
   double theta_track_mm = kAdvanceNaN;  ///< line length printed during theta at print speed
   double gain = kAdvanceNaN;
-  std::vector<ScheduledAdvance> schedule;     ///< flow-dependent advance (sorted by flow)
-  double trend_k0_s = kAdvanceNaN;            ///< least-squares K(Q) = k0 + k1 Q over the schedule
+  std::vector<ScheduledAdvance> schedule;  ///< flow-dependent advance (sorted by flow)
+  double trend_k0_s = kAdvanceNaN;         ///< least-squares K(Q) = k0 + k1 Q over the schedule
   double trend_k1_s_per_mm3_s = kAdvanceNaN;
   double single_k_max_rel_error = kAdvanceNaN;  ///< max |K(Q) - K| / K(Q) over the schedule
-  std::vector<std::string> notes;     ///< what the design means (informational)
-  std::vector<std::string> warnings;  ///< what the user should look at or change
+  std::vector<std::string> notes;               ///< what the design means (informational)
+  std::vector<std::string> warnings;            ///< what the user should look at or change
 
   nlohmann::json to_json() const;
 };

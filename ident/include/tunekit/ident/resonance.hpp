@@ -50,14 +50,14 @@ struct AccelInputOptions {
 inline constexpr double kMaxAccelerometerReading_mm_s2 = 16 * 9806.65;
 
 struct SamplingReport {
-  double sample_rate_hz = 0;   ///< 1 / median interval
+  double sample_rate_hz = 0;  ///< 1 / median interval
   double duration_s = 0;
   std::size_t samples = 0;
-  double jitter = 0;           ///< std. dev. of intervals / median interval (gaps excluded)
-  std::size_t gaps = 0;        ///< intervals longer than 1.5 median intervals
+  double jitter = 0;     ///< std. dev. of intervals / median interval (gaps excluded)
+  std::size_t gaps = 0;  ///< intervals longer than 1.5 median intervals
   double max_gap_s = 0;
   std::size_t missing_samples = 0;
-  bool resampled = false;      ///< linearly interpolated onto a uniform grid
+  bool resampled = false;  ///< linearly interpolated onto a uniform grid
 };
 
 struct ClipReport {
@@ -115,17 +115,17 @@ fitting::SpectralKernel welch_kernel(WindowType window, double kaiser_beta, std:
 
 struct Peak {
   double freq_hz = 0;
-  double height = 0;          ///< whitened PSD at the peak
-  double half_power_zeta = 0; ///< start value from the half-power bandwidth
+  double height = 0;           ///< whitened PSD at the peak
+  double half_power_zeta = 0;  ///< start value from the half-power bandwidth
 };
 
 struct ResonanceOptions {
   double fit_min_hz = 10.0;
-  double fit_max_hz = 133.33;   ///< Klipper's default sweep ends at 133.33 Hz
+  double fit_max_hz = 133.33;  ///< Klipper's default sweep ends at 133.33 Hz
   int max_modes = 3;
-  double peak_threshold = 0.05;  ///< peaks below this fraction of the highest are ignored
+  double peak_threshold = 0.05;     ///< peaks below this fraction of the highest are ignored
   double excitation_exponent = -1;  ///< <0: 2 for raw PSDs, 1 for Klipper-normalized ones
-  bool use_frf = true;           ///< fit the FRF when there is an excitation channel
+  bool use_frf = true;              ///< fit the FRF when there is an excitation channel
   double min_coherence = 0.5;
 };
 
@@ -133,9 +133,9 @@ struct AxisModes {
   std::vector<Peak> peaks;
   std::vector<fitting::ModeEstimate> modes;  ///< sorted by frequency
   std::optional<fitting::ModalFit> fit;
-  std::string method;       ///< "psd" or "frf"
+  std::string method;  ///< "psd" or "frf"
   double band_lo_hz = 0, band_hi_hz = 0;
-  int dominant = -1;        ///< index into modes of the strongest peak
+  int dominant = -1;  ///< index into modes of the strongest peak
   std::vector<std::string> warnings;
 };
 

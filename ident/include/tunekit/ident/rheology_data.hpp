@@ -15,8 +15,8 @@
 // is wrong).
 // Let through with a warning (RheologyTable::warnings): viscosities above kHighViscosity or below
 // kLowViscosity, and a shear stress (eta gamma) that falls by more than 10 % as the shear rate
-// rises at one temperature (a melt's flow curve rises). Zero-shear viscosities above 1e6 Pa.s are real (high-Tg polymers near their
-// processing window, high molecular weights), so magnitude alone cannot prove a unit mix-up.
+// rises at one temperature (a melt's flow curve rises). Zero-shear viscosities above 1e6 Pa.s are real (high-Tg
+// polymers near their processing window, high molecular weights), so magnitude alone cannot prove a unit mix-up.
 
 #include <string>
 #include <string_view>
@@ -54,11 +54,12 @@ inline constexpr double kLowViscosity = 1e-2;
 
 struct RheologyTable {
   fitting::RheologyData data;
-  std::vector<std::string> notes;  ///< conversions applied, e.g. "viscosity: mPa.s -> Pa.s"
+  std::vector<std::string> notes;     ///< conversions applied, e.g. "viscosity: mPa.s -> Pa.s"
   std::vector<std::string> warnings;  ///< "FILE:LINE: ..." plausibility warnings; the data were kept
 };
 
-RheologyTable parse_rheology_csv(std::string_view text, const std::string& path, const RheologyCsvOptions& options = {});
+RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
+                                 const RheologyCsvOptions& options = {});
 RheologyTable read_rheology_csv(const std::string& path, const RheologyCsvOptions& options = {});
 
 /// Multiplier from a viscosity unit to Pa.s; InputError for an unknown unit.

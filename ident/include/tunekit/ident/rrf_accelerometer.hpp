@@ -29,6 +29,7 @@ bool is_rrf_accelerometer_csv(std::string_view bytes);
 /// (FILE:LINE) for a failed run, a missing or bad "Rate" trailer, or a bad row; FIFO overflows
 /// are a warning. The accel_columns / time_column options do not apply (the layout is fixed);
 /// the axis comes from `options.axis` or the file name.
-AccelRecord load_rrf_accelerometer_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& options);
+AccelRecord load_rrf_accelerometer_csv(const std::string& path, std::string_view bytes,
+                                       const AccelInputOptions& options);
 
 }  // namespace tunekit::ident

@@ -27,8 +27,8 @@ bool is_shaketune_stdata(std::string_view bytes);
 inline constexpr std::size_t kMaxStdataBytes = std::size_t{1} << 30;
 
 struct StdataMeasurement {
-  std::string name;     ///< Shake&Tune's measurement name, e.g. axis_X_20250509_131745
-  AccelRecord record;   ///< path "FILE[name]"; its line N (in messages) is sample N - 1
+  std::string name;    ///< Shake&Tune's measurement name, e.g. axis_X_20250509_131745
+  AccelRecord record;  ///< path "FILE[name]"; its line N (in messages) is sample N - 1
 };
 
 /// Decompresses and reads every measurement of a .stdata file. The axis of a measurement is

@@ -17,9 +17,9 @@
 namespace tunekit::ident {
 
 struct DetectedStep {
-  std::size_t index = 0;       ///< 0-based order in the record
-  std::size_t sample = 0;      ///< first sample at the new input level
-  double t_step_s = 0;         ///< s, when the input changed (StepDetectOptions::instant)
+  std::size_t index = 0;   ///< 0-based order in the record
+  std::size_t sample = 0;  ///< first sample at the new input level
+  double t_step_s = 0;     ///< s, when the input changed (StepDetectOptions::instant)
   double u_before = 0, u_after = 0;
   std::size_t begin = 0, end = 0;  ///< samples [begin, end) used for this step's fit
   bool rising() const { return u_after > u_before; }
@@ -70,10 +70,10 @@ struct OperatingPoint {
 /// The steps that ARRIVE at one input level (u_after: the state the liquefier settles in),
 /// fitted together, with the difference between rising and falling arrivals.
 struct ArrivalLevel {
-  double u = 0;               ///< input level (input unit), mean of its arrivals' u_after
+  double u = 0;  ///< input level (input unit), mean of its arrivals' u_after
   int n_rising = 0, n_falling = 0;
   std::vector<std::size_t> steps;  ///< indices into StepAnalysis::steps (successful fits only)
-  fitting::FitResult fit;     ///< pooled over every arrival (a single step's fit for one)
+  fitting::FitResult fit;          ///< pooled over every arrival (a single step's fit for one)
   /// tau of the rising arrivals minus tau of the falling ones (s) with its 95 % interval
   /// (normal, from the two fits' standard errors); NaN unless both directions arrived.
   double rising_minus_falling_tau_s = fitting::kNaN;
@@ -146,8 +146,8 @@ inline constexpr double kWhitenessAlarmP = 1e-3;
 /// The warning (empty when none) for a pooled fit over `members` single-step fits: its
 /// residuals are not white (p < kWhitenessAlarmP) while at least three quarters of the
 /// single-step fits' residuals are. `what` names the pooled fit ("pooled fit over all steps").
-std::string pooled_whiteness_warning(const fitting::FitResult& pooled, const std::vector<const fitting::FitResult*>& members,
-                                     const std::string& what);
+std::string pooled_whiteness_warning(const fitting::FitResult& pooled,
+                                     const std::vector<const fitting::FitResult*>& members, const std::string& what);
 
 /// JSON of the arrival levels: [{u, unit, n_steps, n_rising, n_falling, tau_s, tau_ci95, K,
 /// K_ci95, theta_s, theta_ci95, rising_minus_falling_tau_s, rising_minus_falling_tau_ci95,

@@ -19,13 +19,13 @@
 namespace tunekit::protocols {
 
 struct TestPatternSet {
-  int pads = 4;               ///< filled squares for photos
+  int pads = 4;  ///< filled squares for photos
   double pad_mm = 20;
-  int line_steps = 5;         ///< single-width lines of rising length (line_mm * (k+1) / line_steps)
+  int line_steps = 5;  ///< single-width lines of rising length (line_mm * (k+1) / line_steps)
   double line_mm = 30;
-  int rings = 2;              ///< two-cell-wide rings
+  int rings = 2;  ///< two-cell-wide rings
   double ring_radius_mm = 12;
-  double spacing_mm = 5;      ///< gap between patterns
+  double spacing_mm = 5;  ///< gap between patterns
 };
 
 struct PlannedMove {

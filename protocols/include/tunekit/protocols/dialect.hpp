@@ -25,8 +25,8 @@ Firmware firmware_from_name(const std::string& name);
 
 struct FirmwareInfo {
   Firmware firmware = Firmware::unknown;
-  std::string name;     ///< FIRMWARE_NAME as reported
-  std::string version;  ///< best-effort version string
+  std::string name;                          ///< FIRMWARE_NAME as reported
+  std::string version;                       ///< best-effort version string
   std::map<std::string, bool> capabilities;  ///< Cap: lines
   bool sensor_stream() const;                ///< tunekit's M4100 streaming available
   /// Marlin built with FT_MOTION (it answered M493), and whether fixed-time motion is active
@@ -42,8 +42,8 @@ struct FirmwareInfo {
 /// "Fixed-Time Motion enabled|disabled[ with X axis ZV shaping][ and with Y axis MZV shaping].").
 /// A build without FT_MOTION answers 'echo:Unknown command: "M493"' (gcode.cpp, STR_UNKNOWN_COMMAND).
 struct FtMotionReport {
-  bool present = false;  ///< the build has FT_MOTION
-  bool active = false;   ///< "Fixed-Time Motion enabled"
+  bool present = false;                        ///< the build has FT_MOTION
+  bool active = false;                         ///< "Fixed-Time Motion enabled"
   std::map<std::string, std::string> shapers;  ///< axis "x"/"y" -> shaper as reported ("ZV", "2 Hump EI", ...)
   bool linear_advance = false;                 ///< "Linear Advance enabled. Gain: K"
   double linear_advance_k = 0;

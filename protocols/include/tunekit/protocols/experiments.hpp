@@ -51,7 +51,6 @@ struct ProtocolParam {
   double max_value = 1e6;  ///< |value| must not exceed this
 };
 
-
 struct ProtocolSpec {
   std::string name;
   std::string description;
@@ -65,11 +64,11 @@ const ProtocolSpec& protocol_spec(const std::string& name);  ///< InputError if 
 
 struct Experiment {
   std::string protocol;
-  std::string axis;                       ///< for axis protocols
-  std::map<std::string, double> params;   ///< every parameter, defaults filled in
-  std::vector<std::string> gcode;         ///< with ";@record" directives and comments
+  std::string axis;                      ///< for axis protocols
+  std::map<std::string, double> params;  ///< every parameter, defaults filled in
+  std::vector<std::string> gcode;        ///< with ";@record" directives and comments
   std::vector<std::string> sensors;
-  double estimated_duration_s = 0;        ///< machine time of the motion
+  double estimated_duration_s = 0;  ///< machine time of the motion
   /// How the firmware's planner runs the excitation (per dialect): the acceleration in force,
   /// whether extrude-only moves stop, the test settings changed and restored, ...
   nlohmann::json excitation = nlohmann::json::object();

@@ -46,16 +46,16 @@ struct ShaperSetting {
 /// Pressure Advance) named the offset `linear_offset` in earlier versions; its current source
 /// reads `nonlinear_offset`, which is what is written.
 struct KalicoAdvanceSetting {
-  std::string model = "tanh";                 ///< pressure_advance_model: tanh or recipr
-  double linear_advance_s = 0;                ///< linear_advance (>= 0)
-  double nonlinear_offset_mm = 0;             ///< nonlinear_offset (>= 0)
-  double linearization_velocity_mm_s = 0;     ///< linearization_velocity (> 0 when the offset is)
-  std::optional<double> time_offset_s;        ///< pressure_advance_time_offset (-0.2..0.2 s)
+  std::string model = "tanh";              ///< pressure_advance_model: tanh or recipr
+  double linear_advance_s = 0;             ///< linear_advance (>= 0)
+  double nonlinear_offset_mm = 0;          ///< nonlinear_offset (>= 0)
+  double linearization_velocity_mm_s = 0;  ///< linearization_velocity (> 0 when the offset is)
+  std::optional<double> time_offset_s;     ///< pressure_advance_time_offset (-0.2..0.2 s)
 };
 
 /// The design values to write. Unset values are left alone in the configuration.
 struct CompensatorSettings {
-  std::optional<double> pa_k_s;       ///< advance K, s (Kalico: ignored when `kalico` is set)
+  std::optional<double> pa_k_s;                ///< advance K, s (Kalico: ignored when `kalico` is set)
   std::optional<KalicoAdvanceSetting> kalico;  ///< Kalico only: the nonlinear model replaces pressure_advance
   std::optional<double> pa_smooth_s;  ///< the firmware's own smoothing time (Klipper smooth time, Marlin ADVANCE_TAU)
   std::map<std::string, ShaperSetting> shapers;  ///< by axis "x", "y"
@@ -81,8 +81,8 @@ struct ConfigChange {
   std::string key;        ///< e.g. "[extruder] pressure_advance", "ADVANCE_K", "M572 S"
   std::string old_value;  ///< empty when the line is new
   std::string new_value;
-  std::size_t line = 0;   ///< 1-based line in the original file (0: appended)
-  std::string where;      ///< "SAVE_CONFIG block", "section", "new section", "new line", ...
+  std::size_t line = 0;  ///< 1-based line in the original file (0: appended)
+  std::string where;     ///< "SAVE_CONFIG block", "section", "new section", "new line", ...
 };
 
 struct ExportResult {

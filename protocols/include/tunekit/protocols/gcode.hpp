@@ -14,8 +14,8 @@
 namespace tunekit::protocols {
 
 struct GcodeWords {
-  std::string command;                 ///< "G1", "M204", or an extended name ("SET_VELOCITY_LIMIT")
-  std::map<std::string, double> args;  ///< "X" -> 10.0; extended commands: "ACCEL" -> 3000
+  std::string command;                           ///< "G1", "M204", or an extended name ("SET_VELOCITY_LIMIT")
+  std::map<std::string, double> args;            ///< "X" -> 10.0; extended commands: "ACCEL" -> 3000
   std::map<std::string, std::string> text_args;  ///< arguments that are not numbers
   bool has(const std::string& k) const { return args.count(k) != 0; }
   double get(const std::string& k, double fallback) const;
@@ -31,10 +31,10 @@ int gcode_checksum(std::string_view text);
 std::string numbered_line(long n, std::string_view command);
 
 struct NumberedLine {
-  std::optional<long> number;     ///< N, when present
-  std::optional<int> checksum;    ///< *, when present
-  bool checksum_ok = true;        ///< false if a checksum is present and wrong
-  std::string body;               ///< the command without N and checksum
+  std::optional<long> number;   ///< N, when present
+  std::optional<int> checksum;  ///< *, when present
+  bool checksum_ok = true;      ///< false if a checksum is present and wrong
+  std::string body;             ///< the command without N and checksum
 };
 NumberedLine split_numbered(std::string_view raw);
 

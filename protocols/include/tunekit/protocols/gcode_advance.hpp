@@ -26,8 +26,8 @@ namespace tunekit::protocols {
 struct GcodeAdvanceOptions {
   ExportFirmware firmware = ExportFirmware::klipper;  ///< kalico writes Klipper's command
   std::vector<std::pair<double, double>> k_of_flow;   ///< (flow mm^3/s, K s), >= 1 point
-  double filament_area_mm2 = 0;  ///< 0: from the file's "; filament_diameter = D" line
-  double hysteresis = 0.10;      ///< relative change of K needed to write a new value
+  double filament_area_mm2 = 0;                       ///< 0: from the file's "; filament_diameter = D" line
+  double hysteresis = 0.10;                           ///< relative change of K needed to write a new value
   std::string klipper_extruder = "extruder";
   int rrf_drive = 0;
 };
@@ -42,7 +42,7 @@ struct GcodeAdvanceChange {
 struct GcodeAdvanceResult {
   std::string text;
   std::vector<GcodeAdvanceChange> changes;
-  std::size_t features = 0;        ///< `;TYPE:` blocks with printing moves
+  std::size_t features = 0;  ///< `;TYPE:` blocks with printing moves
   std::vector<std::string> warnings;
 };
 

@@ -36,9 +36,9 @@ struct LinkOptions {
 
 struct LinkStats {
   long lines_sent = 0;
-  long resends = 0;   ///< answered "Resend:"
-  long retries = 0;   ///< re-sent after a timeout
-  long busy = 0;      ///< "busy:" lines seen
+  long resends = 0;  ///< answered "Resend:"
+  long retries = 0;  ///< re-sent after a timeout
+  long busy = 0;     ///< "busy:" lines seen
   long data_lines = 0;
 };
 

@@ -20,9 +20,9 @@ struct AxisLimits {
 struct ExtruderLimits {
   double filament_diameter_mm = 1.75;
   double nozzle_diameter_mm = 0.4;
-  double max_flow_mm3_s = 0;      ///< volumetric flow limit of the hot end
-  double max_velocity_mm_s = 0;   ///< filament feed speed limit
-  double max_accel_mm_s2 = 0;     ///< filament acceleration limit (the extruder motor)
+  double max_flow_mm3_s = 0;     ///< volumetric flow limit of the hot end
+  double max_velocity_mm_s = 0;  ///< filament feed speed limit
+  double max_accel_mm_s2 = 0;    ///< filament acceleration limit (the extruder motor)
   /// Longest extrude-only move the firmware accepts, mm (Klipper's max_extrude_only_distance,
   /// default 50 mm); protocols split longer feeds into moves of at most this length.
   double max_extrude_only_distance_mm = 50;
@@ -62,14 +62,14 @@ struct FirmwareState {
   /// Input shaper configured on the machine per axis, "type:freq_hz:damping" in the firmware's
   /// spelling; empty when the machine has none configured (then nothing is turned off).
   std::map<std::string, std::string> shaper;
-  double minimum_cruise_ratio = 0.5;     ///< Klipper [printer] minimum_cruise_ratio
-  double steps_per_mm_x = 80;            ///< Marlin M92 X (sizes the sweep above MIN_STEPS_PER_SEGMENT)
-  double steps_per_mm_y = 80;            ///< Marlin M92 Y
-  double min_segment_time_s = 0.020;     ///< Marlin M205 B (DEFAULT_MINSEGMENTTIME), s
-  double max_accel_xy_mm_s2 = 3000;      ///< Marlin/RRF M201 X/Y, mm/s^2
-  double retract_accel_mm_s2 = 3000;     ///< Marlin M204 R (moves without X/Y/Z steps), mm/s^2
-  double max_accel_e_mm_s2 = 3000;       ///< RRF M201 E, mm/s^2
-  double jerk_xy_mm_s = 15;              ///< RRF M566 X/Y (instantaneous speed change), mm/s
+  double minimum_cruise_ratio = 0.5;  ///< Klipper [printer] minimum_cruise_ratio
+  double steps_per_mm_x = 80;         ///< Marlin M92 X (sizes the sweep above MIN_STEPS_PER_SEGMENT)
+  double steps_per_mm_y = 80;         ///< Marlin M92 Y
+  double min_segment_time_s = 0.020;  ///< Marlin M205 B (DEFAULT_MINSEGMENTTIME), s
+  double max_accel_xy_mm_s2 = 3000;   ///< Marlin/RRF M201 X/Y, mm/s^2
+  double retract_accel_mm_s2 = 3000;  ///< Marlin M204 R (moves without X/Y/Z steps), mm/s^2
+  double max_accel_e_mm_s2 = 3000;    ///< RRF M201 E, mm/s^2
+  double jerk_xy_mm_s = 15;           ///< RRF M566 X/Y (instantaneous speed change), mm/s
 };
 
 /// True for the accelerometer chips Klipper's API server streams (see klipper_sensors.hpp).
@@ -79,9 +79,9 @@ std::string klipper_accelerometer_chips();
 
 struct MachineProfile {
   std::string name;
-  std::string id;                        ///< the machine's id in the calibration history (may be empty)
-  std::string kinematics = "cartesian";  ///< cartesian, corexy, delta
-  std::string firmware;                  ///< marlin, klipper, rrf, prusa (may be empty: ask M115)
+  std::string id;                          ///< the machine's id in the calibration history (may be empty)
+  std::string kinematics = "cartesian";    ///< cartesian, corexy, delta
+  std::string firmware;                    ///< marlin, klipper, rrf, prusa (may be empty: ask M115)
   std::map<std::string, AxisLimits> axes;  ///< "x", "y", "z"
   ExtruderLimits extruder;
   PrintSettings print;

@@ -48,11 +48,12 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& json_text, const 
 
 /// A new user filament profile holding the advance settings (4-space indentation, as OrcaSlicer
 /// writes user presets). `inherits` may be empty.
-std::string new_orca_filament_profile(const OrcaAdvanceProfile& p, const std::string& name, const std::string& inherits);
+std::string new_orca_filament_profile(const OrcaAdvanceProfile& p, const std::string& name,
+                                      const std::string& inherits);
 
 /// The raw text of each top-level member ("key": value) of a JSON object, in file order (used to
 /// check that a merge left untouched members byte-identical). Throws InputError on bad JSON.
 std::vector<std::pair<std::string, std::string>> json_top_level_members(const std::string& json_text,
-                                                                         const std::string& path);
+                                                                        const std::string& path);
 
 }  // namespace tunekit::protocols

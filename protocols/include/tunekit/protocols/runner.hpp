@@ -44,27 +44,28 @@ struct RunOptions {
   std::string machine = "sim";           ///< "sim" or a machine profile (TOML) path
   std::string port;                      ///< device / PTY / "unix:PATH"; empty with "sim"
   int baud = 250000;
-  std::string run_dir;                   ///< default: <runs_root>/<protocol>-<UTC stamp>
-  std::string file_tag;                  ///< names raw_data_<axis>_<tag>.csv; default: the UTC stamp
+  std::string run_dir;   ///< default: <runs_root>/<protocol>-<UTC stamp>
+  std::string file_tag;  ///< names raw_data_<axis>_<tag>.csv; default: the UTC stamp
   std::string runs_root = "runs";
   std::vector<std::string> sim_options;  ///< SimConfig::from_options keys ("tau_s=0.5", "fault=drop@12")
   /// "sim" only: what the simulated printer prints is laid down on this bed (for its camera,
   /// sim_camera.hpp); several runs may share one bed.
   std::shared_ptr<SimPrintBed> sim_bed;
-  LinkOptions link;                      ///< timeouts and retries
-  ProtocolLimits limits;                 ///< caps on the protocol's machine time, lines and bytes
-  bool dry_run = false;                  ///< build and check only; RunResult::gcode is filled
-  const std::atomic<bool>* abort_flag = nullptr;  ///< e.g. set by SIGINT
+  LinkOptions link;                                  ///< timeouts and retries
+  ProtocolLimits limits;                             ///< caps on the protocol's machine time, lines and bytes
+  bool dry_run = false;                              ///< build and check only; RunResult::gcode is filled
+  const std::atomic<bool>* abort_flag = nullptr;     ///< e.g. set by SIGINT
   std::function<void(const std::string&)> progress;  ///< human progress messages
 };
 
 struct RunResult {
-  std::string run_dir;                       ///< empty for a dry run
-  std::string status;                        ///< "complete" or "dry-run"
-  std::map<std::string, std::string> files;  ///< role -> path: load_cell, accel, commanded_accel, journal, truth, gcode, summary
+  std::string run_dir;  ///< empty for a dry run
+  std::string status;   ///< "complete" or "dry-run"
+  std::map<std::string, std::string>
+      files;  ///< role -> path: load_cell, accel, commanded_accel, journal, truth, gcode, summary
   Experiment experiment;
-  std::vector<std::string> gcode;            ///< the protocol's G-code (with ;@record directives)
-  nlohmann::json summary;                    ///< what run.json holds
+  std::vector<std::string> gcode;  ///< the protocol's G-code (with ;@record directives)
+  nlohmann::json summary;          ///< what run.json holds
 };
 
 /// The built-in simulated printer's machine profile (same content as datasets/machines/sim.toml).

@@ -25,14 +25,14 @@
 namespace tunekit::protocols {
 
 struct SimCameraOptions {
-  double px_per_mm = 12;       ///< image scale on the bed (px/mm)
-  double margin_mm = 8;        ///< frame margin around the print (mm)
-  double bed_level = 55;       ///< mean bed brightness (0..255)
-  double filament_level = 205; ///< filament brightness (0..255)
-  double vignetting = 0.30;    ///< relative darkening at the frame corners
-  double gradient = 0.18;      ///< relative lighting change across the frame (left to right)
-  double noise_sigma = 3.0;    ///< sensor noise (grey levels)
-  double blur_px = 0.6;        ///< optical blur (Gaussian sigma, px)
+  double px_per_mm = 12;        ///< image scale on the bed (px/mm)
+  double margin_mm = 8;         ///< frame margin around the print (mm)
+  double bed_level = 55;        ///< mean bed brightness (0..255)
+  double filament_level = 205;  ///< filament brightness (0..255)
+  double vignetting = 0.30;     ///< relative darkening at the frame corners
+  double gradient = 0.18;       ///< relative lighting change across the frame (left to right)
+  double noise_sigma = 3.0;     ///< sensor noise (grey levels)
+  double blur_px = 0.6;         ///< optical blur (Gaussian sigma, px)
   unsigned seed = 7;
 };
 

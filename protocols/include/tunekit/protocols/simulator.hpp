@@ -46,8 +46,8 @@ struct SimMode {
 struct SimFault {
   enum class Kind { drop, garble, late_ok, disconnect, error };
   Kind kind = Kind::drop;
-  long at_line = 0;       ///< 1-based count of lines the simulator received
-  double delay_ms = 0;    ///< late_ok only
+  long at_line = 0;     ///< 1-based count of lines the simulator received
+  double delay_ms = 0;  ///< late_ok only
   std::string describe() const;
 };
 
@@ -64,7 +64,7 @@ struct SimConfig {
   // through the nozzle), column + melt compliance C (mm^3/MPa): C dP/dt = A u(t - theta) - Q;
   // force = P * A (A filament cross-section, mm^2). K = n F / u and tau = C k n Q^(n-1)
   // depend on the flow.
-  double k_MPa = 2.7;          ///< MPa (s/mm^3)^n
+  double k_MPa = 2.7;  ///< MPa (s/mm^3)^n
   double n_index = 0.5;
   double compliance_mm3_MPa = 0.5;
   double filament_diameter_mm = 1.75;
@@ -81,7 +81,7 @@ struct SimConfig {
   /// acceleration becomes sum_i A_i a(t - T_i) (impulses rounded to the simulation step).
   /// Option "shaper_x=TYPE:FREQ_HZ[:DAMPING]" (damping default 0.1), e.g. "shaper_x=zv:48".
   std::map<std::string, std::vector<std::pair<double, double>>> shapers;  ///< axis -> (A_i, T_i s)
-  std::map<std::string, std::string> shaper_names;                       ///< axis -> "zv:48:0.1"
+  std::map<std::string, std::string> shaper_names;                        ///< axis -> "zv:48:0.1"
   unsigned seed = 1;
   // The firmware whose planner rules the simulator follows ("marlin", "klipper", "rrf"): M115
   // names it, and moves run as that firmware plans them:
@@ -96,10 +96,10 @@ struct SimConfig {
   //   RepRapFirmware: a reversal is joined at M566/2 (DDA.cpp MatchSpeeds); M204 applies to XY
   //     moves only, extrude-only moves use M201 E; M410 is not an RRF command.
   std::string firmware = "marlin";
-  double steps_per_mm = 160;                  ///< X/Y steps per mm (M92; the built-in profile's)
-  double max_extrude_only_distance_mm = 50;   ///< Klipper [extruder] max_extrude_only_distance
-  double max_extrude_only_accel_mm_s2 = 5000; ///< Klipper [extruder] max_extrude_only_accel
-  double minimum_cruise_ratio = 0.5;          ///< Klipper [printer] minimum_cruise_ratio
+  double steps_per_mm = 160;                   ///< X/Y steps per mm (M92; the built-in profile's)
+  double max_extrude_only_distance_mm = 50;    ///< Klipper [extruder] max_extrude_only_distance
+  double max_extrude_only_accel_mm_s2 = 5000;  ///< Klipper [extruder] max_extrude_only_accel
+  double minimum_cruise_ratio = 0.5;           ///< Klipper [printer] minimum_cruise_ratio
   /// Whether M115 offers tunekit's sensor stream (Cap:TUNEKIT_SENSOR_STREAM:1); off, the
   /// simulator is a firmware that cannot stream its sensors over the G-code link.
   bool sensor_stream = true;
@@ -147,7 +147,8 @@ class Simulator {
   /// Every simulation step: the nozzle position (X, Y, Z, E; mm), its XY speed (mm/s) and the
   /// flow leaving the nozzle (mm^3/s, the simulated liquefier's output; never negative). The
   /// simulated camera (sim_camera.hpp) lays the printed bead down from these.
-  std::function<void(double t_s, const std::array<double, 4>& pos, double speed_xy_mm_s, double flow_out_mm3_s)> deposit_sink;
+  std::function<void(double t_s, const std::array<double, 4>& pos, double speed_xy_mm_s, double flow_out_mm3_s)>
+      deposit_sink;
   void set_streaming(const std::string& sensor, bool on);
   /// Runs any queued move to completion.
   void flush(const Emit& emit);

@@ -41,12 +41,12 @@ double local_px_per_mm(const cv::Matx33d& img_to_mm, cv::Point2d p);
 struct CameraProfile {
   cv::Size image_size;
   cv::Matx33d camera_matrix = cv::Matx33d::eye();
-  std::vector<double> dist_coeffs;      ///< OpenCV order k1 k2 p1 p2 k3
+  std::vector<double> dist_coeffs;  ///< OpenCV order k1 k2 p1 p2 k3
   double rms_reprojection_px = 0;
   int images_used = 0;
   bool has_bed_plane = false;
   cv::Matx33d bed_img_to_mm = cv::Matx33d::eye();  ///< undistorted image px -> bed mm
-  double px_per_mm = 0;                 ///< scale on the bed plane at the bed target's centre
+  double px_per_mm = 0;                            ///< scale on the bed plane at the bed target's centre
   ChessboardSpec target;
 
   nlohmann::json to_json() const;
@@ -67,9 +67,9 @@ CameraProfile load_camera_profile(const std::string& path);
 cv::Mat undistort_image(const cv::Mat& gray, const CameraProfile& profile, const std::string& origin);
 
 struct Rectified {
-  cv::Mat image;              ///< bed-plane image, `px_per_mm` px per mm, axes along the target's
+  cv::Mat image;  ///< bed-plane image, `px_per_mm` px per mm, axes along the target's
   double px_per_mm = 0;
-  cv::Matx33d img_to_rect;    ///< source image px -> rectified px
+  cv::Matx33d img_to_rect;  ///< source image px -> rectified px
 };
 
 /// Warps an image onto the bed plane given by `img_to_mm`, at `px_per_mm`. The output covers

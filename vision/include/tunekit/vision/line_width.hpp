@@ -35,9 +35,9 @@ enum LineFlag : std::uint8_t {
 
 struct LineWidthOptions {
   LinePolarity polarity = LinePolarity::automatic;
-  double step_px = 1.0;          ///< spacing of profile samples along the centreline (px)
-  double along_half_px = 1.0;    ///< half-length of the averaging stretch along the tangent (px)
-  double min_length_px = 60.0;   ///< shorter components are not lines (px of centreline)
+  double step_px = 1.0;         ///< spacing of profile samples along the centreline (px)
+  double along_half_px = 1.0;   ///< half-length of the averaging stretch along the tangent (px)
+  double min_length_px = 60.0;  ///< shorter components are not lines (px of centreline)
   int max_lines = 32;
   /// Downsampling of the coarse detection pass; 0 picks it from the image size.
   int coarse_factor = 0;
@@ -47,34 +47,34 @@ struct LineWidthOptions {
 };
 
 struct WidthSample {
-  double s_px = 0;              ///< arc length along the centreline from its start (px)
-  double x_px = 0, y_px = 0;    ///< centre (mid-point of the edges when measured)
-  double nx = 0, ny = 0;        ///< unit normal (edge "a" lies at -width/2 along it)
-  double width_px = 0;          ///< NaN when not measured (see flags)
-  double confidence = 0;        ///< 0..1, from the edge-position uncertainty of the fit
-  double width_stderr_px = 0;   ///< standard error of width_px from the fit
-  double contrast = 0;          ///< fitted line/bed contrast (image units, signed away)
-  double blur_px = 0;           ///< fitted edge blur sigma (px)
+  double s_px = 0;             ///< arc length along the centreline from its start (px)
+  double x_px = 0, y_px = 0;   ///< centre (mid-point of the edges when measured)
+  double nx = 0, ny = 0;       ///< unit normal (edge "a" lies at -width/2 along it)
+  double width_px = 0;         ///< NaN when not measured (see flags)
+  double confidence = 0;       ///< 0..1, from the edge-position uncertainty of the fit
+  double width_stderr_px = 0;  ///< standard error of width_px from the fit
+  double contrast = 0;         ///< fitted line/bed contrast (image units, signed away)
+  double blur_px = 0;          ///< fitted edge blur sigma (px)
   std::uint8_t flags = 0;
   bool valid() const { return flags == 0 && width_px == width_px; }
 };
 
 struct MeasuredLine {
   std::vector<WidthSample> samples;
-  bool closed = false;          ///< a loop (ring): the profile wraps around
-  bool touches_frame = false;   ///< the segmented line reaches the image border
-  cv::Rect bbox;                ///< of the segmented component (px)
+  bool closed = false;         ///< a loop (ring): the profile wraps around
+  bool touches_frame = false;  ///< the segmented line reaches the image border
+  cv::Rect bbox;               ///< of the segmented component (px)
   double mean_width_px = 0, std_width_px = 0;
   double median_contrast = 0;
   int valid_samples = 0;
-  double length_px = 0;         ///< centreline length (px)
+  double length_px = 0;  ///< centreline length (px)
 };
 
 struct LineWidthResult {
   int width = 0, height = 0;
-  bool light_lines = false;     ///< detected (or requested) polarity
+  bool light_lines = false;  ///< detected (or requested) polarity
   int coarse_factor = 1;
-  double noise_sigma = 0;       ///< robust background noise estimate (image units)
+  double noise_sigma = 0;           ///< robust background noise estimate (image units)
   std::vector<MeasuredLine> lines;  ///< longest first
   std::vector<std::string> warnings;
 };

@@ -75,10 +75,10 @@ struct PathMapping {
   /// Path length (mm) before the profile's first sample: the line's ends (caps) are not in
   /// the profile. NaN: centre the profile on the path, (path length - profile length) / 2.
   double offset_mm = std::numeric_limits<double>::quiet_NaN();
-  bool reversed = false;              ///< the nozzle ran from the profile's last sample to its first
-  double filament_diameter_mm = 0;    ///< > 0 with layer_height_mm: set-point from the feed
+  bool reversed = false;            ///< the nozzle ran from the profile's last sample to its first
+  double filament_diameter_mm = 0;  ///< > 0 with layer_height_mm: set-point from the feed
   double layer_height_mm = 0;
-  double setpoint_width_mm = 0;       ///< otherwise this constant set-point
+  double setpoint_width_mm = 0;  ///< otherwise this constant set-point
 };
 
 /// Set-point width the feed implies on a segment: filament volume over path length and layer

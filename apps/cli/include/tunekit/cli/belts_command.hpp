@@ -29,13 +29,13 @@ struct BeltsOptions {
 
 struct BeltsOutcome {
   BeltsOptions options;
-  std::vector<InputDigest> inputs;       ///< belt A's file, then belt B's
-  ident::RingdownResult a, b;            ///< each belt's free decay
-  double difference_hz = 0;              ///< fA - fB (damped frequencies), Hz
+  std::vector<InputDigest> inputs;  ///< belt A's file, then belt B's
+  ident::RingdownResult a, b;       ///< each belt's free decay
+  double difference_hz = 0;         ///< fA - fB (damped frequencies), Hz
   double difference_stderr_hz = 0;
-  double tension_ratio = 0;              ///< (fA / fB)^2, dimensionless
-  double tension_ratio_stderr = 0;       ///< by the delta method
-  std::vector<std::string> warnings;     ///< "<file>: ..." from reading and fitting
+  double tension_ratio = 0;           ///< (fA / fB)^2, dimensionless
+  double tension_ratio_stderr = 0;    ///< by the delta method
+  std::vector<std::string> warnings;  ///< "<file>: ..." from reading and fitting
 };
 
 /// Analyses both plucks. InputError (exit 2) for bad input, FitError (exit 1) for a pluck too

@@ -16,8 +16,8 @@ namespace tunekit::cli {
 struct CliContext {
   std::ostream& out;
   std::ostream& err;
-  int verbosity = 0;           ///< -v count; 0 is quiet
-  bool interactive = false;    ///< stderr is a terminal (progress bars allowed)
+  int verbosity = 0;         ///< -v count; 0 is quiet
+  bool interactive = false;  ///< stderr is a terminal (progress bars allowed)
   std::string program = "tunekit";
 };
 
@@ -27,10 +27,10 @@ struct OutputOptions {
   std::string output_path;           ///< also write the JSON envelope to this file
   std::vector<std::string> require;  ///< CI thresholds, e.g. "tau_s<0.6"
   // The calibration history (tunekit/cli/history_record.hpp): --record --machine-id NAME --db DB.
-  bool record = false;         ///< also store the result in the history database
-  std::string machine_id;      ///< whose result it is (calibrate falls back to the profile's [machine] id)
-  std::string db;              ///< SQLite file or postgresql:// URL (default: history.sqlite)
-  std::string record_source;   ///< set by the command: the run directory the result belongs to
+  bool record = false;        ///< also store the result in the history database
+  std::string machine_id;     ///< whose result it is (calibrate falls back to the profile's [machine] id)
+  std::string db;             ///< SQLite file or postgresql:// URL (default: history.sqlite)
+  std::string record_source;  ///< set by the command: the run directory the result belongs to
 };
 
 /// Adds --json, -o/--json-file and --require to a subcommand, and (unless `recordable` is

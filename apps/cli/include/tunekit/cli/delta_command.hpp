@@ -23,8 +23,8 @@ namespace tunekit::cli {
 inline std::vector<double> delta_tower_values(const std::array<double, 3>& v) { return {v.begin(), v.end()}; }
 
 struct DeltaOptions {
-  std::string probes_csv;          ///< probe heights: x_mm, y_mm, z_mm (G30 S-1 trigger heights)
-  int factors = 6;                 ///< 3, 4, 6, 7, 8 or 9 (ident::kDeltaFactorChoices); 6 is Klipper's set
+  std::string probes_csv;  ///< probe heights: x_mm, y_mm, z_mm (G30 S-1 trigger heights)
+  int factors = 6;         ///< 3, 4, 6, 7, 8 or 9 (ident::kDeltaFactorChoices); 6 is Klipper's set
   // The geometry the firmware ran while probing (mm, degrees).
   double radius_mm = fitting::kNaN;  ///< delta radius; required
   std::vector<double> rod_mm;        ///< diagonal rod length, one or three values; required
@@ -33,19 +33,19 @@ struct DeltaOptions {
   /// are the library's nominal geometry.
   std::vector<double> angles_deg = delta_tower_values(ident::DeltaGeometry{}.angle_deg);
   std::vector<double> endstops_mm = delta_tower_values(ident::DeltaGeometry{}.endstop_mm);
-  std::string export_firmware;       ///< klipper, marlin, rrf (or kalico); empty: no export
-  std::string export_file;           ///< the export is written here (atomically); empty: printed
+  std::string export_firmware;             ///< klipper, marlin, rrf (or kalico); empty: no export
+  std::string export_file;                 ///< the export is written here (atomically); empty: printed
   double print_radius_mm = fitting::kNaN;  ///< RepRapFirmware's M665 B (mm)
   double marlin_probe_z_offset_mm = 0.0;   ///< Marlin's M851 Z (mm)
 };
 
 struct DeltaOutcome {
   DeltaOptions options;
-  InputDigest input;                    ///< the probe CSV
-  std::size_t probe_count = 0;          ///< probe points read
-  ident::DeltaCalibration calibration;  ///< factors, nominal and fitted geometry, flatness, residuals
+  InputDigest input;                                  ///< the probe CSV
+  std::size_t probe_count = 0;                        ///< probe points read
+  ident::DeltaCalibration calibration;                ///< factors, nominal and fitted geometry, flatness, residuals
   std::optional<protocols::ExportFirmware> firmware;  ///< the export's firmware when asked for
-  std::string export_text;              ///< the fitted settings in that firmware's syntax
+  std::string export_text;                            ///< the fitted settings in that firmware's syntax
   std::vector<std::string> warnings;
 };
 

@@ -39,24 +39,24 @@ struct ExportOptions {
   int drive = 0;                       ///< RepRapFirmware drive for M572 D
   bool drive_given = false;
   bool no_pa = false, no_shaper = false;
-  bool write = false;                  ///< apply the change (backup + atomic replacement)
-  std::string gcode_out;               ///< also write the settings as G-code here
-  std::string sliced_in, sliced_out;   ///< per-feature advance: sliced G-code in, post-processed out
-  double hysteresis = 0.10;            ///< relative change of K before the post-processor writes a new one
-  std::string plot_out;                ///< the flow-dependent advance figure (SVG or PNG)
+  bool write = false;                 ///< apply the change (backup + atomic replacement)
+  std::string gcode_out;              ///< also write the settings as G-code here
+  std::string sliced_in, sliced_out;  ///< per-feature advance: sliced G-code in, post-processed out
+  double hysteresis = 0.10;           ///< relative change of K before the post-processor writes a new one
+  std::string plot_out;               ///< the flow-dependent advance figure (SVG or PNG)
   std::string orca_in, orca_out, orca_name = "tunekit flow-dependent advance";
 };
 
 struct ExportOutcome {
   ExportOptions options;
   protocols::ExportFirmware firmware{};
-  protocols::CompensatorSettings settings;      ///< what is set
-  std::optional<ident::AdvanceDesign> design;   ///< the advance design, when one was made
-  std::optional<ident::FlowAdvanceDesign> flow; ///< the flow-dependent design (two or more levels)
-  protocols::ExportResult change;               ///< the configuration before/after, diff and G-code
-  std::string schedule_gcode;                   ///< flow-dependent advance as G-code (per feature)
-  std::string backup;                           ///< the backup's path when --write changes the file
-  protocols::FileBatch files;                   ///< everything commit_export() writes (not the JSON)
+  protocols::CompensatorSettings settings;       ///< what is set
+  std::optional<ident::AdvanceDesign> design;    ///< the advance design, when one was made
+  std::optional<ident::FlowAdvanceDesign> flow;  ///< the flow-dependent design (two or more levels)
+  protocols::ExportResult change;                ///< the configuration before/after, diff and G-code
+  std::string schedule_gcode;                    ///< flow-dependent advance as G-code (per feature)
+  std::string backup;                            ///< the backup's path when --write changes the file
+  protocols::FileBatch files;                    ///< everything commit_export() writes (not the JSON)
   Envelope envelope{"export"};
 };
 

@@ -24,21 +24,21 @@ namespace tunekit::cli {
 enum class FreqMode { dwell, h1, oe };
 
 struct FreqOptions {
-  std::string file;           ///< CSV log
-  std::string time_column;    ///< empty: found by name
-  std::string input_column;   ///< needed by h1 and oe; optional for a dwell
+  std::string file;          ///< CSV log
+  std::string time_column;   ///< empty: found by name
+  std::string input_column;  ///< needed by h1 and oe; optional for a dwell
   std::string output_column;
   std::string input_unit, output_unit;  ///< override the units in the column names
   FreqMode mode = FreqMode::dwell;
-  double freq_hz = 0;              ///< dwell: the excitation frequency (Hz)
-  std::string fit_tf;              ///< "P,Z": fit a transfer function with P poles and Z zeros
-  bool tf_delay = false;           ///< with a dead time theta_s
+  double freq_hz = 0;     ///< dwell: the excitation frequency (Hz)
+  std::string fit_tf;     ///< "P,Z": fit a transfer function with P poles and Z zeros
+  bool tf_delay = false;  ///< with a dead time theta_s
   /// Welch's method for h1/oe; segment_length 0: a power of two giving about 16 segments.
   ident::WelchOptions welch;
-  double fmin_hz = 0;              ///< lowest frequency reported and fitted (Hz)
-  double fmax_hz = 0;              ///< highest (Hz); 0: Nyquist
-  double tmin_s = 0;               ///< broadband: the record before this time (s) is left out
-  double min_coherence = 0.8;      ///< TF fit: points of lower coherence (0-1) are left out
+  double fmin_hz = 0;          ///< lowest frequency reported and fitted (Hz)
+  double fmax_hz = 0;          ///< highest (Hz); 0: Nyquist
+  double tmin_s = 0;           ///< broadband: the record before this time (s) is left out
+  double min_coherence = 0.8;  ///< TF fit: points of lower coherence (0-1) are left out
 };
 
 /// The H1 estimate inside [fmin, fmax].
@@ -57,11 +57,11 @@ struct FreqOutcome {
   std::size_t input_size_bytes = 0;
   std::size_t samples = 0;
   std::string input_unit, output_unit;
-  std::optional<ident::SineDwell> dwell;       ///< mode dwell
-  std::optional<FreqBroadband> broadband;      ///< modes h1 and oe
-  std::optional<fitting::FitResult> tf_fit;    ///< --fit-tf: the fit to the frequency response
+  std::optional<ident::SineDwell> dwell;     ///< mode dwell
+  std::optional<FreqBroadband> broadband;    ///< modes h1 and oe
+  std::optional<fitting::FitResult> tf_fit;  ///< --fit-tf: the fit to the frequency response
   std::size_t tf_points_used = 0;
-  std::optional<fitting::FitResult> oe_fit;    ///< mode oe: the output-error fit to the record
+  std::optional<fitting::FitResult> oe_fit;  ///< mode oe: the output-error fit to the record
   std::vector<std::string> warnings;
 };
 

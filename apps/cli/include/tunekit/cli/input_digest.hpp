@@ -11,8 +11,8 @@ namespace tunekit::cli {
 
 struct InputDigest {
   std::string path;
-  std::string sha256;           ///< lower-case hex SHA-256 of the bytes
-  std::size_t size_bytes = 0;   ///< bytes
+  std::string sha256;          ///< lower-case hex SHA-256 of the bytes
+  std::size_t size_bytes = 0;  ///< bytes
 };
 
 inline InputDigest input_digest(const std::string& path, std::string_view bytes) {

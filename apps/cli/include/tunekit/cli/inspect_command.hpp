@@ -29,8 +29,8 @@ struct InspectColumn {
 
 /// The sampling of the time column.
 struct InspectTiming {
-  double span_s = 0;          ///< last minus first time (s)
-  double sample_rate_hz = 0;  ///< 1 / mean interval (Hz)
+  double span_s = 0;                  ///< last minus first time (s)
+  double sample_rate_hz = 0;          ///< 1 / mean interval (Hz)
   double min_dt_s = 0, max_dt_s = 0;  ///< shortest and longest interval (s)
 };
 

@@ -30,34 +30,34 @@ struct LinewidthOptions {
   /// Images whose header claims more pixels are refused before decoding (megapixels).
   double max_image_mp = static_cast<double>(vision::kDefaultMaxImagePixels) / 1e6;
   // Scale, one of: px_per_mm, camera (with a bed plane), chessboard or charuco, reference_width_mm.
-  double px_per_mm = 0;        ///< image scale on the bed plane (px/mm); 0: not given
-  std::string camera;          ///< camera profile JSON (lens distortion, bed plane)
-  std::string chessboard;      ///< inner corners "COLSxROWS"
-  double square_mm = 0;        ///< chessboard / ChArUco square side (mm)
-  std::string charuco;         ///< ChArUco squares "SQUARESxSQUARES"
-  double marker_mm = 0;        ///< ChArUco marker side (mm)
+  double px_per_mm = 0;                                       ///< image scale on the bed plane (px/mm); 0: not given
+  std::string camera;                                         ///< camera profile JSON (lens distortion, bed plane)
+  std::string chessboard;                                     ///< inner corners "COLSxROWS"
+  double square_mm = 0;                                       ///< chessboard / ChArUco square side (mm)
+  std::string charuco;                                        ///< ChArUco squares "SQUARESxSQUARES"
+  double marker_mm = 0;                                       ///< ChArUco marker side (mm)
   std::string aruco_dict = vision::CharucoSpec{}.dictionary;  ///< OpenCV dictionary name
-  double reference_width_mm = 0;  ///< the longest line has this width (mm); 0: not given
-  bool rectify = false;        ///< warp onto the bed plane first
+  double reference_width_mm = 0;                              ///< the longest line has this width (mm); 0: not given
+  bool rectify = false;                                       ///< warp onto the bed plane first
   /// Polarity, profile sample spacing (px) and minimum line length (px); the scale target's
   /// exclusion mask is set per image by compute_linewidth().
   vision::LineWidthOptions detection;
-  bool allow_edge = false;     ///< measure lines touching the frame edge instead of failing
-  std::string overlay_dir;     ///< check images go here; empty: none
-  std::string save_camera;     ///< non-empty: calibrate the camera and write its profile here
+  bool allow_edge = false;  ///< measure lines touching the frame edge instead of failing
+  std::string overlay_dir;  ///< check images go here; empty: none
+  std::string save_camera;  ///< non-empty: calibrate the camera and write its profile here
   // Mapping one line to time (profile_csv non-empty).
-  std::string profile_csv;     ///< CSV written: time (s), s (mm), width (mm), setpoint_width (mm), confidence
-  int line = 1;                ///< which line (1 = longest)
-  double speed_mm_s = 0;       ///< commanded print speed (mm/s)
+  std::string profile_csv;       ///< CSV written: time (s), s (mm), width (mm), setpoint_width (mm), confidence
+  int line = 1;                  ///< which line (1 = longest)
+  double speed_mm_s = 0;         ///< commanded print speed (mm/s)
   double setpoint_width_mm = 0;  ///< set-point width (mm); 0: the measured mean (or from the feed with gcode)
-  int ring_sines = 0;          ///< ring print: sines per rotation N; 0: not a ring
+  int ring_sines = 0;            ///< ring print: sines per rotation N; 0: not a ring
   double ring_amplitude_mm = 0;  ///< ring print: feeder offset amplitude A (mm)
-  double ring_radius_mm = 0;   ///< ring print: radius R (mm); 0: measured
-  double rod_radius_mm = 0;    ///< ring print: feed rod radius (mm)
-  double layer_height_mm = 0;  ///< ring print, or the set-point from a G-code's feed (mm)
-  double ring_start_deg = 0;   ///< ring print: theta = 0 in the photo (deg, counterclockwise from +x)
-  bool ring_clockwise = false;  ///< ring print: the nozzle ran clockwise in the photo
-  std::string gcode;           ///< G-code that printed the line; empty: none
+  double ring_radius_mm = 0;     ///< ring print: radius R (mm); 0: measured
+  double rod_radius_mm = 0;      ///< ring print: feed rod radius (mm)
+  double layer_height_mm = 0;    ///< ring print, or the set-point from a G-code's feed (mm)
+  double ring_start_deg = 0;     ///< ring print: theta = 0 in the photo (deg, counterclockwise from +x)
+  bool ring_clockwise = false;   ///< ring print: the nozzle ran clockwise in the photo
+  std::string gcode;             ///< G-code that printed the line; empty: none
   /// With gcode: offset_mm (NaN: profile centred on the path), reversed, filament_diameter_mm
   /// (mm); its layer_height_mm and setpoint_width_mm are filled from the members above.
   vision::PathMapping path;
@@ -66,8 +66,8 @@ struct LinewidthOptions {
 /// One measured photo.
 struct LinewidthImage {
   std::string path;
-  double px_per_mm = 0;        ///< the scale used (px/mm)
-  std::string scale_source;    ///< where the scale came from, in words
+  double px_per_mm = 0;            ///< the scale used (px/mm)
+  std::string scale_source;        ///< where the scale came from, in words
   vision::LineWidthResult result;  ///< every line's profile in px
 };
 

@@ -27,36 +27,36 @@ struct NozzleOptions {
   /// compute_nozzle() from `temperature_degc` and `flows_mm3_s`.
   ident::LiquefierPredictionOptions prediction;
   // The rheology, exactly one of: K and n, mu, material, rheology_json.
-  double K = fitting::kNaN;        ///< power-law consistency (Pa.s^n)
-  double n = fitting::kNaN;        ///< power-law index (1)
-  double mu = fitting::kNaN;       ///< Newtonian viscosity (Pa.s)
-  std::string material;            ///< Cross-WLF material name, or "peek-power-law"
-  std::string rheology_json;       ///< a 'tunekit rheo --json' result file
-  double temperature_degc = fitting::kNaN;            ///< melt temperature (degC); NaN: not given
-  double kelvin_offset = fitting::kKelvinOffset;      ///< degC to K: 273.15 or Holtrup's 273 (K)
-  std::vector<double> flows_mm3_s;  ///< flows to evaluate (mm3/s); at least one without fit_file
-  std::string fit_file;             ///< non-empty: inverse fit from this CSV instead
-  double piston_diameter_mm = fitting::kNaN;  ///< area a force column acts on (mm)
+  double K = fitting::kNaN;                       ///< power-law consistency (Pa.s^n)
+  double n = fitting::kNaN;                       ///< power-law index (1)
+  double mu = fitting::kNaN;                      ///< Newtonian viscosity (Pa.s)
+  std::string material;                           ///< Cross-WLF material name, or "peek-power-law"
+  std::string rheology_json;                      ///< a 'tunekit rheo --json' result file
+  double temperature_degc = fitting::kNaN;        ///< melt temperature (degC); NaN: not given
+  double kelvin_offset = fitting::kKelvinOffset;  ///< degC to K: 273.15 or Holtrup's 273 (K)
+  std::vector<double> flows_mm3_s;                ///< flows to evaluate (mm3/s); at least one without fit_file
+  std::string fit_file;                           ///< non-empty: inverse fit from this CSV instead
+  double piston_diameter_mm = fitting::kNaN;      ///< area a force column acts on (mm)
 };
 
 /// One evaluated flow of the forward mode.
 struct NozzlePoint {
   double flow_mm3_s = 0;
-  double pressure_drop_Pa = 0;          ///< with the chosen model
-  fitting::LocalPowerLaw local;         ///< the power law matching the rheology at the wall shear rate
+  double pressure_drop_Pa = 0;                  ///< with the chosen model
+  fitting::LocalPowerLaw local;                 ///< the power law matching the rheology at the wall shear rate
   std::map<std::string, double> all_models_Pa;  ///< pressure drop by every model, by model name
 };
 
 struct NozzleForward {
-  std::string rheology;                 ///< where the viscosity came from, in words
-  double temperature_K = fitting::kNaN; ///< NaN: no temperature given (power law, Newtonian)
-  std::vector<NozzlePoint> points;      ///< one per flow, in the order given
+  std::string rheology;                                  ///< where the viscosity came from, in words
+  double temperature_K = fitting::kNaN;                  ///< NaN: no temperature given (power law, Newtonian)
+  std::vector<NozzlePoint> points;                       ///< one per flow, in the order given
   std::optional<ident::LiquefierPrediction> prediction;  ///< with a temperature or a power law
 };
 
 struct NozzleFit {
-  std::size_t rows = 0;     ///< measurements read
-  fitting::FitResult fit;   ///< K, n (and Ea) with 95 % intervals
+  std::size_t rows = 0;    ///< measurements read
+  fitting::FitResult fit;  ///< K, n (and Ea) with 95 % intervals
 };
 
 struct NozzleOutcome {

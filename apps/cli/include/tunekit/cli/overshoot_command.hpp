@@ -22,20 +22,20 @@
 namespace tunekit::cli {
 
 struct OvershootOptions {
-  std::string input;                ///< run directory or CSV to analyze; empty: grid mode
-  std::string time_column = "time";  ///< CSV: time column (s)
+  std::string input;                                     ///< run directory or CSV to analyze; empty: grid mode
+  std::string time_column = "time";                      ///< CSV: time column (s)
   std::string accel_x = "accel_x", accel_y = "accel_y";  ///< CSV: measured acceleration (mm/s^2)
-  std::string cmd_x, cmd_y;         ///< CSV: commanded acceleration columns (mm/s^2)
-  std::string pos_x, pos_y;         ///< CSV: encoder / position columns (mm), instead of the accelerometer
+  std::string cmd_x, cmd_y;                              ///< CSV: commanded acceleration columns (mm/s^2)
+  std::string pos_x, pos_y;          ///< CSV: encoder / position columns (mm), instead of the accelerometer
   ident::OvershootOptions analysis;  ///< settling band (mm), tail share, pause and move thresholds, drift order
-  bool traces = false;              ///< include each corner's deviation trace in the JSON
+  bool traces = false;               ///< include each corner's deviation trace in the JSON
   // Grid mode.
   std::vector<std::string> params;  ///< axis-rectangle parameters NAME=V1,V2,... (lists for speed and accel)
   /// machine ("sim" or a profile), port, sim_options and runs_root of every grid run; the
   /// protocol, parameters and run directory are set per grid point.
   protocols::RunOptions run;
-  std::string out_dir;              ///< the grid's directory; empty: <runs_root>/overshoot-grid
-  double tolerance_mm = 0.05;       ///< overshoot tolerance of the figure of merit (mm)
+  std::string out_dir;               ///< the grid's directory; empty: <runs_root>/overshoot-grid
+  double tolerance_mm = 0.05;        ///< overshoot tolerance of the figure of merit (mm)
   std::vector<std::string> shapers;  ///< on the simulator: AXIS=TYPE:FREQ_HZ[:DAMPING], grid run again with them
 };
 
@@ -51,8 +51,8 @@ struct OvershootGridCell {
 };
 
 struct OvershootGrid {
-  std::string out_dir;                                ///< where the runs, results.json and report are
-  std::map<std::string, std::vector<double>> lists;   ///< the parameter lists run
+  std::string out_dir;                               ///< where the runs, results.json and report are
+  std::map<std::string, std::vector<double>> lists;  ///< the parameter lists run
   std::vector<OvershootGridCell> cells;
   double mean_completion_time_s = 0;
   std::optional<std::size_t> best;         ///< index of the fastest unshaped point within tolerance

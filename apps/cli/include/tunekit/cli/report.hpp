@@ -14,8 +14,9 @@
 //   step:      {t_s[], u[], y[], y_fit[] (null where no model applies), u_label, y_label}
 //   bode:      {freq_hz[], mag_db[], phase_deg[], coherence[], model: {freq_hz[], mag_db[], phase_deg[], label}}
 //   psd.<axis>: {freq_hz[], psd[], modes: [{freq_hz}], shapers: [{type, freq_hz[], response[]}]}
-//   viscosity: {series: [{temperature_K, shear_rate_1_s[], viscosity_Pa_s[], fit_shear_rate_1_s[], fit_viscosity_Pa_s[]}]}
-//   linewidth: {s_mm[], width_mm[], setpoint_mm[], overlay_png: "file name in the run directory"}
+//   viscosity: {series: [{temperature_K, shear_rate_1_s[], viscosity_Pa_s[], fit_shear_rate_1_s[],
+//   fit_viscosity_Pa_s[]}]} linewidth: {s_mm[], width_mm[], setpoint_mm[], overlay_png: "file name in the run
+//   directory"}
 // Plots whose data are absent are left out.
 
 #include <map>
@@ -38,7 +39,7 @@ Figure linewidth_figure(const nlohmann::json& d);
 Figure overshoot_grid_figure(const nlohmann::json& d);
 
 struct ReportImage {
-  std::string id;       ///< e.g. "step", "psd_x"
+  std::string id;  ///< e.g. "step", "psd_x"
   std::string caption;
   std::string path;  ///< the image file (.svg plot or .png photo)
 };

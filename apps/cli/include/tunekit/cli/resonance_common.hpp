@@ -24,19 +24,18 @@ struct AccelFilesOptions {
   /// file name) and the sensor range for clipping detection.
   ident::AccelInputOptions input;
   ident::WelchOptions welch = ident::klipper_welch_options();  ///< PSD estimate (Klipper's preset)
-  ident::ResonanceOptions modes;  ///< band (Hz), most modes, peak threshold, FRF use
-  double max_plot_hz = 200.0;     ///< highest frequency of the PSD arrays in the JSON, Hz
+  ident::ResonanceOptions modes;                               ///< band (Hz), most modes, peak threshold, FRF use
+  double max_plot_hz = 200.0;                                  ///< highest frequency of the PSD arrays in the JSON, Hz
 };
 
 /// The spectra and modes of one axis (or of one record whose axis is not known).
 struct AxisResult {
-  char axis = 0;       ///< 'x', 'y', 'z', or 0 when no axis was named
-  std::string label;   ///< the axis letter, or the file stem when the axis is not known
-  ident::AxisSpectrum spectrum;                ///< the datasets averaged (for the modes)
+  char axis = 0;                              ///< 'x', 'y', 'z', or 0 when no axis was named
+  std::string label;                          ///< the axis letter, or the file stem when the axis is not known
+  ident::AxisSpectrum spectrum;               ///< the datasets averaged (for the modes)
   std::vector<ident::AxisSpectrum> datasets;  ///< every recording / file dataset of the axis, as read
   ident::AxisModes modes;
 };
-
 
 /// What analyze_accel_files() found.
 struct AccelAnalysis {
@@ -57,7 +56,8 @@ enum class RingdownDiversion {
 /// Checks the options (InputError, exit 2), reads every file, groups the spectra by axis (a file
 /// whose name names no axis, without an axis in the options, is its own group under its file
 /// stem), averages each group and identifies its modes.
-AccelAnalysis analyze_accel_files(const AccelFilesOptions& options, RingdownDiversion ringdown = RingdownDiversion::none);
+AccelAnalysis analyze_accel_files(const AccelFilesOptions& options,
+                                  RingdownDiversion ringdown = RingdownDiversion::none);
 
 /// The label of a record: its axis letter, or its file stem.
 std::string record_label(char axis, const std::string& path);

@@ -53,24 +53,24 @@ struct ShaperOptions {
 
 /// One axis (or one record whose axis is not known) and the shaper chosen for it.
 struct ShaperAxis {
-  AxisResult resonance;  ///< label ("x", "y", "z" or the file stem), spectra and modes
+  AxisResult resonance;         ///< label ("x", "y", "z" or the file stem), spectra and modes
   bool klipper_method = false;  ///< selected with Klipper's assumed damping (asked, or no mode identified)
   /// The selection as run: types, design and test damping ratios, max_shaper_freq_hz, ...
   ident::ShaperSelectionOptions selection;
   /// The recommended shaper (recommended.type, freq_hz in Hz, damping_ratio: the firmware
   /// settings) and every type's best candidate.
   ident::ShaperSelection choice;
-  std::size_t datasets = 0;            ///< recordings (or spectrum datasets) the shapers were scored on
-  std::size_t normalized_by_us = 0;    ///< of them, normalized by tunekit (the rest by Klipper)
-  std::string klipper_csv;             ///< the Klipper layout file written for this axis; empty: none
+  std::size_t datasets = 0;          ///< recordings (or spectrum datasets) the shapers were scored on
+  std::size_t normalized_by_us = 0;  ///< of them, normalized by tunekit (the rest by Klipper)
+  std::string klipper_csv;           ///< the Klipper layout file written for this axis; empty: none
 };
 
 struct ShaperOutcome {
   ShaperOptions options;
-  double max_shaper_freq_hz = 0;        ///< as used (the default resolved), Hz
+  double max_shaper_freq_hz = 0;  ///< as used (the default resolved), Hz
   std::vector<InputDigest> inputs;
-  std::vector<ShaperAxis> axes;         ///< ordered by label (x, y, z first)
-  std::vector<std::string> warnings;    ///< the pipeline's, then per axis
+  std::vector<ShaperAxis> axes;       ///< ordered by label (x, y, z first)
+  std::vector<std::string> warnings;  ///< the pipeline's, then per axis
 
   /// The axis with this label ("x", "y", ...), or nullptr.
   const ShaperAxis* axis(const std::string& label) const;
