@@ -17,8 +17,8 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/version.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/simulator.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/sim/simulator.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -50,9 +50,9 @@ int main(int argc, char** argv) {
       "  tunekit run liquefier-step --machine sim --port /tmp/tksim");
   CLI11_PARSE(app, argc, argv);
   try {
-    const auto cfg = tunekit::protocols::SimConfig::from_options(options);
-    if (!truth_path.empty()) tunekit::protocols::write_file_atomic(truth_path, cfg.truth().dump(2) + "\n");
-    tunekit::protocols::SimPtyServer server(cfg);
+    const auto cfg = tunekit::sim::SimConfig::from_options(options);
+    if (!truth_path.empty()) tunekit::core::write_file_atomic(truth_path, cfg.truth().dump(2) + "\n");
+    tunekit::sim::SimPtyServer server(cfg);
     if (!link.empty()) {
       std::error_code ec;
       std::filesystem::remove(link, ec);
@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
     if (!received_path.empty()) {
       std::string all;
       for (const auto& l : server.sim().received()) all += l + "\n";
-      tunekit::protocols::write_file_atomic(received_path, all);
+      tunekit::core::write_file_atomic(received_path, all);
     }
     if (!link.empty()) {
       std::error_code ec;

@@ -1,5 +1,5 @@
 // The machine profile of tunekit's built-in simulated printer (`--machine sim`).
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
 
 namespace tunekit::protocols {
@@ -65,8 +65,8 @@ steps_per_mm_y = 160
 
 }  // namespace
 
-MachineProfile builtin_sim_profile() {
-  return parse_machine_profile(kSimProfile, "<built-in simulated printer profile>");
+machine::MachineProfile builtin_sim_profile() {
+  return machine::parse_machine_profile(kSimProfile, "<built-in simulated printer profile>");
 }
 
 }  // namespace tunekit::protocols

@@ -35,7 +35,8 @@ double PrintedLine::length_mm() const {
   return l;
 }
 
-std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& p, const MachineProfile& profile) {
+std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& p,
+                                           const machine::MachineProfile& profile) {
   const double v = line_steps_param(p, "speed_mm_s");
   const double lead = line_steps_param(p, "lead_mm"), step = line_steps_param(p, "step_mm"),
                tail = line_steps_param(p, "tail_mm");
@@ -63,7 +64,7 @@ std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& 
 }
 
 void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::string, double>& p,
-                             const MachineProfile& profile, const Dialect& d) {
+                             const machine::MachineProfile& profile, const firmware::Dialect& d) {
   const auto lines = line_steps_layout(p, profile);
   const double z = line_steps_param(p, "z_mm"), accel = line_steps_param(p, "accel_mm_s2");
   const double retract = p.count("retract_mm") ? std::max(0.0, p.at("retract_mm")) : 0.0;

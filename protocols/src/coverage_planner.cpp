@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/trajectory.hpp"
+#include "tunekit/machine/trajectory.hpp"
 
 namespace tunekit::protocols {
 namespace {
@@ -22,7 +22,7 @@ struct CoverageGrid {
   double cy(int j) const { return y0 + (j + 0.5) * cell; }
 };
 
-CoverageGrid coverage_build_grid(const TestPatternSet& s, const MachineProfile& p) {
+CoverageGrid coverage_build_grid(const TestPatternSet& s, const machine::MachineProfile& p) {
   const double w = p.print.line_width_mm;
   if (!(w > 0)) throw InputError("the profile's line width must be positive");
   if (s.pads < 0 || s.line_steps < 0 || s.rings < 0) throw InputError("pattern counts must not be negative");
@@ -159,8 +159,8 @@ std::vector<std::pair<int, int>> coverage_order_pce(const CoverageGrid& g) {
 
 }  // namespace
 
-CoveragePlan plan_test_patterns(const TestPatternSet& set, const MachineProfile& profile, const std::string& planner,
-                                const CoverageMotion& motion) {
+CoveragePlan plan_test_patterns(const TestPatternSet& set, const machine::MachineProfile& profile,
+                                const std::string& planner, const CoverageMotion& motion) {
   if (planner != "pce" && planner != "zigzag")
     throw InputError(fmt::format("unknown planner '{}' (pce, zigzag)", planner));
   const CoverageGrid g = coverage_build_grid(set, profile);
@@ -191,7 +191,7 @@ CoveragePlan plan_test_patterns(const TestPatternSet& set, const MachineProfile&
   for (const auto& m : plan.moves) {
     const double len = std::hypot(m.x1 - m.x0, m.y1 - m.y0);
     const double v = m.extrude ? motion.print_speed_mm_s : motion.travel_speed_mm_s;
-    plan.stats.time_s += Profile::move(len, 0, v, 0, motion.accel_mm_s2, jerk).duration_s();
+    plan.stats.time_s += machine::Profile::move(len, 0, v, 0, motion.accel_mm_s2, jerk).duration_s();
     if (m.extrude) plan.stats.print_mm += len;
     else {
       plan.stats.travel_mm += len;

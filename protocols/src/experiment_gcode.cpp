@@ -11,18 +11,18 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/coverage_planner.hpp"
 #include "tunekit/protocols/flow_sweep_plan.hpp"
-#include "tunekit/protocols/gcode.hpp"
-#include "tunekit/protocols/trajectory.hpp"
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/trajectory.hpp"
 
 #include "experiment_gcode.hpp"
 
 namespace tunekit::protocols::experiment_gcode {
 
-double mid(const MachineProfile& p, const std::string& axis) {
+double mid(const machine::MachineProfile& p, const std::string& axis) {
   const auto& a = p.axis(axis);
   return 0.5 * (a.min_mm + a.max_mm);
 }
@@ -66,17 +66,17 @@ void feed_move(std::vector<std::string>& g, const FeedPlan& fp, double feed_mm_s
 /// (planner.cpp); RepRapFirmware applies M204 to XY moves only (DDA.cpp "apply M204
 /// acceleration limits to XY moves"), so M201 E limits them.
 FeedPlan extruder_accel(std::vector<std::string>& g, std::vector<std::string>& restore, double a,
-                        const MachineProfile& profile, const Dialect& d) {
+                        const machine::MachineProfile& profile, const firmware::Dialect& d) {
   FeedPlan fp;
   fp.max_len_mm = profile.extruder.max_extrude_only_distance_mm;
   switch (d.firmware()) {
-    case Firmware::klipper:
+    case firmware::Firmware::klipper:
       g.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(a, 0)));
       restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(profile.print.max_accel_mm_s2, 0)));
       fp.stops = true;
       fp.accel_mm_s2 = std::min(a, profile.extruder.max_accel_mm_s2);
       break;
-    case Firmware::reprapfirmware:
+    case firmware::Firmware::reprapfirmware:
       g.push_back(fmt::format("M201 E{}", num(a, 0)));
       restore.push_back(fmt::format("M201 E{}", num(profile.state.max_accel_e_mm_s2, 0)));
       fp.accel_mm_s2 = a;
@@ -91,7 +91,8 @@ FeedPlan extruder_accel(std::vector<std::string>& g, std::vector<std::string>& r
 }
 
 FeedPlan liquefier_prologue(std::vector<std::string>& g, std::vector<std::string>& restore,
-                            const std::map<std::string, double>& p, const MachineProfile& profile, const Dialect& d) {
+                            const std::map<std::string, double>& p, const machine::MachineProfile& profile,
+                            const firmware::Dialect& d) {
   g.push_back("M83 ; relative extrusion");
   if (p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
   return extruder_accel(g, restore, p.at("accel_mm_s2"), profile, d);
@@ -123,12 +124,12 @@ StateShaper split_state_shaper(const std::string& v) {
 /// machine has shaping configured ([firmware_state] shaper_x/y): Klipper as its resonance tester
 /// (SET_INPUT_SHAPER with zero frequencies), Marlin M593 F0 (M593.cpp: without X/Y every shaped
 /// axis), RepRapFirmware M593 P"none".
-void shaping_off(const MachineProfile& profile, const Dialect& d, std::vector<std::string>& prologue,
+void shaping_off(const machine::MachineProfile& profile, const firmware::Dialect& d, std::vector<std::string>& prologue,
                  std::vector<std::string>& restore, nlohmann::json& changed) {
   const auto& shaper = profile.state.shaper;
   if (shaper.empty()) return;
   switch (d.firmware()) {
-    case Firmware::klipper: {
+    case firmware::Firmware::klipper: {
       prologue.push_back("SET_INPUT_SHAPER SHAPER_FREQ_X=0 SHAPER_FREQ_Y=0");
       std::string r = "SET_INPUT_SHAPER";
       for (const auto& [ax, v] : shaper) {
@@ -141,7 +142,7 @@ void shaping_off(const MachineProfile& profile, const Dialect& d, std::vector<st
       changed.push_back("input_shaper");
       break;
     }
-    case Firmware::reprapfirmware: {
+    case firmware::Firmware::reprapfirmware: {
       prologue.push_back("M593 P\"none\"");
       const auto sv = split_state_shaper(shaper.begin()->second);
       restore.push_back(fmt::format("M593 P\"{}\" F{} S{}", sv.type, sv.freq, sv.zeta));

@@ -25,17 +25,18 @@ struct FeedPlan {
 };
 
 /// The middle of the axis' travel (mm).
-double mid(const MachineProfile& p, const std::string& axis);
+double mid(const machine::MachineProfile& p, const std::string& axis);
 /// `v` with at most `decimals` decimals, trailing zeros dropped ("-0" is "0").
 std::string num(double v, int decimals = 4);
 void feed_move(std::vector<std::string>& g, const FeedPlan& fp, double feed_mm_s, double duration_s);
 FeedPlan extruder_accel(std::vector<std::string>& g, std::vector<std::string>& restore, double a,
-                        const MachineProfile& profile, const Dialect& d);
+                        const machine::MachineProfile& profile, const firmware::Dialect& d);
 /// Relative extrusion, the hot end heated (if asked) and the extrude-only acceleration set.
 FeedPlan liquefier_prologue(std::vector<std::string>& g, std::vector<std::string>& restore,
-                            const std::map<std::string, double>& p, const MachineProfile& profile, const Dialect& d);
+                            const std::map<std::string, double>& p, const machine::MachineProfile& profile,
+                            const firmware::Dialect& d);
 void epilogue(std::vector<std::string>& g, const std::vector<std::string>& restore);
-void shaping_off(const MachineProfile& profile, const Dialect& d, std::vector<std::string>& prologue,
+void shaping_off(const machine::MachineProfile& profile, const firmware::Dialect& d, std::vector<std::string>& prologue,
                  std::vector<std::string>& restore, nlohmann::json& changed);
 void record_feed_plan(Experiment& e, const FeedPlan& fp);
 void check_plan(const std::string& protocol, double lines, double duration_s, const ProtocolLimits& limits);
@@ -46,8 +47,8 @@ struct ExperimentRequest {
   const std::string& protocol;
   const std::map<std::string, double>& overrides;
   const std::string& axis_in;
-  const MachineProfile& profile;
-  const Dialect& dialect;
+  const machine::MachineProfile& profile;
+  const firmware::Dialect& dialect;
   const ProtocolLimits& limits;
 };
 

@@ -11,12 +11,12 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/coverage_planner.hpp"
 #include "tunekit/protocols/flow_sweep_plan.hpp"
-#include "tunekit/protocols/gcode.hpp"
-#include "tunekit/protocols/trajectory.hpp"
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/trajectory.hpp"
 
 #include "experiment_gcode.hpp"
 
@@ -66,8 +66,8 @@ void check_param_domain(const std::string& protocol, const ProtocolParam& prm, d
 }  // namespace
 
 Experiment build_experiment(const std::string& protocol, const std::map<std::string, double>& overrides,
-                            const std::string& axis_in, const MachineProfile& profile, const Dialect& d,
-                            const ProtocolLimits& limits) {
+                            const std::string& axis_in, const machine::MachineProfile& profile,
+                            const firmware::Dialect& d, const ProtocolLimits& limits) {
   const auto& spec = protocol_spec(protocol);
   Experiment e;
   e.protocol = protocol;

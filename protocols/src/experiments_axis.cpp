@@ -11,12 +11,12 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/coverage_planner.hpp"
 #include "tunekit/protocols/flow_sweep_plan.hpp"
-#include "tunekit/protocols/gcode.hpp"
-#include "tunekit/protocols/trajectory.hpp"
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/trajectory.hpp"
 
 #include "experiment_gcode.hpp"
 
@@ -25,8 +25,8 @@ namespace tunekit::protocols::experiment_gcode {
 bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
   const std::string& protocol = r.protocol;
   const std::string& axis_in = r.axis_in;
-  const MachineProfile& profile = r.profile;
-  const Dialect& d = r.dialect;
+  const machine::MachineProfile& profile = r.profile;
+  const firmware::Dialect& d = r.dialect;
   const ProtocolLimits& limits = r.limits;
   auto& p = e.params;
   auto& g = e.gcode;
@@ -51,11 +51,11 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
     };
     std::vector<SweepMove> moves;
     double min_len = 0;
-    if (d.firmware() == Firmware::marlin || d.firmware() == Firmware::prusa) {
+    if (d.firmware() == firmware::Firmware::marlin || d.firmware() == firmware::Firmware::prusa) {
       // Marlin joins a move with fewer than MIN_STEPS_PER_SEGMENT steps with the next one
       // (planner.cpp _buffer_steps; Configuration_adv.h MIN_STEPS_PER_SEGMENT 6).
       const double spm = axis_in == "x" ? profile.state.steps_per_mm_x : profile.state.steps_per_mm_y;
-      min_len = limits::kMarlinMinStepsPerSegment / spm;
+      min_len = firmware::limits::kMarlinMinStepsPerSegment / spm;
     }
     {
       double t = 0, f = f0;
@@ -69,7 +69,7 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
               "axis-sweep at {:.1f} Hz on Marlin: a half period must move at least {} steps (MIN_STEPS_PER_SEGMENT, "
               "Configuration_adv.h) = {:.4g} mm, which needs {:.0f} mm/s^2, above the axis limit {:.0f} mm/s^2; lower "
               "freq_end_hz or raise [firmware_state] steps_per_mm",
-              f, limits::kMarlinMinStepsPerSegment, min_len, a, axis_max_accel));
+              f, firmware::limits::kMarlinMinStepsPerSegment, min_len, a, axis_max_accel));
         moves.push_back({a, a * th * th / 4, a * th / 2});
         t += th;
         f = f0 + rate * t;
@@ -82,7 +82,7 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
     std::vector<std::string> prologue, restore;
     nlohmann::json changed = nlohmann::json::array();
     switch (d.firmware()) {
-      case Firmware::klipper:
+      case firmware::Firmware::klipper:
         // As Klipper's own TEST_RESONANCES (klippy/extras/resonance_tester.py:194-199):
         // MINIMUM_CRUISE_RATIO=0 and input shaping off.
         prologue.push_back("SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO=0");
@@ -91,7 +91,7 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
                                       num(profile.state.minimum_cruise_ratio, 3)));
         changed.push_back("minimum_cruise_ratio");
         break;
-      case Firmware::reprapfirmware:
+      case firmware::Firmware::reprapfirmware:
         // RRF joins a reversal at M566/2 (DDA.cpp MatchSpeeds, totalFraction 2): the lowest jerk
         // it accepts (Configuration.h MinimumJerk 0.1 mm/s) makes every half period rest to rest.
         prologue.push_back("M566 X6 Y6");
@@ -153,7 +153,7 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
     nlohmann::json changed = nlohmann::json::array();
     g.push_back("G28");
     g.push_back("G90");
-    if (d.firmware() != Firmware::klipper && accel > profile.state.max_accel_xy_mm_s2) {
+    if (d.firmware() != firmware::Firmware::klipper && accel > profile.state.max_accel_xy_mm_s2) {
       // Marlin and RepRapFirmware cap M204 by M201 (Marlin planner.cpp limit_and_warn, RRF
       // DDA.cpp): the rectangle's acceleration is allowed for the test and restored after.
       g.push_back(fmt::format("M201 X{} Y{}", num(accel, 0), num(accel, 0)));

@@ -11,12 +11,12 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/coverage_planner.hpp"
 #include "tunekit/protocols/flow_sweep_plan.hpp"
-#include "tunekit/protocols/gcode.hpp"
-#include "tunekit/protocols/trajectory.hpp"
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/trajectory.hpp"
 
 #include "experiment_gcode.hpp"
 
@@ -25,8 +25,8 @@ namespace tunekit::protocols::experiment_gcode {
 bool build_liquefier_experiment(const ExperimentRequest& r, Experiment& e) {
   const std::string& protocol = r.protocol;
   const auto& overrides = r.overrides;
-  const MachineProfile& profile = r.profile;
-  const Dialect& d = r.dialect;
+  const machine::MachineProfile& profile = r.profile;
+  const firmware::Dialect& d = r.dialect;
   const ProtocolLimits& limits = r.limits;
   auto& p = e.params;
   auto& g = e.gcode;

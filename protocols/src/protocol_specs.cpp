@@ -11,12 +11,12 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/coverage_planner.hpp"
 #include "tunekit/protocols/flow_sweep_plan.hpp"
-#include "tunekit/protocols/gcode.hpp"
-#include "tunekit/protocols/trajectory.hpp"
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/trajectory.hpp"
 
 namespace tunekit::protocols {
 namespace {

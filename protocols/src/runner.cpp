@@ -1,5 +1,5 @@
 #include "tunekit/protocols/runner.hpp"
-#include "tunekit/protocols/rrf_http.hpp"
+#include "tunekit/machine/rrf_http.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
 
 #include <algorithm>
@@ -12,15 +12,15 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/dialect.hpp"
-#include "tunekit/protocols/journal.hpp"
-#include "tunekit/protocols/klipper_api.hpp"
-#include "tunekit/protocols/klipper_sensors.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/firmware/dialect.hpp"
+#include "tunekit/machine/journal.hpp"
+#include "tunekit/machine/klipper_api.hpp"
+#include "tunekit/machine/klipper_sensors.hpp"
 #include "tunekit/protocols/safety.hpp"
-#include "tunekit/protocols/sim_camera.hpp"
-#include "tunekit/protocols/serial_transport.hpp"
-#include "tunekit/protocols/simulator.hpp"
+#include "tunekit/sim/sim_camera.hpp"
+#include "tunekit/machine/serial_transport.hpp"
+#include "tunekit/sim/simulator.hpp"
 
 namespace tunekit::protocols {
 namespace {
@@ -52,7 +52,7 @@ int parse_numbers(std::string_view s, double* out, int max) {
 /// Sensor samples -> CSV files of the run directory.
 class Recorder {
  public:
-  Recorder(Journal& j, std::string load_cell_file, std::string accel_file, std::string commanded_file)
+  Recorder(machine::Journal& j, std::string load_cell_file, std::string accel_file, std::string commanded_file)
       : j_(j),
         load_file_(std::move(load_cell_file)),
         accel_file_(std::move(accel_file)),
@@ -94,7 +94,7 @@ class Recorder {
   const std::string& commanded_file() const { return cmd_file_; }
 
  private:
-  Journal& j_;
+  machine::Journal& j_;
   std::string load_file_, accel_file_, cmd_file_;
   long load_ = 0, accel_ = 0;
 };
@@ -102,7 +102,7 @@ class Recorder {
 class Session {
  public:
   virtual ~Session() = default;
-  virtual FirmwareInfo identify() = 0;
+  virtual firmware::FirmwareInfo identify() = 0;
   virtual void send(const std::string& line) = 0;
   /// `window_s`: how long the recording is expected to last (RepRapFirmware's M956 takes a
   /// sample count, not a stop command).
@@ -113,28 +113,28 @@ class Session {
   virtual void finish() = 0;
   virtual void safe_state(const std::vector<std::string>& commands) = 0;
   virtual nlohmann::json stats() const = 0;
-  Dialect dialect;
-  FirmwareInfo firmware;
+  firmware::Dialect dialect;
+  firmware::FirmwareInfo firmware;
 };
 
 class GcodeSession : public Session {
  public:
-  GcodeSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo,
-               const std::atomic<bool>* abort, SendGuard& guard, std::string http)
+  GcodeSession(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
+               const machine::LinkOptions& lo, const std::atomic<bool>* abort, SendGuard& guard, std::string http)
       : t_(std::move(t)), link_(*t_, &j, lo), j_(j), rec_(rec), http_(std::move(http)) {
     link_.guard = &guard;
     link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
     link_.on_batch = [&j] { j.flush(); };
     link_.abort_flag = abort;
   }
-  FirmwareInfo identify() override {
+  firmware::FirmwareInfo identify() override {
     link_.reset_line_numbers();
-    FirmwareInfo f = parse_m115(link_.send("M115"));
+    firmware::FirmwareInfo f = firmware::parse_m115(link_.send("M115"));
     // Marlin's M115 names no FT_MOTION capability: ask M493 (a bare M493 only reports; a build
     // without FT_MOTION answers "Unknown command"). With fixed-time motion active the classic
     // shaper and smooth linear advance are bypassed, so settings go to M493.
-    if (f.firmware == Firmware::marlin) {
-      const auto ft = parse_m493_report(link_.send("M493"));
+    if (f.firmware == firmware::Firmware::marlin) {
+      const auto ft = firmware::parse_m493_report(link_.send("M493"));
       f.ft_motion = ft.present;
       f.ft_motion_active = ft.active;
     }
@@ -148,8 +148,9 @@ class GcodeSession : public Session {
       return;
     }
     // tunekit-sim streams with M4100 whichever firmware it follows.
-    const std::string cmd = firmware.sensor_stream() ? Dialect(Firmware::marlin).sensor_stream(sensor, on)
-                                                     : dialect.sensor_stream(sensor, on);
+    const std::string cmd = firmware.sensor_stream()
+                                ? firmware::Dialect(firmware::Firmware::marlin).sensor_stream(sensor, on)
+                                : dialect.sensor_stream(sensor, on);
     if (cmd.empty() || !firmware.sensor_stream())
       throw MachineError(
           fmt::format("the firmware ({}) does not stream {} data over this link (it reports no "
@@ -180,11 +181,11 @@ class GcodeSession : public Session {
   /// RepRapFirmware records its accelerometer into a file (M956); tunekit fetches it over the
   /// board's web server (rrf_http.hpp), the only way RepRapFirmware offers to read a file.
   bool rrf_file_accelerometer(const std::string& sensor) const {
-    return firmware.firmware == Firmware::reprapfirmware && sensor == "accelerometer" && !http_.empty();
+    return firmware.firmware == firmware::Firmware::reprapfirmware && sensor == "accelerometer" && !http_.empty();
   }
   void start_m956(double window_s) {
     // Accelerometers.cpp: M955 P0 reports "... samples at <rate>Hz ..."; M956 takes a count.
-    const auto rate = parse_m955_rate_hz(link_.send("M955 P0"));
+    const auto rate = machine::parse_m955_rate_hz(link_.send("M955 P0"));
     if (!rate)
       throw MachineError("RepRapFirmware reports no accelerometer (M955 P0): configure it with M955 first",
                          t_->describe());
@@ -197,22 +198,22 @@ class GcodeSession : public Session {
   }
   void fetch_m956() {
     link_.send("M400");
-    const auto addr = parse_http_address(http_);
+    const auto addr = machine::parse_http_address(http_);
     const std::string name = "0:/sys/accelerometer/" + m956_name_;
     std::string bytes;
     // The run ends after its sample count, in the board's time: poll, waiting G4 P250 between
     // reads (on a real board 250 ms; the simulator's clock runs with the dwell).
     const int polls = static_cast<int>(std::ceil(m956_window_s_ / 0.25)) + 40;
     for (int i = 0;; ++i) {
-      bytes = rrf_download(addr, name, std::chrono::milliseconds(5000));
-      if (rrf_accelerometer_file_complete(bytes)) break;
+      bytes = machine::rrf_download(addr, name, std::chrono::milliseconds(5000));
+      if (machine::rrf_accelerometer_file_complete(bytes)) break;
       if (i >= polls)
         throw MachineError(fmt::format("the accelerometer file {} did not finish within {:.1f} s", name, polls * 0.25),
                            addr.text());
       link_.send("G4 P250");
     }
     const std::string local = "rrf_" + m956_name_;
-    write_file_atomic(j_.path(local), bytes);
+    core::write_file_atomic(j_.path(local), bytes);
     m956_files_.push_back(local);
     // The file as RepRapFirmware wrote it, read by the RRF reader (g -> mm/s^2, time from the rate).
     ident::AccelInputOptions opts;
@@ -222,9 +223,9 @@ class GcodeSession : public Session {
     auto ch = [&](std::size_t c, std::size_t i) { return c < rec.channels.size() ? rec.channels[c][i] : 0.0; };
     for (std::size_t i = 0; i < n; ++i) rec_.accel(static_cast<double>(i) * dt, ch(0, i), ch(1, i), ch(2, i));
   }
-  std::unique_ptr<Transport> t_;
-  GcodeLink link_;
-  Journal& j_;
+  std::unique_ptr<machine::Transport> t_;
+  machine::GcodeLink link_;
+  machine::Journal& j_;
   Recorder& rec_;
   std::string http_;
   std::string m956_name_;
@@ -234,16 +235,16 @@ class GcodeSession : public Session {
 
 class KlipperSession : public Session {
  public:
-  KlipperSession(std::unique_ptr<Transport> t, Journal& j, Recorder& rec, const LinkOptions& lo, const Sensors& sensors,
-                 SendGuard& guard)
+  KlipperSession(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
+                 const machine::LinkOptions& lo, const machine::Sensors& sensors, SendGuard& guard)
       : client_(std::move(t), &j), j_(j), rec_(rec), timeout_(lo.timeout), sensors_(sensors), guard_(guard) {
     client_.on_message = [this](const nlohmann::json& m) { on_message(m); };
     client_.on_batch = [&j] { j.flush(); };
   }
-  FirmwareInfo identify() override {
+  firmware::FirmwareInfo identify() override {
     const auto r = client_.call("info", {{"client_info", {{"name", "tunekit"}}}}, timeout_);
-    FirmwareInfo f;
-    f.firmware = Firmware::klipper;
+    firmware::FirmwareInfo f;
+    f.firmware = firmware::Firmware::klipper;
     f.name = "Klipper";
     f.version = r.value("software_version", "");
     return f;
@@ -259,7 +260,8 @@ class KlipperSession : public Session {
     flush_script();
     if (sensor == "accelerometer") {
       if (on && !accel_subscribed_) {
-        const auto ep = klipper_accelerometer_endpoint(sensors_.accelerometer_chip, sensors_.accelerometer_name);
+        const auto ep =
+            machine::klipper_accelerometer_endpoint(sensors_.accelerometer_chip, sensors_.accelerometer_name);
         client_.call(ep.method, ep.params({{"tunekit", "accel"}}), timeout_);
         accel_subscribed_ = true;
       }
@@ -271,9 +273,9 @@ class KlipperSession : public Session {
       if (on && !load_subscribed_) {
         // The force stream, and the extruder's commanded motion on the same print-time clock:
         // the feed column is the trapq's extruder velocity at each force sample's time.
-        const auto lc = klipper_load_cell_endpoint(sensors_.load_cell_name);
+        const auto lc = machine::klipper_load_cell_endpoint(sensors_.load_cell_name);
         client_.call(lc.method, lc.params({{"tunekit", "load_cell"}}), timeout_);
-        const auto tq = klipper_trapq_endpoint("extruder");
+        const auto tq = machine::klipper_trapq_endpoint("extruder");
         client_.call(tq.method, tq.params({{"tunekit", "trapq_extruder"}}), timeout_);
         load_subscribed_ = true;
       }
@@ -317,11 +319,11 @@ class KlipperSession : public Session {
     const std::string tag = m.value("tunekit", "");
     const auto& p = m["params"];
     if (tag == "accel" && accel_on_) {
-      for (const auto& s : parse_accel_rows(p)) rec_.accel(s.time_s, s.x, s.y, s.z);
+      for (const auto& s : machine::parse_accel_rows(p)) rec_.accel(s.time_s, s.x, s.y, s.z);
     } else if (tag == "load_cell" && load_on_) {
       // Kept as received (nothing is lost if the run fails before the feed is known).
       auto& raw = j_.csv("load_cell_raw.csv", "time (s),force (N)");
-      for (const auto& s : parse_load_cell_rows(p, sensors_.load_cell_name)) {
+      for (const auto& s : machine::parse_load_cell_rows(p, sensors_.load_cell_name)) {
         raw.row(fmt::format("{:.6f},{:.5f}", s.time_s, s.force_N));
         load_.push_back(s);
         ++load_raw_;
@@ -341,15 +343,15 @@ class KlipperSession : public Session {
     pending_.clear();
     client_.call("gcode/script", {{"script", script}}, timeout_);
   }
-  KlipperApiClient client_;
-  Journal& j_;
+  machine::KlipperApiClient client_;
+  machine::Journal& j_;
   Recorder& rec_;
   std::chrono::milliseconds timeout_;
-  Sensors sensors_;
+  machine::Sensors sensors_;
   SendGuard& guard_;
   std::vector<std::string> pending_;
-  std::vector<KlipperLoadCellSample> load_;
-  TrapqTimeline extruder_;
+  std::vector<machine::KlipperLoadCellSample> load_;
+  machine::TrapqTimeline extruder_;
   long load_raw_ = 0;
   bool accel_subscribed_ = false, accel_on_ = false, load_subscribed_ = false, load_on_ = false;
 };
@@ -381,12 +383,12 @@ std::string join_lines(const std::vector<std::string>& lines) {
 
 RunResult run_experiment(const RunOptions& o) {
   const bool sim = o.machine == "sim";
-  const MachineProfile profile = sim ? builtin_sim_profile() : load_machine_profile(o.machine);
-  const SimConfig sim_cfg = SimConfig::from_options(o.sim_options);  // bad options fail before anything else
+  const machine::MachineProfile profile = sim ? builtin_sim_profile() : machine::load_machine_profile(o.machine);
+  const sim::SimConfig sim_cfg = sim::SimConfig::from_options(o.sim_options);  // bad options fail before anything else
   if (!sim && o.port.empty()) throw InputError("--port is needed with a machine profile (or use --machine sim)");
   // The simulator follows the firmware named by its "firmware=" option (Marlin by default).
   const std::string fw_name = sim ? sim_cfg.firmware : profile.firmware;
-  const Dialect dialect(fw_name.empty() ? Firmware::marlin : firmware_from_name(fw_name));
+  const firmware::Dialect dialect(fw_name.empty() ? firmware::Firmware::marlin : firmware::firmware_from_name(fw_name));
 
   RunResult res;
   res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect, o.limits);
@@ -400,13 +402,13 @@ RunResult run_experiment(const RunOptions& o) {
 
   const std::string stamp = utc_stamp();
   res.run_dir = o.run_dir.empty() ? unique_dir(fmt::format("{}/{}-{}", o.runs_root, o.protocol, stamp)) : o.run_dir;
-  Journal journal(res.run_dir);
+  machine::Journal journal(res.run_dir);
   const std::string axis_tag = res.experiment.axis.empty() ? "xy" : res.experiment.axis;
   const std::string tag = o.file_tag.empty() ? stamp : o.file_tag;
   Recorder rec(
       journal, o.protocol == "liquefier-step" || o.protocol == "liquefier-flow-sweep" ? "step.csv" : "feed_force.csv",
       fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag));
-  write_file_atomic(journal.path("protocol.gcode"), join_lines(res.gcode));
+  core::write_file_atomic(journal.path("protocol.gcode"), join_lines(res.gcode));
   res.files["journal"] = journal.path("journal.jsonl");
   res.files["gcode"] = journal.path("protocol.gcode");
   res.files["summary"] = journal.path("run.json");
@@ -416,20 +418,20 @@ RunResult run_experiment(const RunOptions& o) {
                          {"machine", sim ? "sim" : o.machine},
                          {"profile", profile.name},
                          {"started_utc", stamp}};
-  std::unique_ptr<SimPtyServer> server;
+  std::unique_ptr<sim::SimPtyServer> server;
   std::string port = o.port;
   if (sim) {
-    write_file_atomic(journal.path("truth.json"), sim_cfg.truth().dump(2) + "\n");
+    core::write_file_atomic(journal.path("truth.json"), sim_cfg.truth().dump(2) + "\n");
     res.files["truth"] = journal.path("truth.json");
     if (port.empty()) {
-      std::function<void(Simulator&)> setup;
+      std::function<void(sim::Simulator&)> setup;
       if (o.sim_bed)
-        setup = [bed = o.sim_bed](Simulator& s) {
+        setup = [bed = o.sim_bed](sim::Simulator& s) {
           s.deposit_sink = [bed](double t, const std::array<double, 4>& pos, double v, double q) {
             bed->deposit(t, pos, v, q);
           };
         };
-      server = std::make_unique<SimPtyServer>(sim_cfg, setup);
+      server = std::make_unique<sim::SimPtyServer>(sim_cfg, setup);
       port = server->path();
     }
   }
@@ -444,16 +446,16 @@ RunResult run_experiment(const RunOptions& o) {
     server->stop();
     server->wait();
     const auto received = server->sim().received();
-    write_file_atomic(journal.path("sim_received.gcode"), join_lines(received));
-    write_file_atomic(journal.path("sim_stats.json"),
-                      nlohmann::json{{"lines_received", received.size()},
-                                     {"accel_samples_sent", server->sim().accel_samples_sent()},
-                                     {"load_cell_samples_sent", server->sim().load_cell_samples_sent()},
-                                     {"disconnected", server->disconnected()},
-                                     {"halted", server->sim().halted()},
-                                     {"machine_time_s", server->sim().time_s()}}
-                              .dump(2) +
-                          "\n");
+    core::write_file_atomic(journal.path("sim_received.gcode"), join_lines(received));
+    core::write_file_atomic(journal.path("sim_stats.json"),
+                            nlohmann::json{{"lines_received", received.size()},
+                                           {"accel_samples_sent", server->sim().accel_samples_sent()},
+                                           {"load_cell_samples_sent", server->sim().load_cell_samples_sent()},
+                                           {"disconnected", server->disconnected()},
+                                           {"halted", server->sim().halted()},
+                                           {"machine_time_s", server->sim().time_s()}}
+                                    .dump(2) +
+                                "\n");
     res.files["sim_received"] = journal.path("sim_received.gcode");
   };
   auto list_files = [&] {
@@ -467,15 +469,15 @@ RunResult run_experiment(const RunOptions& o) {
   try {
     progress(fmt::format("connecting to {}", port));
     const bool api = port.rfind("unix:", 0) == 0;
-    auto transport = open_transport(port, o.baud);
+    auto transport = machine::open_transport(port, o.baud);
     if (api)
       session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors, guard);
     else
       session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag, guard,
                                                server ? server->http_url() : profile.http_address);
     session->firmware = session->identify();
-    session->dialect =
-        Dialect(session->firmware.firmware == Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
+    session->dialect = firmware::Dialect(
+        session->firmware.firmware == firmware::Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
     journal.event("firmware", {{"name", session->firmware.name},
                                {"version", session->firmware.version},
                                {"dialect", to_string(session->dialect.firmware())},
@@ -487,7 +489,7 @@ RunResult run_experiment(const RunOptions& o) {
     // Fail before heating and homing when the link cannot record what the protocol needs.
     for (const auto& sensor : res.experiment.sensors)
       if (!session->can_record(sensor)) {
-        const bool rrf = session->firmware.firmware == Firmware::reprapfirmware && sensor == "accelerometer";
+        const bool rrf = session->firmware.firmware == firmware::Firmware::reprapfirmware && sensor == "accelerometer";
         throw MachineError(
             fmt::format(
                 "the firmware ({}) cannot record {} data over this link ({}); nothing but M115 was sent",
@@ -547,7 +549,7 @@ RunResult run_experiment(const RunOptions& o) {
     finish_sim();
     list_files();
     summary["files"] = res.files;
-    write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
+    core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
     throw MachineError(fmt::format("{} (the partial run is kept in {})", e.message(), res.run_dir), e.location());
   }
   journal.event("end", {{"load_cell_samples", rec.load_samples()}, {"accel_samples", rec.accel_samples()}});
@@ -559,7 +561,7 @@ RunResult run_experiment(const RunOptions& o) {
   finish_sim();
   list_files();
   summary["files"] = res.files;
-  write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
+  core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
   res.status = "complete";
   res.summary = summary;
   return res;

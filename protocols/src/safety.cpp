@@ -8,7 +8,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/trajectory.hpp"
+#include "tunekit/machine/trajectory.hpp"
 
 namespace tunekit::protocols {
 namespace {
@@ -41,7 +41,7 @@ bool value_not_finite(std::string_view v) {
 
 /// The G-code body without N<line>, *<checksum> and comments.
 std::string gcode_body(std::string_view line) {
-  std::string text = split_numbered(line).body;
+  std::string text = machine::split_numbered(line).body;
   if (const auto semi = text.find(';'); semi != std::string::npos) text.resize(semi);
   for (auto open = text.find('('); open != std::string::npos; open = text.find('(')) {
     const auto close = text.find(')', open);
@@ -50,8 +50,8 @@ std::string gcode_body(std::string_view line) {
   return text;
 }
 
-void home_to_minimums(GcodeInterpreter& in, const MachineProfile& p) {
-  GcodeWords home;
+void home_to_minimums(machine::GcodeInterpreter& in, const machine::MachineProfile& p) {
+  machine::GcodeWords home;
   home.command = "G92";
   for (const char* a : {"x", "y", "z"})
     if (p.axes.count(a)) home.args[std::string(1, static_cast<char>(std::toupper(a[0])))] = p.axes.at(a).min_mm;
@@ -60,7 +60,8 @@ void home_to_minimums(GcodeInterpreter& in, const MachineProfile& p) {
 
 /// Temperature, feed-rate and acceleration settings of one line against the profile.
 template <class Add>
-void check_settings(const GcodeWords& w, const GcodeInterpreter& in, const MachineProfile& p, Add add) {
+void check_settings(const machine::GcodeWords& w, const machine::GcodeInterpreter& in, const machine::MachineProfile& p,
+                    Add add) {
   if ((w.command == "M104" || w.command == "M109") && in.hotend_c) {
     if (*in.hotend_c > p.temperature.hotend_max_c + kLimitTolerance)
       add(fmt::format("hot-end temperature {:g} degC exceeds hotend_max_c {:g}", *in.hotend_c,
@@ -81,9 +82,9 @@ void check_settings(const GcodeWords& w, const GcodeInterpreter& in, const Machi
 
 /// Travel of one move against the profile (the part of the check the send guard repeats).
 template <class Add>
-void check_travel(const GcodeMove& move, const MachineProfile& p, Add add) {
+void check_travel(const machine::GcodeMove& move, const machine::MachineProfile& p, Add add) {
   for (std::size_t k = 0; k < 3; ++k) {
-    const std::string name = kAxisNames[k];
+    const std::string name = machine::kAxisNames[k];
     const double d = move.end[k] - move.start[k];
     if (std::abs(d) <= 1e-12 && !p.axes.count(name)) continue;
     if (!p.axes.count(name)) {
@@ -151,23 +152,23 @@ std::optional<std::string> non_finite_word(std::string_view line) {
 }
 
 double estimate_gcode_duration_s(const std::vector<std::string>& gcode) {
-  GcodeInterpreter in;
+  machine::GcodeInterpreter in;
   double t = 0;
   for (const auto& l : gcode) {
-    const auto w = parse_gcode(l);
+    const auto w = machine::parse_gcode(l);
     if (!w) continue;
     const auto m = in.apply(*w);
     if (m) {
       if (!(m->feed_mm_s > 0) || !(m->accel_mm_s2 > 0) || !std::isfinite(m->length_mm()))
         return std::numeric_limits<double>::infinity();
-      t += Profile::move(m->length_mm(), 0, m->feed_mm_s, 0, m->accel_mm_s2, kGateJerkMmS3).duration_s();
+      t += machine::Profile::move(m->length_mm(), 0, m->feed_mm_s, 0, m->accel_mm_s2, kGateJerkMmS3).duration_s();
     }
     t += in.dwell_s();
   }
   return t;
 }
 
-std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, const MachineProfile& p,
+std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, const machine::MachineProfile& p,
                                       const std::vector<std::string>& sensors, const ProtocolLimits& limits) {
   std::vector<Violation> out;
   for (const auto& s : sensors) {
@@ -190,7 +191,7 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
     out.push_back({0, "", fmt::format("{} bytes of G-code exceed the limit of {} bytes", bytes, limits.max_bytes)});
   if (!out.empty() && (gcode.size() > limits.max_lines || bytes > limits.max_bytes)) return out;
 
-  GcodeInterpreter in;
+  machine::GcodeInterpreter in;
   home_to_minimums(in, p);
   const double tol = kLimitTolerance;
   for (std::size_t i = 0; i < gcode.size(); ++i) {
@@ -199,7 +200,7 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
       add(fmt::format("'{}' is not a finite number", *bad));
       continue;
     }
-    const auto w = parse_gcode(gcode[i]);
+    const auto w = machine::parse_gcode(gcode[i]);
     if (!w) continue;
     if (w->command == "G28") {
       home_to_minimums(in, p);
@@ -211,7 +212,7 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
     check_travel(*move, p, add);
     const auto u = move->unit();
     for (std::size_t k = 0; k < 3; ++k) {
-      const std::string name = kAxisNames[k];
+      const std::string name = machine::kAxisNames[k];
       if (!p.axes.count(name)) continue;
       const auto& a = p.axes.at(name);
       const double v = move->feed_mm_s * std::abs(u[k]);
@@ -246,7 +247,7 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
   return out;
 }
 
-void require_within_limits(const std::vector<std::string>& gcode, const MachineProfile& profile,
+void require_within_limits(const std::vector<std::string>& gcode, const machine::MachineProfile& profile,
                            const std::vector<std::string>& sensors, const ProtocolLimits& limits) {
   const auto v = check_protocol(gcode, profile, sensors, limits);
   if (v.empty()) return;
@@ -263,13 +264,13 @@ void require_within_limits(const std::vector<std::string>& gcode, const MachineP
   throw InputError(msg, profile.source_path);
 }
 
-SendGuard::SendGuard(const MachineProfile& profile) : profile_(profile) { home_to_minimums(state_, profile_); }
+SendGuard::SendGuard(const machine::MachineProfile& profile) : profile_(profile) { home_to_minimums(state_, profile_); }
 
 std::optional<std::string> SendGuard::refuse(std::string_view line) {
   if (const auto bad = non_finite_word(line)) return fmt::format("'{}' is not a finite number", *bad);
-  const auto w = parse_gcode(line);
+  const auto w = machine::parse_gcode(line);
   if (!w) return std::nullopt;
-  GcodeInterpreter next = state_;
+  machine::GcodeInterpreter next = state_;
   if (w->command == "G28") {
     home_to_minimums(next, profile_);
   } else {

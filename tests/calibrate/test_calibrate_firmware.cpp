@@ -11,11 +11,11 @@
 
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 
 namespace {
 
-namespace tkp = tunekit::protocols;
+namespace tkp = tunekit::firmware;
 
 struct FirmwareRun {
   std::string dir;

@@ -11,8 +11,8 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
 #include "tunekit/ident/delta_kinematics.hpp"
-#include "tunekit/protocols/delta_export.hpp"
-#include "tunekit/protocols/delta_probe_sim.hpp"
+#include "tunekit/firmware/delta_export.hpp"
+#include "tunekit/sim/delta_probe_sim.hpp"
 
 using namespace tunekit;
 
@@ -69,7 +69,7 @@ TEST_CASE("delta kinematics: carriage height at the centre is z + sqrt(L^2 - R^2
 
 TEST_CASE("delta probe model: a correct geometry probes flat, a high endstop reads low towards its tower") {
   const auto g = nominal_delta();
-  for (const auto& p : protocols::delta_probe_pattern(80, 2, 6))
+  for (const auto& p : sim::delta_probe_pattern(80, 2, 6))
     CHECK(ident::delta_probe_height(g, g, p.x_mm, p.y_mm) == Approx(0).margin(1e-9));
   auto t = g;
   // Tower C (90 deg, +y) stops 0.3 mm higher: the nozzle stands higher than commanded, most
@@ -84,8 +84,8 @@ TEST_CASE("delta probe model: a correct geometry probes flat, a high endstop rea
 TEST_CASE("delta fit: noiseless probes give back the truth for 6 and 9 factors") {
   const auto n = nominal_delta();
   auto t = true_delta();
-  const auto pts = protocols::delta_probe_pattern(85, 2, 8);
-  auto probes = protocols::simulate_delta_probes(n, t, pts, 0.0, 1);
+  const auto pts = sim::delta_probe_pattern(85, 2, 8);
+  auto probes = sim::simulate_delta_probes(n, t, pts, 0.0, 1);
   const auto cal = ident::fit_delta_calibration(n, probes, 6);
   CHECK(cal.fit.value("endstop_a") == Approx(0.35).margin(1e-6));
   CHECK(cal.fit.value("delta_radius") == Approx(104.2).margin(1e-6));
@@ -97,8 +97,8 @@ TEST_CASE("delta fit: noiseless probes give back the truth for 6 and 9 factors")
   t.rod_mm = {216.0, 216.0, 216.0};
   t.tilt_x = 0.002;
   t.tilt_y = -0.001;
-  const auto pts3 = protocols::delta_probe_pattern(85, 3, 12);
-  probes = protocols::simulate_delta_probes(n, t, pts3, 0.0, 1);
+  const auto pts3 = sim::delta_probe_pattern(85, 3, 12);
+  probes = sim::simulate_delta_probes(n, t, pts3, 0.0, 1);
   const auto cal9 = ident::fit_delta_calibration(n, probes, 9);
   CHECK(cal9.fit.value("diagonal_rod") == Approx(216.0).margin(1e-4));
   CHECK(cal9.fit.value("tilt_x") == Approx(0.2).margin(1e-5));
@@ -108,14 +108,14 @@ TEST_CASE("delta fit: noiseless probes give back the truth for 6 and 9 factors")
 TEST_CASE("delta fit: 6-factor 95 % intervals cover each true error in 90-99 % of 200 noise draws") {
   const auto n = nominal_delta();
   const auto t = true_delta();
-  const auto pts = protocols::delta_probe_pattern(85, 2, 8);
+  const auto pts = sim::delta_probe_pattern(85, 2, 8);
   const std::vector<std::pair<std::string, double>> truth = {{"endstop_a", 0.35}, {"endstop_b", -0.20},
                                                              {"endstop_c", 0.10}, {"delta_radius", 104.2},
                                                              {"angle_a", 210.4},  {"angle_b", 329.7}};
   std::vector<int> covered(truth.size(), 0);
   constexpr int draws = 200;
   for (int d = 0; d < draws; ++d) {
-    const auto probes = protocols::simulate_delta_probes(n, t, pts, 0.02, 1000 + static_cast<std::uint64_t>(d));
+    const auto probes = sim::simulate_delta_probes(n, t, pts, 0.02, 1000 + static_cast<std::uint64_t>(d));
     const auto cal = ident::fit_delta_calibration(n, probes, 6);
     for (std::size_t k = 0; k < truth.size(); ++k) {
       const auto& q = cal.fit.param(truth[k].first);
@@ -139,29 +139,28 @@ TEST_CASE("delta fit: too few points and unsupported factor counts are input err
 TEST_CASE("delta export: Klipper, Marlin and RepRapFirmware text byte-exact against fixtures") {
   auto g = true_delta();
   g.rod_mm = {215.25, 215.25, 215.25};
-  CHECK(protocols::delta_klipper_save_config(g) == fixture("klipper_save_config.txt"));
-  CHECK(protocols::delta_marlin_gcode(g) == fixture("marlin.gcode"));
-  CHECK(protocols::delta_rrf_gcode(g, 85.0) == fixture("rrf_config_override.g"));
+  CHECK(firmware::delta_klipper_save_config(g) == fixture("klipper_save_config.txt"));
+  CHECK(firmware::delta_marlin_gcode(g) == fixture("marlin.gcode"));
+  CHECK(firmware::delta_rrf_gcode(g, 85.0) == fixture("rrf_config_override.g"));
 }
 
 TEST_CASE("delta export: values a firmware cannot hold are refused") {
   auto g = true_delta();
   g.tilt_x = 0.001;
-  CHECK_THROWS_AS(protocols::delta_klipper_save_config(g), InputError);
-  CHECK_THROWS_AS(protocols::delta_marlin_gcode(g), InputError);
-  CHECK_NOTHROW(protocols::delta_rrf_gcode(g, 85.0));
+  CHECK_THROWS_AS(firmware::delta_klipper_save_config(g), InputError);
+  CHECK_THROWS_AS(firmware::delta_marlin_gcode(g), InputError);
+  CHECK_NOTHROW(firmware::delta_rrf_gcode(g, 85.0));
   g.tilt_x = 0;
   g.rod_mm[1] = 216.0;
-  CHECK_THROWS_AS(protocols::delta_marlin_gcode(g), InputError);
+  CHECK_THROWS_AS(firmware::delta_marlin_gcode(g), InputError);
   g.radius_mm = std::nan("");
-  CHECK_THROWS_AS(protocols::delta_rrf_gcode(g, 85.0), InputError);
-  CHECK_THROWS_AS(protocols::delta_rrf_gcode(true_delta(), 0.0), InputError);
+  CHECK_THROWS_AS(firmware::delta_rrf_gcode(g, 85.0), InputError);
+  CHECK_THROWS_AS(firmware::delta_rrf_gcode(true_delta(), 0.0), InputError);
 }
 
 TEST_CASE("delta CLI: fits a probe CSV and exports, listed in --help") {
   const auto n = nominal_delta();
-  const auto probes =
-      protocols::simulate_delta_probes(n, true_delta(), protocols::delta_probe_pattern(85, 2, 8), 0.01, 7);
+  const auto probes = sim::simulate_delta_probes(n, true_delta(), sim::delta_probe_pattern(85, 2, 8), 0.01, 7);
   std::ostringstream csv;
   csv << "x_mm,y_mm,z_mm\n";
   for (const auto& p : probes) csv << p.x_mm << "," << p.y_mm << "," << p.z_mm << "\n";

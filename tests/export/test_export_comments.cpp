@@ -5,10 +5,10 @@
 #include <string>
 
 #include "test_support.hpp"
-#include "tunekit/protocols/config_edit.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/firmware/config_edit.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 
-using tunekit::protocols::replace_trailing_comment;
+using tunekit::firmware::replace_trailing_comment;
 
 TEST_CASE("replace_trailing_comment: a changed value's comment becomes the note, other comments stay") {
   const std::vector<std::string> klipper{"#", ";"};
@@ -49,9 +49,9 @@ TEST_CASE("tunekit export over a hand-tuned pressure_advance with a comment writ
         std::string::npos);
   CHECK(after.find("max_extrude_only_distance: 100 ; unrelated, unchanged\n") != std::string::npos);
   // Without a note (the library default) the comment is kept as before.
-  tunekit::protocols::CompensatorSettings s;
+  tunekit::firmware::CompensatorSettings s;
   s.pa_k_s = 0.041;
-  const auto kept = tunekit::protocols::export_config_text(tunekit::protocols::ExportFirmware::klipper,
-                                                           "[extruder]\npressure_advance: 0.05 ; x\n", "p.cfg", s);
+  const auto kept = tunekit::firmware::export_config_text(tunekit::firmware::ExportFirmware::klipper,
+                                                          "[extruder]\npressure_advance: 0.05 ; x\n", "p.cfg", s);
   CHECK(kept.updated == "[extruder]\npressure_advance: 0.041 ; x\n");
 }

@@ -10,11 +10,11 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/config_edit.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/firmware/config_edit.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 
 using namespace tunekit;
-using namespace tunekit::protocols;
+using namespace tunekit::firmware;
 
 namespace {
 

@@ -11,9 +11,9 @@
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
-#include "tunekit/protocols/config_edit.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/firmware/config_edit.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 
 using namespace tunekit;
 using Catch::Detail::Approx;
@@ -23,7 +23,7 @@ namespace {
 std::string fixture(const std::string& name) { return tunekit::test::dataset("../tests/export/fixtures/" + name); }
 
 ident::AdvanceInputs sim_inputs() {
-  const auto prof = protocols::load_machine_profile(tunekit::test::dataset("machines/sim.toml"));
+  const auto prof = machine::load_machine_profile(tunekit::test::dataset("machines/sim.toml"));
   ident::AdvanceInputs in;
   in.filament_area_mm2 = prof.filament_area_mm2();
   in.line_area_mm2 = prof.line_area_mm2();
@@ -67,14 +67,14 @@ TEST_CASE("Advance design: K = tau, dead time reported, window from the machine 
   for (const auto& n : d.notes) theta_note |= n.find("not cancelled") != std::string::npos;
   CHECK(theta_note);
   // What each firmware takes: rounded up, never below the bound.
-  const auto klipper = protocols::smoothing_time_for(protocols::ExportFirmware::klipper, d);
-  const auto marlin = protocols::smoothing_time_for(protocols::ExportFirmware::marlin, d);
+  const auto klipper = firmware::smoothing_time_for(firmware::ExportFirmware::klipper, d);
+  const auto marlin = firmware::smoothing_time_for(firmware::ExportFirmware::marlin, d);
   REQUIRE(klipper);
   REQUIRE(marlin);
   CHECK(*klipper >= d.window_triangular_s);
   CHECK(*klipper < d.window_triangular_s + 1e-4);
   CHECK(*marlin >= d.window_box_s);
-  CHECK_FALSE(protocols::smoothing_time_for(protocols::ExportFirmware::rrf, d));
+  CHECK_FALSE(firmware::smoothing_time_for(firmware::ExportFirmware::rrf, d));
 }
 
 TEST_CASE("Flow-dependent advance from operating points and from a rheology prediction") {
@@ -141,11 +141,11 @@ TEST_CASE("tunekit export: preview by default, --write applies with a backup, a 
   in.points = {{1.0, 0.96, 0.06, 0.035}, {2.0, 0.95, 0.04, 0.03}, {4.0, 0.93, 0.03, 0.025}};
   in.tau_s = 0.045;
   const auto d = ident::design_advance(in);
-  const auto smooth = protocols::smoothing_time_for(protocols::ExportFirmware::klipper, d);
+  const auto smooth = firmware::smoothing_time_for(firmware::ExportFirmware::klipper, d);
   REQUIRE(smooth);
-  const std::string k_line = "pressure_advance: " + protocols::format_number(d.k_s, 4) + "   ;";
+  const std::string k_line = "pressure_advance: " + firmware::format_number(d.k_s, 4) + "   ;";
   CHECK(preview.out.find("+" + k_line) != std::string::npos);
-  CHECK(preview.out.find("+pressure_advance_smooth_time: " + protocols::format_number(*smooth, 4) + "\n") !=
+  CHECK(preview.out.find("+pressure_advance_smooth_time: " + firmware::format_number(*smooth, 4) + "\n") !=
         std::string::npos);
 
   auto args = base;

@@ -11,10 +11,10 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 
 using namespace tunekit;
-using namespace tunekit::protocols;
+using namespace tunekit::firmware;
 
 TEST_CASE("Marlin: a per-extruder ADVANCE_K list keeps the other extruders' values") {
   const std::string cfg = "#define LIN_ADVANCE\n  #define ADVANCE_K { 0.22, 0.30 }    // (mm) per extruder\n";

@@ -17,11 +17,11 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 
 using namespace tunekit;
-using namespace tunekit::protocols;
+using namespace tunekit::firmware;
 
 namespace {
 
@@ -205,7 +205,7 @@ TEST_CASE("RepRapFirmware: config-override.g setting M572 after config.g's line 
 }
 
 TEST_CASE("every bound of the limits tables: in range accepted, out of range refused with bound and source") {
-  using namespace tunekit::protocols::limits;
+  using namespace tunekit::firmware::limits;
   // Klipper's per-shaper damping maxima (klippy/extras/shaper_defs.py:146-159).
   for (const auto& sh : kKlipperShapers) {
     INFO(sh.firmware_name);
@@ -276,7 +276,7 @@ TEST_CASE("every bound of the limits tables: in range accepted, out of range ref
 }
 
 TEST_CASE("the firmwares' shaper lists") {
-  using namespace tunekit::protocols::limits;
+  using namespace tunekit::firmware::limits;
   CHECK(shaper_list(ExportFirmware::klipper) == "zv, mzv, zvd, ei, 2hump_ei, 3hump_ei");
   CHECK(shaper_list(ExportFirmware::marlin) == "zv");
   CHECK(shaper_list(ExportFirmware::marlin, true) == "ZV, ZVD, ZVDD, ZVDDD, EI, 2HEI, 3HEI, MZV");

@@ -6,7 +6,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/flow_advance.hpp"
-#include "tunekit/protocols/config_edit.hpp"
+#include "tunekit/firmware/config_edit.hpp"
 
 using namespace tunekit;
 using Catch::Detail::Approx;
@@ -28,7 +28,7 @@ double kalico_reference(const std::string& model, double la, double off, double 
 }
 
 /// The values as the export writes them (6 decimals, Kalico's own %.6f precision).
-double written(double v) { return std::stod(protocols::format_number(v, 6)); }
+double written(double v) { return std::stod(firmware::format_number(v, 6)); }
 
 ident::FlowAdvanceInputs power_law_levels(double a, double b, bool with_ci) {
   ident::FlowAdvanceInputs in;

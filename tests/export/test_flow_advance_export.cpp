@@ -13,9 +13,9 @@
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/flow_advance.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
-#include "tunekit/protocols/gcode_advance.hpp"
-#include "tunekit/protocols/orca_profile.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/firmware/gcode_advance.hpp"
+#include "tunekit/firmware/orca_profile.hpp"
 
 using namespace tunekit;
 
@@ -79,15 +79,15 @@ TEST_CASE("kalico export: the nonlinear model replaces pressure_advance in [extr
   const std::string cfg =
       "[printer]\nkinematics: corexy\n\n[extruder]\nstep_pin: PA1\npressure_advance: 0.04  # old\n"
       "pressure_advance_smooth_time: 0.03\n\n[heater_bed]\nheater_pin: PB1\n";
-  protocols::CompensatorSettings s;
-  protocols::KalicoAdvanceSetting k;
+  firmware::CompensatorSettings s;
+  firmware::KalicoAdvanceSetting k;
   k.model = "recipr";
   k.linear_advance_s = 0.012;
   k.nonlinear_offset_mm = 0.11;
   k.linearization_velocity_mm_s = 1.7;
   k.time_offset_s = 0.004;
   s.kalico = k;
-  const auto r = protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", s);
+  const auto r = firmware::export_config_text(firmware::ExportFirmware::kalico, cfg, "printer.cfg", s);
   CHECK(r.updated ==
         "[printer]\nkinematics: corexy\n\n[extruder]\nstep_pin: PA1\n#pressure_advance: 0.04  # old\n"
         "pressure_advance_smooth_time: 0.03\npressure_advance_model: recipr\nlinear_advance: 0.012\n"
@@ -96,44 +96,41 @@ TEST_CASE("kalico export: the nonlinear model replaces pressure_advance in [extr
   CHECK(r.gcode.find("SET_PRESSURE_ADVANCE MODEL=recipr ADVANCE=0.012 OFFSET=0.11 VELOCITY=1.7 TIME_OFFSET=0.004") !=
         std::string::npos);
   // Idempotent: a second run changes nothing.
-  CHECK_FALSE(protocols::export_config_text(protocols::ExportFirmware::kalico, r.updated, "printer.cfg", s).changed());
+  CHECK_FALSE(firmware::export_config_text(firmware::ExportFirmware::kalico, r.updated, "printer.cfg", s).changed());
   // Kalico's bounds.
   auto bad = s;
   bad.kalico->time_offset_s = 0.25;
-  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad),
-                  InputError);
+  CHECK_THROWS_AS(firmware::export_config_text(firmware::ExportFirmware::kalico, cfg, "printer.cfg", bad), InputError);
   bad = s;
   bad.kalico->linearization_velocity_mm_s = 0;
-  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad),
-                  InputError);
+  CHECK_THROWS_AS(firmware::export_config_text(firmware::ExportFirmware::kalico, cfg, "printer.cfg", bad), InputError);
   bad = s;
   bad.kalico->nonlinear_offset_mm = std::nan("");
-  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::kalico, cfg, "printer.cfg", bad),
-                  InputError);
-  CHECK_THROWS_AS(protocols::export_config_text(protocols::ExportFirmware::klipper, cfg, "printer.cfg", s), InputError);
+  CHECK_THROWS_AS(firmware::export_config_text(firmware::ExportFirmware::kalico, cfg, "printer.cfg", bad), InputError);
+  CHECK_THROWS_AS(firmware::export_config_text(firmware::ExportFirmware::klipper, cfg, "printer.cfg", s), InputError);
 }
 
 TEST_CASE("orca profile: the model text is sorted by flow and rounded as OrcaSlicer writes it") {
-  CHECK(protocols::orca_model_text(sample_table()) == "0.059,1.5,5000\n0.05,4.25,5000\n0.041,9,5000\n0.037,16,5000");
+  CHECK(firmware::orca_model_text(sample_table()) == "0.059,1.5,5000\n0.05,4.25,5000\n0.041,9,5000\n0.037,16,5000");
   auto t = sample_table();
   t[0].k_s = std::nan("");
-  CHECK_THROWS_AS(protocols::orca_model_text(t), InputError);
+  CHECK_THROWS_AS(firmware::orca_model_text(t), InputError);
   t = sample_table();
   t[1].flow_mm3_s = 9.001;  // coincides with 9.004 after rounding
-  CHECK_THROWS_AS(protocols::orca_model_text(t), InputError);
+  CHECK_THROWS_AS(firmware::orca_model_text(t), InputError);
 }
 
 TEST_CASE("orca profile merge on a published OrcaSlicer filament profile keeps every untouched key byte-identical") {
   const std::string path = tunekit::test::dataset("slicer/orca_phrozen_pla_arco_0.4.json");
   const std::string original = read_bytes(path);
   REQUIRE(original.size() == 5544);
-  protocols::OrcaAdvanceProfile p;
+  firmware::OrcaAdvanceProfile p;
   p.table = sample_table();
   p.fallback_k_s = 0.0452;
-  const auto r = protocols::merge_orca_filament_profile(original, p, path);
+  const auto r = firmware::merge_orca_filament_profile(original, p, path);
 
-  const auto before = protocols::json_top_level_members(original, path);
-  const auto after = protocols::json_top_level_members(r.text, path);
+  const auto before = firmware::json_top_level_members(original, path);
+  const auto after = firmware::json_top_level_members(r.text, path);
   std::map<std::string, std::string> after_map(after.begin(), after.end());
   const std::set<std::string> touched = {"adaptive_pressure_advance", "adaptive_pressure_advance_model",
                                          "enable_pressure_advance", "pressure_advance"};
@@ -163,34 +160,34 @@ TEST_CASE("orca profile merge on a published OrcaSlicer filament profile keeps e
   const auto first = original.find("\"adaptive_pressure_advance_model\"");
   CHECK(r.text.compare(0, first, original, 0, first) == 0);
   // Merging again changes nothing.
-  CHECK(protocols::merge_orca_filament_profile(r.text, p, path).text == r.text);
+  CHECK(firmware::merge_orca_filament_profile(r.text, p, path).text == r.text);
   // OrcaSlicer's own table in this profile has the format written here (3 / <=2 / 0 decimals).
   CHECK(original.find("0.042,0.72,5000\\n0.044,1.44,5000") != std::string::npos);
 }
 
 TEST_CASE("orca profile: a new profile, and bad inputs") {
-  protocols::OrcaAdvanceProfile p;
+  firmware::OrcaAdvanceProfile p;
   p.table = sample_table();
   p.fallback_k_s = 0.045;
-  const auto j = nlohmann::json::parse(protocols::new_orca_filament_profile(p, "PLA tunekit", "Generic PLA"));
+  const auto j = nlohmann::json::parse(firmware::new_orca_filament_profile(p, "PLA tunekit", "Generic PLA"));
   CHECK(j["type"] == "filament");
   CHECK(j["inherits"] == "Generic PLA");
   CHECK(j["adaptive_pressure_advance"][0] == "1");
-  CHECK_THROWS_AS(protocols::merge_orca_filament_profile("[1, 2]", p, "x.json"), InputError);
-  CHECK_THROWS_AS(protocols::merge_orca_filament_profile("{\"type\": \"process\", \"a\": 1}", p, "x.json"), InputError);
-  CHECK_THROWS_AS(protocols::merge_orca_filament_profile("{\"a\": ", p, "x.json"), InputError);
+  CHECK_THROWS_AS(firmware::merge_orca_filament_profile("[1, 2]", p, "x.json"), InputError);
+  CHECK_THROWS_AS(firmware::merge_orca_filament_profile("{\"type\": \"process\", \"a\": 1}", p, "x.json"), InputError);
+  CHECK_THROWS_AS(firmware::merge_orca_filament_profile("{\"a\": ", p, "x.json"), InputError);
   p.fallback_k_s = -1;
-  CHECK_THROWS_AS(protocols::merge_orca_filament_profile("{\"a\": 1}", p, "x.json"), InputError);
+  CHECK_THROWS_AS(firmware::merge_orca_filament_profile("{\"a\": 1}", p, "x.json"), InputError);
 }
 
 TEST_CASE("gcode post-processor keeps every non-advance line byte-identical and respects its hysteresis") {
   for (const std::string eol : {"\n", "\r\n"}) {
     const std::string original = generated_gcode(eol);
-    protocols::GcodeAdvanceOptions o;
-    o.firmware = protocols::ExportFirmware::klipper;
+    firmware::GcodeAdvanceOptions o;
+    o.firmware = firmware::ExportFirmware::klipper;
     o.k_of_flow = k_table();
     o.hysteresis = 0.10;
-    const auto r = protocols::apply_gcode_advance(original, o, "sliced.gcode");
+    const auto r = firmware::apply_gcode_advance(original, o, "sliced.gcode");
     CHECK(r.features == 24);
     REQUIRE_FALSE(r.changes.empty());
     // Dropping the inserted lines gives the original back, byte for byte.
@@ -219,7 +216,7 @@ TEST_CASE("gcode post-processor keeps every non-advance line byte-identical and 
     for (const auto& c : r.changes) CHECK(c.feature != "Solid infill");
     // A wide hysteresis: at most one change (the infill's K is 25 % below the perimeter's).
     o.hysteresis = 0.5;
-    CHECK(protocols::apply_gcode_advance(original, o, "sliced.gcode").changes.size() <= 1);
+    CHECK(firmware::apply_gcode_advance(original, o, "sliced.gcode").changes.size() <= 1);
   }
 }
 
@@ -228,25 +225,25 @@ TEST_CASE("gcode post-processor: the flow of a feature and the firmware's comman
   const double fa = M_PI * 0.875 * 0.875;
   std::ostringstream g;
   g << "M83\n;TYPE:Internal infill\nG1 X0 Y0 F6000\nG1 X20 Y0 E" << 20 * 0.09 / fa << " F3000\n";
-  protocols::GcodeAdvanceOptions o;
-  o.firmware = protocols::ExportFirmware::marlin;
+  firmware::GcodeAdvanceOptions o;
+  o.firmware = firmware::ExportFirmware::marlin;
   o.k_of_flow = k_table();
   o.filament_area_mm2 = fa;
-  const auto r = protocols::apply_gcode_advance(g.str(), o, "a.gcode");
+  const auto r = firmware::apply_gcode_advance(g.str(), o, "a.gcode");
   REQUIRE(r.changes.size() == 1);
   CHECK(r.changes[0].flow_mm3_s == Catch::Detail::Approx(4.5).epsilon(1e-6));
   CHECK(r.text.find(";TYPE:Internal infill\nM900 K0.0472 ; tunekit: Internal infill at 4.5 mm^3/s\n") !=
         std::string::npos);
-  o.firmware = protocols::ExportFirmware::rrf;
-  CHECK(protocols::apply_gcode_advance(g.str(), o, "a.gcode").text.find("M572 D0 S0.0472") != std::string::npos);
+  o.firmware = firmware::ExportFirmware::rrf;
+  CHECK(firmware::apply_gcode_advance(g.str(), o, "a.gcode").text.find("M572 D0 S0.0472") != std::string::npos);
   // No diameter known, no features, a value beyond the firmware's bounds: refused.
   o.filament_area_mm2 = 0;
-  CHECK_THROWS_AS(protocols::apply_gcode_advance(g.str(), o, "a.gcode"), InputError);
+  CHECK_THROWS_AS(firmware::apply_gcode_advance(g.str(), o, "a.gcode"), InputError);
   o.filament_area_mm2 = fa;
-  CHECK_THROWS_AS(protocols::apply_gcode_advance("G1 X1 E1\n", o, "a.gcode"), InputError);
-  o.firmware = protocols::ExportFirmware::marlin;
+  CHECK_THROWS_AS(firmware::apply_gcode_advance("G1 X1 E1\n", o, "a.gcode"), InputError);
+  o.firmware = firmware::ExportFirmware::marlin;
   o.k_of_flow = {{1.0, 12.0}, {2.0, 11.0}};
-  CHECK_THROWS_AS(protocols::apply_gcode_advance(g.str(), o, "a.gcode"), InputError);
+  CHECK_THROWS_AS(firmware::apply_gcode_advance(g.str(), o, "a.gcode"), InputError);
 }
 
 TEST_CASE("tunekit export of a flow sweep: Kalico config, merged OrcaSlicer profile, per-feature G-code and plot") {

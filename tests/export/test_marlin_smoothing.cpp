@@ -24,7 +24,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/marlin_smoothing.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 
 using namespace tunekit;
 
@@ -126,7 +126,7 @@ TEST_CASE("Marlin export writes the cascade's ADVANCE_TAU, not the box window") 
   ident::AdvanceDesign d;
   d.k_s = 0.05;
   d.window_box_s = 0.0093;
-  const auto tau = protocols::smoothing_time_for(protocols::ExportFirmware::marlin, d);
+  const auto tau = firmware::smoothing_time_for(firmware::ExportFirmware::marlin, d);
   REQUIRE(tau);
   CHECK(*tau == Approx(ident::design_marlin_advance_tau(0.0093).tau_s));
   CHECK(ident::marlin_smoothing_peak_slope_per_s(*tau) * d.window_box_s <= 1.0);

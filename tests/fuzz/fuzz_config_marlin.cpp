@@ -2,5 +2,5 @@
 #include "fuzz_config.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  return tunekit::fuzz::fuzz_config(tunekit::protocols::ExportFirmware::marlin, data, size);
+  return tunekit::fuzz::fuzz_config(tunekit::firmware::ExportFirmware::marlin, data, size);
 }

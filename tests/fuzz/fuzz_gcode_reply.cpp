@@ -6,14 +6,16 @@
 #include <vector>
 
 #include "fuzz_common.hpp"
-#include "tunekit/protocols/dialect.hpp"
-#include "tunekit/protocols/gcode.hpp"
-#include "tunekit/protocols/gcode_link.hpp"
+#include "tunekit/firmware/dialect.hpp"
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
-#include "tunekit/protocols/transport.hpp"
+#include "tunekit/machine/transport.hpp"
 
 using namespace tunekit::protocols;
+using namespace tunekit::machine;
+using namespace tunekit::firmware;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size > 16384) return -1;

@@ -6,12 +6,13 @@
 #include <map>
 
 #include "fuzz_common.hpp"
-#include "tunekit/protocols/dialect.hpp"
+#include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
 
 using namespace tunekit::protocols;
+using namespace tunekit::firmware;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 2) return -1;

@@ -15,7 +15,7 @@ import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-LIBRARIES = ("core", "fitting", "ident", "vision", "history", "protocols", "apps")
+LIBRARIES = ("core", "fitting", "ident", "vision", "history", "firmware", "machine", "sim", "protocols", "apps")
 SUFFIXES = (".hpp", ".h", ".cpp")
 
 
@@ -85,17 +85,30 @@ def main():
         ("core includes ident in a public header", lambda t: "core/include/tunekit/core/error.hpp",
          "#include <tunekit/ident/csv.hpp>", "tunekit/ident/csv.hpp"),
         ("fitting includes protocols", lambda t: first_source(t, "fitting/src"),
-         '#include "tunekit/protocols/machine_profile.hpp"', "tunekit/protocols/machine_profile.hpp"),
+         '#include "tunekit/machine/machine_profile.hpp"', "tunekit/machine/machine_profile.hpp"),
         ("fitting includes ident with <>", lambda t: first_source(t, "fitting/src"),
          "#include <tunekit/ident/csv.hpp>", "tunekit/ident/csv.hpp"),
         ("ident includes protocols in a public header", lambda t: "ident/include/tunekit/ident/csv.hpp",
-         '#  include "tunekit/protocols/gcode.hpp"', "tunekit/protocols/gcode.hpp"),
+         '#  include "tunekit/machine/gcode.hpp"', "tunekit/machine/gcode.hpp"),
         ("ident includes vision (beside it)", lambda t: first_source(t, "ident/src"),
          '#include "tunekit/vision/line_width.hpp"', "tunekit/vision/line_width.hpp"),
         ("vision includes ident (beside it)", lambda t: "vision/src/planted.cpp",
          '#include "tunekit/ident/csv.hpp"', "tunekit/ident/csv.hpp"),
         ("history includes protocols", lambda t: first_source(t, "history/src"),
-         '#include "tunekit/protocols/journal.hpp"', "tunekit/protocols/journal.hpp"),
+         '#include "tunekit/machine/journal.hpp"', "tunekit/machine/journal.hpp"),
+        ("firmware includes machine", lambda t: first_source(t, "firmware/src"),
+         '#include "tunekit/machine/transport.hpp"', "tunekit/machine/transport.hpp"),
+        ("firmware includes protocols in a public header",
+         lambda t: "firmware/include/tunekit/firmware/firmware_export.hpp",
+         '#include "tunekit/protocols/safety.hpp"', "tunekit/protocols/safety.hpp"),
+        ("machine includes sim", lambda t: first_source(t, "machine/src"),
+         '#include "tunekit/sim/simulator.hpp"', "tunekit/sim/simulator.hpp"),
+        ("machine includes protocols", lambda t: first_source(t, "machine/src"),
+         '#include "tunekit/protocols/runner.hpp"', "tunekit/protocols/runner.hpp"),
+        ("sim includes protocols", lambda t: first_source(t, "sim/src"),
+         '#include "tunekit/protocols/experiments.hpp"', "tunekit/protocols/experiments.hpp"),
+        ("core includes firmware", lambda t: "core/src/atomic_file.cpp",
+         '#include "tunekit/firmware/config_edit.hpp"', "tunekit/firmware/config_edit.hpp"),
         ("fitting reaches into ident's folder by a relative path", lambda t: first_source(t, "fitting/src"),
          '#include "../../ident/src/planted_private.hpp"', "ident"),
     ]
@@ -114,9 +127,12 @@ def main():
     # 3. Allowed includes stay allowed: protocols may include vision, apps may include history,
     #    every library may include core.
     tree = fresh("allowed")
-    for library in ("fitting", "ident", "vision", "history", "protocols"):
+    for library in ("fitting", "ident", "vision", "history", "firmware", "machine", "sim", "protocols"):
         plant(tree, first_source(tree, f"{library}/src"), '#include "tunekit/core/error.hpp"')
     plant(tree, first_source(tree, "protocols/src"), '#include "tunekit/vision/line_width.hpp"')
+    plant(tree, first_source(tree, "protocols/src"), '#include "tunekit/sim/simulator.hpp"')
+    plant(tree, first_source(tree, "sim/src"), '#include "tunekit/machine/transport.hpp"')
+    plant(tree, first_source(tree, "machine/src"), '#include "tunekit/firmware/firmware_limits.hpp"')
     plant(tree, "apps/tunekit_main.cpp", '#include "tunekit/history/store.hpp"')
     code, out = run(check, tree)
     if code != 0:

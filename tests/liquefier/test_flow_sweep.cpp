@@ -147,10 +147,10 @@ TEST_CASE("the pooled-fit whiteness warning needs white single-step fits") {
 
 TEST_CASE("liquefier-flow-sweep reaches every level from below and above, within the profile's flow limit") {
   const auto profile = protocols::builtin_sim_profile();
-  using protocols::Firmware;
+  using firmware::Firmware;
   for (const auto fw : {Firmware::marlin, Firmware::klipper, Firmware::reprapfirmware}) {
-    INFO(protocols::to_string(fw));
-    const protocols::Dialect dialect(fw);
+    INFO(firmware::to_string(fw));
+    const firmware::Dialect dialect(fw);
     const auto e = protocols::build_experiment("liquefier-flow-sweep", {}, "", profile, dialect);
     const auto& flows = e.excitation.at("measured_flows_mm3_s");
     REQUIRE(flows.size() == 6);
@@ -178,6 +178,6 @@ TEST_CASE("liquefier-flow-sweep reaches every level from below and above, within
   CHECK_THROWS_AS(protocols::plan_flow_sweep(5, 5, 6, 1, 0.5, 6, 3), InputError);
   // A flow above the hot end's limit is refused by the safety gate.
   const auto e = protocols::build_experiment("liquefier-flow-sweep", {{"flow_max_mm3_s", 40}}, "", profile,
-                                             protocols::Dialect(protocols::Firmware::marlin));
+                                             firmware::Dialect(firmware::Firmware::marlin));
   CHECK_FALSE(protocols::check_protocol(e.gcode, profile, e.sensors).empty());
 }

@@ -46,8 +46,8 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
-#include "tunekit/protocols/simulator.hpp"
-#include "tunekit/protocols/transport.hpp"
+#include "tunekit/sim/simulator.hpp"
+#include "tunekit/machine/transport.hpp"
 
 namespace tunekit::test {
 
@@ -64,7 +64,7 @@ struct FakeKlipperConfig {
 
 class FakeKlipper {
  public:
-  FakeKlipper(const std::string& path, tunekit::protocols::SimConfig config, FakeKlipperConfig fake = {})
+  FakeKlipper(const std::string& path, tunekit::sim::SimConfig config, FakeKlipperConfig fake = {})
       : path_(path), sim_(std::move(config)), fake_(std::move(fake)) {
     // Endpoints as Klipper registers them at start-up, from the config sections.
     for (const auto& section : fake_.accelerometers) {
@@ -120,8 +120,8 @@ class FakeKlipper {
   // One executed move -> trapq entries: the profile cut into 1 ms pieces of constant
   // acceleration, pieces of equal acceleration merged (cruise and constant-acceleration phases
   // become one entry each, as Klipper's accel/cruise/decel entries).
-  void add_trapq(double t0, double duration, const tunekit::protocols::Profile& prof,
-                 const std::array<double, 4>& start, const std::array<double, 4>& u) {
+  void add_trapq(double t0, double duration, const tunekit::machine::Profile& prof, const std::array<double, 4>& start,
+                 const std::array<double, 4>& u) {
     const double piece = 1e-3;
     const bool xy = u[0] != 0 || u[1] != 0;
     const double e_ratio = u[3];
@@ -165,8 +165,8 @@ class FakeKlipper {
   void serve() {
     const int fd = ::accept(listen_fd_, nullptr, nullptr);
     if (fd < 0) return;
-    tunekit::protocols::FdTransport t(fd, "fake klipper");
-    tunekit::protocols::LineReader reader(t, '\x03');
+    tunekit::machine::FdTransport t(fd, "fake klipper");
+    tunekit::machine::LineReader reader(t, '\x03');
     nlohmann::json accel_rows = nlohmann::json::array(), load_rows = nlohmann::json::array();
     std::vector<nlohmann::json> accel_templates, load_templates;
     std::map<std::string, std::vector<nlohmann::json>> trapq_templates;
@@ -180,7 +180,7 @@ class FakeKlipper {
       if (fake_.load_cell_calibrated) grams = static_cast<double>(counts - fake_.tare_counts) / fake_.counts_per_gram;
       load_rows.push_back({t0 + tt, grams, counts, fake_.tare_counts});
     };
-    sim_.move_sink = [&](double ts, double d, const tunekit::protocols::Profile& p, const std::array<double, 4>& s,
+    sim_.move_sink = [&](double ts, double d, const tunekit::machine::Profile& p, const std::array<double, 4>& s,
                          const std::array<double, 4>& u) { add_trapq(ts, d, p, s, u); };
     auto send = [&](const nlohmann::json& m) { t.write(m.dump() + "\x03"); };
     // BatchWebhooksClient.handle_batch: a copy of the template with "params" set to the batch.
@@ -227,7 +227,7 @@ class FakeKlipper {
           }
           std::stringstream ss(script);
           std::string line;
-          const tunekit::protocols::Simulator::Emit ignore = [](std::string_view) {};
+          const tunekit::sim::Simulator::Emit ignore = [](std::string_view) {};
           while (std::getline(ss, line)) sim_.handle_line(line, ignore);
           sim_.flush(ignore);
           sent_ += flush_rows(accel_rows, accel_templates, true);
@@ -269,7 +269,7 @@ class FakeKlipper {
   }
 
   std::string path_;
-  tunekit::protocols::Simulator sim_;
+  tunekit::sim::Simulator sim_;
   FakeKlipperConfig fake_;
   std::map<std::string, std::pair<std::string, std::set<std::string>>> endpoints_;  // method -> (key, values)
   std::map<std::string, nlohmann::json> trapq_{{"toolhead", nlohmann::json::array()},

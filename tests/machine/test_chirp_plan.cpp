@@ -7,12 +7,14 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/dialect.hpp"
+#include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
 
 using namespace tunekit::protocols;
+using namespace tunekit::machine;
+using namespace tunekit::firmware;
 
 TEST_CASE("the chirp plan brackets the corner and puts several Welch bins below it") {
   for (double tau : {0.05, 0.45, 2.0}) {

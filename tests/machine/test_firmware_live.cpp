@@ -36,15 +36,18 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
-#include "tunekit/protocols/dialect.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
-#include "tunekit/protocols/rrf_http.hpp"
+#include "tunekit/firmware/dialect.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/machine/rrf_http.hpp"
 #include "tunekit/protocols/runner.hpp"
-#include "tunekit/protocols/simulator.hpp"
+#include "tunekit/sim/simulator.hpp"
 
 using tunekit::InputError;
 using tunekit::MachineError;
 using namespace tunekit::protocols;
+using namespace tunekit::machine;
+using namespace tunekit::firmware;
+using namespace tunekit::sim;
 
 namespace {
 

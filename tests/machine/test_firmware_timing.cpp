@@ -20,15 +20,18 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/dialect.hpp"
+#include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
-#include "tunekit/protocols/gcode.hpp"
+#include "tunekit/machine/gcode.hpp"
 #include "tunekit/protocols/runner.hpp"
-#include "tunekit/protocols/simulator.hpp"
+#include "tunekit/sim/simulator.hpp"
 
 using tunekit::InputError;
 using tunekit::MachineError;
 using namespace tunekit::protocols;
+using namespace tunekit::machine;
+using namespace tunekit::firmware;
+using namespace tunekit::sim;
 
 namespace {
 

@@ -12,15 +12,15 @@
 #include "fake_klipper.hpp"
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/klipper_sensors.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/machine/klipper_sensors.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 
 using tunekit::test::FakeKlipper;
 using tunekit::test::FakeKlipperConfig;
 using tunekit::test::run_cli;
 using tunekit::test::scratch_dir;
 namespace fs = std::filesystem;
-namespace tp = tunekit::protocols;
+namespace tp = tunekit::machine;
 
 namespace {
 
@@ -111,7 +111,8 @@ TEST_CASE("an axis sweep recorded under each Klipper accelerometer chip gives th
   FakeKlipperConfig fake;
   fake.accelerometers = {c.section};
   FakeKlipper server(
-      sock, tp::SimConfig::from_options({"mode_x=" + std::to_string(c.f_mode) + ":0.06", "firmware=klipper"}), fake);
+      sock, tunekit::sim::SimConfig::from_options({"mode_x=" + std::to_string(c.f_mode) + ":0.06", "firmware=klipper"}),
+      fake);
   const auto profile = klipper_profile(
       dir, fmt::format("accelerometer = \"{}\"\naccelerometer_name = \"{}\"\nload_cell = false\n", c.chip, c.section));
   const auto r =
@@ -142,7 +143,8 @@ TEST_CASE("a liquefier step run on Klipper's load cell gives tau within 5 %", "[
   FakeKlipperConfig fake;
   fake.load_cell = "load_cell extruder";
   FakeKlipper server(
-      sock, tp::SimConfig::from_options({fmt::format("tau_s={}", tau), fmt::format("theta_s={}", theta), "K=2.8"}),
+      sock,
+      tunekit::sim::SimConfig::from_options({fmt::format("tau_s={}", tau), fmt::format("theta_s={}", theta), "K=2.8"}),
       fake);
   // Built for a planner that blends extrude-only moves, so the trapq shows the labelled feeds.
   const auto profile =
@@ -182,7 +184,7 @@ TEST_CASE("an uncalibrated Klipper load cell or an unknown sensor name ends with
     FakeKlipperConfig fake;
     fake.load_cell = "load_cell";
     fake.load_cell_calibrated = false;
-    FakeKlipper server(sock, tp::SimConfig{}, fake);
+    FakeKlipper server(sock, tunekit::sim::SimConfig{}, fake);
     const auto profile = klipper_profile(dir, "load_cell = true\n");
     const auto r =
         run_cli({"run", "liquefier-step", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/r1"});
@@ -196,7 +198,7 @@ TEST_CASE("an uncalibrated Klipper load cell or an unknown sensor name ends with
     const std::string sock = dir + "/uds2";
     FakeKlipperConfig fake;
     fake.accelerometers = {"lis2dw"};
-    FakeKlipper server(sock, tp::SimConfig{}, fake);
+    FakeKlipper server(sock, tunekit::sim::SimConfig{}, fake);
     const auto profile = klipper_profile(dir, "accelerometer = \"lis2dw\"\naccelerometer_name = \"lis2dw toolhead\"\n");
     const auto r =
         run_cli({"run", "axis-sweep", "--machine", profile, "--port", "unix:" + sock, "--run-dir", dir + "/r2"});

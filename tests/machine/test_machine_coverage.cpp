@@ -9,12 +9,13 @@
 
 #include "test_support.hpp"
 #include "tunekit/protocols/coverage_planner.hpp"
-#include "tunekit/protocols/dialect.hpp"
+#include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
 
 using namespace tunekit::protocols;
+using namespace tunekit::firmware;
 
 TEST_CASE("coverage planner travels less and retracts less than the zigzag on the standard test patterns",
           "[machine][coverage]") {

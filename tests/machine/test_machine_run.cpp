@@ -18,8 +18,8 @@
 #include "fake_klipper.hpp"
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/protocols/simulator.hpp"
-#include "tunekit/protocols/transport.hpp"
+#include "tunekit/sim/simulator.hpp"
+#include "tunekit/machine/transport.hpp"
 
 using tunekit::test::run_cli;
 using tunekit::test::scratch_dir;
@@ -62,7 +62,7 @@ TEST_CASE("run --dry-run prints the checked G-code and sends nothing", "[machine
 }
 
 TEST_CASE("a protocol over the profile's limits is refused before any byte is sent", "[machine]") {
-  tunekit::protocols::SimPtyServer server(tunekit::protocols::SimConfig{});
+  tunekit::sim::SimPtyServer server(tunekit::sim::SimConfig{});
   const auto dir = scratch_dir("machine_refused");
   const auto r = run_cli({"run", "liquefier-step", "--machine", tunekit::test::dataset("machines/sim.toml"), "--port",
                           server.path(), "-p", "feed_high_mm_s=100", "-p", "hotend_c=350", "-p", "accel_mm_s2=9000",
@@ -168,7 +168,7 @@ TEST_CASE("a Klipper API server's accelerometer stream is recorded and analyzed"
   const std::string sock = dir + "/klippy_uds";
   // The fake server synthesises one x mode that is not the simulator's default (48 Hz, 0.08).
   const double f_mode = 52.5, zeta_mode = 0.06;
-  FakeKlipper server(sock, tunekit::protocols::SimConfig::from_options(
+  FakeKlipper server(sock, tunekit::sim::SimConfig::from_options(
                                {"mode_x=" + std::to_string(f_mode) + ":" + std::to_string(zeta_mode)}));
   const auto r = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", tunekit::test::dataset("machines/sim.toml"),
                           "--port", "unix:" + sock, "--run-dir", dir + "/run", "-p", "freq_start_hz=35", "-p",

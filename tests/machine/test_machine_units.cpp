@@ -11,19 +11,22 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/dialect.hpp"
+#include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
-#include "tunekit/protocols/gcode.hpp"
-#include "tunekit/protocols/gcode_link.hpp"
-#include "tunekit/protocols/journal.hpp"
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/gcode_link.hpp"
+#include "tunekit/machine/journal.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
-#include "tunekit/protocols/simulator.hpp"
-#include "tunekit/protocols/trajectory.hpp"
-#include "tunekit/protocols/transport.hpp"
+#include "tunekit/sim/simulator.hpp"
+#include "tunekit/machine/trajectory.hpp"
+#include "tunekit/machine/transport.hpp"
 #include "tunekit/ident/csv.hpp"
 
 using namespace tunekit::protocols;
+using namespace tunekit::machine;
+using namespace tunekit::firmware;
+using namespace tunekit::sim;
 
 TEST_CASE("Marlin line numbers and checksums", "[machine]") {
   const std::string l = numbered_line(12, "G1 X10");

@@ -18,7 +18,7 @@
 #include "test_support.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/core/atomic_file.hpp"
 
 using tunekit::test::read_text;
 using tunekit::test::run_cli;
@@ -144,7 +144,7 @@ TEST_CASE("fault: export --write with any output path unwritable leaves every fi
 TEST_CASE("a file batch that fails on a later rename puts back the files it already replaced", "[safety]") {
   const auto dir = scratch_dir("file_batch_rollback");
   std::ofstream(dir + "/a", std::ios::binary) << "old a";
-  tunekit::protocols::FileBatch b;
+  tunekit::core::FileBatch b;
   b.add(dir + "/a", "new a");
   b.add(dir + "/new", "new file");
   b.add(dir + "/c", "new c");

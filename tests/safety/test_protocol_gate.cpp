@@ -15,15 +15,18 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/protocols/dialect.hpp"
+#include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
-#include "tunekit/protocols/gcode_link.hpp"
+#include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
-#include "tunekit/protocols/simulator.hpp"
-#include "tunekit/protocols/transport.hpp"
+#include "tunekit/sim/simulator.hpp"
+#include "tunekit/machine/transport.hpp"
 
 using namespace tunekit::protocols;
+using namespace tunekit::machine;
+using namespace tunekit::firmware;
+using namespace tunekit::sim;
 using tunekit::test::run_cli;
 using tunekit::test::scratch_dir;
 namespace fs = std::filesystem;

@@ -20,7 +20,7 @@
 #include "tunekit/vision/line_width.hpp"
 #include "tunekit/vision/overlay.hpp"
 #include "tunekit/vision/width_to_dynamics.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/core/atomic_file.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
 #include "tunekit/protocols/experiments.hpp"
 
@@ -116,7 +116,7 @@ RingFit fit_sine_at(const std::vector<double>& t, const std::vector<double>& y, 
 
 }  // namespace
 
-LiquefierPath choose_liquefier_path(const std::string& choice, const protocols::MachineProfile& profile,
+LiquefierPath choose_liquefier_path(const std::string& choice, const machine::MachineProfile& profile,
                                     const std::string& profile_path) {
   if (choice == "camera") return LiquefierPath::camera;
   if (choice == "load-cell") {
@@ -157,10 +157,9 @@ std::vector<CameraTest> camera_tests() {
 }
 
 CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
-                                     const protocols::MachineProfile& profile,
+                                     const machine::MachineProfile& profile,
                                      std::map<std::string, protocols::RunResult>& runs,
-                                     const std::shared_ptr<protocols::SimPrintBed>& bed, bool can_prompt,
-                                     CliContext& ctx) {
+                                     const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx) {
   const std::string dir = run_dir + "/liquefier-camera";
   fs::create_directories(dir);
   CameraAnalysis out;
@@ -170,8 +169,8 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   // 1. The photo.
   cv::Mat photo;
   if (a.camera == "sim") {
-    protocols::SimCameraFrame frame;
-    photo = bed->photograph(protocols::SimCameraOptions{}, &frame);
+    sim::SimCameraFrame frame;
+    photo = bed->photograph(sim::SimCameraOptions{}, &frame);
     out.photo = dir + "/photo.png";
     vision::write_png(out.photo, photo);
     map = {true, frame.x0_mm, frame.y1_mm, frame.px_per_mm};
@@ -304,7 +303,7 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   }
   if (rows.empty()) throw InputError("no usable width samples on the printed lines", out.photo);
   out.width_csv = dir + "/line_widths.csv";
-  protocols::write_file_atomic(
+  core::write_file_atomic(
       out.width_csv, vision::timed_width_csv(rows, "widths along the line test (t = s / v per line, lines 1 s apart)"));
 
   // 4. The ring: width against the angle travelled -> gain and phase at f = N v / (2 pi R).

@@ -19,9 +19,9 @@
 #include <nlohmann/json.hpp>
 
 #include "tunekit/cli/context.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
-#include "tunekit/protocols/sim_camera.hpp"
+#include "tunekit/sim/sim_camera.hpp"
 
 namespace tunekit::cli {
 
@@ -38,7 +38,7 @@ enum class LiquefierPath { load_cell, camera };
 
 /// --liquefier auto|load-cell|camera against the profile's sensors (InputError with the
 /// profile path when a load cell is asked for and there is none).
-LiquefierPath choose_liquefier_path(const std::string& choice, const protocols::MachineProfile& profile,
+LiquefierPath choose_liquefier_path(const std::string& choice, const machine::MachineProfile& profile,
                                     const std::string& profile_path);
 
 /// Checked before anything is printed: a photo source must exist (InputError, exit 2, otherwise).
@@ -64,10 +64,9 @@ struct CameraAnalysis {
 /// (exit 2) when the photo shows no printed line; MachineError (exit 3) when a camera cannot
 /// be opened. `runs` holds the camera_tests() runs by name.
 CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
-                                     const protocols::MachineProfile& profile,
+                                     const machine::MachineProfile& profile,
                                      std::map<std::string, protocols::RunResult>& runs,
-                                     const std::shared_ptr<protocols::SimPrintBed>& bed, bool can_prompt,
-                                     CliContext& ctx);
+                                     const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx);
 
 /// The ring's gain and phase, added to the camera analysis once tau and theta are known from
 /// the lines (the model's prediction at the ring frequency is reported beside the measurement).

@@ -39,9 +39,9 @@
 #include "tunekit/fitting/first_order.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/input_shaper.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/core/atomic_file.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/protocols/runner.hpp"
 
 #ifndef TUNEKIT_DATASETS_DIR
@@ -142,8 +142,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
         "a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
   const std::string profile_path =
       !a.profile.empty() ? a.profile : std::string(TUNEKIT_DATASETS_DIR) + "/machines/sim.toml";
-  const auto profile =
-      !a.profile.empty() ? protocols::load_machine_profile(a.profile) : protocols::builtin_sim_profile();
+  const auto profile = !a.profile.empty() ? machine::load_machine_profile(a.profile) : protocols::builtin_sim_profile();
 
   std::vector<Experiment> exps;
   const bool camera_path =
@@ -187,7 +186,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   protocols::ChirpPlan chirp_plan = protocols::plan_liquefier_chirp(protocols::kLiteratureLiquefierTau_s);
   std::string chirp_basis = fmt::format("the literature time constant {} s", display_number(chirp_plan.expected_tau_s));
   // The simulated camera photographs everything the simulated printer prints.
-  auto bed = camera_path && a.camera.camera == "sim" ? std::make_shared<protocols::SimPrintBed>() : nullptr;
+  auto bed = camera_path && a.camera.camera == "sim" ? std::make_shared<sim::SimPrintBed>() : nullptr;
   auto options_for = [&](const Experiment& e, bool dry) {
     protocols::RunOptions o;
     o.protocol = e.protocol;
@@ -201,9 +200,9 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     if (sim && std::none_of(o.sim_options.begin(), o.sim_options.end(),
                             [](const std::string& s) { return s.rfind("firmware=", 0) == 0; })) {
       // Kalico is a Klipper fork: its G-code, API server and planner are Klipper's.
-      const auto fw = protocols::parse_export_firmware(a.firmware);
+      const auto fw = firmware::parse_export_firmware(a.firmware);
       o.sim_options.push_back(
-          "firmware=" + (fw == protocols::ExportFirmware::kalico ? std::string("klipper") : protocols::to_string(fw)));
+          "firmware=" + (fw == firmware::ExportFirmware::kalico ? std::string("klipper") : firmware::to_string(fw)));
     }
     o.dry_run = dry;
     o.run_dir = run_dir + "/" + e.name;
@@ -428,7 +427,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     ShaperOptions so;
     so.accel.files = {csv};
     so.accel.input.axis = axis[0];
-    so.firmware = protocols::parse_export_firmware(a.firmware);
+    so.firmware = firmware::parse_export_firmware(a.firmware);
     const auto j = keep_analysis(calibrate_analysis("shaper", [&] { return compute_shaper(so); }), out, ctx);
     add_input(csv);
     res["axes"][axis] = j.at("results").at("axes").at(axis);
@@ -466,7 +465,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const auto& summary = kv.second.summary;
     return summary.contains(ft_motion) && summary.at(ft_motion) == "active";
   });
-  if (ft_live && protocols::parse_export_firmware(a.firmware) == protocols::ExportFirmware::marlin) {
+  if (ft_live && firmware::parse_export_firmware(a.firmware) == firmware::ExportFirmware::marlin) {
     eo.marlin_ft_live = true;
     res["firmware_ft_motion"] = "active (M493): settings written as M493";
   }
@@ -487,7 +486,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
   if (exported.flow) plot["flow_advance"] = res["compensators"]["flow_advance"];
   const std::string diff = exported.change.diff;
   res["config_diff"] = diff;
-  protocols::write_file_atomic(run_dir + "/config/changes.diff", diff);
+  core::write_file_atomic(run_dir + "/config/changes.diff", diff);
   if (exported.settings.pa_k_s)
     row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
   if (exported.settings.pa_smooth_s)
@@ -506,8 +505,8 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
 
   strip_prefix(res, run_dir + "/");
   bar.begin("write report", 2);
-  protocols::write_file_atomic(run_dir + "/results.json", env.dump());
-  protocols::write_file_atomic(run_dir + "/plotdata.json", plot.dump() + "\n");
+  core::write_file_atomic(run_dir + "/results.json", env.dump());
+  core::write_file_atomic(run_dir + "/plotdata.json", plot.dump() + "\n");
   const std::string report = write_report(run_dir);
   bar.end(report);
 

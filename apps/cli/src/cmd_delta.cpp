@@ -14,9 +14,9 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/delta_export.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/firmware/delta_export.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -71,7 +71,7 @@ DeltaOutcome compute_delta(const DeltaOptions& a) {
   outcome.options = a;
   (void)ident::delta_factor_names(a.factors);
   const auto nominal = delta_nominal(a);
-  if (!a.export_firmware.empty()) outcome.firmware = protocols::parse_export_firmware(a.export_firmware);
+  if (!a.export_firmware.empty()) outcome.firmware = firmware::parse_export_firmware(a.export_firmware);
   if (!a.export_file.empty() && a.export_firmware.empty()) throw InputError("--export-file needs --export FIRMWARE");
 
   const std::string bytes = ident::read_file_bytes(a.probes_csv);
@@ -87,20 +87,20 @@ DeltaOutcome compute_delta(const DeltaOptions& a) {
   const auto& cal = outcome.calibration;
   if (outcome.firmware) {
     switch (*outcome.firmware) {
-      case protocols::ExportFirmware::kalico:
-      case protocols::ExportFirmware::klipper:
-        outcome.export_text = protocols::delta_klipper_save_config(cal.fitted);
+      case firmware::ExportFirmware::kalico:
+      case firmware::ExportFirmware::klipper:
+        outcome.export_text = firmware::delta_klipper_save_config(cal.fitted);
         break;
-      case protocols::ExportFirmware::marlin:
-        outcome.export_text = protocols::delta_marlin_gcode(cal.fitted, a.marlin_probe_z_offset_mm);
+      case firmware::ExportFirmware::marlin:
+        outcome.export_text = firmware::delta_marlin_gcode(cal.fitted, a.marlin_probe_z_offset_mm);
         break;
-      case protocols::ExportFirmware::rrf:
-        outcome.export_text = protocols::delta_rrf_gcode(cal.fitted, a.print_radius_mm);
+      case firmware::ExportFirmware::rrf:
+        outcome.export_text = firmware::delta_rrf_gcode(cal.fitted, a.print_radius_mm);
         break;
     }
   }
   outcome.warnings = cal.fit.warnings;
-  if (!a.export_file.empty()) protocols::write_file_atomic(a.export_file, outcome.export_text);
+  if (!a.export_file.empty()) core::write_file_atomic(a.export_file, outcome.export_text);
   return outcome;
 }
 
@@ -118,7 +118,7 @@ Envelope to_envelope(const DeltaOutcome& o) {
   res["flatness_after"] = delta_flatness_json(cal.after);
   res["residual_mm"] = cal.residual_mm;
   if (o.firmware && !o.export_text.empty())
-    res["export"] = {{"firmware", protocols::to_string(*o.firmware)}, {"text", o.export_text}};
+    res["export"] = {{"firmware", firmware::to_string(*o.firmware)}, {"text", o.export_text}};
   for (const auto& w : o.warnings) env.warn(w);
   return env;
 }
@@ -136,7 +136,7 @@ void print_text(const DeltaOutcome& o, std::ostream& os) {
                     cal.after.peak_to_peak_mm);
   if (o.firmware && !o.export_text.empty()) {
     if (a.export_file.empty()) os << o.export_text;
-    else os << fmt::format("  {} settings written to {}\n", protocols::to_string(*o.firmware), a.export_file);
+    else os << fmt::format("  {} settings written to {}\n", firmware::to_string(*o.firmware), a.export_file);
   }
 }
 

@@ -26,19 +26,19 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/config_edit.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
-#include "tunekit/protocols/gcode_advance.hpp"
-#include "tunekit/protocols/orca_profile.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/firmware/config_edit.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
+#include "tunekit/firmware/gcode_advance.hpp"
+#include "tunekit/firmware/orca_profile.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 
 namespace tunekit::cli {
 namespace {
 
 // Plausibility caps of what export writes, whatever the firmware would accept (the firmware's
-// own bounds are checked by protocols::validate_settings). A value beyond them is a typing or
+// own bounds are checked by firmware::validate_settings). A value beyond them is a typing or
 // unit error (a value in ms given as s, a fit that ran away), never a printer's setting.
 // Advance K, s: 10 is Marlin's upper bound on M900 K (Marlin, Marlin/src/gcode/feature/advance/M900.cpp);
 // a liquefier with a 10 s lag could not print at all.
@@ -53,7 +53,7 @@ constexpr double kPlausibleMaxShaperFreq_hz = 1000;
 constexpr double kPlausibleMaxDesignFlow_mm3_s = 1000;
 
 /// Refuses non-finite and implausible values (exit 2) before anything is computed from them.
-void check_plausible(const protocols::CompensatorSettings& s) {
+void check_plausible(const firmware::CompensatorSettings& s) {
   if (s.pa_k_s && !(*s.pa_k_s >= 0 && *s.pa_k_s <= kPlausibleMaxAdvanceK_s))
     throw InputError(
         fmt::format("advance K {} s is not plausible (accepted: 0 to {} s)", *s.pa_k_s, kPlausibleMaxAdvanceK_s));
@@ -81,10 +81,10 @@ double number_at(const nlohmann::json& j, const std::string& what, const std::st
 ExportOutcome compute_export(const ExportOptions& a) {
   ExportOutcome outcome;
   outcome.options = a;
-  const auto fw = protocols::parse_export_firmware(a.firmware);
+  const auto fw = firmware::parse_export_firmware(a.firmware);
   outcome.firmware = fw;
   {
-    protocols::CompensatorSettings given;  // the options alone, checked before any design uses them
+    firmware::CompensatorSettings given;  // the options alone, checked before any design uses them
     if (std::isfinite(a.pa_k)) given.pa_k_s = a.pa_k;
     if (std::isfinite(a.pa_smooth)) given.pa_smooth_s = a.pa_smooth;
     check_plausible(given);
@@ -95,7 +95,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
   Envelope& env = outcome.envelope;
   ident::AdvanceInputs in;
   double freq_tau = fitting::kNaN;
-  std::map<std::string, protocols::ShaperSetting> shapers;
+  std::map<std::string, firmware::ShaperSetting> shapers;
   std::vector<std::string> sources;
   // Operating points whose u is a volumetric flow (mm^3/s): converted to filament feed once the
   // filament area is known.
@@ -108,11 +108,11 @@ ExportOutcome compute_export(const ExportOptions& a) {
 
   // A Marlin build with FT_MOTION has FT_MOTION's shapers (firmware_limits.hpp).
   bool ft_motion = false;
-  if (fw == protocols::ExportFirmware::marlin) {
+  if (fw == firmware::ExportFirmware::marlin) {
     std::ifstream cfg_in(a.config, std::ios::binary);
     std::stringstream cfg_text;
     cfg_text << cfg_in.rdbuf();
-    ft_motion = (cfg_in && protocols::marlin_ft_motion_enabled(cfg_text.str())) || a.marlin_ft_live;
+    ft_motion = (cfg_in && firmware::marlin_ft_motion_enabled(cfg_text.str())) || a.marlin_ft_live;
   }
   std::string reading;  // the results file being read, for errors deep inside it
   try {
@@ -205,7 +205,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
             continue;
           }
           auto setting_of = [&](const nlohmann::json& c, const std::string& what) {
-            protocols::ShaperSetting s;
+            firmware::ShaperSetting s;
             if (!c.contains("type") || !c["type"].is_string())
               throw InputError(fmt::format("axes.{}.{}.type must be a string", axis, what), path);
             s.type = c["type"].get<std::string>();
@@ -215,15 +215,15 @@ ExportOutcome compute_export(const ExportOptions& a) {
             return s;
           };
           // The firmware must have the shaper and accept its damping (firmware_limits.hpp).
-          auto usable = [&](const protocols::ShaperSetting& s) {
-            const auto f = protocols::limits::find_shaper(fw, protocols::canonical_shaper_type(s.type), ft_motion);
+          auto usable = [&](const firmware::ShaperSetting& s) {
+            const auto f = firmware::limits::find_shaper(fw, firmware::canonical_shaper_type(s.type), ft_motion);
             return f && s.damping <= f->max_damping;
           };
-          protocols::ShaperSetting s = setting_of(rec, "recommended");
+          firmware::ShaperSetting s = setting_of(rec, "recommended");
           if (!usable(s)) {
             // The overall recommendation is not available on this firmware: the best-scoring
             // candidate the firmware has (the results list every type's best frequency).
-            std::optional<protocols::ShaperSetting> best;
+            std::optional<firmware::ShaperSetting> best;
             double best_score = 0;
             for (const auto& c : value_at_or_null(v, "/candidates"_json_pointer)) {
               const auto cs = setting_of(c, "candidates[]");
@@ -238,16 +238,16 @@ ExportOutcome compute_export(const ExportOptions& a) {
               throw InputError(
                   fmt::format("axes.{}: the recommended shaper {} is not available in {} and no candidate "
                               "is ({} has {}{}); run 'tunekit shaper --firmware {}'",
-                              axis, s.type, protocols::limits::firmware_title(fw),
-                              protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw),
-                              fw == protocols::ExportFirmware::marlin ? ": its input shaping is ZV only" : "",
-                              protocols::to_string(fw)),
+                              axis, s.type, firmware::limits::firmware_title(fw), firmware::limits::firmware_title(fw),
+                              firmware::limits::shaper_list(fw),
+                              fw == firmware::ExportFirmware::marlin ? ": its input shaping is ZV only" : "",
+                              firmware::to_string(fw)),
                   path);
             env.warn(
                 fmt::format("{}: axis {}: the recommended {} shaper is not available in {} (it has {}); using the "
                             "best-scoring candidate it has: {} at {:.1f} Hz",
-                            path, axis, s.type, protocols::limits::firmware_title(fw),
-                            protocols::limits::shaper_list(fw), best->type, best->freq_hz));
+                            path, axis, s.type, firmware::limits::firmware_title(fw), firmware::limits::shaper_list(fw),
+                            best->type, best->freq_hz));
             s = *best;
           }
           shapers[axis] = s;
@@ -289,9 +289,9 @@ ExportOutcome compute_export(const ExportOptions& a) {
     in.rheo_relative_tau.clear();
   }
 
-  protocols::MachineProfile profile;
+  machine::MachineProfile profile;
   if (!a.profile.empty()) {
-    profile = protocols::load_machine_profile(a.profile);
+    profile = machine::load_machine_profile(a.profile);
     env.add_input(a.profile);
   }
   in.filament_area_mm2 = profile.filament_area_mm2();
@@ -303,10 +303,10 @@ ExportOutcome compute_export(const ExportOptions& a) {
   in.extruder_accel_limit_mm_s2 = profile.extruder.max_accel_mm_s2;
   in.design_flow_mm3_s = a.design_flow;
 
-  protocols::CompensatorSettings& settings = outcome.settings;
+  firmware::CompensatorSettings& settings = outcome.settings;
   settings.klipper_extruder = a.extruder;
   settings.rrf_drive = a.drive;
-  settings.marlin_ft_motion_live = fw == protocols::ExportFirmware::marlin && a.marlin_ft_live;
+  settings.marlin_ft_motion_live = fw == firmware::ExportFirmware::marlin && a.marlin_ft_live;
   // --extruder N (a number): Klipper's [extruder] / [extruderN], Marlin's ADVANCE_K entry N
   // (M900 T), RepRapFirmware's drive N unless --drive is given.
   if (!a.extruder.empty() && a.extruder.find_first_not_of("0123456789") == std::string::npos) {
@@ -339,7 +339,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
           "(the smoothing time is not designed)");
     design = ident::design_advance(in);
     settings.pa_k_s = design->k_s;
-    settings.pa_smooth_s = protocols::smoothing_time_for(fw, *design);
+    settings.pa_smooth_s = firmware::smoothing_time_for(fw, *design);
     for (const auto& w : design->warnings) env.warn(w);
   }
   // Flow-dependent design (flow_advance.hpp) when two or more levels were identified.
@@ -405,8 +405,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
     // power-law trend when the step analysis gave one).
     design->k_s = flow->k_design_s;
     for (auto& s : design->schedule) s.k_s = ident::needed_advance_s(fin, s.flow_mm3_s);
-    if (fw == protocols::ExportFirmware::kalico) {
-      protocols::KalicoAdvanceSetting k;
+    if (fw == firmware::ExportFirmware::kalico) {
+      firmware::KalicoAdvanceSetting k;
       k.model = ident::to_string(flow->kalico.model);
       k.linear_advance_s = flow->kalico.linear_advance_s;
       k.nonlinear_offset_mm = flow->kalico.nonlinear_offset_mm;
@@ -433,13 +433,13 @@ ExportOutcome compute_export(const ExportOptions& a) {
   }
   check_plausible(settings);
 
-  outcome.change = protocols::export_config_file(fw, a.config, settings);
+  outcome.change = firmware::export_config_file(fw, a.config, settings);
   const auto& result = outcome.change;
   env.add_input(a.config, result.original);
   for (const auto& w : result.warnings) env.warn(w);
 
   env.set_options(
-      {{"firmware", protocols::to_string(fw)},
+      {{"firmware", firmware::to_string(fw)},
        {"config", a.config},
        {"profile", a.profile},
        {"pa_k_s", std::isfinite(a.pa_k) ? nlohmann::json(a.pa_k) : nlohmann::json(nullptr)},
@@ -457,8 +457,8 @@ ExportOutcome compute_export(const ExportOptions& a) {
   sj["pa_smooth_s"] = settings.pa_smooth_s ? nlohmann::json(*settings.pa_smooth_s) : nlohmann::json(nullptr);
   sj["shapers"] = nlohmann::json::object();
   for (const auto& [axis, sh] : settings.shapers)
-    sj["shapers"][axis] = {{"type", protocols::canonical_shaper_type(sh.type)},
-                           {"firmware_type", protocols::firmware_shaper_name(fw, sh.type, ft_motion)},
+    sj["shapers"][axis] = {{"type", firmware::canonical_shaper_type(sh.type)},
+                           {"firmware_type", firmware::firmware_shaper_name(fw, sh.type, ft_motion)},
                            {"freq_hz", sh.freq_hz},
                            {"damping", sh.damping}};
   res["settings"] = sj;
@@ -471,15 +471,15 @@ ExportOutcome compute_export(const ExportOptions& a) {
     render_figure(flow_advance_figure(res["flow_advance"]), a.plot_out);
   }
   res["export"] = result.to_json();
-  outcome.schedule_gcode = design ? protocols::advance_schedule_gcode(fw, design->schedule, settings) : std::string();
+  outcome.schedule_gcode = design ? firmware::advance_schedule_gcode(fw, design->schedule, settings) : std::string();
   res["schedule_gcode"] = outcome.schedule_gcode;
   res["written"] = false;
 
   // Everything that will be written is computed first (configuration, backup, G-code, JSON);
-  // then all of it is written together or none of it (protocols::FileBatch).
-  protocols::FileBatch& batch = outcome.files;
+  // then all of it is written together or none of it (core::FileBatch).
+  core::FileBatch& batch = outcome.files;
   if (a.write && result.changed()) {
-    outcome.backup = protocols::backup_path_for(a.config);
+    outcome.backup = firmware::backup_path_for(a.config);
     const std::string& backup = outcome.backup;
     res["written"] = true;
     batch.add(backup, result.original);
@@ -487,7 +487,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
   }
   if (!a.gcode_out.empty()) batch.add(a.gcode_out, result.gcode);
   if (!a.orca_out.empty()) {
-    protocols::OrcaAdvanceProfile op;
+    firmware::OrcaAdvanceProfile op;
     op.fallback_k_s = *settings.pa_k_s;
     if (flow) {
       for (const auto& o : flow->orca) op.table.push_back(o);
@@ -501,19 +501,19 @@ ExportOutcome compute_export(const ExportOptions& a) {
     if (!a.orca_in.empty()) {
       const std::string base = ident::read_file_bytes(a.orca_in);
       env.add_input(a.orca_in, base);
-      const auto m = protocols::merge_orca_filament_profile(base, op, a.orca_in);
+      const auto m = firmware::merge_orca_filament_profile(base, op, a.orca_in);
       text = m.text;
       res["orca"] = {
           {"profile", a.orca_out}, {"merged_from", a.orca_in}, {"changed", m.changed_keys}, {"added", m.added_keys}};
     } else {
-      text = protocols::new_orca_filament_profile(op, a.orca_name, "");
+      text = firmware::new_orca_filament_profile(op, a.orca_name, "");
       res["orca"] = {{"profile", a.orca_out}, {"merged_from", nullptr}};
     }
-    res["orca"]["adaptive_pressure_advance_model"] = protocols::orca_model_text(op.table);
+    res["orca"]["adaptive_pressure_advance_model"] = firmware::orca_model_text(op.table);
     batch.add(a.orca_out, text);
   }
   if (!a.sliced_out.empty()) {
-    protocols::GcodeAdvanceOptions go;
+    firmware::GcodeAdvanceOptions go;
     go.firmware = fw;
     go.hysteresis = a.hysteresis;
     go.klipper_extruder = settings.klipper_extruder;
@@ -526,7 +526,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
     }
     const std::string sliced = ident::read_file_bytes(a.sliced_in);
     env.add_input(a.sliced_in, sliced);
-    const auto g = protocols::apply_gcode_advance(sliced, go, a.sliced_in);
+    const auto g = firmware::apply_gcode_advance(sliced, go, a.sliced_in);
     nlohmann::json ch = nlohmann::json::array();
     for (const auto& c : g.changes)
       ch.push_back({{"line", c.line}, {"feature", c.feature}, {"flow_mm3_s", c.flow_mm3_s}, {"K_s", c.k_s}});
@@ -551,7 +551,7 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
   const auto& env = o.envelope;
   const std::string& schedule = o.schedule_gcode;
   const std::string& backup = o.backup;
-  protocols::FileBatch batch = o.files;
+  core::FileBatch batch = o.files;
   // Refuse to overwrite a file that changed since it was read.
   if (a.write && result.changed() && ident::read_file_bytes(a.config) != result.original)
     throw InputError("the configuration file changed since it was read; run the export again", a.config);

@@ -22,13 +22,13 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/config_edit.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
-#include "tunekit/protocols/gcode_advance.hpp"
-#include "tunekit/protocols/orca_profile.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/firmware/config_edit.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
+#include "tunekit/firmware/gcode_advance.hpp"
+#include "tunekit/firmware/orca_profile.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -59,7 +59,7 @@ CLI::Option* export_finite_option(CLI::App* sub, const std::string& name, double
 
 }  // namespace
 
-protocols::ShaperSetting parse_shaper_arg(const std::string& arg, const std::string& axis) {
+firmware::ShaperSetting parse_shaper_arg(const std::string& arg, const std::string& axis) {
   // TYPE:FREQ[:ZETA]
   std::vector<std::string> parts;
   std::stringstream ss(arg);
@@ -67,7 +67,7 @@ protocols::ShaperSetting parse_shaper_arg(const std::string& arg, const std::str
   while (std::getline(ss, p, ':')) parts.push_back(p);
   if (parts.size() < 2 || parts.size() > 3 || parts[0].empty())
     throw InputError(fmt::format("--shaper-{} takes TYPE:FREQ[:ZETA] (for example mzv:45.2:0.1), not '{}'", axis, arg));
-  protocols::ShaperSetting s;
+  firmware::ShaperSetting s;
   s.type = parts[0];
   try {
     std::size_t used = 0;

@@ -30,8 +30,8 @@
 #include "tunekit/vision/overlay.hpp"
 #include "tunekit/vision/width_to_dynamics.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/gcode.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/machine/gcode.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -199,7 +199,7 @@ LinewidthOutcome compute_linewidth_camera(const LinewidthOptions& a) {
   for (int i : skipped)
     outcome.warnings.push_back(fmt::format("{}: {}x{} chessboard not found; image not used",
                                            a.images[static_cast<std::size_t>(i)], spec.cols, spec.rows));
-  protocols::write_file_atomic(a.save_camera, outcome.camera->to_json().dump(2) + "\n");
+  core::write_file_atomic(a.save_camera, outcome.camera->to_json().dump(2) + "\n");
   return outcome;
 }
 

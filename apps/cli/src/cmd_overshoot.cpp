@@ -19,7 +19,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/overshoot.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/core/atomic_file.hpp"
 #include "tunekit/protocols/runner.hpp"
 
 namespace tunekit::cli {
@@ -277,8 +277,8 @@ OvershootOutcome compute_overshoot(const OvershootOptions& a, std::ostream* prog
     const std::string out = outcome.grid->out_dir;
     nlohmann::json pd;
     pd["overshoot_grid"] = {{"tolerance_mm", a.tolerance_mm}, {"cells", overshoot_grid_json(*outcome.grid)}};
-    protocols::write_file_atomic(out + "/results.json", overshoot_grid_envelope(outcome).dump());
-    protocols::write_file_atomic(out + "/plotdata.json", pd.dump(2) + "\n");
+    core::write_file_atomic(out + "/results.json", overshoot_grid_envelope(outcome).dump());
+    core::write_file_atomic(out + "/plotdata.json", pd.dump(2) + "\n");
     outcome.grid->report = write_report(out);
     return outcome;
   }

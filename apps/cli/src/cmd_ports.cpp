@@ -8,11 +8,11 @@
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/ports_command.hpp"
-#include "tunekit/protocols/serial_transport.hpp"
+#include "tunekit/machine/serial_transport.hpp"
 
 namespace tunekit::cli {
 
-PortsOutcome compute_ports(const PortsOptions&) { return {protocols::list_serial_ports()}; }
+PortsOutcome compute_ports(const PortsOptions&) { return {machine::list_serial_ports()}; }
 
 Envelope to_envelope(const PortsOutcome& o) {
   Envelope env("ports");

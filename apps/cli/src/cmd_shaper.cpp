@@ -18,8 +18,8 @@
 #include "tunekit/cli/shaper_command.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/klipper_spectrum.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/firmware_limits.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -79,12 +79,12 @@ void shaper_choose_damping(const ShaperOptions& a, const AxisResult& r, ident::S
 
 // The recommendation is made among the target firmware's shapers only, each within the
 // firmware's damping bound for it (firmware_limits.hpp).
-void shaper_restrict_to_firmware(protocols::ExportFirmware fw, const std::string& ax, ident::ShaperSelectionOptions& so,
+void shaper_restrict_to_firmware(firmware::ExportFirmware fw, const std::string& ax, ident::ShaperSelectionOptions& so,
                                  std::vector<std::string>& warnings) {
   std::vector<ident::ShaperType> allowed;
   std::vector<std::string> dropped;
   for (const auto t : so.types) {
-    const auto f = protocols::limits::find_shaper(fw, ident::to_string(t));
+    const auto f = firmware::limits::find_shaper(fw, ident::to_string(t));
     if (!f) continue;
     if (so.design_damping_ratio > f->max_damping) {
       dropped.push_back(fmt::format("{} (damping at most {})", f->firmware_name, f->max_damping));
@@ -96,10 +96,10 @@ void shaper_restrict_to_firmware(protocols::ExportFirmware fw, const std::string
     throw InputError(fmt::format(
         "axis {}: none of the shapers considered is available in {} ({}) at the design "
         "damping {:.3f}",
-        ax, protocols::limits::firmware_title(fw), protocols::limits::shaper_list(fw), so.design_damping_ratio));
+        ax, firmware::limits::firmware_title(fw), firmware::limits::shaper_list(fw), so.design_damping_ratio));
   if (!dropped.empty())
     warnings.push_back(fmt::format("axis {}: design damping {:.3f} is above {}'s bound for {}: not considered", ax,
-                                   so.design_damping_ratio, protocols::limits::firmware_title(fw),
+                                   so.design_damping_ratio, firmware::limits::firmware_title(fw),
                                    fmt::join(dropped, ", ")));
   so.types = allowed;
 }
@@ -169,7 +169,7 @@ ShaperOutcome compute_shaper(const ShaperOptions& a) {
     out.resonance = std::move(r);
     outcome.axes.push_back(std::move(out));
   }
-  for (const auto& [path, content] : csv_files) protocols::write_file_atomic(path, content);
+  for (const auto& [path, content] : csv_files) core::write_file_atomic(path, content);
   return outcome;
 }
 
@@ -217,7 +217,7 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
                   "(freq,psd_x,psd_y,psd_z,psd_xyz,shapers:,...), readable by Klipper's calibrate_shaper.py; "
                   "'{axis}' in the name becomes x/y/z");
   sub->add_option_function<std::string>(
-      "--firmware", [&o](const std::string& s) { o.firmware = protocols::parse_export_firmware(s); },
+      "--firmware", [&o](const std::string& s) { o.firmware = firmware::parse_export_firmware(s); },
       "Recommend among this firmware's shapers only (klipper, marlin or rrf), each within the firmware's "
       "damping bound for it");
   sub->footer(

@@ -12,7 +12,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/version.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/core/atomic_file.hpp"
 
 namespace tunekit::cli {
 
@@ -136,7 +136,7 @@ bool is_special_output(const std::string& path) {
 
 void write_output_text(const std::string& path, const std::string& text) {
   if (!is_special_output(path)) {
-    protocols::write_file_atomic(path, text);
+    core::write_file_atomic(path, text);
     return;
   }
   // A device or pipe (-o /dev/stdout): written in place, never replaced.

@@ -14,7 +14,7 @@
 #include "tunekit/history/drift.hpp"
 #include "tunekit/history/quantities.hpp"
 #include "tunekit/history/store.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/core/atomic_file.hpp"
 
 #include "history_common.hpp"
 
@@ -375,7 +375,7 @@ HistoryReportOutcome compute_history_report(const HistoryOptions& a) {
     out.rows.push_back({t.machine_id, t.runs, last, drifted});
   }
   h << "</table>\n</body>\n</html>\n";
-  protocols::write_file_atomic(a.html_out, h.str());
+  core::write_file_atomic(a.html_out, h.str());
 
   out.columns = columns;
   return out;

@@ -12,8 +12,8 @@
 #include "linewidth_profile_csv.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/gcode.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/machine/gcode.hpp"
 #include "tunekit/vision/width_to_dynamics.hpp"
 
 namespace tunekit::cli::linewidth {
@@ -22,7 +22,7 @@ namespace {
 // The extruding moves of a G-code file, in order (travel and extruder-only moves are skipped).
 std::vector<vision::PathSegment> gcode_path(const std::string& path, std::size_t& lines_read, std::string& text) {
   text = read_file_bytes(path);
-  protocols::GcodeInterpreter gi;
+  machine::GcodeInterpreter gi;
   std::vector<vision::PathSegment> segs;
   std::size_t lineno = 0, start = 0;
   while (start <= text.size()) {
@@ -31,7 +31,7 @@ std::vector<vision::PathSegment> gcode_path(const std::string& path, std::size_t
     ++lineno;
     const std::string_view line(text.data() + start, end - start);
     try {
-      if (const auto w = protocols::parse_gcode(line)) {
+      if (const auto w = machine::parse_gcode(line)) {
         if (const auto m = gi.apply(*w)) {
           const double de = m->end[3] - m->start[3];
           if (!m->extruder_only() && de > 0 && m->length_mm() > 0) segs.push_back({m->length_mm(), m->feed_mm_s, de});
@@ -151,7 +151,7 @@ nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run,
         fmt::format("tunekit linewidth: profile of {} (line {}) at a constant {} mm/s", run.path, a.line, a.speed_mm_s);
   }
   if (rows.size() < 3) throw FitError("measured nothing: fewer than 3 valid profile samples to map to time", run.path);
-  protocols::write_file_atomic(a.profile_csv, vision::timed_width_csv(rows, comment));
+  core::write_file_atomic(a.profile_csv, vision::timed_width_csv(rows, comment));
   mapping["path"] = a.profile_csv;
   mapping["rows"] = rows.size();
   mapping["line"] = a.line;

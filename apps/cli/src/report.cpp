@@ -13,7 +13,7 @@
 #include "tunekit/cli/warning_advice.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
+#include "tunekit/core/atomic_file.hpp"
 
 namespace tunekit::cli {
 namespace {
@@ -325,7 +325,7 @@ ReportOutcome compute_report(const ReportOptions& options) {
     throw InputError(fmt::format("unexpected content in the results or plot data: {}", e.what()), results_path);
   }
   outcome.html_path = run_dir + "/report.html";
-  protocols::write_file_atomic(outcome.html_path, html);
+  core::write_file_atomic(outcome.html_path, html);
   return outcome;
 }
 

@@ -27,7 +27,7 @@ nlohmann::json shaper_selection_json(const ShaperOutcome& o, const ShaperAxis& x
   const auto& so = x.selection;
   nlohmann::json sel;
   sel["method"] = x.klipper_method ? "klipper" : "identified";
-  if (o.options.firmware) sel["firmware"] = protocols::to_string(*o.options.firmware);
+  if (o.options.firmware) sel["firmware"] = firmware::to_string(*o.options.firmware);
   sel["psd_normalization"] =
       x.normalized_by_us == x.datasets
           ? "divided by (f + 0.1 Hz), damped below 10 Hz by tunekit (Klipper's normalization)"

@@ -68,7 +68,7 @@ struct AdvanceInputs {
   std::vector<double> rheo_relative_tau;
   double rheo_reference_flow_mm3_s = kAdvanceNaN;
 
-  // Machine (tunekit::protocols::MachineProfile); NaN or 0 limits disable the window design.
+  // Machine (tunekit::machine::MachineProfile); NaN or 0 limits disable the window design.
   double filament_area_mm2 = kAdvanceNaN;
   double line_area_mm2 = kAdvanceNaN;
   double print_speed_mm_s = kAdvanceNaN;

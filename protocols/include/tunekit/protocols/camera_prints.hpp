@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "tunekit/vision/width_to_dynamics.hpp"
-#include "tunekit/protocols/dialect.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/firmware/dialect.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 
 namespace tunekit::protocols {
 
@@ -28,10 +28,11 @@ struct PrintedLine {
 
 /// The lines the protocol prints (in print order), from its parameters (every key filled in,
 /// see build_experiment) and the profile.
-std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& params, const MachineProfile& profile);
+std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& params,
+                                           const machine::MachineProfile& profile);
 
 /// Appends the protocol's G-code (after the header comment).
 void append_line_steps_gcode(std::vector<std::string>& gcode, const std::map<std::string, double>& params,
-                             const MachineProfile& profile, const Dialect& dialect);
+                             const machine::MachineProfile& profile, const firmware::Dialect& dialect);
 
 }  // namespace tunekit::protocols

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 
 namespace tunekit::protocols {
 
@@ -54,7 +54,7 @@ struct CoverageMotion {
 /// Cells of the standard pattern set laid out in rows centred on the bed of `profile`
 /// (InputError if they do not fit within the x/y travel less a 5 mm margin).
 /// Returns the plan with `planner` = "pce" or "zigzag".
-CoveragePlan plan_test_patterns(const TestPatternSet& set, const MachineProfile& profile, const std::string& planner,
-                                const CoverageMotion& motion);
+CoveragePlan plan_test_patterns(const TestPatternSet& set, const machine::MachineProfile& profile,
+                                const std::string& planner, const CoverageMotion& motion);
 
 }  // namespace tunekit::protocols

@@ -25,8 +25,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "tunekit/protocols/dialect.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/firmware/dialect.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/safety.hpp"
 
 namespace tunekit::protocols {
@@ -81,7 +81,7 @@ struct Experiment {
 /// protocol's line count and machine time are computed from the parameters and compared with
 /// `limits` before any G-code is generated, so no parameter can make it hang or exhaust memory.
 Experiment build_experiment(const std::string& protocol, const std::map<std::string, double>& overrides,
-                            const std::string& axis, const MachineProfile& profile, const Dialect& dialect,
-                            const ProtocolLimits& limits = {});
+                            const std::string& axis, const machine::MachineProfile& profile,
+                            const firmware::Dialect& dialect, const ProtocolLimits& limits = {});
 
 }  // namespace tunekit::protocols

@@ -28,14 +28,18 @@
 #include <nlohmann/json.hpp>
 
 #include "tunekit/protocols/experiments.hpp"
-#include "tunekit/protocols/gcode_link.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/machine/gcode_link.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 
 namespace tunekit::protocols {
 
 /// The simulated camera's print bed (sim_camera.hpp; declared only, so that this header and the
 /// code that runs experiments need no OpenCV).
+}  // namespace tunekit::protocols
+namespace tunekit::sim {
 class SimPrintBed;
+}  // namespace tunekit::sim
+namespace tunekit::protocols {
 
 struct RunOptions {
   std::string protocol;                  ///< see protocol_specs()
@@ -50,8 +54,8 @@ struct RunOptions {
   std::vector<std::string> sim_options;  ///< SimConfig::from_options keys ("tau_s=0.5", "fault=drop@12")
   /// "sim" only: what the simulated printer prints is laid down on this bed (for its camera,
   /// sim_camera.hpp); several runs may share one bed.
-  std::shared_ptr<SimPrintBed> sim_bed;
-  LinkOptions link;                                  ///< timeouts and retries
+  std::shared_ptr<sim::SimPrintBed> sim_bed;
+  machine::LinkOptions link;                         ///< timeouts and retries
   ProtocolLimits limits;                             ///< caps on the protocol's machine time, lines and bytes
   bool dry_run = false;                              ///< build and check only; RunResult::gcode is filled
   const std::atomic<bool>* abort_flag = nullptr;     ///< e.g. set by SIGINT
@@ -69,7 +73,7 @@ struct RunResult {
 };
 
 /// The built-in simulated printer's machine profile (same content as datasets/machines/sim.toml).
-MachineProfile builtin_sim_profile();
+machine::MachineProfile builtin_sim_profile();
 
 /// Runs (or, with dry_run, only builds and checks) an experiment. See the header comment.
 RunResult run_experiment(const RunOptions& options);

@@ -12,8 +12,9 @@
 #include <string_view>
 #include <vector>
 
-#include "tunekit/protocols/gcode.hpp"
-#include "tunekit/protocols/machine_profile.hpp"
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/gcode_link.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 
 namespace tunekit::protocols {
 
@@ -48,26 +49,26 @@ double estimate_gcode_duration_s(const std::vector<std::string>& gcode);
 /// Interprets `gcode` from the machine's home position (axis minimums) and returns all
 /// violations of `profile`'s limits and of `limits`; `sensors` lists sensors the protocol
 /// needs ("accelerometer", "load_cell", "filament_encoder", "camera").
-std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, const MachineProfile& profile,
+std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, const machine::MachineProfile& profile,
                                       const std::vector<std::string>& sensors, const ProtocolLimits& limits = {});
 
 /// Throws InputError (exit code 2) naming every violation when there is any.
-void require_within_limits(const std::vector<std::string>& gcode, const MachineProfile& profile,
+void require_within_limits(const std::vector<std::string>& gcode, const machine::MachineProfile& profile,
                            const std::vector<std::string>& sensors, const ProtocolLimits& limits = {});
 
 /// The final check of each line a link writes to a machine: refuses a line holding a
 /// non-finite number, a move to a position outside the profile's travel, a non-positive feed
 /// rate, or a temperature above the profile's maximum. It follows the position the accepted
 /// lines set up (G28 homes to the axis minimums); a refused line changes nothing.
-class SendGuard {
+class SendGuard : public machine::LineGuard {
  public:
-  explicit SendGuard(const MachineProfile& profile);
+  explicit SendGuard(const machine::MachineProfile& profile);
   /// Why `line` must not be sent, or nullopt when it may be (its effect is then recorded).
-  std::optional<std::string> refuse(std::string_view line);
+  std::optional<std::string> refuse(std::string_view line) override;
 
  private:
-  MachineProfile profile_;
-  GcodeInterpreter state_;
+  machine::MachineProfile profile_;
+  machine::GcodeInterpreter state_;
 };
 
 }  // namespace tunekit::protocols

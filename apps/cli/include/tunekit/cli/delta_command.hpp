@@ -15,7 +15,7 @@
 #include "tunekit/cli/input_digest.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 
 namespace tunekit::cli {
 
@@ -41,11 +41,11 @@ struct DeltaOptions {
 
 struct DeltaOutcome {
   DeltaOptions options;
-  InputDigest input;                                  ///< the probe CSV
-  std::size_t probe_count = 0;                        ///< probe points read
-  ident::DeltaCalibration calibration;                ///< factors, nominal and fitted geometry, flatness, residuals
-  std::optional<protocols::ExportFirmware> firmware;  ///< the export's firmware when asked for
-  std::string export_text;                            ///< the fitted settings in that firmware's syntax
+  InputDigest input;                                 ///< the probe CSV
+  std::size_t probe_count = 0;                       ///< probe points read
+  ident::DeltaCalibration calibration;               ///< factors, nominal and fitted geometry, flatness, residuals
+  std::optional<firmware::ExportFirmware> firmware;  ///< the export's firmware when asked for
+  std::string export_text;                           ///< the fitted settings in that firmware's syntax
   std::vector<std::string> warnings;
 };
 

@@ -6,7 +6,7 @@
 //
 // Unlike the analysis commands, export writes files (the configuration with its backup, G-code,
 // an OrcaSlicer profile, post-processed G-code, and its own JSON results) and all of them are
-// written together or none (protocols::FileBatch). So it is two steps: compute_export() designs
+// written together or none (core::FileBatch). So it is two steps: compute_export() designs
 // everything and reads every input, writing nothing; commit_export() writes what the outcome
 // holds, with the JSON results, and prints the summary. Shape of a command: command.hpp.
 
@@ -20,8 +20,8 @@
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
-#include "tunekit/protocols/atomic_file.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 
 namespace tunekit::cli {
 
@@ -49,14 +49,14 @@ struct ExportOptions {
 
 struct ExportOutcome {
   ExportOptions options;
-  protocols::ExportFirmware firmware{};
-  protocols::CompensatorSettings settings;       ///< what is set
+  firmware::ExportFirmware firmware{};
+  firmware::CompensatorSettings settings;        ///< what is set
   std::optional<ident::AdvanceDesign> design;    ///< the advance design, when one was made
   std::optional<ident::FlowAdvanceDesign> flow;  ///< the flow-dependent design (two or more levels)
-  protocols::ExportResult change;                ///< the configuration before/after, diff and G-code
+  firmware::ExportResult change;                 ///< the configuration before/after, diff and G-code
   std::string schedule_gcode;                    ///< flow-dependent advance as G-code (per feature)
   std::string backup;                            ///< the backup's path when --write changes the file
-  protocols::FileBatch files;                    ///< everything commit_export() writes (not the JSON)
+  core::FileBatch files;                         ///< everything commit_export() writes (not the JSON)
   Envelope envelope{"export"};
 };
 
@@ -74,6 +74,6 @@ void print_text(const ExportOutcome& outcome, std::ostream& os);
 int commit_export(const ExportOutcome& outcome, const OutputOptions& output, CliContext& ctx);
 
 /// --shaper-x/--shaper-y TYPE:FREQ[:ZETA].
-protocols::ShaperSetting parse_shaper_arg(const std::string& arg, const std::string& axis);
+firmware::ShaperSetting parse_shaper_arg(const std::string& arg, const std::string& axis);
 
 }  // namespace tunekit::cli

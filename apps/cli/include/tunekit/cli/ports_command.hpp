@@ -7,14 +7,14 @@
 #include <vector>
 
 #include "tunekit/cli/envelope.hpp"
-#include "tunekit/protocols/serial_transport.hpp"
+#include "tunekit/machine/serial_transport.hpp"
 
 namespace tunekit::cli {
 
 struct PortsOptions {};  ///< nothing to choose
 
 struct PortsOutcome {
-  std::vector<protocols::SerialPortInfo> ports;  ///< path, description, transport, USB ids, serial number
+  std::vector<machine::SerialPortInfo> ports;  ///< path, description, transport, USB ids, serial number
 };
 
 PortsOutcome compute_ports(const PortsOptions& options);

@@ -26,7 +26,7 @@ struct RunCommandOptions {
   /// Protocol parameters as NAME=VALUE (value in the unit the name carries), checked by compute_run().
   std::vector<std::string> params;
   /// Silence allowed while waiting for the firmware's "ok" (s); the link's default.
-  double timeout_s = std::chrono::duration<double>(protocols::LinkOptions{}.timeout).count();
+  double timeout_s = std::chrono::duration<double>(machine::LinkOptions{}.timeout).count();
 };
 
 struct RunOutcome {

@@ -15,7 +15,7 @@
 #include "tunekit/cli/envelope.hpp"
 #include "tunekit/cli/resonance_common.hpp"
 #include "tunekit/ident/input_shaper.hpp"
-#include "tunekit/protocols/firmware_export.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 
 namespace tunekit::cli {
 
@@ -48,7 +48,7 @@ struct ShaperOptions {
   /// to this path ("{axis}" becomes the axis label); empty: none.
   std::string klipper_csv;
   /// Recommend among this firmware's shapers only, each within its damping bound.
-  std::optional<protocols::ExportFirmware> firmware;
+  std::optional<firmware::ExportFirmware> firmware;
 };
 
 /// One axis (or one record whose axis is not known) and the shaper chosen for it.

@@ -1,0 +1,259 @@
+// RepRapFirmware config.g writer. The file is G-code run at start-up: `M572 D<drive> S<s>`
+// sets pressure advance, `M593 P"<type>" F<hz> S<zeta>` the (single) input shaper. Existing
+// commands get their parameter values rewritten in place (other parameters and the comment
+// after ';' stay); missing ones are added after the drive configuration block.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <cctype>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "export_writers.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/firmware/config_edit.hpp"
+#include "text_util.hpp"
+
+namespace tunekit::firmware::detail {
+namespace {
+
+struct Command {
+  std::string code;  // upper case, e.g. "M572"
+  std::size_t args_begin = 0;
+  std::size_t code_end = 0;  // start of the ';' comment, or the line length
+};
+
+std::optional<Command> parse_command(const std::string& t) {
+  std::size_t p = 0;
+  while (p < t.size() && text::is_blank(t[p])) ++p;
+  if (p >= t.size()) return std::nullopt;
+  const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(t[p])));
+  if (letter != 'M' && letter != 'G') return std::nullopt;
+  std::size_t q = p + 1;
+  while (q < t.size() && (std::isdigit(static_cast<unsigned char>(t[q])) || t[q] == '.')) ++q;
+  if (q == p + 1) return std::nullopt;
+  Command c;
+  c.code = std::string(1, letter) + t.substr(p + 1, q - p - 1);
+  c.args_begin = q;
+  bool quoted = false;
+  c.code_end = t.size();
+  for (std::size_t k = q; k < t.size(); ++k) {
+    if (t[k] == '"') quoted = !quoted;
+    if (!quoted && t[k] == ';') {
+      c.code_end = k;
+      break;
+    }
+  }
+  return c;
+}
+
+struct ParamPos {
+  std::size_t value_begin = 0;
+  std::size_t value_end = 0;
+};
+
+std::optional<ParamPos> find_param(const std::string& t, const Command& c, char letter) {
+  bool quoted = false;
+  for (std::size_t k = c.args_begin; k < c.code_end; ++k) {
+    if (t[k] == '"') quoted = !quoted;
+    if (quoted) continue;
+    if (std::toupper(static_cast<unsigned char>(t[k])) == letter && (k == c.args_begin || text::is_blank(t[k - 1]))) {
+      ParamPos p;
+      p.value_begin = k + 1;
+      std::size_t e = k + 1;
+      bool q = false;
+      while (e < c.code_end && (q || !text::is_blank(t[e]))) {
+        if (t[e] == '"') q = !q;
+        ++e;
+      }
+      p.value_end = e;
+      return p;
+    }
+  }
+  return std::nullopt;
+}
+
+/// Sets parameter `letter` to `value` in line `t` (appending it to the command when absent).
+std::string set_param(const std::string& t, char letter, const std::string& value) {
+  const auto c = parse_command(t);
+  if (!c) return t;
+  if (const auto p = find_param(t, *c, letter)) return t.substr(0, p->value_begin) + value + t.substr(p->value_end);
+  std::size_t end = c->code_end;
+  while (end > c->args_begin && text::is_blank(t[end - 1])) --end;
+  return t.substr(0, end) + " " + std::string(1, letter) + value + t.substr(end);
+}
+
+std::string param_value(const std::string& t, char letter) {
+  const auto c = parse_command(t);
+  if (!c) return {};
+  const auto p = find_param(t, *c, letter);
+  return p ? t.substr(p->value_begin, p->value_end - p->value_begin) : std::string();
+}
+
+std::vector<std::string> split_colon(const std::string& v) {
+  std::vector<std::string> out;
+  std::size_t b = 0;
+  for (;;) {
+    const auto e = v.find(':', b);
+    out.push_back(v.substr(b, e == std::string::npos ? std::string::npos : e - b));
+    if (e == std::string::npos) break;
+    b = e + 1;
+  }
+  return out;
+}
+
+/// Position of `drive` in a colon-separated drive list ("0:1"), or -1.
+int index_in_list(const std::string& list, const std::string& drive) {
+  const auto items = split_colon(list);
+  for (std::size_t i = 0; i < items.size(); ++i)
+    if (items[i] == drive) return static_cast<int>(i);
+  return -1;
+}
+
+bool is_drive_setup(const std::string& code) {
+  static const char* codes[] = {"M584", "M350", "M92", "M906", "M566", "M203", "M201", "M84"};
+  return std::any_of(std::begin(codes), std::end(codes), [&](const char* k) { return code == k; });
+}
+
+}  // namespace
+
+void write_rrf(ExportResult& r, const CompensatorSettings& s) {
+  LineEditor ed(r.original);
+  const std::string drive = std::to_string(s.rrf_drive);
+  std::optional<std::size_t> m572, m593, anchor, m501;
+  for (std::size_t i = 0; i < ed.size(); ++i) {
+    const auto c = parse_command(ed.line(i));
+    if (!c) continue;
+    if (c->code == "M572") {
+      const std::string d = param_value(ed.line(i), 'D');
+      if (d == drive || index_in_list(d, drive) >= 0) m572 = i;
+    }
+    if (c->code == "M593") m593 = i;
+    if (is_drive_setup(c->code)) anchor = i;
+    if (c->code == "M501" && !m501) m501 = i;
+  }
+  std::vector<std::string> new_lines;
+
+  // Precedence: config.g's M501 runs config-override.g (GCodes2.cpp case 501) where it stands,
+  // so a command there overrides the same command in config.g before the M501. RRF's M500
+  // writes heater, kinematics, probe, tool and workplace values only (GCodes.cpp
+  // WriteConfigOverrideFile), never M572/M593: such lines there were added by hand.
+  if (m501) {
+    namespace fs = std::filesystem;
+    const fs::path over = fs::path(r.path).parent_path() / "config-override.g";
+    std::ifstream in(over, std::ios::binary);
+    if (in) {
+      std::stringstream ss;
+      ss << in.rdbuf();
+      const LineEditor oe(ss.str());
+      for (std::size_t i = 0; i < oe.size(); ++i) {
+        const auto c = parse_command(oe.line(i));
+        if (!c) continue;
+        const bool pa = c->code == "M572" && s.pa_k_s && param_value(oe.line(i), 'D') == drive;
+        const bool is = c->code == "M593" && !s.shapers.empty();
+        if (!pa && !is) continue;
+        const std::optional<std::size_t>& mine = pa ? m572 : m593;
+        if (mine && *mine > *m501) continue;  // config.g's own line runs after config-override.g
+        throw InputError(fmt::format(
+            "{}:{}: '{}' in config-override.g is run by M501 (config.g line {}) after config.g's own {} and would "
+            "override the value written here; remove that line from config-override.g (RepRapFirmware's M500 never "
+            "writes {}, so it was added by hand) and export again",
+            over.string(), i + 1, oe.line(i), *m501 + 1, c->code, c->code));
+      }
+    }
+  }
+
+  if (s.pa_k_s) {
+    const std::string k = format_number(*s.pa_k_s, kDecimalsK);
+    if (m572) {
+      const std::string& t = ed.line(*m572);
+      const std::string old = param_value(t, 'S');
+      const std::string dlist = param_value(t, 'D');
+      const int at = index_in_list(dlist, drive);
+      if (dlist.find(':') != std::string::npos && at >= 0) {
+        // "M572 D0:1 S0.2:0.3" (GCodes2.cpp case 572: one S per listed drive, or one S for all):
+        // only this drive's entry changes, the others keep theirs.
+        std::vector<std::string> drives = split_colon(dlist), vals = split_colon(old);
+        if (vals.size() == 1) vals.assign(drives.size(), vals[0]);
+        if (vals.size() == drives.size() && !same_number(vals[static_cast<std::size_t>(at)], *s.pa_k_s, kDecimalsK)) {
+          const std::string before = vals[static_cast<std::size_t>(at)];
+          vals[static_cast<std::size_t>(at)] = k;
+          std::string joined;
+          for (std::size_t q = 0; q < vals.size(); ++q) joined += (q ? ":" : "") + vals[q];
+          ed.replace(*m572, set_param(t, 'S', joined));
+          r.changes.push_back({"M572 D" + drive + " S", before, k, *m572 + 1, "command (drive list)"});
+        } else if (vals.size() != drives.size()) {
+          r.warnings.push_back(fmt::format("{}:{}: M572 D{} S{}: the S list does not match the drives; left as it is",
+                                           r.path, *m572 + 1, dlist, old));
+        }
+      } else if (!same_number(old, *s.pa_k_s, kDecimalsK)) {
+        ed.replace(*m572, set_param(t, 'S', k));
+        r.changes.push_back({"M572 D" + drive + " S", old, k, *m572 + 1, "command"});
+      }
+    } else {
+      new_lines.push_back(fmt::format("M572 D{} S{} ; pressure advance (s)", drive, k));
+      r.changes.push_back({"M572 D" + drive + " S", "", k, 0, "new line"});
+    }
+  }
+  if (s.pa_smooth_s)
+    r.warnings.push_back(
+        "RepRapFirmware has no pressure-advance smoothing time: the extruder's M201 E acceleration "
+        "limit applies instead; smoothing time not written");
+
+  std::string axis;
+  const ShaperSetting* sh = rrf_single_shaper(s, r.warnings, &axis);
+  if (sh) {
+    const std::string type = firmware_shaper_name(ExportFirmware::rrf, sh->type);
+    const std::string f = format_number(sh->freq_hz, kDecimalsFreq);
+    const std::string z = format_number(sh->damping, kDecimalsZeta);
+    if (m593) {
+      std::string t = ed.line(*m593);
+      const std::string old_p = param_value(t, 'P'), old_f = param_value(t, 'F'), old_s = param_value(t, 'S');
+      std::string bare_p = old_p;
+      bare_p.erase(std::remove(bare_p.begin(), bare_p.end(), '"'), bare_p.end());
+      if (core::lower(bare_p) != type) {
+        t = set_param(t, 'P', "\"" + type + "\"");
+        r.changes.push_back({"M593 P", old_p, "\"" + type + "\"", *m593 + 1, "command"});
+      }
+      if (!same_number(old_f, sh->freq_hz, kDecimalsFreq)) {
+        t = set_param(t, 'F', f);
+        r.changes.push_back({"M593 F", old_f, f, *m593 + 1, "command"});
+      }
+      if (!same_number(old_s, sh->damping, kDecimalsZeta)) {
+        t = set_param(t, 'S', z);
+        r.changes.push_back({"M593 S", old_s, z, *m593 + 1, "command"});
+      }
+      ed.replace(*m593, t);
+    } else {
+      new_lines.push_back(fmt::format("M593 P\"{}\" F{} S{} ; input shaping (Hz, damping ratio)", type, f, z));
+      r.changes.push_back({"M593", "", fmt::format("P\"{}\" F{} S{}", type, f, z), 0, "new line"});
+    }
+  }
+
+  if (!new_lines.empty()) {
+    std::size_t at = ed.size();
+    if (m572 && !m593 && sh) at = *m572 + 1;
+    else if (anchor) at = *anchor + 1;
+    else if (m501) at = *m501;
+    ed.insert_before(at, new_lines);
+    for (auto& c : r.changes)
+      if (c.where == "new line") c.line = at;
+  }
+
+  r.updated = ed.render();
+  r.diff = ed.unified_diff(r.path);
+  std::string g;
+  if (s.pa_k_s) g += fmt::format("M572 D{} S{}\n", drive, format_number(*s.pa_k_s, kDecimalsK));
+  if (sh)
+    g += fmt::format("M593 P\"{}\" F{} S{}\n", firmware_shaper_name(ExportFirmware::rrf, sh->type),
+                     format_number(sh->freq_hz, kDecimalsFreq), format_number(sh->damping, kDecimalsZeta));
+  r.gcode = g;
+  if (r.updated != r.original)
+    r.notes.push_back(
+        "RepRapFirmware runs config.g at start-up: restart the board (M999) after writing, or send the "
+        "G-code above to apply the values now");
+}
+
+}  // namespace tunekit::firmware::detail

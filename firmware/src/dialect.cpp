@@ -1,0 +1,167 @@
+#include "tunekit/firmware/dialect.hpp"
+#include "text_util.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+
+#include <fmt/format.h>
+
+namespace tunekit::firmware {
+namespace {
+
+/// Value after "KEY:" up to the next " UPPERCASE_KEY:" token.
+std::string field(const std::string& line, const std::string& key) {
+  const auto p = line.find(key + ":");
+  if (p == std::string::npos) return {};
+  std::size_t b = p + key.size() + 1;
+  while (b < line.size() && line[b] == ' ') ++b;
+  std::size_t e = b;
+  while (e < line.size()) {
+    if (line[e] == ' ') {
+      std::size_t k = e + 1;
+      while (k < line.size() && (std::isupper(static_cast<unsigned char>(line[k])) || line[k] == '_')) ++k;
+      if (k > e + 1 && k < line.size() && line[k] == ':') break;
+    }
+    ++e;
+  }
+  return line.substr(b, e - b);
+}
+
+}  // namespace
+
+std::string to_string(Firmware f) {
+  switch (f) {
+    case Firmware::marlin: return "marlin";
+    case Firmware::prusa: return "prusa";
+    case Firmware::klipper: return "klipper";
+    case Firmware::reprapfirmware: return "rrf";
+    default: return "unknown";
+  }
+}
+
+Firmware firmware_from_name(const std::string& name) {
+  const std::string n = core::lower(name);
+  if (n == "marlin") return Firmware::marlin;
+  if (n == "prusa") return Firmware::prusa;
+  if (n == "klipper") return Firmware::klipper;
+  if (n == "rrf" || n == "reprapfirmware") return Firmware::reprapfirmware;
+  return Firmware::unknown;
+}
+
+bool FirmwareInfo::sensor_stream() const {
+  const auto it = capabilities.find("TUNEKIT_SENSOR_STREAM");
+  return it != capabilities.end() && it->second;
+}
+
+FirmwareInfo parse_m115(const std::vector<std::string>& lines) {
+  FirmwareInfo info;
+  for (const auto& raw : lines) {
+    std::string line = raw;
+    if (line.rfind("ok ", 0) == 0) line = line.substr(3);
+    if (line.rfind("Cap:", 0) == 0) {
+      const auto colon = line.rfind(':');
+      if (colon > 4) info.capabilities[line.substr(4, colon - 4)] = line.substr(colon + 1) == "1";
+      continue;
+    }
+    if (line.find("FIRMWARE_NAME:") == std::string::npos || info.firmware != Firmware::unknown) continue;
+    info.name = field(line, "FIRMWARE_NAME");
+    info.version = field(line, "FIRMWARE_VERSION");
+    const std::string n = core::lower(info.name);
+    if (n.find("prusa") != std::string::npos) info.firmware = Firmware::prusa;
+    else if (n.find("klipper") != std::string::npos) info.firmware = Firmware::klipper;
+    else if (n.find("reprapfirmware") != std::string::npos) info.firmware = Firmware::reprapfirmware;
+    else if (n.find("marlin") != std::string::npos) info.firmware = Firmware::marlin;
+    if (info.version.empty()) {
+      // Marlin and Prusa put the version after the name: "Marlin 2.1.2.1 (...)".
+      const auto sp = info.name.find(' ');
+      if (sp != std::string::npos) {
+        auto v = info.name.substr(sp + 1);
+        info.version = v.substr(0, v.find(' '));
+      }
+    }
+  }
+  return info;
+}
+
+FtMotionReport parse_m493_report(const std::vector<std::string>& lines) {
+  FtMotionReport r;
+  for (const auto& raw : lines) {
+    std::string line = raw;
+    if (line.rfind("echo:", 0) == 0) line = line.substr(5);
+    const auto ft = line.find("Fixed-Time Motion ");
+    if (ft != std::string::npos) {
+      r.present = true;
+      r.active = line.compare(ft + 18, 7, "enabled") == 0;
+      // " with X axis ZV shaping" / " and with Y axis MZV shaping" (A/B on CoreXY/CoreXZ builds).
+      static const char* const kTags[2][2] = {{" with ", "x"}, {" and with ", "y"}};
+      for (const auto& tag_axis : kTags) {
+        const std::string tag = tag_axis[0], axis = tag_axis[1];
+        std::size_t p = line.find(tag);
+        // X's " with " is the first one not preceded by " and" (Y's).
+        if (axis == "x" && p != std::string::npos && p >= 4 && line.compare(p - 4, 4, " and") == 0)
+          p = std::string::npos;
+        if (p == std::string::npos) continue;
+        const auto ax = line.find(" axis ", p);
+        const auto end = line.find(" shaping", ax == std::string::npos ? p : ax);
+        if (ax != std::string::npos && end != std::string::npos && end > ax + 6)
+          r.shapers[axis] = line.substr(ax + 6, end - ax - 6);
+      }
+      continue;
+    }
+    const auto la = line.find("Linear Advance ");
+    if (la != std::string::npos && r.present) {
+      r.linear_advance = line.compare(la + 15, 7, "enabled") == 0;
+      const auto g = line.find("Gain: ");
+      if (g != std::string::npos) r.linear_advance_k = std::strtod(line.c_str() + g + 6, nullptr);
+    }
+  }
+  return r;
+}
+
+std::string Dialect::set_accel(double a) const {
+  switch (fw_) {
+    case Firmware::klipper: return fmt::format("SET_VELOCITY_LIMIT ACCEL={:.0f}", a);
+    case Firmware::reprapfirmware: return fmt::format("M204 P{:.0f} T{:.0f}", a, a);
+    // Marlin: P (printing moves) and T (travel moves, those without E); M204 S is deprecated.
+    default: return fmt::format("M204 P{:.0f} T{:.0f}", a, a);
+  }
+}
+
+std::string Dialect::set_hotend(double t, bool wait) const {
+  if (!wait) return fmt::format("M104 S{:.0f}", t);
+  // Marlin and RepRapFirmware: M109 S waits only while heating, M109 R also while cooling
+  // (Marlin/src/gcode/temp/M104_M109.cpp). Klipper's M109 waits from either side.
+  if (fw_ == Firmware::klipper) return fmt::format("M109 S{:.0f}", t);
+  return fmt::format("M109 R{:.0f}", t);
+}
+
+std::vector<std::string> Dialect::safe_state(bool heaters_off) const {
+  std::vector<std::string> out;
+  switch (fw_) {
+    case Firmware::klipper:
+      // Klipper has no quick stop short of an emergency shutdown; M112 stops motion at once.
+      out.push_back("M112");
+      break;
+    // RepRapFirmware has no M410 (GCodes2.cpp has no case 410: it falls through to a macro
+    // lookup and answers "not supported"); M112 is its documented emergency stop.
+    case Firmware::reprapfirmware: out.push_back("M112"); break;
+    default: out.push_back("M410"); break;  // Marlin/Prusa quickstop: stop all steppers now
+  }
+  if (heaters_off) {
+    if (fw_ == Firmware::klipper) out.push_back("TURN_OFF_HEATERS");
+    else {
+      out.push_back("M104 S0");
+      out.push_back("M140 S0");
+    }
+  }
+  return out;
+}
+
+std::string Dialect::sensor_stream(const std::string& sensor, bool on) const {
+  if (fw_ == Firmware::klipper) return {};
+  const char* code = sensor == "accelerometer" ? "A" : sensor == "load_cell" ? "L" : "F";
+  return fmt::format("M4100 {}{}", code, on ? 1 : 0);
+}
+
+}  // namespace tunekit::firmware

@@ -1,0 +1,226 @@
+#include "tunekit/firmware/gcode_advance.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "export_writers.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/firmware/config_edit.hpp"
+
+namespace tunekit::firmware {
+namespace {
+
+std::string ga_upper(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+/// The code part of a line (before ';'), trimmed.
+std::string ga_code(const std::string& line) {
+  std::string c = line.substr(0, line.find(';'));
+  const auto b = c.find_first_not_of(" \t");
+  if (b == std::string::npos) return {};
+  const auto e = c.find_last_not_of(" \t\r");
+  return c.substr(b, e - b + 1);
+}
+
+/// Value of word `letter` in a G-code line's code ("G1 X10.5 E0.2"), if present.
+std::optional<double> ga_word(const std::string& code, char letter) {
+  for (std::size_t i = 0; i < code.size(); ++i) {
+    if (std::toupper(static_cast<unsigned char>(code[i])) != letter) continue;
+    if (i > 0 && code[i - 1] != ' ' && code[i - 1] != '\t') continue;
+    try {
+      std::size_t used = 0;
+      const double v = std::stod(code.substr(i + 1), &used);
+      if (used > 0) return v;
+    } catch (const std::logic_error&) {
+    }
+  }
+  return std::nullopt;
+}
+
+/// Klipper-style KEY=value parameter.
+std::optional<double> ga_param(const std::string& code, const std::string& key) {
+  const std::string u = ga_upper(code);
+  const auto p = u.find(" " + key + "=");
+  if (p == std::string::npos) return std::nullopt;
+  try {
+    return std::stod(code.substr(p + key.size() + 2));
+  } catch (const std::logic_error&) {
+    return std::nullopt;
+  }
+}
+
+std::string ga_command(const std::string& code) {
+  const auto sp = code.find_first_of(" \t");
+  return ga_upper(code.substr(0, sp));
+}
+
+double ga_interp(const std::vector<std::pair<double, double>>& t, double q) {
+  if (q <= t.front().first) return t.front().second;
+  if (q >= t.back().first) return t.back().second;
+  for (std::size_t i = 1; i < t.size(); ++i)
+    if (q <= t[i].first) {
+      const double s = (q - t[i - 1].first) / (t[i].first - t[i - 1].first);
+      return t[i - 1].second + s * (t[i].second - t[i - 1].second);
+    }
+  return t.back().second;
+}
+
+std::string ga_set_command(const GcodeAdvanceOptions& o, double k, double q, const std::string& feature) {
+  const std::string ks = format_number(k, detail::kDecimalsK);
+  const std::string note = fmt::format(" ; tunekit: {} at {} mm^3/s", feature, format_number(q, 2));
+  switch (o.firmware) {
+    case ExportFirmware::klipper:
+    case ExportFirmware::kalico:
+      return "SET_PRESSURE_ADVANCE" +
+             (o.klipper_extruder != "extruder" ? " EXTRUDER=" + o.klipper_extruder : std::string()) + " ADVANCE=" + ks +
+             note;
+    case ExportFirmware::marlin: return "M900 K" + ks + note;
+    case ExportFirmware::rrf: return fmt::format("M572 D{} S{}{}", o.rrf_drive, ks, note);
+  }
+  return {};
+}
+
+}  // namespace
+
+bool parse_advance_command(const std::string& line, ExportFirmware fw, double& k_s) {
+  const std::string code = ga_code(line);
+  if (code.empty()) return false;
+  const std::string cmd = ga_command(code);
+  std::optional<double> v;
+  switch (fw) {
+    case ExportFirmware::klipper:
+    case ExportFirmware::kalico:
+      if (cmd == "SET_PRESSURE_ADVANCE") v = ga_param(code, "ADVANCE");
+      break;
+    case ExportFirmware::marlin:
+      if (cmd == "M900") v = ga_word(code, 'K');
+      break;
+    case ExportFirmware::rrf:
+      if (cmd == "M572") v = ga_word(code, 'S');
+      break;
+  }
+  if (!v) return false;
+  k_s = *v;
+  return true;
+}
+
+GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvanceOptions& o, const std::string& path) {
+  if (o.k_of_flow.empty()) throw InputError("no advance table for the G-code post-processor");
+  if (!(std::isfinite(o.hysteresis) && o.hysteresis >= 0 && o.hysteresis < 1))
+    throw InputError(fmt::format("hysteresis must be at least 0 and below 1, not {}", o.hysteresis));
+  std::vector<std::pair<double, double>> table = o.k_of_flow;
+  std::sort(table.begin(), table.end());
+  {
+    // Every value that may be written is checked against the firmware's bounds first.
+    for (const auto& [q, k] : table) {
+      CompensatorSettings s;
+      s.pa_k_s = k;
+      if (!std::isfinite(q)) throw InputError("advance table: a flow is not a number");
+      validate_settings(o.firmware == ExportFirmware::kalico ? ExportFirmware::klipper : o.firmware, s);
+    }
+  }
+  const LineEditor ed(text);
+  double area = o.filament_area_mm2;
+  if (!(area > 0)) {
+    for (std::size_t i = 0; i < ed.size(); ++i) {
+      const std::string& t = ed.line(i);
+      const auto p = t.find("filament_diameter");
+      if (t.rfind(";", 0) != 0 || p == std::string::npos) continue;
+      const auto eq = t.find_first_of("=:", p);
+      if (eq == std::string::npos) continue;
+      try {
+        const double dmm = std::stod(t.substr(eq + 1));  // the first extruder's value ("1.75,1.75")
+        if (dmm > 0 && std::isfinite(dmm)) {
+          area = M_PI * dmm * dmm / 4;
+          break;
+        }
+      } catch (const std::logic_error&) {
+      }
+    }
+  }
+  if (!(area > 0))
+    throw InputError("no filament diameter: the file has no '; filament_diameter = D' line; give it", path);
+
+  // Pass 1: blocks and their extrusion-weighted flow.
+  struct Block {
+    std::size_t type_line;
+    std::string feature;
+    double e_sum = 0, qe_sum = 0;
+  };
+  std::vector<Block> blocks;
+  bool rel_xy = false, rel_e = false;
+  double x = 0, y = 0, e = 0, f = 0;
+  for (std::size_t i = 0; i < ed.size(); ++i) {
+    const std::string& t = ed.line(i);
+    if (t.rfind(";TYPE:", 0) == 0) {
+      std::string feat = t.substr(6);
+      while (!feat.empty() && (feat.back() == '\r' || feat.back() == ' ')) feat.pop_back();
+      blocks.push_back({i, feat});
+      continue;
+    }
+    const std::string code = ga_code(t);
+    if (code.empty()) continue;
+    const std::string cmd = ga_command(code);
+    if (cmd == "G90") rel_xy = false;
+    else if (cmd == "G91") rel_xy = true;
+    else if (cmd == "M82") rel_e = false;
+    else if (cmd == "M83") rel_e = true;
+    else if (cmd == "G92") {
+      if (auto v = ga_word(code, 'E')) e = *v;
+      if (auto v = ga_word(code, 'X')) x = *v;
+      if (auto v = ga_word(code, 'Y')) y = *v;
+    } else if (cmd == "G0" || cmd == "G1" || cmd == "G00" || cmd == "G01") {
+      const double x0 = x, y0 = y;
+      if (auto v = ga_word(code, 'X')) x = rel_xy ? x + *v : *v;
+      if (auto v = ga_word(code, 'Y')) y = rel_xy ? y + *v : *v;
+      if (auto v = ga_word(code, 'F')) f = *v;
+      double de = 0;
+      if (auto v = ga_word(code, 'E')) {
+        de = rel_e ? *v : *v - e;
+        e = rel_e ? e + *v : *v;
+      }
+      const double dxy = std::hypot(x - x0, y - y0);
+      if (de > 0 && dxy > 1e-9 && f > 0 && !blocks.empty()) {
+        const double q = de / dxy * area * f / 60.0;
+        blocks.back().e_sum += de;
+        blocks.back().qe_sum += q * de;
+      }
+    }
+  }
+  if (blocks.empty())
+    throw InputError(
+        "no ';TYPE:' feature comments: slice with PrusaSlicer, OrcaSlicer or Cura (they mark every feature)", path);
+
+  // Pass 2: decide the changes (with the file's own advance commands in order).
+  GcodeAdvanceResult r;
+  LineEditor out(text);
+  double active = std::nan("");
+  std::size_t next_block = 0;
+  for (std::size_t i = 0; i < ed.size(); ++i) {
+    double k_file = 0;
+    if (parse_advance_command(ed.line(i), o.firmware, k_file)) active = k_file;
+    if (next_block < blocks.size() && blocks[next_block].type_line == i) {
+      const Block& b = blocks[next_block++];
+      if (b.e_sum <= 0) continue;
+      ++r.features;
+      const double q = b.qe_sum / b.e_sum;
+      const double k = ga_interp(table, q);
+      const std::string ks = format_number(k, detail::kDecimalsK);
+      const bool change = !std::isfinite(active) || std::abs(k - active) > o.hysteresis * active;
+      if (!change) continue;
+      out.insert_before(i + 1, {ga_set_command(o, k, q, b.feature)});
+      active = std::stod(ks);
+      r.changes.push_back({i + 1, b.feature, q, active});
+    }
+  }
+  r.text = out.render();
+  return r;
+}
+
+}  // namespace tunekit::firmware

@@ -1,0 +1,109 @@
+#pragma once
+// A machine profile: what a printer can safely do and which sensors it has, read from TOML.
+// Every experiment protocol is checked against it before the first byte is sent, and the
+// compensator design reads the extruder and print limits from it. Units are in the key
+// names (mm, mm/s, mm/s^2, mm^3/s, degC). See datasets/machines/sim.toml for a complete file.
+
+#include <map>
+#include <optional>
+#include <string>
+
+namespace tunekit::machine {
+
+struct AxisLimits {
+  double min_mm = 0;
+  double max_mm = 0;
+  double max_velocity_mm_s = 0;
+  double max_accel_mm_s2 = 0;
+};
+
+struct ExtruderLimits {
+  double filament_diameter_mm = 1.75;
+  double nozzle_diameter_mm = 0.4;
+  double max_flow_mm3_s = 0;     ///< volumetric flow limit of the hot end
+  double max_velocity_mm_s = 0;  ///< filament feed speed limit
+  double max_accel_mm_s2 = 0;    ///< filament acceleration limit (the extruder motor)
+  /// Longest extrude-only move the firmware accepts, mm (Klipper's max_extrude_only_distance,
+  /// default 50 mm); protocols split longer feeds into moves of at most this length.
+  double max_extrude_only_distance_mm = 50;
+};
+
+struct PrintSettings {
+  double max_accel_mm_s2 = 0;  ///< the highest print acceleration used in production
+  double line_width_mm = 0.45;
+  double layer_height_mm = 0.2;
+  double speed_mm_s = 60;
+};
+
+struct TemperatureLimits {
+  double hotend_max_c = 0;
+  double bed_max_c = 0;
+  bool heaters_off_on_abort = true;
+};
+
+struct Sensors {
+  bool accelerometer = false;
+  bool load_cell = false;
+  bool filament_encoder = false;
+  bool camera = false;
+  double accelerometer_rate_hz = 3200;
+  /// Klipper: the accelerometer chip (adxl345, lis2dw, lis3dh, mpu9250, mpu6050, icm20948,
+  /// bmi160; `accelerometer = "lis2dw"` in the profile) and its config section name
+  /// (`accelerometer_name = "lis2dw toolhead"`; default: the chip name, i.e. `[adxl345]`).
+  std::string accelerometer_chip = "adxl345";
+  std::string accelerometer_name;
+  /// Klipper: the load cell's config section name (`[load_cell]` or `[load_cell NAME]`).
+  std::string load_cell_name = "load_cell";
+};
+
+/// The machine's own settings that the protocols change for a test and restore after it (also
+/// on abort): table [firmware_state]. Defaults are the firmwares' defaults (firmware_limits.hpp).
+struct FirmwareState {
+  /// Input shaper configured on the machine per axis, "type:freq_hz:damping" in the firmware's
+  /// spelling; empty when the machine has none configured (then nothing is turned off).
+  std::map<std::string, std::string> shaper;
+  double minimum_cruise_ratio = 0.5;  ///< Klipper [printer] minimum_cruise_ratio
+  double steps_per_mm_x = 80;         ///< Marlin M92 X (sizes the sweep above MIN_STEPS_PER_SEGMENT)
+  double steps_per_mm_y = 80;         ///< Marlin M92 Y
+  double min_segment_time_s = 0.020;  ///< Marlin M205 B (DEFAULT_MINSEGMENTTIME), s
+  double max_accel_xy_mm_s2 = 3000;   ///< Marlin/RRF M201 X/Y, mm/s^2
+  double retract_accel_mm_s2 = 3000;  ///< Marlin M204 R (moves without X/Y/Z steps), mm/s^2
+  double max_accel_e_mm_s2 = 3000;    ///< RRF M201 E, mm/s^2
+  double jerk_xy_mm_s = 15;           ///< RRF M566 X/Y (instantaneous speed change), mm/s
+};
+
+/// True for the accelerometer chips Klipper's API server streams (see klipper_sensors.hpp).
+bool is_klipper_accelerometer_chip(const std::string& chip);
+/// "adxl345, lis2dw, ..." for messages.
+std::string klipper_accelerometer_chips();
+
+struct MachineProfile {
+  std::string name;
+  std::string id;                          ///< the machine's id in the calibration history (may be empty)
+  std::string kinematics = "cartesian";    ///< cartesian, corexy, delta
+  std::string firmware;                    ///< marlin, klipper, rrf, prusa (may be empty: ask M115)
+  std::map<std::string, AxisLimits> axes;  ///< "x", "y", "z"
+  ExtruderLimits extruder;
+  PrintSettings print;
+  TemperatureLimits temperature;
+  Sensors sensors;
+  FirmwareState state;
+  /// [network] http = "http://HOST[:PORT]": RepRapFirmware's web server, through which tunekit
+  /// fetches the accelerometer files M956 writes (rrf_http.hpp; RepRapFirmware cannot send a
+  /// file over USB serial). Empty: serial only.
+  std::string http_address;
+  std::string source_path;
+
+  /// Filament cross-section area, mm^2.
+  double filament_area_mm2() const;
+  /// Line cross-section (rectangle approximation, width x layer height), mm^2.
+  double line_area_mm2() const;
+  const AxisLimits& axis(const std::string& name) const;  ///< throws InputError if absent
+};
+
+/// Parses a profile; throws InputError (exit 2) with FILE:LINE for syntax errors, missing
+/// required keys, non-positive limits, or unknown kinematics.
+MachineProfile load_machine_profile(const std::string& path);
+MachineProfile parse_machine_profile(const std::string& toml_text, const std::string& path_for_messages);
+
+}  // namespace tunekit::machine

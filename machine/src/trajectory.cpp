@@ -1,0 +1,123 @@
+#include "tunekit/machine/trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tunekit::machine {
+namespace {
+
+PathState advance(const PathState& s, double jerk, double t) {
+  PathState o;
+  o.accel_mm_s2 = s.accel_mm_s2 + jerk * t;
+  o.vel_mm_s = s.vel_mm_s + s.accel_mm_s2 * t + jerk * t * t / 2;
+  o.pos_mm = s.pos_mm + s.vel_mm_s * t + s.accel_mm_s2 * t * t / 2 + jerk * t * t * t / 6;
+  return o;
+}
+
+}  // namespace
+
+double Profile::ramp_duration(double v0, double v1, double a_max, double j_max) {
+  const double dv = std::abs(v1 - v0);
+  if (dv <= 0) return 0;
+  const double tj = a_max / j_max;
+  if (dv >= a_max * tj) return 2 * tj + (dv / a_max - tj);
+  return 2 * std::sqrt(dv / j_max);
+}
+
+double Profile::ramp_distance(double v0, double v1, double a_max, double j_max) {
+  return 0.5 * (v0 + v1) * ramp_duration(v0, v1, a_max, j_max);
+}
+
+void Profile::add(double duration, double jerk) {
+  if (duration <= 0) return;
+  segs_.push_back({duration_, duration, jerk, end_});
+  end_ = advance(end_, jerk, duration);
+  duration_ += duration;
+}
+
+void Profile::add_ramp(double v0, double v1, double a_max, double j_max) {
+  const double dv = std::abs(v1 - v0);
+  if (dv <= 0) return;
+  const double sj = v1 > v0 ? j_max : -j_max;
+  const double tj = a_max / j_max;
+  if (dv >= a_max * tj) {
+    add(tj, sj);
+    add(dv / a_max - tj, 0);
+    add(tj, -sj);
+  } else {
+    const double t = std::sqrt(dv / j_max);
+    add(t, sj);
+    add(t, -sj);
+  }
+  end_.accel_mm_s2 = 0;  // exact by construction; remove rounding
+  end_.vel_mm_s = v1;
+}
+
+Profile Profile::move(double d, double v_entry, double v_max, double v_exit, double a_max, double j_max) {
+  d = std::max(0.0, d);
+  v_max = std::max(v_max, 1e-9);
+  v_entry = std::max(0.0, v_entry);
+  v_exit = std::min(std::max(0.0, v_exit), v_max);
+  auto need = [&](double vc) {
+    return ramp_distance(v_entry, vc, a_max, j_max) + ramp_distance(vc, v_exit, a_max, j_max);
+  };
+  double vc = v_max;
+  // Entering faster than this move's speed: slow down to it first (no search).
+  if (v_entry <= v_max && need(vc) > d) {
+    double lo = std::max(v_entry, v_exit), hi = v_max;
+    if (need(lo) > d) {
+      // Too short even to go from the entry speed to the exit speed: lower the exit speed.
+      double elo = 0, ehi = v_exit;
+      for (int i = 0; i < 60; ++i) {
+        const double m = 0.5 * (elo + ehi);
+        v_exit = m;
+        (need(std::max(v_entry, m)) > d ? ehi : elo) = m;
+      }
+      v_exit = elo;
+      lo = std::max(v_entry, v_exit);
+      hi = lo;
+    }
+    for (int i = 0; i < 60 && hi > lo; ++i) {
+      const double m = 0.5 * (lo + hi);
+      (need(m) > d ? hi : lo) = m;
+    }
+    vc = lo;
+  }
+  Profile p;
+  p.end_.vel_mm_s = v_entry;
+  p.add_ramp(v_entry, vc, a_max, j_max);
+  const double cruise = d - need(vc);
+  if (cruise > 0 && vc > 0) p.add(cruise / vc, 0);
+  p.add_ramp(vc, v_exit, a_max, j_max);
+  return p;
+}
+
+Profile Profile::cruise(double v, double duration_s) {
+  Profile p;
+  p.end_.vel_mm_s = v;
+  p.add(duration_s, 0);
+  return p;
+}
+
+double Profile::distance_mm() const { return end_.pos_mm; }
+double Profile::exit_speed() const { return end_.vel_mm_s; }
+
+PathState Profile::at(double t) const {
+  if (segs_.empty()) return end_;
+  if (t <= 0) return segs_.front().s0;
+  if (t >= duration_) return end_;
+  auto it = std::upper_bound(segs_.begin(), segs_.end(), t, [](double v, const Segment& s) { return v < s.t0; });
+  const Segment& s = *(it - 1);
+  return advance(s.s0, s.jerk, t - s.t0);
+}
+
+double Profile::peak_accel() const {
+  double m = 0;
+  for (const auto& s : segs_) {
+    m = std::max(m, std::abs(s.s0.accel_mm_s2));
+    m = std::max(m, std::abs(advance(s.s0, s.jerk, s.duration).accel_mm_s2));
+  }
+  return m;
+}
+
+}  // namespace tunekit::machine

@@ -1,0 +1,289 @@
+#pragma once
+// tunekit's virtual printer: a G-code machine following Marlin's, Klipper's or RepRapFirmware's
+// planner rules (SimConfig::firmware) with a simulated liquefier and
+// load cell, axes with resonant modes and an accelerometer, and injectable faults. It runs
+// in-process on any Transport (a socket pair in tests) or on a pseudo-terminal (SimPtyServer,
+// and the tunekit-sim executable). Its truth (the parameters it simulates) is written to
+// truth.json so identification can be held against it.
+//
+// Simulated time: the machine clock advances only by executed motion and dwells, computed as
+// fast as the host reads; it is not tied to wall time. Sample timestamps are machine time (s).
+//
+// Protocol (docs/machine.md): lines "N<n> <cmd>*<cs>" or plain "<cmd>"; answers "ok", or
+// "Error:checksum mismatch, Last Line: <n>" + "Resend: <n+1>" + "ok". Moves are queued with a
+// one-move lookahead (consecutive same-direction moves blend at the first move's speed) and run
+// when the next move, G4, M400, M4100, G28 or M410 arrives. Sensor streaming (M4100):
+//   M4100 A1 / A0   accelerometer on/off: "echo:TKA <t_s> <ax> <ay> <az> <cmd_ax> <cmd_ay>" (mm/s^2)
+//   M4100 L1 / L0   load cell on/off:     "echo:TKL <t_s> <feed_mm_s> <force_N>"
+// M115 answers "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim ...)" and "Cap:TUNEKIT_SENSOR_STREAM:1".
+
+#include <atomic>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <random>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/trajectory.hpp"
+#include "tunekit/machine/transport.hpp"
+
+namespace tunekit::sim {
+
+struct SimMode {
+  double freq_hz = 0;
+  double zeta = 0;
+  double weight = 1;  ///< share of the axis' response (weights of an axis should sum to 1)
+};
+
+struct SimFault {
+  enum class Kind { drop, garble, late_ok, disconnect, error };
+  Kind kind = Kind::drop;
+  long at_line = 0;     ///< 1-based count of lines the simulator received
+  double delay_ms = 0;  ///< late_ok only
+  std::string describe() const;
+};
+
+/// The simulated liquefier's model (option "liquefier=fopdt|physics", parsed once).
+enum class LiquefierModel { fopdt, physics };
+
+struct SimConfig {
+  LiquefierModel liquefier = LiquefierModel::fopdt;
+  // First order plus dead time, feed (mm/s) -> force (N).
+  double K_N_per_mm_s = 3.5;
+  double tau_s = 0.45;
+  double theta_s = 0.04;
+  // Physics: pressure P (MPa) in the melt, flow out Q = (P / k)^(1/n) (mm^3/s, power-law melt
+  // through the nozzle), column + melt compliance C (mm^3/MPa): C dP/dt = A u(t - theta) - Q;
+  // force = P * A (A filament cross-section, mm^2). K = n F / u and tau = C k n Q^(n-1)
+  // depend on the flow.
+  double k_MPa = 2.7;  ///< MPa (s/mm^3)^n
+  double n_index = 0.5;
+  double compliance_mm3_MPa = 0.5;
+  double filament_diameter_mm = 1.75;
+  double force_offset_N = 0.5;
+  double force_noise_N = 0.02;
+  double load_cell_rate_hz = 200;
+  // Axes.
+  std::map<std::string, std::vector<SimMode>> modes{{"x", {{48, 0.08, 1}}}, {"y", {{37, 0.1, 1}}}};
+  double accel_rate_hz = 3200;
+  double accel_noise_mm_s2 = 20;
+  double cross_coupling = 0.05;  ///< share of one horizontal axis' response seen on the other
+  double jerk_mm_s3 = 1e8;
+  /// Input shaping of the commanded x/y motion, as the firmware applies it: the commanded
+  /// acceleration becomes sum_i A_i a(t - T_i) (impulses rounded to the simulation step).
+  /// Option "shaper_x=TYPE:FREQ_HZ[:DAMPING]" (damping default 0.1), e.g. "shaper_x=zv:48".
+  std::map<std::string, std::vector<std::pair<double, double>>> shapers;  ///< axis -> (A_i, T_i s)
+  std::map<std::string, std::string> shaper_names;                        ///< axis -> "zv:48:0.1"
+  unsigned seed = 1;
+  // The firmware whose planner rules the simulator follows ("marlin", "klipper", "rrf"): M115
+  // names it, and moves run as that firmware plans them:
+  //   Klipper: every extrude-only move stops at both ends (toolhead.py Move.calc_junction) and
+  //     is accelerated at min(ACCEL, max_extrude_only_accel); longer than
+  //     max_extrude_only_distance it is refused ("!! Extrude only move too long"); a move's peak
+  //     speed is capped by minimum_cruise_ratio (toolhead.py flush: v^2 <= a L (1 - mcr)),
+  //     SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO= sets it.
+  //   Marlin: moves with fewer than MIN_STEPS_PER_SEGMENT (6) steps are joined with the next
+  //     (planner.cpp); a move shorter than M205 B (us, default 20000) is slowed to last that
+  //     long; M204 is capped by M201 (default X/Y 3000); extrude-only moves use M204 R.
+  //   RepRapFirmware: a reversal is joined at M566/2 (DDA.cpp MatchSpeeds); M204 applies to XY
+  //     moves only, extrude-only moves use M201 E; M410 is not an RRF command.
+  std::string firmware = "marlin";
+  double steps_per_mm = 160;                   ///< X/Y steps per mm (M92; the built-in profile's)
+  double max_extrude_only_distance_mm = 50;    ///< Klipper [extruder] max_extrude_only_distance
+  double max_extrude_only_accel_mm_s2 = 5000;  ///< Klipper [extruder] max_extrude_only_accel
+  double minimum_cruise_ratio = 0.5;           ///< Klipper [printer] minimum_cruise_ratio
+  /// Whether M115 offers tunekit's sensor stream (Cap:TUNEKIT_SENSOR_STREAM:1); off, the
+  /// simulator is a firmware that cannot stream its sensors over the G-code link.
+  bool sensor_stream = true;
+  /// Marlin only: the build's FT_MOTION (fixed-time motion, M493): "none" (not built: M493 is
+  /// an unknown command), "off" (built, M493 S0) or "on" (built and active, M493 S1). M493
+  /// answers as Marlin/src/gcode/feature/ft_motion/M493.cpp does (say_shaping()).
+  std::string ft_motion = "none";
+  /// RepRapFirmware only ("rrf_http=1"): the board's web server on 127.0.0.1 (an ephemeral
+  /// port), serving rr_download of the files M956 writes, as src/Networking/HttpResponder.cpp
+  /// does. M955 P0 reports the accelerometer and M956 P0 S<n> A<m> [F"name"] records n samples
+  /// into 0:/sys/accelerometer/ (src/Accelerometers/Accelerometers.cpp) in either case.
+  bool rrf_http = false;
+  std::vector<SimFault> faults;
+
+  /// "key=value" options (tunekit-sim flags and `tunekit run --sim`), e.g. "tau_s=0.5",
+  /// "firmware=klipper", "steps_per_mm=160",
+  /// "liquefier=physics", "mode_x=48:0.08" or "mode_x=48:0.08:0.7,95:0.05:0.3",
+  /// "fault=garble@12", "fault=late-ok@12:300", "fault=drop@12", "fault=disconnect@40",
+  /// "fault=error@30", "seed=3". InputError for unknown keys or bad values.
+  static SimConfig from_options(const std::vector<std::string>& options);
+  /// The truth the simulator runs with (also written to truth.json).
+  nlohmann::json truth() const;
+};
+
+class Simulator {
+ public:
+  explicit Simulator(SimConfig config);
+  using Emit = std::function<void(std::string_view)>;
+
+  /// Handles one received line; writes answers and sensor data through `emit` (complete lines).
+  /// Returns false when a disconnect fault fires (the caller drops the connection).
+  bool handle_line(std::string_view raw, const Emit& emit);
+
+  /// For Klipper-API style use: samples go to this callback instead of echo:TKA lines.
+  std::function<void(double t_s, double ax, double ay, double az)> accel_sink;
+  /// Klipper-API style: load-cell samples (force in N, offset and noise included) go here
+  /// instead of echo:TKL lines.
+  std::function<void(double t_s, double force_N)> load_cell_sink;
+  /// Every executed move: its start (machine time, s), the time it ran (s, a whole number of
+  /// simulation steps), its velocity profile along the path, start position and unit direction
+  /// (X, Y, Z, E). A fake Klipper server turns these into motion_report/dump_trapq rows.
+  std::function<void(double t0_s, double duration_s, const machine::Profile& profile,
+                     const std::array<double, 4>& start, const std::array<double, 4>& unit)>
+      move_sink;
+  /// Every simulation step: the nozzle position (X, Y, Z, E; mm), its XY speed (mm/s) and the
+  /// flow leaving the nozzle (mm^3/s, the simulated liquefier's output; never negative). The
+  /// simulated camera (sim_camera.hpp) lays the printed bead down from these.
+  std::function<void(double t_s, const std::array<double, 4>& pos, double speed_xy_mm_s, double flow_out_mm3_s)>
+      deposit_sink;
+  void set_streaming(const std::string& sensor, bool on);
+  /// Runs any queued move to completion.
+  void flush(const Emit& emit);
+
+  const SimConfig& config() const { return cfg_; }
+  /// Thread-safe copies of what was received, and sample counts sent.
+  std::vector<std::string> received() const;
+  long accel_samples_sent() const { return accel_sent_; }
+  long load_cell_samples_sent() const { return load_sent_; }
+  bool halted() const { return halted_; }
+  double time_s() const { return t_; }
+  /// A file on the simulated board ("0:/sys/accelerometer/x.csv"), thread-safe; nullopt if absent.
+  std::optional<std::string> file(const std::string& name) const;
+
+ private:
+  struct Pending {
+    machine::GcodeMove move;
+  };
+  void execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit);
+  void dwell(double seconds, const Emit& emit);
+  void step(const std::array<double, 4>& pos, const std::array<double, 4>& vel, const std::array<double, 4>& acc,
+            const std::array<double, 3>& acc_mid, const std::array<double, 3>& acc_end, const Emit& emit);
+  void out_flush(const Emit& emit);
+
+  SimConfig cfg_;
+  machine::GcodeInterpreter interp_;
+  std::optional<machine::GcodeMove> pending_;
+  double pending_entry_ = 0;
+  std::optional<std::array<double, 4>> carry_start_;  ///< Marlin: start of a move joined with the next
+  double min_segment_time_s_ = 0.020;                 ///< Marlin M205 B
+  double jerk_x_mm_s_ = 15, jerk_y_mm_s_ = 15;        ///< RRF M566
+  double mcr_ = 0.5;                                  ///< Klipper minimum_cruise_ratio
+  double junction_speed(const machine::GcodeMove& a, const machine::GcodeMove& b) const;
+  // The firmware whose rules apply (SimConfig::firmware, read once when the simulator starts).
+  enum class FirmwareRules { marlin, klipper, rrf };
+  FirmwareRules firmware_ = FirmwareRules::marlin;
+  bool klipper() const { return firmware_ == FirmwareRules::klipper; }
+  bool rrf() const { return firmware_ == FirmwareRules::rrf; }
+  void m493(const machine::GcodeWords& w, const Emit& emit);
+  void m956(std::string_view body, const machine::GcodeWords& w, const Emit& emit);
+  bool marlin() const { return firmware_ == FirmwareRules::marlin; }
+  /// Applies the faults planned for the line just received (sim_faults.cpp): may corrupt `line`
+  /// or set `late_ms`; a value means handle_line returns it at once.
+  std::optional<bool> inject_faults(std::string& line, double& late_ms, const Emit& emit);
+  long received_count_ = 0;
+  long last_n_ = 0;
+  bool halted_ = false;
+  // Marlin FT_MOTION state (M493): active, shaper per axis (ftMotionShaper_t: 0 NONE .. 8 MZV),
+  // base frequency, zeta, linear advance on/off and gain.
+  bool ftm_active_ = false;
+  int ftm_shaper_[2] = {0, 0};
+  double ftm_freq_[2] = {37, 37};
+  double ftm_zeta_[2] = {0.1, 0.1};
+  bool ftm_la_ = false;
+  double ftm_k_ = 0;
+  bool stream_accel_ = false, stream_load_ = false;
+  // RepRapFirmware M956 run: the file being written, samples still to take, the next number.
+  std::map<std::string, std::string> files_;
+  std::string capture_name_, capture_text_;
+  long capture_left_ = 0, capture_index_ = 0;
+  // Physics state.
+  double t_ = 0;
+  double dt_;
+  long step_ = 0;
+  int accel_every_, load_every_;
+  std::map<std::string, std::vector<std::array<double, 2>>> mode_state_;
+  // Unshaped commanded accelerations (start, middle, end of each step) of x and y, for shaping.
+  std::array<std::vector<std::array<double, 3>>, 2> shape_hist_;
+  std::size_t shape_pos_ = 0;
+  std::vector<double> delay_;
+  std::size_t delay_pos_ = 0;
+  double liq_ = 0;  ///< FOPDT output (N) or pressure (MPa)
+  std::mt19937 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  std::string out_;
+  std::atomic<long> accel_sent_{0}, load_sent_{0};
+  mutable std::mutex mu_;
+  std::vector<std::string> received_;
+};
+
+/// The simulated RepRapFirmware board's web server: GET /rr_download?name=<file> answers as
+/// src/Networking/HttpResponder.cpp SendFile/RejectMessage do ("HTTP/1.1 200 OK" with
+/// Content-Length and the bytes, or "HTTP/1.1 404 file not found"). Listens on 127.0.0.1.
+class SimHttpServer {
+ public:
+  explicit SimHttpServer(const Simulator& sim);
+  ~SimHttpServer();
+  SimHttpServer(const SimHttpServer&) = delete;
+  SimHttpServer& operator=(const SimHttpServer&) = delete;
+  std::string url() const;
+  long requests() const { return requests_; }
+
+ private:
+  void serve();
+  const Simulator& sim_;
+  int listen_fd_ = -1;
+  int port_ = 0;
+  std::atomic<bool> stop_{false};
+  std::atomic<long> requests_{0};
+  std::thread thread_;
+};
+
+/// Serves a Simulator on a pseudo-terminal in a background thread.
+class SimPtyServer {
+ public:
+  /// `setup` (optional) is called with the simulator before the serving thread starts
+  /// (to attach sinks such as Simulator::deposit_sink without a race).
+  explicit SimPtyServer(SimConfig config, const std::function<void(Simulator&)>& setup = {});
+  ~SimPtyServer();
+  SimPtyServer(const SimPtyServer&) = delete;
+  SimPtyServer& operator=(const SimPtyServer&) = delete;
+  /// The slave device to open (e.g. /dev/pts/7).
+  const std::string& path() const { return slave_path_; }
+  /// Stops the thread (idempotent).
+  void stop();
+  /// Blocks until the serving thread ends (disconnect fault, or stop()).
+  void wait();
+  bool disconnected() const { return disconnected_; }
+  Simulator& sim() { return *sim_; }
+  /// "http://127.0.0.1:PORT" of the simulated board's web server (SimConfig::rrf_http); empty without.
+  std::string http_url() const;
+
+ private:
+  void serve();
+  std::unique_ptr<Simulator> sim_;
+  std::unique_ptr<SimHttpServer> http_;
+  int master_ = -1;
+  int slave_keepalive_ = -1;
+  std::string slave_path_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> disconnected_{false};
+  std::thread thread_;
+};
+
+/// Serves a Simulator on an already connected transport until `stop` is set or the peer goes.
+void serve_simulator(Simulator& sim, machine::Transport& t, const std::atomic<bool>& stop);
+
+}  // namespace tunekit::sim

@@ -1,0 +1,139 @@
+#include "tunekit/sim/sim_camera.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <opencv2/imgproc.hpp>
+
+namespace tunekit::sim {
+namespace {
+
+constexpr double kSimCamPieceMm = 0.05;    // bead pieces are merged up to this length
+constexpr double kSimCamMinSpeed = 0.5;    // mm/s: a (nearly) standing nozzle lays no bead piece
+constexpr double kSimCamMaxWidthMm = 3.0;  // a blob, not a line
+
+double sim_cam_segment_distance(double px, double py, double ax, double ay, double bx, double by) {
+  const double dx = bx - ax, dy = by - ay;
+  const double l2 = dx * dx + dy * dy;
+  double t = l2 > 0 ? ((px - ax) * dx + (py - ay) * dy) / l2 : 0;
+  t = std::clamp(t, 0.0, 1.0);
+  return std::hypot(px - (ax + t * dx), py - (ay + t * dy));
+}
+
+}  // namespace
+
+void SimPrintBed::deposit(double /*t_s*/, const std::array<double, 4>& pos, double speed, double flow) {
+  std::lock_guard<std::mutex> l(mu_);
+  const double h = pos[2];
+  const bool laying = speed > kSimCamMinSpeed && flow > 0 && h > 0;
+  auto close_piece = [&] {
+    if (open_ && len_ > 0) {
+      const double w = std::min(kSimCamMaxWidthMm, wsum_ / len_);
+      if (w > 0.02) pieces_.push_back({ox_, oy_, lx_, ly_, w});
+    }
+    open_ = false;
+  };
+  if (!laying) {
+    close_piece();
+    return;
+  }
+  if (!open_) {
+    open_ = true;
+    ox_ = lx_ = pos[0];
+    oy_ = ly_ = pos[1];
+    wsum_ = len_ = 0;
+    return;
+  }
+  const double step = std::hypot(pos[0] - lx_, pos[1] - ly_);
+  const double w = flow / (speed * h);
+  wsum_ += w * step;
+  len_ += step;
+  lx_ = pos[0];
+  ly_ = pos[1];
+  if (len_ >= kSimCamPieceMm) {
+    close_piece();
+    open_ = true;
+    ox_ = lx_;
+    oy_ = ly_;
+    wsum_ = len_ = 0;
+  }
+}
+
+std::size_t SimPrintBed::pieces() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return pieces_.size();
+}
+
+cv::Mat SimPrintBed::photograph(const SimCameraOptions& o, SimCameraFrame* frame_out) const {
+  std::vector<Piece> pieces;
+  {
+    std::lock_guard<std::mutex> l(mu_);
+    pieces = pieces_;
+  }
+  double x0 = 0, x1 = 100, y0 = 0, y1 = 100;
+  if (!pieces.empty()) {
+    x0 = y0 = 1e300;
+    x1 = y1 = -1e300;
+    for (const auto& p : pieces) {
+      x0 = std::min({x0, p.x0, p.x1});
+      x1 = std::max({x1, p.x0, p.x1});
+      y0 = std::min({y0, p.y0, p.y1});
+      y1 = std::max({y1, p.y0, p.y1});
+    }
+  }
+  x0 -= o.margin_mm;
+  y0 -= o.margin_mm;
+  x1 += o.margin_mm;
+  y1 += o.margin_mm;
+  const double ppm = o.px_per_mm;
+  const int W = static_cast<int>(std::ceil((x1 - x0) * ppm)), H = static_cast<int>(std::ceil((y1 - y0) * ppm));
+  if (frame_out) *frame_out = {x0, y1, ppm, cv::Size(W, H)};
+
+  // Coverage of the filament, anti-aliased: a pixel whose centre lies d px from a bead piece's
+  // centreline is covered by clamp(w/2 - d + 1/2, 0, 1).
+  cv::Mat cover(H, W, CV_32F, cv::Scalar(0));
+  for (const auto& p : pieces) {
+    const double ax = (p.x0 - x0) * ppm, ay = (y1 - p.y0) * ppm, bx = (p.x1 - x0) * ppm, by = (y1 - p.y1) * ppm;
+    const double half = p.width_mm * ppm / 2;
+    const int u0 = std::max(0, static_cast<int>(std::floor(std::min(ax, bx) - half - 1)));
+    const int u1 = std::min(W - 1, static_cast<int>(std::ceil(std::max(ax, bx) + half + 1)));
+    const int v0 = std::max(0, static_cast<int>(std::floor(std::min(ay, by) - half - 1)));
+    const int v1 = std::min(H - 1, static_cast<int>(std::ceil(std::max(ay, by) + half + 1)));
+    for (int v = v0; v <= v1; ++v) {
+      float* row = cover.ptr<float>(v);
+      for (int u = u0; u <= u1; ++u) {
+        const double d = sim_cam_segment_distance(u + 0.5, v + 0.5, ax, ay, bx, by);
+        const double c = std::clamp(half - d + 0.5, 0.0, 1.0);
+        if (c > row[u]) row[u] = static_cast<float>(c);
+      }
+    }
+  }
+  if (o.blur_px > 0) cv::GaussianBlur(cover, cover, cv::Size(0, 0), o.blur_px);
+
+  // The bed: a smooth texture (low-pass noise), then lighting and sensor noise.
+  std::mt19937 rng(o.seed);
+  std::normal_distribution<float> n01(0.f, 1.f);
+  cv::Mat tex(std::max(2, H / 16), std::max(2, W / 16), CV_32F);
+  for (int v = 0; v < tex.rows; ++v)
+    for (int u = 0; u < tex.cols; ++u) tex.at<float>(v, u) = n01(rng);
+  cv::GaussianBlur(tex, tex, cv::Size(0, 0), 1.5);
+  cv::resize(tex, tex, cv::Size(W, H), 0, 0, cv::INTER_CUBIC);
+  cv::Mat img(H, W, CV_8U);
+  const double cx = W / 2.0, cy = H / 2.0, r2max = cx * cx + cy * cy;
+  for (int v = 0; v < H; ++v) {
+    const float* cv_ = cover.ptr<float>(v);
+    const float* tv = tex.ptr<float>(v);
+    auto* out = img.ptr<unsigned char>(v);
+    for (int u = 0; u < W; ++u) {
+      const double bed = o.bed_level + 6.0 * tv[u];
+      const double scene = bed * (1 - cv_[u]) + o.filament_level * cv_[u];
+      const double r2 = ((u - cx) * (u - cx) + (v - cy) * (v - cy)) / r2max;
+      const double light = (1 - o.vignetting * r2) * (1 - o.gradient / 2 + o.gradient * u / W);
+      out[u] = cv::saturate_cast<unsigned char>(scene * light + o.noise_sigma * n01(rng));
+    }
+  }
+  return img;
+}
+
+}  // namespace tunekit::sim

@@ -1,0 +1,82 @@
+#pragma once
+// The simulator's named constants, shared by its source files (simulator.cpp: options, truth
+// and the pseudo-terminal; sim_plant.cpp: motion and the physical models; sim_gcode.cpp: the
+// G-code command table; sim_faults.cpp: fault injection). Where a value mimics a firmware, its
+// comment names the firmware source it comes from.
+
+#include <array>
+#include <chrono>
+#include <cstddef>
+
+namespace tunekit::sim::sim {
+
+// --- Options and truth ---
+/// Damping ratio an input shaper is designed for when "shaper_x=TYPE:FREQ" gives none: Klipper's
+/// klippy/extras/shaper_defs.py DEFAULT_DAMPING_RATIO.
+inline constexpr double kDefaultShaperDamping = 0.1;
+/// Share of an axis' response a mode has when "mode_x=FREQ:ZETA" gives no weight: all of it.
+inline constexpr double kDefaultModeWeight = 1.0;
+/// Feeds (mm/s) at which truth.json tabulates the physics liquefier's local gain and time
+/// constant: the range of feeds a step or sweep experiment commands.
+inline constexpr std::array<double, 6> kTruthOperatingFeeds_mm_s{0.5, 1.0, 2.0, 3.0, 4.0, 5.0};
+
+// --- Plant ---
+/// Simulation steps per accelerometer sample: the axes' modes are integrated (RK4) at four
+/// times the sample rate so that a mode near the sample rate's Nyquist frequency stays accurate.
+inline constexpr int kStepsPerAccelSample = 4;
+/// Cosine of the angle between two moves above which the junction counts as straight (the
+/// moves blend at the first move's speed); below its negative it is a reversal (RRF).
+inline constexpr double kStraightJunctionCos = 0.999;
+/// The accelerometer's Z reading at rest (mm/s^2): 1 g, rounded to 9810 as the simulated
+/// accelerometer reports it (the sensor, not the printer, defines 1 g; see kStandardGravity).
+inline constexpr double kAccelRestZ_mm_s2 = 9810.0;
+/// Standard gravity (mm/s^2) by which an RRF M956 run converts mm/s^2 into g
+/// (src/Accelerometers/Accelerometers.cpp writes samples in g).
+inline constexpr double kStandardGravity_mm_s2 = 9806.65;
+/// Bytes of sensor lines buffered before they are written: long moves stream their samples
+/// while they run and the buffer stays small.
+inline constexpr std::size_t kOutputFlushBytes = 32768;
+/// Lowest peak speed (mm/s) a move is planned with: a zero feed would divide by zero in the
+/// velocity profile.
+inline constexpr double kMinPeakSpeed_mm_s = 1e-6;
+/// Slack on the number of whole steps a move lasts: a duration that is a whole number of steps
+/// up to rounding is not cut one step short.
+inline constexpr double kStepCountSlack = 1e-9;
+
+// --- Firmware rules (G-code command table) ---
+/// Marlin Configuration.h DEFAULT_MAX_ACCELERATION {3000, 3000, 100, 10000} and
+/// DEFAULT_RETRACT_ACCELERATION 3000, applied as G-code when the simulator starts.
+inline constexpr std::array<const char*, 2> kMarlinDefaultAccelerationGcode{"M201 X3000 Y3000 Z100 E10000",
+                                                                            "M204 R3000"};
+/// RepRapFirmware: the M201 of a typical config.g.
+inline constexpr const char* kRrfDefaultAccelerationGcode = "M201 X3000 Y3000 Z100 E3000";
+/// Marlin Configuration_adv.h MIN_STEPS_PER_SEGMENT: a move with fewer steps is joined with the
+/// next (planner.cpp).
+inline constexpr long kMarlinMinStepsPerSegment = 6;
+/// Marlin Configuration_adv.h DEFAULT_MINSEGMENTTIME (us): M205 B's value when B has none.
+inline constexpr double kMarlinDefaultMinSegmentTime_us = 20000;
+/// Seconds per microsecond (M205 B is in us).
+inline constexpr double kSecondsPerMicrosecond = 1e-6;
+/// RepRapFirmware src/Config/Configuration.h MinimumJerk (mm/s): M566 never sets less
+/// (Platform.h: zero or negative values make Move loop indefinitely).
+inline constexpr double kRrfMinimumJerk_mm_s = 0.1;
+/// M566's value (mm/min) when its X or Y word has none: 15 mm/s, the simulator's default jerk.
+inline constexpr double kRrfDefaultJerk_mm_min = 900;
+/// Seconds per minute (M566 is in mm/min).
+inline constexpr double kSecondsPerMinute = 60.0;
+/// Marlin ftMotionShaper_t's last value (8, MZV): M493 X/Y above it is an invalid shaper.
+inline constexpr int kFtmLastShaper = 8;
+/// The file an RRF M956 without F"name" writes: <board>_<date>_<time>.csv
+/// (src/Accelerometers/Accelerometers.cpp), with the simulated board's clock at 2024-01-01 00:00.
+inline constexpr const char* kM956DefaultFileName = "0_2024-01-01_00.00.00.csv";
+
+// --- Faults and serving ---
+/// Bit flipped in the character a garble fault corrupts: it changes the character (so the
+/// checksum no longer matches) and keeps letters and digits printable.
+inline constexpr int kGarbleBit = 0x04;
+/// How long the serving loop waits for host bytes before it checks whether to stop.
+inline constexpr std::chrono::milliseconds kServeReadPoll{50};
+/// After a disconnect fault: time the host gets to read what was sent before the line closes.
+inline constexpr std::chrono::milliseconds kDisconnectGrace{300};
+
+}  // namespace tunekit::sim::sim

@@ -1,0 +1,279 @@
+// The simulator's G-code command table: line numbers and checksums, then one branch per
+// command (G0/G1 moves into the planner, G4, G28, M105, M109/M190, M114, M115, M204/M205,
+// M400, M410, M112, M493, M566, M955, M956, M4100, SET_VELOCITY_LIMIT), answering as the
+// firmware named by SimConfig::firmware does.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "sim_constants.hpp"
+#include "tunekit/core/version.hpp"
+#include "tunekit/sim/simulator.hpp"
+
+namespace tunekit::sim {
+
+// RepRapFirmware's M956 (src/Accelerometers/Accelerometers.cpp StartAccelerometer): P, S and A
+// are required ("missing parameter"); X/Y/Z pick axes (all three when none is given; the
+// simulated board records all three); F"name" names the file under 0:/sys/accelerometer/,
+// otherwise <board>_<date>_<time>.csv; a run while one is collecting is refused.
+void Simulator::m956(std::string_view body, const machine::GcodeWords& /*words*/, const Emit& emit) {
+  // The quoted file name is not parameters: parse the rest.
+  std::string rest(body);
+  if (const auto q = rest.find('"'); q != std::string::npos) {
+    const auto q2 = rest.find('"', q + 1);
+    rest.erase(q, q2 == std::string::npos ? std::string::npos : q2 - q + 1);
+  }
+  const auto parsed = machine::parse_gcode(rest);
+  const machine::GcodeWords w = parsed ? *parsed : machine::GcodeWords{};
+  for (const char* k : {"P", "S", "A"})
+    if (!w.has(k)) {
+      emit(fmt::format("Error: M956: missing parameter '{}'\n", k));
+      return;
+    }
+  if (capture_left_ > 0) {
+    emit("Error: M956: Accelerometer is already collecting data\n");
+    return;
+  }
+  std::string name = sim::kM956DefaultFileName;
+  if (const auto f = body.find("F\""); f != std::string_view::npos) {
+    const auto end = body.find('"', f + 2);
+    if (end != std::string_view::npos) name = std::string(body.substr(f + 2, end - f - 2));
+  }
+  capture_name_ = "0:/sys/accelerometer/" + name;
+  capture_left_ = std::max(1L, std::lround(w.get("S", 0)));
+  capture_index_ = 0;
+  capture_text_ = "Sample,X,Y,Z\n";
+  std::lock_guard<std::mutex> lock(mu_);
+  files_[capture_name_] = capture_text_;
+}
+
+// Marlin's M493 (Marlin/src/gcode/feature/ft_motion/M493.cpp), on a build without
+// HAS_DYNAMIC_FREQ: S on/off, X/Y shaper (0 NONE, 1 ZV, 2 ZVD, 3 ZVDD, 4 ZVDDD, 5 EI, 6 2HEI,
+// 7 3HEI, 8 MZV), A/B base frequency (needs a shaper on the axis), I/J zeta, P linear advance
+// on/off, K its gain; without parameters, or after a change that sets flag.report, it prints
+// say_shaping(). A build without FT_MOTION answers as gcode.cpp does for any unknown command.
+void Simulator::m493(const machine::GcodeWords& w, const Emit& emit) {
+  if (cfg_.ft_motion == "none") {
+    emit("echo:Unknown command: \"M493\"\n");
+    return;
+  }
+  bool report = w.args.empty();
+  if (w.has("S")) {
+    const bool on = w.get("S", 0) != 0;
+    if (on != ftm_active_) report = true;
+    ftm_active_ = on;
+  }
+  static const char* const kNames[] = {"", "ZV", "ZVD", "ZVDD", "ZVDDD", "EI", "2 Hump EI", "3 Hump EI", "MZV"};
+  for (int a = 0; a < 2; ++a) {
+    const std::string letter = a == 0 ? "X" : "Y";
+    if (!w.has(letter)) continue;
+    const int sh = static_cast<int>(w.get(letter, 0));
+    if (sh < 0 || sh > sim::kFtmLastShaper) {
+      emit(fmt::format("?Invalid [{}] shaper.\n", letter));
+      return;
+    }
+    if (sh != ftm_shaper_[a]) report = true;
+    ftm_shaper_[a] = sh;
+  }
+  if (w.has("P")) {
+    ftm_la_ = w.get("P", 0) != 0;
+    report = true;
+    emit(ftm_la_ ? "Linear Advance enabled.\n" : "Linear Advance disabled.\n");
+  }
+  if (w.has("K")) {
+    const double k = w.get("K", 0);
+    if (k >= 0) {
+      ftm_k_ = k;
+      report = true;
+    } else {
+      emit("Linear Advance gain out of range.\n");
+    }
+  }
+  for (int a = 0; a < 2; ++a) {
+    const std::string f = a == 0 ? "A" : "B", z = a == 0 ? "I" : "J";
+    if (w.has(f)) {
+      if (ftm_shaper_[a] == 0) emit(fmt::format("Wrong mode for [{}] frequency.\n", f));
+      else {
+        ftm_freq_[a] = w.get(f, ftm_freq_[a]);
+        report = true;
+      }
+    }
+    if (w.has(z) && ftm_shaper_[a] != 0) ftm_zeta_[a] = w.get(z, ftm_zeta_[a]);
+  }
+  if (!report) return;
+  std::string l = fmt::format("Fixed-Time Motion {}abled", ftm_active_ ? "en" : "dis");
+  if (ftm_shaper_[0]) l += fmt::format(" with X axis {} shaping", kNames[ftm_shaper_[0]]);
+  if (ftm_shaper_[1]) l += fmt::format(" and with Y axis {} shaping", kNames[ftm_shaper_[1]]);
+  emit(l + ".\n");
+  if (ftm_shaper_[0] || ftm_shaper_[1]) {
+    emit(fmt::format("X static shaper frequency: {:.2f}Hz\n", ftm_freq_[0]));
+    emit(fmt::format("Y static shaper frequency: {:.2f} Hz\n", ftm_freq_[1]));
+  }
+  emit(ftm_la_ ? fmt::format("Linear Advance enabled. Gain: {:.2f}\n", ftm_k_)
+               : std::string("Linear Advance disabled\n"));
+}
+
+bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
+  std::string line(raw);
+  while (!line.empty() && (line.back() == '\r' || line.back() == '\n' || line.back() == ' ')) line.pop_back();
+  if (line.empty()) return true;
+  ++received_count_;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    received_.push_back(line);
+  }
+  double late_ms = 0;
+  if (const auto answered = inject_faults(line, late_ms, emit)) return *answered;
+  if (halted_) return true;  // a killed Marlin answers nothing more
+  const machine::NumberedLine nl = machine::split_numbered(line);
+  if (nl.checksum && !nl.checksum_ok) {
+    out_flush(emit);
+    emit(fmt::format("Error:checksum mismatch, Last firmware::Line: {}\nResend: {}\nok\n", last_n_, last_n_ + 1));
+    return true;
+  }
+  auto words = machine::parse_gcode(nl.body);
+  if (nl.number) {
+    if (words && words->command == "M110") {
+      last_n_ = static_cast<long>(words->get("N", static_cast<double>(*nl.number)));
+      emit("ok\n");
+      return true;
+    }
+    if (*nl.number == last_n_) {  // a line sent again after a late ok: already done
+      emit("ok\n");
+      return true;
+    }
+    if (*nl.number != last_n_ + 1) {
+      out_flush(emit);
+      emit(fmt::format(
+          "Error:Line Number is not Last firmware::Line Number+1, Last firmware::Line: {}\nResend: {}\nok\n", last_n_,
+          last_n_ + 1));
+      return true;
+    }
+    last_n_ = *nl.number;
+  }
+  if (words) {
+    const std::string& c = words->command;
+    if (c == "G0" || c == "G1") {
+      if (auto m = interp_.apply(*words)) {
+        if (carry_start_) {
+          m->start = *carry_start_;  // Marlin: the joined move's distance is added to this one
+          carry_start_.reset();
+        }
+        if (klipper() && m->extruder_only() && m->length_mm() > cfg_.max_extrude_only_distance_mm) {
+          out_flush(emit);
+          emit(fmt::format("!! Extrude only move too long ({:.3f}mm vs {:.3f}mm)\n", m->length_mm(),
+                           cfg_.max_extrude_only_distance_mm));
+          emit("ok\n");
+          return true;
+        }
+        double steps = 0;
+        for (std::size_t k = 0; k < 3; ++k)
+          steps = std::max(steps, std::abs(m->end[k] - m->start[k]) * cfg_.steps_per_mm);
+        if (marlin() && !m->extruder_only() && std::lround(steps) < sim::kMarlinMinStepsPerSegment) {
+          carry_start_ = m->start;  // Configuration_adv.h MIN_STEPS_PER_SEGMENT 6
+        } else {
+          if (pending_) {
+            const double v_exit = junction_speed(*pending_, *m);
+            execute(*pending_, pending_entry_, v_exit, emit);
+            pending_entry_ = v_exit;
+          }
+          pending_ = *m;
+        }
+      }
+    } else if (c == "G4") {
+      flush(emit);
+      interp_.apply(*words);
+      dwell(interp_.dwell_s(), emit);
+    } else if (c == "M400") {
+      flush(emit);
+    } else if (c == "G28") {
+      flush(emit);
+      machine::GcodeWords home;
+      home.command = "G92";
+      home.args = {{"X", 0}, {"Y", 0}, {"Z", 0}};
+      interp_.apply(home);
+    } else if (c == "M205" && words->has("B")) {
+      min_segment_time_s_ = words->get("B", sim::kMarlinDefaultMinSegmentTime_us) * sim::kSecondsPerMicrosecond;
+    } else if (c == "M566") {
+      if (words->has("X"))
+        jerk_x_mm_s_ =
+            std::max(sim::kRrfMinimumJerk_mm_s, words->get("X", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
+      if (words->has("Y"))
+        jerk_y_mm_s_ =
+            std::max(sim::kRrfMinimumJerk_mm_s, words->get("Y", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
+    } else if (c == "SET_VELOCITY_LIMIT") {
+      interp_.apply(*words);
+      if (words->has("MINIMUM_CRUISE_RATIO")) mcr_ = words->get("MINIMUM_CRUISE_RATIO", mcr_);
+    } else if (c == "M410" && rrf()) {
+      out_flush(emit);
+      emit("Error: M410: Command is not supported\n");
+    } else if (c == "M410") {
+      pending_.reset();  // quickstop: queued motion is dropped
+      pending_entry_ = 0;
+    } else if (c == "M112") {
+      pending_.reset();
+      halted_ = true;
+      out_flush(emit);
+      return true;
+    } else if (c == "M4100") {
+      flush(emit);
+      if (words->has("A")) set_streaming("accelerometer", words->get("A", 0) != 0);
+      if (words->has("L")) set_streaming("load_cell", words->get("L", 0) != 0);
+    } else if (c == "M955" && rrf()) {
+      out_flush(emit);
+      // Accelerometers.cpp ConfigureAccelerometer without other parameters: the report.
+      emit(
+          fmt::format("Accelerometer 0 type LIS3DH with orientation 20 samples at {}Hz with 10-bit resolution, SPI "
+                      "frequency 2000000\n",
+                      std::lround(cfg_.accel_rate_hz)));
+    } else if (c == "M956" && rrf()) {
+      flush(emit);
+      m956(nl.body, *words, emit);
+    } else if (c == "M493" && !klipper() && !rrf()) {
+      out_flush(emit);
+      m493(*words, emit);
+    } else if (c == "M115") {
+      out_flush(emit);
+      if (klipper())
+        emit(fmt::format("FIRMWARE_NAME:Klipper FIRMWARE_VERSION:v0.13.0-tunekit-sim-{}\n", core::kVersion));
+      else if (rrf())
+        emit(fmt::format(
+            "FIRMWARE_NAME: RepRapFirmware for tunekit-sim FIRMWARE_VERSION: 3.5.1 ELECTRONICS: tunekit-sim "
+            "{} FIRMWARE_DATE: 2024-01-01\n",
+            core::kVersion));
+      else
+        emit(fmt::format(
+            "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
+            "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
+            "UUID:00000000-0000-0000-0000-000000000000\n"
+            "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
+            core::kVersion));
+      if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
+    } else if (c == "M105") {
+      out_flush(emit);
+      const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);
+      emit(fmt::format("ok T:{:.1f} /{:.1f} B:{:.1f} /{:.1f} @:0 B@:0\n", te, te, tb, tb));
+      return true;
+    } else if (c == "M114") {
+      flush(emit);
+      const auto& p = interp_.position();
+      emit(fmt::format("X:{:.3f} Y:{:.3f} Z:{:.3f} E:{:.3f} Count X:0 Y:0 Z:0\n", p[0], p[1], p[2], p[3]));
+    } else if (c == "M109" || c == "M190") {
+      flush(emit);
+      interp_.apply(*words);
+      const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);
+      emit(fmt::format(" T:{:.1f} /{:.1f} B:{:.1f} /{:.1f} @:0 B@:0\n", te, te, tb, tb));
+    } else {
+      interp_.apply(*words);
+    }
+  }
+  out_flush(emit);
+  if (late_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(late_ms));
+  emit("ok\n");
+  return true;
+}
+
+}  // namespace tunekit::sim

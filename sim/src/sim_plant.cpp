@@ -1,0 +1,225 @@
+// The simulator's plant: the planner's motion (junction speeds, velocity profiles, dwells) and
+// the physical models it drives each step (input shaping, the axes' resonant modes with the
+// accelerometer, the liquefier with the load cell). The liquefier model is SimConfig::liquefier.
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "sim_constants.hpp"
+#include "tunekit/sim/simulator.hpp"
+
+namespace tunekit::sim {
+
+Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed) {
+  firmware_ = cfg_.firmware == "klipper" ? FirmwareRules::klipper
+              : cfg_.firmware == "rrf"   ? FirmwareRules::rrf
+                                         : FirmwareRules::marlin;
+  dt_ = 1.0 / (cfg_.accel_rate_hz * sim::kStepsPerAccelSample);
+  accel_every_ = sim::kStepsPerAccelSample;
+  ftm_active_ = cfg_.ft_motion == "on";
+  load_every_ = std::max(1, static_cast<int>(std::lround(1.0 / (cfg_.load_cell_rate_hz * dt_))));
+  for (const auto& [axis, modes] : cfg_.modes) mode_state_[axis].assign(modes.size(), {0.0, 0.0});
+  delay_.assign(std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(cfg_.theta_s / dt_))), 0.0);
+  mcr_ = cfg_.minimum_cruise_ratio;
+  // The firmware's default acceleration limits (sim_constants.hpp names their sources).
+  if (marlin()) {
+    for (const char* l : sim::kMarlinDefaultAccelerationGcode) interp_.apply(*machine::parse_gcode(l));
+  } else if (rrf()) {
+    interp_.apply(*machine::parse_gcode(sim::kRrfDefaultAccelerationGcode));
+  }
+}
+
+double Simulator::junction_speed(const machine::GcodeMove& a, const machine::GcodeMove& b) const {
+  if (a.extruder_only() != b.extruder_only()) return 0;
+  // Klipper: a junction with a move that is not kinematic (extrude-only) is a full stop.
+  if (klipper() && a.extruder_only()) return 0;
+  const auto ua = a.unit(), ub = b.unit();
+  double dot = 0;
+  if (a.extruder_only()) {
+    dot = ua[3] * ub[3];
+  } else {
+    double na = 0, nb = 0;
+    for (std::size_t k = 0; k < 3; ++k) {
+      dot += ua[k] * ub[k];
+      na += ua[k] * ua[k];
+      nb += ub[k] * ub[k];
+    }
+    dot /= std::sqrt(na * nb);
+  }
+  if (dot > sim::kStraightJunctionCos) return a.feed_mm_s;
+  if (rrf() && dot < -sim::kStraightJunctionCos) {
+    // DDA.cpp MatchSpeeds: the speed change across the junction, |d_a - d_b| v = 2 v for a
+    // reversal, may not exceed the axis' M566 jerk.
+    const double jerk = std::abs(ua[0]) >= std::abs(ua[1]) ? jerk_x_mm_s_ : jerk_y_mm_s_;
+    return std::min({jerk / 2, a.feed_mm_s, b.feed_mm_s});
+  }
+  return 0;
+}
+
+void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 4>& vel,
+                     const std::array<double, 4>& acc0_in, const std::array<double, 3>& accm_in,
+                     const std::array<double, 3>& acc1_in, const Emit& emit) {
+  const double h = dt_;
+  std::array<double, 4> acc0 = acc0_in;
+  std::array<double, 3> accm = accm_in, acc1 = acc1_in;
+  if (!cfg_.shapers.empty()) {
+    // Input shaping: the commanded x/y acceleration is the sum of delayed, scaled copies.
+    std::size_t need = 1;
+    for (const auto& [axis, imp] : cfg_.shapers)
+      for (const auto& [a, t] : imp) need = std::max(need, static_cast<std::size_t>(std::lround(t / h)) + 1);
+    for (std::size_t ax = 0; ax < 2; ++ax) {
+      auto& hist = shape_hist_[ax];
+      if (hist.size() < need) hist.assign(need, {0.0, 0.0, 0.0});
+      hist[shape_pos_ % hist.size()] = {acc0_in[ax], accm_in[ax], acc1_in[ax]};
+      const auto it = cfg_.shapers.find(machine::kAxisNames[ax]);
+      if (it == cfg_.shapers.end()) continue;
+      double s0 = 0, sm = 0, s1 = 0;
+      for (const auto& [a, t] : it->second) {
+        const std::size_t lag = static_cast<std::size_t>(std::lround(t / h));
+        const auto& e = hist[(shape_pos_ + hist.size() - lag % hist.size()) % hist.size()];
+        s0 += a * e[0];
+        sm += a * e[1];
+        s1 += a * e[2];
+      }
+      acc0[ax] = s0;
+      accm[ax] = sm;
+      acc1[ax] = s1;
+    }
+    ++shape_pos_;
+  }
+  std::array<double, 3> meas{acc1[0], acc1[1], acc1[2]};
+  for (std::size_t ax = 0; ax < 3; ++ax) {
+    const auto it = cfg_.modes.find(machine::kAxisNames[ax]);
+    if (it == cfg_.modes.end()) continue;
+    auto& states = mode_state_[machine::kAxisNames[ax]];
+    double rel = 0;
+    for (std::size_t m = 0; m < it->second.size(); ++m) {
+      const auto& md = it->second[m];
+      const double w = 2 * std::numbers::pi * md.freq_hz, c = 2 * md.zeta * w, k = w * w;
+      auto f = [&](double z, double zd, double a) { return -c * zd - k * z - a; };
+      double z = states[m][0], zd = states[m][1];
+      const double k1z = zd, k1v = f(z, zd, acc0[ax]);
+      const double k2z = zd + h / 2 * k1v, k2v = f(z + h / 2 * k1z, zd + h / 2 * k1v, accm[ax]);
+      const double k3z = zd + h / 2 * k2v, k3v = f(z + h / 2 * k2z, zd + h / 2 * k2v, accm[ax]);
+      const double k4z = zd + h * k3v, k4v = f(z + h * k3z, zd + h * k3v, acc1[ax]);
+      z += h / 6 * (k1z + 2 * k2z + 2 * k3z + k4z);
+      zd += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
+      states[m] = {z, zd};
+      rel += md.weight * f(z, zd, acc1[ax]);
+    }
+    meas[ax] = acc1[ax] + rel;
+  }
+  // Liquefier: input is the commanded filament feed, delayed by the dead time.
+  const double u = vel[3];
+  const double ud = delay_[delay_pos_];
+  delay_[delay_pos_] = u;
+  delay_pos_ = (delay_pos_ + 1) % delay_.size();
+  const double area = std::numbers::pi / 4 * cfg_.filament_diameter_mm * cfg_.filament_diameter_mm;
+  double force;
+  if (cfg_.liquefier == LiquefierModel::fopdt) {
+    const double target = cfg_.K_N_per_mm_s * ud;
+    liq_ = target + (liq_ - target) * std::exp(-h / cfg_.tau_s);
+    force = liq_;
+  } else {
+    const double q_out = std::pow(std::max(liq_, 0.0) / cfg_.k_MPa, 1.0 / cfg_.n_index);
+    liq_ += h * (area * ud - q_out) / cfg_.compliance_mm3_MPa;
+    force = liq_ * area;
+  }
+  if (deposit_sink) {
+    const double flow = cfg_.liquefier == LiquefierModel::fopdt
+                            ? (cfg_.K_N_per_mm_s != 0 ? std::max(0.0, liq_ / cfg_.K_N_per_mm_s) * area : 0.0)
+                            : std::pow(std::max(liq_, 0.0) / cfg_.k_MPa, 1.0 / cfg_.n_index);
+    deposit_sink(t_ + h, pos, std::hypot(vel[0], vel[1]), flow);
+  }
+  t_ += h;
+  ++step_;
+  if (stream_accel_ && step_ % accel_every_ == 0) {
+    const double ax = meas[0] + cfg_.cross_coupling * meas[1] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    const double ay = meas[1] + cfg_.cross_coupling * meas[0] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    const double az = sim::kAccelRestZ_mm_s2 + meas[2] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    if (accel_sink) accel_sink(t_, ax, ay, az);
+    else
+      fmt::format_to(std::back_inserter(out_), "echo:TKA {:.6f} {:.2f} {:.2f} {:.2f} {:.2f} {:.2f}\n", t_, ax, ay, az,
+                     acc1[0], acc1[1]);
+    ++accel_sent_;
+  }
+  if (capture_left_ > 0 && step_ % accel_every_ == 0) {
+    // An M956 run: sample number, then X, Y, Z in g (Accelerometers.cpp writes 3 decimals at
+    // 10-bit resolution); the trailer "Rate %u, overflows %u" once the samples are taken.
+    const double g = sim::kStandardGravity_mm_s2;
+    const double ax = meas[0] + cfg_.cross_coupling * meas[1] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    const double ay = meas[1] + cfg_.cross_coupling * meas[0] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    const double az = sim::kAccelRestZ_mm_s2 + meas[2] + cfg_.accel_noise_mm_s2 * normal_(rng_);
+    fmt::format_to(std::back_inserter(capture_text_), "{},{:.3f},{:.3f},{:.3f}\n", capture_index_++, ax / g, ay / g,
+                   az / g);
+    if (--capture_left_ == 0) {
+      capture_text_ += fmt::format("Rate {}, overflows 0\n", std::lround(cfg_.accel_rate_hz));
+      std::lock_guard<std::mutex> lock(mu_);
+      files_[capture_name_] = capture_text_;
+    }
+  }
+  if (stream_load_ && step_ % load_every_ == 0) {
+    const double f = cfg_.force_offset_N + force + cfg_.force_noise_N * normal_(rng_);
+    if (load_cell_sink) load_cell_sink(t_, f);
+    else fmt::format_to(std::back_inserter(out_), "echo:TKL {:.6f} {:.5f} {:.5f}\n", t_, u, f);
+    ++load_sent_;
+  }
+  if (out_.size() > sim::kOutputFlushBytes) out_flush(emit);
+}
+
+void Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit) {
+  double accel = m.accel_mm_s2, v_max = m.feed_mm_s;
+  const double L = m.length_mm();
+  if (klipper()) {
+    if (m.extruder_only()) accel = std::min(accel, cfg_.max_extrude_only_accel_mm_s2);
+    else v_max = std::min(v_max, std::sqrt(0.5 * (v_entry * v_entry + v_exit * v_exit) + accel * L * (1 - mcr_)));
+  } else if (marlin() && min_segment_time_s_ > 0 && L / v_max < min_segment_time_s_) {
+    v_max = L / min_segment_time_s_;  // planner.cpp: a block shorter than min_segment_time is slowed
+  }
+  v_max = std::max(v_max, sim::kMinPeakSpeed_mm_s);
+  const machine::Profile prof = machine::Profile::move(L, v_entry, v_max, v_exit, accel, cfg_.jerk_mm_s3);
+  const auto u = m.unit();
+  const double t0 = t_;
+  const double T = prof.duration_s();
+  const int n = static_cast<int>(std::floor(T / dt_ + sim::kStepCountSlack));
+  if (move_sink && n > 0) move_sink(t_, n * dt_, prof, m.start, u);
+  for (int i = 0; i < n; ++i) {
+    const double tau = i * dt_;
+    const machine::PathState s0 = prof.at(tau), sm = prof.at(tau + dt_ / 2), s1 = prof.at(tau + dt_);
+    std::array<double, 4> pos{}, vel{}, acc0{};
+    std::array<double, 3> accm{}, acc1{};
+    for (std::size_t k = 0; k < 4; ++k) {
+      pos[k] = m.start[k] + u[k] * s1.pos_mm;
+      vel[k] = u[k] * s1.vel_mm_s;
+      acc0[k] = u[k] * s0.accel_mm_s2;
+      if (k < 3) {
+        accm[k] = u[k] * sm.accel_mm_s2;
+        acc1[k] = u[k] * s1.accel_mm_s2;
+      }
+    }
+    step(pos, vel, acc0, accm, acc1, emit);
+  }
+  (void)t0;
+  // The fraction of a step left over is dropped: moves start on the sample grid.
+}
+
+void Simulator::dwell(double seconds, const Emit& emit) {
+  const int n = static_cast<int>(std::lround(seconds / dt_));
+  const std::array<double, 4> zero4{};
+  const std::array<double, 3> zero3{};
+  for (int i = 0; i < n; ++i) step(zero4, zero4, zero4, zero3, zero3, emit);
+}
+
+void Simulator::flush(const Emit& emit) {
+  if (pending_) {
+    execute(*pending_, pending_entry_, 0, emit);
+    pending_.reset();
+    pending_entry_ = 0;
+  }
+  out_flush(emit);
+}
+
+}  // namespace tunekit::sim

@@ -1,0 +1,306 @@
+// The simulator's configuration and its serving: SimConfig's "key=value" options and truth, the
+// thread-safe queries, and serving a Simulator on a transport or a pseudo-terminal. The plant is
+// in sim_plant.cpp, the G-code command table in sim_gcode.cpp, fault injection in sim_faults.cpp.
+#include "tunekit/sim/simulator.hpp"
+
+#include <fcntl.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "sim_constants.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/ident/input_shaper.hpp"
+
+namespace tunekit::sim {
+namespace {
+
+double parse_double(const std::string& key, const std::string& v) {
+  char* end = nullptr;
+  const double d = std::strtod(v.c_str(), &end);
+  if (v.empty() || end != v.c_str() + v.size() || !std::isfinite(d))
+    throw InputError(fmt::format("simulator option {}: '{}' is not a number", key, v));
+  return d;
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::size_t b = 0;
+  for (;;) {
+    const auto e = s.find(sep, b);
+    out.push_back(s.substr(b, e == std::string::npos ? std::string::npos : e - b));
+    if (e == std::string::npos) break;
+    b = e + 1;
+  }
+  return out;
+}
+
+const char* liquefier_model_name(LiquefierModel m) { return m == LiquefierModel::fopdt ? "fopdt" : "physics"; }
+
+}  // namespace
+
+SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
+  SimConfig c;
+  for (const auto& opt : options) {
+    const auto eq = opt.find('=');
+    if (eq == std::string::npos) throw InputError(fmt::format("simulator option '{}' is not key=value", opt));
+    const std::string k = opt.substr(0, eq), v = opt.substr(eq + 1);
+    auto pos = [&](double d) {
+      if (!(d > 0)) throw InputError(fmt::format("simulator option {} must be positive", k));
+      return d;
+    };
+    if (k == "liquefier") {
+      if (v != "fopdt" && v != "physics") throw InputError("simulator option liquefier must be fopdt or physics");
+      c.liquefier = v == "fopdt" ? LiquefierModel::fopdt : LiquefierModel::physics;
+    } else if (k == "K" || k == "K_N_per_mm_s") c.K_N_per_mm_s = parse_double(k, v);
+    else if (k == "tau_s") c.tau_s = pos(parse_double(k, v));
+    else if (k == "theta_s") c.theta_s = std::max(0.0, parse_double(k, v));
+    else if (k == "k_MPa") c.k_MPa = pos(parse_double(k, v));
+    else if (k == "n_index") c.n_index = pos(parse_double(k, v));
+    else if (k == "compliance_mm3_MPa") c.compliance_mm3_MPa = pos(parse_double(k, v));
+    else if (k == "filament_diameter_mm") c.filament_diameter_mm = pos(parse_double(k, v));
+    else if (k == "force_offset_N") c.force_offset_N = parse_double(k, v);
+    else if (k == "force_noise_N") c.force_noise_N = std::max(0.0, parse_double(k, v));
+    else if (k == "load_cell_rate_hz") c.load_cell_rate_hz = pos(parse_double(k, v));
+    else if (k == "accel_rate_hz") c.accel_rate_hz = pos(parse_double(k, v));
+    else if (k == "accel_noise_mm_s2") c.accel_noise_mm_s2 = std::max(0.0, parse_double(k, v));
+    else if (k == "cross_coupling") c.cross_coupling = parse_double(k, v);
+    else if (k == "jerk_mm_s3") c.jerk_mm_s3 = pos(parse_double(k, v));
+    else if (k == "seed") c.seed = static_cast<unsigned>(parse_double(k, v));
+    else if (k == "firmware") {
+      if (v != "marlin" && v != "klipper" && v != "rrf")
+        throw InputError("simulator option firmware must be marlin, klipper or rrf");
+      c.firmware = v;
+    } else if (k == "steps_per_mm") c.steps_per_mm = pos(parse_double(k, v));
+    else if (k == "max_extrude_only_distance_mm") c.max_extrude_only_distance_mm = pos(parse_double(k, v));
+    else if (k == "max_extrude_only_accel_mm_s2") c.max_extrude_only_accel_mm_s2 = pos(parse_double(k, v));
+    else if (k == "sensor_stream") {
+      if (v != "0" && v != "1") throw InputError("simulator option sensor_stream must be 0 or 1");
+      c.sensor_stream = v == "1";
+    } else if (k == "rrf_http") {
+      if (v != "0" && v != "1") throw InputError("simulator option rrf_http must be 0 or 1");
+      c.rrf_http = v == "1";
+    } else if (k == "ft_motion") {
+      if (v != "none" && v != "off" && v != "on")
+        throw InputError("simulator option ft_motion must be none, off or on");
+      c.ft_motion = v;
+    } else if (k == "minimum_cruise_ratio") {
+      c.minimum_cruise_ratio = parse_double(k, v);
+      if (c.minimum_cruise_ratio < 0 || c.minimum_cruise_ratio >= 1)
+        throw InputError("simulator option minimum_cruise_ratio must be in [0, 1)");
+    } else if (k.rfind("mode_", 0) == 0 && k.size() == 6) {
+      std::vector<SimMode> modes;
+      for (const auto& m : split(v, ',')) {
+        const auto parts = split(m, ':');
+        if (parts.size() < 2 || parts.size() > 3)
+          throw InputError(fmt::format("simulator option {}: '{}' is not FREQ_HZ:ZETA[:WEIGHT]", k, m));
+        SimMode sm{pos(parse_double(k, parts[0])), pos(parse_double(k, parts[1])),
+                   parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultModeWeight};
+        if (sm.zeta >= 1) throw InputError(fmt::format("simulator option {}: damping ratio must be below 1", k));
+        modes.push_back(sm);
+      }
+      c.modes[k.substr(5)] = modes;
+    } else if (k.rfind("shaper_", 0) == 0 && k.size() == 8 && (k[7] == 'x' || k[7] == 'y')) {
+      const auto parts = split(v, ':');
+      if (parts.size() < 2 || parts.size() > 3)
+        throw InputError(fmt::format("simulator option {}: '{}' is not TYPE:FREQ_HZ[:DAMPING]", k, v));
+      const double damping = parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultShaperDamping;
+      const auto sh = ident::design_shaper(ident::parse_shaper_type(parts[0]), pos(parse_double(k, parts[1])), damping);
+      std::vector<std::pair<double, double>> imp;
+      for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) imp.push_back({sh.amplitudes[i], sh.times_s[i]});
+      c.shapers[k.substr(7)] = imp;
+      c.shaper_names[k.substr(7)] = fmt::format("{}:{:g}:{:g}", parts[0], sh.freq_hz, damping);
+    } else if (k == "fault") {
+      const auto at = v.find('@');
+      if (at == std::string::npos) throw InputError(fmt::format("simulator fault '{}' is not KIND@LINE", v));
+      const std::string kind = v.substr(0, at);
+      SimFault f;
+      auto rest = v.substr(at + 1);
+      if (kind == "late-ok") {
+        const auto colon = rest.find(':');
+        if (colon == std::string::npos) throw InputError("simulator fault late-ok needs @LINE:MILLISECONDS");
+        f.delay_ms = pos(parse_double(k, rest.substr(colon + 1)));
+        rest = rest.substr(0, colon);
+        f.kind = SimFault::Kind::late_ok;
+      } else if (kind == "drop") f.kind = SimFault::Kind::drop;
+      else if (kind == "garble") f.kind = SimFault::Kind::garble;
+      else if (kind == "disconnect") f.kind = SimFault::Kind::disconnect;
+      else if (kind == "error") f.kind = SimFault::Kind::error;
+      else
+        throw InputError(fmt::format("unknown simulator fault '{}' (drop, garble, late-ok, disconnect, error)", kind));
+      f.at_line = static_cast<long>(pos(parse_double(k, rest)));
+      c.faults.push_back(f);
+    } else {
+      throw InputError(fmt::format("unknown simulator option '{}' (see docs/machine.md)", k));
+    }
+  }
+  return c;
+}
+
+nlohmann::json SimConfig::truth() const {
+  nlohmann::json j;
+  const double area = std::numbers::pi / 4 * filament_diameter_mm * filament_diameter_mm;
+  nlohmann::json liq{{"model", liquefier_model_name(liquefier)}, {"input", "feed (mm/s), commanded filament feed"},
+                     {"output", "force (N), load cell"},         {"theta_s", theta_s},
+                     {"force_offset_N", force_offset_N},         {"force_noise_N", force_noise_N},
+                     {"load_cell_rate_hz", load_cell_rate_hz}};
+  if (liquefier == LiquefierModel::fopdt) {
+    liq["K"] = K_N_per_mm_s;
+    liq["K_unit"] = "N/(mm/s)";
+    liq["tau_s"] = tau_s;
+  } else {
+    liq["k_MPa_s^n_per_mm3^n"] = k_MPa;
+    liq["n_index"] = n_index;
+    liq["compliance_mm3_MPa"] = compliance_mm3_MPa;
+    liq["filament_area_mm2"] = area;
+    liq["equations"] = "C dP/dt = A u(t - theta) - (P/k)^(1/n); F = P A";
+    nlohmann::json table = nlohmann::json::array();
+    for (double u : sim::kTruthOperatingFeeds_mm_s) {
+      const double Q = area * u, P = k_MPa * std::pow(Q, n_index);
+      table.push_back({{"feed_mm_s", u},
+                       {"force_N", P * area + force_offset_N},
+                       {"K_local", n_index * P * area / u},
+                       {"tau_local_s", compliance_mm3_MPa * k_MPa * n_index * std::pow(Q, n_index - 1)}});
+    }
+    liq["operating_points"] = table;
+  }
+  j["liquefier"] = liq;
+  nlohmann::json axes = nlohmann::json::object();
+  for (const auto& [axis, modes] : this->modes) {
+    nlohmann::json ms = nlohmann::json::array();
+    for (const auto& m : modes) ms.push_back({{"freq_hz", m.freq_hz}, {"zeta", m.zeta}, {"weight", m.weight}});
+    axes[axis] = {{"modes", ms}};
+  }
+  j["axes"] = axes;
+  j["accelerometer"] = {
+      {"rate_hz", accel_rate_hz}, {"noise_mm_s2", accel_noise_mm_s2}, {"cross_coupling", cross_coupling}};
+  j["jerk_mm_s3"] = jerk_mm_s3;
+  j["firmware"] = firmware;
+  if (firmware == "marlin") j["ft_motion"] = ft_motion;
+  if (firmware == "rrf") j["rrf_http"] = rrf_http;
+  j["planner"] = {{"steps_per_mm", steps_per_mm},
+                  {"max_extrude_only_distance_mm", max_extrude_only_distance_mm},
+                  {"max_extrude_only_accel_mm_s2", max_extrude_only_accel_mm_s2},
+                  {"minimum_cruise_ratio", minimum_cruise_ratio}};
+  for (const auto& [axis, name] : shaper_names) j["input_shaper"][axis] = name;
+  j["seed"] = seed;
+  nlohmann::json faults = nlohmann::json::array();
+  for (const auto& f : this->faults) faults.push_back(f.describe());
+  j["faults"] = faults;
+  j["time"] = "machine time: advances with executed motion only, computed faster than real time";
+  return j;
+}
+
+std::vector<std::string> Simulator::received() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return received_;
+}
+
+void Simulator::set_streaming(const std::string& sensor, bool on) {
+  if (sensor == "accelerometer") stream_accel_ = on;
+  else if (sensor == "load_cell") stream_load_ = on;
+}
+
+void Simulator::out_flush(const Emit& emit) {
+  if (!out_.empty()) emit(out_);
+  out_.clear();
+}
+
+std::optional<std::string> Simulator::file(const std::string& name) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  const auto it = files_.find(name);
+  if (it == files_.end()) return std::nullopt;
+  return it->second;
+}
+
+void serve_simulator(Simulator& sim, machine::Transport& t, const std::atomic<bool>& stop) {
+  std::string buf;
+  const Simulator::Emit emit = [&](std::string_view s) { t.write(s); };
+  try {
+    while (!stop.load()) {
+      const std::string chunk = t.read_some(sim::kServeReadPoll);
+      if (chunk.empty()) continue;
+      buf += chunk;
+      std::size_t b = 0;
+      for (;;) {
+        const auto e = buf.find_first_of("\r\n", b);
+        if (e == std::string::npos) break;
+        const std::string line = buf.substr(b, e - b);
+        b = e + 1;
+        if (line.empty()) continue;
+        if (!sim.handle_line(line, emit)) {
+          std::this_thread::sleep_for(sim::kDisconnectGrace);  // let the host read what was sent
+          t.close();
+          return;
+        }
+      }
+      buf.erase(0, b);
+    }
+  } catch (const MachineError&) {
+    // The host went away.
+  }
+}
+
+SimPtyServer::SimPtyServer(SimConfig config, const std::function<void(Simulator&)>& setup)
+    : sim_(std::make_unique<Simulator>(std::move(config))) {
+  if (setup) setup(*sim_);
+  if (sim_->config().rrf_http && sim_->config().firmware == "rrf") http_ = std::make_unique<SimHttpServer>(*sim_);
+  master_ = ::posix_openpt(O_RDWR | O_NOCTTY);
+  if (master_ < 0) throw MachineError("cannot create a pseudo-terminal (posix_openpt)");
+  char name[256];
+  if (::grantpt(master_) != 0 || ::unlockpt(master_) != 0 || ::ptsname_r(master_, name, sizeof name) != 0) {
+    ::close(master_);
+    throw MachineError("cannot set up the pseudo-terminal");
+  }
+  slave_path_ = name;
+  ::fcntl(master_, F_SETFL, ::fcntl(master_, F_GETFL) | O_NONBLOCK);
+  ::fcntl(master_, F_SETFD, FD_CLOEXEC);
+  // Keep a slave descriptor open so the master does not see a hang-up between clients, and
+  // put the line in raw mode (no echo, no CR/LF translation) before anyone connects.
+  slave_keepalive_ = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
+  if (slave_keepalive_ >= 0) {
+    termios tio{};
+    if (::tcgetattr(slave_keepalive_, &tio) == 0) {
+      ::cfmakeraw(&tio);
+      ::tcsetattr(slave_keepalive_, TCSANOW, &tio);
+    }
+  }
+  thread_ = std::thread([this] { serve(); });
+}
+
+SimPtyServer::~SimPtyServer() {
+  stop();
+  wait();
+  if (slave_keepalive_ >= 0) ::close(slave_keepalive_);
+}
+
+void SimPtyServer::stop() { stop_ = true; }
+
+std::string SimPtyServer::http_url() const { return http_ ? http_->url() : std::string(); }
+
+void SimPtyServer::wait() {
+  if (thread_.joinable()) thread_.join();
+}
+
+void SimPtyServer::serve() {
+  machine::FdTransport master(master_, "simulator pseudo-terminal master");
+  serve_simulator(*sim_, master, stop_);
+  if (!stop_.load()) {
+    disconnected_ = true;
+    if (slave_keepalive_ >= 0) {
+      ::close(slave_keepalive_);
+      slave_keepalive_ = -1;
+    }
+  }
+  master.close();
+  master_ = -1;
+}
+
+}  // namespace tunekit::sim
