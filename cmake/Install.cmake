@@ -81,6 +81,7 @@ tunekit_install_library(tunekit_machine machine)
 tunekit_install_library(tunekit_sim sim)
 tunekit_install_library(tunekit_protocols protocols)
 tunekit_install_library(tunekit_history history)
+tunekit_install_library(tunekit_calibration calibration)
 
 install(EXPORT tunekitTargets NAMESPACE tunekit:: DESTINATION "${TUNEKIT_INSTALL_CMAKEDIR}")
 

@@ -21,8 +21,8 @@
 
 #include "bench_common.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/cli/envelope.hpp"
-#include "tunekit/cli/history_record.hpp"
+#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/history_record.hpp"
 #include "tunekit/history/store.hpp"
 #include "tunekit/ident/csv.hpp"
 
@@ -78,15 +78,16 @@ int main(int argc, char** argv) {
   const auto envelope = nlohmann::json::parse(ident::read_file_bytes(results));
 
   // 1. One calibration recorded, as `calibrate --record` does it.
-  cli::OutputOptions o;
+  calibration::OutputOptions o;
   o.record = true;
   o.json = true;  // no confirmation line
   o.machine_id = "bench-printer";
   o.db = (dir / "record.sqlite").string();
   o.record_source = "runs/calibrate-bench";
   std::ostringstream sink;
-  cli::CliContext ctx{sink, sink};
-  const auto [record_timing, record_cpu_ms] = wall_and_cpu_ms([&] { cli::record_result(envelope, o, ctx); }, 31, 3);
+  calibration::CliContext ctx{sink, sink};
+  const auto [record_timing, record_cpu_ms] =
+      wall_and_cpu_ms([&] { calibration::record_result(envelope, o, ctx); }, 31, 3);
   const double record_ms = record_timing.median_ms;
   std::printf("record one calibration (SQLite, %zu-byte result): median %.2f ms wall, %.2f ms CPU\n",
               envelope.dump().size(), record_ms, record_cpu_ms);

@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/cli/report.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/ident/csv.hpp"
 
 namespace {
@@ -51,10 +51,10 @@ TEST_CASE("calibrate on the simulated printer writes a report whose plots and nu
   std::size_t cells = 0;
   for (const auto& c : tunekit::test::summary_cells(html)) {
     INFO(c.path);
-    const auto* v = tunekit::cli::json_at(results, c.path);
+    const auto* v = tunekit::calibration::json_at(results, c.path);
     REQUIRE(v != nullptr);
     CHECK(nlohmann::json::parse(c.value).get<double>() == v->get<double>());
-    CHECK(c.display == tunekit::cli::display_number(v->get<double>()));
+    CHECK(c.display == tunekit::calibration::display_number(v->get<double>()));
     ++cells;
   }
   CHECK(cells == results.at("summary").size());
@@ -64,14 +64,14 @@ TEST_CASE("calibrate on the simulated printer writes a report whose plots and nu
   for (const auto& row : results.at("summary")) {
     INFO(row.dump());
     if (row.contains("ci_path")) {
-      const auto* ci = tunekit::cli::json_at(results, row.at("ci_path").get<std::string>());
+      const auto* ci = tunekit::calibration::json_at(results, row.at("ci_path").get<std::string>());
       REQUIRE(ci != nullptr);
       REQUIRE(ci->size() == 2);
-      const double v = tunekit::cli::json_at(results, row.at("path").get<std::string>())->get<double>();
+      const double v = tunekit::calibration::json_at(results, row.at("path").get<std::string>())->get<double>();
       CHECK((*ci)[0].get<double>() <= v);
       CHECK(v <= (*ci)[1].get<double>());
-      const std::string cell = "[" + tunekit::cli::display_number((*ci)[0].get<double>()) + ", " +
-                               tunekit::cli::display_number((*ci)[1].get<double>()) + "]";
+      const std::string cell = "[" + tunekit::calibration::display_number((*ci)[0].get<double>()) + ", " +
+                               tunekit::calibration::display_number((*ci)[1].get<double>()) + "]";
       CHECK(html.find(cell) != std::string::npos);
       ++with_interval;
     } else {

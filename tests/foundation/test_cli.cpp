@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/cli/envelope.hpp"
+#include "tunekit/calibration/envelope.hpp"
 
 using tunekit::test::run_cli;
 using tunekit::test::run_exe;
@@ -51,12 +51,12 @@ TEST_CASE("the JSON envelope carries schema, tool, command, options and input ha
   CHECK(j["command"] == "inspect");
   CHECK(j["options"]["time_column"] == "time");
   CHECK(j["inputs"][0]["path"] == path);
-  CHECK(j["inputs"][0]["sha256"] == tunekit::cli::sha256_hex("time,y\n0,1\n1,2\n"));
+  CHECK(j["inputs"][0]["sha256"] == tunekit::calibration::sha256_hex("time,y\n0,1\n1,2\n"));
   CHECK(j["results"]["time"]["sample_rate_hz"] == 1.0);
 }
 
 TEST_CASE("SHA-256 matches the FIPS 180-2 test vector") {
-  CHECK(tunekit::cli::sha256_hex("abc") == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  CHECK(tunekit::calibration::sha256_hex("abc") == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
 }
 
 TEST_CASE("the output option writes the same envelope to a file") {

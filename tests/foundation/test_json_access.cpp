@@ -5,12 +5,12 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/cli/json_access.hpp"
-#include "tunekit/cli/requirements.hpp"
-#include "tunekit/cli/results_json.hpp"
+#include "tunekit/calibration/json_access.hpp"
+#include "tunekit/calibration/requirements.hpp"
+#include "tunekit/calibration/results_json.hpp"
 #include "tunekit/core/error.hpp"
 
-using namespace tunekit::cli;
+using namespace tunekit::calibration;
 using Pointer = nlohmann::json::json_pointer;
 
 namespace {

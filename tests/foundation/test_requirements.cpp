@@ -4,11 +4,11 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/cli/requirements.hpp"
+#include "tunekit/calibration/requirements.hpp"
 #include "tunekit/core/error.hpp"
 
-using tunekit::cli::evaluate_requirement;
-using tunekit::cli::parse_requirement;
+using tunekit::calibration::evaluate_requirement;
+using tunekit::calibration::parse_requirement;
 
 namespace {
 const nlohmann::json kResults = nlohmann::json::parse(R"({

@@ -1,23 +1,23 @@
 // tunekit's results JSON read back: parsing with located errors, the envelope check, the
 // --require evaluation and the HTML report built from it.
 #include "fuzz_common.hpp"
-#include "tunekit/cli/report.hpp"
-#include "tunekit/cli/requirements.hpp"
-#include "tunekit/cli/results_json.hpp"
+#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/requirements.hpp"
+#include "tunekit/calibration/results_json.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size > 65536) return -1;
   const std::string text(tunekit::fuzz::as_text(data, size));
   tunekit::fuzz::expect_result_or_error([&] {
-    const auto j = tunekit::cli::parse_results_json(text, "fuzz.json");
-    tunekit::cli::check_results_envelope(j, text, "fuzz.json");
+    const auto j = tunekit::calibration::parse_results_json(text, "fuzz.json");
+    tunekit::calibration::check_results_envelope(j, text, "fuzz.json");
     for (const char* req : {"tau_s<0.6", "x.freq_hz>=40", "n<0.5"})
       tunekit::fuzz::expect_result_or_error([&] {
-        tunekit::cli::evaluate_requirement(tunekit::cli::parse_requirement(req),
-                                           j.contains("results") ? j["results"] : j);
+        tunekit::calibration::evaluate_requirement(tunekit::calibration::parse_requirement(req),
+                                                   j.contains("results") ? j["results"] : j);
       });
     try {
-      tunekit::cli::build_report_html(j, {});
+      tunekit::calibration::build_report_html(j, {});
     } catch (const nlohmann::json::exception&) {
       // write_report turns these into a located InputError (report.cpp); the builder may throw them.
     }

@@ -13,7 +13,7 @@
 
 #include "history_fixture.hpp"
 #include "test_support.hpp"
-#include "tunekit/cli/envelope.hpp"
+#include "tunekit/calibration/envelope.hpp"
 #include "tunekit/history/store.hpp"
 
 using tunekit::test::dataset;
@@ -83,7 +83,7 @@ TEST_CASE("history cli: step --record stores the result with its input's digest,
       run_cli({"history", "show", std::to_string(recs[0]["record_id"].get<long>()), "--db", db.url, "--json"});
   REQUIRE(show.code == 0);
   const auto rec = nlohmann::json::parse(show.out)["results"];
-  CHECK(rec["inputs"][0]["sha256"] == tunekit::cli::sha256_file(csv));
+  CHECK(rec["inputs"][0]["sha256"] == tunekit::calibration::sha256_file(csv));
   CHECK(rec["result"]["results"] == env["results"]);
   CHECK(rec["quantities"]["tau_s"]["value"] == env["results"]["pooled"]["params"]["tau_s"]["value"]);
   CHECK(rec["quantities"]["tau_s"]["stderr"] == env["results"]["pooled"]["params"]["tau_s"]["stderr"]);
@@ -142,7 +142,7 @@ TEST_CASE("history cli: batch --record stores one record per dataset, import of 
     commands.insert(r.command);
     const auto full = store.get(r.id);
     REQUIRE(full->inputs.size() == 1);  // each dataset's own input and digest
-    CHECK(full->inputs[0].sha256 == tunekit::cli::sha256_file(full->inputs[0].path));
+    CHECK(full->inputs[0].sha256 == tunekit::calibration::sha256_file(full->inputs[0].path));
   }
   CHECK(commands == std::set<std::string>{"rheo", "step"});
   CHECK(store.series("b1", "tau_s").size() == 1);

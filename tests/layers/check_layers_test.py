@@ -15,7 +15,8 @@ import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-LIBRARIES = ("core", "fitting", "ident", "vision", "history", "firmware", "machine", "sim", "protocols", "apps")
+LIBRARIES = ("core", "fitting", "ident", "vision", "history", "firmware", "machine", "sim", "protocols", "calibration",
+             "apps")
 SUFFIXES = (".hpp", ".h", ".cpp")
 
 
@@ -109,6 +110,14 @@ def main():
          '#include "tunekit/protocols/experiments.hpp"', "tunekit/protocols/experiments.hpp"),
         ("core includes firmware", lambda t: "core/src/atomic_file.cpp",
          '#include "tunekit/firmware/config_edit.hpp"', "tunekit/firmware/config_edit.hpp"),
+        ("protocols includes calibration", lambda t: first_source(t, "protocols/src"),
+         '#include "tunekit/calibration/step_command.hpp"', "tunekit/calibration/step_command.hpp"),
+        ("history includes calibration", lambda t: first_source(t, "history/src"),
+         '#include "tunekit/calibration/envelope.hpp"', "tunekit/calibration/envelope.hpp"),
+        ("calibration includes the command line", lambda t: first_source(t, "calibration/src"),
+         '#include "tunekit/cli/option_binding.hpp"', "tunekit/cli/option_binding.hpp"),
+        ("calibration includes apps' private header by a relative path", lambda t: first_source(t, "calibration/src"),
+         '#include "../../apps/cli/src/resonance_cli.hpp"', "apps"),
         ("fitting reaches into ident's folder by a relative path", lambda t: first_source(t, "fitting/src"),
          '#include "../../ident/src/planted_private.hpp"', "ident"),
     ]
@@ -134,6 +143,9 @@ def main():
     plant(tree, first_source(tree, "sim/src"), '#include "tunekit/machine/transport.hpp"')
     plant(tree, first_source(tree, "machine/src"), '#include "tunekit/firmware/firmware_limits.hpp"')
     plant(tree, "apps/tunekit_main.cpp", '#include "tunekit/history/store.hpp"')
+    plant(tree, "apps/tunekit_main.cpp", '#include "tunekit/calibration/step_command.hpp"')
+    plant(tree, first_source(tree, "calibration/src"), '#include "tunekit/protocols/runner.hpp"')
+    plant(tree, first_source(tree, "calibration/src"), '#include "tunekit/history/store.hpp"')
     code, out = run(check, tree)
     if code != 0:
         failures.append(f"allowed includes: expected exit 0, got {code}:\n{out}")

@@ -1,12 +1,12 @@
 // Agreement of a quantity measured two ways, and when a liquefier gain is compared with 1.
 #include <catch2/catch.hpp>
 
-#include "tunekit/cli/agreement.hpp"
-#include "tunekit/cli/warning_advice.hpp"
+#include "tunekit/calibration/agreement.hpp"
+#include "tunekit/calibration/warning_advice.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
 
-using namespace tunekit::cli;
+using namespace tunekit::calibration;
 
 TEST_CASE("two estimates agree when their difference is within the combined 95 % half-width") {
   // Half-widths 0.03 and 0.04 combine to 0.05.

@@ -8,12 +8,12 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/cli/report.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/vision/image_io.hpp"
 
-using namespace tunekit::cli;
+using namespace tunekit::calibration;
 
 namespace {
 

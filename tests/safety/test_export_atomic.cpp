@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/cli/envelope.hpp"
+#include "tunekit/calibration/envelope.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/atomic_file.hpp"
 
@@ -81,9 +81,10 @@ TEST_CASE("export keeps a Latin-1 comment byte for byte and reports valid UTF-8 
   CHECK(after.find("\n# caf\xe9 comment") != std::string::npos);
   CHECK(after.find("pressure_advance: 0.05") != std::string::npos);
   CHECK_NOTHROW(nlohmann::json::parse(read_text(dir + "/r.json")));
-  CHECK(tunekit::cli::utf8_or_latin1("caf\xe9") == "caf\xc3\xa9");
-  CHECK(tunekit::cli::utf8_or_latin1("caf\xc3\xa9") == "caf\xc3\xa9");
-  CHECK(tunekit::cli::utf8_or_latin1("\xed\xa0\x80") == "\xc3\xad\xc2\xa0\xc2\x80");  // a surrogate is not UTF-8
+  CHECK(tunekit::calibration::utf8_or_latin1("caf\xe9") == "caf\xc3\xa9");
+  CHECK(tunekit::calibration::utf8_or_latin1("caf\xc3\xa9") == "caf\xc3\xa9");
+  CHECK(tunekit::calibration::utf8_or_latin1("\xed\xa0\x80") ==
+        "\xc3\xad\xc2\xa0\xc2\x80");  // a surrogate is not UTF-8
 }
 
 TEST_CASE("fault: export --write with any output path unwritable leaves every file byte-identical", "[safety]") {

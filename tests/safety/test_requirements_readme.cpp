@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/cli/requirements.hpp"
+#include "tunekit/calibration/requirements.hpp"
 #include "tunekit/core/error.hpp"
 
 using tunekit::test::run_cli;
@@ -84,8 +84,8 @@ TEST_CASE("requirements: a bare name resolves to the fitted parameter, not to a 
     "diagnostics": {"n": 120, "rms": 0.2},
     "power_law": {"fits": [{"params": {"n": {"value": 0.52}}}, {"params": {"n": {"value": 0.58}}}]}
   })");
-  using tunekit::cli::evaluate_requirement;
-  using tunekit::cli::parse_requirement;
+  using tunekit::calibration::evaluate_requirement;
+  using tunekit::calibration::parse_requirement;
   const auto o = evaluate_requirement(parse_requirement("n<0.5"), results);
   CHECK(o.resolved_path == "params.n.value");
   CHECK(o.value == Approx(0.43));

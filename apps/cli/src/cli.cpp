@@ -10,11 +10,15 @@
 #include <fmt/format.h>
 
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/cli/history_record.hpp"
+#include "tunekit/cli/option_binding.hpp"
+#include "tunekit/calibration/history_record.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/version.hpp"
 
 namespace tunekit::cli {
+
+using namespace calibration;
+
 namespace {
 thread_local int g_exit_code = 0;  // per thread: batch runs commands in parallel
 
@@ -101,6 +105,16 @@ std::string cli_typo_message(CLI::App& app, const std::vector<std::string>& args
 }  // namespace
 
 void set_exit_code(int code) { g_exit_code = code; }
+
+static void add_record_options(CLI::App* sub, OutputOptions& o) {
+  sub->add_flag("--record", o.record,
+                "Also store the result in the calibration history (with --machine-id; see 'tunekit history')");
+  sub->add_option("--machine-id", o.machine_id, "Which machine the result belongs to (history records)");
+  sub->add_option("--db", o.db,
+                  fmt::format("History database: a SQLite file or postgresql://user@host:port/dbname (default: "
+                              "$TUNEKIT_HISTORY_DB, else {})",
+                              kDefaultHistoryDb));
+}
 
 void add_output_options(CLI::App* sub, OutputOptions& o, bool recordable) {
   sub->add_flag("--json", o.json, "Print the results as JSON on stdout");

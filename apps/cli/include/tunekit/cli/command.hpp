@@ -14,8 +14,8 @@
 
 #include <ostream>
 
-#include "tunekit/cli/context.hpp"
-#include "tunekit/cli/envelope.hpp"
+#include "tunekit/calibration/context.hpp"
+#include "tunekit/calibration/envelope.hpp"
 
 namespace tunekit::cli {
 
@@ -23,9 +23,9 @@ namespace tunekit::cli {
 /// then the envelope where `output` says. Returns the process exit code (1 for an unmet
 /// --require threshold).
 template <class Outcome>
-int report_outcome(const Outcome& outcome, const OutputOptions& output, CliContext& ctx) {
+int report_outcome(const Outcome& outcome, const calibration::OutputOptions& output, calibration::CliContext& ctx) {
   if (!output.json) print_text(outcome, ctx.out);
-  return emit(to_envelope(outcome), output, ctx);
+  return calibration::emit(to_envelope(outcome), output, ctx);
 }
 
 }  // namespace tunekit::cli

@@ -8,9 +8,12 @@
 
 #include <CLI/CLI.hpp>
 
-#include "tunekit/cli/context.hpp"
+#include "tunekit/calibration/context.hpp"
 
 namespace tunekit::cli {
+
+using calibration::CliContext;
+using calibration::OutputOptions;
 
 /// Runs the CLI on `args` (without the program name) and returns the exit code.
 /// Never throws: errors are printed on `err` as one line.

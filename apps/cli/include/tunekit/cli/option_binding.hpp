@@ -8,6 +8,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "tunekit/calibration/context.hpp"
+
 namespace tunekit::cli {
 
 /// Adds `--name WORD` that sets `target` to the value named by WORD. `choices` pairs each word
@@ -52,5 +54,9 @@ CLI::Option* add_parsed_option(CLI::App* sub, const std::string& names, T& targe
   opt->default_str(name(target));
   return opt;
 }
+
+/// Adds --json, -o/--json-file and --require to a subcommand, and (unless `recordable` is
+/// false) the history options --record, --machine-id and --db.
+void add_output_options(CLI::App* sub, calibration::OutputOptions& o, bool recordable = true);
 
 }  // namespace tunekit::cli

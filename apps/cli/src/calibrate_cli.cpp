@@ -1,0 +1,96 @@
+// tunekit calibrate: the command line of the command (options bound straight into the library's
+// option structs, so --help shows the library's defaults); the work is done by the
+// calibration library's compute function.
+
+#include "tunekit/calibration/calibrate_command.hpp"
+#include "tunekit/calibration/agreement.hpp"
+#include "tunekit/cli/command.hpp"
+#include "tunekit/cli/commands.hpp"
+#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/export_command.hpp"
+#include "tunekit/calibration/freq_command.hpp"
+#include "tunekit/calibration/history_record.hpp"
+#include "tunekit/cli/option_binding.hpp"
+#include "tunekit/calibration/progress.hpp"
+#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/calibration/shaper_command.hpp"
+#include "tunekit/calibration/step_command.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/fitting/first_order.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/input_shaper.hpp"
+#include "tunekit/protocols/chirp_plan.hpp"
+#include "tunekit/protocols/runner.hpp"
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <unistd.h>
+
+namespace tunekit::cli {
+
+using namespace calibration;
+
+void register_calibrate(CLI::App& app, CliContext& ctx) {
+  auto a = std::make_shared<CalibrateArgs>();
+  auto* sub = app.add_subcommand("calibrate", "Guided calibration: experiments, identification, compensators, report");
+  sub->add_option("-m,--machine", a->machine, "'sim' (the built-in simulated printer) or a port (with --profile)")
+      ->capture_default_str();
+  sub->add_option("-p,--profile", a->profile, "Machine profile TOML: limits (mm, mm/s, mm/s^2) and sensors");
+  sub->add_option("--port", a->port, "Serial device, pseudo-terminal or unix:SOCKET of a real machine");
+  sub->add_option("--out", a->out_dir, "Run directory (default: runs/calibrate-UTCSTAMP)");
+  sub->add_option("-f,--firmware", a->firmware, "Configuration dialect to update: klipper, kalico, marlin or rrf")
+      ->capture_default_str();
+  sub->add_option("-c,--config", a->config,
+                  "Firmware configuration to update (default: a copy of the bundled example in the run directory)");
+  sub->add_flag("--write", a->write,
+                "Apply the configuration change (backup + atomic replace); default: preview the diff");
+  sub->add_flag("--skip-liquefier", a->skip_liquefier, "Leave out the liquefier flow sweep and chirp tests");
+  sub->add_flag("--skip-axes", a->skip_axes, "Leave out the X and Y resonance sweeps");
+  sub->add_option("--sim", a->sim_options, "Simulator truth and faults, KEY=VALUE (see 'tunekit run --help')");
+  sub->add_option("--liquefier", a->liquefier,
+                  "Liquefier path: load-cell (feed steps and chirp against a load cell), camera (printed line and ring "
+                  "tests, photographed), auto (load-cell when the profile has one, else camera)")
+      ->capture_default_str();
+  sub->add_option("--camera", a->camera.camera, "Camera path: 'sim' photographs the simulated printer's print");
+  sub->add_option("--photo", a->camera.photo,
+                  "Camera path: a photo of the printed tests from above (bed X to the right)");
+  sub->add_option(
+      "--camera-device", a->camera.camera_device,
+      "Camera path: take the photo with this camera (e.g. /dev/video0; focus and exposure settle, frames averaged)");
+  sub->add_option("--px-per-mm", a->camera.px_per_mm, "Camera path: the photo's scale on the bed (px/mm)");
+  sub->add_option("--camera-frames", a->camera.frames, "Camera path: frames averaged from --camera-device")
+      ->capture_default_str();
+  add_output_options(sub, a->output);
+  sub->footer(
+      "Examples:\n"
+      "  tunekit calibrate --machine sim                      # the built-in simulated printer\n"
+      "  tunekit calibrate --machine sim --firmware marlin --out runs/demo\n"
+      "  tunekit calibrate --machine /dev/ttyACM0 --profile my-printer.toml --firmware marlin \\\n"
+      "                    --config Marlin/Configuration_adv.h\n"
+      "Liquefier paths (--liquefier):\n"
+      "  load-cell  a flow sweep (feed steps up and down through 6 flow levels up to 90 % of the profile's\n"
+      "             max_flow_mm3_s, each level reached from both sides: tau, K, theta per level and tau = a u^b)\n"
+      "             and a chirp, against a load cell (Klipper: [load_cell], read via load_cell/dump_force)\n"
+      "    tunekit calibrate --machine sim --liquefier load-cell\n"
+      "    tunekit calibrate --profile klipper-printer.toml --port unix:/tmp/klippy_uds --liquefier load-cell\n"
+      "  camera     prints a line test (flow steps along straight lines) and a ring test, then measures a photo:\n"
+      "    tunekit calibrate --machine sim --liquefier camera --camera sim        # the simulator photographs its "
+      "print\n"
+      "    tunekit calibrate --profile p.toml --port /dev/ttyACM0 --liquefier camera --camera-device /dev/video0 \\\n"
+      "                      --px-per-mm 12\n"
+      "    tunekit calibrate --profile p.toml --port /dev/ttyACM0 --liquefier camera --photo tests.jpg --px-per-mm 12\n"
+      "    (on a terminal without --photo/--camera-device it asks for the photo's path once the tests are printed)\n"
+      "  auto       load-cell when the profile has one ([sensors] load_cell = true), else camera (the default)\n"
+      "Every protocol is checked against the profile before anything is sent. On a terminal each step shows a\n"
+      "progress bar with the time left; off a terminal only the diff and the report path are printed.");
+  sub->callback([a, &ctx] { set_exit_code(run_calibrate(*a, ctx)); });
+}
+
+}  // namespace tunekit::cli

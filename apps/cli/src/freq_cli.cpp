@@ -1,0 +1,80 @@
+// tunekit freq: the command line of the command (options bound straight into the library's
+// option structs, so --help shows the library's defaults); the work is done by the
+// calibration library's compute function.
+
+#include "tunekit/cli/command.hpp"
+#include "tunekit/cli/commands.hpp"
+#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/freq_command.hpp"
+#include "tunekit/cli/option_binding.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/fitting/transfer_function.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/sine_dwell.hpp"
+#include "tunekit/ident/spectrum.hpp"
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <memory>
+#include <numbers>
+
+namespace tunekit::cli {
+
+using namespace calibration;
+
+namespace {
+struct FreqCommand {
+  FreqOptions options;
+  OutputOptions output;
+};
+}  // namespace
+
+void register_freq(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<FreqCommand>();
+  FreqOptions& o = cmd->options;
+  auto* sub =
+      app.add_subcommand("freq", "Liquefier frequency response: sine dwell, broadband H1 and transfer-function fits");
+  sub->add_option("file", o.file, "CSV log (time in s; units in column names, e.g. 'width (mm)')")->required();
+  sub->add_option("-t,--time", o.time_column,
+                  "Time column (s; ms and us are converted), strictly increasing; default: found by name (time, t, "
+                  "timestamp, time_s)");
+  sub->add_option("--input-unit", o.input_unit, "Unit of the input column when its name does not say it");
+  sub->add_option("--output-unit", o.output_unit, "Unit of the output column when its name does not say it");
+  sub->add_option("-y,--output", o.output_column, "Output column (e.g. line width in mm, force in N)")->required();
+  sub->add_option("-i,--input", o.input_column, "Input column (e.g. set-point width in mm, feed in mm/s)");
+  add_choice_option<FreqMode>(
+      sub, "--mode", o.mode, {{"dwell", FreqMode::dwell}, {"h1", FreqMode::h1}, {"oe", FreqMode::oe}},
+      "dwell: sine fit at --freq-hz (non-uniform sampling allowed); h1: broadband H1 estimate with "
+      "coherence; oe: h1, TF fit, then output-error refinement on the record");
+  sub->add_option("-f,--freq-hz", o.freq_hz, "Excitation frequency for --mode dwell (Hz)");
+  sub->add_option("--fit-tf", o.fit_tf, "Fit a transfer function with P,Z poles and zeros (P 1-3, Z 0-2)");
+  sub->add_flag("--tf-delay", o.tf_delay, "Include a dead time theta_s (s) in the fitted transfer function");
+  sub->add_option("--segment", o.welch.segment_length,
+                  "Welch segment length (samples; default: a power of two giving about 16 segments)");
+  add_parsed_option(
+      sub, "--window", o.welch.window, ident::parse_window, [](ident::WindowType w) { return ident::to_string(w); },
+      "Welch window: hann, hamming, kaiser, rect");
+  sub->add_option("--fmin", o.fmin_hz, "Lowest frequency reported and fitted (Hz)");
+  sub->add_option("--fmax", o.fmax_hz, "Highest frequency reported and fitted (Hz; default Nyquist)");
+  sub->add_option("--tmin", o.tmin_s,
+                  "Broadband modes: leave out the record before this time (s), e.g. a start-up transient the "
+                  "models do not describe");
+  sub->add_option("--min-coherence", o.min_coherence,
+                  "Frequency points with a lower coherence (0-1) are left out of the TF fit")
+      ->capture_default_str();
+  add_output_options(sub, cmd->output);
+  sub->footer(
+      "Examples:\n"
+      "  tunekit freq datasets/liquefier/appendix_d/exp_07.csv --time time --output width \\\n"
+      "      --input setpoint_width --freq-hz 0.05305165 --json    # Holtrup 2019 appendix D, experiment 7\n"
+      "  tunekit freq datasets/liquefier/synthetic_chirp.csv --time time --input feed --output force \\\n"
+      "      --mode h1 --fit-tf 2,0 --fmax 40 --json\n"
+      "  tunekit freq datasets/liquefier/synthetic_chirp.csv --time time --input feed --output force \\\n"
+      "      --mode oe --fit-tf 2,0 --fmax 40\n"
+      "Sine dwell: y = offset + amplitude sin(2 pi f t + phase) by linear least squares; gain = output/input\n"
+      "amplitude, phase_lag_deg = input phase - output phase in (-180, 180] (positive: the output lags).\n"
+      "Appendix D frequencies: datasets/liquefier/appendix_d/design.csv (f = N v / (2 pi 30 mm)).");
+  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_freq(cmd->options), cmd->output, ctx)); });
+}
+
+}  // namespace tunekit::cli

@@ -1,0 +1,60 @@
+#pragma once
+// The calibration report: one self-contained HTML file (plots embedded as SVG data URIs, the
+// line-width photo as a PNG one; no scripts, no external files, and a Content-Security-Policy
+// that forbids any request leaving the file) built from a run directory's results.json and
+// plotdata.json. `tunekit report RUN_DIR` rebuilds it at any time.
+//
+// results.json is a tunekit envelope. `results.summary` lists the rows of the summary table as
+// {label, path, unit, ci_path?, basis?}: `path` points at a number inside `results`
+// (e.g. "compensators.settings.pa_k_s"), `ci_path` at its 95 % interval [lo, hi]; a row
+// without an interval says why in `basis` ("designed", "fixed"). `results.agreement` lists
+// quantities measured two ways (see agreement.hpp); `results.notes` informational lines.
+// Every warning is shown with a one-line "what to do" (warning_advice.hpp).
+// plotdata.json holds the series of each plot:
+//   step:      {t_s[], u[], y[], y_fit[] (null where no model applies), u_label, y_label}
+//   bode:      {freq_hz[], mag_db[], phase_deg[], coherence[], model: {freq_hz[], mag_db[], phase_deg[], label}}
+//   psd.<axis>: {freq_hz[], psd[], modes: [{freq_hz}], shapers: [{type, freq_hz[], response[]}]}
+//   viscosity: {series: [{temperature_K, shear_rate_1_s[], viscosity_Pa_s[], fit_shear_rate_1_s[],
+//   fit_viscosity_Pa_s[]}]} linewidth: {s_mm[], width_mm[], setpoint_mm[], overlay_png: "file name in the run
+//   directory"}
+// Plots whose data are absent are left out.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/calibration/json_access.hpp"  // json_at(): the summary rows' dotted paths
+#include "tunekit/calibration/plots.hpp"
+
+namespace tunekit::calibration {
+
+Figure step_figure(const nlohmann::json& d);
+Figure bode_figure(const nlohmann::json& d);
+Figure psd_figure(const nlohmann::json& d, const std::string& axis);
+Figure viscosity_figure(const nlohmann::json& d);
+Figure linewidth_figure(const nlohmann::json& d);
+/// overshoot_grid: {tolerance_mm, cells: [{speed_mm_s, accel_mm_s2, overshoot_mm, completion_time_s, figure_of_merit}]}
+Figure overshoot_grid_figure(const nlohmann::json& d);
+
+struct ReportImage {
+  std::string id;  ///< e.g. "step", "psd_x"
+  std::string caption;
+  std::string path;  ///< the image file (.svg plot or .png photo)
+};
+
+/// Renders every plot that plotdata.json has data for into RUN_DIR/plots/*.svg.
+std::vector<ReportImage> render_report_plots(const std::string& run_dir, const nlohmann::json& plotdata);
+
+/// The HTML text for an envelope (results.json contents) and rendered images.
+std::string build_report_html(const nlohmann::json& envelope, const std::vector<ReportImage>& images);
+
+/// Reads RUN_DIR/results.json and RUN_DIR/plotdata.json (optional), renders the plots and
+/// writes RUN_DIR/report.html atomically. Returns the report's path.
+std::string write_report(const std::string& run_dir);
+
+/// Formats a number for display with 4 significant digits ("0.4512", "1.25e+04").
+std::string display_number(double v);
+
+}  // namespace tunekit::calibration

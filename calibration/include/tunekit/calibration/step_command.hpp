@@ -1,0 +1,51 @@
+#pragma once
+// tunekit step as a function: identify liquefier dynamics (K, tau in s, theta in s) from a
+// step-response log (Holtrup, Tuning liquefier dynamics, MSc thesis, University of Twente, 2019,
+// ch. 4.4.2). The shape of a command is described in docs/cpp-api.md.
+
+#include <limits>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/ident/step_analysis.hpp"
+
+namespace tunekit::calibration {
+
+struct StepOptions {
+  std::string file;           ///< CSV log
+  std::string time_column;    ///< empty: found by name (time, t, timestamp, time_s)
+  std::string input_column;   ///< empty: no input channel; the steps are given by group or step_size
+  std::string output_column;  ///< e.g. force in N, ooze length in mm
+  std::string input_unit;     ///< overrides the unit in the input column's name
+  std::string output_unit;    ///< overrides the unit in the output column's name
+  std::string group_column;   ///< without an input: one step per value of this column
+  double step_time_s = 0;     ///< without an input: when the step happened (s)
+  double step_size = std::numeric_limits<double>::quiet_NaN();  ///< without an input: the input change
+  /// Model, step detection and operating points; the units are filled in by compute_step().
+  ident::StepAnalysisOptions analysis;
+};
+
+struct StepOutcome {
+  StepOptions options;
+  std::string time_column;  ///< the time column used
+  std::string input_sha256;
+  std::size_t input_size_bytes = 0;
+  std::string input_unit, output_unit, gain_unit;  ///< as results report them ("1": dimensionless)
+  ident::StepAnalysis analysis;
+  std::vector<std::string> warnings;  ///< the CSV reader's, then the analysis'
+};
+
+/// Reads the log and fits every step, the pooled steps and each operating point. InputError
+/// (exit 2) for bad input, FitError (exit 1) when no fit converges; both located at the file.
+StepOutcome compute_step(const StepOptions& options);
+
+Envelope to_envelope(const StepOutcome& outcome);
+void print_text(const StepOutcome& outcome, std::ostream& os);
+
+/// "fo" or "fopdt" and "midpoint" or "first": the names the command line uses.
+std::string step_model_option_name(fitting::StepModel model);
+std::string step_instant_option_name(ident::StepInstant instant);
+
+}  // namespace tunekit::calibration

@@ -1,0 +1,56 @@
+#include "tunekit/calibration/agreement.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "tunekit/calibration/json_access.hpp"
+#include "tunekit/calibration/report.hpp"  // display_number()
+#include "tunekit/core/error.hpp"
+
+namespace tunekit::calibration {
+
+nlohmann::json compare_estimates(const std::string& quantity, const std::string& unit, const Estimate& a,
+                                 const Estimate& b) {
+  for (const auto* e : {&a, &b}) {
+    if (!std::isfinite(e->value) || !std::isfinite(e->ci95_lo) || !std::isfinite(e->ci95_hi))
+      throw InputError(fmt::format("{} from the {}: value or interval is not a finite number", quantity, e->method));
+    if (!(e->ci95_lo <= e->value && e->value <= e->ci95_hi))
+      throw InputError(fmt::format("{} from the {}: the interval [{:g}, {:g}] does not contain the value {:g}",
+                                   quantity, e->method, e->ci95_lo, e->ci95_hi, e->value));
+  }
+  const double ha = 0.5 * (a.ci95_hi - a.ci95_lo), hb = 0.5 * (b.ci95_hi - b.ci95_lo);
+  const double combined = std::hypot(ha, hb);
+  const double diff = std::abs(a.value - b.value);
+  const bool agree = diff <= combined;
+  auto est = [&](const Estimate& e) {
+    return fmt::format("{} {} [{}, {}] {}", e.method, display_number(e.value), display_number(e.ci95_lo),
+                       display_number(e.ci95_hi), unit);
+  };
+  const std::string statement = fmt::format(
+      "{}: {} and {} {} within their combined 95 % uncertainty (difference {} {} {} {} {})", quantity, est(a), est(b),
+      agree ? "agree" : "do NOT agree", display_number(diff), unit, agree ? "<=" : ">", display_number(combined), unit);
+  nlohmann::json ests = nlohmann::json::array();
+  for (const auto* e : {&a, &b})
+    ests.push_back({{"method", e->method}, {"value", e->value}, {"ci95", {e->ci95_lo, e->ci95_hi}}});
+  return {{"quantity", quantity},
+          {"unit", unit},
+          {"estimates", ests},
+          {"difference", diff},
+          {"combined_half_width", combined},
+          {"agree", agree},
+          {"statement", statement}};
+}
+
+bool estimate_from_param(const nlohmann::json* p, const std::string& method, Estimate& out) {
+  if (p == nullptr || !p->is_object()) return false;
+  const auto* v = find_at(*p, nlohmann::json::json_pointer("/value"));
+  const auto* ci = find_at(*p, nlohmann::json::json_pointer("/ci95"));
+  if (v == nullptr || !v->is_number() || ci == nullptr || !ci->is_array() || ci->size() != 2 || !(*ci)[0].is_number() ||
+      !(*ci)[1].is_number())
+    return false;
+  out = {method, v->get<double>(), (*ci)[0].get<double>(), (*ci)[1].get<double>()};
+  return std::isfinite(out.value) && std::isfinite(out.ci95_lo) && std::isfinite(out.ci95_hi);
+}
+
+}  // namespace tunekit::calibration

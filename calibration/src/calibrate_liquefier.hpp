@@ -1,0 +1,67 @@
+#pragma once
+// The liquefier paths of `tunekit calibrate`:
+//   load-cell  the feed is stepped and chirped while a load cell (or Klipper's load_cell) is read;
+//   camera     a line test (flow steps along straight lines) and a ring test (flow modulated around
+//              a ring) are printed and photographed; the widths along the lines are the step
+//              response (tau, theta), the width around the ring gives gain and phase at the ring's
+//              frequency (Holtrup, Tuning liquefier dynamics, MSc thesis, University of Twente,
+//              2019, ch. 4.3);
+//   auto       load-cell when the profile has one, else camera.
+// The photo comes from the simulated printer's camera (--camera sim), a file (--photo), a camera
+// device through OpenCV's videoio (--camera-device, several frames averaged), or a file path
+// typed at a terminal.
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/calibration/calibrate_command.hpp"
+#include "tunekit/calibration/context.hpp"
+#include "tunekit/machine/machine_profile.hpp"
+#include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/sim_camera.hpp"
+
+namespace tunekit::calibration {
+
+enum class LiquefierPath { load_cell, camera };
+
+/// --liquefier auto|load-cell|camera against the profile's sensors (InputError with the
+/// profile path when a load cell is asked for and there is none).
+LiquefierPath choose_liquefier_path(const std::string& choice, const machine::MachineProfile& profile,
+                                    const std::string& profile_path);
+
+/// Checked before anything is printed: a photo source must exist (InputError, exit 2, otherwise).
+void check_photo_source(const LiquefierCameraArgs& a, bool sim_machine, bool can_prompt);
+
+/// The printed tests of the camera path: sub-directory, protocol and parameter overrides.
+struct CameraTest {
+  std::string name;
+  std::string protocol;
+  std::map<std::string, double> params;
+};
+std::vector<CameraTest> camera_tests();
+
+struct CameraAnalysis {
+  std::string photo;              ///< the photo used (in the run directory)
+  std::string overlay;            ///< the photo with the measured edges (PNG, in the run directory)
+  std::string width_csv;          ///< time, setpoint width, width of the line test (for `tunekit step`)
+  nlohmann::json results;         ///< lines, ring (gain and phase), warnings
+  nlohmann::json linewidth_plot;  ///< plotdata.json "linewidth"
+};
+
+/// Obtains the photo, measures the lines and the ring and writes the width record. InputError
+/// (exit 2) when the photo shows no printed line; MachineError (exit 3) when a camera cannot
+/// be opened. `runs` holds the camera_tests() runs by name.
+CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
+                                     const machine::MachineProfile& profile,
+                                     std::map<std::string, protocols::RunResult>& runs,
+                                     const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx);
+
+/// The ring's gain and phase, added to the camera analysis once tau and theta are known from
+/// the lines (the model's prediction at the ring frequency is reported beside the measurement).
+void add_ring_prediction(nlohmann::json& camera_results, double K, double tau_s, double theta_s);
+
+}  // namespace tunekit::calibration

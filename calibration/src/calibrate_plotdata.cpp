@@ -1,0 +1,103 @@
+// The series behind the plots of tunekit calibrate's report (see calibrate_plotdata.hpp).
+#include "calibrate_plotdata.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "tunekit/fitting/first_order.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/input_shaper.hpp"
+
+namespace tunekit::calibration {
+
+// A fitted parameter's value, NaN when the model has no such parameter (theta_s of a first-order fit).
+double calibrate_param(const fitting::FitResult& f, const std::string& name) {
+  for (const auto& p : f.params)
+    if (p.name == name) return p.value;
+  return std::nan("");
+}
+
+// Series for the step plot: the measured record and each step's own fitted model.
+nlohmann::json step_plotdata(const std::string& csv, const ident::StepAnalysis& steps, const std::string& in_col,
+                             const std::string& out_col, const std::string& u_label, const std::string& y_label) {
+  const auto table = ident::read_csv(csv, {{"time", in_col, out_col}, "time"});
+  const auto& t = table.column("time").values;
+  const auto& u = table.column(in_col).values;
+  const auto& y = table.column(out_col).values;
+  // Each step's model is drawn over the samples its fit used and nowhere else (not over the
+  // warm-up from rest, which no step models).
+  std::vector<double> yf(t.size(), std::nan(""));
+  for (const auto& s : steps.steps) {
+    if (!s.fit) continue;
+    const std::size_t begin = s.step.begin, end = std::min(s.step.end, t.size());
+    const double ts = s.step.t_step_s;
+    const double du = s.step.u_after - s.step.u_before;
+    const auto& f = *s.fit;
+    const double K = calibrate_param(f, "K"), tau = calibrate_param(f, "tau_s"), y0 = calibrate_param(f, "y0");
+    double theta = calibrate_param(f, "theta_s");
+    if (!std::isfinite(theta)) theta = 0;
+    for (std::size_t i = begin; i < end; ++i) yf[i] = fitting::step_response(t[i], ts, du, K, tau, theta, y0);
+  }
+  // Thin very long records for the plot (every n-th sample).
+  const std::size_t stride = std::max<std::size_t>(1, t.size() / 4000);
+  nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};
+  std::vector<double> ts, us, ys, fs_;
+  for (std::size_t i = 0; i < t.size(); i += stride) {
+    ts.push_back(t[i]);
+    us.push_back(u[i]);
+    ys.push_back(y[i]);
+    fs_.push_back(yf[i]);
+  }
+  d["t_s"] = ts;
+  d["u"] = us;
+  d["y"] = ys;
+  d["y_fit"] = fs_;
+  return d;
+}
+
+nlohmann::json bode_plotdata(const nlohmann::json& freq_results) {
+  nlohmann::json d;
+  const auto& b = freq_results.at("h1").at("bode");
+  d["freq_hz"] = b.at("freq_hz");
+  d["mag_db"] = b.at("magnitude_db");
+  d["phase_deg"] = b.at("phase_deg");
+  if (b.contains("coherence")) d["coherence"] = b["coherence"];
+  // The model the summary reports: the output-error fit on the chirp record when there is one.
+  for (const auto& [key, label] :
+       {std::pair{"tf_oe_fit", "output-error fit (record)"}, std::pair{"tf_fit", "fitted model"}}) {
+    if (!freq_results.contains(key) || !freq_results[key].contains("bode")) continue;
+    const auto& m = freq_results[key]["bode"];
+    d["model"] = {{"freq_hz", m.at("freq_hz")},
+                  {"mag_db", m.at("magnitude_db")},
+                  {"phase_deg", m.at("phase_deg")},
+                  {"label", label}};
+    break;
+  }
+  return d;
+}
+
+nlohmann::json psd_plotdata(const nlohmann::json& axis) {
+  nlohmann::json d;
+  const auto& psd = axis.at("psd");
+  d["freq_hz"] = psd.at("freq_hz");
+  d["psd"] = psd.at("psd");
+  d["modes"] = nlohmann::json::array();
+  double zeta = 0.1;
+  for (const auto& m : axis.value("modes", nlohmann::json::array())) {
+    d["modes"].push_back({{"freq_hz", m.value("freq_hz", 0.0)}});
+  }
+  if (axis.contains("zeta") && axis["zeta"].is_number()) zeta = axis["zeta"].get<double>();
+  // Each candidate shaper's remaining vibration against frequency, at the identified damping.
+  std::vector<double> f = psd.at("freq_hz").get<std::vector<double>>();
+  d["shapers"] = nlohmann::json::array();
+  for (const auto& c : axis.value("candidates", nlohmann::json::array())) {
+    const auto type = ident::parse_shaper_type(c.at("type").get<std::string>());
+    const auto shaper = ident::design_shaper(type, c.at("freq_hz").get<double>(), c.value("damping", 0.1),
+                                             ident::kDefaultVibrationTolerance, ident::EiDesign::damped_fit);
+    d["shapers"].push_back(
+        {{"type", c.at("type")}, {"freq_hz", f}, {"response", ident::residual_vibration_curve(shaper, f, zeta)}});
+  }
+  return d;
+}
+
+}  // namespace tunekit::calibration

@@ -1,0 +1,28 @@
+#pragma once
+// The series behind the plots of `tunekit calibrate`'s report (RUN_DIR/plotdata.json): the step
+// records with each step's fitted model, the liquefier's Bode plot and each axis' PSD.
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/fitting/fit_result.hpp"
+#include "tunekit/ident/step_analysis.hpp"
+
+namespace tunekit::calibration {
+
+/// A fitted parameter's value, NaN when the model has no such parameter (theta_s of a first-order fit).
+double calibrate_param(const fitting::FitResult& f, const std::string& name);
+
+/// The measured record (time s, input, output; thinned to about 4000 points) and each step's own
+/// fitted model over the samples its fit used.
+nlohmann::json step_plotdata(const std::string& csv, const ident::StepAnalysis& steps,
+                             const std::string& in_col = "feed", const std::string& out_col = "force",
+                             const std::string& u_label = "feed (mm/s)", const std::string& y_label = "force (N)");
+/// Magnitude and phase of the measured frequency response and of the fitted models (the results of
+/// `tunekit freq`).
+nlohmann::json bode_plotdata(const nlohmann::json& freq_results);
+/// One axis' PSD and its fitted modes (an axis of `tunekit shaper`'s results).
+nlohmann::json psd_plotdata(const nlohmann::json& axis);
+
+}  // namespace tunekit::calibration

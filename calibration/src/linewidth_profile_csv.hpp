@@ -1,0 +1,38 @@
+#pragma once
+// Shared by `tunekit linewidth`'s measurement (cmd_linewidth.cpp) and its mapping of a profile to
+// time (linewidth_profile_csv.cpp): one measured image and the rounding of reported values.
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "tunekit/calibration/input_digest.hpp"
+#include "tunekit/calibration/linewidth_command.hpp"
+#include "tunekit/vision/line_width.hpp"
+
+namespace tunekit::calibration::linewidth {
+
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct ImageRun {
+  std::string path;
+  cv::Mat measured;  // the (undistorted / rectified) grey image that was measured
+  double ppm = 0;
+  std::string scale_source;
+  std::vector<cv::Point> target_outline;
+  vision::LineWidthResult result;
+};
+
+inline double r6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
+inline double r4(double v) { return std::isfinite(v) ? std::round(v * 1e4) / 1e4 : v; }
+
+/// --profile-csv: maps line `a.line` of `run` to time, writes the CSV (atomically) and returns
+/// the "profile_csv" results object; appends its warnings and the G-code it read.
+nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run, std::vector<std::string>& warnings,
+                                 std::vector<InputDigest>& inputs);
+
+}  // namespace tunekit::calibration::linewidth

@@ -1,0 +1,240 @@
+#include "tunekit/calibration/plots.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <fmt/format.h>
+#include <plplot/plstream.h>
+
+#include "tunekit/core/error.hpp"
+
+namespace tunekit::calibration {
+namespace {
+
+// PLplot keeps global state behind its streams; one figure at a time.
+std::mutex& plplot_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+struct Range {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void add(double v) {
+    if (!std::isfinite(v)) return;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  bool valid() const { return lo <= hi; }
+  void pad(double frac) {
+    if (hi == lo) {
+      const double d = lo == 0 ? 1.0 : std::abs(lo) * 0.1;
+      lo -= d;
+      hi += d;
+      return;
+    }
+    const double d = (hi - lo) * frac;
+    lo -= d;
+    hi += d;
+  }
+};
+
+double axis_value(double v, bool log) {
+  if (!log) return v;
+  return v > 0 ? std::log10(v) : std::numeric_limits<double>::quiet_NaN();
+}
+
+// Palette: index 0 background (white), 1..8 line colours, 15 axes (dark grey).
+void set_palette(plstream& pls) {
+  pls.scol0(0, 255, 255, 255);
+  pls.scol0(1, 31, 119, 180);
+  pls.scol0(2, 214, 39, 40);
+  pls.scol0(3, 44, 160, 44);
+  pls.scol0(4, 255, 127, 14);
+  pls.scol0(5, 148, 103, 189);
+  pls.scol0(6, 140, 86, 75);
+  pls.scol0(7, 227, 119, 194);
+  pls.scol0(8, 127, 127, 127);
+  pls.scol0(15, 40, 40, 40);
+}
+
+std::string plot_tick_text(double v) {
+  if (v >= 1e-3 && v < 1e5) return fmt::format("{:g}", v);
+  const int k = static_cast<int>(std::floor(std::log10(v) + 1e-9));
+  const double m = v / std::pow(10.0, k);
+  return std::abs(m - 1) < 1e-6 ? fmt::format("10#u{}#d", k) : fmt::format("{:g}#(727)10#u{}#d", std::round(m), k);
+}
+
+// Labels a logarithmic axis at its decades and (for short spans) at 2x and 5x: PLplot's own
+// log labels name the decades only, which leaves a one-decade axis with a single number.
+void label_log_axis(plstream& pls, bool x_axis, double lo_exp, double hi_exp) {
+  for (double v : log_axis_ticks(lo_exp, hi_exp)) {
+    const double frac = (std::log10(v) - lo_exp) / (hi_exp - lo_exp);
+    const std::string text = plot_tick_text(v);
+    if (x_axis) pls.mtex("b", 1.4, frac, 0.5, text.c_str());
+    else pls.mtex("lv", 0.6, frac, 1.0, text.c_str());
+  }
+}
+
+// Device of a file name: svgcairo for .svg, pngcairo for .png.
+const char* plot_device(const std::string& path) {
+  const auto ext = std::filesystem::path(path).extension().string();
+  if (ext == ".svg") return "svgcairo";
+  if (ext == ".png") return "pngcairo";
+  throw InputError("a plot file must end in .svg or .png", path);
+}
+
+}  // namespace
+
+std::vector<double> log_axis_ticks(double lo_exp, double hi_exp) {
+  std::vector<double> v;
+  if (!std::isfinite(lo_exp) || !std::isfinite(hi_exp) || hi_exp < lo_exp) return v;
+  const bool minors = hi_exp - lo_exp <= 3.0;
+  for (int k = static_cast<int>(std::floor(lo_exp)) - 1; k <= static_cast<int>(std::ceil(hi_exp)); ++k)
+    for (double m : {1.0, 2.0, 5.0}) {
+      if (m != 1.0 && !minors) continue;
+      const double e = k + std::log10(m);
+      if (e >= lo_exp - 1e-9 && e <= hi_exp + 1e-9) v.push_back(std::pow(10.0, e));
+    }
+  return v;
+}
+
+void render_png(const Figure& fig, const std::string& path) {
+  if (std::filesystem::path(path).extension() != ".png") throw InputError("render_png writes .png files", path);
+  render_figure(fig, path);
+}
+
+void render_svg(const Figure& fig, const std::string& path) {
+  if (std::filesystem::path(path).extension() != ".svg") throw InputError("render_svg writes .svg files", path);
+  render_figure(fig, path);
+}
+
+void render_figure(const Figure& fig, const std::string& path) {
+  if (fig.panels.empty()) throw InputError("a figure without panels", path);
+  const char* device = plot_device(path);
+  std::lock_guard lock(plplot_mutex());
+  const auto dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty()) std::filesystem::create_directories(dir);
+  {
+    auto pls = std::make_unique<plstream>();
+    pls->sdev(device);
+    pls->sfnam(path.c_str());
+    pls->spage(90, 90, fig.width_px, fig.height_px, 0, 0);
+    set_palette(*pls);
+    pls->init();
+    pls->adv(0);
+    pls->schr(0, 0.8);
+
+    double total = 0;
+    for (const auto& p : fig.panels) total += p.height_weight;
+    Range shared_x;  // with share_x: the x range of every panel's data
+    if (fig.share_x)
+      for (const auto& p : fig.panels)
+        for (const auto& s : p.series)
+          for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k)
+            if (std::isfinite(axis_value(s.y[k], p.log_y))) shared_x.add(axis_value(s.x[k], p.log_x));
+    const double top_margin = fig.title.empty() ? 0.04 : 0.09, bottom = 0.03;
+    double y_top = 1.0 - top_margin;
+    const double usable = 1.0 - top_margin - bottom;
+    for (std::size_t i = 0; i < fig.panels.size(); ++i) {
+      const Panel& p = fig.panels[i];
+      const double h = usable * p.height_weight / total;
+      const double y0 = y_top - h + 0.075, y1 = y_top - 0.02;
+      y_top -= h;
+      pls->vpor(0.09, 0.97, y0, y1);
+
+      Range rx, ry;
+      for (const auto& s : p.series)
+        for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
+          const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
+          if (std::isfinite(ax) && std::isfinite(ay)) {
+            rx.add(ax);
+            ry.add(ay);
+          }
+        }
+      if (!rx.valid() || !ry.valid())
+        throw InputError(fmt::format("panel '{}' has no finite data to plot", p.title), path);
+      if (fig.share_x && shared_x.valid()) rx = shared_x;
+      if (!p.log_x) rx.pad(0.0);
+      if (rx.hi == rx.lo) rx.pad(0.05);
+      ry.pad(0.06);
+      pls->wind(rx.lo, rx.hi, ry.lo, ry.hi);
+      pls->col0(15);
+      pls->width(1);
+      pls->lsty(1);
+      // Log axes: ticks and grid from PLplot, numbers from label_log_axis.
+      const std::string xopt = p.log_x ? "bcstgl" : "bcnstg";
+      const std::string yopt = p.log_y ? "bcstvgl" : "bcnstvg";
+      pls->box(xopt.c_str(), 0, 0, yopt.c_str(), 0, 0);
+      if (p.log_x) label_log_axis(*pls, true, rx.lo, rx.hi);
+      if (p.log_y) label_log_axis(*pls, false, ry.lo, ry.hi);
+      pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), p.title.c_str());
+
+      std::vector<std::string> labels;
+      std::vector<PLINT> opts, colors, styles, sym_colors, sym_numbers;
+      std::vector<PLFLT> widths, sym_scales;
+      for (const auto& s : p.series) {
+        std::vector<PLFLT> xs, ys;
+        for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
+          const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
+          if (std::isfinite(ax) && std::isfinite(ay)) {
+            xs.push_back(ax);
+            ys.push_back(ay);
+          }
+        }
+        if (xs.empty()) continue;
+        pls->col0(s.color);
+        if (s.style == Series::Style::points) {
+          pls->poin(static_cast<PLINT>(xs.size()), xs.data(), ys.data(), 17);
+        } else {
+          pls->lsty(s.style == Series::Style::dashed ? 2 : 1);
+          pls->width(1.6);
+          pls->line(static_cast<PLINT>(xs.size()), xs.data(), ys.data());
+          pls->lsty(1);
+          pls->width(1);
+        }
+        if (!s.label.empty()) {
+          labels.push_back(s.label);
+          opts.push_back(s.style == Series::Style::points ? PL_LEGEND_SYMBOL : PL_LEGEND_LINE);
+          colors.push_back(s.color);
+          styles.push_back(s.style == Series::Style::dashed ? 2 : 1);
+          widths.push_back(1.6);
+          sym_colors.push_back(s.color);
+          sym_numbers.push_back(3);
+          sym_scales.push_back(1.0);
+        }
+      }
+      if (!labels.empty()) {
+        std::vector<const char*> text, symbols;
+        for (const auto& l : labels) {
+          text.push_back(l.c_str());
+          symbols.push_back("#(728)");
+        }
+        PLFLT lw, lh;
+        pls->col0(15);
+        pls->legend(&lw, &lh, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
+                    PL_POSITION_RIGHT | PL_POSITION_TOP | PL_POSITION_INSIDE, 0.01, 0.01, 0.08, 0, 15, 1, 0, 0,
+                    static_cast<PLINT>(labels.size()), opts.data(), 1.0, 0.9, 1.6, 1.0, colors.data(), text.data(),
+                    nullptr, nullptr, nullptr, nullptr, colors.data(), styles.data(), widths.data(), sym_colors.data(),
+                    sym_scales.data(), sym_numbers.data(), symbols.data());
+      }
+    }
+    if (!fig.title.empty()) {
+      pls->vpor(0, 1, 0, 1);
+      pls->wind(0, 1, 0, 1);
+      pls->col0(15);
+      pls->schr(0, 1.0);
+      pls->mtex("t", -1.6, 0.5, 0.5, fig.title.c_str());
+    }
+  }  // ~plstream ends the stream and closes the file
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec) || std::filesystem::file_size(path, ec) == 0)
+    throw InputError("the plot could not be written", path);
+}
+
+}  // namespace tunekit::calibration

@@ -1,0 +1,336 @@
+#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/report_command.hpp"
+#include "tunekit/calibration/results_json.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <openssl/evp.h>
+
+#include "tunekit/calibration/warning_advice.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/core/atomic_file.hpp"
+
+namespace tunekit::calibration {
+namespace {
+
+std::vector<double> vec(const nlohmann::json& d, const char* key) {
+  if (!d.contains(key) || !d[key].is_array()) return {};
+  std::vector<double> v;
+  v.reserve(d[key].size());
+  for (const auto& x : d[key]) v.push_back(x.is_number() ? x.get<double>() : std::nan(""));
+  return v;
+}
+
+std::string base64(std::string_view bytes) {
+  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
+  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
+                                reinterpret_cast<const unsigned char*>(bytes.data()), static_cast<int>(bytes.size()));
+  out.resize(static_cast<std::size_t>(n));
+  return out;
+}
+
+std::string html_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+// The report's Content-Security-Policy: no request may leave the file.
+constexpr const char* kReportCsp =
+    "default-src 'none'; img-src data:; style-src 'unsafe-inline'; base-uri 'none'; form-action 'none'";
+
+std::string image_mime(const std::string& path) {
+  const auto ext = std::filesystem::path(path).extension().string();
+  if (ext == ".svg") return "image/svg+xml";
+  if (ext == ".png") return "image/png";
+  throw InputError("a report image must be .svg or .png", path);
+}
+
+}  // namespace
+
+std::string display_number(double v) {
+  if (!std::isfinite(v)) return "n/a";
+  return fmt::format("{:.4g}", v);
+}
+
+Figure step_figure(const nlohmann::json& d) {
+  Figure f;
+  f.title = "Liquefier step response";
+  Panel in{"Input", "", d.value("u_label", std::string("input")), false, false, {}, 0.6};
+  in.series.push_back({"commanded", vec(d, "t_s"), vec(d, "u"), Series::Style::line, 4});
+  Panel out{"Output and fit", "", d.value("y_label", std::string("output")), false, false, {}, 1.4};
+  out.series.push_back({"measured", vec(d, "t_s"), vec(d, "y"), Series::Style::line, 1});
+  out.series.push_back({"fitted model (where it applies)", vec(d, "t_s"), vec(d, "y_fit"), Series::Style::dashed, 2});
+  const auto y = vec(d, "y"), yf = vec(d, "y_fit");
+  std::vector<double> res(std::min(y.size(), yf.size()));
+  for (std::size_t i = 0; i < res.size(); ++i) res[i] = y[i] - yf[i];
+  Panel rp{"Residuals", "time (s)", "measured - fit", false, false, {}, 0.8};
+  rp.series.push_back({"", vec(d, "t_s"), res, Series::Style::line, 3});
+  f.panels = {in, out, rp};
+  f.share_x = true;  // one time axis: the residuals exist only where the model applies
+  f.height_px = 760;
+  return f;
+}
+
+Figure bode_figure(const nlohmann::json& d) {
+  Figure f;
+  f.title = "Liquefier frequency response";
+  const auto fr = vec(d, "freq_hz");
+  Panel mag{"Magnitude", "", "|H| (dB)", true, false, {}, 1.2};
+  mag.series.push_back({"measured", fr, vec(d, "mag_db"), Series::Style::points, 1});
+  Panel ph{"Phase", "", "phase (deg)", true, false, {}, 1.0};
+  ph.series.push_back({"measured", fr, vec(d, "phase_deg"), Series::Style::points, 1});
+  if (d.contains("model")) {
+    const auto& m = d["model"];
+    const std::string label = m.value("label", std::string("fitted model"));
+    mag.series.push_back({label, vec(m, "freq_hz"), vec(m, "mag_db"), Series::Style::line, 2});
+    ph.series.push_back({label, vec(m, "freq_hz"), vec(m, "phase_deg"), Series::Style::line, 2});
+  }
+  f.panels = {mag, ph};
+  if (d.contains("coherence")) {
+    Panel coh{"Coherence", "frequency (Hz)", "coherence", true, false, {}, 0.7};
+    coh.series.push_back({"", fr, vec(d, "coherence"), Series::Style::line, 3});
+    f.panels.push_back(coh);
+  } else {
+    f.panels.back().xlabel = "frequency (Hz)";
+  }
+  f.height_px = 760;
+  return f;
+}
+
+Figure psd_figure(const nlohmann::json& d, const std::string& axis) {
+  Figure f;
+  f.title = fmt::format("Axis {}: power spectral density, modes and input shapers", axis);
+  const auto fr = vec(d, "freq_hz");
+  const auto psd = vec(d, "psd");
+  Panel p{"Acceleration PSD", "", "PSD ((mm/s^2)^2/Hz)", false, false, {}, 1.3};
+  p.series.push_back({"measured", fr, psd, Series::Style::line, 1});
+  double peak = 0;
+  for (double v : psd) peak = std::isfinite(v) ? std::max(peak, v) : peak;
+  int color = 2;
+  if (d.contains("modes"))
+    for (const auto& m : d["modes"]) {
+      const double fm = m.value("freq_hz", 0.0);
+      p.series.push_back({fmt::format("mode {:.1f} Hz", fm), {fm, fm}, {0.0, peak}, Series::Style::dashed, color});
+      color = color % 8 + 1;
+    }
+  Panel s{"Shaper response (remaining vibration)", "frequency (Hz)", "fraction", false, false, {}, 1.0};
+  int sc = 2;
+  if (d.contains("shapers"))
+    for (const auto& sh : d["shapers"]) {
+      s.series.push_back(
+          {sh.value("type", std::string("?")), vec(sh, "freq_hz"), vec(sh, "response"), Series::Style::line, sc});
+      sc = sc % 8 + 1;
+    }
+  f.panels = {p};
+  if (!s.series.empty()) f.panels.push_back(s);
+  else f.panels.back().xlabel = "frequency (Hz)";
+  f.height_px = 720;
+  return f;
+}
+
+Figure viscosity_figure(const nlohmann::json& d) {
+  Figure f;
+  f.title = "Melt viscosity";
+  Panel p{"Viscosity against shear rate", "shear rate (1/s)", "viscosity (Pa s)", true, true, {}, 1.0};
+  int c = 1;
+  if (d.contains("series"))
+    for (const auto& s : d["series"]) {
+      const double tk = s.value("temperature_K", 0.0);
+      p.series.push_back({fmt::format("{:.0f} K data", tk), vec(s, "shear_rate_1_s"), vec(s, "viscosity_Pa_s"),
+                          Series::Style::points, c});
+      p.series.push_back({"", vec(s, "fit_shear_rate_1_s"), vec(s, "fit_viscosity_Pa_s"), Series::Style::line, c});
+      c = c % 8 + 1;
+    }
+  f.panels = {p};
+  return f;
+}
+
+Figure linewidth_figure(const nlohmann::json& d) {
+  Figure f;
+  f.title = "Line width profile";
+  Panel p{"Width along the line", "arc length (mm)", "width (mm)", false, false, {}, 1.0};
+  p.series.push_back({"measured", vec(d, "s_mm"), vec(d, "width_mm"), Series::Style::line, 1});
+  if (d.contains("setpoint_mm"))
+    p.series.push_back({"set point", vec(d, "s_mm"), vec(d, "setpoint_mm"), Series::Style::dashed, 2});
+  f.panels = {p};
+  f.height_px = 420;
+  return f;
+}
+
+std::vector<ReportImage> render_report_plots(const std::string& run_dir, const nlohmann::json& pd) {
+  std::vector<ReportImage> images;
+  const std::string dir = run_dir + "/plots";
+  auto add = [&](const std::string& id, const std::string& caption, const Figure& fig) {
+    const std::string path = dir + "/" + id + ".svg";
+    render_svg(fig, path);
+    images.push_back({id, caption, path});
+  };
+  if (pd.contains("step")) add("step", "Step response: data, fitted model and residuals", step_figure(pd["step"]));
+  if (pd.contains("bode")) add("bode", "Bode plot with the fitted model and the coherence", bode_figure(pd["bode"]));
+  for (const char* axis : {"x", "y", "z"}) {
+    const std::string key = std::string("psd_") + axis;
+    if (pd.contains(key))
+      add(key, fmt::format("Axis {}: PSD with identified modes and the candidate shapers' responses", axis),
+          psd_figure(pd[key], axis));
+  }
+  if (pd.contains("overshoot_grid"))
+    add("overshoot_grid", "Overshoot, completion time and figure of merit over the speed x acceleration grid",
+        overshoot_grid_figure(pd["overshoot_grid"]));
+  if (pd.contains("flow_advance"))
+    add("flow_advance", "Advance against flow: the need with its 95 % band, each exported model, the design flow",
+        flow_advance_figure(pd["flow_advance"]));
+  if (pd.contains("viscosity"))
+    add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(pd["viscosity"]));
+  if (pd.contains("linewidth")) {
+    add("linewidth", "Line-width profile", linewidth_figure(pd["linewidth"]));
+    // The photo with the detected edges and centreline, shown beside its profile.
+    const std::string overlay = pd["linewidth"].value("overlay_png", std::string());
+    if (!overlay.empty()) {
+      const std::string path = run_dir + "/" + overlay;
+      if (!std::filesystem::exists(path))
+        throw InputError("the line-width overlay named in plotdata.json is missing", path);
+      images.push_back({"linewidth_overlay", "Photo overlay: detected edges and centreline", path});  // a PNG photo
+    }
+  }
+  return images;
+}
+
+namespace {
+
+// The "95 % interval" cell of a summary row: [lo, hi] from the row's ci_path, else its basis.
+std::string interval_cell(const nlohmann::json& results, const nlohmann::json& row) {
+  const std::string ci_path = row.value("ci_path", std::string());
+  if (!ci_path.empty()) {
+    const auto* ci = json_at(results, ci_path);
+    if (ci != nullptr && ci->is_array() && ci->size() == 2 && (*ci)[0].is_number() && (*ci)[1].is_number())
+      return fmt::format("<td class=\"ci\" data-path=\"{}\">[{}, {}]</td>", html_escape(ci_path),
+                         display_number((*ci)[0].get<double>()), display_number((*ci)[1].get<double>()));
+    return "<td class=\"ci\">n/a</td>";
+  }
+  return "<td class=\"ci\">" + html_escape(row.value("basis", std::string("n/a"))) + "</td>";
+}
+
+}  // namespace
+
+std::string build_report_html(const nlohmann::json& env, const std::vector<ReportImage>& images) {
+  const auto& results = env.contains("results") ? env["results"] : env;
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    // Nothing may leave the file: no scripts, no fetches; images only from data: URIs.
+    << "<meta http-equiv=\"Content-Security-Policy\" content=\"" << kReportCsp << "\">\n"
+    << "<title>tunekit calibration report</title>\n<style>\n"
+    << "body{font-family:DejaVu Sans,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1000px;color:#222}\n"
+    << "h1{font-size:1.6em}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}\n"
+    << "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:.3em .7em;text-align:left}\n"
+    << "td.num{text-align:right;font-variant-numeric:tabular-nums}th{background:#f2f2f2}\n"
+    << "figure{margin:1em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:.9em}\n"
+    << "pre{background:#f7f7f7;border:1px solid #ddd;padding:.8em;overflow-x:auto;font-size:.85em}\n"
+    << ".warn{color:#a15c00}.todo{color:#333}.ci{color:#444;font-variant-numeric:tabular-nums}\n"
+    << ".agree{border-left:4px solid #2c7a2c;padding-left:.6em}.disagree{border-left:4px solid "
+       "#b00;padding-left:.6em}\n"
+    << "</style>\n</head>\n<body>\n";
+  h << "<h1>tunekit calibration report</h1>\n";
+  const std::string machine = results.value("machine", std::string());
+  if (!machine.empty()) h << "<p>Machine: " << html_escape(machine) << "</p>\n";
+  if (env.contains("tool"))
+    h << "<p>tunekit " << html_escape(env["tool"].value("version", std::string("?"))) << ", command <code>"
+      << html_escape(env.value("command", std::string("?"))) << "</code></p>\n";
+
+  h << "<h2>Summary</h2>\n<table id=\"summary\">\n"
+    << "<tr><th>quantity</th><th>value</th><th>95 % interval</th><th>unit</th></tr>\n";
+  if (results.contains("summary"))
+    for (const auto& row : results["summary"]) {
+      const std::string path = row.value("path", std::string());
+      const auto* v = json_at(results, path);
+      if (v == nullptr || !v->is_number()) continue;
+      h << "<tr><td>" << html_escape(row.value("label", path)) << "</td><td class=\"num\" data-path=\""
+        << html_escape(path) << "\" data-value=\"" << v->dump() << "\">" << display_number(v->get<double>()) << "</td>"
+        << interval_cell(results, row) << "<td>" << html_escape(row.value("unit", std::string())) << "</td></tr>\n";
+    }
+  h << "</table>\n";
+
+  if (results.contains("agreement") && results["agreement"].is_array() && !results["agreement"].empty()) {
+    h << "<h2>Methods compared</h2>\n";
+    for (const auto& a : results["agreement"]) {
+      const bool ok = a.value("agree", false);
+      h << "<p class=\"" << (ok ? "agree" : "disagree") << "\" id=\"agreement-"
+        << html_escape(a.value("id", std::string("quantity"))) << "\" data-agree=\"" << (ok ? "true" : "false") << "\">"
+        << html_escape(a.value("statement", std::string())) << "</p>\n";
+    }
+  }
+
+  if (env.contains("warnings") && !env["warnings"].empty()) {
+    h << "<h2>Warnings</h2>\n<ul id=\"warnings\">\n";
+    for (const auto& w : env["warnings"]) {
+      const std::string text = w.get<std::string>();
+      h << "<li class=\"warn\">" << html_escape(text)
+        << "<br><span class=\"todo\">What to do: " << html_escape(advice_for_warning(text)) << "</span></li>\n";
+    }
+    h << "</ul>\n";
+  }
+  if (results.contains("notes") && results["notes"].is_array() && !results["notes"].empty()) {
+    h << "<h2>Notes</h2>\n<ul id=\"notes\">\n";
+    for (const auto& n : results["notes"])
+      if (n.is_string()) h << "<li>" << html_escape(n.get<std::string>()) << "</li>\n";
+    h << "</ul>\n";
+  }
+  if (!images.empty()) h << "<h2>Plots</h2>\n";
+  for (const auto& img : images) {
+    const std::string bytes = ident::read_file_bytes(img.path);
+    h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html_escape(img.caption)
+      << "\" src=\"data:" << image_mime(img.path) << ";base64," << base64(bytes) << "\"><figcaption>"
+      << html_escape(img.caption) << "</figcaption></figure>\n";
+  }
+  if (results.contains("config_diff") && results["config_diff"].is_string() &&
+      !results["config_diff"].get<std::string>().empty())
+    h << "<h2>Configuration changes</h2>\n<pre>" << html_escape(results["config_diff"].get<std::string>())
+      << "</pre>\n";
+  h << "</body>\n</html>\n";
+  return h.str();
+}
+
+ReportOutcome compute_report(const ReportOptions& options) {
+  ReportOutcome outcome;
+  outcome.options = options;
+  const std::string& run_dir = options.run_dir;
+  const std::string results_path = run_dir + "/results.json";
+  const nlohmann::json env = read_results_json(results_path);
+  nlohmann::json pd = nlohmann::json::object();
+  const std::string pd_path = run_dir + "/plotdata.json";
+  if (std::filesystem::exists(pd_path)) {
+    pd = read_json_file(pd_path);
+    if (!pd.is_object())
+      throw InputError(fmt::format("plot data must be a JSON object, not {}", pd.type_name()), pd_path);
+  }
+  std::string html;
+  try {
+    outcome.images = render_report_plots(run_dir, pd);
+    html = build_report_html(env, outcome.images);
+  } catch (const nlohmann::json::exception& e) {
+    // A member of an unexpected type deeper in the results or the plot data.
+    throw InputError(fmt::format("unexpected content in the results or plot data: {}", e.what()), results_path);
+  }
+  outcome.html_path = run_dir + "/report.html";
+  core::write_file_atomic(outcome.html_path, html);
+  return outcome;
+}
+
+void print_text(const ReportOutcome& outcome, std::ostream& os) { os << outcome.html_path << "\n"; }
+
+std::string write_report(const std::string& run_dir) { return compute_report({run_dir}).html_path; }
+
+}  // namespace tunekit::calibration

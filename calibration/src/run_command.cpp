@@ -1,0 +1,112 @@
+// tunekit run: run an experiment protocol on a printer or on the built-in simulated printer,
+// journaling every line and sensor sample into a run directory (protocols/runner.hpp).
+#include <atomic>
+#include <csignal>
+#include <cmath>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/calibration/run_command.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/protocols/experiments.hpp"
+#include "tunekit/protocols/runner.hpp"
+
+namespace tunekit::calibration {
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_sigint(int) { g_interrupted = true; }
+
+}  // namespace
+
+RunOutcome compute_run(const RunCommandOptions& a) {
+  RunOutcome outcome;
+  outcome.options = a;
+  protocols::RunOptions o = a.run;
+  if (!(a.timeout_s > 0)) throw InputError("--timeout must be positive (s)");
+  o.link.timeout = std::chrono::milliseconds(static_cast<long>(std::lround(a.timeout_s * 1000)));
+  if (!(o.limits.max_duration_s > 0) || !std::isfinite(o.limits.max_duration_s))
+    throw InputError("--max-duration must be a positive number of seconds");
+  if (o.limits.max_lines == 0) throw InputError("--max-lines must be at least 1");
+  for (const auto& p : a.params) {
+    const auto eq = p.find('=');
+    if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE", p));
+    char* end = nullptr;
+    const std::string v = p.substr(eq + 1);
+    const double d = std::strtod(v.c_str(), &end);
+    if (v.empty() || end != v.c_str() + v.size()) throw InputError(fmt::format("-p {}: '{}' is not a number", p, v));
+    if (!std::isfinite(d)) throw InputError(fmt::format("-p {}: '{}' is not a finite number", p, v));
+    o.params[p.substr(0, eq)] = d;
+  }
+  outcome.options.run.params = o.params;
+  if (o.machine != "sim" && o.port.empty() && !o.dry_run)
+    throw InputError(
+        "--port is needed with a machine profile (a serial device, a PTY such as /tmp/printer, or "
+        "unix:/tmp/klippy_uds)");
+  if (o.machine != "sim" && o.port.empty()) o.port = "(dry run)";
+  g_interrupted = false;
+  o.abort_flag = &g_interrupted;
+  struct SigGuard {
+    void (*old)(int);
+    SigGuard() : old(std::signal(SIGINT, on_sigint)) {}
+    ~SigGuard() { std::signal(SIGINT, old); }
+  } guard;
+
+  outcome.result = protocols::run_experiment(o);
+  if (!o.dry_run && outcome.result.files.count("truth"))
+    outcome.truth = read_json_file(outcome.result.files.at("truth"));
+  return outcome;
+}
+
+Envelope to_envelope(const RunOutcome& outcome) {
+  const auto& a = outcome.options.run;
+  const auto& r = outcome.result;
+  Envelope env("run");
+  nlohmann::json params = nlohmann::json::object();
+  for (const auto& [k, v] : a.params) params[k] = v;
+  env.set_options({{"protocol", a.protocol},
+                   {"axis", a.axis},
+                   {"machine", a.machine},
+                   {"port", a.port},
+                   {"params", params},
+                   {"sim", a.sim_options},
+                   {"dry_run", a.dry_run}});
+  auto& res = env.results();
+  res["experiment"] = r.experiment.to_json();
+  if (a.dry_run) {
+    res["gcode"] = r.gcode;
+    return env;
+  }
+  res["run_dir"] = r.run_dir;
+  res["status"] = r.status;
+  res["files"] = r.files;
+  res["samples"] = r.summary.value("samples", nlohmann::json::object());
+  res["link"] = r.summary.value("link", nlohmann::json::object());
+  if (outcome.truth) res["truth"] = *outcome.truth;
+  return env;
+}
+
+void print_text(const RunOutcome& outcome, std::ostream& os) {
+  const auto& a = outcome.options.run;
+  const auto& r = outcome.result;
+  if (a.dry_run) {
+    for (const auto& l : r.gcode) os << l << "\n";
+    return;
+  }
+  os << fmt::format("{} {}: {}\n", a.protocol, r.status, r.run_dir);
+  for (const auto& [role, path] : r.files) os << fmt::format("  {:<16} {}\n", role, path);
+  if (r.files.count("load_cell") && a.protocol == "liquefier-step")
+    os << fmt::format("analyze: tunekit step {} --time time --input feed --output force\n", r.files.at("load_cell"));
+  if (r.files.count("load_cell") && a.protocol == "liquefier-flow-sweep")
+    os << fmt::format(
+        "analyze: tunekit step {} --time time --input feed --output force --min-step 0.02 "
+        "--operating-points arrival\n",
+        r.files.at("load_cell"));
+  if (r.files.count("accel"))
+    os << fmt::format("analyze: tunekit resonance {} --axis {}\n", r.files.at("accel"), a.axis);
+}
+
+}  // namespace tunekit::calibration

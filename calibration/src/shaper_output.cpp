@@ -1,0 +1,120 @@
+// tunekit shaper's envelope and text summary (tunekit/calibration/shaper_command.hpp).
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "resonance_json.hpp"
+#include "tunekit/calibration/shaper_command.hpp"
+
+namespace tunekit::calibration {
+namespace {
+
+// Klipper suggests max_accel rounded to 100 mm/s^2.
+double shaper_klipper_suggested_accel(double a) { return std::round(a / 100.0) * 100.0; }
+
+nlohmann::json shaper_candidate_json(const ident::ShaperCandidate& c) {
+  return {{"type", ident::to_string(c.type)},
+          {"freq_hz", c.freq_hz},
+          {"damping", c.damping_ratio},
+          {"vibrations_pct", 100.0 * c.vibrations},
+          {"smoothing", c.smoothing_mm},
+          {"max_accel_mm_s2", c.max_accel_mm_s2},
+          {"suggested_max_accel_mm_s2", shaper_klipper_suggested_accel(c.max_accel_mm_s2)},
+          {"score", c.score}};
+}
+
+nlohmann::json shaper_selection_json(const ShaperOutcome& o, const ShaperAxis& x) {
+  const auto& so = x.selection;
+  nlohmann::json sel;
+  sel["method"] = x.klipper_method ? "klipper" : "identified";
+  if (o.options.firmware) sel["firmware"] = firmware::to_string(*o.options.firmware);
+  sel["psd_normalization"] =
+      x.normalized_by_us == x.datasets
+          ? "divided by (f + 0.1 Hz), damped below 10 Hz by tunekit (Klipper's normalization)"
+      : x.normalized_by_us == 0
+          ? "none applied: the spectrum file was already normalized by Klipper (it has shaper columns)"
+          : "Klipper's normalization (divided by (f + 0.1 Hz), damped below 10 Hz) applied by tunekit "
+            "to the measured spectra; the files with shaper columns were already normalized by Klipper";
+  sel["datasets"] = x.datasets;
+  sel["ei_design"] = "Singhose's damped fits";
+  sel["max_freq_hz"] = so.max_freq_hz;
+  sel["design_damping"] = so.design_damping_ratio;
+  sel["test_damping_ratios"] = so.test_damping_ratios;
+  sel["score"] = "smoothing * (v^1.5 + 0.2 v + 0.01), v = remaining vibration fraction";
+  sel["scv_mm_s"] = so.scv_mm_s;
+  sel["freq_step_hz"] = so.freq_step_hz;
+  sel["max_shaper_freq_hz"] = so.max_shaper_freq_hz;
+  return sel;
+}
+
+}  // namespace
+
+Envelope to_envelope(const ShaperOutcome& o) {
+  const ShaperOptions& a = o.options;
+  Envelope env("shaper");
+  auto opts = accel_options_json(a.accel, false, ident::RingdownOptions{});
+  opts["klipper_compatible"] = a.klipper_compatible;
+  nlohmann::json names = nlohmann::json::array();
+  for (const auto t : a.shapers) names.push_back(ident::to_string(t));
+  opts["shapers"] = names;
+  opts["scv_mm_s"] = a.selection.scv_mm_s;
+  opts["max_smoothing_mm"] = a.selection.max_smoothing_mm;
+  opts["damping_ratio"] = a.damping_ratio;
+  opts["max_shaper_freq_hz"] = o.max_shaper_freq_hz;
+  opts["max_freq_hz"] = a.selection.max_freq_hz;
+  opts["klipper_csv"] = a.klipper_csv;
+  env.set_options(opts);
+  for (const auto& d : o.inputs) env.add_input_digest(d.path, d.sha256, d.size_bytes);
+  for (const auto& w : o.warnings) env.warn(w);
+  auto& res = env.results();
+  res["axes"] = nlohmann::json::object();
+  for (const auto& x : o.axes) {
+    const AxisResult& r = x.resonance;
+    nlohmann::json j;
+    j["modes"] = modes_json(r.modes);
+    j["fit"] = fit_json(r.modes);
+    j["recommended"] = shaper_candidate_json(x.choice.recommended);
+    nlohmann::json cands = nlohmann::json::array();
+    for (const auto& c : x.choice.candidates) cands.push_back(shaper_candidate_json(c));
+    j["candidates"] = cands;
+    j["selection"] = shaper_selection_json(o, x);
+    j["psd"] = spectrum_json(r.spectrum, a.accel.max_plot_hz);
+    if (r.modes.dominant >= 0) {
+      const auto& d = r.modes.modes[static_cast<std::size_t>(r.modes.dominant)];
+      j["freq_hz"] = d.freq_hz;
+      j["zeta"] = d.zeta;
+    }
+    if (!x.klipper_csv.empty()) j["klipper_csv"] = x.klipper_csv;
+    res["axes"][r.label] = j;
+  }
+  return env;
+}
+
+void print_text(const ShaperOutcome& o, std::ostream& os) {
+  for (const auto& x : o.axes) {
+    const std::string& ax = x.resonance.label;
+    const auto& modes = x.resonance.modes.modes;
+    os << fmt::format("axis {}: ", ax);
+    if (modes.empty()) os << "no mode identified\n";
+    else {
+      os << "modes";
+      for (const auto& m : modes) os << fmt::format("  {:.1f} Hz (zeta {:.3f})", m.freq_hz, m.zeta);
+      os << "\n";
+    }
+    for (const auto& c : x.choice.candidates) {
+      // Klipper-compatible: max_accel as Klipper suggests it (rounded to 100 mm/s^2).
+      const std::string accel =
+          o.options.klipper_compatible
+              ? fmt::format("suggested max_accel <= {:.0f} mm/s^2", shaper_klipper_suggested_accel(c.max_accel_mm_s2))
+              : fmt::format("max_accel {:.0f} mm/s^2", c.max_accel_mm_s2);
+      os << fmt::format("  {:<9} {:6.1f} Hz  damping {:.3f}  vibrations {:5.1f} %  smoothing {:.3f} mm  {}\n",
+                        ident::to_string(c.type), c.freq_hz, c.damping_ratio, 100 * c.vibrations, c.smoothing_mm,
+                        accel);
+    }
+    const auto& b = x.choice.recommended;
+    os << fmt::format("  recommended: shaper_type_{} = {}  shaper_freq_{} = {:.1f}  damping_ratio_{} = {:.3f}\n", ax,
+                      ident::to_string(b.type), ax, b.freq_hz, ax, b.damping_ratio);
+  }
+}
+
+}  // namespace tunekit::calibration

@@ -1,0 +1,188 @@
+// tunekit step: identify liquefier dynamics (K, tau, theta) from step-response logs
+// (Holtrup 2019 ch. 4.4.2). Steps are found in the input column, or, for records without an input
+// channel (ooze after a stop, Table B.1), given by --step-time and --step-size / --group.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "tunekit/calibration/step_command.hpp"
+#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/step_analysis.hpp"
+
+namespace tunekit::calibration {
+namespace {
+
+void print_fit_line(std::ostream& os, const std::string& label, const fitting::FitResult& f) {
+  auto pm = [&](const char* n) {
+    const auto& p = f.param(n);
+    if (p.fixed) return fmt::format("{} = {:.4g} (fixed)", n, p.value);
+    return fmt::format("{} = {:.4g} +- {:.2g}", n, p.value, p.std_error);
+  };
+  os << fmt::format("  {:<22} {}   {}   {}   rms {:.3g}  r2 {:.4f}\n", label, pm("K"), pm("tau_s"), pm("theta_s"),
+                    f.diagnostics.rms, f.diagnostics.r2);
+}
+
+}  // namespace
+
+std::string step_model_option_name(fitting::StepModel model) {
+  return model == fitting::StepModel::fo ? "fo" : "fopdt";
+}
+std::string step_instant_option_name(ident::StepInstant instant) {
+  return instant == ident::StepInstant::first_sample ? "first" : "midpoint";
+}
+
+StepOutcome compute_step(const StepOptions& a) {
+  StepOutcome outcome;
+  outcome.options = a;
+  if (!(a.analysis.detect.min_step_fraction > 0 && a.analysis.detect.min_step_fraction < 1))
+    throw InputError("--min-step must be between 0 and 1 (a fraction of the input range)");
+  const std::string bytes = ident::read_file_bytes(a.file);
+  ident::CsvOptions copt;
+  copt.columns = {a.output_column};
+  if (!a.input_column.empty()) copt.columns.push_back(a.input_column);
+  if (!a.group_column.empty()) copt.columns.push_back(a.group_column);
+  copt.time_column = a.time_column;
+  copt.find_time_column = a.time_column.empty();
+  // With --group the time restarts in every group: check monotonic time per group below.
+  copt.time_must_increase = a.group_column.empty();
+  const auto table = ident::parse_csv(bytes, a.file, copt);
+  const auto& tcol = table.column(table.time_column);
+  const auto& ycol = table.column(a.output_column);
+  if (table.rows < 10)
+    throw InputError(fmt::format("too few samples ({}) for a step analysis; at least 10 are needed", table.rows),
+                     a.file);
+
+  ident::StepAnalysisOptions opt = a.analysis;
+  opt.output_unit = unit_or_1(a.output_unit.empty() ? ycol.unit : a.output_unit);
+  std::string input_unit = "1";
+  if (!a.input_column.empty()) input_unit = unit_or_1(table.column(a.input_column).unit);
+  else if (!a.group_column.empty()) input_unit = unit_or_1(table.column(a.group_column).unit);
+  if (!a.input_unit.empty()) input_unit = a.input_unit;
+  if (ident::is_volumetric_flow_unit(input_unit)) input_unit = "mm^3/s";
+  opt.input_unit = input_unit;
+  opt.gain_unit = opt.output_unit + "/(" + input_unit + ")";
+
+  ident::StepAnalysis& res = outcome.analysis;
+  try {
+    if (!a.input_column.empty()) {
+      if (!a.group_column.empty() || !std::isnan(a.step_size))
+        throw InputError("--input finds the steps itself; do not combine it with --group or --step-size");
+      res = ident::analyze_steps(tcol.values, table.column(a.input_column).values, ycol.values, opt);
+    } else {
+      std::map<double, std::vector<std::size_t>> groups;
+      if (!a.group_column.empty()) {
+        const auto& g = table.column(a.group_column).values;
+        for (std::size_t i = 0; i < g.size(); ++i) groups[g[i]].push_back(i);
+      } else {
+        if (std::isnan(a.step_size))
+          throw InputError("without --input give the step: --step-size DU (and --step-time T), or --group COL");
+        for (std::size_t i = 0; i < table.rows; ++i) groups[0].push_back(i);
+      }
+      std::vector<ident::KnownStep> ks;
+      // Descending by the group value (the order of Holtrup's (2019) tables: 50, 20, 12.2, 2 mm/s).
+      for (auto it = groups.rbegin(); it != groups.rend(); ++it) {
+        ident::KnownStep k;
+        const double du = std::isnan(a.step_size) ? it->first : a.step_size;
+        k.u_before = 0;
+        k.u_after = du;
+        k.record.t_step = a.step_time_s;
+        k.record.du = du;
+        for (std::size_t i : it->second) {
+          if (!k.record.t.empty() && !(tcol.values[i] > k.record.t.back()))
+            throw InputError(
+                fmt::format("time is not increasing ({} s after {} s){}", tcol.values[i], k.record.t.back(),
+                            a.group_column.empty() ? std::string()
+                                                   : fmt::format(" in group {} = {:g}", a.group_column, it->first)),
+                source_location(a.file, table.header_line + i + 1));
+          k.record.t.push_back(tcol.values[i]);
+          k.record.y.push_back(ycol.values[i]);
+        }
+        ks.push_back(std::move(k));
+      }
+      res = ident::analyze_known_steps(ks, opt);
+    }
+  } catch (const Error& e) {
+    if (!e.location().empty()) throw;
+    if (e.code() == ExitCode::bad_input) throw InputError(e.message(), a.file);
+    if (e.code() == ExitCode::fit_failed) throw FitError(e.message(), a.file);
+    throw;
+  }
+
+  outcome.time_column = table.time_column;
+  outcome.input_sha256 = sha256_hex(bytes);
+  outcome.input_size_bytes = bytes.size();
+  outcome.input_unit = input_unit;
+  outcome.output_unit = opt.output_unit;
+  outcome.gain_unit = opt.gain_unit;
+  outcome.warnings = table.warnings;
+  outcome.warnings.insert(outcome.warnings.end(), res.warnings.begin(), res.warnings.end());
+  return outcome;
+}
+
+Envelope to_envelope(const StepOutcome& o) {
+  const StepOptions& a = o.options;
+  Envelope env("step");
+  env.set_options(
+      {{"time_column", o.time_column},
+       {"input_column", a.input_column},
+       {"input_unit", a.input_unit},
+       {"output_unit", a.output_unit},
+       {"output_column", a.output_column},
+       {"model", step_model_option_name(a.analysis.model)},
+       {"group_column", a.group_column},
+       {"step_time_s", a.step_time_s},
+       {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
+       {"min_step_fraction", a.analysis.detect.min_step_fraction},
+       {"step_at", a.input_column.empty() ? nlohmann::json(nullptr)
+                                          : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))},
+       {"operating_points", a.analysis.operating_points_by_arrival ? "arrival" : "larger"}});
+  env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
+  env.results() = ident::to_json(o.analysis);
+  env.results()["units"] = {{"input", o.input_unit}, {"output", o.output_unit}, {"K", o.gain_unit}, {"time", "s"}};
+  for (const auto& w : o.warnings) env.warn(w);
+  return env;
+}
+
+void print_text(const StepOutcome& o, std::ostream& os) {
+  const ident::StepAnalysis& res = o.analysis;
+  os << fmt::format("{}: {} step(s), model {}\n", o.options.file, res.steps.size(),
+                    fitting::model_name(o.options.analysis.model));
+  for (const auto& s : res.steps) {
+    const std::string label =
+        fmt::format("step {} {} @{:.4g}s", s.step.index, s.step.rising() ? "up" : "down", s.step.t_step_s);
+    if (s.fit) print_fit_line(os, label, *s.fit);
+    else os << fmt::format("  {:<22} failed: {}\n", label, s.error);
+  }
+  if (res.pooled) print_fit_line(os, "pooled", *res.pooled);
+  for (const auto& op : res.operating_points)
+    print_fit_line(os, fmt::format("u = {:.4g} ({} step{})", op.u, op.n_steps, op.n_steps == 1 ? "" : "s"), op.fit);
+  bool both = false;
+  for (const auto& l : res.arrival_levels) both = both || (l.n_rising > 0 && l.n_falling > 0);
+  if (both) {
+    os << "  arrival levels (rising/falling arrivals, tau rising - falling with its 95 % interval):\n";
+    for (const auto& l : res.arrival_levels) {
+      std::string rmf = "-";
+      if (std::isfinite(l.rmf_ci95_lo))
+        rmf = fmt::format("{:+.3g} s [{:+.3g}, {:+.3g}]{}", l.rising_minus_falling_tau_s, l.rmf_ci95_lo, l.rmf_ci95_hi,
+                          l.directions_differ() ? " differ" : "");
+      os << fmt::format("    u = {:<8.4g} {}/{}  tau = {:.4g} s  K = {:.4g}  theta = {:.3g} s  {}\n", l.u, l.n_rising,
+                        l.n_falling, l.fit.value("tau_s"), l.fit.value("K"), l.fit.value("theta_s"), rmf);
+    }
+    if (res.level_trends.tau) {
+      const auto& b = res.level_trends.tau->param("b");
+      os << fmt::format("  level trend: tau_s = {:.4g} * u^{:.3g} (b 95 %: [{:.3g}, {:.3g}])\n",
+                        res.level_trends.tau->value("a"), b.value, b.ci95_lo, b.ci95_hi);
+    }
+  }
+  if (res.trend_tau)
+    os << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g}   K = {:.4g} * u^{:.3g}\n", res.trend_tau->value("a"),
+                      res.trend_tau->value("b"), res.trend_K->value("a"), res.trend_K->value("b"));
+  os << fmt::format("  K in {}, y0 in {}; 95 % intervals in the JSON (--json)\n", o.gain_unit, o.output_unit);
+}
+
+}  // namespace tunekit::calibration
