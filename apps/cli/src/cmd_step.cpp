@@ -142,8 +142,7 @@ Envelope to_envelope(const StepOutcome& o) {
        {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
        {"min_step_fraction", a.analysis.detect.min_step_fraction},
        {"step_at", a.input_column.empty() ? nlohmann::json(nullptr)
-                                          : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))},
-       {"operating_points", a.analysis.operating_points_by_arrival ? "arrival" : "larger"}});
+                                          : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))}});
   env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
   env.results() = ident::to_json(o.analysis);
   env.results()["units"] = {{"input", o.input_unit}, {"output", o.output_unit}, {"K", o.gain_unit}, {"time", "s"}};
@@ -162,29 +161,30 @@ void print_text(const StepOutcome& o, std::ostream& os) {
     else os << fmt::format("  {:<22} failed: {}\n", label, s.error);
   }
   if (res.pooled) print_fit_line(os, "pooled", *res.pooled);
-  for (const auto& op : res.operating_points)
-    print_fit_line(os, fmt::format("u = {:.4g} ({} step{})", op.u, op.n_steps, op.n_steps == 1 ? "" : "s"), op.fit);
+  os << "  operating points (the level each step arrives at):\n";
+  for (const auto& l : res.arrival_levels)
+    print_fit_line(os, fmt::format("u = {:.4g} ({} step{})", l.u, l.steps.size(), l.steps.size() == 1 ? "" : "s"),
+                   l.fit);
   bool both = false;
   for (const auto& l : res.arrival_levels) both = both || (l.n_rising > 0 && l.n_falling > 0);
   if (both) {
-    os << "  arrival levels (rising/falling arrivals, tau rising - falling with its 95 % interval):\n";
+    os << "  rising/falling arrivals, tau rising - falling with its 95 % interval:\n";
     for (const auto& l : res.arrival_levels) {
       std::string rmf = "-";
       if (std::isfinite(l.rmf_ci95_lo))
         rmf = fmt::format("{:+.3g} s [{:+.3g}, {:+.3g}]{}", l.rising_minus_falling_tau_s, l.rmf_ci95_lo, l.rmf_ci95_hi,
                           l.directions_differ() ? " differ" : "");
-      os << fmt::format("    u = {:<8.4g} {}/{}  tau = {:.4g} s  K = {:.4g}  theta = {:.3g} s  {}\n", l.u, l.n_rising,
-                        l.n_falling, l.fit.value("tau_s"), l.fit.value("K"), l.fit.value("theta_s"), rmf);
-    }
-    if (res.level_trends.tau) {
-      const auto& b = res.level_trends.tau->param("b");
-      os << fmt::format("  level trend: tau_s = {:.4g} * u^{:.3g} (b 95 %: [{:.3g}, {:.3g}])\n",
-                        res.level_trends.tau->value("a"), b.value, b.ci95_lo, b.ci95_hi);
+      os << fmt::format("    u = {:<8.4g} {}/{}  {}\n", l.u, l.n_rising, l.n_falling, rmf);
     }
   }
-  if (res.trend_tau)
-    os << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g}   K = {:.4g} * u^{:.3g}\n", res.trend_tau->value("a"),
-                      res.trend_tau->value("b"), res.trend_K->value("a"), res.trend_K->value("b"));
+  const auto& tr = res.level_trends;
+  if (tr.tau) {
+    const auto& b = tr.tau->param("b");
+    os << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g} (b 95 %: [{:.3g}, {:.3g}])", tr.tau->value("a"), b.value,
+                      b.ci95_lo, b.ci95_hi);
+    if (tr.K) os << fmt::format("   K = {:.4g} * u^{:.3g}", tr.K->value("a"), tr.K->value("b"));
+    os << "\n";
+  }
   os << fmt::format("  K in {}, y0 in {}; 95 % intervals in the JSON (--json)\n", o.gain_unit, o.output_unit);
 }
 
@@ -220,7 +220,8 @@ void register_step(CLI::App& app, CliContext& ctx) {
   sub->add_option("--step-size", o.step_size,
                   "Without --input: the input change (input units, e.g. the print speed before a stop in mm/s)");
   sub->add_option("--min-step", o.analysis.detect.min_step_fraction,
-                  "A change of the input larger than this fraction of its range is a step (1)")
+                  "A change of the input larger than this fraction of its range (and than 8 times the input's own "
+                  "noise) into a level the input holds is a step")
       ->capture_default_str();
   add_choice_option<ident::StepInstant>(
       sub, "--step-at", o.analysis.detect.instant,
@@ -229,20 +230,15 @@ void register_step(CLI::App& app, CliContext& ctx) {
       "the new one. midpoint: half-way (interpolated; for logs sampled independently of the changes, "
       "e.g. a printer's); first: at the first new sample (input changes exactly at sample instants). "
       "Moves t_step and theta_s (s) by up to half a sample interval");
-  add_choice_option<bool>(
-      sub, "--operating-points", o.analysis.operating_points_by_arrival, {{"larger", false}, {"arrival", true}},
-      "How operating_points group the steps: larger (the input level of larger magnitude of each step) or "
-      "arrival (the level each step arrives at, as flow_levels; for a flow sweep). Export reads them");
   add_output_options(sub, cmd->output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"
       "its own (start values by the log-incomplete-response method), then all steps pooled, then per operating\n"
-      "point (the input level of larger magnitude) with a power-law trend tau_s = a u^b, K = a u^b.\n"
-      "Steps are also grouped by the level they arrive at (results 'flow_levels'): per level K, tau, theta with\n"
-      "95 % intervals, the counts of rising and falling arrivals and tau(rising) - tau(falling) with its interval;\n"
-      "'flow_trend' fits tau_s = a u^b, K = a u^b and theta_s = c0 + c1 u over them (a flow sweep: tunekit run\n"
-      "liquefier-flow-sweep). A pooled fit whose residuals are not white while its single-step fits' are is warned\n"
-      "about: the steps do not share one K, tau, theta.\n"
+      "point: the level each step arrives at (results 'operating_points', what export designs from): per level\n"
+      "K, tau, theta with 95 % intervals, the counts of rising and falling arrivals and tau(rising) - tau(falling)\n"
+      "with its interval; 'trend' fits tau_s = a u^b, K = a u^b and theta_s = c0 + c1 u over them (a flow sweep:\n"
+      "tunekit run liquefier-flow-sweep). A pooled fit whose residuals are not white while its single-step fits'\n"
+      "are is warned about: the steps do not share one K, tau, theta.\n"
       "Examples:\n"
       "  tunekit step datasets/liquefier/synthetic_steps.csv --time time --input feed --output force \\\n"
       "      --step-at first --json   # this data set's input changes exactly at sample instants\n"
