@@ -105,11 +105,6 @@ void strip_prefix(nlohmann::json& j, const std::string& prefix) {
   }
 }
 
-// Smallest input change the flow sweep's analysis counts as a step, as a fraction of the feed's
-// range: the sweep's lowest neighbouring levels differ by (r - 1) q_min with r = 10^(1/7) for
-// its default 6 levels over a decade, 4 % of the range.
-constexpr double kSweepMinStepFraction = 0.02;
-
 std::string utc_stamp() {
   const std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -227,16 +222,13 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     bar.end(runs[e.name].status);
     if (e.name == "liquefier-step") {  // identified at once: it sizes the chirp
       const std::string csv = runs[e.name].files.at("load_cell");
-      // The sweep's smallest steps (between the lowest levels) are a few % of its range; the
-      // operating points handed to export are the arrival levels (flow-dependent advance).
+      // The analysis `tunekit step` makes of this log with its defaults: the same steps and
+      // operating points (the levels the steps arrive at), which export designs from.
       StepOptions so;
       so.file = csv;
       so.time_column = "time";
       so.input_column = "feed";
       so.output_column = "force";
-      so.analysis.model = fitting::StepModel::fopdt;
-      so.analysis.detect.min_step_fraction = kSweepMinStepFraction;
-      so.analysis.operating_points_by_arrival = true;
       step_outcome = calibrate_analysis("step", [&] { return compute_step(so); });
       step_analysis = keep_analysis(*step_outcome, run_dir + "/analysis/step.json", ctx);
     }
@@ -332,7 +324,7 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     export_inputs.push_back(out);
     const double area = profile.filament_area_mm2();
     std::vector<std::string> level_text;
-    for (auto& l : res["liquefier"]["step"]["flow_levels"]) {
+    for (auto& l : res["liquefier"]["step"]["operating_points"]) {
       l["flow_mm3_s"] = l.at("u").get<double>() * area;
       if (l.at("n_rising").get<int>() > 0 && l.at("n_falling").get<int>() > 0)
         level_text.push_back(fmt::format("{} mm^3/s: {} s", display_number(l["flow_mm3_s"].get<double>()),

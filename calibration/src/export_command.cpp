@@ -101,7 +101,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
   std::vector<bool> point_is_flow;
   std::vector<std::string> unnamed_axes;          // shaper results under a file stem instead of an axis
   std::optional<ident::TauPowerLaw> trend_tau_u;  // tau = a u^b over the operating points' u
-  std::vector<ident::FlowTau> levels;             // results.flow_levels (u or flow)
+  std::vector<ident::FlowTau> levels;             // results.operating_points (u or flow)
   std::vector<bool> level_is_flow;
   bool points_are_flow = false;
 
@@ -138,44 +138,38 @@ ExportOutcome compute_export(const ExportOptions& a) {
             in.gain_unit = unit.get<std::string>();
           in.tau_source = "step";
         }
-        // Power-law trend of tau over u (the operating points' input), and per-level 95 %
-        // intervals when the step analysis gives them (results.flow_levels[].tau_ci95).
-        const auto& ta = value_at_or_null(res, "/trend/tau_s/params/a/value"_json_pointer);
-        const auto& tb = value_at_or_null(res, "/trend/tau_s/params/b/value"_json_pointer);
+        // Power-law trend of tau over u (the operating points' input), and per-point 95 %
+        // intervals (results.operating_points[].tau_ci95). An operating point is the level the
+        // steps arrive at; one at u = 0 (arrivals at a stop) has no flow to design for.
+        const auto& ta = value_at_or_null(res, "/trend/tau_s/a"_json_pointer);
+        const auto& tb = value_at_or_null(res, "/trend/tau_s/b"_json_pointer);
         if (ta.is_number() && tb.is_number()) trend_tau_u = ident::TauPowerLaw{ta.get<double>(), tb.get<double>()};
-        const auto& lvls = value_at_or_null(res, "/flow_levels"_json_pointer);
-        if (lvls.is_array())
-          for (const auto& l : lvls) {
-            ident::FlowTau ft;
-            double u = number_at(value_at_or_null(l, "/flow_mm3_s"_json_pointer), "flow_levels[].flow_mm3_s", path);
-            const bool is_flow = std::isfinite(u);
-            if (!is_flow) u = number_at(value_at_or_null(l, "/u"_json_pointer), "flow_levels[].u", path);
-            ft.flow_mm3_s = u;
-            ft.tau_s = number_at(value_at_or_null(l, "/tau_s"_json_pointer), "flow_levels[].tau_s", path);
-            const auto& ci = value_at_or_null(l, "/tau_ci95"_json_pointer);
-            if (ci.is_array() && ci.size() == 2) {
-              ft.tau_lo_s = number_at(ci[0], "flow_levels[].tau_ci95[0]", path);
-              ft.tau_hi_s = number_at(ci[1], "flow_levels[].tau_ci95[1]", path);
-            } else if (ci.is_object()) {
-              ft.tau_lo_s = number_at(value_at_or_null(ci, "/lo"_json_pointer), "flow_levels[].tau_ci95.lo", path);
-              ft.tau_hi_s = number_at(value_at_or_null(ci, "/hi"_json_pointer), "flow_levels[].tau_ci95.hi", path);
-            }
-            level_is_flow.push_back(is_flow);
-            levels.push_back(ft);
-          }
         const auto& ops = value_at_or_null(res, "/operating_points"_json_pointer);
         const auto& u_unit = value_at_or_null(res, "/units/input"_json_pointer);
         const bool flow_points = u_unit.is_string() && ident::is_volumetric_flow_unit(u_unit.get<std::string>());
         points_are_flow = flow_points;
         if (ops.is_array())
           for (const auto& op : ops) {
-            point_is_flow.push_back(flow_points);
             ident::LiquefierPoint p;
             p.feed_mm_s = number_at(value_at_or_null(op, "/u"_json_pointer), "operating_points[].u", path);
+            if (!(p.feed_mm_s > 0)) continue;
+            point_is_flow.push_back(flow_points);
             p.gain = number_at(value_at_or_null(op, "/K"_json_pointer), "operating_points[].K", path);
             p.tau_s = number_at(value_at_or_null(op, "/tau_s"_json_pointer), "operating_points[].tau_s", path);
             p.theta_s = number_at(value_at_or_null(op, "/theta_s"_json_pointer), "operating_points[].theta_s", path);
             in.points.push_back(p);
+            ident::FlowTau ft;
+            ft.flow_mm3_s =
+                number_at(value_at_or_null(op, "/flow_mm3_s"_json_pointer), "operating_points[].flow_mm3_s", path);
+            level_is_flow.push_back(std::isfinite(ft.flow_mm3_s));
+            if (!level_is_flow.back()) ft.flow_mm3_s = p.feed_mm_s;
+            ft.tau_s = p.tau_s;
+            const auto& ci = value_at_or_null(op, "/tau_ci95"_json_pointer);
+            if (ci.is_array() && ci.size() == 2) {
+              ft.tau_lo_s = number_at(ci[0], "operating_points[].tau_ci95[0]", path);
+              ft.tau_hi_s = number_at(ci[1], "operating_points[].tau_ci95[1]", path);
+            }
+            levels.push_back(ft);
           }
       } else if (cmd == "freq") {
         freq_tau = number_at(value_at_or_null(res, "/tf_fit/params/tau_s/value"_json_pointer),

@@ -98,13 +98,8 @@ void print_text(const RunOutcome& outcome, std::ostream& os) {
   }
   os << fmt::format("{} {}: {}\n", a.protocol, r.status, r.run_dir);
   for (const auto& [role, path] : r.files) os << fmt::format("  {:<16} {}\n", role, path);
-  if (r.files.count("load_cell") && a.protocol == "liquefier-step")
+  if (r.files.count("load_cell") && (a.protocol == "liquefier-step" || a.protocol == "liquefier-flow-sweep"))
     os << fmt::format("analyze: tunekit step {} --time time --input feed --output force\n", r.files.at("load_cell"));
-  if (r.files.count("load_cell") && a.protocol == "liquefier-flow-sweep")
-    os << fmt::format(
-        "analyze: tunekit step {} --time time --input feed --output force --min-step 0.02 "
-        "--operating-points arrival\n",
-        r.files.at("load_cell"));
   if (r.files.count("accel"))
     os << fmt::format("analyze: tunekit resonance {} --axis {}\n", r.files.at("accel"), a.axis);
 }

@@ -139,8 +139,7 @@ Envelope to_envelope(const StepOutcome& o) {
        {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
        {"min_step_fraction", a.analysis.detect.min_step_fraction},
        {"step_at", a.input_column.empty() ? nlohmann::json(nullptr)
-                                          : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))},
-       {"operating_points", a.analysis.operating_points_by_arrival ? "arrival" : "larger"}});
+                                          : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))}});
   env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
   env.results() = ident::to_json(o.analysis);
   env.results()["units"] = {{"input", o.input_unit}, {"output", o.output_unit}, {"K", o.gain_unit}, {"time", "s"}};
@@ -159,29 +158,30 @@ void print_text(const StepOutcome& o, std::ostream& os) {
     else os << fmt::format("  {:<22} failed: {}\n", label, s.error);
   }
   if (res.pooled) print_fit_line(os, "pooled", *res.pooled);
-  for (const auto& op : res.operating_points)
-    print_fit_line(os, fmt::format("u = {:.4g} ({} step{})", op.u, op.n_steps, op.n_steps == 1 ? "" : "s"), op.fit);
+  os << "  operating points (the level each step arrives at):\n";
+  for (const auto& l : res.arrival_levels)
+    print_fit_line(os, fmt::format("u = {:.4g} ({} step{})", l.u, l.steps.size(), l.steps.size() == 1 ? "" : "s"),
+                   l.fit);
   bool both = false;
   for (const auto& l : res.arrival_levels) both = both || (l.n_rising > 0 && l.n_falling > 0);
   if (both) {
-    os << "  arrival levels (rising/falling arrivals, tau rising - falling with its 95 % interval):\n";
+    os << "  rising/falling arrivals, tau rising - falling with its 95 % interval:\n";
     for (const auto& l : res.arrival_levels) {
       std::string rmf = "-";
       if (std::isfinite(l.rmf_ci95_lo))
         rmf = fmt::format("{:+.3g} s [{:+.3g}, {:+.3g}]{}", l.rising_minus_falling_tau_s, l.rmf_ci95_lo, l.rmf_ci95_hi,
                           l.directions_differ() ? " differ" : "");
-      os << fmt::format("    u = {:<8.4g} {}/{}  tau = {:.4g} s  K = {:.4g}  theta = {:.3g} s  {}\n", l.u, l.n_rising,
-                        l.n_falling, l.fit.value("tau_s"), l.fit.value("K"), l.fit.value("theta_s"), rmf);
-    }
-    if (res.level_trends.tau) {
-      const auto& b = res.level_trends.tau->param("b");
-      os << fmt::format("  level trend: tau_s = {:.4g} * u^{:.3g} (b 95 %: [{:.3g}, {:.3g}])\n",
-                        res.level_trends.tau->value("a"), b.value, b.ci95_lo, b.ci95_hi);
+      os << fmt::format("    u = {:<8.4g} {}/{}  {}\n", l.u, l.n_rising, l.n_falling, rmf);
     }
   }
-  if (res.trend_tau)
-    os << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g}   K = {:.4g} * u^{:.3g}\n", res.trend_tau->value("a"),
-                      res.trend_tau->value("b"), res.trend_K->value("a"), res.trend_K->value("b"));
+  const auto& tr = res.level_trends;
+  if (tr.tau) {
+    const auto& b = tr.tau->param("b");
+    os << fmt::format("  trend: tau_s = {:.4g} * u^{:.3g} (b 95 %: [{:.3g}, {:.3g}])", tr.tau->value("a"), b.value,
+                      b.ci95_lo, b.ci95_hi);
+    if (tr.K) os << fmt::format("   K = {:.4g} * u^{:.3g}", tr.K->value("a"), tr.K->value("b"));
+    os << "\n";
+  }
   os << fmt::format("  K in {}, y0 in {}; 95 % intervals in the JSON (--json)\n", o.gain_unit, o.output_unit);
 }
 

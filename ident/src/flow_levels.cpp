@@ -1,6 +1,6 @@
-// Steps grouped by the level they arrive at: per-level K, tau, theta, the rising-minus-falling
-// difference of tau, the level trends, and the whiteness check of pooled fits
-// (step_analysis.hpp).
+// The operating points, steps grouped by the level they arrive at: per-level K, tau, theta, the
+// rising-minus-falling difference of tau, the level trends, and the whiteness check of pooled
+// fits (step_analysis.hpp).
 #include <algorithm>
 #include <cmath>
 
@@ -213,6 +213,7 @@ nlohmann::json arrival_levels_json(const StepAnalysis& a) {
                    {"K_ci95", flow_level_ci95(K)},
                    {"theta_s", theta.value},
                    {"theta_ci95", flow_level_ci95(theta)},
+                   {"stderr", {{"K", K.std_error}, {"tau_s", tau.std_error}, {"theta_s", theta.std_error}}},
                    {"rising_minus_falling_tau_s", flow_level_number(l.rising_minus_falling_tau_s)},
                    {"rising_minus_falling_tau_ci95", std::isfinite(l.rmf_ci95_lo)
                                                          ? nlohmann::json::array({l.rmf_ci95_lo, l.rmf_ci95_hi})

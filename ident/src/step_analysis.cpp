@@ -49,11 +49,7 @@ std::size_t settled_begin(std::span<const double> y, std::size_t begin, std::siz
   return begin;
 }
 
-void group_by_operating_point(StepAnalysis& a, const std::vector<StepRecord>& recs, const std::vector<std::size_t>& ok,
-                              const StepAnalysisOptions& o);
-void fit_operating_point_trend(StepAnalysis& a);
-
-// The pooled fit over every step, the arrival levels, the operating points and their trends.
+// The pooled fit over every step, the operating points (the arrival levels) and their trends.
 void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnalysisOptions& o) {
   std::vector<std::size_t> ok;
   for (std::size_t i = 0; i < a.steps.size(); ++i)
@@ -76,79 +72,71 @@ void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnal
       a.warnings.push_back(std::move(w));
   }
   analyze_arrival_levels(a, recs, o);
-  if (o.operating_points_by_arrival) {
-    for (const auto& l : a.arrival_levels) a.operating_points.push_back({l.u, static_cast<int>(l.steps.size()), l.fit});
-  } else {
-    group_by_operating_point(a, recs, ok, o);
-  }
-  fit_operating_point_trend(a);
 }
 
-// Groups steps by operating point (levels within 2 % of the largest level are one point) and
-// fits each group pooled.
-void group_by_operating_point(StepAnalysis& a, const std::vector<StepRecord>& recs, const std::vector<std::size_t>& ok,
-                              const StepAnalysisOptions& o) {
-  double umax = 0;
-  for (const auto& s : a.steps) umax = std::max(umax, std::abs(s.step.operating_point()));
-  const double tol = 0.02 * std::max(umax, 1e-300);
-  std::vector<std::pair<double, std::vector<std::size_t>>> groups;
-  for (std::size_t i : ok) {
-    const double u = a.steps[i].step.operating_point();
-    auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return std::abs(g.first - u) <= tol; });
-    if (it == groups.end()) groups.push_back({u, {i}});
-    else it->second.push_back(i);
-  }
-  std::sort(groups.begin(), groups.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  for (const auto& [u, idx] : groups) {
-    OperatingPoint op;
-    op.u = u;
-    op.n_steps = static_cast<int>(idx.size());
-    if (idx.size() == 1) {
-      op.fit = *a.steps[idx.front()].fit;
-    } else {
-      std::vector<StepRecord> sub;
-      for (std::size_t i : idx) sub.push_back(recs[i]);
-      try {
-        op.fit = fitting::fit_steps_pooled(sub, o.model, &*a.steps[idx.front()].fit);
-      } catch (const FitError& e) {
-        a.warnings.push_back(fmt::format("operating point u = {:.6g}: {}", u, e.message()));
-        continue;
-      }
-    }
-    if (idx.size() > 1) {
-      std::vector<const FitResult*> members;
-      for (std::size_t i : idx) members.push_back(&*a.steps[i].fit);
-      if (auto w = pooled_whiteness_warning(op.fit, members, fmt::format("operating point u = {:.6g}", u)); !w.empty())
-        a.warnings.push_back(std::move(w));
-    }
-    a.operating_points.push_back(std::move(op));
-  }
+// Standard deviation of the input's own noise: the median absolute difference of neighbouring
+// samples scaled to a Gaussian's sigma (1.4826, the median absolute deviation of a unit normal's
+// inverse, over sqrt 2, a difference holding two samples' noise). A commanded, piecewise-constant
+// input, whose neighbours are mostly equal, has none.
+double input_noise(std::span<const double> u) {
+  std::vector<double> d;
+  for (std::size_t i = 1; i < u.size(); ++i) d.push_back(std::abs(u[i] - u[i - 1]));
+  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
+  std::nth_element(d.begin(), mid, d.end());
+  return 1.4826 * *mid / std::sqrt(2.0);
 }
 
-// The power-law trends of the operating points.
-void fit_operating_point_trend(StepAnalysis& a) {
-  const std::string& unit = a.input_unit;
-  const std::string gain_unit = a.operating_points.empty() ? "1" : a.operating_points.front().fit.param("K").unit;
-  std::vector<double> us, taus, ks;
-  for (const auto& op : a.operating_points) {
-    if (op.u > 0 && op.fit.value("tau_s") > 0 && op.fit.value("K") > 0) {
-      us.push_back(op.u);
-      taus.push_back(op.fit.value("tau_s"));
-      ks.push_back(op.fit.value("K"));
+struct Change {
+  std::size_t first;            // first sample away from the old level
+  std::size_t settled;          // first sample at the new level
+  std::size_t level_begin = 0;  // first sample of the old level
+};
+
+// The input holds one level over [b, e): the means of its two halves differ by at most thr / 4.
+// A piece of a ramp that drifts by thr has halves thr / 2 apart; noise, at most thr / 8
+// (kStepNoiseSigmas), keeps them well within thr / 4 from a few samples on. A ramp slow enough to
+// be cut into pieces (below thr / 4 a sample) leaves pieces of at least four samples: a shorter
+// stretch is taken as a level.
+bool holds_level(std::span<const double> u, std::size_t b, std::size_t e, double thr) {
+  if (e < b + 4) return true;
+  const std::size_t mid = b + (e - b) / 2;
+  double m1 = 0, m2 = 0;
+  for (std::size_t i = b; i < mid; ++i) m1 += u[i] / static_cast<double>(mid - b);
+  for (std::size_t i = mid; i < e; ++i) m2 += u[i] / static_cast<double>(e - mid);
+  return std::abs(m1 - m2) <= thr / 4;
+}
+
+// Change points: the input leaves the current level by more than thr; the transition ends when
+// the sample-to-sample change falls below thr / 4.
+std::vector<Change> raw_changes(std::span<const double> u, double thr) {
+  std::vector<Change> changes;
+  double ref = u[0];
+  for (std::size_t i = 1; i < u.size(); ++i) {
+    if (std::abs(u[i] - ref) > thr) {
+      std::size_t k = i;
+      while (k + 1 < u.size() && std::abs(u[k + 1] - u[k]) > thr / 4) ++k;
+      changes.push_back({i, k, changes.empty() ? 0 : changes.back().settled});
+      ref = u[k];
+      i = k;
     }
   }
-  if (us.size() >= 2) {
-    try {
-      a.trend_tau = fit_power_law(us, taus, "tau_s", unit, "s");
-      a.trend_K = fit_power_law(us, ks, "K", unit, gain_unit);
-    } catch (const Error& e) {
-      a.warnings.push_back("trend: " + e.message());
-      a.trend_tau.reset();
-      a.trend_K.reset();
-    }
-  } else if (a.operating_points.size() >= 2) {
-    a.warnings.push_back("trend: fewer than two operating points with positive u, K and tau; no power law fitted");
+  return changes;
+}
+
+// The steps between levels the input holds: changes into a ramp are one transition, from the
+// last level held to the next one; a ramp at the start or the end of the record is no step.
+std::vector<Change> level_changes(std::span<const double> u, double thr) {
+  const auto raw = raw_changes(u, thr);
+  std::vector<Change> out;
+  bool in_ramp = !raw.empty() && !holds_level(u, 0, raw.front().first, thr);
+  for (std::size_t j = 0; j < raw.size(); ++j) {
+    if (in_ramp && !out.empty()) out.back().settled = raw[j].settled;
+    else if (!in_ramp) out.push_back(raw[j]);
+    const std::size_t next = j + 1 < raw.size() ? raw[j + 1].first : u.size();
+    in_ramp = !holds_level(u, raw[j].settled, next, thr);
   }
+  if (in_ramp && !out.empty()) out.pop_back();
+  return out;
 }
 
 }  // namespace
@@ -167,24 +155,8 @@ std::vector<DetectedStep> detect_steps(std::span<const double> t, std::span<cons
   const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
   const double range = *hi - *lo;
   if (!(range > 1e-12 * std::max(1.0, std::abs(*hi)))) throw InputError("no step found: the input column is constant");
-  const double thr = o.min_step_fraction * range;
-  // Change points: the input leaves the current level by more than thr; the transition ends when
-  // the sample-to-sample change falls below thr / 4.
-  struct Change {
-    std::size_t first;    // first sample away from the old level
-    std::size_t settled;  // first sample at the new level
-  };
-  std::vector<Change> changes;
-  double ref = u[0];
-  for (std::size_t i = 1; i < n; ++i) {
-    if (std::abs(u[i] - ref) > thr) {
-      std::size_t k = i;
-      while (k + 1 < n && std::abs(u[k + 1] - u[k]) > thr / 4) ++k;
-      changes.push_back({i, k});
-      ref = u[k];
-      i = k;
-    }
-  }
+  const double thr = std::max(o.min_step_fraction * range, kStepNoiseSigmas * input_noise(u));
+  const auto changes = level_changes(u, thr);
   if (changes.empty()) throw InputError("no step found in the input column");
   auto level = [&](std::size_t b, std::size_t e) {  // median-free robust enough: mean of [b, e)
     double s = 0;
@@ -193,7 +165,7 @@ std::vector<DetectedStep> detect_steps(std::span<const double> t, std::span<cons
   };
   std::vector<DetectedStep> steps;
   for (std::size_t j = 0; j < changes.size(); ++j) {
-    const std::size_t prev_end = j == 0 ? 0 : changes[j - 1].settled;
+    const std::size_t prev_end = changes[j].level_begin;
     const std::size_t next = j + 1 < changes.size() ? changes[j + 1].first : n;
     DetectedStep s;
     s.sample = changes[j].first;
@@ -274,7 +246,7 @@ StepAnalysis analyze_known_steps(const std::vector<KnownStep>& steps, const Step
     } catch (const Error& e) {
       if (e.code() == ExitCode::bad_input || steps.size() == 1) throw;
       sf.error = e.message();
-      a.warnings.push_back(fmt::format("step {} (u = {:.6g}): {}", i, sf.step.operating_point(), e.message()));
+      a.warnings.push_back(fmt::format("step {} (u = {:.6g}): {}", i, sf.step.u_after, e.message()));
     }
     a.steps.push_back(std::move(sf));
   }
@@ -343,30 +315,12 @@ nlohmann::json to_json(const StepAnalysis& a) {
     j["fit_samples"] = {s.step.begin, s.step.end};  // [first, last + 1) sample of the record in this step's fit
     j["u_before"] = s.step.u_before;
     j["u_after"] = s.step.u_after;
-    j["operating_point"] = s.step.operating_point();
     steps.push_back(j);
   }
-  json ops = json::array();
-  for (const auto& op : a.operating_points) {
-    json stderr_j;
-    for (const char* n : {"K", "tau_s", "theta_s"}) stderr_j[n] = op.fit.param(n).std_error;
-    ops.push_back({{"u", op.u},
-                   {"n_steps", op.n_steps},
-                   {"K", op.fit.value("K")},
-                   {"tau_s", op.fit.value("tau_s")},
-                   {"theta_s", op.fit.value("theta_s")},
-                   {"stderr", stderr_j},
-                   {"fit", fitting::to_json(op.fit)}});
-  }
-  json out{
-      {"steps", steps}, {"pooled", a.pooled ? fitting::to_json(*a.pooled) : json(nullptr)}, {"operating_points", ops}};
-  json trend = json::object();
-  if (a.trend_tau) trend["tau_s"] = fitting::to_json(*a.trend_tau);
-  if (a.trend_K) trend["K"] = fitting::to_json(*a.trend_K);
-  out["trend"] = trend;
-  out["flow_levels"] = arrival_levels_json(a);
-  out["flow_trend"] = level_trends_json(a);
-  return out;
+  return {{"steps", steps},
+          {"pooled", a.pooled ? fitting::to_json(*a.pooled) : json(nullptr)},
+          {"operating_points", arrival_levels_json(a)},
+          {"trend", level_trends_json(a)}};
 }
 
 }  // namespace tunekit::ident

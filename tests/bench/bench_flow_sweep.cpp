@@ -48,9 +48,7 @@ int main(int argc, char** argv) {
   // 1.5 to 15 mm^3/s, 8 s per level (14 tau at the slowest level): 3 + 14 * 8 = 115 s.
   const auto s = test::synth_flow_sweep(tr, 6, 1.5, 15, 8.0, 3.0);
   ident::StepAnalysisOptions o;
-  o.detect.min_step_fraction = 0.02;
   o.input_unit = "mm^3/s";
-  o.operating_points_by_arrival = true;
   std::size_t levels = 0;
   double b = 0;
   const bench::Timing wall = bench::time_ms(

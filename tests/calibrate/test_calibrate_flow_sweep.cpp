@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/cli/step_command.hpp"
 #include "tunekit/ident/csv.hpp"
 
 using tunekit::ident::read_file_bytes;
@@ -29,7 +30,7 @@ TEST_CASE("calibrate's flow sweep on the physics liquefier recovers the true tau
   auto true_tau = [&](double q) { return C * k * n * std::pow(q, n - 1); };
 
   // The protocol that ran: 6 levels up to 90 % of the profile's max_flow_mm3_s (15 mm^3/s).
-  const auto& levels = step.at("flow_levels");
+  const auto& levels = step.at("operating_points");
   int both = 0;
   double qmax = 0;
   for (const auto& l : levels) {
@@ -45,14 +46,34 @@ TEST_CASE("calibrate's flow sweep on the physics liquefier recovers the true tau
   CHECK(both == 6);
   CHECK(qmax == Approx(13.5).epsilon(0.02));
   // The trend's exponent: tau = C k n Q^(n-1), so b = n - 1.
-  const auto& b = step.at("flow_trend").at("tau_s");
+  const auto& b = step.at("trend").at("tau_s");
   INFO("b = " << b.at("b").get<double>());
   CHECK(b.at("b").get<double>() == Approx(n - 1).margin(0.05));
-  // Export read the arrival levels as its operating points (flow-dependent advance).
-  const auto analysis = nlohmann::json::parse(read_file_bytes(dir + "/analysis/step.json")).at("results");
-  REQUIRE(analysis.at("operating_points").size() == levels.size());
-  for (std::size_t i = 0; i < levels.size(); ++i)
-    CHECK(analysis.at("operating_points")[i].at("tau_s").get<double>() == levels[i].at("tau_s").get<double>());
+  // Export designed from the operating points, the arrival levels (flow-dependent advance).
   const auto& schedule = env.at("results").at("compensators").at("design").at("schedule");
   CHECK(schedule.size() == levels.size());
+}
+
+TEST_CASE("tunekit step with its defaults reproduces calibrate's pooled liquefier fit within 1 %") {
+  const std::string dir = tunekit::test::scratch_dir("calibrate_step_defaults") + "/run";
+  const auto cli = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--skip-axes", "--out", dir});
+  INFO(cli.err);
+  REQUIRE(cli.code == 0);
+  const auto env = nlohmann::json::parse(read_file_bytes(dir + "/results.json"));
+  const auto& cal = env.at("results").at("liquefier").at("step").at("pooled").at("params");
+  const std::string csv = dir + "/liquefier-step/step.csv";  // the load cell's log of the flow sweep
+  REQUIRE(std::filesystem::exists(csv));
+  tunekit::cli::StepOptions o;  // the defaults of `tunekit step`, with only the file and columns named
+  o.file = csv;
+  o.time_column = "time";
+  o.input_column = "feed";
+  o.output_column = "force";
+  const auto step = tunekit::cli::compute_step(o);
+  REQUIRE(step.analysis.pooled);
+  CHECK(step.analysis.steps.size() == env.at("results").at("liquefier").at("step").at("steps").size());
+  for (const char* name : {"tau_s", "K", "theta_s"}) {
+    const double mine = step.analysis.pooled->value(name), theirs = cal.at(name).at("value").get<double>();
+    INFO(name << ": tunekit step " << mine << ", calibrate " << theirs);
+    CHECK(mine == Approx(theirs).epsilon(0.01));
+  }
 }

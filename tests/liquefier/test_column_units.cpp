@@ -51,7 +51,7 @@ TEST_CASE("tunekit step reads time_s/flow_mm3_s/force_N without --time, and expo
   CHECK(j["results"]["units"]["input"] == "mm^3/s");
   CHECK(j["results"]["units"]["output"] == "N");
   CHECK(j["options"]["time_column"] == "time_s");
-  REQUIRE(j["results"]["operating_points"].size() == 2);
+  REQUIRE(j["results"]["operating_points"].size() == 3);  // arrivals at 2, 4 and 6 mm^3/s
 
   const std::string cfg = dir + "/Configuration_adv.h";
   std::filesystem::copy_file(tunekit::test::dataset("firmware/Configuration_adv.h"), cfg);
@@ -61,12 +61,13 @@ TEST_CASE("tunekit step reads time_s/flow_mm3_s/force_N without --time, and expo
   REQUIRE(e.code == 0);
   const auto ej = nlohmann::json::parse(e.out);
   const auto& sched = ej["results"]["design"]["schedule"];
-  REQUIRE(sched.size() == 2);
-  // The schedule is at the flows of the log (4 and 6 mm^3/s), not at 4 and 6 mm/s of filament
-  // (which would be 2.4 times those flows with 1.75 mm filament).
-  CHECK(sched[0]["flow_mm3_s"].get<double>() == Approx(4.0));
-  CHECK(sched[1]["flow_mm3_s"].get<double>() == Approx(6.0));
-  CHECK(sched[1]["feed_mm_s"].get<double>() < 6.0 / 2.0);
+  REQUIRE(sched.size() == 3);
+  // The schedule is at the flows of the log (2, 4 and 6 mm^3/s), not at 2, 4 and 6 mm/s of
+  // filament (which would be 2.4 times those flows with 1.75 mm filament).
+  CHECK(sched[0]["flow_mm3_s"].get<double>() == Approx(2.0));
+  CHECK(sched[1]["flow_mm3_s"].get<double>() == Approx(4.0));
+  CHECK(sched[2]["flow_mm3_s"].get<double>() == Approx(6.0));
+  CHECK(sched[2]["feed_mm_s"].get<double>() < 6.0 / 2.0);
 
   // The same log with bare names: --input-unit says what the input is.
   const std::string bare = tunekit::test::write_scratch("flow_log_bare.csv", flow_step_log("t,flow,force"));

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -20,10 +21,8 @@ using namespace tunekit;
 namespace {
 
 ident::StepAnalysis analyze(const test::SynthFlowSweep& s) {
-  ident::StepAnalysisOptions o;
-  o.detect.min_step_fraction = 0.02;
+  ident::StepAnalysisOptions o;  // the default step detection finds every step of a sweep
   o.input_unit = "mm^3/s";
-  o.operating_points_by_arrival = true;
   return ident::analyze_steps(s.t, s.u, s.y, o);
 }
 
@@ -78,10 +77,6 @@ TEST_CASE(
   CHECK(a.level_trends.K->value("b") == Approx(0).margin(0.02));
   REQUIRE(a.level_trends.theta);
   CHECK(a.level_trends.theta->value("c1") == Approx(0).margin(0.002));
-  // Operating points by arrival are the arrival levels (what export reads).
-  REQUIRE(a.operating_points.size() == a.arrival_levels.size());
-  for (std::size_t i = 0; i < a.operating_points.size(); ++i)
-    CHECK(a.operating_points[i].fit.value("tau_s") == a.arrival_levels[i].fit.value("tau_s"));
   // The steps do not share one tau: the pooled fit over all of them is not white while the
   // single-step fits are, and the analysis says so.
   REQUIRE(a.pooled);
@@ -120,17 +115,17 @@ TEST_CASE("flow levels: rising and falling arrivals that differ are reported wit
   }
   CHECK(differ == 5);
   const auto j = ident::to_json(a);
-  REQUIRE(j.at("flow_levels").size() == 7);
-  const auto& lv = j.at("flow_levels")[1];
+  REQUIRE(j.at("operating_points").size() == 7);
+  const auto& lv = j.at("operating_points")[1];
   CHECK(lv.at("unit") == "mm^3/s");
   CHECK(lv.at("n_rising") == 1);
   CHECK(lv.at("n_falling") == 1);
   CHECK(lv.at("directions_differ") == true);
   CHECK(lv.at("rising_minus_falling_tau_ci95").size() == 2);
   CHECK(lv.at("tau_ci95").size() == 2);
-  CHECK(j.at("flow_trend").at("tau_s").at("b_ci95").size() == 2);
-  CHECK(j.at("flow_trend").contains("K"));
-  CHECK(j.at("flow_trend").contains("theta_s"));
+  CHECK(j.at("trend").at("tau_s").at("b_ci95").size() == 2);
+  CHECK(j.at("trend").contains("K"));
+  CHECK(j.at("trend").contains("theta_s"));
 }
 
 TEST_CASE("the pooled-fit whiteness warning needs white single-step fits") {
@@ -180,4 +175,69 @@ TEST_CASE("liquefier-flow-sweep reaches every level from below and above, within
   const auto e = protocols::build_experiment("liquefier-flow-sweep", {{"flow_max_mm3_s", 40}}, "", profile,
                                              firmware::Dialect(firmware::Firmware::marlin));
   CHECK_FALSE(protocols::check_protocol(e.gcode, profile, e.sensors).empty());
+}
+
+namespace {
+
+// The synthetic sweep as a log `tunekit step` reads: time, flow (mm^3/s) and force (N).
+std::string sweep_log(const test::SynthFlowSweep& s, const std::string& name) {
+  std::ostringstream os;
+  os << "time_s,flow_mm3_s,force_N\n";
+  for (std::size_t i = 0; i < s.t.size(); ++i) os << s.t[i] << "," << s.u[i] << "," << s.y[i] << "\n";
+  return test::write_scratch(name, os.str());
+}
+
+// The exponent b of tau = a Q^b through the first and last points of export's tau(Q) curve.
+double curve_exponent(const nlohmann::json& curve) {
+  const auto &c0 = curve.front(), &c1 = curve.back();
+  return std::log(c1.at("tau_s").get<double>() / c0.at("tau_s").get<double>()) /
+         std::log(c1.at("flow_mm3_s").get<double>() / c0.at("flow_mm3_s").get<double>());
+}
+
+}  // namespace
+
+TEST_CASE("tunekit step and export with their defaults on a flow sweep with tau = a Q^-0.45 at the arrival level") {
+  test::SynthFlowSweepTruth tr;
+  tr.b = -0.45;
+  // 2 to 12 mm^3/s: export's default design flow (a 0.45 x 0.2 mm line at 60 mm/s, 5.4 mm^3/s)
+  // lies inside the levels the log reaches.
+  const auto s = test::synth_flow_sweep(tr, 5, 2, 12, 5.0, 3.0);
+  const std::string log = sweep_log(s, "sweep_b045.csv");
+  const std::string dir = test::scratch_dir("sweep_b045");
+  const auto r =
+      test::run_cli({"step", log, "--input", "flow_mm3_s", "--output", "force_N", "--json", "-o", dir + "/step.json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto res = nlohmann::json::parse(r.out).at("results");
+  CHECK(res.at("steps").size() == 12);
+  REQUIRE(res.at("operating_points").size() == 7);
+  CHECK(res.at("trend").at("tau_s").at("b").get<double>() == Approx(tr.b).margin(0.05));
+  // Every exponent the text prints (u^B) is the truth's.
+  const auto text = test::run_cli({"step", log, "--input", "flow_mm3_s", "--output", "force_N"});
+  REQUIRE(text.code == 0);
+  int printed = 0;
+  for (std::size_t at = text.out.find("tau_s = "); at != std::string::npos; at = text.out.find("tau_s = ", at + 1)) {
+    const auto caret = text.out.find("u^", at);
+    REQUIRE(caret != std::string::npos);
+    INFO(text.out.substr(at, 60));
+    CHECK(std::stod(text.out.substr(caret + 2)) == Approx(tr.b).margin(0.05));
+    ++printed;
+  }
+  CHECK(printed >= 1);
+
+  // Export designs from the operating points: the levels the log reached (2 to 12 mm^3/s).
+  std::filesystem::copy_file(test::dataset("firmware/printer.cfg"), dir + "/printer.cfg",
+                             std::filesystem::copy_options::overwrite_existing);
+  const auto e = test::run_cli({"export", "-f", "klipper", "-c", dir + "/printer.cfg", dir + "/step.json", "--json"});
+  INFO(e.err);
+  REQUIRE(e.code == 0);
+  const auto ej = nlohmann::json::parse(e.out);
+  for (const auto& w : ej.at("warnings"))
+    CHECK(w.get<std::string>().find("outside the identified") == std::string::npos);
+  const auto& fa = ej.at("results").at("flow_advance");
+  REQUIRE(fa.is_object());
+  CHECK(fa.at("flow_range_mm3_s")[0].get<double>() == Approx(2).epsilon(0.02));
+  CHECK(fa.at("flow_range_mm3_s")[1].get<double>() == Approx(12).epsilon(0.02));
+  CHECK(curve_exponent(fa.at("curve")) == Approx(tr.b).margin(0.05));
+  CHECK(ej.at("results").at("design").at("schedule").size() == 7);
 }

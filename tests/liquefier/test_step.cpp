@@ -2,6 +2,7 @@
 // synthetic recovery with known truth, Monte-Carlo interval coverage, step detection, CLI.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -156,14 +157,14 @@ TEST_CASE("a step too short to see tau is reported as not identifiable") {
 
 TEST_CASE("steps are found in the input, fitted rising and falling, pooled and tabulated per operating point") {
   // Levels 1 -> 3 -> 1 -> 2 -> 1 with a dead time; tau depends on the operating point of each
-  // step, the larger of the two levels (non-LTI): tau(3) for 1->3 and 3->1, tau(2) for 1->2, 2->1.
+  // step, the level it arrives at (non-LTI): tau(3) for 1->3, tau(1) for 3->1 and 2->1, tau(2) for 1->2.
   const double fs = 100, K = 4, theta = 0.05;
   auto tau_of = [](double level) { return 0.2 * std::pow(level, 0.5); };
   std::vector<double> t, u, y;
   const std::vector<std::pair<double, double>> lv{{0, 1}, {5, 3}, {10, 1}, {15, 2}, {20, 1}};
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0, 0.01);
-  double state = K * 1.0, prev_level = 1.0, cur_level = 1.0;
+  double state = K * 1.0, cur_level = 1.0;
   for (int i = 0; i < 25 * fs; ++i) {
     const double ti = i / fs;
     double ui = 0;
@@ -172,12 +173,8 @@ TEST_CASE("steps are found in the input, fitted rising and falling, pooled and t
     double ud = 1.0;  // the input delayed by theta
     for (const auto& [t0, l] : lv)
       if (ti - theta >= t0) ud = l;
-    if (ud != cur_level) {
-      prev_level = cur_level;
-      cur_level = ud;
-    }
-    const double upper = std::max(prev_level, cur_level);
-    state += (K * ud - state) * (1 - std::exp(-(1 / fs) / tau_of(upper)));
+    if (ud != cur_level) cur_level = ud;
+    state += (K * ud - state) * (1 - std::exp(-(1 / fs) / tau_of(cur_level)));
     t.push_back(ti);
     u.push_back(ui);
     y.push_back(state + noise(rng));
@@ -196,19 +193,23 @@ TEST_CASE("steps are found in the input, fitted rising and falling, pooled and t
   }
   REQUIRE(a.pooled);
   CHECK(a.pooled->value("K") == Approx(K).epsilon(0.03));
-  REQUIRE(a.operating_points.size() == 2);
-  CHECK(a.operating_points[0].u == Approx(2.0));
-  CHECK(a.operating_points[1].u == Approx(3.0));
-  CHECK(a.operating_points[1].n_steps == 2);
-  REQUIRE(a.trend_tau);
+  const auto& ops = a.arrival_levels;
+  REQUIRE(ops.size() == 3);
+  CHECK(ops[0].u == Approx(1.0));
+  CHECK(ops[1].u == Approx(2.0));
+  CHECK(ops[2].u == Approx(3.0));
+  CHECK(ops[0].steps.size() == 2);
+  REQUIRE(a.level_trends.tau);
   // The discrete simulation above is a first-order lag per sample; tau grows with the level.
-  CHECK(a.operating_points[1].fit.value("tau_s") > a.operating_points[0].fit.value("tau_s"));
-  CHECK(a.trend_tau->value("b") == Approx(0.5).margin(0.15));
+  CHECK(ops[2].fit.value("tau_s") > ops[1].fit.value("tau_s"));
+  CHECK(ops[1].fit.value("tau_s") > ops[0].fit.value("tau_s"));
+  CHECK(a.level_trends.tau->value("b") == Approx(0.5).margin(0.15));
   const auto j = ident::to_json(a);
   CHECK(j["steps"].size() == 4);
   CHECK(j["steps"][1]["direction"] == "falling");
   CHECK(j["operating_points"][0].contains("tau_s"));
-  CHECK(j["trend"]["tau_s"]["params"].contains("b"));
+  CHECK(j["trend"]["tau_s"].contains("b"));
+  CHECK(j["operating_points"].size() == 3);
 }
 
 TEST_CASE("a record that starts from rest: the warm-up is not the first step's baseline") {
@@ -263,7 +264,7 @@ TEST_CASE("tunekit step on the synthetic data set recovers the truth written in 
   }
   CHECK(j["pooled"]["diagnostics"].contains("r2"));
   CHECK(j["units"]["K"] == "N/(mm/s)");
-  CHECK(j["operating_points"].size() == 2);  // 1<->3 at u = 3, 1->2 and 2->0 at u = 2
+  CHECK(j["operating_points"].size() == 4);  // the levels the steps arrive at: 3, 1, 2 and 0 mm/s
   CHECK(j["steps"][0]["params"].contains("y0"));
   // The default (midpoint) puts each step half a sample (5 ms) earlier, and theta that much longer.
   const auto m = run_cli({"step", dataset("liquefier/synthetic_steps.csv"), "--time", "time", "--input", "feed",
@@ -360,4 +361,41 @@ TEST_CASE("tunekit step fails clearly: exit 2 for bad input, exit 1 for a fit th
   // Help carries worked examples.
   const auto h = run_cli({"step", "--help"});
   CHECK(h.out.find("Examples:") != std::string::npos);
+}
+
+TEST_CASE("step detection by default: small steps are steps, the input's noise and ramps are not") {
+  const double fs = 100;
+  std::mt19937 rng(5);
+  std::vector<double> t, u;
+  for (int i = 0; i < 40 * fs; ++i) t.push_back(i / fs);
+  // Levels 2 -> 2.4 -> 12 -> 2: the first step is 4 % of the range, a flow sweep's smallest.
+  for (double ti : t) u.push_back(ti < 10 ? 2.0 : ti < 20 ? 2.4 : ti < 30 ? 12.0 : 2.0);
+  const auto clean = ident::detect_steps(t, u);
+  REQUIRE(clean.size() == 3);
+  CHECK(clean[0].u_after == Approx(2.4));
+  // A measured input whose noise (sigma 3 % of the range) exceeds the smallest step: only the
+  // large steps stand out of it.
+  std::normal_distribution<double> noise(0, 0.3);
+  std::vector<double> noisy = u;
+  for (double& v : noisy) v += noise(rng);
+  const auto found = ident::detect_steps(t, noisy);
+  REQUIRE(found.size() == 2);
+  CHECK(found[0].u_after == Approx(12).margin(0.05));
+  // Noise alone around a constant input is no step.
+  std::vector<double> flat(t.size());
+  for (double& v : flat) v = 5 + 0.01 * noise(rng);
+  CHECK_THROWS_WITH(ident::detect_steps(t, flat), Catch::Contains("no step found"));
+  // A ramp across the whole record is no step; a slow ramp (4 s) between two held levels is one.
+  std::vector<double> ramp(t.size()), ramp_step(t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    ramp[i] = 1 + 0.25 * t[i];
+    ramp_step[i] = 1 + 5 * std::clamp((t[i] - 18) / 4, 0.0, 1.0);
+  }
+  CHECK_THROWS_WITH(ident::detect_steps(t, ramp), Catch::Contains("no step found"));
+  const auto one = ident::detect_steps(t, ramp_step);
+  REQUIRE(one.size() == 1);
+  // The levels hold the ramp's first and last samples within the threshold (2 % of the range).
+  CHECK(one[0].u_before == Approx(1).margin(0.01));
+  CHECK(one[0].u_after == Approx(6).margin(0.01));
+  CHECK(one[0].t_step_s == Approx(20).margin(0.01));
 }

@@ -52,7 +52,8 @@ void register_step(CLI::App& app, CliContext& ctx) {
   sub->add_option("--step-size", o.step_size,
                   "Without --input: the input change (input units, e.g. the print speed before a stop in mm/s)");
   sub->add_option("--min-step", o.analysis.detect.min_step_fraction,
-                  "A change of the input larger than this fraction of its range is a step (1)")
+                  "A change of the input larger than this fraction of its range (and than 8 times the input's own "
+                  "noise) into a level the input holds is a step")
       ->capture_default_str();
   add_choice_option<ident::StepInstant>(
       sub, "--step-at", o.analysis.detect.instant,
@@ -61,20 +62,15 @@ void register_step(CLI::App& app, CliContext& ctx) {
       "the new one. midpoint: half-way (interpolated; for logs sampled independently of the changes, "
       "e.g. a printer's); first: at the first new sample (input changes exactly at sample instants). "
       "Moves t_step and theta_s (s) by up to half a sample interval");
-  add_choice_option<bool>(
-      sub, "--operating-points", o.analysis.operating_points_by_arrival, {{"larger", false}, {"arrival", true}},
-      "How operating_points group the steps: larger (the input level of larger magnitude of each step) or "
-      "arrival (the level each step arrives at, as flow_levels; for a flow sweep). Export reads them");
   add_output_options(sub, cmd->output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"
       "its own (start values by the log-incomplete-response method), then all steps pooled, then per operating\n"
-      "point (the input level of larger magnitude) with a power-law trend tau_s = a u^b, K = a u^b.\n"
-      "Steps are also grouped by the level they arrive at (results 'flow_levels'): per level K, tau, theta with\n"
-      "95 % intervals, the counts of rising and falling arrivals and tau(rising) - tau(falling) with its interval;\n"
-      "'flow_trend' fits tau_s = a u^b, K = a u^b and theta_s = c0 + c1 u over them (a flow sweep: tunekit run\n"
-      "liquefier-flow-sweep). A pooled fit whose residuals are not white while its single-step fits' are is warned\n"
-      "about: the steps do not share one K, tau, theta.\n"
+      "point: the level each step arrives at (results 'operating_points', what export designs from): per level\n"
+      "K, tau, theta with 95 % intervals, the counts of rising and falling arrivals and tau(rising) - tau(falling)\n"
+      "with its interval; 'trend' fits tau_s = a u^b, K = a u^b and theta_s = c0 + c1 u over them (a flow sweep:\n"
+      "tunekit run liquefier-flow-sweep). A pooled fit whose residuals are not white while its single-step fits'\n"
+      "are is warned about: the steps do not share one K, tau, theta.\n"
       "Examples:\n"
       "  tunekit step datasets/liquefier/synthetic_steps.csv --time time --input feed --output force \\\n"
       "      --step-at first --json   # this data set's input changes exactly at sample instants\n"

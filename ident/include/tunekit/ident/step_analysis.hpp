@@ -2,10 +2,10 @@
 // Step-response analysis of the liquefier (Holtrup 2019 ch. 4.4.2, Table 4.3): find the steps in the
 // input channel, fit each rising and falling step on its own (first order, optionally with dead
 // time), pool all steps into one fit, tabulate K, tau, theta per operating point and fit a power
-// law to them for gain scheduling (the liquefier is not linear time-invariant). Steps are also
-// grouped by the level they arrive at (the state the liquefier settles in), with rising and
-// falling arrivals compared (flow_levels.cpp; the flow sweep of the liquefier-flow-sweep
-// protocol reaches every level from both sides).
+// law to them for gain scheduling (the liquefier is not linear time-invariant). A step's operating
+// point is the level it arrives at (the state the liquefier settles in), the same in every command
+// and in export; rising and falling arrivals are compared (flow_levels.cpp; the flow sweep of the
+// liquefier-flow-sweep protocol reaches every level from both sides).
 
 #include <optional>
 #include <span>
@@ -23,9 +23,6 @@ struct DetectedStep {
   double u_before = 0, u_after = 0;
   std::size_t begin = 0, end = 0;  ///< samples [begin, end) used for this step's fit
   bool rising() const { return u_after > u_before; }
-  /// The operating point of the step: the input level of larger magnitude (the running speed
-  /// for a start or stop; the upper level for a step between two levels).
-  double operating_point() const { return std::abs(u_before) >= std::abs(u_after) ? u_before : u_after; }
 };
 
 /// Where, between the last sample at the old input level and the first at the new one, the
@@ -40,9 +37,21 @@ enum class StepInstant { midpoint, first_sample };
 /// "midpoint" or "first"; InputError otherwise.
 StepInstant parse_step_instant(const std::string& name);
 
+/// Default floor of a step, as a fraction of the input's range: half the smallest step of the
+/// liquefier-flow-sweep protocol, so that every step of a sweep is found with a margin of two (its
+/// lowest neighbouring levels differ by (r - 1) q_min with r = 10^(1/7) for its default 6 levels
+/// over a decade, 4 % of the range).
+inline constexpr double kDefaultMinStepFraction = 0.02;
+/// A change of the input must also exceed this many standard deviations of the input's own
+/// sample-to-sample noise (a measured input's scatter; a commanded one has none): at 8 sigma a
+/// Gaussian excursion is called a step with a probability below 1e-15 per sample.
+inline constexpr double kStepNoiseSigmas = 8;
+
 struct StepDetectOptions {
-  /// A change of the input by more than this fraction of its range is a step.
-  double min_step_fraction = 0.1;
+  /// A change of the input is a step when it exceeds both this fraction of the input's range and
+  /// kStepNoiseSigmas times the input's noise, and the input then holds a level (a change into a
+  /// ramp is part of one transition, from the last level held to the next).
+  double min_step_fraction = kDefaultMinStepFraction;
   /// Fraction of the preceding level's samples (before a step) included in that step's fit,
   /// the first level's included. analyze_steps() shortens this window further to the stretch
   /// where the output has settled (a warm-up from rest is not the steady state before a step).
@@ -61,14 +70,9 @@ struct StepFit {
   std::string error;                      ///< why, when it failed
 };
 
-struct OperatingPoint {
-  double u = 0;
-  int n_steps = 0;
-  fitting::FitResult fit;  ///< pooled over the steps at this level
-};
-
-/// The steps that ARRIVE at one input level (u_after: the state the liquefier settles in),
-/// fitted together, with the difference between rising and falling arrivals.
+/// An operating point: the steps that ARRIVE at one input level (u_after: the state the
+/// liquefier settles in), fitted together, with the difference between rising and falling
+/// arrivals.
 struct ArrivalLevel {
   double u = 0;  ///< input level (input unit), mean of its arrivals' u_after
   int n_rising = 0, n_falling = 0;
@@ -93,12 +97,9 @@ struct LevelTrends {
 struct StepAnalysis {
   std::vector<StepFit> steps;
   std::optional<fitting::FitResult> pooled;  ///< empty (with a warning) when the pooled fit fails
-  std::vector<OperatingPoint> operating_points;
-  std::optional<fitting::FitResult> trend_tau;  ///< tau_s = a * u^b, with >= 2 operating points
-  std::optional<fitting::FitResult> trend_K;    ///< K = a * u^b
-  /// Steps grouped by the level they arrive at (flow_levels.cpp), sorted by u.
+  /// The operating points: steps grouped by the level they arrive at (flow_levels.cpp), sorted by u.
   std::vector<ArrivalLevel> arrival_levels;
-  LevelTrends level_trends;
+  LevelTrends level_trends;      ///< the trends of the operating points with u
   std::string input_unit = "1";  ///< unit of u, as StepAnalysisOptions::input_unit
   std::vector<std::string> warnings;
 };
@@ -109,10 +110,6 @@ struct StepAnalysisOptions {
   std::string output_unit = "1";
   std::string gain_unit = "1";
   std::string input_unit = "1";
-  /// How operating_points group the steps: false (default) by the level of larger magnitude
-  /// (DetectedStep::operating_point), true by the level each step arrives at (then they equal
-  /// arrival_levels; for a flow sweep, whose levels are reached from both sides).
-  bool operating_points_by_arrival = false;
 };
 
 /// Analysis of one record with an input channel.
@@ -120,7 +117,7 @@ StepAnalysis analyze_steps(std::span<const double> t, std::span<const double> u,
                            const StepAnalysisOptions& options = {});
 
 /// Analysis of records without an input channel (e.g. Holtrup 2019 Table B.1: ooze length after a
-/// stop): each record is one step of size `du` at `t_step`; its operating point is `du`.
+/// stop): each record is one step from u_before to u_after at `t_step`; its operating point is u_after.
 struct KnownStep {
   fitting::StepRecord record;
   double u_before = 0, u_after = 1;
@@ -149,16 +146,16 @@ inline constexpr double kWhitenessAlarmP = 1e-3;
 std::string pooled_whiteness_warning(const fitting::FitResult& pooled,
                                      const std::vector<const fitting::FitResult*>& members, const std::string& what);
 
-/// JSON of the arrival levels: [{u, unit, n_steps, n_rising, n_falling, tau_s, tau_ci95, K,
-/// K_ci95, theta_s, theta_ci95, rising_minus_falling_tau_s, rising_minus_falling_tau_ci95,
-/// directions_differ, fit}].
+/// JSON of the operating points (the arrival levels): [{u, unit, n_steps, n_rising, n_falling,
+/// steps, tau_s, tau_ci95, K, K_ci95, theta_s, theta_ci95, stderr: {K, tau_s, theta_s},
+/// rising_minus_falling_tau_s, rising_minus_falling_tau_ci95, directions_differ, fit}].
 nlohmann::json arrival_levels_json(const StepAnalysis& a);
 /// JSON of the level trends: {tau_s: {a, b, b_ci95, fit}, K: {a, b, b_ci95, fit},
 /// theta_s: {c0, c1, c1_ci95, fit}, levels_used}.
 nlohmann::json level_trends_json(const StepAnalysis& a);
 
-/// JSON of a whole analysis: {steps[], pooled, operating_points[], trend, flow_levels[],
-/// flow_trend}.
+/// JSON of a whole analysis: {steps[], pooled, operating_points[] (arrival_levels_json), trend
+/// (level_trends_json)}.
 nlohmann::json to_json(const StepAnalysis& a);
 
 }  // namespace tunekit::ident
