@@ -2,6 +2,7 @@
 // file is recognized by its columns and analyzed by the command a user would run on it:
 //   accel_x/accel_y/accel_z (Klipper raw) or freq,psd_x (Klipper calibration data) -> shaper
 //   feed + force (a liquefier step test as tunekit run writes it)                   -> step
+//   feed + force with a feed changing faster than the liquefier settles (a chirp)    -> freq
 //   shear_rate + viscosity (rheometer data)                                          -> rheo
 // Other files are listed as skipped with the reason. --require applies to every dataset.
 #include <algorithm>
@@ -21,8 +22,11 @@
 #include "tunekit/calibration/step_command.hpp"
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/calibration/requirements.hpp"
+#include "tunekit/calibration/freq_command.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/excitation.hpp"
+#include "tunekit/protocols/chirp_plan.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -70,6 +74,22 @@ std::vector<std::string> sniff_columns(const std::string& path) {
   return {};
 }
 
+// A step test holds each feed level for several liquefier time constants; a chirp (or any
+// broadband excitation) changes the level within one. Without a measurement of this liquefier,
+// Bellini's literature time constant separates the two. A file that cannot be read is taken for
+// a step test, whose analysis then reports what is wrong with it.
+bool feed_changes_within_tau(const std::string& path) {
+  try {
+    const auto table = ident::read_csv(path, {{"time", "feed"}, "time"});
+    const auto& t = table.column("time").values;
+    const auto& u = table.column("feed").values;
+    if (t.size() < 2) return false;
+    return ident::typical_hold_s(t, ident::input_holds(u)) < protocols::kLiteratureLiquefierTau_s;
+  } catch (const Error&) {
+    return false;
+  }
+}
+
 Job plan_job(const std::string& path) {
   Job j;
   j.file = path;
@@ -86,6 +106,16 @@ Job plan_job(const std::string& path) {
       ShaperOptions o;
       o.accel.files = {path};
       return to_envelope(compute_shaper(o));
+    };
+  } else if (has("feed") && has("force") && has("time") && feed_changes_within_tau(path)) {
+    j.args = {"freq", path, "--time", "time", "--input", "feed", "--output", "force"};
+    j.analyze = [path] {
+      FreqOptions o;
+      o.file = path;
+      o.time_column = "time";
+      o.input_column = "feed";
+      o.output_column = "force";
+      return to_envelope(compute_freq(o));
     };
   } else if (has("feed") && has("force") && has("time")) {
     j.args = {"step", path, "--time", "time", "--input", "feed", "--output", "force"};

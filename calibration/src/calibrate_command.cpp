@@ -347,23 +347,13 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
     const auto& r = runs["liquefier-chirp"];
     const std::string csv = r.files.at("load_cell");
     const std::string out = run_dir + "/analysis/freq.json";
-    // Sized from the same plan as the chirp: Welch segments putting bins at most a third of the
-    // corner apart, the record from the settled feed on, and the output-error fit on the whole
-    // chirp for the interval (the spectrum alone is coarse at the corner).
-    const auto table = ident::read_csv(csv, {{"time"}, "time"});
-    const auto& tt = table.column("time").values;
-    const double fs = tt.size() > 1 ? static_cast<double>(tt.size() - 1) / (tt.back() - tt.front()) : 0.0;
+    // Analysed as a user would analyse the file: `tunekit freq FILE --input feed --output force`
+    // sizes the analysis from the record itself (where the chirp starts, the band it excites).
     FreqOptions fo;
     fo.file = csv;
     fo.time_column = "time";
     fo.input_column = "feed";
     fo.output_column = "force";
-    fo.mode = FreqMode::oe;
-    fo.fit_tf = "1,0";  // first order with dead time
-    fo.tf_delay = true;
-    fo.fmax_hz = chirp_plan.analysis_fmax_hz;
-    fo.welch.segment_length = chirp_plan.welch_segment_samples(fs);
-    fo.tmin_s = chirp_plan.analysis_start_s;
     const auto chirp = calibrate_analysis("freq", [&] { return compute_freq(fo); });
     const auto j = keep_analysis(chirp, out, ctx);
     add_input(csv);
@@ -374,22 +364,26 @@ int run_calibrate(const CalibrateArgs& a, CliContext& ctx) {
                                       {"freq_min_hz", chirp_plan.freq_min_hz},
                                       {"freq_max_hz", chirp_plan.freq_max_hz},
                                       {"duration_s", chirp_plan.duration_s},
-                                      {"settle_s", chirp_plan.settle_s},
-                                      {"analysis_start_s", chirp_plan.analysis_start_s},
-                                      {"welch_segment_samples", chirp_plan.welch_segment_samples(fs)}};
+                                      {"settle_s", chirp_plan.settle_s}};
     plot["bode"] = bode_plotdata(j.at("results"));
-    const std::string p = "liquefier.freq.tf_oe_fit.params.";
-    row("tau from the frequency response (chirp, output-error fit)", p + "tau_s.value", "s", p + "tau_s.ci95");
+    const auto& bb = *chirp.broadband;
+    const fitting::FitResult* fit = chirp.reported_fit();
+    if (fit != nullptr) {
+      const std::string p = "liquefier.freq.fit.params.";
+      row(fmt::format("tau from the frequency response (chirp, {})",
+                      j.at("results").at("fit").at("method").get<std::string>()),
+          p + "tau_s.value", "s", p + "tau_s.ci95");
+    }
     notes.push_back(
-        fmt::format("chirp sized from {}: corner {} Hz, {}-{} Hz over {} s, Welch segments of {} samples "
-                    "({} Hz bins)",
+        fmt::format("chirp sized from {}: corner {} Hz, {}-{} Hz over {} s; analysed from {} s up to {} Hz in Welch "
+                    "segments of {} samples ({} Hz bins)",
                     chirp_basis, display_number(chirp_plan.corner_hz), display_number(chirp_plan.freq_min_hz),
                     display_number(chirp_plan.freq_max_hz), display_number(chirp_plan.duration_s),
-                    chirp_plan.welch_segment_samples(fs),
-                    display_number(fs / static_cast<double>(chirp_plan.welch_segment_samples(fs)))));
+                    display_number(bb.start_s), display_number(bb.fmax_hz), bb.segment_length,
+                    display_number(bb.sample_rate_hz / static_cast<double>(bb.segment_length))));
     Estimate by_step, by_freq;
-    if (step_tau && chirp.oe_fit && calibrate_estimate(*step_tau, "step response", by_step) &&
-        calibrate_estimate(chirp.oe_fit->param("tau_s"), "frequency response", by_freq)) {
+    if (step_tau && fit != nullptr && calibrate_estimate(*step_tau, "step response", by_step) &&
+        calibrate_estimate(fit->param("tau_s"), "frequency response", by_freq)) {
       auto a = compare_estimates("liquefier time constant tau", "s", by_step, by_freq);
       a["id"] = "tau";
       if (!a.at("agree").get<bool>()) env.warn(a.at("statement").get<std::string>());

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "tunekit/calibration/json_access.hpp"
 #include "tunekit/fitting/first_order.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/input_shaper.hpp"
@@ -62,16 +63,15 @@ nlohmann::json bode_plotdata(const nlohmann::json& freq_results) {
   d["mag_db"] = b.at("magnitude_db");
   d["phase_deg"] = b.at("phase_deg");
   if (b.contains("coherence")) d["coherence"] = b["coherence"];
-  // The model the summary reports: the output-error fit on the chirp record when there is one.
-  for (const auto& [key, label] :
-       {std::pair{"tf_oe_fit", "output-error fit (record)"}, std::pair{"tf_fit", "fitted model"}}) {
-    if (!freq_results.contains(key) || !freq_results[key].contains("bode")) continue;
-    const auto& m = freq_results[key]["bode"];
+  // The model the summary reports: the fit freq names as its result (results.fit.source).
+  const auto* fit = json_at(freq_results, "fit.source");
+  if (fit != nullptr && fit->is_string() && freq_results.contains(fit->get<std::string>())) {
+    const auto& reported = freq_results[fit->get<std::string>()];
+    const auto& m = reported.at("bode");
     d["model"] = {{"freq_hz", m.at("freq_hz")},
                   {"mag_db", m.at("magnitude_db")},
                   {"phase_deg", m.at("phase_deg")},
-                  {"label", label}};
-    break;
+                  {"label", freq_results.at("fit").at("method")}};
   }
   return d;
 }

@@ -20,6 +20,7 @@
 #include "tunekit/calibration/json_access.hpp"
 #include "tunekit/calibration/plots.hpp"
 #include "tunekit/calibration/results_json.hpp"
+#include "tunekit/calibration/agreement.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
@@ -93,7 +94,10 @@ ExportOutcome compute_export(const ExportOptions& a) {
                                  a.design_flow, kPlausibleMaxDesignFlow_mm3_s));
   Envelope& env = outcome.envelope;
   ident::AdvanceInputs in;
-  double freq_tau = fitting::kNaN;
+  double freq_tau = fitting::kNaN, freq_tau_stderr = fitting::kNaN;
+  // tau as each analysis reports it ({value, stderr, ci95}), for the agreement of the two.
+  nlohmann::json step_tau_param, freq_tau_param;
+  nlohmann::json agreement = nlohmann::json::array();
   std::map<std::string, firmware::ShaperSetting> shapers;
   std::vector<std::string> sources;
   // Operating points whose u is a volumetric flow (mm^3/s): converted to filament feed once the
@@ -129,6 +133,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
         if (params.is_object()) {
           in.tau_s =
               number_at(value_at_or_null(params, "/tau_s/value"_json_pointer), "pooled.params.tau_s.value", path);
+          step_tau_param = value_at_or_null(params, "/tau_s"_json_pointer);
           in.tau_stderr_s =
               number_at(value_at_or_null(params, "/tau_s/stderr"_json_pointer), "pooled.params.tau_s.stderr", path);
           in.theta_s =
@@ -172,8 +177,12 @@ ExportOutcome compute_export(const ExportOptions& a) {
             levels.push_back(ft);
           }
       } else if (cmd == "freq") {
-        freq_tau = number_at(value_at_or_null(res, "/tf_fit/params/tau_s/value"_json_pointer),
-                             "tf_fit.params.tau_s.value", path);
+        // The fit freq reports as its result (results.fit), as its report and the history do.
+        freq_tau_param = value_at_or_null(res, "/fit/params/tau_s"_json_pointer);
+        freq_tau =
+            number_at(value_at_or_null(res, "/fit/params/tau_s/value"_json_pointer), "fit.params.tau_s.value", path);
+        freq_tau_stderr =
+            number_at(value_at_or_null(res, "/fit/params/tau_s/stderr"_json_pointer), "fit.params.tau_s.stderr", path);
       } else if (cmd == "shaper") {
         const auto& axes = value_at_or_null(res, "/axes"_json_pointer);
         if (!axes.is_object()) throw InputError("shaper results without 'axes'", path);
@@ -265,13 +274,24 @@ ExportOutcome compute_export(const ExportOptions& a) {
   }
   if (!std::isfinite(in.tau_s) && std::isfinite(freq_tau)) {
     in.tau_s = freq_tau;
+    in.tau_stderr_s = freq_tau_stderr;
     in.tau_source = "freq";
-  } else if (std::isfinite(in.tau_s) && std::isfinite(freq_tau) &&
-             std::abs(freq_tau - in.tau_s) > 0.2 * std::max(in.tau_s, freq_tau)) {
-    env.warn(
-        fmt::format("the step response gives tau = {:.4g} s, the frequency response {:.4g} s: they differ by more "
-                    "than 20 %; the step value is used",
-                    in.tau_s, freq_tau));
+  } else if (std::isfinite(in.tau_s) && std::isfinite(freq_tau)) {
+    // Both measured: the step value is designed with; the two are compared by the one rule
+    // (agreement.hpp), as calibrate compares them.
+    Estimate by_step, by_freq;
+    if (estimate_from_param(&step_tau_param, "step response", by_step) &&
+        estimate_from_param(&freq_tau_param, "frequency response", by_freq)) {
+      agreement.push_back(compare_estimates("liquefier time constant tau", "s", by_step, by_freq));
+      agreement.back()["id"] = "tau";
+      if (!agreement.back().at("agree").get<bool>())
+        env.warn(agreement.back().at("statement").get<std::string>() + "; the step value is used");
+    } else {
+      env.warn(
+          fmt::format("the step response gives tau = {:.4g} s, the frequency response {:.4g} s; without a 95 % "
+                      "interval for each they are not compared; the step value is used",
+                      in.tau_s, freq_tau));
+    }
   }
   if (std::isfinite(a.pa_k)) {
     in.tau_s = a.pa_k;
@@ -456,6 +476,7 @@ ExportOutcome compute_export(const ExportOptions& a) {
                            {"damping", sh.damping}};
   res["settings"] = sj;
   res["design"] = design ? design->to_json() : nlohmann::json(nullptr);
+  if (!agreement.empty()) res["agreement"] = agreement;
   res["flow_advance"] = flow ? flow->to_json() : nlohmann::json(nullptr);
   if (flow && !flow_rheology.is_null()) res["flow_advance"]["rheology"] = flow_rheology;
   if (!a.plot_out.empty()) {

@@ -81,16 +81,108 @@ std::vector<std::complex<double>> freq_model_response(const fitting::TfStructure
   return h;
 }
 
-fitting::TfStructure freq_structure(const FreqOptions& a) {
-  auto st = fitting::parse_tf_structure(a.fit_tf);
-  st.delay = a.tf_delay;
+// The model fitted when none is named: the liquefier's, first order with dead time (Bellini,
+// Guceri and Bertoldi, Liquefier dynamics in fused deposition, J. Manuf. Sci. Eng., 2004).
+constexpr const char* kLiquefierTf = "1,0";
+
+// Default Welch segments put bins a sixteenth of the excited band's top apart: a liquefier
+// chirp ends at five times the corner it was planned for, so about three bins lie below the
+// corner (Holtrup, 2019, ch. 4.3.3, resolves the corner with several bins below it).
+constexpr double kBinsBelowBandTop = 16;
+// ... at most a quarter of the record each, leaving seven half-overlapping segments for the
+// coherence to average over.
+constexpr std::size_t kMaxSegmentFraction = 4;
+
+// The mode run: automatic is a dwell when the frequency is given, else the output-error analysis.
+FreqMode resolved_mode(const FreqOptions& a) {
+  if (a.mode != FreqMode::automatic) return a.mode;
+  if (a.freq_hz > 0) return FreqMode::dwell;
+  if (a.input_column.empty())
+    throw InputError("give --freq-hz F for a sine dwell, or the input column --input COL for the broadband analysis");
+  return FreqMode::oe;
+}
+
+// The structure fitted: --fit-tf, or in mode oe the liquefier model; none in h1 without --fit-tf.
+std::optional<fitting::TfStructure> fit_structure(const FreqOptions& a, FreqMode mode) {
+  if (a.fit_tf.empty() && mode != FreqMode::oe) return std::nullopt;
+  auto st = fitting::parse_tf_structure(a.fit_tf.empty() ? kLiquefierTf : a.fit_tf);
+  st.delay = a.fit_tf.empty() || a.tf_delay;
   return st;
+}
+
+// About 16 half-overlapping segments: a power of two, at most 65536 samples.
+std::size_t sixteen_segments(std::size_t samples) {
+  std::size_t seg = 16;
+  while (seg * 2 <= samples / 8 && seg < 65536) seg *= 2;
+  return seg;
+}
+
+// Welch segment length without --segment: the shortest power of two whose bins lie at most a
+// sixteenth of the excited band's top apart, no coarser than sixteen_segments(), and at most a
+// quarter of the record.
+std::size_t band_segment(std::size_t samples, double fs, const ident::ExcitedBand& band) {
+  const double want = kBinsBelowBandTop * fs / band.hi_hz;
+  std::size_t seg = 16;
+  while (static_cast<double>(seg) < want && seg * 2 <= samples / kMaxSegmentFraction) seg *= 2;
+  return std::max(seg, sixteen_segments(samples));
+}
+
+// First sample analysed: from --tmin, else where the excitation leaves its steady hold.
+std::size_t analysis_first(const std::vector<double>& t, std::span<const double> u, const FreqOptions& a) {
+  if (a.tmin_s) return static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), *a.tmin_s) - t.begin());
+  return ident::excitation_onset(t, u);
+}
+
+// Welch options and the upper frequency: the options given, the rest from the input's band.
+void size_from_band(const FreqOptions& a, std::span<const double> u, double fs, ident::WelchOptions& wo,
+                    FreqBroadband& bb) {
+  wo = a.welch;
+  if (wo.segment_length > 0 && a.fmax_hz > 0) {
+    bb.fmax_hz = a.fmax_hz;
+    return;
+  }
+  ident::WelchOptions probe = a.welch;
+  probe.segment_length = sixteen_segments(u.size());
+  bb.excited = ident::excited_band(ident::welch_psd(u, fs, probe));
+  if (wo.segment_length == 0) wo.segment_length = band_segment(u.size(), fs, bb.excited);
+  bb.fmax_hz = a.fmax_hz > 0 ? a.fmax_hz : bb.excited.hi_hz;
+}
+
+// The transfer-function fits: to the coherent H1 points, then (mode oe) by output error to the
+// analysed record u, y, started from the first.
+void freq_fits(FreqOutcome& o, const FreqOptions& a, const std::vector<double>& u, const std::vector<double>& y) {
+  const auto st = fit_structure(a, o.mode);
+  if (!st) return;
+  o.structure = *st;
+  const auto& bb = *o.broadband;
+  std::vector<double> ff, sg;
+  std::vector<std::complex<double>> hh;
+  for (std::size_t i = 0; i < bb.freq_hz.size(); ++i) {
+    if (bb.coherence[i] < a.min_coherence) continue;
+    ff.push_back(bb.freq_hz[i]);
+    hh.push_back(bb.h[i]);
+    sg.push_back(fitting::h1_sigma(bb.h[i], bb.coherence[i], bb.segments));
+  }
+  if (ff.size() < 4)
+    throw InputError(fmt::format("only {} frequency points have coherence >= {}; lower --min-coherence or excite "
+                                 "more",
+                                 ff.size(), a.min_coherence),
+                     a.file);
+  const std::string gain_unit = o.output_unit + "/(" + o.input_unit + ")";
+  freq_located(a.file, [&] { o.tf_fit = fitting::fit_tf_frf(ff, hh, sg, *st, gain_unit); });
+  o.tf_points_used = ff.size();
+  for (const auto& w : o.tf_fit->warnings) o.warnings.push_back("tf fit: " + w);
+  if (o.mode != FreqMode::oe) return;
+  const double dt = 1.0 / bb.sample_rate_hz;
+  freq_located(a.file, [&] { o.oe_fit = fitting::fit_tf_output_error(u, y, dt, *st, *o.tf_fit, gain_unit); });
+  for (const auto& w : o.oe_fit->warnings) o.warnings.push_back("output-error fit: " + w);
 }
 
 }  // namespace
 
 std::string freq_mode_name(FreqMode mode) {
   switch (mode) {
+    case FreqMode::automatic: return "auto";
     case FreqMode::dwell: return "dwell";
     case FreqMode::h1: return "h1";
     case FreqMode::oe: return "oe";
@@ -98,9 +190,56 @@ std::string freq_mode_name(FreqMode mode) {
   return "?";
 }
 
+namespace {
+
+// The broadband analyses (h1, oe) of the record from its first analysed sample on: the H1
+// estimate, then the fits. o has the table's units; table holds the columns.
+void freq_broadband(FreqOutcome& o, const FreqOptions& a, const ident::CsvTable& table) {
+  const std::string mode = freq_mode_name(o.mode);
+  if (a.input_column.empty()) throw InputError("--mode " + mode + " needs the input column: --input COL");
+  const auto& t_all = table.column(table.time_column).values;
+  const auto& u_all = table.column(a.input_column).values;
+  const auto first = static_cast<std::ptrdiff_t>(analysis_first(t_all, u_all, a));
+  const std::vector<double> t(t_all.begin() + first, t_all.end());
+  const std::vector<double> u(u_all.begin() + first, u_all.end());
+  const std::vector<double> y(table.column(a.output_column).values.begin() + first,
+                              table.column(a.output_column).values.end());
+  if (t.size() < 16)
+    throw InputError(fmt::format("too few samples ({}) for a spectral estimate from {:g} s on", t.size(),
+                                 t.empty() ? t_all.back() : t.front()),
+                     a.file);
+  for (const auto* col : {&u, &y}) {
+    const auto [lo, hi] = std::minmax_element(col->begin(), col->end());
+    if (!(*hi > *lo))
+      throw InputError(std::string(col == &u ? "the input" : "the output") + " column is constant", a.file);
+  }
+  const double fs = uniform_rate(t, a.file);
+  FreqBroadband bb;
+  bb.start_s = t.front();
+  ident::WelchOptions wo;
+  freq_located(a.file, [&] { size_from_band(a, u, fs, wo, bb); });
+  ident::FrequencyResponse fr;
+  freq_located(a.file, [&] { fr = ident::h1_estimate(u, y, fs, wo); });
+  bb.sample_rate_hz = fs;
+  bb.segment_length = wo.segment_length;
+  bb.segments = fr.segments;
+  for (std::size_t i = 0; i < fr.freq_hz.size(); ++i) {
+    if (fr.freq_hz[i] <= 0 || fr.freq_hz[i] < a.fmin_hz || fr.freq_hz[i] > bb.fmax_hz) continue;
+    bb.freq_hz.push_back(fr.freq_hz[i]);
+    bb.h.push_back(fr.h[i]);
+    bb.coherence.push_back(fr.coherence[i]);
+  }
+  if (bb.freq_hz.empty()) throw InputError("no frequency bins inside --fmin/--fmax", a.file);
+  o.broadband = bb;
+  freq_fits(o, a, u, y);
+}
+
+}  // namespace
+
 FreqOutcome compute_freq(const FreqOptions& a) {
   FreqOutcome o;
   o.options = a;
+  o.mode = resolved_mode(a);
   const std::string bytes = ident::read_file_bytes(a.file);
   ident::CsvOptions copt;
   copt.columns = {a.output_column};
@@ -120,7 +259,7 @@ FreqOutcome compute_freq(const FreqOptions& a) {
   if (ident::is_volumetric_flow_unit(o.input_unit)) o.input_unit = "mm^3/s";
   o.warnings = table.warnings;
 
-  if (a.mode == FreqMode::dwell) {
+  if (o.mode == FreqMode::dwell) {
     if (!(a.freq_hz > 0)) throw InputError("sine dwell needs the excitation frequency: --freq-hz F (Hz)");
     if (!a.fit_tf.empty()) throw InputError("--fit-tf needs broadband data: use --mode h1 or --mode oe");
     freq_located(a.file, [&] {
@@ -134,74 +273,16 @@ FreqOutcome compute_freq(const FreqOptions& a) {
       for (const auto& w : o.dwell->input->warnings) o.warnings.push_back("input: " + w);
     return o;
   }
-
-  const std::string mode = freq_mode_name(a.mode);
-  if (a.input_column.empty()) throw InputError("--mode " + mode + " needs the input column: --input COL");
-  if (a.mode == FreqMode::oe && a.fit_tf.empty()) throw InputError("--mode oe needs the model structure: --fit-tf P,Z");
-  // The broadband analyses use the record from --tmin on (a start-up transient left out).
-  const auto first =
-      static_cast<std::ptrdiff_t>(std::lower_bound(t_all.begin(), t_all.end(), a.tmin_s) - t_all.begin());
-  const std::vector<double> t(t_all.begin() + first, t_all.end());
-  const std::vector<double> u(table.column(a.input_column).values.begin() + first,
-                              table.column(a.input_column).values.end());
-  const std::vector<double> y(ycol.values.begin() + first, ycol.values.end());
-  if (t.size() < 16)
-    throw InputError(fmt::format("too few samples ({}) for a spectral estimate{}", t.size(),
-                                 a.tmin_s > 0 ? fmt::format(" from --tmin {:g} s on", a.tmin_s) : std::string()),
-                     a.file);
-  for (const auto* col : {&u, &y}) {
-    const auto [lo, hi] = std::minmax_element(col->begin(), col->end());
-    if (!(*hi > *lo))
-      throw InputError(std::string(col == &u ? "the input" : "the output") + " column is constant", a.file);
-  }
-  const double fs = uniform_rate(t, a.file);
-  ident::WelchOptions wo = a.welch;
-  if (wo.segment_length == 0) {  // about 16 half-overlapping segments, a power of two, at most 65536 samples
-    std::size_t seg = 16;
-    while (seg * 2 <= t.size() / 8 && seg < 65536) seg *= 2;
-    wo.segment_length = seg;
-  }
-  ident::FrequencyResponse fr;
-  freq_located(a.file, [&] { fr = ident::h1_estimate(u, y, fs, wo); });
-  FreqBroadband bb;
-  bb.sample_rate_hz = fs;
-  bb.segment_length = wo.segment_length;
-  bb.segments = fr.segments;
-  const double fmax = a.fmax_hz > 0 ? a.fmax_hz : fs / 2;
-  for (std::size_t i = 0; i < fr.freq_hz.size(); ++i) {
-    if (fr.freq_hz[i] <= 0 || fr.freq_hz[i] < a.fmin_hz || fr.freq_hz[i] > fmax) continue;
-    bb.freq_hz.push_back(fr.freq_hz[i]);
-    bb.h.push_back(fr.h[i]);
-    bb.coherence.push_back(fr.coherence[i]);
-  }
-  if (bb.freq_hz.empty()) throw InputError("no frequency bins inside --fmin/--fmax", a.file);
-  o.broadband = bb;
-  if (a.fit_tf.empty()) return o;
-
-  const auto st = freq_structure(a);
-  std::vector<double> ff, sg;
-  std::vector<std::complex<double>> hh;
-  for (std::size_t i = 0; i < bb.freq_hz.size(); ++i) {
-    if (bb.coherence[i] < a.min_coherence) continue;
-    ff.push_back(bb.freq_hz[i]);
-    hh.push_back(bb.h[i]);
-    sg.push_back(fitting::h1_sigma(bb.h[i], bb.coherence[i], fr.segments));
-  }
-  if (ff.size() < 4)
-    throw InputError(fmt::format("only {} frequency points have coherence >= {}; lower --min-coherence or excite "
-                                 "more",
-                                 ff.size(), a.min_coherence),
-                     a.file);
-  const std::string gain_unit = o.output_unit + "/(" + o.input_unit + ")";
-  freq_located(a.file, [&] { o.tf_fit = fitting::fit_tf_frf(ff, hh, sg, st, gain_unit); });
-  o.tf_points_used = ff.size();
-  for (const auto& w : o.tf_fit->warnings) o.warnings.push_back("tf fit: " + w);
-  if (a.mode == FreqMode::oe) {
-    freq_located(a.file, [&] { o.oe_fit = fitting::fit_tf_output_error(u, y, 1.0 / fs, st, *o.tf_fit, gain_unit); });
-    for (const auto& w : o.oe_fit->warnings) o.warnings.push_back("output-error fit: " + w);
-  }
+  freq_broadband(o, a, table);
   return o;
 }
+
+const fitting::FitResult* FreqOutcome::reported_fit() const {
+  if (oe_fit) return &*oe_fit;
+  return tf_fit ? &*tf_fit : nullptr;
+}
+
+std::string FreqOutcome::reported_fit_key() const { return oe_fit ? "tf_oe_fit" : "tf_fit"; }
 
 Envelope to_envelope(const FreqOutcome& o) {
   const FreqOptions& a = o.options;
@@ -219,7 +300,7 @@ Envelope to_envelope(const FreqOutcome& o) {
                    {"window", ident::to_string(a.welch.window)},
                    {"fmin_hz", a.fmin_hz},
                    {"fmax_hz", a.fmax_hz},
-                   {"tmin_s", a.tmin_s},
+                   {"tmin_s", a.tmin_s ? nlohmann::json(*a.tmin_s) : nlohmann::json(nullptr)},
                    {"min_coherence", a.min_coherence}});
   env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
   for (const auto& w : o.warnings) env.warn(w);
@@ -231,17 +312,28 @@ Envelope to_envelope(const FreqOutcome& o) {
                  {"segment_length", bb.segment_length},
                  {"segments", bb.segments},
                  {"window", ident::to_string(a.welch.window)},
+                 {"start_s", bb.start_s},
+                 {"fmax_hz", bb.fmax_hz},
                  {"bode", bode_json(bb.freq_hz, bb.h, &bb.coherence)}};
+    if (bb.excited.hi_hz > 0) res["h1"]["excited_band_hz"] = {bb.excited.lo_hz, bb.excited.hi_hz};
     if (o.tf_fit) {
-      const auto st = freq_structure(a);
       res["tf_fit"] = fitting::to_json(*o.tf_fit);
       res["tf_fit"]["points_used"] = o.tf_points_used;
       res["tf_fit"]["weighting"] = "1/sigma from coherence: sigma = |H| sqrt((1-g2)/(2 n_segments g2))";
-      res["tf_fit"]["bode"] = bode_json(bb.freq_hz, freq_model_response(st, *o.tf_fit, bb.freq_hz), nullptr);
-      if (o.oe_fit) {
-        res["tf_oe_fit"] = fitting::to_json(*o.oe_fit);
-        res["tf_oe_fit"]["bode"] = bode_json(bb.freq_hz, freq_model_response(st, *o.oe_fit, bb.freq_hz), nullptr);
-      }
+      res["tf_fit"]["bode"] = bode_json(bb.freq_hz, freq_model_response(o.structure, *o.tf_fit, bb.freq_hz), nullptr);
+    }
+    if (o.oe_fit) {
+      res["tf_oe_fit"] = fitting::to_json(*o.oe_fit);
+      res["tf_oe_fit"]["bode"] =
+          bode_json(bb.freq_hz, freq_model_response(o.structure, *o.oe_fit, bb.freq_hz), nullptr);
+    }
+    if (const auto* fit = o.reported_fit()) {
+      // The one model this analysis reports (its parameters are the frequency-response tau,
+      // theta and K that the report, history and export read); the full result, with its
+      // model's Bode data, is under `source`.
+      res["fit"] = fitting::to_json(*fit);
+      res["fit"]["source"] = o.reported_fit_key();
+      res["fit"]["method"] = o.oe_fit ? "output-error fit to the record" : "fit to the H1 frequency response";
     }
   }
   return env;
@@ -277,6 +369,9 @@ void print_text(const FreqOutcome& o, std::ostream& os) {
   };
   if (o.tf_fit) print_fit("frequency-domain fit", *o.tf_fit);
   if (o.oe_fit) print_fit("output-error fit", *o.oe_fit);
+  if (o.reported_fit() != nullptr)
+    os << fmt::format("  reported: the {} (from {:.4g} s, up to {:.4g} Hz)\n",
+                      o.oe_fit ? "output-error fit" : "frequency-domain fit", bb.start_s, bb.fmax_hz);
 }
 
 }  // namespace tunekit::calibration

@@ -67,9 +67,14 @@ void liquefier_step(QuantityList& out, const nlohmann::json* step) {
   out.param("K", qty_at(*params, {"K"}), gain_unit);
 }
 
+// The frequency response's parameters from the fit the freq analysis reports (results.fit:
+// the output-error fit when there is one), the same ones its report and export show. Results
+// written before freq named its fit (imports of older runs) are read by the same rule.
 void liquefier_freq(QuantityList& out, const nlohmann::json* freq) {
   if (freq == nullptr) return;
-  const auto* params = qty_at(*freq, {"tf_fit", "params"});
+  const auto* params = qty_at(*freq, {"fit", "params"});
+  if (params == nullptr) params = qty_at(*freq, {"tf_oe_fit", "params"});
+  if (params == nullptr) params = qty_at(*freq, {"tf_fit", "params"});
   if (params == nullptr) return;
   out.param("freq.tau_s", qty_at(*params, {"tau_s"}), "s");
   out.param("freq.theta_s", qty_at(*params, {"theta_s"}), "s");

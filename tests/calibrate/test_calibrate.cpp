@@ -129,7 +129,7 @@ TEST_CASE("calibrate: step and frequency-response taus agree and the frequency i
   const auto env = nlohmann::json::parse(read_file_bytes(run.dir + "/results.json"));
   const auto& liq = env.at("results").at("liquefier");
   const auto& step = liq.at("step").at("pooled").at("params").at("tau_s");
-  const auto& freq = liq.at("freq").at("tf_oe_fit").at("params").at("tau_s");
+  const auto& freq = liq.at("freq").at("fit").at("params").at("tau_s");
   const double step_lo = step.at("ci95")[0].get<double>(), step_hi = step.at("ci95")[1].get<double>();
   const double freq_lo = freq.at("ci95")[0].get<double>(), freq_hi = freq.at("ci95")[1].get<double>();
   INFO("step tau " << step.at("value").get<double>() << " [" << step_lo << ", " << step_hi << "], frequency tau "

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/cli/step_command.hpp"
+#include "tunekit/calibration/step_command.hpp"
 #include "tunekit/ident/csv.hpp"
 
 using tunekit::ident::read_file_bytes;
@@ -63,12 +63,12 @@ TEST_CASE("tunekit step with its defaults reproduces calibrate's pooled liquefie
   const auto& cal = env.at("results").at("liquefier").at("step").at("pooled").at("params");
   const std::string csv = dir + "/liquefier-step/step.csv";  // the load cell's log of the flow sweep
   REQUIRE(std::filesystem::exists(csv));
-  tunekit::cli::StepOptions o;  // the defaults of `tunekit step`, with only the file and columns named
+  tunekit::calibration::StepOptions o;  // the defaults of `tunekit step`, with only the file and columns named
   o.file = csv;
   o.time_column = "time";
   o.input_column = "feed";
   o.output_column = "force";
-  const auto step = tunekit::cli::compute_step(o);
+  const auto step = tunekit::calibration::compute_step(o);
   REQUIRE(step.analysis.pooled);
   CHECK(step.analysis.steps.size() == env.at("results").at("liquefier").at("step").at("steps").size());
   for (const char* name : {"tau_s", "K", "theta_s"}) {

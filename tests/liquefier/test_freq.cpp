@@ -14,6 +14,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/transfer_function.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/excitation.hpp"
 #include "tunekit/ident/sine_dwell.hpp"
 #include "tunekit/ident/spectrum.hpp"
 
@@ -304,4 +305,36 @@ TEST_CASE("a rank-deficient fit prints exactly one error line on the real stderr
   CHECK(r.err.find("not identifiable") != std::string::npos);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   CHECK(r.out.empty());
+}
+
+TEST_CASE("excitation: a steady hold then a staircase chirp gives the chirp's onset and band") {
+  // 200 Hz: 1 s at rest, a ramp to the mean, 3 s steady, then a linear chirp 0.1-2 Hz over 40 s
+  // in 50 ms staircase steps, then 1 s steady at the mean.
+  const double fs = 200, f0 = 0.1, f1 = 2.0, T = 40, seg = 0.05, settle_end = 4.0;
+  std::vector<double> t, u;
+  for (int i = 0; i < static_cast<int>((settle_end + T + 1) * fs); ++i) {
+    const double ti = i / fs;
+    double v = ti < 1 ? 0.0 : std::min(1.0, ti - 1.0) * 2.0;
+    if (ti >= settle_end && ti < settle_end + T) {
+      const double tk = (std::floor((ti - settle_end) / seg) + 0.5) * seg;
+      v = 2.0 + std::sin(2 * kPi * (f0 * tk + 0.5 * (f1 - f0) / T * tk * tk));
+    }
+    t.push_back(ti);
+    u.push_back(v);
+  }
+  const auto onset = ident::excitation_onset(t, u);
+  CHECK(t[onset] == Approx(settle_end - 1 / fs).margin(1e-9));
+  CHECK(ident::typical_hold_s(t, ident::input_holds(u)) <= seg + 1e-9);
+  ident::WelchOptions wo;
+  wo.segment_length = 2048;
+  const std::vector<double> chirp(u.begin() + static_cast<std::ptrdiff_t>(onset), u.end());
+  const auto band = ident::excited_band(ident::welch_psd(chirp, fs, wo));
+  INFO("band " << band.lo_hz << "-" << band.hi_hz << " Hz");
+  CHECK(band.hi_hz >= f1);
+  CHECK(band.hi_hz <= f1 + 4 * fs / 2048);  // the band's edge, within the window's main lobe
+  CHECK(band.lo_hz <= f0 + 2 * fs / 2048);
+  // Without a steady hold (a chirp from the first sample), there is no onset.
+  const std::vector<double> no_hold(u.begin() + static_cast<std::ptrdiff_t>(onset) + 1, u.end());
+  const std::vector<double> t_no_hold(t.begin() + static_cast<std::ptrdiff_t>(onset) + 1, t.end());
+  CHECK(ident::excitation_onset(t_no_hold, no_hold) == 0);
 }

@@ -3,6 +3,9 @@
 
 #include "tunekit/calibration/agreement.hpp"
 #include "tunekit/calibration/warning_advice.hpp"
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include "test_support.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
 
@@ -63,4 +66,42 @@ TEST_CASE("the liquefier gain is compared with 1 only when input and output shar
   CHECK_FALSE(gain_warned(tunekit::ident::design_advance(in)));
   in.gain_unit = "mm/(mm)";  // width in, width out
   CHECK(gain_warned(tunekit::ident::design_advance(in)));
+}
+
+TEST_CASE("export compares the step and frequency-response taus by the combined-interval rule, not by their gap") {
+  auto envelope = [](const std::string& command, const nlohmann::json& tau) {
+    nlohmann::json params{{"tau_s", tau}};
+    nlohmann::json results = command == "step" ? nlohmann::json{{"pooled", {{"params", params}}}}
+                                               : nlohmann::json{{"fit", {{"source", "tf_oe_fit"}, {"params", params}}}};
+    return nlohmann::json{{"command", command}, {"schema_version", 1}, {"results", results}}.dump();
+  };
+  auto tau = [](double v, double lo, double hi) {
+    return nlohmann::json{{"value", v}, {"stderr", (hi - lo) / 3.92}, {"ci95", {lo, hi}}, {"unit", "s"}};
+  };
+  const std::string cfg = tunekit::test::scratch_dir("agreement_export") + "/printer.cfg";
+  std::filesystem::copy_file(tunekit::test::dataset("firmware/printer.cfg"), cfg,
+                             std::filesystem::copy_options::overwrite_existing);
+  const std::string step = tunekit::test::write_scratch("agree_step.json", envelope("step", tau(0.45, 0.44, 0.46)));
+  auto run = [&](const std::string& freq_file) {
+    const auto r = tunekit::test::run_cli({"export", "-f", "klipper", "-c", cfg, step, freq_file, "--json"});
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    return nlohmann::json::parse(r.out);
+  };
+  auto warned = [](const nlohmann::json& env) {
+    for (const auto& w : env.at("warnings"))
+      if (w.get<std::string>().find("liquefier time constant tau") != std::string::npos) return true;
+    return false;
+  };
+  // 4 % apart, but each interval is narrow: they do not agree, and export says so.
+  const auto close = run(tunekit::test::write_scratch("agree_close.json", envelope("freq", tau(0.47, 0.46, 0.48))));
+  REQUIRE(close.at("results").at("agreement").size() == 1);
+  CHECK_FALSE(close.at("results").at("agreement")[0].at("agree").get<bool>());
+  CHECK(warned(close));
+  // 25 % apart, but the frequency response's interval is wide: they agree, and nothing is said.
+  const auto wide = run(tunekit::test::write_scratch("agree_wide.json", envelope("freq", tau(0.6, 0.3, 0.9))));
+  CHECK(wide.at("results").at("agreement")[0].at("agree").get<bool>());
+  CHECK_FALSE(warned(wide));
+  // The design uses the step's tau either way.
+  CHECK(wide.at("results").at("design").at("K_s").get<double>() == 0.45);
 }

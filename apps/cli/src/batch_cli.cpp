@@ -34,7 +34,8 @@ void register_batch(CLI::App& app, CliContext& ctx) {
   sub->add_option("-j,--jobs", a->jobs, "Parallel analyses (default: one per core)");
   add_output_options(sub, a->output);
   sub->footer(
-      "Each CSV is recognized by its columns: accel_x/y/z or freq+psd_x -> shaper; time+feed+force -> step;\n"
+      "Each CSV is recognized by its columns: accel_x/y/z or freq+psd_x -> shaper; time+feed+force -> step,\n"
+      "or freq when the feed changes level faster than a liquefier settles (a chirp);\n"
       "shear_rate+viscosity -> rheo. Exit code: the worst of the datasets (0 ok, 1 fit failed or requirement\n"
       "unmet, 2 bad input).\n"
       "Example:\n  tunekit batch archive/2026-11/ --require 'tau_s<0.6' --require 'x.freq_hz>=35' -o summary.json");

@@ -43,22 +43,30 @@ void register_freq(CLI::App& app, CliContext& ctx) {
   sub->add_option("-y,--output", o.output_column, "Output column (e.g. line width in mm, force in N)")->required();
   sub->add_option("-i,--input", o.input_column, "Input column (e.g. set-point width in mm, feed in mm/s)");
   add_choice_option<FreqMode>(
-      sub, "--mode", o.mode, {{"dwell", FreqMode::dwell}, {"h1", FreqMode::h1}, {"oe", FreqMode::oe}},
+      sub, "--mode", o.mode,
+      {{"auto", FreqMode::automatic}, {"dwell", FreqMode::dwell}, {"h1", FreqMode::h1}, {"oe", FreqMode::oe}},
       "dwell: sine fit at --freq-hz (non-uniform sampling allowed); h1: broadband H1 estimate with "
-      "coherence; oe: h1, TF fit, then output-error refinement on the record");
+      "coherence; oe: h1, TF fit, then output-error refinement on the record; auto (default): dwell with "
+      "--freq-hz, else oe");
   sub->add_option("-f,--freq-hz", o.freq_hz, "Excitation frequency for --mode dwell (Hz)");
-  sub->add_option("--fit-tf", o.fit_tf, "Fit a transfer function with P,Z poles and zeros (P 1-3, Z 0-2)");
+  sub->add_option("--fit-tf", o.fit_tf,
+                  "Fit a transfer function with P,Z poles and zeros (P 1-3, Z 0-2); default for oe: the liquefier "
+                  "model, 1,0 with dead time");
   sub->add_flag("--tf-delay", o.tf_delay, "Include a dead time theta_s (s) in the fitted transfer function");
   sub->add_option("--segment", o.welch.segment_length,
-                  "Welch segment length (samples; default: a power of two giving about 16 segments)");
+                  "Welch segment length (samples; default: a power of two resolving the excited band in 16 bins, "
+                  "at least about 16 segments' resolution, at most a quarter of the record)");
   add_parsed_option(
       sub, "--window", o.welch.window, ident::parse_window, [](ident::WindowType w) { return ident::to_string(w); },
       "Welch window: hann, hamming, kaiser, rect");
   sub->add_option("--fmin", o.fmin_hz, "Lowest frequency reported and fitted (Hz)");
-  sub->add_option("--fmax", o.fmax_hz, "Highest frequency reported and fitted (Hz; default Nyquist)");
+  sub->add_option(
+      "--fmax", o.fmax_hz,
+      "Highest frequency reported and fitted (Hz; default: the top of the band the input excites, where its "
+      "spectrum falls 30 dB below its peak)");
   sub->add_option("--tmin", o.tmin_s,
                   "Broadband modes: leave out the record before this time (s), e.g. a start-up transient the "
-                  "models do not describe");
+                  "models do not describe; default: the end of the steady hold before the excitation, if any");
   sub->add_option("--min-coherence", o.min_coherence,
                   "Frequency points with a lower coherence (0-1) are left out of the TF fit")
       ->capture_default_str();
@@ -71,6 +79,8 @@ void register_freq(CLI::App& app, CliContext& ctx) {
       "      --mode h1 --fit-tf 2,0 --fmax 40 --json\n"
       "  tunekit freq datasets/liquefier/synthetic_chirp.csv --time time --input feed --output force \\\n"
       "      --mode oe --fit-tf 2,0 --fmax 40\n"
+      "  tunekit freq RUN_DIR/liquefier-chirp/feed_force.csv --input feed --output force\n"
+      "      # a calibrate chirp: the liquefier model by output error, sized from the record as calibrate does\n"
       "Sine dwell: y = offset + amplitude sin(2 pi f t + phase) by linear least squares; gain = output/input\n"
       "amplitude, phase_lag_deg = input phase - output phase in (-180, 180] (positive: the output lags).\n"
       "Appendix D frequencies: datasets/liquefier/appendix_d/design.csv (f = N v / (2 pi 30 mm)).");

@@ -4,6 +4,13 @@
 // of input (e.g. feed in mm/s) and output (force in N, line width in mm): a sine dwell at one
 // known frequency, or a broadband H1 estimate with coherence, a transfer-function fit to it and
 // an output-error refinement on the record. The shape of a command: docs/cpp-api.md.
+//
+// Without options beyond the file and its columns, the broadband analysis sizes itself from
+// the record (tunekit/ident/excitation.hpp): it starts where the excitation leaves the steady
+// hold before it, reports up to the top of the band the input excites, takes Welch segments
+// that resolve that band, and fits the liquefier model, first order with dead time (Bellini,
+// Guceri and Bertoldi, Liquefier dynamics in fused deposition, J. Manuf. Sci. Eng., 2004), by
+// output error. `tunekit calibrate` analyses its chirp exactly so.
 
 #include <complex>
 #include <optional>
@@ -14,14 +21,15 @@
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/fitting/transfer_function.hpp"
+#include "tunekit/ident/excitation.hpp"
 #include "tunekit/ident/sine_dwell.hpp"
 #include "tunekit/ident/spectrum.hpp"
 
 namespace tunekit::calibration {
 
 /// dwell: sine fit at a known frequency; h1: broadband H1 estimate; oe: h1, a TF fit, then the
-/// output-error fit on the record.
-enum class FreqMode { dwell, h1, oe };
+/// output-error fit on the record; automatic: dwell when the frequency is given, else oe.
+enum class FreqMode { automatic, dwell, h1, oe };
 
 struct FreqOptions {
   std::string file;          ///< CSV log
@@ -29,20 +37,27 @@ struct FreqOptions {
   std::string input_column;  ///< needed by h1 and oe; optional for a dwell
   std::string output_column;
   std::string input_unit, output_unit;  ///< override the units in the column names
-  FreqMode mode = FreqMode::dwell;
-  double freq_hz = 0;     ///< dwell: the excitation frequency (Hz)
-  std::string fit_tf;     ///< "P,Z": fit a transfer function with P poles and Z zeros
+  FreqMode mode = FreqMode::automatic;
+  double freq_hz = 0;  ///< dwell: the excitation frequency (Hz)
+  /// "P,Z": fit a transfer function with P poles and Z zeros. Empty: none for h1; for oe the
+  /// liquefier model "1,0" with dead time (tf_delay is then implied).
+  std::string fit_tf;
   bool tf_delay = false;  ///< with a dead time theta_s
-  /// Welch's method for h1/oe; segment_length 0: a power of two giving about 16 segments.
+  /// Welch's method for h1/oe; segment_length 0: from the excited band (bins a sixteenth of its
+  /// top apart), at least about 16 segments' worth of resolution, at most a quarter of the record.
   ident::WelchOptions welch;
-  double fmin_hz = 0;          ///< lowest frequency reported and fitted (Hz)
-  double fmax_hz = 0;          ///< highest (Hz); 0: Nyquist
-  double tmin_s = 0;           ///< broadband: the record before this time (s) is left out
+  double fmin_hz = 0;  ///< lowest frequency reported and fitted (Hz)
+  double fmax_hz = 0;  ///< highest (Hz); 0: the top of the band the input excites
+  /// Broadband: the record before this time (s) is left out; unset: before the excitation's onset.
+  std::optional<double> tmin_s;
   double min_coherence = 0.8;  ///< TF fit: points of lower coherence (0-1) are left out
 };
 
 /// The H1 estimate inside [fmin, fmax].
 struct FreqBroadband {
+  double start_s = 0;          ///< time of the first sample analysed (s)
+  double fmax_hz = 0;          ///< the upper frequency used (Hz)
+  ident::ExcitedBand excited;  ///< the band the input excites (Hz)
   double sample_rate_hz = 0;
   std::size_t segment_length = 0, segments = 0;
   std::vector<double> freq_hz;
@@ -62,7 +77,17 @@ struct FreqOutcome {
   std::optional<fitting::FitResult> tf_fit;  ///< --fit-tf: the fit to the frequency response
   std::size_t tf_points_used = 0;
   std::optional<fitting::FitResult> oe_fit;  ///< mode oe: the output-error fit to the record
+  FreqMode mode = FreqMode::dwell;           ///< the mode run (automatic resolved)
+  fitting::TfStructure structure;            ///< the fitted structure (fit_tf or the default)
   std::vector<std::string> warnings;
+
+  /// The transfer-function fit this analysis reports, results key "fit": the output-error fit
+  /// when there is one (it uses every sample of the record, not only the coherent bins), else
+  /// the fit to the H1 frequency response; nullptr when no model was fitted. Every reader of a
+  /// frequency-response tau (report, history, export, batch) reads this one.
+  const fitting::FitResult* reported_fit() const;
+  /// "tf_oe_fit" or "tf_fit": the results key of the reported fit's full result.
+  std::string reported_fit_key() const;
 };
 
 /// InputError (exit 2) for bad input or options, FitError (exit 1) when a fit fails; located at

@@ -3,7 +3,7 @@
 // commands print with --json). Names are the same whichever command measured them, so a
 // machine's trend joins its calibrations and its hand-run analyses:
 //   tau_s, theta_s, K          liquefier step response (s, s, output unit per input unit)
-//   freq.tau_s, freq.theta_s   the same from the frequency response's transfer-function fit
+//   freq.tau_s, freq.theta_s   the same from the frequency response's reported fit (results.fit)
 //   <axis>.freq_hz, <axis>.zeta          the axis's dominant resonance and its damping ratio
 //   <axis>.shaper, <axis>.shaper_freq_hz the input shaper chosen (type, Hz)
 //   <axis>.max_accel_mm_s2               the acceleration the chosen shaper allows

@@ -1,0 +1,140 @@
+// The liquefier chirp of `tunekit calibrate` and `tunekit freq`: freq with nothing but the file
+// and its columns analyses the chirp as calibrate does, and the frequency-response tau it
+// reports is the one every reader shows: the report, the history, export's design and batch.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+#include "tunekit/calibration/freq_command.hpp"
+#include "tunekit/calibration/json_access.hpp"
+#include "tunekit/history/store.hpp"
+#include "tunekit/ident/csv.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kFreqTauPath = "liquefier.freq.fit.params.tau_s.value";
+constexpr const char* kMachineId = "freq-sim";
+
+struct ChirpRun {
+  std::string dir, db;
+  tunekit::test::CliRun cli;
+  nlohmann::json results;
+  std::string chirp_csv() const { return dir + "/liquefier-chirp/feed_force.csv"; }
+  double freq_tau() const { return tunekit::calibration::json_at(results, kFreqTauPath)->get<double>(); }
+};
+
+// One calibration of the simulated liquefier (axes left out), recorded in a history database;
+// shared by the cases below.
+const ChirpRun& chirp_run() {
+  static const ChirpRun run = [] {
+    ChirpRun r;
+    const std::string base = tunekit::test::scratch_dir("calibrate_freq");
+    r.dir = base + "/run";
+    r.db = base + "/history.sqlite";
+    r.cli = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--skip-axes", "--out", r.dir, "--record",
+                                    "--machine-id", kMachineId, "--db", r.db});
+    if (r.cli.code == 0) r.results = tunekit::test::read_json(r.dir + "/results.json").at("results");
+    return r;
+  }();
+  return run;
+}
+
+}  // namespace
+
+TEST_CASE("freq with only the file and its columns gives calibrate's frequency-response tau on its chirp") {
+  const auto& run = chirp_run();
+  INFO(run.cli.err);
+  REQUIRE(run.cli.code == 0);
+  REQUIRE(tunekit::calibration::json_at(run.results, kFreqTauPath) != nullptr);
+  REQUIRE(fs::exists(run.chirp_csv()));
+  tunekit::calibration::FreqOptions o;
+  o.file = run.chirp_csv();
+  o.input_column = "feed";
+  o.output_column = "force";
+  const auto own = tunekit::calibration::compute_freq(o);
+  REQUIRE(own.reported_fit() != nullptr);
+  const double tau = own.reported_fit()->value("tau_s");
+  INFO("freq's own tau " << tau << " s, calibrate's " << run.freq_tau() << " s");
+  CHECK(tau == Approx(run.freq_tau()).epsilon(0.01));
+  // The same analysis: the same start, band and segments as calibrate's.
+  const auto& h1 = run.results.at("liquefier").at("freq").at("h1");
+  CHECK(own.broadband->start_s == h1.at("start_s").get<double>());
+  CHECK(own.broadband->fmax_hz == h1.at("fmax_hz").get<double>());
+  CHECK(own.broadband->segment_length == h1.at("segment_length").get<std::size_t>());
+  // As a user types it.
+  const auto cli = tunekit::test::run_cli({"freq", run.chirp_csv(), "--input", "feed", "--output", "force", "--json"});
+  INFO(cli.err);
+  REQUIRE(cli.code == 0);
+  const auto j = nlohmann::json::parse(cli.out).at("results");
+  CHECK(j.at("fit").at("params").at("tau_s").at("value").get<double>() == Approx(run.freq_tau()).epsilon(0.01));
+  CHECK(j.at("fit").at("source") == "tf_oe_fit");
+}
+
+TEST_CASE("one frequency-response tau: the report, the history, export's design and batch show the same") {
+  const auto& run = chirp_run();
+  INFO(run.cli.err);
+  REQUIRE(run.cli.code == 0);
+  const double tau = run.freq_tau();
+  const auto& freq = run.results.at("liquefier").at("freq");
+  // The reported fit is the output-error fit, named as such.
+  CHECK(freq.at("fit").at("source") == "tf_oe_fit");
+  CHECK(freq.at("tf_oe_fit").at("params").at("tau_s").at("value").get<double>() == tau);
+
+  // The report: its summary row and the cell report.html shows.
+  int rows = 0;
+  for (const auto& r : run.results.at("summary"))
+    if (r.at("path") == kFreqTauPath) ++rows;
+  CHECK(rows == 1);
+  int cells = 0;
+  for (const auto& c : tunekit::test::summary_cells(tunekit::ident::read_file_bytes(run.dir + "/report.html"))) {
+    if (c.path != kFreqTauPath) continue;
+    CHECK(nlohmann::json::parse(c.value).get<double>() == tau);
+    ++cells;
+  }
+  CHECK(cells == 1);
+  // The agreement check compares that tau with the step's.
+  REQUIRE(run.results.at("agreement").size() == 1);
+  CHECK(run.results.at("agreement")[0].at("estimates")[1].at("value").get<double>() == tau);
+
+  // The history.
+  tunekit::history::Store store(run.db);
+  const auto series = store.series(kMachineId, "freq.tau_s");
+  REQUIRE(series.size() == 1);
+  CHECK(series[0].value == Approx(tau).epsilon(1e-12));
+
+  // Export: designed from the frequency response alone, K is that tau; with the step results
+  // too, the agreement it states holds that tau.
+  const std::string cfg = run.dir + "/config/printer.cfg";
+  const std::string freq_json = run.dir + "/analysis/freq.json";
+  auto ex = tunekit::test::run_cli({"export", "-f", "klipper", "-c", cfg, freq_json, "--json"});
+  INFO(ex.err);
+  REQUIRE(ex.code == 0);
+  auto ej = nlohmann::json::parse(ex.out).at("results");
+  CHECK(ej.at("design").at("K_source") == "freq");
+  CHECK(ej.at("design").at("K_s").get<double>() == Approx(tau).epsilon(1e-12));
+  ex = tunekit::test::run_cli(
+      {"export", "-f", "klipper", "-c", cfg, run.dir + "/analysis/step.json", freq_json, "--json"});
+  INFO(ex.err);
+  REQUIRE(ex.code == 0);
+  ej = nlohmann::json::parse(ex.out).at("results");
+  REQUIRE(ej.at("agreement").size() == 1);
+  CHECK(ej.at("agreement")[0].at("estimates")[1].at("value").get<double>() == Approx(tau).epsilon(1e-12));
+  CHECK(ej.at("agreement")[0].at("agree") == run.results.at("agreement")[0].at("agree"));
+
+  // Batch: the chirp's CSV is recognised as a chirp and analysed by freq.
+  const std::string in = tunekit::test::scratch_dir("calibrate_freq_batch");
+  fs::copy_file(run.chirp_csv(), in + "/chirp.csv", fs::copy_options::overwrite_existing);
+  const auto b = tunekit::test::run_cli({"batch", in, "-j", "1", "--json"});
+  INFO(b.err);
+  REQUIRE(b.code == 0);
+  const auto summary = nlohmann::json::parse(b.out);
+  const auto& ds = summary.at("results").at("datasets");
+  REQUIRE(ds.size() == 1);
+  CHECK(ds[0].at("command")[0] == "freq");
+  CHECK(ds[0].at("results").at("fit").at("params").at("tau_s").at("value").get<double>() == Approx(tau).epsilon(1e-12));
+}
