@@ -155,26 +155,16 @@ bool looks_like_ring(const MeasuredLine& l) {
   return l.closed || (a < kRingMaxAspect && a > 1 / kRingMaxAspect);
 }
 
-std::optional<RingResult> measure_ring(const MeasuredLine& feature, double ppm, const RingTest& ring,
-                                       std::vector<std::string>& warnings) {
-  std::vector<cv::Point2d> pts;
-  std::vector<double> widths;
-  for (const auto& s : feature.samples)
-    if (s.valid()) pts.emplace_back(s.x_px, s.y_px), widths.push_back(s.width_px / ppm);
-  if (pts.size() < kMinRingSamples) {
-    warnings.push_back("the ring was not measured (too few valid samples)");
-    return std::nullopt;
-  }
-  RingResult r;
-  const cv::Vec3d c = fit_circle(pts);
-  r.centre_px = {c[0], c[1]};
-  r.measured_radius_mm = c[2] / ppm;
-  r.radius_mm = ring.radius_mm > 0 ? ring.radius_mm : r.measured_radius_mm;
+namespace {
+
+// The ring's samples past its start, against time, with their set-point (r: centre and radii).
+std::vector<TimedWidth> ring_rows(const std::vector<cv::Point2d>& pts, const std::vector<double>& widths,
+                                  const std::vector<double>& conf, const RingTest& ring, const RingResult& r) {
   const double a_sp =
       ring.setpoint_amplitude_mm > 0 ? ring.setpoint_amplitude_mm : ring.setpoint_amplitude_mm2 / r.radius_mm;
   const double start = ring.start_deg * std::numbers::pi / 180,
                phase = ring.setpoint_phase_deg * std::numbers::pi / 180;
-  std::vector<double> t, y, ysp;
+  std::vector<TimedWidth> rows;
   for (std::size_t i = 0; i < pts.size(); ++i) {
     double th = view_angle(pts[i], r.centre_px) - start;
     if (ring.clockwise) th = -th;
@@ -185,14 +175,40 @@ std::optional<RingResult> measure_ring(const MeasuredLine& feature, double ppm, 
     if (ring.segments > 0)
       th_sp = kTwoPi * (std::clamp(std::floor(th / kTwoPi * ring.segments), 0.0, ring.segments - 1.0) + 0.5) /
               ring.segments;
-    t.push_back(th * r.radius_mm / ring.speed_mm_s);
-    y.push_back(widths[i]);
-    ysp.push_back(ring.setpoint_width_mm + a_sp * std::sin(ring.sines * th_sp + phase));
+    rows.push_back({th * r.radius_mm / ring.speed_mm_s, th * r.radius_mm, widths[i],
+                    ring.setpoint_width_mm + a_sp * std::sin(ring.sines * th_sp + phase), conf[i]});
   }
-  if (t.size() < kMinRingSamples) {
+  std::sort(rows.begin(), rows.end(), [](const auto& p, const auto& q) { return p.t_s < q.t_s; });
+  // Equal times (two samples at the same angle) would break a strictly increasing time column.
+  rows.erase(std::unique(rows.begin(), rows.end(), [](const auto& p, const auto& q) { return !(q.t_s > p.t_s); }),
+             rows.end());
+  return rows;
+}
+
+}  // namespace
+
+std::optional<RingResult> measure_ring(const MeasuredLine& feature, double ppm, const RingTest& ring,
+                                       std::vector<std::string>& warnings) {
+  std::vector<cv::Point2d> pts;
+  std::vector<double> widths, conf;
+  for (const auto& s : feature.samples)
+    if (s.valid()) pts.emplace_back(s.x_px, s.y_px), widths.push_back(s.width_px / ppm), conf.push_back(s.confidence);
+  if (pts.size() < kMinRingSamples) {
+    warnings.push_back("the ring was not measured (too few valid samples)");
+    return std::nullopt;
+  }
+  RingResult r;
+  const cv::Vec3d c = fit_circle(pts);
+  r.centre_px = {c[0], c[1]};
+  r.measured_radius_mm = c[2] / ppm;
+  r.radius_mm = ring.radius_mm > 0 ? ring.radius_mm : r.measured_radius_mm;
+  r.rows = ring_rows(pts, widths, conf, ring, r);
+  if (r.rows.size() < kMinRingSamples) {
     warnings.push_back("the ring has too few measured samples past its start for gain and phase");
     return std::nullopt;
   }
+  std::vector<double> t, y, ysp;
+  for (const auto& row : r.rows) t.push_back(row.t_s), y.push_back(row.width_mm), ysp.push_back(row.setpoint_mm);
   const double w = ring.sines * ring.speed_mm_s / r.radius_mm;
   const auto m = sine_at(t, y, w), sp = sine_at(t, ysp, w);
   const std::complex<double> H = m / sp;
@@ -202,6 +218,7 @@ std::optional<RingResult> measure_ring(const MeasuredLine& feature, double ppm, 
   r.samples = t.size();
   r.setpoint_amplitude_mm = std::abs(sp);
   r.width_amplitude_mm = std::abs(m);
+  r.skipped_start_rad = kRingSkipRad;
   return r;
 }
 

@@ -29,7 +29,6 @@ CalibratedLine calibrate_line(const MeasuredLine& l, double ppm) {
     c.s_mm.push_back(s.s_px / ppm);
     c.width_mm.push_back(s.valid() ? s.width_px / ppm : std::numeric_limits<double>::quiet_NaN());
     c.confidence.push_back(s.confidence);
-    c.centre_px.emplace_back(s.x_px, s.y_px);
     if (s.valid()) valid.push_back(s.width_px / ppm);
   }
   c.mean_mm = l.mean_width_px / ppm;

@@ -103,7 +103,6 @@ struct PhotoWidthsRequest {
 /// One feature's profile in mm (samples as in the feature's px profile).
 struct CalibratedLine {
   std::vector<double> s_mm, width_mm, confidence;  ///< width NaN where not measured
-  std::vector<cv::Point2d> centre_px;
   double mean_mm = 0, std_mm = 0, median_mm = 0, length_mm = 0;
 };
 
@@ -123,6 +122,9 @@ struct RingResult {
   double radius_mm = 0, measured_radius_mm = 0;
   cv::Point2d centre_px;
   double setpoint_amplitude_mm = 0, width_amplitude_mm = 0;
+  double skipped_start_rad = 0;  ///< samples before this angle travelled are left out (still filling)
+  /// The samples fitted, by time from theta = 0: s = theta R, the set-point at each.
+  std::vector<TimedWidth> rows;
 };
 
 struct PhotoWidths {
