@@ -31,10 +31,37 @@
 #include "tunekit/machine/gcode.hpp"
 
 namespace tunekit::calibration {
+
+// The ring test as given: Holtrup's (2019) feeder modulation (eq. 4.3: amplitude from the feeder
+// offset, rod radius and layer height, -cos in time) or tunekit's ring-print flow modulation
+// (1 + A sin(N theta)), with what the photo cannot tell (speed, start, direction).
+vision::RingTest linewidth::ring_test(const LinewidthOptions& a) {
+  vision::RingTest t;
+  t.sines = a.ring_sines;
+  t.speed_mm_s = a.speed_mm_s;
+  t.radius_mm = a.ring_radius_mm;
+  t.setpoint_width_mm = a.setpoint_width_mm;
+  t.segments = a.ring_segments;
+  t.start_deg = a.ring_start_deg;
+  t.clockwise = a.ring_clockwise;
+  if (a.ring_flow_amplitude > 0) {
+    t.setpoint_amplitude_mm = a.ring_flow_amplitude * a.setpoint_width_mm;
+    return t;
+  }
+  vision::RingSine hs;  // eq. 4.3's amplitude at R = 1 mm: a R
+  hs.n_sines = a.ring_sines;
+  hs.amplitude_mm = a.ring_amplitude_mm;
+  hs.radius_mm = 1;
+  hs.rod_radius_mm = a.rod_radius_mm;
+  hs.layer_height_mm = a.layer_height_mm;
+  t.setpoint_amplitude_mm2 = vision::ring_setpoint_amplitude_mm(hs);
+  t.setpoint_phase_deg = -90;  // -cos(x) = sin(x - 90 deg)
+  return t;
+}
+
 namespace {
 
 using linewidth::ImageRun;
-using linewidth::kNaN;
 using linewidth::r4;
 using linewidth::r6;
 
@@ -85,78 +112,28 @@ void overlay_best_effort(const LinewidthOptions& a, const ImageRun& run, const v
   }
 }
 
-ImageRun measure_image(const LinewidthOptions& a, const std::string& path,
-                       const std::optional<vision::CameraProfile>& cam, std::ostream& err) {
-  ImageRun run;
-  run.path = path;
-  cv::Mat gray = vision::load_gray_image(path);
-  if (cam) gray = vision::undistort_image(gray, *cam, path);
-  run.measured = gray;
-  vision::LineWidthOptions opt = a.detection;
+vision::PhotoWidthsRequest photo_request(const LinewidthOptions& a, const std::optional<vision::CameraProfile>& cam) {
+  vision::PhotoWidthsRequest req;
+  auto& sc = req.scale;
+  sc.camera = cam;
+  if (!a.charuco.empty()) sc.charuco = vision::parse_charuco_spec(a.charuco, a.square_mm, a.marker_mm, a.aruco_dict);
+  else if (!a.chessboard.empty()) sc.chessboard = vision::parse_chessboard_spec(a.chessboard, a.square_mm);
+  sc.px_per_mm = a.px_per_mm;
+  sc.nominal_width_mm = a.reference_width_mm;
+  sc.rectify = a.rectify;
+  req.detection = a.detection;
+  if (a.ring_sines > 0) req.ring_test = linewidth::ring_test(a);
+  return req;
+}
 
-  if (!a.chessboard.empty() || !a.charuco.empty()) {
-    vision::ChessboardDetection det;
-    std::string board_name;
-    if (!a.charuco.empty()) {
-      const auto cs = vision::parse_charuco_spec(a.charuco, a.square_mm, a.marker_mm, a.aruco_dict);
-      det = vision::detect_charuco(gray, cs);
-      board_name = fmt::format("ChArUco {}x{} x {} mm ({})", cs.squares_x, cs.squares_y, cs.square_mm, cs.dictionary);
-    } else {
-      const auto spec = vision::parse_chessboard_spec(a.chessboard, a.square_mm);
-      det = vision::detect_chessboard(gray, spec);
-      board_name = fmt::format("chessboard {}x{} x {} mm", spec.cols, spec.rows, spec.square_mm);
-    }
-    if (!det.found) {
-      const std::string msg = fmt::format("scale target not found: no {} in the image", board_name);
-      overlay_best_effort(a, run, nullptr, msg, err);
-      throw InputError(msg, path);
-    }
-    if (a.rectify) {
-      const auto rect = vision::rectify_to_plane(gray, det.img_to_mm, det.px_per_mm);
-      run.measured = rect.image;
-      run.ppm = rect.px_per_mm;
-      for (const auto& p : det.outline) {
-        const cv::Vec3d q = rect.img_to_rect * cv::Vec3d(p.x, p.y, 1.0);
-        run.target_outline.emplace_back(static_cast<int>(std::lround(q[0] / q[2])),
-                                        static_cast<int>(std::lround(q[1] / q[2])));
-      }
-      run.scale_source = board_name + ", rectified";
-    } else {
-      run.ppm = det.px_per_mm;
-      run.target_outline = det.outline;
-      run.scale_source = board_name;
-    }
-    opt.exclude_mask = cv::Mat::zeros(run.measured.size(), CV_8U);
-    cv::fillConvexPoly(opt.exclude_mask, run.target_outline, cv::Scalar(255));
-  } else if (cam && cam->has_bed_plane && a.rectify) {
-    const auto rect = vision::rectify_to_plane(gray, cam->bed_img_to_mm, cam->px_per_mm);
-    run.measured = rect.image;
-    run.ppm = rect.px_per_mm;
-    run.scale_source = "camera profile bed plane, rectified";
-  } else if (cam && cam->has_bed_plane) {
-    run.ppm = cam->px_per_mm;
-    run.scale_source = "camera profile bed plane";
-  } else if (a.px_per_mm > 0) {
-    run.ppm = a.px_per_mm;
-    run.scale_source = "--px-per-mm";
-  }
-  run.result = vision::measure_line_widths(run.measured, opt);
+// Throws the error of a photo that gave no measurement, after its overlay.
+void check_measured(const LinewidthOptions& a, const ImageRun& run, std::ostream& err) {
   const auto& res = run.result;
-
-  if (a.reference_width_mm > 0) {
-    if (res.lines.empty() || !(res.lines.front().valid_samples > 0)) {
-      const std::string msg = "scale target not found: no line of the reference width was measured";
-      overlay_best_effort(a, run, &res, msg, err);
-      throw InputError(msg, path);
-    }
-    run.ppm = res.lines.front().mean_width_px / a.reference_width_mm;
-    run.scale_source = fmt::format("reference width {} mm (line 1)", a.reference_width_mm);
-  }
   if (res.lines.empty()) {
     std::string msg = "no line found";
     for (const auto& w : res.warnings) msg += ": " + w;
     overlay_best_effort(a, run, &res, msg, err);
-    throw FitError(msg, path);
+    throw FitError(msg, run.path);
   }
   if (!a.allow_edge) {
     for (std::size_t i = 0; i < res.lines.size(); ++i)
@@ -167,7 +144,7 @@ ImageRun measure_image(const LinewidthOptions& a, const std::string& path,
             "or pass --allow-edge to measure it with out-of-frame stretches flagged",
             i + 1, b.x, b.x + b.width, b.y, b.y + b.height, res.width, res.height);
         overlay_best_effort(a, run, &res, msg, err);
-        throw InputError(msg, path);
+        throw InputError(msg, run.path);
       }
   }
   int valid = 0;
@@ -175,9 +152,29 @@ ImageRun measure_image(const LinewidthOptions& a, const std::string& path,
   if (valid == 0) {
     const std::string msg = "measured nothing: every profile sample is flagged (occluded, merged or out of frame)";
     overlay_best_effort(a, run, &res, msg, err);
-    throw FitError(msg, path);
+    throw FitError(msg, run.path);
   }
-  overlay_best_effort(a, run, &res, "", err);
+}
+
+ImageRun measure_image(const LinewidthOptions& a, const std::string& path,
+                       const std::optional<vision::CameraProfile>& cam, std::ostream& err) {
+  auto pw = vision::measure_photo_widths(vision::load_gray_image(path), photo_request(a, cam), path);
+  ImageRun run;
+  run.path = path;
+  run.measured = pw.measured;
+  run.ppm = pw.scale.px_per_mm;
+  run.scale = pw.scale;
+  run.target_outline = pw.target_outline;
+  run.result = std::move(pw.features);
+  run.lines = std::move(pw.lines);
+  run.ring = pw.ring;
+  run.warnings = std::move(pw.warnings);
+  if (!pw.failure.empty()) {
+    overlay_best_effort(a, run, run.result.lines.empty() ? nullptr : &run.result, pw.failure, err);
+    throw InputError(pw.failure, path);
+  }
+  check_measured(a, run, err);
+  overlay_best_effort(a, run, &run.result, "", err);
   return run;
 }
 
@@ -231,8 +228,15 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
   if (!a.gcode.empty() && a.profile_csv.empty()) throw InputError("--gcode maps a profile to time: add --profile-csv");
   if (!a.gcode.empty() && a.ring_sines > 0)
     throw InputError("give either --gcode or the ring's --ring-sines, not both");
-  if (a.ring_sines > 0 && !(a.ring_amplitude_mm > 0 && a.rod_radius_mm > 0 && a.layer_height_mm > 0))
-    throw InputError("--ring-sines needs --ring-amplitude-mm, --rod-radius-mm and --layer-height-mm");
+  const bool feeder_ring = a.ring_amplitude_mm > 0 && a.rod_radius_mm > 0 && a.layer_height_mm > 0;
+  if (a.ring_sines > 0 && feeder_ring == (a.ring_flow_amplitude > 0))
+    throw InputError(
+        "--ring-sines needs one modulation: Holtrup's feeder (--ring-amplitude-mm, --rod-radius-mm and "
+        "--layer-height-mm) or the extrusion's (--ring-flow-amplitude with --setpoint-width-mm)");
+  if (a.ring_flow_amplitude > 0 && !(a.setpoint_width_mm > 0))
+    throw InputError("--ring-flow-amplitude needs --setpoint-width-mm (the ring's mean line width, mm)");
+  if (a.ring_sines > 0 && !(a.speed_mm_s > 0))
+    throw InputError("--ring-sines needs the print speed around the ring: --speed-mm-s (mm/s)");
 
   LinewidthOutcome outcome;
   outcome.options = a;
@@ -250,7 +254,7 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
     outcome.inputs.push_back(input_digest(path, ident::read_file_bytes(path)));
     const auto& run = runs.back();
     const auto& res = run.result;
-    for (const auto& w : res.warnings) outcome.warnings.push_back(fmt::format("{}: {}", path, w));
+    for (const auto& w : run.warnings) outcome.warnings.push_back(fmt::format("{}: {}", path, w));
     for (std::size_t k = 0; k < res.lines.size(); ++k) {
       const auto& l = res.lines[k];
       const double valid_frac = l.samples.empty() ? 0.0 : static_cast<double>(l.valid_samples) / l.samples.size();
@@ -258,7 +262,7 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
         outcome.warnings.push_back(
             fmt::format("{}: line {}: only {:.0f} % of the profile is measured", path, k + 1, 100 * valid_frac));
     }
-    outcome.images.push_back({run.path, run.ppm, run.scale_source, run.result});
+    outcome.images.push_back({run.path, run.ppm, run.scale, run.result, run.lines, run.ring});
   }
   if (!a.profile_csv.empty())
     outcome.profile_csv = linewidth::write_profile_csv(a, runs.front(), outcome.warnings, outcome.inputs);
@@ -285,7 +289,9 @@ Envelope to_envelope(const LinewidthOutcome& o) {
                       {"width_px", res.width},
                       {"height_px", res.height},
                       {"px_per_mm", r6(ppm)},
-                      {"scale_source", run.scale_source},
+                      {"scale_source", run.scale.name},
+                      {"scale_reason", run.scale.reason},
+                      {"scale_passed_over", run.scale.passed_over},
                       {"polarity", res.light_lines ? "light" : "dark"},
                       {"noise", r4(res.noise_sigma)},
                       {"lines_found", res.lines.size()}});
@@ -303,11 +309,7 @@ Envelope to_envelope(const LinewidthOutcome& o) {
         xs.push_back(r4(s.x_px));
         ys.push_back(r4(s.y_px));
       }
-      std::vector<double> ws;
-      for (const auto& s : l.samples)
-        if (s.valid()) ws.push_back(s.width_px / ppm);
-      std::sort(ws.begin(), ws.end());
-      const double med = ws.empty() ? kNaN : ws[ws.size() / 2];
+      const double med = run.lines[k].median_mm;
       lines.push_back(
           {{"image", run.path},
            {"index", k + 1},
@@ -333,6 +335,22 @@ Envelope to_envelope(const LinewidthOutcome& o) {
   results["flag_bits"] = {
       {"out_of_frame", vision::kFlagOutOfFrame}, {"occluded", vision::kFlagOccluded}, {"merged", vision::kFlagMerged}};
   if (!o.profile_csv.is_null()) results["profile_csv"] = o.profile_csv;
+  for (const auto& run : o.images)
+    if (run.ring) {
+      const auto& r = *run.ring;
+      results["ring"] = {{"image", run.path},
+                         {"line", r.feature + 1},
+                         {"freq_hz", r.freq_hz},
+                         {"gain", r.gain},
+                         {"phase_deg", r.phase_deg},
+                         {"samples", r.samples},
+                         {"radius_mm", r.radius_mm},
+                         {"measured_radius_mm", r.measured_radius_mm},
+                         {"centre_px", {r4(r.centre_px.x), r4(r.centre_px.y)}},
+                         {"setpoint_amplitude_mm", r.setpoint_amplitude_mm},
+                         {"width_amplitude_mm", r.width_amplitude_mm}};
+      break;
+    }
 
   env.set_options(
       {{"px_per_mm", a.px_per_mm},
@@ -358,6 +376,8 @@ Envelope to_envelope(const LinewidthOutcome& o) {
        {"ring_radius_mm", a.ring_radius_mm},
        {"rod_radius_mm", a.rod_radius_mm},
        {"layer_height_mm", a.layer_height_mm},
+       {"ring_flow_amplitude", a.ring_flow_amplitude},
+       {"ring_segments", a.ring_segments},
        {"ring_start_deg", a.ring_start_deg},
        {"ring_clockwise", a.ring_clockwise},
        {"gcode", a.gcode},

@@ -3,6 +3,7 @@
 // G-code file), written as CSV with the set-point width for `tunekit step` / `tunekit freq`.
 
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/machine/gcode.hpp"
+#include "tunekit/vision/photo_widths.hpp"
 #include "tunekit/vision/width_to_dynamics.hpp"
 
 namespace tunekit::calibration::linewidth {
@@ -54,15 +56,9 @@ nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run,
   if (a.line < 1 || a.line > static_cast<int>(run.result.lines.size()))
     throw InputError(fmt::format("--line {}: the image has {} line(s)", a.line, run.result.lines.size()));
   const auto& l = run.result.lines[static_cast<std::size_t>(a.line - 1)];
-  std::vector<double> w_mm, conf, s_mm;
-  std::vector<cv::Point2d> centres;
-  for (const auto& s : l.samples) {
-    w_mm.push_back(s.valid() ? s.width_px / run.ppm : kNaN);
-    conf.push_back(s.confidence);
-    s_mm.push_back(s.s_px / run.ppm);
-    centres.emplace_back(s.x_px, s.y_px);
-  }
-  const double mean_mm = l.mean_width_px / run.ppm;
+  const auto& cl = run.lines[static_cast<std::size_t>(a.line - 1)];  // its widths in mm
+  const std::vector<double>&w_mm = cl.width_mm, &conf = cl.confidence, &s_mm = cl.s_mm;
+  const double mean_mm = cl.mean_mm;
   double setpoint = a.setpoint_width_mm;
   const bool setpoint_from_feed = !a.gcode.empty() && a.path.filament_diameter_mm > 0 && a.layer_height_mm > 0;
   if (!(setpoint > 0) && !setpoint_from_feed) {
@@ -117,33 +113,29 @@ nlohmann::json write_profile_csv(const LinewidthOptions& a, const ImageRun& run,
             ? fmt::format("E (pi d^2/4) / (L h), d = {} mm, h = {} mm", a.path.filament_diameter_mm, a.layer_height_mm)
             : fmt::format("constant {} mm", setpoint));
   } else if (a.ring_sines > 0) {
-    if (!l.closed) throw InputError(fmt::format("line {} is not a closed ring; --ring-sines needs one", a.line));
-    std::vector<cv::Point2d> pts;
-    for (const auto& s : l.samples)
-      if (s.valid()) pts.emplace_back(s.x_px, s.y_px);
-    const cv::Vec3d circ = vision::fit_circle(pts);
-    vision::RingSine ring;
-    ring.n_sines = a.ring_sines;
-    ring.amplitude_mm = a.ring_amplitude_mm;
-    ring.speed_mm_s = a.speed_mm_s;
-    ring.radius_mm = a.ring_radius_mm > 0 ? a.ring_radius_mm : circ[2] / run.ppm;
-    ring.rod_radius_mm = a.rod_radius_mm;
-    ring.layer_height_mm = a.layer_height_mm;
-    ring.width_gcode_mm = setpoint;
-    rows = vision::map_ring(centres, w_mm, conf, {circ[0], circ[1]}, ring, a.ring_start_deg, a.ring_clockwise);
+    if (!vision::looks_like_ring(l))
+      throw InputError(fmt::format("line {} is not a ring; --ring-sines needs one", a.line));
+    // The ring's own measurement: the samples it fits (past the ring's start) are the rows.
+    vision::RingTest test = ring_test(a);
+    test.setpoint_width_mm = setpoint;
+    const auto ring = vision::measure_ring(l, run.ppm, test, warnings);
+    if (!ring) throw FitError("measured nothing: too few valid ring samples to map to time", run.path);
+    rows = ring->rows;
     mapping = {{"kind", "ring"},
-               {"frequency_hz", r6(vision::ring_frequency_hz(ring))},
-               {"setpoint_amplitude_mm", r6(vision::ring_setpoint_amplitude_mm(ring))},
-               {"ring_radius_mm", r6(ring.radius_mm)},
-               {"measured_radius_mm", r6(circ[2] / run.ppm)},
-               {"centre_px", {r4(circ[0]), r4(circ[1])}},
+               {"frequency_hz", r6(ring->freq_hz)},
+               {"setpoint_amplitude_mm", r6(ring->setpoint_amplitude_mm)},
+               {"ring_radius_mm", r6(ring->radius_mm)},
+               {"measured_radius_mm", r6(ring->measured_radius_mm)},
+               {"centre_px", {r4(ring->centre_px.x), r4(ring->centre_px.y)}},
                {"start_deg", a.ring_start_deg},
+               {"skipped_start_deg", r6(ring->skipped_start_rad * 180 / std::numbers::pi)},
                {"direction", a.ring_clockwise ? "clockwise" : "counterclockwise"}};
     comment = fmt::format(
-        "tunekit linewidth: ring profile of {} (line {}), N={} A={} mm v={} mm/s R={:.4f} mm -> f={:.6g} Hz\n"
-        "setpoint_width: Holtrup 2019 eq. 4.3",
-        run.path, a.line, ring.n_sines, ring.amplitude_mm, ring.speed_mm_s, ring.radius_mm,
-        vision::ring_frequency_hz(ring));
+        "tunekit linewidth: ring profile of {} (line {}), N={} v={} mm/s R={:.4f} mm -> f={:.6g} Hz, from "
+        "theta = {:.4g} rad\nsetpoint_width: {}",
+        run.path, a.line, a.ring_sines, a.speed_mm_s, ring->radius_mm, ring->freq_hz, ring->skipped_start_rad,
+        a.ring_flow_amplitude > 0 ? fmt::format("w (1 + {} sin(N theta))", a.ring_flow_amplitude)
+                                  : fmt::format("Holtrup 2019 eq. 4.3, A={} mm", a.ring_amplitude_mm));
   } else {
     rows = vision::map_constant_speed(s_mm, w_mm, conf, a.speed_mm_s, setpoint);
     mapping = {{"kind", "constant_speed"}};

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "tunekit/calibration/input_digest.hpp"
 #include "tunekit/calibration/linewidth_command.hpp"
 #include "tunekit/vision/line_width.hpp"
+#include "tunekit/vision/photo_widths.hpp"
 
 namespace tunekit::calibration::linewidth {
 
@@ -22,13 +24,19 @@ struct ImageRun {
   std::string path;
   cv::Mat measured;  // the (undistorted / rectified) grey image that was measured
   double ppm = 0;
-  std::string scale_source;
+  vision::ScaleChoice scale;
   std::vector<cv::Point> target_outline;
   vision::LineWidthResult result;
+  std::vector<vision::CalibratedLine> lines;  // result's lines in mm
+  std::optional<vision::RingResult> ring;
+  std::vector<std::string> warnings;
 };
 
 inline double r6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
 inline double r4(double v) { return std::isfinite(v) ? std::round(v * 1e4) / 1e4 : v; }
+
+/// The ring test described by the ring options (--ring-sines and its modulation).
+vision::RingTest ring_test(const LinewidthOptions& a);
 
 /// --profile-csv: maps line `a.line` of `run` to time, writes the CSV (atomically) and returns
 /// the "profile_csv" results object; appends its warnings and the G-code it read.

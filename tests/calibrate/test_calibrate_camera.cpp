@@ -2,19 +2,32 @@
 // its camera photographs them, and tau and theta come back from the widths in the photo.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/vision/image_io.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using tunekit::ident::read_file_bytes;
+
+std::string num(double v) { return fmt::format("{:.17g}", v); }
+
+// Mean image y (px) of a measured line's profile.
+double mean_y(const nlohmann::json& line) {
+  double sum = 0;
+  for (const auto& y : line["profile"]["y_px"]) sum += y.get<double>();
+  return sum / static_cast<double>(line["profile"]["y_px"].size());
+}
 
 }  // namespace
 
@@ -47,6 +60,47 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   CHECK(fs::exists(dir + "/liquefier-camera/photo.png"));
   // Pressure advance is designed from the camera's tau.
   CHECK(res.at("compensators").at("settings").at("pa_k_s").get<double>() > 0);
+}
+
+TEST_CASE("tunekit linewidth on calibrate's camera photo gives calibrate's line widths, ring gain and phase",
+          "[calibrate]") {
+  const std::string dir = tunekit::test::scratch_dir("calibrate_camera_linewidth") + "/run";
+  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera", "sim",
+                                         "--skip-axes", "--out", dir, "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto cam = nlohmann::json::parse(r.out).at("results").at("liquefier").at("camera");
+  REQUIRE(cam.contains("ring"));
+  // What a user knows of this photo: its scale and the ring test as printed (the ring-print run's
+  // parameters, the profile's line width).
+  const auto ring = tunekit::test::read_json(dir + "/liquefier-ring/run.json").at("experiment").at("params");
+  const auto profile = tunekit::machine::load_machine_profile(tunekit::test::dataset("machines/sim.toml"));
+  const auto lw = tunekit::test::run_cli(
+      {"linewidth", dir + "/liquefier-camera/photo.png", "--px-per-mm", num(cam.at("px_per_mm").get<double>()),
+       "--speed-mm-s", num(ring.at("speed_mm_s").get<double>()), "--ring-sines",
+       std::to_string(std::lround(ring.at("periods").get<double>())), "--ring-radius-mm",
+       num(ring.at("radius_mm").get<double>()), "--ring-flow-amplitude", num(ring.at("amplitude").get<double>()),
+       "--ring-segments", std::to_string(std::lround(ring.at("segments").get<double>())), "--setpoint-width-mm",
+       num(profile.print.line_width_mm), "--json"});
+  INFO(lw.err);
+  REQUIRE(lw.code == 0);
+  const auto res = nlohmann::json::parse(lw.out).at("results");
+  REQUIRE(res.contains("ring"));
+  const auto& a = res.at("ring");
+  const auto& b = cam.at("ring");
+  CHECK(a.at("freq_hz").get<double>() == Approx(b.at("freq_hz").get<double>()).epsilon(0.01));
+  CHECK(a.at("gain").get<double>() == Approx(b.at("gain").get<double>()).epsilon(0.01));
+  CHECK(a.at("phase_deg").get<double>() == Approx(b.at("phase_deg").get<double>()).epsilon(0.01));
+  // The line test's lines, top to bottom (print order): the same median width.
+  std::vector<nlohmann::json> straight;
+  for (const auto& l : res.at("lines"))
+    if (l.at("index").get<std::size_t>() != a.at("line").get<std::size_t>()) straight.push_back(l);
+  std::sort(straight.begin(), straight.end(), [](const auto& p, const auto& q) { return mean_y(p) < mean_y(q); });
+  const auto& cal_lines = cam.at("lines");
+  REQUIRE(straight.size() == cal_lines.size());
+  for (std::size_t k = 0; k < straight.size(); ++k)
+    CHECK(straight[k]["width_mm"]["median"].get<double>() ==
+          Approx(cal_lines[k]["median_width_mm"].get<double>()).epsilon(0.01));
 }
 
 TEST_CASE("calibrate camera path: a blank photo or an unopenable camera is one clear error, the printed runs kept",

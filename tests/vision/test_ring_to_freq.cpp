@@ -120,8 +120,16 @@ TEST_CASE("rendered sine-modulated ring photo -> tunekit linewidth -> tunekit fr
     const auto& map = jl["results"]["profile_csv"];
     CHECK(map["frequency_hz"].get<double>() == Approx(f_hz).epsilon(1e-5));
     CHECK(map["setpoint_amplitude_mm"].get<double>() == Approx(a_sp).epsilon(1e-5));
-    CHECK(map["rows"].get<int>() > 1400);
+    // One sample per px of centreline, from theta = 2.5 rad (the ring's start, where a printed
+    // ring is still filling, is left out) to 0.05 rad short of a full turn: 59 % of the turn.
+    CHECK(map["skipped_start_deg"].get<double>() == Approx(2.5 * 180 / M_PI));
+    CHECK(map["rows"].get<double>() > 0.57 * 2 * M_PI * ring.radius_mm * ppm);
     CHECK(fs::exists(dir + "/ov/ring_overlay.png"));
+    // linewidth's own ring measurement (the one calibrate's camera path makes): the same answer.
+    const auto& rr = jl["results"]["ring"];
+    CHECK(rr["freq_hz"].get<double>() == Approx(f_hz).epsilon(1e-5));
+    CHECK(std::abs(rr["gain"].get<double>() / c.gain - 1) <= 0.03);
+    CHECK(std::abs(-rr["phase_deg"].get<double>() - c.lag_deg) <= 3.0);
 
     const auto fr = run_cli({"freq", csv, "--time", "time", "--output", "width", "--input", "setpoint_width",
                              "--freq-hz", fmtnum(f_hz), "--json"});

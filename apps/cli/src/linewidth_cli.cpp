@@ -109,6 +109,14 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("--rod-radius-mm", o.rod_radius_mm, "Ring print: feed rod (filament) radius (mm)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--layer-height-mm", o.layer_height_mm, "Ring print: layer height (mm)")->check(CLI::PositiveNumber);
+  sub->add_option("--ring-flow-amplitude", o.ring_flow_amplitude,
+                  "Ring print: the extrusion modulated by (1 + A sin(N theta)) instead of the feeder offset (tunekit's "
+                  "ring-print protocol, parameter amplitude); needs --setpoint-width-mm")
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--ring-segments", o.ring_segments,
+                  "Ring print: straight segments per turn, the set-point constant along each (ring-print parameter "
+                  "segments); default: a smooth ring")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--ring-start-deg", o.ring_start_deg,
                   "Ring print: where theta = 0 is, as an angle in the photo (deg, counterclockwise from +x)");
   sub->add_flag("--ring-clockwise", o.ring_clockwise, "Ring print: the nozzle ran clockwise as seen in the photo");
@@ -134,6 +142,8 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
       "  tunekit linewidth ring.png --px-per-mm 20 --speed-mm-s 10 --ring-sines 3 --ring-amplitude-mm 0.08 \\\n"
       "      --rod-radius-mm 2.5 --layer-height-mm 0.2 --setpoint-width-mm 0.66 --profile-csv ring.csv\n"
       "  tunekit freq ring.csv --time time --output width --input setpoint_width --freq-hz 0.159 --json\n"
+      "  tunekit linewidth liquefier-camera/photo.png --px-per-mm 12 --speed-mm-s 20 --ring-sines 6 \\\n"
+      "      --ring-radius-mm 30 --ring-flow-amplitude 0.3 --ring-segments 360 --setpoint-width-mm 0.45 --json\n"
       "  tunekit linewidth line.png --px-per-mm 20 --gcode line.gcode --filament-diameter-mm 1.75 \\\n"
       "      --layer-height-mm 0.2 --profile-csv line.csv && tunekit step line.csv --time time \\\n"
       "      --input setpoint_width --output width --json\n"

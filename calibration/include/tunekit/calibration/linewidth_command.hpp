@@ -21,6 +21,7 @@
 #include "tunekit/vision/charuco.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/vision/line_width.hpp"
+#include "tunekit/vision/photo_widths.hpp"
 #include "tunekit/vision/width_to_dynamics.hpp"
 
 namespace tunekit::calibration {
@@ -55,9 +56,12 @@ struct LinewidthOptions {
   double ring_radius_mm = 0;     ///< ring print: radius R (mm); 0: measured
   double rod_radius_mm = 0;      ///< ring print: feed rod radius (mm)
   double layer_height_mm = 0;    ///< ring print, or the set-point from a G-code's feed (mm)
-  double ring_start_deg = 0;     ///< ring print: theta = 0 in the photo (deg, counterclockwise from +x)
-  bool ring_clockwise = false;   ///< ring print: the nozzle ran clockwise in the photo
-  std::string gcode;             ///< G-code that printed the line; empty: none
+  double ring_flow_amplitude =
+      0;                  ///< ring print: relative extrusion modulation A of (1 + A sin(N theta)); 0: Holtrup's feeder
+  int ring_segments = 0;  ///< ring print: straight segments per turn (set-point constant along each); 0: smooth
+  double ring_start_deg = 0;    ///< ring print: theta = 0 in the photo (deg, counterclockwise from +x)
+  bool ring_clockwise = false;  ///< ring print: the nozzle ran clockwise in the photo
+  std::string gcode;            ///< G-code that printed the line; empty: none
   /// With gcode: offset_mm (NaN: profile centred on the path), reversed, filament_diameter_mm
   /// (mm); its layer_height_mm and setpoint_width_mm are filled from the members above.
   vision::PathMapping path;
@@ -66,9 +70,11 @@ struct LinewidthOptions {
 /// One measured photo.
 struct LinewidthImage {
   std::string path;
-  double px_per_mm = 0;            ///< the scale used (px/mm)
-  std::string scale_source;        ///< where the scale came from, in words
-  vision::LineWidthResult result;  ///< every line's profile in px
+  double px_per_mm = 0;                       ///< the scale used (px/mm)
+  vision::ScaleChoice scale;                  ///< where the scale came from and why
+  vision::LineWidthResult result;             ///< every line's profile in px
+  std::vector<vision::CalibratedLine> lines;  ///< the same lines in mm
+  std::optional<vision::RingResult> ring;     ///< with ring_sines: gain and phase of the ring (the longest ring)
 };
 
 struct LinewidthOutcome {

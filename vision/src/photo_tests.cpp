@@ -1,0 +1,225 @@
+// The printed tests of measure_photo_widths: the line test (widths along each straight line's
+// commanded path, mapped to time) and the ring test (gain and phase of the width against the
+// set-point at the ring's frequency; Holtrup, Tuning liquefier dynamics, MSc thesis, University
+// of Twente, 2019, section 4.3.3).
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include "photo_widths_stages.hpp"
+#include "tunekit/fitting/stats.hpp"
+
+namespace tunekit::vision {
+namespace {
+
+constexpr double kTwoPi = 2 * std::numbers::pi;
+
+// A line of the line test is a long thin bar along X: its box is more than 5 times as wide as
+// high (a 0.5 mm bead over 150 mm is 300 times; a ring, blob or purge stroke is not).
+constexpr double kStraightMinAspect = 5;
+// A ring's box is about square; an open feature whose box is within 3:1 either way is a ring
+// the detector cut open (e.g. where its end meets its start), not a line.
+constexpr double kRingMaxAspect = 3;
+// Where the camera's placement is unknown, the line is placed by its far end, whose bead width
+// is read over the last 5 mm (several bead widths: a stable median, yet short of the step).
+constexpr double kEndWindowMm = 5;
+// The first two thirds of each line's lead-in are left out: there the nozzle is still filling
+// after the travel move (a start from empty, not the step under test); the rest is the settled
+// level before the step.
+constexpr double kLeadSkip = 2.0 / 3.0;
+// Fewer samples on the path than this (a few mm at 12 px/mm) cannot show a step response.
+constexpr std::size_t kMinLineSamples = 20;
+// Ring samples before this angle (rad) are left out: the liquefier is still filling after the
+// travel move that precedes the ring (about 2.5 rad at the ring test's speed and radius covers
+// three time constants of a typical hot end).
+constexpr double kRingSkipRad = 2.5;
+// ... and the last 0.05 rad (1.5 mm on a 30 mm ring), where the ring's end runs into its start.
+constexpr double kRingEndSkipRad = 0.05;
+// The sine fit (offset, drift, cosine, sine: four terms) needs well over a period's worth of
+// samples: fewer than 50 are not a measurement.
+constexpr std::size_t kMinRingSamples = 50;
+
+double aspect_wide(const cv::Rect& b) { return static_cast<double>(b.width) / std::max(1, b.height); }
+
+// y ~ a0 + a1 t + c cos(w t) + s sin(w t): the complex amplitude c - j s at w.
+std::complex<double> sine_at(const std::vector<double>& t, const std::vector<double>& y, double w) {
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(t.size()), 4);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(t.size()));
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    A.row(r) << 1, t[i], std::cos(w * t[i]), std::sin(w * t[i]);
+    b(r) = y[i];
+  }
+  const Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
+  return {x(2), -x(3)};
+}
+
+// Valid samples of a straight line as (position on its path, width, confidence), by position.
+struct PathSamples {
+  std::vector<double> s, w, c;
+};
+
+PathSamples on_path(const MeasuredLine& ml, const TestLine& tl, double ppm, const BedPlacement& placement) {
+  double length = 0;
+  for (const auto& sg : tl.path) length += sg.length_mm;
+  // Without the camera's placement: the nozzle stopped at the path's end, the bead ends half a
+  // width beyond it.
+  const double x_end_px = ml.bbox.x + ml.bbox.width - 0.5;
+  std::vector<double> end_widths;
+  for (const auto& s : ml.samples)
+    if (s.valid() && s.x_px > x_end_px + 0.5 - kEndWindowMm * ppm) end_widths.push_back(s.width_px);
+  const double w_end_px = fitting::median(end_widths);
+  std::vector<std::array<double, 3>> rows;
+  for (const auto& s : ml.samples) {
+    if (!s.valid()) continue;
+    const double pos = placement.known ? placement.x0_mm + (s.x_px + 0.5) / ppm - tl.x0_mm
+                                       : length - (x_end_px - s.x_px - w_end_px / 2) / ppm;
+    if (pos < kLeadSkip * tl.path.front().length_mm || pos > length) continue;
+    rows.push_back({pos, s.width_px / ppm, s.confidence});
+  }
+  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
+  PathSamples out;
+  for (const auto& r : rows) out.s.push_back(r[0]), out.w.push_back(r[1]), out.c.push_back(r[2]);
+  return out;
+}
+
+std::vector<std::size_t> straight_lines(const LineWidthResult& features) {
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < features.lines.size(); ++i) {
+    const auto& l = features.lines[i];
+    if (!l.closed && aspect_wide(l.bbox) > kStraightMinAspect) idx.push_back(i);
+  }
+  // Printed first = highest Y = topmost in the photo.
+  std::sort(idx.begin(), idx.end(),
+            [&](auto a, auto b) { return features.lines[a].bbox.y < features.lines[b].bbox.y; });
+  return idx;
+}
+
+}  // namespace
+
+namespace detail {
+
+int find_ring_feature(const LineWidthResult& features) {
+  for (std::size_t i = 0; i < features.lines.size(); ++i)
+    if (looks_like_ring(features.lines[i])) return static_cast<int>(i);
+  return -1;
+}
+
+void measure_line_test(PhotoWidths& out, const LineTest& test, const BedPlacement& placement) {
+  const double ppm = out.scale.px_per_mm;
+  const auto straight = straight_lines(out.features);
+  if (straight.empty()) {
+    out.failure = fmt::format(
+        "the photo shows {} printed feature(s) but none of the line test's straight lines along X (photograph "
+        "with the bed's X axis to the right)",
+        out.features.lines.size());
+    return;
+  }
+  if (straight.size() != test.lines.size())
+    out.warnings.push_back(
+        fmt::format("the photo shows {} of the {} printed lines; the first {} are used in print order", straight.size(),
+                    test.lines.size(), std::min(straight.size(), test.lines.size())));
+  for (std::size_t k = 0; k < std::min(straight.size(), test.lines.size()); ++k) {
+    const auto& ml = out.features.lines[straight[k]];
+    const auto ps = on_path(ml, test.lines[k], ppm, placement);
+    if (ps.s.size() < kMinLineSamples) {
+      out.warnings.push_back(fmt::format("line {}: too few measured samples on the path", k + 1));
+      continue;
+    }
+    PathMapping how;
+    how.offset_mm = ps.s.front();  // map_path counts along the profile from its first sample
+    how.filament_diameter_mm = test.filament_diameter_mm;
+    how.layer_height_mm = test.layer_height_mm;
+    LineTestResult r;
+    r.feature = straight[k];
+    r.rows = map_path(ps.s, ps.w, ps.c, test.lines[k].path, how);
+    double sum = 0;
+    for (const auto& row : r.rows) sum += row.width_mm;
+    r.mean_width_mm = r.rows.empty() ? 0 : sum / static_cast<double>(r.rows.size());
+    r.median_width_mm = out.lines[straight[k]].median_mm;
+    r.placed_by_camera = placement.known;
+    out.line_test.push_back(std::move(r));
+  }
+  if (out.line_test.empty()) out.failure = "no usable width samples on the printed lines";
+}
+
+}  // namespace detail
+
+bool looks_like_ring(const MeasuredLine& l) {
+  const double a = aspect_wide(l.bbox);
+  return l.closed || (a < kRingMaxAspect && a > 1 / kRingMaxAspect);
+}
+
+namespace {
+
+// The ring's samples past its start, against time, with their set-point (r: centre and radii).
+std::vector<TimedWidth> ring_rows(const std::vector<cv::Point2d>& pts, const std::vector<double>& widths,
+                                  const std::vector<double>& conf, const RingTest& ring, const RingResult& r) {
+  const double a_sp =
+      ring.setpoint_amplitude_mm > 0 ? ring.setpoint_amplitude_mm : ring.setpoint_amplitude_mm2 / r.radius_mm;
+  const double start = ring.start_deg * std::numbers::pi / 180,
+               phase = ring.setpoint_phase_deg * std::numbers::pi / 180;
+  std::vector<TimedWidth> rows;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    double th = view_angle(pts[i], r.centre_px) - start;
+    if (ring.clockwise) th = -th;
+    th = std::fmod(th, kTwoPi);
+    if (th < 0) th += kTwoPi;
+    if (th < kRingSkipRad || th > kTwoPi - kRingEndSkipRad) continue;
+    double th_sp = th;  // the set-point is constant along each segment: its value at the middle
+    if (ring.segments > 0)
+      th_sp = kTwoPi * (std::clamp(std::floor(th / kTwoPi * ring.segments), 0.0, ring.segments - 1.0) + 0.5) /
+              ring.segments;
+    rows.push_back({th * r.radius_mm / ring.speed_mm_s, th * r.radius_mm, widths[i],
+                    ring.setpoint_width_mm + a_sp * std::sin(ring.sines * th_sp + phase), conf[i]});
+  }
+  std::sort(rows.begin(), rows.end(), [](const auto& p, const auto& q) { return p.t_s < q.t_s; });
+  // Equal times (two samples at the same angle) would break a strictly increasing time column.
+  rows.erase(std::unique(rows.begin(), rows.end(), [](const auto& p, const auto& q) { return !(q.t_s > p.t_s); }),
+             rows.end());
+  return rows;
+}
+
+}  // namespace
+
+std::optional<RingResult> measure_ring(const MeasuredLine& feature, double ppm, const RingTest& ring,
+                                       std::vector<std::string>& warnings) {
+  std::vector<cv::Point2d> pts;
+  std::vector<double> widths, conf;
+  for (const auto& s : feature.samples)
+    if (s.valid()) pts.emplace_back(s.x_px, s.y_px), widths.push_back(s.width_px / ppm), conf.push_back(s.confidence);
+  if (pts.size() < kMinRingSamples) {
+    warnings.push_back("the ring was not measured (too few valid samples)");
+    return std::nullopt;
+  }
+  RingResult r;
+  const cv::Vec3d c = fit_circle(pts);
+  r.centre_px = {c[0], c[1]};
+  r.measured_radius_mm = c[2] / ppm;
+  r.radius_mm = ring.radius_mm > 0 ? ring.radius_mm : r.measured_radius_mm;
+  r.rows = ring_rows(pts, widths, conf, ring, r);
+  if (r.rows.size() < kMinRingSamples) {
+    warnings.push_back("the ring has too few measured samples past its start for gain and phase");
+    return std::nullopt;
+  }
+  std::vector<double> t, y, ysp;
+  for (const auto& row : r.rows) t.push_back(row.t_s), y.push_back(row.width_mm), ysp.push_back(row.setpoint_mm);
+  const double w = ring.sines * ring.speed_mm_s / r.radius_mm;
+  const auto m = sine_at(t, y, w), sp = sine_at(t, ysp, w);
+  const std::complex<double> H = m / sp;
+  r.freq_hz = w / kTwoPi;
+  r.gain = std::abs(H);
+  r.phase_deg = std::arg(H) * 180 / std::numbers::pi;
+  r.samples = t.size();
+  r.setpoint_amplitude_mm = std::abs(sp);
+  r.width_amplitude_mm = std::abs(m);
+  r.skipped_start_rad = kRingSkipRad;
+  return r;
+}
+
+}  // namespace tunekit::vision
