@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "tunekit/calibration/context.hpp"
+#include "tunekit/calibration/design_inputs.hpp"
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/ident/flow_advance.hpp"
@@ -61,8 +62,12 @@ struct ExportOutcome {
 };
 
 /// Designs and prepares every file; writes nothing. InputError (exit 2) for bad results files,
-/// options or values outside the plausible or the firmware's limits.
+/// options or values outside the plausible or the firmware's limits. Reads options.results (the
+/// JSON files a user names) with read_design_inputs() and designs from them.
 ExportOutcome compute_export(const ExportOptions& options);
+/// The same from typed design inputs (design_inputs.hpp; what calibrate hands over from its
+/// analyses' outcomes); options.results is not read.
+ExportOutcome compute_export(const ExportOptions& options, const DesignInputs& inputs);
 
 inline const Envelope& to_envelope(const ExportOutcome& outcome) { return outcome.envelope; }
 /// The configuration diff (stdout of the command).

@@ -1,0 +1,224 @@
+// The inputs of the compensator design (design_inputs.hpp): from the analyses' typed outcomes,
+// and from the results files a user names, one reader per kind of result. This is the only
+// place export reads results JSON.
+#include "tunekit/calibration/design_inputs.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "tunekit/calibration/freq_command.hpp"
+#include "tunekit/calibration/json_access.hpp"
+#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/calibration/shaper_command.hpp"
+#include "tunekit/calibration/step_command.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/ident/csv.hpp"
+
+namespace tunekit::calibration {
+namespace {
+
+using nlohmann::json;
+
+/// A number of a results file, NaN when absent (null); InputError when it is not a number.
+double number_at(const json& root, const char* pointer, const std::string& what, const std::string& path) {
+  const json& j = value_at_or_null(root, json::json_pointer(pointer));
+  if (j.is_null()) return fitting::kNaN;
+  if (!j.is_number()) throw InputError(fmt::format("{} must be a number", what), path);
+  return j.get<double>();
+}
+
+/// {value, stderr, ci95: [lo, hi]} of a fitted parameter in a results file.
+EstimatedValue estimated_at(const json& param, const std::string& what, const std::string& path) {
+  EstimatedValue e;
+  e.value = number_at(param, "/value", what + ".value", path);
+  e.std_error = number_at(param, "/stderr", what + ".stderr", path);
+  const json& ci = value_at_or_null(param, "/ci95"_json_pointer);
+  if (ci.is_array() && ci.size() == 2 && ci[0].is_number() && ci[1].is_number()) {
+    e.ci95_lo = ci[0].get<double>();
+    e.ci95_hi = ci[1].get<double>();
+  }
+  return e;
+}
+
+EstimatedValue estimated_of(const fitting::Param& p) { return {p.value, p.std_error, p.ci95_lo, p.ci95_hi}; }
+
+StepDesignInput read_step_results(const json& res, const std::string& path) {
+  StepDesignInput in;
+  in.origin = path;
+  const json& params = value_at_or_null(res, "/pooled/params"_json_pointer);
+  if (params.is_object()) {
+    in.tau_s = estimated_at(value_at_or_null(params, "/tau_s"_json_pointer), "pooled.params.tau_s", path);
+    in.theta_s = estimated_at(value_at_or_null(params, "/theta_s"_json_pointer), "pooled.params.theta_s", path);
+    in.K = estimated_at(value_at_or_null(params, "/K"_json_pointer), "pooled.params.K", path);
+    if (const json& unit = value_at_or_null(params, "/K/unit"_json_pointer); unit.is_string())
+      in.K_unit = unit.get<std::string>();
+  }
+  const double a = number_at(res, "/trend/tau_s/a", "trend.tau_s.a", path);
+  const double b = number_at(res, "/trend/tau_s/b", "trend.tau_s.b", path);
+  if (std::isfinite(a) && std::isfinite(b)) in.trend = ident::TauPowerLaw{a, b};
+  const json& unit = value_at_or_null(res, "/units/input"_json_pointer);
+  in.levels_in_flow = unit.is_string() && ident::is_volumetric_flow_unit(unit.get<std::string>());
+  const json& ops = value_at_or_null(res, "/operating_points"_json_pointer);
+  if (!ops.is_array()) return in;
+  for (const json& op : ops) {
+    StepLevel l;
+    l.u = number_at(op, "/u", "operating_points[].u", path);
+    if (!(l.u > 0)) continue;  // arrivals at a stop: no flow to design for
+    l.K = number_at(op, "/K", "operating_points[].K", path);
+    l.tau_s = number_at(op, "/tau_s", "operating_points[].tau_s", path);
+    l.theta_s = number_at(op, "/theta_s", "operating_points[].theta_s", path);
+    l.flow_mm3_s = number_at(op, "/flow_mm3_s", "operating_points[].flow_mm3_s", path);
+    l.tau_ci95_lo = number_at(op, "/tau_ci95/0", "operating_points[].tau_ci95[0]", path);
+    l.tau_ci95_hi = number_at(op, "/tau_ci95/1", "operating_points[].tau_ci95[1]", path);
+    in.levels.push_back(l);
+  }
+  return in;
+}
+
+FreqDesignInput read_freq_results(const json& res, const std::string& path) {
+  // The fit freq reports as its result (results.fit), as its report and the history do.
+  FreqDesignInput in;
+  in.origin = path;
+  in.tau_s = estimated_at(value_at_or_null(res, "/fit/params/tau_s"_json_pointer), "fit.params.tau_s", path);
+  return in;
+}
+
+firmware::ShaperSetting shaper_setting_at(const json& c, const std::string& what, const std::string& path) {
+  firmware::ShaperSetting s;
+  const json& type = value_at_or_null(c, "/type"_json_pointer);
+  if (!type.is_string()) throw InputError(fmt::format("{}.type must be a string", what), path);
+  s.type = type.get<std::string>();
+  s.freq_hz = number_at(c, "/freq_hz", what + ".freq_hz", path);
+  const double z = number_at(c, "/damping", what + ".damping", path);
+  if (std::isfinite(z)) s.damping = z;
+  return s;
+}
+
+void read_shaper_results(const json& res, const std::string& path, DesignInputs& out) {
+  const json& axes = value_at_or_null(res, "/axes"_json_pointer);
+  if (!axes.is_object()) throw InputError("shaper results without 'axes'", path);
+  for (const auto& item : axes.items()) {
+    const std::string axis = item.key();
+    const json& v = item.value();
+    const json& rec = value_at_or_null(v, "/recommended"_json_pointer);
+    if (!rec.is_object()) continue;
+    if (axis != "x" && axis != "y") {
+      if (axis == "z") {
+        out.warnings.push_back(
+            fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
+      } else {
+        out.unnamed_axes.push_back(
+            fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; "
+                        "run 'tunekit shaper' on it with --axis x or --axis y",
+                        path, axis));
+        out.warnings.push_back(out.unnamed_axes.back());
+      }
+      continue;
+    }
+    AxisShaperInput a;
+    a.origin = path;
+    a.recommended = shaper_setting_at(rec, "axes." + axis + ".recommended", path);
+    const json& cands = value_at_or_null(v, "/candidates"_json_pointer);
+    if (cands.is_array())
+      for (const json& c : cands)
+        a.candidates.push_back({shaper_setting_at(c, "axes." + axis + ".candidates[]", path),
+                                number_at(c, "/score", "candidates[].score", path)});
+    out.axes[axis] = a;
+  }
+}
+
+RheoDesignInput read_rheo_results(const json& res, const std::string& path) {
+  const json& pred = value_at_or_null(res, "/prediction"_json_pointer);
+  if (!pred.is_object())
+    throw InputError(
+        "rheo results without 'prediction': run 'tunekit rheo' with the nozzle (--nozzle-d, and --nozzle-l) so that "
+        "it predicts tau over flow",
+        path);
+  RheoDesignInput in;
+  in.origin = path;
+  try {
+    in.flow_mm3_s = pred.at("flow_mm3_s").get<std::vector<double>>();
+    in.relative_tau = pred.at("relative_tau").get<std::vector<double>>();
+  } catch (const json::exception&) {
+    throw InputError("prediction.flow_mm3_s and prediction.relative_tau must be arrays of numbers", path);
+  }
+  in.reference_flow_mm3_s = number_at(pred, "/reference_flow_mm3_s", "prediction.reference_flow_mm3_s", path);
+  return in;
+}
+
+void read_one_results_file(const std::string& path, DesignInputs& out) {
+  std::string bytes;
+  const json j = read_results_json(path, &bytes);
+  out.files.emplace_back(path, bytes);
+  out.origins.push_back(path);
+  const std::string cmd = j.value("command", std::string());
+  const json& res = value_at_or_null(j, "/results"_json_pointer);
+  if (!res.is_object()) throw InputError("no 'results' object: not a tunekit results file", path);
+  if (cmd == "step") out.step = read_step_results(res, path);
+  else if (cmd == "freq") out.freq = read_freq_results(res, path);
+  else if (cmd == "shaper") read_shaper_results(res, path, out);
+  else if (cmd == "rheo") out.rheo = read_rheo_results(res, path);
+  else throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper or rheo)", cmd), path);
+}
+
+}  // namespace
+
+DesignInputs read_design_inputs(const std::vector<std::string>& results_files) {
+  DesignInputs out;
+  for (const auto& path : results_files) {
+    try {
+      read_one_results_file(path, out);
+    } catch (const json::exception& e) {
+      throw InputError(fmt::format("unexpected content in a results file: {}", e.what()), path);
+    }
+  }
+  return out;
+}
+
+StepDesignInput step_design_input(const StepOutcome& o, const std::string& origin) {
+  StepDesignInput in;
+  in.origin = origin;
+  const ident::StepAnalysis& a = o.analysis;
+  if (a.pooled) {
+    in.tau_s = estimated_of(a.pooled->param("tau_s"));
+    in.theta_s = estimated_of(a.pooled->param("theta_s"));
+    in.K = estimated_of(a.pooled->param("K"));
+    in.K_unit = a.pooled->param("K").unit;
+  }
+  if (a.level_trends.tau) in.trend = ident::TauPowerLaw{a.level_trends.tau->value("a"), a.level_trends.tau->value("b")};
+  in.levels_in_flow = ident::is_volumetric_flow_unit(o.input_unit);
+  for (const auto& l : a.arrival_levels) {
+    if (!(l.u > 0)) continue;
+    const auto& tau = l.fit.param("tau_s");
+    in.levels.push_back(
+        {l.u, l.fit.value("K"), tau.value, l.fit.value("theta_s"), tau.ci95_lo, tau.ci95_hi, fitting::kNaN});
+  }
+  return in;
+}
+
+FreqDesignInput freq_design_input(const FreqOutcome& o, const std::string& origin) {
+  FreqDesignInput in;
+  in.origin = origin;
+  if (const fitting::FitResult* fit = o.reported_fit()) in.tau_s = estimated_of(fit->param("tau_s"));
+  return in;
+}
+
+std::map<std::string, AxisShaperInput> shaper_design_inputs(const ShaperOutcome& o, const std::string& origin) {
+  std::map<std::string, AxisShaperInput> out;
+  for (const auto& x : o.axes) {
+    const std::string& label = x.resonance.label;
+    if (label != "x" && label != "y") continue;
+    auto setting = [](const ident::ShaperCandidate& c) {
+      return firmware::ShaperSetting{ident::to_string(c.type), c.freq_hz, c.damping_ratio};
+    };
+    AxisShaperInput a;
+    a.origin = origin;
+    a.recommended = setting(x.choice.recommended);
+    for (const auto& c : x.choice.candidates) a.candidates.push_back({setting(c), c.score});
+    out[label] = a;
+  }
+  return out;
+}
+
+}  // namespace tunekit::calibration

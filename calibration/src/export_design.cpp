@@ -1,0 +1,242 @@
+// The design stages of `tunekit export` (export_design.hpp).
+#include "export_design.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "tunekit/calibration/agreement.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
+#include "tunekit/machine/machine_profile.hpp"
+
+namespace tunekit::calibration::export_design {
+namespace {
+
+/// An estimate for the agreement rule: false when the value or its interval is not finite.
+bool estimate_of(const EstimatedValue& v, const std::string& method, Estimate& out) {
+  out = {method, v.value, v.ci95_lo, v.ci95_hi};
+  return std::isfinite(v.value) && std::isfinite(v.ci95_lo) && std::isfinite(v.ci95_hi);
+}
+
+void take_step(const StepDesignInput& s, LiquefierInputs& li) {
+  ident::AdvanceInputs& in = li.in;
+  in.tau_s = s.tau_s.value;
+  in.tau_stderr_s = s.tau_s.std_error;
+  in.theta_s = s.theta_s.value;
+  in.gain = s.K.value;
+  in.gain_unit = s.K_unit;
+  in.tau_source = "step";
+  li.trend_u = s.trend;
+  li.levels_in_flow = s.levels_in_flow;
+  li.levels = s.levels;
+  for (const auto& l : s.levels) in.points.push_back({l.u, l.K, l.tau_s, l.theta_s});
+}
+
+/// Both measured: the step value is designed with; the two are compared by the one rule.
+void compare_step_and_freq(const StepDesignInput& s, const FreqDesignInput& f, LiquefierInputs& li, Envelope& env) {
+  Estimate by_step, by_freq;
+  if (estimate_of(s.tau_s, "step response", by_step) && estimate_of(f.tau_s, "frequency response", by_freq)) {
+    li.agreement.push_back(compare_estimates("liquefier time constant tau", "s", by_step, by_freq));
+    li.agreement.back()["id"] = "tau";
+    if (!li.agreement.back().at("agree").get<bool>())
+      env.warn(li.agreement.back().at("statement").get<std::string>() + "; the step value is used");
+    return;
+  }
+  env.warn(
+      fmt::format("the step response gives tau = {:.4g} s, the frequency response {:.4g} s; without a 95 % interval "
+                  "for each they are not compared; the step value is used",
+                  s.tau_s.value, f.tau_s.value));
+}
+
+}  // namespace
+
+LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, Envelope& env) {
+  LiquefierInputs li;
+  ident::AdvanceInputs& in = li.in;
+  if (d.step) take_step(*d.step, li);
+  const bool freq_tau = d.freq && std::isfinite(d.freq->tau_s.value);
+  if (!std::isfinite(in.tau_s) && freq_tau) {
+    in.tau_s = d.freq->tau_s.value;
+    in.tau_stderr_s = d.freq->tau_s.std_error;
+    in.tau_source = "freq";
+  } else if (std::isfinite(in.tau_s) && freq_tau) {
+    compare_step_and_freq(*d.step, *d.freq, li, env);
+  }
+  if (d.rheo) {
+    in.rheo_flow_mm3_s = d.rheo->flow_mm3_s;
+    in.rheo_relative_tau = d.rheo->relative_tau;
+    in.rheo_reference_flow_mm3_s = d.rheo->reference_flow_mm3_s;
+  }
+  if (std::isfinite(a.pa_k)) {
+    in.tau_s = a.pa_k;
+    in.tau_stderr_s = fitting::kNaN;
+    in.tau_source = "command line";
+    in.points.clear();
+    in.rheo_flow_mm3_s.clear();
+    in.rheo_relative_tau.clear();
+  }
+  return li;
+}
+
+void apply_machine_profile(const ExportOptions& a, LiquefierInputs& li, Envelope& env) {
+  machine::MachineProfile profile;
+  if (!a.profile.empty()) {
+    profile = machine::load_machine_profile(a.profile);
+    env.add_input(a.profile);
+  }
+  ident::AdvanceInputs& in = li.in;
+  in.filament_area_mm2 = profile.filament_area_mm2();
+  if (li.levels_in_flow)
+    for (auto& p : in.points) p.feed_mm_s /= in.filament_area_mm2;  // mm^3/s -> mm/s of filament
+  in.line_area_mm2 = profile.line_area_mm2();
+  in.print_speed_mm_s = profile.print.speed_mm_s;
+  in.print_accel_mm_s2 = profile.print.max_accel_mm_s2;
+  in.extruder_accel_limit_mm_s2 = profile.extruder.max_accel_mm_s2;
+  in.design_flow_mm3_s = a.design_flow;
+}
+
+std::map<std::string, firmware::ShaperSetting> firmware_shapers(const DesignInputs& d, firmware::ExportFirmware fw,
+                                                                bool ft_motion, Envelope& env) {
+  // The firmware must have the shaper and accept its damping (firmware_limits.hpp).
+  auto usable = [&](const firmware::ShaperSetting& s) {
+    const auto f = firmware::limits::find_shaper(fw, firmware::canonical_shaper_type(s.type), ft_motion);
+    return f && s.damping <= f->max_damping;
+  };
+  std::map<std::string, firmware::ShaperSetting> out;
+  for (const auto& [axis, in] : d.axes) {
+    if (usable(in.recommended)) {
+      out[axis] = in.recommended;
+      continue;
+    }
+    // The overall recommendation is not available on this firmware: the best-scoring candidate
+    // the firmware has (the results list every type's best frequency).
+    const ScoredShaper* best = nullptr;
+    for (const auto& c : in.candidates)
+      if (usable(c.setting) && std::isfinite(c.score) && (!best || c.score < best->score)) best = &c;
+    const std::string title = firmware::limits::firmware_title(fw);
+    if (!best)
+      throw InputError(fmt::format("axes.{}: the recommended shaper {} is not available in {} and no candidate is ({} "
+                                   "has {}{}); run 'tunekit shaper --firmware {}'",
+                                   axis, in.recommended.type, title, title, firmware::limits::shaper_list(fw),
+                                   fw == firmware::ExportFirmware::marlin ? ": its input shaping is ZV only" : "",
+                                   firmware::to_string(fw)),
+                       in.origin);
+    env.warn(
+        fmt::format("{}: axis {}: the recommended {} shaper is not available in {} (it has {}); using the "
+                    "best-scoring candidate it has: {} at {:.1f} Hz",
+                    in.origin, axis, in.recommended.type, title, firmware::limits::shaper_list(fw), best->setting.type,
+                    best->setting.freq_hz));
+    out[axis] = best->setting;
+  }
+  return out;
+}
+
+namespace {
+
+/// The levels as flows (mm^3/s) for the flow-dependent design.
+ident::FlowAdvanceInputs flow_inputs(const LiquefierInputs& li, const ident::AdvanceDesign& design) {
+  const ident::AdvanceInputs& in = li.in;
+  ident::FlowAdvanceInputs fin;
+  fin.filament_area_mm2 = in.filament_area_mm2;
+  for (const auto& l : li.levels) {
+    const double flow = std::isfinite(l.flow_mm3_s) ? l.flow_mm3_s
+                        : li.levels_in_flow         ? l.u
+                                                    : l.u * in.filament_area_mm2;  // feed mm/s -> mm^3/s
+    fin.levels.push_back({flow, l.tau_s, l.tau_ci95_lo, l.tau_ci95_hi});
+  }
+  if (li.trend_u) {
+    // tau = a u^b with u a feed (mm/s): in flow, a (Q/A)^b = (a A^-b) Q^b.
+    ident::TauPowerLaw t = *li.trend_u;
+    if (!li.levels_in_flow) t.a *= std::pow(in.filament_area_mm2, -t.b);
+    fin.trend = t;
+  }
+  fin.design_flow_mm3_s = design.design_flow_mm3_s;
+  fin.theta_s = design.theta_s;
+  if (std::isfinite(in.print_accel_mm_s2) && in.print_accel_mm_s2 > 0) fin.orca_accels_mm_s2 = {in.print_accel_mm_s2};
+  return fin;
+}
+
+// A rheology prediction whose shape of tau(Q) differs from the measured one by more than this
+// fraction over the identified flows is warned about: beyond the few-% scatter of the levels'
+// own intervals, it says the melt model or the nozzle geometry given to rheo is not this machine's.
+constexpr double kRheologyGapWarning = 0.2;
+
+/// The predicted shape of tau(Q), scaled to the measured tau at the prediction's reference flow,
+/// against the measured tau(Q) over the identified flows.
+nlohmann::json rheology_cross_check(const ident::AdvanceInputs& in, const ident::FlowAdvanceInputs& fin,
+                                    const ident::FlowAdvanceDesign& flow, Envelope& env) {
+  const auto& rq = in.rheo_flow_mm3_s;
+  const auto& rr = in.rheo_relative_tau;
+  auto rel_at = [&](double q) {
+    if (q <= rq.front()) return rr.front();
+    if (q >= rq.back()) return rr.back();
+    const auto it = std::upper_bound(rq.begin(), rq.end(), q);
+    const std::size_t i = static_cast<std::size_t>(it - rq.begin());
+    return rr[i - 1] + (q - rq[i - 1]) / (rq[i] - rq[i - 1]) * (rr[i] - rr[i - 1]);
+  };
+  const double qref =
+      std::isfinite(in.rheo_reference_flow_mm3_s) ? in.rheo_reference_flow_mm3_s : flow.design_flow_mm3_s;
+  const double scale = ident::flow_tau_s(fin, qref) / rel_at(qref);
+  std::vector<double> fq, ft;
+  double gap = 0;
+  for (const auto& c : flow.curve) {
+    fq.push_back(c.flow_mm3_s);
+    ft.push_back(scale * rel_at(c.flow_mm3_s));
+    gap = std::max(gap, std::abs(ft.back() - c.tau_s) / c.tau_s);
+  }
+  if (gap > kRheologyGapWarning)
+    env.warn(
+        fmt::format("the rheology prediction of tau(Q) differs from the measured one by up to {:.0f} % over the "
+                    "identified flows (scaled to agree at {:.3g} mm^3/s)",
+                    100 * gap, qref));
+  return {{"flow_mm3_s", fq}, {"tau_pred_s", ft}, {"max_gap_rel", gap}, {"reference_flow_mm3_s", qref}};
+}
+
+firmware::KalicoAdvanceSetting kalico_setting(const ident::FlowAdvanceDesign& flow) {
+  firmware::KalicoAdvanceSetting k;
+  k.model = ident::to_string(flow.kalico.model);
+  k.linear_advance_s = flow.kalico.linear_advance_s;
+  k.nonlinear_offset_mm = flow.kalico.nonlinear_offset_mm;
+  k.linearization_velocity_mm_s = flow.kalico.linearization_velocity_mm_s;
+  if (std::isfinite(flow.kalico_time_offset_s)) k.time_offset_s = flow.kalico_time_offset_s;
+  return k;
+}
+
+}  // namespace
+
+nlohmann::json design_advance(const ExportOptions& a, LiquefierInputs& li, ExportOutcome& outcome) {
+  Envelope& env = outcome.envelope;
+  firmware::CompensatorSettings& settings = outcome.settings;
+  const ident::AdvanceInputs& in = li.in;
+  const bool have_tau = std::isfinite(in.tau_s) || !in.points.empty();
+  if (a.no_pa || !have_tau) return nullptr;
+  if (a.profile.empty())
+    env.warn(
+        "no --profile: assuming 1.75 mm filament, a 0.45 x 0.2 mm line at 60 mm/s, and no acceleration limits "
+        "(the smoothing time is not designed)");
+  auto& design = outcome.design;
+  design = ident::design_advance(in);
+  settings.pa_k_s = design->k_s;
+  settings.pa_smooth_s = firmware::smoothing_time_for(outcome.firmware, *design);
+  for (const auto& w : design->warnings) env.warn(w);
+  // Flow-dependent design (flow_advance.hpp) when two or more levels were identified.
+  if (!(design->schedule.size() >= 2 && design->k_source == "operating points")) return nullptr;
+  const ident::FlowAdvanceInputs fin = flow_inputs(li, *design);
+  outcome.flow = ident::design_flow_advance(fin);
+  const auto& flow = *outcome.flow;
+  for (const auto& w : flow.warnings) env.warn(w);
+  nlohmann::json rheology;
+  if (in.rheo_flow_mm3_s.size() >= 2 && in.rheo_flow_mm3_s.size() == in.rheo_relative_tau.size())
+    rheology = rheology_cross_check(in, fin, flow, env);
+  settings.pa_k_s = flow.k_design_s;
+  // One design everywhere: the per-flow schedule and K follow the flow design (which uses the
+  // power-law trend when the step analysis gave one).
+  design->k_s = flow.k_design_s;
+  for (auto& s : design->schedule) s.k_s = ident::needed_advance_s(fin, s.flow_mm3_s);
+  if (outcome.firmware == firmware::ExportFirmware::kalico) settings.kalico = kalico_setting(flow);
+  return rheology;
+}
+
+}  // namespace tunekit::calibration::export_design

@@ -1,0 +1,47 @@
+#pragma once
+// The design stages of `tunekit export` (export_design.cpp): from typed design inputs to the
+// advance design, the flow-dependent design and the firmware's shapers. Private to calibration.
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/calibration/design_inputs.hpp"
+#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/export_command.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/ident/flow_advance.hpp"
+#include "tunekit/ident/pressure_advance.hpp"
+
+namespace tunekit::calibration::export_design {
+
+/// The liquefier's side of the design: the advance inputs, the levels in flow and tau's trend.
+struct LiquefierInputs {
+  ident::AdvanceInputs in;
+  std::vector<StepLevel> levels;                       ///< the step analysis' operating points (u > 0)
+  bool levels_in_flow = false;                         ///< their u is mm^3/s (else filament feed, mm/s)
+  std::optional<ident::TauPowerLaw> trend_u;           ///< tau = a u^b over the levels' u
+  nlohmann::json agreement = nlohmann::json::array();  ///< step against frequency response tau
+};
+
+/// Step (else frequency response) tau and the levels; --pa-k overrides them. Compares the step
+/// and frequency-response tau by the one agreement rule (agreement.hpp) and warns when they differ.
+LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, Envelope& env);
+
+/// The machine profile's filament, line and limits (assumed defaults without --profile).
+void apply_machine_profile(const ExportOptions& a, LiquefierInputs& li, Envelope& env);
+
+/// Each axis' shaper as the firmware can take it: the recommendation, or the best-scoring
+/// candidate the firmware has (with a warning); InputError when it has none.
+std::map<std::string, firmware::ShaperSetting> firmware_shapers(const DesignInputs& d, firmware::ExportFirmware fw,
+                                                                bool ft_motion, Envelope& env);
+
+/// The advance design and, with two or more levels, the flow-dependent one (with the rheology
+/// cross-check when a prediction was given); fills outcome.design, outcome.flow and the settings.
+/// Returns the rheology cross-check's JSON (null without one).
+nlohmann::json design_advance(const ExportOptions& a, LiquefierInputs& li, ExportOutcome& outcome);
+
+}  // namespace tunekit::calibration::export_design
