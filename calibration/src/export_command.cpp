@@ -2,7 +2,7 @@
 // `tunekit step`, `freq`, `shaper` and `rheo` (or values on the command line) and write them
 // into a Klipper printer.cfg, a Marlin Configuration_adv.h or a RepRapFirmware config.g.
 // By default only a unified diff is printed; --write applies it (backup + atomic rename).
-// The command line (options, help) is in cmd_export_options.cpp.
+// The command line (options, help) is apps/cli/src/export_cli.cpp; option parsing is export_options.cpp.
 #include <algorithm>
 #include <cmath>
 #include <ctime>

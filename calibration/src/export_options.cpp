@@ -1,5 +1,5 @@
 // tunekit export's command line: its options bound to ExportOptions, the help text, and the
-// parsing of option values (the command itself is cmd_export.cpp).
+// parsing of option values (the command itself is export_command.cpp).
 #include <algorithm>
 #include <cmath>
 #include <ctime>

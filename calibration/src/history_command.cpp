@@ -6,7 +6,7 @@
 //   tunekit history trend   [--machine M] [-q NAME]  each quantity against the machine's baseline
 //   tunekit history report  --out fleet.html         one row per machine, sparklines, drift flagged
 //   tunekit history import  PATH...                  run directories, results and batch summaries
-//                                                    (cmd_history_import.cpp)
+//                                                    (history_import.cpp)
 // Drift is a change from the baseline larger than the combined uncertainty of the two runs
 // (tunekit/history/drift.hpp); `--require 'drift.x.freq_hz>-5%'` gates CI on it.
 #include <algorithm>

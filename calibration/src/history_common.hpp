@@ -1,6 +1,6 @@
 #pragma once
-// Helpers shared by `tunekit history`'s subcommands: list, show (cmd_history.cpp), trend and
-// report (history_trend.cpp), import (cmd_history_import.cpp). The options and outcomes are in
+// Helpers shared by `tunekit history`'s subcommands: list, show (history_command.cpp), trend and
+// report (history_trend.cpp), import (history_import.cpp). The options and outcomes are in
 // tunekit/calibration/history_command.hpp.
 
 #include <cmath>

@@ -1,5 +1,5 @@
 #pragma once
-// Shared by `tunekit linewidth`'s measurement (cmd_linewidth.cpp) and its mapping of a profile to
+// Shared by `tunekit linewidth`'s measurement (linewidth_command.cpp) and its mapping of a profile to
 // time (linewidth_profile_csv.cpp): one measured image and the rounding of reported values.
 
 #include <cmath>
