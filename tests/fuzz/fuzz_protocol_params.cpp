@@ -13,6 +13,7 @@
 
 using namespace tunekit::protocols;
 using namespace tunekit::firmware;
+using tunekit::machine::MachineProfile;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 2) return -1;
