@@ -14,6 +14,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 #include "html.hpp"
 
@@ -280,7 +281,7 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
   }
   if (!images.empty()) h << "<h2>Plots</h2>\n";
   for (const auto& img : images) {
-    const std::string bytes = ident::read_file_bytes(img.path);
+    const std::string bytes = read_file_bytes(img.path);
     h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html::escape(img.caption)
       << "\" src=\"data:" << image_mime(img.path) << ";base64," << base64(bytes) << "\"><figcaption>"
       << html::escape(img.caption) << "</figcaption></figure>\n";

@@ -9,6 +9,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::ident {
 namespace {
