@@ -11,6 +11,7 @@
 #include "tunekit/calibration/belts_command.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 
@@ -28,7 +29,7 @@ BeltsOutcome compute_belts(const BeltsOptions& a) {
   ident::AccelInputOptions in = a.input;
   in.axis = 'x';  // not used: a belt record is not an axis measurement
   auto analyse = [&](const std::string& path) {
-    const std::string bytes = ident::read_file_bytes(path);
+    const std::string bytes = read_file_bytes(path);
     o.inputs.push_back({path, sha256_hex(bytes), bytes.size()});
     const auto rec = ident::load_accel_csv(path, bytes, in);
     for (const auto& w : rec.warnings) o.warnings.push_back(path + ": " + w);

@@ -15,6 +15,7 @@
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/firmware/delta_export.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -72,7 +73,7 @@ DeltaOutcome compute_delta(const DeltaOptions& a) {
   if (!a.export_firmware.empty()) outcome.firmware = firmware::parse_export_firmware(a.export_firmware);
   if (!a.export_file.empty() && a.export_firmware.empty()) throw InputError("--export-file needs --export FIRMWARE");
 
-  const std::string bytes = ident::read_file_bytes(a.probes_csv);
+  const std::string bytes = read_file_bytes(a.probes_csv);
   outcome.input = input_digest(a.probes_csv, bytes);
   const auto t = ident::parse_csv(bytes, a.probes_csv);
   const auto hdr = source_location(a.probes_csv, t.header_line);

@@ -13,6 +13,7 @@
 #include "tunekit/core/version.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 
@@ -26,11 +27,11 @@ std::string sha256_hex(std::string_view bytes) {
   return hex;
 }
 
-std::string sha256_file(const std::string& path) { return sha256_hex(ident::read_file_bytes(path)); }
+std::string sha256_file(const std::string& path) { return sha256_hex(read_file_bytes(path)); }
 
 Envelope::Envelope(std::string command) : command_(std::move(command)) {}
 
-void Envelope::add_input(const std::string& path) { add_input(path, ident::read_file_bytes(path)); }
+void Envelope::add_input(const std::string& path) { add_input(path, read_file_bytes(path)); }
 
 void Envelope::add_input(const std::string& path, std::string_view bytes) {
   add_input_digest(path, sha256_hex(bytes), bytes.size());

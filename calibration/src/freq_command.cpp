@@ -15,6 +15,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/sine_dwell.hpp"
 #include "tunekit/ident/spectrum.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -240,7 +241,7 @@ FreqOutcome compute_freq(const FreqOptions& a) {
   FreqOutcome o;
   o.options = a;
   o.mode = resolved_mode(a);
-  const std::string bytes = ident::read_file_bytes(a.file);
+  const std::string bytes = read_file_bytes(a.file);
   ident::CsvOptions copt;
   copt.columns = {a.output_column};
   if (!a.input_column.empty()) copt.columns.push_back(a.input_column);

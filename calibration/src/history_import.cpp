@@ -18,6 +18,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/history/store.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 #include "history_common.hpp"
 
@@ -58,7 +59,7 @@ struct ImportItem {
 bool hist_looks_like_result(const fs::path& p) {
   std::string head;
   try {
-    head = ident::read_file_bytes(p.string()).substr(0, 4096);
+    head = read_file_bytes(p.string()).substr(0, 4096);
   } catch (const std::exception&) {
     return false;
   }

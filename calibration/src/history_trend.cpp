@@ -17,6 +17,7 @@
 #include "tunekit/core/atomic_file.hpp"
 
 #include "history_common.hpp"
+#include "html.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -25,18 +26,15 @@ using history_cmd::hist_db_of;
 using history_cmd::hist_machines;
 using history_cmd::hist_number;
 
-std::string hist_html_escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
+// The fleet report's page width and style sheet (tall table cells, drift flags, sparklines).
+constexpr int kFleetMaxWidthPx = 1400;
+std::string fleet_css() {
+  return html::base_css(kFleetMaxWidthPx) +
+         "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:.3em "
+         ".5em;text-align:left;vertical-align:top}\n" +
+         std::string(html::kTableCss) +
+         "td.drift{background:#fdecea}.flag{color:#c0392b;font-weight:bold}.small{color:#555;font-size:.85em}\n"
+         "svg.spark{display:block}\n";
 }
 
 // The quantities to show: those asked for, else the headline ones first, then the rest by name.
@@ -325,22 +323,14 @@ HistoryReportOutcome compute_history_report(const HistoryOptions& a) {
       if (present.count(h)) columns.push_back(h);
 
   std::ostringstream h;
-  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-    << "<title>tunekit fleet report</title>\n<style>\n"
-    << "body{font-family:DejaVu Sans,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1400px;color:#222}\n"
-    << "h1{font-size:1.6em}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}\n"
-    << "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:.3em "
-       ".5em;text-align:left;vertical-align:top}\n"
-    << "td.num{text-align:right;font-variant-numeric:tabular-nums}th{background:#f2f2f2}\n"
-    << "td.drift{background:#fdecea}.flag{color:#c0392b;font-weight:bold}.small{color:#555;font-size:.85em}\n"
-    << "svg.spark{display:block}\n</style>\n</head>\n<body>\n";
+  h << html::head("tunekit fleet report", fleet_css());
   h << "<h1>tunekit fleet report</h1>\n";
   h << fmt::format(
       "<p>{} machines, database {}. A quantity is flagged when its latest run differs from the machine's "
       "baseline (first {} run(s)) by more than {:g} times the combined standard error.</p>\n",
-      machines.size(), hist_html_escape(store.connection().name()), a.drift.baseline_runs, a.drift.coverage_k);
+      machines.size(), html::escape(store.connection().name()), a.drift.baseline_runs, a.drift.coverage_k);
   h << "<table id=\"fleet\">\n<tr><th>machine</th><th>runs</th><th>last run (UTC)</th>";
-  for (const auto& c : columns) h << "<th>" << hist_html_escape(c) << "</th>";
+  for (const auto& c : columns) h << "<th>" << html::escape(c) << "</th>";
   h << "<th>drifted</th></tr>\n";
   for (const auto& t : trends) {
     std::string last;
@@ -349,8 +339,8 @@ HistoryReportOutcome compute_history_report(const HistoryOptions& a) {
       if (!s.points.empty()) last = std::max(last, s.points.back().point.run_utc);
       if (s.latest_drifted()) drifted.push_back(s.name);
     }
-    h << "<tr data-machine=\"" << hist_html_escape(t.machine_id) << "\"><td>" << hist_html_escape(t.machine_id)
-      << "</td><td class=\"num\">" << t.runs << "</td><td>" << hist_html_escape(last) << "</td>";
+    h << "<tr data-machine=\"" << html::escape(t.machine_id) << "\"><td>" << html::escape(t.machine_id)
+      << "</td><td class=\"num\">" << t.runs << "</td><td>" << html::escape(last) << "</td>";
     for (const auto& c : columns) {
       const auto it = std::find_if(t.series.begin(), t.series.end(), [&](const auto& s) { return s.name == c; });
       if (it == t.series.end() || it->points.empty()) {
@@ -360,18 +350,17 @@ HistoryReportOutcome compute_history_report(const HistoryOptions& a) {
       const auto& p = it->points.back();
       const std::string value = it->is_text ? p.point.text : display_number(p.point.value) + " " + it->unit;
       h << "<td" << (p.drifted ? " class=\"drift\" data-drifted=\"1\"" : "") << ">" << hist_sparkline(*it)
-        << hist_html_escape(value);
+        << html::escape(value);
       if (!it->is_text && !p.in_baseline && std::isfinite(p.change_pct))
         h << fmt::format(" <span class=\"small\">({:+.1f} %)</span>", p.change_pct);
       if (p.drifted && it->drifted_since)
-        h << "<br><span class=\"flag\">drift since " << hist_html_escape(it->points[*it->drifted_since].point.run_utc)
+        h << "<br><span class=\"flag\">drift since " << html::escape(it->points[*it->drifted_since].point.run_utc)
           << "</span>";
       h << "</td>";
     }
     std::string dl;
     for (const auto& d : drifted) dl += (dl.empty() ? "" : ", ") + d;
-    h << "<td>" << (drifted.empty() ? "" : "<span class=\"flag\">" + hist_html_escape(dl) + "</span>")
-      << "</td></tr>\n";
+    h << "<td>" << (drifted.empty() ? "" : "<span class=\"flag\">" + html::escape(dl) + "</span>") << "</td></tr>\n";
     out.rows.push_back({t.machine_id, t.runs, last, drifted});
   }
   h << "</table>\n</body>\n</html>\n";

@@ -10,6 +10,7 @@
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/calibration/inspect_command.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 
@@ -17,7 +18,7 @@ InspectOutcome compute_inspect(const InspectOptions& a) {
   ident::CsvOptions opt;
   opt.columns = a.columns;
   opt.time_column = a.time_column;
-  const std::string bytes = ident::read_file_bytes(a.file);
+  const std::string bytes = read_file_bytes(a.file);
   const auto table = ident::parse_csv(bytes, a.file, opt);
 
   InspectOutcome outcome;

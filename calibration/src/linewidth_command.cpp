@@ -29,6 +29,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/machine/gcode.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 
@@ -186,7 +187,7 @@ LinewidthOutcome compute_linewidth_camera(const LinewidthOptions& a) {
   std::vector<cv::Mat> grays;
   for (const auto& p : a.images) {
     grays.push_back(vision::load_gray_image(p));
-    outcome.inputs.push_back(input_digest(p, ident::read_file_bytes(p)));
+    outcome.inputs.push_back(input_digest(p, read_file_bytes(p)));
   }
   std::vector<int> skipped;
   outcome.camera = vision::calibrate_camera(grays, spec, &skipped);
@@ -243,7 +244,7 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
   std::optional<vision::CameraProfile> cam;
   if (!a.camera.empty()) {
     cam = vision::load_camera_profile(a.camera);
-    outcome.inputs.push_back(input_digest(a.camera, ident::read_file_bytes(a.camera)));
+    outcome.inputs.push_back(input_digest(a.camera, read_file_bytes(a.camera)));
     if (!cam->has_bed_plane && a.px_per_mm <= 0 && !board && a.reference_width_mm <= 0)
       throw InputError("camera profile has no bed plane scale: add --px-per-mm, --chessboard or --reference-width-mm",
                        a.camera);
@@ -251,7 +252,7 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
   std::vector<ImageRun> runs;
   for (const auto& path : a.images) {
     runs.push_back(measure_image(a, path, cam, err));
-    outcome.inputs.push_back(input_digest(path, ident::read_file_bytes(path)));
+    outcome.inputs.push_back(input_digest(path, read_file_bytes(path)));
     const auto& run = runs.back();
     const auto& res = run.result;
     for (const auto& w : run.warnings) outcome.warnings.push_back(fmt::format("{}: {}", path, w));

@@ -17,6 +17,7 @@
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/vision/photo_widths.hpp"
 #include "tunekit/vision/width_to_dynamics.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration::linewidth {
 namespace {

@@ -17,6 +17,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/liquefier_prediction.hpp"
 #include "tunekit/ident/rheology_data.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 
@@ -35,7 +36,7 @@ nlohmann::json nozzle_geometry_json(const fitting::NozzleGeometry& g) {
 }
 
 NozzleFit compute_nozzle_fit(const NozzleOptions& a, NozzleOutcome& outcome) {
-  const std::string bytes = ident::read_file_bytes(a.fit_file);
+  const std::string bytes = read_file_bytes(a.fit_file);
   outcome.input_path = a.fit_file;
   outcome.input_sha256 = sha256_hex(bytes);
   outcome.input_size_bytes = bytes.size();

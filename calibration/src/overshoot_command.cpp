@@ -19,6 +19,7 @@
 #include "tunekit/ident/overshoot.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -53,9 +54,7 @@ ident::OvershootAnalysis overshoot_from_run_dir(const std::string& dir, const id
   if (a.rows != c.rows)
     throw InputError(fmt::format("{} has {} rows but {} has {}: not one time base", raw[0], a.rows, cmd[0], c.rows),
                      dir);
-  if (inputs)
-    *inputs = {input_digest(raw[0], ident::read_file_bytes(raw[0])),
-               input_digest(cmd[0], ident::read_file_bytes(cmd[0]))};
+  if (inputs) *inputs = {input_digest(raw[0], read_file_bytes(raw[0])), input_digest(cmd[0], read_file_bytes(cmd[0]))};
   try {
     return ident::analyze_overshoot_accel(a.column("time").values, a.column("accel_x").values,
                                           a.column("accel_y").values, c.column("accel_x").values,
@@ -82,7 +81,7 @@ ident::OvershootAnalysis overshoot_from_csv(const OvershootOptions& a, std::vect
     co.columns.insert(co.columns.end(), {a.accel_x, a.accel_y, a.cmd_x, a.cmd_y});
   }
   const auto t = ident::read_csv(a.input, co);
-  inputs = {input_digest(a.input, ident::read_file_bytes(a.input))};
+  inputs = {input_digest(a.input, read_file_bytes(a.input))};
   try {
     if (position)
       return ident::analyze_overshoot_position(

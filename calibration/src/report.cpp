@@ -14,6 +14,9 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"
+#include "tunekit/core/file_bytes.hpp"
+
+#include "html.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -34,18 +37,18 @@ std::string base64(std::string_view bytes) {
   return out;
 }
 
-std::string html_escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
+// The report's page width and style sheet (tables, figures, warnings, agreements).
+constexpr int kReportMaxWidthPx = 1000;
+std::string report_css() {
+  return html::base_css(kReportMaxWidthPx) +
+         "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:.3em "
+         ".7em;text-align:left}\n" +
+         std::string(html::kTableCss) +
+         "figure{margin:1em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:.9em}\n"
+         "pre{background:#f7f7f7;border:1px solid #ddd;padding:.8em;overflow-x:auto;font-size:.85em}\n"
+         ".warn{color:#a15c00}.todo{color:#333}.ci{color:#444;font-variant-numeric:tabular-nums}\n"
+         ".agree{border-left:4px solid #2c7a2c;padding-left:.6em}.disagree{border-left:4px solid "
+         "#b00;padding-left:.6em}\n";
 }
 
 // The report's Content-Security-Policy: no request may leave the file.
@@ -217,11 +220,11 @@ std::string interval_cell(const nlohmann::json& results, const nlohmann::json& r
   if (!ci_path.empty()) {
     const auto* ci = json_at(results, ci_path);
     if (ci != nullptr && ci->is_array() && ci->size() == 2 && (*ci)[0].is_number() && (*ci)[1].is_number())
-      return fmt::format("<td class=\"ci\" data-path=\"{}\">[{}, {}]</td>", html_escape(ci_path),
+      return fmt::format("<td class=\"ci\" data-path=\"{}\">[{}, {}]</td>", html::escape(ci_path),
                          display_number((*ci)[0].get<double>()), display_number((*ci)[1].get<double>()));
     return "<td class=\"ci\">n/a</td>";
   }
-  return "<td class=\"ci\">" + html_escape(row.value("basis", std::string("n/a"))) + "</td>";
+  return "<td class=\"ci\">" + html::escape(row.value("basis", std::string("n/a"))) + "</td>";
 }
 
 }  // namespace
@@ -229,26 +232,14 @@ std::string interval_cell(const nlohmann::json& results, const nlohmann::json& r
 std::string build_report_html(const nlohmann::json& env, const std::vector<ReportImage>& images) {
   const auto& results = env.contains("results") ? env["results"] : env;
   std::ostringstream h;
-  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-    // Nothing may leave the file: no scripts, no fetches; images only from data: URIs.
-    << "<meta http-equiv=\"Content-Security-Policy\" content=\"" << kReportCsp << "\">\n"
-    << "<title>tunekit calibration report</title>\n<style>\n"
-    << "body{font-family:DejaVu Sans,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1000px;color:#222}\n"
-    << "h1{font-size:1.6em}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}\n"
-    << "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:.3em .7em;text-align:left}\n"
-    << "td.num{text-align:right;font-variant-numeric:tabular-nums}th{background:#f2f2f2}\n"
-    << "figure{margin:1em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:.9em}\n"
-    << "pre{background:#f7f7f7;border:1px solid #ddd;padding:.8em;overflow-x:auto;font-size:.85em}\n"
-    << ".warn{color:#a15c00}.todo{color:#333}.ci{color:#444;font-variant-numeric:tabular-nums}\n"
-    << ".agree{border-left:4px solid #2c7a2c;padding-left:.6em}.disagree{border-left:4px solid "
-       "#b00;padding-left:.6em}\n"
-    << "</style>\n</head>\n<body>\n";
+  // Nothing may leave the file: no scripts, no fetches; images only from data: URIs.
+  h << html::head("tunekit calibration report", report_css(), kReportCsp);
   h << "<h1>tunekit calibration report</h1>\n";
   const std::string machine = results.value("machine", std::string());
-  if (!machine.empty()) h << "<p>Machine: " << html_escape(machine) << "</p>\n";
+  if (!machine.empty()) h << "<p>Machine: " << html::escape(machine) << "</p>\n";
   if (env.contains("tool"))
-    h << "<p>tunekit " << html_escape(env["tool"].value("version", std::string("?"))) << ", command <code>"
-      << html_escape(env.value("command", std::string("?"))) << "</code></p>\n";
+    h << "<p>tunekit " << html::escape(env["tool"].value("version", std::string("?"))) << ", command <code>"
+      << html::escape(env.value("command", std::string("?"))) << "</code></p>\n";
 
   h << "<h2>Summary</h2>\n<table id=\"summary\">\n"
     << "<tr><th>quantity</th><th>value</th><th>95 % interval</th><th>unit</th></tr>\n";
@@ -257,9 +248,9 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
       const std::string path = row.value("path", std::string());
       const auto* v = json_at(results, path);
       if (v == nullptr || !v->is_number()) continue;
-      h << "<tr><td>" << html_escape(row.value("label", path)) << "</td><td class=\"num\" data-path=\""
-        << html_escape(path) << "\" data-value=\"" << v->dump() << "\">" << display_number(v->get<double>()) << "</td>"
-        << interval_cell(results, row) << "<td>" << html_escape(row.value("unit", std::string())) << "</td></tr>\n";
+      h << "<tr><td>" << html::escape(row.value("label", path)) << "</td><td class=\"num\" data-path=\""
+        << html::escape(path) << "\" data-value=\"" << v->dump() << "\">" << display_number(v->get<double>()) << "</td>"
+        << interval_cell(results, row) << "<td>" << html::escape(row.value("unit", std::string())) << "</td></tr>\n";
     }
   h << "</table>\n";
 
@@ -268,8 +259,8 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
     for (const auto& a : results["agreement"]) {
       const bool ok = a.value("agree", false);
       h << "<p class=\"" << (ok ? "agree" : "disagree") << "\" id=\"agreement-"
-        << html_escape(a.value("id", std::string("quantity"))) << "\" data-agree=\"" << (ok ? "true" : "false") << "\">"
-        << html_escape(a.value("statement", std::string())) << "</p>\n";
+        << html::escape(a.value("id", std::string("quantity"))) << "\" data-agree=\"" << (ok ? "true" : "false")
+        << "\">" << html::escape(a.value("statement", std::string())) << "</p>\n";
     }
   }
 
@@ -277,27 +268,27 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
     h << "<h2>Warnings</h2>\n<ul id=\"warnings\">\n";
     for (const auto& w : env["warnings"]) {
       const std::string text = w.get<std::string>();
-      h << "<li class=\"warn\">" << html_escape(text)
-        << "<br><span class=\"todo\">What to do: " << html_escape(advice_for_warning(text)) << "</span></li>\n";
+      h << "<li class=\"warn\">" << html::escape(text)
+        << "<br><span class=\"todo\">What to do: " << html::escape(advice_for_warning(text)) << "</span></li>\n";
     }
     h << "</ul>\n";
   }
   if (results.contains("notes") && results["notes"].is_array() && !results["notes"].empty()) {
     h << "<h2>Notes</h2>\n<ul id=\"notes\">\n";
     for (const auto& n : results["notes"])
-      if (n.is_string()) h << "<li>" << html_escape(n.get<std::string>()) << "</li>\n";
+      if (n.is_string()) h << "<li>" << html::escape(n.get<std::string>()) << "</li>\n";
     h << "</ul>\n";
   }
   if (!images.empty()) h << "<h2>Plots</h2>\n";
   for (const auto& img : images) {
-    const std::string bytes = ident::read_file_bytes(img.path);
-    h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html_escape(img.caption)
+    const std::string bytes = read_file_bytes(img.path);
+    h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html::escape(img.caption)
       << "\" src=\"data:" << image_mime(img.path) << ";base64," << base64(bytes) << "\"><figcaption>"
-      << html_escape(img.caption) << "</figcaption></figure>\n";
+      << html::escape(img.caption) << "</figcaption></figure>\n";
   }
   if (results.contains("config_diff") && results["config_diff"].is_string() &&
       !results["config_diff"].get<std::string>().empty())
-    h << "<h2>Configuration changes</h2>\n<pre>" << html_escape(results["config_diff"].get<std::string>())
+    h << "<h2>Configuration changes</h2>\n<pre>" << html::escape(results["config_diff"].get<std::string>())
       << "</pre>\n";
   h << "</body>\n</html>\n";
   return h.str();

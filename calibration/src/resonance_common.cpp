@@ -16,6 +16,7 @@
 #include "tunekit/ident/klipper_spectrum.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
 #include "tunekit/ident/shaketune_stdata.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 
@@ -61,7 +62,7 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
   AccelAnalysis result;
   std::map<std::string, std::vector<ident::AxisSpectrum>> by_axis;
   for (const auto& path : a.files) {
-    const std::string bytes = ident::read_file_bytes(path);
+    const std::string bytes = read_file_bytes(path);
     // The input's digest (tens of ms for a 20 MB raw file) is computed on a second core while
     // the file is parsed and its spectrum estimated.
     auto digest = std::async(std::launch::async, [&bytes] { return sha256_hex(bytes); });

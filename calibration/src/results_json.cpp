@@ -6,6 +6,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -75,7 +76,7 @@ nlohmann::json parse_results_json(std::string_view text, const std::string& path
 }
 
 nlohmann::json read_json_file(const std::string& path, std::string* bytes) {
-  std::string text = ident::read_file_bytes(path);
+  std::string text = read_file_bytes(path);
   auto j = parse_results_json(text, path);
   if (bytes != nullptr) *bytes = std::move(text);
   return j;

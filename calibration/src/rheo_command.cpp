@@ -17,6 +17,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/liquefier_prediction.hpp"
 #include "tunekit/ident/rheology_data.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -80,7 +81,7 @@ std::map<std::string, double> parse_fixes(const std::vector<std::string>& fixes)
 RheoOutcome compute_rheo(const RheoOptions& a) {
   RheoOutcome o;
   o.options = a;
-  const std::string bytes = ident::read_file_bytes(a.file);
+  const std::string bytes = read_file_bytes(a.file);
   o.input_sha256 = sha256_hex(bytes);
   o.input_size_bytes = bytes.size();
   ident::RheologyCsvOptions co = a.csv;

@@ -13,6 +13,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/step_analysis.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -41,7 +42,7 @@ StepOutcome compute_step(const StepOptions& a) {
   outcome.options = a;
   if (!(a.analysis.detect.min_step_fraction > 0 && a.analysis.detect.min_step_fraction < 1))
     throw InputError("--min-step must be between 0 and 1 (a fraction of the input range)");
-  const std::string bytes = ident::read_file_bytes(a.file);
+  const std::string bytes = read_file_bytes(a.file);
   ident::CsvOptions copt;
   copt.columns = {a.output_column};
   if (!a.input_column.empty()) copt.columns.push_back(a.input_column);

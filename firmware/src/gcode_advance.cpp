@@ -10,6 +10,7 @@
 #include "export_writers.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/config_edit.hpp"
+#include "tunekit/fitting/interpolate.hpp"
 
 namespace tunekit::firmware {
 namespace {
@@ -58,17 +59,6 @@ std::optional<double> ga_param(const std::string& code, const std::string& key) 
 std::string ga_command(const std::string& code) {
   const auto sp = code.find_first_of(" \t");
   return ga_upper(code.substr(0, sp));
-}
-
-double ga_interp(const std::vector<std::pair<double, double>>& t, double q) {
-  if (q <= t.front().first) return t.front().second;
-  if (q >= t.back().first) return t.back().second;
-  for (std::size_t i = 1; i < t.size(); ++i)
-    if (q <= t[i].first) {
-      const double s = (q - t[i - 1].first) / (t[i].first - t[i - 1].first);
-      return t[i - 1].second + s * (t[i].second - t[i - 1].second);
-    }
-  return t.back().second;
 }
 
 std::string ga_set_command(const GcodeAdvanceOptions& o, double k, double q, const std::string& feature) {
@@ -125,6 +115,8 @@ GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvan
       validate_settings(o.firmware == ExportFirmware::kalico ? ExportFirmware::klipper : o.firmware, s);
     }
   }
+  std::vector<double> table_q, table_k;  // the table as columns for fitting::interp_linear
+  for (const auto& [q, k] : table) table_q.push_back(q), table_k.push_back(k);
   const LineEditor ed(text);
   double area = o.filament_area_mm2;
   if (!(area > 0)) {
@@ -210,7 +202,7 @@ GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvan
       if (b.e_sum <= 0) continue;
       ++r.features;
       const double q = b.qe_sum / b.e_sum;
-      const double k = ga_interp(table, q);
+      const double k = fitting::interp_linear(table_q, table_k, q);
       const std::string ks = format_number(k, detail::kDecimalsK);
       const bool change = !std::isfinite(active) || std::abs(k - active) > o.hysteresis * active;
       if (!change) continue;

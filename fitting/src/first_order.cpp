@@ -14,6 +14,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "first_order_detail.hpp"
+#include "levenberg_marquardt.hpp"
 #include "number_text.hpp"
 #include "solver_logging.hpp"
 
@@ -143,43 +144,11 @@ double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d&
 // Levenberg-Marquardt on the 4x4 normal equations: brings a start close to the optimum cheaply,
 // so that the Ceres solve that follows needs only an iteration or two on long records.
 void polish_start(const StepRecord& r, double p[4], const double lo[4], const double hi[4], const bool fixed[4]) {
-  double lambda = 1e-3;
-  Eigen::Matrix4d JtJ, JtJ_q;
-  Eigen::Vector4d Jtr, Jtr_q;
-  double cost = normal_equations(r, p, JtJ, Jtr);
-  for (int it = 0; it < 60; ++it) {
-    for (int j = 0; j < 4; ++j)
-      if (fixed[j]) {
-        JtJ.row(j).setZero();
-        JtJ.col(j).setZero();
-        JtJ(j, j) = 1;
-        Jtr(j) = 0;
-      }
-    bool improved = false;
-    for (int tries = 0; tries < 12 && !improved; ++tries) {
-      Eigen::Matrix4d A = JtJ;
-      for (int j = 0; j < 4; ++j) A(j, j) += lambda * std::max(JtJ(j, j), 1e-12);
-      const Eigen::Vector4d dp = A.ldlt().solve(-Jtr);
-      double q[4];
-      for (int j = 0; j < 4; ++j) q[j] = fixed[j] ? p[j] : std::clamp(p[j] + dp(j), lo[j], hi[j]);
-      // The trial's normal equations come with its cost (one pass over the data, and the
-      // exponentials are the expensive part); an accepted step needs no second pass.
-      const double c = normal_equations(r, q, JtJ_q, Jtr_q);
-      if (std::isfinite(c) && c < cost) {
-        const double rel = (cost - c) / std::max(cost, 1e-300);
-        std::copy(q, q + 4, p);
-        cost = c;
-        JtJ = JtJ_q;
-        Jtr = Jtr_q;
-        lambda = std::max(lambda / 3, 1e-12);
-        improved = true;
-        if (rel < 1e-8) return;  // Ceres confirms the last digits
-      } else {
-        lambda *= 4;
-      }
-    }
-    if (!improved) return;
-  }
+  auto equations = [&r](std::span<const double> q, Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
+    return normal_equations(r, q.data(), JtJ, Jtr);
+  };
+  lm_detail::polish<Eigen::Matrix4d, Eigen::Vector4d>(std::span<double>(p, 4), std::span<const double>(lo, 4),
+                                                      std::span<const double>(hi, 4), fixed, equations);
 }
 
 // Standard errors and 95 % intervals from the 4x4 normal matrix at the solution: the same

@@ -16,6 +16,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "first_order_detail.hpp"
+#include "levenberg_marquardt.hpp"
 #include "number_text.hpp"
 #include "solver_logging.hpp"
 
@@ -61,7 +62,7 @@ class PooledStepCost final : public ceres::CostFunction {
 // The pooled fit's normal equations: each step's 4x4 block (normal_equations) added into the
 // (3 + steps)-square matrix; p = {K, tau_s, theta_s, y0_0, y0_1, ...}. Returns the residual
 // sum of squares.
-double pooled_normal_equations(const std::vector<StepRecord>& recs, const std::vector<double>& p, Eigen::MatrixXd& N,
+double pooled_normal_equations(const std::vector<StepRecord>& recs, std::span<const double> p, Eigen::MatrixXd& N,
                                Eigen::VectorXd& g) {
   const auto n = static_cast<Eigen::Index>(p.size());
   N.setZero(n, n);
@@ -85,44 +86,10 @@ double pooled_normal_equations(const std::vector<StepRecord>& recs, const std::v
 // over the samples per trial, no Jacobian stored), so that Ceres starts next to the optimum.
 void polish_pooled_start(const std::vector<StepRecord>& recs, std::vector<double>& p, const std::vector<double>& lo,
                          const std::vector<double>& hi, const std::vector<bool>& fixed) {
-  const std::size_t n = p.size();
-  double lambda = 1e-3;
-  Eigen::MatrixXd N, N_q;
-  Eigen::VectorXd g, g_q;
-  double cost = pooled_normal_equations(recs, p, N, g);
-  std::vector<double> q(n);
-  for (int it = 0; it < 60; ++it) {
-    for (std::size_t j = 0; j < n; ++j)
-      if (fixed[j]) {
-        const auto e = static_cast<Eigen::Index>(j);
-        N.row(e).setZero();
-        N.col(e).setZero();
-        N(e, e) = 1;
-        g(e) = 0;
-      }
-    bool improved = false;
-    for (int tries = 0; tries < 12 && !improved; ++tries) {
-      Eigen::MatrixXd A = N;
-      for (Eigen::Index j = 0; j < A.rows(); ++j) A(j, j) += lambda * std::max(N(j, j), 1e-12);
-      const Eigen::VectorXd dp = A.ldlt().solve(-g);
-      for (std::size_t j = 0; j < n; ++j)
-        q[j] = fixed[j] ? p[j] : std::clamp(p[j] + dp(static_cast<Eigen::Index>(j)), lo[j], hi[j]);
-      const double c = pooled_normal_equations(recs, q, N_q, g_q);
-      if (std::isfinite(c) && c < cost) {
-        const double rel = (cost - c) / std::max(cost, 1e-300);
-        p = q;
-        cost = c;
-        N = N_q;
-        g = g_q;
-        lambda = std::max(lambda / 3, 1e-12);
-        improved = true;
-        if (rel < 1e-8) return;  // Ceres confirms the last digits
-      } else {
-        lambda *= 4;
-      }
-    }
-    if (!improved) return;
-  }
+  auto equations = [&recs](std::span<const double> q, Eigen::MatrixXd& N, Eigen::VectorXd& g) {
+    return pooled_normal_equations(recs, q, N, g);
+  };
+  lm_detail::polish<Eigen::MatrixXd, Eigen::VectorXd>(p, lo, hi, fixed, equations);
 }
 
 // Covariance of the pooled fit from its (3 + steps)-square normal matrix J^T J

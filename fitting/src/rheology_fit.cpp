@@ -28,12 +28,9 @@ std::string strf(const char* f, ...) {
 
 DataStats stats_of(const RheologyData& d) {
   DataStats s;
-  std::vector<double> e = d.viscosity_Pa_s, g = d.shear_rate_1_s;
-  for (double v : e) s.eta_min = std::min(s.eta_min, v), s.eta_max = std::max(s.eta_max, v);
-  std::nth_element(e.begin(), e.begin() + static_cast<long>(e.size() / 2), e.end());
-  std::nth_element(g.begin(), g.begin() + static_cast<long>(g.size() / 2), g.end());
-  s.eta_med = e[e.size() / 2];
-  s.g_med = g[g.size() / 2];
+  for (double v : d.viscosity_Pa_s) s.eta_min = std::min(s.eta_min, v), s.eta_max = std::max(s.eta_max, v);
+  s.eta_med = median(d.viscosity_Pa_s);
+  s.g_med = median(d.shear_rate_1_s);
   s.levels = d.temperature_levels_K();
   return s;
 }

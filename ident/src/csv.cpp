@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::ident {
 namespace {

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/interpolate.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -35,14 +36,7 @@ FaKnots fa_knots(const FlowAdvanceInputs& in, int which) {
 }
 
 /// tau of the piecewise-linear table (held outside the levels).
-double fa_table_tau(const FaKnots& k, double q) {
-  if (q <= k.q.front()) return k.t.front();
-  if (q >= k.q.back()) return k.t.back();
-  const auto it = std::upper_bound(k.q.begin(), k.q.end(), q);
-  const std::size_t i = static_cast<std::size_t>(it - k.q.begin());
-  const double s = (q - k.q[i - 1]) / (k.q[i] - k.q[i - 1]);
-  return k.t[i - 1] + s * (k.t[i] - k.t[i - 1]);
-}
+double fa_table_tau(const FaKnots& k, double q) { return fitting::interp_linear(k.q, k.t, q); }
 
 /// Exact integral of the piecewise-linear table from 0 to Q.
 double fa_table_volume(const FaKnots& k, double Q) {

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/interpolate.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/csv.hpp"
 
@@ -70,26 +71,6 @@ std::string csv_escape_name(const std::string& name) {
     s += c;
   }
   return name.find(',') != std::string::npos ? "\"" + s + "\"" : s;
-}
-
-std::vector<double> interp_onto(const std::vector<double>& fx, const std::vector<double>& x,
-                                const std::vector<double>& fq) {
-  std::vector<double> y(fq.size());
-  std::size_t j = 0;
-  for (std::size_t i = 0; i < fq.size(); ++i) {
-    if (fq[i] <= fx.front()) {
-      y[i] = x.front();
-      continue;
-    }
-    if (fq[i] >= fx.back()) {
-      y[i] = x.back();
-      continue;
-    }
-    while (j + 2 < fx.size() && fx[j + 1] < fq[i]) ++j;
-    const double u = (fq[i] - fx[j]) / (fx[j + 1] - fx[j]);
-    y[i] = x[j] + u * (x[j + 1] - x[j]);
-  }
-  return y;
 }
 
 }  // namespace
@@ -225,7 +206,7 @@ std::string write_klipper_spectrum(const std::vector<KlipperSpectrumColumn>& dat
     for (std::size_t k = 0; k < datasets.size(); ++k) {
       if (k > 0) out += ',';
       out += csv_escape_name(datasets[k].name);
-      cols.push_back(interp_onto(datasets[k].spectrum->freq_hz, datasets[k].spectrum->psd_sum, grid));
+      cols.push_back(fitting::interp_linear(datasets[k].spectrum->freq_hz, datasets[k].spectrum->psd_sum, grid));
     }
   }
   if (!shapers.empty()) {

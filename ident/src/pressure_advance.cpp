@@ -6,22 +6,13 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/interpolate.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 
 namespace tunekit::ident {
 namespace {
 
 bool finite(double v) { return std::isfinite(v); }
-
-/// Linear interpolation on sorted xs, clamped at the ends.
-double interp(const std::vector<double>& xs, const std::vector<double>& ys, double x) {
-  if (x <= xs.front()) return ys.front();
-  if (x >= xs.back()) return ys.back();
-  const auto it = std::upper_bound(xs.begin(), xs.end(), x);
-  const std::size_t i = static_cast<std::size_t>(it - xs.begin());
-  const double t = (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
-  return ys[i - 1] + t * (ys[i] - ys[i - 1]);
-}
 
 nlohmann::json num(double v) { return finite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
@@ -118,12 +109,12 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
     if (!finite(d.theta_s)) {
       std::vector<double> th;
       for (const auto& p : pts) th.push_back(p.theta_s);
-      if (std::all_of(th.begin(), th.end(), finite)) d.theta_s = interp(q, th, d.design_flow_mm3_s);
+      if (std::all_of(th.begin(), th.end(), finite)) d.theta_s = fitting::interp_linear(q, th, d.design_flow_mm3_s);
     }
     if (!finite(d.gain)) {
       std::vector<double> g;
       for (const auto& p : pts) g.push_back(p.gain);
-      if (std::all_of(g.begin(), g.end(), finite)) d.gain = interp(q, g, d.design_flow_mm3_s);
+      if (std::all_of(g.begin(), g.end(), finite)) d.gain = fitting::interp_linear(q, g, d.design_flow_mm3_s);
     }
   } else if (!in.rheo_flow_mm3_s.empty() && finite(in.tau_s)) {
     const auto& q = in.rheo_flow_mm3_s;
@@ -135,9 +126,10 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
         throw InputError("rheology prediction: flows must be positive and increasing, relative_tau positive");
     }
     // relative_tau is relative to the reference flow; the pooled tau is taken to be tau there.
-    const double rel_ref = finite(in.rheo_reference_flow_mm3_s) ? interp(q, rel, in.rheo_reference_flow_mm3_s) : 1.0;
+    const double rel_ref =
+        finite(in.rheo_reference_flow_mm3_s) ? fitting::interp_linear(q, rel, in.rheo_reference_flow_mm3_s) : 1.0;
     for (std::size_t i = 0; i < q.size(); ++i) d.schedule.push_back({q[i], q[i] / af, in.tau_s * rel[i] / rel_ref});
-    d.k_s = in.tau_s * interp(q, rel, d.design_flow_mm3_s) / rel_ref;
+    d.k_s = in.tau_s * fitting::interp_linear(q, rel, d.design_flow_mm3_s) / rel_ref;
     d.k_source = "rheology";
     d.notes.push_back(
         fmt::format("flow dependence predicted from rheology, scaled so that K = tau = {:.4g} s at the "

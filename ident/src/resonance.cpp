@@ -1,4 +1,5 @@
 #include "tunekit/ident/resonance.hpp"
+#include "tunekit/fitting/interpolate.hpp"
 #include "tunekit/fitting/stats.hpp"
 
 #include <algorithm>
@@ -15,36 +16,11 @@
 namespace tunekit::ident {
 namespace {
 
-// Linear interpolation of (t, x) onto t0 + i dt.
+// Linear interpolation of (t, x) onto t0 + i dt, i < n.
 std::vector<double> resample(const std::vector<double>& t, const std::vector<double>& x, double t0, double dt,
                              std::size_t n) {
   std::vector<double> y(n);
-  std::size_t j = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double ti = t0 + dt * static_cast<double>(i);
-    while (j + 2 < t.size() && t[j + 1] < ti) ++j;
-    const double u = std::clamp((ti - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0);
-    y[i] = x[j] + u * (x[j + 1] - x[j]);
-  }
-  return y;
-}
-
-std::vector<double> interp(const std::vector<double>& fx, const std::vector<double>& x, const std::vector<double>& fq) {
-  std::vector<double> y(fq.size());
-  std::size_t j = 0;
-  for (std::size_t i = 0; i < fq.size(); ++i) {
-    if (fq[i] <= fx.front()) {
-      y[i] = x.front();
-      continue;
-    }
-    if (fq[i] >= fx.back()) {
-      y[i] = x.back();
-      continue;
-    }
-    while (j + 2 < fx.size() && fx[j + 1] < fq[i]) ++j;
-    const double u = (fq[i] - fx[j]) / (fx[j + 1] - fx[j]);
-    y[i] = x[j] + u * (x[j + 1] - x[j]);
-  }
+  for (std::size_t i = 0; i < n; ++i) y[i] = fitting::interp_linear(t, x, t0 + dt * static_cast<double>(i));
   return y;
 }
 
@@ -339,7 +315,7 @@ AxisSpectrum average_spectra(const std::vector<AxisSpectrum>& v) {
   if (v.size() == 1) return a;
   auto add = [&](std::vector<double>& acc, const std::vector<double>& fx, const std::vector<double>& x) {
     if (acc.empty() || x.empty()) return;
-    const auto y = interp(fx, x, a.freq_hz);
+    const auto y = fitting::interp_linear(fx, x, a.freq_hz);
     for (std::size_t i = 0; i < acc.size(); ++i) acc[i] += y[i];
   };
   for (std::size_t k = 1; k < v.size(); ++k) {

@@ -7,7 +7,9 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -248,9 +250,7 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   }
   if (!stress_ratio.empty()) {
     // eta = tau / gamma must hold row by row; a factor between the columns is a unit mix-up.
-    std::nth_element(stress_ratio.begin(), stress_ratio.begin() + static_cast<long>(stress_ratio.size() / 2),
-                     stress_ratio.end());
-    const double r = stress_ratio[stress_ratio.size() / 2];
+    const double r = fitting::median(std::move(stress_ratio));
     if (!(r > 0.8 && r < 1.25))
       throw InputError(
           fmt::format("the viscosity and shear_stress columns disagree: shear_stress / shear_rate is {:.4g} times "

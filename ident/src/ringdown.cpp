@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/fitting/damped_sinusoids.hpp"
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/spectrum.hpp"
@@ -55,13 +56,6 @@ const RingdownLine* ringdown_line_near(const std::vector<RingdownLine>& lines, d
   return best;
 }
 
-double ringdown_median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 }  // namespace
 
 RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o) {
@@ -80,7 +74,7 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
   std::size_t impact = 0;
   {
     std::vector<double> med;
-    for (const auto& c : rec.channels) med.push_back(ringdown_median(c));
+    for (const auto& c : rec.channels) med.push_back(fitting::median(c));
     double best = -1;
     for (std::size_t i = 0; i < n; ++i) {
       double s = 0;
@@ -149,7 +143,7 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
     std::vector<double> band;
     for (auto k = static_cast<std::size_t>(o.min_hz / df); k < mag.size() && static_cast<double>(k) * df <= max_hz; ++k)
       band.push_back(mag[k]);
-    cl.floor = ringdown_median(band);
+    cl.floor = fitting::median(band);
     if (!cl.lines.empty()) {
       cl.top = cl.fund = cl.lines.front();
       for (int d : {3, 2}) {

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -81,9 +82,7 @@ void finish(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnal
 double input_noise(std::span<const double> u) {
   std::vector<double> d;
   for (std::size_t i = 1; i < u.size(); ++i) d.push_back(std::abs(u[i] - u[i - 1]));
-  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
-  std::nth_element(d.begin(), mid, d.end());
-  return 1.4826 * *mid / std::sqrt(2.0);
+  return 1.4826 * fitting::median(std::move(d)) / std::sqrt(2.0);
 }
 
 struct Change {

@@ -12,6 +12,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::machine {
 namespace {
@@ -217,7 +218,7 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
 }
 
 MachineProfile load_machine_profile(const std::string& path) {
-  return parse_machine_profile(ident::read_file_bytes(path), path);
+  return parse_machine_profile(read_file_bytes(path), path);
 }
 
 }  // namespace tunekit::machine

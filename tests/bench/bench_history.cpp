@@ -25,6 +25,7 @@
 #include "tunekit/calibration/history_record.hpp"
 #include "tunekit/history/store.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace fs = std::filesystem;
 using namespace tunekit;
@@ -75,7 +76,7 @@ int main(int argc, char** argv) {
     }
     results = (dir / "run" / "results.json").string();
   }
-  const auto envelope = nlohmann::json::parse(ident::read_file_bytes(results));
+  const auto envelope = nlohmann::json::parse(read_file_bytes(results));
 
   // 1. One calibration recorded, as `calibrate --record` does it.
   calibration::OutputOptions o;

@@ -8,6 +8,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace fs = std::filesystem;
 
@@ -21,7 +22,7 @@ TEST_CASE("batch analyzes each recognized file, applies requirements where they 
   auto r = tunekit::test::run_cli({"batch", dir, "--jobs", "2", "--require", "tau_s<10", "-o", out});
   INFO(r.err);
   CHECK(r.code == 0);
-  auto j = nlohmann::json::parse(tunekit::ident::read_file_bytes(out));
+  auto j = nlohmann::json::parse(tunekit::read_file_bytes(out));
   const auto& ds = j["results"]["datasets"];
   REQUIRE(ds.size() == 3);
   CHECK(ds[0]["file"] == dir + "/rheometer.csv");

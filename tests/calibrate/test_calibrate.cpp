@@ -10,10 +10,11 @@
 #include "test_support.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace {
 
-using tunekit::ident::read_file_bytes;
+using tunekit::read_file_bytes;
 
 struct Run {
   std::string dir;
@@ -113,7 +114,7 @@ TEST_CASE("calibrate never writes into a used run directory") {
   CHECK(r.err == "tunekit: error: " + dir +
                      ": the run directory already exists; give a new --out (or leave it out for "
                      "runs/calibrate-UTCSTAMP)\n");
-  CHECK(tunekit::ident::read_file_bytes(dir + "/results.json") == "{}");
+  CHECK(tunekit::read_file_bytes(dir + "/results.json") == "{}");
 }
 
 TEST_CASE("calibrate refuses a real machine without a profile before touching it") {

@@ -14,11 +14,12 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/vision/image_io.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-using tunekit::ident::read_file_bytes;
+using tunekit::read_file_bytes;
 
 std::string num(double v) { return fmt::format("{:.17g}", v); }
 

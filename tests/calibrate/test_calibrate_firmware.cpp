@@ -12,6 +12,7 @@
 #include "test_support.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace {
 
@@ -30,7 +31,7 @@ FirmwareRun calibrate_firmware(const std::string& name, const std::vector<std::s
   args.insert(args.end(), extra.begin(), extra.end());
   r.cli = tunekit::test::run_cli(args);
   if (r.cli.code == 0)
-    r.results = nlohmann::json::parse(tunekit::ident::read_file_bytes(r.dir + "/results.json")).at("results");
+    r.results = nlohmann::json::parse(tunekit::read_file_bytes(r.dir + "/results.json")).at("results");
   return r;
 }
 
@@ -55,7 +56,7 @@ TEST_CASE("calibrate --firmware klipper on heavily damped axes picks Klipper sha
   INFO(r.cli.err);
   REQUIRE(r.cli.code == 0);
   check_shapers_are_the_firmwares(r, tkp::ExportFirmware::klipper);
-  const std::string cfg = tunekit::ident::read_file_bytes(r.dir + "/config/changes.diff");
+  const std::string cfg = tunekit::read_file_bytes(r.dir + "/config/changes.diff");
   CHECK(cfg.find("shaper_type_x") != std::string::npos);
 }
 
@@ -68,7 +69,7 @@ TEST_CASE("calibrate --firmware marlin completes and writes Configuration_adv.h 
   CHECK(diff.find("SHAPING_FREQ_X") != std::string::npos);
   CHECK(diff.find("ADVANCE_K") != std::string::npos);
   // The simulated printer ran Marlin's planner and answered M115 as Marlin.
-  const auto run = nlohmann::json::parse(tunekit::ident::read_file_bytes(r.dir + "/axis-x/run.json"));
+  const auto run = nlohmann::json::parse(tunekit::read_file_bytes(r.dir + "/axis-x/run.json"));
   CHECK(run.at("firmware").at("name").get<std::string>().rfind("Marlin", 0) == 0);
 }
 
@@ -79,6 +80,6 @@ TEST_CASE("calibrate --firmware rrf completes and writes config.g with an RRF sh
   check_shapers_are_the_firmwares(r, tkp::ExportFirmware::rrf);
   const std::string diff = r.results.at("config_diff");
   CHECK(diff.find("M593 P\"") != std::string::npos);
-  const auto run = nlohmann::json::parse(tunekit::ident::read_file_bytes(r.dir + "/axis-x/run.json"));
+  const auto run = nlohmann::json::parse(tunekit::read_file_bytes(r.dir + "/axis-x/run.json"));
   CHECK(run.at("firmware").at("name").get<std::string>().find("RepRapFirmware") != std::string::npos);
 }

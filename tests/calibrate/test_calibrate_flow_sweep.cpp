@@ -11,8 +11,9 @@
 #include "test_support.hpp"
 #include "tunekit/calibration/step_command.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
-using tunekit::ident::read_file_bytes;
+using tunekit::read_file_bytes;
 
 TEST_CASE("calibrate's flow sweep on the physics liquefier recovers the true tau at each level within 5 %") {
   const std::string dir = tunekit::test::scratch_dir("calibrate_flow_sweep") + "/run";

@@ -12,6 +12,7 @@
 #include "tunekit/calibration/json_access.hpp"
 #include "tunekit/history/store.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace {
 
@@ -91,7 +92,7 @@ TEST_CASE("one frequency-response tau: the report, the history, export's design 
     if (r.at("path") == kFreqTauPath) ++rows;
   CHECK(rows == 1);
   int cells = 0;
-  for (const auto& c : tunekit::test::summary_cells(tunekit::ident::read_file_bytes(run.dir + "/report.html"))) {
+  for (const auto& c : tunekit::test::summary_cells(tunekit::read_file_bytes(run.dir + "/report.html"))) {
     if (c.path != kFreqTauPath) continue;
     CHECK(nlohmann::json::parse(c.value).get<double>() == tau);
     ++cells;

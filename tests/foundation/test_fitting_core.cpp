@@ -5,6 +5,7 @@
 #include <random>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/interpolate.hpp"
 #include "tunekit/fitting/least_squares.hpp"
 #include "tunekit/fitting/stats.hpp"
 
@@ -86,4 +87,21 @@ TEST_CASE("Student-t multipliers and the Ljung-Box test") {
   std::vector<double> alternating;
   for (int i = 0; i < 100; ++i) alternating.push_back(i % 2 ? 1.0 : -1.0);
   CHECK(ljung_box(alternating, 10).p_value < 1e-6);
+}
+
+TEST_CASE("the median is the upper middle value, 0 for no values") {
+  CHECK(median({3.0, 1.0, 2.0}) == 2.0);
+  CHECK(median({4.0, 1.0, 3.0, 2.0}) == 3.0);
+  CHECK(median({}) == 0.0);
+}
+
+TEST_CASE("linear interpolation holds the end values outside the table and is exact at knots") {
+  const std::vector<double> xs{0.0, 1.0, 3.0}, ys{10.0, 20.0, 0.0};
+  CHECK(interp_linear(xs, ys, -5.0) == 10.0);
+  CHECK(interp_linear(xs, ys, 7.0) == 0.0);
+  CHECK(interp_linear(xs, ys, 1.0) == 20.0);
+  CHECK(interp_linear(xs, ys, 0.5) == Approx(15.0));
+  CHECK(interp_linear(xs, ys, 2.0) == Approx(10.0));
+  const std::vector<double> q{-1.0, 0.5, 2.0, 4.0};
+  CHECK(interp_linear(xs, ys, q) == std::vector<double>{10.0, 15.0, 10.0, 0.0});
 }

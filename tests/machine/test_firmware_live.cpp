@@ -41,6 +41,7 @@
 #include "tunekit/machine/rrf_http.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/sim/simulator.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 using tunekit::InputError;
 using tunekit::MachineError;
@@ -111,7 +112,7 @@ TEST_CASE("a live Marlin with FT_MOTION active is detected from M493, and its se
     o.params = {{"freq_start_hz", 30}, {"freq_end_hz", 60}};
     o.sim_options = {"firmware=marlin", std::string("ft_motion=") + mode};
     const auto res = run_experiment(o);
-    const auto run = nlohmann::json::parse(tunekit::ident::read_file_bytes(res.files.at("summary")));
+    const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at("summary")));
     const auto* ft = run.at("firmware").contains("ft_motion") ? &run.at("firmware").at("ft_motion") : nullptr;
     if (std::string(mode) == "on") {
       REQUIRE(ft != nullptr);
@@ -131,8 +132,7 @@ TEST_CASE("a live Marlin with FT_MOTION active is detected from M493, and its se
   s.shapers["x"] = {"mzv", 45.2, 0.1};
   s.shapers["y"] = {"zv", 38, 0.08};
   s.marlin_ft_motion_live = true;
-  const std::string cfg =
-      tunekit::ident::read_file_bytes(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/Configuration_adv.h");
+  const std::string cfg = tunekit::read_file_bytes(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/Configuration_adv.h");
   const auto r = export_config_text(ExportFirmware::marlin, cfg, "Configuration_adv.h", s);
   CHECK(r.gcode == "M493 S1 X8 A45.2 I0.1 Y1 B38 J0.08\nM493 P1 K0.045\nM500\n");
   CHECK(r.gcode.find("M593") == std::string::npos);
@@ -153,7 +153,7 @@ TEST_CASE("calibrate on a simulated Marlin running FT_MOTION writes M493, on a c
                                 dir, "--sim", std::string("ft_motion=") + mode});
     INFO(cli.err);
     REQUIRE(cli.code == 0);
-    const auto res = nlohmann::json::parse(tunekit::ident::read_file_bytes(dir + "/results.json")).at("results");
+    const auto res = nlohmann::json::parse(tunekit::read_file_bytes(dir + "/results.json")).at("results");
     const std::string gcode = res.at("compensators").at("export").at("gcode").get<std::string>();
     INFO(gcode);
     if (std::string(mode) == "on") {
@@ -208,9 +208,9 @@ TEST_CASE("axis-sweep on RepRapFirmware records with M956 and fetches the file o
   CHECK(sent.find("F\"tunekit_1.csv\"", m956) != std::string::npos);
   CHECK(sent.find("M4100") == std::string::npos);  // no tunekit stream on this board
   // The file as the board wrote it is kept, and reads as an RRF accelerometer file.
-  const auto run = nlohmann::json::parse(tunekit::ident::read_file_bytes(res.files.at("summary")));
+  const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at("summary")));
   const std::string kept = res.run_dir + "/" + run.at("link").at("rrf_accelerometer_files").at(0).get<std::string>();
-  const std::string bytes = tunekit::ident::read_file_bytes(kept);
+  const std::string bytes = tunekit::read_file_bytes(kept);
   CHECK(tunekit::ident::is_rrf_accelerometer_csv(bytes));
   CHECK(rrf_accelerometer_file_complete(bytes));
   // The accelerometer record the analysis reads, and the simulated X mode (48 Hz) in it.

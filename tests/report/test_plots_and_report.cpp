@@ -12,6 +12,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/vision/image_io.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 using namespace tunekit::calibration;
 
@@ -104,7 +105,7 @@ TEST_CASE("each plot type renders an SVG of the expected size with its curves dr
   for (const auto& img : images) {
     INFO(img.id);
     CHECK(std::filesystem::path(img.path).extension() == ".svg");
-    const std::string svg = tunekit::ident::read_file_bytes(img.path);
+    const std::string svg = tunekit::read_file_bytes(img.path);
     REQUIRE(svg.find("<svg") != std::string::npos);
     const auto [w, h] = expected.at(img.id);
     CHECK(svg.find("width=\"" + std::to_string(w) + "pt\" height=\"" + std::to_string(h) + "pt\"") !=
@@ -178,7 +179,7 @@ TEST_CASE("the report embeds every plot and its summary numbers equal results.js
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(r.out == dir + "/report.html\n");
-  const std::string html = tunekit::ident::read_file_bytes(dir + "/report.html");
+  const std::string html = tunekit::read_file_bytes(dir + "/report.html");
 
   // Self-contained: no external references.
   CHECK(html.find("src=\"http") == std::string::npos);

@@ -11,6 +11,7 @@
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/vision/exif_orientation.hpp"
 #include "tunekit/vision/image_io.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 using tunekit::test::dataset;
 
@@ -34,7 +35,7 @@ double mean_abs_diff(const cv::Mat& a, const cv::Mat& b) {
 TEST_CASE("the EXIF orientation tag is read from a JPEG's APP1 segment") {
   for (int n : {1, 3, 6, 8}) {
     INFO(n);
-    const auto bytes = tunekit::ident::read_file_bytes(dataset("images/Landscape_" + std::to_string(n) + ".jpg"));
+    const auto bytes = tunekit::read_file_bytes(dataset("images/Landscape_" + std::to_string(n) + ".jpg"));
     CHECK(tunekit::vision::jpeg_exif_orientation(bytes) == n);
   }
   // Not a JPEG, a damaged segment length, a truncated Exif block: 1, without reading past the end.
@@ -43,7 +44,7 @@ TEST_CASE("the EXIF orientation tag is read from a JPEG's APP1 segment") {
   CHECK(tunekit::vision::jpeg_exif_orientation(std::string("\xFF\xD8\xFF\xE1\xFF\xFF"
                                                            "Exif",
                                                            10)) == 1);
-  const auto six = tunekit::ident::read_file_bytes(dataset("images/Landscape_6.jpg"));
+  const auto six = tunekit::read_file_bytes(dataset("images/Landscape_6.jpg"));
   for (std::size_t cut : {std::size_t{30}, std::size_t{40}, std::size_t{60}, std::size_t{100}})
     CHECK(tunekit::vision::jpeg_exif_orientation(six.substr(0, cut)) == 1);
 }

@@ -81,8 +81,8 @@ inline constexpr const char* kTimeColumnNames[] = {"time", "t", "#time", "timest
 /// Case-insensitive equality on ASCII (core's, used by the column matching above).
 using core::iequals;
 
-/// Reads a whole file into memory; InputError if it cannot be opened or read (declared with
-/// the error types in core, so libraries that read files without tables need no CSV header).
+/// Transitional: core's tunekit::read_file_bytes (tunekit/core/file_bytes.hpp) under ident's
+/// name, kept only for the calibrate and export commands until they call core's directly.
 using tunekit::read_file_bytes;
 
 }  // namespace tunekit::ident
