@@ -25,6 +25,7 @@
 #include "tunekit/calibration/agreement.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/file_bytes.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
@@ -314,7 +315,7 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
   const std::string& backup = o.backup;
   core::FileBatch batch = o.files;
   // Refuse to overwrite a file that changed since it was read.
-  if (a.write && result.changed() && ident::read_file_bytes(a.config) != result.original)
+  if (a.write && result.changed() && read_file_bytes(a.config) != result.original)
     throw InputError("the configuration file changed since it was read; run the export again", a.config);
   const Emission emission = prepare_emission(env, output);
   const bool output_is_device = !output.output_path.empty() && is_special_output(output.output_path);

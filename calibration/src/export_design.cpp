@@ -9,6 +9,7 @@
 #include "tunekit/calibration/agreement.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
+#include "tunekit/fitting/interpolate.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 
 namespace tunekit::calibration::export_design {
@@ -169,13 +170,7 @@ nlohmann::json rheology_cross_check(const ident::AdvanceInputs& in, const ident:
                                     const ident::FlowAdvanceDesign& flow, Envelope& env) {
   const auto& rq = in.rheo_flow_mm3_s;
   const auto& rr = in.rheo_relative_tau;
-  auto rel_at = [&](double q) {
-    if (q <= rq.front()) return rr.front();
-    if (q >= rq.back()) return rr.back();
-    const auto it = std::upper_bound(rq.begin(), rq.end(), q);
-    const std::size_t i = static_cast<std::size_t>(it - rq.begin());
-    return rr[i - 1] + (q - rq[i - 1]) / (rq[i] - rq[i - 1]) * (rr[i] - rr[i - 1]);
-  };
+  auto rel_at = [&](double q) { return fitting::interp_linear(rq, rr, q); };
   const double qref =
       std::isfinite(in.rheo_reference_flow_mm3_s) ? in.rheo_reference_flow_mm3_s : flow.design_flow_mm3_s;
   const double scale = ident::flow_tau_s(fin, qref) / rel_at(qref);
