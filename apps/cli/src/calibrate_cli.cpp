@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/calibration/calibrate_command.hpp"
+#include "tunekit/calibration/calibration_pipeline.hpp"
 #include "tunekit/calibration/agreement.hpp"
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
@@ -36,6 +37,27 @@
 namespace tunekit::cli {
 
 using namespace calibration;
+
+namespace {
+
+// calibrate's stages drawn as a progress bar on a terminal (nothing off one).
+class BarProgress final : public Progress {
+ public:
+  explicit BarProgress(CliContext& ctx) : ctx_(ctx) {}
+  void expect(int steps) override { bar_ = std::make_unique<ProgressBar>(ctx_, steps); }
+  void begin(const std::string& label, double estimated_s) override {
+    if (bar_) bar_->begin(label, estimated_s);
+  }
+  void end(const std::string& summary) override {
+    if (bar_) bar_->end(summary);
+  }
+
+ private:
+  CliContext& ctx_;
+  std::unique_ptr<ProgressBar> bar_;
+};
+
+}  // namespace
 
 void register_calibrate(CLI::App& app, CliContext& ctx) {
   auto a = std::make_shared<CalibrateArgs>();
@@ -90,7 +112,10 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
       "  auto       load-cell when the profile has one ([sensors] load_cell = true), else camera (the default)\n"
       "Every protocol is checked against the profile before anything is sent. On a terminal each step shows a\n"
       "progress bar with the time left; off a terminal only the diff and the report path are printed.");
-  sub->callback([a, &ctx] { set_exit_code(run_calibrate(*a, ctx)); });
+  sub->callback([a, &ctx] {
+    BarProgress progress(ctx);
+    set_exit_code(run_calibrate(*a, ctx, progress));
+  });
 }
 
 }  // namespace tunekit::cli
