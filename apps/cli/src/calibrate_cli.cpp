@@ -1,38 +1,16 @@
 // tunekit calibrate: the command line of the command (options bound straight into the library's
 // option structs, so --help shows the library's defaults); the work is done by the
-// calibration library's compute function.
+// calibration library's stages (calibration_pipeline.hpp), whose progress is drawn here.
+
+#include <memory>
+#include <string>
 
 #include "tunekit/calibration/calibrate_command.hpp"
 #include "tunekit/calibration/calibration_pipeline.hpp"
-#include "tunekit/calibration/agreement.hpp"
+#include "tunekit/calibration/progress.hpp"
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/export_command.hpp"
-#include "tunekit/calibration/freq_command.hpp"
-#include "tunekit/calibration/history_record.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/progress.hpp"
-#include "tunekit/calibration/report.hpp"
-#include "tunekit/calibration/results_json.hpp"
-#include "tunekit/calibration/shaper_command.hpp"
-#include "tunekit/calibration/step_command.hpp"
-#include "tunekit/core/atomic_file.hpp"
-#include "tunekit/core/error.hpp"
-#include "tunekit/firmware/firmware_export.hpp"
-#include "tunekit/fitting/first_order.hpp"
-#include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/input_shaper.hpp"
-#include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/runner.hpp"
-#include <algorithm>
-#include <cmath>
-#include <filesystem>
-#include <fmt/format.h>
-#include <fstream>
-#include <memory>
-#include <sstream>
-#include <unistd.h>
 
 namespace tunekit::cli {
 
