@@ -150,7 +150,7 @@ std::vector<CameraTest> camera_tests() {
 
 CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
                                      const machine::MachineProfile& profile,
-                                     std::map<std::string, protocols::RunResult>& runs,
+                                     const std::map<std::string, protocols::RunResult>& runs,
                                      const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx) {
   const std::string dir = run_dir + "/liquefier-camera";
   fs::create_directories(dir);
@@ -256,23 +256,27 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
                  {"width_record", out.width_csv},
                  {"warnings", warnings}};
   if (!ring_json.is_null()) out.results["ring"] = ring_json;
+  out.ring = pw.ring;
+  out.warnings = pw.warnings;
   plot_line["overlay_png"] = fs::relative(out.overlay, run_dir).generic_string();
   out.linewidth_plot = plot_line;
   return out;
 }
 
-void add_ring_prediction(nlohmann::json& r, double K, double tau, double theta) {
-  if (!r.contains("ring") || !std::isfinite(tau)) return;
-  const double w = 2 * std::numbers::pi * r["ring"]["freq_hz"].get<double>();
+void add_ring_prediction(CameraAnalysis& camera, double K, double tau, double theta) {
+  if (!camera.ring || !std::isfinite(tau)) return;
+  const double w = 2 * std::numbers::pi * camera.ring->freq_hz;
   if (!std::isfinite(theta)) theta = 0;
   const std::complex<double> G = K * std::exp(std::complex<double>(0, -w * theta)) / std::complex<double>(1, w * tau);
-  r["ring"]["model_gain"] = std::abs(G);
-  r["ring"]["model_phase_deg"] = std::arg(G) * 180 / std::numbers::pi;
+  auto& ring = camera.results["ring"];
+  ring["model_gain"] = std::abs(G);
+  ring["model_phase_deg"] = std::arg(G) * 180 / std::numbers::pi;
   // The dead time the ring's phase implies with the lines' tau: phase = -atan(w tau) - w theta.
   // It does not depend on where the lines lie on their paths (the weak point of a photo whose
   // placement on the bed is not known), only on the ring's start direction (+X).
-  const double lag = -r["ring"]["phase_deg"].get<double>() * std::numbers::pi / 180 - std::atan(w * tau);
-  r["ring"]["theta_from_phase_s"] = lag / w;
+  const double lag = -camera.ring->phase_deg * std::numbers::pi / 180 - std::atan(w * tau);
+  ring["theta_from_phase_s"] = lag / w;
+  camera.ring_predicted = true;
 }
 
 }  // namespace tunekit::calibration

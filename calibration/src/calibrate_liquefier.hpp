@@ -13,6 +13,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/sim/sim_camera.hpp"
+#include "tunekit/vision/photo_widths.hpp"
 
 namespace tunekit::calibration {
 
@@ -44,12 +46,15 @@ struct CameraTest {
 };
 std::vector<CameraTest> camera_tests();
 
-struct CameraAnalysis {
-  std::string photo;              ///< the photo used (in the run directory)
-  std::string overlay;            ///< the photo with the measured edges (PNG, in the run directory)
-  std::string width_csv;          ///< time, setpoint width, width of the line test (for `tunekit step`)
-  nlohmann::json results;         ///< lines, ring (gain and phase), warnings
-  nlohmann::json linewidth_plot;  ///< plotdata.json "linewidth"
+struct CameraAnalysis {                    // declared in calibration_pipeline.hpp
+  std::string photo;                       ///< the photo used (in the run directory)
+  std::string overlay;                     ///< the photo with the measured edges (PNG, in the run directory)
+  std::string width_csv;                   ///< time, setpoint width, width of the line test (for `tunekit step`)
+  nlohmann::json results;                  ///< lines, ring (gain and phase), warnings
+  std::optional<vision::RingResult> ring;  ///< the ring's gain and phase, when the photo shows it
+  bool ring_predicted = false;             ///< the step model's prediction was added (add_ring_prediction)
+  std::vector<std::string> warnings;       ///< the photo measurement's
+  nlohmann::json linewidth_plot;           ///< plotdata.json "linewidth"
 };
 
 /// Obtains the photo, measures the lines and the ring and writes the width record. InputError
@@ -57,11 +62,11 @@ struct CameraAnalysis {
 /// be opened. `runs` holds the camera_tests() runs by name.
 CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
                                      const machine::MachineProfile& profile,
-                                     std::map<std::string, protocols::RunResult>& runs,
+                                     const std::map<std::string, protocols::RunResult>& runs,
                                      const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx);
 
 /// The ring's gain and phase, added to the camera analysis once tau and theta are known from
 /// the lines (the model's prediction at the ring frequency is reported beside the measurement).
-void add_ring_prediction(nlohmann::json& camera_results, double K, double tau_s, double theta_s);
+void add_ring_prediction(CameraAnalysis& camera, double K, double tau_s, double theta_s);
 
 }  // namespace tunekit::calibration

@@ -285,6 +285,10 @@ const fitting::FitResult* FreqOutcome::reported_fit() const {
 
 std::string FreqOutcome::reported_fit_key() const { return oe_fit ? "tf_oe_fit" : "tf_fit"; }
 
+std::string FreqOutcome::reported_fit_method() const {
+  return oe_fit ? "output-error fit to the record" : "fit to the H1 frequency response";
+}
+
 Envelope to_envelope(const FreqOutcome& o) {
   const FreqOptions& a = o.options;
   Envelope env("freq");
@@ -334,7 +338,7 @@ Envelope to_envelope(const FreqOutcome& o) {
       // model's Bode data, is under `source`.
       res["fit"] = fitting::to_json(*fit);
       res["fit"]["source"] = o.reported_fit_key();
-      res["fit"]["method"] = o.oe_fit ? "output-error fit to the record" : "fit to the H1 frequency response";
+      res["fit"]["method"] = o.reported_fit_method();
     }
   }
   return env;

@@ -68,26 +68,28 @@ Envelope to_envelope(const ShaperOutcome& o) {
   for (const auto& w : o.warnings) env.warn(w);
   auto& res = env.results();
   res["axes"] = nlohmann::json::object();
-  for (const auto& x : o.axes) {
-    const AxisResult& r = x.resonance;
-    nlohmann::json j;
-    j["modes"] = modes_json(r.modes);
-    j["fit"] = fit_json(r.modes);
-    j["recommended"] = shaper_candidate_json(x.choice.recommended);
-    nlohmann::json cands = nlohmann::json::array();
-    for (const auto& c : x.choice.candidates) cands.push_back(shaper_candidate_json(c));
-    j["candidates"] = cands;
-    j["selection"] = shaper_selection_json(o, x);
-    j["psd"] = spectrum_json(r.spectrum, a.accel.max_plot_hz);
-    if (r.modes.dominant >= 0) {
-      const auto& d = r.modes.modes[static_cast<std::size_t>(r.modes.dominant)];
-      j["freq_hz"] = d.freq_hz;
-      j["zeta"] = d.zeta;
-    }
-    if (!x.klipper_csv.empty()) j["klipper_csv"] = x.klipper_csv;
-    res["axes"][r.label] = j;
-  }
+  for (const auto& x : o.axes) res["axes"][x.resonance.label] = shaper_axis_json(o, x);
   return env;
+}
+
+nlohmann::json shaper_axis_json(const ShaperOutcome& o, const ShaperAxis& x) {
+  const AxisResult& r = x.resonance;
+  nlohmann::json j;
+  j["modes"] = modes_json(r.modes);
+  j["fit"] = fit_json(r.modes);
+  j["recommended"] = shaper_candidate_json(x.choice.recommended);
+  nlohmann::json cands = nlohmann::json::array();
+  for (const auto& c : x.choice.candidates) cands.push_back(shaper_candidate_json(c));
+  j["candidates"] = cands;
+  j["selection"] = shaper_selection_json(o, x);
+  j["psd"] = spectrum_json(r.spectrum, o.options.accel.max_plot_hz);
+  if (r.modes.dominant >= 0) {
+    const auto& d = r.modes.modes[static_cast<std::size_t>(r.modes.dominant)];
+    j["freq_hz"] = d.freq_hz;
+    j["zeta"] = d.zeta;
+  }
+  if (!x.klipper_csv.empty()) j["klipper_csv"] = x.klipper_csv;
+  return j;
 }
 
 void print_text(const ShaperOutcome& o, std::ostream& os) {

@@ -484,8 +484,10 @@ RunResult run_experiment(const RunOptions& o) {
                                {"ft_motion", session->firmware.ft_motion},
                                {"ft_motion_active", session->firmware.ft_motion_active}});
     summary["firmware"] = {{"name", session->firmware.name}, {"version", session->firmware.version}};
-    if (session->firmware.ft_motion)
-      summary["firmware"]["ft_motion"] = session->firmware.ft_motion_active ? "active" : "built, inactive";
+    if (session->firmware.ft_motion) {
+      res.ft_motion = session->firmware.ft_motion_active ? "active" : "built, inactive";
+      summary["firmware"]["ft_motion"] = res.ft_motion;
+    }
     // Fail before heating and homing when the link cannot record what the protocol needs.
     for (const auto& sensor : res.experiment.sensors)
       if (!session->can_record(sensor)) {

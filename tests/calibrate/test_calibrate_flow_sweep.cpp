@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/step_command.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
 
@@ -62,19 +61,22 @@ TEST_CASE("tunekit step with its defaults reproduces calibrate's pooled liquefie
   REQUIRE(cli.code == 0);
   const auto env = nlohmann::json::parse(read_file_bytes(dir + "/results.json"));
   const auto& cal = env.at("results").at("liquefier").at("step").at("pooled").at("params");
-  const std::string csv = dir + "/liquefier-step/step.csv";  // the load cell's log of the flow sweep
-  REQUIRE(std::filesystem::exists(csv));
-  tunekit::calibration::StepOptions o;  // the defaults of `tunekit step`, with only the file and columns named
-  o.file = csv;
-  o.time_column = "time";
-  o.input_column = "feed";
-  o.output_column = "force";
-  const auto step = tunekit::calibration::compute_step(o);
-  REQUIRE(step.analysis.pooled);
-  CHECK(step.analysis.steps.size() == env.at("results").at("liquefier").at("step").at("steps").size());
+  // The command results.json names for the step analysis, run as a user types it (the load
+  // cell's log named relative to the run directory, only its columns given).
+  std::string command;
+  for (const auto& e : env.at("results").at("reproduce"))
+    if (e.at("analysis") == "step") command = e.at("command").get<std::string>();
+  INFO(command);
+  CHECK(command == "tunekit step liquefier-step/step.csv --input feed --output force");
+  const auto step = tunekit::test::run_reproduce_command(dir, command, {"--json"});
+  INFO(step.err);
+  REQUIRE(step.code == 0);
+  const auto mine = nlohmann::json::parse(step.out).at("results");
+  CHECK(mine.at("steps").size() == env.at("results").at("liquefier").at("step").at("steps").size());
   for (const char* name : {"tau_s", "K", "theta_s"}) {
-    const double mine = step.analysis.pooled->value(name), theirs = cal.at(name).at("value").get<double>();
-    INFO(name << ": tunekit step " << mine << ", calibrate " << theirs);
-    CHECK(mine == Approx(theirs).epsilon(0.01));
+    const double own = mine.at("pooled").at("params").at(name).at("value").get<double>(),
+                 theirs = cal.at(name).at("value").get<double>();
+    INFO(name << ": tunekit step " << own << ", calibrate " << theirs);
+    CHECK(own == Approx(theirs).epsilon(0.01));
   }
 }

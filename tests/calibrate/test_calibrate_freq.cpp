@@ -67,8 +67,12 @@ TEST_CASE("freq with only the file and its columns gives calibrate's frequency-r
   CHECK(own.broadband->start_s == h1.at("start_s").get<double>());
   CHECK(own.broadband->fmax_hz == h1.at("fmax_hz").get<double>());
   CHECK(own.broadband->segment_length == h1.at("segment_length").get<std::size_t>());
-  // As a user types it.
-  const auto cli = tunekit::test::run_cli({"freq", run.chirp_csv(), "--input", "feed", "--output", "force", "--json"});
+  // As a user types it: the command results.json names for this analysis.
+  std::string command;
+  for (const auto& e : run.results.at("reproduce"))
+    if (e.at("analysis") == "freq") command = e.at("command").get<std::string>();
+  CHECK(command == "tunekit freq liquefier-chirp/feed_force.csv --input feed --output force");
+  const auto cli = tunekit::test::run_reproduce_command(run.dir, command, {"--json"});
   INFO(cli.err);
   REQUIRE(cli.code == 0);
   const auto j = nlohmann::json::parse(cli.out).at("results");

@@ -24,6 +24,17 @@ CliRun run_cli(const std::vector<std::string>& args) {
   return r;
 }
 
+CliRun run_reproduce_command(const std::string& run_dir, const std::string& command,
+                             const std::vector<std::string>& extra) {
+  std::istringstream words(command);
+  std::string word;
+  if (!(words >> word) || word != "tunekit") throw std::runtime_error("not a tunekit command: " + command);
+  std::vector<std::string> args;
+  while (words >> word) args.push_back(std::filesystem::exists(run_dir + "/" + word) ? run_dir + "/" + word : word);
+  args.insert(args.end(), extra.begin(), extra.end());
+  return run_cli(args);
+}
+
 CliRun run_exe(const std::string& args) {
   // One stderr file per process and call: ctest runs test cases in parallel processes.
   static int calls = 0;

@@ -17,6 +17,12 @@ struct CliRun {
 /// Runs `tunekit ARGS...` in-process (same code path as the executable).
 CliRun run_cli(const std::vector<std::string>& args);
 
+/// Runs a command of calibrate's results.reproduce list ("tunekit WORD...", paths relative to the
+/// run directory) in-process from anywhere: each word naming a file of `run_dir` is made
+/// absolute; `extra` words (e.g. "--json") are appended. Throws unless it starts with "tunekit".
+CliRun run_reproduce_command(const std::string& run_dir, const std::string& command,
+                             const std::vector<std::string>& extra = {});
+
 /// Runs the built tunekit executable through the shell (for end-to-end checks of the real
 /// process: exit status, stdout/stderr separation). `args` is appended as one shell string.
 CliRun run_exe(const std::string& args);

@@ -1,41 +1,41 @@
 // tunekit calibrate: the command line of the command (options bound straight into the library's
 // option structs, so --help shows the library's defaults); the work is done by the
-// calibration library's compute function.
+// calibration library's stages (calibration_pipeline.hpp), whose progress is drawn here.
+
+#include <memory>
+#include <string>
 
 #include "tunekit/calibration/calibrate_command.hpp"
-#include "tunekit/calibration/agreement.hpp"
+#include "tunekit/calibration/calibration_pipeline.hpp"
+#include "tunekit/calibration/progress.hpp"
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/export_command.hpp"
-#include "tunekit/calibration/freq_command.hpp"
-#include "tunekit/calibration/history_record.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/progress.hpp"
-#include "tunekit/calibration/report.hpp"
-#include "tunekit/calibration/results_json.hpp"
-#include "tunekit/calibration/shaper_command.hpp"
-#include "tunekit/calibration/step_command.hpp"
-#include "tunekit/core/atomic_file.hpp"
-#include "tunekit/core/error.hpp"
-#include "tunekit/firmware/firmware_export.hpp"
-#include "tunekit/fitting/first_order.hpp"
-#include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/input_shaper.hpp"
-#include "tunekit/protocols/chirp_plan.hpp"
-#include "tunekit/protocols/runner.hpp"
-#include <algorithm>
-#include <cmath>
-#include <filesystem>
-#include <fmt/format.h>
-#include <fstream>
-#include <memory>
-#include <sstream>
-#include <unistd.h>
 
 namespace tunekit::cli {
 
 using namespace calibration;
+
+namespace {
+
+// calibrate's stages drawn as a progress bar on a terminal (nothing off one).
+class BarProgress final : public Progress {
+ public:
+  explicit BarProgress(CliContext& ctx) : ctx_(ctx) {}
+  void expect(int steps) override { bar_ = std::make_unique<ProgressBar>(ctx_, steps); }
+  void begin(const std::string& label, double estimated_s) override {
+    if (bar_) bar_->begin(label, estimated_s);
+  }
+  void end(const std::string& summary) override {
+    if (bar_) bar_->end(summary);
+  }
+
+ private:
+  CliContext& ctx_;
+  std::unique_ptr<ProgressBar> bar_;
+};
+
+}  // namespace
 
 void register_calibrate(CLI::App& app, CliContext& ctx) {
   auto a = std::make_shared<CalibrateArgs>();
@@ -90,7 +90,10 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
       "  auto       load-cell when the profile has one ([sensors] load_cell = true), else camera (the default)\n"
       "Every protocol is checked against the profile before anything is sent. On a terminal each step shows a\n"
       "progress bar with the time left; off a terminal only the diff and the report path are printed.");
-  sub->callback([a, &ctx] { set_exit_code(run_calibrate(*a, ctx)); });
+  sub->callback([a, &ctx] {
+    BarProgress progress(ctx);
+    set_exit_code(run_calibrate(*a, ctx, progress));
+  });
 }
 
 }  // namespace tunekit::cli

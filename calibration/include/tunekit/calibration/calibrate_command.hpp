@@ -4,7 +4,7 @@
 // sent, runs them, identifies the models with the same functions (and defaults) the single
 // commands use, designs pressure advance and input shaping, previews (or writes) the firmware
 // configuration change and writes a run directory with results.json, plotdata.json and
-// report.html.
+// report.html. The stages, and run_calibrate() that runs them, are in calibration_pipeline.hpp.
 
 #include <string>
 #include <vector>
@@ -39,10 +39,5 @@ struct CalibrateArgs {
   LiquefierCameraArgs camera;
   OutputOptions output;
 };
-
-/// Runs the whole calibration and prints as the command does; returns the exit code. InputError
-/// (exit 2) before anything is sent for a protocol outside the machine's limits, MachineError
-/// (exit 3) when the machine stops answering (every sample received is kept in the run directory).
-int run_calibrate(const CalibrateArgs& options, CliContext& ctx);
 
 }  // namespace tunekit::calibration

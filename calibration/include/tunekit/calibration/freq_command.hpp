@@ -88,6 +88,8 @@ struct FreqOutcome {
   const fitting::FitResult* reported_fit() const;
   /// "tf_oe_fit" or "tf_fit": the results key of the reported fit's full result.
   std::string reported_fit_key() const;
+  /// How the reported fit was made, in words (results "fit.method").
+  std::string reported_fit_method() const;
 };
 
 /// InputError (exit 2) for bad input or options, FitError (exit 1) when a fit fails; located at

@@ -84,6 +84,9 @@ ShaperOutcome compute_shaper(const ShaperOptions& options);
 /// The envelope: results.axes.<label> holds modes, fit, recommended, candidates, selection,
 /// psd and (for an identified mode) freq_hz and zeta of the dominant mode.
 Envelope to_envelope(const ShaperOutcome& outcome);
+/// One axis' results as to_envelope() writes them under results.axes.LABEL: modes (Hz, damping
+/// ratio), fit, recommended shaper, candidates, selection, PSD.
+nlohmann::json shaper_axis_json(const ShaperOutcome& outcome, const ShaperAxis& axis);
 void print_text(const ShaperOutcome& outcome, std::ostream& os);
 
 }  // namespace tunekit::calibration

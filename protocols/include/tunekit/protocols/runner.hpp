@@ -70,6 +70,9 @@ struct RunResult {
   Experiment experiment;
   std::vector<std::string> gcode;  ///< the protocol's G-code (with ;@record directives)
   nlohmann::json summary;          ///< what run.json holds
+  /// Marlin's fixed-time motion as its M493 report said: "active", "built, inactive", or empty
+  /// (not built in, or not Marlin). Also in summary.firmware.ft_motion.
+  std::string ft_motion;
 };
 
 /// The built-in simulated printer's machine profile (same content as datasets/machines/sim.toml).

@@ -1,0 +1,68 @@
+// tunekit calibrate, stage 4: the compensators (pressure advance and input shaping) and the
+// configuration change, previewed unless --write. Export is called as `tunekit export` would be,
+// on the analyses' JSON files in RUN_DIR/analysis/.
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "calibrate_stages.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+
+#ifndef TUNEKIT_DATASETS_DIR
+#define TUNEKIT_DATASETS_DIR "datasets"
+#endif
+
+namespace tunekit::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+
+// --config, or a copy of the bundled example configuration of the firmware in RUN_DIR/config/.
+std::string configuration_to_update(const CalibrateArgs& a, const std::string& run_dir) {
+  if (!a.config.empty()) return a.config;
+  const std::map<std::string, std::string> examples{
+      {"klipper", "printer.cfg"}, {"kalico", "printer.cfg"}, {"marlin", "Configuration_adv.h"}, {"rrf", "config.g"}};
+  const auto it = examples.find(a.firmware);
+  if (it == examples.end()) throw InputError("--firmware must be klipper, kalico, marlin or rrf");
+  const std::string config = run_dir + "/config/" + it->second;
+  fs::copy_file(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/" + it->second, config,
+                fs::copy_options::overwrite_existing);
+  return config;
+}
+
+}  // namespace
+
+CompensatorDesign design_and_export(const CalibrationPlan& plan, const ExperimentRuns& runs,
+                                    const Identification& identified, Progress& progress, CliContext& ctx) {
+  progress.begin("design compensators", 1);
+  CompensatorDesign design;
+  ExportOptions eo;
+  eo.firmware = plan.options.firmware;
+  eo.config = configuration_to_update(plan.options, plan.run_dir);
+  eo.profile = plan.profile.path;
+  eo.results = identified.export_inputs;
+  // A Marlin printer that answered M493 with fixed-time motion enabled bypasses M593/M900 U:
+  // its settings go to M493 (the runner records the answer in each run).
+  const bool ft_live =
+      std::any_of(runs.runs.begin(), runs.runs.end(), [](const auto& kv) { return kv.second.ft_motion == "active"; });
+  design.marlin_ft_live =
+      ft_live && firmware::parse_export_firmware(plan.options.firmware) == firmware::ExportFirmware::marlin;
+  eo.marlin_ft_live = design.marlin_ft_live;
+  eo.write = plan.options.write;
+  design.exported = calibrate_analysis("export", [&] { return compute_export(eo); });
+  OutputOptions keep;
+  keep.json = true;  // the summary lines go to the verbose stream only
+  keep.output_path = plan.run_dir + "/analysis/export.json";
+  std::ostringstream quiet_out, quiet_err;
+  CliContext quiet{quiet_out, quiet_err};
+  calibrate_analysis("export", [&] { return commit_export(design.exported, keep, quiet); });
+  if (ctx.verbosity > 0) print_text(design.exported, ctx.err);
+  const std::string& diff = design.exported.change.diff;
+  core::write_file_atomic(plan.run_dir + "/config/changes.diff", diff);
+  progress.end(diff.empty() ? "configuration already up to date" : "configuration diff ready");
+  return design;
+}
+
+}  // namespace tunekit::calibration

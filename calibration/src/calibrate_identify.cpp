@@ -1,0 +1,137 @@
+// tunekit calibrate, stage 3: identification. Each analysis is the one a user's single command
+// makes of the file the run wrote (compute_step, compute_freq, compute_shaper with the command's
+// defaults; only the file, its columns, the axis and the target firmware are named), so that
+// the command it records in results.json reproduces it from the run directory.
+#include <filesystem>
+
+#include "calibrate_liquefier.hpp"
+#include "calibrate_stages.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+
+namespace tunekit::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string relative_to(const std::string& path, const std::string& run_dir) {
+  return fs::relative(path, run_dir).generic_string();
+}
+
+// The command's words for a step or freq analysis of `csv` (columns named as calibrate names them).
+Reproduction columns_command(const char* analysis, const std::string& what, const std::string& csv,
+                             const std::string& input, const std::string& output, const std::string& run_dir) {
+  return {analysis,
+          std::string("analysis/") + analysis + ".json",
+          what,
+          {"tunekit", analysis, relative_to(csv, run_dir), "--input", input, "--output", output}};
+}
+
+void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {
+  id.camera = std::make_shared<CameraAnalysis>(analyze_camera_prints(
+      plan.run_dir, plan.options.camera, plan.profile.profile, runs.runs, plan.bed, plan.can_prompt, ctx));
+  const CameraAnalysis& cam = *id.camera;
+  StepOptions so;
+  so.file = cam.width_csv;
+  so.time_column = "time";
+  so.input_column = "setpoint_width";
+  so.output_column = "width";
+  so.analysis.model = fitting::StepModel::fopdt;  // `tunekit step`'s default model
+  id.step = calibrate_analysis("step", [&] { return compute_step(so); });
+  const std::string out = plan.run_dir + "/analysis/step.json";
+  keep_analysis(*id.step, out, ctx);
+  id.inputs.push_back(cam.width_csv);
+  id.inputs.push_back(cam.photo);
+  id.export_inputs.push_back(out);
+  id.reproduce.push_back(columns_command("step",
+                                         "the liquefier's step responses in the printed line widths: tau, K, theta",
+                                         cam.width_csv, "setpoint_width", "width", plan.run_dir));
+  const auto& pooled = id.step->analysis.pooled;
+  add_ring_prediction(*id.camera, pooled ? pooled->value("K") : std::nan(""),
+                      pooled ? pooled->value("tau_s") : std::nan(""), pooled ? pooled->value("theta_s") : std::nan(""));
+}
+
+void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {
+  if (runs.liquefier_step) {
+    const std::string csv = runs.runs.at("liquefier-step").files.at("load_cell");
+    const std::string out = plan.run_dir + "/analysis/step.json";
+    id.step = runs.liquefier_step;
+    keep_analysis(*id.step, out, ctx);
+    id.inputs.push_back(csv);
+    id.export_inputs.push_back(out);
+    id.reproduce.push_back(
+        columns_command("step",
+                        "the liquefier's step responses in the load cell's flow sweep: tau, K, theta "
+                        "per step, pooled and per flow level",
+                        csv, "feed", "force", plan.run_dir));
+  }
+  if (const auto it = runs.runs.find("liquefier-chirp"); it != runs.runs.end()) {
+    const std::string csv = it->second.files.at("load_cell");
+    const std::string out = plan.run_dir + "/analysis/freq.json";
+    // Analysed as a user would analyse the file: `tunekit freq FILE --input feed --output force`
+    // sizes the analysis from the record itself (where the chirp starts, the band it excites).
+    FreqOptions fo;
+    fo.file = csv;
+    fo.time_column = "time";
+    fo.input_column = "feed";
+    fo.output_column = "force";
+    id.freq = calibrate_analysis("freq", [&] { return compute_freq(fo); });
+    keep_analysis(*id.freq, out, ctx);
+    id.inputs.push_back(csv);
+    id.reproduce.push_back(columns_command("freq",
+                                           "the liquefier's frequency response to the chirp and the transfer function "
+                                           "fitted to it",
+                                           csv, "feed", "force", plan.run_dir));
+  }
+}
+
+void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {
+  for (const char axis : {'x', 'y'}) {
+    const auto it = runs.runs.find(std::string("axis-") + axis);
+    if (it == runs.runs.end()) continue;
+    const std::string csv = it->second.files.at("accel");
+    const std::string name = std::string("shaper_") + axis;
+    const std::string out = plan.run_dir + "/analysis/" + name + ".json";
+    // The recommendation is made among the target firmware's shapers (and its damping bounds).
+    ShaperOptions so;
+    so.accel.files = {csv};
+    so.accel.input.axis = axis;
+    so.firmware = firmware::parse_export_firmware(plan.options.firmware);
+    const auto& shaper = id.shapers[axis] = calibrate_analysis("shaper", [&] { return compute_shaper(so); });
+    keep_analysis(shaper, out, ctx);
+    id.inputs.push_back(csv);
+    id.export_inputs.push_back(out);
+    id.reproduce.push_back(
+        {name,
+         "analysis/" + name + ".json",
+         std::string("axis ") + axis + "'s resonances (frequency, damping) and the recommended input shaper",
+         {"tunekit", "shaper", relative_to(csv, plan.run_dir), "--axis", std::string(1, axis), "--firmware",
+          plan.options.firmware}});
+  }
+}
+
+}  // namespace
+
+std::string Reproduction::command() const {
+  std::string out;
+  for (const auto& word : args) {
+    const bool plain = !word.empty() && word.find_first_not_of(
+                                            "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                            "0123456789-_./=:,+@%") == std::string::npos;
+    std::string quoted = "'";
+    for (char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    out += (out.empty() ? "" : " ") + (plain ? word : quoted + "'");
+  }
+  return out;
+}
+
+Identification identify(const CalibrationPlan& plan, const ExperimentRuns& runs, Progress& progress, CliContext& ctx) {
+  Identification id;
+  progress.begin("identify models", 3);
+  if (plan.camera_path) identify_camera(plan, runs, id, ctx);
+  identify_load_cell(plan, runs, id, ctx);
+  identify_axes(plan, runs, id, ctx);
+  progress.end("models identified");
+  return id;
+}
+
+}  // namespace tunekit::calibration

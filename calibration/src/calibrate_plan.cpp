@@ -1,0 +1,147 @@
+// tunekit calibrate, stage 1: the plan. The experiments for the profile and the liquefier path,
+// a fresh run directory, and every protocol checked against the machine's limits before any
+// byte is sent.
+#include <algorithm>
+#include <ctime>
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "calibrate_liquefier.hpp"
+#include "calibrate_stages.hpp"
+#include "tunekit/calibration/history_record.hpp"
+#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/sim/sim_camera.hpp"
+
+#ifndef TUNEKIT_DATASETS_DIR
+#define TUNEKIT_DATASETS_DIR "datasets"
+#endif
+
+namespace tunekit::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string utc_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
+  return buf;
+}
+
+std::vector<PlannedExperiment> choose_experiments(const CalibrateArgs& a, const CalibrationProfile& p,
+                                                  bool camera_path) {
+  std::vector<PlannedExperiment> exps;
+  if (!a.skip_liquefier && !camera_path) {
+    // The step test is a flow sweep: every level reached from below and from above, so that tau,
+    // K and theta are known per arrival level (the liquefier's dynamics change with the flow).
+    exps.push_back({"liquefier-step", "liquefier-flow-sweep", "", {}, 0});
+    exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}, 0});
+  }
+  if (camera_path)
+    for (const auto& t : camera_tests()) exps.push_back({t.name, t.protocol, "", t.params, 0});
+  if (!a.skip_axes) {
+    if (!p.profile.sensors.accelerometer)
+      throw InputError("the axis sweeps need an accelerometer ([sensors] accelerometer = true)", p.path);
+    exps.push_back({"axis-x", "axis-sweep", "x", {}, 0});
+    exps.push_back({"axis-y", "axis-sweep", "y", {}, 0});
+  }
+  if (exps.empty()) throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given");
+  return exps;
+}
+
+// Each calibration keeps its own run directory: a used one is never written into again.
+std::string make_run_dir(const std::string& out_dir) {
+  std::string run_dir = out_dir;
+  if (run_dir.empty()) {
+    const std::string base = "runs/calibrate-" + utc_stamp();
+    run_dir = base;
+    for (int k = 2; fs::exists(run_dir); ++k) run_dir = base + "-" + std::to_string(k);
+  } else if (fs::exists(run_dir) && !(fs::is_directory(run_dir) && fs::is_empty(run_dir))) {
+    throw InputError("the run directory already exists; give a new --out (or leave it out for runs/calibrate-UTCSTAMP)",
+                     run_dir);
+  }
+  fs::create_directories(run_dir + "/analysis");
+  fs::create_directories(run_dir + "/config");
+  return run_dir;
+}
+
+}  // namespace
+
+CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
+  if (a.machine != "sim" && a.profile.empty())
+    throw InputError(
+        "a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
+  if (!a.profile.empty()) return {machine::load_machine_profile(a.profile), a.profile};
+  return {protocols::builtin_sim_profile(), std::string(TUNEKIT_DATASETS_DIR) + "/machines/sim.toml"};
+}
+
+CalibrationPlan plan_calibration(const CalibrateArgs& a, const CalibrationProfile& profile, bool can_prompt) {
+  CalibrationPlan plan;
+  plan.options = a;
+  plan.profile = profile;
+  plan.sim = a.machine == "sim";
+  plan.can_prompt = can_prompt;
+  plan.camera_path =
+      !a.skip_liquefier && choose_liquefier_path(a.liquefier, profile.profile, profile.path) == LiquefierPath::camera;
+  // Off a terminal the photo source must be known before anything is printed.
+  if (plan.camera_path) check_photo_source(a.camera, plan.sim, can_prompt);
+  plan.experiments = choose_experiments(a, profile, plan.camera_path);
+  plan.output = a.output;
+  prepare_record(plan.output,
+                 profile.profile.id);  // --record: a bad machine id or database fails before the machine moves
+  plan.run_dir = make_run_dir(a.out_dir);
+
+  // The chirp is sized from the expected liquefier corner: the literature time constant until
+  // the step test has measured one (it runs first).
+  plan.chirp = protocols::plan_liquefier_chirp(protocols::kLiteratureLiquefierTau_s);
+  plan.chirp_basis = fmt::format("the literature time constant {} s", display_number(plan.chirp.expected_tau_s));
+  // The simulated camera photographs everything the simulated printer prints.
+  if (plan.camera_path && a.camera.camera == "sim") plan.bed = std::make_shared<sim::SimPrintBed>();
+
+  // Safety first: every protocol is built and checked against the limits before any byte is sent.
+  for (auto& e : plan.experiments)
+    e.estimated_s =
+        protocols::run_experiment(experiment_run_options(plan, e, plan.chirp, true)).experiment.estimated_duration_s;
+  return plan;
+}
+
+protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const PlannedExperiment& e,
+                                             const protocols::ChirpPlan& chirp, bool dry) {
+  const CalibrateArgs& a = plan.options;
+  protocols::RunOptions o;
+  o.protocol = e.protocol;
+  o.params = e.params;
+  if (plan.sim) o.sim_bed = plan.bed;
+  o.axis = e.axis.empty() ? "x" : e.axis;
+  o.machine = plan.sim ? "sim" : a.profile;
+  o.port = a.port;
+  o.sim_options = a.sim_options;
+  // The simulated printer runs the firmware being calibrated (its planner rules and dialect).
+  if (plan.sim && std::none_of(o.sim_options.begin(), o.sim_options.end(),
+                               [](const std::string& s) { return s.rfind("firmware=", 0) == 0; })) {
+    // Kalico is a Klipper fork: its G-code, API server and planner are Klipper's.
+    const auto fw = firmware::parse_export_firmware(a.firmware);
+    o.sim_options.push_back(
+        "firmware=" + (fw == firmware::ExportFirmware::kalico ? std::string("klipper") : firmware::to_string(fw)));
+  }
+  o.dry_run = dry;
+  o.run_dir = plan.run_dir + "/" + e.name;
+  o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
+  if (e.protocol == "liquefier-chirp") {
+    o.params["expected_tau_s"] = chirp.expected_tau_s;
+    // Staircase steps as long as the chirp's end allows (10 per period, at most 50 ms): Klipper
+    // stops after every extrude-only move, so fewer, longer moves keep the delivered feed close
+    // to the recorded staircase.
+    o.params["segment_s"] = std::min(0.05, 1.0 / (10 * chirp.freq_max_hz));
+    // ... and as short a stop as the extruder allows: its own acceleration limit.
+    if (plan.profile.profile.extruder.max_accel_mm_s2 > 0)
+      o.params["accel_mm_s2"] = plan.profile.profile.extruder.max_accel_mm_s2;
+  }
+  return o;
+}
+
+}  // namespace tunekit::calibration

@@ -1,0 +1,240 @@
+// tunekit calibrate, stage 5: the run's record. results.json is built from the stages' typed
+// outcomes (each analysis' results as its own JSON holds them, the summary rows, notes and the
+// agreement of the two liquefier time constants), then plotdata.json, report.html, the
+// analysis README and, with --record, the history.
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "calibrate_liquefier.hpp"
+#include "calibrate_plotdata.hpp"
+#include "calibrate_stages.hpp"
+#include "tunekit/calibration/agreement.hpp"
+#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/core/atomic_file.hpp"
+#include "tunekit/ident/csv.hpp"
+
+namespace tunekit::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+
+// What results.json and plotdata.json are assembled in.
+struct RunRecord {
+  Envelope env{"calibrate"};
+  nlohmann::json plot = nlohmann::json::object();
+  nlohmann::json summary = nlohmann::json::array();
+  nlohmann::json agreement = nlohmann::json::array();
+  nlohmann::json notes = nlohmann::json::array();
+  nlohmann::json& res() { return env.results(); }
+  // A summary row: the value at `path`, its 95 % interval at `ci_path` or, without one, its basis.
+  void row(const std::string& label, const std::string& path, const std::string& unit, const std::string& ci_path,
+           const std::string& basis = "") {
+    nlohmann::json r{{"label", label}, {"path", path}, {"unit", unit}};
+    if (!ci_path.empty()) r["ci_path"] = ci_path;
+    else r["basis"] = basis;
+    summary.push_back(r);
+  }
+  void plain_row(const std::string& label, const std::string& path, const std::string& unit) {
+    summary.push_back({{"label", label}, {"path", path}, {"unit", unit}});
+  }
+};
+
+// An estimate for the agreement check from a fitted parameter with its 95 % interval; false when
+// it has none or it is not finite.
+bool calibrate_estimate(const fitting::Param& p, const std::string& method, Estimate& out) {
+  out = {method, p.value, p.ci95_lo, p.ci95_hi};
+  return std::isfinite(out.value) && std::isfinite(out.ci95_lo) && std::isfinite(out.ci95_hi);
+}
+
+void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths) {
+  r.res()["liquefier"]["step"] = analysis_results(widths);
+  r.res()["liquefier"]["camera"] = cam.results;
+  r.plot["step"] =
+      step_plotdata(cam.width_csv, widths.analysis, "setpoint_width", "width", "set-point width (mm)", "width (mm)");
+  r.plot["linewidth"] = cam.linewidth_plot;
+  const std::string p = "liquefier.step.pooled.params.";
+  r.plain_row("liquefier time constant tau (line widths)", p + "tau_s.value", "s");
+  r.plain_row("tau standard error", p + "tau_s.stderr", "s");
+  r.plain_row("liquefier dead time theta", p + "theta_s.value", "s");
+  r.plain_row("width gain K", p + "K.value", "1");
+  if (cam.ring) {
+    r.plain_row("ring frequency", "liquefier.camera.ring.freq_hz", "Hz");
+    r.plain_row("ring gain (measured)", "liquefier.camera.ring.gain", "1");
+    r.plain_row("ring phase (measured)", "liquefier.camera.ring.phase_deg", "deg");
+    if (cam.ring_predicted) {
+      r.plain_row("ring phase (step model)", "liquefier.camera.ring.model_phase_deg", "deg");
+      r.plain_row("dead time from the ring's phase", "liquefier.camera.ring.theta_from_phase_s", "s");
+    }
+  }
+  for (const auto& w : cam.warnings) r.env.warn(w);
+}
+
+void add_load_cell_step(RunRecord& r, const StepOutcome& step, double filament_area_mm2) {
+  auto& j = r.res()["liquefier"]["step"] = analysis_results(step);
+  r.plot["step"] = step_plotdata(step.options.file, step.analysis);
+  std::string levels;
+  const auto& arrivals = step.analysis.arrival_levels;
+  for (std::size_t i = 0; i < arrivals.size(); ++i) {
+    const double flow = arrivals[i].u * filament_area_mm2;
+    j["operating_points"][i]["flow_mm3_s"] = flow;
+    if (arrivals[i].n_rising > 0 && arrivals[i].n_falling > 0)
+      levels += fmt::format("{}{} mm^3/s: {} s", levels.empty() ? "" : "; ", display_number(flow),
+                            display_number(arrivals[i].fit.value("tau_s")));
+  }
+  if (!levels.empty()) {
+    std::string trend;
+    if (const auto& tau_trend = step.analysis.level_trends.tau)
+      trend = fmt::format(" (tau = a u^b, b = {})", display_number(tau_trend->value("b")));
+    r.notes.push_back(fmt::format("flow sweep: tau at each level reached from both sides, {}{}", levels, trend));
+  }
+  const std::string p = "liquefier.step.pooled.params.";
+  r.row("liquefier time constant tau (step response)", p + "tau_s.value", "s", p + "tau_s.ci95");
+  r.row("liquefier dead time theta (step response)", p + "theta_s.value", "s", p + "theta_s.ci95");
+  r.row("liquefier gain K (step response)", p + "K.value", "N/(mm/s)", p + "K.ci95");
+}
+
+void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs,
+              const std::optional<StepOutcome>& step) {
+  const auto& plan = runs.chirp;
+  const auto& j = r.res()["liquefier"]["freq"] = analysis_results(chirp);
+  r.res()["liquefier"]["chirp_plan"] = {{"expected_tau_s", plan.expected_tau_s},
+                                        {"basis", runs.chirp_basis},
+                                        {"corner_hz", plan.corner_hz},
+                                        {"freq_min_hz", plan.freq_min_hz},
+                                        {"freq_max_hz", plan.freq_max_hz},
+                                        {"duration_s", plan.duration_s},
+                                        {"settle_s", plan.settle_s}};
+  r.plot["bode"] = bode_plotdata(j);
+  const auto& bb = *chirp.broadband;
+  const fitting::FitResult* fit = chirp.reported_fit();
+  if (fit != nullptr) {
+    const std::string p = "liquefier.freq.fit.params.";
+    r.row(fmt::format("tau from the frequency response (chirp, {})", chirp.reported_fit_method()), p + "tau_s.value",
+          "s", p + "tau_s.ci95");
+  }
+  r.notes.push_back(
+      fmt::format("chirp sized from {}: corner {} Hz, {}-{} Hz over {} s; analysed from {} s up to {} Hz in Welch "
+                  "segments of {} samples ({} Hz bins)",
+                  runs.chirp_basis, display_number(plan.corner_hz), display_number(plan.freq_min_hz),
+                  display_number(plan.freq_max_hz), display_number(plan.duration_s), display_number(bb.start_s),
+                  display_number(bb.fmax_hz), bb.segment_length,
+                  display_number(bb.sample_rate_hz / static_cast<double>(bb.segment_length))));
+  Estimate by_step, by_freq;
+  if (step && step->analysis.pooled && fit != nullptr &&
+      calibrate_estimate(step->analysis.pooled->param("tau_s"), "step response", by_step) &&
+      calibrate_estimate(fit->param("tau_s"), "frequency response", by_freq)) {
+    auto a = compare_estimates("liquefier time constant tau", "s", by_step, by_freq);
+    a["id"] = "tau";
+    if (!a.at("agree").get<bool>()) r.env.warn(a.at("statement").get<std::string>());
+    r.agreement.push_back(a);
+  }
+}
+
+void add_axes(RunRecord& r, const Identification& id) {
+  for (const auto& [axis, shaper] : id.shapers) {
+    const std::string label(1, axis);
+    const ShaperAxis* result = shaper.axis(label);
+    if (result == nullptr) throw InputError("'tunekit shaper' found no " + label + " axis in its file");
+    r.res()["axes"][label] = shaper_axis_json(shaper, *result);
+    r.plot["psd_" + label] = psd_plotdata(shaper_axis_json(shaper, *result));
+    const std::string base = "axes." + label;
+    r.row(label + " resonance frequency", base + ".modes[0].freq_hz", "Hz", base + ".modes[0].freq_ci95");
+    r.row(label + " damping ratio", base + ".modes[0].zeta", "1", base + ".modes[0].zeta_ci95");
+    r.row(label + " shaper frequency", base + ".recommended.freq_hz", "Hz", "", "designed");
+    r.row(label + " max acceleration", base + ".recommended.max_accel_mm_s2", "mm/s^2", "", "designed");
+  }
+}
+
+void add_compensators(RunRecord& r, const CompensatorDesign& design, const std::string& run_dir) {
+  const ExportOutcome& ex = design.exported;
+  if (design.marlin_ft_live) r.res()["firmware_ft_motion"] = "active (M493): settings written as M493";
+  const auto& compensators = r.res()["compensators"] = analysis_results(ex);
+  // The report draws the advance the liquefier needs against flow (the export's flow design).
+  if (ex.flow) r.plot["flow_advance"] = compensators.at("flow_advance");
+  r.res()["config_diff"] = ex.change.diff;
+  if (ex.settings.pa_k_s) r.row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
+  if (ex.settings.pa_smooth_s)
+    r.row("advance smoothing time", "compensators.settings.pa_smooth_s", "s", "", "designed");
+  if (ex.design)
+    for (const auto& n : ex.design->notes) r.notes.push_back(n);
+  for (const auto& w : to_envelope(ex).warnings()) {
+    nlohmann::json wj = w;
+    strip_prefix(wj, run_dir + "/");
+    r.env.warn(wj.get<std::string>());
+  }
+}
+
+nlohmann::json reproduce_json(const Identification& id) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& rep : id.reproduce)
+    out.push_back({{"analysis", rep.analysis}, {"json", rep.json}, {"command", rep.command()}});
+  return out;
+}
+
+RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, const Identification& id,
+                       const CompensatorDesign& design) {
+  RunRecord r;
+  const CalibrateArgs& a = plan.options;
+  // Inputs are recorded relative to the run directory: the run can move, and two runs of the
+  // same machine give byte-identical results.json files.
+  for (const auto& path : id.inputs)
+    r.env.add_input(fs::relative(path, plan.run_dir).generic_string(), ident::read_file_bytes(path));
+  r.env.set_options({{"machine", a.machine},
+                     {"profile", a.profile.empty() ? "builtin" : a.profile},
+                     {"firmware", a.firmware},
+                     {"config", a.config},
+                     {"write", a.write},
+                     {"sim", a.sim_options}});
+  r.res()["machine"] = plan.profile.profile.name;
+  if (id.camera) add_camera(r, *id.camera, *id.step);
+  else if (id.step) add_load_cell_step(r, *id.step, plan.profile.profile.filament_area_mm2());
+  if (id.freq) add_freq(r, *id.freq, runs, id.step);
+  add_axes(r, id);
+  add_compensators(r, design, plan.run_dir);
+  r.res()["summary"] = r.summary;
+  r.res()["agreement"] = r.agreement;
+  r.res()["notes"] = r.notes;
+  r.res()["reproduce"] = reproduce_json(id);
+  strip_prefix(r.res(), plan.run_dir + "/");
+  return r;
+}
+
+// RUN_DIR/analysis/README: what each file is and the command that reproduces it.
+std::string analysis_readme(const Identification& id) {
+  std::ostringstream os;
+  os << "The analyses of this calibration. Each NAME.json holds the results of the tunekit command below,\n"
+        "run from the run directory (the directory above this one) with that command's defaults; add --json\n"
+        "to print its JSON or --json-file FILE to write it (the same results; only the input paths differ).\n\n";
+  for (const auto& rep : id.reproduce)
+    os << rep.json.substr(rep.json.find('/') + 1) << ": " << rep.what << "\n    " << rep.command() << "\n\n";
+  os << "export.json: the compensators and the configuration change, designed by tunekit export from\n"
+        "    step.json and the shaper_*.json files (results.json: compensators)\n";
+  return os.str();
+}
+
+}  // namespace
+
+int write_run(const CalibrationPlan& plan, const ExperimentRuns& runs, const Identification& identified,
+              const CompensatorDesign& design, Progress& progress, CliContext& ctx) {
+  RunRecord r = build_record(plan, runs, identified, design);
+  progress.begin("write report", 2);
+  core::write_file_atomic(plan.run_dir + "/analysis/README", analysis_readme(identified));
+  core::write_file_atomic(plan.run_dir + "/results.json", r.env.dump());
+  core::write_file_atomic(plan.run_dir + "/plotdata.json", r.plot.dump() + "\n");
+  const std::string report = write_report(plan.run_dir);
+  progress.end(report);
+  const std::string& diff = design.exported.change.diff;
+  if (!plan.options.output.json) {
+    if (!diff.empty()) ctx.out << diff << (diff.back() == '\n' ? "" : "\n");
+    ctx.out << fmt::format("report: {}\n", report);
+  }
+  OutputOptions output = plan.output;
+  output.record_source = plan.run_dir;
+  return emit(r.env, output, ctx);
+}
+
+}  // namespace tunekit::calibration

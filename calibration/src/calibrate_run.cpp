@@ -1,0 +1,50 @@
+// tunekit calibrate, stage 2: the experiments run in the plan's order. The liquefier step test
+// is identified as soon as it has run: its time constant sizes the chirp that follows.
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "calibrate_stages.hpp"
+#include "tunekit/calibration/results_json.hpp"
+
+namespace tunekit::calibration {
+
+StepOptions load_cell_step_options(const std::string& csv) {
+  // The analysis `tunekit step` makes of this log with its defaults: the same steps and
+  // operating points (the levels the steps arrive at), which export designs from.
+  StepOptions so;
+  so.file = csv;
+  so.time_column = "time";
+  so.input_column = "feed";
+  so.output_column = "force";
+  return so;
+}
+
+ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) {
+  ExperimentRuns out;
+  out.chirp = plan.chirp;
+  out.chirp_basis = plan.chirp_basis;
+  for (const auto& e : plan.experiments) {
+    double estimate_s = e.estimated_s;
+    if (e.protocol == "liquefier-chirp" && out.liquefier_step && out.liquefier_step->analysis.pooled) {
+      const double tau = out.liquefier_step->analysis.pooled->value("tau_s");
+      if (std::isfinite(tau) && tau > 0) {
+        out.chirp = protocols::plan_liquefier_chirp(tau);
+        out.chirp_basis = fmt::format("the step test's time constant {} s", display_number(tau));
+        // The dry run timed the chirp of the plan; this one is longer or shorter by the difference.
+        estimate_s += out.chirp.duration_s - plan.chirp.duration_s;
+      }
+    }
+    progress.begin("run " + e.name, plan.sim ? std::max(1.0, estimate_s / 4) : estimate_s);
+    const auto& run = out.runs[e.name] = protocols::run_experiment(experiment_run_options(plan, e, out.chirp, false));
+    progress.end(run.status);
+    if (e.name == "liquefier-step") {
+      const auto options = load_cell_step_options(run.files.at("load_cell"));
+      out.liquefier_step = calibrate_analysis("step", [&] { return compute_step(options); });
+    }
+  }
+  return out;
+}
+
+}  // namespace tunekit::calibration
