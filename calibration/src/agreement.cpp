@@ -42,15 +42,5 @@ nlohmann::json compare_estimates(const std::string& quantity, const std::string&
           {"statement", statement}};
 }
 
-bool estimate_from_param(const nlohmann::json* p, const std::string& method, Estimate& out) {
-  if (p == nullptr || !p->is_object()) return false;
-  const auto* v = find_at(*p, nlohmann::json::json_pointer("/value"));
-  const auto* ci = find_at(*p, nlohmann::json::json_pointer("/ci95"));
-  if (v == nullptr || !v->is_number() || ci == nullptr || !ci->is_array() || ci->size() != 2 || !(*ci)[0].is_number() ||
-      !(*ci)[1].is_number())
-    return false;
-  out = {method, v->get<double>(), (*ci)[0].get<double>(), (*ci)[1].get<double>()};
-  return std::isfinite(out.value) && std::isfinite(out.ci95_lo) && std::isfinite(out.ci95_hi);
-}
 
 }  // namespace tunekit::calibration

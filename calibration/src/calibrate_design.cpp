@@ -1,13 +1,16 @@
 // tunekit calibrate, stage 4: the compensators (pressure advance and input shaping) and the
-// configuration change, previewed unless --write. Export is called as `tunekit export` would be,
-// on the analyses' JSON files in RUN_DIR/analysis/.
+// configuration change, previewed unless --write. Export designs from the analyses' typed
+// outcomes (design_inputs.hpp), the same values `tunekit export` reads from their JSON files in
+// RUN_DIR/analysis/.
 #include <algorithm>
 #include <filesystem>
 #include <map>
 #include <sstream>
 
 #include "calibrate_stages.hpp"
+#include "tunekit/calibration/design_inputs.hpp"
 #include "tunekit/core/atomic_file.hpp"
+#include "tunekit/core/file_bytes.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 
 #ifndef TUNEKIT_DATASETS_DIR
@@ -32,6 +35,22 @@ std::string configuration_to_update(const CalibrateArgs& a, const std::string& r
   return config;
 }
 
+/// The analyses' outcomes as export's design inputs, each named by the JSON file it was written to
+/// (the file `tunekit export` would read: its digest is recorded as export's input).
+DesignInputs typed_design_inputs(const CalibrationPlan& plan, const Identification& identified) {
+  DesignInputs d;
+  for (const auto& path : identified.export_inputs) {
+    d.origins.push_back(path);
+    d.files.emplace_back(path, read_file_bytes(path));
+  }
+  if (identified.step) d.step = step_design_input(*identified.step, plan.run_dir + "/analysis/step.json");
+  for (const auto& [axis, outcome] : identified.shapers)
+    for (const auto& [label, in] :
+         shaper_design_inputs(outcome, plan.run_dir + "/analysis/shaper_" + std::string(1, axis) + ".json"))
+      d.axes[label] = in;
+  return d;
+}
+
 }  // namespace
 
 CompensatorDesign design_and_export(const CalibrationPlan& plan, const ExperimentRuns& runs,
@@ -42,7 +61,6 @@ CompensatorDesign design_and_export(const CalibrationPlan& plan, const Experimen
   eo.firmware = plan.options.firmware;
   eo.config = configuration_to_update(plan.options, plan.run_dir);
   eo.profile = plan.profile.path;
-  eo.results = identified.export_inputs;
   // A Marlin printer that answered M493 with fixed-time motion enabled bypasses M593/M900 U:
   // its settings go to M493 (the runner records the answer in each run).
   const bool ft_live =
@@ -51,7 +69,8 @@ CompensatorDesign design_and_export(const CalibrationPlan& plan, const Experimen
       ft_live && firmware::parse_export_firmware(plan.options.firmware) == firmware::ExportFirmware::marlin;
   eo.marlin_ft_live = design.marlin_ft_live;
   eo.write = plan.options.write;
-  design.exported = calibrate_analysis("export", [&] { return compute_export(eo); });
+  const DesignInputs inputs = typed_design_inputs(plan, identified);
+  design.exported = calibrate_analysis("export", [&] { return compute_export(eo, inputs); });
   OutputOptions keep;
   keep.json = true;  // the summary lines go to the verbose stream only
   keep.output_path = plan.run_dir + "/analysis/export.json";

@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/core/file_bytes.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/vision/image_io.hpp"
@@ -63,7 +64,7 @@ std::string capture_from_device(const LiquefierCameraArgs& a, const std::string&
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 3;
   if (code == 127) throw MachineError(fmt::format("the camera helper '{}' could not be run", exe), a.camera_device);
   if (code != 0) {
-    std::string why = ident::read_file_bytes(log);
+    std::string why = read_file_bytes(log);
     while (!why.empty() && (why.back() == '\n' || why.back() == '\r')) why.pop_back();
     if (const auto nl = why.find_last_of('\n'); nl != std::string::npos) why = why.substr(nl + 1);
     if (const auto colon = why.rfind(": "); colon != std::string::npos) why = why.substr(colon + 2);

@@ -11,6 +11,7 @@
 #include "calibrate_liquefier.hpp"
 #include "calibrate_plotdata.hpp"
 #include "calibrate_stages.hpp"
+#include "tunekit/core/file_bytes.hpp"
 #include "tunekit/calibration/agreement.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
@@ -182,7 +183,7 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
   // Inputs are recorded relative to the run directory: the run can move, and two runs of the
   // same machine give byte-identical results.json files.
   for (const auto& path : id.inputs)
-    r.env.add_input(fs::relative(path, plan.run_dir).generic_string(), ident::read_file_bytes(path));
+    r.env.add_input(fs::relative(path, plan.run_dir).generic_string(), read_file_bytes(path));
   r.env.set_options({{"machine", a.machine},
                      {"profile", a.profile.empty() ? "builtin" : a.profile},
                      {"firmware", a.firmware},

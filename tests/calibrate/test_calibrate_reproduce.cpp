@@ -90,7 +90,7 @@ TEST_CASE("calibrate names a reproduce command for every analysis it made, and t
   INFO(run.cli.err);
   REQUIRE(run.cli.code == 0);
   std::set<std::string> analyses;
-  const std::string readme = tunekit::ident::read_file_bytes(run.dir + "/analysis/README");
+  const std::string readme = tunekit::read_file_bytes(run.dir + "/analysis/README");
   for (const auto& e : run.results.at("reproduce")) {
     const std::string name = e.at("analysis").get<std::string>(), command = e.at("command").get<std::string>();
     INFO(name << ": " << command);

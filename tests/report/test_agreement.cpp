@@ -31,16 +31,6 @@ TEST_CASE("an estimate whose interval does not hold its value is refused") {
                   tunekit::InputError);
 }
 
-TEST_CASE("a fitted parameter's JSON gives an estimate only with a finite interval") {
-  Estimate e;
-  const nlohmann::json p{{"value", 0.45}, {"ci95", {0.44, 0.46}}};
-  REQUIRE(estimate_from_param(&p, "step response", e));
-  CHECK(e.ci95_hi == 0.46);
-  const nlohmann::json no_ci{{"value", 0.45}};
-  CHECK_FALSE(estimate_from_param(&no_ci, "x", e));
-  CHECK_FALSE(estimate_from_param(nullptr, "x", e));
-}
-
 TEST_CASE("the liquefier gain is compared with 1 only when input and output share units") {
   using tunekit::ident::gain_is_dimensionless;
   CHECK(gain_is_dimensionless("1"));

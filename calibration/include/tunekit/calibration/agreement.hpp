@@ -23,8 +23,4 @@ struct Estimate {
 nlohmann::json compare_estimates(const std::string& quantity, const std::string& unit, const Estimate& a,
                                  const Estimate& b);
 
-/// Reads an estimate from a fitted parameter's JSON ({value, ci95: [lo, hi]}); nullopt-like
-/// false when the parameter or its interval is missing or not finite.
-bool estimate_from_param(const nlohmann::json* param, const std::string& method, Estimate& out);
-
 }  // namespace tunekit::calibration

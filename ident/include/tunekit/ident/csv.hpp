@@ -81,8 +81,4 @@ inline constexpr const char* kTimeColumnNames[] = {"time", "t", "#time", "timest
 /// Case-insensitive equality on ASCII (core's, used by the column matching above).
 using core::iequals;
 
-/// Transitional: core's tunekit::read_file_bytes (tunekit/core/file_bytes.hpp) under ident's
-/// name, kept only for the calibrate and export commands until they call core's directly.
-using tunekit::read_file_bytes;
-
 }  // namespace tunekit::ident
