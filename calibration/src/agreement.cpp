@@ -4,7 +4,6 @@
 
 #include <fmt/format.h>
 
-#include "tunekit/calibration/json_access.hpp"
 #include "tunekit/calibration/report.hpp"  // display_number()
 #include "tunekit/core/error.hpp"
 
