@@ -31,10 +31,9 @@ CalibrateRun calibrate(const std::string& name, const std::vector<std::string>& 
   return r;
 }
 
-// The axes alone, shared by the per-axis cases.
-const CalibrateRun& axes_run() {
-  static const CalibrateRun run = calibrate("calibrate_reproduce_axes", {"--skip-liquefier"});
-  return run;
+// The axes alone, one run directory per case: ctest runs the cases as separate processes at once.
+CalibrateRun axes_run(const char* axis) {
+  return calibrate(std::string("calibrate_reproduce_axes_") + axis, {"--skip-liquefier"});
 }
 
 // The reproduce entry of `analysis`, or null.
@@ -53,7 +52,7 @@ nlohmann::json reproduce(const std::string& run_dir, const std::string& command)
 }
 
 void check_axis_reproduced(const char* axis) {
-  const auto& run = axes_run();
+  const auto run = axes_run(axis);
   INFO(run.cli.err);
   REQUIRE(run.cli.code == 0);
   const auto* e = entry(run.results, std::string("shaper_") + axis);
