@@ -1,6 +1,8 @@
 // The liquefier chirp of `tunekit calibrate` and `tunekit freq`: freq with nothing but the file
 // and its columns analyses the chirp as calibrate does, and the frequency-response tau it
 // reports is the one every reader shows: the report, the history, export's design and batch.
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 
 #include <filesystem>
@@ -30,11 +32,12 @@ struct ChirpRun {
 };
 
 // One calibration of the simulated liquefier (axes left out), recorded in a history database;
-// shared by the cases below.
+// shared by the cases below within one process (ctest runs each case as its own process, at the
+// same time: the directory is the process's own).
 const ChirpRun& chirp_run() {
   static const ChirpRun run = [] {
     ChirpRun r;
-    const std::string base = tunekit::test::scratch_dir("calibrate_freq");
+    const std::string base = tunekit::test::scratch_dir("calibrate_freq_" + std::to_string(::getpid()));
     r.dir = base + "/run";
     r.db = base + "/history.sqlite";
     r.cli = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--skip-axes", "--out", r.dir, "--record",
