@@ -43,6 +43,15 @@ EstimatedValue estimated_at(const json& param, const std::string& what, const st
 
 EstimatedValue estimated_of(const fitting::Param& p) { return {p.value, p.std_error, p.ci95_lo, p.ci95_hi}; }
 
+/// Whether the step analysis' operating points are levels of the extruder's feed (mm/s) or of
+/// the volumetric flow (mm^3/s), what the flow-dependent advance is designed over. A log whose
+/// input is something else (the set-point width of a printed line, in mm) has levels the design
+/// cannot place on the flow axis: its pooled fit is designed from. An unstated unit ("1") is
+/// taken as a feed, as export has always read it.
+bool levels_are_feed_or_flow(const std::string& input_unit) {
+  return input_unit.empty() || input_unit == "1" || input_unit == "mm/s" || ident::is_volumetric_flow_unit(input_unit);
+}
+
 StepDesignInput read_step_results(const json& res, const std::string& path) {
   StepDesignInput in;
   in.origin = path;
@@ -58,9 +67,13 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
   const double b = number_at(res, "/trend/tau_s/b", "trend.tau_s.b", path);
   if (std::isfinite(a) && std::isfinite(b)) in.trend = ident::TauPowerLaw{a, b};
   const json& unit = value_at_or_null(res, "/units/input"_json_pointer);
-  in.levels_in_flow = unit.is_string() && ident::is_volumetric_flow_unit(unit.get<std::string>());
+  const std::string input_unit = unit.is_string() ? unit.get<std::string>() : std::string();
+  in.levels_in_flow = ident::is_volumetric_flow_unit(input_unit);
   const json& ops = value_at_or_null(res, "/operating_points"_json_pointer);
-  if (!ops.is_array()) return in;
+  if (!ops.is_array() || !levels_are_feed_or_flow(input_unit)) {
+    in.trend.reset();
+    return in;
+  }
   for (const json& op : ops) {
     StepLevel l;
     l.u = number_at(op, "/u", "operating_points[].u", path);
@@ -186,8 +199,9 @@ StepDesignInput step_design_input(const StepOutcome& o, const std::string& origi
     in.K = estimated_of(a.pooled->param("K"));
     in.K_unit = a.pooled->param("K").unit;
   }
-  if (a.level_trends.tau) in.trend = ident::TauPowerLaw{a.level_trends.tau->value("a"), a.level_trends.tau->value("b")};
   in.levels_in_flow = ident::is_volumetric_flow_unit(o.input_unit);
+  if (!levels_are_feed_or_flow(o.input_unit)) return in;
+  if (a.level_trends.tau) in.trend = ident::TauPowerLaw{a.level_trends.tau->value("a"), a.level_trends.tau->value("b")};
   for (const auto& l : a.arrival_levels) {
     if (!(l.u > 0)) continue;
     const auto& tau = l.fit.param("tau_s");
