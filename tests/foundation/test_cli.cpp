@@ -1,6 +1,9 @@
 // CLI conventions: help lists every subcommand, exit codes, deterministic JSON envelope.
+#include <sys/stat.h>
+
 #include <catch2/catch.hpp>
 
+#include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -68,6 +71,54 @@ TEST_CASE("the output option writes the same envelope to a file") {
   std::stringstream ss;
   ss << f.rdbuf();
   CHECK(ss.str() == r.out);
+}
+
+namespace {
+
+// The permission bits of `path`.
+mode_t file_mode(const std::string& path) {
+  struct stat st {};
+  REQUIRE(::stat(path.c_str(), &st) == 0);
+  return st.st_mode & 07777;
+}
+
+// Sets the process umask for one scope.
+struct ScopedUmask {
+  explicit ScopedUmask(mode_t m) : saved(::umask(m)) {}
+  ~ScopedUmask() { ::umask(saved); }
+  ScopedUmask(const ScopedUmask&) = delete;
+  ScopedUmask& operator=(const ScopedUmask&) = delete;
+  mode_t saved;
+};
+
+}  // namespace
+
+TEST_CASE("outputs honour the umask, a replaced file keeps its mode and a backup its original's") {
+  const ScopedUmask umask022(022);
+  const auto dir = tunekit::test::scratch_dir("modes");
+  const auto src = write_scratch("modes_src.csv", "time,y\n0,1\n1,2\n");
+  const auto r = run_cli({"inspect", src, "--json", "-o", dir + "/r.json"});
+  REQUIRE(r.code == 0);
+  CHECK(file_mode(dir + "/r.json") == 0644);
+  {
+    const ScopedUmask umask077(077);  // a stricter umask is honoured as well
+    REQUIRE(run_cli({"inspect", src, "--json", "-o", dir + "/private.json"}).code == 0);
+    CHECK(file_mode(dir + "/private.json") == 0600);
+  }
+  const std::string cfg = dir + "/printer.cfg";
+  std::ofstream(cfg) << "[printer]\nkinematics: cartesian\n\n[extruder]\nstep_pin: PA1\npressure_advance: 0.02\n";
+  REQUIRE(::chmod(cfg.c_str(), 0640) == 0);
+  const auto w = run_cli({"export", "-f", "klipper", "-c", cfg, "--pa-k", "0.05", "--write"});
+  INFO(w.err);
+  REQUIRE(w.code == 0);
+  CHECK(file_mode(cfg) == 0640);
+  int backups = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".bak") {
+      ++backups;
+      CHECK(file_mode(e.path().string()) == 0640);
+    }
+  CHECK(backups == 1);
 }
 
 TEST_CASE("an unknown command or option gets one error line with 'did you mean'") {
