@@ -3,6 +3,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -135,4 +136,49 @@ TEST_CASE("an unknown command or option gets one error line with 'did you mean'"
   const auto v = tunekit::test::run_cli({"rheo", "data.csv", "--shear-rat=Scherrate"});
   CHECK(v.code == 2);
   CHECK(v.err.find("did you mean '--shear-rate'?") != std::string::npos);
+}
+
+namespace {
+
+// A usage error as the tool prints every error: one line, the tool's prefix, exit 2, with a
+// pointer to the command's help and none of the argument library's own lines.
+void check_one_line_usage_error(const tunekit::test::CliRun& r, const std::string& help_hint) {
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.rfind("tunekit: error: ", 0) == 0);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.back() == '\n');
+  CHECK(r.err.find(help_hint) != std::string::npos);
+  CHECK(r.err.find("Run with --help") == std::string::npos);
+  CHECK(r.out.empty());
+}
+
+}  // namespace
+
+TEST_CASE("argument errors are one line with the tool's prefix and a pointer to the command's help") {
+  SECTION("an unknown short option") {
+    const auto r = run_cli({"step", "log.csv", "--time", "t", "--input", "u", "--output", "y", "-Z"});
+    check_one_line_usage_error(r, "run 'tunekit step --help'");
+    CHECK(r.err.find("'-Z'") != std::string::npos);
+  }
+  SECTION("an unknown option of a nested command") {
+    const auto r = run_cli({"history", "list", "--frobnicate"});
+    check_one_line_usage_error(r, "--help");
+    CHECK(r.err.find("--frobnicate") != std::string::npos);
+  }
+  SECTION("a missing required argument") {
+    const auto r = run_cli({"step"});
+    check_one_line_usage_error(r, "run 'tunekit step --help'");
+    CHECK(r.err.find("FILE") != std::string::npos);
+  }
+  SECTION("a number that is not one") {
+    const auto r = run_cli({"batch", ".", "--jobs", "many"});
+    check_one_line_usage_error(r, "run 'tunekit batch --help'");
+    CHECK(r.err.find("--jobs: 'many' is not a whole number") != std::string::npos);
+  }
+  SECTION("an option without its value") {
+    const auto r = run_cli({"batch", ".", "--jobs"});
+    check_one_line_usage_error(r, "run 'tunekit batch --help'");
+    CHECK(r.err.find("--jobs") != std::string::npos);
+  }
 }
