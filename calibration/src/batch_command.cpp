@@ -183,8 +183,7 @@ int apply_requirements(const Job& j, const std::vector<Requirement>& requirement
 void refuse_unnamed_requirements(const std::vector<RequirementReach>& reach, int analyzed) {
   if (analyzed == 0) return;  // nothing to look in: the datasets' own errors say why
   for (const auto& r : reach)
-    if (!r.named)
-      throw InputError(fmt::format("{}; it applies to none of the {} datasets analyzed", r.why_not, analyzed));
+    if (!r.named) throw InputError(fmt::format("{}; it applies to no dataset ({} analyzed)", r.why_not, analyzed));
 }
 
 }  // namespace

@@ -61,7 +61,7 @@ TEST_CASE("batch refuses a requirement that names nothing in any dataset, as a s
   CHECK(r.code == 2);
   CHECK(r.err.find("tunekit: error:") != std::string::npos);
   CHECK(r.err.find("x.freqhz>=35") != std::string::npos);
-  CHECK(r.err.find("2 datasets") != std::string::npos);
+  CHECK(r.err.find("it applies to no dataset (2 analyzed)") != std::string::npos);
   CHECK_FALSE(fs::exists(out));  // all or nothing, as a single command
 
   // A requirement that one kind of dataset names still applies (the other kind: not applicable).
