@@ -4,7 +4,8 @@
 //   feed + force (a liquefier step test as tunekit run writes it)                   -> step
 //   feed + force with a feed changing faster than the liquefier settles (a chirp)    -> freq
 //   shear_rate + viscosity (rheometer data)                                          -> rheo
-// Other files are listed as skipped with the reason. --require applies to every dataset.
+// Other files are listed as skipped with the reason. --require applies to every dataset whose
+// results name the number; one that names nothing in any dataset is an error (exit 2).
 #include <algorithm>
 #include <atomic>
 #include <filesystem>
@@ -140,6 +141,51 @@ Job plan_job(const std::string& path) {
   return j;
 }
 
+// Per requirement: whether it named a number in some dataset, and why not in the last one
+// where it did not.
+struct RequirementReach {
+  bool named = false;
+  std::string why_not;
+};
+
+// Evaluates `requirements` on a dataset analyzed without error: records each outcome in its
+// summary entry `e` (not applicable where its results name no such number), prints each unmet
+// one and returns the dataset's exit code (1 when one is unmet).
+int apply_requirements(const Job& j, const std::vector<Requirement>& requirements, std::vector<RequirementReach>& reach,
+                       nlohmann::json& e, CliContext& ctx) {
+  if (requirements.empty()) return j.code;
+  int code = j.code;
+  nlohmann::json reqs = nlohmann::json::array();
+  for (std::size_t i = 0; i < requirements.size(); ++i) {
+    const auto& r = requirements[i];
+    try {
+      const auto o = evaluate_requirement(r, j.results);
+      reach[i].named = true;
+      reqs.push_back({{"expression", r.expression}, {"path", o.resolved_path}, {"value", o.value}, {"met", o.met}});
+      if (!o.met) {
+        code = static_cast<int>(ExitCode::fit_failed);
+        ctx.err << fmt::format("tunekit: {}: requirement not met: {} ({} = {:.6g})\n", j.file, r.expression,
+                               o.resolved_path, o.value);
+      }
+    } catch (const InputError& why) {
+      reach[i].why_not = why.message();
+      reqs.push_back({{"expression", r.expression}, {"applicable", false}});
+    }
+  }
+  e["requirements"] = reqs;
+  e["exit_code"] = code;
+  e["status"] = code == 0 ? "ok" : "failed";
+  return code;
+}
+
+// A requirement that names nothing in any dataset analyzed is a mistake in the command line
+// (a typo'd path), as it is for a single command: exit 2, naming it.
+void refuse_unnamed_requirements(const std::vector<RequirementReach>& reach, int analyzed) {
+  if (analyzed == 0) return;  // nothing to look in: the datasets' own errors say why
+  for (const auto& r : reach)
+    if (!r.named) throw InputError(fmt::format("{}; it applies to no dataset ({} analyzed)", r.why_not, analyzed));
+}
+
 }  // namespace
 
 int run_batch(const BatchArgs& a, CliContext& ctx) {
@@ -195,7 +241,9 @@ int run_batch(const BatchArgs& a, CliContext& ctx) {
   Envelope env("batch");
   env.set_options({{"dir", a.dir}, {"require", a.output.require}});
   nlohmann::json list = nlohmann::json::array();
-  int worst = 0, ok = 0, failed = 0, bad = 0, skipped = 0;
+  int worst = 0, ok = 0, failed = 0, bad = 0, skipped = 0, analyzed = 0;
+  std::vector<RequirementReach> reach(requirements.size());
+  std::string listing;  // one line per file, printed once the requirements are known to name something
   for (const auto& j : jobs) {
     env.add_input(j.file);
     nlohmann::json e{{"file", j.file}};
@@ -209,37 +257,18 @@ int run_batch(const BatchArgs& a, CliContext& ctx) {
       e["status"] = j.code == 0 ? "ok" : j.code == 1 ? "failed" : "error";
       if (!j.err.empty()) e["messages"] = j.err;
       if (!j.results.is_null()) e["results"] = j.results;
-      // Requirements apply to the datasets whose results name the quantity; elsewhere they
-      // are recorded as not applicable.
-      int code = j.code;
-      if (j.code == 0 && !requirements.empty()) {
-        nlohmann::json reqs = nlohmann::json::array();
-        for (const auto& r : requirements) {
-          try {
-            const auto o = evaluate_requirement(r, j.results);
-            reqs.push_back(
-                {{"expression", r.expression}, {"path", o.resolved_path}, {"value", o.value}, {"met", o.met}});
-            if (!o.met) {
-              code = static_cast<int>(ExitCode::fit_failed);
-              ctx.err << fmt::format("tunekit: {}: requirement not met: {} ({} = {:.6g})\n", j.file, r.expression,
-                                     o.resolved_path, o.value);
-            }
-          } catch (const InputError&) {
-            reqs.push_back({{"expression", r.expression}, {"applicable", false}});
-          }
-        }
-        e["requirements"] = reqs;
-        e["exit_code"] = code;
-        e["status"] = code == 0 ? "ok" : "failed";
-      }
+      analyzed += j.code == 0 ? 1 : 0;
+      const int code = j.code == 0 ? apply_requirements(j, requirements, reach, e, ctx) : j.code;
       worst = std::max(worst, code);
       (code == 0 ? ok : code == 1 ? failed : bad)++;
     }
     list.push_back(e);
     if (!a.output.json)
-      ctx.out << fmt::format("{:<8} {}{}\n", e["status"].get<std::string>(), j.file,
+      listing += fmt::format("{:<8} {}{}\n", e["status"].get<std::string>(), j.file,
                              j.args.empty() ? " (" + j.skip_reason + ")" : "");
   }
+  refuse_unnamed_requirements(reach, analyzed);
+  ctx.out << listing;
   env.results()["datasets"] = list;
   env.results()["counts"] = {{"ok", ok}, {"failed", failed}, {"error", bad}, {"skipped", skipped}};
   OutputOptions o = a.output;

@@ -12,6 +12,7 @@
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/calibration/shaper_command.hpp"
 #include "tunekit/calibration/step_command.hpp"
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 
@@ -183,7 +184,7 @@ DesignInputs read_design_inputs(const std::vector<std::string>& results_files) {
     try {
       read_one_results_file(path, out);
     } catch (const json::exception& e) {
-      throw InputError(fmt::format("unexpected content in a results file: {}", e.what()), path);
+      throw InputError(fmt::format("unexpected content in a results file: {}", core::plain_json_error(e.what())), path);
     }
   }
   return out;

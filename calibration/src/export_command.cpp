@@ -240,7 +240,7 @@ void prepare_files(const ExportOptions& a, const export_design::LiquefierInputs&
   if (a.write && result.changed()) {
     outcome.backup = firmware::backup_path_for(a.config);
     outcome.envelope.results()["written"] = true;
-    outcome.files.add(outcome.backup, result.original);
+    outcome.files.add(outcome.backup, result.original, a.config);  // the backup keeps the original's mode
     outcome.files.add(a.config, result.updated);
   }
   if (!a.gcode_out.empty()) outcome.files.add(a.gcode_out, result.gcode);

@@ -11,6 +11,7 @@
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/calibration/nozzle_command.hpp"
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
@@ -154,7 +155,8 @@ NozzleForward compute_nozzle_forward(const NozzleOptions& a, NozzleOutcome& outc
       for (const auto& [k, v] : r.at("params").items()) spec.values[k] = v.at("value").get<double>();
       source = "fit " + r.at("model").get<std::string>() + " from " + a.rheology_json;
     } catch (const nlohmann::json::exception& e) {
-      throw InputError(std::string("not a 'tunekit rheo --json' result: ") + e.what(), a.rheology_json);
+      throw InputError(std::string("not a 'tunekit rheo --json' result: ") + core::plain_json_error(e.what()),
+                       a.rheology_json);
     }
   }
   const double T_eval = std::isfinite(T_K) ? T_K : 0.0;

@@ -11,6 +11,7 @@
 #include <openssl/evp.h>
 
 #include "tunekit/calibration/warning_advice.hpp"
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"
@@ -313,7 +314,9 @@ ReportOutcome compute_report(const ReportOptions& options) {
     html = build_report_html(env, outcome.images);
   } catch (const nlohmann::json::exception& e) {
     // A member of an unexpected type deeper in the results or the plot data.
-    throw InputError(fmt::format("unexpected content in the results or plot data: {}", e.what()), results_path);
+    throw InputError(
+        fmt::format("unexpected content in the results or plot data: {}", core::plain_json_error(e.what())),
+        results_path);
   }
   outcome.html_path = run_dir + "/report.html";
   core::write_file_atomic(outcome.html_path, html);

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
@@ -71,7 +72,7 @@ nlohmann::json parse_results_json(std::string_view text, const std::string& path
     const std::string where = pos == std::string::npos ? path : results_json_location(path, text, pos);
     throw InputError("a number is beyond the range of a double (about 1.8e308)", where);
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("not valid JSON: {}", e.what()), path);
+    throw InputError(fmt::format("not valid JSON: {}", core::plain_json_error(e.what())), path);
   }
 }
 

@@ -117,6 +117,10 @@ ShaperOutcome compute_shaper(const ShaperOptions& a) {
       a.max_shaper_freq_hz > 0 ? a.max_shaper_freq_hz
                                : (a.klipper_compatible ? kKlipperMaxShaperFreqHz : a.selection.max_shaper_freq_hz);
   outcome.max_shaper_freq_hz = max_shaper_freq;
+  // Without --firmware the recommendation is printed in Klipper's syntax, so it is made among
+  // Klipper's shapers (Klipper refuses any other at start-up, klippy/extras/shaper_defs.py).
+  outcome.firmware_assumed = !a.firmware && a.shapers.empty();
+  outcome.firmware = outcome.firmware_assumed ? std::optional(firmware::ExportFirmware::klipper) : a.firmware;
   if (!(a.selection.max_freq_hz > 0)) throw InputError("--max-freq must be positive");
   if (!(max_shaper_freq > 0)) throw InputError("--max-shaper-freq must be positive");
   if (!(a.selection.scv_mm_s >= 0)) throw InputError("--scv must not be negative");
@@ -133,7 +137,7 @@ ShaperOutcome compute_shaper(const ShaperOptions& a) {
     ident::ShaperSelectionOptions so = a.selection;
     so.max_shaper_freq_hz = max_shaper_freq;
     shaper_choose_damping(a, r, so, out, outcome.warnings);
-    if (a.firmware) shaper_restrict_to_firmware(*a.firmware, r.label, so, outcome.warnings);
+    if (outcome.firmware) shaper_restrict_to_firmware(*outcome.firmware, r.label, so, outcome.warnings);
     // Klipper's selection works on its normalized PSD (divided by f + 0.1 Hz, damped below 10 Hz),
     // each recording (or dataset of a spectrum file) on its own; a shaper's vibrations are the
     // worst over them.

@@ -5,6 +5,7 @@
 
 #include "resonance_json.hpp"
 #include "tunekit/calibration/shaper_command.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -27,7 +28,8 @@ nlohmann::json shaper_selection_json(const ShaperOutcome& o, const ShaperAxis& x
   const auto& so = x.selection;
   nlohmann::json sel;
   sel["method"] = x.klipper_method ? "klipper" : "identified";
-  if (o.options.firmware) sel["firmware"] = firmware::to_string(*o.options.firmware);
+  if (o.firmware) sel["firmware"] = firmware::to_string(*o.firmware);
+  sel["firmware_assumed"] = o.firmware_assumed;
   sel["psd_normalization"] =
       x.normalized_by_us == x.datasets
           ? "divided by (f + 0.1 Hz), damped below 10 Hz by tunekit (Klipper's normalization)"
@@ -45,6 +47,28 @@ nlohmann::json shaper_selection_json(const ShaperOutcome& o, const ShaperAxis& x
   sel["freq_step_hz"] = so.freq_step_hz;
   sel["max_shaper_freq_hz"] = so.max_shaper_freq_hz;
   return sel;
+}
+
+// The recommendation in Klipper's (and Kalico's) configuration syntax where that firmware
+// has the shaper; else in words that name no firmware's syntax, with the firmware's own name
+// for the shaper when it differs ('tunekit export' writes it in that firmware's syntax).
+void print_recommended(const ShaperOutcome& o, const std::string& ax, const ident::ShaperCandidate& b,
+                       std::ostream& os) {
+  using firmware::ExportFirmware;
+  const std::string type = ident::to_string(b.type);
+  const bool klipper_syntax = o.firmware == ExportFirmware::klipper || o.firmware == ExportFirmware::kalico;
+  const auto in_firmware = o.firmware ? firmware::limits::find_shaper(*o.firmware, type) : std::nullopt;
+  if (klipper_syntax && in_firmware) {
+    os << fmt::format("  recommended: shaper_type_{} = {}  shaper_freq_{} = {:.1f}  damping_ratio_{} = {:.3f}\n", ax,
+                      in_firmware->firmware_name, ax, b.freq_hz, ax, b.damping_ratio);
+    return;
+  }
+  const std::string own_name =
+      in_firmware && type != in_firmware->firmware_name
+          ? fmt::format(" ({} calls it {})", firmware::limits::firmware_title(*o.firmware), in_firmware->firmware_name)
+          : std::string();
+  os << fmt::format("  recommended: {} at {:.1f} Hz, damping ratio {:.3f}{}\n", type, b.freq_hz, b.damping_ratio,
+                    own_name);
 }
 
 }  // namespace
@@ -113,10 +137,10 @@ void print_text(const ShaperOutcome& o, std::ostream& os) {
                         ident::to_string(c.type), c.freq_hz, c.damping_ratio, 100 * c.vibrations, c.smoothing_mm,
                         accel);
     }
-    const auto& b = x.choice.recommended;
-    os << fmt::format("  recommended: shaper_type_{} = {}  shaper_freq_{} = {:.1f}  damping_ratio_{} = {:.3f}\n", ax,
-                      ident::to_string(b.type), ax, b.freq_hz, ax, b.damping_ratio);
+    print_recommended(o, ax, x.choice.recommended, os);
   }
+  if (o.firmware_assumed)
+    os << "recommended among Klipper's shapers (assuming Klipper; --firmware marlin|rrf|kalico to choose)\n";
 }
 
 }  // namespace tunekit::calibration

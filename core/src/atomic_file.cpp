@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <optional>
 
 #include <fmt/format.h>
@@ -28,9 +29,33 @@ void fsync_directory(const std::filesystem::path& dir) {
   ::close(fd);
 }
 
-/// Writes `content` to a new durable temporary file beside `path` (with the target's
-/// permission bits when it exists) and returns the temporary file's path.
-std::string stage_temporary(const std::string& path, std::string_view content) {
+// The permission bits a new file gets from open(2) with mode 0666, as for any other tool
+// under the user's umask (0644 under umask 022). Read from /proc/self/status (Linux 4.7 and
+// later; proc(5)) because umask(2) can only be read by setting it, which would race with
+// threads creating files; where /proc is missing, that read-by-setting is the fallback.
+mode_t new_file_mode() {
+  constexpr mode_t kCreateMode = 0666;  // what open(2) and fopen(3) request for a new file
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("Umask:", 0) == 0) return kCreateMode & ~static_cast<mode_t>(std::stoul(line.substr(6), nullptr, 8));
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  return kCreateMode & ~mask;
+}
+
+// The permission bits for a file written at `path`: those of `mode_of` when it exists (a
+// replaced file keeps its mode, a backup its original's), else those of a new file under
+// the umask. (mkstemp(3) creates its file 0600, which must not become the output's mode.)
+mode_t output_mode(const std::string& mode_of) {
+  struct stat st {};
+  if (::stat(mode_of.c_str(), &st) == 0) return st.st_mode & 07777;
+  return new_file_mode();
+}
+
+/// Writes `content` to a new durable temporary file beside `path` (with the permission bits
+/// output_mode(mode_of) gives) and returns the temporary file's path.
+std::string stage_temporary(const std::string& path, std::string_view content, const std::string& mode_of) {
   const std::filesystem::path target(path);
   const std::filesystem::path dir = target.parent_path();
   std::string tmpl =
@@ -46,8 +71,7 @@ std::string stage_temporary(const std::string& path, std::string_view content) {
     ::unlink(tmp.c_str());
     fail(what, path, err);
   };
-  struct stat st {};
-  if (::stat(path.c_str(), &st) == 0) ::fchmod(fd, st.st_mode & 07777);
+  if (::fchmod(fd, output_mode(mode_of)) != 0) give_up("cannot set the file's permissions");
   const char* p = content.data();
   std::size_t left = content.size();
   while (left > 0) {
@@ -72,7 +96,12 @@ std::string stage_temporary(const std::string& path, std::string_view content) {
 
 void write_file_atomic(const std::string& path, std::string_view content,
                        const std::function<void(const std::string&)>& before_rename) {
-  const std::string tmp = stage_temporary(path, content);
+  write_file_atomic_as(path, content, path, before_rename);
+}
+
+void write_file_atomic_as(const std::string& path, std::string_view content, const std::string& mode_of,
+                          const std::function<void(const std::string&)>& before_rename) {
+  const std::string tmp = stage_temporary(path, content, mode_of);
   auto cleanup = [&] { ::unlink(tmp.c_str()); };
   if (before_rename) {
     try {
@@ -90,13 +119,15 @@ void write_file_atomic(const std::string& path, std::string_view content,
   fsync_directory(std::filesystem::path(path).parent_path());
 }
 
-void FileBatch::add(std::string path, std::string content) {
+void FileBatch::add(std::string path, std::string content, std::string mode_of) {
+  if (mode_of.empty()) mode_of = path;
   for (auto& f : files_)
     if (f.path == path) {
       f.content = std::move(content);
+      f.mode_of = std::move(mode_of);
       return;
     }
-  files_.push_back({std::move(path), std::move(content)});
+  files_.push_back({std::move(path), std::move(content), std::move(mode_of)});
 }
 
 void FileBatch::commit(const std::function<void(const std::string&)>& before_rename) {
@@ -116,7 +147,7 @@ void FileBatch::commit(const std::function<void(const std::string&)>& before_ren
   };
   for (const auto& f : files_) {
     try {
-      temps.push_back(stage_temporary(f.path, f.content));
+      temps.push_back(stage_temporary(f.path, f.content, f.mode_of));
     } catch (const Error& e) {
       remove_temps(0);
       throw InputError(fmt::format("{} (nothing was changed)", e.message()), e.location());

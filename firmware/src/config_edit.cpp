@@ -242,7 +242,7 @@ std::string write_with_backup(const std::string& path, std::string_view new_cont
   ss << in.rdbuf();
   const std::string old = ss.str();
   const std::string backup = backup_path_for(path);
-  core::write_file_atomic(backup, old);
+  core::write_file_atomic_as(backup, old, path);  // the backup keeps the original's mode
   core::write_file_atomic(path, new_content, before_rename);
   return backup;
 }

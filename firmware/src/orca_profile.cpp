@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/config_edit.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
@@ -199,7 +200,7 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
     try {
       j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::exception& e) {
-      throw InputError(fmt::format("not valid JSON: {}", e.what()), path);
+      throw InputError(fmt::format("not valid JSON: {}", core::plain_json_error(e.what())), path);
     }
     if (!j.is_object()) throw InputError("an OrcaSlicer profile is a JSON object", path);
     if (j.contains("type") && j["type"].is_string() && j["type"] != "filament")
@@ -291,7 +292,9 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
     if (!nlohmann::json::parse(r.text).is_object())
       throw InputError("internal error: the merged profile is not an object", path);
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("internal error: the merged profile is not valid JSON ({})", e.what()), path);
+    throw InputError(
+        fmt::format("internal error: the merged profile is not valid JSON ({})", core::plain_json_error(e.what())),
+        path);
   }
   return r;
 }

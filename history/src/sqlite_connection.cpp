@@ -1,5 +1,8 @@
 // SQLite backend (Debian's libsqlite3). Write-ahead logging lets readers work while one writer
 // commits; busy_timeout makes concurrent writers wait for their turn instead of failing.
+// journal_mode stays WAL (a rollback journal, DELETE, would make every reader wait for each
+// writer on a farm's shared file); instead a connection that recorded something checkpoints
+// the log into the file when it closes, so history.sqlite alone holds every record.
 // synchronous=NORMAL (SQLite's recommendation for WAL, https://sqlite.org/pragma.html#pragma_synchronous):
 // a committed record survives a killed process and the file is never corrupted; only a power
 // cut or OS crash may roll back the last commits (re-import their run directories). FULL would
@@ -41,15 +44,17 @@ class SqliteConnection final : public Connection {
   }
   ~SqliteConnection() override {
     for (auto& [sql, stmt] : cache_) sqlite3_finalize(stmt);
+    if (committed_) checkpoint_into_file();
     sqlite3_close(db_);
   }
 
  private:
   void configure() {
     sqlite3_busy_timeout(db_, kSqliteBusyTimeoutMs);
-    // A command opens the file, records and closes it: closing the last connection would
-    // otherwise checkpoint the log into the file (with its fsyncs) every time. The log is
-    // checkpointed when it grows past SQLite's 1000 pages instead.
+    // SQLite's own checkpoint when the last connection closes is off: every read-only
+    // command (list, trend) would pay its fsyncs. A connection that committed records
+    // checkpoints on close instead (checkpoint_into_file), and the log is also checkpointed
+    // when it grows past SQLite's 1000 pages.
     sqlite3_db_config(db_, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, nullptr);
     // Switching a new file to WAL needs it to itself for a moment; processes opening the same
     // new file at once may find it busy, without the busy handler being asked: wait and retry.
@@ -127,7 +132,10 @@ class SqliteConnection final : public Connection {
   }
 
   void begin() override { execute("BEGIN IMMEDIATE"); }
-  void commit() override { execute("COMMIT"); }
+  void commit() override {
+    execute("COMMIT");
+    committed_ = true;
+  }
   void rollback() noexcept override { sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr); }
 
  private:
@@ -139,6 +147,19 @@ class SqliteConnection final : public Connection {
     if (rc != SQLITE_OK) fail(rc, sqlite3_errmsg(db_));
     cache_.emplace(sql, stmt);
     return stmt;
+  }
+
+  // A connection that recorded something copies the log into the database file and empties
+  // it when it closes (SQLite, "PRAGMA wal_checkpoint(TRUNCATE)", sqlite.org/pragma.html):
+  // history.sqlite alone then holds every record, so copying that one file to another
+  // machine or a backup loses none. Readers do not checkpoint (a trend stays a pure read).
+  // A reader still inside the log may hold the checkpoint back: after kCheckpointWaitMs it
+  // copies what it can (as PASSIVE does) and the records stay safe in the log for the next
+  // writer's close to copy.
+  void checkpoint_into_file() noexcept {
+    constexpr int kCheckpointWaitMs = 2000;  // a close waits at most this for readers to move on
+    sqlite3_busy_timeout(db_, kCheckpointWaitMs);
+    sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_TRUNCATE, nullptr, nullptr);
   }
 
   [[noreturn]] void fail(int rc, const std::string& msg) const {
@@ -153,6 +174,7 @@ class SqliteConnection final : public Connection {
 
   std::string path_;
   sqlite3* db_ = nullptr;
+  bool committed_ = false;  // a write transaction committed: checkpoint on close
   std::map<std::string, sqlite3_stmt*> cache_;
 };
 

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <zstd.h>
 
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::ident {
@@ -74,7 +75,8 @@ std::vector<StdataMeasurement> load_shaketune_stdata(const std::string& path, st
     try {
       m = nlohmann::json::parse(line);
     } catch (const nlohmann::json::exception& ex) {
-      throw InputError(fmt::format("decompressed line {} is not JSON ({})", line_no, ex.what()), path);
+      throw InputError(fmt::format("decompressed line {} is not JSON ({})", line_no, core::plain_json_error(ex.what())),
+                       path);
     }
     if (!m.is_object() || !m.contains("samples") || !m["samples"].is_array())
       throw InputError(

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::machine {
@@ -14,7 +15,8 @@ void KlipperApiClient::handle(const std::string& frame, long want_id, std::optio
   try {
     msg = nlohmann::json::parse(frame);
   } catch (const nlohmann::json::parse_error& e) {
-    throw MachineError(fmt::format("the API server sent malformed JSON: {}", e.what()), t_->describe());
+    throw MachineError(fmt::format("the API server sent malformed JSON: {}", core::plain_json_error(e.what())),
+                       t_->describe());
   }
   if (msg.contains("id")) {
     if (journal_) journal_->received(frame);

@@ -45,3 +45,27 @@ TEST_CASE("batch analyzes each recognized file, applies requirements where they 
   r = tunekit::test::run_cli({"batch", dir});
   CHECK(r.code == 2);
 }
+
+TEST_CASE("batch refuses a requirement that names nothing in any dataset, as a single command does") {
+  const auto dir = tunekit::test::scratch_dir("batch_typo");
+  fs::copy_file(tunekit::test::dataset("liquefier/synthetic_steps.csv"), dir + "/steps.csv");
+  fs::copy_file(tunekit::test::dataset("rheology/peek_cross_wlf_synthetic.csv"), dir + "/rheometer.csv");
+  const std::string out = tunekit::test::scratch_dir("batch_typo_out") + "/summary.json";
+
+  // The single command's verdict on the same typo, for comparison.
+  const auto single = tunekit::test::run_cli({"step", dir + "/steps.csv", "--time", "time", "--input", "feed",
+                                              "--output", "force", "--require", "x.freqhz>=35"});
+  CHECK(single.code == 2);
+
+  const auto r = tunekit::test::run_cli({"batch", dir, "--require", "x.freqhz>=35", "-o", out});
+  CHECK(r.code == 2);
+  CHECK(r.err.find("tunekit: error:") != std::string::npos);
+  CHECK(r.err.find("x.freqhz>=35") != std::string::npos);
+  CHECK(r.err.find("it applies to no dataset (2 analyzed)") != std::string::npos);
+  CHECK_FALSE(fs::exists(out));  // all or nothing, as a single command
+
+  // A requirement that one kind of dataset names still applies (the other kind: not applicable).
+  const auto ok = tunekit::test::run_cli({"batch", dir, "--require", "tau_s<10"});
+  INFO(ok.err);
+  CHECK(ok.code == 0);
+}

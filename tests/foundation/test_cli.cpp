@@ -1,6 +1,10 @@
 // CLI conventions: help lists every subcommand, exit codes, deterministic JSON envelope.
+#include <sys/stat.h>
+
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -70,6 +74,54 @@ TEST_CASE("the output option writes the same envelope to a file") {
   CHECK(ss.str() == r.out);
 }
 
+namespace {
+
+// The permission bits of `path`.
+mode_t file_mode(const std::string& path) {
+  struct stat st {};
+  REQUIRE(::stat(path.c_str(), &st) == 0);
+  return st.st_mode & 07777;
+}
+
+// Sets the process umask for one scope.
+struct ScopedUmask {
+  explicit ScopedUmask(mode_t m) : saved(::umask(m)) {}
+  ~ScopedUmask() { ::umask(saved); }
+  ScopedUmask(const ScopedUmask&) = delete;
+  ScopedUmask& operator=(const ScopedUmask&) = delete;
+  mode_t saved;
+};
+
+}  // namespace
+
+TEST_CASE("outputs honour the umask, a replaced file keeps its mode and a backup its original's") {
+  const ScopedUmask umask022(022);
+  const auto dir = tunekit::test::scratch_dir("modes");
+  const auto src = write_scratch("modes_src.csv", "time,y\n0,1\n1,2\n");
+  const auto r = run_cli({"inspect", src, "--json", "-o", dir + "/r.json"});
+  REQUIRE(r.code == 0);
+  CHECK(file_mode(dir + "/r.json") == 0644);
+  {
+    const ScopedUmask umask077(077);  // a stricter umask is honoured as well
+    REQUIRE(run_cli({"inspect", src, "--json", "-o", dir + "/private.json"}).code == 0);
+    CHECK(file_mode(dir + "/private.json") == 0600);
+  }
+  const std::string cfg = dir + "/printer.cfg";
+  std::ofstream(cfg) << "[printer]\nkinematics: cartesian\n\n[extruder]\nstep_pin: PA1\npressure_advance: 0.02\n";
+  REQUIRE(::chmod(cfg.c_str(), 0640) == 0);
+  const auto w = run_cli({"export", "-f", "klipper", "-c", cfg, "--pa-k", "0.05", "--write"});
+  INFO(w.err);
+  REQUIRE(w.code == 0);
+  CHECK(file_mode(cfg) == 0640);
+  int backups = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".bak") {
+      ++backups;
+      CHECK(file_mode(e.path().string()) == 0640);
+    }
+  CHECK(backups == 1);
+}
+
 TEST_CASE("an unknown command or option gets one error line with 'did you mean'") {
   const auto c = tunekit::test::run_cli({"stpe", "log.csv"});
   CHECK(c.code == 2);
@@ -84,4 +136,49 @@ TEST_CASE("an unknown command or option gets one error line with 'did you mean'"
   const auto v = tunekit::test::run_cli({"rheo", "data.csv", "--shear-rat=Scherrate"});
   CHECK(v.code == 2);
   CHECK(v.err.find("did you mean '--shear-rate'?") != std::string::npos);
+}
+
+namespace {
+
+// A usage error as the tool prints every error: one line, the tool's prefix, exit 2, with a
+// pointer to the command's help and none of the argument library's own lines.
+void check_one_line_usage_error(const tunekit::test::CliRun& r, const std::string& help_hint) {
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.rfind("tunekit: error: ", 0) == 0);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.back() == '\n');
+  CHECK(r.err.find(help_hint) != std::string::npos);
+  CHECK(r.err.find("Run with --help") == std::string::npos);
+  CHECK(r.out.empty());
+}
+
+}  // namespace
+
+TEST_CASE("argument errors are one line with the tool's prefix and a pointer to the command's help") {
+  SECTION("an unknown short option") {
+    const auto r = run_cli({"step", "log.csv", "--time", "t", "--input", "u", "--output", "y", "-Z"});
+    check_one_line_usage_error(r, "run 'tunekit step --help'");
+    CHECK(r.err.find("'-Z'") != std::string::npos);
+  }
+  SECTION("an unknown option of a nested command") {
+    const auto r = run_cli({"history", "list", "--frobnicate"});
+    check_one_line_usage_error(r, "--help");
+    CHECK(r.err.find("--frobnicate") != std::string::npos);
+  }
+  SECTION("a missing required argument") {
+    const auto r = run_cli({"step"});
+    check_one_line_usage_error(r, "run 'tunekit step --help'");
+    CHECK(r.err.find("FILE") != std::string::npos);
+  }
+  SECTION("a number that is not one") {
+    const auto r = run_cli({"batch", ".", "--jobs", "many"});
+    check_one_line_usage_error(r, "run 'tunekit batch --help'");
+    CHECK(r.err.find("--jobs: 'many' is not a whole number") != std::string::npos);
+  }
+  SECTION("an option without its value") {
+    const auto r = run_cli({"batch", ".", "--jobs"});
+    check_one_line_usage_error(r, "run 'tunekit batch --help'");
+    CHECK(r.err.find("--jobs") != std::string::npos);
+  }
 }

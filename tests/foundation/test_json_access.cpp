@@ -9,6 +9,7 @@
 #include "tunekit/calibration/requirements.hpp"
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/json_error_text.hpp"
 
 using namespace tunekit::calibration;
 using Pointer = nlohmann::json::json_pointer;
@@ -71,4 +72,39 @@ TEST_CASE("read_json_file locates a syntax error at its line and column") {
   CHECK(read_json_file(good, &bytes)["a"][1] == 2);
   CHECK(bytes == "{\"a\": [1, 2]}");
   CHECK_THROWS_AS(read_json_file(path + ".missing"), tunekit::InputError);
+}
+
+TEST_CASE("a JSON library error is said in plain words, without the library's tag") {
+  const nlohmann::json doc = nlohmann::json::parse(R"({"model": 3, "params": [1]})");
+  // Each error is the library's own, raised by a real misuse, so its wording is the library's.
+  auto what_of = [](const auto& misuse) -> std::string {
+    try {
+      (void)misuse();
+    } catch (const nlohmann::json::exception& e) {
+      return e.what();
+    }
+    return {};
+  };
+  const std::string type = what_of([&] { return doc.at("model").get<std::string>(); });
+  const std::string missing = what_of([&] { return doc.at("name"); });
+  const std::string index = what_of([&] { return doc.at("params").at(4); });
+  const std::string syntax = what_of([] { return nlohmann::json::parse("{\"a\": tru}"); });
+  for (const auto& w : {type, missing, index, syntax}) {
+    REQUIRE(w.find("[json.exception.") == 0);
+    CHECK(tunekit::core::plain_json_error(w).find("json.exception") == std::string::npos);
+  }
+  CHECK(tunekit::core::plain_json_error(type) == "text was expected, but found a number");
+  CHECK(tunekit::core::plain_json_error(missing) == "the member 'name' is missing");
+  CHECK(tunekit::core::plain_json_error(index) == "a list has no item 4");
+  CHECK(tunekit::core::plain_json_error(syntax).rfind("syntax error at line 1, column ", 0) == 0);
+}
+
+TEST_CASE("a results file of the wrong shape is refused in plain words") {
+  const auto path =
+      tunekit::test::write_scratch("rheo_model_number.json", R"({"results": {"model": 3, "params": {}}})");
+  const auto r = tunekit::test::run_cli({"nozzle", "--rheology", path, "--temperature", "230", "--flow", "3"});
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("json.exception") == std::string::npos);
+  CHECK(r.err.find("text was expected, but found a number") != std::string::npos);
 }

@@ -328,3 +328,24 @@ TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the r
   const auto steady_row = html.substr(html.find("<tr data-machine=\"steady-sim\">"));
   CHECK(steady_row.substr(0, steady_row.find("</tr>")).find("data-drifted") == std::string::npos);
 }
+
+TEST_CASE("history cli: a copy of history.sqlite alone, without its -wal and -shm files, lists every record") {
+  const std::string dir = scratch_dir("history-copy");
+  const std::string db = dir + "/history.sqlite";
+  const std::string csv = dataset("liquefier/synthetic_steps.csv");
+  const std::vector<std::string> machines{"printer-01", "printer-02", "printer-03"};
+  for (const auto& m : machines) {
+    const auto r = run_cli({"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--record",
+                            "--machine-id", m, "--db", db});
+    REQUIRE(r.code == 0);
+  }
+  const std::string copy_dir = scratch_dir("history-copy-elsewhere");
+  const std::string copy = copy_dir + "/history.sqlite";
+  fs::copy_file(db, copy);  // the one file a user would copy; the log beside it stays behind
+  REQUIRE_FALSE(fs::exists(copy + "-wal"));
+  for (const auto& m : machines) {
+    const auto list = run_cli({"history", "list", "--machine", m, "--db", copy, "--json"});
+    REQUIRE(list.code == 0);
+    CHECK(nlohmann::json::parse(list.out)["results"]["records"][m].size() == 1);
+  }
+}

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 
 using tunekit::test::dataset;
 using tunekit::test::read_text;
@@ -157,4 +158,44 @@ TEST_CASE("a truncated or foreign .stdata file is refused with one located error
   const auto r2 = run_cli({"resonance", other});
   CHECK(r2.code == 2);
   CHECK(r2.err.find("other.stdata") != std::string::npos);
+}
+
+TEST_CASE("without --firmware, shaper recommends a shaper Klipper has, in Klipper's syntax, and says so",
+          "[resonance][real]") {
+  // The premise: compared over all seven types (no firmware), a shaper Klipper lacks wins on
+  // one of the real sweeps (zvdd; Klipper has zv, mzv, zvd, ei, 2hump_ei, 3hump_ei).
+  const std::vector<std::string> all_seven = {"--shapers", "zv", "mzv", "zvd", "ei", "zvdd", "2hump_ei", "3hump_ei"};
+  std::string file, axis;
+  for (const auto& [f, ax] : {std::pair{kSweepX, std::string("x")}, std::pair{kSweepY, std::string("y")}}) {
+    std::vector<std::string> args = {"shaper", dataset(f), "--json"};
+    args.insert(args.end(), all_seven.begin(), all_seven.end());
+    const auto doc = run_json(args);
+    const std::string type = doc["results"]["axes"][ax]["recommended"]["type"];
+    if (!tunekit::firmware::limits::find_shaper(tunekit::firmware::ExportFirmware::klipper, type)) {
+      file = f;
+      axis = ax;
+    }
+  }
+  REQUIRE_FALSE(file.empty());  // some sweep's best shaper is one Klipper lacks
+
+  // By default: Klipper assumed, the recommendation among Klipper's shapers, in its syntax.
+  const auto doc = run_json({"shaper", dataset(file), "--json"});
+  const auto& a = doc["results"]["axes"][axis];
+  const std::string type = a["recommended"]["type"];
+  CHECK(tunekit::firmware::limits::find_shaper(tunekit::firmware::ExportFirmware::klipper, type));
+  CHECK(a["selection"]["firmware"] == "klipper");
+  CHECK(a["selection"]["firmware_assumed"] == true);
+  const auto text = run_cli({"shaper", dataset(file)});
+  REQUIRE(text.code == 0);
+  CHECK(text.out.find("recommended: shaper_type_" + axis + " = " + type + " ") != std::string::npos);
+  CHECK(text.out.find("assuming Klipper; --firmware marlin|rrf|kalico to choose") != std::string::npos);
+
+  // The seven compared as asked: the winner Klipper lacks is named in no firmware's syntax.
+  std::vector<std::string> args = {"shaper", dataset(file)};
+  args.insert(args.end(), all_seven.begin(), all_seven.end());
+  const auto neutral = run_cli(args);
+  REQUIRE(neutral.code == 0);
+  CHECK(neutral.out.find("shaper_type_") == std::string::npos);
+  CHECK(neutral.out.find("recommended: zvdd at ") != std::string::npos);
+  CHECK(neutral.out.find("assuming Klipper") == std::string::npos);
 }

@@ -10,6 +10,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::vision {
@@ -167,7 +168,7 @@ CameraProfile CameraProfile::from_json(const nlohmann::json& j, const std::strin
       if (!(p.px_per_mm > 0)) throw InputError("bed_plane.px_per_mm must be > 0", origin);
     }
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("malformed camera profile: {}", e.what()), origin);
+    throw InputError(fmt::format("malformed camera profile: {}", core::plain_json_error(e.what())), origin);
   }
   return p;
 }
@@ -238,7 +239,7 @@ CameraProfile load_camera_profile(const std::string& path) {
   try {
     f >> j;
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("camera profile is not valid JSON: {}", e.what()), path);
+    throw InputError(fmt::format("camera profile is not valid JSON: {}", core::plain_json_error(e.what())), path);
   }
   return CameraProfile::from_json(j, path);
 }

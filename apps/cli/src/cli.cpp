@@ -1,9 +1,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -102,6 +104,93 @@ std::string cli_typo_message(CLI::App& app, const std::vector<std::string>& args
   return {};
 }
 
+// The command the arguments name ("step", "history trend") and its CLI11 App, for a
+// "run 'tunekit X --help'" hint; the path is "" when they name none.
+std::pair<const CLI::App*, std::string> cli_named_command(CLI::App& app, const std::vector<std::string>& args) {
+  CLI::App* cur = &app;
+  std::string path;
+  for (const auto& a : args) {
+    if (a.empty() || a[0] == '-') continue;
+    for (auto* s : cur->get_subcommands([](const CLI::App*) { return true; }))
+      if (s->get_name() == a) {
+        cur = s;
+        path += (path.empty() ? "" : " ") + a;
+        break;
+      }
+  }
+  return {cur, path};
+}
+
+// What a value of an option's CLI11 type name is ("INT" -> "a whole number").
+std::string cli_value_kind(const CLI::App& app, const std::string& option) {
+  const CLI::Option* o = app.get_option_no_throw(option);
+  const std::string type = o != nullptr ? o->get_type_name() : std::string();
+  if (type == "INT" || type == "UINT") return "a whole number";
+  if (type == "FLOAT" || type == "NUMBER") return "a number";
+  return "a value this option accepts";
+}
+
+// The text after `prefix` in `s`, or nullopt.
+std::optional<std::string> cli_after(const std::string& s, const std::string& prefix) {
+  if (s.rfind(prefix, 0) != 0) return std::nullopt;
+  return s.substr(prefix.size());
+}
+
+// The text before `suffix` in `s` when `s` ends with it, or nullopt.
+std::optional<std::string> cli_before(const std::string& s, const std::string& suffix) {
+  if (s.size() < suffix.size() || s.compare(s.size() - suffix.size(), suffix.size(), suffix) != 0) return std::nullopt;
+  return s.substr(0, s.size() - suffix.size());
+}
+
+// A positional's name as the help shows it ("file" -> "FILE").
+std::string cli_upper(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// CLI11's error (CLI11 2.1, CLI/Error.hpp wordings) in plain words, without a hint.
+std::string cli_plain_parse_error(const CLI::ParseError& e, const CLI::App& command) {
+  const std::string what = e.what();
+  if (what == "A subcommand is required") return "no command given";
+  if (auto name = cli_before(what, " is required"); name && !name->empty() && name->front() != '-')
+    return fmt::format("the {} argument is missing", cli_upper(*name));  // a positional: "file is required"
+  if (auto rest = cli_after(what, "Could not convert: ")) {
+    // "Could not convert: --jobs = abc"
+    const auto eq = rest->find(" = ");
+    if (eq != std::string::npos)
+      return fmt::format("{}: '{}' is not {}", rest->substr(0, eq), rest->substr(eq + 3),
+                         cli_value_kind(command, rest->substr(0, eq)));
+  }
+  if (auto rest = cli_after(what, "The following argument was not expected: "))
+    return "unexpected argument '" + *rest + "'";
+  if (auto rest = cli_after(what, "The following arguments were not expected: "))
+    return "unexpected arguments '" + *rest + "'";
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr && what.find(" required ") != std::string::npos &&
+      what.find(" missing") != std::string::npos)
+    return fmt::format("{} needs a value", what.substr(0, what.find(':')));  // "--time: 1 required TEXT missing"
+  if (auto rest = cli_after(what, "Exactly 1 option from ")) return "give exactly one of " + *rest;
+  if (auto rest = cli_after(what, "At least 1 option from ")) return "give at least one of " + *rest;
+  if (dynamic_cast<const CLI::ExcludesError*>(&e) != nullptr) {
+    const auto at = what.find(" excludes ");
+    if (at != std::string::npos)
+      return fmt::format("{} cannot be used with {}", what.substr(0, at), what.substr(at + 10));
+  }
+  if (dynamic_cast<const CLI::RequiresError*>(&e) != nullptr) {
+    const auto at = what.find(" requires ");
+    if (at != std::string::npos) return fmt::format("{} needs {}", what.substr(0, at), what.substr(at + 10));
+  }
+  return what;  // "--time is required", "--jobs: Value -1 not in range ..."
+}
+
+// "tunekit: error: WHAT; run 'tunekit CMD --help' for its usage": one line, like every other
+// error of the tool, instead of CLI11's two lines.
+std::string cli_parse_error_line(const CLI::ParseError& e, CLI::App& app, const std::vector<std::string>& args) {
+  const auto [command, path] = cli_named_command(app, args);
+  const std::string hint =
+      path.empty() ? "'tunekit --help' lists the commands" : fmt::format("run 'tunekit {} --help' for its usage", path);
+  return fmt::format("tunekit: error: {}; {}", cli_plain_parse_error(e, *command), hint);
+}
+
 }  // namespace
 
 void set_exit_code(int code) { g_exit_code = code; }
@@ -181,8 +270,9 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
         return static_cast<int>(ExitCode::bad_input);
       }
     }
-    const int code = app.exit(e, out, err);
-    return code == 0 ? 0 : static_cast<int>(ExitCode::bad_input);
+    if (e.get_exit_code() == 0) return app.exit(e, out, err);  // --help, --version
+    err << cli_parse_error_line(e, app, args) << "\n";
+    return static_cast<int>(ExitCode::bad_input);
   } catch (const Error& e) {
     err << e.formatted() << "\n";
     return static_cast<int>(e.code());

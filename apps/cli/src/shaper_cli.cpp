@@ -44,8 +44,8 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
         o.shapers.clear();
         for (const auto& n : names) o.shapers.push_back(ident::parse_shaper_type(n));
       },
-      "Shaper types to consider: zv mzv zvd zvdd ei 2hump_ei 3hump_ei (default: all; with "
-      "--klipper-compatible: zv mzv ei 2hump_ei 3hump_ei)");
+      "Shaper types to consider: zv mzv zvd zvdd ei 2hump_ei 3hump_ei (default: all that the --firmware "
+      "has, Klipper's without it; with --klipper-compatible: zv mzv ei 2hump_ei 3hump_ei)");
   sub->add_option("--scv", o.selection.scv_mm_s,
                   fmt::format("Square-corner velocity for smoothing, mm/s (default {:g})", o.selection.scv_mm_s));
   sub->add_option("--max-smoothing", o.selection.max_smoothing_mm,
@@ -68,8 +68,8 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
                   "'{axis}' in the name becomes x/y/z");
   sub->add_option_function<std::string>(
       "--firmware", [&o](const std::string& s) { o.firmware = firmware::parse_export_firmware(s); },
-      "Recommend among this firmware's shapers only (klipper, marlin or rrf), each within the firmware's "
-      "damping bound for it");
+      "Recommend among this firmware's shapers only (klipper, kalico, marlin or rrf), each within the "
+      "firmware's damping bound for it (default: Klipper's, unless --shapers names the shapers to compare)");
   sub->footer(
       klipper_files_help() +
       "\nExamples:\n"

@@ -47,7 +47,9 @@ struct ShaperOptions {
   /// Also write each axis's spectrum and shaper responses in Klipper's calibration_data layout
   /// to this path ("{axis}" becomes the axis label); empty: none.
   std::string klipper_csv;
-  /// Recommend among this firmware's shapers only, each within its damping bound.
+  /// Recommend among this firmware's shapers only, each within its damping bound. Unset (and
+  /// no `shapers` given): Klipper is assumed, so that the recommendation is one Klipper
+  /// accepts; with `shapers` given, they are compared as asked.
   std::optional<firmware::ExportFirmware> firmware;
 };
 
@@ -68,6 +70,10 @@ struct ShaperAxis {
 struct ShaperOutcome {
   ShaperOptions options;
   double max_shaper_freq_hz = 0;  ///< as used (the default resolved), Hz
+  /// The firmware recommended for: options.firmware, or Klipper when assumed; none when
+  /// the shapers given were compared without a firmware.
+  std::optional<firmware::ExportFirmware> firmware;
+  bool firmware_assumed = false;  ///< Klipper assumed: no --firmware and no --shapers
   std::vector<InputDigest> inputs;
   std::vector<ShaperAxis> axes;       ///< ordered by label (x, y, z first)
   std::vector<std::string> warnings;  ///< the pipeline's, then per axis

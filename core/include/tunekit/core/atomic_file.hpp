@@ -12,11 +12,16 @@
 namespace tunekit::core {
 
 /// Replaces `path` with `content` atomically. Keeps the target's permission bits when it
-/// exists. `before_rename` (for tests) runs after the temporary file is durable and before
-/// the rename; if it throws, the temporary file is removed and the target is untouched.
-/// Throws tunekit::Error (exit code 2) on I/O failure.
+/// exists; a new file gets 0666 less the umask (0644 under umask 022), as from any other tool. `before_rename` (for
+/// tests) runs after the temporary file is durable and before the rename; if it throws, the temporary file is removed
+/// and the target is untouched. Throws tunekit::Error (exit code 2) on I/O failure.
 void write_file_atomic(const std::string& path, std::string_view content,
                        const std::function<void(const std::string& temp_path)>& before_rename = {});
+
+/// write_file_atomic() giving `path` the permission bits of the file `mode_of` (when it
+/// exists): a backup keeps its original's mode.
+void write_file_atomic_as(const std::string& path, std::string_view content, const std::string& mode_of,
+                          const std::function<void(const std::string& temp_path)>& before_rename = {});
 
 /// Several files written together, all or nothing. commit() first writes every new content
 /// to a durable temporary file beside its target (any failure: every temporary file is
@@ -26,8 +31,10 @@ void write_file_atomic(const std::string& path, std::string_view content,
 /// naming the file that could not be written.
 class FileBatch {
  public:
-  /// Adds a file; a later add of the same path replaces the earlier content.
-  void add(std::string path, std::string content);
+  /// Adds a file; a later add of the same path replaces the earlier content. The file gets
+  /// the permission bits of `mode_of` when that exists (default: `path` itself, kept when
+  /// replaced), else those of a new file under the umask.
+  void add(std::string path, std::string content, std::string mode_of = {});
   bool empty() const { return files_.empty(); }
   /// `before_rename` (for tests) runs before each rename with the target's path; if it
   /// throws, the batch is rolled back as for a failed rename.
@@ -35,7 +42,7 @@ class FileBatch {
 
  private:
   struct File {
-    std::string path, content;
+    std::string path, content, mode_of;
   };
   std::vector<File> files_;
 };
