@@ -41,5 +41,4 @@ nlohmann::json compare_estimates(const std::string& quantity, const std::string&
           {"statement", statement}};
 }
 
-
 }  // namespace tunekit::calibration
