@@ -48,3 +48,18 @@ TEST_CASE("nozzle --rheology with a fit missing a parameter names the parameter"
   CHECK(r.err.find(path) != std::string::npos);
   CHECK(r.err.find("internal error") == std::string::npos);
 }
+
+TEST_CASE("a protocol hot-end temperature that rounds to 0 is refused, never written as M109 R0",
+          "[safety][temperature]") {
+  for (const std::string t : {"0.4", "3"}) {
+    const auto r = run_cli({"run", "liquefier-step", "--dry-run", "-p", "hotend_c=" + t});
+    INFO("hotend_c=" << t << ": " << r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("M109") != std::string::npos);
+    CHECK(r.out.find("M109 R0") == std::string::npos);
+    CHECK(r.out.find("M109 S0") == std::string::npos);
+  }
+  const auto off = run_cli({"run", "liquefier-step", "--dry-run", "-p", "hotend_c=0"});
+  CHECK(off.code == 0);  // 0: the heater is left alone, no M109 at all
+  CHECK(off.out.find("M109") == std::string::npos);
+}
