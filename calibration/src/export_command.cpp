@@ -54,6 +54,9 @@ constexpr double kPlausibleMinShaperFreq_hz = 1;
 constexpr double kPlausibleMaxShaperFreq_hz = 1000;
 // Design flow, mm^3/s: ten times what the fastest high-flow hot ends melt.
 constexpr double kPlausibleMaxDesignFlow_mm3_s = 1000;
+// Design flow, mm^3/s: a 0.1 mm wide, 0.1 mm thick line at 1 mm/s, slower than any printing
+// move; below it the advance design extrapolates to an absurd K and the message would blame K.
+constexpr double kPlausibleMinDesignFlow_mm3_s = 0.01;
 
 /// Refuses non-finite and implausible values (exit 2) before anything is computed from them.
 void check_plausible(const firmware::CompensatorSettings& s) {
@@ -79,9 +82,10 @@ void check_given_options(const ExportOptions& a) {
   if (std::isfinite(a.pa_k)) given.pa_k_s = a.pa_k;
   if (std::isfinite(a.pa_smooth)) given.pa_smooth_s = a.pa_smooth;
   check_plausible(given);
-  if (std::isfinite(a.design_flow) && !(a.design_flow > 0 && a.design_flow <= kPlausibleMaxDesignFlow_mm3_s))
-    throw InputError(fmt::format("--design-flow {} mm^3/s is not plausible (accepted: above 0 to {} mm^3/s)",
-                                 a.design_flow, kPlausibleMaxDesignFlow_mm3_s));
+  if (std::isfinite(a.design_flow) &&
+      !(a.design_flow >= kPlausibleMinDesignFlow_mm3_s && a.design_flow <= kPlausibleMaxDesignFlow_mm3_s))
+    throw InputError(fmt::format("--design-flow {} mm^3/s is not plausible (accepted: {} to {} mm^3/s)", a.design_flow,
+                                 kPlausibleMinDesignFlow_mm3_s, kPlausibleMaxDesignFlow_mm3_s));
 }
 
 /// A Marlin build with FT_MOTION has FT_MOTION's shapers (firmware_limits.hpp).

@@ -111,3 +111,13 @@ TEST_CASE("a shaper frequency too small for a double is called implausible, not 
   CHECK(r.err.find("not a number") == std::string::npos);
   CHECK(r.err.find("implausibly small") != std::string::npos);
 }
+
+TEST_CASE("an implausibly small --design-flow is named, not blamed on the advance K", "[export][hostile]") {
+  const std::string cfg = copy_config("export_tiny_design_flow", "printer.cfg");
+  const std::string step = tunekit::test::dataset("../tests/export/fixtures/step_sweep.json");
+  const auto r = run_cli({"export", "-f", "klipper", "--config", cfg, step, "--design-flow", "1e-300"});
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("--design-flow") != std::string::npos);
+  CHECK(r.err.find("advance K") == std::string::npos);
+}
