@@ -37,6 +37,12 @@ void Envelope::add_input(const std::string& path, std::string_view bytes) {
   add_input_digest(path, sha256_hex(bytes), bytes.size());
 }
 
+std::vector<std::string> Envelope::input_paths() const {
+  std::vector<std::string> out;
+  for (const auto& i : inputs_) out.push_back(i.value("path", std::string()));
+  return out;
+}
+
 void Envelope::add_input_digest(const std::string& path, std::string sha256, std::size_t size_bytes) {
   inputs_.push_back({{"path", path}, {"sha256", std::move(sha256)}, {"bytes", size_bytes}});
 }
@@ -147,8 +153,20 @@ void write_output_text(const std::string& path, const std::string& text) {
   if (!f.flush()) throw InputError("cannot write the results file", path);
 }
 
+void check_output_not_input(const std::string& path, const std::string& option,
+                            const std::vector<std::string>& inputs) {
+  if (path.empty() || is_special_output(path)) return;
+  for (const auto& in : inputs)
+    if (!in.empty() && same_file(path, in))
+      throw InputError(
+          fmt::format("{} {} is the input file {}: writing it would replace the input; choose another "
+                      "output file",
+                      option, path, in));
+}
+
 int finish_emission(const Envelope& env, const OutputOptions& o, const Emission& e, CliContext& ctx,
                     bool write_output_file) {
+  if (write_output_file) check_output_not_input(o.output_path, "--json-file", env.input_paths());
   if (write_output_file && !o.output_path.empty()) write_output_text(o.output_path, e.text);
   if (o.record) record_result(nlohmann::json::parse(e.text), o, ctx);
   if (o.json) ctx.out << e.text;

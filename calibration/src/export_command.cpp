@@ -54,6 +54,9 @@ constexpr double kPlausibleMinShaperFreq_hz = 1;
 constexpr double kPlausibleMaxShaperFreq_hz = 1000;
 // Design flow, mm^3/s: ten times what the fastest high-flow hot ends melt.
 constexpr double kPlausibleMaxDesignFlow_mm3_s = 1000;
+// Design flow, mm^3/s: a 0.1 mm wide, 0.1 mm thick line at 1 mm/s, slower than any printing
+// move; below it the advance design extrapolates to an absurd K and the message would blame K.
+constexpr double kPlausibleMinDesignFlow_mm3_s = 0.01;
 
 /// Refuses non-finite and implausible values (exit 2) before anything is computed from them.
 void check_plausible(const firmware::CompensatorSettings& s) {
@@ -79,9 +82,10 @@ void check_given_options(const ExportOptions& a) {
   if (std::isfinite(a.pa_k)) given.pa_k_s = a.pa_k;
   if (std::isfinite(a.pa_smooth)) given.pa_smooth_s = a.pa_smooth;
   check_plausible(given);
-  if (std::isfinite(a.design_flow) && !(a.design_flow > 0 && a.design_flow <= kPlausibleMaxDesignFlow_mm3_s))
-    throw InputError(fmt::format("--design-flow {} mm^3/s is not plausible (accepted: above 0 to {} mm^3/s)",
-                                 a.design_flow, kPlausibleMaxDesignFlow_mm3_s));
+  if (std::isfinite(a.design_flow) &&
+      !(a.design_flow >= kPlausibleMinDesignFlow_mm3_s && a.design_flow <= kPlausibleMaxDesignFlow_mm3_s))
+    throw InputError(fmt::format("--design-flow {} mm^3/s is not plausible (accepted: {} to {} mm^3/s)", a.design_flow,
+                                 kPlausibleMinDesignFlow_mm3_s, kPlausibleMaxDesignFlow_mm3_s));
 }
 
 /// A Marlin build with FT_MOTION has FT_MOTION's shapers (firmware_limits.hpp).
@@ -108,19 +112,78 @@ std::string change_note(const ExportOptions& a, const DesignInputs& d) {
   return fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : from, day);
 }
 
+// Klipper reads its extruders from the sections [extruder], [extruder1], [extruder2] ...
+// up to extruder98 (Kevin O'Connor et al., Klipper, klippy/kinematics/extruder.py,
+// add_printer_objects: `for i in range(99)`); an extruder number beyond is no printer's. The
+// same bound serves Marlin's ADVANCE_K entry and RepRapFirmware's drive (M572 D).
+constexpr long long kMaxExtruderNumber = 98;
+
+/// `name` for a message: control characters (a newline would break the message) as '?'.
+std::string shown(const std::string& name) {
+  std::string out = name;
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = '?';
+  return out;
+}
+
+bool all_digits(const std::string& s) { return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos; }
+
+/// The extruder number N of "N" or "extruderN" (0 for "extruder"); nullopt for another name.
+std::optional<long long> extruder_number(const std::string& e) {
+  const std::string prefix = "extruder";
+  const std::string digits = e.rfind(prefix, 0) == 0 ? e.substr(prefix.size()) : e;
+  if (digits.empty() && e == prefix) return 0;
+  if (!all_digits(digits) || (digits != e && digits.front() == '0')) return std::nullopt;
+  if (digits.size() > 2) return kMaxExtruderNumber + 1;  // beyond the range, whatever its size
+  return std::stoll(digits);
+}
+
+/// Refuses an --extruder that is no Klipper extruder section and a --drive out of range (exit 2).
+long long checked_extruder(const ExportOptions& a) {
+  const auto n = extruder_number(a.extruder);
+  if (!n)
+    throw InputError(
+        fmt::format("--extruder '{}' is not an extruder: give a number 0 to {}, or Klipper's section "
+                    "name extruder or extruder1 to extruder{} (klippy/kinematics/extruder.py)",
+                    shown(a.extruder), kMaxExtruderNumber, kMaxExtruderNumber));
+  if (*n > kMaxExtruderNumber || (a.extruder != "extruder" && a.extruder != "0" && *n == 0))
+    throw InputError(
+        fmt::format("--extruder '{}' is out of range: extruders are numbered 0 to {} (extruder, "
+                    "extruder1 to extruder{})",
+                    shown(a.extruder), kMaxExtruderNumber, kMaxExtruderNumber));
+  if (a.drive < 0 || a.drive > kMaxExtruderNumber)
+    throw InputError(
+        fmt::format("--drive {} is out of range: RepRapFirmware's extruder drives (M572 D) are "
+                    "numbered 0 to {}",
+                    a.drive, kMaxExtruderNumber));
+  return *n;
+}
+
 /// Where the settings go: Klipper's section, Marlin's extruder entry, RepRapFirmware's drive.
-/// --extruder N (a number): Klipper's [extruder] / [extruderN], Marlin's ADVANCE_K entry N
-/// (M900 T), RepRapFirmware's drive N unless --drive is given.
+/// --extruder N (a number) or extruderN: Klipper's [extruder] / [extruderN], Marlin's ADVANCE_K
+/// entry N (M900 T), RepRapFirmware's drive N unless --drive is given.
 void set_extruder(const ExportOptions& a, firmware::ExportFirmware fw, firmware::CompensatorSettings& settings) {
-  settings.klipper_extruder = a.extruder;
-  settings.rrf_drive = a.drive;
+  const int n = static_cast<int>(checked_extruder(a));
   settings.marlin_ft_motion_live = fw == firmware::ExportFirmware::marlin && a.marlin_ft_live;
-  if (!a.extruder.empty() && a.extruder.find_first_not_of("0123456789") == std::string::npos) {
-    const int n = std::stoi(a.extruder);
-    settings.extruder_index = n;
-    settings.klipper_extruder = n == 0 ? "extruder" : "extruder" + a.extruder;
-    if (!a.drive_given) settings.rrf_drive = n;
-  }
+  settings.extruder_index = n;
+  settings.klipper_extruder = n == 0 ? "extruder" : fmt::format("extruder{}", n);
+  settings.rrf_drive = a.drive_given ? a.drive : n;
+}
+
+/// The files export reads, as the options name them.
+std::vector<std::string> option_inputs(const ExportOptions& a) {
+  std::vector<std::string> in = a.results;
+  for (const std::string* p : {&a.config, &a.profile, &a.orca_in, &a.sliced_in}) in.push_back(*p);
+  return in;
+}
+
+/// Refuses an output that is one of `inputs` (exit 2): it would replace the file export reads.
+void check_outputs(const ExportOptions& a, const std::string& json_file, const std::vector<std::string>& inputs) {
+  check_output_not_input(a.gcode_out, "--gcode", inputs);
+  check_output_not_input(a.orca_out, "--orca-out", inputs);
+  check_output_not_input(a.sliced_out, "--gcode-out", inputs);
+  check_output_not_input(a.plot_out, "--plot", inputs);
+  check_output_not_input(json_file, "--json-file", inputs);
 }
 
 /// The shapers and smoothing the options set or keep, then the check that something is set.
@@ -281,6 +344,7 @@ ExportOutcome compute_export(const ExportOptions& a, const DesignInputs& inputs)
   const auto fw = firmware::parse_export_firmware(a.firmware);
   outcome.firmware = fw;
   check_given_options(a);
+  check_outputs(a, "", option_inputs(a));
   Envelope& env = outcome.envelope;
   for (const auto& [path, bytes] : inputs.files) env.add_input(path, bytes);
   for (const auto& w : inputs.warnings) env.warn(w);
@@ -314,6 +378,9 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
   const std::string& schedule = o.schedule_gcode;
   const std::string& backup = o.backup;
   core::FileBatch batch = o.files;
+  std::vector<std::string> inputs = option_inputs(a);
+  for (const auto& p : env.input_paths()) inputs.push_back(p);
+  check_outputs(a, output.output_path, inputs);
   // Refuse to overwrite a file that changed since it was read.
   if (a.write && result.changed() && read_file_bytes(a.config) != result.original)
     throw InputError("the configuration file changed since it was read; run the export again", a.config);

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -49,6 +50,10 @@ firmware::ShaperSetting parse_shaper_arg(const std::string& arg, const std::stri
       s.damping = std::stod(parts[2], &used);
       if (used != parts[2].size()) throw std::invalid_argument("trailing");
     }
+  } catch (const std::out_of_range&) {  // a number, but beyond a double (5e-324, 1e999)
+    throw InputError(fmt::format(
+        "--shaper-{}: '{}' has a frequency or damping implausibly small or large (outside the accepted range)", axis,
+        arg));
   } catch (const std::logic_error&) {
     throw InputError(fmt::format("--shaper-{}: '{}' has a frequency or damping that is not a number", axis, arg));
   }

@@ -99,6 +99,18 @@ NozzleFit compute_nozzle_fit(const NozzleOptions& a, NozzleOutcome& outcome) {
   return out;
 }
 
+/// Refuses a fit that lacks a parameter its model evaluates (the evaluation would fail on it).
+void require_rheology_params(const fitting::ViscositySpec& spec, const std::string& path) {
+  auto names = fitting::viscosity_param_names(spec.model);
+  for (const auto& n : fitting::shift_param_names(spec.shift)) names.push_back(n);
+  std::string all;
+  for (const auto& n : names) all += (all.empty() ? "" : ", ") + n;
+  for (const auto& n : names)
+    if (!spec.values.count(n))
+      throw InputError(
+          fmt::format("the rheology fit has no parameter '{}' (its model {} needs {})", n, spec.name(), all), path);
+}
+
 NozzleForward compute_nozzle_forward(const NozzleOptions& a, NozzleOutcome& outcome) {
   const fitting::NozzleGeometry& g = a.prediction.geometry;
   fitting::validate(g);
@@ -158,6 +170,7 @@ NozzleForward compute_nozzle_forward(const NozzleOptions& a, NozzleOutcome& outc
       throw InputError(std::string("not a 'tunekit rheo --json' result: ") + core::plain_json_error(e.what()),
                        a.rheology_json);
     }
+    require_rheology_params(spec, a.rheology_json);
   }
   const double T_eval = std::isfinite(T_K) ? T_K : 0.0;
   if (spec.model != fitting::ViscosityModel::power_law && spec.model != fitting::ViscosityModel::newtonian &&

@@ -20,17 +20,46 @@ namespace {
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_sigint(int) { g_interrupted = true; }
 
+// Accepted ranges of run's numeric options (a value beyond is a typing error, and some would
+// wrap: -1 lines is 2^64-1 as an unsigned count, an infinite timeout overflows the milliseconds).
+// --timeout, s: a day of silence is a dead link; far inside the range of the milliseconds count.
+constexpr double kMaxTimeout_s = 86400;
+// --timeout, s: the link counts milliseconds; less than one would round to no wait at all.
+constexpr double kMinTimeout_s = 0.001;
+// --retries: each waits up to --timeout; a hundred turn a dead link into hours of waiting.
+constexpr int kMaxRetries = 100;
+// --baud, bit/s: the highest rate termios names, B4000000 (Linux, include/uapi/asm-generic/termbits.h).
+constexpr int kMaxBaud = 4'000'000;
+// --max-duration, s: one week of machine time; no calibration protocol runs longer.
+constexpr double kMaxDuration_s = 7 * 86400.0;
+
+/// Refuses an out-of-range numeric option of run (InputError, exit 2), naming the accepted range.
+void check_run_ranges(const RunCommandOptions& a) {
+  const auto& r = a.run;
+  if (!(a.timeout_s >= kMinTimeout_s && a.timeout_s <= kMaxTimeout_s))
+    throw InputError(fmt::format("--timeout {} s is out of range (accepted: {} to {} s)", a.timeout_s, kMinTimeout_s,
+                                 kMaxTimeout_s));
+  if (r.link.max_retries < 0 || r.link.max_retries > kMaxRetries)
+    throw InputError(fmt::format("--retries {} is out of range (accepted: 0 to {})", r.link.max_retries, kMaxRetries));
+  if (r.baud <= 0 || r.baud > kMaxBaud)
+    throw InputError(fmt::format("--baud {} is out of range (accepted: 1 to {} bit/s)", r.baud, kMaxBaud));
+  if (!(r.limits.max_duration_s > 0 && r.limits.max_duration_s <= kMaxDuration_s))
+    throw InputError(fmt::format("--max-duration {} s is out of range (accepted: above 0 to {} s)",
+                                 r.limits.max_duration_s, kMaxDuration_s));
+  // Every line takes at least one byte of the protocol's byte cap: more lines cannot fit.
+  if (r.limits.max_lines == 0 || r.limits.max_lines > r.limits.max_bytes)
+    throw InputError(fmt::format("--max-lines {} is out of range (accepted: 1 to {}, the G-code byte cap)",
+                                 r.limits.max_lines, r.limits.max_bytes));
+}
+
 }  // namespace
 
 RunOutcome compute_run(const RunCommandOptions& a) {
   RunOutcome outcome;
   outcome.options = a;
   protocols::RunOptions o = a.run;
-  if (!(a.timeout_s > 0)) throw InputError("--timeout must be positive (s)");
+  check_run_ranges(a);
   o.link.timeout = std::chrono::milliseconds(static_cast<long>(std::lround(a.timeout_s * 1000)));
-  if (!(o.limits.max_duration_s > 0) || !std::isfinite(o.limits.max_duration_s))
-    throw InputError("--max-duration must be a positive number of seconds");
-  if (o.limits.max_lines == 0) throw InputError("--max-lines must be at least 1");
   for (const auto& p : a.params) {
     const auto eq = p.find('=');
     if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE", p));

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 
 #include <fmt/format.h>
@@ -25,6 +26,14 @@ std::string read_file_bytes(const std::string& path) {
   while ((n = std::fread(buf, 1, sizeof buf, f.get())) > 0) data.append(buf, n);
   if (std::ferror(f.get())) throw InputError(fmt::format("read error: {}", std::strerror(errno)), path);
   return data;
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ea, eb;
+  if (fs::exists(a, ea) && fs::exists(b, eb)) return fs::equivalent(a, b, ea) && !ea;
+  const fs::path pa = fs::weakly_canonical(a, ea), pb = fs::weakly_canonical(b, eb);
+  return !ea && !eb && pa == pb;
 }
 
 }  // namespace tunekit

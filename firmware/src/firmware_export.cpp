@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -25,6 +26,33 @@ constexpr double kMarlinTauMax = limits::kMarlinAdvanceTauMax_s;
 constexpr double kKlipperSmoothMax = limits::kKlipperSmoothTimeMax_s;
 constexpr double kRrfFreqMin = limits::kRrfShaperFreqMin_hz;
 constexpr double kRrfFreqMax = limits::kRrfShaperFreqMax_hz;
+
+/// `v` as the configuration will hold it: formatted with `decimals` and read back. A check of the
+/// raw value would pass 1e-9 s that is written as 0, or a damping of 0.999999 written as 1.
+double as_written(double v, int decimals) { return std::strtod(format_number(v, decimals).c_str(), nullptr); }
+
+/// Every value of `s` as written; `rounded` tells whether formatting changed any of them.
+CompensatorSettings written_values(const CompensatorSettings& s, bool& rounded) {
+  CompensatorSettings w = s;
+  const auto put = [&rounded](double& v, int decimals) {
+    const double r = as_written(v, decimals);
+    rounded = rounded || (r != v && std::isfinite(v));
+    v = r;
+  };
+  if (w.pa_k_s) put(*w.pa_k_s, detail::kDecimalsK);
+  if (w.pa_smooth_s) put(*w.pa_smooth_s, detail::kDecimalsSmooth);
+  if (w.kalico) {
+    put(w.kalico->linear_advance_s, detail::kDecimalsKalico);
+    put(w.kalico->nonlinear_offset_mm, detail::kDecimalsKalico);
+    put(w.kalico->linearization_velocity_mm_s, detail::kDecimalsKalico);
+    if (w.kalico->time_offset_s) put(*w.kalico->time_offset_s, detail::kDecimalsKalico);
+  }
+  for (auto& [axis, sh] : w.shapers) {
+    put(sh.freq_hz, detail::kDecimalsFreq);
+    put(sh.damping, detail::kDecimalsZeta);
+  }
+  return w;
+}
 
 }  // namespace
 
@@ -81,7 +109,9 @@ std::string firmware_shaper_name(ExportFirmware fw, const std::string& type, boo
                                limits::shaper_list(fw)));
 }
 
-void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
+void validate_settings(ExportFirmware fw, const CompensatorSettings& settings) {
+  bool rounded = false;
+  const CompensatorSettings s = written_values(settings, rounded);
   std::vector<std::string> bad;
   const std::string name = limits::firmware_title(fw);
   const bool klipper_like = fw == ExportFirmware::klipper || fw == ExportFirmware::kalico;
@@ -138,6 +168,7 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& s) {
   if (!bad.empty()) {
     std::string msg = fmt::format("refusing to write {} settings: ", name);
     for (std::size_t i = 0; i < bad.size(); ++i) msg += (i ? "; " : "") + bad[i];
+    if (rounded) msg += " (the values as written, rounded to the decimals of the configuration)";
     throw InputError(msg);
   }
 }

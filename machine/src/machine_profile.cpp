@@ -13,6 +13,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
+#include "toml_depth.hpp"
 
 namespace tunekit::machine {
 namespace {
@@ -96,6 +97,7 @@ const AxisLimits& MachineProfile::axis(const std::string& name) const {
 
 MachineProfile parse_machine_profile(const std::string& text, const std::string& path) {
   toml::table root;
+  detail::check_dotted_key_depth(text, path);
   try {
     root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {

@@ -14,6 +14,11 @@ namespace tunekit::protocols {
 namespace {
 
 constexpr double kLimitTolerance = 1e-6;
+// The lowest hot-end temperature an M109 may wait for, degC: below the coolest room a printer
+// runs in. A heater cannot cool below ambient, so Marlin's and RepRapFirmware's M109 R (which
+// waits while cooling, Marlin/src/gcode/temp/M104_M109.cpp) would never return; a protocol
+// temperature that rounds to 0 ("leave the heater alone") must not become such a wait.
+constexpr double kMinHotendWait_c = 15;
 constexpr double kGateJerkMmS3 = 1e8;  // duration estimates only: a near-trapezoidal profile
 
 bool iequals_prefix(std::string_view s, std::string_view prefix) {
@@ -67,6 +72,11 @@ void check_settings(const machine::GcodeWords& w, const machine::GcodeInterprete
       add(fmt::format("hot-end temperature {:g} degC exceeds hotend_max_c {:g}", *in.hotend_c,
                       p.temperature.hotend_max_c));
     if (*in.hotend_c < 0) add(fmt::format("hot-end temperature {:g} degC is negative", *in.hotend_c));
+    else if (w.command == "M109" && *in.hotend_c < kMinHotendWait_c)
+      add(
+          fmt::format("M109 waits for a hot-end temperature of {:g} degC as written, below {:g} degC (ambient): the "
+                      "wait would never end; give a melt temperature, or 0 without a wait to leave the heater alone",
+                      *in.hotend_c, kMinHotendWait_c));
   }
   if ((w.command == "M140" || w.command == "M190") && in.bed_c) {
     if (*in.bed_c > p.temperature.bed_max_c + kLimitTolerance)

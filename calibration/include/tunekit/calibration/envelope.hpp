@@ -38,6 +38,8 @@ class Envelope {
   nlohmann::json& diagnostics() { return diagnostics_; }
   const nlohmann::json& results() const { return results_; }
   const std::vector<std::string>& warnings() const { return warnings_; }
+  /// The paths of the inputs recorded so far.
+  std::vector<std::string> input_paths() const;
 
   nlohmann::json to_json() const;
   /// Pretty-printed with two-space indent and a final newline.
@@ -76,6 +78,10 @@ int finish_emission(const Envelope& env, const OutputOptions& o, const Emission&
 /// True for an existing path that is neither a regular file nor a directory (a device such as
 /// /dev/stdout, a pipe): results are written into it in place instead of replacing it.
 bool is_special_output(const std::string& path);
+
+/// Refuses (InputError, exit 2) an output `path`, given with `option`, that is the same file as
+/// one of `inputs` (core::same_file): writing it would replace an input. Devices are exempt.
+void check_output_not_input(const std::string& path, const std::string& option, const std::vector<std::string>& inputs);
 /// Writes a results file: atomically replaced when it is (or will be) a regular file, written
 /// in place when it is a device or pipe.
 void write_output_text(const std::string& path, const std::string& text);

@@ -10,4 +10,8 @@ namespace tunekit {
 /// be opened or read.
 std::string read_file_bytes(const std::string& path);
 
+/// Whether `a` and `b` name the same file: by filesystem identity (device and inode, so links
+/// and other spellings of a path count) when both exist, else by their normalized absolute paths.
+bool same_file(const std::string& a, const std::string& b);
+
 }  // namespace tunekit
