@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "tunekit/calibration/json_access.hpp"
 #include "tunekit/fitting/first_order.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/input_shaper.hpp"
@@ -56,46 +55,46 @@ nlohmann::json step_plotdata(const std::string& csv, const ident::StepAnalysis& 
   return d;
 }
 
-nlohmann::json bode_plotdata(const nlohmann::json& freq_results) {
+nlohmann::json bode_plotdata(const FreqOutcome& chirp) {
   nlohmann::json d;
-  const auto& b = freq_results.at("h1").at("bode");
-  d["freq_hz"] = b.at("freq_hz");
-  d["mag_db"] = b.at("magnitude_db");
-  d["phase_deg"] = b.at("phase_deg");
-  if (b.contains("coherence")) d["coherence"] = b["coherence"];
-  // The model the summary reports: the fit freq names as its result (results.fit.source).
-  const auto* fit = json_at(freq_results, "fit.source");
-  if (fit != nullptr && fit->is_string() && freq_results.contains(fit->get<std::string>())) {
-    const auto& reported = freq_results[fit->get<std::string>()];
-    const auto& m = reported.at("bode");
-    d["model"] = {{"freq_hz", m.at("freq_hz")},
-                  {"mag_db", m.at("magnitude_db")},
-                  {"phase_deg", m.at("phase_deg")},
-                  {"label", freq_results.at("fit").at("method")}};
-  }
+  const BodeCurve b = measured_bode(chirp);
+  d["freq_hz"] = b.freq_hz;
+  d["mag_db"] = b.magnitude_db;
+  d["phase_deg"] = b.phase_deg;
+  if (chirp.broadband) d["coherence"] = chirp.broadband->coherence;
+  // The model the summary reports: the fit freq names as its result.
+  if (const auto m = reported_fit_bode(chirp))
+    d["model"] = {{"freq_hz", m->freq_hz},
+                  {"mag_db", m->magnitude_db},
+                  {"phase_deg", m->phase_deg},
+                  {"label", chirp.reported_fit_method()}};
   return d;
 }
 
-nlohmann::json psd_plotdata(const nlohmann::json& axis) {
+nlohmann::json psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis) {
   nlohmann::json d;
-  const auto& psd = axis.at("psd");
-  d["freq_hz"] = psd.at("freq_hz");
-  d["psd"] = psd.at("psd");
-  d["modes"] = nlohmann::json::array();
-  double zeta = 0.1;
-  for (const auto& m : axis.value("modes", nlohmann::json::array())) {
-    d["modes"].push_back({{"freq_hz", m.value("freq_hz", 0.0)}});
+  const ident::AxisSpectrum& s = axis.resonance.spectrum;
+  std::vector<double> f, psd;
+  for (std::size_t b = 0; b < s.freq_hz.size() && s.freq_hz[b] <= shaper.options.accel.max_plot_hz; ++b) {
+    f.push_back(s.freq_hz[b]);
+    psd.push_back(s.psd_sum[b]);
   }
-  if (axis.contains("zeta") && axis["zeta"].is_number()) zeta = axis["zeta"].get<double>();
+  d["freq_hz"] = f;
+  d["psd"] = psd;
+  d["modes"] = nlohmann::json::array();
+  const auto& modes = axis.resonance.modes;
+  for (const auto& m : modes.modes) d["modes"].push_back({{"freq_hz", m.freq_hz}});
   // Each candidate shaper's remaining vibration against frequency, at the identified damping.
-  std::vector<double> f = psd.at("freq_hz").get<std::vector<double>>();
+  double zeta = 0.1;
+  if (modes.dominant >= 0 && std::isfinite(modes.modes[static_cast<std::size_t>(modes.dominant)].zeta))
+    zeta = modes.modes[static_cast<std::size_t>(modes.dominant)].zeta;
   d["shapers"] = nlohmann::json::array();
-  for (const auto& c : axis.value("candidates", nlohmann::json::array())) {
-    const auto type = ident::parse_shaper_type(c.at("type").get<std::string>());
-    const auto shaper = ident::design_shaper(type, c.at("freq_hz").get<double>(), c.value("damping", 0.1),
-                                             ident::kDefaultVibrationTolerance, ident::EiDesign::damped_fit);
-    d["shapers"].push_back(
-        {{"type", c.at("type")}, {"freq_hz", f}, {"response", ident::residual_vibration_curve(shaper, f, zeta)}});
+  for (const auto& c : axis.choice.candidates) {
+    const auto shaper_design = ident::design_shaper(c.type, c.freq_hz, c.damping_ratio,
+                                                    ident::kDefaultVibrationTolerance, ident::EiDesign::damped_fit);
+    d["shapers"].push_back({{"type", ident::to_string(c.type)},
+                            {"freq_hz", f},
+                            {"response", ident::residual_vibration_curve(shaper_design, f, zeta)}});
   }
   return d;
 }

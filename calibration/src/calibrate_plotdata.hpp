@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tunekit/calibration/freq_command.hpp"
+#include "tunekit/calibration/shaper_command.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
@@ -19,10 +21,10 @@ double calibrate_param(const fitting::FitResult& f, const std::string& name);
 nlohmann::json step_plotdata(const std::string& csv, const ident::StepAnalysis& steps,
                              const std::string& in_col = "feed", const std::string& out_col = "force",
                              const std::string& u_label = "feed (mm/s)", const std::string& y_label = "force (N)");
-/// Magnitude and phase of the measured frequency response and of the fitted models (the results of
-/// `tunekit freq`).
-nlohmann::json bode_plotdata(const nlohmann::json& freq_results);
-/// One axis' PSD and its fitted modes (an axis of `tunekit shaper`'s results).
-nlohmann::json psd_plotdata(const nlohmann::json& axis);
+/// Magnitude and phase of the measured frequency response and of the reported fitted model.
+nlohmann::json bode_plotdata(const FreqOutcome& chirp);
+/// One axis' PSD up to the plot's highest frequency, its fitted modes and each candidate
+/// shaper's remaining vibration at the identified damping.
+nlohmann::json psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis);
 
 }  // namespace tunekit::calibration

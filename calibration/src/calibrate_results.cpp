@@ -101,7 +101,7 @@ void add_load_cell_step(RunRecord& r, const StepOutcome& step, double filament_a
 void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs,
               const std::optional<StepOutcome>& step) {
   const auto& plan = runs.chirp;
-  const auto& j = r.res()["liquefier"]["freq"] = analysis_results(chirp);
+  r.res()["liquefier"]["freq"] = analysis_results(chirp);
   r.res()["liquefier"]["chirp_plan"] = {{"expected_tau_s", plan.expected_tau_s},
                                         {"basis", runs.chirp_basis},
                                         {"corner_hz", plan.corner_hz},
@@ -109,7 +109,7 @@ void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs
                                         {"freq_max_hz", plan.freq_max_hz},
                                         {"duration_s", plan.duration_s},
                                         {"settle_s", plan.settle_s}};
-  r.plot["bode"] = bode_plotdata(j);
+  r.plot["bode"] = bode_plotdata(chirp);
   const auto& bb = *chirp.broadband;
   const fitting::FitResult* fit = chirp.reported_fit();
   if (fit != nullptr) {
@@ -141,7 +141,7 @@ void add_axes(RunRecord& r, const Identification& id) {
     const ShaperAxis* result = shaper.axis(label);
     if (result == nullptr) throw InputError("'tunekit shaper' found no " + label + " axis in its file");
     r.res()["axes"][label] = shaper_axis_json(shaper, *result);
-    r.plot["psd_" + label] = psd_plotdata(shaper_axis_json(shaper, *result));
+    r.plot["psd_" + label] = psd_plotdata(shaper, *result);
     const std::string base = "axes." + label;
     r.row(label + " resonance frequency", base + ".modes[0].freq_hz", "Hz", base + ".modes[0].freq_ci95");
     r.row(label + " damping ratio", base + ".modes[0].zeta", "1", base + ".modes[0].zeta_ci95");
@@ -153,9 +153,9 @@ void add_axes(RunRecord& r, const Identification& id) {
 void add_compensators(RunRecord& r, const CompensatorDesign& design, const std::string& run_dir) {
   const ExportOutcome& ex = design.exported;
   if (design.marlin_ft_live) r.res()["firmware_ft_motion"] = "active (M493): settings written as M493";
-  const auto& compensators = r.res()["compensators"] = analysis_results(ex);
+  r.res()["compensators"] = analysis_results(ex);
   // The report draws the advance the liquefier needs against flow (the export's flow design).
-  if (ex.flow) r.plot["flow_advance"] = compensators.at("flow_advance");
+  if (ex.flow) r.plot["flow_advance"] = ex.flow->to_json();
   r.res()["config_diff"] = ex.change.diff;
   if (ex.settings.pa_k_s) r.row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
   if (ex.settings.pa_smooth_s)

@@ -49,14 +49,22 @@ std::vector<double> unwrap_deg(const std::vector<std::complex<double>>& h) {
   return ph;
 }
 
+BodeCurve bode_curve(const std::vector<double>& f, const std::vector<std::complex<double>>& h) {
+  BodeCurve b;
+  b.freq_hz = f;
+  for (const auto& v : h) {
+    b.magnitude.push_back(std::abs(v));
+    b.magnitude_db.push_back(20 * std::log10(std::max(std::abs(v), 1e-300)));
+  }
+  b.phase_deg = unwrap_deg(h);
+  return b;
+}
+
 nlohmann::json bode_json(const std::vector<double>& f, const std::vector<std::complex<double>>& h,
                          const std::vector<double>* coherence) {
-  std::vector<double> mag, db;
-  for (const auto& v : h) {
-    mag.push_back(std::abs(v));
-    db.push_back(20 * std::log10(std::max(std::abs(v), 1e-300)));
-  }
-  nlohmann::json j{{"freq_hz", f}, {"magnitude", mag}, {"magnitude_db", db}, {"phase_deg", unwrap_deg(h)}};
+  const BodeCurve b = bode_curve(f, h);
+  nlohmann::json j{
+      {"freq_hz", b.freq_hz}, {"magnitude", b.magnitude}, {"magnitude_db", b.magnitude_db}, {"phase_deg", b.phase_deg}};
   if (coherence != nullptr) j["coherence"] = *coherence;
   return j;
 }
@@ -276,6 +284,18 @@ FreqOutcome compute_freq(const FreqOptions& a) {
   }
   freq_broadband(o, a, table);
   return o;
+}
+
+BodeCurve measured_bode(const FreqOutcome& o) {
+  if (!o.broadband) return {};
+  return bode_curve(o.broadband->freq_hz, o.broadband->h);
+}
+
+std::optional<BodeCurve> reported_fit_bode(const FreqOutcome& o) {
+  const fitting::FitResult* fit = o.reported_fit();
+  if (fit == nullptr || !o.broadband) return std::nullopt;
+  const auto& f = o.broadband->freq_hz;
+  return bode_curve(f, freq_model_response(o.structure, *fit, f));
 }
 
 const fitting::FitResult* FreqOutcome::reported_fit() const {

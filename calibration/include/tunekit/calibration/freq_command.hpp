@@ -92,6 +92,17 @@ struct FreqOutcome {
   std::string reported_fit_method() const;
 };
 
+/// A frequency response as a Bode plot draws it: frequency (Hz), magnitude (output per input)
+/// in plain ratio and in dB, phase in degrees unwrapped along frequency.
+struct BodeCurve {
+  std::vector<double> freq_hz, magnitude, magnitude_db, phase_deg;
+};
+/// The measured H1 response (results h1.bode); empty without a broadband analysis.
+BodeCurve measured_bode(const FreqOutcome& outcome);
+/// The reported fit's response at the measured frequencies (results <fit.source>.bode); nullopt
+/// without a fitted model.
+std::optional<BodeCurve> reported_fit_bode(const FreqOutcome& outcome);
+
 /// InputError (exit 2) for bad input or options, FitError (exit 1) when a fit fails; located at
 /// the file.
 FreqOutcome compute_freq(const FreqOptions& options);
