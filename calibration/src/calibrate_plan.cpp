@@ -10,6 +10,7 @@
 #include "calibrate_liquefier.hpp"
 #include "calibrate_stages.hpp"
 #include "tunekit/calibration/history_record.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/sim/sim_camera.hpp"
