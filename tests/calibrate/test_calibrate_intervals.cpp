@@ -42,7 +42,7 @@ TEST_CASE("calibrate on each firmware's simulated planner never says the step an
   for (const auto& w : env.at("warnings")) CHECK(w.get<std::string>().find("do NOT agree") == std::string::npos);
 }
 
-TEST_CASE("step, freq and resonance on the simulator's clean runs print no warning") {
+TEST_CASE("the simulator's clean runs through step and freq and resonance print no warning") {
   const std::string dir = sim_run("calibrate_clean_analyses", {});
   std::vector<std::vector<std::string>> commands{
       {"step", dir + "/liquefier-step/step.csv", "--input", "feed", "--output", "force"},
