@@ -128,7 +128,8 @@ void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs
   if (step && step->analysis.pooled && fit != nullptr &&
       calibrate_estimate(step->analysis.pooled->param("tau_s"), "step response", by_step) &&
       calibrate_estimate(fit->param("tau_s"), "frequency response", by_freq)) {
-    auto a = compare_estimates("liquefier time constant tau", "s", by_step, by_freq);
+    auto a =
+        compare_estimates("liquefier time constant tau", "s", by_step, by_freq, fitting::equivalence_margin("tau_s"));
     a["id"] = "tau";
     if (!a.at("agree").get<bool>()) r.env.warn(a.at("statement").get<std::string>());
     r.agreement.push_back(a);

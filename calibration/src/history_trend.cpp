@@ -12,6 +12,7 @@
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/history/drift.hpp"
+#include "tunekit/fitting/margins.hpp"
 #include "tunekit/history/quantities.hpp"
 #include "tunekit/history/store.hpp"
 #include "tunekit/core/atomic_file.hpp"
@@ -62,7 +63,7 @@ void hist_set_dotted(nlohmann::json& obj, const std::string& name, const nlohman
 nlohmann::json hist_series_json(const history::DriftSeries& d, bool with_runs) {
   std::vector<std::int64_t> ids;
   std::vector<std::string> times, words;
-  std::vector<nlohmann::json> values, errors, changes, thresholds;
+  std::vector<nlohmann::json> values, errors, changes, thresholds, margins;
   std::vector<bool> drifted;
   for (const auto& p : d.points) {
     ids.push_back(p.point.record_id);
@@ -75,6 +76,7 @@ nlohmann::json hist_series_json(const history::DriftSeries& d, bool with_runs) {
       errors.push_back(hist_number(p.point.stderr_value));
       changes.push_back(hist_number(p.change_pct));
       thresholds.push_back(hist_number(p.threshold));
+      margins.push_back(hist_number(p.margin));
     }
   }
   nlohmann::json runs{{"record_id", ids}, {"run_utc", times}, {"drifted", drifted}};
@@ -85,8 +87,11 @@ nlohmann::json hist_series_json(const history::DriftSeries& d, bool with_runs) {
     runs["stderr"] = errors;
     runs["change_pct"] = changes;
     runs["threshold"] = thresholds;
+    runs["margin"] = margins;
   }
   nlohmann::json j{{"unit", d.unit}, {"count", d.points.size()}, {"drifted", d.latest_drifted()}};
+  if (d.margin.designed) j["designed_from"] = d.margin.designed_from;
+  else j["margin"] = {{"kind", d.margin.kind}, {"relative", d.margin.relative}, {"basis", d.margin.basis}};
   if (with_runs) j["runs"] = runs;
   if (!d.points.empty()) {
     const auto& last = d.points.back();
@@ -122,6 +127,13 @@ MachineTrend hist_trend_of(history::Store& store, const std::string& machine, co
   if (a.quantities.empty()) all = store.series(machine);
   else
     for (const auto& q : a.quantities) all[q] = store.series(machine, q);
+  // A designed quantity drifts through what it was designed from: those are analysed too.
+  std::vector<history::DriftSeries> sources;
+  for (const auto& q : a.quantities)
+    for (const auto& from : fitting::equivalence_margin(q).designed_from)
+      if (std::find(a.quantities.begin(), a.quantities.end(), from) == a.quantities.end())
+        if (auto s = store.series(machine, from); !s.empty())
+          sources.push_back(history::analyse_drift(from, s, a.drift));
   std::set<std::int64_t> records;
   for (const auto& name : hist_quantity_order(all, a.quantities)) {
     const auto it = all.find(name);
@@ -129,6 +141,10 @@ MachineTrend hist_trend_of(history::Store& store, const std::string& machine, co
     for (const auto& p : it->second) records.insert(p.record_id);
     t.series.push_back(history::analyse_drift(name, it->second, a.drift));
   }
+  const std::size_t shown = t.series.size();
+  for (auto& s : sources) t.series.push_back(std::move(s));
+  history::follow_designed(t.series);
+  t.series.resize(shown);
   t.runs = records.size();
   return t;
 }
@@ -236,8 +252,10 @@ void print_text(const HistoryTrendOutcome& o, std::ostream& os) {
   const auto& a = o.options;
   for (const auto& m : o.machines) {
     const auto& t = m.trend;
-    os << fmt::format("machine {}: {} runs, baseline = first {} run(s), drift beyond {:g} x combined standard error\n",
-                      t.machine_id, t.runs, a.drift.baseline_runs, a.drift.coverage_k);
+    os << fmt::format(
+        "machine {}: {} runs, baseline = first {} run(s), drift: the change's interval ({:g} x combined "
+        "standard error) lies beyond the quantity's margin\n",
+        t.machine_id, t.runs, a.drift.baseline_runs, a.drift.coverage_k);
     for (const auto& s : t.series) {
       if (!o.with_runs) {
         const auto& p = s.points.back();
@@ -257,8 +275,10 @@ void print_text(const HistoryTrendOutcome& o, std::ostream& os) {
         std::string change;
         if (p.in_baseline) change = "baseline";
         else if (!s.is_text && std::isfinite(p.change_pct))
-          change = fmt::format("{:+.2f} % (limit ±{} {})", p.change_pct, display_number(p.threshold), s.unit);
-        os << fmt::format("    {:>3}  {:<24}  {:<24} {:<28} {}\n", i + 1, p.point.run_utc, value, change,
+          change = s.margin.designed ? fmt::format("{:+.2f} % (designed)", p.change_pct)
+                                     : fmt::format("{:+.2f} % (±{} {} noise, margin {:g} %)", p.change_pct,
+                                                   display_number(p.threshold), s.unit, 100 * s.margin.relative);
+        os << fmt::format("    {:>3}  {:<24}  {:<24} {:<44} {}\n", i + 1, p.point.run_utc, value, change,
                           p.drifted ? "DRIFT" : "");
       }
       if (s.drifted_since)
@@ -326,8 +346,10 @@ HistoryReportOutcome compute_history_report(const HistoryOptions& a) {
   h << html::head("tunekit fleet report", fleet_css());
   h << "<h1>tunekit fleet report</h1>\n";
   h << fmt::format(
-      "<p>{} machines, database {}. A quantity is flagged when its latest run differs from the machine's "
-      "baseline (first {} run(s)) by more than {:g} times the combined standard error.</p>\n",
+      "<p>{} machines, database {}. A quantity is flagged when the interval of its latest run's change from the "
+      "machine's baseline (first {} run(s)), {:g} times the combined standard error either side, lies wholly "
+      "beyond the quantity's equivalence margin (resonance frequency 1 %, damping ratio 10 %, time constant 2 %, "
+      "gain 2 %, dead time 5 %); a designed setting is flagged only when what it was designed from is.</p>\n",
       machines.size(), html::escape(store.connection().name()), a.drift.baseline_runs, a.drift.coverage_k);
   h << "<table id=\"fleet\">\n<tr><th>machine</th><th>runs</th><th>last run (UTC)</th>";
   for (const auto& c : columns) h << "<th>" << html::escape(c) << "</th>";

@@ -184,9 +184,12 @@ void fill_covariance(FitResult& f, const StepRecord& r, const LsqOptions& o) {
   if (dof <= 0) throw FitError(f.model + ": as many parameters as data points; no uncertainty can be estimated");
   const double s2 = o.absolute_sigma ? 1.0 : f.diagnostics.rss / dof;
   const double tq = t_multiplier(o.confidence, dof);
+  // The step instant is known to one sample: its rectangular uncertainty joins the dead time's
+  // (see step_instant_resolution).
+  const double theta_resolution = step_instant_resolution(r);
   for (int j : free_idx) {
     auto& prm = f.params[static_cast<std::size_t>(j)];
-    prm.std_error = std::sqrt(Sinv(j, j) * d(j) * d(j) * s2);
+    prm.std_error = std::sqrt(Sinv(j, j) * d(j) * d(j) * s2 + (j == 2 ? theta_resolution * theta_resolution : 0.0));
     prm.ci95_lo = prm.value - tq * prm.std_error;
     prm.ci95_hi = prm.value + tq * prm.std_error;
     if (!std::isfinite(prm.std_error))
@@ -207,6 +210,14 @@ void check_identifiable(const FitResult& f, const StepRecord* rec, double durati
 }
 
 double response_duration(const StepRecord& r) { return r.t.back() - r.t_step; }
+
+double step_instant_resolution(const StepRecord& r) {
+  if (r.t.size() < 2) return 0;
+  std::vector<double> d(r.t.size() - 1);
+  for (std::size_t i = 1; i < r.t.size(); ++i) d[i - 1] = r.t[i] - r.t[i - 1];
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return d[d.size() / 2] / std::sqrt(12.0);
+}
 
 }  // namespace first_order_detail
 

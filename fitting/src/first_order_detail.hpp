@@ -35,6 +35,14 @@ void step_residuals(const StepRecord& r, double K, double tau, double theta, dou
 /// returns the residual sum of squares.
 double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr);
 
+/// Ljung-Box p below which the residuals count as not white and the intervals take the
+/// model error in (a sandwich covariance).
+constexpr double kWhitenessRobustP = 0.01;
+
+/// The standard uncertainty of a step's instant from the sampling: dt / sqrt(12), dt the
+/// record's median sample interval (the instant lies somewhere within a sample).
+double step_instant_resolution(const StepRecord& r);
+
 /// FitError when tau_s ran to its bound or is not determined, or theta_s ran to its bound.
 void check_identifiable(const FitResult& f, const StepRecord* rec, double duration, bool have_stderr);
 /// Time from the step to the last sample (s).

@@ -135,16 +135,66 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
       es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
   const Eigen::MatrixXd C = d.asDiagonal() * Sinv * d.asDiagonal();
   const double s2 = o.absolute_sigma ? 1.0 : f.diagnostics.rss / dof;
-  const double tq = t_multiplier(o.confidence, dof);
+  Eigen::MatrixXd V = C * s2;
+  double tq = t_multiplier(o.confidence, dof);
+  std::string method = "wald";
+  // Residuals that are not white say the model does not describe the data exactly (a ramped
+  // feed, a sampled dead time, a plant that is not quite first order): their errors are
+  // correlated within each step, and s^2 (J^T J)^-1 is too sure. The cluster-robust sandwich
+  // C B C with one cluster per step (Liang and Zeger, "Longitudinal data analysis using
+  // generalized linear models", 1986; small-sample factor G/(G-1), t with G-1 degrees of
+  // freedom: Cameron and Miller, "A practitioner's guide to cluster-robust inference", 2015)
+  // takes whatever correlation there is within a step; an interval is never made narrower
+  // than the noise-only one.
+  const std::size_t G = recs.size();
+  if (!o.absolute_sigma && G >= 4 && f.diagnostics.whiteness_p < kWhitenessRobustP) {
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(k, k);
+    for (std::size_t j = 0; j < G; ++j) {
+      const double q[4] = {p[0], p[1], p[2], p[3 + j]};
+      Eigen::Matrix4d JtJ;
+      Eigen::Vector4d Jtr;
+      normal_equations(recs[j], q, JtJ, Jtr);
+      Eigen::VectorXd gj = Eigen::VectorXd::Zero(k);
+      const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
+      for (int a = 0; a < k; ++a)
+        for (int c = 0; c < 4; ++c)
+          if (free_idx[static_cast<std::size_t>(a)] == idx[c]) gj(a) = Jtr(c);
+      B += gj * gj.transpose();
+    }
+    B *= static_cast<double>(G) / static_cast<double>(G - 1);
+    Eigen::MatrixXd R = C * B * C;
+    bool wider = false;
+    for (int a = 0; a < k; ++a) {
+      if (free_idx[static_cast<std::size_t>(a)] < 3 && R(a, a) > V(a, a)) wider = true;
+      R(a, a) = std::max(R(a, a), V(a, a));  // never narrower than the noise-only variance
+    }
+    if (wider) {
+      V = R;
+      method = "cluster-robust over steps";
+      tq = t_multiplier(o.confidence, static_cast<int>(G) - 1);
+    }
+  }
+  // The step instants are known to one sample: a rectangular uncertainty dt / sqrt(12) in the
+  // dead time (JCGM 100:2008, "Guide to the expression of uncertainty in measurement", 4.3.7),
+  // added to its variance.
+  double theta_resolution = 0;
+  for (const auto& r : recs) theta_resolution = std::max(theta_resolution, step_instant_resolution(r));
   f.covariance.assign(static_cast<std::size_t>(n * n), 0.0);
   for (int a = 0; a < k; ++a)
     for (int b = 0; b < k; ++b)
       f.covariance[static_cast<std::size_t>(free_idx[static_cast<std::size_t>(a)] * n +
-                                            free_idx[static_cast<std::size_t>(b)])] = C(a, b) * s2;
+                                            free_idx[static_cast<std::size_t>(b)])] = V(a, b);
   for (int a = 0; a < k; ++a) {
-    auto& prm = f.params[static_cast<std::size_t>(free_idx[static_cast<std::size_t>(a)])];
-    prm.ci95_method = "wald";
-    prm.std_error = C(a, a) >= 0 ? std::sqrt(C(a, a) * s2) : kNaN;
+    const int j = free_idx[static_cast<std::size_t>(a)];
+    auto& prm = f.params[static_cast<std::size_t>(j)];
+    prm.ci95_method = method;
+    double var = V(a, a);
+    if (j == 2 && theta_resolution > 0) {
+      var += theta_resolution * theta_resolution;
+      f.covariance[static_cast<std::size_t>(j * n + j)] = var;
+      prm.ci95_method += ", with the step instants' sampling resolution";
+    }
+    prm.std_error = var >= 0 ? std::sqrt(var) : kNaN;
     prm.ci95_lo = prm.value - tq * prm.std_error;
     prm.ci95_hi = prm.value + tq * prm.std_error;
     if (!std::isfinite(prm.std_error))

@@ -224,7 +224,11 @@ ModalFit fit_modal_psd(const std::vector<double>& freq, const std::vector<double
     const double vif = variance_inflation(r, o.correlation_lags);
     finish(out, modes, vif, o.confidence);
     for (auto& m : out.modes) m.gain *= std::sqrt(pmax);
-    for (const auto& w : out.fit.warnings) out.warnings.push_back("modal fit: " + w);
+    // A floor at its lower bound 0 means the spectrum shows no floor above the modes' tails
+    // (clean data): that is an answer, not a failure, and nothing a user can act on.
+    const bool floor_absent = out.noise_floor == 0;
+    for (const auto& w : out.fit.warnings)
+      if (!(floor_absent && w.rfind("floor ended on its bound", 0) == 0)) out.warnings.push_back("modal fit: " + w);
     return out;
   }
   throw FitError("modal fit of " + std::to_string(modes) + " mode(s) to the PSD failed: " + last_error);

@@ -301,6 +301,69 @@ FitResult fit_tf_frf(std::span<const double> freq_hz, std::span<const std::compl
   return r;
 }
 
+std::vector<double> TransferFunction::simulate_foh(std::span<const double> u, double dt) const {
+  if (!(dt > 0) || !std::isfinite(dt)) throw InputError("FOH simulation: the sample interval must be positive");
+  if (den.empty() || den.front() == 0 || num.empty() || num.size() > den.size())
+    throw InputError("FOH simulation: the transfer function is empty or improper");
+  if (!(delay_s >= 0)) throw InputError("FOH simulation: negative delay");
+  const int n = static_cast<int>(den.size()) - 1;
+  const auto N = static_cast<long>(u.size());
+  std::vector<double> y(u.size(), 0.0);
+  std::vector<double> a(den.size()), b(den.size(), 0.0);
+  for (std::size_t i = 0; i < den.size(); ++i) a[i] = den[i] / den[0];
+  for (std::size_t i = 0; i < num.size(); ++i) b[den.size() - num.size() + i] = num[i] / den[0];
+  const double D = b[0];
+  const auto d_whole = static_cast<long>(std::floor(delay_s / dt + 1e-12));
+  double frac = delay_s - static_cast<double>(d_whole) * dt;
+  if (frac < 1e-12 * dt) frac = 0;
+  const double w = frac / dt;  // the delayed input at k dt lies this far back from sample k - d_whole
+  auto uat = [&](long k) { return k < 0 ? 0.0 : u[static_cast<std::size_t>(std::min(k, N - 1))]; };
+  // The delayed input at k dt, and at k dt + frac (where it passes through sample k - d_whole).
+  auto u_grid = [&](long k) { return uat(k - d_whole) - w * (uat(k - d_whole) - uat(k - d_whole - 1)); };
+  if (n == 0) {
+    for (long k = 0; k < N; ++k) y[static_cast<std::size_t>(k)] = D * u_grid(k);
+    return y;
+  }
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+  for (int j = 0; j < n; ++j) A(0, j) = -a[static_cast<std::size_t>(j) + 1];
+  for (int i = 1; i < n; ++i) A(i, i - 1) = 1.0;
+  Eigen::VectorXd C(n);
+  for (int i = 0; i < n; ++i) C(i) = b[static_cast<std::size_t>(i) + 1] - a[static_cast<std::size_t>(i) + 1] * D;
+  // Over a span h with the input going linearly from v0 to v1: x(h) = Phi x + G v0 + L (v1 - v0),
+  // from one matrix exponential of [[A, B, 0], [0, 0, 1], [0, 0, 0]] h (B = e1).
+  struct Hold {
+    Eigen::MatrixXd Phi;
+    Eigen::VectorXd G, L;
+  };
+  auto hold = [&](double h) {
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 2, n + 2);
+    M.topLeftCorner(n, n) = A * h;
+    M(0, n) = h;
+    M(n, n + 1) = h;
+    const Eigen::MatrixXd E = M.exp();
+    if (!E.allFinite()) throw InputError("FOH simulation: the discretization is not finite");
+    return Hold{E.topLeftCorner(n, n), E.block(0, n, n, 1), E.block(0, n + 1, n, 1) / h};
+  };
+  const Hold first = hold(frac > 0 ? frac : dt), second = frac > 0 ? hold(dt - frac) : Hold{};
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), xn(n);
+  for (long k = 0; k < N; ++k) {
+    const double v0 = u_grid(k), v1 = u_grid(k + 1);
+    y[static_cast<std::size_t>(k)] = C.dot(x) + D * v0;
+    if (frac > 0) {
+      const double vm = uat(k - d_whole);  // at k dt + frac
+      xn.noalias() = first.Phi * x;
+      xn += first.G * v0 + first.L * (vm - v0);
+      x.noalias() = second.Phi * xn;
+      x += second.G * vm + second.L * (v1 - vm);
+    } else {
+      xn.noalias() = first.Phi * x;
+      xn += first.G * v0 + first.L * (v1 - v0);
+      x = xn;
+    }
+  }
+  return y;
+}
+
 FitResult fit_tf_output_error(std::span<const double> u, std::span<const double> y, double dt, const TfStructure& s,
                               const FitResult& start, const std::string& gain_unit, const LsqOptions& options) {
   if (u.size() != y.size()) throw InputError("output-error fit: input and output lengths differ");
@@ -319,11 +382,29 @@ FitResult fit_tf_output_error(std::span<const double> u, std::span<const double>
   prob.num_residuals = static_cast<int>(yv.size());
   prob.observed = yv;
   const std::size_t k = names.size();
-  prob.residuals = [s, du, yv, dt, k](const double* p, double* r) {
+  // An input that holds its value over most samples (a staircase, a digital command) is held
+  // between samples; a sampled continuous input (a chirp) is linear between them.
+  std::size_t repeats = 0;
+  for (std::size_t i = 1; i < du.size(); ++i)
+    if (du[i] == du[i - 1]) ++repeats;
+  const bool held = 2 * repeats > du.size();
+  // A sampled continuous input is band-limited; linear interpolation between its samples
+  // attenuates a component at f by sinc^2(f dt) (0.8 % at a twentieth of the sampling rate),
+  // which the gain and the poles would absorb. The three-tap filter [-1/12, 7/6, -1/12]
+  // (response 1 + (1 - cos 2 pi f dt) / 6) undoes that to fourth order in f dt.
+  if (!held && du.size() >= 3) {
+    std::vector<double> pre(du.size());
+    for (std::size_t i = 0; i < du.size(); ++i) {
+      const double l = du[i == 0 ? 0 : i - 1], r = du[i + 1 < du.size() ? i + 1 : i];
+      pre[i] = (7.0 / 6.0) * du[i] - (l + r) / 12.0;
+    }
+    du = std::move(pre);
+  }
+  prob.residuals = [s, du, yv, dt, k, held](const double* p, double* r) {
     const auto tf = tf_from_params(s, p);
     std::vector<double> sim;
     try {
-      sim = tf.simulate_zoh(du, dt);
+      sim = held ? tf.simulate_zoh(du, dt) : tf.simulate_foh(du, dt);
     } catch (const InputError&) {
       return false;
     }

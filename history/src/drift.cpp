@@ -1,10 +1,23 @@
 #include "tunekit/history/drift.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::history {
+namespace {
+
+// The first run of the unbroken stretch of drifted runs that ends at the latest run.
+void set_drifted_since(DriftSeries& d) {
+  d.drifted_since.reset();
+  if (!d.latest_drifted()) return;
+  std::size_t k = d.points.size() - 1;
+  while (k > 0 && d.points[k - 1].drifted) --k;
+  d.drifted_since = k;
+}
+
+}  // namespace
 
 double DriftSeries::significant_change_pct() const {
   if (!latest_drifted() || is_text) return 0;
@@ -18,6 +31,7 @@ DriftSeries analyse_drift(const std::string& name, const std::vector<SeriesPoint
     throw InputError("the coverage factor must be a positive number");
   DriftSeries d;
   d.name = name;
+  d.margin = fitting::equivalence_margin(name);
   if (series.empty()) return d;
   d.unit = series.front().unit;
   d.is_text = !series.front().text.empty();
@@ -46,22 +60,37 @@ DriftSeries analyse_drift(const std::string& name, const std::vector<SeriesPoint
     p.in_baseline = i < nb;
     if (d.is_text) {
       p.change = p.change_pct = std::nan("");
-      p.drifted = !p.in_baseline && series[i].text != d.baseline_text;
+      p.drifted = !d.margin.designed && !p.in_baseline && series[i].text != d.baseline_text;
     } else {
       p.change = series[i].value - d.baseline;
       p.change_pct = d.baseline != 0 ? 100 * p.change / std::fabs(d.baseline) : std::nan("");
       const double u = std::isfinite(series[i].stderr_value) ? series[i].stderr_value : 0;
       p.threshold = o.coverage_k * std::sqrt(u * u + d.baseline_stderr * d.baseline_stderr);
-      p.drifted = !p.in_baseline && std::isfinite(p.change) && std::fabs(p.change) > p.threshold;
+      p.margin = d.margin.relative * std::fabs(d.baseline);
+      p.drifted = !d.margin.designed && !p.in_baseline && std::isfinite(p.change) &&
+                  fitting::beyond_margin(p.change, p.threshold, p.margin) > 0;
     }
     d.points.push_back(p);
   }
-  if (d.latest_drifted()) {
-    std::size_t k = d.points.size() - 1;
-    while (k > 0 && d.points[k - 1].drifted) --k;
-    d.drifted_since = k;
-  }
+  set_drifted_since(d);
   return d;
+}
+
+void follow_designed(std::vector<DriftSeries>& all) {
+  for (auto& d : all) {
+    if (!d.margin.designed) continue;
+    for (auto& p : d.points) {
+      p.drifted = false;
+      for (const auto& src : all) {
+        if (src.margin.designed || std::find(d.margin.designed_from.begin(), d.margin.designed_from.end(), src.name) ==
+                                       d.margin.designed_from.end())
+          continue;
+        for (const auto& q : src.points)
+          if (q.point.record_id == p.point.record_id && q.drifted) p.drifted = true;
+      }
+    }
+    set_drifted_since(d);
+  }
 }
 
 }  // namespace tunekit::history

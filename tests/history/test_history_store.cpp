@@ -203,24 +203,33 @@ TEST_CASE("history store: a process killed mid-record leaves the database consis
   check_consistent(s.connection());
 }
 
-TEST_CASE("history drift: a change within the combined uncertainty is not drift") {
+TEST_CASE("history drift: drift is a change whose interval lies beyond the quantity's margin") {
   auto pt = [](double v, double se) { return SeriesPoint{0, "t", v, se, "", "Hz"}; };
-  // Baseline 48 +- 0.2; run 2: -0.5 Hz, limit 1.96 * sqrt(0.04 + 0.04) = 0.554 -> not drift;
-  // run 3: -0.6 Hz -> drift; run 4 back within; runs 5 and 6 beyond.
-  const std::vector<SeriesPoint> s{pt(48, 0.2), pt(47.5, 0.2), pt(47.4, 0.2), pt(47.9, 0.2), pt(46, 0.2), pt(45, 0.2)};
+  // Baseline 48 +- 0.2; noise limit 1.96 * sqrt(0.04 + 0.04) = 0.554 Hz, margin 1 % = 0.48 Hz:
+  // drift when |change| > 1.034 Hz. Run 2: -0.5 Hz and run 3: -0.9 Hz (beyond the noise, within
+  // the margin's reach) are not drift; run 4: -1.1 Hz is; run 5 back within; runs 6 and 7 beyond.
+  const std::vector<SeriesPoint> s{pt(48, 0.2),   pt(47.5, 0.2), pt(47.1, 0.2), pt(46.9, 0.2),
+                                   pt(47.9, 0.2), pt(46, 0.2),   pt(45, 0.2)};
   const auto d = analyse_drift("x.freq_hz", s, {});
-  REQUIRE(d.points.size() == 6);
+  REQUIRE(d.points.size() == 7);
   CHECK(d.baseline == 48);
+  CHECK(d.margin.relative == Approx(0.01));
   CHECK(d.points[1].threshold == Approx(1.96 * std::sqrt(0.08)));
+  CHECK(d.points[1].margin == Approx(0.48));
   CHECK_FALSE(d.points[0].drifted);
   CHECK_FALSE(d.points[1].drifted);
-  CHECK(d.points[2].drifted);
-  CHECK_FALSE(d.points[3].drifted);
-  CHECK(d.points[4].drifted);
+  CHECK_FALSE(d.points[2].drifted);
+  CHECK(d.points[3].drifted);
+  CHECK_FALSE(d.points[4].drifted);
   CHECK(d.points[5].drifted);
+  CHECK(d.points[6].drifted);
   REQUIRE(d.drifted_since);
-  CHECK(*d.drifted_since == 4);  // the stretch that lasts to the latest run
+  CHECK(*d.drifted_since == 5);  // the stretch that lasts to the latest run
   CHECK(d.significant_change_pct() == Approx(-100.0 * 3 / 48));
+  // A real change far beyond the noise but within the margin is not drift: 0.4 % of K.
+  const auto k = analyse_drift("K", {pt(3.5, 0.001), pt(3.514, 0.001)}, {});
+  CHECK(k.points[1].threshold < 0.014);
+  CHECK_FALSE(k.latest_drifted());
   // A larger coverage factor turns the same change into noise.
   const auto wide = analyse_drift("x.freq_hz", s, {1, 20.0});  // limit 5.66 Hz > the 3 Hz change
   CHECK_FALSE(wide.latest_drifted());
@@ -231,13 +240,42 @@ TEST_CASE("history drift: a change within the combined uncertainty is not drift"
   CHECK(two.baseline_stderr == Approx(std::sqrt(0.08) / 2));
   CHECK_FALSE(two.points[1].drifted);  // part of the baseline
   CHECK_THROWS_AS(analyse_drift("x", s, {0, 1.96}), InputError);
-  // Words: the shaper chosen changed.
-  const std::vector<SeriesPoint> w{
-      {1, "t", NAN, NAN, "mzv", "1"}, {2, "t", NAN, NAN, "mzv", "1"}, {3, "t", NAN, NAN, "ei", "1"}};
-  const auto dw = analyse_drift("x.shaper", w, {});
-  CHECK(dw.is_text);
-  CHECK_FALSE(dw.points[1].drifted);
-  CHECK(dw.points[2].drifted);
+}
+
+TEST_CASE("history drift: a designed quantity drifts only through what it was designed from") {
+  // The shaper chosen and its maximum acceleration change in run 3 and run 4; the X resonance
+  // drifts only in run 4: only run 4's designed values are drift.
+  const std::vector<SeriesPoint> w{{1, "t", NAN, NAN, "mzv", "1"},
+                                   {2, "t", NAN, NAN, "mzv", "1"},
+                                   {3, "t", NAN, NAN, "ei", "1"},
+                                   {4, "t", NAN, NAN, "ei", "1"}};
+  const std::vector<SeriesPoint> acc{{1, "t", 4033, NAN, "", "mm/s^2"},
+                                     {2, "t", 4033, NAN, "", "mm/s^2"},
+                                     {3, "t", 4100, NAN, "", "mm/s^2"},
+                                     {4, "t", 3600, NAN, "", "mm/s^2"}};
+  const std::vector<SeriesPoint> f{{1, "t", 48, 0.1, "", "Hz"},
+                                   {2, "t", 48, 0.1, "", "Hz"},
+                                   {3, "t", 47.9, 0.1, "", "Hz"},
+                                   {4, "t", 45, 0.1, "", "Hz"}};
+  std::vector<tunekit::history::DriftSeries> all{
+      analyse_drift("x.shaper", w, {}), analyse_drift("x.max_accel_mm_s2", acc, {}), analyse_drift("y.freq_hz", f, {})};
+  CHECK(all[0].is_text);
+  CHECK(all[0].margin.designed);
+  CHECK(all[2].latest_drifted());  // the Y resonance, measured, drifts on its own
+  for (std::size_t i = 0; i < 2; ++i)
+    for (const auto& p : all[i].points) CHECK_FALSE(p.drifted);  // alone, designed values never drift
+  tunekit::history::follow_designed(all);
+  for (std::size_t i = 0; i < 2; ++i) CHECK_FALSE(all[i].latest_drifted());  // X's follow X, not Y
+  all.push_back(analyse_drift("x.freq_hz", f, {}));
+  CHECK(all.back().latest_drifted());
+  tunekit::history::follow_designed(all);
+  for (std::size_t i = 0; i < 2; ++i) {
+    INFO(all[i].name);
+    CHECK_FALSE(all[i].points[2].drifted);
+    CHECK(all[i].points[3].drifted);
+    REQUIRE(all[i].drifted_since);
+    CHECK(*all[i].drifted_since == 3);
+  }
 }
 
 TEST_CASE("history quantities: taken from calibrate, step and shaper results by the same names") {

@@ -128,12 +128,28 @@ TEST_CASE("flow levels: rising and falling arrivals that differ are reported wit
   CHECK(j.at("trend").contains("theta_s"));
 }
 
-TEST_CASE("the pooled-fit whiteness warning needs white single-step fits") {
-  fitting::FitResult pooled, white, coloured;
-  pooled.diagnostics.whiteness_p = 1e-6;
-  white.diagnostics.whiteness_p = 0.4;
-  coloured.diagnostics.whiteness_p = 1e-5;
+TEST_CASE("the pooled-fit whiteness warning needs white single-step fits that differ beyond the margin") {
+  auto fit = [](double p, double tau, double tau_se) {
+    fitting::FitResult f;
+    f.diagnostics.whiteness_p = p;
+    fitting::Param k, t;
+    k.name = "K";
+    k.value = 3.5;
+    k.std_error = 0.001;
+    t.name = "tau_s";
+    t.value = tau;
+    t.std_error = tau_se;
+    f.params = {k, t};
+    return f;
+  };
+  // One step's tau 11 % above the pooled value, known to 0.5 %: beyond tau's 2 % margin.
+  const fitting::FitResult pooled = fit(1e-6, 0.45, 0.001), white = fit(0.4, 0.5, 0.0025),
+                           coloured = fit(1e-5, 0.5, 0.0025);
   CHECK_FALSE(ident::pooled_whiteness_warning(pooled, {&white, &white, &white, &white}, "pooled").empty());
+  // The steps differ from the pooled fit by 0.4 %, far beyond their noise but within the
+  // margin: one K and tau describe them for any compensator, and nothing is said.
+  const fitting::FitResult close = fit(0.4, 0.4518, 0.0002);
+  CHECK(ident::pooled_whiteness_warning(pooled, {&close, &close, &close, &close}, "pooled").empty());
   // Most single-step fits are not white either: the pooled fit says nothing new.
   CHECK(ident::pooled_whiteness_warning(pooled, {&white, &coloured, &coloured, &coloured}, "pooled").empty());
   // A white pooled fit is no warning.

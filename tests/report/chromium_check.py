@@ -163,7 +163,7 @@ def check_report(chromium, report):
             if len(r) != 4 or not (r[2].startswith("[") or r[2].startswith("designed") or r[2] == "fixed"):
                 failures.append(f"summary row without an interval or basis: {r}")
         tau = evaluate(browser, session, "(document.getElementById('agreement-tau') || {}).textContent || ''")
-        if "agree within their combined 95 % uncertainty" not in tau:
+        if "liquefier time constant tau: step response" not in tau or "do NOT agree" in tau:
             failures.append(f"no agreement line for tau (found: {tau!r})")
         print(f"chromium_check: {len(images)} images, {len(rows)} summary rows, {len(requests)} requests, "
               f"CSP probe: {probe}")

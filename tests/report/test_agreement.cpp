@@ -11,23 +11,37 @@
 
 using namespace tunekit::calibration;
 
-TEST_CASE("two estimates agree when their difference is within the combined 95 % half-width") {
-  // Half-widths 0.03 and 0.04 combine to 0.05.
-  const Estimate step{"step response", 0.45, 0.42, 0.48};
-  const auto ok = compare_estimates("tau", "s", step, {"frequency response", 0.49, 0.45, 0.53});
-  CHECK(ok.at("agree").get<bool>());
-  CHECK(ok.at("combined_half_width").get<double>() == Approx(0.05));
-  CHECK(ok.at("statement").get<std::string>().find("agree within their combined 95 % uncertainty") !=
-        std::string::npos);
-  const auto bad = compare_estimates("tau", "s", step, {"frequency response", 0.51, 0.47, 0.55});
+TEST_CASE("two estimates do NOT agree only when the interval of their difference lies beyond the margin") {
+  const auto margin = tunekit::fitting::equivalence_margin("tau_s");
+  REQUIRE(margin.relative == Approx(0.02));
+  const Estimate step{"step response", 0.45, 0.44, 0.46};
+  // 9 % apart, half-widths 0.01 and 0.01 (combined 0.0141): the difference's interval
+  // [0.026, 0.054] s lies beyond the 2 % margin (0.0094 s).
+  const auto bad = compare_estimates("tau", "s", step, {"frequency response", 0.49, 0.48, 0.50}, margin);
+  CHECK(bad.at("verdict") == "differ");
   CHECK_FALSE(bad.at("agree").get<bool>());
+  CHECK(bad.at("combined_half_width").get<double>() == Approx(std::sqrt(2.0) * 0.01));
+  CHECK(bad.at("margin").at("value").get<double>() == Approx(0.02 * 0.47));
   CHECK(bad.at("statement").get<std::string>().find("do NOT agree") != std::string::npos);
   CHECK(advice_for_warning(bad.at("statement").get<std::string>()).find("repeat both experiments") == 0);
+  // 0.25 % apart with intervals far narrower than that: different, but not by a margin a
+  // compensator feels: equivalent (the old test of equality called this a disagreement).
+  const auto close = compare_estimates("tau", "s", {"step response", 0.4497, 0.4496, 0.4498},
+                                       {"frequency response", 0.4508, 0.4507, 0.4509}, margin);
+  CHECK(close.at("verdict") == "equivalent");
+  CHECK(close.at("agree").get<bool>());
+  CHECK(close.at("statement").get<std::string>().find("NOT") == std::string::npos);
+  // Wide intervals: not shown to differ, not shown equivalent; no disagreement either.
+  const auto wide = compare_estimates("tau", "s", {"step response", 0.45, 0.42, 0.48},
+                                      {"frequency response", 0.49, 0.45, 0.53}, margin);
+  CHECK(wide.at("verdict") == "undecided");
+  CHECK(wide.at("agree").get<bool>());
+  CHECK(wide.at("statement").get<std::string>().find("NOT") == std::string::npos);
 }
 
 TEST_CASE("an estimate whose interval does not hold its value is refused") {
-  CHECK_THROWS_AS(compare_estimates("tau", "s", {"a", 0.5, 0.6, 0.7}, {"b", 0.5, 0.4, 0.6}), tunekit::InputError);
-  CHECK_THROWS_AS(compare_estimates("tau", "s", {"a", std::nan(""), 0.4, 0.6}, {"b", 0.5, 0.4, 0.6}),
+  CHECK_THROWS_AS(compare_estimates("tau", "s", {"a", 0.5, 0.6, 0.7}, {"b", 0.5, 0.4, 0.6}, {}), tunekit::InputError);
+  CHECK_THROWS_AS(compare_estimates("tau", "s", {"a", std::nan(""), 0.4, 0.6}, {"b", 0.5, 0.4, 0.6}, {}),
                   tunekit::InputError);
 }
 
@@ -58,7 +72,7 @@ TEST_CASE("the liquefier gain is compared with 1 only when input and output shar
   CHECK(gain_warned(tunekit::ident::design_advance(in)));
 }
 
-TEST_CASE("export compares the step and frequency-response taus by the combined-interval rule, not by their gap") {
+TEST_CASE("export compares the step and frequency-response taus by the margin rule, not by their gap") {
   auto envelope = [](const std::string& command, const nlohmann::json& tau) {
     nlohmann::json params{{"tau_s", tau}};
     nlohmann::json results = command == "step" ? nlohmann::json{{"pooled", {{"params", params}}}}
@@ -83,8 +97,8 @@ TEST_CASE("export compares the step and frequency-response taus by the combined-
       if (w.get<std::string>().find("liquefier time constant tau") != std::string::npos) return true;
     return false;
   };
-  // 4 % apart, but each interval is narrow: they do not agree, and export says so.
-  const auto close = run(tunekit::test::write_scratch("agree_close.json", envelope("freq", tau(0.47, 0.46, 0.48))));
+  // 9 % apart, each interval narrow: the difference is beyond the 2 % margin, and export says so.
+  const auto close = run(tunekit::test::write_scratch("agree_close.json", envelope("freq", tau(0.49, 0.48, 0.50))));
   REQUIRE(close.at("results").at("agreement").size() == 1);
   CHECK_FALSE(close.at("results").at("agreement")[0].at("agree").get<bool>());
   CHECK(warned(close));

@@ -33,6 +33,12 @@ struct TransferFunction {
   /// hold), starting at rest with u = 0 before the record. Exact for any delay, including
   /// fractions of a sample. Throws InputError for dt <= 0 or an improper / empty model.
   std::vector<double> simulate_zoh(std::span<const double> u, double dt) const;
+  /// Output at the sample times k dt for an input that is linear between samples (first-order
+  /// or triangle hold: Franklin, Powell and Workman, "Digital Control of Dynamic Systems",
+  /// 1998, section 6.3), starting at rest with u = 0 before the record: the right model of a
+  /// sampled continuous input (a chirp, a feed that accelerates), where the zero-order hold
+  /// would add half a sample of delay. Exact for any delay. Throws as simulate_zoh.
+  std::vector<double> simulate_foh(std::span<const double> u, double dt) const;
 };
 
 struct TfStructure {
@@ -59,7 +65,9 @@ FitResult fit_tf_frf(std::span<const double> freq_hz, std::span<const std::compl
                      std::span<const double> sigma, const TfStructure& s, const std::string& gain_unit = "1");
 
 /// Output-error fit of G (plus an output offset y0) to a uniformly sampled record: the model
-/// output is the ZOH simulation of (u - u[0]) plus y0. `start` gives the TF parameters to start
+/// output is the simulation of (u - u[0]) plus y0, the input held between samples (ZOH) when
+/// it repeats its value over most samples (a staircase, a digital command), else linear
+/// between them (FOH: a sampled continuous input such as a chirp). `start` gives the TF parameters to start
 /// from (e.g. from fit_tf_frf); y0 starts at y[0].
 FitResult fit_tf_output_error(std::span<const double> u, std::span<const double> y, double dt, const TfStructure& s,
                               const FitResult& start, const std::string& gain_unit = "1",

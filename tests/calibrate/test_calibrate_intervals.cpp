@@ -1,0 +1,66 @@
+// Intervals and verdicts on the simulator's own runs: the step and frequency-response taus are
+// never said to disagree on any firmware's planner, and the single analyses (step, freq,
+// resonance) of a clean simulated run warn about nothing.
+#include <filesystem>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+#include "tunekit/core/file_bytes.hpp"
+
+using tunekit::read_file_bytes;
+using tunekit::test::run_cli;
+using tunekit::test::scratch_dir;
+
+namespace {
+
+std::string sim_run(const std::string& name, const std::vector<std::string>& extra) {
+  const std::string dir = scratch_dir(name) + "/run";
+  std::vector<std::string> args{"calibrate", "--machine", "sim", "--out", dir};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const auto r = run_cli(args);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.err.find("do NOT agree") == std::string::npos);
+  return dir;
+}
+
+}  // namespace
+
+TEST_CASE("calibrate on each firmware's simulated planner never says the step and frequency taus do NOT agree") {
+  const std::string fw = GENERATE(as<std::string>{}, "marlin", "rrf", "klipper");
+  INFO("firmware " << fw);
+  const std::string dir = sim_run("calibrate_agree_" + fw, {"--firmware", fw, "--skip-axes"});
+  const auto env = nlohmann::json::parse(read_file_bytes(dir + "/results.json"));
+  const auto& agreement = env.at("results").at("agreement");
+  REQUIRE(agreement.size() == 1);
+  INFO(agreement[0].dump());
+  CHECK(agreement[0].at("verdict") != "differ");
+  CHECK(agreement[0].at("agree").get<bool>());
+  CHECK(agreement[0].at("margin").at("relative").get<double>() == Approx(0.02));
+  for (const auto& w : env.at("warnings")) CHECK(w.get<std::string>().find("do NOT agree") == std::string::npos);
+}
+
+TEST_CASE("the simulator's clean runs through step and freq and resonance print no warning") {
+  const std::string dir = sim_run("calibrate_clean_analyses", {});
+  std::vector<std::vector<std::string>> commands{
+      {"step", dir + "/liquefier-step/step.csv", "--input", "feed", "--output", "force"},
+      {"freq", dir + "/liquefier-chirp/feed_force.csv", "--input", "feed", "--output", "force"},
+      {"resonance", dir + "/axis-x/raw_data_x_tunekit.csv"},
+      {"resonance", dir + "/axis-y/raw_data_y_tunekit.csv"}};
+  for (auto args : commands) {
+    INFO(args[0] << " " << args[1]);
+    auto text = run_cli(args);
+    INFO(text.err);
+    REQUIRE(text.code == 0);
+    CHECK(text.err.find("warning") == std::string::npos);
+    CHECK(text.out.find("warning") == std::string::npos);
+    args.push_back("--json");
+    const auto json = run_cli(args);
+    REQUIRE(json.code == 0);
+    const auto env = nlohmann::json::parse(json.out);
+    INFO(env.at("warnings").dump());
+    CHECK(env.at("warnings").empty());
+  }
+}
