@@ -30,8 +30,12 @@ std::string configuration_to_update(const CalibrateArgs& a, const std::string& r
   const auto it = examples.find(a.firmware);
   if (it == examples.end()) throw InputError("--firmware must be klipper, kalico, marlin or rrf");
   const std::string config = run_dir + "/config/" + it->second;
-  fs::copy_file(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/" + it->second, config,
-                fs::copy_options::overwrite_existing);
+  // Built up in place: GCC 12 warns (-Warray-bounds, a false positive) on `literal + ...` for
+  // some lengths of the datasets path.
+  fs::path example(TUNEKIT_DATASETS_DIR);
+  example /= "firmware";
+  example /= it->second;
+  fs::copy_file(example, config, fs::copy_options::overwrite_existing);
   return config;
 }
 
