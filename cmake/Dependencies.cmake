@@ -115,6 +115,30 @@ if(NOT LIBPQ_FOUND)
   tunekit_missing("libpq (PostgreSQL client, calibration history)" "libpq-dev")
 endif()
 
+# tunekit_soname(<var> <pkg-config prefix> <library name>): the SONAME ("libpq.so.5") of a library
+# pkg-config found. PLplot and libpq are opened with dlopen when a command first needs them
+# (core/shared_library.hpp), not linked: each brings a dozen or more libraries of its own that
+# every other command would load, map and relocate at start-up.
+function(tunekit_soname var prefix name)
+  find_library(_tunekit_lib NAMES ${name} HINTS ${${prefix}_LIBRARY_DIRS} NO_CACHE)
+  if(NOT _tunekit_lib OR NOT CMAKE_OBJDUMP)
+    message(FATAL_ERROR "tunekit: cannot find lib${name} (or objdump) to read its SONAME")
+  endif()
+  execute_process(COMMAND "${CMAKE_OBJDUMP}" -p "${_tunekit_lib}" OUTPUT_VARIABLE _tunekit_dump
+                  RESULT_VARIABLE _tunekit_rc)
+  if(NOT _tunekit_rc EQUAL 0 OR NOT _tunekit_dump MATCHES "SONAME +([^ \n]+)")
+    message(FATAL_ERROR "tunekit: cannot read the SONAME of ${_tunekit_lib}")
+  endif()
+  set(${var} "${CMAKE_MATCH_1}" PARENT_SCOPE)
+endfunction()
+tunekit_soname(TUNEKIT_PLPLOT_SONAME PLPLOT plplot)
+tunekit_soname(TUNEKIT_LIBPQ_SONAME LIBPQ pq)
+# Their headers, for the build only (nothing to link, nothing in the installed package).
+add_library(tunekit_plplot_headers INTERFACE)
+target_include_directories(tunekit_plplot_headers SYSTEM INTERFACE ${PLPLOT_INCLUDE_DIRS})
+add_library(tunekit_libpq_headers INTERFACE)
+target_include_directories(tunekit_libpq_headers SYSTEM INTERFACE ${LIBPQ_INCLUDE_DIRS})
+
 if(TUNEKIT_BUILD_TESTS)
   find_package(Catch2 2 QUIET)
   if(NOT Catch2_FOUND)

@@ -9,9 +9,10 @@
 #include <string>
 
 #include <fmt/format.h>
-#include <plplot/plstream.h>
+#include <plplot/plplot.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/shared_library.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -21,6 +22,86 @@ std::mutex& plplot_mutex() {
   static std::mutex m;
   return m;
 }
+
+// PLplot's C functions used here. PLplot (and the libraries it needs: freetype, qhull, libltdl,
+// ...) is opened when the first figure is drawn, so that no other command loads it at start-up.
+struct PlplotApi {
+  decltype(&c_plmkstrm) mkstrm;
+  decltype(&c_plsstrm) sstrm;
+  decltype(&c_plend1) end1;
+  decltype(&c_plend) end;
+  decltype(&c_plsdev) sdev;
+  decltype(&c_plsfnam) sfnam;
+  decltype(&c_plspage) spage;
+  decltype(&c_plscol0) scol0;
+  decltype(&c_plinit) init;
+  decltype(&c_pladv) adv;
+  decltype(&c_plschr) schr;
+  decltype(&c_plvpor) vpor;
+  decltype(&c_plwind) wind;
+  decltype(&c_plcol0) col0;
+  decltype(&c_plwidth) width;
+  decltype(&c_pllsty) lsty;
+  decltype(&c_plbox) box;
+  decltype(&c_plmtex) mtex;
+  decltype(&c_pllab) lab;
+  decltype(&c_plpoin) poin;
+  decltype(&c_plline) line;
+  decltype(&c_pllegend) legend;
+};
+
+const PlplotApi& plplot_api() {
+  static const PlplotApi api = [] {
+    static core::SharedLibrary lib(TUNEKIT_PLPLOT_SONAME, "figures (PNG and SVG plots)", "libplplot17");
+    PlplotApi a;
+    a.mkstrm = lib.function<decltype(&c_plmkstrm)>("c_plmkstrm");
+    a.sstrm = lib.function<decltype(&c_plsstrm)>("c_plsstrm");
+    a.end1 = lib.function<decltype(&c_plend1)>("c_plend1");
+    a.end = lib.function<decltype(&c_plend)>("c_plend");
+    a.sdev = lib.function<decltype(&c_plsdev)>("c_plsdev");
+    a.sfnam = lib.function<decltype(&c_plsfnam)>("c_plsfnam");
+    a.spage = lib.function<decltype(&c_plspage)>("c_plspage");
+    a.scol0 = lib.function<decltype(&c_plscol0)>("c_plscol0");
+    a.init = lib.function<decltype(&c_plinit)>("c_plinit");
+    a.adv = lib.function<decltype(&c_pladv)>("c_pladv");
+    a.schr = lib.function<decltype(&c_plschr)>("c_plschr");
+    a.vpor = lib.function<decltype(&c_plvpor)>("c_plvpor");
+    a.wind = lib.function<decltype(&c_plwind)>("c_plwind");
+    a.col0 = lib.function<decltype(&c_plcol0)>("c_plcol0");
+    a.width = lib.function<decltype(&c_plwidth)>("c_plwidth");
+    a.lsty = lib.function<decltype(&c_pllsty)>("c_pllsty");
+    a.box = lib.function<decltype(&c_plbox)>("c_plbox");
+    a.mtex = lib.function<decltype(&c_plmtex)>("c_plmtex");
+    a.lab = lib.function<decltype(&c_pllab)>("c_pllab");
+    a.poin = lib.function<decltype(&c_plpoin)>("c_plpoin");
+    a.line = lib.function<decltype(&c_plline)>("c_plline");
+    a.legend = lib.function<decltype(&c_pllegend)>("c_pllegend");
+    return a;
+  }();
+  return api;
+}
+
+// One PLplot stream, as PLplot's own C++ binding (plstream) drives it: made current on creation,
+// ended on destruction (with the library's global state, as the binding does for its last stream).
+class PlStream {
+ public:
+  PlStream() : api_(plplot_api()) {
+    api_.mkstrm(&stream_);
+    api_.sstrm(stream_);
+  }
+  ~PlStream() {
+    api_.sstrm(stream_);
+    api_.end1();
+    api_.end();
+  }
+  PlStream(const PlStream&) = delete;
+  PlStream& operator=(const PlStream&) = delete;
+  const PlplotApi* operator->() const { return &api_; }
+
+ private:
+  const PlplotApi& api_;
+  PLINT stream_ = 0;
+};
 
 struct Range {
   double lo = std::numeric_limits<double>::infinity();
@@ -50,17 +131,17 @@ double axis_value(double v, bool log) {
 }
 
 // Palette: index 0 background (white), 1..8 line colours, 15 axes (dark grey).
-void set_palette(plstream& pls) {
-  pls.scol0(0, 255, 255, 255);
-  pls.scol0(1, 31, 119, 180);
-  pls.scol0(2, 214, 39, 40);
-  pls.scol0(3, 44, 160, 44);
-  pls.scol0(4, 255, 127, 14);
-  pls.scol0(5, 148, 103, 189);
-  pls.scol0(6, 140, 86, 75);
-  pls.scol0(7, 227, 119, 194);
-  pls.scol0(8, 127, 127, 127);
-  pls.scol0(15, 40, 40, 40);
+void set_palette(PlStream& pls) {
+  pls->scol0(0, 255, 255, 255);
+  pls->scol0(1, 31, 119, 180);
+  pls->scol0(2, 214, 39, 40);
+  pls->scol0(3, 44, 160, 44);
+  pls->scol0(4, 255, 127, 14);
+  pls->scol0(5, 148, 103, 189);
+  pls->scol0(6, 140, 86, 75);
+  pls->scol0(7, 227, 119, 194);
+  pls->scol0(8, 127, 127, 127);
+  pls->scol0(15, 40, 40, 40);
 }
 
 std::string plot_tick_text(double v) {
@@ -72,12 +153,12 @@ std::string plot_tick_text(double v) {
 
 // Labels a logarithmic axis at its decades and (for short spans) at 2x and 5x: PLplot's own
 // log labels name the decades only, which leaves a one-decade axis with a single number.
-void label_log_axis(plstream& pls, bool x_axis, double lo_exp, double hi_exp) {
+void label_log_axis(PlStream& pls, bool x_axis, double lo_exp, double hi_exp) {
   for (double v : log_axis_ticks(lo_exp, hi_exp)) {
     const double frac = (std::log10(v) - lo_exp) / (hi_exp - lo_exp);
     const std::string text = plot_tick_text(v);
-    if (x_axis) pls.mtex("b", 1.4, frac, 0.5, text.c_str());
-    else pls.mtex("lv", 0.6, frac, 1.0, text.c_str());
+    if (x_axis) pls->mtex("b", 1.4, frac, 0.5, text.c_str());
+    else pls->mtex("lv", 0.6, frac, 1.0, text.c_str());
   }
 }
 
@@ -121,11 +202,11 @@ void render_figure(const Figure& fig, const std::string& path) {
   const auto dir = std::filesystem::path(path).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir);
   {
-    auto pls = std::make_unique<plstream>();
+    PlStream pls;
     pls->sdev(device);
     pls->sfnam(path.c_str());
     pls->spage(90, 90, fig.width_px, fig.height_px, 0, 0);
-    set_palette(*pls);
+    set_palette(pls);
     pls->init();
     pls->adv(0);
     pls->schr(0, 0.8);
@@ -171,8 +252,8 @@ void render_figure(const Figure& fig, const std::string& path) {
       const std::string xopt = p.log_x ? "bcstgl" : "bcnstg";
       const std::string yopt = p.log_y ? "bcstvgl" : "bcnstvg";
       pls->box(xopt.c_str(), 0, 0, yopt.c_str(), 0, 0);
-      if (p.log_x) label_log_axis(*pls, true, rx.lo, rx.hi);
-      if (p.log_y) label_log_axis(*pls, false, ry.lo, ry.hi);
+      if (p.log_x) label_log_axis(pls, true, rx.lo, rx.hi);
+      if (p.log_y) label_log_axis(pls, false, ry.lo, ry.hi);
       pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), p.title.c_str());
 
       std::vector<std::string> labels;
@@ -231,7 +312,7 @@ void render_figure(const Figure& fig, const std::string& path) {
       pls->schr(0, 1.0);
       pls->mtex("t", -1.6, 0.5, 0.5, fig.title.c_str());
     }
-  }  // ~plstream ends the stream and closes the file
+  }  // ~PlStream ends the stream and closes the file
   std::error_code ec;
   if (!std::filesystem::exists(path, ec) || std::filesystem::file_size(path, ec) == 0)
     throw InputError("the plot could not be written", path);

@@ -4,6 +4,8 @@
 
 #include <string>
 
+#include <unistd.h>
+
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
@@ -144,4 +146,33 @@ TEST_CASE("the time column is found by its usual names, and its absence is one c
         "time");
   CHECK_THROWS_WITH(tunekit::ident::parse_csv("when,y\n0,1\n", "mem.csv", {{}, "", true}),
                     Catch::Contains("no time column") && Catch::Contains("the file has: when, y"));
+}
+
+TEST_CASE("plain decimals and the general number forms read the same values, mapped or in memory") {
+  // The reader's one-pass path takes "-12.5" at a delimiter; spaces, a '+', an exponent or more
+  // than 15 digits take the general path. Both must give the same doubles, and reading the file
+  // (mapped) must equal parsing its bytes.
+  const std::string text =
+      "time,a,b\n"
+      "0.5,-12.5,3\n"
+      "1.5, -12.5 ,+3\n"
+      "2.5,-1.25e1,3.000000000000000\n"
+      "3.5,-12.50000000000000000001,0.3e1\n";
+  const std::string path = write_scratch("csv_fast_general_" + std::to_string(getpid()) + ".csv", text);
+  const auto mapped = tunekit::ident::read_csv(path, {{"a", "b"}, "time"});
+  const auto parsed = tunekit::ident::parse_csv(text, path, {{"a", "b"}, "time"});
+  REQUIRE(mapped.rows == 4);
+  for (const auto* t : {&mapped, &parsed}) {
+    for (std::size_t r = 0; r < 4; ++r) {
+      CHECK(t->column("a").values[r] == -12.5);
+      CHECK(t->column("b").values[r] == 3.0);
+      CHECK(t->column("time").values[r] == 0.5 + static_cast<double>(r));
+    }
+  }
+  // A value the one-pass path cannot take is located exactly as before.
+  const std::string bad =
+      write_scratch("csv_fast_bad_" + std::to_string(getpid()) + ".csv", "time,a\n0.5,1.5\n1.5,-\n");
+  const auto r = run_cli({"inspect", bad, "--time", "time"});
+  CHECK(r.code == 2);
+  CHECK(r.err == "tunekit: error: " + bad + ":3:5: '-' in column 'a' is not a number\n");
 }
