@@ -8,7 +8,6 @@
 #include "calibrate_stages.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
-#include "tunekit/calibration/report.hpp"
 
 namespace tunekit::calibration {
 
