@@ -1,0 +1,58 @@
+#include "tunekit/protocols/stop_signals.hpp"
+
+#include <csignal>
+#include <mutex>
+
+namespace tunekit::protocols {
+namespace {
+
+constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
+
+std::atomic<bool> g_stop{false};
+std::atomic<int> g_signal{0};
+std::mutex g_mu;
+int g_depth = 0;
+struct sigaction g_old[3];
+
+extern "C" void on_stop_signal(int sig) {
+  g_signal = sig;
+  g_stop = true;
+}
+
+}  // namespace
+
+StopSignals::StopSignals() {
+  std::lock_guard<std::mutex> lock(g_mu);
+  if (g_depth++ > 0) return;
+  g_stop = false;
+  g_signal = 0;
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: a blocking wait returns EINTR and the flag is seen at once
+  for (int i = 0; i < 3; ++i) {
+    ::sigaction(kSignals[i], nullptr, &g_old[i]);
+    // An ignored signal stays ignored: under nohup(1) a hang-up must not stop the run, nor
+    // Ctrl-C one started in the background by a shell.
+    if (g_old[i].sa_handler != SIG_IGN) ::sigaction(kSignals[i], &sa, nullptr);
+  }
+}
+
+StopSignals::~StopSignals() {
+  std::lock_guard<std::mutex> lock(g_mu);
+  if (--g_depth > 0) return;
+  for (int i = 0; i < 3; ++i) ::sigaction(kSignals[i], &g_old[i], nullptr);
+}
+
+const std::atomic<bool>& StopSignals::flag() { return g_stop; }
+
+std::string StopSignals::received() {
+  switch (g_signal.load()) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    default: return {};
+  }
+}
+
+}  // namespace tunekit::protocols
