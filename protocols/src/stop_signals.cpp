@@ -32,9 +32,10 @@ StopSignals::StopSignals() {
   sa.sa_flags = 0;  // no SA_RESTART: a blocking wait returns EINTR and the flag is seen at once
   for (int i = 0; i < 3; ++i) {
     ::sigaction(kSignals[i], nullptr, &g_old[i]);
-    // An ignored signal stays ignored: under nohup(1) a hang-up must not stop the run, nor
-    // Ctrl-C one started in the background by a shell.
-    if (g_old[i].sa_handler != SIG_IGN) ::sigaction(kSignals[i], &sa, nullptr);
+    // An ignored hang-up stays ignored: under nohup(1) it must not stop the run. SIGINT and
+    // SIGTERM always stop it (a shell starts background jobs with SIGINT ignored, yet
+    // `kill -INT` is how a script stops one).
+    if (kSignals[i] != SIGHUP || g_old[i].sa_handler != SIG_IGN) ::sigaction(kSignals[i], &sa, nullptr);
   }
 }
 

@@ -4,8 +4,8 @@
 // StopSignals is alive, none of them ends the process: each sets a flag that the runner checks
 // between lines and the link checks while it waits for an answer, so the run stops the machine
 // (the firmware's stop sequence and heaters off), flushes its journal and writes run.json with
-// "status": "interrupted" before it returns (runner.hpp). A signal ignored when the guard is
-// installed (nohup(1) ignores SIGHUP) stays ignored.
+// "status": "interrupted" before it returns (runner.hpp). SIGHUP ignored when the guard is
+// installed (as under nohup(1)) stays ignored.
 
 #include <atomic>
 #include <string>
