@@ -25,6 +25,8 @@
 #include "tunekit/calibration/requirements.hpp"
 #include "tunekit/calibration/freq_command.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/json_error_text.hpp"
+#include "tunekit/core/file_bytes.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/excitation.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
@@ -46,10 +48,11 @@ struct Job {
 
 // The column names of a CSV file, from its first 64 KiB, with units stripped, lower case.
 std::vector<std::string> sniff_columns(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::string head(65536, '\0');
-  f.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<std::size_t>(f.gcount()));
+  std::string head;
+  try {
+    head = read_file_head(path, 65536);  // a FIFO or device is not sniffed (the analysis names it)
+  } catch (const Error&) {
+  }
   std::istringstream in(head);
   std::string line, last_comment;
   while (std::getline(in, line)) {
@@ -220,7 +223,8 @@ int run_batch(const BatchArgs& a, CliContext& ctx) {
         err << "tunekit: error: out of memory\n";
         j.code = static_cast<int>(ExitCode::bad_input);
       } catch (const std::exception& e) {
-        err << "tunekit: error: internal error: " << e.what() << "\n";
+        // A JSON library error that escaped is told in plain words, never in the library's text.
+        err << "tunekit: error: internal error: " << core::plain_json_error(e.what()) << "\n";
         j.code = static_cast<int>(ExitCode::fit_failed);
       }
       j.err = err.str();

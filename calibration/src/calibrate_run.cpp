@@ -8,6 +8,7 @@
 #include "calibrate_stages.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
+#include "tunekit/protocols/stop_signals.hpp"
 
 namespace tunekit::calibration {
 
@@ -23,6 +24,9 @@ StepOptions load_cell_step_options(const std::string& csv) {
 }
 
 ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) {
+  // A stop signal between two experiments stops the calibration too: the next run sees it
+  // before its first line and ends as "interrupted" (stop_signals.hpp).
+  const protocols::StopSignals stop_signals;
   ExperimentRuns out;
   out.chirp = plan.chirp;
   out.chirp_basis = plan.chirp_basis;

@@ -91,10 +91,11 @@ void check_given_options(const ExportOptions& a) {
 /// A Marlin build with FT_MOTION has FT_MOTION's shapers (firmware_limits.hpp).
 bool marlin_ft_motion(const ExportOptions& a, firmware::ExportFirmware fw) {
   if (fw != firmware::ExportFirmware::marlin) return false;
-  std::ifstream cfg_in(a.config, std::ios::binary);
-  std::stringstream cfg_text;
-  cfg_text << cfg_in.rdbuf();
-  return (cfg_in && firmware::marlin_ft_motion_enabled(cfg_text.str())) || a.marlin_ft_live;
+  if (a.marlin_ft_live) return true;
+  std::error_code ec;
+  // A missing file is named by the export that reads it next; anything else is refused here.
+  return std::filesystem::exists(a.config, ec) &&
+         firmware::marlin_ft_motion_enabled(firmware::read_config_file(a.config));
 }
 
 /// The note that replaces a changed line's trailing comment: what set it, from which results, when.
@@ -398,10 +399,19 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
           design->design_flow_mm3_s,
           settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s) : std::string());
     if (flow) {
-      ctx.err << fmt::format(
-          "tunekit: the single K stays within 10 % of the need from {:.3g} to {:.3g} mm^3/s "
-          "(identified {:.3g}-{:.3g} mm^3/s)\n",
-          flow->k_within_lo_mm3_s, flow->k_within_hi_mm3_s, flow->flow_min_mm3_s, flow->flow_max_mm3_s);
+      // No band (the single K is off the need even at the design flow): said so, not "nan to nan".
+      if (std::isfinite(flow->k_within_lo_mm3_s) && std::isfinite(flow->k_within_hi_mm3_s))
+        ctx.err << fmt::format(
+            "tunekit: the single K stays within 10 % of the need from {:.3g} to {:.3g} mm^3/s "
+            "(identified {:.3g}-{:.3g} mm^3/s)\n",
+            flow->k_within_lo_mm3_s, flow->k_within_hi_mm3_s, flow->flow_min_mm3_s, flow->flow_max_mm3_s);
+      else
+        ctx.err << fmt::format(
+            "tunekit: the single K, designed for {:.3g} mm^3/s, is more than 10 % from the need at {:.3g} mm^3/s, "
+            "the identified flow nearest to it: no band of flows keeps it within 10 % (identified {:.3g}-{:.3g} "
+            "mm^3/s)\n",
+            flow->design_flow_mm3_s, std::clamp(flow->design_flow_mm3_s, flow->flow_min_mm3_s, flow->flow_max_mm3_s),
+            flow->flow_min_mm3_s, flow->flow_max_mm3_s);
       ctx.err << fmt::format(
           "tunekit: Kalico {}: linear_advance {:.4g} s, nonlinear_offset {:.4g} mm, "
           "linearization_velocity {:.4g} mm/s (within {:.1f} % of the need)\n",

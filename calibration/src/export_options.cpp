@@ -19,6 +19,7 @@
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/text.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
@@ -43,6 +44,9 @@ firmware::ShaperSetting parse_shaper_arg(const std::string& arg, const std::stri
   firmware::ShaperSetting s;
   s.type = parts[0];
   try {
+    // Plain decimals only (stod would read "0x10" as 16, and "inf" or "nan").
+    for (std::size_t i = 1; i < parts.size(); ++i)
+      if (!core::is_decimal_number(parts[i])) throw std::invalid_argument("not decimal");
     std::size_t used = 0;
     s.freq_hz = std::stod(parts[1], &used);
     if (used != parts[1].size()) throw std::invalid_argument("trailing");

@@ -15,6 +15,8 @@
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/text.hpp"
+#include "tunekit/protocols/stop_signals.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/overshoot.hpp"
 #include "tunekit/core/atomic_file.hpp"
@@ -117,11 +119,10 @@ std::vector<double> parse_overshoot_grid_list(const std::string& name, const std
   for (;;) {
     const auto e = v.find(',', b);
     const std::string item = v.substr(b, e == std::string::npos ? std::string::npos : e - b);
-    char* end = nullptr;
-    const double d = std::strtod(item.c_str(), &end);
-    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
-      throw InputError(fmt::format("-p {}: '{}' is not a number", name, item));
-    out.push_back(d);
+    const auto d = core::parse_decimal(item);
+    if (!d || !std::isfinite(*d))
+      throw InputError(fmt::format("-p {}: '{}' is not a decimal number (such as 12, 0.5 or 1e-3)", name, item));
+    out.push_back(*d);
     if (e == std::string::npos) break;
     b = e + 1;
   }
@@ -160,6 +161,7 @@ OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome
         "--shaper compares shaping on/off on the simulator; on a machine run the grid twice, with the "
         "firmware's input shaper enabled and disabled");
   auto& cells = g.cells;
+  const protocols::StopSignals stop_signals;  // between two grid points too (stop_signals.hpp)
   for (const bool shaped : shaper_opts.empty() ? std::vector<bool>{false} : std::vector<bool>{false, true})
     for (double v : lists["speed_mm_s"])
       for (double acc : lists["accel_mm_s2"]) {

@@ -1,7 +1,5 @@
 // tunekit run: run an experiment protocol on a printer or on the built-in simulated printer,
 // journaling every line and sensor sample into a run directory (protocols/runner.hpp).
-#include <atomic>
-#include <csignal>
 #include <cmath>
 #include <memory>
 
@@ -11,14 +9,12 @@
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/calibration/run_command.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/text.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
 
 namespace tunekit::calibration {
 namespace {
-
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted = true; }
 
 // Accepted ranges of run's numeric options (a value beyond is a typing error, and some would
 // wrap: -1 lines is 2^64-1 as an unsigned count, an infinite timeout overflows the milliseconds).
@@ -63,10 +59,10 @@ RunOutcome compute_run(const RunCommandOptions& a) {
   for (const auto& p : a.params) {
     const auto eq = p.find('=');
     if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE", p));
-    char* end = nullptr;
     const std::string v = p.substr(eq + 1);
-    const double d = std::strtod(v.c_str(), &end);
-    if (v.empty() || end != v.c_str() + v.size()) throw InputError(fmt::format("-p {}: '{}' is not a number", p, v));
+    const auto parsed = core::parse_decimal(v);
+    if (!parsed) throw InputError(fmt::format("-p {}: '{}' is not a decimal number (such as 12, 0.5 or 1e-3)", p, v));
+    const double d = *parsed;
     if (!std::isfinite(d)) throw InputError(fmt::format("-p {}: '{}' is not a finite number", p, v));
     o.params[p.substr(0, eq)] = d;
   }
@@ -76,14 +72,6 @@ RunOutcome compute_run(const RunCommandOptions& a) {
         "--port is needed with a machine profile (a serial device, a PTY such as /tmp/printer, or "
         "unix:/tmp/klippy_uds)");
   if (o.machine != "sim" && o.port.empty()) o.port = "(dry run)";
-  g_interrupted = false;
-  o.abort_flag = &g_interrupted;
-  struct SigGuard {
-    void (*old)(int);
-    SigGuard() : old(std::signal(SIGINT, on_sigint)) {}
-    ~SigGuard() { std::signal(SIGINT, old); }
-  } guard;
-
   outcome.result = protocols::run_experiment(o);
   if (!o.dry_run && outcome.result.files.count("truth"))
     outcome.truth = read_json_file(outcome.result.files.at("truth"));

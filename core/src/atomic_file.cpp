@@ -53,8 +53,55 @@ mode_t output_mode(const std::string& mode_of) {
   return new_file_mode();
 }
 
+// The file a path names after following its symbolic links (each relative link read from
+// its own directory): a write goes to the link's target and the link stays. Stops at a
+// missing file (a dangling link is written through, creating its target) and after
+// kMaxLinkHops hops, as the kernel does (MAXSYMLINKS, 40: ELOOP beyond).
+std::string resolve_links(const std::string& path) {
+  constexpr int kMaxLinkHops = 40;
+  std::filesystem::path p(path);
+  for (int hop = 0; hop < kMaxLinkHops; ++hop) {
+    struct stat st {};
+    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return p.string();
+    std::error_code ec;
+    const std::filesystem::path to = std::filesystem::read_symlink(p, ec);
+    if (ec) fail("cannot read the symbolic link", p.string(), ec.value());
+    p = to.is_absolute() ? to : p.parent_path() / to;
+  }
+  fail("cannot follow the symbolic link", path, ELOOP);
+}
+
+// Refuses to replace a file with several hard links: the rename would give only this name
+// the new content and leave the others with the old, and writing in place instead could
+// leave a half-written file after a crash. Neither is acceptable for a configuration file.
+void refuse_hard_links(const std::string& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_nlink > 1)
+    throw InputError(fmt::format("cannot replace it: the file has {} hard links, and replacing it would leave the "
+                                 "other names with the old content (writing it in place is not crash-safe); "
+                                 "nothing was changed: break the link first (e.g. cp FILE FILE.new && mv FILE.new "
+                                 "FILE) or edit it by hand",
+                                 st.st_nlink),
+                     path);
+}
+
+// Gives the temporary file `fd` the owner and group of `mode_of` when that exists (a file
+// edited as root, e.g. Klipper's printer.cfg, stays its owner's). Root can always do so; an
+// unprivileged user can give only a group of its own (chown(2)), and the new file is then
+// the writer's, as after any editor that saves by renaming.
+void keep_owner(int fd, const std::string& mode_of) {
+  struct stat want {
+  }, have{};
+  if (::stat(mode_of.c_str(), &want) != 0 || ::fstat(fd, &have) != 0) return;
+  if (want.st_uid == have.st_uid && want.st_gid == have.st_gid) return;
+  if (::fchown(fd, want.st_uid, want.st_gid) != 0 && ::fchown(fd, static_cast<uid_t>(-1), want.st_gid) != 0) {
+    // Neither: the new file is the writer's.
+  }
+}
+
 /// Writes `content` to a new durable temporary file beside `path` (with the permission bits
-/// output_mode(mode_of) gives) and returns the temporary file's path.
+/// output_mode(mode_of) gives, and the owner and group of `mode_of` when it exists) and
+/// returns the temporary file's path.
 std::string stage_temporary(const std::string& path, std::string_view content, const std::string& mode_of) {
   const std::filesystem::path target(path);
   const std::filesystem::path dir = target.parent_path();
@@ -71,6 +118,8 @@ std::string stage_temporary(const std::string& path, std::string_view content, c
     ::unlink(tmp.c_str());
     fail(what, path, err);
   };
+  keep_owner(fd, mode_of);
+  // After fchown, which clears the set-user-ID and set-group-ID bits.
   if (::fchmod(fd, output_mode(mode_of)) != 0) give_up("cannot set the file's permissions");
   const char* p = content.data();
   std::size_t left = content.size();
@@ -99,8 +148,10 @@ void write_file_atomic(const std::string& path, std::string_view content,
   write_file_atomic_as(path, content, path, before_rename);
 }
 
-void write_file_atomic_as(const std::string& path, std::string_view content, const std::string& mode_of,
+void write_file_atomic_as(const std::string& link_path, std::string_view content, const std::string& mode_of,
                           const std::function<void(const std::string&)>& before_rename) {
+  const std::string path = resolve_links(link_path);
+  refuse_hard_links(path);
   const std::string tmp = stage_temporary(path, content, mode_of);
   auto cleanup = [&] { ::unlink(tmp.c_str()); };
   if (before_rename) {
@@ -133,7 +184,9 @@ void FileBatch::add(std::string path, std::string content, std::string mode_of) 
 void FileBatch::commit(const std::function<void(const std::string&)>& before_rename) {
   // What each target holds now, to put back if a later rename fails.
   std::vector<std::optional<std::string>> previous;
-  for (const auto& f : files_) {
+  for (auto& f : files_) {
+    f.path = resolve_links(f.path);  // a symbolic link's target is written, the link stays
+    refuse_hard_links(f.path);
     std::error_code ec;
     const auto st = std::filesystem::status(f.path, ec);
     if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))

@@ -11,6 +11,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/atomic_file.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::firmware {
 
@@ -234,13 +235,28 @@ std::string backup_path_for(const std::string& path) {
   return candidate;
 }
 
+std::string read_config_file(const std::string& path) {
+  std::string text = read_file_bytes(path, kMaxConfigFileBytes);
+  const auto starts = [&](std::string_view bom) { return std::string_view(text).substr(0, bom.size()) == bom; };
+  const char* encoding = starts(std::string_view("\x00\x00\xFE\xFF", 4))   ? "UTF-32 (big-endian byte-order mark)"
+                         : starts(std::string_view("\xFF\xFE\x00\x00", 4)) ? "UTF-32 (little-endian byte-order mark)"
+                         : starts("\xFE\xFF")                              ? "UTF-16 (big-endian byte-order mark)"
+                         : starts("\xFF\xFE")                              ? "UTF-16 (little-endian byte-order mark)"
+                                                                           : nullptr;
+  const auto nul = text.find('\0');
+  if (encoding || nul != std::string::npos)
+    throw InputError(
+        fmt::format("the configuration file is {}, not ASCII-compatible text: tunekit edits ASCII or UTF-8 "
+                    "configuration files only (convert it, e.g. iconv -f UTF-16 -t UTF-8, and run again; nothing "
+                    "was changed)",
+                    encoding ? encoding : fmt::format("binary or UTF-16/UTF-32 text (a NUL byte at offset {})", nul)),
+        path);
+  return text;
+}
+
 std::string write_with_backup(const std::string& path, std::string_view new_content,
                               const std::function<void(const std::string&)>& before_rename) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot read the configuration file", path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string old = ss.str();
+  const std::string old = read_config_file(path);
   const std::string backup = backup_path_for(path);
   core::write_file_atomic_as(backup, old, path);  // the backup keeps the original's mode
   core::write_file_atomic(path, new_content, before_rename);

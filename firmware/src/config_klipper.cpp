@@ -28,6 +28,7 @@
 #include <fmt/ranges.h>
 
 #include "export_writers.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/firmware/config_edit.hpp"
 #include "text_util.hpp"
@@ -176,15 +177,15 @@ void read_include(const std::string& including, const std::string& spec, Doc& d,
     std::error_code ec;
     const std::string canon = fs::weakly_canonical(f, ec).string();
     if (visited.count(canon)) continue;
-    std::ifstream in(f, std::ios::binary);
-    if (!in) {
-      d.include_problems.push_back(fmt::format("{}: cannot read the included file {}", including, f));
+    std::string text;
+    try {
+      text = read_config_file(f);  // a regular ASCII-compatible file of bounded size
+    } catch (const Error& e) {
+      d.include_problems.push_back(fmt::format("{}: cannot read the included file {}: {}", including, f, e.message()));
       continue;
     }
-    std::stringstream ss;
-    ss << in.rdbuf();
     visited.insert(canon);
-    const auto lines = split_lines(ss.str());
+    const auto lines = split_lines(text);
     std::vector<Section> secs;
     for (std::size_t i = 0; i < lines.size(); ++i) {
       const std::size_t nsec = secs.size();

@@ -143,11 +143,9 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
   if (m501) {
     namespace fs = std::filesystem;
     const fs::path over = fs::path(r.path).parent_path() / "config-override.g";
-    std::ifstream in(over, std::ios::binary);
-    if (in) {
-      std::stringstream ss;
-      ss << in.rdbuf();
-      const LineEditor oe(ss.str());
+    std::error_code ec;
+    if (fs::exists(over, ec)) {
+      const LineEditor oe(read_config_file(over.string()));
       for (std::size_t i = 0; i < oe.size(); ++i) {
         const auto c = parse_command(oe.line(i));
         if (!c) continue;

@@ -199,21 +199,13 @@ ExportResult export_config_text(ExportFirmware fw, const std::string& text, cons
 }
 
 ExportResult export_config_file(ExportFirmware fw, const std::string& path, const CompensatorSettings& s) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot read the configuration file", path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return export_config_text(fw, ss.str(), path, s);
+  return export_config_text(fw, read_config_file(path), path, s);
 }
 
 std::string apply_export(const ExportResult& r, const std::function<void(const std::string&)>& before_rename) {
   if (!r.changed()) return {};
   // Refuse to overwrite a file that changed since it was read.
-  std::ifstream in(r.path, std::ios::binary);
-  if (!in) throw InputError("cannot read the configuration file", r.path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  if (ss.str() != r.original)
+  if (read_config_file(r.path) != r.original)
     throw InputError("the configuration file changed since it was read; run the export again", r.path);
   return write_with_backup(r.path, r.updated, before_rename);
 }

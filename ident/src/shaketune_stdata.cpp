@@ -1,5 +1,6 @@
 #include "tunekit/ident/shaketune_stdata.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <iterator>
@@ -15,15 +16,26 @@
 namespace tunekit::ident {
 namespace {
 
-// The whole Zstandard stream (one or several frames) decompressed, at most kMaxStdataBytes.
+// The most a .stdata file may expand, as decompressed over compressed bytes: Shake&Tune's
+// JSON samples compress about 7-fold (the bundled sweeps: 2.9 MB -> 21 MB); a file that
+// expands 200-fold is not a measurement but a stream of repeated bytes. Small files may
+// always reach kMinStdataCap bytes.
+constexpr std::size_t kMaxStdataExpansion = 200;
+constexpr std::size_t kMinStdataCap = std::size_t{64} << 20;
+
+// The whole Zstandard stream (one or several frames) decompressed, refused as soon as it
+// grows past its cap (the expansion bound, at most kMaxStdataBytes): a small file that
+// would expand to gigabytes stops after its cap, not after decompressing everything.
 std::string stdata_decompress(const std::string& path, std::string_view bytes) {
   std::unique_ptr<ZSTD_DCtx, decltype(&ZSTD_freeDCtx)> ctx(ZSTD_createDCtx(), &ZSTD_freeDCtx);
   if (!ctx) throw InputError("cannot allocate a Zstandard decoder", path);
+  const std::size_t cap = std::min(
+      kMaxStdataBytes,
+      std::max(kMinStdataCap, bytes.size() * kMaxStdataExpansion));  // no overflow: input files are at most 1 GiB
   std::string out;
   std::string chunk(ZSTD_DStreamOutSize(), '\0');
   ZSTD_inBuffer in{bytes.data(), bytes.size(), 0};
   std::size_t last = 0;
-  // Until the input is consumed and the decoder had room to spare (nothing left to flush).
   for (;;) {
     ZSTD_outBuffer ob{chunk.data(), chunk.size(), 0};
     last = ZSTD_decompressStream(ctx.get(), &ob, &in);
@@ -31,11 +43,15 @@ std::string stdata_decompress(const std::string& path, std::string_view bytes) {
       throw InputError(fmt::format("not a readable Shake&Tune .stdata file: Zstandard error '{}' at byte {}",
                                    ZSTD_getErrorName(last), in.pos),
                        path);
+    if (out.size() + ob.pos > cap)
+      throw InputError(fmt::format("decompresses to more than {} bytes ({} times its {} bytes, or {} bytes for any "
+                                   "file); not a Shake&Tune measurement file",
+                                   cap, kMaxStdataExpansion, bytes.size(), kMinStdataCap),
+                       path);
     out.append(chunk.data(), ob.pos);
-    if (out.size() > kMaxStdataBytes)
-      throw InputError(
-          fmt::format("decompresses to more than {} bytes; not a Shake&Tune measurement file", kMaxStdataBytes), path);
-    if (in.pos == in.size && ob.pos < ob.size) break;
+    // Done when the input is consumed and either the last frame is complete (0; calling again
+    // would start a new frame) or the decoder had room to spare (nothing left to flush).
+    if (in.pos == in.size && (last == 0 || ob.pos < ob.size)) break;
   }
   if (last != 0)
     throw InputError("the Zstandard stream ends in the middle of a frame (a truncated .stdata file)", path);

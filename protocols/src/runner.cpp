@@ -18,6 +18,7 @@
 #include "tunekit/machine/klipper_api.hpp"
 #include "tunekit/machine/klipper_sensors.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/protocols/stop_signals.hpp"
 #include "tunekit/sim/sim_camera.hpp"
 #include "tunekit/machine/serial_transport.hpp"
 #include "tunekit/sim/simulator.hpp"
@@ -400,6 +401,9 @@ RunResult run_experiment(const RunOptions& o) {
     return res;
   }
 
+  // SIGINT, SIGTERM and SIGHUP stop the run safely from here on (stop_signals.hpp).
+  const StopSignals stop_signals;
+  const std::atomic<bool>* abort_flag = o.abort_flag ? o.abort_flag : &StopSignals::flag();
   const std::string stamp = utc_stamp();
   res.run_dir = o.run_dir.empty() ? unique_dir(fmt::format("{}/{}-{}", o.runs_root, o.protocol, stamp)) : o.run_dir;
   machine::Journal journal(res.run_dir);
@@ -473,7 +477,7 @@ RunResult run_experiment(const RunOptions& o) {
     if (api)
       session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors, guard);
     else
-      session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, o.abort_flag, guard,
+      session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, abort_flag, guard,
                                                server ? server->http_url() : profile.http_address);
     session->firmware = session->identify();
     session->dialect = firmware::Dialect(
@@ -506,7 +510,7 @@ RunResult run_experiment(const RunOptions& o) {
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
     for (const auto& line : res.gcode) {
-      if (o.abort_flag && o.abort_flag->load()) throw MachineError("interrupted", port);
+      if (abort_flag->load()) throw MachineError("interrupted", port);
       if (line.rfind(";@record ", 0) == 0) {
         const auto rest = line.substr(9);
         const auto sp = rest.find(' ');
@@ -529,7 +533,11 @@ RunResult run_experiment(const RunOptions& o) {
     }
     session->finish();
   } catch (const MachineError& e) {
-    journal.error(e.formatted());
+    const bool interrupted = abort_flag->load();
+    const std::string signal = StopSignals::received();
+    const MachineError why =
+        interrupted && !signal.empty() ? MachineError("interrupted by " + signal, e.location()) : e;
+    journal.error(why.formatted());
     const auto safe = (session ? session->dialect : dialect).safe_state(profile.temperature.heaters_off_on_abort);
     if (session) {
       journal.event("safe state", {{"commands", safe}});
@@ -543,8 +551,8 @@ RunResult run_experiment(const RunOptions& o) {
       }
     }
     journal.sync();
-    summary["status"] = "failed";
-    summary["error"] = e.formatted();
+    summary["status"] = interrupted ? "interrupted" : "failed";
+    summary["error"] = why.formatted();
     summary["samples"] = {{"load_cell", rec.load_samples()}, {"accel", rec.accel_samples()}};
     if (session) summary["link"] = session->stats();
     session.reset();
@@ -552,7 +560,7 @@ RunResult run_experiment(const RunOptions& o) {
     list_files();
     summary["files"] = res.files;
     core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
-    throw MachineError(fmt::format("{} (the partial run is kept in {})", e.message(), res.run_dir), e.location());
+    throw MachineError(fmt::format("{} (the partial run is kept in {})", why.message(), res.run_dir), why.location());
   }
   journal.event("end", {{"load_cell_samples", rec.load_samples()}, {"accel_samples", rec.accel_samples()}});
   journal.sync();

@@ -271,7 +271,14 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     }
   }
   out_flush(emit);
-  if (late_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(late_ms));
+  if (late_ms > 0) {
+    // Waited in short slices, so that stopping the simulator ends the wait (set_cancel).
+    using Clock = std::chrono::steady_clock;
+    const Clock::time_point until =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(late_ms));
+    while (!(cancel_ && cancel_->load()) && Clock::now() < until)
+      std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(10), until - Clock::now()));
+  }
   emit("ok\n");
   return true;
 }

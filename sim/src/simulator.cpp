@@ -127,6 +127,12 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
         const auto colon = rest.find(':');
         if (colon == std::string::npos) throw InputError("simulator fault late-ok needs @LINE:MILLISECONDS");
         f.delay_ms = pos(parse_double(k, rest.substr(colon + 1)));
+        // About 30 years: past any host's timeout (1e9 ms, 11.6 days, is a wait that never
+        // ends in practice), and well within what the clock counts in nanoseconds (2^63 ns).
+        constexpr double kMaxLateOk_ms = 1e12;
+        if (f.delay_ms > kMaxLateOk_ms)
+          throw InputError(fmt::format("simulator fault late-ok: {:g} ms is out of range (accepted: up to {:g} ms)",
+                                       f.delay_ms, kMaxLateOk_ms));
         rest = rest.substr(0, colon);
         f.kind = SimFault::Kind::late_ok;
       } else if (kind == "drop") f.kind = SimFault::Kind::drop;
@@ -223,6 +229,7 @@ std::optional<std::string> Simulator::file(const std::string& name) const {
 void serve_simulator(Simulator& sim, machine::Transport& t, const std::atomic<bool>& stop) {
   std::string buf;
   const Simulator::Emit emit = [&](std::string_view s) { t.write(s); };
+  sim.set_cancel(&stop);
   try {
     while (!stop.load()) {
       const std::string chunk = t.read_some(sim::kServeReadPoll);

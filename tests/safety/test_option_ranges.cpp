@@ -63,3 +63,26 @@ TEST_CASE("a protocol hot-end temperature that rounds to 0 is refused, never wri
   CHECK(off.code == 0);  // 0: the heater is left alone, no M109 at all
   CHECK(off.out.find("M109") == std::string::npos);
 }
+
+TEST_CASE("a protocol parameter must be a plain decimal: 0x10 is refused, not read as 16", "[safety][run]") {
+  for (const std::string v : {"0x10", "0X1p4", "nan", "inf", " 5", "5 ", "1e", "."}) {
+    const auto r = run_cli({"run", "liquefier-flow-sweep", "--dry-run", "-p", "cycles=" + v});
+    INFO("cycles=" << v << ": " << r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.rfind("tunekit: error: -p cycles=", 0) == 0);
+  }
+  const auto hex = run_cli({"run", "liquefier-flow-sweep", "--dry-run", "-p", "cycles=0x10"});
+  CHECK(hex.err.find("not a decimal number") != std::string::npos);
+  for (const std::string v : {"2", "+2", "2.0", "2e0", ".2e1"}) {
+    const auto ok = run_cli({"run", "liquefier-flow-sweep", "--dry-run", "-p", "cycles=" + v});
+    INFO("cycles=" << v << ": " << ok.err);
+    CHECK(ok.code == 0);
+  }
+  // The same rule for a shaper's frequency in export.
+  const std::string cfg =
+      tunekit::test::write_scratch("hex_shaper_printer.cfg", "[printer]\nkinematics: cartesian\n\n[input_shaper]\n");
+  const auto shaper = run_cli({"export", "-f", "klipper", "-c", cfg, "--shaper-x", "mzv:0x2A"});
+  INFO(shaper.err);
+  CHECK(shaper.code == 2);
+  CHECK(shaper.err.find("not a number") != std::string::npos);
+}

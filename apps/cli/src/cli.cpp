@@ -15,6 +15,7 @@
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/calibration/history_record.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/version.hpp"
 
 namespace tunekit::cli {
@@ -280,7 +281,8 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     err << "tunekit: error: out of memory\n";
     return static_cast<int>(ExitCode::bad_input);
   } catch (const std::exception& e) {
-    err << "tunekit: error: internal error: " << e.what() << "\n";
+    // A JSON library error that escaped is told in plain words, never in the library's text.
+    err << "tunekit: error: internal error: " << core::plain_json_error(e.what()) << "\n";
     return static_cast<int>(ExitCode::fit_failed);
   }
   return g_exit_code;

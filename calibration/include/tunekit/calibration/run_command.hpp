@@ -20,7 +20,7 @@ namespace tunekit::calibration {
 struct RunCommandOptions {
   /// Protocol, axis, machine ("sim" or a profile TOML), port, baud, run directory, simulator
   /// options, link retries, limits (max_duration_s in s, max_lines) and dry_run: the runner's own
-  /// options and defaults. compute_run() fills in params, link.timeout and abort_flag;
+  /// options and defaults. compute_run() fills in params and link.timeout;
   /// `progress` (human progress lines) is the caller's.
   protocols::RunOptions run;
   /// Protocol parameters as NAME=VALUE (value in the unit the name carries), checked by compute_run().
@@ -36,8 +36,8 @@ struct RunOutcome {
 };
 
 /// Checks the options (InputError, exit 2), then runs the protocol (MachineError, exit 3, when
-/// the machine or link fails; the partial run directory is kept). SIGINT during the run aborts
-/// it cleanly.
+/// the machine or link fails; the partial run directory is kept). SIGINT, SIGTERM or SIGHUP during
+/// the run stops the machine and ends the run as "interrupted" (protocols/stop_signals.hpp).
 RunOutcome compute_run(const RunCommandOptions& options);
 
 Envelope to_envelope(const RunOutcome& outcome);

@@ -3,6 +3,10 @@
 // directory, flushed to disk (fsync), then renamed over the target, and the directory is
 // fsynced. A crash at any point leaves either the old file or the new one, never a mix.
 // FileBatch does the same for several files that must change together (all or nothing).
+// A replaced file keeps its permission bits, owner and group; a symbolic link is followed and
+// its target replaced (the link stays a link); a file with several hard links is refused
+// (InputError, nothing written), since the rename would split the links and writing in place
+// is not crash-safe.
 
 #include <functional>
 #include <string>

@@ -6,6 +6,8 @@
 
 #include <cctype>
 #include <cstddef>
+#include <cstdlib>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -25,6 +27,37 @@ inline bool iequals(std::string_view a, std::string_view b) {
     if (std::tolower(ca) != std::tolower(cb)) return false;
   }
   return true;
+}
+
+/// Whether `s` is a plain decimal number as people type one: an optional sign, digits with an
+/// optional decimal point, and an optional exponent ("12", "-0.5", ".5", "1e-3"). Hexadecimal
+/// ("0x10", which strtod reads as 16), "inf", "nan", white space and trailing text are not.
+inline bool is_decimal_number(std::string_view s) {
+  std::size_t i = 0, digits = 0;
+  auto is_digit = [&](std::size_t k) { return k < s.size() && s[k] >= '0' && s[k] <= '9'; };
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+  while (is_digit(i)) ++i, ++digits;
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    while (is_digit(i)) ++i, ++digits;
+  }
+  if (digits == 0) return false;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    if (!is_digit(i)) return false;
+    while (is_digit(i)) ++i;
+  }
+  return i == s.size();
+}
+
+/// The value of a plain decimal number (is_decimal_number()); nullopt for anything else. A
+/// number beyond a double's range reads as +-inf or, below the smallest, as 0 or a denormal:
+/// callers range-check the value.
+inline std::optional<double> parse_decimal(std::string_view s) {
+  if (!is_decimal_number(s)) return std::nullopt;
+  const std::string text(s);
+  return std::strtod(text.c_str(), nullptr);
 }
 
 }  // namespace tunekit::core

@@ -5,6 +5,7 @@
 // The edit list also gives a unified diff for the preview, and the write path makes a
 // timestamped backup and replaces the file atomically (atomic_file.hpp).
 
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <string>
@@ -76,6 +77,17 @@ std::string format_number(double v, int decimals);
 /// Whether `text` is a number equal to `v` rounded to `decimals` decimals (so an existing
 /// "0.040" counts as already set to 0.04 and is left alone: idempotence).
 bool same_number(std::string_view text, double v, int decimals);
+
+/// The largest configuration file tunekit reads (bytes): 16 MiB, some hundred times a large
+/// Klipper printer.cfg or Marlin Configuration.h.
+inline constexpr std::uint64_t kMaxConfigFileBytes = std::uint64_t{16} << 20;
+
+/// Reads a firmware configuration file (a regular file of at most kMaxConfigFileBytes,
+/// read_file_bytes()) and refuses, with InputError (exit code 2), text that is not
+/// ASCII-compatible: UTF-16 or UTF-32 (byte-order mark or NUL bytes) would be "edited" by
+/// appending ASCII lines the firmware cannot read. ASCII and UTF-8 (with or without its
+/// byte-order mark) are accepted.
+std::string read_config_file(const std::string& path);
 
 /// "<path>.<YYYYmmdd-HHMMSS>.bak" for the current UTC time (with -1, -2, ... appended when
 /// that name already exists).

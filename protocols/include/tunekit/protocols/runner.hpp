@@ -16,6 +16,8 @@
 // opened; a machine/transport failure is a MachineError (exit 3) thrown after the journal has
 // been flushed, safe-state commands sent (best effort) and run.json written with
 // "status": "failed" — everything received before the failure stays in the run directory.
+// SIGINT, SIGTERM and SIGHUP during a run do the same with "status": "interrupted"
+// (stop_signals.hpp), unless the caller gives its own abort_flag.
 
 #include <atomic>
 #include <chrono>
@@ -55,10 +57,11 @@ struct RunOptions {
   /// "sim" only: what the simulated printer prints is laid down on this bed (for its camera,
   /// sim_camera.hpp); several runs may share one bed.
   std::shared_ptr<sim::SimPrintBed> sim_bed;
-  machine::LinkOptions link;                         ///< timeouts and retries
-  ProtocolLimits limits;                             ///< caps on the protocol's machine time, lines and bytes
-  bool dry_run = false;                              ///< build and check only; RunResult::gcode is filled
-  const std::atomic<bool>* abort_flag = nullptr;     ///< e.g. set by SIGINT
+  machine::LinkOptions link;  ///< timeouts and retries
+  ProtocolLimits limits;      ///< caps on the protocol's machine time, lines and bytes
+  bool dry_run = false;       ///< build and check only; RunResult::gcode is filled
+  /// Set to stop the run safely; default: set by SIGINT, SIGTERM or SIGHUP (stop_signals.hpp).
+  const std::atomic<bool>* abort_flag = nullptr;
   std::function<void(const std::string&)> progress;  ///< human progress messages
 };
 

@@ -132,6 +132,10 @@ class Simulator {
   /// Handles one received line; writes answers and sensor data through `emit` (complete lines).
   /// Returns false when a disconnect fault fires (the caller drops the connection).
   bool handle_line(std::string_view raw, const Emit& emit);
+  /// A late answer (fault late-ok) stops waiting as soon as `*cancel` is set: the host that
+  /// gave up and stops the simulator is not kept waiting for it. serve_simulator() passes its
+  /// stop flag; nullptr waits the whole delay.
+  void set_cancel(const std::atomic<bool>* cancel) { cancel_ = cancel; }
 
   /// For Klipper-API style use: samples go to this callback instead of echo:TKA lines.
   std::function<void(double t_s, double ax, double ay, double az)> accel_sink;
@@ -194,6 +198,7 @@ class Simulator {
   /// or set `late_ms`; a value means handle_line returns it at once.
   std::optional<bool> inject_faults(std::string& line, double& late_ms, const Emit& emit);
   long received_count_ = 0;
+  const std::atomic<bool>* cancel_ = nullptr;
   long last_n_ = 0;
   bool halted_ = false;
   // Marlin FT_MOTION state (M493): active, shaper per axis (ftMotionShaper_t: 0 NONE .. 8 MZV),

@@ -1,0 +1,30 @@
+#pragma once
+// A safe stop on the signals that end a run from outside: SIGINT (Ctrl-C), SIGTERM (kill,
+// timeout(1), systemd's stop) and SIGHUP (the terminal or SSH session went away). While a
+// StopSignals is alive, none of them ends the process: each sets a flag that the runner checks
+// between lines and the link checks while it waits for an answer, so the run stops the machine
+// (the firmware's stop sequence and heaters off), flushes its journal and writes run.json with
+// "status": "interrupted" before it returns (runner.hpp). SIGHUP ignored when the guard is
+// installed (as under nohup(1)) stays ignored.
+
+#include <atomic>
+#include <string>
+
+namespace tunekit::protocols {
+
+class StopSignals {
+ public:
+  /// Installs the handlers (nested guards share them: the outermost installs and restores, and
+  /// clears the flag when it installs).
+  StopSignals();
+  ~StopSignals();
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+  /// Set once one of the signals arrived while a guard was alive.
+  static const std::atomic<bool>& flag();
+  /// The signal's name ("SIGTERM"), or empty when none arrived.
+  static std::string received();
+};
+
+}  // namespace tunekit::protocols
