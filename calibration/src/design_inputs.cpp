@@ -64,6 +64,16 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
     if (const json& unit = value_at_or_null(params, "/K/unit"_json_pointer); unit.is_string())
       in.K_unit = unit.get<std::string>();
   }
+  if (const json& wr = value_at_or_null(res, "/whole_record/a"_json_pointer); wr.is_object()) {
+    StepModelInput m;
+    m.a = estimated_at(wr, "whole_record.a", path);
+    m.b = estimated_at(value_at_or_null(res, "/whole_record/b"_json_pointer), "whole_record.b", path);
+    m.theta_s = estimated_at(value_at_or_null(res, "/whole_record/theta_s"_json_pointer), "whole_record.theta_s", path);
+    m.linear = value_at_or_null(res, "/whole_record/linear_chosen"_json_pointer) == json(true);
+    m.u_min = number_at(res, "/whole_record/input_range/0", "whole_record.input_range[0]", path);
+    m.u_max = number_at(res, "/whole_record/input_range/1", "whole_record.input_range[1]", path);
+    if (std::isfinite(m.a.value) && std::isfinite(m.b.value)) in.model = m;
+  }
   const double a = number_at(res, "/trend/tau_s/a", "trend.tau_s.a", path);
   const double b = number_at(res, "/trend/tau_s/b", "trend.tau_s.b", path);
   if (std::isfinite(a) && std::isfinite(b)) in.trend = ident::TauPowerLaw{a, b};
@@ -71,6 +81,7 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
   const std::string input_unit = unit.is_string() ? unit.get<std::string>() : std::string();
   in.levels_in_flow = ident::is_volumetric_flow_unit(input_unit);
   const json& ops = value_at_or_null(res, "/operating_points"_json_pointer);
+  if (!levels_are_feed_or_flow(input_unit)) in.model.reset();
   if (!ops.is_array() || !levels_are_feed_or_flow(input_unit)) {
     in.trend.reset();
     return in;
@@ -201,7 +212,21 @@ StepDesignInput step_design_input(const StepOutcome& o, const std::string& origi
     in.K_unit = a.pooled->param("K").unit;
   }
   in.levels_in_flow = ident::is_volumetric_flow_unit(o.input_unit);
-  if (!levels_are_feed_or_flow(o.input_unit)) return in;
+  if (o.whole_record) {
+    const auto& f = o.whole_record->model.fit;
+    StepModelInput m;
+    m.a = estimated_of(f.derived.front());
+    m.b = estimated_of(f.param("b"));
+    m.theta_s = estimated_of(f.param("theta_s"));
+    m.linear = o.whole_record->model.linear_chosen;
+    m.u_min = o.whole_record->input_min_positive;
+    m.u_max = o.whole_record->input_max;
+    in.model = m;
+  }
+  if (!levels_are_feed_or_flow(o.input_unit)) {
+    in.model.reset();
+    return in;
+  }
   if (a.level_trends.tau) in.trend = ident::TauPowerLaw{a.level_trends.tau->value("a"), a.level_trends.tau->value("b")};
   for (const auto& l : a.arrival_levels) {
     if (!(l.u > 0)) continue;

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/cli/option_binding.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 
 namespace tunekit::cli {
