@@ -37,6 +37,7 @@ struct ModelProblem {
   bool volume = false;
   double q_ref = 1;
   int substeps = 1;
+  bool fix_v0 = false;  ///< the record starts empty: V0 held at 0 (its derivative vanishes there)
   LsqProblem lsq;
 };
 
@@ -169,7 +170,8 @@ std::vector<ParamSpec> specs(const ModelProblem& mp, const std::array<double, 6>
           {"theta_s", "s", std::clamp(start[2], 0.0, kThetaMaxFraction * T), 0.0, kThetaMaxFraction * T},
           {"g", gunit, start[3]},
           {"c", out, start[4]},
-          {"V0", in + ".s", std::max(start[5], 0.0), 0.0, std::numeric_limits<double>::infinity()}};
+          {"V0", in + ".s", mp.fix_v0 ? 0.0 : std::max(start[5], 0.0), 0.0, std::numeric_limits<double>::infinity(),
+           mp.fix_v0}};
 }
 
 /// Smallest time constant the record's input reaches under (a, b), for the sub-step count.
@@ -359,6 +361,14 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   full.volume = volume;
   full.q_ref = out.reference_input;
   bind(full);
+  // A record that starts with an empty liquefier ends the thinned fit with V0 at its bound 0,
+  // where the output does not depend on it: V0 is then held at 0.
+  {
+    const auto v = values(best);
+    const double a0 = v[0] * std::pow(out.reference_input, -v[1]);
+    const double umax = *std::max_element(rec.u.begin(), rec.u.end());
+    full.fix_v0 = v[5] <= 1e-6 * steady_volume(a0, v[1], umax);
+  }
   FitResult nl = solve(full, values(best), o, rec, !o.fit_b, true);
   out.substeps = full.substeps;
   if (!o.fit_b) {

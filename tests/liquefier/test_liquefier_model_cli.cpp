@@ -145,26 +145,38 @@ TEST_CASE("calibrate on the physics liquefier: the whole-record model and the pe
   const auto& wr = step.at("whole_record");
   REQUIRE(wr.contains("a"));
   CHECK(wr.at("sensor") == "pressure");
-  const double a = wr.at("a").at("value").get<double>(), b = wr.at("b").at("value").get<double>();
+  const double b = wr.at("b").at("value").get<double>();
   const auto truth = nlohmann::json::parse(read_file_bytes(dir + "/liquefier-step/truth.json")).at("liquefier");
   const double n = truth.at("n_index").get<double>();
   INFO("b = " << b << " [" << wr.at("b").at("ci95")[0] << ", " << wr.at("b").at("ci95")[1] << "], truth " << n - 1);
   CHECK(b == Approx(n - 1).margin(0.05));
-  // Every operating point's tau and the model's tau at that level within their combined 95 %.
-  int compared = 0;
+  // Every operating point's tau against the model's prediction for the steps arriving there (the
+  // model's own response over each step fitted as the step was), within their combined 95 %; at
+  // 95 % each, one level in eight may miss by chance.
+  const auto& checks = wr.at("step_checks");
+  int compared = 0, missed = 0;
   for (const auto& l : step.at("operating_points")) {
-    const double u = l.at("u").get<double>();
-    if (!(u > 0)) continue;
-    const double tau = l.at("tau_s").get<double>();
-    const double half = 0.5 * (l.at("tau_ci95")[1].get<double>() - l.at("tau_ci95")[0].get<double>());
-    const double model = a * std::pow(u, b);
-    const double a_half = 0.5 * (wr.at("a").at("ci95")[1].get<double>() - wr.at("a").at("ci95")[0].get<double>());
-    const double model_half = model * a_half / a;
-    INFO("u " << u << ": level tau " << tau << " +- " << half << ", model " << model << " +- " << model_half);
-    CHECK(std::abs(tau - model) <= std::hypot(half, model_half) + 0.02 * model);
+    if (!(l.at("u").get<double>() > 0)) continue;
+    double pred = 0, pred_se = 0;
+    int n_pred = 0;
+    for (const auto& i : l.at("steps"))
+      for (const auto& c : checks)
+        if (c.at("step") == i) {
+          pred += c.at("tau_model_s").get<double>();
+          pred_se += c.at("tau_model_stderr_s").get<double>();
+          ++n_pred;
+        }
+    if (n_pred == 0) continue;
+    pred /= n_pred;
+    pred_se /= n_pred;
+    const double tau = l.at("tau_s").get<double>(), se = l.at("stderr").at("tau_s").get<double>();
+    const bool agree = std::abs(tau - pred) <= 1.96 * std::hypot(se, pred_se);
+    INFO("u " << l.at("u") << ": level tau " << tau << " +- " << se << ", model " << pred << " +- " << pred_se);
+    CHECK((agree || missed == 0));
+    missed += !agree;
     ++compared;
   }
-  CHECK(compared >= 4);
+  CHECK(compared >= 6);
   // The design came from the model.
   bool from_model = false;
   for (const auto& note : env.at("results").at("compensators").at("flow_advance").at("notes"))
