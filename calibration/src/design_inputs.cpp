@@ -49,6 +49,12 @@ EstimatedValue estimated_of(const fitting::Param& p) { return {p.value, p.std_er
 /// input is something else (the set-point width of a printed line, in mm) has levels the design
 /// cannot place on the flow axis: its pooled fit is designed from. An unstated unit ("1") is
 /// taken as a feed, as export has always read it.
+/// The whole-record model designs the advance only when it agrees with the record's own step fits:
+/// when more than a quarter of them disagree with its prediction (ident/liquefier_record.hpp), the
+/// store does not describe this liquefier well enough and the operating points design instead
+/// (the step analysis' warning says how many disagree).
+bool model_agrees_with_steps(std::size_t checks, std::size_t disagreeing) { return 4 * disagreeing <= checks; }
+
 bool levels_are_feed_or_flow(const std::string& input_unit) {
   return input_unit.empty() || input_unit == "1" || input_unit == "mm/s" || ident::is_volumetric_flow_unit(input_unit);
 }
@@ -64,6 +70,23 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
     if (const json& unit = value_at_or_null(params, "/K/unit"_json_pointer); unit.is_string())
       in.K_unit = unit.get<std::string>();
   }
+  if (const json& wr = value_at_or_null(res, "/whole_record/a"_json_pointer); wr.is_object()) {
+    StepModelInput m;
+    m.a = estimated_at(wr, "whole_record.a", path);
+    m.b = estimated_at(value_at_or_null(res, "/whole_record/b"_json_pointer), "whole_record.b", path);
+    m.theta_s = estimated_at(value_at_or_null(res, "/whole_record/theta_s"_json_pointer), "whole_record.theta_s", path);
+    m.linear = value_at_or_null(res, "/whole_record/linear_chosen"_json_pointer) == json(true);
+    m.u_min = number_at(res, "/whole_record/input_range/0", "whole_record.input_range[0]", path);
+    m.u_max = number_at(res, "/whole_record/input_range/1", "whole_record.input_range[1]", path);
+    std::size_t checks = 0, disagreeing = 0;
+    if (const json& sc = value_at_or_null(res, "/whole_record/step_checks"_json_pointer); sc.is_array())
+      for (const json& c : sc) {
+        ++checks;
+        disagreeing += value_at_or_null(c, "/disagrees"_json_pointer) == json(true);
+      }
+    if (std::isfinite(m.a.value) && std::isfinite(m.b.value) && model_agrees_with_steps(checks, disagreeing))
+      in.model = m;
+  }
   const double a = number_at(res, "/trend/tau_s/a", "trend.tau_s.a", path);
   const double b = number_at(res, "/trend/tau_s/b", "trend.tau_s.b", path);
   if (std::isfinite(a) && std::isfinite(b)) in.trend = ident::TauPowerLaw{a, b};
@@ -71,6 +94,7 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
   const std::string input_unit = unit.is_string() ? unit.get<std::string>() : std::string();
   in.levels_in_flow = ident::is_volumetric_flow_unit(input_unit);
   const json& ops = value_at_or_null(res, "/operating_points"_json_pointer);
+  if (!levels_are_feed_or_flow(input_unit)) in.model.reset();
   if (!ops.is_array() || !levels_are_feed_or_flow(input_unit)) {
     in.trend.reset();
     return in;
@@ -201,7 +225,23 @@ StepDesignInput step_design_input(const StepOutcome& o, const std::string& origi
     in.K_unit = a.pooled->param("K").unit;
   }
   in.levels_in_flow = ident::is_volumetric_flow_unit(o.input_unit);
-  if (!levels_are_feed_or_flow(o.input_unit)) return in;
+  if (o.whole_record) {
+    const auto& f = o.whole_record->model.fit;
+    StepModelInput m;
+    m.a = estimated_of(f.derived.front());
+    m.b = estimated_of(f.param("b"));
+    m.theta_s = estimated_of(f.param("theta_s"));
+    m.linear = o.whole_record->model.linear_chosen;
+    m.u_min = o.whole_record->input_min_positive;
+    m.u_max = o.whole_record->input_max;
+    std::size_t disagreeing = 0;
+    for (const auto& c : o.whole_record->checks) disagreeing += c.disagrees;
+    if (model_agrees_with_steps(o.whole_record->checks.size(), disagreeing)) in.model = m;
+  }
+  if (!levels_are_feed_or_flow(o.input_unit)) {
+    in.model.reset();
+    return in;
+  }
   if (a.level_trends.tau) in.trend = ident::TauPowerLaw{a.level_trends.tau->value("a"), a.level_trends.tau->value("b")};
   for (const auto& l : a.arrival_levels) {
     if (!(l.u > 0)) continue;

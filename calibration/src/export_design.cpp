@@ -30,6 +30,8 @@ void take_step(const StepDesignInput& s, LiquefierInputs& li) {
   in.gain_unit = s.K_unit;
   in.tau_source = "step";
   li.trend_u = s.trend;
+  li.model = s.model;
+  if (!std::isfinite(in.tau_s) && s.model && std::isfinite(s.model->a.value)) in.tau_s = s.model->a.value;
   li.levels_in_flow = s.levels_in_flow;
   li.levels = s.levels;
   for (const auto& l : s.levels) in.points.push_back({l.u, l.K, l.tau_s, l.theta_s});
@@ -72,6 +74,7 @@ LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, 
     in.rheo_reference_flow_mm3_s = d.rheo->reference_flow_mm3_s;
   }
   if (std::isfinite(a.pa_k)) {
+    li.model.reset();
     in.tau_s = a.pa_k;
     in.tau_stderr_s = fitting::kNaN;
     in.tau_source = "command line";
@@ -137,8 +140,45 @@ std::map<std::string, firmware::ShaperSetting> firmware_shapers(const DesignInpu
 
 namespace {
 
+/// The whole-record model as the flow design's inputs: tau = a Q^b (in flow) at flows spread over
+/// the record's inputs, so that the advance is V(Q)/Q = a Q^b / (b+1) of the model.
+ident::FlowAdvanceInputs model_flow_inputs(const LiquefierInputs& li, const ident::AdvanceDesign& design) {
+  const ident::AdvanceInputs& in = li.in;
+  const StepModelInput& m = *li.model;
+  const double to_flow = li.levels_in_flow ? 1.0 : in.filament_area_mm2;  // feed mm/s -> mm^3/s
+  ident::FlowAdvanceInputs fin;
+  fin.filament_area_mm2 = in.filament_area_mm2;
+  // tau = a u^b with u = Q / to_flow: in flow, a to_flow^-b Q^b.
+  fin.trend = ident::TauPowerLaw{m.a.value * std::pow(to_flow, -m.b.value), m.b.value};
+  const double q_lo = m.u_min * to_flow, q_hi = std::max(m.u_max * to_flow, 1.5 * q_lo);
+  for (int i = 0; i < 6; ++i) {
+    const double q = q_lo * std::pow(q_hi / q_lo, i / 5.0);
+    fin.levels.push_back({q, fin.trend->a * std::pow(q, fin.trend->b), fitting::kNaN, fitting::kNaN});
+  }
+  fin.design_flow_mm3_s = design.design_flow_mm3_s;
+  fin.theta_s = std::isfinite(m.theta_s.value) ? m.theta_s.value : design.theta_s;
+  if (std::isfinite(in.print_accel_mm_s2) && in.print_accel_mm_s2 > 0) fin.orca_accels_mm_s2 = {in.print_accel_mm_s2};
+  return fin;
+}
+
+std::string model_note(double b, bool linear) {
+  if (linear)
+    return "designed from the whole-record model with b = 0 (the data do not support a flow-dependent tau): the "
+           "advance is tau";
+  return fmt::format(
+      "designed from the whole-record model tau = a Q^b with b = {:.3g}: the advance at flow Q is V(Q)/Q = a Q^b / "
+      "(b + 1)",
+      b);
+}
+
+bool model_usable(const LiquefierInputs& li) {
+  return li.model && std::isfinite(li.model->a.value) && li.model->a.value > 0 && std::isfinite(li.model->b.value) &&
+         li.model->b.value > -1 && li.model->u_min > 0 && std::isfinite(li.model->u_max);
+}
+
 /// The levels as flows (mm^3/s) for the flow-dependent design.
 ident::FlowAdvanceInputs flow_inputs(const LiquefierInputs& li, const ident::AdvanceDesign& design) {
+  if (model_usable(li)) return model_flow_inputs(li, design);
   const ident::AdvanceInputs& in = li.in;
   ident::FlowAdvanceInputs fin;
   fin.filament_area_mm2 = in.filament_area_mm2;
@@ -208,20 +248,24 @@ nlohmann::json design_advance(const ExportOptions& a, LiquefierInputs& li, Expor
   const ident::AdvanceInputs& in = li.in;
   const bool have_tau = std::isfinite(in.tau_s) || !in.points.empty();
   if (a.no_pa || !have_tau) return nullptr;
-  if (a.profile.empty())
-    env.warn(
-        "no --profile: assuming 1.75 mm filament, a 0.45 x 0.2 mm line at 60 mm/s, and no acceleration limits "
-        "(the smoothing time is not designed)");
+  static const std::string no_profile =
+      "no --profile: assuming 1.75 mm filament, a 0.45 x 0.2 mm line at 60 mm/s, and no acceleration limits "
+      "(the smoothing time is not designed)";
+  if (a.profile.empty()) env.warn(no_profile);
   auto& design = outcome.design;
   design = ident::design_advance(in);
   settings.pa_k_s = design->k_s;
   settings.pa_smooth_s = firmware::smoothing_time_for(outcome.firmware, *design);
   for (const auto& w : design->warnings) env.warn(w);
   // Flow-dependent design (flow_advance.hpp) when two or more levels were identified.
-  if (!(design->schedule.size() >= 2 && design->k_source == "operating points")) return nullptr;
+  if (!model_usable(li) && !(design->schedule.size() >= 2 && design->k_source == "operating points")) return nullptr;
   const ident::FlowAdvanceInputs fin = flow_inputs(li, *design);
   outcome.flow = ident::design_flow_advance(fin);
-  const auto& flow = *outcome.flow;
+  auto& flow = *outcome.flow;
+  if (model_usable(li)) {
+    std::string note = li.model->linear ? model_note(0.0, true) : model_note(li.model->b.value, false);
+    flow.notes.insert(flow.notes.begin(), std::move(note));
+  }
   for (const auto& w : flow.warnings) env.warn(w);
   nlohmann::json rheology;
   if (in.rheo_flow_mm3_s.size() >= 2 && in.rheo_flow_mm3_s.size() == in.rheo_relative_tau.size())

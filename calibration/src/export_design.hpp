@@ -24,6 +24,7 @@ struct LiquefierInputs {
   std::vector<StepLevel> levels;                       ///< the step analysis' operating points (u > 0)
   bool levels_in_flow = false;                         ///< their u is mm^3/s (else filament feed, mm/s)
   std::optional<ident::TauPowerLaw> trend_u;           ///< tau = a u^b over the levels' u
+  std::optional<StepModelInput> model;                 ///< the whole-record model (designed from first)
   nlohmann::json agreement = nlohmann::json::array();  ///< step against frequency response tau
 };
 

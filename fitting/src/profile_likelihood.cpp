@@ -82,8 +82,9 @@ PlSetup pl_setup(const LsqProblem& problem, const FitResult& fit, int index, con
   s.rss_min = fit.diagnostics.rss;
   // An exact fit has no residual variance to scale by; the floor keeps the threshold finite.
   s.s2 = std::max(s.rss_min / std::max(dof, 1), residual_variance_floor(problem.observed));
-  s.threshold = tq * tq;
-  s.half_width = tq * p.std_error;
+  const double f = std::max(1.0, o.variance_factor);
+  s.threshold = f * tq * tq;
+  s.half_width = std::sqrt(f) * tq * p.std_error;
   return s;
 }
 

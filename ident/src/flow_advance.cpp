@@ -16,6 +16,12 @@ bool fa_finite(double v) { return std::isfinite(v); }
 
 nlohmann::json fa_num(double v) { return fa_finite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
+/// A power-law trend tau = a Q^b stores a finite volume a Q^(b+1)/(b+1) from zero flow only for
+/// a > 0 and b > -1; otherwise the levels' own table is designed from.
+bool fa_trend_usable(const FlowAdvanceInputs& in) {
+  return in.trend && fa_finite(in.trend->a) && in.trend->a > 0 && fa_finite(in.trend->b) && in.trend->b > -1;
+}
+
 /// The levels sorted by flow, with the bound `which` selected (-1 lower, 0 estimate, +1 upper).
 struct FaKnots {
   std::vector<double> q, t;
@@ -122,11 +128,6 @@ void fa_validate(const FlowAdvanceInputs& in) {
   std::sort(qs.begin(), qs.end());
   for (std::size_t i = 1; i < qs.size(); ++i)
     if (qs[i] == qs[i - 1]) throw InputError(fmt::format("two flow levels at the same flow {} mm^3/s", qs[i]));
-  if (in.trend && !(fa_finite(in.trend->a) && in.trend->a > 0 && fa_finite(in.trend->b) && in.trend->b > -1))
-    throw InputError(
-        fmt::format("tau trend a = {}, b = {}: a must be positive and b above -1 (the stored volume "
-                    "a Q^(b+1)/(b+1) is finite only then)",
-                    in.trend->a, in.trend->b));
 }
 
 }  // namespace
@@ -145,7 +146,7 @@ double kalico_offset_mm(KalicoModel m, double linear_advance_s, double nonlinear
 
 double flow_tau_s(const FlowAdvanceInputs& in, double q, int which) {
   const FaKnots k = fa_knots(in, which);
-  if (in.trend) {
+  if (fa_trend_usable(in)) {
     const double est = in.trend->a * std::pow(std::max(q, 0.0), in.trend->b);
     if (which == 0) return est;
     const FaKnots k0 = fa_knots(in, 0);
@@ -157,7 +158,7 @@ double flow_tau_s(const FlowAdvanceInputs& in, double q, int which) {
 double stored_volume_mm3(const FlowAdvanceInputs& in, double q, int which) {
   if (q <= 0) return 0;
   const FaKnots k = fa_knots(in, which);
-  if (in.trend) {
+  if (fa_trend_usable(in)) {
     const double b = in.trend->b;
     const double est = in.trend->a * std::pow(q, b + 1) / (b + 1);
     if (which == 0) return est;
@@ -222,6 +223,12 @@ KalicoFit fit_kalico(const FlowAdvanceInputs& in, KalicoModel model, const std::
 FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   fa_validate(in);
   FlowAdvanceDesign d;
+  if (in.trend && !fa_trend_usable(in))
+    d.warnings.push_back(fmt::format(
+        "the levels' time constants fall with the flow as steeply as tau ~ Q^{:.3g}: followed down to zero flow that "
+        "trend would store an unbounded melt volume, so it is not used; the advance is designed from the measured "
+        "levels, assuming tau holds the lowest level's value below it",
+        in.trend->b));
   d.has_band = std::all_of(in.levels.begin(), in.levels.end(),
                            [](const FlowTau& l) { return fa_finite(l.tau_lo_s) && fa_finite(l.tau_hi_s); });
   const FaKnots k = fa_knots(in, 0);

@@ -149,7 +149,18 @@ TEST_CASE("flow advance: bad levels are refused") {
   CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
   in.levels = {{2.0, 0.05, 0.06, 0.07}, {4.0, 0.04}};
   CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+}
+
+TEST_CASE("flow advance: a trend steeper than 1/Q is set aside and the levels design, with the reason") {
+  ident::FlowAdvanceInputs in;
+  in.filament_area_mm2 = 2.4;
   in.levels = {{2.0, 0.05}, {4.0, 0.04}};
+  in.design_flow_mm3_s = 3.0;
+  const double from_levels = ident::design_flow_advance(in).k_design_s;
   in.trend = ident::TauPowerLaw{0.1, -1.2};
-  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  const auto d = ident::design_flow_advance(in);
+  CHECK(d.k_design_s == Approx(from_levels));
+  bool reason = false;
+  for (const auto& w : d.warnings) reason = reason || w.find("designed from the measured levels") != std::string::npos;
+  CHECK(reason);
 }

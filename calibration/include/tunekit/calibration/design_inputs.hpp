@@ -39,6 +39,14 @@ struct StepLevel {
   double flow_mm3_s = fitting::kNaN;  ///< the level as a volumetric flow when the record says it
 };
 
+/// The whole-record liquefier model of `tunekit step` (liquefier_record.hpp): tau = a u^b over
+/// the input's unit, the dead time, and the inputs the record reached.
+struct StepModelInput {
+  EstimatedValue a, b, theta_s;
+  bool linear = false;  ///< b held at 0 (the data do not support a flow-dependent tau)
+  double u_min = fitting::kNaN, u_max = fitting::kNaN;
+};
+
 /// From `tunekit step`: the pooled fit, the arrival levels (u > 0) and tau's trend over them.
 struct StepDesignInput {
   std::string origin;  ///< the results file (or analysis) it came from, for messages
@@ -47,6 +55,7 @@ struct StepDesignInput {
   bool levels_in_flow = false;  ///< the levels' u is a volumetric flow (mm^3/s), not a feed (mm/s)
   std::vector<StepLevel> levels;
   std::optional<ident::TauPowerLaw> trend;  ///< tau_s = a u^b over the levels
+  std::optional<StepModelInput> model;      ///< the whole-record model, when it was fitted
 };
 
 /// From `tunekit freq`: the frequency-response tau it reports (results.fit).

@@ -4,11 +4,13 @@
 // ch. 4.4.2). The shape of a command is described in docs/cpp-api.md.
 
 #include <limits>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "tunekit/calibration/envelope.hpp"
+#include "tunekit/ident/liquefier_record.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
 namespace tunekit::calibration {
@@ -34,6 +36,9 @@ struct StepOutcome {
   std::size_t input_size_bytes = 0;
   std::string input_unit, output_unit, gain_unit;  ///< as results report them ("1": dimensionless)
   ident::StepAnalysis analysis;
+  /// The whole-record model (records with an input channel), or why it could not be fitted.
+  std::optional<ident::WholeRecordModel> whole_record;
+  std::string whole_record_error;
   std::vector<std::string> warnings;  ///< the CSV reader's, then the analysis'
 };
 

@@ -45,6 +45,10 @@ struct ProfileOptions {
   int max_steps = 24;       ///< stepping-out steps per side
   int max_bisections = 30;  ///< per side
   int inner_max_iterations = 200;
+  /// Variance inflation for residuals that are not white (1: none): the threshold becomes
+  /// f t^2 and the first step sqrt(f) times the Wald half-width, as for a record of n / f
+  /// independent residuals.
+  double variance_factor = 1.0;
 };
 
 /// One parameter's profile interval, in solver coordinates.

@@ -143,7 +143,8 @@ double needed_advance_s(const FlowAdvanceInputs& in, double q_mm3_s, int which =
 KalicoFit fit_kalico(const FlowAdvanceInputs& in, KalicoModel model, const std::vector<double>& flows);
 
 /// Designs every form. Throws InputError for fewer than two usable levels, non-positive flows
-/// or taus, a missing filament area, or a power law with b <= -1.
+/// or taus, or a missing filament area. A power law with a <= 0 or b <= -1 (no finite stored
+/// volume from zero flow) is set aside with a warning and the levels' table designed from.
 FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in);
 
 }  // namespace tunekit::ident

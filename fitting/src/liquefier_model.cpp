@@ -1,0 +1,408 @@
+// The whole-record liquefier model (liquefier_model.hpp): simulation, start values, the Ceres
+// fit, the intervals and the choice of the linear model.
+#include "tunekit/fitting/liquefier_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "liquefier_model_sim.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/fitting/least_squares.hpp"
+#include "tunekit/fitting/profile_likelihood.hpp"
+#include "tunekit/fitting/stats.hpp"
+
+namespace tunekit::fitting {
+namespace {
+
+using liquefier_detail::simulate;
+using Jet4 = ceres::Jet<double, 4>;
+
+/// The stored volume at steady input u (the state a settled record starts in).
+double steady_volume(double a, double b, double u) { return u > 0 ? a * std::pow(u, b + 1) / (b + 1) : 0.0; }
+
+constexpr double kThetaMaxFraction = 0.25;  // theta at most this share of the record
+constexpr std::size_t kThinTarget = 3000;   // samples of the thinned record the start is found on
+
+struct Rec {
+  std::vector<double> t, u, y;
+};
+
+/// The least-squares problem of one record; parameters tau_ref_s, b, theta_s, g, c, V0 (the
+/// stored volume at the first sample: a record need not start settled).
+struct ModelProblem {
+  Rec rec;
+  bool volume = false;
+  double q_ref = 1;
+  int substeps = 1;
+  bool fix_v0 = false;  ///< the record starts empty: V0 held at 0 (its derivative vanishes there)
+  LsqProblem lsq;
+};
+
+void bind(ModelProblem& mp) {
+  ModelProblem* self = &mp;
+  mp.lsq.num_residuals = static_cast<int>(mp.rec.t.size());
+  mp.lsq.observed = mp.rec.y;
+  mp.lsq.residuals_and_jacobian = [self](const double* p, double* r, double* jac) {
+    const Rec& rc = self->rec;
+    const std::size_t n = rc.t.size();
+    const double ln_qref = std::log(self->q_ref);
+    if (!(p[0] > 0) || !(p[1] > -1) || !(p[2] >= 0) || !(p[5] >= 0)) return false;
+    if (jac == nullptr) {
+      std::vector<double> s(n);
+      const double a = p[0] * std::exp(-p[1] * ln_qref);
+      simulate(rc.t.data(), rc.u.data(), n, a, p[1], p[2], p[5], self->volume, self->substeps, s.data());
+      for (std::size_t i = 0; i < n; ++i) {
+        r[i] = p[3] * s[i] + p[4] - rc.y[i];
+        if (!std::isfinite(r[i])) return false;
+      }
+      return true;
+    }
+    std::vector<Jet4> s(n);
+    const Jet4 tau(p[0], 0), b(p[1], 1), theta(p[2], 2), v0(p[5], 3);
+    const Jet4 a = tau * exp(-b * ln_qref);
+    simulate(rc.t.data(), rc.u.data(), n, a, b, theta, v0, self->volume, self->substeps, s.data());
+    for (std::size_t i = 0; i < n; ++i) {
+      r[i] = p[3] * s[i].a + p[4] - rc.y[i];
+      if (!std::isfinite(r[i])) return false;
+      double* row = jac + i * 6;
+      row[0] = p[3] * s[i].v[0];
+      row[1] = p[3] * s[i].v[1];
+      row[2] = p[3] * s[i].v[2];
+      row[3] = s[i].a;
+      row[4] = 1.0;
+      row[5] = p[3] * s[i].v[3];
+    }
+    return true;
+  };
+}
+
+void check_record(const LiquefierRecord& r) {
+  const std::size_t n = r.t.size();
+  if (r.u.size() != n || r.y.size() != n)
+    throw InputError("whole-record model: time, input and output differ in length");
+  if (n < 20) throw InputError(fmt::format("whole-record model: too few samples ({}); at least 20 are needed", n));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(r.t[i]) || !std::isfinite(r.u[i]) || !std::isfinite(r.y[i]))
+      throw InputError("whole-record model: NaN or infinite sample");
+    if (i > 0 && !(r.t[i] > r.t[i - 1]))
+      throw InputError(fmt::format("whole-record model: time is not increasing at sample {}", i + 1));
+    if (r.u[i] < 0)
+      throw InputError(
+          fmt::format("whole-record model: the input is negative at t = {:.4g} s; the store is fed by a flow or feed "
+                      "of at least 0 (a retraction is outside the model)",
+                      r.t[i]));
+  }
+  const auto [lo, hi] = std::minmax_element(r.u.begin(), r.u.end());
+  if (!(*hi > *lo)) throw InputError("whole-record model: the input is constant; nothing excites the liquefier");
+  const auto [ylo, yhi] = std::minmax_element(r.y.begin(), r.y.end());
+  if (!(*yhi > *ylo)) throw InputError("whole-record model: the output is constant; there is no response to fit");
+}
+
+double positive_median(const std::vector<double>& u) {
+  std::vector<double> pos;
+  for (double v : u)
+    if (v > 0) pos.push_back(v);
+  return median(pos);
+}
+
+/// g, c by linear least squares for y = g s + c; returns the residual sum of squares.
+double linear_gc(const std::vector<double>& s, const std::vector<double>& y, double& g, double& c) {
+  const double n = static_cast<double>(s.size());
+  double ms = 0, my = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) ms += s[i], my += y[i];
+  ms /= n, my /= n;
+  double sss = 0, ssy = 0, syy = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    sss += (s[i] - ms) * (s[i] - ms);
+    ssy += (s[i] - ms) * (y[i] - my);
+    syy += (y[i] - my) * (y[i] - my);
+  }
+  g = sss > 0 ? ssy / sss : 0;
+  c = my - g * ms;
+  return syy - g * ssy;
+}
+
+Rec thinned(const LiquefierRecord& r) {
+  const std::size_t m = std::max<std::size_t>(1, r.t.size() / kThinTarget);
+  Rec out;
+  for (std::size_t i = 0; i < r.t.size(); i += m) {
+    out.t.push_back(r.t[i]);
+    out.u.push_back(r.u[i]);
+    out.y.push_back(r.y[i]);
+  }
+  return out;
+}
+
+/// The best linear first-order model (b = 0), settled at the start, on a grid of tau and theta:
+/// {tau, theta, g, c}.
+std::array<double, 4> linear_grid_start(const Rec& r, bool volume) {
+  const std::size_t n = r.t.size();
+  const double T = r.t.back() - r.t.front();
+  const double dt = T / static_cast<double>(n - 1);
+  const double tau_lo = std::max(dt, T * 1e-4), tau_hi = T / 4;
+  std::array<double, 4> best{tau_lo, 0, 1, 0};
+  double best_rss = std::numeric_limits<double>::infinity();
+  std::vector<double> s(n);
+  const int nt = 14;
+  for (int i = 0; i < nt; ++i) {
+    const double tau = tau_lo * std::pow(tau_hi / tau_lo, i / double(nt - 1));
+    for (double th : {0.0, 1.0, 2.0, 4.0, 8.0, 16.0}) {
+      const double theta = std::min(th * dt, kThetaMaxFraction * T * 0.5);
+      simulate(r.t.data(), r.u.data(), n, tau, 0.0, theta, tau * r.u.front(), volume, 1, s.data());
+      double g = 0, c = 0;
+      const double rss = linear_gc(s, r.y, g, c);
+      if (rss < best_rss) best_rss = rss, best = {tau, theta, g, c};
+    }
+  }
+  return best;
+}
+
+std::vector<ParamSpec> specs(const ModelProblem& mp, const std::array<double, 6>& start, const LiquefierFitOptions& o,
+                             const LiquefierRecord& rec, bool fix_b) {
+  const double T = mp.rec.t.back() - mp.rec.t.front();
+  const std::string in = rec.input_unit, out = rec.output_unit;
+  const std::string gunit = mp.volume ? out + "/(" + in + ".s)" : out + "/(" + in + ")";
+  return {{"tau_ref_s", "s", start[0], 1e-6 * T, 10 * T},
+          {"b", "1", fix_b ? 0.0 : std::clamp(start[1], o.b_lower, o.b_upper), o.b_lower, o.b_upper, fix_b},
+          {"theta_s", "s", std::clamp(start[2], 0.0, kThetaMaxFraction * T), 0.0, kThetaMaxFraction * T},
+          {"g", gunit, start[3]},
+          {"c", out, start[4]},
+          {"V0", in + ".s", mp.fix_v0 ? 0.0 : std::max(start[5], 0.0), 0.0, std::numeric_limits<double>::infinity(),
+           mp.fix_v0}};
+}
+
+/// Smallest time constant the record's input reaches under (a, b), for the sub-step count.
+int substeps_for(const Rec& r, double a, double b) { return liquefier_substeps(r.t, r.u, a, b); }
+
+FitResult solve(ModelProblem& mp, const std::array<double, 6>& start, const LiquefierFitOptions& o,
+                const LiquefierRecord& rec, bool fix_b, bool covariance) {
+  mp.lsq.params = specs(mp, start, o, rec, fix_b);
+  // The exponential step is exact for the linear model: one sub-step.
+  mp.substeps = fix_b ? 1 : substeps_for(mp.rec, start[0] * std::pow(mp.q_ref, -start[1]), start[1]);
+  LsqOptions lo;
+  lo.compute_covariance = covariance;
+  lo.require_convergence = covariance;
+  lo.max_iterations = covariance ? 200 : 60;
+  lo.function_tolerance = 1e-10;
+  lo.parameter_tolerance = 1e-10;
+  lo.gradient_tolerance = 1e-12;
+  return solve_least_squares(fix_b ? "liquefier_linear" : "liquefier_store", mp.lsq, lo);
+}
+
+std::array<double, 6> values(const FitResult& f) {
+  return {f.params[0].value, f.params[1].value, f.params[2].value,
+          f.params[3].value, f.params[4].value, f.params[5].value};
+}
+
+/// 1 + 2 sum of the residuals' autocorrelation up to its first non-positive lag (>= 1).
+double variance_factor(const std::vector<double>& r) {
+  const std::size_t n = r.size();
+  double mean = 0;
+  for (double v : r) mean += v;
+  mean /= static_cast<double>(n);
+  double c0 = 0;
+  for (double v : r) c0 += (v - mean) * (v - mean);
+  if (!(c0 > 0)) return 1;
+  double f = 1;
+  const std::size_t max_lag = std::min<std::size_t>(n / 10, 2000);
+  for (std::size_t k = 1; k <= max_lag; ++k) {
+    double ck = 0;
+    for (std::size_t i = k; i < n; ++i) ck += (r[i] - mean) * (r[i - k] - mean);
+    const double rho = ck / c0;
+    if (!(rho > 0)) break;
+    f += 2 * rho;
+  }
+  return std::max(1.0, f);
+}
+
+std::vector<double> residuals_at(ModelProblem& mp, const FitResult& f) {
+  std::vector<double> r(mp.rec.t.size());
+  const auto p = values(f);
+  mp.lsq.residuals_and_jacobian(p.data(), r.data(), nullptr);
+  return r;
+}
+
+/// Widens the Wald intervals by sqrt(f) and adds a.
+void finish_intervals(FitResult& f, double q_ref, double factor, double confidence, const std::string& input_unit) {
+  const int dof = f.diagnostics.num_observations - f.diagnostics.num_parameters;
+  const double tq = t_multiplier(confidence, dof);
+  const double w = std::sqrt(factor);
+  for (auto& p : f.params) {
+    if (p.fixed) continue;
+    p.std_error *= w;
+    p.ci95_lo = p.value - tq * p.std_error;
+    p.ci95_hi = p.value + tq * p.std_error;
+    p.ci95_method = "wald";
+  }
+  // a = tau_ref Q_ref^-b; ln a = ln tau_ref - b ln Q_ref (delta method in ln).
+  const std::size_t k = f.params.size();
+  const double L = std::log(q_ref);
+  const auto& tau = f.params[0];
+  const auto& b = f.params[1];
+  double var = std::pow(tau.std_error / tau.value, 2);
+  if (!b.fixed && f.covariance.size() == k * k) {
+    const double cov_tb = f.covariance[0 * k + 1] * factor;
+    var += L * L * b.std_error * b.std_error - 2 * L * cov_tb / tau.value;
+  }
+  Param a;
+  a.name = "a";
+  a.unit = fmt::format("s.({})^-b", input_unit);
+  a.value = tau.value * std::exp(-b.value * L);
+  const double se_ln = std::sqrt(std::max(var, 0.0));
+  a.std_error = a.value * se_ln;
+  a.ci95_lo = a.value * std::exp(-tq * se_ln);
+  a.ci95_hi = a.value * std::exp(tq * se_ln);
+  a.ci95_method = "wald";
+  f.derived = {a};
+}
+
+/// Profile intervals of b (index 1, when free) and theta (index 2) with the widened threshold.
+int profile(ModelProblem& mp, FitResult& f, double factor, double confidence) {
+  ProfileOptions po;
+  po.confidence = confidence;
+  po.variance_factor = factor;
+  po.inner_max_iterations = 40;
+  int solves = 0;
+  for (int idx : {1, 2}) {
+    auto& p = f.params[static_cast<std::size_t>(idx)];
+    if (p.fixed) continue;
+    // The profile starts from the unwidened standard error (profile_interval widens it itself).
+    FitResult base = f;
+    base.params[static_cast<std::size_t>(idx)].std_error = p.std_error / std::sqrt(factor);
+    const ProfileInterval pi = profile_interval(mp.lsq, base, idx, po);
+    solves += pi.solves;
+    p.ci95_lo = std::min(pi.lo, p.value);
+    p.ci95_hi = std::max(pi.hi, p.value);
+    p.ci95_method = "profile-likelihood";
+    if (pi.lo_at_bound || pi.hi_at_bound)
+      f.warnings.push_back(fmt::format("the 95 % profile-likelihood interval of {} is not closed by the data", p.name));
+  }
+  return solves;
+}
+
+}  // namespace
+
+std::string to_string(LiquefierSensor s) { return s == LiquefierSensor::flow ? "flow" : "pressure"; }
+
+double liquefier_tau_s(const LiquefierParams& p, double q) { return p.a * std::pow(q, p.b); }
+double liquefier_volume(const LiquefierParams& p, double q) {
+  return q > 0 ? p.a * std::pow(q, p.b + 1) / (p.b + 1) : 0.0;
+}
+
+int liquefier_substeps(const std::vector<double>& t, const std::vector<double>& u, double a, double b) {
+  double dt_max = 0;
+  for (std::size_t i = 1; i < t.size(); ++i) dt_max = std::max(dt_max, t[i] - t[i - 1]);
+  double tau_min = std::numeric_limits<double>::infinity();
+  for (double v : u)
+    if (v > 0) tau_min = std::min(tau_min, a * std::pow(v, b));
+  if (!(tau_min > 0) || !std::isfinite(tau_min)) return 1;
+  return std::clamp(static_cast<int>(std::ceil(8 * dt_max / tau_min)), 1, 64);
+}
+
+std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::vector<double>& u,
+                                       const LiquefierParams& p, LiquefierSensor sensor, int substeps) {
+  if (t.size() != u.size() || t.empty()) throw InputError("simulate_liquefier: time and input differ in length");
+  if (!(p.a > 0) || !(p.b > -1) || !(p.theta_s >= 0))
+    throw InputError("simulate_liquefier: a must be positive, b above -1 and theta at least 0");
+  const int ns = substeps > 0 ? substeps : liquefier_substeps(t, u, p.a, p.b);
+  std::vector<double> s(t.size());
+  const double v0 = std::isfinite(p.v0) ? p.v0 : steady_volume(p.a, p.b, u.front());
+  simulate(t.data(), u.data(), t.size(), p.a, p.b, p.theta_s, v0, sensor == LiquefierSensor::pressure, ns, s.data());
+  for (double& v : s) v = p.g * v + p.c;
+  return s;
+}
+
+LiquefierParams LiquefierModelFit::params() const {
+  LiquefierParams p;
+  p.a = fit.derived.empty() ? kNaN : fit.derived.front().value;
+  p.b = fit.value("b");
+  p.theta_s = fit.value("theta_s");
+  p.g = fit.value("g");
+  p.c = fit.value("c");
+  p.v0 = fit.value("V0");
+  return p;
+}
+
+LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const LiquefierFitOptions& o) {
+  check_record(rec);
+  LiquefierModelFit out;
+  out.sensor = rec.sensor;
+  out.reference_input = positive_median(rec.u);
+  const bool volume = rec.sensor == LiquefierSensor::pressure;
+
+  // Start: linear grid, then the model on the thinned record.
+  ModelProblem thin;
+  thin.rec = thinned(rec);
+  thin.volume = volume;
+  thin.q_ref = out.reference_input;
+  bind(thin);
+  const auto g0 = linear_grid_start(thin.rec, volume);
+  std::array<double, 6> start{g0[0], 0.0, g0[1], g0[2], g0[3], g0[0] * rec.u.front()};
+  FitResult best;
+  bool have = false;
+  for (double b0 : {0.0, -0.5}) {
+    if (!o.fit_b && b0 != 0.0) continue;
+    std::array<double, 6> s0 = start;
+    s0[1] = b0;
+    s0[5] = steady_volume(start[0] * std::pow(out.reference_input, -b0), b0, rec.u.front());
+    try {
+      FitResult f = solve(thin, s0, o, rec, !o.fit_b, false);
+      if (!have || f.diagnostics.rss < best.diagnostics.rss) best = f, have = true;
+    } catch (const FitError&) {
+    }
+  }
+  if (!have) throw FitError("whole-record model: no start value led to a fit of the record");
+
+  ModelProblem full;
+  full.rec = {rec.t, rec.u, rec.y};
+  full.volume = volume;
+  full.q_ref = out.reference_input;
+  bind(full);
+  // A record that starts with an empty liquefier ends the thinned fit with V0 at its bound 0,
+  // where the output does not depend on it: V0 is then held at 0.
+  {
+    const auto v = values(best);
+    const double a0 = v[0] * std::pow(out.reference_input, -v[1]);
+    const double umax = *std::max_element(rec.u.begin(), rec.u.end());
+    full.fix_v0 = v[5] <= 1e-6 * steady_volume(a0, v[1], umax);
+  }
+  FitResult nl = solve(full, values(best), o, rec, !o.fit_b, true);
+  out.substeps = full.substeps;
+  if (!o.fit_b) {
+    out.variance_factor = variance_factor(residuals_at(full, nl));
+    finish_intervals(nl, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
+    if (o.profile) out.profile_solves += profile(full, nl, out.variance_factor, o.confidence);
+    out.linear_chosen = true;
+    out.fit = out.nonlinear = nl;
+    return out;
+  }
+  out.variance_factor = variance_factor(residuals_at(full, nl));
+  const FitResult nl_raw = nl;
+  finish_intervals(nl, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
+  if (o.profile) out.profile_solves += profile(full, nl, out.variance_factor, o.confidence);
+
+  // The linear model: b held at 0, refitted; the F-test of b = 0 at the confidence level.
+  std::array<double, 6> lin_start = values(nl_raw);
+  lin_start[1] = 0.0;
+  FitResult lin = solve(full, lin_start, o, rec, true, true);
+  const int dof = nl.diagnostics.num_observations - nl.diagnostics.num_parameters;
+  const double s2 = nl_raw.diagnostics.rss / dof;
+  const double tq = t_multiplier(o.confidence, dof);
+  out.f_statistic = (lin.diagnostics.rss - nl_raw.diagnostics.rss) / (s2 * out.variance_factor);
+  out.f_threshold = tq * tq;
+  out.linear_chosen = out.f_statistic <= out.f_threshold;
+  out.nonlinear = nl;
+  if (out.linear_chosen) {
+    finish_intervals(lin, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
+    if (o.profile) out.profile_solves += profile(full, lin, out.variance_factor, o.confidence);
+    out.fit = lin;
+  } else {
+    out.fit = nl;
+  }
+  return out;
+}
+
+}  // namespace tunekit::fitting

@@ -1,0 +1,155 @@
+// The whole-record liquefier model beside the per-step fits (liquefier_record.hpp).
+#include "tunekit/ident/liquefier_record.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "tunekit/core/error.hpp"
+#include "tunekit/fitting/first_order.hpp"
+
+namespace tunekit::ident {
+namespace {
+
+nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json param_json(const fitting::Param& p) {
+  return {{"value", num(p.value)},
+          {"stderr", num(p.std_error)},
+          {"ci95", {num(p.ci95_lo), num(p.ci95_hi)}},
+          {"unit", p.unit},
+          {"fixed", p.fixed},
+          {"ci95_method", p.fixed ? std::string("fixed") : p.ci95_method}};
+}
+
+/// The model's response over one step's window, fitted as the step was.
+void check_step(const WholeRecordModel& m, const std::vector<double>& tv, const std::vector<double>& sim,
+                const StepFit& s, std::size_t index, std::vector<StepModelCheck>& out) {
+  if (!s.fit) return;
+  fitting::StepRecord r;
+  r.t_step = s.step.t_step_s;
+  r.du = s.step.u_after - s.step.u_before;
+  for (std::size_t i = s.step.begin; i < s.step.end && i < tv.size(); ++i) {
+    r.t.push_back(tv[i]);
+    r.y.push_back(sim[i]);
+  }
+  StepModelCheck c;
+  c.step = index;
+  c.u_after = s.step.u_after;
+  c.tau_step_s = s.fit->value("tau_s");
+  c.tau_step_stderr_s = s.fit->param("tau_s").std_error;
+  try {
+    fitting::LsqOptions lo;
+    lo.compute_covariance = false;
+    const auto f = fitting::fit_step(r, fitting::StepModel::fopdt, lo);
+    c.tau_model_s = f.value("tau_s");
+  } catch (const Error&) {
+    return;  // the model's own response is not first order enough to fit: nothing to compare
+  }
+  // The model's uncertainty for that step: the relative standard error of its tau at the level
+  // the step arrives at (the level that dominates the step's time constant).
+  const double q = std::max(c.u_after, 1e-9);
+  c.tau_model_stderr_s = c.tau_model_s * m.tau_stderr_at(q) / m.tau_at(q);
+  const double comb = std::hypot(c.tau_step_stderr_s, c.tau_model_stderr_s);
+  c.disagrees = std::isfinite(comb) && std::abs(c.tau_step_s - c.tau_model_s) > 1.96 * comb;
+  out.push_back(c);
+}
+
+}  // namespace
+
+fitting::LiquefierSensor sensor_for_output_unit(const std::string& unit) {
+  for (const char* p : {"N", "kN", "Pa", "kPa", "MPa", "bar", "lbf", "g", "kg"})
+    if (unit == p) return fitting::LiquefierSensor::pressure;
+  return fitting::LiquefierSensor::flow;
+}
+
+double WholeRecordModel::tau_at(double q) const {
+  return model.fit.value("tau_ref_s") * std::pow(q / model.reference_input, model.fit.value("b"));
+}
+
+double WholeRecordModel::tau_stderr_at(double q) const {
+  const auto& f = model.fit;
+  const auto& tau = f.param("tau_ref_s");
+  const auto& b = f.param("b");
+  const double L = std::log(q / model.reference_input);
+  double var = std::pow(tau.std_error / tau.value, 2);
+  const std::size_t k = f.params.size();
+  if (!b.fixed && f.covariance.size() == k * k) {
+    var += L * L * b.std_error * b.std_error + 2 * L * f.covariance[1] * model.variance_factor / tau.value;
+  }
+  return tau_at(q) * std::sqrt(std::max(var, 0.0));
+}
+
+WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                                      fitting::LiquefierSensor sensor, const std::string& input_unit,
+                                      const std::string& output_unit, const StepAnalysis* steps) {
+  fitting::LiquefierRecord rec;
+  rec.t.assign(t.begin(), t.end());
+  rec.u.assign(u.begin(), u.end());
+  rec.y.assign(y.begin(), y.end());
+  rec.sensor = sensor;
+  rec.input_unit = input_unit;
+  rec.output_unit = output_unit;
+  WholeRecordModel m;
+  m.input_unit = input_unit;
+  m.output_unit = output_unit;
+  m.model = fitting::fit_liquefier_model(rec);
+  m.input_max = *std::max_element(rec.u.begin(), rec.u.end());
+  for (double v : rec.u)
+    if (v > 0 && !(v >= m.input_min_positive)) m.input_min_positive = v;
+  m.warnings = m.model.fit.warnings;
+  if (m.model.variance_factor > 1.5)
+    m.warnings.push_back(fmt::format(
+        "whole-record model: the residuals are correlated (Ljung-Box p = {:.2g}): its intervals are widened "
+        "by {:.3g} (the residuals' autocorrelation leaves about n / {:.3g} independent samples)",
+        m.model.fit.diagnostics.whiteness_p, std::sqrt(m.model.variance_factor), m.model.variance_factor));
+  if (steps != nullptr) {
+    const std::vector<double> sim = fitting::simulate_liquefier(rec.t, rec.u, m.model.params(), sensor);
+    for (std::size_t i = 0; i < steps->steps.size(); ++i) check_step(m, rec.t, sim, steps->steps[i], i, m.checks);
+    std::size_t bad = 0;
+    for (const auto& c : m.checks) bad += c.disagrees;
+    if (bad > 0)
+      m.warnings.push_back(fmt::format(
+          "{} of {} step fits disagree with the whole-record model's prediction for that step beyond their combined "
+          "uncertainty (flagged in whole_record.step_checks)",
+          bad, m.checks.size()));
+  }
+  return m;
+}
+
+nlohmann::json to_json(const WholeRecordModel& m) {
+  const auto& f = m.model.fit;
+  nlohmann::json checks = nlohmann::json::array();
+  for (const auto& c : m.checks)
+    checks.push_back({{"step", c.step},
+                      {"u_after", num(c.u_after)},
+                      {"tau_step_s", num(c.tau_step_s)},
+                      {"tau_step_stderr_s", num(c.tau_step_stderr_s)},
+                      {"tau_model_s", num(c.tau_model_s)},
+                      {"tau_model_stderr_s", num(c.tau_model_stderr_s)},
+                      {"disagrees", c.disagrees}});
+  return {{"model", fitting::to_json(f)},
+          {"form", "dV/dt = u(t - theta) - q, V(q) = a q^(b+1)/(b+1), tau(q) = a q^b"},
+          {"sensor", fitting::to_string(m.model.sensor)},
+          {"sensor_form", m.model.sensor == fitting::LiquefierSensor::flow ? "y = g q + c" : "y = g V + c"},
+          {"reference_input", num(m.model.reference_input)},
+          {"input_unit", m.input_unit},
+          {"input_range", {num(m.input_min_positive), num(m.input_max)}},
+          {"a", param_json(f.derived.front())},
+          {"b", param_json(f.param("b"))},
+          {"theta_s", param_json(f.param("theta_s"))},
+          {"tau_ref_s", param_json(f.param("tau_ref_s"))},
+          {"linear_chosen", m.model.linear_chosen},
+          {"b_nonlinear", param_json(m.model.nonlinear.param("b"))},
+          {"test",
+           {{"name", "F-test of b = 0 at 5 % (the linear model is kept when b's 95 % profile interval holds 0)"},
+            {"statistic", num(m.model.f_statistic)},
+            {"threshold", num(m.model.f_threshold)}}},
+          {"variance_factor", num(m.model.variance_factor)},
+          {"substeps", m.model.substeps},
+          {"step_checks", checks},
+          {"warnings", m.warnings}};
+}
+
+}  // namespace tunekit::ident

@@ -1,0 +1,164 @@
+// The whole-record liquefier model: a store of melt with tau(q) = a q^b, fitted by output error
+// over records that never settle, at a camera's 25 Hz and a load cell's 1 kHz.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdlib>
+
+#include "synth_store.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/fitting/liquefier_model.hpp"
+#include "tunekit/ident/step_analysis.hpp"
+
+using namespace tunekit;
+using tunekit::test::StoreTruth;
+using tunekit::test::synth_store;
+
+namespace {
+
+double rel(double est, double truth) { return std::abs(est - truth) / std::abs(truth); }
+
+bool covers(const fitting::Param& p, double truth) { return p.ci95_lo <= truth && truth <= p.ci95_hi; }
+
+}  // namespace
+
+TEST_CASE("the store's simulation converges: the automatic sub-steps agree with 64 sub-steps within 0.1 %") {
+  const StoreTruth tr;
+  for (double rate : {25.0, 1000.0}) {
+    const auto s = synth_store(tr, rate, 20.0, 0.0, 3);
+    const auto coarse = fitting::simulate_liquefier(s.rec.t, s.rec.u, tr.params(), tr.sensor);
+    const auto fine = fitting::simulate_liquefier(s.rec.t, s.rec.u, tr.params(), tr.sensor, 64);
+    double worst = 0;
+    for (std::size_t i = 0; i < fine.size(); ++i) worst = std::max(worst, std::abs(coarse[i] - fine[i]) / 14.0);
+    INFO("rate " << rate << " Hz");
+    CHECK(worst < 1e-3);
+  }
+}
+
+TEST_CASE("the linear store (b = 0) is the first-order response with tau = a") {
+  StoreTruth tr;
+  tr.a = 0.3;
+  tr.b = 0;
+  tr.theta_s = 0;
+  std::vector<double> t, u;
+  for (int i = 0; i < 400; ++i) {
+    t.push_back(i * 0.01);
+    u.push_back(i < 100 ? 2.0 : 5.0);
+  }
+  const auto y = fitting::simulate_liquefier(t, u, tr.params(), tr.sensor);
+  // The input ramps over the sample interval 0.99..1.00 s: the response is the first-order
+  // response to that ramp.
+  for (int i = 150; i < 400; i += 50) {
+    const double s = t[static_cast<std::size_t>(i)] - 0.99;
+    const double expect = 2.0 + 3.0 - 3.0 * 0.3 / 0.01 * std::exp(-s / 0.3) * (std::exp(0.01 / 0.3) - 1);
+    CHECK(y[static_cast<std::size_t>(i)] == Approx(expect).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("a never-settled staircase of the nonlinear store gives a, b and theta back at 25 Hz and at 1 kHz") {
+  const StoreTruth tr;
+  for (double rate : {25.0, 1000.0}) {
+    const auto s = synth_store(tr, rate, 60.0, 0.02, 11);
+    const auto m = fitting::fit_liquefier_model(s.rec);
+    INFO("rate " << rate << " Hz: a " << m.fit.derived.front().value << " b " << m.fit.value("b") << " theta "
+                 << m.fit.value("theta_s"));
+    CHECK_FALSE(m.linear_chosen);
+    CHECK(rel(m.fit.derived.front().value, tr.a) < 0.03);
+    CHECK(std::abs(m.fit.value("b") - tr.b) < 0.05);
+    CHECK(rel(m.fit.value("theta_s"), tr.theta_s) < 0.10);
+    CHECK(m.fit.param("b").ci95_method == "profile-likelihood");
+    CHECK(m.fit.param("theta_s").ci95_method == "profile-likelihood");
+  }
+}
+
+TEST_CASE("a load cell's pressure record of the store is fitted with the stored volume as the sensed quantity") {
+  StoreTruth tr;
+  tr.sensor = fitting::LiquefierSensor::pressure;
+  tr.g = 2.0;
+  tr.c = 0.5;
+  const auto s = synth_store(tr, 200.0, 40.0, 0.02, 5);
+  const auto m = fitting::fit_liquefier_model(s.rec);
+  CHECK(rel(m.fit.derived.front().value, tr.a) < 0.03);
+  CHECK(std::abs(m.fit.value("b") - tr.b) < 0.05);
+  CHECK(rel(m.fit.value("g"), tr.g) < 0.03);
+}
+
+TEST_CASE("a linear liquefier's record chooses the linear model: b's interval holds 0") {
+  StoreTruth tr;
+  tr.a = 0.3;
+  tr.b = 0.0;
+  const auto s = synth_store(tr, 100.0, 40.0, 0.02, 9);
+  const auto m = fitting::fit_liquefier_model(s.rec);
+  CHECK(m.linear_chosen);
+  CHECK(m.f_statistic <= m.f_threshold);
+  CHECK(m.fit.param("b").fixed);
+  CHECK(rel(m.fit.value("tau_ref_s"), 0.3) < 0.02);
+}
+
+TEST_CASE("rises slower than falls are one store: one model explains both directions to the noise") {
+  // b = -0.45: filling towards a high flow starts at the low flow's long time constant, draining
+  // from it starts fast. The per-step first-order fits see rises slower than falls; a single
+  // linear model cannot follow both, the store does.
+  const StoreTruth tr;
+  const auto s = synth_store(tr, 100.0, 40.0, 0.02, 21, {4, 14});
+  ident::StepAnalysisOptions so;
+  const auto steps = ident::analyze_steps(s.rec.t, s.rec.u, s.rec.y, so);
+  double rise = 0, fall = 0;
+  int nr = 0, nf = 0;
+  for (const auto& st : steps.steps) {
+    if (!st.fit) continue;
+    (st.step.rising() ? rise : fall) += st.fit->value("tau_s");
+    (st.step.rising() ? nr : nf) += 1;
+  }
+  REQUIRE(nr > 3);
+  REQUIRE(nf > 3);
+  CHECK(rise / nr > 1.1 * (fall / nf));
+  const auto m = fitting::fit_liquefier_model(s.rec);
+  double mean = 0;
+  for (double v : s.clean) mean += v;
+  const double sigma = 0.02 * mean / static_cast<double>(s.clean.size());
+  CHECK_FALSE(m.linear_chosen);
+  CHECK(m.fit.diagnostics.rms < 1.25 * sigma);
+  CHECK(std::abs(m.fit.value("b") - tr.b) < 0.05);
+  // The linear model misses the asymmetry: its residual sum of squares is far above the store's.
+  CHECK(m.f_statistic > 100 * m.f_threshold);
+}
+
+TEST_CASE("the 95 % intervals of a, b and theta cover the truth in 90-98 % of draws") {
+  // The figure in docs/liquefier-model.md is from 200 draws (TUNEKIT_STORE_DRAWS=200); the
+  // default keeps the test short and checks the coverage within its binomial spread.
+  int draws = 24;
+  if (const char* env = std::getenv("TUNEKIT_STORE_DRAWS")) draws = std::max(10, std::atoi(env));
+  const StoreTruth tr;
+  int ca = 0, cb = 0, ct = 0;
+  for (int d = 0; d < draws; ++d) {
+    const auto s = synth_store(tr, 25.0, 40.0, 0.02, 1000u + static_cast<unsigned>(d));
+    const auto m = fitting::fit_liquefier_model(s.rec);
+    ca += covers(m.nonlinear.derived.front(), tr.a);
+    cb += covers(m.nonlinear.param("b"), tr.b);
+    ct += covers(m.nonlinear.param("theta_s"), tr.theta_s);
+  }
+  const double n = draws;
+  // 200 draws: 90-98 %; fewer: the nominal 95 % within three binomial standard deviations.
+  const double spread = draws >= 200 ? 0.0 : 3 * std::sqrt(0.95 * 0.05 / n);
+  const double lo = std::min(0.90, 0.95 - spread), hi = std::max(0.98, std::min(1.0, 0.95 + spread));
+  INFO("draws " << draws << ": a " << ca / n << " b " << cb / n << " theta " << ct / n);
+  CHECK(ca / n >= lo);
+  CHECK(ca / n <= hi);
+  CHECK(cb / n >= lo);
+  CHECK(cb / n <= hi);
+  CHECK(ct / n >= lo);
+  CHECK(ct / n <= hi);
+}
+
+TEST_CASE("a record that cannot carry the model is refused with a plain reason") {
+  fitting::LiquefierRecord r;
+  for (int i = 0; i < 50; ++i) {
+    r.t.push_back(i * 0.01);
+    r.u.push_back(3.0);
+    r.y.push_back(3.0 + 0.01 * (i % 3));
+  }
+  CHECK_THROWS_AS(fitting::fit_liquefier_model(r), InputError);
+  r.u[10] = -1;
+  CHECK_THROWS_WITH(fitting::fit_liquefier_model(r), Catch::Contains("negative"));
+}
