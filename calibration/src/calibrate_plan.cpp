@@ -12,7 +12,6 @@
 #include "tunekit/calibration/history_record.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
-#include "tunekit/calibration/report.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/sim/sim_camera.hpp"
 

@@ -72,7 +72,7 @@ FeedPlan extruder_accel(std::vector<std::string>& g, std::vector<std::string>& r
   switch (d.firmware()) {
     case firmware::Firmware::klipper:
       g.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(a, 0)));
-      restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(profile.print.max_accel_mm_s2, 0)));
+      restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(accel_to_restore(profile), 0)));
       fp.stops = true;
       fp.accel_mm_s2 = std::min(a, profile.extruder.max_accel_mm_s2);
       break;

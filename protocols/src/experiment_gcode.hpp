@@ -28,6 +28,11 @@ struct FeedPlan {
 double mid(const machine::MachineProfile& p, const std::string& axis);
 /// `v` with at most `decimals` decimals, trailing zeros dropped ("-0" is "0").
 std::string num(double v, int decimals = 4);
+/// Klipper: the acceleration a test restores (SET_VELOCITY_LIMIT ACCEL): the one in force when
+/// the machine was identified, else the profile's print acceleration; mm/s^2.
+inline double accel_to_restore(const machine::MachineProfile& p) {
+  return p.state.accel_in_force_mm_s2 > 0 ? p.state.accel_in_force_mm_s2 : p.print.max_accel_mm_s2;
+}
 void feed_move(std::vector<std::string>& g, const FeedPlan& fp, double feed_mm_s, double duration_s);
 FeedPlan extruder_accel(std::vector<std::string>& g, std::vector<std::string>& restore, double a,
                         const machine::MachineProfile& profile, const firmware::Dialect& d);

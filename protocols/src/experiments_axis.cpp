@@ -87,8 +87,7 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
         // MINIMUM_CRUISE_RATIO=0 and input shaping off.
         prologue.push_back("SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO=0");
         restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={} MINIMUM_CRUISE_RATIO={}",
-                                      num(profile.print.max_accel_mm_s2, 0),
-                                      num(profile.state.minimum_cruise_ratio, 3)));
+                                      num(accel_to_restore(profile), 0), num(profile.state.minimum_cruise_ratio, 3)));
         changed.push_back("minimum_cruise_ratio");
         break;
       case firmware::Firmware::reprapfirmware:

@@ -1,4 +1,6 @@
 #include "tunekit/protocols/runner.hpp"
+
+#include "run_sessions.hpp"
 #include "tunekit/machine/rrf_http.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
 
@@ -26,6 +28,9 @@
 namespace tunekit::protocols {
 namespace {
 
+using detail::Recorder;
+using detail::Session;
+
 std::string utc_stamp() {
   const std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -34,328 +39,6 @@ std::string utc_stamp() {
   std::strftime(buf, sizeof buf, "%Y%m%d_%H%M%S", &tm);
   return buf;
 }
-
-/// Parses whitespace-separated numbers after a prefix; returns how many were read.
-int parse_numbers(std::string_view s, double* out, int max) {
-  std::string tmp(s);
-  const char* p = tmp.c_str();
-  int n = 0;
-  while (n < max) {
-    char* end = nullptr;
-    const double v = std::strtod(p, &end);
-    if (end == p) break;
-    out[n++] = v;
-    p = end;
-  }
-  return n;
-}
-
-/// Sensor samples -> CSV files of the run directory.
-class Recorder {
- public:
-  Recorder(machine::Journal& j, std::string load_cell_file, std::string accel_file, std::string commanded_file)
-      : j_(j),
-        load_file_(std::move(load_cell_file)),
-        accel_file_(std::move(accel_file)),
-        cmd_file_(std::move(commanded_file)) {}
-
-  void load_cell(double t, double feed, double force) {
-    auto& c = j_.csv(load_file_, "time (s),feed (mm/s),force (N)");
-    c.row(fmt::format("{:.6f},{:.5f},{:.5f}", t, feed, force));
-    ++load_;
-  }
-  void accel(double t, double ax, double ay, double az) {
-    auto& c = j_.csv(accel_file_, "#time,accel_x,accel_y,accel_z");
-    c.row(fmt::format("{:.6f},{:.2f},{:.2f},{:.2f}", t, ax, ay, az));
-    ++accel_;
-  }
-  void commanded(double t, double cx, double cy) {
-    auto& c = j_.csv(cmd_file_, "time (s),accel_x (mm/s^2),accel_y (mm/s^2)");
-    c.row(fmt::format("{:.6f},{:.2f},{:.2f}", t, cx, cy));
-  }
-  /// Handles a tunekit-sim data line; true if it was one.
-  bool line(std::string_view l) {
-    double v[6];
-    if (l.rfind("echo:TKA ", 0) == 0) {
-      const int n = parse_numbers(l.substr(9), v, 6);
-      if (n >= 4) accel(v[0], v[1], v[2], v[3]);
-      if (n == 6) commanded(v[0], v[4], v[5]);
-      return true;
-    }
-    if (l.rfind("echo:TKL ", 0) == 0) {
-      if (parse_numbers(l.substr(9), v, 3) == 3) load_cell(v[0], v[1], v[2]);
-      return true;
-    }
-    return false;
-  }
-  long load_samples() const { return load_; }
-  long accel_samples() const { return accel_; }
-  const std::string& load_file() const { return load_file_; }
-  const std::string& accel_file() const { return accel_file_; }
-  const std::string& commanded_file() const { return cmd_file_; }
-
- private:
-  machine::Journal& j_;
-  std::string load_file_, accel_file_, cmd_file_;
-  long load_ = 0, accel_ = 0;
-};
-
-class Session {
- public:
-  virtual ~Session() = default;
-  virtual firmware::FirmwareInfo identify() = 0;
-  virtual void send(const std::string& line) = 0;
-  /// `window_s`: how long the recording is expected to last (RepRapFirmware's M956 takes a
-  /// sample count, not a stop command).
-  virtual void record(const std::string& sensor, bool on, double window_s) = 0;
-  /// Whether this link can record `sensor` (checked before anything is sent: no heating or
-  /// homing for a protocol whose data cannot be recorded).
-  virtual bool can_record(const std::string& sensor) const = 0;
-  virtual void finish() = 0;
-  virtual void safe_state(const std::vector<std::string>& commands) = 0;
-  virtual nlohmann::json stats() const = 0;
-  firmware::Dialect dialect;
-  firmware::FirmwareInfo firmware;
-};
-
-class GcodeSession : public Session {
- public:
-  GcodeSession(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
-               const machine::LinkOptions& lo, const std::atomic<bool>* abort, SendGuard& guard, std::string http)
-      : t_(std::move(t)), link_(*t_, &j, lo), j_(j), rec_(rec), http_(std::move(http)) {
-    link_.guard = &guard;
-    link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
-    link_.on_batch = [&j] { j.flush(); };
-    link_.abort_flag = abort;
-  }
-  firmware::FirmwareInfo identify() override {
-    link_.reset_line_numbers();
-    firmware::FirmwareInfo f = firmware::parse_m115(link_.send("M115"));
-    // Marlin's M115 names no FT_MOTION capability: ask M493 (a bare M493 only reports; a build
-    // without FT_MOTION answers "Unknown command"). With fixed-time motion active the classic
-    // shaper and smooth linear advance are bypassed, so settings go to M493.
-    if (f.firmware == firmware::Firmware::marlin) {
-      const auto ft = firmware::parse_m493_report(link_.send("M493"));
-      f.ft_motion = ft.present;
-      f.ft_motion_active = ft.active;
-    }
-    return f;
-  }
-  void send(const std::string& line) override { link_.send(line); }
-  void record(const std::string& sensor, bool on, double window_s) override {
-    if (!firmware.sensor_stream() && rrf_file_accelerometer(sensor)) {
-      if (on) start_m956(window_s);
-      else fetch_m956();
-      return;
-    }
-    // tunekit-sim streams with M4100 whichever firmware it follows.
-    const std::string cmd = firmware.sensor_stream()
-                                ? firmware::Dialect(firmware::Firmware::marlin).sensor_stream(sensor, on)
-                                : dialect.sensor_stream(sensor, on);
-    if (cmd.empty() || !firmware.sensor_stream())
-      throw MachineError(
-          fmt::format("the firmware ({}) does not stream {} data over this link (it reports no "
-                      "Cap:TUNEKIT_SENSOR_STREAM); use Klipper's API socket (--port unix:PATH) or tunekit-sim",
-                      firmware.name.empty() ? "unidentified" : firmware.name, sensor),
-          t_->describe());
-    link_.send(cmd);
-  }
-  bool can_record(const std::string& sensor) const override {
-    return firmware.sensor_stream() || rrf_file_accelerometer(sensor);
-  }
-  void finish() override {}
-  void safe_state(const std::vector<std::string>& commands) override {
-    link_.send_best_effort(commands, std::chrono::milliseconds(300));
-  }
-  nlohmann::json stats() const override {
-    const auto& s = link_.stats();
-    nlohmann::json j{{"lines_sent", s.lines_sent},
-                     {"resends", s.resends},
-                     {"retries", s.retries},
-                     {"busy", s.busy},
-                     {"data_lines", s.data_lines}};
-    if (!m956_files_.empty()) j["rrf_accelerometer_files"] = m956_files_;
-    return j;
-  }
-
- private:
-  /// RepRapFirmware records its accelerometer into a file (M956); tunekit fetches it over the
-  /// board's web server (rrf_http.hpp), the only way RepRapFirmware offers to read a file.
-  bool rrf_file_accelerometer(const std::string& sensor) const {
-    return firmware.firmware == firmware::Firmware::reprapfirmware && sensor == "accelerometer" && !http_.empty();
-  }
-  void start_m956(double window_s) {
-    // Accelerometers.cpp: M955 P0 reports "... samples at <rate>Hz ..."; M956 takes a count.
-    const auto rate = machine::parse_m955_rate_hz(link_.send("M955 P0"));
-    if (!rate)
-      throw MachineError("RepRapFirmware reports no accelerometer (M955 P0): configure it with M955 first",
-                         t_->describe());
-    m956_rate_hz_ = *rate;
-    // The window as planned plus a second: RepRapFirmware cannot stop a run early.
-    const long samples = std::lround(std::ceil(*rate * (std::max(0.0, window_s) + 1.0)));
-    m956_name_ = fmt::format("tunekit_{}.csv", m956_files_.size() + 1);
-    m956_window_s_ = window_s + 1.0;
-    link_.send(fmt::format("M956 P0 S{} A0 F\"{}\"", samples, m956_name_));
-  }
-  void fetch_m956() {
-    link_.send("M400");
-    const auto addr = machine::parse_http_address(http_);
-    const std::string name = "0:/sys/accelerometer/" + m956_name_;
-    std::string bytes;
-    // The run ends after its sample count, in the board's time: poll, waiting G4 P250 between
-    // reads (on a real board 250 ms; the simulator's clock runs with the dwell).
-    const int polls = static_cast<int>(std::ceil(m956_window_s_ / 0.25)) + 40;
-    for (int i = 0;; ++i) {
-      bytes = machine::rrf_download(addr, name, std::chrono::milliseconds(5000));
-      if (machine::rrf_accelerometer_file_complete(bytes)) break;
-      if (i >= polls)
-        throw MachineError(fmt::format("the accelerometer file {} did not finish within {:.1f} s", name, polls * 0.25),
-                           addr.text());
-      link_.send("G4 P250");
-    }
-    const std::string local = "rrf_" + m956_name_;
-    core::write_file_atomic(j_.path(local), bytes);
-    m956_files_.push_back(local);
-    // The file as RepRapFirmware wrote it, read by the RRF reader (g -> mm/s^2, time from the rate).
-    ident::AccelInputOptions opts;
-    const auto rec = ident::load_rrf_accelerometer_csv(j_.path(local), bytes, opts);
-    const double dt = rec.sampling.sample_rate_hz > 0 ? 1.0 / rec.sampling.sample_rate_hz : 1.0 / m956_rate_hz_;
-    const std::size_t n = rec.channels.empty() ? 0 : rec.channels.front().size();
-    auto ch = [&](std::size_t c, std::size_t i) { return c < rec.channels.size() ? rec.channels[c][i] : 0.0; };
-    for (std::size_t i = 0; i < n; ++i) rec_.accel(static_cast<double>(i) * dt, ch(0, i), ch(1, i), ch(2, i));
-  }
-  std::unique_ptr<machine::Transport> t_;
-  machine::GcodeLink link_;
-  machine::Journal& j_;
-  Recorder& rec_;
-  std::string http_;
-  std::string m956_name_;
-  double m956_rate_hz_ = 0, m956_window_s_ = 0;
-  std::vector<std::string> m956_files_;
-};
-
-class KlipperSession : public Session {
- public:
-  KlipperSession(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
-                 const machine::LinkOptions& lo, const machine::Sensors& sensors, SendGuard& guard)
-      : client_(std::move(t), &j), j_(j), rec_(rec), timeout_(lo.timeout), sensors_(sensors), guard_(guard) {
-    client_.on_message = [this](const nlohmann::json& m) { on_message(m); };
-    client_.on_batch = [&j] { j.flush(); };
-  }
-  firmware::FirmwareInfo identify() override {
-    const auto r = client_.call("info", {{"client_info", {{"name", "tunekit"}}}}, timeout_);
-    firmware::FirmwareInfo f;
-    f.firmware = firmware::Firmware::klipper;
-    f.name = "Klipper";
-    f.version = r.value("software_version", "");
-    return f;
-  }
-  void send(const std::string& line) override {
-    if (const auto why = guard_.refuse(line))
-      throw MachineError(fmt::format("refused to send '{}': {} (nothing of it was sent)", line, *why),
-                         client_.transport().describe());
-    pending_.push_back(line);
-    if (pending_.size() >= 50) flush_script();
-  }
-  void record(const std::string& sensor, bool on, double /*window_s*/) override {
-    flush_script();
-    if (sensor == "accelerometer") {
-      if (on && !accel_subscribed_) {
-        const auto ep =
-            machine::klipper_accelerometer_endpoint(sensors_.accelerometer_chip, sensors_.accelerometer_name);
-        client_.call(ep.method, ep.params({{"tunekit", "accel"}}), timeout_);
-        accel_subscribed_ = true;
-      }
-      if (!on) client_.pump(kBatchWait);  // the last batch of samples
-      accel_on_ = on;
-      return;
-    }
-    if (sensor == "load_cell") {
-      if (on && !load_subscribed_) {
-        // The force stream, and the extruder's commanded motion on the same print-time clock:
-        // the feed column is the trapq's extruder velocity at each force sample's time.
-        const auto lc = machine::klipper_load_cell_endpoint(sensors_.load_cell_name);
-        client_.call(lc.method, lc.params({{"tunekit", "load_cell"}}), timeout_);
-        const auto tq = machine::klipper_trapq_endpoint("extruder");
-        client_.call(tq.method, tq.params({{"tunekit", "trapq_extruder"}}), timeout_);
-        load_subscribed_ = true;
-      }
-      if (!on) {
-        client_.pump(kBatchWait);
-        write_load_cell();
-      }
-      load_on_ = on;
-      return;
-    }
-    throw MachineError(fmt::format("Klipper's API server streams no {} data", sensor), client_.transport().describe());
-  }
-  void finish() override {
-    flush_script();
-    if (load_on_) {
-      client_.pump(kBatchWait);
-      write_load_cell();
-    }
-  }
-  bool can_record(const std::string& sensor) const override {
-    return sensor == "accelerometer" || sensor == "load_cell";
-  }
-  void safe_state(const std::vector<std::string>& commands) override {
-    try {
-      std::string script;
-      for (const auto& c : commands) script += (script.empty() ? "" : "\n") + c;
-      client_.call("gcode/script", {{"script", script}}, std::chrono::milliseconds(500));
-    } catch (const std::exception&) {
-    }
-  }
-  nlohmann::json stats() const override {
-    return {{"api", "klipper"}, {"trapq_moves", extruder_.size()}, {"load_cell_raw_samples", load_raw_}};
-  }
-
- private:
-  // Klipper sends sensor batches every 0.5 s (bulk_sensor.py, BATCH_INTERVAL): wait a little longer.
-  static constexpr std::chrono::milliseconds kBatchWait{600};
-
-  void on_message(const nlohmann::json& m) {
-    if (!m.contains("params")) return;
-    const std::string tag = m.value("tunekit", "");
-    const auto& p = m["params"];
-    if (tag == "accel" && accel_on_) {
-      for (const auto& s : machine::parse_accel_rows(p)) rec_.accel(s.time_s, s.x, s.y, s.z);
-    } else if (tag == "load_cell" && load_on_) {
-      // Kept as received (nothing is lost if the run fails before the feed is known).
-      auto& raw = j_.csv("load_cell_raw.csv", "time (s),force (N)");
-      for (const auto& s : machine::parse_load_cell_rows(p, sensors_.load_cell_name)) {
-        raw.row(fmt::format("{:.6f},{:.5f}", s.time_s, s.force_N));
-        load_.push_back(s);
-        ++load_raw_;
-      }
-    } else if (tag == "trapq_extruder") {
-      extruder_.add(p);
-    }
-  }
-  void write_load_cell() {
-    for (const auto& s : load_) rec_.load_cell(s.time_s, extruder_.velocity_x_at(s.time_s), s.force_N);
-    load_.clear();
-  }
-  void flush_script() {
-    if (pending_.empty()) return;
-    std::string script;
-    for (const auto& c : pending_) script += (script.empty() ? "" : "\n") + c;
-    pending_.clear();
-    client_.call("gcode/script", {{"script", script}}, timeout_);
-  }
-  machine::KlipperApiClient client_;
-  machine::Journal& j_;
-  Recorder& rec_;
-  std::chrono::milliseconds timeout_;
-  machine::Sensors sensors_;
-  SendGuard& guard_;
-  std::vector<std::string> pending_;
-  std::vector<machine::KlipperLoadCellSample> load_;
-  machine::TrapqTimeline extruder_;
-  long load_raw_ = 0;
-  bool accel_subscribed_ = false, accel_on_ = false, load_subscribed_ = false, load_on_ = false;
-};
 
 std::string unique_dir(const std::string& base) {
   std::string d = base;
@@ -378,6 +61,40 @@ std::string join_lines(const std::vector<std::string>& lines) {
   std::string s;
   for (const auto& l : lines) s += l + "\n";
   return s;
+}
+
+/// After the firmware is identified, before anything but the identification was sent: a profile
+/// naming another firmware is refused (RunOptions::strict_firmware) or overridden with a warning;
+/// the protocol is rebuilt for the firmware found, within the stricter of the profile's and the
+/// firmware's limits, and checked again.
+void adapt_to_firmware(const RunOptions& o, bool sim, const machine::MachineProfile& profile, Session& session,
+                       const std::string& port, machine::Journal& journal, nlohmann::json& summary, RunResult& res,
+                       const std::function<void(const std::string&)>& progress) {
+  const auto found = session.dialect.firmware();
+  const auto named = firmware::firmware_from_name(profile.firmware);
+  nlohmann::json warnings = nlohmann::json::array();
+  if (!sim && !profile.firmware.empty() && named != found && session.firmware.firmware != firmware::Firmware::unknown) {
+    const std::string what =
+        fmt::format("the profile {} names the firmware '{}' but the machine on {} is {} {}", profile.name,
+                    profile.firmware, port, session.firmware.name, session.firmware.version);
+    if (o.strict_firmware)
+      throw InputError(what + ": correct [machine] firmware in the profile (or leave it empty to identify it)");
+    warnings.push_back(what + fmt::format("; the protocol is built for {}, the firmware found", to_string(found)));
+  }
+  std::vector<std::string> notes;
+  const machine::MachineProfile run_profile = session.with_firmware_limits(profile, notes);
+  for (const auto& n : notes) warnings.push_back("firmware setting: " + n);
+  for (const auto& w : warnings) {
+    progress("warning: " + w.get<std::string>());
+    journal.event("warning", {{"message", w}});
+  }
+  if (!warnings.empty()) summary["warnings"] = warnings;
+  res.experiment = build_experiment(o.protocol, o.params, o.axis, run_profile, session.dialect, o.limits);
+  res.gcode = res.experiment.gcode;
+  require_within_limits(res.gcode, run_profile, res.experiment.sensors, o.limits);
+  summary["experiment"] = res.experiment.to_json();
+  summary["dialect"] = to_string(found);
+  core::write_file_atomic(journal.path("protocol.gcode"), join_lines(res.gcode));
 }
 
 }  // namespace
@@ -412,7 +129,6 @@ RunResult run_experiment(const RunOptions& o) {
   Recorder rec(
       journal, o.protocol == "liquefier-step" || o.protocol == "liquefier-flow-sweep" ? "step.csv" : "feed_force.csv",
       fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag));
-  core::write_file_atomic(journal.path("protocol.gcode"), join_lines(res.gcode));
   res.files["journal"] = journal.path("journal.jsonl");
   res.files["gcode"] = journal.path("protocol.gcode");
   res.files["summary"] = journal.path("run.json");
@@ -474,11 +190,10 @@ RunResult run_experiment(const RunOptions& o) {
     progress(fmt::format("connecting to {}", port));
     const bool api = port.rfind("unix:", 0) == 0;
     auto transport = machine::open_transport(port, o.baud);
-    if (api)
-      session = std::make_unique<KlipperSession>(std::move(transport), journal, rec, o.link, profile.sensors, guard);
+    if (api) session = detail::make_klipper_session(std::move(transport), journal, rec, o.link, profile.sensors, guard);
     else
-      session = std::make_unique<GcodeSession>(std::move(transport), journal, rec, o.link, abort_flag, guard,
-                                               server ? server->http_url() : profile.http_address);
+      session = detail::make_gcode_session(std::move(transport), journal, rec, o.link, abort_flag, guard,
+                                           server ? server->http_url() : profile.http_address);
     session->firmware = session->identify();
     session->dialect = firmware::Dialect(
         session->firmware.firmware == firmware::Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
@@ -492,6 +207,7 @@ RunResult run_experiment(const RunOptions& o) {
       res.ft_motion = session->firmware.ft_motion_active ? "active" : "built, inactive";
       summary["firmware"]["ft_motion"] = res.ft_motion;
     }
+    adapt_to_firmware(o, sim, profile, *session, port, journal, summary, res, progress);
     // Fail before heating and homing when the link cannot record what the protocol needs.
     for (const auto& sensor : res.experiment.sensors)
       if (!session->can_record(sensor)) {

@@ -28,11 +28,27 @@
 //   filament position in x, direction (1, pressure-advance flag, 0) and a signed velocity
 //   (kinematics/extruder.py process_move).
 // - Times are print time: the fake adds a print-time origin to the simulator's clock.
+// - `info` answers as webhooks.py _handle_info_request (v0.13.0-730): state, state_message,
+//   hostname, klipper_path, python_path, process_id, user_id, group_id and the start arguments
+//   log_file, config_file, software_version, cpu_info.
+// - `objects/query` {"objects": {name: [fields] or null}} answers {"eventtime", "status": {name:
+//   {...}}} (webhooks.py QueryStatusHelper; an object without status answers {}): configfile's
+//   "settings" (every option a module read, defaults included, lower-case section names),
+//   toolhead (toolhead.py get_status: max_velocity, max_accel, minimum_cruise_ratio,
+//   square_corner_velocity, live) and extruder (extruder.py: pressure_advance, smooth_time).
+// - `gcode/script` runs each line; a command no module registered is not run: Klipper answers
+//   it with the G-code response 'Unknown command:"M201"' (gcode.py cmd_default, respond_info) and
+//   the script goes on, so the request still succeeds. The commands known are those the
+//   modules of a printer with this fake's sections register (gcode.py, toolhead.py,
+//   gcode_move.py, homing.py, kinematics/extruder.py, heaters.py, heater_bed.py, fan.py,
+//   stepper_enable.py, idle_timeout.py, input_shaper.py, resonance_tester.py, adxl345.py,
+//   load_cell.py).
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -60,12 +76,23 @@ struct FakeKlipperConfig {
   long tare_counts = 183452;       ///< what LOAD_CELL_TARE stored
   bool load_cell_calibrated = true;
   double print_time_origin_s = 3292.4;  ///< print time when the simulator's clock reads 0
+  // The configuration in force ([printer], [extruder], [input_shaper]); the extrude-only limits
+  // and minimum_cruise_ratio are the simulator's (SimConfig), so both agree.
+  double max_velocity = 300;                    ///< [printer] max_velocity, mm/s
+  double max_accel = 3000;                      ///< [printer] max_accel, mm/s^2
+  double square_corner_velocity = 5;            ///< [printer] square_corner_velocity, mm/s
+  double max_extrude_only_velocity = 50;        ///< [extruder] max_extrude_only_velocity, mm/s
+  double pressure_advance = 0.04;               ///< [extruder] pressure_advance, s
+  double smooth_time = 0.04;                    ///< [extruder] pressure_advance_smooth_time, s
+  double shaper_freq_x = 0, shaper_freq_y = 0;  ///< [input_shaper]; 0: no section
+  std::string shaper_type = "mzv";
+  std::string state = "ready";  ///< what info reports
 };
 
 class FakeKlipper {
  public:
   FakeKlipper(const std::string& path, tunekit::sim::SimConfig config, FakeKlipperConfig fake = {})
-      : path_(path), sim_(std::move(config)), fake_(std::move(fake)) {
+      : path_(path), sim_(klipper_rules(std::move(config))), fake_(std::move(fake)) {
     // Endpoints as Klipper registers them at start-up, from the config sections.
     for (const auto& section : fake_.accelerometers) {
       std::string module = section.substr(0, section.find(' '));
@@ -108,6 +135,13 @@ class FakeKlipper {
     return requests_;
   }
   long samples_sent() const { return sent_; }
+  /// Commands Klipper would have answered 'Unknown command:"..."' (not run), in order.
+  std::vector<std::string> unknown_commands() {
+    std::lock_guard<std::mutex> l(mu_);
+    return unknown_;
+  }
+  /// The simulator's clock (s) when the last script finished.
+  double machine_time_s() const { return machine_time_; }
   long load_cell_samples_sent() const { return load_sent_; }
 
  private:
@@ -116,6 +150,113 @@ class FakeKlipper {
     return sp == std::string::npos ? s : s.substr(sp + 1);
   }
   static double round6(double v) { return std::round(v * 1e6) / 1e6; }
+  // A Klipper peer plans moves as Klipper does: the simulator follows Klipper's planner rules.
+  static tunekit::sim::SimConfig klipper_rules(tunekit::sim::SimConfig c) {
+    c.firmware = "klipper";
+    return c;
+  }
+
+  // Commands registered by the modules of the fake's printer (see the header comment).
+  bool known_command(const std::string& cmd) const {
+    static const std::set<std::string> base{"M110",
+                                            "M112",
+                                            "M115",
+                                            "RESTART",
+                                            "FIRMWARE_RESTART",
+                                            "ECHO",
+                                            "STATUS",
+                                            "HELP",  // gcode.py
+                                            "G4",
+                                            "M400",
+                                            "SET_VELOCITY_LIMIT",
+                                            "M204",  // toolhead.py
+                                            "G0",
+                                            "G1",
+                                            "G20",
+                                            "G21",
+                                            "M82",
+                                            "M83",
+                                            "G90",
+                                            "G91",
+                                            "G92",
+                                            "M220",
+                                            "M221",
+                                            "M114",
+                                            "GET_POSITION",
+                                            "SET_GCODE_OFFSET",
+                                            "SAVE_GCODE_STATE",
+                                            "RESTORE_GCODE_STATE",  // gcode_move.py
+                                            "G28",                  // homing.py
+                                            "M104",
+                                            "M109",
+                                            "SET_PRESSURE_ADVANCE",
+                                            "SET_EXTRUDER_ROTATION_DISTANCE",
+                                            "SYNC_EXTRUDER_MOTION",
+                                            "ACTIVATE_EXTRUDER",  // kinematics/extruder.py
+                                            "SET_HEATER_TEMPERATURE",
+                                            "TURN_OFF_HEATERS",
+                                            "M105",
+                                            "TEMPERATURE_WAIT",  // heaters.py
+                                            "M140",
+                                            "M190",
+                                            "M106",
+                                            "M107",
+                                            "M18",
+                                            "M84",
+                                            "SET_STEPPER_ENABLE",
+                                            "SET_IDLE_TIMEOUT",
+                                            "SET_INPUT_SHAPER",
+                                            "MEASURE_AXES_NOISE",
+                                            "TEST_RESONANCES",
+                                            "SHAPER_CALIBRATE",
+                                            "ACCELEROMETER_MEASURE",
+                                            "ACCELEROMETER_QUERY"};
+    if (base.count(cmd) != 0) return true;
+    return !fake_.load_cell.empty() && (cmd == "LOAD_CELL_TARE" || cmd == "LOAD_CELL_CALIBRATE" ||
+                                        cmd == "LOAD_CELL_READ" || cmd == "LOAD_CELL_DIAGNOSTIC");
+  }
+  // The command word as gcode.py reads it: the first word, upper case (an extended command's
+  // name ends at the first space or '=').
+  static std::string command_word(const std::string& line) {
+    std::string l = line.substr(0, line.find(';'));
+    const auto b = l.find_first_not_of(" \t");
+    if (b == std::string::npos) return "";
+    l = l.substr(b);
+    std::string w = l.substr(0, l.find_first_of(" \t"));
+    for (auto& c : w) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return w;
+  }
+  nlohmann::json status_of(const std::string& name) const {
+    const auto& sc = sim_.config();
+    if (name == "configfile") {
+      nlohmann::json settings{{"printer",
+                               {{"kinematics", "cartesian"},
+                                {"max_velocity", fake_.max_velocity},
+                                {"max_accel", fake_.max_accel},
+                                {"minimum_cruise_ratio", sc.minimum_cruise_ratio},
+                                {"square_corner_velocity", fake_.square_corner_velocity}}},
+                              {"extruder",
+                               {{"max_extrude_only_velocity", fake_.max_extrude_only_velocity},
+                                {"max_extrude_only_accel", sc.max_extrude_only_accel_mm_s2},
+                                {"max_extrude_only_distance", sc.max_extrude_only_distance_mm},
+                                {"pressure_advance", fake_.pressure_advance},
+                                {"pressure_advance_smooth_time", fake_.smooth_time}}}};
+      if (fake_.shaper_freq_x > 0 || fake_.shaper_freq_y > 0)
+        settings["input_shaper"] = {{"shaper_type", fake_.shaper_type},
+                                    {"shaper_freq_x", fake_.shaper_freq_x},
+                                    {"shaper_freq_y", fake_.shaper_freq_y},
+                                    {"damping_ratio_x", 0.1},
+                                    {"damping_ratio_y", 0.1}};
+      return {{"settings", settings}};
+    }
+    if (name == "toolhead")
+      return {{"max_velocity", fake_.max_velocity},
+              {"max_accel", fake_.max_accel},
+              {"minimum_cruise_ratio", sc.minimum_cruise_ratio},
+              {"square_corner_velocity", fake_.square_corner_velocity}};
+    if (name == "extruder") return {{"pressure_advance", fake_.pressure_advance}, {"smooth_time", fake_.smooth_time}};
+    return nlohmann::json::object();
+  }
 
   // One executed move -> trapq entries: the profile cut into 1 ms pieces of constant
   // acceleration, pieces of equal acceleration merged (cruise and constant-acceleration phases
@@ -216,7 +357,41 @@ class FakeKlipper {
           send({{"id", id}, {"error", {{"error", "WebRequestError"}, {"message", message}}}});
         };
         if (method == "info") {
-          send({{"id", id}, {"result", {{"state", "ready"}, {"software_version", "v0.13.0-fake"}}}});
+          send({{"id", id},
+                {"result",
+                 {{"state", fake_.state},
+                  {"state_message", fake_.state == "ready" ? "Printer is ready" : "Printer is not ready"},
+                  {"hostname", "fake-klipper"},
+                  {"klipper_path", "/home/pi/klipper"},
+                  {"python_path", "/home/pi/klippy-env/bin/python"},
+                  {"process_id", 4242},
+                  {"user_id", 1000},
+                  {"group_id", 1000},
+                  {"log_file", "/tmp/klippy.log"},
+                  {"config_file", "/home/pi/printer_data/config/printer.cfg"},
+                  {"software_version", "v0.13.0-730-fake"},
+                  {"cpu_info", "4 core ARMv7 Processor rev 4 (v7l)"}}}});
+          continue;
+        }
+        if (method == "objects/query") {
+          const auto objects = params.value("objects", nlohmann::json::object());
+          if (!objects.is_object()) {
+            error("Invalid argument");
+            continue;
+          }
+          nlohmann::json status = nlohmann::json::object();
+          for (const auto& [name, fields] : objects.items()) {
+            const nlohmann::json all = status_of(name);
+            if (fields.is_null()) {
+              status[name] = all;
+              continue;
+            }
+            status[name] = nlohmann::json::object();
+            for (const auto& f : fields)
+              if (f.is_string() && all.contains(f.get<std::string>()))
+                status[name][f.get<std::string>()] = all[f.get<std::string>()];
+          }
+          send({{"id", id}, {"result", {{"eventtime", 1234.5}, {"status", status}}}});
           continue;
         }
         if (method == "gcode/script") {
@@ -228,8 +403,17 @@ class FakeKlipper {
           std::stringstream ss(script);
           std::string line;
           const tunekit::sim::Simulator::Emit ignore = [](std::string_view) {};
-          while (std::getline(ss, line)) sim_.handle_line(line, ignore);
+          while (std::getline(ss, line)) {
+            const std::string cmd = command_word(line);
+            if (!cmd.empty() && !known_command(cmd)) {
+              std::lock_guard<std::mutex> l(mu_);
+              unknown_.push_back(cmd);  // gcode.py: respond_info('Unknown command:"%s"'); not run
+              continue;
+            }
+            sim_.handle_line(line, ignore);
+          }
           sim_.flush(ignore);
+          machine_time_ = sim_.time_s();
           sent_ += flush_rows(accel_rows, accel_templates, true);
           load_sent_ += flush_rows(load_rows, load_templates, true);
           for (auto& [name, rows] : trapq_) flush_rows(rows, trapq_templates[name], false);
@@ -279,6 +463,8 @@ class FakeKlipper {
   std::atomic<long> sent_{0}, load_sent_{0};
   std::mutex mu_;
   std::vector<std::string> scripts_;
+  std::vector<std::string> unknown_;
+  std::atomic<double> machine_time_{0};
   std::vector<nlohmann::json> requests_;
   std::thread thread_;
 };

@@ -135,12 +135,12 @@ TEST_CASE("klipper-compatible shaper on Zippy's TEST_RESONANCES files gives cali
   check_file("resonances_y_20220317_143943.csv", "y");
 }
 
-TEST_CASE("klipper-compatible shaper on Kymeron's TEST_RESONANCES files gives calibrate_shaper.py's answer",
+TEST_CASE("klipper-compatible shaper on a Neptune 4 Pro's spectra gives calibrate_shaper.py's answer",
           "[resonance][shaper][klipper]") {
-  // A second printer: 2hump_ei @ 110.0 Hz on x, mzv @ 82.4 Hz on y (3hump_ei at the 149.8 Hz end
-  // of Klipper's shaper range).
-  check_file("resonances_x_20250208_212836.csv", "x");
-  check_file("resonances_y_20250208_213102.csv", "y");
+  // A second printer (spectra Klipper computed from the printer's licensed raw sweeps, as its
+  // TEST_RESONANCES writes them): ei @ 89.4 Hz on x, ei @ 92.2 Hz on y.
+  check_file("resonances_x_20250509_131744.csv", "x");
+  check_file("resonances_y_20250509_125633.csv", "y");
 }
 
 TEST_CASE("klipper-compatible shaper with a smoothing limit stops each scan where Klipper stops it",
@@ -159,7 +159,7 @@ TEST_CASE("a spectrum file tunekit writes in Klipper's layout reads back to the 
           "[resonance][shaper][klipper]") {
   const auto ref = klipper_reference();
   const std::string dir = scratch_dir("klipper_csv_roundtrip");
-  for (const std::string name : {"resonances_x_20220317_143228.csv", "resonances_x_20250208_212836.csv"}) {
+  for (const std::string name : {"resonances_x_20220317_143228.csv", "resonances_x_20250509_131744.csv"}) {
     INFO(name);
     const std::string out = dir + "/calibration_data_x_" + name;
     const auto w =
@@ -191,7 +191,7 @@ TEST_CASE("a spectrum file tunekit writes in Klipper's layout reads back to the 
 TEST_CASE("several recordings of one axis count separately and round-trip through Klipper's several-dataset layout",
           "[resonance][shaper][klipper]") {
   const std::string a = dataset("klipper_spectra/resonances_x_20220317_143228.csv");
-  const std::string b = dataset("klipper_spectra/resonances_x_20250208_212836.csv");
+  const std::string b = dataset("klipper_spectra/resonances_x_20250509_131744.csv");
   const std::string out = scratch_dir("klipper_csv_multi") + "/two_x.csv";
   const auto w = run_cli({"shaper", a, b, "--klipper-compatible", "--klipper-csv", out, "--json"});
   INFO(w.err);
@@ -200,7 +200,7 @@ TEST_CASE("several recordings of one axis count separately and round-trip throug
   CHECK(both["selection"]["datasets"] == 2);
   // Klipper's calibrate_shaper.py given both files: vibrations are the worst over the two.
   check_against_klipper(both,
-                        klipper_reference().at("resonances_x_20220317_143228.csv+resonances_x_20250208_212836.csv"));
+                        klipper_reference().at("resonances_x_20220317_143228.csv+resonances_x_20250509_131744.csv"));
   const std::string text = read_text(out);
   // One column per recording, named as given (Klipper names them by the file name it was given).
   CHECK(text.rfind("freq," + a + "," + b + ",shapers:", 0) == 0);
@@ -226,12 +226,12 @@ TEST_CASE("several recordings of one axis count separately and round-trip throug
 TEST_CASE("a normalized file and a measured one of the same axis combine as in calibrate_shaper.py",
           "[resonance][shaper][klipper]") {
   // calibration_data layout (normalized, with shaper columns) written from Zippy's x file, plus
-  // Kymeron's measured x file: Klipper normalizes the second only, then scores both.
+  // the Neptune's measured x file: Klipper normalizes the second only, then scores both.
   const std::string written = scratch_dir("klipper_csv_mixed") + "/calibration_data_x_zippy.csv";
   const auto w = run_cli({"shaper", dataset("klipper_spectra/resonances_x_20220317_143228.csv"), "--klipper-compatible",
                           "--klipper-csv", written});
   REQUIRE(w.code == 0);
-  const auto r = run_cli({"shaper", written, dataset("klipper_spectra/resonances_x_20250208_212836.csv"),
+  const auto r = run_cli({"shaper", written, dataset("klipper_spectra/resonances_x_20250509_131744.csv"),
                           "--klipper-compatible", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
@@ -240,7 +240,7 @@ TEST_CASE("a normalized file and a measured one of the same axis combine as in c
   const auto norm = a["selection"]["psd_normalization"].get<std::string>();
   CHECK(norm.find("applied by tunekit to the measured spectra") != std::string::npos);
   CHECK(norm.find("already normalized") != std::string::npos);
-  check_against_klipper(a, klipper_reference().at("resonances_x_20220317_143228.csv+resonances_x_20250208_212836.csv"));
+  check_against_klipper(a, klipper_reference().at("resonances_x_20220317_143228.csv+resonances_x_20250509_131744.csv"));
 }
 
 TEST_CASE("tunekit's own mode on a measured spectrum file states the normalization it applied",

@@ -70,6 +70,9 @@ struct FirmwareState {
   double retract_accel_mm_s2 = 3000;  ///< Marlin M204 R (moves without X/Y/Z steps), mm/s^2
   double max_accel_e_mm_s2 = 3000;    ///< RRF M201 E, mm/s^2
   double jerk_xy_mm_s = 15;           ///< RRF M566 X/Y (instantaneous speed change), mm/s
+  /// Klipper: the acceleration in force (toolhead max_accel) when the machine was identified,
+  /// mm/s^2, restored after a test; 0 when not known (then [print] max_accel_mm_s2 is restored).
+  double accel_in_force_mm_s2 = 0;
 };
 
 /// True for the accelerometer chips Klipper's API server streams (see klipper_sensors.hpp).

@@ -12,6 +12,11 @@
 // with `port`: a serial device, a pseudo-terminal (Klipper's /tmp/printer), or
 // "unix:/tmp/klippy_uds" for Klipper's API server.
 //
+// Before the protocol is built for the machine, the firmware on the link is identified (M115, or
+// Klipper's API server: info and the configuration in force): the protocol is built for that
+// firmware, within the stricter of the profile's and the firmware's limits (a dry run uses the
+// profile's firmware).
+//
 // Failures: a limit violation or bad parameter is an InputError (exit 2) before anything is
 // opened; a machine/transport failure is a MachineError (exit 3) thrown after the journal has
 // been flushed, safe-state commands sent (best effort) and run.json written with
@@ -60,6 +65,10 @@ struct RunOptions {
   machine::LinkOptions link;  ///< timeouts and retries
   ProtocolLimits limits;      ///< caps on the protocol's machine time, lines and bytes
   bool dry_run = false;       ///< build and check only; RunResult::gcode is filled
+  /// A profile whose [machine] firmware differs from the firmware the machine identifies as is
+  /// refused (InputError naming both) when set; otherwise the protocol is built for the firmware
+  /// found and the difference is reported as a warning (run.json "warnings").
+  bool strict_firmware = false;
   /// Set to stop the run safely; default: set by SIGINT, SIGTERM or SIGHUP (stop_signals.hpp).
   const std::atomic<bool>* abort_flag = nullptr;
   std::function<void(const std::string&)> progress;  ///< human progress messages

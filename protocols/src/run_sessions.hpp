@@ -1,0 +1,111 @@
+#pragma once
+// The runner's machine sessions (internal to the protocols library): what records the sensor
+// samples into the run directory (Recorder), and one session per kind of link, G-code over a
+// serial line or pseudo-terminal (Marlin, Prusa, RepRapFirmware, tunekit-sim) or Klipper's API
+// server, each identifying the firmware before anything else is sent.
+#include <atomic>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "tunekit/firmware/dialect.hpp"
+#include "tunekit/machine/gcode_link.hpp"
+#include "tunekit/machine/journal.hpp"
+#include "tunekit/machine/machine_profile.hpp"
+#include "tunekit/machine/transport.hpp"
+
+namespace tunekit::protocols {
+class SendGuard;
+}  // namespace tunekit::protocols
+
+namespace tunekit::protocols::detail {
+
+/// Parses whitespace-separated numbers; returns how many were read.
+int parse_numbers(std::string_view s, double* out, int max);
+
+/// Sensor samples -> CSV files of the run directory.
+class Recorder {
+ public:
+  Recorder(machine::Journal& j, std::string load_cell_file, std::string accel_file, std::string commanded_file)
+      : j_(j),
+        load_file_(std::move(load_cell_file)),
+        accel_file_(std::move(accel_file)),
+        cmd_file_(std::move(commanded_file)) {}
+
+  void load_cell(double t, double feed, double force) {
+    auto& c = j_.csv(load_file_, "time (s),feed (mm/s),force (N)");
+    c.row(fmt::format("{:.6f},{:.5f},{:.5f}", t, feed, force));
+    ++load_;
+  }
+  void accel(double t, double ax, double ay, double az) {
+    auto& c = j_.csv(accel_file_, "#time,accel_x,accel_y,accel_z");
+    c.row(fmt::format("{:.6f},{:.2f},{:.2f},{:.2f}", t, ax, ay, az));
+    ++accel_;
+  }
+  void commanded(double t, double cx, double cy) {
+    auto& c = j_.csv(cmd_file_, "time (s),accel_x (mm/s^2),accel_y (mm/s^2)");
+    c.row(fmt::format("{:.6f},{:.2f},{:.2f}", t, cx, cy));
+  }
+  /// Handles a tunekit-sim data line; true if it was one.
+  bool line(std::string_view l) {
+    double v[6];
+    if (l.rfind("echo:TKA ", 0) == 0) {
+      const int n = parse_numbers(l.substr(9), v, 6);
+      if (n >= 4) accel(v[0], v[1], v[2], v[3]);
+      if (n == 6) commanded(v[0], v[4], v[5]);
+      return true;
+    }
+    if (l.rfind("echo:TKL ", 0) == 0) {
+      if (parse_numbers(l.substr(9), v, 3) == 3) load_cell(v[0], v[1], v[2]);
+      return true;
+    }
+    return false;
+  }
+  long load_samples() const { return load_; }
+  long accel_samples() const { return accel_; }
+  const std::string& load_file() const { return load_file_; }
+  const std::string& accel_file() const { return accel_file_; }
+  const std::string& commanded_file() const { return cmd_file_; }
+
+ private:
+  machine::Journal& j_;
+  std::string load_file_, accel_file_, cmd_file_;
+  long load_ = 0, accel_ = 0;
+};
+
+class Session {
+ public:
+  virtual ~Session() = default;
+  virtual firmware::FirmwareInfo identify() = 0;
+  virtual void send(const std::string& line) = 0;
+  /// `window_s`: how long the recording is expected to last (RepRapFirmware's M956 takes a
+  /// sample count, not a stop command).
+  virtual void record(const std::string& sensor, bool on, double window_s) = 0;
+  /// Whether this link can record `sensor` (checked before anything is sent: no heating or
+  /// homing for a protocol whose data cannot be recorded).
+  virtual bool can_record(const std::string& sensor) const = 0;
+  virtual void finish() = 0;
+  virtual void safe_state(const std::vector<std::string>& commands) = 0;
+  virtual nlohmann::json stats() const = 0;
+  /// The profile with the stricter of its own and the firmware's reported limits, and the
+  /// firmware's settings in force as what a test restores; each change is noted.
+  virtual machine::MachineProfile with_firmware_limits(const machine::MachineProfile& p,
+                                                       std::vector<std::string>& /*notes*/) const {
+    return p;
+  }
+  firmware::Dialect dialect;
+  firmware::FirmwareInfo firmware;
+};
+
+std::unique_ptr<Session> make_gcode_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
+                                            const machine::LinkOptions& lo, const std::atomic<bool>* abort,
+                                            SendGuard& guard, std::string http);
+std::unique_ptr<Session> make_klipper_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
+                                              const machine::LinkOptions& lo, const machine::Sensors& sensors,
+                                              SendGuard& guard);
+
+}  // namespace tunekit::protocols::detail
