@@ -109,6 +109,14 @@ void advance_quantities(QuantityList& out, const nlohmann::json* settings) {
   out.number("pa_smooth_s", qty_at(*settings, {"pa_smooth_s"}), nullptr, "s");
 }
 
+// tunekit belts: each belt's fundamental and, when the span was known, its tension.
+void belt_quantities(QuantityList& out, const nlohmann::json& r) {
+  out.number("belt_a.freq_hz", qty_at(r, {"freq_a_hz"}), qty_at(r, {"a", "freq_stderr_hz"}), "Hz");
+  out.number("belt_b.freq_hz", qty_at(r, {"freq_b_hz"}), qty_at(r, {"b", "freq_stderr_hz"}), "Hz");
+  out.param("belt_a.tension_n", qty_at(r, {"tension_a_n"}), "N");
+  out.param("belt_b.tension_n", qty_at(r, {"tension_b_n"}), "N");
+}
+
 // Any other fitted parameter: objects under a "params" key whose members have a value.
 void other_params(QuantityList& out, const std::string& command, const nlohmann::json& j, int depth) {
   if (depth > 6 || !j.is_object()) return;
@@ -140,6 +148,8 @@ std::vector<Quantity> extract_quantities(const std::string& command, const nlohm
     liquefier_freq(out, &r);
   } else if (command == "shaper" || command == "resonance") {
     axis_quantities(out, qty_at(r, {"axes"}));
+  } else if (command == "belts") {
+    belt_quantities(out, r);
   } else if (command == "export") {
     advance_quantities(out, qty_at(r, {"settings"}));
   } else {

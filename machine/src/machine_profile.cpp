@@ -150,6 +150,13 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
   p.print.layer_height_mm = r.positive(pr, "print", "layer_height_mm", false, 0.2);
   p.print.speed_mm_s = r.positive(pr, "print", "speed_mm_s", false, 60);
 
+  const auto& bt = r.section("belts", false);
+  p.belts.belt = r.text(bt, "belt", "");
+  p.belts.mass_g_m = r.positive(bt, "belts", "mass_g_m", false, 0);
+  p.belts.span_mm = r.positive(bt, "belts", "span_mm", false, 0);
+  p.belts.span_uncertainty_mm = r.positive(bt, "belts", "span_uncertainty_mm", false, 0);
+  p.belts.target_n = r.positive(bt, "belts", "target_n", false, 0);
+
   const auto& tt = r.section("temperature", true);
   p.temperature.hotend_max_c = r.positive(tt, "temperature", "hotend_max_c", true, 0);
   p.temperature.bed_max_c = r.positive(tt, "temperature", "bed_max_c", false, 100);

@@ -8,6 +8,8 @@
 //   <axis>.shaper, <axis>.shaper_freq_hz the input shaper chosen (type, Hz)
 //   <axis>.max_accel_mm_s2               the acceleration the chosen shaper allows
 //   pa_k_s, pa_smooth_s        pressure advance gain and smoothing time (s)
+//   belt_a.freq_hz, belt_b.freq_hz       a CoreXY machine's two belts' fundamentals (tunekit belts)
+//   belt_a.tension_n, belt_b.tension_n   their tensions in N, when the span was given
 //   <command>.<param>          any other fitted parameter with a value and standard error
 //                              (e.g. rheo.n), found under a "params" object
 

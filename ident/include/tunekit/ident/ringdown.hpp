@@ -4,18 +4,29 @@
 // 0.4-6.4 kHz) and hold one impact followed by the decay of a few lightly damped modes, so
 // they are analysed in the time domain instead of by Welch's method:
 //   1. the impact is the largest excursion; the decay window starts `settle_s` after it;
-//   2. the channel whose fundamental line stands highest over its spectrum's median is analysed
-//      (or the one named);
-//   3. strength gate: the RMS of the first 0.1 s of the decay over the noise floor (the RMS
+//   2. strength gate: the RMS of the first 0.1 s of the decay over the noise floor (the RMS
 //      before the impact, or of the record's last fifth when there is too little before it);
-//      a record below `min_strength` is refused (FitError, exit 1) with the measured ratio;
-//   4. harmonic-aware choice of the fundamental on a zero-padded spectrum of the window: when
-//      the strongest peak P has a clear peak at P/2 (or P/3), that peak is the fundamental and
-//      P its harmonic -- a plucked string's second harmonic is often the strongest line in one
-//      accelerometer channel;
-//   5. the fundamental, its harmonic and the other strong lines are fitted as damped
-//      sinusoids (matrix pencil start, least-squares refinement; fitting/damped_sinusoids.hpp),
-//      giving frequency and damping ratio with 95 % intervals.
+//      a record whose strongest channel is below `min_strength` is refused (FitError, exit 1);
+//   3. the fundamental, from all channels together: on the summed power spectrum of the
+//      window every clear line is a candidate fundamental f, and its harmonic series (lines
+//      at 2f, 3f, ... within `harmonic_tolerance`) is collected. The candidate whose series
+//      carries the most power wins, and a series with harmonics wins over a lone line unless
+//      the lone line is over five times stronger -- a plucked string rings with its
+//      harmonics; a line at f/2 that is clearly there makes the line at f its second
+//      harmonic, however strong, since f/2's series then holds f's. A pluck whose second
+//      harmonic is the strongest line in every channel therefore reads at its fundamental;
+//   4. the projection: the channels are combined as y = sum_c w_c x_c with the unit vector w
+//      in which the fundamental stands highest over the noise (each channel weighted by its
+//      noise, the principal direction of the fundamental's complex amplitudes). A named
+//      channel is used alone instead;
+//   5. the fundamental, its harmonics and the other strong lines of the projection are
+//      fitted as damped sinusoids, each with its own frequency, damping, amplitude and phase
+//      (matrix pencil start, least-squares refinement; fitting/damped_sinusoids.hpp), giving
+//      the fundamental's frequency and damping ratio with 95 % intervals;
+//   6. what is not a ring-down is refused (FitError, exit 1): no line standing above the
+//      spectrum's floor (a weak pluck, a bump), a line that does not decay (a fan's or a
+//      motor's steady tone), a decay faster than `max_zeta` (a tap on the frame, when the
+//      caller asks for a belt).
 // The intervals assume white residuals; the fit's whiteness p-value is reported with them.
 
 #include <string>
@@ -30,16 +41,22 @@ namespace tunekit::ident {
 
 struct RingdownOptions {
   double min_hz = 20.0;                ///< lowest fundamental considered, Hz
-  double max_hz = 0.0;                 ///< highest line considered, Hz; 0: 0.45 x the sample rate
+  double max_hz = 0.0;                 ///< highest line considered (harmonics too), Hz; 0: 0.45 x the sample rate
   double settle_s = 0.03;              ///< skipped after the impact (the impact and the first, large and
                                        ///< not yet free swings are not a free decay of fixed frequency)
   double max_window_s = 0.5;           ///< longest decay window fitted, s
   double min_strength = 3.0;           ///< refuse below this signal/noise RMS ratio
-  int max_components = 3;              ///< damped sinusoids fitted (fundamental first)
+  int max_components = 5;              ///< damped sinusoids fitted (fundamental and harmonics first)
+  int max_harmonic = 6;                ///< highest harmonic number looked for
   double max_line_shift = 0.05;        ///< a fitted line may move this fraction from its spectral start
-  double harmonic_tolerance = 0.03;    ///< relative tolerance of f = P/2, P/3
-  double min_subharmonic_ratio = 0.1;  ///< the peak at P/2 must reach this fraction of P's height
-  std::string channel;                 ///< analyse this channel; empty: the strongest
+  double harmonic_tolerance = 0.03;    ///< relative tolerance of a harmonic at k f
+  double min_line_ratio = 4.0;         ///< a line must stand this many times (amplitude) over the spectrum's median
+  double min_subharmonic_ratio = 0.1;  ///< a candidate fundamental must reach this fraction of the strongest
+                                       ///< line's amplitude
+  double max_decay_ratio = 0.8;        ///< refuse a fundamental whose fitted envelope keeps more than this fraction
+                                       ///< of its amplitude over the window (a steady tone)
+  double max_zeta = 0;                 ///< refuse a fundamental damped more than this (a tap); 0: no limit
+  std::string channel;                 ///< analyse this channel alone; empty: the best projection of all
 };
 
 struct RingdownChannel {
@@ -47,35 +64,49 @@ struct RingdownChannel {
   double signal_rms = 0;  ///< first 0.1 s of the decay window, mm/s^2
   double noise_rms = 0;   ///< noise floor, mm/s^2
   double strength = 0;    ///< signal_rms / noise_rms
+  double weight = 0;      ///< its weight in the analysed projection (the weights' squares sum to 1)
+};
+
+/// One line of the fundamental's harmonic series (k = 1 is the fundamental).
+struct RingdownHarmonic {
+  int k = 1;
+  double freq_hz = 0;        ///< fitted natural frequency when fitted, else the spectral line, Hz
+  double rel_amplitude = 0;  ///< spectral amplitude over the fundamental's (summed over the channels)
+  bool fitted = false;       ///< fitted as a damped sinusoid of the projection
+  double zeta = 0;           ///< its damping ratio when fitted
 };
 
 struct RingdownResult {
   std::string path;
-  std::string channel;
+  std::string channel;     ///< the named channel, or "projection"
+  std::string projection;  ///< the analysed combination, e.g. "0.83 accel_x + 0.55 accel_y - 0.05 accel_z"
   double sample_rate_hz = 0;
   double impact_s = 0;        ///< time of the impact from the record's start, s
   double window_start_s = 0;  ///< from the record's start, s
   double window_s = 0;        ///< length of the fitted decay window, s
   std::vector<RingdownChannel> channels;
-  double strength = 0;                 ///< of the analysed channel
-  double strongest_peak_hz = 0;        ///< highest line of the window's spectrum
-  double spectral_freq_hz = 0;         ///< the fundamental's line on the zero-padded spectrum (start value)
-  bool strongest_is_harmonic = false;  ///< the strongest line was a harmonic of the fundamental
-  int harmonic_number = 1;             ///< strongest line / fundamental (1, 2 or 3)
-  double freq_hz = 0;                  ///< fundamental, natural frequency
+  double strength = 0;                      ///< of the analysed projection (decay RMS over noise RMS)
+  double strongest_peak_hz = 0;             ///< highest line of the window's summed spectrum
+  double spectral_freq_hz = 0;              ///< the fundamental's line on the zero-padded spectrum (start value)
+  bool strongest_is_harmonic = false;       ///< the strongest line was a harmonic of the fundamental
+  int harmonic_number = 1;                  ///< strongest line / fundamental (1, 2, 3, ...)
+  std::vector<RingdownHarmonic> harmonics;  ///< the fundamental's series found (k = 1 first)
+  double freq_hz = 0;                       ///< fundamental, natural frequency
   double freq_stderr_hz = 0;
   double freq_ci95_lo = 0, freq_ci95_hi = 0;
   double damped_freq_hz = 0;  ///< f sqrt(1 - zeta^2), what a tuner reads
   double zeta = 0;
   double zeta_stderr = 0;
   double zeta_ci95_lo = 0, zeta_ci95_hi = 0;
+  double decay_ratio = 0;              ///< the fundamental's envelope at the window's end over its start
   std::vector<double> other_lines_hz;  ///< the other fitted components' frequencies
   fitting::FitResult fit;
   std::vector<std::string> warnings;
 };
 
-/// Analyses one record. FitError (exit 1) for a record too weak to measure (naming the
-/// strength and the threshold) or a fit that fails; InputError for a record too short.
+/// Analyses one record. FitError (exit 1) for a record that is no ring-down (too weak, no
+/// line over the noise, a steady tone, a decay faster than max_zeta; the message names the
+/// measured value and the threshold) or a fit that fails; InputError for a record too short.
 RingdownResult analyze_ringdown(const AccelRecord& record, const RingdownOptions& options = {});
 
 nlohmann::json to_json(const RingdownResult& r);

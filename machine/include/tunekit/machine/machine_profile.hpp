@@ -80,6 +80,15 @@ bool is_klipper_accelerometer_chip(const std::string& chip);
 /// "adxl345, lis2dw, ..." for messages.
 std::string klipper_accelerometer_chips();
 
+/// [belts]: the two CoreXY belt paths as `tunekit belts` measures them (optional section).
+struct BeltSettings {
+  std::string belt;                ///< belt type, e.g. "gt2-6mm" (empty: not given)
+  double mass_g_m = 0;             ///< the belt's linear mass, g/m (0: from `belt`)
+  double span_mm = 0;              ///< free span plucked, between the contact points, mm (0: not given)
+  double span_uncertainty_mm = 0;  ///< standard uncertainty of the span, mm (0: not given)
+  double target_n = 0;             ///< tension to set, N (0: not given)
+};
+
 struct MachineProfile {
   std::string name;
   std::string id;                          ///< the machine's id in the calibration history (may be empty)
@@ -91,6 +100,7 @@ struct MachineProfile {
   TemperatureLimits temperature;
   Sensors sensors;
   FirmwareState state;
+  BeltSettings belts;
   /// [network] http = "http://HOST[:PORT]": RepRapFirmware's web server, through which tunekit
   /// fetches the accelerometer files M956 writes (rrf_http.hpp; RepRapFirmware cannot send a
   /// file over USB serial). Empty: serial only.
