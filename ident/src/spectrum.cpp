@@ -166,22 +166,6 @@ std::vector<double> padded_amplitude_spectrum(std::span<const double> x, std::si
   return mag;
 }
 
-std::vector<double> padded_decay_spectrum(std::span<const double> x, std::size_t nfft) {
-  if (x.size() < 2 || nfft < x.size()) throw InputError("padded spectrum: nfft must be at least the record length");
-  double mean = 0;
-  for (double v : x) mean += v;
-  mean /= static_cast<double>(x.size());
-  RealFft fft(nfft);
-  double* in = fft.input();
-  const auto n = static_cast<double>(x.size());
-  for (std::size_t i = 0; i < nfft; ++i)
-    in[i] = i < x.size() ? (x[i] - mean) * (0.5 + 0.5 * std::cos(std::numbers::pi * static_cast<double>(i) / n)) : 0.0;
-  fft.execute();
-  std::vector<double> mag(fft.bins());
-  for (std::size_t k = 0; k < mag.size(); ++k) mag[k] = std::abs(fft.bin(k));
-  return mag;
-}
-
 Spectrum welch_psd(std::span<const double> x, double fs, const WelchOptions& o) {
   const auto sp = plan_segments(x.size(), fs, o);
   const auto w = make_window(o.window, sp.nperseg, o.kaiser_beta);

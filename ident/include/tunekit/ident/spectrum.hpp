@@ -68,11 +68,6 @@ std::size_t resolve_segment_length(const WelchOptions& o, double sample_rate_hz)
 /// locating peaks of a short record (a ring-down) more finely than its length resolves.
 std::vector<double> padded_amplitude_spectrum(std::span<const double> x, std::size_t nfft);
 
-/// The same for a free decay, whose start holds most of its energy: the record is weighted by
-/// the falling half of a Hann window (1 at the first sample, 0 past the last) instead, so that
-/// a fast-decaying line is not lost under the window's rising edge.
-std::vector<double> padded_decay_spectrum(std::span<const double> x, std::size_t nfft);
-
 /// Throws InputError when the record is shorter than two segments or options are invalid.
 Spectrum welch_psd(std::span<const double> x, double sample_rate_hz, const WelchOptions& options = {});
 CrossSpectrum welch_csd(std::span<const double> x, std::span<const double> y, double sample_rate_hz,
