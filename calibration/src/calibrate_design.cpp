@@ -30,8 +30,7 @@ std::string configuration_to_update(const CalibrateArgs& a, const std::string& r
   const auto it = examples.find(a.firmware);
   if (it == examples.end()) throw InputError("--firmware must be klipper, kalico, marlin or rrf");
   const std::string config = run_dir + "/config/" + it->second;
-  fs::copy_file(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/" + it->second, config,
-                fs::copy_options::overwrite_existing);
+  fs::copy_file(fs::path(TUNEKIT_DATASETS_DIR) / "firmware" / it->second, config, fs::copy_options::overwrite_existing);
   return config;
 }
 

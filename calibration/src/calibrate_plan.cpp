@@ -10,6 +10,7 @@
 #include "calibrate_liquefier.hpp"
 #include "calibrate_stages.hpp"
 #include "tunekit/calibration/history_record.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/sim/sim_camera.hpp"
@@ -76,7 +77,7 @@ CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
     throw InputError(
         "a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
   if (!a.profile.empty()) return {machine::load_machine_profile(a.profile), a.profile};
-  return {protocols::builtin_sim_profile(), std::string(TUNEKIT_DATASETS_DIR) + "/machines/sim.toml"};
+  return {protocols::builtin_sim_profile(), (fs::path(TUNEKIT_DATASETS_DIR) / "machines" / "sim.toml").string()};
 }
 
 CalibrationPlan plan_calibration(const CalibrateArgs& a, const CalibrationProfile& profile, bool can_prompt) {

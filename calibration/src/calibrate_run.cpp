@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "calibrate_stages.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
 
 namespace tunekit::calibration {

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/cli/option_binding.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 
