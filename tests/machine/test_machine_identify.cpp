@@ -15,8 +15,9 @@ using tunekit::test::run_cli;
 TEST_CASE("liquefier-step on the simulator identifies K, tau and theta within 5 %", "[machine][e2e]") {
   const auto dir = tunekit::test::scratch_dir("machine_e2e_step") + "/run";
   // Non-default truth, so the test cannot pass on defaults baked in anywhere else.
-  const auto run = run_cli({"run", "liquefier-step", "--machine", "sim", "--run-dir", dir, "--sim", "K=2.8", "--sim",
-                            "tau_s=0.38", "--sim", "theta_s=0.06", "--sim", "load_cell_rate_hz=1000", "--json"});
+  const auto run =
+      run_cli({"run", "liquefier-step", "--machine", "sim", "--run-dir", dir, "--sim", "K=2.8", "--sim", "tau_s=0.38",
+               "--sim", "tau_flow_exponent=0", "--sim", "theta_s=0.06", "--sim", "load_cell_rate_hz=1000", "--json"});
   INFO(run.err);
   REQUIRE(run.code == 0);
   const auto res = nlohmann::json::parse(run.out)["results"];

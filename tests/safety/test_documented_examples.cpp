@@ -86,6 +86,8 @@ const std::set<std::string> kOutputOptions{"-o",         "--json-file", "--gcode
 std::vector<std::string> runnable_words(const std::string& example, const std::string& root) {
   std::vector<std::string> words;
   const auto all = shell_words(example);
+  // The history's reports need the user's own database of records.
+  if (all.empty() || all[0] == "history") return {};
   for (std::size_t i = 0; i < all.size(); ++i) {
     std::string w = all[i];
     if (w == ">" || w == "|") return {};  // a shell pipeline: not a single command
@@ -95,6 +97,7 @@ std::vector<std::string> runnable_words(const std::string& example, const std::s
     const bool looks_like_file = w.find('/') != std::string::npos || w.find(".csv") != std::string::npos ||
                                  w.find(".json") != std::string::npos || w.find(".cfg") != std::string::npos ||
                                  w.find(".toml") != std::string::npos || w.find(".gcode") != std::string::npos ||
+                                 w.find(".png") != std::string::npos || w.find(".jpg") != std::string::npos ||
                                  w.find(".g") + 2 == w.size() || w.find(".h") + 2 == w.size();
     if (!output && w.rfind("-", 0) != 0 && looks_like_file && !fs::exists(w)) return {};
     words.push_back(w);
