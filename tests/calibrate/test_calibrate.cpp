@@ -265,3 +265,14 @@ TEST_CASE("calibrate --json prints only the JSON on stdout") {
   const auto env = nlohmann::json::parse(run.cli.out);  // throws on anything else on stdout
   CHECK(env.at("results").contains("axes"));
 }
+
+TEST_CASE("calibrate --machine DEVICE --profile FILE talks to DEVICE as its help says") {
+  const auto dir = tunekit::test::scratch_dir("calibrate_machine_device") + "/run";
+  const auto r =
+      tunekit::test::run_cli({"calibrate", "--machine", "/dev/ttyNONEXISTENT", "--profile",
+                              tunekit::test::dataset("machines/sim.toml"), "--skip-liquefier", "--out", dir});
+  // The device is opened (and is missing: a transport failure), not refused for a missing --port.
+  CHECK(r.code == 3);
+  CHECK(r.err.find("--port") == std::string::npos);
+  CHECK(r.err.find("/dev/ttyNONEXISTENT: cannot open") != std::string::npos);
+}

@@ -375,7 +375,8 @@ TEST_CASE("run_experiment: over-limit protocols are refused before the simulator
   CHECK_FALSE(std::filesystem::exists(o.run_dir));
 }
 
-TEST_CASE("simulator presets: a desktop direct-drive default, the thesis' PEEK liquefier by name", "[machine]") {
+TEST_CASE("simulator presets: a desktop direct-drive default and the PEEK liquefier of the thesis by name",
+          "[machine]") {
   const auto desktop = SimConfig{}.truth();
   CHECK(desktop.at("preset") == "desktop");
   // Tens of milliseconds, falling as the flow rises; a dead time; axis modes of a desktop machine.
