@@ -36,8 +36,10 @@ int main(int argc, char** argv) {
   app.add_option("--truth", truth_path, "Write the simulated truth (model parameters) to this JSON file");
   app.add_option("--received", received_path, "On exit, write every line received to this file");
   app.add_option("-s,--set", options,
-                 "Simulator option KEY=VALUE (repeatable): liquefier=fopdt|physics, K=3.5 (N/(mm/s)), tau_s=0.45 (s), "
-                 "theta_s=0.04 (s), force_noise_N=0.02 (N), load_cell_rate_hz=200 (Hz), mode_x=48:0.08[:weight] "
+                 "Simulator option KEY=VALUE (repeatable): preset=desktop|peek (a direct-drive desktop printer, or "
+                 "the thesis' PEEK liquefier with tau 0.45 s), liquefier=fopdt|physics, K=3.5 (N/(mm/s)), tau_s=0.026 "
+                 "(s, at tau_ref_feed_mm_s=2.25), tau_flow_exponent=-0.5, theta_s=0.02 (s), force_noise_N=0.02 (N), "
+                 "load_cell_rate_hz=200 (Hz), mode_x=48:0.08[:weight] "
                  "(Hz:damping ratio), accel_rate_hz=3200 (Hz), accel_noise_mm_s2=20 (mm/s^2), jerk_mm_s3=1e8 (mm/s^3), "
                  "seed=1, fault=drop@N|garble@N|late-ok@N:MS|disconnect@N|error@N (N: received line count)");
   app.set_version_flag("--version", std::string("tunekit-sim ") + tunekit::core::kVersion);

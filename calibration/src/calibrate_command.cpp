@@ -30,7 +30,10 @@ void strip_prefix(nlohmann::json& j, const std::string& prefix) {
   }
 }
 
-int run_calibrate(const CalibrateArgs& options, CliContext& ctx, Progress& progress) {
+int run_calibrate(const CalibrateArgs& given, CliContext& ctx, Progress& progress) {
+  // `--machine DEVICE --profile FILE`: the machine named by its device is the port to use.
+  CalibrateArgs options = given;
+  if (options.machine != "sim" && options.port.empty()) options.port = options.machine;
   const CalibrationProfile profile = load_calibration_profile(options);
   const bool can_prompt = ::isatty(STDIN_FILENO) != 0 && ctx.interactive;
   const CalibrationPlan plan = plan_calibration(options, profile, can_prompt);

@@ -89,6 +89,8 @@ nlohmann::json psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis)
   if (modes.dominant >= 0 && std::isfinite(modes.modes[static_cast<std::size_t>(modes.dominant)].zeta))
     zeta = modes.modes[static_cast<std::size_t>(modes.dominant)].zeta;
   d["shapers"] = nlohmann::json::array();
+  d["recommended"] = {{"type", ident::to_string(axis.choice.recommended.type)},
+                      {"freq_hz", axis.choice.recommended.freq_hz}};
   for (const auto& c : axis.choice.candidates) {
     const auto shaper_design = ident::design_shaper(c.type, c.freq_hz, c.damping_ratio,
                                                     ident::kDefaultVibrationTolerance, ident::EiDesign::damped_fit);

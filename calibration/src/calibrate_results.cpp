@@ -2,7 +2,10 @@
 // outcomes (each analysis' results as its own JSON holds them, the summary rows, notes and the
 // agreement of the two liquefier time constants), then plotdata.json, report.html, the
 // analysis README and, with --record, the history.
+#include <algorithm>
 #include <cmath>
+#include <optional>
+#include <utility>
 #include <filesystem>
 #include <sstream>
 
@@ -22,6 +25,9 @@ namespace tunekit::calibration {
 namespace {
 
 namespace fs = std::filesystem;
+
+/// Two-sided 95 % quantile of the normal distribution: the advance's interval from its standard error.
+constexpr double kZ95 = 1.959963984540054;
 
 // What results.json and plotdata.json are assembled in.
 struct RunRecord {
@@ -151,14 +157,43 @@ void add_axes(RunRecord& r, const Identification& id) {
   }
 }
 
-void add_compensators(RunRecord& r, const CompensatorDesign& design, const std::string& run_dir) {
+// The advance's 95 % interval: from the design's standard error of tau when it has one (K = the
+// pooled tau), else, for K built from the per-level taus (K = the stored melt volume over the
+// flow, an average of the taus up to the design flow), K scaled by the widest relative interval of
+// those taus: every tau within its interval keeps their average within that bound.
+std::optional<std::pair<double, double>> advance_interval(const ExportOutcome& ex,
+                                                          const std::optional<StepOutcome>& step) {
+  const double k = *ex.settings.pa_k_s;
+  const double se = ex.design ? ex.design->k_stderr_s : fitting::kNaN;
+  if (std::isfinite(se)) return std::pair{k - kZ95 * se, k + kZ95 * se};
+  if (!step || !ex.design || ex.design->k_source != "operating points") return std::nullopt;
+  double widest = 0;
+  for (const auto& level : step->analysis.arrival_levels) {
+    const auto& tau = level.fit.param("tau_s");
+    if (!(tau.value > 0) || !std::isfinite(tau.ci95_lo) || !std::isfinite(tau.ci95_hi)) return std::nullopt;
+    widest = std::max({widest, (tau.value - tau.ci95_lo) / tau.value, (tau.ci95_hi - tau.value) / tau.value});
+  }
+  if (step->analysis.arrival_levels.empty() || !(widest < 1)) return std::nullopt;
+  return std::pair{k * (1 - widest), k * (1 + widest)};
+}
+
+void add_compensators(RunRecord& r, const CompensatorDesign& design, const std::optional<StepOutcome>& step,
+                      const std::string& run_dir) {
   const ExportOutcome& ex = design.exported;
   if (design.marlin_ft_live) r.res()["firmware_ft_motion"] = "active (M493): settings written as M493";
   r.res()["compensators"] = analysis_results(ex);
   // The report draws the advance the liquefier needs against flow (the export's flow design).
   if (ex.flow) r.plot["flow_advance"] = ex.flow->to_json();
   r.res()["config_diff"] = ex.change.diff;
-  if (ex.settings.pa_k_s) r.row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
+  if (ex.settings.pa_k_s) {
+    const auto ci = advance_interval(ex, step);
+    if (ci) {
+      r.res()["compensators"]["pa_k_ci95"] = {ci->first, ci->second};
+      r.row("pressure advance K", "compensators.settings.pa_k_s", "s", "compensators.pa_k_ci95");
+    } else {
+      r.row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
+    }
+  }
   if (ex.settings.pa_smooth_s)
     r.row("advance smoothing time", "compensators.settings.pa_smooth_s", "s", "", "designed");
   if (ex.design)
@@ -196,7 +231,7 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
   else if (id.step) add_load_cell_step(r, *id.step, plan.profile.profile.filament_area_mm2());
   if (id.freq) add_freq(r, *id.freq, runs, id.step);
   add_axes(r, id);
-  add_compensators(r, design, plan.run_dir);
+  add_compensators(r, design, id.step, plan.run_dir);
   r.res()["summary"] = r.summary;
   r.res()["agreement"] = r.agreement;
   r.res()["notes"] = r.notes;
@@ -229,11 +264,7 @@ int write_run(const CalibrationPlan& plan, const ExperimentRuns& runs, const Ide
   core::write_file_atomic(plan.run_dir + "/plotdata.json", r.plot.dump() + "\n");
   const std::string report = write_report(plan.run_dir);
   progress.end(report);
-  const std::string& diff = design.exported.change.diff;
-  if (!plan.options.output.json) {
-    if (!diff.empty()) ctx.out << diff << (diff.back() == '\n' ? "" : "\n");
-    ctx.out << fmt::format("report: {}\n", report);
-  }
+  if (!plan.options.output.json) print_calibrate_terminal(r.res(), design, report, ctx.out);
   OutputOptions output = plan.output;
   output.record_source = plan.run_dir;
   return emit(r.env, output, ctx);

@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the stages of `tunekit calibrate` (calibration_pipeline.hpp).
 
+#include <ostream>
 #include <string>
 
 #include <fmt/format.h>
@@ -48,6 +49,12 @@ protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const 
 
 /// The liquefier step test analysed as `tunekit step FILE --input feed --output force` does.
 StepOptions load_cell_step_options(const std::string& csv);
+
+/// What the technician reads after the progress (calibrate_terminal.cpp): the summary rows of
+/// `results` (each identified quantity, its value and 95 % interval or basis), the configuration's
+/// settings (current, proposed, change), the diff, what to do next, and the report's path.
+void print_calibrate_terminal(const nlohmann::json& results, const CompensatorDesign& design, const std::string& report,
+                              std::ostream& os);
 
 /// Paths inside the run directory are written relative to it, so that results.json does not
 /// depend on where the run lives (and two runs of one machine are byte-identical).

@@ -269,11 +269,14 @@ void prepare_orca_profile(const ExportOptions& a, const export_design::Liquefier
 }
 
 /// --gcode-in/--gcode-out: the sliced G-code with the advance each feature's flow needs.
-void prepare_sliced_gcode(const ExportOptions& a, ExportOutcome& outcome) {
+/// The filament's cross-section is the machine profile's when --profile is given (else the sliced
+/// file's "; filament_diameter = D" line).
+void prepare_sliced_gcode(const ExportOptions& a, const export_design::LiquefierInputs& li, ExportOutcome& outcome) {
   const auto& flow = outcome.flow;
   const auto& design = outcome.design;
   firmware::GcodeAdvanceOptions go;
   go.firmware = outcome.firmware;
+  if (!a.profile.empty()) go.filament_area_mm2 = li.in.filament_area_mm2;
   go.hysteresis = a.hysteresis;
   go.klipper_extruder = outcome.settings.klipper_extruder;
   go.rrf_drive = outcome.settings.rrf_drive;
@@ -309,7 +312,7 @@ void prepare_files(const ExportOptions& a, const export_design::LiquefierInputs&
   }
   if (!a.gcode_out.empty()) outcome.files.add(a.gcode_out, result.gcode);
   if (!a.orca_out.empty()) prepare_orca_profile(a, li, outcome);
-  if (!a.sliced_out.empty()) prepare_sliced_gcode(a, outcome);
+  if (!a.sliced_out.empty()) prepare_sliced_gcode(a, li, outcome);
 }
 
 /// The results of the envelope: settings, design, agreement, flow design, the change.
@@ -369,6 +372,12 @@ ExportOutcome compute_export(const ExportOptions& a, const DesignInputs& inputs)
 
 void print_text(const ExportOutcome& o, std::ostream& os) { os << o.change.diff; }
 
+std::string configuration_status(const ExportOutcome& o) {
+  if (!o.change.changed()) return fmt::format("{} already has these settings; nothing to change", o.options.config);
+  if (o.options.write) return fmt::format("wrote {} (backup: {})", o.options.config, o.backup);
+  return "preview only; add --write to apply (a timestamped backup is kept)";
+}
+
 int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContext& ctx) {
   const ExportOptions& a = o.options;
   const auto& result = o.change;
@@ -377,7 +386,6 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
   const auto& settings = o.settings;
   const auto& env = o.envelope;
   const std::string& schedule = o.schedule_gcode;
-  const std::string& backup = o.backup;
   core::FileBatch batch = o.files;
   std::vector<std::string> inputs = option_inputs(a);
   for (const auto& p : env.input_paths()) inputs.push_back(p);
@@ -421,10 +429,7 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
     // The design's notes say what it means (nothing to act on): informational lines, not warnings.
     if (design)
       for (const auto& n : design->notes) ctx.err << "tunekit: note: " << n << "\n";
-    if (!result.changed())
-      ctx.err << fmt::format("tunekit: {} already has these settings; nothing to change\n", a.config);
-    else if (a.write) ctx.err << fmt::format("tunekit: wrote {} (backup: {})\n", a.config, backup);
-    else ctx.err << "tunekit: preview only; add --write to apply (a timestamped backup is kept)\n";
+    ctx.err << "tunekit: " << configuration_status(o) << "\n";
     if (!result.gcode.empty()) ctx.err << "tunekit: the same settings as G-code:\n" << result.gcode;
     for (const auto& n : result.notes) ctx.err << "tunekit: " << n << "\n";
     if (!schedule.empty() && design && design->schedule.size() >= 2)

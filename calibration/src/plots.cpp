@@ -227,7 +227,11 @@ void render_figure(const Figure& fig, const std::string& path) {
       const double h = usable * p.height_weight / total;
       const double y0 = y_top - h + 0.075, y1 = y_top - 0.02;
       y_top -= h;
-      pls->vpor(0.09, 0.97, y0, y1);
+      // The legend sits right of the data, never over it: the plot area leaves it room.
+      std::size_t longest_label = 0;
+      for (const auto& s : p.series) longest_label = std::max(longest_label, s.label.size());
+      const double legend_room = longest_label == 0 ? 0.0 : std::min(0.4, 0.06 + 0.0075 * longest_label);
+      pls->vpor(0.09, 0.97 - legend_room, y0, y1);
 
       Range rx, ry;
       for (const auto& s : p.series)
@@ -254,30 +258,43 @@ void render_figure(const Figure& fig, const std::string& path) {
       pls->box(xopt.c_str(), 0, 0, yopt.c_str(), 0, 0);
       if (p.log_x) label_log_axis(pls, true, rx.lo, rx.hi);
       if (p.log_y) label_log_axis(pls, false, ry.lo, ry.hi);
-      pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), p.title.c_str());
+      // The panel's title left-aligned above its frame (centred, it read as the axis label of the
+      // panel above).
+      pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), "");
+      pls->mtex("t", 0.8, 0.0, 0.0, p.title.c_str());
 
       std::vector<std::string> labels;
       std::vector<PLINT> opts, colors, styles, sym_colors, sym_numbers;
       std::vector<PLFLT> widths, sym_scales;
       for (const auto& s : p.series) {
-        std::vector<PLFLT> xs, ys;
+        // A line is drawn in pieces between missing (non-finite) values: a gap stays a gap.
+        std::vector<std::vector<PLFLT>> xs(1), ys(1);
+        bool any = false;
         for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
           const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
           if (std::isfinite(ax) && std::isfinite(ay)) {
-            xs.push_back(ax);
-            ys.push_back(ay);
+            xs.back().push_back(ax);
+            ys.back().push_back(ay);
+            any = true;
+          } else if (!xs.back().empty()) {
+            xs.emplace_back();
+            ys.emplace_back();
           }
         }
-        if (xs.empty()) continue;
+        if (!any) continue;
         pls->col0(s.color);
-        if (s.style == Series::Style::points) {
-          pls->poin(static_cast<PLINT>(xs.size()), xs.data(), ys.data(), 17);
-        } else {
-          pls->lsty(s.style == Series::Style::dashed ? 2 : 1);
-          pls->width(1.6);
-          pls->line(static_cast<PLINT>(xs.size()), xs.data(), ys.data());
-          pls->lsty(1);
-          pls->width(1);
+        for (std::size_t piece = 0; piece < xs.size(); ++piece) {
+          const auto n = static_cast<PLINT>(xs[piece].size());
+          if (n == 0) continue;
+          if (s.style == Series::Style::points) {
+            pls->poin(n, xs[piece].data(), ys[piece].data(), 17);
+          } else {
+            pls->lsty(s.style == Series::Style::dashed ? 2 : 1);
+            pls->width(1.6);
+            pls->line(n, xs[piece].data(), ys[piece].data());
+            pls->lsty(1);
+            pls->width(1);
+          }
         }
         if (!s.label.empty()) {
           labels.push_back(s.label);
@@ -299,7 +316,7 @@ void render_figure(const Figure& fig, const std::string& path) {
         PLFLT lw, lh;
         pls->col0(15);
         pls->legend(&lw, &lh, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
-                    PL_POSITION_RIGHT | PL_POSITION_TOP | PL_POSITION_INSIDE, 0.01, 0.01, 0.08, 0, 15, 1, 0, 0,
+                    PL_POSITION_RIGHT | PL_POSITION_TOP | PL_POSITION_OUTSIDE, 0.01, 0.0, 0.05, 0, 15, 1, 0, 0,
                     static_cast<PLINT>(labels.size()), opts.data(), 1.0, 0.9, 1.6, 1.0, colors.data(), text.data(),
                     nullptr, nullptr, nullptr, nullptr, colors.data(), styles.data(), widths.data(), sym_colors.data(),
                     sym_scales.data(), sym_numbers.data(), symbols.data());

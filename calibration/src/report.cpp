@@ -133,10 +133,16 @@ Figure psd_figure(const nlohmann::json& d, const std::string& axis) {
     }
   Panel s{"Shaper response (remaining vibration)", "frequency (Hz)", "fraction", false, false, {}, 1.0};
   int sc = 2;
+  // The recommended shaper is marked: named so in the legend, drawn solid; the others dashed.
+  const std::string chosen = d.contains("recommended") ? d["recommended"].value("type", std::string()) : "";
   if (d.contains("shapers"))
     for (const auto& sh : d["shapers"]) {
+      const std::string type = sh.value("type", std::string("?"));
+      const bool is_chosen = type == chosen;
       s.series.push_back(
-          {sh.value("type", std::string("?")), vec(sh, "freq_hz"), vec(sh, "response"), Series::Style::line, sc});
+          {is_chosen ? fmt::format("{} (recommended, {:.1f} Hz)", type, d["recommended"].value("freq_hz", 0.0)) : type,
+           vec(sh, "freq_hz"), vec(sh, "response"),
+           is_chosen || chosen.empty() ? Series::Style::line : Series::Style::dashed, sc});
       sc = sc % 8 + 1;
     }
   f.panels = {p};

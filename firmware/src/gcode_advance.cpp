@@ -137,7 +137,8 @@ GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvan
     }
   }
   if (!(area > 0))
-    throw InputError("no filament diameter: the file has no '; filament_diameter = D' line; give it", path);
+    throw InputError(
+        "no filament diameter: the file has no '; filament_diameter = D' line and no machine profile gave one", path);
 
   // Pass 1: blocks and their extrusion-weighted flow.
   struct Block {

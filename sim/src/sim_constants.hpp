@@ -21,6 +21,9 @@ inline constexpr double kDefaultModeWeight = 1.0;
 inline constexpr std::array<double, 6> kTruthOperatingFeeds_mm_s{0.5, 1.0, 2.0, 3.0, 4.0, 5.0};
 
 // --- Plant ---
+/// Lowest feed (filament mm/s) at which the FOPDT liquefier's flow-dependent time constant is
+/// evaluated: a stopped extruder relaxes at this feed's time constant instead of an infinite one.
+inline constexpr double kTauFloorFeed_mm_s = 0.2;
 /// Simulation steps per accelerometer sample: the axes' modes are integrated (RK4) at four
 /// times the sample rate so that a mode near the sample rate's Nyquist frequency stays accurate.
 inline constexpr int kStepsPerAccelSample = 4;

@@ -121,7 +121,10 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
   double force;
   if (cfg_.liquefier == LiquefierModel::fopdt) {
     const double target = cfg_.K_N_per_mm_s * ud;
-    liq_ = target + (liq_ - target) * std::exp(-h / cfg_.tau_s);
+    // The time constant of the flow leaving the nozzle (the state, as a filament feed): a melt's
+    // shear rate is set by what flows through the nozzle, not by the feed commanded this instant.
+    const double u_out = cfg_.K_N_per_mm_s != 0 ? liq_ / cfg_.K_N_per_mm_s : ud;
+    liq_ = target + (liq_ - target) * std::exp(-h / cfg_.tau_at_feed(u_out));
     force = liq_;
   } else {
     const double q_out = std::pow(std::max(liq_, 0.0) / cfg_.k_MPa, 1.0 / cfg_.n_index);

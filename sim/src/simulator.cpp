@@ -46,12 +46,40 @@ const char* liquefier_model_name(LiquefierModel m) { return m == LiquefierModel:
 
 }  // namespace
 
-SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
+double SimConfig::tau_at_feed(double feed_mm_s) const {
+  if (tau_flow_exponent == 0) return tau_s;
+  const double u = std::max(std::abs(feed_mm_s), sim::kTauFloorFeed_mm_s);
+  return tau_s * std::pow(u / tau_ref_feed_mm_s, tau_flow_exponent);
+}
+
+const char* SimConfig::preset_name(SimPreset p) { return p == SimPreset::desktop ? "desktop" : "peek"; }
+
+SimConfig SimConfig::with_preset(SimPreset p) {
   SimConfig c;
+  c.preset = p;
+  if (p == SimPreset::peek) {
+    c.tau_s = 0.45;
+    c.theta_s = 0.04;
+    c.tau_flow_exponent = 0;
+    c.modes = {{"x", {{48, 0.08, 1}}}, {"y", {{37, 0.1, 1}}}};
+  }
+  return c;
+}
+
+SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
+  // The preset first: the other options change it, whatever their order.
+  SimConfig c;
+  for (const auto& opt : options) {
+    if (opt.rfind("preset=", 0) != 0) continue;
+    const std::string v = opt.substr(7);
+    if (v != "desktop" && v != "peek") throw InputError("simulator option preset must be desktop or peek");
+    c = with_preset(v == "desktop" ? SimPreset::desktop : SimPreset::peek);
+  }
   for (const auto& opt : options) {
     const auto eq = opt.find('=');
     if (eq == std::string::npos) throw InputError(fmt::format("simulator option '{}' is not key=value", opt));
     const std::string k = opt.substr(0, eq), v = opt.substr(eq + 1);
+    if (k == "preset") continue;
     auto pos = [&](double d) {
       if (!(d > 0)) throw InputError(fmt::format("simulator option {} must be positive", k));
       return d;
@@ -61,6 +89,8 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
       c.liquefier = v == "fopdt" ? LiquefierModel::fopdt : LiquefierModel::physics;
     } else if (k == "K" || k == "K_N_per_mm_s") c.K_N_per_mm_s = parse_double(k, v);
     else if (k == "tau_s") c.tau_s = pos(parse_double(k, v));
+    else if (k == "tau_ref_feed_mm_s") c.tau_ref_feed_mm_s = pos(parse_double(k, v));
+    else if (k == "tau_flow_exponent") c.tau_flow_exponent = parse_double(k, v);
     else if (k == "theta_s") c.theta_s = std::max(0.0, parse_double(k, v));
     else if (k == "k_MPa") c.k_MPa = pos(parse_double(k, v));
     else if (k == "n_index") c.n_index = pos(parse_double(k, v));
@@ -161,6 +191,17 @@ nlohmann::json SimConfig::truth() const {
     liq["K"] = K_N_per_mm_s;
     liq["K_unit"] = "N/(mm/s)";
     liq["tau_s"] = tau_s;
+    liq["tau_ref_feed_mm_s"] = tau_ref_feed_mm_s;
+    liq["tau_flow_exponent"] = tau_flow_exponent;
+    liq["equations"] = "tau(u) = tau_s (u / tau_ref_feed_mm_s)^tau_flow_exponent";
+    nlohmann::json table = nlohmann::json::array();
+    for (double u : sim::kTruthOperatingFeeds_mm_s)
+      table.push_back({{"feed_mm_s", u},
+                       {"flow_mm3_s", area * u},
+                       {"force_N", K_N_per_mm_s * u + force_offset_N},
+                       {"K_local", K_N_per_mm_s},
+                       {"tau_local_s", tau_at_feed(u)}});
+    liq["operating_points"] = table;
   } else {
     liq["k_MPa_s^n_per_mm3^n"] = k_MPa;
     liq["n_index"] = n_index;
@@ -177,6 +218,7 @@ nlohmann::json SimConfig::truth() const {
     }
     liq["operating_points"] = table;
   }
+  j["preset"] = preset_name(preset);
   j["liquefier"] = liq;
   nlohmann::json axes = nlohmann::json::object();
   for (const auto& [axis, modes] : this->modes) {

@@ -34,8 +34,11 @@ double mean_y(const nlohmann::json& line) {
 
 TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from the photo", "[calibrate]") {
   const std::string dir = tunekit::test::scratch_dir("calibrate_camera") + "/run";
+  // The PEEK liquefier (tau 0.45 s, flow-independent): the printed tests were sized for it. The
+  // desktop default's tens of milliseconds are a fraction of a millimetre of line at the test's
+  // speed, below what these photographed tests resolve (the open follow-up: faster line tests).
   const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera", "sim",
-                                         "--skip-axes", "--out", dir, "--json"});
+                                         "--skip-axes", "--out", dir, "--json", "--sim", "preset=peek"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto env = nlohmann::json::parse(r.out);

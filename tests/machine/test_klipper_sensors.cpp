@@ -142,10 +142,10 @@ TEST_CASE("a liquefier step run on Klipper's load cell gives tau within 5 %", "[
   const double tau = 0.38, theta = 0.05;
   FakeKlipperConfig fake;
   fake.load_cell = "load_cell extruder";
-  FakeKlipper server(
-      sock,
-      tunekit::sim::SimConfig::from_options({fmt::format("tau_s={}", tau), fmt::format("theta_s={}", theta), "K=2.8"}),
-      fake);
+  FakeKlipper server(sock,
+                     tunekit::sim::SimConfig::from_options({fmt::format("tau_s={}", tau), "tau_flow_exponent=0",
+                                                            fmt::format("theta_s={}", theta), "K=2.8"}),
+                     fake);
   // The profile names Marlin; the protocol is built for Klipper, the firmware identified.
   const auto profile =
       klipper_profile(dir, "accelerometer = false\nload_cell = true\nload_cell_name = \"load_cell extruder\"\n", false);

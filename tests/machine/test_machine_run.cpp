@@ -94,7 +94,9 @@ TEST_CASE("liquefier-step on the simulator writes a complete run directory", "[m
   CHECK(table.rows == Approx(15 * 200).epsilon(0.02));
   const auto stats = tunekit::test::read_json(dir + "/sim_stats.json");
   CHECK(stats["load_cell_samples_sent"].get<std::size_t>() == table.rows);
-  CHECK(tunekit::test::read_json(dir + "/truth.json")["liquefier"]["tau_s"] == 0.45);
+  // truth.json holds the truth the simulator ran with: the default (desktop) preset here.
+  CHECK(tunekit::test::read_json(dir + "/truth.json")["liquefier"]["tau_s"] == tunekit::sim::SimConfig{}.tau_s);
+  CHECK(tunekit::test::read_json(dir + "/truth.json")["preset"] == "desktop");
   CHECK(tunekit::test::read_json(dir + "/run.json")["status"] == "complete");
   const std::string journal = tunekit::test::read_text(dir + "/journal.jsonl");
   CHECK(journal.find("\"kind\":\"tx\"") != std::string::npos);

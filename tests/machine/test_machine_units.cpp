@@ -208,7 +208,8 @@ TEST_CASE("firmware errors and silence are MachineErrors", "[machine]") {
 }
 
 TEST_CASE("simulated liquefier follows its first-order truth", "[machine]") {
-  Simulator sim(SimConfig::from_options({"force_noise_N=0", "theta_s=0.05", "tau_s=0.3", "K=2"}));
+  Simulator sim(
+      SimConfig::from_options({"force_noise_N=0", "theta_s=0.05", "tau_s=0.3", "tau_flow_exponent=0", "K=2"}));
   std::vector<std::pair<double, double>> samples;  // (t, force)
   std::string out;
   const Simulator::Emit emit = [&](std::string_view s) { out += s; };
@@ -372,4 +373,34 @@ TEST_CASE("run_experiment: over-limit protocols are refused before the simulator
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   CHECK(server.sim().received().empty());
   CHECK_FALSE(std::filesystem::exists(o.run_dir));
+}
+
+TEST_CASE("simulator presets: a desktop direct-drive default and the PEEK liquefier of the thesis by name",
+          "[machine]") {
+  const auto desktop = SimConfig{}.truth();
+  CHECK(desktop.at("preset") == "desktop");
+  // Tens of milliseconds, falling as the flow rises; a dead time; axis modes of a desktop machine.
+  const auto& points = desktop.at("liquefier").at("operating_points");
+  REQUIRE(points.size() >= 2);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double tau = points[i].at("tau_local_s").get<double>();
+    CHECK(tau > 0.01);
+    CHECK(tau < 0.1);
+    if (i > 0) CHECK(tau < points[i - 1].at("tau_local_s").get<double>());
+  }
+  CHECK(desktop.at("liquefier").at("theta_s").get<double>() > 0);
+  for (const char* axis : {"x", "y"}) {
+    const auto& mode = desktop.at("axes").at(axis).at("modes")[0];
+    CHECK(mode.at("freq_hz").get<double>() >= 40);
+    CHECK(mode.at("freq_hz").get<double>() <= 70);
+    CHECK(mode.at("zeta").get<double>() >= 0.05);
+    CHECK(mode.at("zeta").get<double>() <= 0.1);
+  }
+  // The PEEK preset: Bellini's 0.45 s whatever the flow; later options change it, in any order.
+  const auto peek = SimConfig::from_options({"theta_s=0.05", "preset=peek"});
+  CHECK(peek.tau_at_feed(0.5) == 0.45);
+  CHECK(peek.tau_at_feed(5) == 0.45);
+  CHECK(peek.theta_s == 0.05);
+  CHECK(peek.modes.at("y")[0].freq_hz == 37);
+  CHECK_THROWS_AS(SimConfig::from_options({"preset=bowden"}), tunekit::InputError);
 }

@@ -180,7 +180,7 @@ def main():
     a = ap.parse_args()
     chromium = shutil.which("chromium")
     if not chromium:
-        print("SKIPPED: headless-browser check needs Debian's chromium package (scripts/install-deps installs it)")
+        print("SKIPPED: headless-browser check needs Debian's chromium package (scripts/install-deps --tests installs it)")
         return 77
     report = a.report
     if not report:

@@ -68,6 +68,11 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
   sub->add_option("--camera-frames", a->camera.frames, "Camera path: frames averaged from --camera-device")
       ->capture_default_str();
   add_output_options(sub, a->output);
+  // calibrate measures tau twice (step and frequency response): its example names which one.
+  sub->get_option("--require")
+      ->description(
+          "CI threshold on a result, e.g. 'step.tau_s<0.6' or 'x.freq_hz>=35' (repeatable); exit 1 naming each unmet "
+          "one");
   sub->footer(
       "Examples:\n"
       "  tunekit calibrate --machine sim                      # the built-in simulated printer\n"
@@ -89,7 +94,8 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
       "    (on a terminal without --photo/--camera-device it asks for the photo's path once the tests are printed)\n"
       "  auto       load-cell when the profile has one ([sensors] load_cell = true), else camera (the default)\n"
       "Every protocol is checked against the profile before anything is sent. On a terminal each step shows a\n"
-      "progress bar with the time left; off a terminal only the diff and the report path are printed.");
+      "progress bar with the time left. Then the identified values with their 95 % intervals, the configuration's\n"
+      "settings (current, proposed, change), the diff, and what to do next (--json: the JSON results only).");
   sub->callback([a, &ctx] {
     BarProgress progress(ctx);
     set_exit_code(run_calibrate(*a, ctx, progress));

@@ -69,9 +69,11 @@ void register_run(CLI::App& app, CliContext& ctx) {
                   "with --machine sim: an external tunekit-sim link");
   sub->add_option("--baud", r.baud, "Serial baud rate (bit/s)");
   sub->add_option("-p,--param", o.params, "Protocol parameter NAME=VALUE, in the unit its name carries (repeatable)");
-  sub->add_option("--sim", r.sim_options,
-                  "Simulator option KEY=VALUE (repeatable), e.g. tau_s=0.5 (s), K=3.5 (N/(mm/s)), theta_s=0.04 (s), "
-                  "mode_x=48:0.08 (Hz:damping ratio), liquefier=physics, fault=garble@12; see docs/machine.md");
+  sub->add_option(
+      "--sim", r.sim_options,
+      "Simulator option KEY=VALUE (repeatable), e.g. preset=peek (the thesis' PEEK liquefier), tau_s=0.5 (s), "
+      "K=3.5 (N/(mm/s)), theta_s=0.04 (s), "
+      "mode_x=48:0.08 (Hz:damping ratio), liquefier=physics, fault=garble@12; see docs/machine.md");
   sub->add_option("--run-dir", r.run_dir, "Run directory (default: RUNS_ROOT/PROTOCOL-UTCSTAMP)");
   sub->add_option("--runs-root", r.runs_root,
                   fmt::format("Where run directories are created (default: {})", r.runs_root));

@@ -73,6 +73,11 @@ inline const Envelope& to_envelope(const ExportOutcome& outcome) { return outcom
 /// The configuration diff (stdout of the command).
 void print_text(const ExportOutcome& outcome, std::ostream& os);
 
+/// What became of the configuration, in one sentence: already up to date, written (and where its
+/// backup is) or previewed only (add --write). The firmware's own next steps (RESTART, M502 + M500)
+/// are outcome.change.notes.
+std::string configuration_status(const ExportOutcome& outcome);
+
 /// Writes the outcome's files and the JSON results (`output`) together or not at all, then
 /// prints the diff and the summary as the command does. Returns the exit code. InputError when
 /// the configuration changed since compute_export() read it.

@@ -54,12 +54,48 @@ struct SimFault {
 /// The simulated liquefier's model (option "liquefier=fopdt|physics", parsed once).
 enum class LiquefierModel { fopdt, physics };
 
+/// A named set of the simulated printer's truth (option "preset=NAME", applied before the other
+/// options, whatever their order):
+///   desktop  (the default) a desktop printer with a direct-drive extruder printing PLA: a liquefier
+///            time constant of tens of milliseconds that falls as the flow rises, a short dead time,
+///            and axis modes of 48 Hz (X) and 42 Hz (Y) with damping ratios of 0.08 and 0.09;
+///   peek     the high-viscosity PEEK liquefier of Holtrup's thesis ("Tuning liquefier dynamics: A
+///            strategy for accuracy improvement in extrusion based additive manufacturing with
+///            PEEK", 2019): Bellini's literature
+///            model (tau 0.45 s, theta 0.04 s; Bellini, Guceri and Bertoldi, "Liquefier dynamics in
+///            fused deposition", 2004) with a time constant that does not change with the flow, on
+///            axes with modes of 48 Hz and 37 Hz (tunekit's simulated printer before the desktop
+///            default).
+enum class SimPreset { desktop, peek };
+
 struct SimConfig {
+  SimPreset preset = SimPreset::desktop;
   LiquefierModel liquefier = LiquefierModel::fopdt;
-  // First order plus dead time, feed (mm/s) -> force (N).
+  // First order plus dead time, feed (mm/s) -> force (N), with a time constant that depends on the
+  // flow leaving the nozzle (the model's output as a filament feed u = force / K):
+  // tau(u) = tau_s (u / tau_ref_feed_mm_s)^b, b = tau_flow_exponent, u not below
+  // sim::kTauFloorFeed_mm_s. Around a steady feed u0 the small-signal time constant is tau(u0).
+  // A shear-thinning melt behind a compliant filament column has b = n - 1 (n the power-law index;
+  // SimConfig's physics model below): the time constant falls as the flow rises.
+  //
+  // Desktop defaults. A direct-drive extruder needs a pressure advance of a few hundredths of a
+  // second: Klipper's "Pressure advance" guide (O'Connor, Klipper documentation) prints its tuning
+  // tower for direct drives at FACTOR .005 s/mm, a quarter of the Bowden setups' .020; Wilkins and
+  // Lock ("Duet3D Research - Extrusion Behaviour and Pressure Advance", 2022) model the extruder as
+  // this first-order lag and ("Nozzle Back-Pressure, Speed and Pressure Advance", 2023) measure
+  // the advance constant changing with the extrusion speed. The defaults: tau = 0.026 s at a
+  // 2.25 mm/s feed (5.4 mm^3/s: a 60 mm/s line of 0.45 x 0.2 mm, the profile's print settings),
+  // b = -0.5 (a power-law index of 0.5, as the physics model's) and a dead time of 0.02 s, half of
+  // Bellini's (the filament path of a direct drive is short). The advance that holds the stored
+  // melt volume at that flow, tau / (1 + b) = 0.052 s, is then the bundled example configurations'
+  // hand-tuned 0.05 s.
   double K_N_per_mm_s = 3.5;
-  double tau_s = 0.45;
-  double theta_s = 0.04;
+  double tau_s = 0.026;             ///< s, the time constant at tau_ref_feed_mm_s
+  double tau_ref_feed_mm_s = 2.25;  ///< mm/s of filament, the feed tau_s is given at
+  double tau_flow_exponent = -0.5;  ///< b of tau(u) = tau_s (u / tau_ref_feed_mm_s)^b; 0: tau does not change
+  double theta_s = 0.02;
+  /// The time constant of the FOPDT liquefier driven at `feed_mm_s` (filament mm/s).
+  double tau_at_feed(double feed_mm_s) const;
   // Physics: pressure P (MPa) in the melt, flow out Q = (P / k)^(1/n) (mm^3/s, power-law melt
   // through the nozzle), column + melt compliance C (mm^3/MPa): C dP/dt = A u(t - theta) - Q;
   // force = P * A (A filament cross-section, mm^2). K = n F / u and tau = C k n Q^(n-1)
@@ -72,7 +108,7 @@ struct SimConfig {
   double force_noise_N = 0.02;
   double load_cell_rate_hz = 200;
   // Axes.
-  std::map<std::string, std::vector<SimMode>> modes{{"x", {{48, 0.08, 1}}}, {"y", {{37, 0.1, 1}}}};
+  std::map<std::string, std::vector<SimMode>> modes{{"x", {{48, 0.08, 1}}}, {"y", {{42, 0.09, 1}}}};
   double accel_rate_hz = 3200;
   double accel_noise_mm_s2 = 20;
   double cross_coupling = 0.05;  ///< share of one horizontal axis' response seen on the other
@@ -114,7 +150,7 @@ struct SimConfig {
   bool rrf_http = false;
   std::vector<SimFault> faults;
 
-  /// "key=value" options (tunekit-sim flags and `tunekit run --sim`), e.g. "tau_s=0.5",
+  /// "key=value" options (tunekit-sim flags and `tunekit run --sim`), e.g. "preset=peek", "tau_s=0.5",
   /// "firmware=klipper", "steps_per_mm=160",
   /// "liquefier=physics", "mode_x=48:0.08" or "mode_x=48:0.08:0.7,95:0.05:0.3",
   /// "fault=garble@12", "fault=late-ok@12:300", "fault=drop@12", "fault=disconnect@40",
@@ -122,6 +158,9 @@ struct SimConfig {
   static SimConfig from_options(const std::vector<std::string>& options);
   /// The truth the simulator runs with (also written to truth.json).
   nlohmann::json truth() const;
+  /// The defaults of a preset (SimPreset), and its option name ("desktop", "peek").
+  static SimConfig with_preset(SimPreset preset);
+  static const char* preset_name(SimPreset preset);
 };
 
 class Simulator {
