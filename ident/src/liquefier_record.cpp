@@ -12,12 +12,12 @@
 namespace tunekit::ident {
 namespace {
 
-nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 nlohmann::json param_json(const fitting::Param& p) {
-  return {{"value", num(p.value)},
-          {"stderr", num(p.std_error)},
-          {"ci95", {num(p.ci95_lo), num(p.ci95_hi)}},
+  return {{"value", number_or_null(p.value)},
+          {"stderr", number_or_null(p.std_error)},
+          {"ci95", {number_or_null(p.ci95_lo), number_or_null(p.ci95_hi)}},
           {"unit", p.unit},
           {"fixed", p.fixed},
           {"ci95_method", p.fixed ? std::string("fixed") : p.ci95_method}};
@@ -123,19 +123,19 @@ nlohmann::json to_json(const WholeRecordModel& m) {
   nlohmann::json checks = nlohmann::json::array();
   for (const auto& c : m.checks)
     checks.push_back({{"step", c.step},
-                      {"u_after", num(c.u_after)},
-                      {"tau_step_s", num(c.tau_step_s)},
-                      {"tau_step_stderr_s", num(c.tau_step_stderr_s)},
-                      {"tau_model_s", num(c.tau_model_s)},
-                      {"tau_model_stderr_s", num(c.tau_model_stderr_s)},
+                      {"u_after", number_or_null(c.u_after)},
+                      {"tau_step_s", number_or_null(c.tau_step_s)},
+                      {"tau_step_stderr_s", number_or_null(c.tau_step_stderr_s)},
+                      {"tau_model_s", number_or_null(c.tau_model_s)},
+                      {"tau_model_stderr_s", number_or_null(c.tau_model_stderr_s)},
                       {"disagrees", c.disagrees}});
   return {{"model", fitting::to_json(f)},
           {"form", "dV/dt = u(t - theta) - q, V(q) = a q^(b+1)/(b+1), tau(q) = a q^b"},
           {"sensor", fitting::to_string(m.model.sensor)},
           {"sensor_form", m.model.sensor == fitting::LiquefierSensor::flow ? "y = g q + c" : "y = g V + c"},
-          {"reference_input", num(m.model.reference_input)},
+          {"reference_input", number_or_null(m.model.reference_input)},
           {"input_unit", m.input_unit},
-          {"input_range", {num(m.input_min_positive), num(m.input_max)}},
+          {"input_range", {number_or_null(m.input_min_positive), number_or_null(m.input_max)}},
           {"a", param_json(f.derived.front())},
           {"b", param_json(f.param("b"))},
           {"theta_s", param_json(f.param("theta_s"))},
@@ -144,9 +144,9 @@ nlohmann::json to_json(const WholeRecordModel& m) {
           {"b_nonlinear", param_json(m.model.nonlinear.param("b"))},
           {"test",
            {{"name", "F-test of b = 0 at 5 % (the linear model is kept when b's 95 % profile interval holds 0)"},
-            {"statistic", num(m.model.f_statistic)},
-            {"threshold", num(m.model.f_threshold)}}},
-          {"variance_factor", num(m.model.variance_factor)},
+            {"statistic", number_or_null(m.model.f_statistic)},
+            {"threshold", number_or_null(m.model.f_threshold)}}},
+          {"variance_factor", number_or_null(m.model.variance_factor)},
           {"substeps", m.model.substeps},
           {"step_checks", checks},
           {"warnings", m.warnings}};

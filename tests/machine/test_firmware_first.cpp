@@ -24,17 +24,17 @@
 using tunekit::test::FakeKlipper;
 using tunekit::test::FakeKlipperConfig;
 using tunekit::test::scratch_dir;
-namespace tp = tunekit::protocols;
+namespace tprot = tunekit::protocols;
 
 namespace {
 
-tp::RunOptions bundled_profile_on(const std::string& sock, const std::string& protocol, const std::string& dir) {
-  tp::RunOptions o;
+tprot::RunOptions bundled_profile_on(const std::string& sock, const std::string& protocol, const std::string& dir) {
+  tprot::RunOptions o;
   o.protocol = protocol;
   o.machine = tunekit::test::dataset("machines/sim.toml");
   o.port = "unix:" + sock;
   o.run_dir = dir;
-  if (tp::protocol_spec(protocol).uses_axis) o.axis = "x";
+  if (tprot::protocol_spec(protocol).uses_axis) o.axis = "x";
   return o;
 }
 
@@ -48,7 +48,7 @@ std::string joined(const std::vector<std::string>& v) {
 
 TEST_CASE("every protocol built for the bundled profile uses only commands a Klipper peer knows",
           "[machine][klipper]") {
-  for (const auto& spec : tp::protocol_specs()) {
+  for (const auto& spec : tprot::protocol_specs()) {
     INFO("protocol " << spec.name);
     const auto dir = scratch_dir("fw_first_" + spec.name);
     const std::string sock = dir + "/klippy_uds";
@@ -57,7 +57,7 @@ TEST_CASE("every protocol built for the bundled profile uses only commands a Kli
     FakeKlipper server(sock, tunekit::sim::SimConfig::from_options({"firmware=klipper"}), fake);
     auto o = bundled_profile_on(sock, spec.name, dir + "/run");
     if (spec.name == "axis-sweep") o.params = {{"freq_start_hz", 35}, {"freq_end_hz", 70}, {"hz_per_sec", 3}};
-    const auto res = tp::run_experiment(o);
+    const auto res = tprot::run_experiment(o);
     REQUIRE(res.status == "complete");
     // Identified before anything else was sent: info, then the configuration in force.
     const auto requests = server.requests();
@@ -85,7 +85,7 @@ TEST_CASE("the axis sweep on a Klipper peer takes its nominal time within 2 %", 
   FakeKlipper server(sock, tunekit::sim::SimConfig::from_options({"firmware=klipper"}));
   auto o = bundled_profile_on(sock, "axis-sweep", dir + "/run");
   o.params = {{"freq_start_hz", 20}, {"freq_end_hz", 60}, {"hz_per_sec", 4}};
-  const auto res = tp::run_experiment(o);
+  const auto res = tprot::run_experiment(o);
   REQUIRE(res.status == "complete");
   // Nominal: the sweep's design, settle + (f1 - f0) / rate + settle (its half periods follow
   // f(t) = f0 + rate t).
@@ -112,7 +112,7 @@ TEST_CASE("a profile naming another firmware is refused with both names when ask
   auto o = bundled_profile_on(sock, "axis-rectangle", dir + "/run");
   o.strict_firmware = true;
   try {
-    tp::run_experiment(o);
+    tprot::run_experiment(o);
     FAIL("a Marlin profile ran on Klipper");
   } catch (const tunekit::InputError& e) {
     const std::string m = e.what();
@@ -140,7 +140,7 @@ TEST_CASE("Klipper's reported limits are applied where stricter than the profile
     // within Klipper's 1200: refused before the protocol's first line is sent.
     FakeKlipper refusing(sock, sim_cfg, fake);
     try {
-      tp::run_experiment(o);
+      tprot::run_experiment(o);
       FAIL("a feed acceleration above Klipper's max_extrude_only_accel was sent");
     } catch (const tunekit::InputError& e) {
       CHECK(std::string(e.what()).find("1200") != std::string::npos);
@@ -150,7 +150,7 @@ TEST_CASE("Klipper's reported limits are applied where stricter than the profile
   FakeKlipper server(sock, sim_cfg, fake);
   o.params = {{"accel_mm_s2", 1000}};
   o.run_dir = dir + "/run2";
-  const auto res = tp::run_experiment(o);
+  const auto res = tprot::run_experiment(o);
   REQUIRE(res.status == "complete");
   const auto& ex = res.experiment.excitation;
   CHECK(ex["extrude_only_accel_mm_s2"].get<double>() == Approx(1000));
@@ -164,7 +164,7 @@ TEST_CASE("Klipper's reported limits are applied where stricter than the profile
   FakeKlipper server2(dir2 + "/klippy_uds", tunekit::sim::SimConfig::from_options({"firmware=klipper"}), fake);
   auto o2 = bundled_profile_on(dir2 + "/klippy_uds", "axis-sweep", dir2 + "/run");
   o2.params = {{"freq_start_hz", 35}, {"freq_end_hz", 45}, {"hz_per_sec", 5}};
-  const auto res2 = tp::run_experiment(o2);
+  const auto res2 = tprot::run_experiment(o2);
   const std::string g = [&] {
     std::string s;
     for (const auto& l : res2.gcode) s += l + "\n";
@@ -195,7 +195,7 @@ TEST_CASE("Klipper settings: live values win over the configuration, missing one
   CHECK(k.shaper.at("x") == "ei:55:0.1");
   CHECK(k.shaper.count("y") == 0);
   std::vector<std::string> notes;
-  auto profile = tp::builtin_sim_profile();
+  auto profile = tprot::builtin_sim_profile();
   const double feed_limit = profile.extruder.max_velocity_mm_s;
   const auto p = tunekit::machine::with_klipper_settings(profile, k, notes);
   CHECK(p.extruder.max_accel_mm_s2 == 800);           // stricter than the profile's 5000

@@ -18,37 +18,10 @@
 #include "tunekit/core/error.hpp"
 
 using tunekit::test::run_cli;
+using tunekit::test::shell_words;
 namespace fs = std::filesystem;
 
 namespace {
-
-/// Splits a shell command line into words (single and double quotes, no expansion).
-std::vector<std::string> shell_words(const std::string& line) {
-  std::vector<std::string> words;
-  std::string cur;
-  bool in_word = false;
-  char quote = 0;
-  for (char c : line) {
-    if (quote) {
-      if (c == quote) quote = 0;
-      else cur += c;
-      continue;
-    }
-    if (c == '\'' || c == '"') {
-      quote = c;
-      in_word = true;
-    } else if (c == ' ' || c == '\t') {
-      if (in_word) words.push_back(cur);
-      cur.clear();
-      in_word = false;
-    } else {
-      cur += c;
-      in_word = true;
-    }
-  }
-  if (in_word) words.push_back(cur);
-  return words;
-}
 
 /// The README's shell examples that call tunekit with --require (continuation lines joined,
 /// trailing comments removed).

@@ -55,4 +55,7 @@ struct SummaryCell {
 /// The numeric cells of the report's summary table (data-path, data-value, shown text).
 std::vector<SummaryCell> summary_cells(const std::string& html);
 
+/// Splits a shell command line into words (single and double quotes, no expansion).
+std::vector<std::string> shell_words(const std::string& line);
+
 }  // namespace tunekit::test
