@@ -189,7 +189,7 @@ def main():
         shutil.rmtree(a.work, ignore_errors=True)
         os.makedirs(a.work)
         run = os.path.join(a.work, "run")
-        p = subprocess.run([a.tunekit, "calibrate", "--machine", "sim", "--out", run], capture_output=True, text=True,
+        p = subprocess.run([a.tunekit, "calibrate", "--machine", "sim", "--sim", "preset=peek", "--out", run], capture_output=True, text=True,
                            timeout=600)
         if p.returncode != 0:
             print(f"FAILED: tunekit calibrate exited {p.returncode}: {p.stderr}")
