@@ -138,9 +138,13 @@ StepOutcome compute_step(const StepOptions& a) {
   if (!a.input_column.empty()) {
     // The whole-record model beside the per-step fits: any excitation, steps settled or not.
     try {
+      std::string basis;
+      const auto sensor = ident::sensor_for_record(res, ident::sensor_for_output_unit(opt.output_unit), &basis);
+      fitting::LiquefierFitOptions fo;
+      fo.profile = a.profile_intervals;
       outcome.whole_record = ident::analyze_whole_record(tcol.values, table.column(a.input_column).values, ycol.values,
-                                                         ident::sensor_for_output_unit(opt.output_unit), input_unit,
-                                                         opt.output_unit, &res);
+                                                         sensor, input_unit, opt.output_unit, &res, fo);
+      outcome.whole_record->sensor_basis = basis;
     } catch (const Error& e) {
       outcome.whole_record_error = e.message();
       res.warnings.push_back("whole-record model not fitted: " + e.message());
@@ -171,6 +175,7 @@ Envelope to_envelope(const StepOutcome& o) {
        {"step_time_s", a.step_time_s},
        {"step_size", std::isnan(a.step_size) ? nlohmann::json(nullptr) : nlohmann::json(a.step_size)},
        {"min_step_fraction", a.analysis.detect.min_step_fraction},
+       {"profile_intervals", a.profile_intervals},
        {"step_at", a.input_column.empty() ? nlohmann::json(nullptr)
                                           : nlohmann::json(step_instant_option_name(a.analysis.detect.instant))}});
   env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);

@@ -24,7 +24,9 @@ using Jet4 = ceres::Jet<double, 4>;
 double steady_volume(double a, double b, double u) { return u > 0 ? a * std::pow(u, b + 1) / (b + 1) : 0.0; }
 
 constexpr double kThetaMaxFraction = 0.25;  // theta at most this share of the record
-constexpr std::size_t kThinTarget = 3000;   // samples of the thinned record the start is found on
+constexpr std::size_t kThinTarget = 3000;
+constexpr int kMaxSubsteps =
+    64;  // sub-steps of one sample interval at most   // samples of the thinned record the start is found on
 
 struct Rec {
   std::vector<double> t, u, y;
@@ -36,7 +38,8 @@ struct ModelProblem {
   Rec rec;
   bool volume = false;
   double q_ref = 1;
-  int substeps = 1;
+  int substeps = 1;     ///< sub-steps in the longest sample interval (reported)
+  double h_max = 0;     ///< longest sub-step (s): an eighth of the smallest time constant
   bool fix_v0 = false;  ///< the record starts empty: V0 held at 0 (its derivative vanishes there)
   LsqProblem lsq;
 };
@@ -53,7 +56,7 @@ void bind(ModelProblem& mp) {
     if (jac == nullptr) {
       std::vector<double> s(n);
       const double a = p[0] * std::exp(-p[1] * ln_qref);
-      simulate(rc.t.data(), rc.u.data(), n, a, p[1], p[2], p[5], self->volume, self->substeps, s.data());
+      simulate(rc.t.data(), rc.u.data(), n, a, p[1], p[2], p[5], self->volume, kMaxSubsteps, self->h_max, s.data());
       for (std::size_t i = 0; i < n; ++i) {
         r[i] = p[3] * s[i] + p[4] - rc.y[i];
         if (!std::isfinite(r[i])) return false;
@@ -63,7 +66,7 @@ void bind(ModelProblem& mp) {
     std::vector<Jet4> s(n);
     const Jet4 tau(p[0], 0), b(p[1], 1), theta(p[2], 2), v0(p[5], 3);
     const Jet4 a = tau * exp(-b * ln_qref);
-    simulate(rc.t.data(), rc.u.data(), n, a, b, theta, v0, self->volume, self->substeps, s.data());
+    simulate(rc.t.data(), rc.u.data(), n, a, b, theta, v0, self->volume, kMaxSubsteps, self->h_max, s.data());
     for (std::size_t i = 0; i < n; ++i) {
       r[i] = p[3] * s[i].a + p[4] - rc.y[i];
       if (!std::isfinite(r[i])) return false;
@@ -151,7 +154,7 @@ std::array<double, 4> linear_grid_start(const Rec& r, bool volume) {
     const double tau = tau_lo * std::pow(tau_hi / tau_lo, i / double(nt - 1));
     for (double th : {0.0, 1.0, 2.0, 4.0, 8.0, 16.0}) {
       const double theta = std::min(th * dt, kThetaMaxFraction * T * 0.5);
-      simulate(r.t.data(), r.u.data(), n, tau, 0.0, theta, tau * r.u.front(), volume, 1, s.data());
+      simulate(r.t.data(), r.u.data(), n, tau, 0.0, theta, tau * r.u.front(), volume, 1, 0.0, s.data());
       double g = 0, c = 0;
       const double rss = linear_gc(s, r.y, g, c);
       if (rss < best_rss) best_rss = rss, best = {tau, theta, g, c};
@@ -181,7 +184,14 @@ FitResult solve(ModelProblem& mp, const std::array<double, 6>& start, const Liqu
                 const LiquefierRecord& rec, bool fix_b, bool covariance) {
   mp.lsq.params = specs(mp, start, o, rec, fix_b);
   // The exponential step is exact for the linear model: one sub-step.
-  mp.substeps = fix_b ? 1 : substeps_for(mp.rec, start[0] * std::pow(mp.q_ref, -start[1]), start[1]);
+  if (fix_b) {
+    mp.substeps = 1;
+    mp.h_max = 0;
+  } else {
+    const double a = start[0] * std::pow(mp.q_ref, -start[1]);
+    mp.substeps = substeps_for(mp.rec, a, start[1]);
+    mp.h_max = liquefier_max_substep_s(mp.rec.u, a, start[1]);
+  }
   LsqOptions lo;
   lo.compute_covariance = covariance;
   lo.require_convergence = covariance;
@@ -195,6 +205,24 @@ FitResult solve(ModelProblem& mp, const std::array<double, 6>& start, const Liqu
 std::array<double, 6> values(const FitResult& f) {
   return {f.params[0].value, f.params[1].value, f.params[2].value,
           f.params[3].value, f.params[4].value, f.params[5].value};
+}
+
+/// The full record's fit: solved first without the covariance; a stored volume at the start that
+/// ends at (or within 0.1 % of the largest stored volume from) its bound 0 is held there, where the
+/// output does not depend on it (the record starts with an empty liquefier); then the covariance
+/// from that solution.
+FitResult solve_full(ModelProblem& full, const std::array<double, 6>& start, const LiquefierFitOptions& o,
+                     const LiquefierRecord& rec) {
+  std::array<double, 6> v = values(solve(full, start, o, rec, !o.fit_b, false));
+  if (!full.fix_v0) {
+    const double a = v[0] * std::pow(full.q_ref, -v[1]);
+    const double umax = *std::max_element(rec.u.begin(), rec.u.end());
+    if (v[5] <= 1e-3 * steady_volume(a, v[1], umax)) {
+      full.fix_v0 = true;
+      v[5] = 0;
+    }
+  }
+  return solve(full, v, o, rec, !o.fit_b, true);
 }
 
 /// 1 + 2 sum of the residuals' autocorrelation up to its first non-positive lag (>= 1).
@@ -292,14 +320,20 @@ double liquefier_volume(const LiquefierParams& p, double q) {
   return q > 0 ? p.a * std::pow(q, p.b + 1) / (p.b + 1) : 0.0;
 }
 
-int liquefier_substeps(const std::vector<double>& t, const std::vector<double>& u, double a, double b) {
-  double dt_max = 0;
-  for (std::size_t i = 1; i < t.size(); ++i) dt_max = std::max(dt_max, t[i] - t[i - 1]);
+double liquefier_max_substep_s(const std::vector<double>& u, double a, double b) {
   double tau_min = std::numeric_limits<double>::infinity();
   for (double v : u)
     if (v > 0) tau_min = std::min(tau_min, a * std::pow(v, b));
-  if (!(tau_min > 0) || !std::isfinite(tau_min)) return 1;
-  return std::clamp(static_cast<int>(std::ceil(8 * dt_max / tau_min)), 1, 64);
+  if (!(tau_min > 0) || !std::isfinite(tau_min)) return 0;
+  return tau_min / 8;
+}
+
+int liquefier_substeps(const std::vector<double>& t, const std::vector<double>& u, double a, double b) {
+  double dt_max = 0;
+  for (std::size_t i = 1; i < t.size(); ++i) dt_max = std::max(dt_max, t[i] - t[i - 1]);
+  const double h = liquefier_max_substep_s(u, a, b);
+  if (!(h > 0)) return 1;
+  return std::clamp(static_cast<int>(std::ceil(dt_max / h)), 1, kMaxSubsteps);
 }
 
 std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::vector<double>& u,
@@ -307,10 +341,13 @@ std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::
   if (t.size() != u.size() || t.empty()) throw InputError("simulate_liquefier: time and input differ in length");
   if (!(p.a > 0) || !(p.b > -1) || !(p.theta_s >= 0))
     throw InputError("simulate_liquefier: a must be positive, b above -1 and theta at least 0");
-  const int ns = substeps > 0 ? substeps : liquefier_substeps(t, u, p.a, p.b);
+  // A fixed count when given; else sized per sample interval.
+  const int ns = substeps > 0 ? substeps : kMaxSubsteps;
+  const double h_max = substeps > 0 ? 0.0 : liquefier_max_substep_s(u, p.a, p.b);
   std::vector<double> s(t.size());
   const double v0 = std::isfinite(p.v0) ? p.v0 : steady_volume(p.a, p.b, u.front());
-  simulate(t.data(), u.data(), t.size(), p.a, p.b, p.theta_s, v0, sensor == LiquefierSensor::pressure, ns, s.data());
+  simulate(t.data(), u.data(), t.size(), p.a, p.b, p.theta_s, v0, sensor == LiquefierSensor::pressure, ns, h_max,
+           s.data());
   for (double& v : s) v = p.g * v + p.c;
   return s;
 }
@@ -369,7 +406,7 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
     const double umax = *std::max_element(rec.u.begin(), rec.u.end());
     full.fix_v0 = v[5] <= 1e-6 * steady_volume(a0, v[1], umax);
   }
-  FitResult nl = solve(full, values(best), o, rec, !o.fit_b, true);
+  FitResult nl = solve_full(full, values(best), o, rec);
   out.substeps = full.substeps;
   if (!o.fit_b) {
     out.variance_factor = variance_factor(residuals_at(full, nl));

@@ -54,11 +54,13 @@ void store_step(T& V, const T& h, const T& u0, const T& u1, const T& ln_a, const
 
 /// Simulates the record (t, u of n samples) from the stored volume V0 at t[0] and writes the
 /// sensor-free signal (q, or V when `volume`) at every sample into out. The delayed input u(t - theta) is piecewise
-/// linear with breakpoints at t_j + theta; every piece between two breakpoints or samples is integrated in `substeps`
-/// equal steps.
+/// linear with breakpoints at t_j + theta; every piece between two breakpoints or samples is integrated in equal
+/// steps: ceil((t[k+1] - t[k]) / h_max) of them for the pieces between samples k and k+1 (1..max_substeps; all
+/// max_substeps when h_max is not positive). The count depends on the sample times only, never on the parameters,
+/// so the simulation is a smooth function of them.
 template <class T>
 void simulate(const double* t, const double* u, std::size_t n, const T& a, const T& b, const T& theta, const T& V0,
-              bool volume, int substeps, T* out) {
+              bool volume, int max_substeps, double h_max, T* out) {
   using std::exp;
   using std::log;
   const T bp1 = b + 1.0;
@@ -81,7 +83,8 @@ void simulate(const double* t, const double* u, std::size_t n, const T& a, const
     const T w = (T(s) - theta - t[j - 1]) / (t[j] - t[j - 1]);
     return u[j - 1] + (u[j] - u[j - 1]) * w;
   };
-  const double inv_sub = 1.0 / substeps;
+  int substeps = max_substeps;
+  double inv_sub = 1.0 / substeps;
   auto piece = [&](const T& s, const T& e, const T& us, const T& ue) {
     const T h = (e - s) * inv_sub;
     const T du = (ue - us) * inv_sub;
@@ -89,6 +92,11 @@ void simulate(const double* t, const double* u, std::size_t n, const T& a, const
       store_step(V, h, us + du * double(i), us + du * double(i + 1), ln_a, bp1, ln_bp1, inv_bp1);
   };
   for (std::size_t k = 0; k + 1 < n; ++k) {
+    if (h_max > 0) {
+      const double c = std::ceil((t[k + 1] - t[k]) / h_max);
+      substeps = c >= max_substeps ? max_substeps : (c > 1 ? static_cast<int>(c) : 1);
+      inv_sub = 1.0 / substeps;
+    }
     T s(t[k]);
     T us = delayed(t[k]);
     while (j < n && t[j] + th < t[k + 1]) {

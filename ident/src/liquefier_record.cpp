@@ -73,6 +73,21 @@ fitting::LiquefierSensor sensor_for_output_unit(const std::string& unit) {
   return fitting::LiquefierSensor::flow;
 }
 
+fitting::LiquefierSensor sensor_for_record(const StepAnalysis& steps, fitting::LiquefierSensor by_unit,
+                                           std::string* basis) {
+  if (basis != nullptr) *basis = "unit";
+  const auto& tr = steps.level_trends;
+  if (!tr.tau || !tr.K) return by_unit;
+  const auto& bt = tr.tau->param("b");
+  const auto& bk = tr.K->param("b");
+  if (!(bt.std_error > 0) || !(bk.std_error > 0) || !(std::abs(bt.value) > 2 * bt.std_error)) return by_unit;
+  // Standard errors of K's exponent from each sensor's prediction: g tau(u) (pressure), constant (flow).
+  const double off_pressure = std::abs(bk.value - bt.value) / std::hypot(bk.std_error, bt.std_error);
+  const double off_flow = std::abs(bk.value) / bk.std_error;
+  if (basis != nullptr) *basis = "operating points";
+  return off_pressure < off_flow ? fitting::LiquefierSensor::pressure : fitting::LiquefierSensor::flow;
+}
+
 double WholeRecordModel::tau_at(double q) const {
   return model.fit.value("tau_ref_s") * std::pow(q / model.reference_input, model.fit.value("b"));
 }
@@ -92,7 +107,8 @@ double WholeRecordModel::tau_stderr_at(double q) const {
 
 WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
                                       fitting::LiquefierSensor sensor, const std::string& input_unit,
-                                      const std::string& output_unit, const StepAnalysis* steps) {
+                                      const std::string& output_unit, const StepAnalysis* steps,
+                                      const fitting::LiquefierFitOptions& options) {
   fitting::LiquefierRecord rec;
   rec.t.assign(t.begin(), t.end());
   rec.u.assign(u.begin(), u.end());
@@ -103,7 +119,7 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
   WholeRecordModel m;
   m.input_unit = input_unit;
   m.output_unit = output_unit;
-  m.model = fitting::fit_liquefier_model(rec);
+  m.model = fitting::fit_liquefier_model(rec, options);
   m.input_max = *std::max_element(rec.u.begin(), rec.u.end());
   for (double v : rec.u)
     if (v > 0 && !(v >= m.input_min_positive)) m.input_min_positive = v;
@@ -140,6 +156,7 @@ nlohmann::json to_json(const WholeRecordModel& m) {
   return {{"model", fitting::to_json(f)},
           {"form", "dV/dt = u(t - theta) - q, V(q) = a q^(b+1)/(b+1), tau(q) = a q^b"},
           {"sensor", fitting::to_string(m.model.sensor)},
+          {"sensor_chosen_by", m.sensor_basis},
           {"sensor_form", m.model.sensor == fitting::LiquefierSensor::flow ? "y = g q + c" : "y = g V + c"},
           {"reference_input", number_or_null(m.model.reference_input)},
           {"input_unit", m.input_unit},

@@ -10,6 +10,8 @@
 namespace tunekit::protocols {
 namespace {
 
+constexpr double kMaxLineStepRatio = 1.55;
+
 std::string line_steps_num(double v, int decimals = 4) {
   std::string s = fmt::format("{:.{}f}", v, decimals);
   if (s.find('.') != std::string::npos) {
@@ -41,6 +43,13 @@ std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& 
   const double lead = line_steps_param(p, "lead_mm"), step = line_steps_param(p, "step_mm"),
                tail = line_steps_param(p, "tail_mm");
   const double lo = line_steps_param(p, "low_flow"), hi = line_steps_param(p, "high_flow");
+  // The photo measurement flags a stretch wider than 1.6 times its line's median width as two
+  // merged beads: a step wider than that would be dropped from the measured widths.
+  if (!(std::max(hi, lo) <= kMaxLineStepRatio * std::min(hi, lo)))
+    throw InputError(
+        fmt::format("line-steps: high_flow {:g} and low_flow {:g} differ by more than a factor {:g} (a "
+                    "photo takes a line that much wider for two merged beads)",
+                    hi, lo, kMaxLineStepRatio));
   const double spacing = line_steps_param(p, "spacing_mm");
   const int n = std::max(1, static_cast<int>(std::lround(line_steps_param(p, "lines"))));
   const double e_per_mm = profile.line_area_mm2() / profile.filament_area_mm2();

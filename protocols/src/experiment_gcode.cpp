@@ -37,13 +37,22 @@ std::string num(double v, int decimals) {
   return s;
 }
 
+constexpr double kMaxMovesPerSegment = 1e6;
+
 /// One constant-feed segment of `duration_s` at `feed_mm_s`, split into moves of at most
 /// max_len_mm. When the firmware stops after each move, the move's speed is raised so that the
 /// move with its ramps (d / v + v / a) still takes its share of the duration and delivers its
 /// share of the length: the staircase keeps its labelled timing.
 void feed_move(std::vector<std::string>& g, const FeedPlan& fp, double feed_mm_s, double duration_s) {
   const double total = feed_mm_s * duration_s;
-  const int n = std::max(1, static_cast<int>(std::ceil(total / fp.max_len_mm - 1e-9)));
+  const double moves = std::ceil(total / fp.max_len_mm - 1e-9);
+  // A segment is at most a million moves (the most lines any protocol may have); NaN fails too.
+  if (!(moves <= kMaxMovesPerSegment))
+    throw InputError(fmt::format(
+        "a feed segment of {:.4g} mm ({:.4g} mm/s for {:.4g} s) would take more than {:.0f} extrude-only moves of at "
+        "most {:.4g} mm (the extruder's max_extrude_only_distance): shorten the segment or lower the feed",
+        total, feed_mm_s, duration_s, kMaxMovesPerSegment, fp.max_len_mm));
+  const int n = std::max(1, static_cast<int>(moves));
   const double d = total / n, dt = duration_s / n;
   double v = feed_mm_s;
   if (fp.stops) {

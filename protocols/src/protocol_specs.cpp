@@ -142,8 +142,10 @@ std::vector<ProtocolSpec> make_specs() {
                 {"lead_mm", 45, "mm", "length at the low flow before the step (several tau * v)"},
                 {"step_mm", 50, "mm", "length at the high flow"},
                 {"tail_mm", 55, "mm", "length at the low flow after the step"},
-                {"low_flow", 0.8, "", "low flow, relative to the profile's line width x layer height"},
-                {"high_flow", 1.5, "", "high flow, relative"},
+                {"low_flow", 0.9, "", "low flow, relative to the profile's line width x layer height"},
+                {"high_flow", 1.3, "",
+                 "high flow, relative (at most 1.6 times the low flow: the photo measurement takes a line wider than "
+                 "1.6 times its median for two merged beads)"},
                 {"spacing_mm", 6, "mm", "distance between the lines"},
                 {"center_x_mm", kMachineDefault, "mm", "middle of the lines in x (default: middle of the travel)",
                  ParamDomain::any, kMaxLengthMm},

@@ -34,9 +34,7 @@ double mean_y(const nlohmann::json& line) {
 
 TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from the photo", "[calibrate]") {
   const std::string dir = tunekit::test::scratch_dir("calibrate_camera") + "/run";
-  // The PEEK liquefier (tau 0.45 s, flow-independent): the printed tests were sized for it. The
-  // desktop default's tens of milliseconds are a fraction of a millimetre of line at the test's
-  // speed, below what these photographed tests resolve (the open follow-up: faster line tests).
+  // The PEEK liquefier (tau 0.45 s, flow-independent; the desktop default is the next test).
   const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera", "sim",
                                          "--skip-axes", "--out", dir, "--json", "--sim", "preset=peek"});
   INFO(r.err);
@@ -64,6 +62,40 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   CHECK(fs::exists(dir + "/liquefier-camera/photo.png"));
   // Pressure advance is designed from the camera's tau.
   CHECK(res.at("compensators").at("settings").at("pa_k_s").get<double>() > 0);
+}
+
+TEST_CASE(
+    "calibrate's camera path on the default desktop printer: every step of every line, tau of the line test's flows",
+    "[calibrate]") {
+  const std::string dir = tunekit::test::scratch_dir("calibrate_camera_desktop") + "/run";
+  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera", "sim",
+                                         "--skip-axes", "--out", dir, "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto env = nlohmann::json::parse(r.out);
+  const auto& res = env.at("results");
+  // Both flow changes of each of the 3 lines are in the measured widths (a wide stretch taken for
+  // two merged beads would drop the high-flow part and its falling step).
+  const auto& step = res.at("liquefier").at("step");
+  CHECK(step.at("steps").size() == 6);
+  // The truth's tau at the line test's two feeds (tau falls with the feed): the pooled tau lies
+  // between them, within 10 %.
+  const auto truth = tunekit::test::read_json(dir + "/liquefier-lines/truth.json").at("liquefier");
+  const auto params = tunekit::test::read_json(dir + "/liquefier-lines/run.json").at("experiment").at("params");
+  const auto profile = tunekit::machine::load_machine_profile(tunekit::test::dataset("machines/sim.toml"));
+  auto tau_at = [&](double relative_flow) {
+    const double feed =
+        relative_flow * profile.line_area_mm2() * params.at("speed_mm_s").get<double>() / profile.filament_area_mm2();
+    return truth.at("tau_s").get<double>() *
+           std::pow(feed / truth.at("tau_ref_feed_mm_s").get<double>(), truth.at("tau_flow_exponent").get<double>());
+  };
+  const double t_hi = tau_at(params.at("low_flow").get<double>()), t_lo = tau_at(params.at("high_flow").get<double>());
+  const double tau = step.at("pooled").at("params").at("tau_s").at("value").get<double>();
+  INFO("tau " << tau << " s; truth " << t_lo << " .. " << t_hi << " s");
+  CHECK(tau > 0.9 * t_lo);
+  CHECK(tau < 1.1 * t_hi);
+  CHECK(step.at("pooled").at("params").at("theta_s").at("value").get<double>() ==
+        Approx(truth.at("theta_s").get<double>()).epsilon(0.20));
 }
 
 TEST_CASE("tunekit linewidth on calibrate's camera photo gives calibrate's line widths, ring gain and phase",

@@ -30,9 +30,11 @@ std::string store_log(const test::StoreRecord& s, const std::string& name) {
 
 /// `tunekit step` then `tunekit export -f klipper` at the design flow; returns export's results.
 nlohmann::json step_then_export(const std::string& log, const std::string& dir, double design_flow,
-                                nlohmann::json* step_results) {
-  const auto r = test::run_cli(
-      {"step", log, "--input", "flow_mm3_s", "--output", "outflow_mm3_s", "--json", "-o", dir + "/step.json"});
+                                nlohmann::json* step_results, bool profile_intervals = false) {
+  std::vector<std::string> args{"step",          log,      "--input", "flow_mm3_s",      "--output",
+                                "outflow_mm3_s", "--json", "-o",      dir + "/step.json"};
+  if (profile_intervals) args.push_back("--profile-intervals");
+  const auto r = test::run_cli(args);
   INFO(r.err);
   REQUIRE(r.code == 0);
   if (step_results) *step_results = nlohmann::json::parse(r.out).at("results");
@@ -53,11 +55,13 @@ TEST_CASE("export designs the advance V(Q)/Q of the whole-record model within 10
   const std::string dir = test::scratch_dir("store_export_nonlinear");
   nlohmann::json step;
   const double qd = 8.0;
-  const auto ex = step_then_export(store_log(s, "store_nonlinear.csv"), dir, qd, &step);
+  // --profile-intervals: b's and theta's intervals by profile likelihood (default: widened Wald).
+  const auto ex = step_then_export(store_log(s, "store_nonlinear.csv"), dir, qd, &step, true);
   const auto& wr = step.at("whole_record");
   REQUIRE(wr.contains("a"));
   CHECK(wr.at("linear_chosen") == false);
   CHECK(wr.at("b").at("ci95_method") == "profile-likelihood");
+  CHECK(wr.at("theta_s").at("ci95_method") == "profile-likelihood");
   const double truth = tr.volume(qd) / qd;
   const double k = ex.at("settings").at("pa_k_s").get<double>();
   INFO("exported K " << k << " s, truth V(Q)/Q " << truth << " s");

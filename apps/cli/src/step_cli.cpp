@@ -62,6 +62,9 @@ void register_step(CLI::App& app, CliContext& ctx) {
       "the new one. midpoint: half-way (interpolated; for logs sampled independently of the changes, "
       "e.g. a printer's); first: at the first new sample (input changes exactly at sample instants). "
       "Moves t_step and theta_s (s) by up to half a sample interval");
+  sub->add_flag("--profile-intervals", o.profile_intervals,
+                "With --input: the whole-record model's 95 % intervals of b and theta_s by profile likelihood "
+                "(several times slower; default: Wald intervals widened for correlated residuals)");
   add_output_options(sub, cmd->output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"

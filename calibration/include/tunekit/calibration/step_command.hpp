@@ -27,6 +27,9 @@ struct StepOptions {
   double step_size = std::numeric_limits<double>::quiet_NaN();  ///< without an input: the input change
   /// Model, step detection and operating points; the units are filled in by compute_step().
   ident::StepAnalysisOptions analysis;
+  /// The whole-record model's intervals of b and theta by profile likelihood (slower) instead of
+  /// Wald intervals widened for correlated residuals.
+  bool profile_intervals = false;
 };
 
 struct StepOutcome {

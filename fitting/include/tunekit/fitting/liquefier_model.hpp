@@ -70,12 +70,17 @@ struct LiquefierParams {
 
 /// The sensor output y = g s + c at every sample, s the outflow q (flow sensor) or the stored
 /// volume V (pressure sensor). The store starts at p.v0 (NaN: settled at the first input).
-/// substeps <= 0: sized from the record and the parameters (liquefier_substeps).
+/// substeps > 0: that many sub-steps in every piece; else sized per sample interval so that each
+/// is at most liquefier_max_substep_s (1..64).
 std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::vector<double>& u,
                                        const LiquefierParams& p, LiquefierSensor sensor, int substeps = 0);
 
-/// Sub-steps per piece so that each is at most an eighth of the smallest time constant the input
-/// reaches (1..64).
+/// The longest sub-step (s): an eighth of the smallest time constant the input reaches under
+/// (a, b); 0 when no input is positive.
+double liquefier_max_substep_s(const std::vector<double>& u, double a, double b);
+
+/// Sub-steps the longest sample interval needs so that each is at most liquefier_max_substep_s
+/// (1..64).
 int liquefier_substeps(const std::vector<double>& t, const std::vector<double>& u, double a, double b);
 
 /// tau(q) = a q^b (s).

@@ -22,6 +22,15 @@ namespace tunekit::ident {
 /// anything else (a flow, a line width) the outflow.
 fitting::LiquefierSensor sensor_for_output_unit(const std::string& unit);
 
+/// What the output senses, read from the operating points when they show it: a sensor of the
+/// stored volume (pressure, V = a q^(b+1)/(b+1)) has a step gain that follows tau, K(u) = g tau(u),
+/// a sensor of the outflow a gain that does not depend on u. When tau's trend exponent is
+/// significant (beyond 2 standard errors), the sensor whose prediction of K's trend exponent lies
+/// fewer standard errors from the fitted one is chosen; otherwise (or without trends) `by_unit`.
+/// `basis` (may be null) receives "unit" or "operating points".
+fitting::LiquefierSensor sensor_for_record(const StepAnalysis& steps, fitting::LiquefierSensor by_unit,
+                                           std::string* basis);
+
 /// One step fit held against the model's prediction for that step.
 struct StepModelCheck {
   std::size_t step = 0;  ///< index into StepAnalysis::steps
@@ -36,6 +45,7 @@ struct WholeRecordModel {
   std::string input_unit = "1", output_unit = "1";
   double input_min_positive = fitting::kNaN, input_max = fitting::kNaN;  ///< the flows the record reached
   std::vector<StepModelCheck> checks;
+  std::string sensor_basis = "unit";  ///< what chose the sensor: "unit" or "operating points"
   std::vector<std::string> warnings;
   /// tau at input q from the chosen model (s), and its standard error from the fit's covariance.
   double tau_at(double q) const;
@@ -43,9 +53,11 @@ struct WholeRecordModel {
 };
 
 /// Fits the model to (t, u, y) and, when `steps` is given, checks its step fits against it.
+/// The intervals are Wald intervals widened for correlated residuals unless `options.profile`.
 WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
                                       fitting::LiquefierSensor sensor, const std::string& input_unit,
-                                      const std::string& output_unit, const StepAnalysis* steps);
+                                      const std::string& output_unit, const StepAnalysis* steps,
+                                      const fitting::LiquefierFitOptions& options);
 
 /// {model (the fit), sensor, reference_input, a, b, theta_s (each {value, ci95, method}),
 /// linear_chosen, test, variance_factor, substeps, input_range, step_checks, warnings}.
