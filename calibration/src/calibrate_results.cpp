@@ -16,6 +16,7 @@
 #include "calibrate_stages.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/calibration/agreement.hpp"
+#include "tunekit/calibration/design_inputs.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/core/atomic_file.hpp"
@@ -131,8 +132,8 @@ void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs
                   display_number(bb.fmax_hz), bb.segment_length,
                   display_number(bb.sample_rate_hz / static_cast<double>(bb.segment_length))));
   Estimate by_step, by_freq;
-  if (step && step->analysis.pooled && fit != nullptr &&
-      calibrate_estimate(step->analysis.pooled->param("tau_s"), "step response", by_step) &&
+  if (step && fit != nullptr &&
+      step_tau_for_freq(step_design_input(*step, ""), freq_design_input(chirp, ""), by_step) &&
       calibrate_estimate(fit->param("tau_s"), "frequency response", by_freq)) {
     auto a =
         compare_estimates("liquefier time constant tau", "s", by_step, by_freq, fitting::equivalence_margin("tau_s"));

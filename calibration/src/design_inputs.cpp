@@ -3,6 +3,7 @@
 // place export reads results JSON.
 #include "tunekit/calibration/design_inputs.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -90,6 +91,8 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
   const double a = number_at(res, "/trend/tau_s/a", "trend.tau_s.a", path);
   const double b = number_at(res, "/trend/tau_s/b", "trend.tau_s.b", path);
   if (std::isfinite(a) && std::isfinite(b)) in.trend = ident::TauPowerLaw{a, b};
+  in.trend_b_ci95_lo = number_at(res, "/trend/tau_s/b_ci95/0", "trend.tau_s.b_ci95[0]", path);
+  in.trend_b_ci95_hi = number_at(res, "/trend/tau_s/b_ci95/1", "trend.tau_s.b_ci95[1]", path);
   const json& unit = value_at_or_null(res, "/units/input"_json_pointer);
   const std::string input_unit = unit.is_string() ? unit.get<std::string>() : std::string();
   in.levels_in_flow = ident::is_volumetric_flow_unit(input_unit);
@@ -119,6 +122,9 @@ FreqDesignInput read_freq_results(const json& res, const std::string& path) {
   FreqDesignInput in;
   in.origin = path;
   in.tau_s = estimated_at(value_at_or_null(res, "/fit/params/tau_s"_json_pointer), "fit.params.tau_s", path);
+  in.input_min = number_at(res, "/input_range/min", "input_range.min", path);
+  in.input_max = number_at(res, "/input_range/max", "input_range.max", path);
+  in.input_mean = number_at(res, "/input_range/mean", "input_range.mean", path);
   return in;
 }
 
@@ -242,7 +248,12 @@ StepDesignInput step_design_input(const StepOutcome& o, const std::string& origi
     in.model.reset();
     return in;
   }
-  if (a.level_trends.tau) in.trend = ident::TauPowerLaw{a.level_trends.tau->value("a"), a.level_trends.tau->value("b")};
+  if (a.level_trends.tau) {
+    const auto& b = a.level_trends.tau->param("b");
+    in.trend = ident::TauPowerLaw{a.level_trends.tau->value("a"), b.value};
+    in.trend_b_ci95_lo = b.ci95_lo;
+    in.trend_b_ci95_hi = b.ci95_hi;
+  }
   for (const auto& l : a.arrival_levels) {
     if (!(l.u > 0)) continue;
     const auto& tau = l.fit.param("tau_s");
@@ -256,7 +267,23 @@ FreqDesignInput freq_design_input(const FreqOutcome& o, const std::string& origi
   FreqDesignInput in;
   in.origin = origin;
   if (const fitting::FitResult* fit = o.reported_fit()) in.tau_s = estimated_of(fit->param("tau_s"));
+  in.input_min = o.input_min;
+  in.input_max = o.input_max;
+  in.input_mean = o.input_mean;
   return in;
+}
+
+bool step_tau_for_freq(const StepDesignInput& s, const FreqDesignInput& f, Estimate& out) {
+  const bool flow_dependent = s.trend && (s.trend_b_ci95_lo > 0 || s.trend_b_ci95_hi < 0);
+  const double lo = std::max(f.input_min, 0.0), hi = f.input_max, mean = f.input_mean;
+  if (flow_dependent && lo > 0 && hi > lo && mean > 0) {
+    auto tau = [&](double u) { return s.trend->a * std::pow(u, s.trend->b); };
+    out = {fmt::format("step-response trend over the frequency record's inputs {:.4g}-{:.4g}", lo, hi), tau(mean),
+           std::min({tau(lo), tau(hi), tau(mean)}), std::max({tau(lo), tau(hi), tau(mean)})};
+  } else {
+    out = {"step response", s.tau_s.value, s.tau_s.ci95_lo, s.tau_s.ci95_hi};
+  }
+  return std::isfinite(out.value) && std::isfinite(out.ci95_lo) && std::isfinite(out.ci95_hi);
 }
 
 std::map<std::string, AxisShaperInput> shaper_design_inputs(const ShaperOutcome& o, const std::string& origin) {

@@ -40,7 +40,7 @@ void take_step(const StepDesignInput& s, LiquefierInputs& li) {
 /// Both measured: the step value is designed with; the two are compared by the one rule.
 void compare_step_and_freq(const StepDesignInput& s, const FreqDesignInput& f, LiquefierInputs& li, Envelope& env) {
   Estimate by_step, by_freq;
-  if (estimate_of(s.tau_s, "step response", by_step) && estimate_of(f.tau_s, "frequency response", by_freq)) {
+  if (step_tau_for_freq(s, f, by_step) && estimate_of(f.tau_s, "frequency response", by_freq)) {
     li.agreement.push_back(
         compare_estimates("liquefier time constant tau", "s", by_step, by_freq, fitting::equivalence_margin("tau_s")));
     li.agreement.back()["id"] = "tau";

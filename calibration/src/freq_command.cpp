@@ -5,6 +5,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <numeric>
 
 #include <fmt/format.h>
 
@@ -267,6 +268,15 @@ FreqOutcome compute_freq(const FreqOptions& a) {
   if (!a.input_unit.empty()) o.input_unit = a.input_unit;
   if (ident::is_volumetric_flow_unit(o.input_unit)) o.input_unit = "mm^3/s";
   o.warnings = table.warnings;
+  if (!a.input_column.empty()) {
+    const auto& u = table.column(a.input_column).values;
+    if (!u.empty()) {
+      const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
+      o.input_min = *lo;
+      o.input_max = *hi;
+      o.input_mean = std::accumulate(u.begin(), u.end(), 0.0) / static_cast<double>(u.size());
+    }
+  }
 
   if (o.mode == FreqMode::dwell) {
     if (!(a.freq_hz > 0)) throw InputError("sine dwell needs the excitation frequency: --freq-hz F (Hz)");
@@ -330,6 +340,8 @@ Envelope to_envelope(const FreqOutcome& o) {
   env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
   for (const auto& w : o.warnings) env.warn(w);
   auto& res = env.results();
+  if (std::isfinite(o.input_mean))
+    res["input_range"] = {{"min", o.input_min}, {"max", o.input_max}, {"mean", o.input_mean}, {"unit", o.input_unit}};
   if (o.dwell) res["sine_dwell"] = ident::to_json(*o.dwell);
   if (o.broadband) {
     const auto& bb = *o.broadband;

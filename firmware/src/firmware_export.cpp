@@ -236,7 +236,9 @@ std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::Advance
   }
   if (!std::isfinite(w) || w <= 0) return std::nullopt;
   const double scale = std::pow(10.0, detail::kDecimalsSmooth);
-  return std::max(1.0 / scale, std::ceil(w * scale - 1e-9) / scale);
+  // The design is the shortest window the extruder's acceleration allows; Klipper's default is
+  // kept unless that minimum is longer.
+  return std::max(limits::kKlipperSmoothTimeDefault_s, std::max(1.0 / scale, std::ceil(w * scale - 1e-9) / scale));
 }
 
 std::string advance_schedule_gcode(ExportFirmware fw, const std::vector<ident::ScheduledAdvance>& schedule,

@@ -164,13 +164,34 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
       files_[capture_name_] = capture_text_;
     }
   }
+  fed_in_window_mm_ += u * h;
+  if (stream_load_ && step_ % load_every_ == load_every_ / 2) {
+    emit_pending_load_sample();
+    window_start_t_ = t_;
+  }
   if (stream_load_ && step_ % load_every_ == 0) {
     const double f = cfg_.force_offset_N + force + cfg_.force_noise_N * normal_(rng_);
-    if (load_cell_sink) load_cell_sink(t_, f);
-    else fmt::format_to(std::back_inserter(out_), "echo:TKL {:.6f} {:.5f} {:.5f}\n", t_, u, f);
-    ++load_sent_;
+    if (load_cell_sink) {
+      load_cell_sink(t_, f);
+      ++load_sent_;
+    } else {
+      load_pending_ = true;
+      pending_t_ = t_;
+      pending_force_ = f;
+    }
   }
   if (out_.size() > sim::kOutputFlushBytes) out_flush(emit);
+}
+
+void Simulator::emit_pending_load_sample() {
+  if (load_pending_) {
+    const double span = t_ - window_start_t_;
+    const double u_mean = span > 0 ? fed_in_window_mm_ / span : 0.0;
+    fmt::format_to(std::back_inserter(out_), "echo:TKL {:.6f} {:.5f} {:.5f}\n", pending_t_, u_mean, pending_force_);
+    load_pending_ = false;
+    ++load_sent_;
+  }
+  fed_in_window_mm_ = 0;
 }
 
 void Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit) {

@@ -253,7 +253,14 @@ std::vector<std::string> Simulator::received() const {
 
 void Simulator::set_streaming(const std::string& sensor, bool on) {
   if (sensor == "accelerometer") stream_accel_ = on;
-  else if (sensor == "load_cell") stream_load_ = on;
+  else if (sensor == "load_cell") {
+    if (on && !stream_load_) {
+      fed_in_window_mm_ = 0;
+      window_start_t_ = t_;
+    }
+    if (!on && stream_load_) emit_pending_load_sample();  // its window ends here
+    stream_load_ = on;
+  }
 }
 
 void Simulator::out_flush(const Emit& emit) {

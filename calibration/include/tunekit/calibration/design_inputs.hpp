@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "tunekit/calibration/agreement.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/ident/flow_advance.hpp"
@@ -54,14 +55,17 @@ struct StepDesignInput {
   std::string K_unit;           ///< as the fit reports it; empty when unknown
   bool levels_in_flow = false;  ///< the levels' u is a volumetric flow (mm^3/s), not a feed (mm/s)
   std::vector<StepLevel> levels;
-  std::optional<ident::TauPowerLaw> trend;  ///< tau_s = a u^b over the levels
-  std::optional<StepModelInput> model;      ///< the whole-record model, when it was fitted
+  std::optional<ident::TauPowerLaw> trend;                                  ///< tau_s = a u^b over the levels
+  double trend_b_ci95_lo = fitting::kNaN, trend_b_ci95_hi = fitting::kNaN;  ///< the trend's b, 95 %
+  std::optional<StepModelInput> model;  ///< the whole-record model, when it was fitted
 };
 
 /// From `tunekit freq`: the frequency-response tau it reports (results.fit).
 struct FreqDesignInput {
   std::string origin;
   EstimatedValue tau_s;
+  /// The input the record swept (its unit the step test's, e.g. feed in mm/s): NaN without one.
+  double input_min = fitting::kNaN, input_max = fitting::kNaN, input_mean = fitting::kNaN;
 };
 
 /// A shaper as `tunekit shaper` scored it (score: lower is better; NaN for the recommendation).
@@ -103,6 +107,14 @@ DesignInputs read_design_inputs(const std::vector<std::string>& results_files);
 /// The same inputs from the analyses' typed outcomes; `origin` names them in messages.
 StepDesignInput step_design_input(const StepOutcome& outcome, const std::string& origin);
 FreqDesignInput freq_design_input(const FreqOutcome& outcome, const std::string& origin);
+
+/// The step test's tau to hold against a frequency response: where the step test's operating
+/// points show tau changing with the input (the trend's 95 % interval of b excludes 0) and the
+/// frequency record's input range is known, the trend tau = a u^b at that record's mean input,
+/// its interval the span the trend gives over the inputs the record swept (one tau fitted to a
+/// flow-dependent liquefier's chirp may lie anywhere in it); otherwise the step fit's tau and
+/// its 95 % interval. False when neither is finite. Calibrate and export both compare with it.
+bool step_tau_for_freq(const StepDesignInput& step, const FreqDesignInput& freq, Estimate& out);
 /// The axes of a shaper outcome (x and y; others are left out).
 std::map<std::string, AxisShaperInput> shaper_design_inputs(const ShaperOutcome& outcome, const std::string& origin);
 

@@ -72,6 +72,9 @@ struct FreqOutcome {
   std::size_t input_size_bytes = 0;
   std::size_t samples = 0;
   std::string input_unit, output_unit;
+  /// The input column's range and mean over the record (NaN without an input column); results
+  /// "input_range".
+  double input_min = fitting::kNaN, input_max = fitting::kNaN, input_mean = fitting::kNaN;
   std::optional<ident::SineDwell> dwell;     ///< mode dwell
   std::optional<FreqBroadband> broadband;    ///< modes h1 and oe
   std::optional<fitting::FitResult> tf_fit;  ///< --fit-tf: the fit to the frequency response

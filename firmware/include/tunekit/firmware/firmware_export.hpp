@@ -120,9 +120,10 @@ ExportResult export_config_text(ExportFirmware fw, const std::string& text, cons
 ExportResult export_config_file(ExportFirmware fw, const std::string& path, const CompensatorSettings& s);
 
 /// The smoothing time `fw` takes from a design: Klipper's pressure_advance_smooth_time is the
-/// triangular window; Marlin's ADVANCE_TAU is designed with Marlin's own exponential cascade
-/// (ident/marlin_smoothing.hpp: the extra extruder acceleration of a print acceleration step
-/// within the limit, at least one update period per stage; InputError beyond M900 U's 0.5 s);
+/// triangular window, or Klipper's default 0.040 s when that is longer (the design is a lower
+/// bound: a shorter window than the default buys little and makes the extruder noisier); Marlin's ADVANCE_TAU is
+/// designed with Marlin's own exponential cascade (ident/marlin_smoothing.hpp: the extra extruder acceleration of a
+/// print acceleration step within the limit, at least one update period per stage; InputError beyond M900 U's 0.5 s);
 /// RepRapFirmware has none. Rounded up to the written precision (0.1 ms) so that the
 /// acceleration bound still holds. nullopt when the firmware has no such setting, or the design
 /// has no window or a zero one.

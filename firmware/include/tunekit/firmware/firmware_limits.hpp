@@ -45,6 +45,9 @@ inline constexpr FirmwareShaper kKlipperShapers[] = {
 inline constexpr double kKlipperPressureAdvanceMin = 0.0;
 /// klippy/kinematics/extruder.py:15-16, 'pressure_advance_smooth_time' above=0., maxval=.200.
 inline constexpr double kKlipperSmoothTimeMax_s = 0.2;
+/// klippy/kinematics/extruder.py:15, 'pressure_advance_smooth_time' default .040 (Klipper's
+/// Pressure_Advance.md: lower values make the extruder more sensitive to noise and skipping).
+inline constexpr double kKlipperSmoothTimeDefault_s = 0.040;
 /// klippy/extras/input_shaper.py:24, shaper_freq minval=0. (0 disables shaping on the axis).
 inline constexpr double kKlipperShaperFreqMin_hz = 0.0;
 /// klippy/kinematics/extruder.py:168-169, 'max_extrude_only_distance' default 50 mm; longer

@@ -265,6 +265,15 @@ class Simulator {
   std::vector<double> delay_;
   std::size_t delay_pos_ = 0;
   double liq_ = 0;  ///< FOPDT output (N) or pressure (MPa)
+  /// The feed a load-cell sample reports is the mean over the sample interval centred on it (the
+  /// planned extruder position's change, as Klipper's motion queue gives it), not the speed at
+  /// the sample instant, which a staircase of moves that stop between them would alias. A sample
+  /// waits half an interval for the second half of its window: filament fed (mm) since the
+  /// window began, when it began (s), and the sample waiting for it.
+  double fed_in_window_mm_ = 0, window_start_t_ = 0;
+  bool load_pending_ = false;
+  double pending_t_ = 0, pending_force_ = 0;
+  void emit_pending_load_sample();
   std::mt19937 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
   std::string out_;
