@@ -212,8 +212,8 @@ std::array<double, 6> values(const FitResult& f) {
 /// output does not depend on it (the record starts with an empty liquefier); then the covariance
 /// from that solution.
 FitResult solve_full(ModelProblem& full, const std::array<double, 6>& start, const LiquefierFitOptions& o,
-                     const LiquefierRecord& rec) {
-  std::array<double, 6> v = values(solve(full, start, o, rec, !o.fit_b, false));
+                     const LiquefierRecord& rec, bool fix_b) {
+  std::array<double, 6> v = values(solve(full, start, o, rec, fix_b, false));
   if (!full.fix_v0) {
     const double a = v[0] * std::pow(full.q_ref, -v[1]);
     const double umax = *std::max_element(rec.u.begin(), rec.u.end());
@@ -222,7 +222,7 @@ FitResult solve_full(ModelProblem& full, const std::array<double, 6>& start, con
       v[5] = 0;
     }
   }
-  return solve(full, v, o, rec, !o.fit_b, true);
+  return solve(full, v, o, rec, fix_b, true);
 }
 
 /// 1 + 2 sum of the residuals' autocorrelation up to its first non-positive lag (>= 1).
@@ -406,7 +406,7 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
     const double umax = *std::max_element(rec.u.begin(), rec.u.end());
     full.fix_v0 = v[5] <= 1e-6 * steady_volume(a0, v[1], umax);
   }
-  FitResult nl = solve_full(full, values(best), o, rec);
+  FitResult nl = solve_full(full, values(best), o, rec, !o.fit_b);
   out.substeps = full.substeps;
   if (!o.fit_b) {
     out.variance_factor = variance_factor(residuals_at(full, nl));
@@ -424,7 +424,7 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   // The linear model: b held at 0, refitted; the F-test of b = 0 at the confidence level.
   std::array<double, 6> lin_start = values(nl_raw);
   lin_start[1] = 0.0;
-  FitResult lin = solve(full, lin_start, o, rec, true, true);
+  FitResult lin = solve_full(full, lin_start, o, rec, true);
   const int dof = nl.diagnostics.num_observations - nl.diagnostics.num_parameters;
   const double s2 = nl_raw.diagnostics.rss / dof;
   const double tq = t_multiplier(o.confidence, dof);

@@ -245,6 +245,35 @@ TEST_CASE("calibrate on the default simulated desktop printer proposes a direct-
   CHECK(out.find("RESTART", next_at) != std::string::npos);
 }
 
+TEST_CASE(
+    "calibrate on the default desktop printer: no warning, its taus one story, Klipper's smoothing default kept") {
+  const auto run = calibrate("calibrate_desktop_story", {"--skip-axes"});
+  INFO(run.cli.out << run.cli.err);
+  REQUIRE(run.cli.code == 0);
+  // A first run on the simulated printer gives the technician nothing to doubt.
+  CHECK(run.cli.err.find("warning") == std::string::npos);
+  const auto env = nlohmann::json::parse(read_file_bytes(run.dir + "/results.json"));
+  const auto& res = env.at("results");
+  const auto truth = tunekit::test::read_json(run.dir + "/liquefier-step/truth.json").at("liquefier");
+  const double tau_s = truth.at("tau_s").get<double>(), u_ref = truth.at("tau_ref_feed_mm_s").get<double>(),
+               b_true = truth.at("tau_flow_exponent").get<double>();
+  // The chirp's tau is the liquefier's at the chirp's feeds (1-3 mm/s: the truth's 0.023-0.039 s),
+  // and is held against the step trend over those feeds: not "differ".
+  const double tau_freq = res.at("liquefier").at("freq").at("fit").at("params").at("tau_s").at("value").get<double>();
+  const double mean = res.at("liquefier").at("freq").at("input_range").at("mean").get<double>();
+  CHECK(tau_freq == Approx(tau_s * std::pow(mean / u_ref, b_true)).epsilon(0.10));
+  REQUIRE(res.at("agreement").size() >= 1);
+  CHECK(res.at("agreement")[0].at("verdict") != "differ");
+  // The whole-record model reads the load cell as the outflow (its gain does not follow tau) and
+  // finds tau's exponent near the truth's.
+  const auto& wr = res.at("liquefier").at("step").at("whole_record");
+  CHECK(wr.at("sensor") == "flow");
+  CHECK(wr.at("sensor_chosen_by") == "operating points");
+  CHECK(wr.at("b").at("value").get<double>() == Approx(b_true).margin(0.05));
+  // Klipper's 0.040 s default smoothing, not the 2 ms lower bound of a direct-drive extruder.
+  CHECK(res.at("compensators").at("settings").at("pa_smooth_s").get<double>() == Approx(0.040));
+}
+
 TEST_CASE("calibrate --write says what it wrote, where the backup is and that Klipper needs RESTART") {
   const auto run = calibrate("calibrate_terminal_write", {"--skip-liquefier", "--write"});
   INFO(run.cli.out << run.cli.err);
