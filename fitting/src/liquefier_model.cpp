@@ -56,7 +56,8 @@ void bind(ModelProblem& mp) {
     if (jac == nullptr) {
       std::vector<double> s(n);
       const double a = p[0] * std::exp(-p[1] * ln_qref);
-      simulate(rc.t.data(), rc.u.data(), n, a, p[1], p[2], p[5], self->volume, kMaxSubsteps, self->h_max, s.data());
+      simulate(rc.t.data(), rc.u.data(), n, a, p[1], p[2], p[5], self->volume,
+               self->h_max > 0 ? kMaxSubsteps : self->substeps, self->h_max, s.data());
       for (std::size_t i = 0; i < n; ++i) {
         r[i] = p[3] * s[i] + p[4] - rc.y[i];
         if (!std::isfinite(r[i])) return false;
@@ -66,7 +67,8 @@ void bind(ModelProblem& mp) {
     std::vector<Jet4> s(n);
     const Jet4 tau(p[0], 0), b(p[1], 1), theta(p[2], 2), v0(p[5], 3);
     const Jet4 a = tau * exp(-b * ln_qref);
-    simulate(rc.t.data(), rc.u.data(), n, a, b, theta, v0, self->volume, kMaxSubsteps, self->h_max, s.data());
+    simulate(rc.t.data(), rc.u.data(), n, a, b, theta, v0, self->volume,
+             self->h_max > 0 ? kMaxSubsteps : self->substeps, self->h_max, s.data());
     for (std::size_t i = 0; i < n; ++i) {
       r[i] = p[3] * s[i].a + p[4] - rc.y[i];
       if (!std::isfinite(r[i])) return false;

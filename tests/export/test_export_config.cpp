@@ -71,7 +71,7 @@ TEST_CASE("Klipper printer.cfg: values land where they take effect, everything e
   // The macro that mentions pressure advance is untouched (also covered by the equality).
   CHECK(r.updated.find("    SET_PRESSURE_ADVANCE ADVANCE=0.07\n") != std::string::npos);
   // Diff preview names the changed lines.
-  CHECK(r.diff.rfind("--- a/", 0) == 0);
+  CHECK(r.diff.rfind("--- " + path + "\n", 0) == 0);
   CHECK(r.diff.find("\n-pressure_advance: 0.05   ; tuned by hand with the tower test\n") != std::string::npos);
   CHECK(r.diff.find("\n+pressure_advance: 0.0425   ; tuned by hand with the tower test\n") != std::string::npos);
   CHECK(r.diff.find("\n+#*# shaper_type_y = ei\n") != std::string::npos);
@@ -348,6 +348,7 @@ TEST_CASE("Unified diff of line edits") {
   ed.replace(1, "B");
   ed.insert_before(9, {"x"});
   CHECK(ed.render() == "a\nB\nc\nd\ne\nf\ng\nh\ni\nx\nj\n");
+  CHECK(ed.unified_diff("/abs/f.txt", 1).rfind("--- /abs/f.txt\n+++ /abs/f.txt\n", 0) == 0);
   CHECK(ed.unified_diff("f.txt", 1) ==
         "--- a/f.txt\n+++ b/f.txt\n"
         "@@ -1,3 +1,3 @@\n a\n-b\n+B\n c\n"

@@ -33,7 +33,8 @@ class LineEditor {
 
   bool changed() const { return !replaced_.empty() || !inserted_.empty(); }
   std::string render() const;
-  /// Unified diff (original -> edited) with `context` lines of context; empty if unchanged.
+  /// Unified diff (original -> edited) with `context` lines of context; empty if unchanged. The
+  /// header names `label` as a/LABEL and b/LABEL, or as it is when it is an absolute path.
   std::string unified_diff(const std::string& label, int context = 3) const;
 
  private:
