@@ -277,8 +277,11 @@ void render_figure(const Figure& fig, const std::string& path) {
       const double y0 = y_top - h + 0.075, y1 = y_top - 0.02;
       y_top -= h;
       // The legend sits right of the data, never over it: the plot area leaves it room.
+      // With a shared x axis every panel leaves the same room, so that their x axes line up.
       std::size_t longest_label = 0;
-      for (const auto& s : p.series) longest_label = std::max(longest_label, s.label.size());
+      for (const auto& q : fig.panels)
+        if (&q == &p || fig.share_x)
+          for (const auto& s : q.series) longest_label = std::max(longest_label, s.label.size());
       const double legend_room = longest_label == 0 ? 0.0 : std::min(0.4, 0.05 + 0.0095 * longest_label);
       pls->vpor(0.09, 0.97 - legend_room, y0, y1);
 
