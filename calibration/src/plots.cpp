@@ -47,7 +47,10 @@ struct PlplotApi {
   decltype(&c_pllab) lab;
   decltype(&c_plpoin) poin;
   decltype(&c_plline) line;
-  decltype(&c_pllegend) legend;
+  decltype(&c_plgchr) gchr;
+  decltype(&c_plgspa) gspa;
+  decltype(&c_plfill) fill;
+  decltype(&c_plptex) ptex;
 };
 
 const PlplotApi& plplot_api() {
@@ -75,7 +78,10 @@ const PlplotApi& plplot_api() {
     a.lab = lib.function<decltype(&c_pllab)>("c_pllab");
     a.poin = lib.function<decltype(&c_plpoin)>("c_plpoin");
     a.line = lib.function<decltype(&c_plline)>("c_plline");
-    a.legend = lib.function<decltype(&c_pllegend)>("c_pllegend");
+    a.gchr = lib.function<decltype(&c_plgchr)>("c_plgchr");
+    a.gspa = lib.function<decltype(&c_plgspa)>("c_plgspa");
+    a.fill = lib.function<decltype(&c_plfill)>("c_plfill");
+    a.ptex = lib.function<decltype(&c_plptex)>("c_plptex");
     return a;
   }();
   return api;
@@ -170,6 +176,49 @@ const char* plot_device(const std::string& path) {
   throw InputError("a plot file must end in .svg or .png", path);
 }
 
+// Draws the legend of a panel in the band [x0, x1] of the page (normalised page coordinates) with
+// its top at y_top: a white box with a frame, one row per series (its sample and its label,
+// left-aligned). Drawn here rather than by PLplot's legend, whose outside-corner placement put a
+// legend over the panel above and whose estimate of the labels' width ran it off the page.
+void draw_legend(PlStream& pls, const std::vector<const Series*>& entries, double x0, double x1, double y_top,
+                 int width_pt) {
+  PLFLT def_mm = 0, ht_mm = 0, xmin_mm = 0, xmax_mm = 0, ymin_mm = 0, ymax_mm = 0;
+  pls->schr(0, 0.72);
+  pls->gchr(&def_mm, &ht_mm);
+  pls->gspa(&xmin_mm, &xmax_mm, &ymin_mm, &ymax_mm);
+  const double n = static_cast<double>(entries.size()), rows = n + 0.6;
+  const double row = 1.8 * ht_mm / (ymax_mm - ymin_mm);  // one row, normalised page height
+  pls->vpor(x0, x1, std::max(0.0, y_top - row * rows), y_top);
+  pls->wind(0, 1, 0, rows);
+  PLFLT bx[4] = {0, 1, 1, 0}, by[4] = {0, 0, rows, rows};
+  pls->col0(0);
+  pls->fill(4, bx, by);
+  pls->col0(15);
+  pls->width(1);
+  pls->lsty(1);
+  pls->box("bc", 0, 0, "bc", 0, 0);
+  const double pt = 1.0 / ((x1 - x0) * width_pt);  // one point in the box's x units
+  const double margin = 6 * pt, sample = 26 * pt;
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    const Series& s = *entries[k];
+    PLFLT yc = rows - 0.3 - (static_cast<double>(k) + 0.5);
+    pls->col0(s.color);
+    if (s.style == Series::Style::points) {
+      PLFLT xc = margin + sample / 2;
+      pls->poin(1, &xc, &yc, 17);
+    } else {
+      PLFLT xs[2] = {margin, margin + sample}, ys[2] = {yc, yc};
+      pls->lsty(s.style == Series::Style::dashed ? 2 : 1);
+      pls->width(1.6);
+      pls->line(2, xs, ys);
+      pls->lsty(1);
+      pls->width(1);
+    }
+    pls->ptex(2 * margin + sample, yc, 1, 0, 0.0, s.label.c_str());
+  }
+  pls->schr(0, 0.8);
+}
+
 }  // namespace
 
 std::vector<double> log_axis_ticks(double lo_exp, double hi_exp) {
@@ -228,9 +277,12 @@ void render_figure(const Figure& fig, const std::string& path) {
       const double y0 = y_top - h + 0.075, y1 = y_top - 0.02;
       y_top -= h;
       // The legend sits right of the data, never over it: the plot area leaves it room.
+      // With a shared x axis every panel leaves the same room, so that their x axes line up.
       std::size_t longest_label = 0;
-      for (const auto& s : p.series) longest_label = std::max(longest_label, s.label.size());
-      const double legend_room = longest_label == 0 ? 0.0 : std::min(0.4, 0.06 + 0.0075 * longest_label);
+      for (const auto& q : fig.panels)
+        if (&q == &p || fig.share_x)
+          for (const auto& s : q.series) longest_label = std::max(longest_label, s.label.size());
+      const double legend_room = longest_label == 0 ? 0.0 : std::min(0.4, 0.05 + 0.0095 * longest_label);
       pls->vpor(0.09, 0.97 - legend_room, y0, y1);
 
       Range rx, ry;
@@ -263,9 +315,7 @@ void render_figure(const Figure& fig, const std::string& path) {
       pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), "");
       pls->mtex("t", 0.8, 0.0, 0.0, p.title.c_str());
 
-      std::vector<std::string> labels;
-      std::vector<PLINT> opts, colors, styles, sym_colors, sym_numbers;
-      std::vector<PLFLT> widths, sym_scales;
+      std::vector<const Series*> legend;
       for (const auto& s : p.series) {
         // A line is drawn in pieces between missing (non-finite) values: a gap stays a gap.
         std::vector<std::vector<PLFLT>> xs(1), ys(1);
@@ -296,31 +346,10 @@ void render_figure(const Figure& fig, const std::string& path) {
             pls->width(1);
           }
         }
-        if (!s.label.empty()) {
-          labels.push_back(s.label);
-          opts.push_back(s.style == Series::Style::points ? PL_LEGEND_SYMBOL : PL_LEGEND_LINE);
-          colors.push_back(s.color);
-          styles.push_back(s.style == Series::Style::dashed ? 2 : 1);
-          widths.push_back(1.6);
-          sym_colors.push_back(s.color);
-          sym_numbers.push_back(3);
-          sym_scales.push_back(1.0);
-        }
+        if (!s.label.empty()) legend.push_back(&s);
       }
-      if (!labels.empty()) {
-        std::vector<const char*> text, symbols;
-        for (const auto& l : labels) {
-          text.push_back(l.c_str());
-          symbols.push_back("#(728)");
-        }
-        PLFLT lw, lh;
-        pls->col0(15);
-        pls->legend(&lw, &lh, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
-                    PL_POSITION_RIGHT | PL_POSITION_TOP | PL_POSITION_OUTSIDE, 0.01, 0.0, 0.05, 0, 15, 1, 0, 0,
-                    static_cast<PLINT>(labels.size()), opts.data(), 1.0, 0.9, 1.6, 1.0, colors.data(), text.data(),
-                    nullptr, nullptr, nullptr, nullptr, colors.data(), styles.data(), widths.data(), sym_colors.data(),
-                    sym_scales.data(), sym_numbers.data(), symbols.data());
-      }
+      // The legend sits right of the data, its top level with the panel's frame.
+      if (!legend.empty()) draw_legend(pls, legend, 0.97 - legend_room + 0.01, 0.99, y1, fig.width_px);
     }
     if (!fig.title.empty()) {
       pls->vpor(0, 1, 0, 1);
