@@ -9,6 +9,7 @@
 
 #include "tunekit/calibration/delta_command.hpp"
 #include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/row_limit.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
@@ -75,7 +76,9 @@ DeltaOutcome compute_delta(const DeltaOptions& a) {
 
   const std::string bytes = read_file_bytes(a.probes_csv);
   outcome.input = input_digest(a.probes_csv, bytes);
+  require_line_limit(bytes, a.max_rows, "--max-rows", a.probes_csv);
   const auto t = ident::parse_csv(bytes, a.probes_csv);
+  require_row_limit(t.rows, a.max_rows, "--max-rows", a.probes_csv);
   const auto hdr = source_location(a.probes_csv, t.header_line);
   const auto &xc = delta_column(t, "x", hdr), &yc = delta_column(t, "y", hdr), &zc = delta_column(t, "z", hdr);
   std::vector<ident::DeltaProbe> probes;

@@ -11,6 +11,7 @@
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/calibration/nozzle_command.hpp"
+#include "tunekit/calibration/row_limit.hpp"
 #include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
@@ -41,7 +42,9 @@ NozzleFit compute_nozzle_fit(const NozzleOptions& a, NozzleOutcome& outcome) {
   outcome.input_path = a.fit_file;
   outcome.input_sha256 = sha256_hex(bytes);
   outcome.input_size_bytes = bytes.size();
+  require_line_limit(bytes, a.max_rows, "--max-rows", a.fit_file);
   const auto t = ident::parse_csv(bytes, a.fit_file);
+  require_row_limit(t.rows, a.max_rows, "--max-rows", a.fit_file);
   const auto hdr = source_location(a.fit_file, t.header_line);
   if (!t.has_column("flow")) throw InputError("no 'flow (mm3/s)' column", hdr);
   const auto& fc = t.column("flow");

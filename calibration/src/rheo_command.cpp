@@ -12,6 +12,7 @@
 
 #include "tunekit/calibration/rheo_command.hpp"
 #include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/row_limit.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/ident/csv.hpp"
@@ -91,8 +92,10 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
     std::tie(co.temperature_min_degC, co.temperature_max_degC) = parse_temperature_range(a.temperatures);
   if (!(co.kelvin_offset == fitting::kKelvinOffset || co.kelvin_offset == fitting::kKelvinOffsetThesis))
     throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (Holtrup's (2019) code)");
+  require_line_limit(bytes, a.max_rows, "--max-rows", a.file);
   const auto table = ident::parse_rheology_csv(bytes, a.file, co);
   const auto& data = table.data;
+  require_row_limit(data.size(), a.max_rows, "--max-rows", a.file);
   const auto levels = data.temperature_levels_K();
   const bool multi = levels.size() > 1;
 

@@ -148,11 +148,13 @@ FitResult fit_nozzle_rheology(const NozzleFlowData& d, PressureModel model, cons
     if (!(d.pressure_Pa[i] > 0)) throw InputError("point " + std::to_string(i + 1) + ": pressures must be positive");
     if (!(d.temperature_K[i] > 0))
       throw InputError("point " + std::to_string(i + 1) + ": temperatures must be positive (K)");
-    bool seen = false;
-    for (double l : levels) seen = seen || std::abs(l - d.temperature_K[i]) <= 0.05;
-    if (!seen) levels.push_back(d.temperature_K[i]);
   }
-  std::sort(levels.begin(), levels.end());
+  // Temperature levels (within 0.05 K of each other), sorted: linear after the sort, so many
+  // distinct temperatures do not make this quadratic.
+  std::vector<double> sorted_T = d.temperature_K;
+  std::sort(sorted_T.begin(), sorted_T.end());
+  for (double T : sorted_T)
+    if (levels.empty() || T - levels.back() > 0.05) levels.push_back(T);
   const bool newtonian = model == PressureModel::hagen_poiseuille;
   const bool shifted = levels.size() > 1;
   const double T_ref = std::isfinite(T_ref_K) ? T_ref_K : (levels.empty() ? 0.0 : levels[(levels.size() - 1) / 2]);
@@ -175,20 +177,37 @@ FitResult fit_nozzle_rheology(const NozzleFlowData& d, PressureModel model, cons
   std::vector<double> ln_obs(n);
   for (std::size_t i = 0; i < n; ++i) ln_obs[i] = std::log(d.pressure_Pa[i]);
   prob.observed = ln_obs;
-  prob.residuals = [&, newtonian, shifted](const double* p, double* r) {
-    for (std::size_t i = 0; i < n; ++i) {
-      double K = std::exp(p[0]);
-      if (shifted) K *= arrhenius_shift(d.temperature_K[i], p[2], p[3]);
-      const double nn = newtonian ? 1.0 : p[1];
-      const double dp = pressure_drop(model, K, nn, d.flow_m3_s[i], g);
-      if (!(dp > 0) || !std::isfinite(dp)) return false;
-      r[i] = std::log(dp) - ln_obs[i];
-    }
-    return true;
+  // Residuals of the rows `idx`: every row for the fit, an evenly strided subset for the start
+  // search (which only has to find the basin; the final least squares sees every row).
+  const auto residuals_of = [&, newtonian, shifted](const std::vector<std::size_t>& idx) {
+    return [&, newtonian, shifted, idx](const double* p, double* r) {
+      for (std::size_t k = 0; k < idx.size(); ++k) {
+        const std::size_t i = idx[k];
+        double K = std::exp(p[0]);
+        if (shifted) K *= arrhenius_shift(d.temperature_K[i], p[2], p[3]);
+        const double nn = newtonian ? 1.0 : p[1];
+        const double dp = pressure_drop(model, K, nn, d.flow_m3_s[i], g);
+        if (!(dp > 0) || !std::isfinite(dp)) return false;
+        r[k] = std::log(dp) - ln_obs[i];
+      }
+      return true;
+    };
   };
+  std::vector<std::size_t> all(n), sub;
+  for (std::size_t i = 0; i < n; ++i) all[i] = i;
+  constexpr std::size_t kMaxSearch = 240;
+  if (n > kMaxSearch)
+    for (std::size_t k = 0; k < kMaxSearch; ++k) sub.push_back(k * n / kMaxSearch);
+  else sub = all;
+  prob.residuals = residuals_of(all);
+  LsqProblem search = prob;
+  search.num_residuals = static_cast<int>(sub.size());
+  search.observed.clear();
+  for (std::size_t i : sub) search.observed.push_back(ln_obs[i]);
+  search.residuals = residuals_of(sub);
   std::string name = "nozzle-" + to_string(model) + (newtonian ? "/newtonian" : "/power-law");
   if (shifted) name += "+arrhenius";
-  auto fit = solve_with_global_start(name, prob);
+  auto fit = solve_with_global_start(name, prob, {}, {}, &search);
   auto& p0 = fit.params[0];
   p0.value = std::exp(p0.value);
   p0.std_error *= p0.value;

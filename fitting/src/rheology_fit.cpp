@@ -456,7 +456,11 @@ std::vector<ViscosityFitOptions> default_candidates(const RheologyData& data, co
 ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates) {
   ModelComparison c;
   double best = kInf;
-  for (const auto& o : candidates) {
+  // The candidates are ranked by AIC, which needs no intervals: profile-likelihood intervals
+  // (many refits each) are computed only for the winner, refitted below with its own options.
+  for (const auto& candidate : candidates) {
+    ViscosityFitOptions o = candidate;
+    o.profile_intervals = false;
     ModelComparisonEntry e;
     e.model = ViscositySpec{o.model, o.shift, {}}.name();
     FitResult fit;
@@ -482,6 +486,15 @@ ModelComparison compare_viscosity_models(const RheologyData& data, const std::ve
     c.entries.push_back(e);
     c.fits.push_back(fit);
   }
+  for (std::size_t i = 0; i < c.entries.size(); ++i)
+    if (c.entries[i].model == c.best && candidates[i].profile_intervals) {
+      try {
+        c.fits[i] = fit_viscosity(data, candidates[i]);
+      } catch (const Error&) {
+        // Keep the fit without profile intervals (its linearised intervals stand).
+      }
+      break;
+    }
   double wsum = 0;
   for (auto& e : c.entries)
     if (e.ok) {

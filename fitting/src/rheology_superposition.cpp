@@ -73,18 +73,40 @@ TtsResult time_temperature_superposition(const RheologyData& data, double T_ref_
   std::vector<double> ln_obs(n);
   for (std::size_t i = 0; i < n; ++i) ln_obs[i] = std::log(data.viscosity_Pa_s[i]);
   prob.observed = ln_obs;
-  prob.residuals = [&](const double* p, double* r) {
-    const double eta0 = std::exp(p[0]), ts = std::exp(p[1]), nn = p[2];
-    for (std::size_t i = 0; i < n; ++i) {
-      const int si = shift_index[level_of[i]];
-      const double a = si < 0 ? 1.0 : std::exp(p[si]);
-      const double e = cross_viscosity(eta0 * a, ts, nn, data.shear_rate_1_s[i]);
-      if (!(e > 0) || !std::isfinite(e)) return false;
-      r[i] = std::log(e) - ln_obs[i];
-    }
-    return true;
+  // Residuals of the rows `idx` (every row for the fit; an evenly strided subset of each
+  // temperature for the start search, which only has to find the basin).
+  const auto residuals_of = [&](const std::vector<std::size_t>& idx) {
+    return [&, idx](const double* p, double* r) {
+      const double eta0 = std::exp(p[0]), ts = std::exp(p[1]), nn = p[2];
+      for (std::size_t k = 0; k < idx.size(); ++k) {
+        const std::size_t i = idx[k];
+        const int si = shift_index[level_of[i]];
+        const double a = si < 0 ? 1.0 : std::exp(p[si]);
+        const double e = cross_viscosity(eta0 * a, ts, nn, data.shear_rate_1_s[i]);
+        if (!(e > 0) || !std::isfinite(e)) return false;
+        r[k] = std::log(e) - ln_obs[i];
+      }
+      return true;
+    };
   };
-  t.reference_fit = solve_with_global_start("cross+tts", prob);
+  std::vector<std::size_t> all(n);
+  for (std::size_t i = 0; i < n; ++i) all[i] = i;
+  prob.residuals = residuals_of(all);
+  constexpr std::size_t kSearchPerLevel = 60;
+  std::vector<std::vector<std::size_t>> rows_of(L);
+  for (std::size_t i = 0; i < n; ++i) rows_of[level_of[i]].push_back(i);
+  std::vector<std::size_t> sub;
+  for (const auto& rows : rows_of) {
+    const std::size_t m = std::min(rows.size(), kSearchPerLevel);
+    for (std::size_t j = 0; j < m; ++j) sub.push_back(rows[j * rows.size() / m]);
+  }
+  std::sort(sub.begin(), sub.end());
+  LsqProblem search = prob;
+  search.num_residuals = static_cast<int>(sub.size());
+  search.observed.clear();
+  for (std::size_t i : sub) search.observed.push_back(ln_obs[i]);
+  search.residuals = residuals_of(sub);
+  t.reference_fit = solve_with_global_start("cross+tts", prob, {}, {}, &search);
   finish_params(t.reference_fit, specs);
   t.reference_fit.params.push_back({"T_ref_K", t.T_ref_K, kNaN, kNaN, kNaN, "K", true});
   std::vector<double> lnA(L, 0.0), lnA_se(L, 0.0);

@@ -2,6 +2,7 @@
 #include "tunekit/ident/delta_calibration.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -78,10 +79,17 @@ DeltaCalibration fit_delta_calibration(const DeltaGeometry& nominal, const std::
   if (probes.size() < k + 1)
     throw InputError(fmt::format("{} probe points for a {}-factor delta calibration: need at least {}", probes.size(),
                                  factors, k + 1));
-  for (const auto& p : probes) {
+  // The carriages' travel below their endstops at each probe, under the firmware's (nominal)
+  // geometry: the same for every trial geometry, so computed once (as delta_true_height does).
+  const auto homed_nominal = delta_homed_carriages(nominal);
+  std::vector<std::array<double, 3>> travel(probes.size());
+  for (std::size_t i = 0; i < probes.size(); ++i) {
+    const auto& p = probes[i];
     double h = 0;
-    if (!delta_true_height(nominal, nominal, p, h))
+    std::array<double, 3> c{};
+    if (!delta_true_height(nominal, nominal, p, h) || !delta_carriages(nominal, {p.x_mm, p.y_mm, p.z_mm}, c))
       throw InputError(fmt::format("probe point ({:g}, {:g}) mm is out of the nominal delta's reach", p.x_mm, p.y_mm));
+    for (std::size_t t = 0; t < 3; ++t) travel[i][t] = homed_nominal[t] - c[t];
   }
   fitting::LsqProblem prob;
   for (const auto& n : names) {
@@ -111,10 +119,16 @@ DeltaCalibration fit_delta_calibration(const DeltaGeometry& nominal, const std::
   prob.num_residuals = m;
   prob.residuals_are_time_ordered = false;
   for (const auto& p : probes) prob.observed.push_back(p.z_mm);
-  auto eval = [&nominal, &probes, factors](const std::vector<double>& v, double* r) {
+  auto eval = [&nominal, &travel, factors](const std::vector<double>& v, double* r) {
     const DeltaGeometry g = delta_apply_factors(nominal, factors, v);
-    for (std::size_t i = 0; i < probes.size(); ++i)
-      if (!delta_true_height(nominal, g, probes[i], r[i])) return false;
+    const auto homed = delta_homed_carriages(g);
+    const DeltaForward forward(g);
+    for (std::size_t i = 0; i < travel.size(); ++i) {
+      const std::array<double, 3> real{homed[0] - travel[i][0], homed[1] - travel[i][1], homed[2] - travel[i][2]};
+      DeltaPoint q;
+      if (!forward.position(real, q)) return false;
+      r[i] = q.z;
+    }
     return true;
   };
   prob.residuals_and_jacobian = [&eval, k, m](const double* p, double* r, double* jac) {

@@ -36,13 +36,19 @@ bool delta_carriages(const DeltaGeometry& g, const DeltaPoint& p, std::array<dou
 }
 
 bool delta_position(const DeltaGeometry& g, const std::array<double, 3>& c, DeltaPoint& out) {
+  return DeltaForward(g).position(c, out);
+}
+
+DeltaForward::DeltaForward(const DeltaGeometry& g) : g_(g) {
+  for (int i = 0; i < 3; ++i) towers_[static_cast<std::size_t>(i)] = dk_tower(g, i);
+}
+
+bool DeltaForward::position(const std::array<double, 3>& c, DeltaPoint& out) const {
   // Trilateration of three spheres (centre: tower column at the carriage height, radius:
   // rod length), taking the intersection below the carriages. Tilt is applied after.
+  const DeltaGeometry& g = g_;
   DkVec3 p[3];
-  for (int i = 0; i < 3; ++i) {
-    const auto t = dk_tower(g, i);
-    p[i] = {t[0], t[1], c[static_cast<std::size_t>(i)]};
-  }
+  for (std::size_t i = 0; i < 3; ++i) p[i] = {towers_[i][0], towers_[i][1], c[i]};
   const double r1 = g.rod_mm[0], r2 = g.rod_mm[1], r3 = g.rod_mm[2];
   const DkVec3 s21 = dk_sub(p[1], p[0]), s31 = dk_sub(p[2], p[0]);
   const double d = std::sqrt(dk_dot(s21, s21));

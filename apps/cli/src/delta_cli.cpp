@@ -54,6 +54,9 @@ void register_delta(CLI::App& app, CliContext& ctx) {
   sub->add_option("--marlin-probe-z-offset", o.marlin_probe_z_offset_mm,
                   "Marlin's M851 Z (mm): with a bed probe Marlin homes at M665 H minus it")
       ->capture_default_str();
+  sub->add_option("--max-rows", o.max_rows, "Most probe rows accepted (count); a longer file is refused")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));
   add_output_options(sub, cmd->output);
   sub->footer(
       "Probe heights come from a CSV (probing over the machine link is not built in yet).\n"

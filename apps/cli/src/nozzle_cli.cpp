@@ -80,6 +80,9 @@ void register_nozzle(CLI::App& app, CliContext& ctx) {
                   "Inverse fit: CSV with flow (mm3/s), pressure (MPa|Pa|bar) or force (N), temperature (degC|K)");
   sub->add_option("--piston-diameter", o.piston_diameter_mm,
                   "Diameter the feeder force acts on (mm), for a force column");
+  sub->add_option("--max-rows", o.max_rows, "Most rows of the --fit file accepted (count); a longer file is refused")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));
   add_output_options(sub, cmd->output);
   sub->footer(
       "Defaults are Holtrup's (2019) regular nozzle (Table 5.3): d 0.6 mm, l 4 mm, alpha 30 deg, D 5 mm.\n"

@@ -112,6 +112,9 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
   add_parsed_option(
       sub, "--pressure-model", o.prediction.model, fitting::parse_pressure_model,
       [](fitting::PressureModel m) { return fitting::to_string(m); }, "boles, bellini, power-law or hagen-poiseuille");
+  sub->add_option("--max-rows", o.max_rows, "Most data rows accepted (count); a longer file is refused")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));
   add_output_options(sub, cmd->output);
   sub->footer(
       "Examples:\n"

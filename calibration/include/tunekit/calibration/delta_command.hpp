@@ -37,6 +37,7 @@ struct DeltaOptions {
   std::string export_file;                 ///< the export is written here (atomically); empty: printed
   double print_radius_mm = fitting::kNaN;  ///< RepRapFirmware's M665 B (mm)
   double marlin_probe_z_offset_mm = 0.0;   ///< Marlin's M851 Z (mm)
+  std::size_t max_rows = 200000;           ///< most probe rows accepted (count; --max-rows)
 };
 
 struct DeltaOutcome {

@@ -37,6 +37,7 @@ struct NozzleOptions {
   std::vector<double> flows_mm3_s;                ///< flows to evaluate (mm3/s); at least one without fit_file
   std::string fit_file;                           ///< non-empty: inverse fit from this CSV instead
   double piston_diameter_mm = fitting::kNaN;      ///< area a force column acts on (mm)
+  std::size_t max_rows = 200000;                  ///< most rows of fit_file accepted (count; --max-rows)
 };
 
 /// One evaluated flow of the forward mode.

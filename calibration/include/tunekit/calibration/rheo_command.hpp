@@ -5,6 +5,7 @@
 // liquefier's flow-dependent resistance predicted for a nozzle geometry (Holtrup, Tuning liquefier
 // dynamics, MSc thesis, University of Twente, 2019, ch. 5). Shape of a command: command.hpp.
 
+#include <cstddef>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -22,16 +23,19 @@ struct RheoOptions {
   /// Columns, units, the temperature of a file without one, the degC -> K offset; the
   /// temperature range is filled in from `temperatures` by compute_rheo().
   ident::RheologyCsvOptions csv;
-  std::string temperatures;               ///< "LO:HI" degC, either side may be empty; empty: every row
-  std::string model = "auto";             ///< a viscosity model name, or auto (lowest AIC)
-  std::string shift = "auto";             ///< none, arrhenius, wlf, or auto (arrhenius with several temperatures)
-  double t_ref_degc = fitting::kNaN;      ///< shift reference (degC); NaN: the middle data temperature
-  std::vector<std::string> fix;           ///< NAME=VALUE (SI), parameters held at a value
-  std::vector<std::string> free;          ///< parameters held by default to estimate instead
-  bool compare = true;                    ///< fit the default candidates too and rank them by AIC
-  bool tts = false;                       ///< report the master curve's shift factors
-  std::string power_law_window;           ///< "LOW:HIGH" 1/s; empty: no power-law fits
-  int power_law_points = 50;              ///< log-spaced points in the window (Holtrup 2019, sec. 5.2.3)
+  std::string temperatures;           ///< "LO:HI" degC, either side may be empty; empty: every row
+  std::string model = "auto";         ///< a viscosity model name, or auto (lowest AIC)
+  std::string shift = "auto";         ///< none, arrhenius, wlf, or auto (arrhenius with several temperatures)
+  double t_ref_degc = fitting::kNaN;  ///< shift reference (degC); NaN: the middle data temperature
+  std::vector<std::string> fix;       ///< NAME=VALUE (SI), parameters held at a value
+  std::vector<std::string> free;      ///< parameters held by default to estimate instead
+  bool compare = true;                ///< fit the default candidates too and rank them by AIC
+  bool tts = false;                   ///< report the master curve's shift factors
+  std::string power_law_window;       ///< "LOW:HIGH" 1/s; empty: no power-law fits
+  int power_law_points = 50;          ///< log-spaced points in the window (Holtrup 2019, sec. 5.2.3)
+  /// Most data rows accepted (count): a rheometer file holds tens to hundreds; the bound keeps a
+  /// runaway file from running for minutes (--max-rows).
+  std::size_t max_rows = 20000;
   std::vector<double> power_law_at_degc;  ///< temperatures of the power-law fits; empty: the data's
   /// The liquefier prediction (geometry in m and rad, flows in mm3/s); made when `predict`.
   bool predict = false;

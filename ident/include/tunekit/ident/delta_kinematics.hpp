@@ -43,6 +43,18 @@ bool delta_carriages(const DeltaGeometry& g, const DeltaPoint& p, std::array<dou
 /// Forward kinematics: the nozzle position for carriage heights (the solution below the
 /// carriages). Returns false when the rods cannot meet.
 bool delta_position(const DeltaGeometry& g, const std::array<double, 3>& carriages, DeltaPoint& p);
+/// Forward kinematics of one geometry for many carriage heights: the tower positions (mm,
+/// from the radius and the tower angles) are computed once, not once per point.
+class DeltaForward {
+ public:
+  explicit DeltaForward(const DeltaGeometry& g);
+  /// As delta_position(g, carriages, p).
+  bool position(const std::array<double, 3>& carriages, DeltaPoint& p) const;
+
+ private:
+  DeltaGeometry g_;
+  std::array<std::array<double, 2>, 3> towers_{};
+};
 /// Carriage heights when homed (carriages at their endstops).
 std::array<double, 3> delta_homed_carriages(const DeltaGeometry& g);
 
