@@ -182,8 +182,8 @@ std::string LineEditor::unified_diff(const std::string& label, int context) cons
   const std::size_t ctx = static_cast<std::size_t>(std::max(context, 0));
   // git's a/ and b/ prefixes for a relative path (patch -p1); an absolute path as it is (patch -p0).
   const bool absolute = !label.empty() && label.front() == '/';
-  std::string out = absolute ? fmt::format("--- {}\n+++ {}\n", label, label)
-                             : fmt::format("--- a/{}\n+++ b/{}\n", label, label);
+  std::string out =
+      absolute ? fmt::format("--- {}\n+++ {}\n", label, label) : fmt::format("--- a/{}\n+++ b/{}\n", label, label);
   std::size_t c = 0;
   while (c < changes.size()) {
     const std::size_t begin = changes[c] >= ctx ? changes[c] - ctx : 0;
