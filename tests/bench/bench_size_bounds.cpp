@@ -18,6 +18,7 @@
 
 #include <unistd.h>
 
+#include "../support/size_bound_inputs.hpp"
 #include "bench_common.hpp"
 #include "tunekit/calibration/delta_command.hpp"
 #include "tunekit/calibration/nozzle_command.hpp"
@@ -32,26 +33,6 @@ namespace {
 constexpr double kR = 8.314462618;  // J/(mol K)
 
 void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
-
-// Cross with an Arrhenius shift at four temperatures, 3 % noise (as the unit test's file).
-std::string rheo_csv(int rows) {
-  std::mt19937 gen(20190101);
-  std::normal_distribution<double> noise(0.0, 0.03);
-  std::string s = "shear_rate (1/s),viscosity (Pa.s),temperature (degC)\n";
-  const double temps[] = {380, 400, 420, 440};
-  const int per = rows / 4;
-  for (int i = 0; i < rows; ++i) {
-    const double T = temps[i % 4];
-    const double g = std::pow(10.0, 4.0 * (i / 4) / std::max(per - 1, 1));
-    const double aT = std::exp(66500.0 / kR * (1 / (T + 273.15) - 1 / (400 + 273.15)));
-    const double eta0 = 3000 * aT;
-    const double eta = eta0 / (1 + std::pow(eta0 * g / 1e5, 0.7));
-    char line[96];
-    std::snprintf(line, sizeof line, "%.6g,%.6g,%g\n", g, eta * std::exp(noise(gen)), T);
-    s += line;
-  }
-  return s;
-}
 
 // Boles' pressure drop of a power law (K 2e4 Pa.s^n, n 0.35, Ea 50 kJ/mol) through the default
 // nozzle at three temperatures, 2 % noise.
@@ -68,24 +49,6 @@ std::string nozzle_csv(int rows) {
     const double dp = fitting::pressure_drop(fitting::PressureModel::boles, 2e4 * aT, 0.35, q * 1e-9, g);
     char line[96];
     std::snprintf(line, sizeof line, "%.6g,%.6g,%g\n", q, dp * 1e-6 * std::exp(noise(gen)), T);
-    s += line;
-  }
-  return s;
-}
-
-std::string delta_csv() {
-  ident::DeltaGeometry nominal;
-  nominal.radius_mm = 105.0;
-  nominal.rod_mm = {215.0, 215.0, 215.0};
-  nominal.homed_height_mm = 250.0;
-  auto truth = nominal;
-  truth.endstop_mm = {0.35, -0.20, 0.10};
-  truth.radius_mm = 104.2;
-  truth.angle_deg = {210.4, 329.7, 90.0};
-  std::string s = "x_mm,y_mm,z_mm\n";
-  for (const auto& p : sim::simulate_delta_probes(nominal, truth, sim::delta_probe_pattern(85, 100, 1000), 0.01, 11)) {
-    char line[96];
-    std::snprintf(line, sizeof line, "%.4f,%.4f,%.5f\n", p.x_mm, p.y_mm, p.z_mm);
     s += line;
   }
   return s;
@@ -117,9 +80,9 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(dir);
   const std::string rheo = (dir / "rheo_10000.csv").string(), nozzle = (dir / "nozzle_100000.csv").string(),
                     delta = (dir / "delta_100001.csv").string();
-  write(rheo, rheo_csv(10000));
+  write(rheo, test::cross_rheometer_csv(10000));
   write(nozzle, nozzle_csv(100000));
-  write(delta, delta_csv());
+  write(delta, test::delta_probe_csv(100, 1000));
 
   calibration::RheoOptions ro;
   ro.file = rheo;

@@ -8,36 +8,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "size_bound_inputs.hpp"
 #include "test_support.hpp"
 #include "tunekit/ident/delta_kinematics.hpp"
 #include "tunekit/sim/delta_probe_sim.hpp"
 
 using namespace tunekit;
 
-namespace {
-
-// A 105 mm radius delta whose real radius is 104.2 mm, endstops and tower angles a little off.
-std::string probe_csv(int rings, int points_per_ring) {
-  ident::DeltaGeometry nominal;
-  nominal.radius_mm = 105.0;
-  nominal.rod_mm = {215.0, 215.0, 215.0};
-  nominal.homed_height_mm = 250.0;
-  auto truth = nominal;
-  truth.endstop_mm = {0.35, -0.20, 0.10};
-  truth.radius_mm = 104.2;
-  truth.angle_deg = {210.4, 329.7, 90.0};
-  const auto probes =
-      sim::simulate_delta_probes(nominal, truth, sim::delta_probe_pattern(85, rings, points_per_ring), 0.01, 11);
-  std::ostringstream csv;
-  csv << "x_mm,y_mm,z_mm\n";
-  for (const auto& p : probes) csv << p.x_mm << "," << p.y_mm << "," << p.z_mm << "\n";
-  return csv.str();
-}
-
-}  // namespace
-
 TEST_CASE("delta: a 100000-row probe file is fitted") {
-  const auto path = test::write_scratch("delta_size_100001.csv", probe_csv(100, 1000));
+  const auto path = test::write_scratch("delta_size_100001.csv", test::delta_probe_csv(100, 1000));
   const auto r = test::run_cli({"delta", path, "--radius", "105", "--rod", "215", "--height", "250", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
@@ -49,7 +28,7 @@ TEST_CASE("delta: a 100000-row probe file is fitted") {
 }
 
 TEST_CASE("delta: a probe file over the row bound is refused with exit 2 naming --max-rows") {
-  const auto path = test::write_scratch("delta_size_over.csv", probe_csv(4, 10));  // 41 rows
+  const auto path = test::write_scratch("delta_size_over.csv", test::delta_probe_csv(4, 10));  // 41 rows
   auto r = test::run_cli({"delta", path, "--radius", "105", "--rod", "215", "--height", "250", "--max-rows", "40"});
   CHECK(r.code == 2);
   CHECK(r.err.starts_with("tunekit: error: "));

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "size_bound_inputs.hpp"
 #include "test_support.hpp"
 
 using tunekit::test::run_cli;
@@ -19,26 +20,6 @@ using tunekit::test::write_scratch;
 namespace {
 
 constexpr double kR = 8.314462618;  // J/(mol K)
-
-// A capillary-rheometer file: Cross model with an Arrhenius shift (eta0 3000 Pa.s at 400 degC,
-// tau* 1e5 Pa, n 0.3, Ea 66.5 kJ/mol), four temperatures, shear rates 1..1e4 1/s, 3 % noise.
-std::string cross_rheometer_csv(int rows) {
-  std::mt19937 gen(20190101);
-  std::normal_distribution<double> noise(0.0, 0.03);
-  std::ostringstream csv;
-  csv << "shear_rate (1/s),viscosity (Pa.s),temperature (degC)\n";
-  const double temps[] = {380, 400, 420, 440};
-  const int per = rows / 4;
-  for (int i = 0; i < rows; ++i) {
-    const double T = temps[i % 4];
-    const double g = std::pow(10.0, 4.0 * (i / 4) / std::max(per - 1, 1));
-    const double aT = std::exp(66500.0 / kR * (1 / (T + 273.15) - 1 / (400 + 273.15)));
-    const double eta0 = 3000 * aT;
-    const double eta = eta0 / (1 + std::pow(eta0 * g / 1e5, 0.7));
-    csv << g << "," << eta * std::exp(noise(gen)) << "," << T << "\n";
-  }
-  return csv.str();
-}
 
 // Load-cell nozzle measurements: power law K 2e4 Pa.s^n at 410 degC, n 0.35, Arrhenius
 // Ea 50 kJ/mol, through the default nozzle (Boles' model), three temperatures, 2 % noise.
@@ -65,7 +46,7 @@ std::string nozzle_csv(int rows) {
 }  // namespace
 
 TEST_CASE("rheo: a 10000-row viscosity file is fitted with every row counted") {
-  const auto path = write_scratch("rheo_size_10000.csv", cross_rheometer_csv(10000));
+  const auto path = write_scratch("rheo_size_10000.csv", tunekit::test::cross_rheometer_csv(10000));
   const auto r = run_cli({"rheo", path, "--model", "cross", "--shift", "arrhenius", "--json"});
   INFO(r.err);
   REQUIRE(r.code == 0);
@@ -77,7 +58,7 @@ TEST_CASE("rheo: a 10000-row viscosity file is fitted with every row counted") {
 }
 
 TEST_CASE("rheo: a file over the row bound is refused with exit 2 naming --max-rows") {
-  const auto path = write_scratch("rheo_size_over.csv", cross_rheometer_csv(400));
+  const auto path = write_scratch("rheo_size_over.csv", tunekit::test::cross_rheometer_csv(400));
   auto r = run_cli({"rheo", path, "--max-rows", "399"});
   CHECK(r.code == 2);
   CHECK(r.err.starts_with("tunekit: error: "));
@@ -85,7 +66,7 @@ TEST_CASE("rheo: a file over the row bound is refused with exit 2 naming --max-r
   CHECK(r.err.find("399") != std::string::npos);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   // The default bound is far above a rheometer file's hundreds of rows but holds.
-  const auto big = write_scratch("rheo_size_default.csv", cross_rheometer_csv(20004));
+  const auto big = write_scratch("rheo_size_default.csv", tunekit::test::cross_rheometer_csv(20004));
   r = run_cli({"rheo", big});
   CHECK(r.code == 2);
   CHECK(r.err.find("--max-rows") != std::string::npos);
