@@ -99,7 +99,6 @@ nlohmann::json tension_json(const BeltTension& t) {
 ident::RingdownOptions belts_ringdown_defaults() {
   ident::RingdownOptions o;
   o.min_hz = 40;
-  o.max_hz = 400;
   o.max_zeta = 0.06;
   return o;
 }

@@ -141,7 +141,9 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
   r.sample_rate_hz = fs;
   if (rec.channels.empty() || !(fs > 0)) throw InputError("no acceleration channels to analyse", rec.path);
   const std::size_t n = rec.channels.front().size();
-  const double max_hz = o.max_hz > 0 ? std::min(o.max_hz, 0.49 * fs) : 0.45 * fs;
+  if (!(o.max_hz >= 0))
+    throw InputError(fmt::format("the ring-down's highest line {} Hz is not a frequency (0 or more)", o.max_hz));
+  const double max_hz = o.max_hz > 0 ? std::min(o.max_hz, 0.45 * fs) : 0.45 * fs;
   if (!(o.min_hz > 0 && o.min_hz < max_hz))
     throw InputError(fmt::format("the ring-down band {}-{} Hz is empty at {:.0f} Hz sampling", o.min_hz, max_hz, fs),
                      rec.path);
@@ -219,7 +221,7 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
   const auto lines = rd::spectral_lines(psum, df, o.min_hz, max_hz);
   const double floor = rd::spectral_floor(psum, df, o.min_hz, max_hz);
   const auto choice = rd::choose_fundamental(lines, ratio2 * floor, o.min_subharmonic_ratio * o.min_subharmonic_ratio,
-                                             o.min_hz, o.max_harmonic, o.harmonic_tolerance, 5.0);
+                                             o.min_hz, max_hz, o.harmonic_tolerance, 5.0);
   if (!choice.found)
     throw FitError(
         fmt::format("no decaying line above the noise: the strongest line between {:g} and {:.0f} Hz "

@@ -43,7 +43,7 @@ double spectral_floor(const std::vector<double>& p, double df, double lo, double
 }
 
 SeriesChoice choose_fundamental(const std::vector<Line>& lines, double min_power, double min_rel, double f_min,
-                                int max_harmonic, double tol, double lone_factor) {
+                                double f_max, double tol, double lone_factor) {
   SeriesChoice out;
   if (lines.empty()) return out;
   out.strongest = lines.front();
@@ -53,7 +53,8 @@ SeriesChoice choose_fundamental(const std::vector<Line>& lines, double min_power
     Series s;
     s.fundamental = l;
     s.power = l.power;
-    for (int k = 2; k <= max_harmonic; ++k) {
+    const int k_max = static_cast<int>(std::floor(f_max * (1 + tol) / l.freq_hz));
+    for (int k = 2; k <= k_max; ++k) {
       const auto* h = line_near(lines, k * l.freq_hz, tol);
       if (h == nullptr || h->power < min_power) continue;
       s.harmonics.emplace_back(k, *h);

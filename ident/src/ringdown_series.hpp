@@ -39,8 +39,11 @@ struct SeriesChoice {
 /// Chooses the fundamental among the clear lines (power >= min_power, >= min_rel of the strongest
 /// in power, at or above f_min): the one whose harmonic series carries the most power, a series
 /// with harmonics winning over a lone line unless that is over `lone_factor` times stronger.
+/// Every candidate's series is collected up to the same top frequency f_max (the lines' band), so
+/// the series of f/k holds every line of f's series and a clear sub-harmonic is never outweighed
+/// by its own harmonic's series.
 SeriesChoice choose_fundamental(const std::vector<Line>& lines, double min_power, double min_rel, double f_min,
-                                int max_harmonic, double tol, double lone_factor);
+                                double f_max, double tol, double lone_factor);
 
 /// Unit weights w (sum of squares 1) of the channels: the direction in which a sinusoid at f_hz
 /// stands highest over the noise (channel c's noise RMS noise[c]), from each channel's complex

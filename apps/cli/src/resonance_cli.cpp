@@ -133,9 +133,9 @@ void add_ringdown_options(CLI::App* sub, ident::RingdownOptions& o, bool* ringdo
   sub->add_option("--ringdown-min", o.min_hz,
                   fmt::format("Ring-down: lowest fundamental considered, Hz (default {:g})", o.min_hz));
   sub->add_option("--ringdown-max", o.max_hz,
-                  o.max_hz > 0
-                      ? fmt::format("Ring-down: highest line considered, Hz (default {:g})", o.max_hz)
-                      : std::string("Ring-down: highest line considered, Hz (default 0.45 x the sample rate)"));
+                  fmt::format("Ring-down: highest line considered, harmonics too, Hz (default {:g}, at most 0.45 x "
+                              "the sample rate; 0: that limit)",
+                              o.max_hz));
 }
 
 }  // namespace tunekit::cli

@@ -12,8 +12,9 @@
 //      at 2f, 3f, ... within `harmonic_tolerance`) is collected. The candidate whose series
 //      carries the most power wins, and a series with harmonics wins over a lone line unless
 //      the lone line is over five times stronger -- a plucked string rings with its
-//      harmonics; a line at f/2 that is clearly there makes the line at f its second
-//      harmonic, however strong, since f/2's series then holds f's. A pluck whose second
+//      harmonics. Every series is collected over the same band (up to `max_hz`), so a line at
+//      f/2 that is clearly there makes the line at f its second harmonic, however strong:
+//      f/2's series then holds every line of f's. A pluck whose second
 //      harmonic is the strongest line in every channel therefore reads at its fundamental;
 //   4. the projection: the channels are combined as y = sum_c w_c x_c with the unit vector w
 //      in which the fundamental stands highest over the noise (each channel weighted by its
@@ -40,14 +41,17 @@
 namespace tunekit::ident {
 
 struct RingdownOptions {
-  double min_hz = 20.0;                ///< lowest fundamental considered, Hz
-  double max_hz = 0.0;                 ///< highest line considered (harmonics too), Hz; 0: 0.45 x the sample rate
+  double min_hz = 20.0;  ///< lowest fundamental considered, Hz
+  /// Highest line considered (harmonics too), Hz, at most 0.45 x the sample rate; 0: that limit.
+  /// Input shapers act below about 200 Hz (Klipper's resonance test stops at 133 Hz by default) and
+  /// printer belts ring at 50-250 Hz; the lines a toolhead accelerometer shows above 400 Hz are its
+  /// mount, the frame's panels and fans, and on real plucks they can outweigh the belt's series.
+  double max_hz = 400.0;
   double settle_s = 0.03;              ///< skipped after the impact (the impact and the first, large and
                                        ///< not yet free swings are not a free decay of fixed frequency)
   double max_window_s = 0.5;           ///< longest decay window fitted, s
   double min_strength = 3.0;           ///< refuse below this signal/noise RMS ratio
   int max_components = 5;              ///< damped sinusoids fitted (fundamental and harmonics first)
-  int max_harmonic = 6;                ///< highest harmonic number looked for
   double max_line_shift = 0.05;        ///< a fitted line may move this fraction from its spectral start
   double harmonic_tolerance = 0.03;    ///< relative tolerance of a harmonic at k f
   double min_line_ratio = 4.0;         ///< a line must stand this many times (amplitude) over the spectrum's median
