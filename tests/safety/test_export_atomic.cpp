@@ -92,6 +92,11 @@ TEST_CASE("fault: export --write with any output path unwritable leaves every fi
   // tests run as root, and only the one directory of each case may refuse it.
   const auto root = scratch_dir("export_fault");
   ::chmod(root.c_str(), 0777);
+  // The results file the command reads, where user nobody can read it: a clone under /root
+  // (mode 0700 on Debian) is not, and the fault cases must fail for their own reason.
+  const std::string results = root + "/shaper_zv.json";
+  fs::copy_file(fixture("shaper_zv.json"), results, fs::copy_options::overwrite_existing);
+  ::chmod(results.c_str(), 0644);
   struct Case {
     std::string name;
     std::string extra;   // arguments naming the unwritable output
@@ -123,8 +128,7 @@ TEST_CASE("fault: export --write with any output path unwritable leaves every fi
     const auto before = snapshot(root);
     std::string extra = c.extra;
     for (auto at = extra.find("{root}"); at != std::string::npos; at = extra.find("{root}")) extra.replace(at, 6, root);
-    const auto r = run_unprivileged("export -f klipper -c " + cfg + " --pa-k 0.05 " + fixture("shaper_zv.json") +
-                                    " --write " + extra);
+    const auto r = run_unprivileged("export -f klipper -c " + cfg + " --pa-k 0.05 " + results + " --write " + extra);
     for (const char* d : {"/cfgdir", "/locked"}) ::chmod((root + d).c_str(), 0777);
     INFO(r.err);
     CHECK(r.code == 2);
@@ -133,8 +137,8 @@ TEST_CASE("fault: export --write with any output path unwritable leaves every fi
   }
   // The same command with every path writable changes them all (the fault cases were real).
   const std::string cfg = root + "/cfgdir/printer.cfg";
-  const auto ok = run_unprivileged("export -f klipper -c " + cfg + " --pa-k 0.05 " + fixture("shaper_zv.json") +
-                                   " --write --gcode " + root + "/locked/x.gcode -o " + root + "/locked/r.json");
+  const auto ok = run_unprivileged("export -f klipper -c " + cfg + " --pa-k 0.05 " + results + " --write --gcode " +
+                                   root + "/locked/x.gcode -o " + root + "/locked/r.json");
   INFO(ok.err);
   CHECK(ok.code == 0);
   CHECK(read_text(cfg).find("pressure_advance: 0.05") != std::string::npos);
