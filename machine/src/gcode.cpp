@@ -17,13 +17,80 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
+// strtod's syntax (what firmware's own number parsing accepts), without a heap copy for the
+// short values G-code carries: the gate and the simulator parse every line of a protocol.
 std::optional<double> to_number(std::string_view s) {
   if (s.empty()) return std::nullopt;
-  std::string tmp(s);
+  constexpr std::size_t kShort = 64;
+  char buf[kShort];
+  std::string long_copy;
+  const char* text = buf;
+  if (s.size() < kShort) {
+    std::copy(s.begin(), s.end(), buf);
+    buf[s.size()] = '\0';
+  } else {
+    long_copy.assign(s);
+    text = long_copy.c_str();
+  }
   char* end = nullptr;
-  const double v = std::strtod(tmp.c_str(), &end);
-  if (end != tmp.c_str() + tmp.size() || !std::isfinite(v)) return std::nullopt;
+  const double v = std::strtod(text, &end);
+  if (end != text + s.size() || !std::isfinite(v)) return std::nullopt;
   return v;
+}
+
+bool is_space(char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; }
+bool is_alpha(char c) { return std::isalpha(static_cast<unsigned char>(c)) != 0; }
+char upper(char c) { return static_cast<char>(std::toupper(static_cast<unsigned char>(c))); }
+
+/// The line without its comments (';' to the end, and parenthesised ones); `storage` holds the
+/// text only when a parenthesised comment had to be cut out of the middle.
+std::string_view strip_comments(std::string_view s, std::string& storage) {
+  if (const auto semi = s.find(';'); semi != std::string_view::npos) s = s.substr(0, semi);
+  if (s.find('(') == std::string_view::npos) return s;
+  storage.assign(s);
+  for (auto open = storage.find('('); open != std::string::npos; open = storage.find('(')) {
+    const auto close = storage.find(')', open);
+    storage.erase(open, close == std::string::npos ? std::string::npos : close - open + 1);
+  }
+  return storage;
+}
+
+/// Marlin's words after the command ("X10 Y5", also "X10Y5"): a letter, then its value up to the
+/// next letter or space.
+void parse_classic_words(std::string_view rest, GcodeWords& w) {
+  std::size_t j = 0;
+  while (j < rest.size()) {
+    if (!is_alpha(rest[j])) {
+      ++j;
+      continue;
+    }
+    std::size_t k = j + 1;
+    while (k < rest.size() && !is_alpha(rest[k]) && !is_space(rest[k])) ++k;
+    const std::string key(1, upper(rest[j]));
+    const auto value_text = rest.substr(j + 1, k - j - 1);
+    if (const auto v = to_number(value_text)) w.args[key] = *v;
+    else if (value_text.empty()) w.args[key] = 0;  // a bare flag such as "G28 X"
+    else w.text_args[key] = std::string(value_text);
+    j = k;
+  }
+}
+
+/// Extended commands' KEY=VALUE words (Klipper's SET_VELOCITY_LIMIT ACCEL=3000).
+void parse_extended_words(std::string_view rest, GcodeWords& w) {
+  std::size_t i = 0;
+  while (i < rest.size()) {
+    while (i < rest.size() && is_space(rest[i])) ++i;
+    const std::size_t b = i;
+    while (i < rest.size() && !is_space(rest[i])) ++i;
+    const auto token = rest.substr(b, i - b);
+    const auto eq = token.find('=');
+    if (token.empty() || eq == std::string_view::npos) continue;
+    std::string key;
+    for (char c : token.substr(0, eq)) key.push_back(upper(c));
+    const auto value_text = token.substr(eq + 1);
+    if (const auto v = to_number(value_text)) w.args[key] = *v;
+    else w.text_args[key] = std::string(value_text);
+  }
 }
 
 }  // namespace
@@ -69,63 +136,21 @@ NumberedLine split_numbered(std::string_view raw) {
 }
 
 std::optional<GcodeWords> parse_gcode(std::string_view line) {
-  std::string text(split_numbered(line).body);
-  // Strip comments.
-  if (const auto semi = text.find(';'); semi != std::string::npos) text.resize(semi);
-  for (auto open = text.find('('); open != std::string::npos; open = text.find('(')) {
-    const auto close = text.find(')', open);
-    text.erase(open, close == std::string::npos ? std::string::npos : close - open + 1);
-  }
-  const std::string_view s = trim(text);
+  const NumberedLine numbered = split_numbered(line);
+  std::string storage;
+  const std::string_view s = trim(strip_comments(numbered.body, storage));
   if (s.empty()) return std::nullopt;
   GcodeWords w;
-  // Split into whitespace-separated tokens.
-  std::vector<std::string_view> tokens;
-  std::size_t i = 0;
-  while (i < s.size()) {
-    while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
-    const std::size_t b = i;
-    while (i < s.size() && !std::isspace(static_cast<unsigned char>(s[i]))) ++i;
-    if (i > b) tokens.push_back(s.substr(b, i - b));
-  }
-  const std::string_view head = tokens.front();
-  const bool classic = head.size() >= 2 && std::isalpha(static_cast<unsigned char>(head[0])) &&
-                       std::isdigit(static_cast<unsigned char>(head[1])) && head.find('=') == std::string_view::npos;
-  for (char c : head) w.command.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
-  if (classic) {
-    // Marlin allows "G1X10Y5": split letters from numbers over the rest of the line.
-    std::string rest;
-    for (std::size_t k = 1; k < tokens.size(); ++k) rest += std::string(tokens[k]) + " ";
-    std::size_t j = 0;
-    while (j < rest.size()) {
-      const char c = rest[j];
-      if (!std::isalpha(static_cast<unsigned char>(c))) {
-        ++j;
-        continue;
-      }
-      std::size_t k = j + 1;
-      while (k < rest.size() && !std::isalpha(static_cast<unsigned char>(rest[k])) &&
-             !std::isspace(static_cast<unsigned char>(rest[k])))
-        ++k;
-      const std::string key(1, static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
-      const auto value_text = std::string_view(rest).substr(j + 1, k - j - 1);
-      if (const auto v = to_number(value_text)) w.args[key] = *v;
-      else if (value_text.empty()) w.args[key] = 0;  // a bare flag such as "G28 X"
-      else w.text_args[key] = std::string(value_text);
-      j = k;
-    }
-  } else {
-    for (std::size_t k = 1; k < tokens.size(); ++k) {
-      const auto eq = tokens[k].find('=');
-      if (eq == std::string_view::npos) continue;
-      std::string key;
-      for (char c : tokens[k].substr(0, eq))
-        key.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
-      const auto value_text = tokens[k].substr(eq + 1);
-      if (const auto v = to_number(value_text)) w.args[key] = *v;
-      else w.text_args[key] = std::string(value_text);
-    }
-  }
+  std::size_t head_end = 0;
+  while (head_end < s.size() && !is_space(s[head_end])) ++head_end;
+  const std::string_view head = s.substr(0, head_end);
+  const bool classic = head.size() >= 2 && is_alpha(head[0]) && std::isdigit(static_cast<unsigned char>(head[1])) &&
+                       head.find('=') == std::string_view::npos;
+  w.command.reserve(head.size());
+  for (char c : head) w.command.push_back(upper(c));
+  const std::string_view rest = s.substr(head_end);
+  if (classic) parse_classic_words(rest, w);
+  else parse_extended_words(rest, w);
   return w;
 }
 
