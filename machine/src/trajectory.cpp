@@ -53,17 +53,34 @@ void Profile::add_ramp(double v0, double v1, double a_max, double j_max) {
   end_.vel_mm_s = v1;
 }
 
-Profile Profile::move(double d, double v_entry, double v_max, double v_exit, double a_max, double j_max) {
+namespace {
+
+/// A move's speeds: entry, the peak (cruise) speed and the exit speed, after the limits.
+struct MoveSpeeds {
+  double d = 0, v_entry = 0, vc = 0, v_exit = 0;
+};
+
+MoveSpeeds move_speeds(double d, double v_entry, double v_max, double v_exit, double a_max, double j_max) {
   d = std::max(0.0, d);
   v_max = std::max(v_max, 1e-9);
   v_entry = std::max(0.0, v_entry);
   v_exit = std::min(std::max(0.0, v_exit), v_max);
   auto need = [&](double vc) {
-    return ramp_distance(v_entry, vc, a_max, j_max) + ramp_distance(vc, v_exit, a_max, j_max);
+    return Profile::ramp_distance(v_entry, vc, a_max, j_max) + Profile::ramp_distance(vc, v_exit, a_max, j_max);
   };
   double vc = v_max;
-  // Entering faster than this move's speed: slow down to it first (no search).
-  if (v_entry <= v_max && need(vc) > d) {
+  if (v_entry == 0 && v_exit == 0 && need(vc) > d && a_max > 0 && j_max > 0) {
+    // From rest to rest, too short to reach v_max: the peak speed in closed form (the search
+    // below finds the same root; the gate and the planners time many such short moves).
+    // need(vc) = vc * ramp_duration(0, vc): vc^2 / a + vc a / j when the ramp reaches a_max,
+    // else 2 vc^1.5 / sqrt(j).
+    const double tj = a_max / j_max;
+    const double full = 0.5 * a_max * (std::sqrt(tj * tj + 4 * d / a_max) - tj);
+    vc = full >= a_max * tj ? full : std::cbrt(0.25 * d * d * j_max);
+    vc = std::clamp(vc, 0.0, v_max);
+  } else if (v_entry <= v_max && need(vc) > d) {
+    // Too short to reach v_max: search the peak speed (entering faster than this move's speed,
+    // the move slows down to it first, with no search).
     double lo = std::max(v_entry, v_exit), hi = v_max;
     if (need(lo) > d) {
       // Too short even to go from the entry speed to the exit speed: lower the exit speed.
@@ -83,13 +100,29 @@ Profile Profile::move(double d, double v_entry, double v_max, double v_exit, dou
     }
     vc = lo;
   }
+  return {d, v_entry, vc, v_exit};
+}
+
+}  // namespace
+
+Profile Profile::move(double d, double v_entry, double v_max, double v_exit, double a_max, double j_max) {
+  const MoveSpeeds m = move_speeds(d, v_entry, v_max, v_exit, a_max, j_max);
   Profile p;
-  p.end_.vel_mm_s = v_entry;
-  p.add_ramp(v_entry, vc, a_max, j_max);
-  const double cruise = d - need(vc);
-  if (cruise > 0 && vc > 0) p.add(cruise / vc, 0);
-  p.add_ramp(vc, v_exit, a_max, j_max);
+  p.end_.vel_mm_s = m.v_entry;
+  p.add_ramp(m.v_entry, m.vc, a_max, j_max);
+  const double cruise =
+      m.d - ramp_distance(m.v_entry, m.vc, a_max, j_max) - ramp_distance(m.vc, m.v_exit, a_max, j_max);
+  if (cruise > 0 && m.vc > 0) p.add(cruise / m.vc, 0);
+  p.add_ramp(m.vc, m.v_exit, a_max, j_max);
   return p;
+}
+
+double Profile::move_duration_s(double d, double v_entry, double v_max, double v_exit, double a_max, double j_max) {
+  const MoveSpeeds m = move_speeds(d, v_entry, v_max, v_exit, a_max, j_max);
+  const double cruise =
+      m.d - ramp_distance(m.v_entry, m.vc, a_max, j_max) - ramp_distance(m.vc, m.v_exit, a_max, j_max);
+  return ramp_duration(m.v_entry, m.vc, a_max, j_max) + (cruise > 0 && m.vc > 0 ? cruise / m.vc : 0.0) +
+         ramp_duration(m.vc, m.v_exit, a_max, j_max);
 }
 
 Profile Profile::cruise(double v, double duration_s) {

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 
 #include <fmt/format.h>
 
@@ -89,14 +88,21 @@ std::vector<std::pair<int, int>> coverage_order_zigzag(const CoverageGrid& g) {
 }
 
 std::vector<std::pair<int, int>> coverage_order_pce(const CoverageGrid& g) {
-  std::vector<char> covered(g.print.size(), 0);
-  auto open = [&](int i, int j) { return g.printable(i, j) && !covered[static_cast<std::size_t>(j * g.nx + i)]; };
+  // Cells still to print, on the grid with a border of one cell that is never open: the open
+  // test is one load, and the neighbours' count needs no bounds checks or branches (the
+  // planner runs on every test-pattern protocol the gate sees).
+  const int px = g.nx + 2;
+  std::vector<unsigned char> open_cells(static_cast<std::size_t>(px) * static_cast<std::size_t>(g.ny + 2), 0);
+  auto at = [&](int i, int j) { return static_cast<std::size_t>(j + 1) * static_cast<std::size_t>(px) + (i + 1); };
+  for (int j = 0; j < g.ny; ++j)
+    for (int i = 0; i < g.nx; ++i) open_cells[at(i, j)] = g.printable(i, j) ? 1 : 0;
+  auto open = [&](int i, int j) { return open_cells[at(i, j)] != 0; };
+  // Neighbours that are not open (covered, not to print, or off the grid): PCE's cost.
   auto cost = [&](int i, int j) {
-    int c = 0;
-    for (int dj = -1; dj <= 1; ++dj)
-      for (int di = -1; di <= 1; ++di)
-        if ((di != 0 || dj != 0) && !open(i + di, j + dj)) ++c;
-    return c;
+    const unsigned char* r0 = &open_cells[at(i - 1, j - 1)];
+    const unsigned char* r1 = r0 + px;
+    const unsigned char* r2 = r1 + px;
+    return 8 - (r0[0] + r0[1] + r0[2] + r1[0] + r1[2] + r2[0] + r2[1] + r2[2]);
   };
   std::size_t remaining = static_cast<std::size_t>(std::count(g.print.begin(), g.print.end(), 1));
   std::vector<std::pair<int, int>> out;
@@ -111,9 +117,11 @@ std::vector<std::pair<int, int>> coverage_order_pce(const CoverageGrid& g) {
         break;
       }
   std::vector<int> seen(g.print.size(), -1);
+  std::vector<std::pair<int, int>> queue;  // the search's queue, reused: [head, end) is pending
+  queue.reserve(g.print.size());
   int stamp = 0;
   while (remaining > 0 && ci >= 0) {
-    covered[static_cast<std::size_t>(cj * g.nx + ci)] = 1;
+    open_cells[at(ci, cj)] = 0;
     out.push_back({ci, cj});
     --remaining;
     if (remaining == 0) break;
@@ -135,12 +143,11 @@ std::vector<std::pair<int, int>> coverage_order_pce(const CoverageGrid& g) {
     }
     // Singularity: breadth-first search for the nearest uncovered cell (Chebyshev steps over the grid).
     ++stamp;
-    std::deque<std::pair<int, int>> q{{ci, cj}};
+    queue.assign(1, {ci, cj});
     seen[static_cast<std::size_t>(cj * g.nx + ci)] = stamp;
     ci = -1;
-    while (!q.empty()) {
-      const auto [i, j] = q.front();
-      q.pop_front();
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const auto [i, j] = queue[head];
       if (open(i, j)) {
         ci = i;
         cj = j;
@@ -150,7 +157,7 @@ std::vector<std::pair<int, int>> coverage_order_pce(const CoverageGrid& g) {
         const int ni = i + d[0], nj = j + d[1];
         if (!g.inside(ni, nj) || seen[static_cast<std::size_t>(nj * g.nx + ni)] == stamp) continue;
         seen[static_cast<std::size_t>(nj * g.nx + ni)] = stamp;
-        q.push_back({ni, nj});
+        queue.push_back({ni, nj});
       }
     }
   }
@@ -191,7 +198,7 @@ CoveragePlan plan_test_patterns(const TestPatternSet& set, const machine::Machin
   for (const auto& m : plan.moves) {
     const double len = std::hypot(m.x1 - m.x0, m.y1 - m.y0);
     const double v = m.extrude ? motion.print_speed_mm_s : motion.travel_speed_mm_s;
-    plan.stats.time_s += machine::Profile::move(len, 0, v, 0, motion.accel_mm_s2, jerk).duration_s();
+    plan.stats.time_s += machine::Profile::move_duration_s(len, 0, v, 0, motion.accel_mm_s2, jerk);
     if (m.extrude) plan.stats.print_mm += len;
     else {
       plan.stats.travel_mm += len;

@@ -171,7 +171,7 @@ double estimate_gcode_duration_s(const std::vector<std::string>& gcode) {
     if (m) {
       if (!(m->feed_mm_s > 0) || !(m->accel_mm_s2 > 0) || !std::isfinite(m->length_mm()))
         return std::numeric_limits<double>::infinity();
-      t += machine::Profile::move(m->length_mm(), 0, m->feed_mm_s, 0, m->accel_mm_s2, kGateJerkMmS3).duration_s();
+      t += machine::Profile::move_duration_s(m->length_mm(), 0, m->feed_mm_s, 0, m->accel_mm_s2, kGateJerkMmS3);
     }
     t += in.dwell_s();
   }

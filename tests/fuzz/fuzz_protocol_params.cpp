@@ -30,13 +30,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::memcpy(&v, data + i + 1, sizeof v);
     params[spec.params[data[i] % spec.params.size()].name] = v;
   }
-  // Small limits keep one execution to a few thousand lines at most (the default limits let a
-  // protocol generate up to a million lines: about 23 inputs a second under the sanitizers).
-  // The gate and the refusal before generation are the same code at any limit. Every
-  // protocol's defaults fit but axis-sweep's (9,914 lines), which the fuzzer shortens through
-  // its parameters.
+  // Small limits keep one execution to a few hundred lines (the default limits let a protocol
+  // generate up to a million lines: about 23 inputs a second under the sanitizers). The gate
+  // and the refusal before generation are the same code at any limit. The defaults of
+  // liquefier-step, liquefier-flow-sweep, line-steps and axis-rectangle fit; the longer
+  // protocols are refused before generation unless the fuzzer shortens them through their
+  // parameters, as the seeds short-* do.
   ProtocolLimits limits;
-  limits.max_lines = 2500;
+  limits.max_lines = 300;
   limits.max_bytes = 128 * 1024;
   Experiment e;
   try {

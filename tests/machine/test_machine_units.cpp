@@ -106,6 +106,24 @@ TEST_CASE("jerk-limited profiles reach the distance within the limits", "[machin
   CHECK(b.exit_speed() == Approx(3));
 }
 
+TEST_CASE("a short move from rest to rest peaks where the search for its peak speed does", "[machine]") {
+  // The rest-to-rest case is solved in closed form; entering at 1e-9 mm/s takes the search.
+  for (const double a : {500.0, 3000.0, 20000.0})
+    for (const double j : {1e4, 1e6, 1e8})
+      for (const double d : {1e-4, 0.01, 0.4, 3.0, 40.0}) {
+        INFO("a " << a << " j " << j << " d " << d);
+        const auto closed = Profile::move(d, 0, 300, 0, a, j);
+        const auto searched = Profile::move(d, 1e-9, 300, 0, a, j);
+        CHECK(closed.distance_mm() == Approx(d).epsilon(1e-9));
+        CHECK(closed.exit_speed() == Approx(0).margin(1e-12));
+        CHECK(closed.duration_s() == Approx(searched.duration_s()).epsilon(1e-6));
+        CHECK(Profile::move_duration_s(d, 0, 300, 0, a, j) == Approx(closed.duration_s()).epsilon(1e-12));
+        CHECK(Profile::move_duration_s(d, 1e-9, 300, 0, a, j) == Approx(searched.duration_s()).epsilon(1e-12));
+        CHECK(closed.at(closed.duration_s() / 2).vel_mm_s ==
+              Approx(searched.at(searched.duration_s() / 2).vel_mm_s).epsilon(1e-6));
+      }
+}
+
 TEST_CASE("safety check lists every violation at once", "[machine]") {
   const auto profile = builtin_sim_profile();
   const std::vector<std::string> g{"G28", "M109 S400", "M204 S20000", "G1 X500 F30000", "M83", "G1 E100 F6000"};

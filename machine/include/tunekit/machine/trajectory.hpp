@@ -22,6 +22,9 @@ class Profile {
   /// cruise speed is lowered; if even the entry/exit speeds cannot be met the exit speed is
   /// lowered too.
   static Profile move(double distance_mm, double v_entry, double v_max, double v_exit, double a_max, double j_max);
+  /// The duration of that move, s (as move(...).duration_s(), without building its segments).
+  static double move_duration_s(double distance_mm, double v_entry, double v_max, double v_exit, double a_max,
+                                double j_max);
   /// A pure dwell at speed v (no acceleration) for `duration_s`.
   static Profile cruise(double v, double duration_s);
 
