@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -89,75 +91,76 @@ std::vector<std::pair<int, int>> coverage_order_zigzag(const CoverageGrid& g) {
 
 std::vector<std::pair<int, int>> coverage_order_pce(const CoverageGrid& g) {
   // Cells still to print, on the grid with a border of one cell that is never open: the open
-  // test is one load, and the neighbours' count needs no bounds checks or branches (the
-  // planner runs on every test-pattern protocol the gate sees).
-  const int px = g.nx + 2;
-  std::vector<unsigned char> open_cells(static_cast<std::size_t>(px) * static_cast<std::size_t>(g.ny + 2), 0);
-  auto at = [&](int i, int j) { return static_cast<std::size_t>(j + 1) * static_cast<std::size_t>(px) + (i + 1); };
+  // test is one load, and neighbours are index offsets with no bounds checks (the planner runs
+  // on every test-pattern protocol the gate sees).
+  const std::ptrdiff_t px = g.nx + 2;
+  const std::size_t padded = static_cast<std::size_t>(px) * static_cast<std::size_t>(g.ny + 2);
+  auto at = [&](int i, int j) { return static_cast<std::size_t>((j + 1) * px + (i + 1)); };
+  std::vector<unsigned char> open_cells(padded, 0);
   for (int j = 0; j < g.ny; ++j)
-    for (int i = 0; i < g.nx; ++i) open_cells[at(i, j)] = g.printable(i, j) ? 1 : 0;
-  auto open = [&](int i, int j) { return open_cells[at(i, j)] != 0; };
+    for (int i = 0; i < g.nx; ++i) open_cells[at(i, j)] = g.print[static_cast<std::size_t>(j * g.nx + i)] != 0;
+  // The 8 neighbours in the planner's order: +x, +y, -x, -y, then the diagonals.
+  const std::ptrdiff_t step[8] = {1, px, -1, -px, px + 1, px - 1, -px - 1, -px + 1};
   // Neighbours that are not open (covered, not to print, or off the grid): PCE's cost.
-  auto cost = [&](int i, int j) {
-    const unsigned char* r0 = &open_cells[at(i - 1, j - 1)];
-    const unsigned char* r1 = r0 + px;
-    const unsigned char* r2 = r1 + px;
-    return 8 - (r0[0] + r0[1] + r0[2] + r1[0] + r1[2] + r2[0] + r2[1] + r2[2]);
+  auto cost = [&](std::size_t k) {
+    const unsigned char* c = &open_cells[k];
+    return 8 - (c[-px - 1] + c[-px] + c[-px + 1] + c[-1] + c[1] + c[px - 1] + c[px] + c[px + 1]);
   };
   std::size_t remaining = static_cast<std::size_t>(std::count(g.print.begin(), g.print.end(), 1));
   std::vector<std::pair<int, int>> out;
   out.reserve(remaining);
-  const int dirs[8][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
-  int ci = -1, cj = -1;
-  for (int j = 0; j < g.ny && ci < 0; ++j)
+  std::size_t cur = 0;
+  for (int j = 0; j < g.ny && cur == 0; ++j)
     for (int i = 0; i < g.nx; ++i)
       if (g.printable(i, j)) {
-        ci = i;
-        cj = j;
+        cur = at(i, j);
         break;
       }
-  std::vector<int> seen(g.print.size(), -1);
-  std::vector<std::pair<int, int>> queue;  // the search's queue, reused: [head, end) is pending
-  queue.reserve(g.print.size());
+  // The search's marks: a cell is seen in the current search when its mark is >= the search's
+  // stamp; the border's mark is the largest, so the search never leaves the grid.
+  std::vector<int> seen(padded, std::numeric_limits<int>::max());
+  for (int j = 0; j < g.ny; ++j)
+    for (int i = 0; i < g.nx; ++i) seen[at(i, j)] = -1;
+  std::vector<std::size_t> queue;  // the search's queue, reused
+  queue.reserve(padded);
   int stamp = 0;
-  while (remaining > 0 && ci >= 0) {
-    open_cells[at(ci, cj)] = 0;
-    out.push_back({ci, cj});
+  while (remaining > 0 && cur != 0) {
+    open_cells[cur] = 0;
+    out.push_back({static_cast<int>(static_cast<std::ptrdiff_t>(cur) % px) - 1,
+                   static_cast<int>(static_cast<std::ptrdiff_t>(cur) / px) - 1});
     --remaining;
     if (remaining == 0) break;
-    int best = -1, bi = 0, bj = 0;
-    for (const auto& d : dirs) {
-      const int ni = ci + d[0], nj = cj + d[1];
-      if (!open(ni, nj)) continue;
-      const int c = cost(ni, nj);
+    int best = -1;
+    std::size_t next = 0;
+    for (const auto d : step) {
+      const std::size_t n = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(cur) + d);
+      if (!open_cells[n]) continue;
+      const int c = cost(n);
       if (c > best) {
         best = c;
-        bi = ni;
-        bj = nj;
+        next = n;
       }
     }
     if (best >= 0) {
-      ci = bi;
-      cj = bj;
+      cur = next;
       continue;
     }
     // Singularity: breadth-first search for the nearest uncovered cell (Chebyshev steps over the grid).
     ++stamp;
-    queue.assign(1, {ci, cj});
-    seen[static_cast<std::size_t>(cj * g.nx + ci)] = stamp;
-    ci = -1;
+    queue.assign(1, cur);
+    seen[cur] = stamp;
+    cur = 0;
     for (std::size_t head = 0; head < queue.size(); ++head) {
-      const auto [i, j] = queue[head];
-      if (open(i, j)) {
-        ci = i;
-        cj = j;
+      const std::size_t k = queue[head];
+      if (open_cells[k]) {
+        cur = k;
         break;
       }
-      for (const auto& d : dirs) {
-        const int ni = i + d[0], nj = j + d[1];
-        if (!g.inside(ni, nj) || seen[static_cast<std::size_t>(nj * g.nx + ni)] == stamp) continue;
-        seen[static_cast<std::size_t>(nj * g.nx + ni)] = stamp;
-        queue.push_back({ni, nj});
+      for (const auto d : step) {
+        const std::size_t n = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(k) + d);
+        if (seen[n] >= stamp) continue;
+        seen[n] = stamp;
+        queue.push_back(n);
       }
     }
   }
