@@ -221,7 +221,10 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
   const auto lines = rd::spectral_lines(psum, df, o.min_hz, max_hz);
   const double floor = rd::spectral_floor(psum, df, o.min_hz, max_hz);
   const auto choice = rd::choose_fundamental(lines, ratio2 * floor, o.min_subharmonic_ratio * o.min_subharmonic_ratio,
-                                             o.min_hz, max_hz, o.harmonic_tolerance, 5.0);
+                                             o.min_hz, max_hz, o.harmonic_tolerance, 5.0,
+                                             {o.min_fundamental_line_ratio * o.min_fundamental_line_ratio * floor,
+                                              o.min_fundamental_to_harmonic * o.min_fundamental_to_harmonic,
+                                              o.min_pair_line_ratio * o.min_pair_line_ratio * floor});
   if (!choice.found)
     throw FitError(
         fmt::format("no decaying line above the noise: the strongest line between {:g} and {:.0f} Hz "

@@ -43,20 +43,35 @@ double spectral_floor(const std::vector<double>& p, double df, double lo, double
 }
 
 SeriesChoice choose_fundamental(const std::vector<Line>& lines, double min_power, double min_rel, double f_min,
-                                double f_max, double tol, double lone_factor) {
+                                double f_max, double tol, double lone_factor, const SubharmonicRule& sub) {
   SeriesChoice out;
   if (lines.empty()) return out;
   out.strongest = lines.front();
+  std::vector<Line> clear;
+  for (const auto& l : lines)
+    if (l.power >= min_power && l.power >= min_rel * out.strongest.power && l.freq_hz >= f_min) clear.push_back(l);
+  std::vector<Line> heads = clear;
+  for (const auto& l : clear)
+    for (int k = 2; k <= 3 && sub.min_power > 0; ++k) {
+      const Line* g = line_near(lines, l.freq_hz / k, tol);
+      if (g == nullptr || g->freq_hz < f_min || g->power < sub.min_power || g->power < sub.min_rel * l.power) continue;
+      if (line_near(heads, g->freq_hz, 1e-9) == nullptr) heads.push_back(*g);
+    }
+  for (const auto& g : lines) {
+    if (sub.pair_power <= 0 || g.power < sub.pair_power || g.freq_hz < f_min) continue;
+    const Line* h = line_near(lines, 2 * g.freq_hz, tol);
+    if (h != nullptr && h->power >= sub.pair_power && line_near(heads, g.freq_hz, 1e-9) == nullptr) heads.push_back(g);
+  }
+  const double harmonic_power = sub.pair_power > 0 ? std::min(min_power, sub.pair_power) : min_power;
   std::vector<Series> candidates;
-  for (const auto& l : lines) {
-    if (l.power < min_power || l.power < min_rel * out.strongest.power || l.freq_hz < f_min) continue;
+  for (const auto& l : heads) {
     Series s;
     s.fundamental = l;
     s.power = l.power;
     const int k_max = static_cast<int>(std::floor(f_max * (1 + tol) / l.freq_hz));
     for (int k = 2; k <= k_max; ++k) {
       const auto* h = line_near(lines, k * l.freq_hz, tol);
-      if (h == nullptr || h->power < min_power) continue;
+      if (h == nullptr || h->power < harmonic_power) continue;
       s.harmonics.emplace_back(k, *h);
       s.power += h->power;
     }

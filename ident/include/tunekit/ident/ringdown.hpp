@@ -15,7 +15,9 @@
 //      harmonics. Every series is collected over the same band (up to `max_hz`), so a line at
 //      f/2 that is clearly there makes the line at f its second harmonic, however strong:
 //      f/2's series then holds every line of f's. A pluck whose second
-//      harmonic is the strongest line in every channel therefore reads at its fundamental;
+//      harmonic is the strongest line in every channel therefore reads at its fundamental.
+//      A weaker line at f/2 or f/3 of a clear line, and a pair of lines g, 2g both well over
+//      the floor, are candidates too (`min_fundamental_line_ratio`, `min_pair_line_ratio`);
 //   4. the projection: the channels are combined as y = sum_c w_c x_c with the unit vector w
 //      in which the fundamental stands highest over the noise (each channel weighted by its
 //      noise, the principal direction of the fundamental's complex amplitudes). A named
@@ -57,10 +59,19 @@ struct RingdownOptions {
   double min_line_ratio = 4.0;         ///< a line must stand this many times (amplitude) over the spectrum's median
   double min_subharmonic_ratio = 0.1;  ///< a candidate fundamental must reach this fraction of the strongest
                                        ///< line's amplitude
-  double max_decay_ratio = 0.8;        ///< refuse a fundamental whose fitted envelope keeps more than this fraction
-                                       ///< of its amplitude over the window (a steady tone)
-  double max_zeta = 0;                 ///< refuse a fundamental damped more than this (a tap); 0: no limit
-  std::string channel;                 ///< analyse this channel alone; empty: the best projection of all
+  /// A line at f/2 or f/3 of a clear line f is a candidate fundamental when it stands this many
+  /// times (amplitude) over the spectrum's median and reaches `min_fundamental_to_harmonic` of
+  /// f's amplitude: where the sensor sits near a node of the fundamental, a real pluck's
+  /// fundamental can stand lower than its second harmonic.
+  double min_fundamental_line_ratio = 2.5;
+  double min_fundamental_to_harmonic = 0.25;
+  /// Two lines g and 2g that both stand this many times (amplitude) over the median make g a
+  /// candidate fundamental, and a series counts its harmonics down to this ratio.
+  double min_pair_line_ratio = 3.0;
+  double max_decay_ratio = 0.8;  ///< refuse a fundamental whose fitted envelope keeps more than this fraction
+                                 ///< of its amplitude over the window (a steady tone)
+  double max_zeta = 0;           ///< refuse a fundamental damped more than this (a tap); 0: no limit
+  std::string channel;           ///< analyse this channel alone; empty: the best projection of all
 };
 
 struct RingdownChannel {
