@@ -89,11 +89,15 @@ TEST_CASE("export keeps a Latin-1 comment byte for byte and reports valid UTF-8 
 
 TEST_CASE("fault: export --write with any output path unwritable leaves every file byte-identical", "[safety]") {
   // Writable directories are writable for everyone: the command runs as user nobody when the
-  // tests run as root, and only the one directory of each case may refuse it.
-  const auto root = scratch_dir("export_fault");
+  // tests run as root, and only the one directory of each case may refuse it. Every file lives
+  // under the system's temporary directory, where user nobody can reach it: a clone (and its
+  // build directory) under /root, mode 0700 on Debian, is out of its reach, and the fault cases
+  // must fail for their own reason.
+  const std::string root =
+      (fs::temp_directory_path() / ("tunekit-export-fault-" + std::to_string(::getpid()))).string();
+  fs::remove_all(root);
+  fs::create_directories(root);
   ::chmod(root.c_str(), 0777);
-  // The results file the command reads, where user nobody can read it: a clone under /root
-  // (mode 0700 on Debian) is not, and the fault cases must fail for their own reason.
   const std::string results = root + "/shaper_zv.json";
   fs::copy_file(fixture("shaper_zv.json"), results, fs::copy_options::overwrite_existing);
   ::chmod(results.c_str(), 0644);
@@ -144,6 +148,7 @@ TEST_CASE("fault: export --write with any output path unwritable leaves every fi
   CHECK(read_text(cfg).find("pressure_advance: 0.05") != std::string::npos);
   CHECK(read_text(root + "/locked/x.gcode").find("SET_PRESSURE_ADVANCE") != std::string::npos);
   CHECK(fs::exists(root + "/locked/r.json"));
+  fs::remove_all(root);
 }
 
 TEST_CASE("a file batch that fails on a later rename puts back the files it already replaced", "[safety]") {
