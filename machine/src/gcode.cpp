@@ -96,8 +96,8 @@ void parse_extended_words(std::string_view rest, GcodeWords& w) {
 }  // namespace
 
 double GcodeWords::get(const std::string& k, double fallback) const {
-  const auto it = args.find(k);
-  return it == args.end() ? fallback : it->second;
+  const double* v = args.find(k);
+  return v == nullptr ? fallback : *v;
 }
 
 int gcode_checksum(std::string_view text) {

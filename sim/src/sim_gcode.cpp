@@ -193,7 +193,7 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
       flush(emit);
       machine::GcodeWords home;
       home.command = "G92";
-      home.args = {{"X", 0}, {"Y", 0}, {"Z", 0}};
+      for (const char* axis : {"X", "Y", "Z"}) home.args[axis] = 0;
       interp_.apply(home);
     } else if (c == "M205" && words->has("B")) {
       min_segment_time_s_ = words->get("B", sim::kMarlinDefaultMinSegmentTime_us) * sim::kSecondsPerMicrosecond;

@@ -13,10 +13,39 @@
 
 namespace tunekit::machine {
 
+/// The words of one line by name: a line has a handful, so they are kept in one small vector
+/// and searched in order (a map allocates a node per word, and the gate, the link's last check
+/// and the simulator parse every line of every protocol). A repeated word keeps its last value.
+template <class V>
+class WordMap {
+ public:
+  V& operator[](const std::string& k) {
+    for (auto& e : words_)
+      if (e.first == k) return e.second;
+    if (words_.empty()) words_.reserve(kTypicalWords);
+    return words_.emplace_back(k, V{}).second;
+  }
+  /// The value of word k, or nullptr.
+  const V* find(const std::string& k) const {
+    for (const auto& e : words_)
+      if (e.first == k) return &e.second;
+    return nullptr;
+  }
+  std::size_t count(const std::string& k) const { return find(k) != nullptr ? 1 : 0; }
+  bool empty() const { return words_.empty(); }
+  std::size_t size() const { return words_.size(); }
+  auto begin() const { return words_.begin(); }
+  auto end() const { return words_.end(); }
+
+ private:
+  static constexpr std::size_t kTypicalWords = 6;  // G1 X Y Z E F
+  std::vector<std::pair<std::string, V>> words_;
+};
+
 struct GcodeWords {
-  std::string command;                           ///< "G1", "M204", or an extended name ("SET_VELOCITY_LIMIT")
-  std::map<std::string, double> args;            ///< "X" -> 10.0; extended commands: "ACCEL" -> 3000
-  std::map<std::string, std::string> text_args;  ///< arguments that are not numbers
+  std::string command;             ///< "G1", "M204", or an extended name ("SET_VELOCITY_LIMIT")
+  WordMap<double> args;            ///< "X" -> 10.0; extended commands: "ACCEL" -> 3000
+  WordMap<std::string> text_args;  ///< arguments that are not numbers
   bool has(const std::string& k) const { return args.count(k) != 0; }
   double get(const std::string& k, double fallback) const;
 };
