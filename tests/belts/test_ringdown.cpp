@@ -195,6 +195,13 @@ TEST_CASE("resonance --ringdown and belts read the same fundamental from every r
     // for a CoreXY belt is 90-140 Hz), never at a harmonic or at the 1.1 kHz line.
     CHECK(f_res == Approx(109.0).epsilon(0.03));
   }
+  // The band's top is a frequency: empty, negative and non-numbers are refused, not read as 0.
+  for (const char* bad : {"", "-1", "nan", "abc"}) {
+    INFO(bad);
+    const auto r = run_cli({"resonance", "--ringdown", dataset(files.front()), "--ringdown-max", bad});
+    CHECK(r.code == 2);
+    CHECK(r.err.find("is not a frequency") != std::string::npos);
+  }
 }
 
 // A second printer (datasets/belts/helixscreen/PROVENANCE.md): HelixScreen's belt-tuner captures

@@ -3,6 +3,7 @@
 #include "resonance_cli.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <complex>
 #include <numbers>
 #include <utility>
@@ -135,7 +136,15 @@ void add_ringdown_options(CLI::App* sub, ident::RingdownOptions& o, bool* ringdo
   sub->add_option("--ringdown-max", o.max_hz,
                   fmt::format("Ring-down: highest line considered, harmonics too, Hz (default {:g}, at most 0.45 x "
                               "the sample rate; 0: that limit)",
-                              o.max_hz));
+                              o.max_hz))
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            char* end = nullptr;
+            const double x = v.empty() ? -1.0 : std::strtod(v.c_str(), &end);
+            return v.empty() || *end != '\0' || !(x >= 0) ? "'" + v + "' is not a frequency in Hz (0 or more)"
+                                                          : std::string();
+          },
+          "HZ"));
 }
 
 }  // namespace tunekit::cli
