@@ -20,6 +20,8 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
 
+#include "csv_rows.hpp"
+
 namespace tunekit::ident {
 namespace {
 
@@ -57,39 +59,8 @@ void split(std::string_view line, char delim, std::vector<Field>& out) {
   }
 }
 
-// Exact powers of ten representable in a double.
-constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-                             1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-
-// Clinger's fast path for plain decimals such as "-1234.567890" (what loggers write): the
-// digits form an integer M < 10^15 < 2^53 and the value is M / 10^k with k <= 15; both are
-// exact doubles, so one IEEE division gives the correctly rounded result. Anything else
-// (exponents, more digits, inf/nan) returns false and goes to std::from_chars.
-bool parse_plain_decimal(std::string_view s, double& v) {
-  const char* p = s.data();
-  const char* end = p + s.size();
-  const bool neg = p != end && *p == '-';
-  if (neg) ++p;
-  std::uint64_t m = 0;
-  int digits = 0, frac_digits = 0;
-  for (; p != end && static_cast<unsigned>(*p - '0') <= 9; ++p, ++digits) m = m * 10 + static_cast<unsigned>(*p - '0');
-  if (p != end && *p == '.') {
-    for (++p; p != end && static_cast<unsigned>(*p - '0') <= 9; ++p, ++digits, ++frac_digits)
-      m = m * 10 + static_cast<unsigned>(*p - '0');
-  }
-  if (p != end || digits == 0 || digits > 15) return false;
-  v = static_cast<double>(m) / kPow10[frac_digits];
-  if (neg) v = -v;
-  return true;
-}
-
-bool parse_number(std::string_view s, double& v) {
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  if (s.empty()) return false;
-  if (parse_plain_decimal(s, v)) return true;
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  return ec == std::errc() && ptr == s.data() + s.size();
-}
+using detail::LineReader;
+using detail::parse_number;
 
 bool all_numeric(const std::vector<Field>& fields) {
   double v;
@@ -106,38 +77,6 @@ std::string join_names(const std::vector<std::string>& names) {
   }
   return s;
 }
-
-// Iterates over lines, handling CRLF and enforcing the maximum line length.
-class LineReader {
- public:
-  LineReader(std::string_view text, const std::string& path, std::size_t max_len)
-      : text_(text), path_(path), max_len_(max_len) {}
-  bool next(std::string_view& line) {
-    if (pos_ >= text_.size()) return false;
-    ++line_no_;
-    const char* begin = text_.data() + pos_;
-    const void* nl = std::memchr(begin, '\n', text_.size() - pos_);
-    const std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
-    if (len > max_len_)
-      throw InputError(
-          fmt::format(
-              "line is {} bytes long, more than the {} allowed (a file without line breaks, or not a CSV file?)", len,
-              max_len_),
-          source_location(path_, line_no_));
-    line = std::string_view(begin, len);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    pos_ += len + 1;
-    return true;
-  }
-  std::size_t line_no() const { return line_no_; }
-
- private:
-  std::string_view text_;
-  const std::string& path_;
-  std::size_t max_len_;
-  std::size_t pos_ = 0;
-  std::size_t line_no_ = 0;
-};
 
 /// UTF-16 text with a byte-order mark (FF FE little-endian, FE FF big-endian) as UTF-8;
 /// InputError for an odd length or an unpaired surrogate.
@@ -407,108 +346,28 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
                      {header[time_source].label, header[time_source].base, header[time_source].unit, {}});
   }
   if (time_index == ncols) time_index = t.columns.size();
-  const bool check_time = options.time_must_increase;
 
+  detail::CsvRowLayout layout;
+  layout.path = &t.path;
+  layout.header = &t.header;
+  for (const auto& c : t.columns) layout.selected_names.push_back(c.name);
+  layout.ncols = ncols;
+  layout.source = source;
+  layout.wanted_field.assign(ncols, 0);
+  for (std::size_t src : source) layout.wanted_field[src] = 1;
+  layout.time_index = time_index;
+  layout.check_time = options.time_must_increase;
+  layout.delim = delim;
+  layout.max_line_bytes = options.max_line_bytes;
+
+  detail::CsvRows rows;
+  rows.values.resize(t.columns.size());
   const std::size_t estimate = text.size() / std::max<std::size_t>(16, ncols * 8);
-  for (auto& c : t.columns) c.values.reserve(estimate);
-
-  std::size_t prev_time_line = 0;
-  // Hot loop: one pass over each row, parsing only the selected fields, no allocation.
-  std::vector<char> wanted_field(ncols, 0);
-  for (std::size_t src : source) wanted_field[src] = 1;
-  std::vector<double> row_values(ncols, 0.0);
-  std::vector<std::size_t> row_columns(ncols, 0);
-  auto consume = [&](std::string_view row, std::size_t line_no) {
-    const char* const row_begin = row.data();
-    const char* p = row_begin;
-    const char* const end = p + row.size();
-    std::size_t nf = 0;
-    while (true) {
-      if (nf < ncols && wanted_field[nf]) {
-        // Fast path, one pass: a plain decimal ("-1234.5678", at most 15 digits, as loggers
-        // write) ending exactly at the delimiter or the end of the row. The value is the one
-        // parse_plain_decimal gives; anything else (spaces, exponents, text) takes the general
-        // path below, which locates every error.
-        const char* r = p;
-        const bool neg = r != end && *r == '-';
-        if (neg) ++r;
-        std::uint64_t m = 0;
-        int digits = 0, frac_digits = 0;
-        for (; r != end && static_cast<unsigned>(*r - '0') <= 9; ++r, ++digits)
-          m = m * 10 + static_cast<unsigned>(*r - '0');
-        if (r != end && *r == '.')
-          for (++r; r != end && static_cast<unsigned>(*r - '0') <= 9; ++r, ++digits, ++frac_digits)
-            m = m * 10 + static_cast<unsigned>(*r - '0');
-        if (digits > 0 && digits <= 15 && (r == end || *r == delim)) {
-          const double v = static_cast<double>(m) / kPow10[frac_digits];
-          row_values[nf] = neg ? -v : v;
-          row_columns[nf] = static_cast<std::size_t>(p - row_begin) + 1;
-          ++nf;
-          if (r == end) break;
-          p = r + 1;
-          continue;
-        }
-      }
-      const char* q = static_cast<const char*>(std::memchr(p, delim, static_cast<std::size_t>(end - p)));
-      if (q == nullptr) q = end;
-      if (nf < ncols && wanted_field[nf]) {
-        const char* b = p;
-        while (b < q && (*b == ' ' || *b == '\t')) ++b;
-        const char* e = q;
-        while (e > b && (e[-1] == ' ' || e[-1] == '\t')) --e;
-        const std::string_view text(b, static_cast<std::size_t>(e - b));
-        const std::size_t col = static_cast<std::size_t>(b - row_begin) + 1;
-        double v;
-        if (text.empty())
-          throw InputError(fmt::format("empty field in column '{}'", t.header[nf]),
-                           source_location(path, line_no, col));
-        if (!parse_number(text, v))
-          throw InputError(fmt::format("'{}' in column '{}' is not a number", text.substr(0, 40), t.header[nf]),
-                           source_location(path, line_no, col));
-        if (std::isnan(v))
-          throw InputError(fmt::format("NaN in column '{}'", t.header[nf]), source_location(path, line_no, col));
-        if (std::isinf(v))
-          throw InputError(fmt::format("infinite value in column '{}'", t.header[nf]),
-                           source_location(path, line_no, col));
-        row_values[nf] = v;
-        row_columns[nf] = col;
-      }
-      ++nf;
-      if (q == end) break;
-      p = q + 1;
-    }
-    if (nf != ncols)
-      throw InputError(fmt::format("{} fields, but the header has {} columns", nf, ncols),
-                       source_location(path, line_no));
-    for (std::size_t k = 0; k < source.size(); ++k) {
-      const double v = row_values[source[k]];
-      auto& vals = t.columns[k].values;
-      if (k == time_index && check_time && !vals.empty()) {
-        if (v == vals.back())
-          throw InputError(fmt::format("duplicate time stamp {} in column '{}' (also on line {})", v, t.columns[k].name,
-                                       prev_time_line),
-                           source_location(path, line_no, row_columns[source[k]]));
-        if (v < vals.back())
-          throw InputError(fmt::format("time goes backwards in column '{}': {} after {} (line {})", t.columns[k].name,
-                                       v, vals.back(), prev_time_line),
-                           source_location(path, line_no, row_columns[source[k]]));
-      }
-      vals.push_back(v);
-    }
-    prev_time_line = line_no;
-    ++t.rows;
-  };
-
-  if (!pending_first_row.empty()) consume(pending_first_row, pending_line);
-  while (lines.next(line)) {
-    if (!line.empty() && line.front() != ' ' && line.front() != '\t' && line.front() != '#') {
-      consume(line, lines.line_no());
-      continue;
-    }
-    const std::string_view tl = trim(line);
-    if (tl.empty() || tl.front() == '#') continue;
-    consume(tl, lines.line_no());
-  }
+  for (auto& v : rows.values) v.reserve(estimate);
+  if (!pending_first_row.empty()) detail::parse_csv_row(pending_first_row, pending_line, layout, rows);
+  detail::parse_csv_rows_parallel(text.substr(lines.pos()), lines.line_no() + 1, layout, rows);
+  for (std::size_t k = 0; k < t.columns.size(); ++k) t.columns[k].values = std::move(rows.values[k]);
+  t.rows = rows.rows;
   if (t.rows == 0) throw InputError("a header but no data rows", source_location(path, t.header_line));
   // Time is in seconds everywhere else: convert a time column logged in ms or us.
   if (time_index < t.columns.size()) {

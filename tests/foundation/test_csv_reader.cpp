@@ -2,9 +2,13 @@
 // file, line (and column where there is one) and the problem.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cstdio>
 #include <string>
 
 #include <unistd.h>
+
+#include <fmt/format.h>
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
@@ -175,4 +179,72 @@ TEST_CASE("plain decimals and the general number forms read the same values, map
   const auto r = run_cli({"inspect", bad, "--time", "time"});
   CHECK(r.code == 2);
   CHECK(r.err == "tunekit: error: " + bad + ":3:5: '-' in column 'a' is not a number\n");
+}
+
+namespace {
+
+// A Klipper-style raw accelerometer file of `rows` rows, every row the same length (so the
+// middle of the data, where a large file is cut for the second thread, is a known row).
+std::string large_raw_csv(std::size_t rows) {
+  std::string s = "#time,accel_x,accel_y,accel_z\n";
+  char line[96];
+  for (std::size_t i = 0; i < rows; ++i) {
+    const int n = std::snprintf(line, sizeof line, "%011.6f,%+011.4f,%+011.4f,%+011.4f\n", 1000.0 + 3.125e-4 * i,
+                                static_cast<double>(i % 977) - 488.5, static_cast<double>(i % 89) * 0.25,
+                                9800.0 + static_cast<double>(i % 7));
+    s.append(line, static_cast<std::size_t>(n));
+  }
+  return s;
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    (void)tunekit::ident::parse_csv(text, "big.csv", {{}, "time"});
+  } catch (const tunekit::InputError& e) {
+    return e.location() + ": " + e.message();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("a large file parsed on two threads gives every row once, in order, with the values written") {
+  const std::size_t rows = 200'000;  // 9 MB: above the size at which the rows are split
+  const std::string text = large_raw_csv(rows);
+  REQUIRE(text.size() > (std::size_t{8} << 20));
+  const auto t = tunekit::ident::parse_csv(text, "big.csv", {{}, "time"});
+  REQUIRE(t.rows == rows);
+  const auto& time = t.column("time").values;
+  const auto& x = t.column("accel_x").values;
+  REQUIRE(time.size() == rows);
+  REQUIRE(x.size() == rows);
+  for (const std::size_t i : {std::size_t{0}, rows / 2 - 1, rows / 2, rows / 2 + 1, rows - 1}) {
+    CHECK(x[i] == static_cast<double>(i % 977) - 488.5);
+    CHECK(time[i] == Approx(1000.0 + 3.125e-4 * static_cast<double>(i)).margin(6e-7));  // written with 6 decimals
+  }
+  CHECK(std::is_sorted(time.begin(), time.end()));
+  CHECK(std::adjacent_find(time.begin(), time.end()) == time.end());
+}
+
+TEST_CASE("a large file's errors name the line a single pass names, on either side of the cut") {
+  const std::size_t rows = 200'000, header_lines = 1;
+  const std::string good = large_raw_csv(rows);
+  const std::size_t row_bytes = (good.size() - good.find('\n') - 1) / rows;
+  // Rows around the middle of the data (the cut) and far into the second half.
+  for (const std::size_t row : {rows / 2 - 1, rows / 2, rows / 2 + 1, rows - 3}) {
+    const std::size_t line = header_lines + row + 1;  // 1-based line of data row `row`
+    const std::size_t at = good.find('\n') + 1 + row * row_bytes;
+    SECTION("a field that is not a number, data row " + std::to_string(row)) {
+      std::string bad = good;
+      bad.replace(at + 12, 11, "   garbage ");  // the field starts at byte 13, its text at 16
+      CHECK(error_of(bad) == "big.csv:" + std::to_string(line) + ":16: 'garbage' in column 'accel_x' is not a number");
+    }
+    SECTION("a time stamp repeated from the row above, data row " + std::to_string(row)) {
+      std::string bad = good;
+      bad.replace(at, 11, good.substr(at - row_bytes, 11));
+      const double repeated = std::stod(good.substr(at - row_bytes, 11));
+      CHECK(error_of(bad) == fmt::format("big.csv:{}:1: duplicate time stamp {} in column 'time' (also on line {})",
+                                         line, repeated, line - 1));
+    }
+  }
 }
