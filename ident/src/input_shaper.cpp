@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <exception>
+#include <future>
 #include <limits>
 #include <numbers>
 
@@ -316,8 +318,13 @@ struct ScoredDataset {
   double step = 0;
 };
 
+// Scratch of dataset_vibrations: the shaper's response summed over impulses, per bin.
+struct ResponseSums {
+  std::vector<double> re, im;
+};
+
 // Remaining vibration fraction of one shaper against one dataset at one test damping ratio.
-double dataset_vibrations(const ScoredDataset& d, const Shaper& sh, double z, std::vector<std::complex<double>>& acc) {
+double dataset_vibrations(const ScoredDataset& d, const Shaper& sh, double z, ResponseSums& acc) {
   if (!(d.all > 0)) return 0.0;
   double remaining = 0;
   if (!d.uniform) {
@@ -325,24 +332,108 @@ double dataset_vibrations(const ScoredDataset& d, const Shaper& sh, double z, st
       remaining += std::max(residual_vibration(sh, d.f[b], z) * d.psd[b] - d.thr, 0.0);
     return remaining / d.all;
   }
-  // Uniform bins: every impulse's factor is a geometric sequence in the bin index.
+  // Uniform bins: every impulse's factor exp((-z w (T_n - T_i)) + j w_d T_i) is a geometric
+  // sequence in the bin index. It is run as four interleaved sequences (bins b, b+1, b+2, b+3,
+  // each stepped by the ratio's fourth power), which the processor works on side by side: one
+  // sequence alone waits on each multiplication's result.
   const std::size_t nb = d.hi - d.lo + 1;
-  acc.assign(nb, {0, 0});
+  acc.re.assign(nb + 3, 0.0);
+  acc.im.assign(nb + 3, 0.0);
   const double dz = std::sqrt(std::max(0.0, 1 - z * z));
   const double tn = sh.duration_s();
   for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) {
     const double decay = -z * 2 * kPi * (tn - sh.times_s[i]);
     const double phase = 2 * kPi * dz * sh.times_s[i];
     const std::complex<double> ratio = std::exp(std::complex<double>(decay * d.step, phase * d.step));
-    std::complex<double> cur = sh.amplitudes[i] * std::exp(std::complex<double>(decay * d.f[d.lo], phase * d.f[d.lo]));
-    for (std::size_t b = 0; b < nb; ++b) {
-      acc[b] += cur;
-      cur *= ratio;
+    const std::complex<double> ratio2 = ratio * ratio, ratio4 = ratio2 * ratio2;
+    double cr[4], ci[4];
+    std::complex<double> c = sh.amplitudes[i] * std::exp(std::complex<double>(decay * d.f[d.lo], phase * d.f[d.lo]));
+    for (int j = 0; j < 4; ++j, c *= ratio) {
+      cr[j] = c.real();
+      ci[j] = c.imag();
     }
+    const double rr = ratio4.real(), ri = ratio4.imag();
+    double* re = acc.re.data();
+    double* im = acc.im.data();
+    for (std::size_t b = 0; b < nb; b += 4)
+      for (int j = 0; j < 4; ++j) {
+        re[b + j] += cr[j];
+        im[b + j] += ci[j];
+        const double r = cr[j] * rr - ci[j] * ri;
+        ci[j] = cr[j] * ri + ci[j] * rr;
+        cr[j] = r;
+      }
   }
   for (std::size_t b = 0; b < nb; ++b)
-    remaining += std::max(std::sqrt(std::norm(acc[b])) * d.psd[d.lo + b] - d.thr, 0.0);  // |acc|, without hypot's cost
+    remaining += std::max(std::sqrt(acc.re[b] * acc.re[b] + acc.im[b] * acc.im[b]) * d.psd[d.lo + b] - d.thr, 0.0);
   return remaining / d.all;
+}
+
+// The datasets cut at a PSD frequency limit (max_freq_hz, but never below the type's highest
+// shaper frequency: Klipper's rule, per type), with the bins that can count.
+std::vector<ScoredDataset> scored_datasets(std::span<const PsdDataset> datasets, double psd_limit,
+                                           const ShaperSelectionOptions& o) {
+  std::vector<ScoredDataset> sets;
+  for (const auto& ds : datasets) {
+    ScoredDataset d;
+    for (std::size_t b = 0; b < ds.freq_hz.size(); ++b)
+      if (ds.freq_hz[b] <= psd_limit) {
+        d.f.push_back(ds.freq_hz[b]);
+        d.psd.push_back(ds.psd[b]);
+      }
+    if (d.f.size() < 3 || !(*std::max_element(d.psd.begin(), d.psd.end()) > 0))
+      throw InputError(fmt::format("the vibration spectrum below {} Hz is empty or zero; nothing to shape", psd_limit));
+    d.thr = *std::max_element(d.psd.begin(), d.psd.end()) / o.vibration_reduction;
+    d.lo = d.psd.size();
+    for (std::size_t b = 0; b < d.psd.size(); ++b)
+      if (d.psd[b] > d.thr) {
+        d.all += d.psd[b] - d.thr;
+        d.lo = std::min(d.lo, b);
+        d.hi = std::max(d.hi, b);
+      }
+    d.uniform = uniform_grid(d.f);
+    d.step = d.uniform ? (d.f.back() - d.f.front()) / static_cast<double>(d.f.size() - 1) : 0.0;
+    sets.push_back(std::move(d));
+  }
+  return sets;
+}
+
+// One type's candidates, scored from its highest frequency down as Klipper does (ties keep the
+// higher one), and which of them leaves the fewest vibrations.
+struct TypeScan {
+  std::vector<ShaperCandidate> results;
+  std::size_t best = 0;
+  bool smoothing_limited = false;  // the smoothing limit cut the scan short
+};
+
+TypeScan scan_type(ShaperType type, const std::vector<double>& test_freqs, std::span<const PsdDataset> datasets,
+                   const ShaperSelectionOptions& o) {
+  TypeScan scan;
+  if (test_freqs.empty()) return scan;
+  const auto sets = scored_datasets(datasets, std::max(o.max_freq_hz, test_freqs.back()), o);
+  const double design_z = std::min(o.design_damping_ratio, shaper_info(type).max_damping_ratio);
+  ResponseSums acc;
+  auto& results = scan.results;
+  results.reserve(test_freqs.size());
+  for (auto it = test_freqs.rbegin(); it != test_freqs.rend(); ++it) {
+    const Shaper sh = design_shaper(type, *it, design_z, kDefaultVibrationTolerance, o.ei_design);
+    ShaperCandidate c;
+    c.type = type;
+    c.freq_hz = *it;
+    c.damping_ratio = design_z;
+    c.smoothing_mm = shaper_smoothing(sh, 5000.0, o.scv_mm_s);
+    if (o.max_smoothing_mm > 0 && c.smoothing_mm > o.max_smoothing_mm && !results.empty()) {
+      scan.smoothing_limited = true;
+      break;
+    }
+    c.max_accel_mm_s2 = shaper_max_accel(sh, o.scv_mm_s, o.target_smoothing_mm);
+    for (const auto& d : sets)
+      for (double z : o.test_damping_ratios) c.vibrations = std::max(c.vibrations, dataset_vibrations(d, sh, z, acc));
+    c.score = c.smoothing_mm * (std::pow(c.vibrations, 1.5) + 0.2 * c.vibrations + 0.01);
+    results.push_back(c);
+    if (results.size() == 1 || results[scan.best].vibrations > c.vibrations) scan.best = results.size() - 1;
+  }
+  return scan;
 }
 
 }  // namespace
@@ -379,71 +470,34 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
   for (const auto& ds : datasets)
     if (ds.freq_hz.size() != ds.psd.size()) throw InputError("frequency and PSD arrays differ in length");
 
-  // The datasets cut at a PSD frequency limit: max_freq_hz, but never below the type's highest
-  // shaper frequency (Klipper's rule, per type). Recomputed only when the limit changes.
-  std::vector<ScoredDataset> sets;
-  double sets_limit = -1;
-  auto prepare = [&](double psd_limit) {
-    if (psd_limit == sets_limit) return;
-    sets.clear();
-    sets_limit = psd_limit;
-    for (const auto& ds : datasets) {
-      ScoredDataset d;
-      for (std::size_t b = 0; b < ds.freq_hz.size(); ++b)
-        if (ds.freq_hz[b] <= psd_limit) {
-          d.f.push_back(ds.freq_hz[b]);
-          d.psd.push_back(ds.psd[b]);
-        }
-      if (d.f.size() < 3 || !(*std::max_element(d.psd.begin(), d.psd.end()) > 0))
-        throw InputError(
-            fmt::format("the vibration spectrum below {} Hz is empty or zero; nothing to shape", psd_limit));
-      d.thr = *std::max_element(d.psd.begin(), d.psd.end()) / o.vibration_reduction;
-      d.lo = d.psd.size();
-      for (std::size_t b = 0; b < d.psd.size(); ++b)
-        if (d.psd[b] > d.thr) {
-          d.all += d.psd[b] - d.thr;
-          d.lo = std::min(d.lo, b);
-          d.hi = std::max(d.hi, b);
-        }
-      d.uniform = uniform_grid(d.f);
-      d.step = d.uniform ? (d.f.back() - d.f.front()) / static_cast<double>(d.f.size() - 1) : 0.0;
-      sets.push_back(std::move(d));
-    }
+  // Each type's frequencies are scored on their own (half of the types on a second thread);
+  // the choice among them below is Klipper's, in the types' order.
+  // A type's error is raised after both threads are done, the first type's first, so the
+  // message is the one a single pass gives.
+  std::vector<TypeScan> scans(o.types.size());
+  std::vector<std::exception_ptr> errors(o.types.size());
+  auto scan_range = [&](std::size_t from, std::size_t step) {
+    for (std::size_t ti = from; ti < o.types.size(); ti += step) try {
+        scans[ti] = scan_type(o.types[ti], type_freqs[ti], datasets, o);
+      } catch (...) {
+        errors[ti] = std::current_exception();
+      }
   };
+  {
+    auto other = std::async(o.types.size() > 1 ? std::launch::async : std::launch::deferred, scan_range, 1, 2);
+    scan_range(0, 2);
+    other.get();
+  }
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
 
-  std::vector<std::complex<double>> acc;
   ShaperSelection sel;
   bool have_best = false;
   ShaperCandidate best;
   for (std::size_t ti = 0; ti < o.types.size(); ++ti) {
-    const ShaperType type = o.types[ti];
-    const auto& test_freqs = type_freqs[ti];
-    if (test_freqs.empty()) continue;
-    prepare(std::max(o.max_freq_hz, test_freqs.back()));
-    const double design_z = std::min(o.design_damping_ratio, shaper_info(type).max_damping_ratio);
-    // Evaluate from the highest frequency down, as Klipper does (ties keep the higher one).
-    std::vector<ShaperCandidate> results;
-    results.reserve(test_freqs.size());
-    std::size_t best_res = 0;
-    bool smoothing_limited = false;
-    for (auto it = test_freqs.rbegin(); it != test_freqs.rend(); ++it) {
-      const Shaper sh = design_shaper(type, *it, design_z, kDefaultVibrationTolerance, o.ei_design);
-      ShaperCandidate c;
-      c.type = type;
-      c.freq_hz = *it;
-      c.damping_ratio = design_z;
-      c.smoothing_mm = shaper_smoothing(sh, 5000.0, o.scv_mm_s);
-      if (o.max_smoothing_mm > 0 && c.smoothing_mm > o.max_smoothing_mm && !results.empty()) {
-        smoothing_limited = true;
-        break;
-      }
-      c.max_accel_mm_s2 = shaper_max_accel(sh, o.scv_mm_s, o.target_smoothing_mm);
-      for (const auto& d : sets)
-        for (double z : o.test_damping_ratios) c.vibrations = std::max(c.vibrations, dataset_vibrations(d, sh, z, acc));
-      c.score = c.smoothing_mm * (std::pow(c.vibrations, 1.5) + 0.2 * c.vibrations + 0.01);
-      results.push_back(c);
-      if (results.size() == 1 || results[best_res].vibrations > c.vibrations) best_res = results.size() - 1;
-    }
+    const auto& results = scans[ti].results;
+    const std::size_t best_res = scans[ti].best;
+    const bool smoothing_limited = scans[ti].smoothing_limited;
     if (results.empty()) continue;
     // The frequency with fewest vibrations, or a lower-scoring one (less smoothing) that is
     // not much worse (within 10 % + 0.05 percentage points), scanning from low frequencies.

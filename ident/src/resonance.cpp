@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <numbers>
 #include <numeric>
 
@@ -24,6 +25,18 @@ std::vector<double> resample(const std::vector<double>& t, const std::vector<dou
   return y;
 }
 
+// The smallest and largest value of a non-empty record without NaN. std::minmax_element
+// branches on every comparison, which noisy data mispredicts about half the time; this takes
+// a few times less on a 410k-sample channel.
+std::pair<double, double> value_range(const std::vector<double>& v) {
+  double lo = v.front(), hi = v.front();
+  for (double x : v) {
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+  return {lo, hi};
+}
+
 ClipReport detect_clipping(const std::string& name, const std::vector<double>& v, double full_scale) {
   ClipReport c;
   c.channel = name;
@@ -36,24 +49,23 @@ ClipReport detect_clipping(const std::string& name, const std::vector<double>& v
   }
   // Without a declared range: the extremes are clipped when the signal sits flat on them
   // (three or more consecutive samples, or eight or more samples in all).
-  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-  if (!(*hi > *lo)) return c;  // a constant channel carries no signal to clip
-  for (const double ext : {*lo, *hi}) {
-    if (ext == 0) continue;
-    std::size_t count = 0, run = 0, longest = 0;
-    for (double x : v) {
-      if (x == ext) {
-        ++count;
-        longest = std::max(longest, ++run);
-      } else {
-        run = 0;
-      }
+  const auto [lo, hi] = value_range(v);
+  if (!(hi > lo)) return c;  // a constant channel carries no signal to clip
+  // Both extremes in one pass: how many samples sit on each, and the longest run there.
+  const double ext[2] = {lo, hi};
+  std::size_t count[2] = {0, 0}, run[2] = {0, 0}, longest[2] = {0, 0};
+  for (double x : v)
+    for (int k = 0; k < 2; ++k) {
+      const bool on = x == ext[k];
+      count[k] += on;
+      run[k] = on ? run[k] + 1 : 0;
+      longest[k] = std::max(longest[k], run[k]);
     }
-    if (longest >= 3 || count >= 8) {
-      c.samples += count;
-      c.limit_mm_s2 = std::max(c.limit_mm_s2, std::abs(ext));
+  for (int k = 0; k < 2; ++k)
+    if (ext[k] != 0 && (longest[k] >= 3 || count[k] >= 8)) {
+      c.samples += count[k];
+      c.limit_mm_s2 = std::max(c.limit_mm_s2, std::abs(ext[k]));
     }
-  }
   return c;
 }
 
@@ -180,27 +192,35 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
   replace_wild_samples(table, bytes, accel.size(), o, r.warnings);
   std::vector<double> t = std::move(table.columns[0].values);
   const std::size_t n = t.size();
-  std::vector<double> dt(n - 1);
-  for (std::size_t i = 1; i < n; ++i) dt[i - 1] = t[i] - t[i - 1];
-  const double med = fitting::median(dt);
+  // The median interval, found in place (the intervals are taken again from t below: one
+  // 3 MB copy less for a 410k-sample record).
+  double med = 0;
+  {
+    std::vector<double> dt(n - 1);
+    for (std::size_t i = 1; i < n; ++i) dt[i - 1] = t[i] - t[i - 1];
+    const auto mid = dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2);
+    std::nth_element(dt.begin(), mid, dt.end());
+    med = *mid;
+  }
   auto& s = r.sampling;
   s.samples = n;
   s.duration_s = t.back() - t.front();
   double sum = 0, sum2 = 0;
   std::size_t regular = 0;
   double gap_at = 0;
-  for (std::size_t i = 0; i < dt.size(); ++i) {
-    if (dt[i] > 1.5 * med) {
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double dt = t[i + 1] - t[i];
+    if (dt > 1.5 * med) {
       ++s.gaps;
-      s.missing_samples += static_cast<std::size_t>(std::llround(dt[i] / med)) - 1;
-      if (dt[i] > s.max_gap_s) {
-        s.max_gap_s = dt[i];
+      s.missing_samples += static_cast<std::size_t>(std::llround(dt / med)) - 1;
+      if (dt > s.max_gap_s) {
+        s.max_gap_s = dt;
         gap_at = t[i];
       }
       continue;
     }
-    sum += dt[i];
-    sum2 += dt[i] * dt[i];
+    sum += dt;
+    sum2 += dt * dt;
     ++regular;
   }
   const double mean_dt = regular > 0 ? sum / static_cast<double>(regular) : med;
@@ -240,8 +260,8 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
 
   bool any_signal = false;
   for (const auto& ch : r.channels) {
-    const auto [lo, hi] = std::minmax_element(ch.begin(), ch.end());
-    if (*hi > *lo) any_signal = true;
+    const auto [lo, hi] = value_range(ch);
+    if (hi > lo) any_signal = true;
   }
   if (!any_signal)
     throw InputError(
@@ -249,8 +269,8 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
         "its wiring and that the test moved the axis",
         path);
   if (!r.excitation.empty()) {
-    const auto [lo, hi] = std::minmax_element(r.excitation.begin(), r.excitation.end());
-    if (!(*hi > *lo)) throw InputError("the excitation column '" + o.excitation_column + "' is constant", path);
+    const auto [lo, hi] = value_range(r.excitation);
+    if (!(hi > lo)) throw InputError("the excitation column '" + o.excitation_column + "' is constant", path);
   }
 
   for (std::size_t c = 0; c < r.channels.size(); ++c) {
@@ -280,10 +300,15 @@ AxisSpectrum record_spectrum(const AccelRecord& r, const WelchOptions& welch) {
   s.welch = welch;
   s.sample_rate_hz = r.sampling.sample_rate_hz;
   s.warnings = r.warnings;
+  // The channels' spectra are independent: all but the first on other threads.
+  std::vector<std::future<Spectrum>> others;
+  for (std::size_t c = 1; c < r.channels.size(); ++c)
+    others.push_back(std::async(
+        std::launch::async, [&r, &welch, c] { return welch_psd(r.channels[c], r.sampling.sample_rate_hz, welch); }));
   for (std::size_t c = 0; c < r.channels.size(); ++c) {
     Spectrum sp;
     try {
-      sp = welch_psd(r.channels[c], r.sampling.sample_rate_hz, welch);
+      sp = c == 0 ? welch_psd(r.channels[0], r.sampling.sample_rate_hz, welch) : others[c - 1].get();
     } catch (const InputError& e) {
       throw InputError(e.message(), r.path);
     }
