@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <future>
 #include <map>
+#include <memory>
 
 #include <fmt/format.h>
 
@@ -61,14 +62,28 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
 
   AccelAnalysis result;
   std::map<std::string, std::vector<ident::AxisSpectrum>> by_axis;
+  // The inputs' digests (about 10 ms for a 20 MB raw file) are computed on another core while
+  // the analysis goes on, and collected at the end; the files stay mapped until then.
+  std::vector<std::unique_ptr<const ident::InputFileBytes>> files;
+  std::vector<std::future<std::string>> digests;
   for (const auto& path : a.files) {
     // Mapped, not copied: a fresh 20 MB buffer costs more in page faults than the parse.
-    const ident::InputFileBytes file(path);
-    const std::string_view bytes = file.view();
-    // The input's digest (tens of ms for a 20 MB raw file) is computed on a second core while
-    // the file is parsed and its spectrum estimated.
-    auto digest = std::async(std::launch::async, [&bytes] { return sha256_hex(bytes); });
-    auto record_input = [&] { result.inputs.push_back({path, digest.get(), bytes.size()}); };
+    files.push_back(std::make_unique<const ident::InputFileBytes>(path));
+    const std::string_view bytes = files.back()->view();
+    std::future<std::string> digest;
+    auto start_digest = [&] {
+      if (!digest.valid()) digest = std::async(std::launch::async, [bytes] { return sha256_hex(bytes); });
+    };
+    auto record_input = [&] {
+      start_digest();
+      result.inputs.push_back({path, {}, bytes.size()});
+      digests.push_back(std::move(digest));
+    };
+    // A raw accelerometer CSV is parsed on both cores: its digest starts after the parse, beside
+    // the record's checks.
+    const bool raw_csv = !ident::is_klipper_spectrum(bytes) && !ident::is_shaketune_stdata(bytes) &&
+                         !ident::is_rrf_accelerometer_csv(bytes);
+    if (!raw_csv) start_digest();
     std::vector<ident::AxisSpectrum> file_spectra;
     if (ident::is_klipper_spectrum(bytes)) {
       // Klipper's spectrum files: one or several datasets; measured PSDs unless the file has
@@ -86,7 +101,7 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
     } else if (ident::is_rrf_accelerometer_csv(bytes)) {
       file_spectra.push_back(ident::record_spectrum(ident::load_rrf_accelerometer_csv(path, bytes, in), welch));
     } else {
-      auto rec = ident::load_accel_csv(path, bytes, in);
+      auto rec = ident::load_accel_csv(path, bytes, in, start_digest);
       const bool too_short =
           rec.sampling.samples < 2 * ident::resolve_segment_length(welch, rec.sampling.sample_rate_hz);
       if (ringdown == RingdownDiversion::all || (ringdown == RingdownDiversion::too_short && too_short)) {
@@ -133,6 +148,7 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
     for (const auto& w : r.modes.warnings) result.warnings.push_back(fmt::format("axis {}: {}", label, w));
     result.axes.push_back(std::move(r));
   }
+  for (std::size_t i = 0; i < digests.size(); ++i) result.inputs[i].sha256 = digests[i].get();
   return result;
 }
 

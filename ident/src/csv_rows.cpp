@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <latch>
 #include <thread>
 
 #include <fmt/format.h>
@@ -23,7 +24,7 @@ constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8
 // exact doubles, so one IEEE division gives the correctly rounded result. Parses from p up to
 // the first character that is not part of such a number; returns that position, or nullptr
 // when there were no digits or more than 15.
-const char* plain_decimal_prefix(const char* p, const char* end, double& v) {
+[[gnu::always_inline]] inline const char* plain_decimal_prefix(const char* p, const char* end, double& v) {
   const bool neg = p != end && *p == '-';
   if (neg) ++p;
   std::uint64_t m = 0;
@@ -228,8 +229,17 @@ void parse_csv_rows_parallel(std::string_view text, std::size_t first_line, cons
   CsvRows tail;
   tail.values.resize(out.values.size());
   for (auto& v : tail.values) v.reserve(second.size() / std::max<std::size_t>(16, layout.ncols * 8));
-  bool tail_clean = false;
+  // The first thread decides, once both halves are parsed, whether the second joins the first
+  // (it parsed cleanly and the time column continues across the cut); if so each thread then
+  // appends half of the columns, into memory the first half's columns reserved.
+  bool tail_clean = false, joined = false;
   std::size_t first_end = 0;
+  std::latch parsed(1), decided(1);
+  const std::size_t t = layout.time_index, half = out.values.size() / 2;
+  auto append = [&](std::size_t from, std::size_t to) {
+    for (std::size_t k = from; k < to; ++k)
+      out.values[k].insert(out.values[k].end(), tail.values[k].begin(), tail.values[k].end());
+  };
   {
     // The second half's messages would carry line numbers counted from the cut: they are never
     // shown. Any problem there makes the second half be parsed again below, after the first.
@@ -239,19 +249,26 @@ void parse_csv_rows_parallel(std::string_view text, std::size_t first_line, cons
         tail_clean = true;
       } catch (...) {
       }
+      parsed.count_down();
+      decided.wait();
+      if (joined) append(half, out.values.size());
     });
-    first_end = parse_csv_rows(first, first_line, layout, out);
+    try {
+      first_end = parse_csv_rows(first, first_line, layout, out);
+    } catch (...) {
+      decided.count_down();  // joined stays false: the worker appends nothing
+      throw;
+    }
+    parsed.wait();
+    joined = tail_clean && (!layout.check_time || t >= out.values.size() || tail.rows == 0 || out.rows == 0 ||
+                            tail.values[t].front() > out.values[t].back());
+    decided.count_down();
+    if (joined) append(0, half);
   }
-  const std::size_t t = layout.time_index;
-  const bool continues = !layout.check_time || t >= out.values.size() || tail.rows == 0 || out.rows == 0 ||
-                         tail.values[t].front() > out.values[t].back();
-    fprintf(stderr, "clean %d continues %d rows %zu %zu\n", tail_clean, continues, out.rows, tail.rows);
-  if (!tail_clean || !continues) {
+  if (!joined) {
     parse_csv_rows(second, first_end + 1, layout, out);
     return;
   }
-  for (std::size_t k = 0; k < out.values.size(); ++k)
-    out.values[k].insert(out.values[k].end(), tail.values[k].begin(), tail.values[k].end());
   if (tail.rows > 0) out.last_line = first_end + tail.last_line;
   out.rows += tail.rows;
 }

@@ -51,16 +51,19 @@ ClipReport detect_clipping(const std::string& name, const std::vector<double>& v
   // (three or more consecutive samples, or eight or more samples in all).
   const auto [lo, hi] = value_range(v);
   if (!(hi > lo)) return c;  // a constant channel carries no signal to clip
-  // Both extremes in one pass: how many samples sit on each, and the longest run there.
+  // Both extremes in one pass: how many samples sit on each, and the longest run there. A
+  // sample on an extreme is rare in a signal that is not clipped, so the test is one
+  // well-predicted branch per sample.
   const double ext[2] = {lo, hi};
-  std::size_t count[2] = {0, 0}, run[2] = {0, 0}, longest[2] = {0, 0};
-  for (double x : v)
-    for (int k = 0; k < 2; ++k) {
-      const bool on = x == ext[k];
-      count[k] += on;
-      run[k] = on ? run[k] + 1 : 0;
-      longest[k] = std::max(longest[k], run[k]);
-    }
+  std::size_t count[2] = {0, 0}, run[2] = {0, 0}, longest[2] = {0, 0}, last[2] = {0, 0};
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (v[i] != lo && v[i] != hi) continue;
+    const int k = v[i] == hi;
+    run[k] = count[k] > 0 && last[k] + 1 == i ? run[k] + 1 : 1;
+    longest[k] = std::max(longest[k], run[k]);
+    last[k] = i;
+    ++count[k];
+  }
   for (int k = 0; k < 2; ++k)
     if (ext[k] != 0 && (longest[k] >= 3 || count[k] >= 8)) {
       c.samples += count[k];
@@ -173,7 +176,8 @@ char axis_from_filename(const std::string& path) {
   return 0;
 }
 
-AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& o) {
+AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& o,
+                           const std::function<void()>& on_parsed) {
   AccelRecord r;
   r.path = path;
   r.axis = o.axis != 0 ? o.axis : axis_from_filename(path);
@@ -185,6 +189,7 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
   for (const auto& a : accel) co.columns.push_back(a);
   if (!o.excitation_column.empty()) co.columns.push_back(o.excitation_column);
   CsvTable table = parse_csv(bytes, path, co);
+  if (on_parsed) on_parsed();
   for (const auto& w : table.warnings) r.warnings.push_back(w);
   if (table.rows < 16)
     throw InputError(fmt::format("{} rows of accelerometer data; far too few for a spectrum", table.rows), path);

@@ -14,6 +14,7 @@
 
 #include <complex>
 #include <optional>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -81,7 +82,11 @@ struct AccelRecord {
 /// Parses an accelerometer CSV already in memory. InputError (exit 2) for wrong columns,
 /// non-monotonic time, all-zero data, too many clipped samples, large gaps; warnings for
 /// small problems that were handled (resampling, a few clipped samples).
-AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& options);
+/// `on_parsed`, when given, is called once the rows are parsed (on both cores for a large file),
+/// before the record's checks: a caller's own work on the bytes (a digest) then runs beside the
+/// checks instead of competing with the parse.
+AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& options,
+                           const std::function<void()>& on_parsed = {});
 
 /// PSDs of one axis: per channel and summed, on one frequency grid.
 struct AxisSpectrum {
