@@ -324,7 +324,9 @@ struct ResponseSums {
 };
 
 // Remaining vibration fraction of one shaper against one dataset at one test damping ratio.
-double dataset_vibrations(const ScoredDataset& d, const Shaper& sh, double z, ResponseSums& acc) {
+// Built for AVX2 as well as the baseline: the four sequences then advance in one instruction.
+[[gnu::target_clones("avx2", "default")]] double dataset_vibrations(const ScoredDataset& d, const Shaper& sh, double z,
+                                                                    ResponseSums& acc) {
   if (!(d.all > 0)) return 0.0;
   double remaining = 0;
   if (!d.uniform) {
