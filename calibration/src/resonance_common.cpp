@@ -72,7 +72,8 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
     const std::string_view bytes = files.back()->view();
     std::future<std::string> digest;
     auto start_digest = [&] {
-      if (!digest.valid()) digest = std::async(std::launch::async, [bytes] { return sha256_hex(bytes); });
+      if (a.digest_inputs && !digest.valid())
+        digest = std::async(std::launch::async, [bytes] { return sha256_hex(bytes); });
     };
     auto record_input = [&] {
       start_digest();
@@ -148,7 +149,8 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
     for (const auto& w : r.modes.warnings) result.warnings.push_back(fmt::format("axis {}: {}", label, w));
     result.axes.push_back(std::move(r));
   }
-  for (std::size_t i = 0; i < digests.size(); ++i) result.inputs[i].sha256 = digests[i].get();
+  for (std::size_t i = 0; i < digests.size(); ++i)
+    if (digests[i].valid()) result.inputs[i].sha256 = digests[i].get();
   return result;
 }
 

@@ -10,6 +10,7 @@
 
 #include "synth_sweep.hpp"
 #include "test_support.hpp"
+#include "tunekit/calibration/envelope.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 
 using tunekit::test::run_cli;
@@ -255,4 +256,21 @@ TEST_CASE("a few clipped samples or a few dropped samples give a warning, not an
     const auto j = nlohmann::json::parse(r.out);
     CHECK(std::abs(j["results"]["axes"]["x"]["modes"][0]["freq_hz"].get<double>() / 44.0 - 1) < 0.01);
   }
+}
+
+TEST_CASE("shaper: the input's SHA-256 is in every envelope that leaves the process, --json and the results file",
+          "[resonance][cli]") {
+  std::ifstream in(x_file(), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string digest = tunekit::calibration::sha256_hex(bytes);
+  REQUIRE(digest.size() == 64);
+  const auto r = run_cli({"shaper", x_file(), "--json"});
+  REQUIRE(r.code == 0);
+  CHECK(nlohmann::json::parse(r.out)["inputs"][0]["sha256"] == digest);
+  const std::string results = write_scratch("shaper_digest_results.json", "");
+  const auto t = run_cli({"shaper", x_file(), "-o", results});
+  REQUIRE(t.code == 0);
+  CHECK(t.out.find("shaper") != std::string::npos);  // the terminal summary, without the envelope
+  std::ifstream f(results, std::ios::binary);
+  CHECK(nlohmann::json::parse(f)["inputs"][0]["sha256"] == digest);
 }

@@ -79,7 +79,10 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
       "  tunekit shaper /tmp/resonances_x_20240101.csv --klipper-compatible   # same as calibrate_shaper.py\n"
       "  tunekit shaper /tmp/raw_data_x_*.csv --klipper-csv calibration_data_{axis}.csv\n"
       "  tunekit shaper log.csv --axis x --accel ax --excitation ax_cmd --json -o shaper.json");
-  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_shaper(cmd->options), cmd->output, ctx)); });
+  sub->callback([cmd, &ctx] {
+    cmd->options.accel.digest_inputs = envelope_leaves_process(cmd->output);
+    set_exit_code(report_outcome(compute_shaper(cmd->options), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

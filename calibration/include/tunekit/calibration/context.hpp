@@ -29,4 +29,8 @@ struct OutputOptions {
   std::string record_source;  ///< set by the command: the run directory the result belongs to
 };
 
+/// True when the JSON envelope leaves the process (--json, a results file, --record): only then
+/// are the inputs' digests shown or stored.
+inline bool envelope_leaves_process(const OutputOptions& o) { return o.json || !o.output_path.empty() || o.record; }
+
 }  // namespace tunekit::calibration
