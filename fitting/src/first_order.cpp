@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include <array>
+#include <cstdio>
 #include <memory>
 
 #include <Eigen/Dense>
@@ -62,6 +63,13 @@ StepModelPoint step_model_at(const StepRecord& r, std::size_t i, double K, doubl
 void step_residuals(const StepRecord& r, double K, double tau, double theta, double y0, double* res, double* jac,
                     std::size_t width, const std::size_t cols[4]) {
   const std::size_t n = r.t.size();
+  if (jac == nullptr) {  // the residuals alone: the model value of step_model_at, no derivatives
+    for (std::size_t i = 0; i < n; ++i) {
+      const double s = r.t[i] - r.t_step - theta;
+      res[i] = (s <= 0 ? y0 : y0 + K * r.du * (1 - std::exp(-s / tau))) - r.y[i];
+    }
+    return;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const StepModelPoint p = step_model_at(r, i, K, tau, theta, y0);
     res[i] = p.m - r.y[i];
@@ -97,7 +105,10 @@ std::array<double, 3> line_fit(const std::vector<double>& t, const std::vector<d
 double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
   // Before the response starts the Jacobian row is (0, 0, 0, 1): only the count and the sum of
   // residuals matter there. Afterwards the ten products of the symmetric 4x4 are accumulated in
-  // scalars (an Eigen outer product per row costs twice as much on 100k rows).
+  // scalars (an Eigen outer product per row costs twice as much on 100k rows). The exponentials
+  // of a block of samples come first: a call inside the accumulating loop would make the
+  // fourteen sums leave their registers for every sample. The sums add the same terms in the
+  // same order either way.
   const std::size_t n = r.t.size();
   const double K = p[0], tau = p[1], theta = p[2], y0 = p[3], du = r.du;
   const double inv_tau = 1.0 / tau, Kdu = K * du;
@@ -105,35 +116,44 @@ double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d&
   double rss = 0, n_pre = 0, r_sum = 0;
   double a00 = 0, a01 = 0, a02 = 0, a03 = 0, a11 = 0, a12 = 0, a13 = 0, a22 = 0, a23 = 0, a33 = 0;
   double b0 = 0, b1 = 0, b2 = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double s = r.t[i] - t_on;
-    if (!(s > 0)) {
-      const double res = y0 - r.y[i];
-      rss += res * res;
-      n_pre += 1;
-      r_sum += res;
-      continue;
+  constexpr std::size_t kBlock = 256;
+  std::array<double, kBlock> exps;
+  for (std::size_t begin = 0; begin < n; begin += kBlock) {
+    const std::size_t end = std::min(n, begin + kBlock);
+    for (std::size_t i = begin; i < end; ++i) {
+      const double s = r.t[i] - t_on;
+      exps[i - begin] = s > 0 ? std::exp(-s * inv_tau) : 0.0;
     }
-    const double e = std::exp(-s * inv_tau);
-    const double j0 = du * (1 - e);
-    const double j2 = -Kdu * e * inv_tau;
-    const double j1 = j2 * s * inv_tau;
-    const double res = y0 + K * j0 - r.y[i];
-    rss += res * res;
-    a00 += j0 * j0;
-    a01 += j0 * j1;
-    a02 += j0 * j2;
-    a03 += j0;
-    a11 += j1 * j1;
-    a12 += j1 * j2;
-    a13 += j1;
-    a22 += j2 * j2;
-    a23 += j2;
-    a33 += 1;
-    b0 += j0 * res;
-    b1 += j1 * res;
-    b2 += j2 * res;
-    r_sum += res;  // the y0 column is 1 on every row
+    for (std::size_t i = begin; i < end; ++i) {
+      const double s = r.t[i] - t_on;
+      if (!(s > 0)) {
+        const double res = y0 - r.y[i];
+        rss += res * res;
+        n_pre += 1;
+        r_sum += res;
+        continue;
+      }
+      const double e = exps[i - begin];
+      const double j0 = du * (1 - e);
+      const double j2 = -Kdu * e * inv_tau;
+      const double j1 = j2 * s * inv_tau;
+      const double res = y0 + K * j0 - r.y[i];
+      rss += res * res;
+      a00 += j0 * j0;
+      a01 += j0 * j1;
+      a02 += j0 * j2;
+      a03 += j0;
+      a11 += j1 * j1;
+      a12 += j1 * j2;
+      a13 += j1;
+      a22 += j2 * j2;
+      a23 += j2;
+      a33 += 1;
+      b0 += j0 * res;
+      b1 += j1 * res;
+      b2 += j2 * res;
+      r_sum += res;  // the y0 column is 1 on every row
+    }
   }
   a33 += n_pre;
   JtJ << a00, a01, a02, a03, a01, a11, a12, a13, a02, a12, a22, a23, a03, a13, a23, a33;
@@ -141,24 +161,109 @@ double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d&
   return rss;
 }
 
-// Levenberg-Marquardt on the 4x4 normal equations: brings a start close to the optimum cheaply,
-// so that the Ceres solve that follows needs only an iteration or two on long records.
-void polish_start(const StepRecord& r, double p[4], const double lo[4], const double hi[4], const bool fixed[4]) {
+// Levenberg-Marquardt on the 4x4 normal equations, carried to convergence by Ceres Solver's own
+// tests (lm_detail::confirm) with the tolerances the Ceres solve of the same problem would use.
+// One solver instead of a polish followed by a Ceres solve that only confirmed it: that solve
+// evaluated and factored the 100k x 4 Jacobian for an iteration that did not move the parameters.
+struct NormalSolve {
+  lm_detail::Confirmed confirmed;
+  int iterations = 0;   // iterations after the polish
+  Eigen::Matrix4d JtJ;  // J'J at the end point (unpinned)
+  double rss = 0;       // residual sum of squares there
+};
+
+NormalSolve solve_normal_equations(const StepRecord& r, double p[4], const double lo[4], const double hi[4],
+                                   const bool fixed[4], const lm_detail::Tolerances& tol) {
   auto equations = [&r](std::span<const double> q, Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
     return normal_equations(r, q.data(), JtJ, Jtr);
   };
-  lm_detail::polish<Eigen::Matrix4d, Eigen::Vector4d>(std::span<double>(p, 4), std::span<const double>(lo, 4),
-                                                      std::span<const double>(hi, 4), fixed, equations);
+  const std::span<double> ps(p, 4);
+  const std::span<const double> los(lo, 4), his(hi, 4);
+  lm_detail::Equations<Eigen::Matrix4d, Eigen::Vector4d> at;
+  at.cost = equations(std::span<const double>(ps), at.N, at.g);
+  double lambda = lm_detail::kInitialDamping;
+  // The polish stops at a relative decrease of 1e-8 (kStopRelativeDecrease); confirm continues
+  // from there with the same damping, as the Ceres solve after the polish did. Both hold a
+  // parameter at a bound it is pressed against (theta_s at 0 for a response without dead time).
+  lm_detail::polish_from(ps, los, his, fixed, equations, at, lambda, true);
+  NormalSolve s;
+  s.confirmed = lm_detail::confirm(ps, los, his, fixed, equations, at, lambda, tol);
+  s.iterations = s.confirmed.iterations;
+  // The cost has a kink wherever the response's start t_step + theta_s crosses a sample: the
+  // derivative by theta_s jumps there. An optimum on a kink makes the steps across it fail,
+  // the damping grows, and the iteration stops on steps too small to finish K, tau_s and y0.
+  // With theta_s held where it is, the rest is smooth: finish them from the undamped start.
+  if (s.confirmed.converged() && s.confirmed.rejected_trials > 0 && !fixed[2]) {
+    const bool theta_held[4] = {fixed[0], fixed[1], true, fixed[3]};
+    s.iterations +=
+        lm_detail::confirm(ps, los, his, theta_held, equations, at, lm_detail::kInitialDamping, tol).iterations;
+  }
+  s.JtJ = at.N;
+  s.rss = at.cost;
+  return s;
+}
+
+const char* end_name(lm_detail::ConfirmEnd e) {
+  switch (e) {
+    case lm_detail::ConfirmEnd::function_tolerance: return "function tolerance";
+    case lm_detail::ConfirmEnd::parameter_tolerance: return "parameter tolerance";
+    case lm_detail::ConfirmEnd::gradient_tolerance: return "gradient tolerance";
+    case lm_detail::ConfirmEnd::no_decrease: return "no decrease";
+    case lm_detail::ConfirmEnd::iteration_limit: return "iteration limit";
+  }
+  return "";
+}
+
+// The FitResult of a converged solve_normal_equations: what solve_least_squares reports for the
+// same solution (residual diagnostics, bound warnings), without the covariance.
+FitResult normal_solve_result(const StepRecord& r, StepModel model, const std::vector<ParamSpec>& specs,
+                              const double p[4], const NormalSolve& s) {
+  FitResult f;
+  f.model = model_name(model);
+  f.diagnostics.iterations = s.iterations;
+  char line[160];
+  std::snprintf(line, sizeof line,
+                "Levenberg-Marquardt on the 4x4 normal equations, polished start: %d further iterations, final "
+                "residual sum of squares %.6e, converged (%s)",
+                s.iterations, s.rss, end_name(s.confirmed.end));
+  f.diagnostics.solver = line;
+  for (const auto& ps : specs)
+    if (!ps.fixed) ++f.diagnostics.num_parameters;
+  f.diagnostics.converged = true;
+  for (int j = 0; j < 4; ++j)
+    if (!std::isfinite(p[j])) throw FitError(f.model + ": the solution is not finite (" + f.diagnostics.solver + ")");
+  // The residuals as step_residuals computes them for the Ceres cost, for the diagnostics.
+  std::vector<double> res(r.t.size());
+  static constexpr std::size_t cols[4] = {0, 1, 2, 3};
+  step_residuals(r, p[0], p[1], p[2], p[3], res.data(), nullptr, 4, cols);
+  fill_residual_diagnostics(f, res, r.y, true);
+  for (std::size_t j = 0; j < 4; ++j) {
+    const auto& ps = specs[j];
+    Param prm;
+    prm.name = ps.name;
+    prm.unit = ps.unit;
+    prm.value = p[j];
+    prm.fixed = ps.fixed;
+    if (!ps.fixed && (p[j] <= ps.lower || p[j] >= ps.upper))
+      f.warnings.push_back(ps.name + " ended on its bound (" + std::to_string(p[j]) + ")");
+    f.params.push_back(prm);
+  }
+  return f;
 }
 
 // Standard errors and 95 % intervals from the 4x4 normal matrix at the solution: the same
 // s^2 (J^T J)^-1 that ceres::Covariance computes from J, with the same rank check (ratio of
-// the extreme singular values of J, i.e. the square root of that of J^T J).
-void fill_covariance(FitResult& f, const StepRecord& r, const LsqOptions& o) {
-  double p[4] = {f.value("K"), f.value("tau_s"), f.value("theta_s"), f.value("y0")};
+// the extreme singular values of J, i.e. the square root of that of J^T J). `at_solution`: J^T J
+// at f's parameters when the solver has it, otherwise it is computed here.
+void fill_covariance(FitResult& f, const StepRecord& r, const LsqOptions& o, const Eigen::Matrix4d* at_solution) {
   Eigen::Matrix4d JtJ;
-  Eigen::Vector4d Jtr;
-  normal_equations(r, p, JtJ, Jtr);
+  if (at_solution != nullptr) {
+    JtJ = *at_solution;
+  } else {
+    const double p[4] = {f.value("K"), f.value("tau_s"), f.value("theta_s"), f.value("y0")};
+    Eigen::Vector4d Jtr;
+    normal_equations(r, p, JtJ, Jtr);
+  }
   std::vector<int> free_idx;
   for (int j = 0; j < 4; ++j)
     if (!f.params[static_cast<std::size_t>(j)].fixed) free_idx.push_back(j);
@@ -275,12 +380,19 @@ StepStart log_incomplete_start(const StepRecord& r) {
       }
     }
   }
+  // The samples with t_lo <= t <= t_hi (times increase): the transient, searched once.
+  const auto t_begin = r.t.begin() + static_cast<std::ptrdiff_t>(first_after);
+  const auto i_lo = static_cast<std::size_t>(std::lower_bound(t_begin, r.t.end(), t_lo) - r.t.begin());
+  const auto i_hi = static_cast<std::size_t>(std::upper_bound(t_begin, r.t.end(), t_hi) - r.t.begin());
   double best_r2 = -1;
+  std::vector<double> tt, zz;
+  tt.reserve(i_hi - std::min(i_lo, i_hi));
+  zz.reserve(tt.capacity());
   for (double c : {0.03, 0.1, 0.3, 1.0, 3.0, 10.0}) {
     const double yss = y_end + c * span;
-    std::vector<double> tt, zz;
-    for (std::size_t i = first_after; i < n; ++i) {
-      if (r.t[i] < t_lo || r.t[i] > t_hi) continue;
+    tt.clear();
+    zz.clear();
+    for (std::size_t i = i_lo; i < i_hi; ++i) {
       const double ratio = (r.y[i] - yss) / (st.y0 - yss);  // 1 at the start, 0 at steady state
       if (ratio > 0.01 && ratio < 0.99) {
         tt.push_back(r.t[i]);
@@ -313,15 +425,22 @@ FitResult fit_step(const StepRecord& r, StepModel model, const LsqOptions& optio
   const double duration = response_duration(r);
   const StepStart st = log_incomplete_start(r);
 
-  // Long records: polish the start on the 4x4 normal equations, let Ceres confirm the optimum,
-  // and compute the covariance from the same normal matrix (fill_covariance).
+  // Levenberg-Marquardt on the 4x4 normal equations to convergence by Ceres Solver's tests, with
+  // the tolerances a Ceres solve of this problem uses (solve_normal_equations); the covariance
+  // from the same normal matrix (fill_covariance). Only when that does not converge does Ceres
+  // take over from where it stopped.
   LsqOptions ceres_opt = options;
   ceres_opt.compute_covariance = false;
-  // The polished start is already at the optimum to about 1e-10 in cost; Ceres only has to
-  // confirm it. Its default tolerances (1e-15) would have it shrink rejected steps for several
-  // iterations of the 100k-row Jacobian before giving up on improving the last digits.
+  // Function and parameter tolerances of at least 1e-12, for both solvers: the polished start is
+  // at the optimum to about 1e-10 in cost, and the default 1e-15 would only have the solver shrink
+  // rejected steps for several more passes over the samples.
   ceres_opt.function_tolerance = std::max(options.function_tolerance, 1e-12);
   ceres_opt.parameter_tolerance = std::max(options.parameter_tolerance, 1e-12);
+  lm_detail::Tolerances tol;
+  tol.function = ceres_opt.function_tolerance;
+  tol.parameter = ceres_opt.parameter_tolerance;
+  tol.gradient = ceres_opt.gradient_tolerance;
+  tol.max_iterations = ceres_opt.max_iterations;
   auto solve_from = [&](const StepStart& s) {
     LsqProblem prob;
     const double tmin = r.t.size() > 1 ? (r.t[1] - r.t[0]) * 1e-3 : 1e-9;
@@ -330,28 +449,31 @@ FitResult fit_step(const StepRecord& r, StepModel model, const LsqOptions& optio
         {"tau_s", "s", s.tau_s, std::max(tmin, 1e-9), kTauMaxFactor * duration},
         {"theta_s", "s", model == StepModel::fo ? 0.0 : s.theta_s, 0.0, 0.9 * duration, model == StepModel::fo},
         {"y0", r.output_unit, s.y0}};
-    {
-      double p[4], lo[4], hi[4];
-      bool fixed[4];
-      for (int j = 0; j < 4; ++j) {
-        const auto& ps = prob.params[static_cast<std::size_t>(j)];
-        p[j] = std::clamp(ps.start, ps.lower, ps.upper);
-        lo[j] = ps.lower;
-        hi[j] = ps.upper;
-        fixed[j] = ps.fixed;
-      }
-      polish_start(r, p, lo, hi, fixed);
-      for (int j = 0; j < 4; ++j) prob.params[static_cast<std::size_t>(j)].start = p[j];
+    double p[4], lo[4], hi[4];
+    bool fixed[4];
+    for (int j = 0; j < 4; ++j) {
+      const auto& ps = prob.params[static_cast<std::size_t>(j)];
+      p[j] = std::clamp(ps.start, ps.lower, ps.upper);
+      lo[j] = ps.lower;
+      hi[j] = ps.upper;
+      fixed[j] = ps.fixed;
     }
+    const NormalSolve ns = solve_normal_equations(r, p, lo, hi, fixed, tol);
+    if (ns.confirmed.converged()) {
+      FitResult fr = normal_solve_result(r, model, prob.params, p, ns);
+      if (options.compute_covariance) fill_covariance(fr, r, options, &ns.JtJ);
+      return fr;
+    }
+    for (int j = 0; j < 4; ++j) prob.params[static_cast<std::size_t>(j)].start = p[j];
     prob.num_residuals = static_cast<int>(r.t.size());
     prob.observed = r.y;
-    prob.residuals_and_jacobian = [&r](const double* p, double* res, double* jac) {
+    prob.residuals_and_jacobian = [&r](const double* q, double* res, double* jac) {
       static constexpr std::size_t cols[4] = {0, 1, 2, 3};
-      step_residuals(r, p[0], p[1], p[2], p[3], res, jac, 4, cols);
+      step_residuals(r, q[0], q[1], q[2], q[3], res, jac, 4, cols);
       return true;
     };
     FitResult fr = solve_least_squares(model_name(model), prob, ceres_opt);
-    if (options.compute_covariance) fill_covariance(fr, r, options);
+    if (options.compute_covariance) fill_covariance(fr, r, options, nullptr);
     return fr;
   };
 

@@ -82,7 +82,7 @@ double pooled_normal_equations(const std::vector<StepRecord>& recs, std::span<co
   return rss;
 }
 
-// polish_start for the pooled fit: Levenberg-Marquardt on the small normal equations (one pass
+// The pooled fit's start polish: Levenberg-Marquardt on the small normal equations (one pass
 // over the samples per trial, no Jacobian stored), so that Ceres starts next to the optimum.
 void polish_pooled_start(const std::vector<StepRecord>& recs, std::vector<double>& p, const std::vector<double>& lo,
                          const std::vector<double>& hi, const std::vector<bool>& fixed) {

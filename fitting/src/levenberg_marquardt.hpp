@@ -1,7 +1,8 @@
 #pragma once
-// The Levenberg-Marquardt loop on small normal equations that polishes a start before the Ceres
-// solve of the first-order step fits (single step and pooled). Each trial costs one pass over the
-// samples and no Jacobian is stored. Damping scaled by the diagonal of J'J (Marquardt, An
+// The Levenberg-Marquardt loop on small normal equations of the first-order step fits: it
+// polishes a start before the pooled fit's Ceres solve, and carries the single-step fit to
+// convergence by Ceres Solver's own tests (confirm). Each trial costs one pass over the samples
+// and no Jacobian is stored. Damping scaled by the diagonal of J'J (Marquardt, An
 // algorithm for least-squares estimation of nonlinear parameters, 1963); start value and the
 // multiplicative update as in Press, Teukolsky, Vetterling and Flannery, Numerical Recipes,
 // 3rd ed., 2007, ch. 15.5. Private to the fitting library.
@@ -30,11 +31,11 @@ inline constexpr double kMinDamping = 1e-12;
 // Least diagonal element the damping is scaled by: a parameter the data do not move (a zero
 // column of J) still gets a damped, finite step.
 inline constexpr double kMinCurvature = 1e-12;
-// Stop once an accepted step lowers the cost by less than this fraction: the Ceres solve that
-// follows confirms the last digits.
+// The polish stops once an accepted step lowers the cost by less than this fraction: the Ceres
+// solve that follows (pooled fit) or confirm() (single step) finishes the last digits.
 inline constexpr double kStopRelativeDecrease = 1e-8;
-// Iterations at most: the work on a long record stays bounded; a start not converged by then is
-// handed to Ceres as it is.
+// Polish iterations at most: the work on a long record stays bounded; a start not converged by
+// then is handed on as it is.
 inline constexpr int kMaxIterations = 60;
 // Rejected trials in one iteration at most: 12 raise the damping 4^12 (about 1.7e7) times, to
 // tiny gradient steps; when even those do not lower the cost the start is optimal to rounding.
@@ -65,38 +66,152 @@ void damped_trial(const Matrix& N, const Vector& g, double lambda, std::span<con
     q[j] = fixed[j] ? p[j] : std::clamp(p[j] + dp(static_cast<Eigen::Index>(j)), lo[j], hi[j]);
 }
 
-/// Polishes p in place within [lo, hi], fixed[j] parameters held. normal_equations(q, N, g)
-/// fills J'J and J'r at q and returns the residual sum of squares; each trial's normal equations
-/// come with its cost, so an accepted step needs no second pass over the data.
+/// Which parameters a step holds: the fixed ones and, with `active_bounds`, those at a bound the
+/// gradient g = J'r pushes them against (an active bound). The damped step of the others then
+/// does not count on a move that the bound would cut off; without this, a step clamped at the
+/// bound leaves the others off their best values and the iteration creeps along the bound.
+template <class Vector, class Fixed>
+std::vector<char> held(std::span<const double> p, std::span<const double> lo, std::span<const double> hi,
+                       const Vector& g, const Fixed& fixed, bool active_bounds) {
+  std::vector<char> h(p.size());
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    const double gj = g(static_cast<Eigen::Index>(j));
+    h[j] = fixed[j] || (active_bounds && ((p[j] <= lo[j] && gj > 0) || (p[j] >= hi[j] && gj < 0)));
+  }
+  return h;
+}
+
+/// The normal equations J'J and J'r at a point with its cost (the residual sum of squares).
+template <class Matrix, class Vector>
+struct Equations {
+  Matrix N;
+  Vector g;
+  double cost = 0;
+};
+
+/// Polishes p in place within [lo, hi], fixed[j] parameters held, from the equations `at` at p
+/// and the damping `lambda`; both are updated to the end point. normal_equations(q, N, g) fills
+/// J'J and J'r at q and returns the residual sum of squares; each trial's normal equations come
+/// with its cost, so an accepted step needs no second pass over the data. `active_bounds`: hold
+/// parameters at active bounds in each step (see held()).
 template <class Matrix, class Vector, class Fixed, class NormalEquations>
-void polish(std::span<double> p, std::span<const double> lo, std::span<const double> hi, const Fixed& fixed,
-            NormalEquations&& normal_equations) {
-  double lambda = kInitialDamping;
-  Matrix N, N_q;
-  Vector g, g_q;
-  double cost = normal_equations(std::span<const double>(p), N, g);
+void polish_from(std::span<double> p, std::span<const double> lo, std::span<const double> hi, const Fixed& fixed,
+                 NormalEquations&& normal_equations, Equations<Matrix, Vector>& at, double& lambda,
+                 bool active_bounds = false) {
+  Matrix N_q;
+  Vector g_q;
   std::vector<double> q(p.size());
   for (int it = 0; it < kMaxIterations; ++it) {
-    pin_fixed(N, g, fixed);
+    Matrix N = at.N;
+    Vector g = at.g;
+    const auto hold = held(std::span<const double>(p), lo, hi, g, fixed, active_bounds);
+    pin_fixed(N, g, hold);
     bool improved = false;
     for (int trial = 0; trial < kMaxTrials && !improved; ++trial) {
-      damped_trial(N, g, lambda, p, lo, hi, fixed, q);
+      damped_trial(N, g, lambda, p, lo, hi, hold, q);
       const double c = normal_equations(std::span<const double>(q), N_q, g_q);
-      if (!(std::isfinite(c) && c < cost)) {
+      if (!(std::isfinite(c) && c < at.cost)) {
         lambda *= kDampingIncrease;
         continue;
       }
-      const double rel = (cost - c) / std::max(cost, kTinyCost);
+      const double rel = (at.cost - c) / std::max(at.cost, kTinyCost);
       std::copy(q.begin(), q.end(), p.begin());
-      cost = c;
-      N = N_q;
-      g = g_q;
+      at = {N_q, g_q, c};
       lambda = std::max(lambda / kDampingDecrease, kMinDamping);
       improved = true;
       if (rel < kStopRelativeDecrease) return;
     }
     if (!improved) return;
   }
+}
+
+/// polish_from a start p, with the first damping kInitialDamping.
+template <class Matrix, class Vector, class Fixed, class NormalEquations>
+void polish(std::span<double> p, std::span<const double> lo, std::span<const double> hi, const Fixed& fixed,
+            NormalEquations&& normal_equations) {
+  Equations<Matrix, Vector> at;
+  at.cost = normal_equations(std::span<const double>(p), at.N, at.g);
+  double lambda = kInitialDamping;
+  polish_from(p, lo, hi, fixed, normal_equations, at, lambda);
+}
+
+/// Convergence tests of confirm(): those of Ceres Solver's trust-region minimizer (Agarwal,
+/// Mierle and others, Ceres Solver 2.1, 2022: Solver::Options), with the same meaning.
+struct Tolerances {
+  double function = 1e-12;   ///< |cost change of a trial| <= function * cost
+  double parameter = 1e-12;  ///< |trial step| <= parameter * (|p| + parameter), Euclidean norms
+  double gradient = 1e-15;   ///< max_j |p_j - clamp(p_j - g_j, lo_j, hi_j)| <= gradient, g = J'r
+  int max_iterations = 500;
+};
+
+/// How confirm() ended: converged by one of the tolerances, or not (then another solver should
+/// take over from p).
+enum class ConfirmEnd { function_tolerance, parameter_tolerance, gradient_tolerance, no_decrease, iteration_limit };
+
+struct Confirmed {
+  ConfirmEnd end = ConfirmEnd::iteration_limit;
+  int iterations = 0;       ///< iterations run (each solves the damped normal equations once or more)
+  int rejected_trials = 0;  ///< trials that raised the cost: the cost is not smooth or not quadratic there
+  bool converged() const {
+    return end == ConfirmEnd::function_tolerance || end == ConfirmEnd::parameter_tolerance ||
+           end == ConfirmEnd::gradient_tolerance;
+  }
+};
+
+/// Continues the Levenberg-Marquardt iteration of polish_from until one of Ceres Solver's
+/// convergence tests holds: the gradient is small, or a trial moves the parameters or changes
+/// the cost by less than the tolerances. As in Ceres, such a trial is not taken: p stays the
+/// last accepted point and `at` holds its equations. Parameters at active bounds are held in
+/// each step (held()).
+template <class Matrix, class Vector, class Fixed, class NormalEquations>
+Confirmed confirm(std::span<double> p, std::span<const double> lo, std::span<const double> hi, const Fixed& fixed,
+                  NormalEquations&& normal_equations, Equations<Matrix, Vector>& at, double lambda,
+                  const Tolerances& tol) {
+  Matrix N_q;
+  Vector g_q;
+  std::vector<double> q(p.size());
+  Confirmed out;
+  auto end = [&out](ConfirmEnd e) {
+    out.end = e;
+    return out;
+  };
+  while (out.iterations < tol.max_iterations) {
+    ++out.iterations;
+    Matrix N = at.N;
+    Vector g = at.g;
+    double projected_gradient = 0, p_norm = 0;
+    for (std::size_t j = 0; j < p.size(); ++j) {
+      const double gj = g(static_cast<Eigen::Index>(j));
+      if (!fixed[j])
+        projected_gradient = std::max(projected_gradient, std::abs(p[j] - std::clamp(p[j] - gj, lo[j], hi[j])));
+      p_norm += p[j] * p[j];
+    }
+    const auto hold = held(std::span<const double>(p), lo, hi, g, fixed, true);
+    pin_fixed(N, g, hold);
+    if (projected_gradient <= tol.gradient) return end(ConfirmEnd::gradient_tolerance);
+    p_norm = std::sqrt(p_norm);
+    bool improved = false;
+    for (int trial = 0; trial < kMaxTrials && !improved; ++trial) {
+      damped_trial(N, g, lambda, p, lo, hi, hold, q);
+      double step = 0;
+      for (std::size_t j = 0; j < p.size(); ++j) step += (q[j] - p[j]) * (q[j] - p[j]);
+      if (std::sqrt(step) <= tol.parameter * (p_norm + tol.parameter)) return end(ConfirmEnd::parameter_tolerance);
+      const double c = normal_equations(std::span<const double>(q), N_q, g_q);
+      if (std::isfinite(c) && std::abs(at.cost - c) <= tol.function * at.cost)
+        return end(ConfirmEnd::function_tolerance);
+      if (!(std::isfinite(c) && c < at.cost)) {
+        lambda *= kDampingIncrease;
+        ++out.rejected_trials;
+        continue;
+      }
+      std::copy(q.begin(), q.end(), p.begin());
+      at = {N_q, g_q, c};
+      lambda = std::max(lambda / kDampingDecrease, kMinDamping);
+      improved = true;
+    }
+    if (!improved) return end(ConfirmEnd::no_decrease);
+  }
+  return end(ConfirmEnd::iteration_limit);
 }
 
 }  // namespace tunekit::fitting::lm_detail

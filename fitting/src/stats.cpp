@@ -29,11 +29,33 @@ WhitenessTest ljung_box(std::span<const double> r, int lags) {
   double c0 = 0;
   for (double v : r) c0 += (v - mean) * (v - mean);
   if (!(c0 > 0)) return t;
-  double q = 0;
-  for (int k = 1; k <= lags; ++k) {
+  // The autocovariances c_k = sum_{i >= k} (r_i - mean)(r_{i-k} - mean), four lags per pass over
+  // the residuals: the four sums do not wait for each other's additions (one sum at a time is
+  // bound by the latency of its additions). Each sum still adds its terms in the order of i, so
+  // every c_k is rounded exactly as one lag at a time would round it.
+  std::vector<double> c(static_cast<std::size_t>(lags) + 1, 0.0);
+  constexpr int kBlock = 4;
+  int k = 1;
+  for (; k + kBlock - 1 <= lags; k += kBlock) {
+    const auto k0 = static_cast<std::size_t>(k);
+    double a[kBlock] = {0, 0, 0, 0};
+    // Lag k + m starts at i = k + m (lags <= n - 1, so these i are samples).
+    for (std::size_t i = k0; i < k0 + kBlock - 1; ++i)
+      for (std::size_t m = 0; k0 + m <= i; ++m) a[m] += (r[i] - mean) * (r[i - k0 - m] - mean);
+    for (std::size_t i = k0 + kBlock - 1; i < n; ++i) {
+      const double di = r[i] - mean;
+      for (std::size_t m = 0; m < kBlock; ++m) a[m] += di * (r[i - k0 - m] - mean);
+    }
+    for (std::size_t m = 0; m < kBlock; ++m) c[k0 + m] = a[m];
+  }
+  for (; k <= lags; ++k) {
     double ck = 0;
     for (std::size_t i = static_cast<std::size_t>(k); i < n; ++i) ck += (r[i] - mean) * (r[i - k] - mean);
-    const double rho = ck / c0;
+    c[static_cast<std::size_t>(k)] = ck;
+  }
+  double q = 0;
+  for (k = 1; k <= lags; ++k) {
+    const double rho = c[static_cast<std::size_t>(k)] / c0;
     q += rho * rho / static_cast<double>(n - static_cast<std::size_t>(k));
   }
   q *= static_cast<double>(n) * (static_cast<double>(n) + 2.0);

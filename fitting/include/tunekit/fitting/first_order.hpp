@@ -5,8 +5,10 @@
 //   y(t) = y0 + K du (1 - exp(-(t - t_step - theta) / tau))  afterwards
 //
 // "fo" holds theta at 0 (first order), "fopdt" estimates it (first order plus dead time).
-// Single-step fits use solve_least_squares with an analytic Jacobian, start from the log-incomplete-response
-// method (Holtrup 2019 eq. 4.4), and refuse (FitError) when tau cannot be seen in the record.
+// Single-step fits start from the log-incomplete-response method (Holtrup 2019 eq. 4.4), solve by
+// Levenberg-Marquardt on the 4x4 normal equations (analytic Jacobian, one pass over the samples
+// per trial) until Ceres Solver's convergence tests hold, with solve_least_squares taking over if
+// they do not, and refuse (FitError) when tau cannot be seen in the record.
 
 #include <string>
 #include <vector>
@@ -54,7 +56,9 @@ double step_response(double t, double t_step, double du, double K, double tau_s,
 
 /// Fits one step. Parameters: K (gain_unit), tau_s, theta_s (held at 0 for fo), y0 (output_unit).
 /// Throws InputError for too few samples, a constant output or a zero step, and FitError when
-/// the solver fails or tau / theta are not identifiable from the record.
+/// the solver fails or tau / theta are not identifiable from the record. options: the
+/// function and parameter tolerances are at least 1e-12 (relative; the start is polished close to
+/// the optimum already), gradient_tolerance and max_iterations as given.
 FitResult fit_step(const StepRecord& rec, StepModel model, const LsqOptions& options = {});
 
 /// Fits several steps with one K, tau_s and theta_s and an own y0 per step (y0_0, y0_1, ...).
