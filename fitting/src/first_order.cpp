@@ -10,6 +10,7 @@
 
 #include <Eigen/Dense>
 #include <ceres/ceres.h>
+#include <fmt/format.h>
 
 #include "tunekit/fitting/stats.hpp"
 
@@ -221,12 +222,10 @@ FitResult normal_solve_result(const StepRecord& r, StepModel model, const std::v
   FitResult f;
   f.model = model_name(model);
   f.diagnostics.iterations = s.iterations;
-  char line[160];
-  std::snprintf(line, sizeof line,
-                "Levenberg-Marquardt on the 4x4 normal equations, polished start: %d further iterations, final "
-                "residual sum of squares %.6e, converged (%s)",
-                s.iterations, s.rss, end_name(s.confirmed.end));
-  f.diagnostics.solver = line;
+  f.diagnostics.solver = fmt::format(
+      "Levenberg-Marquardt on the 4x4 normal equations, polished start: {} further iterations, final residual sum "
+      "of squares {:.6e}, converged ({})",
+      s.iterations, s.rss, end_name(s.confirmed.end));
   for (const auto& ps : specs)
     if (!ps.fixed) ++f.diagnostics.num_parameters;
   f.diagnostics.converged = true;
