@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -34,18 +35,21 @@ SweepSpec z_sweep() {
   return s;
 }
 
-// The accelerometer's Z channel carries the motion (and gravity); X sees noise, Y noise and 5 % of the motion.
-const std::string& z_file() {
-  static const std::string p = [] {
+// The accelerometer's Z channel carries the motion (and gravity); X sees noise, Y noise and 5 % of
+// the motion. Written into the calling test's own directory: ctest runs the cases in parallel.
+std::string z_file(const std::string& dir) {
+  static const std::string csv = [] {
     auto r = tunekit::test::synth_sweep(kTruthZ, z_sweep());
     for (std::size_t i = 0; i < r.t.size(); ++i) {
       const double motion = r.ax[i];
       r.ax[i] = r.az[i] - 9806.65;
       r.az[i] = motion + 9806.65;
     }
-    return tunekit::test::write_scratch("raw_data_z_zaxis.csv", tunekit::test::to_klipper_csv(r));
+    return tunekit::test::to_klipper_csv(r);
   }();
-  return p;
+  const std::string path = dir + "/raw_data_z_zaxis.csv";
+  std::ofstream(path, std::ios::binary) << csv;
+  return path;
 }
 
 std::string copy_config(const std::string& test, const std::string& dataset_name) {
@@ -59,7 +63,8 @@ std::string copy_config(const std::string& test, const std::string& dataset_name
 }  // namespace
 
 TEST_CASE("a Klipper raw Z sweep is analysed as axis z and its resonance recovered", "[resonance][z]") {
-  const auto r = run_cli({"resonance", z_file(), "--json", "--fit-min", "20", "--fit-max", "100"});
+  const std::string dir = tunekit::test::scratch_dir("z_resonance");
+  const auto r = run_cli({"resonance", z_file(dir), "--json", "--fit-min", "20", "--fit-max", "100"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   const auto axes = nlohmann::json::parse(r.out)["results"]["axes"];
@@ -75,7 +80,7 @@ TEST_CASE("a Z shaper from a Klipper raw Z sweep is written into printer.cfg as 
           "[resonance][z]") {
   const std::string dir = tunekit::test::scratch_dir("z_shaper_export");
   const std::string results = dir + "/shaper.json";
-  const auto sh = run_cli({"shaper", z_file(), "--klipper-compatible", "--json", "-o", results});
+  const auto sh = run_cli({"shaper", z_file(dir), "--klipper-compatible", "--json", "-o", results});
   INFO(sh.err);
   REQUIRE(sh.code == 0);
   const auto rec = nlohmann::json::parse(sh.out)["results"]["axes"]["z"]["recommended"];
