@@ -147,17 +147,12 @@ void read_shaper_results(const json& res, const std::string& path, DesignInputs&
     const json& v = item.value();
     const json& rec = value_at_or_null(v, "/recommended"_json_pointer);
     if (!rec.is_object()) continue;
-    if (axis != "x" && axis != "y") {
-      if (axis == "z") {
-        out.warnings.push_back(
-            fmt::format("{}: the {} axis shaper is not exported (firmware shapers cover x and y)", path, axis));
-      } else {
-        out.unnamed_axes.push_back(
-            fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; "
-                        "run 'tunekit shaper' on it with --axis x or --axis y",
-                        path, axis));
-        out.warnings.push_back(out.unnamed_axes.back());
-      }
+    if (axis != "x" && axis != "y" && axis != "z") {
+      out.unnamed_axes.push_back(
+          fmt::format("{}: the shaper of '{}' is not exported: that record names no axis; "
+                      "run 'tunekit shaper' on it with --axis x, --axis y or --axis z",
+                      path, axis));
+      out.warnings.push_back(out.unnamed_axes.back());
       continue;
     }
     AxisShaperInput a;

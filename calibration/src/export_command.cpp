@@ -103,7 +103,7 @@ std::string change_note(const ExportOptions& a, const DesignInputs& d) {
   std::string from;
   for (const auto& origin : d.origins)
     from += (from.empty() ? "" : ", ") + std::filesystem::path(origin).filename().string();
-  if (std::isfinite(a.pa_k) || !a.shaper_x.empty() || !a.shaper_y.empty())
+  if (std::isfinite(a.pa_k) || !a.shaper_x.empty() || !a.shaper_y.empty() || !a.shaper_z.empty())
     from += from.empty() ? "the command line" : " and the command line";
   const std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -201,6 +201,7 @@ void finish_settings(const ExportOptions& a, const DesignInputs& d,
   if (!a.no_shaper) {
     if (!a.shaper_x.empty()) shapers["x"] = parse_shaper_arg(a.shaper_x, "x");
     if (!a.shaper_y.empty()) shapers["y"] = parse_shaper_arg(a.shaper_y, "y");
+    if (!a.shaper_z.empty()) shapers["z"] = parse_shaper_arg(a.shaper_z, "z");
     settings.shapers = shapers;
   }
   if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty()) {
@@ -219,6 +220,7 @@ nlohmann::json export_options_json(const ExportOptions& a, firmware::ExportFirmw
           {"design_flow_mm3_s", std::isfinite(a.design_flow) ? nlohmann::json(a.design_flow) : nlohmann::json(nullptr)},
           {"shaper_x", a.shaper_x},
           {"shaper_y", a.shaper_y},
+          {"shaper_z", a.shaper_z},
           {"no_pa", a.no_pa},
           {"no_shaper", a.no_shaper},
           {"write", a.write}};

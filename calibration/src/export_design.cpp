@@ -8,6 +8,7 @@
 
 #include "tunekit/calibration/agreement.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/fitting/interpolate.hpp"
 #include "tunekit/machine/machine_profile.hpp"
@@ -111,6 +112,12 @@ std::map<std::string, firmware::ShaperSetting> firmware_shapers(const DesignInpu
   };
   std::map<std::string, firmware::ShaperSetting> out;
   for (const auto& [axis, in] : d.axes) {
+    // A Z shaper in the results is written only where the firmware reads one (Klipper); elsewhere
+    // the X and Y shapers are exported and the Z one is reported (--shaper-z is refused instead).
+    if (axis == "z" && fw != firmware::ExportFirmware::klipper) {
+      env.warn(fmt::format("{}: the Z shaper is not exported: {}", in.origin, firmware::z_shaper_refusal(fw)));
+      continue;
+    }
     if (usable(in.recommended)) {
       out[axis] = in.recommended;
       continue;

@@ -7,7 +7,7 @@
 namespace tunekit::calibration {
 
 std::string advice_for_warning(const std::string& w) {
-  static constexpr std::array<std::pair<std::string_view, std::string_view>, 12> table{{
+  static constexpr std::array<std::pair<std::string_view, std::string_view>, 13> table{{
       {"do NOT agree",
        "repeat both experiments; if they still disagree, the liquefier is not first-order at this feed: compare the "
        "step and Bode plots and check the load cell's mounting"},
@@ -27,7 +27,10 @@ std::string advice_for_warning(const std::string& w) {
       {"tf fit:",
        "look at the Bode plot and its coherence; excite longer, with a larger amplitude, or around the corner"},
       {"output-error fit:", "look at the residuals of the record; excite longer or with a larger amplitude"},
-      {"shaper is not exported", "set that axis's shaper by hand: firmware shapers cover x and y only"},
+      {"Z shaper is not exported",
+       "set the Z shaper by hand in the firmware, if it has one: tunekit writes a Z shaper into Klipper's printer.cfg "
+       "only"},
+      {"shaper is not exported", "name the record's axis with --axis, or set that axis's shaper by hand"},
       {"coherence", "excite longer or with a larger amplitude so that more frequencies pass the coherence threshold"},
   }};
   for (const auto& [key, advice] : table)

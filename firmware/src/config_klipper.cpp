@@ -513,6 +513,11 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
     g += "\n";
   }
   r.gcode = g;
+  if (s.shapers.count("z"))
+    r.notes.push_back(
+        "shaper_type_z, shaper_freq_z and damping_ratio_z are read by Klipper since its Z-axis input shaper "
+        "(D. Butyugin, Klipper, 4 October 2025); an older Klipper refuses to start on them above the SAVE_CONFIG "
+        "block and ignores them inside it");
   if (r.updated != r.original)
     r.notes.push_back(
         "Klipper reads printer.cfg only at start-up: send RESTART after writing (or the G-code above to "

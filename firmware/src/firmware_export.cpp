@@ -70,6 +70,21 @@ bool marlin_ft_motion_enabled(const std::string& text) {
   return false;
 }
 
+std::string z_shaper_refusal(ExportFirmware fw) {
+  switch (fw) {
+    case ExportFirmware::klipper: break;
+    case ExportFirmware::kalico:
+      return "a Z shaper is exported for Klipper only: Kalico's [input_shaper] reads the X and Y shapers only";
+    case ExportFirmware::marlin:
+      return "a Z shaper is exported for Klipper only: tunekit writes Marlin's X and Y shapers (INPUT_SHAPING_Z / "
+             "M593 Z of Marlin 2.1.3 is not written)";
+    case ExportFirmware::rrf:
+      return "a Z shaper is exported for Klipper only: RepRapFirmware's M593 sets one shaper for every axis, "
+             "the X/Y one tunekit writes";
+  }
+  return {};
+}
+
 ExportFirmware parse_export_firmware(const std::string& name) {
   const std::string n = core::lower(name);
   if (n == "klipper") return ExportFirmware::klipper;
@@ -140,8 +155,12 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& settings) {
           fmt::format("Marlin accepts ADVANCE_TAU (M900 U) from 0 to {} s; {} is out of range", kMarlinTauMax, t));
   }
   for (const auto& [axis, sh] : s.shapers) {
-    if (axis != "x" && axis != "y") {
-      bad.push_back(fmt::format("input shaping on axis '{}' is not exported (x and y only)", axis));
+    if (axis == "z" && fw != ExportFirmware::klipper) {
+      bad.push_back(z_shaper_refusal(fw));
+      continue;
+    }
+    if (axis != "x" && axis != "y" && axis != "z") {
+      bad.push_back(fmt::format("input shaping on axis '{}' is not exported (x, y, and z for Klipper)", axis));
       continue;
     }
     try {

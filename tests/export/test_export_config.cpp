@@ -359,3 +359,35 @@ TEST_CASE("Unified diff of line edits") {
   CHECK_FALSE(same_number("0.05", 0.04, 4));
   CHECK_FALSE(same_number("abc", 0.04, 4));
 }
+
+TEST_CASE(
+    "Klipper: a Z shaper is written as shaper_type_z / shaper_freq_z / damping_ratio_z, other firmwares refuse it") {
+  // Klipper's [input_shaper] reads the Z keys since its Z-axis input shaper (Butyugin, 2025).
+  const std::string cfg = "[printer]\nkinematics: cartesian\n\n[input_shaper]\nshaper_freq_x: 48.6\n";
+  CompensatorSettings s;
+  s.shapers["z"] = {"2hump_ei", 63, 0.1};
+  const auto r = export_config_text(ExportFirmware::klipper, cfg, "p.cfg", s);
+  CHECK(r.updated == cfg + "shaper_type_z: 2hump_ei\nshaper_freq_z: 63\ndamping_ratio_z: 0.1\n");
+  CHECK(r.gcode.find("SET_INPUT_SHAPER SHAPER_TYPE_Z=2hump_ei SHAPER_FREQ_Z=63 DAMPING_RATIO_Z=0.1") !=
+        std::string::npos);
+  bool noted = false;
+  for (const auto& n : r.notes) noted = noted || n.find("older Klipper refuses to start") != std::string::npos;
+  CHECK(noted);
+  CHECK_FALSE(export_config_text(ExportFirmware::klipper, r.updated, "p.cfg", s).changed());
+  // Klipper's bound on the damping of each shaper applies to Z too.
+  CompensatorSettings wild = s;
+  wild.shapers["z"].damping = 0.95;
+  CHECK_THROWS_AS(validate_settings(ExportFirmware::klipper, wild), InputError);
+  for (const auto fw : {ExportFirmware::kalico, ExportFirmware::marlin, ExportFirmware::rrf}) {
+    try {
+      validate_settings(fw, s);
+      FAIL("accepted a Z shaper for " << to_string(fw));
+    } catch (const InputError& e) {
+      CHECK(e.code() == ExitCode::bad_input);
+      CHECK_THAT(e.message(), Catch::Contains("exported for Klipper only"));
+    }
+  }
+  CompensatorSettings e;
+  e.shapers["e"] = {"zv", 40, 0.1};
+  CHECK_THROWS_AS(validate_settings(ExportFirmware::klipper, e), InputError);
+}

@@ -90,6 +90,8 @@ void register_export(CLI::App& app, CliContext& ctx) {
       "cross-section)");
   sub->add_option("--shaper-x", o.shaper_x, "X shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
   sub->add_option("--shaper-y", o.shaper_y, "Y shaper TYPE:FREQ[:ZETA] (frequency in Hz, damping ratio 0-1)");
+  sub->add_option("--shaper-z", o.shaper_z,
+                  "Z shaper TYPE:FREQ[:ZETA] (Klipper only: shaper_type_z, shaper_freq_z, damping_ratio_z)");
   sub->add_option("--extruder", o.extruder,
                   "Extruder: a Klipper section name (default: extruder), or a number N: Klipper [extruderN], Marlin's "
                   "Nth ADVANCE_K entry (M900 TN), RepRapFirmware drive N");

@@ -36,6 +36,7 @@ struct ExportOptions {
   double pa_smooth = fitting::kNaN;    ///< smoothing time (s) instead of the design; NaN: not given
   double design_flow = fitting::kNaN;  ///< flow (mm^3/s) the single K is designed for; NaN: from the profile
   std::string shaper_x, shaper_y;      ///< TYPE:FREQ[:ZETA] instead of the results
+  std::string shaper_z;                ///< TYPE:FREQ[:ZETA] of the Z shaper (Klipper only)
   std::string extruder = "extruder";   ///< Klipper section name, or a number N (extruder N everywhere)
   int drive = 0;                       ///< RepRapFirmware drive for M572 D
   bool drive_given = false;

@@ -58,7 +58,7 @@ struct CompensatorSettings {
   std::optional<double> pa_k_s;                ///< advance K, s (Kalico: ignored when `kalico` is set)
   std::optional<KalicoAdvanceSetting> kalico;  ///< Kalico only: the nonlinear model replaces pressure_advance
   std::optional<double> pa_smooth_s;  ///< the firmware's own smoothing time (Klipper smooth time, Marlin ADVANCE_TAU)
-  std::map<std::string, ShaperSetting> shapers;  ///< by axis "x", "y"
+  std::map<std::string, ShaperSetting> shapers;  ///< by axis "x", "y" ("z": Klipper only)
   std::string klipper_extruder = "extruder";     ///< Klipper section holding pressure_advance
   int rrf_drive = 0;                             ///< RepRapFirmware extruder drive (M572 D)
   int extruder_index = 0;                        ///< Marlin: entry of a per-extruder ADVANCE_K list, M900 T
@@ -112,6 +112,11 @@ bool marlin_ft_motion_enabled(const std::string& configuration_text);
 /// Checks every value against the firmware's accepted range and shaper types and throws one
 /// InputError (exit 2) listing all violations.
 void validate_settings(ExportFirmware fw, const CompensatorSettings& s);
+
+/// Why a Z shaper is not exported for `fw` (one sentence), or empty for Klipper, which reads
+/// shaper_type_z / shaper_freq_z / damping_ratio_z in [input_shaper] since its Z-axis input
+/// shaper (Butyugin, October 2025).
+std::string z_shaper_refusal(ExportFirmware fw);
 
 /// Edits configuration text. `path` names the file in messages and the diff. Validates first.
 ExportResult export_config_text(ExportFirmware fw, const std::string& text, const std::string& path,
