@@ -117,11 +117,12 @@ constexpr double kRidgeCorrelation = 0.99;
 
 // Viscosity from public values in the order of `names` (model names, shift names, T_ref_K).
 struct Evaluator {
+  Evaluator(ViscosityModel m, TemperatureShift s) : model(m), shift(s), k(viscosity_param_names(m).size()) {}
   ViscosityModel model;
   TemperatureShift shift;
+  std::size_t k;  // where the shift's values start (the model's parameter count)
   double operator()(const double* v, double g, double T, double p) const {
     double aT = 1.0;
-    std::size_t k = viscosity_param_names(model).size();
     if (shift == TemperatureShift::arrhenius) aT = arrhenius_shift(T, v[k], v[k + 1]);
     else if (shift == TemperatureShift::wlf) aT = wlf_shift(T, v[k], v[k + 1], v[k + 2]);
     switch (model) {
