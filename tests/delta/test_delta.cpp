@@ -134,30 +134,11 @@ TEST_CASE("delta fit: 9-factor standard errors agree with a finite-difference Ja
     const auto hu = heights(up), hd = heights(down);
     for (std::size_t i = 0; i < m; ++i) jac[j].push_back((hu[i] - hd[i]) / (2 * step));
   }
-  // (J'J)^-1 by Gauss-Jordan elimination with partial pivoting.
-  std::vector<std::vector<double>> a(k, std::vector<double>(2 * k, 0.0));
-  for (std::size_t r = 0; r < k; ++r) {
-    for (std::size_t c = 0; c < k; ++c)
-      for (std::size_t i = 0; i < m; ++i) a[r][c] += jac[r][i] * jac[c][i];
-    a[r][k + r] = 1;
-  }
-  for (std::size_t c = 0; c < k; ++c) {
-    std::size_t piv = c;
-    for (std::size_t r = c + 1; r < k; ++r)
-      if (std::abs(a[r][c]) > std::abs(a[piv][c])) piv = r;
-    std::swap(a[c], a[piv]);
-    const double d = a[c][c];
-    for (auto& x : a[c]) x /= d;
-    for (std::size_t r = 0; r < k; ++r)
-      if (r != c) {
-        const double f = a[r][c];
-        for (std::size_t q = 0; q < 2 * k; ++q) a[r][q] -= f * a[c][q];
-      }
-  }
+  const auto diag = test::inverse_normal_diagonal(jac);
   const double s2 = cal.fit.diagnostics.rss / static_cast<double>(m - k);
   for (std::size_t j = 0; j < k; ++j) {
     INFO(names[j]);
-    CHECK(cal.fit.param(names[j]).std_error == Approx(std::sqrt(s2 * a[j][k + j])).epsilon(1e-5));
+    CHECK(cal.fit.param(names[j]).std_error == Approx(std::sqrt(s2 * diag[j])).epsilon(1e-5));
   }
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "test_support.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
 #include "tunekit/fitting/viscosity.hpp"
 
@@ -32,33 +33,6 @@ NozzleFlowData nozzle_data(PressureModel model, double K, double n, double Ea, c
                               std::exp(noise(rng)));
     }
   return d;
-}
-
-// Diagonal of (J'J)^-1 by Gauss-Jordan elimination with partial pivoting; J as columns.
-std::vector<double> inverse_normal_diagonal(const std::vector<std::vector<double>>& cols) {
-  const std::size_t k = cols.size();
-  std::vector<std::vector<double>> a(k, std::vector<double>(2 * k, 0.0));
-  for (std::size_t r = 0; r < k; ++r) {
-    for (std::size_t c = 0; c < k; ++c)
-      for (std::size_t i = 0; i < cols[r].size(); ++i) a[r][c] += cols[r][i] * cols[c][i];
-    a[r][k + r] = 1;
-  }
-  for (std::size_t c = 0; c < k; ++c) {
-    std::size_t piv = c;
-    for (std::size_t r = c + 1; r < k; ++r)
-      if (std::abs(a[r][c]) > std::abs(a[piv][c])) piv = r;
-    std::swap(a[c], a[piv]);
-    const double d = a[c][c];
-    for (auto& x : a[c]) x /= d;
-    for (std::size_t r = 0; r < k; ++r)
-      if (r != c) {
-        const double f = a[r][c];
-        for (std::size_t q = 0; q < 2 * k; ++q) a[r][q] -= f * a[c][q];
-      }
-  }
-  std::vector<double> diag;
-  for (std::size_t j = 0; j < k; ++j) diag.push_back(a[j][k + j]);
-  return diag;
 }
 
 }  // namespace
@@ -95,7 +69,7 @@ TEST_CASE("nozzle fit: standard errors agree with a finite-difference Jacobian o
       cols[1].push_back((ln_dp(i, lnK, n + h[1], Ea) - ln_dp(i, lnK, n - h[1], Ea)) / (2 * h[1]));
       cols[2].push_back((ln_dp(i, lnK, n, Ea + h[2]) - ln_dp(i, lnK, n, Ea - h[2])) / (2 * h[2]));
     }
-    const auto diag = inverse_normal_diagonal(cols);
+    const auto diag = tunekit::test::inverse_normal_diagonal(cols);
     const double s2 = fit.diagnostics.rss / static_cast<double>(d.flow_m3_s.size() - 3);
     // K is estimated as ln K: its standard error is K times that of ln K.
     CHECK(fit.param("K_Pa_s_n").std_error == Approx(fit.value("K_Pa_s_n") * std::sqrt(s2 * diag[0])).epsilon(1e-5));
