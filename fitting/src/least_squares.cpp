@@ -84,8 +84,8 @@ class WholeProblemCost final : public ceres::CostFunction {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const double* x = parameters[0];
     double* jac = (jacobians != nullptr) ? jacobians[0] : nullptr;
-    const bool numeric = !prob_.residuals_and_jacobian;
-    if (memo_.find(x, residuals, jac, numeric)) return true;
+    const bool reusable = !prob_.residuals_and_jacobian || prob_.same_residuals_with_jacobian;
+    if (memo_.find(x, residuals, jac, reusable)) return true;
     if (!compute(x, residuals, jac)) return false;
     memo_.store(x, residuals, jac);
     return true;

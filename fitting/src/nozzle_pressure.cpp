@@ -244,6 +244,7 @@ FitResult fit_nozzle_rheology(const NozzleFlowData& d, PressureModel model, cons
     for (std::size_t k = 0; k < kMaxSearch; ++k) sub.push_back(k * n / kMaxSearch);
   else sub = all;
   prob.residuals_and_jacobian = residuals_of(all);
+  prob.same_residuals_with_jacobian = true;
   LsqProblem search = prob;
   search.num_residuals = static_cast<int>(sub.size());
   search.observed.clear();

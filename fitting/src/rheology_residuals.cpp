@@ -143,6 +143,7 @@ LsqProblem viscosity_problem(LsqProblem base, const ViscosityRows& rows, std::ve
   for (auto i : idx) base.observed.push_back(rows.ln_obs[i]);
   const std::size_t np = base.params.size();
   base.residuals = nullptr;
+  base.same_residuals_with_jacobian = true;
   base.residuals_and_jacobian = [&rows, idx = std::move(idx), ln_eta, np](const double* p, double* r, double* J) {
     for (std::size_t k = 0; k < idx.size(); ++k) {
       const auto i = idx[k];

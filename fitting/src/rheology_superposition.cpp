@@ -126,6 +126,7 @@ TtsResult time_temperature_superposition(const RheologyData& data, double T_ref_
   std::vector<std::size_t> all(n);
   for (std::size_t i = 0; i < n; ++i) all[i] = i;
   prob.residuals_and_jacobian = tts_residuals(rows, std::move(all), prob.params.size());
+  prob.same_residuals_with_jacobian = true;
   constexpr std::size_t kSearchPerLevel = 60;
   std::vector<std::vector<std::size_t>> rows_of(L);
   for (std::size_t i = 0; i < n; ++i) rows_of[level_of[i]].push_back(i);

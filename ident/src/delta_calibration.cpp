@@ -213,6 +213,7 @@ DeltaCalibration fit_delta_calibration(const DeltaGeometry& nominal, const std::
   prob.residuals_and_jacobian = [&eval, k](const double* p, double* r, double* jac) {
     return eval(std::vector<double>(p, p + k), r, jac);
   };
+  prob.same_residuals_with_jacobian = true;
   DeltaCalibration out;
   out.nominal = nominal;
   out.fit = fitting::solve_least_squares(fmt::format("delta_{}_factor", factors), prob);
