@@ -1,7 +1,9 @@
 #include "tunekit/fitting/least_squares.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -16,12 +18,65 @@
 namespace tunekit::fitting {
 namespace {
 
+// The last evaluations, served again bit for bit instead of recomputed (the residual functions
+// are pure). Ceres evaluates the same point more than once per iteration: with bounds, its
+// projected line search evaluates the trial point with the gradient (so with the Jacobian), then
+// the trial point's cost, and an accepted trial point with its Jacobian again. One evaluation
+// with a Jacobian is kept (one more copy of the Jacobian than Ceres holds) and two without.
+class EvaluationMemo {
+ public:
+  EvaluationMemo(int num_params, int num_residuals) : n_(num_params), m_(num_residuals) {}
+
+  // Copies a stored evaluation at x into r (and jac when not null). A Jacobian request needs
+  // the entry with a Jacobian; a residual request takes it only when `any_kind` (the residuals
+  // are computed the same way with and without the Jacobian).
+  bool find(const double* x, double* r, double* jac, bool any_kind) const {
+    if (same_point(with_jacobian_, x) && (jac != nullptr || any_kind)) {
+      copy_out(with_jacobian_, r, jac);
+      return true;
+    }
+    if (jac != nullptr) return false;
+    for (const auto& e : residuals_only_)
+      if (same_point(e, x)) {
+        copy_out(e, r, nullptr);
+        return true;
+      }
+    return false;
+  }
+
+  void store(const double* x, const double* r, const double* jac) {
+    Entry& e = jac != nullptr ? with_jacobian_ : residuals_only_[next_];
+    if (jac == nullptr) next_ = 1 - next_;
+    e.x.assign(x, x + n_);
+    e.r.assign(r, r + m_);
+    if (jac != nullptr) e.jac.assign(jac, jac + static_cast<std::size_t>(m_) * static_cast<std::size_t>(n_));
+  }
+
+ private:
+  struct Entry {
+    std::vector<double> x, r, jac;
+  };
+  bool same_point(const Entry& e, const double* x) const {
+    return !e.x.empty() && std::memcmp(e.x.data(), x, sizeof(double) * static_cast<std::size_t>(n_)) == 0;
+  }
+  static void copy_out(const Entry& e, double* r, double* jac) {
+    std::copy(e.r.begin(), e.r.end(), r);
+    if (jac != nullptr) std::copy(e.jac.begin(), e.jac.end(), jac);
+  }
+  int n_, m_;
+  Entry with_jacobian_;
+  std::array<Entry, 2> residuals_only_;
+  std::size_t next_ = 0;
+};
+
 // One residual block holding every residual, one parameter block holding every parameter.
 // Jacobians come from the model when it provides them, otherwise from central differences
-// (one-sided where a central step leaves the model's domain).
+// (one-sided where a central step leaves the model's domain). A fixed parameter's column is 0:
+// the solver and the covariance see only the free parameters' columns (SubsetManifold).
 class WholeProblemCost final : public ceres::CostFunction {
  public:
-  explicit WholeProblemCost(const LsqProblem& p) : prob_(p), n_(static_cast<int>(p.params.size())) {
+  explicit WholeProblemCost(const LsqProblem& p)
+      : prob_(p), n_(static_cast<int>(p.params.size())), memo_(n_, p.num_residuals) {
     set_num_residuals(p.num_residuals);
     mutable_parameter_block_sizes()->push_back(n_);
   }
@@ -29,12 +84,25 @@ class WholeProblemCost final : public ceres::CostFunction {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const double* x = parameters[0];
     double* jac = (jacobians != nullptr) ? jacobians[0] : nullptr;
+    const bool reusable = !prob_.residuals_and_jacobian || prob_.same_residuals_with_jacobian;
+    if (memo_.find(x, residuals, jac, reusable)) return true;
+    if (!compute(x, residuals, jac)) return false;
+    memo_.store(x, residuals, jac);
+    return true;
+  }
+
+ private:
+  bool compute(const double* x, double* residuals, double* jac) const {
     if (prob_.residuals_and_jacobian) return prob_.residuals_and_jacobian(x, residuals, jac);
     if (!prob_.residuals(x, residuals)) return false;
     if (jac == nullptr) return true;
     const int m = num_residuals();
     std::vector<double> xp(x, x + n_), rp(static_cast<std::size_t>(m)), rm(static_cast<std::size_t>(m));
     for (int j = 0; j < n_; ++j) {
+      if (prob_.params[static_cast<std::size_t>(j)].fixed) {
+        for (int i = 0; i < m; ++i) jac[i * n_ + j] = 0;
+        continue;
+      }
       const double h = 1e-6 * std::max(std::abs(x[j]), 1e-6);
       xp[j] = x[j] + h;
       const bool okp = prob_.residuals(xp.data(), rp.data());
@@ -54,9 +122,9 @@ class WholeProblemCost final : public ceres::CostFunction {
     return true;
   }
 
- private:
   const LsqProblem& prob_;
   int n_;
+  mutable EvaluationMemo memo_;
 };
 
 // Ceres reports through glog, which (never initialised by the program) writes ERROR lines such

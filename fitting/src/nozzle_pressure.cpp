@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/global_start.hpp"
@@ -137,6 +138,54 @@ PowerLawCoefficients holtrup_peek_power_law(double T) {
           0.17651020236319326 + T * 0.0008956157030695386};
 }
 
+namespace {
+
+// A drop at the consistency 1 and this flow, times K (Q / Q_ref)^n, is the drop at K and Q.
+constexpr double kNozzleReferenceFlow_m3_s = 1e-9;
+
+// Where the nozzle fit's parameters sit in its vector (-1: not fitted). ln K (or ln mu) is first.
+struct NozzleLayout {
+  int n = -1, Ea = -1, T_ref = -1;
+};
+
+// ln dP(1, n, Q_ref) and its derivative in n (fourth-order central differences: it is one
+// function of n, the same for every row). NaN when the model has no finite drop there.
+std::pair<double, double> ln_unit_drop(PressureModel model, double n, const NozzleGeometry& g, bool slope) {
+  const auto f = [&](double x) { return std::log(pressure_drop(model, 1.0, x, kNozzleReferenceFlow_m3_s, g)); };
+  const double v = f(n);
+  if (!slope || !std::isfinite(v)) return {v, 0.0};
+  const double h = 1e-4 * std::max(1.0, std::abs(n));
+  return {v, (8 * (f(n + h) - f(n - h)) - (f(n + 2 * h) - f(n - 2 * h))) / (12 * h)};
+}
+
+// Residuals ln dP_model - ln dP_measured of the rows idx, and their Jacobian when J is not null.
+// Every model's drop is homogeneous in K and the flow: dP(K, n, Q) = K (Q / Q_ref)^n dP(1, n,
+// Q_ref) (the power law's shear stress scales so; Hagen-Poiseuille is n = 1), so
+// ln dP = ln K + ln a_T + n ln(Q / Q_ref) + ln dP(1, n, Q_ref) costs arithmetic per row.
+bool nozzle_residuals(PressureModel model, const NozzleGeometry& g, const NozzleLayout& at, std::size_t np,
+                      const double* p, const std::vector<std::size_t>& idx, const std::vector<double>& ln_flow,
+                      const std::vector<double>& T, const std::vector<double>& ln_obs, double* r, double* J) {
+  const double n = at.n >= 0 ? p[at.n] : 1.0;
+  const auto [c, dc] = ln_unit_drop(model, n, g, J != nullptr && at.n >= 0);
+  if (!std::isfinite(c) || !std::isfinite(dc)) return false;
+  const double Ea = at.Ea >= 0 ? p[at.Ea] : 0.0, T_ref = at.T_ref >= 0 ? p[at.T_ref] : 1.0;
+  for (std::size_t k = 0; k < idx.size(); ++k) {
+    const std::size_t i = idx[k];
+    const double w = at.Ea >= 0 ? (1.0 / T[i] - 1.0 / T_ref) / kGasConstant : 0.0;  // d ln a_T / d Ea
+    r[k] = p[0] + Ea * w + n * ln_flow[i] + c - ln_obs[i];
+    if (!std::isfinite(r[k])) return false;
+    if (J == nullptr) continue;
+    double* row = J + k * np;
+    row[0] = 1.0;
+    if (at.n >= 0) row[at.n] = ln_flow[i] + dc;
+    if (at.Ea >= 0) row[at.Ea] = w;
+    if (at.T_ref >= 0) row[at.T_ref] = Ea / (kGasConstant * T_ref * T_ref);
+  }
+  return true;
+}
+
+}  // namespace
+
 FitResult fit_nozzle_rheology(const NozzleFlowData& d, PressureModel model, const NozzleGeometry& g, double T_ref_K) {
   validate(g);
   const std::size_t n = d.flow_m3_s.size();
@@ -174,23 +223,18 @@ FitResult fit_nozzle_rheology(const NozzleFlowData& d, PressureModel model, cons
                      " free parameters; need more measurements than parameters");
   prob.num_residuals = static_cast<int>(n);
   prob.residuals_are_time_ordered = false;
-  std::vector<double> ln_obs(n);
-  for (std::size_t i = 0; i < n; ++i) ln_obs[i] = std::log(d.pressure_Pa[i]);
+  std::vector<double> ln_obs(n), ln_flow(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    ln_obs[i] = std::log(d.pressure_Pa[i]);
+    ln_flow[i] = std::log(d.flow_m3_s[i] / kNozzleReferenceFlow_m3_s);
+  }
   prob.observed = ln_obs;
+  const NozzleLayout at{newtonian ? -1 : 1, shifted ? (newtonian ? 1 : 2) : -1, shifted ? (newtonian ? 2 : 3) : -1};
   // Residuals of the rows `idx`: every row for the fit, an evenly strided subset for the start
   // search (which only has to find the basin; the final least squares sees every row).
-  const auto residuals_of = [&, newtonian, shifted](const std::vector<std::size_t>& idx) {
-    return [&, newtonian, shifted, idx](const double* p, double* r) {
-      for (std::size_t k = 0; k < idx.size(); ++k) {
-        const std::size_t i = idx[k];
-        double K = std::exp(p[0]);
-        if (shifted) K *= arrhenius_shift(d.temperature_K[i], p[2], p[3]);
-        const double nn = newtonian ? 1.0 : p[1];
-        const double dp = pressure_drop(model, K, nn, d.flow_m3_s[i], g);
-        if (!(dp > 0) || !std::isfinite(dp)) return false;
-        r[k] = std::log(dp) - ln_obs[i];
-      }
-      return true;
+  const auto residuals_of = [&, np = prob.params.size()](const std::vector<std::size_t>& idx) {
+    return [&, np, idx](const double* p, double* r, double* J) {
+      return nozzle_residuals(model, g, at, np, p, idx, ln_flow, d.temperature_K, ln_obs, r, J);
     };
   };
   std::vector<std::size_t> all(n), sub;
@@ -199,12 +243,13 @@ FitResult fit_nozzle_rheology(const NozzleFlowData& d, PressureModel model, cons
   if (n > kMaxSearch)
     for (std::size_t k = 0; k < kMaxSearch; ++k) sub.push_back(k * n / kMaxSearch);
   else sub = all;
-  prob.residuals = residuals_of(all);
+  prob.residuals_and_jacobian = residuals_of(all);
+  prob.same_residuals_with_jacobian = true;
   LsqProblem search = prob;
   search.num_residuals = static_cast<int>(sub.size());
   search.observed.clear();
   for (std::size_t i : sub) search.observed.push_back(ln_obs[i]);
-  search.residuals = residuals_of(sub);
+  search.residuals_and_jacobian = residuals_of(sub);
   std::string name = "nozzle-" + to_string(model) + (newtonian ? "/newtonian" : "/power-law");
   if (shifted) name += "+arrhenius";
   auto fit = solve_with_global_start(name, prob, {}, {}, &search);

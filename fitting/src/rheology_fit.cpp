@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include <boost/math/distributions/fisher_f.hpp>
 
@@ -107,21 +108,26 @@ using rheology_detail::default_T_ref;
 using rheology_detail::finish_params;
 using rheology_detail::free_count;
 using rheology_detail::kInf;
+using rheology_detail::LnViscosity;
 using rheology_detail::PSpec;
 using rheology_detail::stats_of;
 using rheology_detail::strf;
 using rheology_detail::validate_data;
+using rheology_detail::viscosity_problem;
+using rheology_detail::ViscosityProblem;
+using rheology_detail::ViscosityRows;
 
 // |correlation| above which Cross-WLF's temperature parameters are reported as a ridge.
 constexpr double kRidgeCorrelation = 0.99;
 
 // Viscosity from public values in the order of `names` (model names, shift names, T_ref_K).
 struct Evaluator {
+  Evaluator(ViscosityModel m, TemperatureShift s) : model(m), shift(s), k(viscosity_param_names(m).size()) {}
   ViscosityModel model;
   TemperatureShift shift;
+  std::size_t k;  // where the shift's values start (the model's parameter count)
   double operator()(const double* v, double g, double T, double p) const {
     double aT = 1.0;
-    std::size_t k = viscosity_param_names(model).size();
     if (shift == TemperatureShift::arrhenius) aT = arrhenius_shift(T, v[k], v[k + 1]);
     else if (shift == TemperatureShift::wlf) aT = wlf_shift(T, v[k], v[k + 1], v[k + 2]);
     switch (model) {
@@ -212,18 +218,18 @@ std::vector<double> RheologyData::temperature_levels_K() const {
   return levels;
 }
 
-FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) {
-  validate_data(data);
-  const auto st = stats_of(data);
-  const std::string name = ViscositySpec{o.model, o.shift, {}}.name();
+namespace {
+
+// The data's temperatures must suit the model: one without a shift, or as many as its
+// temperature parameters. InputError naming the model otherwise.
+void check_temperatures(const ViscosityFitOptions& o, const DataStats& st, const std::vector<PSpec>& specs,
+                        const std::string& name, std::size_t points) {
   const bool temp_model = o.model == ViscosityModel::cross_wlf || o.shift != TemperatureShift::none;
   if (!temp_model && st.levels.size() > 1)
     throw InputError(
         strf("%s: the data hold %zu temperatures (%.2f..%.2f K); a model without a temperature "
              "shift needs data at one temperature (choose a shift: arrhenius or wlf)",
              name.c_str(), st.levels.size(), st.levels.front(), st.levels.back()));
-  const double T_ref = std::isfinite(o.T_ref_K) ? o.T_ref_K : default_T_ref(st.levels);
-  const auto specs = default_specs(o, st, T_ref);
   if (temp_model) {
     // Parameters of the temperature dependence; the data need at least that many temperatures.
     int t_params = 0;
@@ -246,12 +252,140 @@ FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) 
                name.c_str(), t_params, t_params, st.levels.size()));
   }
   const int k = free_count(specs);
-  if (static_cast<int>(data.size()) <= k)
-    throw InputError(strf("%s: %zu data points for %d free parameters; need more points than parameters", name.c_str(),
-                          data.size(), k));
+  if (static_cast<int>(points) <= k)
+    throw InputError(
+        strf("%s: %zu data points for %d free parameters; need more points than parameters", name.c_str(), points, k));
+}
 
+// What the data determine even when the temperature parameters are not separately
+// identifiable: derived viscosities with delta-method intervals (FitResult::derived).
+void add_derived_viscosities(FitResult& fit, const RheologyData& data, const ViscosityFitOptions& o,
+                             const ViscosityProblem& vp) {
+  const auto& specs = vp.specs;
+  const auto& st = vp.stats;
+  const std::size_t n = data.size();
+  // At each measured temperature the zero-shear viscosity (not for the power law, which has
+  // none) and the viscosity at the median measured shear rate: smooth functions of the
+  // parameters, so their linearised (delta-method) intervals on ln hold.
+  if (st.levels.size() < 2 || fit.covariance.size() != specs.size() * specs.size()) return;
+  const Evaluator ev{o.model, o.shift};
+  std::vector<bool> is_log;
+  for (const auto& s : specs) is_log.push_back(s.log);
+  const std::size_t np = specs.size();
+  std::vector<double> x(np);
+  for (std::size_t j = 0; j < np; ++j) x[j] = fit.params[j].value;
+  double p_mean = 0;
+  for (double v : data.pressure_Pa) p_mean += v / static_cast<double>(data.pressure_Pa.size());
+  auto ln_eta = [&](const std::vector<double>& q, double g, double T) {
+    double v[12];
+    for (std::size_t j = 0; j < np; ++j) v[j] = is_log[j] ? std::exp(q[j]) : q[j];
+    return std::log(ev(v, g, T, p_mean));
+  };
+  const int dof = fit.diagnostics.num_observations - fit.diagnostics.num_parameters;
+  const double tq = t_multiplier(0.95, dof);
+  auto add = [&](const std::string& qname, double g, double T) {
+    std::vector<double> grad(np, 0.0);
+    for (std::size_t j = 0; j < np; ++j) {
+      if (fit.params[j].fixed) continue;
+      const double h = 1e-6 * std::max(1.0, std::abs(x[j]));
+      auto xp = x, xm = x;
+      xp[j] += h;
+      xm[j] -= h;
+      grad[j] = (ln_eta(xp, g, T) - ln_eta(xm, g, T)) / (2 * h);
+    }
+    double var = 0;
+    for (std::size_t a = 0; a < np; ++a)
+      for (std::size_t b = 0; b < np; ++b) var += grad[a] * fit.covariance[a * np + b] * grad[b];
+    const double l = ln_eta(x, g, T), se = std::sqrt(std::max(var, 0.0));
+    Param q;
+    q.name = qname;
+    q.unit = "Pa.s";
+    q.value = std::exp(l);
+    q.std_error = q.value * se;
+    q.ci95_lo = std::exp(l - tq * se);
+    q.ci95_hi = std::exp(l + tq * se);
+    q.ci95_method = "wald";
+    if (std::isfinite(q.value) && std::isfinite(q.std_error) && std::isfinite(q.ci95_lo) && std::isfinite(q.ci95_hi))
+      fit.derived.push_back(q);
+  };
+  for (double T : st.levels) {
+    std::vector<double> gs;
+    for (std::size_t i = 0; i < n; ++i)
+      if (std::abs(data.temperature_K[i] - T) <= 0.05 + 1e-9) gs.push_back(data.shear_rate_1_s[i]);
+    std::sort(gs.begin(), gs.end());
+    const double g_med = gs[(gs.size() - 1) / 2];
+    if (o.model != ViscosityModel::power_law) add(strf("eta0_Pa_s_at_%.2fK", T), 1e-30, T);
+    add(strf("eta_Pa_s_at_%.2fK_%.4g_per_s", T, g_med), g_med, T);
+  }
+}
+
+// The WLF ridge warning of Cross-WLF (D1, D2, A1 trade off with few temperatures).
+void add_ridge_warning(FitResult& fit, const std::vector<PSpec>& specs, const DataStats& st) {
+  std::vector<std::size_t> t_idx;
+  for (std::size_t j = 0; j < specs.size(); ++j)
+    if (!specs[j].fixed &&
+        (specs[j].name == "D1_Pa_s" || specs[j].name == "D2_K" || specs[j].name == "A1" || specs[j].name == "A2_K"))
+      t_idx.push_back(j);
+  double max_r = 0;
+  for (std::size_t a = 0; a < t_idx.size(); ++a)
+    for (std::size_t b = a + 1; b < t_idx.size(); ++b)
+      max_r = std::max(max_r, std::abs(correlation(fit, t_idx[a], t_idx[b])));
+  const bool d2_free = std::any_of(t_idx.begin(), t_idx.end(), [&](std::size_t j) { return specs[j].name == "D2_K"; });
+  if (d2_free && t_idx.size() >= 2 && max_r > kRidgeCorrelation) {
+    std::string names;
+    for (auto j : t_idx) names += (names.empty() ? "" : ", ") + specs[j].name;
+    fit.warnings.push_back(
+        strf("%s are not separately identifiable from %zu temperatures (correlation up to %.4f); fix "
+             "D2_K at the polymer's glass transition (--fix D2_K=...), or measure more temperatures. "
+             "What the data determine: n, tau_star_Pa and the viscosity at each measured temperature "
+             "(derived; the zero-shear viscosity where the data reach the plateau)",
+             names.c_str(), st.levels.size(), max_r));
+  }
+}
+
+// `base` with the residuals of the points idx through the public viscosity functions
+// (viscosity.hpp), for the start search: it needs no derivatives, and the least squares after it
+// uses the same function in logarithms with its analytic Jacobian (LnViscosity). Cross-WLF's
+// search uses that ln form too.
+LsqProblem search_problem(LsqProblem base, const RheologyData& data, const ViscosityRows& rows,
+                          std::vector<std::size_t> idx, const ViscosityFitOptions& o, const std::vector<PSpec>& specs) {
+  if (o.model == ViscosityModel::cross_wlf)
+    return viscosity_problem(std::move(base), rows, std::move(idx), LnViscosity(o.model, o.shift));
+  base.num_residuals = static_cast<int>(idx.size());
+  base.observed.clear();
+  for (auto i : idx) base.observed.push_back(rows.ln_obs[i]);
+  std::vector<bool> is_log;
+  for (const auto& s : specs) is_log.push_back(s.log);
+  base.residuals_and_jacobian = nullptr;
+  base.residuals = [&data, &rows, ev = Evaluator{o.model, o.shift}, is_log, idx](const double* p, double* r) {
+    double v[12];
+    for (std::size_t j = 0; j < is_log.size(); ++j) v[j] = is_log[j] ? std::exp(p[j]) : p[j];
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      const auto i = idx[k];
+      const double e = ev(v, data.shear_rate_1_s[i], data.temperature_K[i], rows.pressure[i]);
+      if (!(e > 0) || !std::isfinite(e)) return false;
+      r[k] = rows.sw[i] * (std::log(e) - rows.ln_obs[i]);
+    }
+    return true;
+  };
+  return base;
+}
+
+}  // namespace
+
+namespace rheology_detail {
+
+std::unique_ptr<ViscosityProblem> viscosity_problem_for(const RheologyData& data, const ViscosityFitOptions& o) {
+  validate_data(data);
+  auto vp = std::make_unique<ViscosityProblem>();
+  vp->stats = stats_of(data);
+  const auto& st = vp->stats;
+  vp->name = ViscositySpec{o.model, o.shift, {}}.name();
+  const double T_ref = std::isfinite(o.T_ref_K) ? o.T_ref_K : default_T_ref(st.levels);
+  vp->specs = default_specs(o, st, T_ref);
+  check_temperatures(o, st, vp->specs, vp->name, data.size());
   LsqProblem prob;
-  for (const auto& s : specs) {
+  for (const auto& s : vp->specs) {
     ParamSpec ps{s.name,
                  s.unit,
                  s.log ? std::log(s.start) : s.start,
@@ -261,73 +395,10 @@ FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) 
     if (s.fixed) ps.lower = -kInf, ps.upper = kInf;
     prob.params.push_back(ps);
   }
-  const std::size_t n = data.size();
-  prob.num_residuals = static_cast<int>(n);
-  std::vector<double> ln_obs(n), sw(n, 1.0), ln_g(n);
-  for (std::size_t i = 0; i < n; ++i) ln_g[i] = std::log(data.shear_rate_1_s[i]);
-  for (std::size_t i = 0; i < n; ++i) {
-    ln_obs[i] = std::log(data.viscosity_Pa_s[i]);
-    if (!data.weight.empty()) sw[i] = std::sqrt(data.weight[i]);
-  }
-  prob.observed = ln_obs;
   prob.residuals_are_time_ordered = false;
-  const Evaluator ev{o.model, o.shift};
-  std::vector<bool> is_log;
-  for (const auto& s : specs) is_log.push_back(s.log);
-  const bool cwlf = o.model == ViscosityModel::cross_wlf;
-  // Residuals (and for Cross-WLF the analytic Jacobian) over a subset `idx` of the points.
-  auto make = [&, ev, is_log, cwlf](std::vector<std::size_t> idx) {
-    LsqProblem q = prob;
-    q.num_residuals = static_cast<int>(idx.size());
-    q.observed.clear();
-    for (auto i : idx) q.observed.push_back(ln_obs[i]);
-    if (!cwlf) {
-      q.residuals = [&, ev, is_log, idx](const double* p, double* r) {
-        double v[12];
-        for (std::size_t j = 0; j < is_log.size(); ++j) v[j] = is_log[j] ? std::exp(p[j]) : p[j];
-        for (std::size_t k = 0; k < idx.size(); ++k) {
-          const auto i = idx[k];
-          const double e = ev(v, data.shear_rate_1_s[i], data.temperature_K[i],
-                              data.pressure_Pa.empty() ? 0.0 : data.pressure_Pa[i]);
-          if (!(e > 0) || !std::isfinite(e)) return false;
-          r[k] = sw[i] * (std::log(e) - ln_obs[i]);
-        }
-        return true;
-      };
-    } else {
-      // Internal order: n, ln tau*, ln D1, D2, D3, A1, A2.
-      q.residuals_and_jacobian = [&, idx](const double* p, double* r, double* J) {
-        const double n = p[0], ln_ts = p[1], ln_d1 = p[2], D2 = p[3], D3 = p[4], A1 = p[5], A2 = p[6];
-        for (std::size_t k = 0; k < idx.size(); ++k) {
-          const auto i = idx[k];
-          const double pr = data.pressure_Pa.empty() ? 0.0 : data.pressure_Pa[i];
-          const double T = data.temperature_K[i];
-          const double x = T - D2 - D3 * pr, den = A2 + D3 * pr + x;
-          if (!(den > 0)) return false;
-          const double ln_eta0 = ln_d1 - A1 * x / den;
-          const double L = ln_eta0 + ln_g[i] - ln_ts;
-          const double u = std::exp((1 - n) * L);
-          if (!std::isfinite(u)) return false;
-          const double ln_eta = ln_eta0 - std::log1p(u);
-          r[k] = sw[i] * (ln_eta - ln_obs[i]);
-          if (!std::isfinite(r[k])) return false;
-          if (J != nullptr) {
-            const double s = u / (1 + u), c0 = 1 - (1 - n) * s;
-            double* row = J + 7 * k;
-            row[0] = sw[i] * s * L;
-            row[1] = sw[i] * (1 - n) * s;
-            row[2] = sw[i] * c0;
-            row[3] = sw[i] * c0 * A1 * (A2 + D3 * pr) / (den * den);
-            row[4] = sw[i] * c0 * A1 * pr / den;
-            row[5] = sw[i] * c0 * (-x / den);
-            row[6] = sw[i] * c0 * A1 * x / (den * den);
-          }
-        }
-        return true;
-      };
-    }
-    return q;
-  };
+  vp->rows = viscosity_rows(data);
+  const LnViscosity ln_eta(o.model, o.shift);
+  const std::size_t n = data.size();
   std::vector<std::size_t> all(n), sub;
   for (std::size_t i = 0; i < n; ++i) all[i] = i;
   const std::size_t max_search = 120;  // the search only has to find the basin
@@ -336,197 +407,35 @@ FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) 
   } else {
     sub = all;
   }
-  prob = make(all);
-  const LsqProblem search = make(sub);
-  auto fit = solve_with_global_start(name, prob, o.global, o.lsq, &search);
-  if (o.profile_intervals) apply_profile_intervals(prob, fit, o.profile);
-  if (st.levels.size() > 1 && fit.covariance.size() == specs.size() * specs.size()) {
-    // What the data determine even when the temperature parameters are not separately
-    // identifiable: at each measured temperature the zero-shear viscosity (not for the power
-    // law, which has none) and the viscosity at the median measured shear rate. Smooth functions
-    // of the parameters, so their linearised (delta-method) intervals on ln hold.
-    const std::size_t np = specs.size();
-    std::vector<double> x(np);
-    for (std::size_t j = 0; j < np; ++j) x[j] = fit.params[j].value;
-    double p_mean = 0;
-    for (double v : data.pressure_Pa) p_mean += v / static_cast<double>(data.pressure_Pa.size());
-    auto ln_eta = [&](const std::vector<double>& q, double g, double T) {
-      double v[12];
-      for (std::size_t j = 0; j < np; ++j) v[j] = is_log[j] ? std::exp(q[j]) : q[j];
-      return std::log(ev(v, g, T, p_mean));
-    };
-    const int dof = fit.diagnostics.num_observations - fit.diagnostics.num_parameters;
-    const double tq = t_multiplier(0.95, dof);
-    auto add = [&](const std::string& qname, double g, double T) {
-      std::vector<double> grad(np, 0.0);
-      for (std::size_t j = 0; j < np; ++j) {
-        if (fit.params[j].fixed) continue;
-        const double h = 1e-6 * std::max(1.0, std::abs(x[j]));
-        auto xp = x, xm = x;
-        xp[j] += h;
-        xm[j] -= h;
-        grad[j] = (ln_eta(xp, g, T) - ln_eta(xm, g, T)) / (2 * h);
-      }
-      double var = 0;
-      for (std::size_t a = 0; a < np; ++a)
-        for (std::size_t b = 0; b < np; ++b) var += grad[a] * fit.covariance[a * np + b] * grad[b];
-      const double l = ln_eta(x, g, T), se = std::sqrt(std::max(var, 0.0));
-      Param q;
-      q.name = qname;
-      q.unit = "Pa.s";
-      q.value = std::exp(l);
-      q.std_error = q.value * se;
-      q.ci95_lo = std::exp(l - tq * se);
-      q.ci95_hi = std::exp(l + tq * se);
-      q.ci95_method = "wald";
-      if (std::isfinite(q.value) && std::isfinite(q.std_error) && std::isfinite(q.ci95_lo) && std::isfinite(q.ci95_hi))
-        fit.derived.push_back(q);
-    };
-    for (double T : st.levels) {
-      std::vector<double> gs;
-      for (std::size_t i = 0; i < n; ++i)
-        if (std::abs(data.temperature_K[i] - T) <= 0.05 + 1e-9) gs.push_back(data.shear_rate_1_s[i]);
-      std::sort(gs.begin(), gs.end());
-      const double g_med = gs[(gs.size() - 1) / 2];
-      if (o.model != ViscosityModel::power_law) add(strf("eta0_Pa_s_at_%.2fK", T), 1e-30, T);
-      add(strf("eta_Pa_s_at_%.2fK_%.4g_per_s", T, g_med), g_med, T);
-    }
-  }
-  if (cwlf) {
-    // The WLF ridge: with few temperatures D1, D2 and A1 trade off against each other.
-    std::vector<std::size_t> t_idx;
-    for (std::size_t j = 0; j < specs.size(); ++j)
-      if (!specs[j].fixed &&
-          (specs[j].name == "D1_Pa_s" || specs[j].name == "D2_K" || specs[j].name == "A1" || specs[j].name == "A2_K"))
-        t_idx.push_back(j);
-    double max_r = 0;
-    for (std::size_t a = 0; a < t_idx.size(); ++a)
-      for (std::size_t b = a + 1; b < t_idx.size(); ++b)
-        max_r = std::max(max_r, std::abs(correlation(fit, t_idx[a], t_idx[b])));
-    const bool d2_free =
-        std::any_of(t_idx.begin(), t_idx.end(), [&](std::size_t j) { return specs[j].name == "D2_K"; });
-    if (d2_free && t_idx.size() >= 2 && max_r > kRidgeCorrelation) {
-      std::string names;
-      for (auto j : t_idx) names += (names.empty() ? "" : ", ") + specs[j].name;
-      fit.warnings.push_back(
-          strf("%s are not separately identifiable from %zu temperatures (correlation up to %.4f); fix "
-               "D2_K at the polymer's glass transition (--fix D2_K=...), or measure more temperatures. "
-               "What the data determine: n, tau_star_Pa and the viscosity at each measured temperature "
-               "(derived; the zero-shear viscosity where the data reach the plateau)",
-               names.c_str(), st.levels.size(), max_r));
-    }
-  }
-  finish_params(fit, specs);
+  vp->search = search_problem(prob, data, vp->rows, sub, o, vp->specs);
+  vp->all = viscosity_problem(std::move(prob), vp->rows, std::move(all), ln_eta);
+  return vp;
+}
+
+FitResult finish_viscosity_fit(const RheologyData& data, const ViscosityFitOptions& o, const ViscosityProblem& vp,
+                               FitResult fit) {
+  if (o.profile_intervals) apply_profile_intervals(vp.all, fit, o.profile);
+  add_derived_viscosities(fit, data, o, vp);
+  if (o.model == ViscosityModel::cross_wlf) add_ridge_warning(fit, vp.specs, vp.stats);
+  finish_params(fit, vp.specs);
   return fit;
+}
+
+FitResult solve_viscosity(const ViscosityProblem& vp, const ViscosityFitOptions& o) {
+  return solve_with_global_start(vp.name, vp.all, o.global, o.lsq, &vp.search);
+}
+
+}  // namespace rheology_detail
+
+FitResult fit_viscosity(const RheologyData& data, const ViscosityFitOptions& o) {
+  const auto vp = rheology_detail::viscosity_problem_for(data, o);
+  return rheology_detail::finish_viscosity_fit(data, o, *vp, rheology_detail::solve_viscosity(*vp, o));
 }
 
 ViscositySpec spec_from_fit(const FitResult& fit) {
   ViscositySpec s = parse_viscosity_spec_name(fit.model);
   for (const auto& p : fit.params) s.values[p.name] = p.value;
   return s;
-}
-
-std::vector<ViscosityFitOptions> default_candidates(const RheologyData& data, const ViscosityFitOptions& base) {
-  std::vector<ViscosityFitOptions> c;
-  const bool multi = data.temperature_levels_K().size() > 1;
-  for (auto m :
-       {ViscosityModel::newtonian, ViscosityModel::power_law, ViscosityModel::cross, ViscosityModel::carreau_yasuda}) {
-    ViscosityFitOptions o = base;
-    o.fixed.clear();
-    o.free.clear();
-    o.model = m;
-    o.shift = multi ? TemperatureShift::arrhenius : TemperatureShift::none;
-    c.push_back(o);
-    if (multi && m == ViscosityModel::cross) {
-      o.shift = TemperatureShift::wlf;
-      c.push_back(o);
-    }
-  }
-  if (multi) {
-    ViscosityFitOptions o = base;
-    o.fixed.clear();
-    o.free.clear();
-    o.model = ViscosityModel::cross_wlf;
-    o.shift = TemperatureShift::none;
-    c.push_back(o);
-  }
-  return c;
-}
-
-ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates) {
-  ModelComparison c;
-  double best = kInf;
-  // The candidates are ranked by AIC, which needs no intervals: profile-likelihood intervals
-  // (many refits each) are computed only for the winner, refitted below with its own options.
-  for (const auto& candidate : candidates) {
-    ViscosityFitOptions o = candidate;
-    o.profile_intervals = false;
-    ModelComparisonEntry e;
-    e.model = ViscositySpec{o.model, o.shift, {}}.name();
-    FitResult fit;
-    try {
-      fit = fit_viscosity(data, o);
-      e.ok = true;
-      e.num_parameters = fit.diagnostics.num_parameters;
-      e.aic = fit.diagnostics.aic;
-      e.bic = fit.diagnostics.bic;
-      e.rms_ln = fit.diagnostics.rms;
-      if (!std::isfinite(e.aic)) {
-        e.ok = false;
-        e.error = strf("fitted, but its AIC is not finite (rss %g)", fit.diagnostics.rss);
-      }
-    } catch (const Error& err) {
-      e.error = err.message();
-    } catch (const std::exception& err) {
-      e.error = err.what();
-    }
-    if (!e.ok && e.error.empty()) e.error = "the fit failed without giving a reason";
-    if (!e.ok) fit = FitResult{};
-    if (e.ok && e.aic < best) best = e.aic, c.best = e.model;
-    c.entries.push_back(e);
-    c.fits.push_back(fit);
-  }
-  for (std::size_t i = 0; i < c.entries.size(); ++i)
-    if (c.entries[i].model == c.best && candidates[i].profile_intervals) {
-      try {
-        c.fits[i] = fit_viscosity(data, candidates[i]);
-      } catch (const Error&) {
-        // Keep the fit without profile intervals (its linearised intervals stand).
-      }
-      break;
-    }
-  double wsum = 0;
-  for (auto& e : c.entries)
-    if (e.ok) {
-      e.delta_aic = e.aic - best;
-      wsum += std::exp(-0.5 * e.delta_aic);
-    }
-  for (auto& e : c.entries)
-    if (e.ok) e.akaike_weight = std::exp(-0.5 * e.delta_aic) / wsum;
-  return c;
-}
-
-nlohmann::json to_json(const ModelComparison& c) {
-  nlohmann::json j;
-  j["criterion"] = "AIC on ln(viscosity) residuals (n ln(rss/n) + 2k)";
-  j["best"] = c.best;
-  nlohmann::json arr = nlohmann::json::array();
-  for (const auto& e : c.entries) {
-    nlohmann::json x{{"model", e.model}, {"ok", e.ok}};
-    if (e.ok) {
-      x["num_parameters"] = e.num_parameters;
-      x["aic"] = e.aic;
-      x["bic"] = e.bic;
-      x["delta_aic"] = e.delta_aic;
-      x["akaike_weight"] = e.akaike_weight;
-      x["rms_ln_viscosity"] = e.rms_ln;
-    } else {
-      x["error"] = e.error;
-    }
-    arr.push_back(x);
-  }
-  j["models"] = arr;
-  return j;
 }
 
 FitResult fit_power_law_window(const ViscositySpec& v, double T, double lo, double hi, int points, double pressure) {

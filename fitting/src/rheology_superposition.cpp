@@ -23,10 +23,57 @@ using rheology_detail::default_T_ref;
 using rheology_detail::finish_params;
 using rheology_detail::free_count;
 using rheology_detail::kInf;
+using rheology_detail::ln_cross_viscosity;
 using rheology_detail::PSpec;
 using rheology_detail::stats_of;
 using rheology_detail::strf;
 using rheology_detail::validate_data;
+
+// What the master curve's residuals read: each point's temperature level, the index of each
+// level's ln a_T parameter (-1 at the reference), ln viscosity and ln shear rate.
+struct TtsRows {
+  const RheologyData& data;
+  std::vector<std::size_t> level_of;
+  std::vector<int> shift_index;
+  std::vector<double> ln_obs, ln_g;
+};
+
+// Residuals ln eta - ln eta_observed of the points idx on the master curve (Cross at T_ref with
+// eta0 a_T at each other level; parameters ln eta0, ln tau*, n, ln a_T...) and their Jacobian.
+ResidualJacobianFunction tts_residuals(const TtsRows& rows, std::vector<std::size_t> idx, std::size_t np) {
+  return [&rows, idx = std::move(idx), np](const double* p, double* r, double* J) {
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      const std::size_t i = idx[k];
+      const int si = rows.shift_index[rows.level_of[i]];
+      double d[3];
+      r[k] = ln_cross_viscosity(p[0] + (si < 0 ? 0.0 : p[si]), rows.ln_g[i], p[1], p[2], J != nullptr ? d : nullptr) -
+             rows.ln_obs[i];
+      if (!std::isfinite(r[k])) return false;
+      if (J == nullptr) continue;
+      double* row = J + np * k;
+      std::fill(row, row + np, 0.0);
+      std::copy(d, d + 3, row);
+      if (si >= 0) row[si] = d[0];  // ln a_T enters as ln eta0 does
+    }
+    return true;
+  };
+}
+
+// The same residuals through cross_viscosity, for the start search (which needs no derivatives).
+ResidualFunction tts_search_residuals(const TtsRows& rows, std::vector<std::size_t> idx) {
+  return [&rows, idx = std::move(idx)](const double* p, double* r) {
+    const double eta0 = std::exp(p[0]), ts = std::exp(p[1]), nn = p[2];
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      const std::size_t i = idx[k];
+      const int si = rows.shift_index[rows.level_of[i]];
+      const double a = si < 0 ? 1.0 : std::exp(p[si]);
+      const double e = cross_viscosity(eta0 * a, ts, nn, rows.data.shear_rate_1_s[i]);
+      if (!(e > 0) || !std::isfinite(e)) return false;
+      r[k] = std::log(e) - rows.ln_obs[i];
+    }
+    return true;
+  };
+}
 
 }  // namespace
 
@@ -70,42 +117,31 @@ TtsResult time_temperature_superposition(const RheologyData& data, double T_ref_
                            s.log ? std::log(s.hi) : s.hi});
   prob.num_residuals = static_cast<int>(n);
   prob.residuals_are_time_ordered = false;
-  std::vector<double> ln_obs(n);
-  for (std::size_t i = 0; i < n; ++i) ln_obs[i] = std::log(data.viscosity_Pa_s[i]);
-  prob.observed = ln_obs;
-  // Residuals of the rows `idx` (every row for the fit; an evenly strided subset of each
-  // temperature for the start search, which only has to find the basin).
-  const auto residuals_of = [&](const std::vector<std::size_t>& idx) {
-    return [&, idx](const double* p, double* r) {
-      const double eta0 = std::exp(p[0]), ts = std::exp(p[1]), nn = p[2];
-      for (std::size_t k = 0; k < idx.size(); ++k) {
-        const std::size_t i = idx[k];
-        const int si = shift_index[level_of[i]];
-        const double a = si < 0 ? 1.0 : std::exp(p[si]);
-        const double e = cross_viscosity(eta0 * a, ts, nn, data.shear_rate_1_s[i]);
-        if (!(e > 0) || !std::isfinite(e)) return false;
-        r[k] = std::log(e) - ln_obs[i];
-      }
-      return true;
-    };
-  };
+  TtsRows rows{data, level_of, shift_index, {}, {}};
+  for (std::size_t i = 0; i < n; ++i) {
+    rows.ln_obs.push_back(std::log(data.viscosity_Pa_s[i]));
+    rows.ln_g.push_back(std::log(data.shear_rate_1_s[i]));
+  }
+  prob.observed = rows.ln_obs;
   std::vector<std::size_t> all(n);
   for (std::size_t i = 0; i < n; ++i) all[i] = i;
-  prob.residuals = residuals_of(all);
+  prob.residuals_and_jacobian = tts_residuals(rows, std::move(all), prob.params.size());
+  prob.same_residuals_with_jacobian = true;
   constexpr std::size_t kSearchPerLevel = 60;
   std::vector<std::vector<std::size_t>> rows_of(L);
   for (std::size_t i = 0; i < n; ++i) rows_of[level_of[i]].push_back(i);
   std::vector<std::size_t> sub;
-  for (const auto& rows : rows_of) {
-    const std::size_t m = std::min(rows.size(), kSearchPerLevel);
-    for (std::size_t j = 0; j < m; ++j) sub.push_back(rows[j * rows.size() / m]);
+  for (const auto& level_rows : rows_of) {
+    const std::size_t m = std::min(level_rows.size(), kSearchPerLevel);
+    for (std::size_t j = 0; j < m; ++j) sub.push_back(level_rows[j * level_rows.size() / m]);
   }
   std::sort(sub.begin(), sub.end());
   LsqProblem search = prob;
   search.num_residuals = static_cast<int>(sub.size());
   search.observed.clear();
-  for (std::size_t i : sub) search.observed.push_back(ln_obs[i]);
-  search.residuals = residuals_of(sub);
+  for (std::size_t i : sub) search.observed.push_back(rows.ln_obs[i]);
+  search.residuals_and_jacobian = nullptr;
+  search.residuals = tts_search_residuals(rows, sub);
   t.reference_fit = solve_with_global_start("cross+tts", prob, {}, {}, &search);
   finish_params(t.reference_fit, specs);
   t.reference_fit.params.push_back({"T_ref_K", t.T_ref_K, kNaN, kNaN, kNaN, "K", true});

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <string>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -19,6 +21,77 @@ bool delta_factor_supported(int f) {
 }
 
 double delta_mean_rod(const DeltaGeometry& g) { return (g.rod_mm[0] + g.rod_mm[1] + g.rod_mm[2]) / 3.0; }
+
+// The factors of delta_factor_names, in its order.
+enum class DeltaFactorKind { endstop_a, endstop_b, endstop_c, radius, angle_a, angle_b, rod, tilt_x, tilt_y };
+
+std::vector<DeltaFactorKind> delta_factor_kinds(const std::vector<std::string>& names) {
+  static const std::pair<const char*, DeltaFactorKind> table[] = {
+      {"endstop_a", DeltaFactorKind::endstop_a}, {"endstop_b", DeltaFactorKind::endstop_b},
+      {"endstop_c", DeltaFactorKind::endstop_c}, {"delta_radius", DeltaFactorKind::radius},
+      {"angle_a", DeltaFactorKind::angle_a},     {"angle_b", DeltaFactorKind::angle_b},
+      {"diagonal_rod", DeltaFactorKind::rod},    {"tilt_x", DeltaFactorKind::tilt_x},
+      {"tilt_y", DeltaFactorKind::tilt_y}};
+  std::vector<DeltaFactorKind> kinds;
+  for (const auto& n : names)
+    for (const auto& [name, kind] : table)
+      if (n == name) kinds.push_back(kind);
+  return kinds;
+}
+
+// How each factor moves the carriage joints P_t (tower column at the carriage height) and the
+// rods under geometry g: the carriage height when homed is H + sqrt(L_t^2 - R^2) + e_t.
+class DeltaFactorTerms {
+ public:
+  explicit DeltaFactorTerms(const DeltaGeometry& g) : radius_(g.radius_mm), rod_(g.rod_mm) {
+    for (std::size_t t = 0; t < 3; ++t) {
+      const double a = g.angle_deg[t] * std::numbers::pi / 180.0;
+      cos_[t] = std::cos(a);
+      sin_[t] = std::sin(a);
+      rise_[t] = std::sqrt(g.rod_mm[t] * g.rod_mm[t] - g.radius_mm * g.radius_mm);
+    }
+  }
+
+  // d height / d factor for each of `kinds` (mm per mm, per degree or per percent) into row.
+  void height_gradient(const std::vector<DeltaFactorKind>& kinds, const DeltaPoint& q, const DeltaHeightSensitivity& s,
+                       double* row) const {
+    const auto& w = s.weight;
+    const auto& d = s.joint_offset;
+    constexpr double deg = std::numbers::pi / 180.0;
+    for (std::size_t j = 0; j < kinds.size(); ++j) {
+      double v = 0;
+      switch (kinds[j]) {
+        case DeltaFactorKind::endstop_a:
+        case DeltaFactorKind::endstop_b:
+        case DeltaFactorKind::endstop_c: {
+          const auto t = static_cast<std::size_t>(kinds[j]) - static_cast<std::size_t>(DeltaFactorKind::endstop_a);
+          v = w[t] * d[t][2];
+          break;
+        }
+        case DeltaFactorKind::radius:
+          for (std::size_t t = 0; t < 3; ++t)
+            v += w[t] * (d[t][0] * cos_[t] + d[t][1] * sin_[t] - d[t][2] * radius_ / rise_[t]);
+          break;
+        case DeltaFactorKind::angle_a:
+        case DeltaFactorKind::angle_b: {
+          const std::size_t t = kinds[j] == DeltaFactorKind::angle_a ? 0 : 1;
+          v = w[t] * deg * radius_ * (-d[t][0] * sin_[t] + d[t][1] * cos_[t]);
+          break;
+        }
+        case DeltaFactorKind::rod:
+          for (std::size_t t = 0; t < 3; ++t) v += w[t] * rod_[t] * (d[t][2] / rise_[t] + 1.0);
+          break;
+        case DeltaFactorKind::tilt_x: v = -q.x / 100.0; break;
+        case DeltaFactorKind::tilt_y: v = -q.y / 100.0; break;
+      }
+      row[j] = v;
+    }
+  }
+
+ private:
+  double radius_;
+  std::array<double, 3> rod_, cos_{}, sin_{}, rise_{};
+};
 
 }  // namespace
 
@@ -119,38 +192,28 @@ DeltaCalibration fit_delta_calibration(const DeltaGeometry& nominal, const std::
   prob.num_residuals = m;
   prob.residuals_are_time_ordered = false;
   for (const auto& p : probes) prob.observed.push_back(p.z_mm);
-  auto eval = [&nominal, &travel, factors](const std::vector<double>& v, double* r) {
+  auto eval = [&nominal, &travel, factors, kinds = delta_factor_kinds(names), k](const std::vector<double>& v,
+                                                                                 double* r, double* jac) {
     const DeltaGeometry g = delta_apply_factors(nominal, factors, v);
     const auto homed = delta_homed_carriages(g);
     const DeltaForward forward(g);
+    const DeltaFactorTerms terms(g);
+    DeltaHeightSensitivity sens;
     for (std::size_t i = 0; i < travel.size(); ++i) {
       const std::array<double, 3> real{homed[0] - travel[i][0], homed[1] - travel[i][1], homed[2] - travel[i][2]};
       DeltaPoint q;
-      if (!forward.position(real, q)) return false;
+      if (!forward.position(real, q, jac != nullptr ? &sens : nullptr)) return false;
       r[i] = q.z;
+      if (jac != nullptr) terms.height_gradient(kinds, q, sens, jac + i * k);
     }
     return true;
   };
-  prob.residuals_and_jacobian = [&eval, k, m](const double* p, double* r, double* jac) {
-    std::vector<double> v(p, p + k);
-    if (!eval(v, r)) return false;
-    if (jac == nullptr) return true;
-    // Central differences with absolute steps (mm, degrees, percent): the factors are of
-    // order 1 or are absolute lengths, so a relative step would vanish at an adjustment of 0.
-    constexpr double step = 1e-5;
-    std::vector<double> rp(static_cast<std::size_t>(m)), rm(static_cast<std::size_t>(m));
-    for (std::size_t j = 0; j < k; ++j) {
-      v[j] = p[j] + step;
-      if (!eval(v, rp.data())) return false;
-      v[j] = p[j] - step;
-      if (!eval(v, rm.data())) return false;
-      v[j] = p[j];
-      for (int i = 0; i < m; ++i)
-        jac[static_cast<std::size_t>(i) * k + j] =
-            (rp[static_cast<std::size_t>(i)] - rm[static_cast<std::size_t>(i)]) / (2 * step);
-    }
-    return true;
+  // The Jacobian is analytic: each factor moves the carriage joints, the rods or the tilt, and
+  // DeltaHeightSensitivity turns that into the height's derivative.
+  prob.residuals_and_jacobian = [&eval, k](const double* p, double* r, double* jac) {
+    return eval(std::vector<double>(p, p + k), r, jac);
   };
+  prob.same_residuals_with_jacobian = true;
   DeltaCalibration out;
   out.nominal = nominal;
   out.fit = fitting::solve_least_squares(fmt::format("delta_{}_factor", factors), prob);
@@ -158,7 +221,8 @@ DeltaCalibration fit_delta_calibration(const DeltaGeometry& nominal, const std::
   for (const auto& q : out.fit.params) v.push_back(q.value);
   out.fitted = delta_apply_factors(nominal, factors, v);
   out.residual_mm.resize(probes.size());
-  if (!eval(v, out.residual_mm.data())) throw FitError("the fitted delta geometry cannot reach every probe point");
+  if (!eval(v, out.residual_mm.data(), nullptr))
+    throw FitError("the fitted delta geometry cannot reach every probe point");
   std::vector<double> before;
   for (const auto& p : probes) before.push_back(p.z_mm);
   out.before = delta_flatness(before);

@@ -22,6 +22,24 @@ std::array<double, 2> dk_tower(const DeltaGeometry& g, int i) {
   return {g.radius_mm * std::cos(a), g.radius_mm * std::sin(a)};
 }
 
+double dk_triple(DkVec3 a, DkVec3 b, DkVec3 c) { return dk_dot(a, dk_cross(b, c)); }
+
+// The weights of DeltaHeightSensitivity: with d_t = q - P_t the rows of D, the constraints give
+// D dq = b (b_t = d_t . dP_t + L_t dL_t), and the height w . dq = (D^-T w) . b; the weights solve
+// sum_t weight_t d_t = w (Cramer's rule).
+bool dk_height_sensitivity(const DkVec3 (&joint)[3], DkVec3 q, DkVec3 w, DeltaHeightSensitivity& s) {
+  DkVec3 d[3];
+  for (std::size_t t = 0; t < 3; ++t) {
+    d[t] = dk_sub(q, joint[t]);
+    s.joint_offset[t] = {d[t].x, d[t].y, d[t].z};
+  }
+  const double det = dk_triple(d[0], d[1], d[2]);
+  const double scale = std::sqrt(dk_dot(d[0], d[0]) * dk_dot(d[1], d[1]) * dk_dot(d[2], d[2]));
+  if (!(std::abs(det) > 1e-12 * scale)) return false;
+  s.weight = {dk_triple(w, d[1], d[2]) / det, dk_triple(d[0], w, d[2]) / det, dk_triple(d[0], d[1], w) / det};
+  return true;
+}
+
 }  // namespace
 
 bool delta_carriages(const DeltaGeometry& g, const DeltaPoint& p, std::array<double, 3>& c) {
@@ -43,7 +61,7 @@ DeltaForward::DeltaForward(const DeltaGeometry& g) : g_(g) {
   for (int i = 0; i < 3; ++i) towers_[static_cast<std::size_t>(i)] = dk_tower(g, i);
 }
 
-bool DeltaForward::position(const std::array<double, 3>& c, DeltaPoint& out) const {
+bool DeltaForward::position(const std::array<double, 3>& c, DeltaPoint& out, DeltaHeightSensitivity* sens) const {
   // Trilateration of three spheres (centre: tower column at the carriage height, radius:
   // rod length), taking the intersection below the carriages. Tilt is applied after.
   const DeltaGeometry& g = g_;
@@ -69,7 +87,8 @@ bool DeltaForward::position(const std::array<double, 3>& c, DeltaPoint& out) con
   const double zs = ez.z > 0 ? -std::sqrt(z2) : std::sqrt(z2);
   const DkVec3 q = dk_add(p[0], dk_add(dk_scale(ex, x), dk_add(dk_scale(ey, y), dk_scale(ez, zs))));
   out = {q.x, q.y, q.z - q.x * g.tilt_x - q.y * g.tilt_y};
-  return std::isfinite(out.x) && std::isfinite(out.y) && std::isfinite(out.z);
+  if (!(std::isfinite(out.x) && std::isfinite(out.y) && std::isfinite(out.z))) return false;
+  return sens == nullptr || dk_height_sensitivity(p, q, {-g.tilt_x, -g.tilt_y, 1.0}, *sens);
 }
 
 std::array<double, 3> delta_homed_carriages(const DeltaGeometry& g) {

@@ -105,6 +105,43 @@ TEST_CASE("delta fit: noiseless probes give back the truth for 6 and 9 factors")
   CHECK(cal9.fit.value("tilt_y") == Approx(-0.1).margin(1e-5));
 }
 
+TEST_CASE("delta fit: 9-factor standard errors agree with a finite-difference Jacobian of the height model") {
+  // The fit's Jacobian is analytic; the standard errors it gives must be those of the height
+  // model differentiated numerically (central differences of delta_true_height).
+  const auto n = nominal_delta();
+  auto t = true_delta();
+  t.rod_mm = {216.0, 216.0, 216.0};
+  t.tilt_x = 0.002;
+  t.tilt_y = -0.001;
+  const auto probes = sim::simulate_delta_probes(n, t, sim::delta_probe_pattern(85, 3, 12), 0.02, 7);
+  const auto cal = ident::fit_delta_calibration(n, probes, 9);
+  const auto names = ident::delta_factor_names(9);
+  const std::size_t k = names.size(), m = probes.size();
+  std::vector<double> v;
+  for (const auto& name : names) v.push_back(cal.fit.value(name));
+  auto heights = [&](const std::vector<double>& x) {
+    const auto g = ident::delta_apply_factors(n, 9, x);
+    std::vector<double> h(m);
+    for (std::size_t i = 0; i < m; ++i) REQUIRE(ident::delta_true_height(n, g, probes[i], h[i]));
+    return h;
+  };
+  std::vector<std::vector<double>> jac(k);  // jac[j][i] = d height_i / d factor_j
+  for (std::size_t j = 0; j < k; ++j) {
+    constexpr double step = 1e-4;  // mm, degrees, percent
+    auto up = v, down = v;
+    up[j] += step;
+    down[j] -= step;
+    const auto hu = heights(up), hd = heights(down);
+    for (std::size_t i = 0; i < m; ++i) jac[j].push_back((hu[i] - hd[i]) / (2 * step));
+  }
+  const auto diag = test::inverse_normal_diagonal(jac);
+  const double s2 = cal.fit.diagnostics.rss / static_cast<double>(m - k);
+  for (std::size_t j = 0; j < k; ++j) {
+    INFO(names[j]);
+    CHECK(cal.fit.param(names[j]).std_error == Approx(std::sqrt(s2 * diag[j])).epsilon(1e-5));
+  }
+}
+
 TEST_CASE("delta fit: 6-factor 95 % intervals cover each true error in 90-99 % of 200 noise draws") {
   const auto n = nominal_delta();
   const auto t = true_delta();

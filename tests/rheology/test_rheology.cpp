@@ -184,6 +184,33 @@ TEST_CASE("model comparison prefers Cross over a power law on Cross data, and Ca
   check_within_ci(fit, "n", 0.4);
 }
 
+TEST_CASE("model comparison: equivalent models tie, and the tie goes to the earlier candidate") {
+  // Cross with a WLF shift and Cross-WLF (A2 held, no pressure) are the same family: ln eta0(T)
+  // = const + B / (c + T) with three free constants each. Their AICs agree to rounding, and the
+  // winner must not depend on the last digits.
+  RheologyData d;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0, 0.03);
+  for (double degc : {380.0, 400.0, 420.0})
+    for (int i = 0; i < 20; ++i) {
+      const double g = std::pow(10.0, i * 4.0 / 19), T = celsius_to_kelvin(degc);
+      d.shear_rate_1_s.push_back(g);
+      d.temperature_K.push_back(T);
+      d.viscosity_Pa_s.push_back(cross_wlf_viscosity(peek(), g, T) * std::exp(noise(rng)));
+    }
+  ViscosityFitOptions shifted, cwlf;
+  shifted.model = ViscosityModel::cross;
+  shifted.shift = TemperatureShift::wlf;
+  cwlf.model = ViscosityModel::cross_wlf;
+  const auto ab = compare_viscosity_models(d, {shifted, cwlf});
+  REQUIRE(ab.entries.size() == 2);
+  REQUIRE(ab.entries[0].ok);
+  REQUIRE(ab.entries[1].ok);
+  REQUIRE(ab.entries[0].aic == Approx(ab.entries[1].aic).epsilon(1e-9));
+  CHECK(ab.best == "cross+wlf");
+  CHECK(compare_viscosity_models(d, {cwlf, shifted}).best == "cross-wlf");
+}
+
 TEST_CASE("Cross with an Arrhenius shift and time-temperature superposition") {
   RheologyData d;
   std::mt19937 rng(8);

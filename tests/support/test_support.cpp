@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cctype>
+#include <cmath>
 #include <regex>
 #include <cstdio>
 #include <filesystem>
@@ -157,6 +158,32 @@ std::vector<std::string> shell_words(const std::string& line) {
   }
   if (in_word) words.push_back(cur);
   return words;
+}
+
+std::vector<double> inverse_normal_diagonal(const std::vector<std::vector<double>>& cols) {
+  const std::size_t k = cols.size();
+  std::vector<std::vector<double>> a(k, std::vector<double>(2 * k, 0.0));
+  for (std::size_t r = 0; r < k; ++r) {
+    for (std::size_t c = 0; c < k; ++c)
+      for (std::size_t i = 0; i < cols[r].size(); ++i) a[r][c] += cols[r][i] * cols[c][i];
+    a[r][k + r] = 1;
+  }
+  for (std::size_t c = 0; c < k; ++c) {
+    std::size_t piv = c;
+    for (std::size_t r = c + 1; r < k; ++r)
+      if (std::abs(a[r][c]) > std::abs(a[piv][c])) piv = r;
+    std::swap(a[c], a[piv]);
+    const double d = a[c][c];
+    for (auto& x : a[c]) x /= d;
+    for (std::size_t r = 0; r < k; ++r)
+      if (r != c) {
+        const double f = a[r][c];
+        for (std::size_t q = 0; q < 2 * k; ++q) a[r][q] -= f * a[c][q];
+      }
+  }
+  std::vector<double> diag;
+  for (std::size_t j = 0; j < k; ++j) diag.push_back(a[j][k + j]);
+  return diag;
 }
 
 }  // namespace tunekit::test

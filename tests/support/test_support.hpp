@@ -58,4 +58,9 @@ std::vector<SummaryCell> summary_cells(const std::string& html);
 /// Splits a shell command line into words (single and double quotes, no expansion).
 std::vector<std::string> shell_words(const std::string& line);
 
+/// The diagonal of (J'J)^-1 for a Jacobian given as its columns (one per parameter), by
+/// Gauss-Jordan elimination with partial pivoting: times s^2 = rss / (m - k), the variances of a
+/// least-squares fit's parameters, to check a fit's analytic Jacobian against differences.
+std::vector<double> inverse_normal_diagonal(const std::vector<std::vector<double>>& columns);
+
 }  // namespace tunekit::test

@@ -46,8 +46,11 @@ struct LsqProblem {
   int num_residuals = 0;
   ResidualFunction residuals;                       ///< numeric (central) differences
   ResidualJacobianFunction residuals_and_jacobian;  ///< preferred when set
-  std::vector<double> observed;                     ///< optional: the data, to report R^2 = 1 - rss/tss
-  bool residuals_are_time_ordered = true;           ///< run the whiteness test on residual order
+  /// residuals_and_jacobian computes the residuals the same way with and without the Jacobian,
+  /// bit for bit: the solver then reuses residuals evaluated with a Jacobian at the same point.
+  bool same_residuals_with_jacobian = false;
+  std::vector<double> observed;            ///< optional: the data, to report R^2 = 1 - rss/tss
+  bool residuals_are_time_ordered = true;  ///< run the whiteness test on residual order
 };
 
 struct LsqOptions {

@@ -1,7 +1,7 @@
 #pragma once
 // Fitting melt viscosity models to rheometer data (Holtrup 2019 sec. 2.2.2, 5.2.3):
-//  - weighted least squares on ln(eta) with bounds (Ceres), start values from a bounded global
-//    search (global_start.hpp), so no fit needs a guess from the user;
+//  - weighted least squares on ln(eta) with bounds (Ceres) and an analytic Jacobian, start
+//    values from a bounded global search (global_start.hpp), so no fit needs a guess from the user;
 //  - 95 % intervals: scale parameters (eta0, K, tau*, D1, lambda) are estimated as logarithms,
 //    so their intervals are exp of an interval in ln and never go negative; the reported std.
 //    error is the delta-method value * se(ln). Where the linearised interval cannot be trusted
@@ -82,7 +82,8 @@ struct ModelComparison {
   std::vector<FitResult> fits;  ///< parallel to entries (default FitResult where !ok)
   std::string best;             ///< lowest AIC
 };
-/// Fits every candidate to the same data and ranks them by AIC (Akaike weights).
+/// Fits every candidate to the same data and ranks them by AIC (Akaike weights). AICs within
+/// 1e-9 relative tie (equivalent models), and a tie goes to the earlier candidate.
 ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates);
 /// The default candidates for these data (with shifts when there are several temperatures).
 std::vector<ViscosityFitOptions> default_candidates(const RheologyData& data, const ViscosityFitOptions& base = {});

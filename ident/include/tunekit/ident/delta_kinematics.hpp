@@ -43,13 +43,26 @@ bool delta_carriages(const DeltaGeometry& g, const DeltaPoint& p, std::array<dou
 /// Forward kinematics: the nozzle position for carriage heights (the solution below the
 /// carriages). Returns false when the rods cannot meet.
 bool delta_position(const DeltaGeometry& g, const std::array<double, 3>& carriages, DeltaPoint& p);
+/// How the height of a forward solution moves with the geometry. With P_t the joint of tower t's
+/// rod on its carriage (tower column at the carriage height, mm), L_t the rod lengths and q the
+/// nozzle before the bed tilt, small changes dP_t, dL_t move the reported height by
+///   dz = sum_t weight[t] ((q - P_t) . dP_t + L_t dL_t),
+/// the rods' constraints |q - P_t| = L_t differentiated (implicit function theorem); a tilt
+/// change moves it by -x dtilt_x - y dtilt_y (x, y of the solution, tilts as fractions).
+struct DeltaHeightSensitivity {
+  std::array<double, 3> weight{};                       ///< 1/mm
+  std::array<std::array<double, 3>, 3> joint_offset{};  ///< q - P_t (x, y, z), mm
+};
+
 /// Forward kinematics of one geometry for many carriage heights: the tower positions (mm,
 /// from the radius and the tower angles) are computed once, not once per point.
 class DeltaForward {
  public:
   explicit DeltaForward(const DeltaGeometry& g);
-  /// As delta_position(g, carriages, p).
-  bool position(const std::array<double, 3>& carriages, DeltaPoint& p) const;
+  /// As delta_position(g, carriages, p); when `sensitivity` is not null it is filled too (false
+  /// also when the rods are coplanar with the nozzle, where the height does not move smoothly).
+  bool position(const std::array<double, 3>& carriages, DeltaPoint& p,
+                DeltaHeightSensitivity* sensitivity = nullptr) const;
 
  private:
   DeltaGeometry g_;
