@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <complex>
 #include <exception>
@@ -472,22 +473,35 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
   for (const auto& ds : datasets)
     if (ds.freq_hz.size() != ds.psd.size()) throw InputError("frequency and PSD arrays differ in length");
 
-  // Each type's frequencies are scored on their own (half of the types on a second thread);
-  // the choice among them below is Klipper's, in the types' order.
-  // A type's error is raised after both threads are done, the first type's first, so the
-  // message is the one a single pass gives.
+  // Each type's frequencies are scored on their own, on two threads that take the types in
+  // order of their work (impulses x frequencies, the largest first) as each finishes one; the
+  // choice among them below is Klipper's, in the types' order. A type's error is raised after
+  // both threads are done, the first type's first, so the message is the one a single pass gives.
   std::vector<TypeScan> scans(o.types.size());
   std::vector<std::exception_ptr> errors(o.types.size());
-  auto scan_range = [&](std::size_t from, std::size_t step) {
-    for (std::size_t ti = from; ti < o.types.size(); ti += step) try {
+  std::vector<std::size_t> order(o.types.size());
+  std::vector<double> work(o.types.size());
+  for (std::size_t ti = 0; ti < o.types.size(); ++ti) {
+    order[ti] = ti;
+    const auto impulses =
+        design_shaper(o.types[ti], 50.0, 0.1, kDefaultVibrationTolerance, o.ei_design).amplitudes.size();
+    work[ti] = static_cast<double>(impulses * type_freqs[ti].size());
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return work[a] > work[b]; });
+  std::atomic<std::size_t> next{0};
+  auto scan_types = [&] {
+    for (std::size_t k; (k = next.fetch_add(1)) < order.size();) {
+      const std::size_t ti = order[k];
+      try {
         scans[ti] = scan_type(o.types[ti], type_freqs[ti], datasets, o);
       } catch (...) {
         errors[ti] = std::current_exception();
       }
+    }
   };
   {
-    auto other = std::async(o.types.size() > 1 ? std::launch::async : std::launch::deferred, scan_range, 1, 2);
-    scan_range(0, 2);
+    auto other = std::async(o.types.size() > 1 ? std::launch::async : std::launch::deferred, scan_types);
+    scan_types();
     other.get();
   }
   for (const auto& e : errors)
