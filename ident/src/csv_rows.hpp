@@ -39,7 +39,8 @@ class LineReader {
       : text_(text), path_(path), max_len_(max_len), line_no_(first_line - 1) {}
   bool next(std::string_view& line);
   std::size_t line_no() const { return line_no_; }
-  std::size_t pos() const { return pos_; }
+  /// Where the next line starts (the text's size after its last line).
+  std::size_t pos() const { return pos_ < text_.size() ? pos_ : text_.size(); }
 
  private:
   std::string_view text_;

@@ -248,3 +248,16 @@ TEST_CASE("a large file's errors name the line a single pass names, on either si
     }
   }
 }
+
+TEST_CASE(
+    "a file that is only a header without a line break is refused as having no rows, not with an internal error") {
+  for (const std::string text : {",", "time,x", "time,x\r", "# comment\ntime,x"}) {
+    INFO(text);
+    try {
+      (void)tunekit::ident::parse_csv(text, "short.csv", {});
+      FAIL("accepted");
+    } catch (const tunekit::InputError& e) {
+      CHECK(e.message() == "a header but no data rows");
+    }
+  }
+}
