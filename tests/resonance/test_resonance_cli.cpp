@@ -260,9 +260,7 @@ TEST_CASE("a few clipped samples or a few dropped samples give a warning, not an
 
 TEST_CASE("shaper: the input's SHA-256 is in every envelope that leaves the process, --json and the results file",
           "[resonance][cli]") {
-  std::ifstream in(x_file(), std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string digest = tunekit::calibration::sha256_hex(bytes);
+  const std::string digest = tunekit::calibration::sha256_hex(tunekit::test::read_text(x_file()));
   REQUIRE(digest.size() == 64);
   const auto r = run_cli({"shaper", x_file(), "--json"});
   REQUIRE(r.code == 0);
@@ -271,6 +269,5 @@ TEST_CASE("shaper: the input's SHA-256 is in every envelope that leaves the proc
   const auto t = run_cli({"shaper", x_file(), "-o", results});
   REQUIRE(t.code == 0);
   CHECK(t.out.find("shaper") != std::string::npos);  // the terminal summary, without the envelope
-  std::ifstream f(results, std::ios::binary);
-  CHECK(nlohmann::json::parse(f)["inputs"][0]["sha256"] == digest);
+  CHECK(nlohmann::json::parse(tunekit::test::read_text(results))["inputs"][0]["sha256"] == digest);
 }
