@@ -209,8 +209,9 @@ void print_text(const BeltsOutcome& o, std::ostream& os) {
     std::string harmonics;
     for (const auto& h : r.harmonics)
       if (h.k > 1) harmonics += fmt::format("{}{}x {:.1f} Hz", harmonics.empty() ? "" : ", ", h.k, h.freq_hz);
-    os << fmt::format("belt {} ({}): {:.2f} Hz [{:.2f}, {:.2f}]", name, file, r.damped_freq_hz, r.freq_ci95_lo,
-                      r.freq_ci95_hi);
+    const double to_damped = r.freq_hz > 0 ? r.damped_freq_hz / r.freq_hz : 1.0;  // the interval with its value
+    os << fmt::format("belt {} ({}): {:.2f} Hz [{:.2f}, {:.2f}]", name, file, r.damped_freq_hz,
+                      to_damped * r.freq_ci95_lo, to_damped * r.freq_ci95_hi);
     if (t)
       os << fmt::format("   {:.1f} N [{:.1f}, {:.1f}]", t->tension.tension_n, t->tension.ci95_lo, t->tension.ci95_hi);
     os << fmt::format("\n  from {} (strength {:.1f}), harmonics: {}\n", r.projection, r.strength,

@@ -62,14 +62,14 @@ Envelope to_envelope(const ResonanceOutcome& o) {
 void print_text(const ResonanceOutcome& o, std::ostream& os) {
   for (const auto& lr : o.ringdowns) {
     const auto& r = lr.result;
-    os << fmt::format(
-        "{}: ring-down in {} (strength {:.1f}): f = {:.2f} Hz [{:.2f}, {:.2f}]   zeta = {:.4f} "
-        "[{:.4f}, {:.4f}]{}\n",
-        r.path, r.channel, r.strength, r.freq_hz, r.freq_ci95_lo, r.freq_ci95_hi, r.zeta, r.zeta_ci95_lo,
-        r.zeta_ci95_hi,
-        r.strongest_is_harmonic ? fmt::format(" (the strongest line, {:.2f} Hz, is its harmonic {})",
-                                              r.strongest_peak_hz, r.harmonic_number)
-                                : std::string());
+    const std::string zeta = r.zeta_identified
+                                 ? fmt::format("zeta = {:.4f} [{:.4f}, {:.4f}]", r.zeta, r.zeta_ci95_lo, r.zeta_ci95_hi)
+                                 : fmt::format("zeta not identified (series {:.4f})", r.series_zeta);
+    os << fmt::format("{}: ring-down in {} (strength {:.1f}): f = {:.2f} Hz [{:.2f}, {:.2f}]   {}{}\n", r.path,
+                      r.channel, r.strength, r.freq_hz, r.freq_ci95_lo, r.freq_ci95_hi, zeta,
+                      r.strongest_is_harmonic ? fmt::format(" (the strongest line, {:.2f} Hz, is its harmonic {})",
+                                                            r.strongest_peak_hz, r.harmonic_number)
+                                              : std::string());
   }
   for (const auto& r : o.analysis.axes) {
     os << fmt::format("{} {}: {} file(s), {} Welch segments of {} samples, {} modes ({} fit)\n",

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <complex>
 #include <numbers>
 
@@ -91,7 +92,8 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   std::vector<double> z0(static_cast<std::size_t>(nc));
   for (int i = 0; i < nc; ++i) {
     const auto& s = start[static_cast<std::size_t>(i)];
-    z0[static_cast<std::size_t>(i)] = std::clamp(s.zeta, 2 * kMinDampedZeta, 0.5 * kMaxDampedZeta);
+    const double z_max = s.max_zeta > 0 ? std::min(s.max_zeta, kMaxDampedZeta) : kMaxDampedZeta;
+    z0[static_cast<std::size_t>(i)] = std::clamp(s.zeta, 2 * kMinDampedZeta, 0.5 * z_max);
     const double w = 2 * std::numbers::pi * s.freq_hz, z = z0[static_cast<std::size_t>(i)];
     const double wd = w * std::sqrt(1 - z * z);
     for (int k = 0; k < m; ++k) {
@@ -105,12 +107,22 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   const Eigen::VectorXd lin = D.colPivHouseholderQr().solve(yv);
 
   LsqProblem prob;
+  std::vector<int> tie(static_cast<std::size_t>(nc), 0);  // harmonic number of component 0, or 0: free
+  for (int i = 1; i < nc; ++i)
+    tie[static_cast<std::size_t>(i)] = std::max(0, start[static_cast<std::size_t>(i)].harmonic);
   for (int i = 0; i < nc; ++i) {
     const auto& s = start[static_cast<std::size_t>(i)];
-    prob.params.push_back({fmt::format("f{}_hz", i), "Hz", s.freq_hz, (1 - freq_rel_bound) * s.freq_hz,
-                           std::min((1 + freq_rel_bound) * s.freq_hz, nyquist)});
-    prob.params.push_back(
-        {fmt::format("zeta{}", i), "1", z0[static_cast<std::size_t>(i)], kMinDampedZeta, kMaxDampedZeta});
+    ParamSpec fp{fmt::format("f{}_hz", i), "Hz", s.freq_hz, (1 - freq_rel_bound) * s.freq_hz,
+                 std::min((1 + freq_rel_bound) * s.freq_hz, nyquist)};
+    if (tie[static_cast<std::size_t>(i)] > 0) {
+      fp.start = tie[static_cast<std::size_t>(i)] * start.front().freq_hz;
+      fp.lower = -std::numeric_limits<double>::infinity();
+      fp.upper = std::numeric_limits<double>::infinity();
+      fp.fixed = true;
+    }
+    prob.params.push_back(fp);
+    prob.params.push_back({fmt::format("zeta{}", i), "1", z0[static_cast<std::size_t>(i)], kMinDampedZeta,
+                           s.max_zeta > 0 ? std::min(s.max_zeta, kMaxDampedZeta) : kMaxDampedZeta});
     prob.params.push_back({fmt::format("a{}", i), "", std::isfinite(lin(2 * i)) ? lin(2 * i) : 0.0});
     prob.params.push_back({fmt::format("b{}", i), "", std::isfinite(lin(2 * i + 1)) ? lin(2 * i + 1) : 0.0});
   }
@@ -118,7 +130,7 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   const int np = static_cast<int>(prob.params.size());
   prob.num_residuals = m;
   prob.observed = y;
-  prob.residuals_and_jacobian = [&y, fs_hz, nc, np, m](const double* p, double* r, double* J) {
+  prob.residuals_and_jacobian = [&y, &tie, fs_hz, nc, np, m](const double* p, double* r, double* J) {
     const double two_pi = 2 * std::numbers::pi;
     for (int k = 0; k < m; ++k) r[k] = p[np - 1] - y[static_cast<std::size_t>(k)];
     if (J)
@@ -128,7 +140,8 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
         row[np - 1] = 1.0;
       }
     for (int i = 0; i < nc; ++i) {
-      const double f = p[4 * i], z = p[4 * i + 1], a = p[4 * i + 2], b = p[4 * i + 3];
+      const int k_tie = tie[static_cast<std::size_t>(i)];
+      const double f = k_tie > 0 ? k_tie * p[0] : p[4 * i], z = p[4 * i + 1], a = p[4 * i + 2], b = p[4 * i + 3];
       const double w = two_pi * f, q = std::sqrt(1 - z * z), wd = w * q, sigma = z * w;
       // Rotations by recurrence: exp(-sigma dt), cos/sin(wd dt) per sample (exact enough over
       // a few thousand samples; renormalized every 256).
@@ -148,7 +161,8 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
           double* row = J + static_cast<std::ptrdiff_t>(k) * np + 4 * i;
           const double dy_dw = E * t * (-z * g + q * h);
           const double dy_dz = E * t * (-w * g - (w * z / q) * h);
-          row[0] = dy_dw * two_pi;
+          if (k_tie > 0) J[static_cast<std::ptrdiff_t>(k) * np] += dy_dw * two_pi * k_tie;  // into f0's column
+          else row[0] = dy_dw * two_pi;
           row[1] = dy_dz;
           row[2] = E * C;
           row[3] = E * S;
@@ -168,7 +182,22 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   opt.function_tolerance = 1e-12;
   opt.parameter_tolerance = 1e-12;
   opt.gradient_tolerance = 1e-14;
-  return solve_least_squares("damped_sinusoids", prob, opt);
+  FitResult fit = solve_least_squares("damped_sinusoids", prob, opt);
+  const auto& f0 = fit.param("f0_hz");
+  for (int i = 1; i < nc; ++i) {
+    const int k_tie = tie[static_cast<std::size_t>(i)];
+    if (k_tie == 0) continue;
+    for (auto& q : fit.params)
+      if (q.name == fmt::format("f{}_hz", i)) {
+        q.value = k_tie * f0.value;
+        q.std_error = k_tie * f0.std_error;
+        q.ci95_lo = k_tie * f0.ci95_lo;
+        q.ci95_hi = k_tie * f0.ci95_hi;
+        q.fixed = false;  // derived from f0's estimate, not held
+        q.ci95_method = f0.ci95_method;
+      }
+  }
+  return fit;
 }
 
 double damped_sinusoids_value(const FitResult& fit, double t) {

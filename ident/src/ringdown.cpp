@@ -83,6 +83,44 @@ std::string projection_text(const AccelRecord& rec, const std::vector<double>& w
   return s;
 }
 
+// The spectral lines of the decay window, each line's power divided by the median of the
+// spectrum it was found in over [lo, hi]: every channel's own spectrum and the channels' summed
+// spectrum (the named channel's alone when one is named), pooled and strongest first. A line
+// is measured where it stands highest: a line that stands clearly over one channel's floor is
+// not drowned by another channel's larger floor (as it is in the sum), and a line spread over
+// the channels adds up in the sum.
+std::vector<rd::Line> pooled_lines(const std::vector<std::span<const double>>& windows, int named, std::size_t nfft,
+                                   double df, double lo, double hi) {
+  std::vector<rd::Line> pool;
+  auto add = [&](const std::vector<double>& p) {
+    const double floor = rd::spectral_floor(p, df, lo, hi);
+    if (!(floor > 0)) return;
+    for (auto l : rd::spectral_lines(p, df, lo, hi)) {
+      l.power /= floor;
+      pool.push_back(l);
+    }
+  };
+  std::vector<double> sum;
+  for (std::size_t c = 0; c < windows.size(); ++c) {
+    if (named >= 0 && static_cast<int>(c) != named) continue;
+    auto p = padded_amplitude_spectrum(windows[c], nfft);
+    for (double& v : p) v *= v;
+    add(p);
+    if (sum.empty()) sum.assign(p.size(), 0.0);
+    for (std::size_t k = 0; k < p.size() && k < sum.size(); ++k) sum[k] += p[k];
+  }
+  if (named < 0 && windows.size() > 1) add(sum);
+  std::sort(pool.begin(), pool.end(), [](const rd::Line& x, const rd::Line& y) { return x.power > y.power; });
+  return pool;
+}
+
+// The largest damping ratio a line of the series may take in the fit. A ring-down's modes are
+// lightly damped; left free, the fundamental's component can instead take the impact's
+// broadband transient as one heavily damped "line" (a damping ratio of 0.3-0.7 on real plucks
+// whose fundamental is weak), which is no mode at all. With a tap limit (max_zeta) the bound is
+// twice that limit, so that a tap still fits above the limit and is refused by it.
+double series_max_zeta(const RingdownOptions& o) { return o.max_zeta > 0 ? 2 * o.max_zeta : 0.25; }
+
 // Start values from the matrix pencil where it finds the line, then least squares; the
 // fundamental (component 0) into r.
 void fit_components(RingdownResult& r, const std::vector<double>& win, double fs,
@@ -98,6 +136,8 @@ void fit_components(RingdownResult& r, const std::vector<double>& win, double fs
     fitting::PencilComponent s;
     s.freq_hz = c.second;
     s.zeta = 0.01;
+    s.harmonic = starts.empty() ? 0 : std::max(0, c.first);  // the series' harmonics share f0
+    if (c.first >= 1) s.max_zeta = series_max_zeta(o);
     for (const auto& p : pencil)
       if (std::abs(p.freq_hz - c.second) <= o.harmonic_tolerance * c.second && p.zeta > 0 && p.zeta < 0.5) {
         s.freq_hz = p.freq_hz;
@@ -128,8 +168,214 @@ void fit_components(RingdownResult& r, const std::vector<double>& win, double fs
   r.zeta_stderr = pz.std_error;
   r.zeta_ci95_lo = pz.ci95_lo;
   r.zeta_ci95_hi = pz.ci95_hi;
-  r.damped_freq_hz = r.freq_hz * std::sqrt(std::max(0.0, 1 - r.zeta * r.zeta));
-  for (std::size_t i = 1; i < starts.size(); ++i) r.other_lines_hz.push_back(r.fit.value(fmt::format("f{}_hz", i)));
+  r.zeta_identified = pz.value < 0.999 * series_max_zeta(o);
+  r.series_zeta = r.zeta_identified ? r.zeta : std::numeric_limits<double>::infinity();
+  for (std::size_t i = 1; i < starts.size(); ++i) {
+    r.other_lines_hz.push_back(r.fit.value(fmt::format("f{}_hz", i)));
+    if (comps[i].first >= 2) r.series_zeta = std::min(r.series_zeta, r.fit.value(fmt::format("zeta{}", i)));
+  }
+  if (!std::isfinite(r.series_zeta)) r.series_zeta = r.zeta;
+  // What a tuner reads: the series' lines ring at their damped frequencies.
+  r.damped_freq_hz = r.freq_hz * std::sqrt(std::max(0.0, 1 - r.series_zeta * r.series_zeta));
+  if (!r.zeta_identified)
+    r.warnings.push_back(fmt::format(
+        "the fundamental's damping is not identified: its fitted line reached the bound {:g} (the impact's transient "
+        "at {:.2f} Hz); the frequency is the harmonic series', and the series' damping is {:.4f}",
+        series_max_zeta(o), r.freq_hz, r.series_zeta));
+}
+
+// The decay window of a record and what the fundamental's choice and the fit share.
+struct DecayWindow {
+  const AccelRecord& rec;
+  std::vector<std::span<const double>> windows;  ///< every channel's decay window
+  std::vector<double> noises;                    ///< every channel's noise RMS
+  NoiseSpans spans;
+  std::size_t start = 0, len = 0, head = 0;  ///< window start and length, strength head, samples
+  std::size_t nfft = 1;                      ///< zero-padded FFT length
+  double df = 0;                             ///< its bin spacing, Hz
+  double max_hz = 0;                         ///< the band's top, Hz
+  int named = -1;                            ///< the named channel, or -1
+};
+
+rd::SeriesChoice choose(const std::vector<rd::Line>& lines, const std::vector<double>& excluded, double max_hz,
+                        const RingdownOptions& o) {
+  auto sq = [](double v) { return v * v; };
+  return rd::choose_fundamental(
+      lines, sq(o.min_line_ratio), sq(o.min_subharmonic_ratio), o.min_hz, max_hz, o.harmonic_tolerance, 5.0,
+      {sq(o.min_fundamental_line_ratio), sq(o.min_fundamental_to_harmonic), sq(o.min_pair_line_ratio)}, excluded);
+}
+
+// The fundamental is in the record when its fitted amplitude (a0, b0) differs from zero: the
+// Wald statistic with their covariance above the chi-square(2) 99 % point (9.21). A candidate
+// fundamental chosen for a noise line at f/2 of a real line fits with no amplitude.
+bool fundamental_present(const fitting::FitResult& fit) {
+  const std::size_t n = fit.params.size();
+  std::size_t ia = n, ib = n;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (fit.params[i].name == "a0") ia = i;
+    if (fit.params[i].name == "b0") ib = i;
+  }
+  if (ia == n || ib == n || fit.covariance.size() != n * n) return true;  // nothing to test: keep it
+  const double a = fit.params[ia].value, b = fit.params[ib].value;
+  const double caa = fit.covariance[ia * n + ia], cbb = fit.covariance[ib * n + ib], cab = fit.covariance[ia * n + ib];
+  const double det = caa * cbb - cab * cab;
+  if (!(det > 0)) return true;
+  const double w = (cbb * a * a - 2 * cab * a * b + caa * b * b) / det;
+  return w > 9.21;
+}
+
+// Intervals where the residuals are not white (other motion than the fitted lines: the
+// toolhead's own modes, the other belt): the Cramer-Rao bound of a sinusoid's frequency in
+// coloured noise is the white-noise bound with the noise's spectral density at the line in
+// place of its mean (Stoica and Moses, Spectral Analysis of Signals, 2005, section 4.3). Each
+// line's factor rho_k is the residuals' periodogram around k f0 (+-2 resolution bins) over its
+// mean; f0, informed by every line of the series in proportion to k^2 A_k^2 / rho_k, is
+// widened by sum(k^2 A_k^2) / sum(k^2 A_k^2 / rho_k), the fundamental's damping by rho_1;
+// never narrowed. White residuals keep the Wald intervals.
+void widen_for_coloured_residuals(RingdownResult& r, const std::vector<double>& win, double fs, std::size_t nfft,
+                                  const std::vector<std::pair<int, double>>& comps) {
+  if (!(r.fit.diagnostics.whiteness_p < 0.01)) return;
+  std::vector<double> res(win.size());
+  for (std::size_t i = 0; i < win.size(); ++i)
+    res[i] = win[i] - fitting::damped_sinusoids_value(r.fit, static_cast<double>(i) / fs);
+  auto p = padded_amplitude_spectrum(res, nfft);
+  double mean = 0;
+  for (double& v : p) mean += (v *= v);
+  mean /= static_cast<double>(p.size());
+  if (!(mean > 0)) return;
+  const double df = fs / static_cast<double>(nfft);
+  const double half = 2.0 * fs / static_cast<double>(win.size());  // two resolution bins, Hz
+  auto rho = [&](double f) {
+    const auto k0 = static_cast<std::size_t>(std::max(0.0, (f - half) / df));
+    const auto k1 = std::min(p.size() - 1, static_cast<std::size_t>((f + half) / df));
+    double s = 0;
+    for (std::size_t k = k0; k <= k1; ++k) s += p[k];
+    return std::max(1.0, s / static_cast<double>(k1 - k0 + 1) / mean);
+  };
+  double w_sum = 0, w_over_rho = 0, rho1 = 1;
+  for (std::size_t i = 0; i < comps.size(); ++i) {
+    const int k = comps[i].first;
+    if (k < 1) continue;
+    const double a = r.fit.value(fmt::format("a{}", i)), b = r.fit.value(fmt::format("b{}", i));
+    const double rk = rho(r.fit.value(fmt::format("f{}_hz", i)));
+    const double w = k * k * (a * a + b * b);
+    w_sum += w;
+    w_over_rho += w / rk;
+    if (k == 1) rho1 = rk;
+  }
+  const double f_factor = w_over_rho > 0 ? std::max(1.0, w_sum / w_over_rho) : rho1;
+  auto widen = [](double value, double& se, double& lo, double& hi, double factor) {
+    const double g = std::sqrt(factor);
+    se *= g;
+    lo = value - g * (value - lo);
+    hi = value + g * (hi - value);
+  };
+  widen(r.freq_hz, r.freq_stderr_hz, r.freq_ci95_lo, r.freq_ci95_hi, f_factor);
+  widen(r.zeta, r.zeta_stderr, r.zeta_ci95_lo, r.zeta_ci95_hi, rho1);
+  r.interval_factor = std::sqrt(f_factor);
+}
+
+// 4-5. The projection in which the fundamental stands highest over the noise; the fundamental,
+// its harmonics present in the projection, then the other strong lines of the projection,
+// fitted; the series found reported.
+void fit_series(RingdownResult& r, const DecayWindow& dw, const rd::SeriesChoice& choice, const RingdownOptions& o) {
+  const auto& rec = dw.rec;
+  const double fs = r.sample_rate_hz;
+  const auto& series = choice.best;
+  const double f_spec = series.fundamental.freq_hz;
+  std::vector<double> w(rec.channels.size(), 0.0);
+  if (dw.named >= 0) w[static_cast<std::size_t>(dw.named)] = 1.0;
+  else w = rd::best_projection(dw.windows, dw.noises, f_spec, fs);
+  for (std::size_t c = 0; c < w.size(); ++c) r.channels[c].weight = w[c];
+  const auto y = weighted_sum(rec, w);
+  r.channel = dw.named >= 0 ? rec.channel_names[static_cast<std::size_t>(dw.named)] : std::string("projection");
+  r.projection = projection_text(rec, w);
+  const std::span<const double> ys(y);
+  const double y_noise = noise_rms(ys, dw.spans);
+  r.strength =
+      y_noise > 0 ? ringdown_rms(ys.subspan(dw.start, dw.head)) / y_noise : std::numeric_limits<double>::infinity();
+  const std::vector<double> win(y.begin() + static_cast<std::ptrdiff_t>(dw.start),
+                                y.begin() + static_cast<std::ptrdiff_t>(dw.start + dw.len));
+
+  std::vector<double> pp = padded_amplitude_spectrum(win, dw.nfft);
+  for (double& v : pp) v *= v;
+  const auto plines = rd::spectral_lines(pp, dw.df, 0.5 * o.min_hz, dw.max_hz);
+  const double pfloor = rd::spectral_floor(pp, dw.df, o.min_hz, dw.max_hz);
+  const double ratio2 = o.min_line_ratio * o.min_line_ratio;
+  std::vector<std::pair<int, double>> comps{{1, f_spec}};  // (harmonic number or 0, start Hz)
+  const auto* fund_line = rd::line_near(plines, f_spec, o.harmonic_tolerance);
+  if (fund_line) comps.front().second = fund_line->freq_hz;
+  auto distinct = [&](double f) {
+    return std::none_of(comps.begin(), comps.end(),
+                        [&](const auto& c) { return std::abs(c.second - f) <= o.harmonic_tolerance * c.second; });
+  };
+  for (const auto& [k, hl] : series.harmonics) {
+    if (static_cast<int>(comps.size()) >= o.max_components) break;
+    const auto* l = rd::line_near(plines, hl.freq_hz, o.harmonic_tolerance);
+    if (l && l->power >= ratio2 * pfloor && distinct(l->freq_hz)) comps.emplace_back(k, l->freq_hz);
+  }
+  // The series' f0 to start from: each line's f_k / k weighted by k^2 times its power (a line's
+  // frequency error falls with its amplitude, and f_k / k divides it by k), so that a strong
+  // harmonic places f0 where a weak fundamental alone would not.
+  if (comps.size() > 1) {
+    double sw = 0, swf = 0;
+    for (const auto& [k, f] : comps) {
+      const auto* l = k == 1 ? fund_line : rd::line_near(plines, f, 1e-9);
+      if (l == nullptr) continue;
+      sw += k * k * l->power;
+      swf += k * k * l->power * (f / k);
+    }
+    if (sw > 0) comps.front().second = swf / sw;
+  }
+  const double ptop = plines.empty() ? 0.0 : plines.front().power;
+  for (const auto& l : plines) {
+    if (static_cast<int>(comps.size()) >= o.max_components) break;
+    if (l.freq_hz >= o.min_hz && l.power >= 0.09 * ptop && l.power >= ratio2 * pfloor && distinct(l.freq_hz))
+      comps.emplace_back(0, l.freq_hz);
+  }
+  fit_components(r, win, fs, comps, o);
+  widen_for_coloured_residuals(r, win, fs, dw.nfft, comps);
+
+  // The harmonic series found, and where the strongest line stands in it.
+  r.spectral_freq_hz = comps.front().second;
+  r.strongest_peak_hz = choice.strongest.freq_hz;
+  r.harmonics.push_back({1, r.freq_hz, 1.0, true, r.zeta});
+  for (const auto& [k, hl] : series.harmonics) {
+    RingdownHarmonic h{k, hl.freq_hz, std::sqrt(hl.power / series.fundamental.power), false, 0.0};
+    for (std::size_t i = 1; i < comps.size(); ++i)
+      if (comps[i].first == k) {
+        h.fitted = true;
+        h.freq_hz = r.fit.value(fmt::format("f{}_hz", i));
+        h.zeta = r.fit.value(fmt::format("zeta{}", i));
+      }
+    if (std::abs(hl.freq_hz - choice.strongest.freq_hz) < 1e-9) r.harmonic_number = k;
+    r.harmonics.push_back(h);
+  }
+  r.strongest_is_harmonic = r.harmonic_number > 1;
+  if (r.strongest_is_harmonic)
+    r.warnings.push_back(fmt::format("the strongest line, {:.2f} Hz, is harmonic {} of the fundamental {:.2f} Hz",
+                                     r.strongest_peak_hz, r.harmonic_number, r.freq_hz));
+}
+
+// 6. A ring-down decays, and a belt's decays slowly.
+void check_ringdown(RingdownResult& r, const RingdownOptions& o) {
+  r.decay_ratio = std::exp(-r.zeta * 2 * std::numbers::pi * r.freq_hz * r.window_s);
+  if (r.decay_ratio > o.max_decay_ratio)
+    throw FitError(fmt::format("the {:.2f} Hz line does not decay: its envelope keeps {:.0f} % of its amplitude over "
+                               "the {:.2f} s window (more than {:.0f} %); a steady tone (a fan, a motor), not a "
+                               "ring-down",
+                               r.freq_hz, 100 * r.decay_ratio, r.window_s, 100 * o.max_decay_ratio),
+                   r.path);
+  if (o.max_zeta > 0 && r.series_zeta > o.max_zeta)
+    throw FitError(fmt::format("the {:.2f} Hz line decays too fast for a plucked belt: damping ratio {:.3f}, above "
+                               "{:g}; a tap or a bump of the frame, not a pluck",
+                               r.freq_hz, r.series_zeta, o.max_zeta),
+                   r.path);
+  if (r.fit.diagnostics.whiteness_p < 0.01)
+    r.warnings.push_back(
+        fmt::format("{}: the fit's residuals are not white (p = {:.2g}): other motion than the fitted "
+                    "lines; the frequency's interval is widened {:.1f}x for the residuals' level at the lines",
+                    r.channel, r.fit.diagnostics.whiteness_p, r.interval_factor));
 }
 
 }  // namespace
@@ -205,114 +451,40 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
                                  r.window_s, static_cast<double>(min_len) / fs, o.min_hz),
                      rec.path);
 
-  // 3. The fundamental by its harmonic series on the channels' summed power spectrum.
-  std::size_t nfft = 1;
-  while (nfft < std::max<std::size_t>(8 * len, 16384)) nfft <<= 1;
-  const double df = fs / static_cast<double>(nfft);
-  std::vector<std::span<const double>> windows;
-  for (const auto& c : rec.channels) windows.push_back(std::span<const double>(c).subspan(start, len));
-  std::vector<double> psum(nfft / 2 + 1, 0.0);
-  for (std::size_t c = 0; c < windows.size(); ++c) {
-    if (named >= 0 && static_cast<int>(c) != named) continue;
-    const auto mag = padded_amplitude_spectrum(windows[c], nfft);
-    for (std::size_t k = 0; k < psum.size() && k < mag.size(); ++k) psum[k] += mag[k] * mag[k];
+  // 3-6. The fundamental by its harmonic series over the channels' lines, each line measured
+  // against its own channel's floor; the series fitted in the best projection. A candidate whose
+  // fitted fundamental has no amplitude in the record (a line of the other motion at f/2 of a
+  // clear line) is set aside and the next candidate taken.
+  DecayWindow dw{rec, {}, noises, spans, start, len, head, 1, 0, max_hz, named};
+  while (dw.nfft < std::max<std::size_t>(8 * len, 16384)) dw.nfft <<= 1;
+  dw.df = fs / static_cast<double>(dw.nfft);
+  for (const auto& c : rec.channels) dw.windows.push_back(std::span<const double>(c).subspan(start, len));
+  const auto lines = pooled_lines(dw.windows, named, dw.nfft, dw.df, o.min_hz, max_hz);
+  std::vector<double> excluded;
+  for (int attempt = 0;; ++attempt) {
+    const auto choice = choose(lines, excluded, max_hz, o);
+    if (!choice.found) {
+      if (!excluded.empty())
+        throw FitError(fmt::format("no decaying line: the candidate fundamental {:.2f} Hz has no amplitude in the "
+                                   "fitted decay (it is the other motion's line, not a ring-down's)",
+                                   excluded.front()),
+                       rec.path);
+      throw FitError(
+          fmt::format("no decaying line above the noise: the strongest line between {:g} and {:.0f} Hz "
+                      "stands {:.1f} times over its channel's spectral median (amplitude), below the {:g} "
+                      "required; a weak pluck, a tap or a bump, not a ring-down",
+                      o.min_hz, max_hz, lines.empty() ? 0.0 : std::sqrt(lines.front().power), o.min_line_ratio),
+          rec.path);
+    }
+    RingdownResult attempt_r = r;
+    fit_series(attempt_r, dw, choice, o);
+    if (fundamental_present(attempt_r.fit) || attempt >= 2) {
+      r = std::move(attempt_r);
+      break;
+    }
+    excluded.push_back(choice.best.fundamental.freq_hz);
   }
-  const double ratio2 = o.min_line_ratio * o.min_line_ratio;
-  const auto lines = rd::spectral_lines(psum, df, o.min_hz, max_hz);
-  const double floor = rd::spectral_floor(psum, df, o.min_hz, max_hz);
-  const auto choice = rd::choose_fundamental(lines, ratio2 * floor, o.min_subharmonic_ratio * o.min_subharmonic_ratio,
-                                             o.min_hz, max_hz, o.harmonic_tolerance, 5.0,
-                                             {o.min_fundamental_line_ratio * o.min_fundamental_line_ratio * floor,
-                                              o.min_fundamental_to_harmonic * o.min_fundamental_to_harmonic,
-                                              o.min_pair_line_ratio * o.min_pair_line_ratio * floor});
-  if (!choice.found)
-    throw FitError(
-        fmt::format("no decaying line above the noise: the strongest line between {:g} and {:.0f} Hz "
-                    "stands {:.1f} times over the spectrum's median (amplitude), below the {:g} "
-                    "required; a weak pluck, a tap or a bump, not a ring-down",
-                    o.min_hz, max_hz, lines.empty() || !(floor > 0) ? 0.0 : std::sqrt(lines.front().power / floor),
-                    o.min_line_ratio),
-        rec.path);
-  const auto& series = choice.best;
-  const double f_spec = series.fundamental.freq_hz;
-
-  // 4. The projection in which the fundamental stands highest over the noise.
-  std::vector<double> w(rec.channels.size(), 0.0);
-  if (named >= 0) w[static_cast<std::size_t>(named)] = 1.0;
-  else w = rd::best_projection(windows, noises, f_spec, fs);
-  for (std::size_t c = 0; c < w.size(); ++c) r.channels[c].weight = w[c];
-  const auto y = weighted_sum(rec, w);
-  r.channel = named >= 0 ? rec.channel_names[static_cast<std::size_t>(named)] : std::string("projection");
-  r.projection = projection_text(rec, w);
-  const std::span<const double> ys(y);
-  const double y_noise = noise_rms(ys, spans);
-  r.strength = y_noise > 0 ? ringdown_rms(ys.subspan(start, head)) / y_noise : std::numeric_limits<double>::infinity();
-  const std::vector<double> win(y.begin() + static_cast<std::ptrdiff_t>(start),
-                                y.begin() + static_cast<std::ptrdiff_t>(start + len));
-
-  // 5. Components: the fundamental, its harmonics present in the projection, then the other
-  // strong lines of the projection.
-  std::vector<double> pp = padded_amplitude_spectrum(win, nfft);
-  for (double& v : pp) v *= v;
-  const auto plines = rd::spectral_lines(pp, df, 0.5 * o.min_hz, max_hz);
-  const double pfloor = rd::spectral_floor(pp, df, o.min_hz, max_hz);
-  std::vector<std::pair<int, double>> comps{{1, f_spec}};  // (harmonic number or 0, start Hz)
-  if (const auto* l = rd::line_near(plines, f_spec, o.harmonic_tolerance)) comps.front().second = l->freq_hz;
-  auto distinct = [&](double f) {
-    return std::none_of(comps.begin(), comps.end(),
-                        [&](const auto& c) { return std::abs(c.second - f) <= o.harmonic_tolerance * c.second; });
-  };
-  for (const auto& [k, hl] : series.harmonics) {
-    if (static_cast<int>(comps.size()) >= o.max_components) break;
-    const auto* l = rd::line_near(plines, hl.freq_hz, o.harmonic_tolerance);
-    if (l && l->power >= ratio2 * pfloor && distinct(l->freq_hz)) comps.emplace_back(k, l->freq_hz);
-  }
-  const double ptop = plines.empty() ? 0.0 : plines.front().power;
-  for (const auto& l : plines) {
-    if (static_cast<int>(comps.size()) >= o.max_components) break;
-    if (l.freq_hz >= o.min_hz && l.power >= 0.09 * ptop && l.power >= ratio2 * pfloor && distinct(l.freq_hz))
-      comps.emplace_back(0, l.freq_hz);
-  }
-  fit_components(r, win, fs, comps, o);
-
-  // The harmonic series found, and where the strongest line stands in it.
-  r.spectral_freq_hz = comps.front().second;
-  r.strongest_peak_hz = choice.strongest.freq_hz;
-  r.harmonics.push_back({1, r.freq_hz, 1.0, true, r.zeta});
-  for (const auto& [k, hl] : series.harmonics) {
-    RingdownHarmonic h{k, hl.freq_hz, std::sqrt(hl.power / series.fundamental.power), false, 0.0};
-    for (std::size_t i = 1; i < comps.size(); ++i)
-      if (comps[i].first == k) {
-        h.fitted = true;
-        h.freq_hz = r.fit.value(fmt::format("f{}_hz", i));
-        h.zeta = r.fit.value(fmt::format("zeta{}", i));
-      }
-    if (std::abs(hl.freq_hz - choice.strongest.freq_hz) < 1e-9) r.harmonic_number = k;
-    r.harmonics.push_back(h);
-  }
-  r.strongest_is_harmonic = r.harmonic_number > 1;
-  if (r.strongest_is_harmonic)
-    r.warnings.push_back(fmt::format("the strongest line, {:.2f} Hz, is harmonic {} of the fundamental {:.2f} Hz",
-                                     r.strongest_peak_hz, r.harmonic_number, r.freq_hz));
-
-  // 6. A ring-down decays, and a belt's decays slowly.
-  r.decay_ratio = std::exp(-r.zeta * 2 * std::numbers::pi * r.freq_hz * r.window_s);
-  if (r.decay_ratio > o.max_decay_ratio)
-    throw FitError(fmt::format("the {:.2f} Hz line does not decay: its envelope keeps {:.0f} % of its amplitude over "
-                               "the {:.2f} s window (more than {:.0f} %); a steady tone (a fan, a motor), not a "
-                               "ring-down",
-                               r.freq_hz, 100 * r.decay_ratio, r.window_s, 100 * o.max_decay_ratio),
-                   rec.path);
-  if (o.max_zeta > 0 && r.zeta > o.max_zeta)
-    throw FitError(fmt::format("the {:.2f} Hz line decays too fast for a plucked belt: damping ratio {:.3f}, above "
-                               "{:g}; a tap or a bump of the frame, not a pluck",
-                               r.freq_hz, r.zeta, o.max_zeta),
-                   rec.path);
-  if (r.fit.diagnostics.whiteness_p < 0.01)
-    r.warnings.push_back(
-        fmt::format("{}: the fit's residuals are not white (p = {:.2g}): other motion than the fitted "
-                    "lines; the intervals are optimistic",
-                    r.channel, r.fit.diagnostics.whiteness_p));
+  check_ringdown(r, o);
   return r;
 }
 
@@ -352,6 +524,9 @@ nlohmann::json to_json(const RingdownResult& r) {
           {"zeta", r.zeta},
           {"zeta_stderr", r.zeta_stderr},
           {"zeta_ci95", {r.zeta_ci95_lo, r.zeta_ci95_hi}},
+          {"zeta_identified", r.zeta_identified},
+          {"series_zeta", r.series_zeta},
+          {"interval_factor", r.interval_factor},
           {"decay_ratio", r.decay_ratio},
           {"other_lines_hz", r.other_lines_hz},
           {"fit", fitting::to_json(r.fit)}};

@@ -43,7 +43,8 @@ double spectral_floor(const std::vector<double>& p, double df, double lo, double
 }
 
 SeriesChoice choose_fundamental(const std::vector<Line>& lines, double min_power, double min_rel, double f_min,
-                                double f_max, double tol, double lone_factor, const SubharmonicRule& sub) {
+                                double f_max, double tol, double lone_factor, const SubharmonicRule& sub,
+                                const std::vector<double>& excluded) {
   SeriesChoice out;
   if (lines.empty()) return out;
   out.strongest = lines.front();
@@ -52,7 +53,7 @@ SeriesChoice choose_fundamental(const std::vector<Line>& lines, double min_power
     if (l.power >= min_power && l.power >= min_rel * out.strongest.power && l.freq_hz >= f_min) clear.push_back(l);
   std::vector<Line> heads = clear;
   for (const auto& l : clear)
-    for (int k = 2; k <= 3 && sub.min_power > 0; ++k) {
+    for (int k = 2; k <= 2 && sub.min_power > 0; ++k) {
       const Line* g = line_near(lines, l.freq_hz / k, tol);
       if (g == nullptr || g->freq_hz < f_min || g->power < sub.min_power || g->power < sub.min_rel * l.power) continue;
       if (line_near(heads, g->freq_hz, 1e-9) == nullptr) heads.push_back(*g);
@@ -65,6 +66,8 @@ SeriesChoice choose_fundamental(const std::vector<Line>& lines, double min_power
   const double harmonic_power = sub.pair_power > 0 ? std::min(min_power, sub.pair_power) : min_power;
   std::vector<Series> candidates;
   for (const auto& l : heads) {
+    if (std::any_of(excluded.begin(), excluded.end(), [&](double f) { return std::abs(f - l.freq_hz) <= 1e-9 * f; }))
+      continue;
     Series s;
     s.fundamental = l;
     s.power = l.power;

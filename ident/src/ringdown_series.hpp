@@ -43,7 +43,7 @@ struct SeriesChoice {
 /// the series of f/k holds every line of f's series and a clear sub-harmonic is never outweighed
 /// by its own harmonic's series.
 /// Weaker lines that can still be a fundamental, for a plucked belt whose fundamental stands
-/// lower than its second harmonic where the sensor sits: a line at f/2 or f/3 of a clear line f
+/// lower than its second harmonic where the sensor sits: a line at f/2 of a clear line f
 /// with at least `min_power` and `min_rel` of f's power; and a pair of lines g, 2g that both
 /// reach `pair_power` (two lines in harmonic ratio, each well over the floor, are rarely noise).
 /// A series counts its harmonics down to `pair_power` too. 0 turns a rule off.
@@ -52,8 +52,10 @@ struct SubharmonicRule {
   double min_rel = 0;
   double pair_power = 0;
 };
+/// Candidates at a frequency in `excluded` (set aside by the caller) are not considered.
 SeriesChoice choose_fundamental(const std::vector<Line>& lines, double min_power, double min_rel, double f_min,
-                                double f_max, double tol, double lone_factor, const SubharmonicRule& sub = {});
+                                double f_max, double tol, double lone_factor, const SubharmonicRule& sub = {},
+                                const std::vector<double>& excluded = {});
 
 /// Unit weights w (sum of squares 1) of the channels: the direction in which a sinusoid at f_hz
 /// stands highest over the noise (channel c's noise RMS noise[c]), from each channel's complex

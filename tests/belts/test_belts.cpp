@@ -56,13 +56,15 @@ TEST_CASE(
     CHECK(ok);
     within += ok;
     harmonic_strongest += r.strongest_is_harmonic;
-    // The series is reported: the second harmonic near 2 f, where it outlasts the window's rising
-    // edge (a fast-decaying harmonic can be gone from the spectrum).
-    if (r.harmonics.size() >= 2) {
-      CHECK(r.harmonics[1].k == 2);
-      CHECK(r.harmonics[1].freq_hz == Approx(2 * tr.f_hz).epsilon(0.01));
-      ++with_harmonic;
+    // The series is reported: every harmonic found lies at k f within the series' tolerance (a
+    // fast-decaying harmonic's spectral peak is broad, and it can be gone from the spectrum: the
+    // third harmonic is then reported without the second), and the second where it outlasts the
+    // window's rising edge.
+    for (std::size_t h = 1; h < r.harmonics.size(); ++h) {
+      CHECK(r.harmonics[h].k >= 2);
+      CHECK(r.harmonics[h].freq_hz == Approx(r.harmonics[h].k * tr.f_hz).epsilon(belt_options().harmonic_tolerance));
     }
+    if (r.harmonics.size() >= 2 && r.harmonics[1].k == 2) ++with_harmonic;
   }
   CHECK(within == 100);
   CHECK(with_harmonic >= 50);  // 60 of these 100 draws

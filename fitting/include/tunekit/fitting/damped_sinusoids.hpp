@@ -22,6 +22,11 @@ struct PencilComponent {
   double zeta = 0;       ///< damping ratio (negative for a growing component)
   double amplitude = 0;  ///< initial amplitude at k = 0, y's unit
   double phase_rad = 0;  ///< at k = 0: amplitude * cos(w_d t + phase)
+  /// In a fit: 0 for a free frequency; k >= 2 ties this component's natural frequency to k times
+  /// component 0's (a harmonic of a string's fundamental), so that every harmonic informs f0.
+  int harmonic = 0;
+  /// In a fit: the upper bound of this component's damping ratio; 0 for the general bound (0.9).
+  double max_zeta = 0;
 };
 
 /// Matrix-pencil estimate of the damped sinusoids in a real record `y` sampled at `fs_hz`:
@@ -32,8 +37,10 @@ std::vector<PencilComponent> matrix_pencil(const std::vector<double>& y, double 
 
 /// Least-squares fit of the model above to `y` (sampled at fs_hz) from the start values
 /// `start` (frequency and damping of each component; amplitudes are refitted), each frequency
-/// kept within start x (1 -+ freq_rel_bound). FitError when it does not converge or the
-/// parameters are not identifiable.
+/// kept within start x (1 -+ freq_rel_bound). A component whose `harmonic` is k >= 2 has no
+/// frequency of its own: f<i>_hz is reported as k f0_hz with k times f0's error and interval
+/// (a fixed parameter of the fit). FitError when it does not converge or the parameters are not
+/// identifiable.
 FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
                                double freq_rel_bound = 0.5);
 

@@ -7,30 +7,36 @@
 //   2. strength gate: the RMS of the first 0.1 s of the decay over the noise floor (the RMS
 //      before the impact, or of the record's last fifth when there is too little before it);
 //      a record whose strongest channel is below `min_strength` is refused (FitError, exit 1);
-//   3. the fundamental, from all channels together: on the summed power spectrum of the
-//      window every clear line is a candidate fundamental f, and its harmonic series (lines
-//      at 2f, 3f, ... within `harmonic_tolerance`) is collected. The candidate whose series
-//      carries the most power wins, and a series with harmonics wins over a lone line unless
-//      the lone line is over five times stronger -- a plucked string rings with its
+//   3. the fundamental, from all channels together: the spectral lines of every channel's
+//      window and of the channels' summed spectrum, each measured against its own spectrum's
+//      median, are pooled; every clear line is a candidate fundamental f, and its harmonic
+//      series (lines at 2f, 3f, ... within `harmonic_tolerance`) is collected. The candidate
+//      whose series carries the most power wins, and a series with harmonics wins over a lone
+//      line unless the lone line is over five times stronger -- a plucked string rings with its
 //      harmonics. Every series is collected over the same band (up to `max_hz`), so a line at
 //      f/2 that is clearly there makes the line at f its second harmonic, however strong:
 //      f/2's series then holds every line of f's. A pluck whose second
 //      harmonic is the strongest line in every channel therefore reads at its fundamental.
-//      A weaker line at f/2 or f/3 of a clear line, and a pair of lines g, 2g both well over
-//      the floor, are candidates too (`min_fundamental_line_ratio`, `min_pair_line_ratio`);
+//      A weaker line at f/2 of a clear line, and a pair of lines g, 2g both well over the
+//      floor, are candidates too (`min_fundamental_line_ratio`, `min_pair_line_ratio`);
 //   4. the projection: the channels are combined as y = sum_c w_c x_c with the unit vector w
 //      in which the fundamental stands highest over the noise (each channel weighted by its
 //      noise, the principal direction of the fundamental's complex amplitudes). A named
 //      channel is used alone instead;
 //   5. the fundamental, its harmonics and the other strong lines of the projection are
-//      fitted as damped sinusoids, each with its own frequency, damping, amplitude and phase
-//      (matrix pencil start, least-squares refinement; fitting/damped_sinusoids.hpp), giving
-//      the fundamental's frequency and damping ratio with 95 % intervals;
+//      fitted as damped sinusoids (matrix pencil start, least-squares refinement;
+//      fitting/damped_sinusoids.hpp): the harmonics at exactly k f0, each line of the series
+//      with its own damping, amplitude and phase, the other lines free, giving the
+//      fundamental's frequency (informed by every harmonic) and damping ratio with 95 %
+//      intervals. A candidate whose fitted fundamental has no amplitude (a Wald test) is set
+//      aside and the next one taken;
 //   6. what is not a ring-down is refused (FitError, exit 1): no line standing above the
 //      spectrum's floor (a weak pluck, a bump), a line that does not decay (a fan's or a
 //      motor's steady tone), a decay faster than `max_zeta` (a tap on the frame, when the
 //      caller asks for a belt).
-// The intervals assume white residuals; the fit's whiteness p-value is reported with them.
+// The intervals are Wald intervals; where the residuals are not white (Ljung-Box p < 0.01) the
+// frequency's and damping's are widened by the residuals' spectral level at the lines
+// (`interval_factor`), and the whiteness p-value is reported with them.
 
 #include <string>
 #include <vector>
@@ -49,17 +55,19 @@ struct RingdownOptions {
   /// printer belts ring at 50-250 Hz; the lines a toolhead accelerometer shows above 400 Hz are its
   /// mount, the frame's panels and fans, and on real plucks they can outweigh the belt's series.
   double max_hz = 400.0;
-  double settle_s = 0.03;              ///< skipped after the impact (the impact and the first, large and
-                                       ///< not yet free swings are not a free decay of fixed frequency)
-  double max_window_s = 0.5;           ///< longest decay window fitted, s
-  double min_strength = 3.0;           ///< refuse below this signal/noise RMS ratio
-  int max_components = 5;              ///< damped sinusoids fitted (fundamental and harmonics first)
-  double max_line_shift = 0.05;        ///< a fitted line may move this fraction from its spectral start
-  double harmonic_tolerance = 0.03;    ///< relative tolerance of a harmonic at k f
-  double min_line_ratio = 4.0;         ///< a line must stand this many times (amplitude) over the spectrum's median
+  double settle_s = 0.03;        ///< skipped after the impact (the impact and the first, large and
+                                 ///< not yet free swings are not a free decay of fixed frequency)
+  double max_window_s = 0.5;     ///< longest decay window fitted, s
+  double min_strength = 3.0;     ///< refuse below this signal/noise RMS ratio
+  int max_components = 5;        ///< damped sinusoids fitted (fundamental and harmonics first)
+  double max_line_shift = 0.05;  ///< a fitted line may move this fraction from its spectral start
+  /// Relative tolerance of a harmonic at k f: a belt's overtones run at most about 1 % sharp of
+  /// k f (its bending stiffness), and a wider tolerance pairs unrelated lines by chance.
+  double harmonic_tolerance = 0.015;
+  double min_line_ratio = 4.0;         ///< a line must stand this many times (amplitude) over its spectrum's median
   double min_subharmonic_ratio = 0.1;  ///< a candidate fundamental must reach this fraction of the strongest
                                        ///< line's amplitude
-  /// A line at f/2 or f/3 of a clear line f is a candidate fundamental when it stands this many
+  /// A line at f/2 of a clear line f is a candidate fundamental when it stands this many
   /// times (amplitude) over the spectrum's median and reaches `min_fundamental_to_harmonic` of
   /// f's amplitude: where the sensor sits near a node of the fundamental, a real pluck's
   /// fundamental can stand lower than its second harmonic.
@@ -113,7 +121,16 @@ struct RingdownResult {
   double zeta = 0;
   double zeta_stderr = 0;
   double zeta_ci95_lo = 0, zeta_ci95_hi = 0;
-  double decay_ratio = 0;              ///< the fundamental's envelope at the window's end over its start
+  /// False when the fundamental's damping reached the fit's bound for a line of the series: its
+  /// component then holds the impact's heavily damped transient at that frequency as well as
+  /// the line, so zeta is no mode's damping. The frequency is still the series' (tied to its
+  /// harmonics), and the damping a belt is judged by is the series' least-damped line's.
+  bool zeta_identified = true;
+  double series_zeta = 0;  ///< the least damping ratio among the fitted lines of the series (k >= 1)
+  double decay_ratio = 0;  ///< the fundamental's envelope at the window's end over its start
+  /// How much the frequency's Wald interval was widened for residuals that are not white (the
+  /// residuals' spectral level at the series' lines over their mean); 1: not widened.
+  double interval_factor = 1;
   std::vector<double> other_lines_hz;  ///< the other fitted components' frequencies
   fitting::FitResult fit;
   std::vector<std::string> warnings;
