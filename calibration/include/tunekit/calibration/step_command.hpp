@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "tunekit/calibration/envelope.hpp"
-#include "tunekit/ident/liquefier_record.hpp"
+#include "tunekit/calibration/whole_record.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
 namespace tunekit::calibration {
@@ -40,8 +40,7 @@ struct StepOutcome {
   std::string input_unit, output_unit, gain_unit;  ///< as results report them ("1": dimensionless)
   ident::StepAnalysis analysis;
   /// The whole-record model (records with an input channel), or why it could not be fitted.
-  std::optional<ident::WholeRecordModel> whole_record;
-  std::string whole_record_error;
+  WholeRecordResult whole_record;
   std::vector<std::string> warnings;  ///< the CSV reader's, then the analysis'
 };
 
