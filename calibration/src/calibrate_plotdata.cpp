@@ -50,10 +50,10 @@ std::string model_label(const ident::WholeRecordModel& m) {
 }  // namespace
 
 // Series for the step plot: the measured record, each step's own fitted model and the whole-record model.
-nlohmann::json step_plotdata(const StepOutcome& step, const std::string& in_col, const std::string& out_col,
-                             const std::string& u_label, const std::string& y_label) {
-  const auto table = ident::read_csv(step.options.file, {{"time", in_col, out_col}, "time"});
-  const auto& t = table.column("time").values;
+nlohmann::json step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label) {
+  const std::string &tc = step.time_column, &in_col = step.options.input_column, &out_col = step.options.output_column;
+  const auto table = ident::read_csv(step.options.file, {{tc, in_col, out_col}, tc});
+  const auto& t = table.column(tc).values;
   const auto& u = table.column(in_col).values;
   const auto& y = table.column(out_col).values;
   const std::vector<double> yf = step_fits_output(t, step.analysis);

@@ -21,9 +21,8 @@ double calibrate_param(const fitting::FitResult& f, const std::string& name);
 /// fitted model over the samples its fit used (y_fit), and the whole-record model's simulated
 /// output over all of it (y_model, with its legend text model_label) or, when it was not fitted,
 /// why (model_missing).
-nlohmann::json step_plotdata(const StepOutcome& step, const std::string& in_col = "feed",
-                             const std::string& out_col = "force", const std::string& u_label = "feed (mm/s)",
-                             const std::string& y_label = "force (N)");
+/// The record is read again from the step analysis' file and columns (it needs an input column).
+nlohmann::json step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label);
 /// Magnitude and phase of the measured frequency response and of the reported fitted model.
 nlohmann::json bode_plotdata(const FreqOutcome& chirp);
 /// One axis' PSD up to the plot's highest frequency, its fitted modes and each candidate

@@ -3,13 +3,17 @@
 // channel (ooze after a stop, Table B.1), given by --step-time and --step-size / --group.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <memory>
 
 #include <fmt/format.h>
 
+#include "calibrate_plotdata.hpp"
+
 #include "tunekit/calibration/step_command.hpp"
 #include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/whole_record.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
@@ -29,6 +33,22 @@ void print_fit_line(std::ostream& os, const std::string& label, const fitting::F
                     f.diagnostics.rms, f.diagnostics.r2);
 }
 
+// --plot: the figure needs the input column, an .svg or .png name, and never the log's own path.
+void check_plot_option(const StepOptions& a) {
+  if (a.plot_out.empty()) return;
+  if (a.input_column.empty()) throw InputError("--plot draws the record against its input: give --input COL");
+  const auto ext = std::filesystem::path(a.plot_out).extension();
+  if (ext != ".svg" && ext != ".png") throw InputError("--plot writes an .svg or .png file", a.plot_out);
+  std::error_code ec;
+  if (std::filesystem::equivalent(a.plot_out, a.file, ec))
+    throw InputError("--plot names the log itself; give another file", a.plot_out);
+}
+
+// An axis label: the column and its unit ("feed (mm/s)"), the column alone when dimensionless.
+std::string column_label(const std::string& column, const std::string& unit) {
+  return unit == "1" ? column : fmt::format("{} ({})", column, unit);
+}
+
 }  // namespace
 
 std::string step_model_option_name(fitting::StepModel model) {
@@ -43,6 +63,7 @@ StepOutcome compute_step(const StepOptions& a) {
   outcome.options = a;
   if (!(a.analysis.detect.min_step_fraction > 0 && a.analysis.detect.min_step_fraction < 1))
     throw InputError("--min-step must be between 0 and 1 (a fraction of the input range)");
+  check_plot_option(a);
   const std::string bytes = read_file_bytes(a.file);
   ident::CsvOptions copt;
   copt.columns = {a.output_column};
@@ -126,6 +147,10 @@ StepOutcome compute_step(const StepOptions& a) {
   outcome.gain_unit = opt.gain_unit;
   outcome.warnings = table.warnings;
   outcome.warnings.insert(outcome.warnings.end(), res.warnings.begin(), res.warnings.end());
+  if (!a.plot_out.empty())
+    render_figure(step_figure(step_plotdata(outcome, column_label(a.input_column, outcome.input_unit),
+                                            column_label(a.output_column, outcome.output_unit))),
+                  a.plot_out);
   return outcome;
 }
 

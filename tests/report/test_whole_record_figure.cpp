@@ -168,3 +168,33 @@ TEST_CASE("calibrate's report: the step figure holds the whole-record model fitt
   REQUIRE(points.count(kModel) == 1);
   CHECK(points.at(kModel) > 1000);
 }
+
+TEST_CASE("tunekit step --plot draws the same figure: the record, the whole-record model and the step fits") {
+  const std::string dir = tunekit::test::scratch_dir("whole_record_step_plot");
+  const std::string csv = tunekit::test::dataset("liquefier/synthetic_steps.csv");
+  const auto r = tunekit::test::run_cli({"step", csv, "--time", "time", "--input", "feed", "--output", "force",
+                                         "--step-at", "first", "--plot", dir + "/step.svg"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("whole record: tau = a u^b") != std::string::npos);
+  const auto points = points_by_stroke(tunekit::read_file_bytes(dir + "/step.svg"));
+  REQUIRE(points.count(kMeasured) == 1);
+  REQUIRE(points.count(kModel) == 1);
+  REQUIRE(points.count(kStepFits) == 1);
+  CHECK(points.at(kMeasured) > 500);
+  CHECK(points.at(kModel) > 2 * 500);
+  CHECK(points.at(kStepFits) > 100);
+  // A PNG on request; the options it needs are checked before anything is fitted.
+  CHECK(tunekit::test::run_cli(
+            {"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--plot", dir + "/step.png"})
+            .code == 0);
+  CHECK(std::filesystem::file_size(dir + "/step.png") > 1000);
+  const auto no_input = tunekit::test::run_cli(
+      {"step", csv, "--time", "time", "--output", "force", "--step-size", "1", "--plot", dir + "/x.svg"});
+  CHECK(no_input.code == 2);
+  CHECK(no_input.err.find("tunekit: error: --plot draws the record against its input") != std::string::npos);
+  const auto pdf = tunekit::test::run_cli(
+      {"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--plot", dir + "/x.pdf"});
+  CHECK(pdf.code == 2);
+  CHECK(!std::filesystem::exists(dir + "/x.svg"));
+}

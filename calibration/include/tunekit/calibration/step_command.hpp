@@ -30,6 +30,9 @@ struct StepOptions {
   /// The whole-record model's intervals of b and theta by profile likelihood (slower) instead of
   /// Wald intervals widened for correlated residuals.
   bool profile_intervals = false;
+  /// With input_column: also draw the step figure of the calibration report here (.svg or .png):
+  /// the record, the whole-record model over all of it, each step's fit over its step, residuals.
+  std::string plot_out;
 };
 
 struct StepOutcome {
@@ -44,8 +47,9 @@ struct StepOutcome {
   std::vector<std::string> warnings;  ///< the CSV reader's, then the analysis'
 };
 
-/// Reads the log and fits every step, the pooled steps and each operating point. InputError
-/// (exit 2) for bad input, FitError (exit 1) when no fit converges; both located at the file.
+/// Reads the log and fits every step, the pooled steps and each operating point (and draws the
+/// figure options.plot_out names). InputError (exit 2) for bad input, FitError (exit 1) when no
+/// fit converges; both located at the file.
 StepOutcome compute_step(const StepOptions& options);
 
 Envelope to_envelope(const StepOutcome& outcome);
