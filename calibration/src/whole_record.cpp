@@ -44,10 +44,11 @@ WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const do
     r.error = plain_reason(e);
     refused = e.code() == ExitCode::bad_input;
   }
-  if (steps == nullptr && !refused) {
+  if (steps == nullptr && !refused && !(r.model && r.model->model.linear_chosen)) {
     // Without operating points to read the sensor from, the record decides: both sensors' models
     // have the same parameters, and the one with the smaller residuals (so the smaller AIC) is
-    // kept; a tie (the linear model, where the two are one) keeps the unit's.
+    // kept; a tie keeps the unit's. The linear model is one model for either sensor (y = g a q + c
+    // or y = g q + c): when the unit's sensor chose it, there is nothing to decide.
     try {
       auto other = ident::analyze_whole_record(t, u, y, other_sensor(by_unit), input_unit, output_unit, nullptr, fo);
       if (!r.model || other.model.fit.diagnostics.rms < (1 - 1e-6) * r.model->model.fit.diagnostics.rms) {

@@ -28,9 +28,10 @@ struct WholeRecordResult {
 /// in `input_unit`), y the output (in `output_unit`). With `steps` (tunekit step) the sensor
 /// (flow or pressure) is read from their operating points, else from the output's unit
 /// (ident::sensor_for_record), and the step fits are checked against the model. Without them
-/// (tunekit freq) both sensors' models are fitted and the one with the smaller residuals is kept
-/// (equal parameter counts: the smaller AIC; a tie keeps the unit's), sensor_basis "residuals"
-/// when it is not the unit's. Intervals of b and theta by profile likelihood when
+/// (tunekit freq), unless the unit's sensor gives the linear model (the same for either sensor),
+/// the other sensor's model is fitted too and the one with the smaller residuals is kept (equal
+/// parameter counts: the smaller AIC; a tie keeps the unit's), sensor_basis "residuals" when it
+/// is not the unit's. Intervals of b and theta by profile likelihood when
 /// `profile_intervals`, else widened Wald intervals.
 /// A record that cannot carry the model is no failure: the result holds the reason, and
 /// "whole-record model not fitted: <reason>" is added to `warnings`.
