@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
+#include "tunekit/calibration/whole_record.hpp"
 #include "tunekit/fitting/first_order.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/input_shaper.hpp"
@@ -17,15 +20,11 @@ double calibrate_param(const fitting::FitResult& f, const std::string& name) {
   return std::nan("");
 }
 
-// Series for the step plot: the measured record and each step's own fitted model.
-nlohmann::json step_plotdata(const std::string& csv, const ident::StepAnalysis& steps, const std::string& in_col,
-                             const std::string& out_col, const std::string& u_label, const std::string& y_label) {
-  const auto table = ident::read_csv(csv, {{"time", in_col, out_col}, "time"});
-  const auto& t = table.column("time").values;
-  const auto& u = table.column(in_col).values;
-  const auto& y = table.column(out_col).values;
-  // Each step's model is drawn over the samples its fit used and nowhere else (not over the
-  // warm-up from rest, which no step models).
+namespace {
+
+// Each step's model over the samples its fit used and nowhere else (not over the warm-up from
+// rest, which no step models); NaN elsewhere.
+std::vector<double> step_fits_output(const std::vector<double>& t, const ident::StepAnalysis& steps) {
   std::vector<double> yf(t.size(), std::nan(""));
   for (const auto& s : steps.steps) {
     if (!s.fit) continue;
@@ -38,20 +37,50 @@ nlohmann::json step_plotdata(const std::string& csv, const ident::StepAnalysis& 
     if (!std::isfinite(theta)) theta = 0;
     for (std::size_t i = begin; i < end; ++i) yf[i] = fitting::step_response(t[i], ts, du, K, tau, theta, y0);
   }
+  return yf;
+}
+
+// The whole-record model's legend text: its form and exponent.
+std::string model_label(const ident::WholeRecordModel& m) {
+  const auto& b = m.model.fit.param("b");
+  if (b.fixed) return "whole-record model (linear)";
+  return fmt::format("whole-record model (b = {:.2g})", b.value);
+}
+
+}  // namespace
+
+// Series for the step plot: the measured record, each step's own fitted model and the whole-record model.
+nlohmann::json step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label) {
+  const std::string &tc = step.time_column, &in_col = step.options.input_column, &out_col = step.options.output_column;
+  const auto table = ident::read_csv(step.options.file, {{tc, in_col, out_col}, tc});
+  const auto& t = table.column(tc).values;
+  const auto& u = table.column(in_col).values;
+  const auto& y = table.column(out_col).values;
+  const std::vector<double> yf = step_fits_output(t, step.analysis);
+  std::vector<double> ym;
+  nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};
+  if (const auto& m = step.whole_record.model) {
+    ym = whole_record_output(*m, t, u);
+    d["model_label"] = model_label(*m);
+  } else {
+    d["model_missing"] =
+        step.whole_record.error.empty() ? std::string("the record has no input column") : step.whole_record.error;
+  }
   // Thin very long records for the plot (every n-th sample).
   const std::size_t stride = std::max<std::size_t>(1, t.size() / 4000);
-  nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};
-  std::vector<double> ts, us, ys, fs_;
+  std::vector<double> ts, us, ys, fs_, ms;
   for (std::size_t i = 0; i < t.size(); i += stride) {
     ts.push_back(t[i]);
     us.push_back(u[i]);
     ys.push_back(y[i]);
     fs_.push_back(yf[i]);
+    if (!ym.empty()) ms.push_back(ym[i]);
   }
   d["t_s"] = ts;
   d["u"] = us;
   d["y"] = ys;
   d["y_fit"] = fs_;
+  if (!ym.empty()) d["y_model"] = ms;
   return d;
 }
 

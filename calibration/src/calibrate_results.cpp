@@ -61,8 +61,7 @@ bool calibrate_estimate(const fitting::Param& p, const std::string& method, Esti
 void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths) {
   r.res()["liquefier"]["step"] = analysis_results(widths);
   r.res()["liquefier"]["camera"] = cam.results;
-  r.plot["step"] =
-      step_plotdata(cam.width_csv, widths.analysis, "setpoint_width", "width", "set-point width (mm)", "width (mm)");
+  r.plot["step"] = step_plotdata(widths, "set-point width (mm)", "width (mm)");
   r.plot["linewidth"] = cam.linewidth_plot;
   const std::string p = "liquefier.step.pooled.params.";
   r.plain_row("liquefier time constant tau (line widths)", p + "tau_s.value", "s");
@@ -83,7 +82,7 @@ void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widt
 
 void add_load_cell_step(RunRecord& r, const StepOutcome& step, double filament_area_mm2) {
   auto& j = r.res()["liquefier"]["step"] = analysis_results(step);
-  r.plot["step"] = step_plotdata(step.options.file, step.analysis);
+  r.plot["step"] = step_plotdata(step, "feed (mm/s)", "force (N)");
   std::string levels;
   const auto& arrivals = step.analysis.arrival_levels;
   for (std::size_t i = 0; i < arrivals.size(); ++i) {

@@ -226,18 +226,18 @@ StepDesignInput step_design_input(const StepOutcome& o, const std::string& origi
     in.K_unit = a.pooled->param("K").unit;
   }
   in.levels_in_flow = ident::is_volumetric_flow_unit(o.input_unit);
-  if (o.whole_record) {
-    const auto& f = o.whole_record->model.fit;
+  if (const auto& wr = o.whole_record.model) {
+    const auto& f = wr->model.fit;
     StepModelInput m;
     m.a = estimated_of(f.derived.front());
     m.b = estimated_of(f.param("b"));
     m.theta_s = estimated_of(f.param("theta_s"));
-    m.linear = o.whole_record->model.linear_chosen;
-    m.u_min = o.whole_record->input_min_positive;
-    m.u_max = o.whole_record->input_max;
+    m.linear = wr->model.linear_chosen;
+    m.u_min = wr->input_min_positive;
+    m.u_max = wr->input_max;
     std::size_t disagreeing = 0;
-    for (const auto& c : o.whole_record->checks) disagreeing += c.disagrees;
-    if (model_agrees_with_steps(o.whole_record->checks.size(), disagreeing)) in.model = m;
+    for (const auto& c : wr->checks) disagreeing += c.disagrees;
+    if (model_agrees_with_steps(wr->checks.size(), disagreeing)) in.model = m;
   }
   if (!levels_are_feed_or_flow(o.input_unit)) {
     in.model.reset();

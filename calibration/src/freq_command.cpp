@@ -244,6 +244,40 @@ void freq_broadband(FreqOutcome& o, const FreqOptions& a, const ident::CsvTable&
   freq_fits(o, a, u, y);
 }
 
+// The sine dwell at the known frequency (any sampling).
+void freq_dwell(FreqOutcome& o, const FreqOptions& a, const ident::CsvTable& table) {
+  if (!(a.freq_hz > 0)) throw InputError("sine dwell needs the excitation frequency: --freq-hz F (Hz)");
+  if (!a.fit_tf.empty()) throw InputError("--fit-tf needs broadband data: use --mode h1 or --mode oe");
+  const auto& t_all = table.column(table.time_column).values;
+  const auto& ycol = table.column(a.output_column);
+  freq_located(a.file, [&] {
+    o.dwell =
+        ident::sine_dwell(t_all, ycol.values, a.freq_hz,
+                          a.input_column.empty() ? std::span<const double>() : table.column(a.input_column).values,
+                          o.output_unit, o.input_unit);
+  });
+  for (const auto& w : o.dwell->output.warnings) o.warnings.push_back("output: " + w);
+  if (o.dwell->input)
+    for (const auto& w : o.dwell->input->warnings) o.warnings.push_back("input: " + w);
+}
+
+// The whole-record model beside the per-frequency results, fitted to the record from --tmin on
+// (all of it without --tmin: the model starts from any state, V0 is one of its parameters).
+void freq_whole_record(FreqOutcome& o, const FreqOptions& a, const ident::CsvTable& table) {
+  if (a.input_column.empty()) {
+    o.whole_record.error = "the record has no input column (--input COL), and the model is driven by the input";
+    o.warnings.push_back("whole-record model not fitted: " + o.whole_record.error);
+    return;
+  }
+  const std::span<const double> t = table.column(table.time_column).values;
+  const std::size_t first =
+      a.tmin_s ? static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), *a.tmin_s) - t.begin()) : 0;
+  const std::span<const double> u = table.column(a.input_column).values;
+  const std::span<const double> y = table.column(a.output_column).values;
+  o.whole_record = fit_whole_record(t.subspan(first), u.subspan(first), y.subspan(first), o.input_unit, o.output_unit,
+                                    nullptr, a.profile_intervals, o.warnings);
+}
+
 }  // namespace
 
 FreqOutcome compute_freq(const FreqOptions& a) {
@@ -278,21 +312,9 @@ FreqOutcome compute_freq(const FreqOptions& a) {
     }
   }
 
-  if (o.mode == FreqMode::dwell) {
-    if (!(a.freq_hz > 0)) throw InputError("sine dwell needs the excitation frequency: --freq-hz F (Hz)");
-    if (!a.fit_tf.empty()) throw InputError("--fit-tf needs broadband data: use --mode h1 or --mode oe");
-    freq_located(a.file, [&] {
-      o.dwell =
-          ident::sine_dwell(t_all, ycol.values, a.freq_hz,
-                            a.input_column.empty() ? std::span<const double>() : table.column(a.input_column).values,
-                            o.output_unit, o.input_unit);
-    });
-    for (const auto& w : o.dwell->output.warnings) o.warnings.push_back("output: " + w);
-    if (o.dwell->input)
-      for (const auto& w : o.dwell->input->warnings) o.warnings.push_back("input: " + w);
-    return o;
-  }
-  freq_broadband(o, a, table);
+  if (o.mode == FreqMode::dwell) freq_dwell(o, a, table);
+  else freq_broadband(o, a, table);
+  freq_whole_record(o, a, table);
   return o;
 }
 
@@ -336,7 +358,8 @@ Envelope to_envelope(const FreqOutcome& o) {
                    {"fmin_hz", a.fmin_hz},
                    {"fmax_hz", a.fmax_hz},
                    {"tmin_s", a.tmin_s ? nlohmann::json(*a.tmin_s) : nlohmann::json(nullptr)},
-                   {"min_coherence", a.min_coherence}});
+                   {"min_coherence", a.min_coherence},
+                   {"profile_intervals", a.profile_intervals}});
   env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
   for (const auto& w : o.warnings) env.warn(w);
   auto& res = env.results();
@@ -373,32 +396,33 @@ Envelope to_envelope(const FreqOutcome& o) {
       res["fit"]["method"] = o.reported_fit_method();
     }
   }
+  add_whole_record(env, o.whole_record);
   return env;
 }
 
-void print_text(const FreqOutcome& o, std::ostream& os) {
-  const FreqOptions& a = o.options;
-  if (o.dwell) {
-    const auto& sd = *o.dwell;
-    auto line = [&](const char* what, const fitting::FitResult& f, const std::string& unit) {
-      os << fmt::format("  {:<7} amplitude {:.4g} +- {:.2g} {}  phase {:.2f} +- {:.2f} deg  offset {:.4g} {}\n", what,
-                        f.value("amplitude"), f.param("amplitude").std_error, unit, f.value("phase_deg"),
-                        f.param("phase_deg").std_error, f.value("offset"), unit);
-    };
-    os << fmt::format("{}: sine dwell at {:.6g} Hz, {} samples\n", a.file, a.freq_hz, o.samples);
-    line("output", sd.output, o.output_unit);
-    if (sd.input) {
-      line("input", *sd.input, o.input_unit);
-      os << fmt::format("  gain {:.4g} +- {:.2g}   phase lag {:.2f} +- {:.2f} deg (positive: output lags)\n",
-                        sd.gain.value, sd.gain.std_error, sd.phase_lag_deg.value, sd.phase_lag_deg.std_error);
-    }
-    return;
+namespace {
+
+void print_dwell(const FreqOutcome& o, std::ostream& os) {
+  const auto& sd = *o.dwell;
+  auto line = [&](const char* what, const fitting::FitResult& f, const std::string& unit) {
+    os << fmt::format("  {:<7} amplitude {:.4g} +- {:.2g} {}  phase {:.2f} +- {:.2f} deg  offset {:.4g} {}\n", what,
+                      f.value("amplitude"), f.param("amplitude").std_error, unit, f.value("phase_deg"),
+                      f.param("phase_deg").std_error, f.value("offset"), unit);
+  };
+  os << fmt::format("{}: sine dwell at {:.6g} Hz, {} samples\n", o.options.file, o.options.freq_hz, o.samples);
+  line("output", sd.output, o.output_unit);
+  if (sd.input) {
+    line("input", *sd.input, o.input_unit);
+    os << fmt::format("  gain {:.4g} +- {:.2g}   phase lag {:.2f} +- {:.2f} deg (positive: output lags)\n",
+                      sd.gain.value, sd.gain.std_error, sd.phase_lag_deg.value, sd.phase_lag_deg.std_error);
   }
-  if (!o.broadband) return;
+}
+
+void print_broadband(const FreqOutcome& o, std::ostream& os) {
   const auto& bb = *o.broadband;
   os << fmt::format("{}: H1 estimate, {:.6g} Hz sampling, {} segments of {} samples, {} bins {:.4g}-{:.4g} Hz\n",
-                    a.file, bb.sample_rate_hz, bb.segments, bb.segment_length, bb.freq_hz.size(), bb.freq_hz.front(),
-                    bb.freq_hz.back());
+                    o.options.file, bb.sample_rate_hz, bb.segments, bb.segment_length, bb.freq_hz.size(),
+                    bb.freq_hz.front(), bb.freq_hz.back());
   auto print_fit = [&](const char* label, const fitting::FitResult& r) {
     os << fmt::format("  {} {}:", label, r.model);
     for (const auto& p : r.params) os << fmt::format("  {} = {:.5g} +- {:.2g}", p.name, p.value, p.std_error);
@@ -409,6 +433,15 @@ void print_text(const FreqOutcome& o, std::ostream& os) {
   if (o.reported_fit() != nullptr)
     os << fmt::format("  reported: the {} (from {:.4g} s, up to {:.4g} Hz)\n",
                       o.oe_fit ? "output-error fit" : "frequency-domain fit", bb.start_s, bb.fmax_hz);
+}
+
+}  // namespace
+
+void print_text(const FreqOutcome& o, std::ostream& os) {
+  if (o.dwell) print_dwell(o, os);
+  else if (o.broadband) print_broadband(o, os);
+  // Its tau at the mean input: the operating point the frequency response linearises about.
+  print_whole_record(os, o.whole_record, o.input_mean);
 }
 
 }  // namespace tunekit::calibration

@@ -70,22 +70,51 @@ std::string display_number(double v) {
   return fmt::format("{:.4g}", v);
 }
 
+std::string step_model_note(const nlohmann::json& d) {
+  if (d.contains("y_model")) return "";
+  const std::string why = d.value("model_missing", std::string());
+  return why.empty() ? std::string("no whole-record model in the plot data") : "whole-record model not fitted: " + why;
+}
+
 Figure step_figure(const nlohmann::json& d) {
   Figure f;
   f.title = "Liquefier step response";
   Panel in{"Input", "", d.value("u_label", std::string("input")), false, false, {}, 0.6};
   in.series.push_back({"commanded", vec(d, "t_s"), vec(d, "u"), Series::Style::line, 4});
-  Panel out{"Output and fit", "", d.value("y_label", std::string("output")), false, false, {}, 1.4};
+  const std::string note = step_model_note(d);
+  // The panel's title says why the model is missing (shortened to fit above the panel; the
+  // caption has it in full).
+  constexpr std::size_t kTitleChars = 100;
+  std::string title =
+      note.empty() ? "Output, the whole-record model and each step's fit" : "Output and step fits; " + note;
+  if (title.size() > kTitleChars) title = title.substr(0, kTitleChars - 3) + "...";
+  Panel out{title, "", d.value("y_label", std::string("output")), false, false, {}, 1.4};
   out.series.push_back({"measured", vec(d, "t_s"), vec(d, "y"), Series::Style::line, 1});
-  out.series.push_back({"fitted model (where it applies)", vec(d, "t_s"), vec(d, "y_fit"), Series::Style::dashed, 2});
-  const auto y = vec(d, "y"), yf = vec(d, "y_fit");
-  std::vector<double> res(std::min(y.size(), yf.size()));
-  for (std::size_t i = 0; i < res.size(); ++i) res[i] = y[i] - yf[i];
-  Panel rp{"Residuals", "time (s)", "measured - fit", false, false, {}, 0.8};
-  rp.series.push_back({"", vec(d, "t_s"), res, Series::Style::line, 3});
-  f.panels = {in, out, rp};
-  f.share_x = true;  // one time axis: the residuals exist only where the model applies
-  f.height_px = 760;
+  if (note.empty())
+    out.series.push_back({d.value("model_label", std::string("whole-record model")), vec(d, "t_s"), vec(d, "y_model"),
+                          Series::Style::line, kWholeRecordModelColor});
+  out.series.push_back({"step fits (each over its step)", vec(d, "t_s"), vec(d, "y_fit"), Series::Style::dashed, 2});
+  // The residuals of each: the model's over the whole record, the step fits' over their steps.
+  auto residuals = [&](const char* key, const std::string& panel_title, int color) {
+    const auto y = vec(d, "y"), fit = vec(d, key);
+    std::vector<double> res(std::min(y.size(), fit.size()));
+    for (std::size_t i = 0; i < res.size(); ++i) res[i] = y[i] - fit[i];
+    Panel rp{panel_title, "", "residual", false, false, {}, 0.7};
+    rp.series.push_back({"", vec(d, "t_s"), res, Series::Style::line, color});
+    return rp;
+  };
+  f.panels = {in, out};
+  if (note.empty()) {
+    f.panels.push_back(residuals("y_model", "Residuals of the whole-record model", kWholeRecordModelColor));
+    f.panels.push_back(residuals("y_fit", "Residuals of the step fits", 3));
+    f.height_px = 900;
+  } else {
+    f.panels.push_back(residuals("y_fit", "Residuals", 3));
+    f.panels.back().height_weight = 0.8;
+    f.height_px = 760;
+  }
+  f.panels.back().xlabel = "time (s)";
+  f.share_x = true;  // one time axis: the step fits' residuals exist only over their steps
   return f;
 }
 
@@ -189,7 +218,14 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
     render_svg(fig, path);
     images.push_back({id, caption, path});
   };
-  if (pd.contains("step")) add("step", "Step response: data, fitted model and residuals", step_figure(pd["step"]));
+  if (pd.contains("step")) {
+    const std::string note = step_model_note(pd["step"]);
+    add("step",
+        note.empty() ? "Step response: the record, the whole-record model over all of it, each step's fit over its "
+                       "step, and the residuals"
+                     : "Step response: the record, each step's fit over its step and the residuals; " + note,
+        step_figure(pd["step"]));
+  }
   if (pd.contains("bode")) add("bode", "Bode plot with the fitted model and the coherence", bode_figure(pd["bode"]));
   for (const char* axis : {"x", "y", "z"}) {
     const std::string key = std::string("psd_") + axis;

@@ -3,13 +3,18 @@
 // channel (ooze after a stop, Table B.1), given by --step-time and --step-size / --group.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <memory>
 
 #include <fmt/format.h>
 
+#include "calibrate_plotdata.hpp"
+
 #include "tunekit/calibration/step_command.hpp"
 #include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/whole_record.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/step_analysis.hpp"
@@ -28,25 +33,20 @@ void print_fit_line(std::ostream& os, const std::string& label, const fitting::F
                     f.diagnostics.rms, f.diagnostics.r2);
 }
 
-void print_whole_record(std::ostream& os, const StepOutcome& o) {
-  if (!o.whole_record) {
-    if (!o.whole_record_error.empty()) os << "  whole record: not fitted: " << o.whole_record_error << "\n";
-    return;
-  }
-  const auto& m = *o.whole_record;
-  const auto& f = m.model.fit;
-  const auto& a = f.derived.front();
-  const auto& b = f.param("b");
-  const auto& th = f.param("theta_s");
-  std::size_t bad = 0;
-  for (const auto& c : m.checks) bad += c.disagrees;
-  os << fmt::format(
-      "  whole record: tau = a u^b, a = {:.4g} [{:.4g}, {:.4g}], b = {} , theta = {:.3g} s [{:.3g}, {:.3g}]; {}; "
-      "{} of {} step fits disagree with it\n",
-      a.value, a.ci95_lo, a.ci95_hi,
-      b.fixed ? std::string("0 (linear: b's interval holds 0)")
-              : fmt::format("{:.3g} [{:.3g}, {:.3g}]", b.value, b.ci95_lo, b.ci95_hi),
-      th.value, th.ci95_lo, th.ci95_hi, fitting::to_string(m.model.sensor) + " sensor", bad, m.checks.size());
+// --plot: the figure needs the input column, an .svg or .png name, and never the log's own path.
+void check_plot_option(const StepOptions& a) {
+  if (a.plot_out.empty()) return;
+  if (a.input_column.empty()) throw InputError("--plot draws the record against its input: give --input COL");
+  const auto ext = std::filesystem::path(a.plot_out).extension();
+  if (ext != ".svg" && ext != ".png") throw InputError("--plot writes an .svg or .png file", a.plot_out);
+  std::error_code ec;
+  if (std::filesystem::equivalent(a.plot_out, a.file, ec))
+    throw InputError("--plot names the log itself; give another file", a.plot_out);
+}
+
+// An axis label: the column and its unit ("feed (mm/s)"), the column alone when dimensionless.
+std::string column_label(const std::string& column, const std::string& unit) {
+  return unit == "1" ? column : fmt::format("{} ({})", column, unit);
 }
 
 }  // namespace
@@ -63,6 +63,7 @@ StepOutcome compute_step(const StepOptions& a) {
   outcome.options = a;
   if (!(a.analysis.detect.min_step_fraction > 0 && a.analysis.detect.min_step_fraction < 1))
     throw InputError("--min-step must be between 0 and 1 (a fraction of the input range)");
+  check_plot_option(a);
   const std::string bytes = read_file_bytes(a.file);
   ident::CsvOptions copt;
   copt.columns = {a.output_column};
@@ -135,21 +136,9 @@ StepOutcome compute_step(const StepOptions& a) {
     throw;
   }
 
-  if (!a.input_column.empty()) {
-    // The whole-record model beside the per-step fits: any excitation, steps settled or not.
-    try {
-      std::string basis;
-      const auto sensor = ident::sensor_for_record(res, ident::sensor_for_output_unit(opt.output_unit), &basis);
-      fitting::LiquefierFitOptions fo;
-      fo.profile = a.profile_intervals;
-      outcome.whole_record = ident::analyze_whole_record(tcol.values, table.column(a.input_column).values, ycol.values,
-                                                         sensor, input_unit, opt.output_unit, &res, fo);
-      outcome.whole_record->sensor_basis = basis;
-    } catch (const Error& e) {
-      outcome.whole_record_error = e.message();
-      res.warnings.push_back("whole-record model not fitted: " + e.message());
-    }
-  }
+  if (!a.input_column.empty())  // the whole-record model beside the per-step fits: any excitation
+    outcome.whole_record = fit_whole_record(tcol.values, table.column(a.input_column).values, ycol.values, input_unit,
+                                            opt.output_unit, &res, a.profile_intervals, res.warnings);
   outcome.time_column = table.time_column;
   outcome.input_sha256 = sha256_hex(bytes);
   outcome.input_size_bytes = bytes.size();
@@ -158,6 +147,10 @@ StepOutcome compute_step(const StepOptions& a) {
   outcome.gain_unit = opt.gain_unit;
   outcome.warnings = table.warnings;
   outcome.warnings.insert(outcome.warnings.end(), res.warnings.begin(), res.warnings.end());
+  if (!a.plot_out.empty())
+    render_figure(step_figure(step_plotdata(outcome, column_label(a.input_column, outcome.input_unit),
+                                            column_label(a.output_column, outcome.output_unit))),
+                  a.plot_out);
   return outcome;
 }
 
@@ -181,12 +174,7 @@ Envelope to_envelope(const StepOutcome& o) {
   env.add_input_digest(a.file, o.input_sha256, o.input_size_bytes);
   env.results() = ident::to_json(o.analysis);
   env.results()["units"] = {{"input", o.input_unit}, {"output", o.output_unit}, {"K", o.gain_unit}, {"time", "s"}};
-  if (o.whole_record) {
-    env.results()["whole_record"] = ident::to_json(*o.whole_record);
-    for (const auto& w : o.whole_record->warnings) env.warn(w);
-  } else if (!o.whole_record_error.empty()) {
-    env.results()["whole_record"] = {{"error", o.whole_record_error}};
-  }
+  add_whole_record(env, o.whole_record);
   for (const auto& w : o.warnings) env.warn(w);
   return env;
 }
@@ -226,7 +214,7 @@ void print_text(const StepOutcome& o, std::ostream& os) {
     if (tr.K) os << fmt::format("   K = {:.4g} * u^{:.3g}", tr.K->value("a"), tr.K->value("b"));
     os << "\n";
   }
-  print_whole_record(os, o);
+  print_whole_record(os, o.whole_record);
   os << fmt::format("  K in {}, y0 in {}; 95 % intervals in the JSON (--json)\n", o.gain_unit, o.output_unit);
 }
 

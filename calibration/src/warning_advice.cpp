@@ -7,7 +7,7 @@
 namespace tunekit::calibration {
 
 std::string advice_for_warning(const std::string& w) {
-  static constexpr std::array<std::pair<std::string_view, std::string_view>, 13> table{{
+  static constexpr std::array<std::pair<std::string_view, std::string_view>, 14> table{{
       {"do NOT agree",
        "repeat both experiments; if they still disagree, the liquefier is not first-order at this feed: compare the "
        "step and Bode plots and check the load cell's mounting"},
@@ -26,6 +26,9 @@ std::string advice_for_warning(const std::string& w) {
       {"no --profile", "pass the machine profile with --profile so the limits and line geometry are the machine's"},
       {"tf fit:",
        "look at the Bode plot and its coherence; excite longer, with a larger amplitude, or around the corner"},
+      {"whole-record model not fitted",
+       "the per-step and per-frequency results stand; for the model, record the commanded flow or feed (never below "
+       "zero) as the input column"},
       {"output-error fit:", "look at the residuals of the record; excite longer or with a larger amplitude"},
       {"Z shaper is not exported",
        "set the Z shaper by hand in the firmware, if it has one: tunekit writes a Z shaper into Klipper's printer.cfg "

@@ -70,6 +70,9 @@ void register_freq(CLI::App& app, CliContext& ctx) {
   sub->add_option("--min-coherence", o.min_coherence,
                   "Frequency points with a lower coherence (0-1) are left out of the TF fit")
       ->capture_default_str();
+  sub->add_flag("--profile-intervals", o.profile_intervals,
+                "With --input: the whole-record model's 95 % intervals of b and theta_s by profile likelihood "
+                "(several times slower; default: Wald intervals widened for correlated residuals)");
   add_output_options(sub, cmd->output);
   sub->footer(
       "Examples:\n"
@@ -83,7 +86,11 @@ void register_freq(CLI::App& app, CliContext& ctx) {
       "      # a calibrate chirp: the liquefier model by output error, sized from the record as calibrate does\n"
       "Sine dwell: y = offset + amplitude sin(2 pi f t + phase) by linear least squares; gain = output/input\n"
       "amplitude, phase_lag_deg = input phase - output phase in (-180, 180] (positive: the output lags).\n"
-      "Appendix D frequencies: datasets/liquefier/appendix_d/design.csv (f = N v / (2 pi 30 mm)).");
+      "Appendix D frequencies: datasets/liquefier/appendix_d/design.csv (f = N v / (2 pi 30 mm)).\n"
+      "Beside these, every mode fits the whole-record liquefier model (stored melt V(Q) = a Q^(b+1)/(b+1),\n"
+      "tau(Q) = a Q^b, dead time theta; as 'tunekit step' does) to the record from --tmin on, results\n"
+      "'whole_record'; a record it cannot describe (no input column, an input below zero) is reported as not\n"
+      "fitted with the reason and a warning, and freq's own results stand.");
   sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_freq(cmd->options), cmd->output, ctx)); });
 }
 

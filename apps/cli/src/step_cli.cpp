@@ -65,6 +65,9 @@ void register_step(CLI::App& app, CliContext& ctx) {
   sub->add_flag("--profile-intervals", o.profile_intervals,
                 "With --input: the whole-record model's 95 % intervals of b and theta_s by profile likelihood "
                 "(several times slower; default: Wald intervals widened for correlated residuals)");
+  sub->add_option("--plot", o.plot_out,
+                  "With --input: also draw the record, the whole-record model, each step's fit and the residuals "
+                  "(the calibration report's step figure) into this .svg or .png file");
   add_output_options(sub, cmd->output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"

@@ -11,6 +11,11 @@
 // that resolve that band, and fits the liquefier model, first order with dead time (Bellini,
 // Guceri and Bertoldi, Liquefier dynamics in fused deposition, J. Manuf. Sci. Eng., 2004), by
 // output error. `tunekit calibrate` analyses its chirp exactly so.
+//
+// Beside the per-frequency results, every mode fits the whole-record liquefier model
+// (whole_record.hpp) to the record's commanded input and output: it needs no particular
+// excitation. A record that cannot carry it (no input column, an input below zero, ...) is
+// reported as not fitted with the reason and a warning; the command does not fail for it.
 
 #include <complex>
 #include <optional>
@@ -19,6 +24,7 @@
 #include <vector>
 
 #include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/whole_record.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/fitting/transfer_function.hpp"
 #include "tunekit/ident/excitation.hpp"
@@ -51,6 +57,9 @@ struct FreqOptions {
   /// Broadband: the record before this time (s) is left out; unset: before the excitation's onset.
   std::optional<double> tmin_s;
   double min_coherence = 0.8;  ///< TF fit: points of lower coherence (0-1) are left out
+  /// The whole-record model's intervals of b and theta by profile likelihood (slower) instead of
+  /// Wald intervals widened for correlated residuals.
+  bool profile_intervals = false;
 };
 
 /// The H1 estimate inside [fmin, fmax].
@@ -82,6 +91,9 @@ struct FreqOutcome {
   std::optional<fitting::FitResult> oe_fit;  ///< mode oe: the output-error fit to the record
   FreqMode mode = FreqMode::dwell;           ///< the mode run (automatic resolved)
   fitting::TfStructure structure;            ///< the fitted structure (fit_tf or the default)
+  /// The whole-record liquefier model fitted to the record (from --tmin on when it is given; any
+  /// mode, the input column needed), or why it could not be; results "whole_record".
+  WholeRecordResult whole_record;
   std::vector<std::string> warnings;
 
   /// The transfer-function fit this analysis reports, results key "fit": the output-error fit

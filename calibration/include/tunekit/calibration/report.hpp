@@ -11,7 +11,9 @@
 // quantities measured two ways (see agreement.hpp); `results.notes` informational lines.
 // Every warning is shown with a one-line "what to do" (warning_advice.hpp).
 // plotdata.json holds the series of each plot:
-//   step:      {t_s[], u[], y[], y_fit[] (null where no model applies), u_label, y_label}
+//   step:      {t_s[], u[], y[], y_fit[] (each step's fit over its step, null elsewhere), u_label, y_label,
+//              y_model[] (the whole-record model's output over the record) and model_label, or
+//              model_missing (why there is no model)}
 //   bode:      {freq_hz[], mag_db[], phase_deg[], coherence[], model: {freq_hz[], mag_db[], phase_deg[], label}}
 //   psd.<axis>: {freq_hz[], psd[], modes: [{freq_hz}], shapers: [{type, freq_hz[], response[]}]}
 //   viscosity: {series: [{temperature_K, shear_rate_1_s[], viscosity_Pa_s[], fit_shear_rate_1_s[],
@@ -30,7 +32,15 @@
 
 namespace tunekit::calibration {
 
+/// The record's input, its output with the whole-record model (colour kWholeRecordModelColor) and
+/// each step's fit (colour 2, dashed), and the residuals; without the model the output panel's
+/// title says why.
 Figure step_figure(const nlohmann::json& d);
+/// The step plot's sentence on a missing whole-record model ("whole-record model not fitted:
+/// <reason>"); empty when the plot data have the model.
+std::string step_model_note(const nlohmann::json& d);
+/// The palette colour of the whole-record model's curves.
+constexpr int kWholeRecordModelColor = 5;
 Figure bode_figure(const nlohmann::json& d);
 Figure psd_figure(const nlohmann::json& d, const std::string& axis);
 Figure viscosity_figure(const nlohmann::json& d);

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "tunekit/calibration/envelope.hpp"
-#include "tunekit/ident/liquefier_record.hpp"
+#include "tunekit/calibration/whole_record.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
 namespace tunekit::calibration {
@@ -30,6 +30,9 @@ struct StepOptions {
   /// The whole-record model's intervals of b and theta by profile likelihood (slower) instead of
   /// Wald intervals widened for correlated residuals.
   bool profile_intervals = false;
+  /// With input_column: also draw the step figure of the calibration report here (.svg or .png):
+  /// the record, the whole-record model over all of it, each step's fit over its step, residuals.
+  std::string plot_out;
 };
 
 struct StepOutcome {
@@ -40,13 +43,13 @@ struct StepOutcome {
   std::string input_unit, output_unit, gain_unit;  ///< as results report them ("1": dimensionless)
   ident::StepAnalysis analysis;
   /// The whole-record model (records with an input channel), or why it could not be fitted.
-  std::optional<ident::WholeRecordModel> whole_record;
-  std::string whole_record_error;
+  WholeRecordResult whole_record;
   std::vector<std::string> warnings;  ///< the CSV reader's, then the analysis'
 };
 
-/// Reads the log and fits every step, the pooled steps and each operating point. InputError
-/// (exit 2) for bad input, FitError (exit 1) when no fit converges; both located at the file.
+/// Reads the log and fits every step, the pooled steps and each operating point (and draws the
+/// figure options.plot_out names). InputError (exit 2) for bad input, FitError (exit 1) when no
+/// fit converges; both located at the file.
 StepOutcome compute_step(const StepOptions& options);
 
 Envelope to_envelope(const StepOutcome& outcome);

@@ -45,7 +45,9 @@ struct WholeRecordModel {
   std::string input_unit = "1", output_unit = "1";
   double input_min_positive = fitting::kNaN, input_max = fitting::kNaN;  ///< the flows the record reached
   std::vector<StepModelCheck> checks;
-  std::string sensor_basis = "unit";  ///< what chose the sensor: "unit" or "operating points"
+  /// What chose the sensor: "unit", "operating points" or "residuals" (the record's own fits with
+  /// either sensor, the smaller residuals kept; set by the caller).
+  std::string sensor_basis = "unit";
   std::vector<std::string> warnings;
   /// tau at input q from the chosen model (s), and its standard error from the fit's covariance.
   double tau_at(double q) const;

@@ -1,0 +1,61 @@
+#pragma once
+// The whole-record liquefier model (ident/liquefier_record.hpp: one store of melt with
+// tau(q) = a q^b, a continuous dead time and the sensor's gain and offset) as `tunekit step` and
+// `tunekit freq` report it beside their per-step and per-frequency results: one fit, one terminal
+// line, one JSON member `whole_record`, and the model's simulated output for the report's figure.
+
+#include <limits>
+#include <optional>
+#include <ostream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/fitting/fit_result.hpp"
+#include "tunekit/ident/liquefier_record.hpp"
+#include "tunekit/ident/step_analysis.hpp"
+
+namespace tunekit::calibration {
+
+/// The model fitted to a record, or why it was not.
+struct WholeRecordResult {
+  std::optional<ident::WholeRecordModel> model;
+  std::string error;  ///< the plain reason it was not fitted; empty when it was (or was not tried)
+};
+
+/// Fits the model to a record: t (s, increasing), u the commanded input (a flow or feed, >= 0,
+/// in `input_unit`), y the output (in `output_unit`). With `steps` (tunekit step) the sensor
+/// (flow or pressure) is read from their operating points, else from the output's unit
+/// (ident::sensor_for_record), and the step fits are checked against the model. Without them
+/// (tunekit freq), unless the unit's sensor gives the linear model (the same for either sensor),
+/// the other sensor's model is fitted too and the one with the smaller residuals is kept (equal
+/// parameter counts: the smaller AIC; a tie keeps the unit's), sensor_basis "residuals" when it
+/// is not the unit's. Intervals of b and theta by profile likelihood when
+/// `profile_intervals`, else widened Wald intervals.
+/// A record that cannot carry the model is no failure: the result holds the reason, and
+/// "whole-record model not fitted: <reason>" is added to `warnings`.
+WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                                   const std::string& input_unit, const std::string& output_unit,
+                                   const ident::StepAnalysis* steps, bool profile_intervals,
+                                   std::vector<std::string>& warnings);
+
+/// The terminal line: "  whole record: tau = a u^b, a = ..., b = ..., theta = ... s; <sensor>"
+/// (with the step fits that disagree with it when it checked any), or
+/// "  whole record: not fitted: <reason>"; nothing when it was not tried. With a finite
+/// `u_compare` (freq: the record's mean input, the operating point its frequency response
+/// linearises the liquefier at), also tau there with its 95 % interval (s).
+void print_whole_record(std::ostream& os, const WholeRecordResult& r,
+                        double u_compare = std::numeric_limits<double>::quiet_NaN());
+
+/// results.whole_record: ident::to_json of the model (and its warnings added to the envelope), or
+/// {error: reason}; nothing when it was not tried.
+void add_whole_record(Envelope& env, const WholeRecordResult& r);
+
+/// The model's output at every sample of (t, u) (output unit): fitting::simulate_liquefier with
+/// the chosen parameters and the fitted stored volume at the first sample. The record must be the
+/// one the model was fitted to (its first sample is where V0 applies).
+std::vector<double> whole_record_output(const ident::WholeRecordModel& m, const std::vector<double>& t,
+                                        const std::vector<double>& u);
+
+}  // namespace tunekit::calibration

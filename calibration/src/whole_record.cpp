@@ -1,0 +1,114 @@
+// The whole-record liquefier model as tunekit step and tunekit freq report it (whole_record.hpp).
+#include "tunekit/calibration/whole_record.hpp"
+
+#include <cmath>
+#include <string_view>
+
+#include <fmt/format.h>
+
+#include "tunekit/core/error.hpp"
+#include "tunekit/fitting/liquefier_model.hpp"
+
+namespace tunekit::calibration {
+
+namespace {
+
+// The reason in plain words: the line and the warning already name the model.
+std::string plain_reason(const Error& e) {
+  constexpr std::string_view kPrefix = "whole-record model: ";
+  std::string why = e.message();
+  if (why.starts_with(kPrefix)) why.erase(0, kPrefix.size());
+  return why;
+}
+
+fitting::LiquefierSensor other_sensor(fitting::LiquefierSensor s) {
+  return s == fitting::LiquefierSensor::flow ? fitting::LiquefierSensor::pressure : fitting::LiquefierSensor::flow;
+}
+
+}  // namespace
+
+WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                                   const std::string& input_unit, const std::string& output_unit,
+                                   const ident::StepAnalysis* steps, bool profile_intervals,
+                                   std::vector<std::string>& warnings) {
+  WholeRecordResult r;
+  fitting::LiquefierFitOptions fo;
+  fo.profile = profile_intervals;
+  std::string basis = "unit";
+  const auto by_unit = ident::sensor_for_output_unit(output_unit);
+  bool refused = false;  // the record cannot carry the model (too short, an input below zero, ...)
+  try {
+    const auto sensor = steps != nullptr ? ident::sensor_for_record(*steps, by_unit, &basis) : by_unit;
+    r.model = ident::analyze_whole_record(t, u, y, sensor, input_unit, output_unit, steps, fo);
+  } catch (const Error& e) {
+    r.error = plain_reason(e);
+    refused = e.code() == ExitCode::bad_input;
+  }
+  if (steps == nullptr && !refused && !(r.model && r.model->model.linear_chosen)) {
+    // Without operating points to read the sensor from, the record decides: both sensors' models
+    // have the same parameters, and the one with the smaller residuals (so the smaller AIC) is
+    // kept; a tie keeps the unit's. The linear model is one model for either sensor (y = g a q + c
+    // or y = g q + c): when the unit's sensor chose it, there is nothing to decide.
+    try {
+      auto other = ident::analyze_whole_record(t, u, y, other_sensor(by_unit), input_unit, output_unit, nullptr, fo);
+      if (!r.model || other.model.fit.diagnostics.rms < (1 - 1e-6) * r.model->model.fit.diagnostics.rms) {
+        r.model = std::move(other);
+        r.error.clear();
+        basis = "residuals";
+      }
+    } catch (const Error&) {
+      // The unit's model (or its reason) stands.
+    }
+  }
+  if (r.model) r.model->sensor_basis = basis;
+  else warnings.push_back("whole-record model not fitted: " + r.error);
+  return r;
+}
+
+void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_compare) {
+  if (!r.model) {
+    if (!r.error.empty()) os << "  whole record: not fitted: " << r.error << "\n";
+    return;
+  }
+  const auto& m = *r.model;
+  const auto& f = m.model.fit;
+  const auto& a = f.derived.front();
+  const auto& b = f.param("b");
+  const auto& th = f.param("theta_s");
+  os << fmt::format(
+      "  whole record: tau = a u^b, a = {:.4g} [{:.4g}, {:.4g}], b = {} , theta = {:.3g} s [{:.3g}, {:.3g}]; "
+      "{} sensor",
+      a.value, a.ci95_lo, a.ci95_hi,
+      b.fixed ? std::string("0 (linear: b's interval holds 0)")
+              : fmt::format("{:.3g} [{:.3g}, {:.3g}]", b.value, b.ci95_lo, b.ci95_hi),
+      th.value, th.ci95_lo, th.ci95_hi, fitting::to_string(m.model.sensor));
+  if (!m.checks.empty()) {
+    std::size_t bad = 0;
+    for (const auto& c : m.checks) bad += c.disagrees;
+    os << fmt::format("; {} of {} step fits disagree with it", bad, m.checks.size());
+  }
+  os << "\n";
+  if (std::isfinite(u_compare) && u_compare > 0) {
+    // Two-sided 95 % quantile of the normal distribution.
+    constexpr double kZ95 = 1.959963984540054;
+    const double tau = m.tau_at(u_compare), se = m.tau_stderr_at(u_compare);
+    os << fmt::format("    its tau at the record's mean input u = {:.4g} {}: {:.4g} s [{:.4g}, {:.4g}]\n", u_compare,
+                      m.input_unit, tau, tau - kZ95 * se, tau + kZ95 * se);
+  }
+}
+
+void add_whole_record(Envelope& env, const WholeRecordResult& r) {
+  if (r.model) {
+    env.results()["whole_record"] = ident::to_json(*r.model);
+    for (const auto& w : r.model->warnings) env.warn(w);
+  } else if (!r.error.empty()) {
+    env.results()["whole_record"] = {{"error", r.error}};
+  }
+}
+
+std::vector<double> whole_record_output(const ident::WholeRecordModel& m, const std::vector<double>& t,
+                                        const std::vector<double>& u) {
+  return fitting::simulate_liquefier(t, u, m.model.params(), m.model.sensor);
+}
+
+}  // namespace tunekit::calibration
