@@ -57,7 +57,7 @@ std::map<std::string, std::size_t> points_by_stroke(const std::string& svg) {
   return out;
 }
 
-std::vector<double> linspace(double a, double b, int n) {
+std::vector<double> figure_time_grid(double a, double b, int n) {
   std::vector<double> v(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) v[static_cast<std::size_t>(i)] = a + (b - a) * i / (n - 1);
   return v;
@@ -66,7 +66,7 @@ std::vector<double> linspace(double a, double b, int n) {
 // A staircase record with a model over all of it and step fits over each step's window (null
 // elsewhere, as step_plotdata writes them).
 nlohmann::json step_data(bool with_model) {
-  const auto t = linspace(0, 12, 600);
+  const auto t = figure_time_grid(0, 12, 600);
   nlohmann::json u = nlohmann::json::array(), y = nlohmann::json::array(), yf = nlohmann::json::array(),
                  ym = nlohmann::json::array();
   for (double ti : t) {
