@@ -257,9 +257,13 @@ void print_text(const NozzleOutcome& o, std::ostream& os) {
   if (o.fit) {
     const auto& fit = o.fit->fit;
     os << fmt::format("{}: {} measurements, {} model\n", a.fit_file, o.fit->rows, fit.model);
-    for (const auto& q : fit.params)
-      os << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", q.name, q.value, q.unit, q.ci95_lo,
-                        q.ci95_hi);
+    for (const auto& q : fit.params) {
+      if (q.fixed)
+        os << fmt::format("  {:<14} {:>12.6g} {:<8} (held: the reference, not estimated)\n", q.name, q.value, q.unit);
+      else
+        os << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", q.name, q.value, q.unit, q.ci95_lo,
+                          q.ci95_hi);
+    }
     os << fmt::format("  rms(ln dP) {:.4g}, R2 {:.5f}\n", fit.diagnostics.rms, fit.diagnostics.r2);
     return;
   }
