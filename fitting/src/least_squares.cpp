@@ -21,8 +21,10 @@ namespace {
 // The last evaluations, served again bit for bit instead of recomputed (the residual functions
 // are pure). Ceres evaluates the same point more than once per iteration: with bounds, its
 // projected line search evaluates the trial point with the gradient (so with the Jacobian), then
-// the trial point's cost, and an accepted trial point with its Jacobian again. One evaluation
-// with a Jacobian is kept (one more copy of the Jacobian than Ceres holds) and two without.
+// the trial point's cost, and an accepted trial point with its Jacobian again; after a rejected
+// last trial the solution's residuals and its Jacobian (for the covariance) are asked for once
+// more. Two evaluations with a Jacobian are kept (two more copies of the Jacobian than Ceres
+// holds) and two without.
 class EvaluationMemo {
  public:
   EvaluationMemo(int num_params, int num_residuals) : n_(num_params), m_(num_residuals) {}
@@ -31,10 +33,11 @@ class EvaluationMemo {
   // the entry with a Jacobian; a residual request takes it only when `any_kind` (the residuals
   // are computed the same way with and without the Jacobian).
   bool find(const double* x, double* r, double* jac, bool any_kind) const {
-    if (same_point(with_jacobian_, x) && (jac != nullptr || any_kind)) {
-      copy_out(with_jacobian_, r, jac);
-      return true;
-    }
+    for (const auto& e : with_jacobian_)
+      if (same_point(e, x) && (jac != nullptr || any_kind)) {
+        copy_out(e, r, jac);
+        return true;
+      }
     if (jac != nullptr) return false;
     for (const auto& e : residuals_only_)
       if (same_point(e, x)) {
@@ -45,8 +48,9 @@ class EvaluationMemo {
   }
 
   void store(const double* x, const double* r, const double* jac) {
-    Entry& e = jac != nullptr ? with_jacobian_ : residuals_only_[next_];
+    Entry& e = jac != nullptr ? with_jacobian_[next_jac_] : residuals_only_[next_];
     if (jac == nullptr) next_ = 1 - next_;
+    else next_jac_ = 1 - next_jac_;
     e.x.assign(x, x + n_);
     e.r.assign(r, r + m_);
     if (jac != nullptr) e.jac.assign(jac, jac + static_cast<std::size_t>(m_) * static_cast<std::size_t>(n_));
@@ -64,9 +68,9 @@ class EvaluationMemo {
     if (jac != nullptr) std::copy(e.jac.begin(), e.jac.end(), jac);
   }
   int n_, m_;
-  Entry with_jacobian_;
+  std::array<Entry, 2> with_jacobian_;
   std::array<Entry, 2> residuals_only_;
-  std::size_t next_ = 0;
+  std::size_t next_ = 0, next_jac_ = 0;
 };
 
 // One residual block holding every residual, one parameter block holding every parameter.
@@ -267,6 +271,22 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
     if (!std::isfinite(v)) throw FitError(model + ": the solution is not finite (" + r.diagnostics.solver + ")");
   r.diagnostics.converged = n_free == 0 || summary.termination_type == ceres::CONVERGENCE;
 
+  // Parameters the caller holds on a bound: fixed from here on (statistics and covariance).
+  std::vector<bool> fixed(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) fixed[j] = prob.params[j].fixed;
+  bool any_held = false;
+  if (opt.hold_before_covariance && n_free > 0) {
+    std::vector<bool> hold(static_cast<std::size_t>(n), false);
+    opt.hold_before_covariance(x, hold);
+    for (int j = 0; j < n; ++j) {
+      if (!hold[j] || fixed[j]) continue;
+      fixed[j] = true;
+      any_held = true;
+      --n_free;
+    }
+    r.diagnostics.num_parameters = n_free;
+  }
+
   // Residuals at the solution.
   std::vector<double> res(static_cast<std::size_t>(prob.num_residuals));
   {
@@ -292,7 +312,18 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
     co.num_threads = 1;
     ceres::Covariance covariance(co);
     std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
-    if (!covariance.Compute(blocks, &problem) || !covariance.GetCovarianceBlock(x.data(), x.data(), cov.data()))
+    // With held parameters the covariance sees the problem with them fixed as well.
+    ceres::Problem held_problem(popt);
+    ceres::Problem* cov_problem = &problem;
+    if (any_held) {
+      held_problem.AddResidualBlock(new WholeProblemCost(prob), nullptr, x.data());
+      std::vector<int> all_fixed;
+      for (int j = 0; j < n; ++j)
+        if (fixed[j]) all_fixed.push_back(j);
+      held_problem.SetManifold(x.data(), new ceres::SubsetManifold(n, all_fixed));
+      cov_problem = &held_problem;
+    }
+    if (!covariance.Compute(blocks, cov_problem) || !covariance.GetCovarianceBlock(x.data(), x.data(), cov.data()))
       throw FitError(model + ": parameters not identifiable from these data (the Jacobian of " + free_names(prob) +
                      " is rank deficient); record a longer or richer response, or fix a parameter");
   }
@@ -303,8 +334,8 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
     p.name = ps.name;
     p.unit = ps.unit;
     p.value = x[j];
-    p.fixed = ps.fixed;
-    if (!ps.fixed && opt.compute_covariance) {
+    p.fixed = fixed[j];
+    if (!p.fixed && opt.compute_covariance) {
       p.ci95_method = "wald";
       const double var = cov[j * n + j] * s2;
       p.std_error = var >= 0 ? std::sqrt(var) : kNaN;
@@ -313,7 +344,7 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
       if (!std::isfinite(p.std_error))
         throw FitError(model + ": the uncertainty of " + ps.name + " is not finite; it is not identifiable");
     }
-    if (!ps.fixed && (x[j] <= ps.lower || x[j] >= ps.upper))
+    if (!p.fixed && (x[j] <= ps.lower || x[j] >= ps.upper))
       r.warnings.push_back(ps.name + " ended on its bound (" + std::to_string(x[j]) + ")");
     r.params.push_back(p);
   }
@@ -321,7 +352,7 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
     r.covariance.assign(static_cast<std::size_t>(n * n), 0.0);
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j)
-        if (!prob.params[i].fixed && !prob.params[j].fixed) r.covariance[i * n + j] = cov[i * n + j] * s2;
+        if (!fixed[i] && !fixed[j]) r.covariance[i * n + j] = cov[i * n + j] * s2;
   }
   return r;
 }

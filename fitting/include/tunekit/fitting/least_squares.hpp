@@ -65,6 +65,11 @@ struct LsqOptions {
   bool require_convergence = true;
   /// Reciprocal condition number of J^T J below which parameters are "not identifiable".
   double min_reciprocal_condition = 1e-14;
+  /// Called once with the solution (before the residual statistics and the covariance): it may
+  /// move free parameters onto a bound and mark them held (hold[j] = true), e.g. a parameter
+  /// that ended on a bound where the residuals no longer depend on it. Held parameters are
+  /// reported fixed and left out of the covariance, as if they had been fixed in the solve.
+  std::function<void(std::vector<double>& x, std::vector<bool>& hold)> hold_before_covariance;
 };
 
 /// Solves the problem; throws FitError when the solver fails, the solution is not finite,
