@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include <fmt/format.h>
@@ -17,16 +18,16 @@
 namespace tunekit::fitting {
 namespace {
 
+using liquefier_detail::InputTrack;
+using liquefier_detail::SimParams;
 using liquefier_detail::simulate;
-using Jet4 = ceres::Jet<double, 4>;
 
 /// The stored volume at steady input u (the state a settled record starts in).
 double steady_volume(double a, double b, double u) { return u > 0 ? a * std::pow(u, b + 1) / (b + 1) : 0.0; }
 
 constexpr double kThetaMaxFraction = 0.25;  // theta at most this share of the record
-constexpr std::size_t kThinTarget = 3000;
-constexpr int kMaxSubsteps =
-    64;  // sub-steps of one sample interval at most   // samples of the thinned record the start is found on
+constexpr std::size_t kThinTarget = 3000;   // samples of the thinned record the start is found on
+constexpr int kMaxSubsteps = 64;            // sub-steps of one sample interval at most
 
 struct Rec {
   std::vector<double> t, u, y;
@@ -36,49 +37,50 @@ struct Rec {
 /// stored volume at the first sample: a record need not start settled).
 struct ModelProblem {
   Rec rec;
+  InputTrack input;                ///< the commanded input (the record's own samples, or its track)
+  std::vector<std::size_t> kinks;  ///< where the input's slope changes (input_kinks)
   bool volume = false;
   double q_ref = 1;
   int substeps = 1;     ///< sub-steps in the longest sample interval (reported)
   double h_max = 0;     ///< longest sub-step (s): an eighth of the smallest time constant
   bool fix_v0 = false;  ///< the record starts empty: V0 held at 0 (its derivative vanishes there)
   LsqProblem lsq;
+  std::vector<double> sim, sens;  ///< scratch: the simulated signal and its sensitivities
 };
 
 void bind(ModelProblem& mp) {
   ModelProblem* self = &mp;
   mp.lsq.num_residuals = static_cast<int>(mp.rec.t.size());
   mp.lsq.observed = mp.rec.y;
+  // The simulation computes the state the same way with and without its sensitivities.
+  mp.lsq.same_residuals_with_jacobian = true;
   mp.lsq.residuals_and_jacobian = [self](const double* p, double* r, double* jac) {
     const Rec& rc = self->rec;
     const std::size_t n = rc.t.size();
     const double ln_qref = std::log(self->q_ref);
     if (!(p[0] > 0) || !(p[1] > -1) || !(p[2] >= 0) || !(p[5] >= 0)) return false;
-    if (jac == nullptr) {
-      std::vector<double> s(n);
-      const double a = p[0] * std::exp(-p[1] * ln_qref);
-      simulate(rc.t.data(), rc.u.data(), n, a, p[1], p[2], p[5], self->volume,
-               self->h_max > 0 ? kMaxSubsteps : self->substeps, self->h_max, s.data());
-      for (std::size_t i = 0; i < n; ++i) {
-        r[i] = p[3] * s[i] + p[4] - rc.y[i];
-        if (!std::isfinite(r[i])) return false;
-      }
-      return true;
-    }
-    std::vector<Jet4> s(n);
-    const Jet4 tau(p[0], 0), b(p[1], 1), theta(p[2], 2), v0(p[5], 3);
-    const Jet4 a = tau * exp(-b * ln_qref);
-    simulate(rc.t.data(), rc.u.data(), n, a, b, theta, v0, self->volume,
-             self->h_max > 0 ? kMaxSubsteps : self->substeps, self->h_max, s.data());
+    // ln a = ln tau_ref - b ln Q_ref.
+    const SimParams sp{std::log(p[0]) - p[1] * ln_qref, p[1], p[2], p[5], !self->lsq.params[1].fixed};
+    self->sim.resize(n);
+    if (jac != nullptr) self->sens.resize(4 * n);
+    simulate(rc.t.data(), n, self->input, sp, self->volume, self->h_max > 0 ? kMaxSubsteps : self->substeps,
+             self->h_max, self->sim.data(), jac != nullptr ? self->sens.data() : nullptr);
+    const double* s = self->sim.data();
     for (std::size_t i = 0; i < n; ++i) {
-      r[i] = p[3] * s[i].a + p[4] - rc.y[i];
+      r[i] = p[3] * s[i] + p[4] - rc.y[i];
       if (!std::isfinite(r[i])) return false;
+    }
+    if (jac == nullptr) return true;
+    const double inv_tau = 1.0 / p[0];
+    for (std::size_t i = 0; i < n; ++i) {
+      const double* d = self->sens.data() + 4 * i;  // d/d(ln a, b, theta, V0)
       double* row = jac + i * 6;
-      row[0] = p[3] * s[i].v[0];
-      row[1] = p[3] * s[i].v[1];
-      row[2] = p[3] * s[i].v[2];
-      row[3] = s[i].a;
+      row[0] = p[3] * d[0] * inv_tau;
+      row[1] = p[3] * (d[1] - ln_qref * d[0]);
+      row[2] = p[3] * d[2];
+      row[3] = s[i];
       row[4] = 1.0;
-      row[5] = p[3] * s[i].v[3];
+      row[5] = p[3] * d[3];
     }
     return true;
   };
@@ -99,6 +101,17 @@ void check_record(const LiquefierRecord& r) {
           fmt::format("whole-record model: the input is negative at t = {:.4g} s; the store is fed by a flow or feed "
                       "of at least 0 (a retraction is outside the model)",
                       r.t[i]));
+  }
+  if (r.input_t.size() != r.input_u.size())
+    throw InputError("whole-record model: the commanded input's instants and values differ in length");
+  for (std::size_t i = 0; i < r.input_t.size(); ++i) {
+    if (!std::isfinite(r.input_t[i]) || !std::isfinite(r.input_u[i]))
+      throw InputError("whole-record model: NaN or infinite point in the commanded input");
+    if (i > 0 && r.input_t[i] < r.input_t[i - 1])
+      throw InputError(fmt::format("whole-record model: the commanded input's time goes back at point {}", i + 1));
+    if (r.input_u[i] < 0)
+      throw InputError(
+          fmt::format("whole-record model: the commanded input is negative at t = {:.4g} s", r.input_t[i]));
   }
   const auto [lo, hi] = std::minmax_element(r.u.begin(), r.u.end());
   if (!(*hi > *lo)) throw InputError("whole-record model: the input is constant; nothing excites the liquefier");
@@ -143,7 +156,7 @@ Rec thinned(const LiquefierRecord& r) {
 
 /// The best linear first-order model (b = 0), settled at the start, on a grid of tau and theta:
 /// {tau, theta, g, c}.
-std::array<double, 4> linear_grid_start(const Rec& r, bool volume) {
+std::array<double, 4> linear_grid_start(const Rec& r, const InputTrack& input, bool volume) {
   const std::size_t n = r.t.size();
   const double T = r.t.back() - r.t.front();
   const double dt = T / static_cast<double>(n - 1);
@@ -156,7 +169,8 @@ std::array<double, 4> linear_grid_start(const Rec& r, bool volume) {
     const double tau = tau_lo * std::pow(tau_hi / tau_lo, i / double(nt - 1));
     for (double th : {0.0, 1.0, 2.0, 4.0, 8.0, 16.0}) {
       const double theta = std::min(th * dt, kThetaMaxFraction * T * 0.5);
-      simulate(r.t.data(), r.u.data(), n, tau, 0.0, theta, tau * r.u.front(), volume, 1, 0.0, s.data());
+      simulate(r.t.data(), n, input, SimParams{std::log(tau), 0.0, theta, tau * r.u.front()}, volume, 1, 0.0, s.data(),
+               nullptr);
       double g = 0, c = 0;
       const double rss = linear_gc(s, r.y, g, c);
       if (rss < best_rss) best_rss = rss, best = {tau, theta, g, c};
@@ -179,11 +193,10 @@ std::vector<ParamSpec> specs(const ModelProblem& mp, const std::array<double, 6>
            mp.fix_v0}};
 }
 
-/// Smallest time constant the record's input reaches under (a, b), for the sub-step count.
-int substeps_for(const Rec& r, double a, double b) { return liquefier_substeps(r.t, r.u, a, b); }
+using HoldFunction = std::function<void(std::vector<double>&, std::vector<bool>&)>;
 
 FitResult solve(ModelProblem& mp, const std::array<double, 6>& start, const LiquefierFitOptions& o,
-                const LiquefierRecord& rec, bool fix_b, bool covariance) {
+                const LiquefierRecord& rec, bool fix_b, bool covariance, const HoldFunction& hold = {}) {
   mp.lsq.params = specs(mp, start, o, rec, fix_b);
   // The exponential step is exact for the linear model: one sub-step.
   if (fix_b) {
@@ -191,8 +204,9 @@ FitResult solve(ModelProblem& mp, const std::array<double, 6>& start, const Liqu
     mp.h_max = 0;
   } else {
     const double a = start[0] * std::pow(mp.q_ref, -start[1]);
-    mp.substeps = substeps_for(mp.rec, a, start[1]);
-    mp.h_max = liquefier_max_substep_s(mp.rec.u, a, start[1]);
+    const std::vector<double> levels(mp.input.u, mp.input.u + mp.input.n);
+    mp.h_max = liquefier_max_substep_s(levels, a, start[1]);
+    mp.substeps = liquefier_substeps(mp.rec.t, levels, a, start[1]);
   }
   LsqOptions lo;
   lo.compute_covariance = covariance;
@@ -201,6 +215,7 @@ FitResult solve(ModelProblem& mp, const std::array<double, 6>& start, const Liqu
   lo.function_tolerance = 1e-10;
   lo.parameter_tolerance = 1e-10;
   lo.gradient_tolerance = 1e-12;
+  lo.hold_before_covariance = hold;
   return solve_least_squares(fix_b ? "liquefier_linear" : "liquefier_store", mp.lsq, lo);
 }
 
@@ -209,22 +224,33 @@ std::array<double, 6> values(const FitResult& f) {
           f.params[3].value, f.params[4].value, f.params[5].value};
 }
 
-/// The full record's fit: solved first without the covariance; a stored volume at the start that
-/// ends at (or within 0.1 % of the largest stored volume from) its bound 0 is held there, where the
-/// output does not depend on it (the record starts with an empty liquefier); then the covariance
-/// from that solution.
+/// The full record's fit with its covariance, in one solve: a stored volume at the start that
+/// ends at (or within 0.1 % of the largest stored volume from) its bound 0 is held there for the
+/// covariance, where the output does not depend on it (the record starts with an empty
+/// liquefier), and stays held for the profiles and the refits that follow. Only when it had to be
+/// moved onto the bound are the others solved again.
 FitResult solve_full(ModelProblem& full, const std::array<double, 6>& start, const LiquefierFitOptions& o,
                      const LiquefierRecord& rec, bool fix_b) {
-  std::array<double, 6> v = values(solve(full, start, o, rec, fix_b, false));
+  bool moved = false;
+  HoldFunction hold;
   if (!full.fix_v0) {
-    const double a = v[0] * std::pow(full.q_ref, -v[1]);
     const double umax = *std::max_element(rec.u.begin(), rec.u.end());
-    if (v[5] <= 1e-3 * steady_volume(a, v[1], umax)) {
-      full.fix_v0 = true;
-      v[5] = 0;
-    }
+    hold = [&full, &moved, umax](std::vector<double>& x, std::vector<bool>& held) {
+      const double a = x[0] * std::pow(full.q_ref, -x[1]);
+      if (x[5] <= 1e-3 * steady_volume(a, x[1], umax)) {
+        held[5] = true;
+        moved = x[5] != 0.0;
+        x[5] = 0.0;
+      }
+    };
   }
-  return solve(full, v, o, rec, fix_b, true);
+  FitResult f = solve(full, start, o, rec, fix_b, true, hold);
+  if (!full.fix_v0 && f.params[5].fixed) {
+    full.fix_v0 = true;
+    full.lsq.params = specs(full, values(f), o, rec, fix_b);
+    if (moved) f = solve(full, values(f), o, rec, fix_b, true);
+  }
+  return f;
 }
 
 /// 1 + 2 sum of the residuals' autocorrelation up to its first non-positive lag (>= 1).
@@ -323,9 +349,12 @@ double liquefier_volume(const LiquefierParams& p, double q) {
 }
 
 double liquefier_max_substep_s(const std::vector<double>& u, double a, double b) {
-  double tau_min = std::numeric_limits<double>::infinity();
+  // tau = a u^b is monotonic in u: its smallest value is at the smallest or the largest input.
+  double lo = std::numeric_limits<double>::infinity(), hi = 0;
   for (double v : u)
-    if (v > 0) tau_min = std::min(tau_min, a * std::pow(v, b));
+    if (v > 0) lo = std::min(lo, v), hi = std::max(hi, v);
+  if (!(hi > 0)) return 0;
+  const double tau_min = std::min(a * std::pow(lo, b), a * std::pow(hi, b));
   if (!(tau_min > 0) || !std::isfinite(tau_min)) return 0;
   return tau_min / 8;
 }
@@ -338,20 +367,57 @@ int liquefier_substeps(const std::vector<double>& t, const std::vector<double>& 
   return std::clamp(static_cast<int>(std::ceil(dt_max / h)), 1, kMaxSubsteps);
 }
 
-std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::vector<double>& u,
-                                       const LiquefierParams& p, LiquefierSensor sensor, int substeps) {
-  if (t.size() != u.size() || t.empty()) throw InputError("simulate_liquefier: time and input differ in length");
+namespace {
+
+/// The sensor-free signal (and with sens its derivatives with respect to ln a, b, theta, V0).
+std::vector<double> simulate_signal(const std::vector<double>& t, const std::vector<double>& tu,
+                                    const std::vector<double>& u, const LiquefierParams& p, LiquefierSensor sensor,
+                                    int substeps, std::vector<double>* sens) {
+  if (tu.size() != u.size() || t.empty() || u.empty())
+    throw InputError("simulate_liquefier: time and input differ in length");
   if (!(p.a > 0) || !(p.b > -1) || !(p.theta_s >= 0))
     throw InputError("simulate_liquefier: a must be positive, b above -1 and theta at least 0");
   // A fixed count when given; else sized per sample interval.
   const int ns = substeps > 0 ? substeps : kMaxSubsteps;
   const double h_max = substeps > 0 ? 0.0 : liquefier_max_substep_s(u, p.a, p.b);
   std::vector<double> s(t.size());
-  const double v0 = std::isfinite(p.v0) ? p.v0 : steady_volume(p.a, p.b, u.front());
-  simulate(t.data(), u.data(), t.size(), p.a, p.b, p.theta_s, v0, sensor == LiquefierSensor::pressure, ns, h_max,
-           s.data());
+  // Settled at the input in force at the first instant (before any step of the track).
+  std::size_t first = 0;
+  while (first + 1 < tu.size() && tu[first + 1] <= t.front() - p.theta_s) ++first;
+  const double v0 = std::isfinite(p.v0) ? p.v0 : steady_volume(p.a, p.b, u[first]);
+  if (sens != nullptr) sens->assign(4 * t.size(), 0.0);
+  simulate(t.data(), t.size(), InputTrack{tu.data(), u.data(), u.size()}, SimParams{std::log(p.a), p.b, p.theta_s, v0},
+           sensor == LiquefierSensor::pressure, ns, h_max, s.data(), sens != nullptr ? sens->data() : nullptr);
+  return s;
+}
+
+}  // namespace
+
+std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::vector<double>& u,
+                                       const LiquefierParams& p, LiquefierSensor sensor, int substeps) {
+  std::vector<double> s = simulate_signal(t, t, u, p, sensor, substeps, nullptr);
   for (double& v : s) v = p.g * v + p.c;
   return s;
+}
+
+std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::vector<double>& input_t,
+                                       const std::vector<double>& input_u, const LiquefierParams& p,
+                                       LiquefierSensor sensor, int substeps) {
+  std::vector<double> s = simulate_signal(t, input_t, input_u, p, sensor, substeps, nullptr);
+  for (double& v : s) v = p.g * v + p.c;
+  return s;
+}
+
+std::vector<std::array<double, 4>> liquefier_sensitivities(const std::vector<double>& t, const std::vector<double>& u,
+                                                           const LiquefierParams& p, LiquefierSensor sensor,
+                                                           int substeps) {
+  std::vector<double> d;
+  if (t.size() != u.size()) throw InputError("liquefier_sensitivities: time and input differ in length");
+  (void)simulate_signal(t, t, u, p, sensor, substeps, &d);
+  std::vector<std::array<double, 4>> out(t.size());
+  for (std::size_t i = 0; i < t.size(); ++i)
+    out[i] = {p.g * d[4 * i] / p.a, p.g * d[4 * i + 1], p.g * d[4 * i + 2], p.g * d[4 * i + 3]};
+  return out;
 }
 
 LiquefierParams LiquefierModelFit::params() const {
@@ -377,8 +443,15 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   thin.rec = thinned(rec);
   thin.volume = volume;
   thin.q_ref = out.reference_input;
+  // The commanded input: the record's own track when it carries one, else its samples; the
+  // thinned record keeps all of it (only the outputs are thinned).
+  thin.input = rec.input_t.empty() ? InputTrack{rec.t.data(), rec.u.data(), rec.t.size()}
+                                   : InputTrack{rec.input_t.data(), rec.input_u.data(), rec.input_t.size()};
+  thin.kinks = liquefier_detail::input_kinks(thin.input);
+  thin.input.kinks = thin.kinks.data();
+  thin.input.n_kinks = thin.kinks.size();
   bind(thin);
-  const auto g0 = linear_grid_start(thin.rec, volume);
+  const auto g0 = linear_grid_start(thin.rec, thin.input, volume);
   std::array<double, 6> start{g0[0], 0.0, g0[1], g0[2], g0[3], g0[0] * rec.u.front()};
   FitResult best;
   bool have = false;
@@ -399,6 +472,9 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   full.rec = {rec.t, rec.u, rec.y};
   full.volume = volume;
   full.q_ref = out.reference_input;
+  full.input = thin.input;
+  full.kinks = thin.kinks;
+  full.input.kinks = full.kinks.data();
   bind(full);
   // A record that starts with an empty liquefier ends the thinned fit with V0 at its bound 0,
   // where the output does not depend on it: V0 is then held at 0.
@@ -424,8 +500,14 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   if (o.profile) out.profile_solves += profile(full, nl, out.variance_factor, o.confidence);
 
   // The linear model: b held at 0, refitted; the F-test of b = 0 at the confidence level.
+  // Its start: the linear model on the thinned record, from the free fit with b = 0.
   std::array<double, 6> lin_start = values(nl_raw);
   lin_start[1] = 0.0;
+  thin.fix_v0 = full.fix_v0;
+  try {
+    lin_start = values(solve(thin, lin_start, o, rec, true, false));
+  } catch (const FitError&) {
+  }
   FitResult lin = solve_full(full, lin_start, o, rec, true);
   const int dof = nl.diagnostics.num_observations - nl.diagnostics.num_parameters;
   const double s2 = nl_raw.diagnostics.rss / dof;

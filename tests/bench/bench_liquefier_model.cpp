@@ -2,11 +2,12 @@
 // and offset) fitted by output error to 120 s of a never-settled staircase at 1 kHz (120k
 // samples), start values included. Rows: the fit with its linearised intervals, and the whole
 // analysis as `tunekit step` runs it (profile-likelihood intervals of b and theta and the test of
-// the linear model added). Usage: bench_liquefier_model [runs]
+// the linear model added). Usage: bench_liquefier_model [runs] [--fit-only]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <string>
 #include <vector>
 
 #include "../liquefier/synth_store.hpp"
@@ -31,7 +32,10 @@ int main(int argc, char** argv) {
   using namespace tunekit;
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 7;
   const test::StoreTruth tr;
-  const auto s = test::synth_store(tr, 1000.0, 120.0, 0.02, 17, {4, 6, 8, 10, 12, 14}, 2);
+  auto s = test::synth_store(tr, 1000.0, 120.0, 0.02, 17, {4, 6, 8, 10, 12, 14}, 2);
+  // The input as a CSV record carries it (sampled at the sensor's instants), as `tunekit step` fits it.
+  s.rec.input_t.clear();
+  s.rec.input_u.clear();
   fitting::LiquefierFitOptions fast;
   fast.profile = false;
   fast.fit_b = true;
@@ -47,6 +51,7 @@ int main(int argc, char** argv) {
   std::printf("liquefier_model_fit_%zu_samples: median wall %.1f ms, median cpu %.1f ms (a %.4f, b %.4f)\n",
               s.rec.t.size(), fit_t.median_ms, fit_cpu, a, b);
   bench::print_bench_line("liquefier_model_fit", fit_t);
+  if (argc > 2 && std::string(argv[2]) == "--fit-only") return 0;
   int solves = 0;
   const auto full_t = bench::time_ms(
       [&] {

@@ -1,9 +1,12 @@
 #pragma once
 // Synthetic records of the nonlinear liquefier store (tau(q) = a q^b): a staircase of commanded
-// flow levels, each held for `hold_s` (2.5 time constants of the slowest level: the steps never
-// settle), simulated on a grid `oversample` times finer than the record with the steps at
-// arbitrary fine-grid instants, then sampled at the record's rate with Gaussian noise of
-// `noise_rel` times the mean output. Shared by the whole-record tests and the benchmark.
+// flow levels, each held for 2.5 time constants of the slowest level (the steps never settle),
+// stepping at instants drawn uniformly inside a sample interval (never on the record's grid). The
+// record carries what a real one would: the commanded staircase exactly (input_t, input_u: the
+// feed is known from the G-code) and sampled at the record's instants (u), and the sensor's
+// output at the record's rate with Gaussian noise of `noise_rel` times the mean output, simulated
+// from the exact staircase with `oversample` sub-steps in every piece. Shared by the
+// whole-record tests and the benchmark.
 
 #include <cmath>
 #include <random>
@@ -47,29 +50,34 @@ inline StoreRecord synth_store(const StoreTruth& tr, double rate_hz, double dura
     s.step_times.push_back(t + jitter(rng) / rate_hz);  // not on the record's sample grid
     s.levels.push_back(level);
   }
-  const double dt_fine = 1.0 / (rate_hz * oversample);
-  const auto n_fine = static_cast<std::size_t>(duration_s / dt_fine);
-  std::vector<double> tf(n_fine), uf(n_fine);
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < n_fine; ++i) {
-    tf[i] = static_cast<double>(i) * dt_fine;
-    while (k < s.step_times.size() && s.step_times[k] <= tf[i]) ++k;
-    uf[i] = s.levels[k];
+  // The exact staircase: two points at each step's instant.
+  std::vector<double> tu{0.0}, uu{s.levels.front()};
+  for (std::size_t k = 0; k < s.step_times.size(); ++k) {
+    tu.insert(tu.end(), {s.step_times[k], s.step_times[k]});
+    uu.insert(uu.end(), {s.levels[k], s.levels[k + 1]});
   }
-  const auto yf = fitting::simulate_liquefier(tf, uf, tr.params(), tr.sensor, 16);
+  const auto n = static_cast<std::size_t>(duration_s * rate_hz);
+  std::vector<double> t(n), u(n);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    t[i] = static_cast<double>(i) / rate_hz;
+    while (k < s.step_times.size() && s.step_times[k] <= t[i]) ++k;
+    u[i] = s.levels[k];
+  }
+  const auto clean = fitting::simulate_liquefier(t, tu, uu, tr.params(), tr.sensor, oversample);
   double mean = 0;
-  for (double v : yf) mean += v;
-  mean /= static_cast<double>(yf.size());
+  for (double v : clean) mean += v;
+  mean /= static_cast<double>(clean.size());
   std::normal_distribution<double> noise(0.0, noise_rel * std::abs(mean));
   s.rec.sensor = tr.sensor;
   s.rec.input_unit = "mm^3/s";
   s.rec.output_unit = "mm^3/s";
-  for (std::size_t i = 0; i < n_fine; i += static_cast<std::size_t>(oversample)) {
-    s.rec.t.push_back(tf[i]);
-    s.rec.u.push_back(uf[i]);
-    s.clean.push_back(yf[i]);
-    s.rec.y.push_back(yf[i] + noise(rng));
-  }
+  s.rec.t = t;
+  s.rec.u = u;
+  s.rec.input_t = tu;
+  s.rec.input_u = uu;
+  s.clean = clean;
+  for (double v : clean) s.rec.y.push_back(v + noise(rng));
   return s;
 }
 

@@ -10,17 +10,19 @@
 //                           proportional to the stored volume for a constant compliance).
 //
 // u and q are in the record's input unit (a flow, or a filament feed), a in s (input unit)^-b.
-// b = 0 is the linear first-order model with tau = a. The dead time is continuous: the input is
-// interpolated linearly between its samples and delayed by theta, never rounded to a sample.
+// b = 0 is the linear first-order model with tau = a. The dead time is continuous: the input
+// (the record's commanded track when it carries one, else its samples) is interpolated linearly
+// between its points and delayed by theta, never rounded to a sample.
 //
 // Simulation on the record's own time grid: between samples (and the delayed input's own
-// breakpoints) the store is advanced by the exponential (Rosenbrock-)Euler step, the exact
-// solution of the store linearised at the start of the step under a linearly varying input; it is
-// exact for b = 0 and second-order accurate otherwise, with `substeps` equal sub-steps per piece
-// sized from the smallest time constant the record reaches.
+// breakpoints where its slope changes) the store is advanced by the exponential
+// (Rosenbrock-)Euler step, the exact solution of the store linearised at the start of the step
+// under a linearly varying input; it is exact for b = 0 and second-order accurate otherwise, with
+// `substeps` equal sub-steps per piece sized from the smallest time constant the record reaches.
 //
-// Fit: output error over the whole record with Ceres, Jacobian by automatic differentiation of
-// the simulation (exact derivatives of the discrete model). The time constant is estimated at a
+// Fit: output error over the whole record with Ceres, Jacobian by forward sensitivities: the
+// derivatives of the state with respect to a, b, theta and V0 propagated beside it through every
+// step (exact derivatives of the discrete model). The time constant is estimated at a
 // reference input Q_ref (the median of the positive inputs) as tau_ref = a Q_ref^b, which nearly
 // decorrelates it from b; a follows with its interval by the delta method. Start values: a grid
 // of linear first-order models (tau, theta) on a thinned record, then the nonlinear model on the
@@ -37,6 +39,7 @@
 // Choosing the linear model: b = 0 is kept when the profile-likelihood interval of b contains 0,
 // which is the F-test of b = 0 at 5 % (S(0) - S_min <= s^2 f t^2, the same threshold).
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -54,6 +57,13 @@ std::string to_string(LiquefierSensor s);
 /// A record: time (s, increasing), the commanded input (>= 0, a flow or feed) and the output.
 struct LiquefierRecord {
   std::vector<double> t, u, y;
+  /// The commanded input on its own instants, when the record carries it: the commanded feed is
+  /// known exactly (from the G-code's moves), only the sensor is sampled. input_u (>= 0) at
+  /// input_t (s, non-decreasing, on the record's clock), linear between them and held before the
+  /// first and after the last; two points at the same instant make a step. Empty: the input is u
+  /// at t, linear between the samples, so a step between two samples becomes a ramp across that
+  /// interval (its instant is known to a sample interval only).
+  std::vector<double> input_t, input_u;
   LiquefierSensor sensor = LiquefierSensor::flow;
   std::string input_unit = "1";
   std::string output_unit = "1";
@@ -74,6 +84,19 @@ struct LiquefierParams {
 /// is at most liquefier_max_substep_s (1..64).
 std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::vector<double>& u,
                                        const LiquefierParams& p, LiquefierSensor sensor, int substeps = 0);
+
+/// As above with the commanded input on its own instants (LiquefierRecord::input_t, input_u); the
+/// output at the instants t.
+std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::vector<double>& input_t,
+                                       const std::vector<double>& input_u, const LiquefierParams& p,
+                                       LiquefierSensor sensor, int substeps = 0);
+
+/// The derivatives of simulate_liquefier's output at every sample with respect to a, b, theta_s
+/// and v0 (output unit per parameter unit; v0 must be given), the ones the fit's Jacobian is
+/// made of.
+std::vector<std::array<double, 4>> liquefier_sensitivities(const std::vector<double>& t, const std::vector<double>& u,
+                                                           const LiquefierParams& p, LiquefierSensor sensor,
+                                                           int substeps = 0);
 
 /// The longest sub-step (s): an eighth of the smallest time constant the input reaches under
 /// (a, b); 0 when no input is positive.
