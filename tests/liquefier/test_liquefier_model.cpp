@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <random>
 
 #include "synth_store.hpp"
 #include "tunekit/core/error.hpp"
@@ -231,6 +232,27 @@ TEST_CASE("without the commanded track the sampled input alone gives a, b and th
       CHECK(covers(m.fit.param("theta_s"), tr.theta_s));
     }
   }
+}
+
+TEST_CASE("a record that starts with an empty liquefier holds the start volume at 0 and fits the rest") {
+  // The output does not depend on V0 at its bound 0: it is held there for the covariance (the
+  // fit is solved once) and reported fixed.
+  const StoreTruth tr;
+  auto s = synth_store(tr, 100.0, 40.0, 0.0, 41);
+  fitting::LiquefierParams p = tr.params();
+  p.v0 = 0.0;
+  const auto clean = fitting::simulate_liquefier(s.rec.t, s.rec.input_t, s.rec.input_u, p, tr.sensor, 8);
+  std::mt19937 rng(41);
+  std::normal_distribution<double> noise(0.0, 0.002 * 9.0);
+  for (std::size_t i = 0; i < clean.size(); ++i) s.rec.y[i] = clean[i] + noise(rng);
+  const auto m = fitting::fit_liquefier_model(s.rec);
+  INFO("a " << m.fit.derived.front().value << " b " << m.fit.value("b") << " V0 " << m.fit.value("V0"));
+  CHECK(m.fit.param("V0").fixed);
+  CHECK(m.fit.value("V0") == 0.0);
+  CHECK(m.nonlinear.param("V0").fixed);
+  CHECK(rel(m.fit.derived.front().value, tr.a) < 0.05);
+  CHECK(std::abs(m.fit.value("b") - tr.b) < 0.05);
+  CHECK(m.fit.param("tau_ref_s").std_error > 0);
 }
 
 TEST_CASE("a record that cannot carry the model is refused with a plain reason") {
