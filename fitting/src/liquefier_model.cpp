@@ -411,9 +411,16 @@ std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::
 std::vector<std::array<double, 4>> liquefier_sensitivities(const std::vector<double>& t, const std::vector<double>& u,
                                                            const LiquefierParams& p, LiquefierSensor sensor,
                                                            int substeps) {
-  std::vector<double> d;
   if (t.size() != u.size()) throw InputError("liquefier_sensitivities: time and input differ in length");
-  (void)simulate_signal(t, t, u, p, sensor, substeps, &d);
+  return liquefier_sensitivities(t, t, u, p, sensor, substeps);
+}
+
+std::vector<std::array<double, 4>> liquefier_sensitivities(const std::vector<double>& t,
+                                                           const std::vector<double>& input_t,
+                                                           const std::vector<double>& input_u, const LiquefierParams& p,
+                                                           LiquefierSensor sensor, int substeps) {
+  std::vector<double> d;
+  (void)simulate_signal(t, input_t, input_u, p, sensor, substeps, &d);
   std::vector<std::array<double, 4>> out(t.size());
   for (std::size_t i = 0; i < t.size(); ++i)
     out[i] = {p.g * d[4 * i] / p.a, p.g * d[4 * i + 1], p.g * d[4 * i + 2], p.g * d[4 * i + 3]};

@@ -97,6 +97,11 @@ std::vector<double> simulate_liquefier(const std::vector<double>& t, const std::
 std::vector<std::array<double, 4>> liquefier_sensitivities(const std::vector<double>& t, const std::vector<double>& u,
                                                            const LiquefierParams& p, LiquefierSensor sensor,
                                                            int substeps = 0);
+/// The same with the commanded input on its own instants.
+std::vector<std::array<double, 4>> liquefier_sensitivities(const std::vector<double>& t,
+                                                           const std::vector<double>& input_t,
+                                                           const std::vector<double>& input_u, const LiquefierParams& p,
+                                                           LiquefierSensor sensor, int substeps = 0);
 
 /// The longest sub-step (s): an eighth of the smallest time constant the input reaches under
 /// (a, b); 0 when no input is positive.
