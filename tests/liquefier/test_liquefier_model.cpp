@@ -177,13 +177,20 @@ namespace {
 
 /// Coverage of the 95 % intervals of a, b and theta over `draws` records at `rate` Hz (40 s,
 /// 2 % noise); TUNEKIT_STORE_DRAWS overrides the count. 200 draws: 90-98 %; fewer: the nominal
-/// 95 % within three binomial standard deviations.
+/// 95 % within three binomial standard deviations. TUNEKIT_STORE_SAMPLED_INPUT=1 drops the
+/// commanded track (the input known at the samples only), for the comparison in
+/// docs/liquefier-model.md; at 25 Hz that run falls short of 90 %.
 void check_coverage(double rate, int draws) {
   if (const char* env = std::getenv("TUNEKIT_STORE_DRAWS")) draws = std::max(10, std::atoi(env));
+  const bool sampled = std::getenv("TUNEKIT_STORE_SAMPLED_INPUT") != nullptr;
   const StoreTruth tr;
   int ca = 0, cb = 0, ct = 0;
   for (int d = 0; d < draws; ++d) {
-    const auto s = synth_store(tr, rate, 40.0, 0.02, 1000u + static_cast<unsigned>(d));
+    auto s = synth_store(tr, rate, 40.0, 0.02, 1000u + static_cast<unsigned>(d));
+    if (sampled) {
+      s.rec.input_t.clear();
+      s.rec.input_u.clear();
+    }
     const auto m = fitting::fit_liquefier_model(s.rec);
     ca += covers(m.nonlinear.derived.front(), tr.a);
     cb += covers(m.nonlinear.param("b"), tr.b);
@@ -192,7 +199,8 @@ void check_coverage(double rate, int draws) {
   const double n = draws;
   const double spread = draws >= 200 ? 0.0 : 3 * std::sqrt(0.95 * 0.05 / n);
   const double lo = std::min(0.90, 0.95 - spread), hi = std::max(0.98, std::min(1.0, 0.95 + spread));
-  INFO("rate " << rate << " Hz, draws " << draws << ": a " << ca / n << " b " << cb / n << " theta " << ct / n);
+  INFO((sampled ? "sampled input, " : "")
+       << "rate " << rate << " Hz, draws " << draws << ": a " << ca / n << " b " << cb / n << " theta " << ct / n);
   CHECK(ca / n >= lo);
   CHECK(ca / n <= hi);
   CHECK(cb / n >= lo);
