@@ -174,11 +174,33 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
       tq = t_multiplier(o.confidence, static_cast<int>(G) - 1);
     }
   }
-  // The step instants are known to one sample: a rectangular uncertainty dt / sqrt(12) in the
-  // dead time (JCGM 100:2008, "Guide to the expression of uncertainty in measurement", 4.3.7),
-  // added to its variance.
+  // The step instants are known to one sample: a rectangular uncertainty r = dt / sqrt(12) in
+  // each (JCGM 100:2008, "Guide to the expression of uncertainty in measurement", 4.3.7). An error
+  // e_j in step j's instant shifts that step's response alone, which moves the estimates by
+  // a_j e_j, a_j = (J^T J)^-1 J_j^T J_j,theta (J_j,theta: the model's derivative in the dead time
+  // over step j's samples); the instants of different steps fall at unrelated phases of the sample
+  // clock, so their errors are independent and add r^2 sum_j a_j a_j^T to the covariance (law of
+  // propagation, ibid. 5.1.2). Shifting every step alike moves the dead time by the same amount
+  // (sum_j a_j = 1 in theta): r^2 would be the one common clock offset, which the pooled steps
+  // do not share.
   double theta_resolution = 0;
   for (const auto& r : recs) theta_resolution = std::max(theta_resolution, step_instant_resolution(r));
+  const int theta_pos = static_cast<int>(std::find(free_idx.begin(), free_idx.end(), 2) - free_idx.begin());
+  if (theta_resolution > 0 && theta_pos < k) {
+    for (std::size_t j = 0; j < G; ++j) {
+      const double q[4] = {p[0], p[1], p[2], p[3 + j]};
+      Eigen::Matrix4d JtJ;
+      Eigen::Vector4d Jtr;
+      normal_equations(recs[j], q, JtJ, Jtr);
+      Eigen::VectorXd v = Eigen::VectorXd::Zero(k);
+      const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
+      for (int a = 0; a < k; ++a)
+        for (int c = 0; c < 4; ++c)
+          if (free_idx[static_cast<std::size_t>(a)] == idx[c]) v(a) = JtJ(c, 2);
+      const Eigen::VectorXd aj = C * v;
+      V += theta_resolution * theta_resolution * aj * aj.transpose();
+    }
+  }
   f.covariance.assign(static_cast<std::size_t>(n * n), 0.0);
   for (int a = 0; a < k; ++a)
     for (int b = 0; b < k; ++b)
@@ -188,12 +210,8 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
     const int j = free_idx[static_cast<std::size_t>(a)];
     auto& prm = f.params[static_cast<std::size_t>(j)];
     prm.ci95_method = method;
-    double var = V(a, a);
-    if (j == 2 && theta_resolution > 0) {
-      var += theta_resolution * theta_resolution;
-      f.covariance[static_cast<std::size_t>(j * n + j)] = var;
-      prm.ci95_method += ", with the step instants' sampling resolution";
-    }
+    const double var = V(a, a);
+    if (theta_resolution > 0 && theta_pos < k) prm.ci95_method += ", with the step instants' sampling resolution";
     prm.std_error = var >= 0 ? std::sqrt(var) : kNaN;
     prm.ci95_lo = prm.value - tq * prm.std_error;
     prm.ci95_hi = prm.value + tq * prm.std_error;

@@ -65,6 +65,27 @@ WhitenessTest ljung_box(std::span<const double> r, int lags) {
   return t;
 }
 
+double residual_variance_factor(std::span<const double> r) {
+  const std::size_t n = r.size();
+  if (n < 2) return 1;
+  double mean = 0;
+  for (double v : r) mean += v;
+  mean /= static_cast<double>(n);
+  double c0 = 0;
+  for (double v : r) c0 += (v - mean) * (v - mean);
+  if (!(c0 > 0)) return 1;
+  double f = 1;
+  const std::size_t max_lag = std::min<std::size_t>(n / 10, 2000);
+  for (std::size_t k = 1; k <= max_lag; ++k) {
+    double ck = 0;
+    for (std::size_t i = k; i < n; ++i) ck += (r[i] - mean) * (r[i - k] - mean);
+    const double rho = ck / c0;
+    if (!(rho > 0)) break;
+    f += 2 * rho;
+  }
+  return std::max(1.0, f);
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);

@@ -9,13 +9,19 @@
 #include <Eigen/Dense>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include <fmt/format.h>
+
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/stats.hpp"
 #include "number_text.hpp"
 
 namespace tunekit::fitting {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
+// Ljung-Box p-value below which an output-error fit's intervals are widened for correlated
+// residuals (the pooled step fit's threshold for its cluster-robust covariance).
+constexpr double kWhitenessWidenP = 0.01;
 
 std::vector<double> polymul(const std::vector<double>& a, const std::vector<double>& b) {
   std::vector<double> c(a.size() + b.size() - 1, 0.0);
@@ -364,6 +370,35 @@ std::vector<double> TransferFunction::simulate_foh(std::span<const double> u, do
   return y;
 }
 
+namespace {
+
+/// Residuals of an output-error fit that fail the whiteness test say the model does not follow
+/// the record exactly (a plant that is not linear over the excitation's range, a feed the model
+/// does not see): consecutive errors are correlated and s^2 (J^T J)^-1 is too sure. Its variances
+/// are multiplied by the residuals' variance factor (residual_variance_factor), the degrees of
+/// freedom divided by it, as the whole-record liquefier model does.
+void widen_for_correlated_residuals(FitResult& f, const LsqProblem& prob, const LsqOptions& o) {
+  if (!o.compute_covariance || o.absolute_sigma || !(f.diagnostics.whiteness_p < kWhitenessWidenP)) return;
+  std::vector<double> p;
+  for (const auto& prm : f.params) p.push_back(prm.value);
+  std::vector<double> r(static_cast<std::size_t>(prob.num_residuals));
+  if (!prob.residuals(p.data(), r.data())) return;
+  const double factor = residual_variance_factor(r);
+  if (!(factor > 1)) return;
+  const double dof = std::max(1.0, (f.diagnostics.num_observations - f.diagnostics.num_parameters) / factor);
+  const double tq = t_multiplier(o.confidence, dof);
+  for (auto& prm : f.params) {
+    if (prm.fixed || !std::isfinite(prm.std_error)) continue;
+    prm.std_error *= std::sqrt(factor);
+    prm.ci95_lo = prm.value - tq * prm.std_error;
+    prm.ci95_hi = prm.value + tq * prm.std_error;
+    prm.ci95_method = fmt::format("wald, widened for correlated residuals (variance factor {:.3g})", factor);
+  }
+  for (double& c : f.covariance) c *= factor;
+}
+
+}  // namespace
+
 FitResult fit_tf_output_error(std::span<const double> u, std::span<const double> y, double dt, const TfStructure& s,
                               const FitResult& start, const std::string& gain_unit, const LsqOptions& options) {
   if (u.size() != y.size()) throw InputError("output-error fit: input and output lengths differ");
@@ -414,7 +449,9 @@ FitResult fit_tf_output_error(std::span<const double> u, std::span<const double>
     }
     return true;
   };
-  return solve_least_squares(tf_model_name(s) + " output error", prob, options);
+  FitResult f = solve_least_squares(tf_model_name(s) + " output error", prob, options);
+  widen_for_correlated_residuals(f, prob, options);
+  return f;
 }
 
 }  // namespace tunekit::fitting

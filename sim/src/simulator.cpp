@@ -193,6 +193,7 @@ nlohmann::json SimConfig::truth() const {
     liq["tau_s"] = tau_s;
     liq["tau_ref_feed_mm_s"] = tau_ref_feed_mm_s;
     liq["tau_flow_exponent"] = tau_flow_exponent;
+    liq["tau_floor_feed_mm_s"] = sim::kTauFloorFeed_mm_s;  // tau(u) = tau(floor) below it
     liq["equations"] = "tau(u) = tau_s (u / tau_ref_feed_mm_s)^tau_flow_exponent";
     nlohmann::json table = nlohmann::json::array();
     for (double u : sim::kTruthOperatingFeeds_mm_s)

@@ -89,6 +89,21 @@ TEST_CASE("Student-t multipliers and the Ljung-Box test") {
   CHECK(ljung_box(alternating, 10).p_value < 1e-6);
 }
 
+TEST_CASE("the residuals' variance factor is 1 for white noise and (1 + phi) / (1 - phi) for AR(1)") {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> e(0, 1);
+  std::vector<double> white, ar;
+  double x = 0;
+  for (int i = 0; i < 20000; ++i) {
+    white.push_back(e(rng));
+    x = 0.8 * x + e(rng);
+    ar.push_back(x);
+  }
+  CHECK(residual_variance_factor(white) < 1.1);
+  CHECK(residual_variance_factor(ar) == Approx(9.0).epsilon(0.2));  // (1 + 0.8) / (1 - 0.8)
+  CHECK(residual_variance_factor(std::vector<double>(50, 2.0)) == 1.0);
+}
+
 TEST_CASE("the median is the upper middle value, 0 for no values") {
   CHECK(median({3.0, 1.0, 2.0}) == 2.0);
   CHECK(median({4.0, 1.0, 3.0, 2.0}) == 3.0);

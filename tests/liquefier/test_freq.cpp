@@ -285,6 +285,49 @@ TEST_CASE("output-error fit of a transfer function with dead time to a random-st
   CHECK(fit.diagnostics.rms == Approx(0.01).epsilon(0.2));
 }
 
+TEST_CASE("output-error fit with coloured output noise: the intervals widened for it cover tau") {
+  // A first-order lag with dead time driven by random steps, its output noise AR(1) with
+  // phi = 0.9: s^2 (J^T J)^-1 alone takes the noise for ten times as many independent samples
+  // as it holds, and its 95 % interval covers tau far less often than 95 %.
+  const double dt = 0.01;
+  fitting::TfStructure st{1, 0, true};
+  const std::vector<double> truth{2.0, 0.3, 0.05};  // K, tau_s, theta_s
+  const auto tf = fitting::tf_from_params(st, truth.data());
+  int covered = 0, widened = 0;
+  const int draws = 30;
+  for (int d = 0; d < draws; ++d) {
+    std::mt19937 rng(100 + d);
+    std::uniform_int_distribution<int> coin(0, 1);
+    std::normal_distribution<double> e(0, 0.01);
+    std::vector<double> u;
+    double level = 0;
+    for (int i = 0; i < 3000; ++i) {
+      if (i >= 100 && i % 60 == 0) level = coin(rng) ? 1.0 : -1.0;
+      u.push_back(level);
+    }
+    auto y = tf.simulate_zoh(u, dt);
+    double ar = 0;
+    for (auto& v : y) {
+      ar = 0.9 * ar + e(rng);
+      v += ar;
+    }
+    fitting::FitResult start;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      fitting::Param p;
+      p.name = fitting::tf_param_names(st)[i];
+      p.value = truth[i] * 1.1;
+      start.params.push_back(p);
+    }
+    const auto fit = fitting::fit_tf_output_error(u, y, dt, st, start);
+    const auto& tau = fit.param("tau_s");
+    if (tau.ci95_lo <= truth[1] && truth[1] <= tau.ci95_hi) ++covered;
+    if (tau.ci95_method.find("widened for correlated residuals") != std::string::npos) ++widened;
+  }
+  INFO(covered << " of " << draws << " covered, " << widened << " widened");
+  CHECK(widened == draws);
+  CHECK(covered >= 26);  // P(X <= 25) = 1.6 % for X ~ Binomial(30, 0.95)
+}
+
 TEST_CASE("tunekit freq --mode h1 / oe on the synthetic chirp data set: oe gives fn within 1 % of 12 Hz, covered") {
   auto r = run_cli({"freq", dataset("liquefier/synthetic_chirp.csv"), "--time", "time", "--input", "feed", "--output",
                     "force", "--mode", "h1", "--fit-tf", "2,0", "--fmax", "40", "--json"});

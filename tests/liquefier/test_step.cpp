@@ -139,6 +139,25 @@ TEST_CASE("Monte-Carlo: the 95 % interval of tau covers the truth in 90-99 % of 
   CHECK(coverage <= 0.99);
 }
 
+TEST_CASE("pooled steps: each step's instant known to a sample adds dt^2 / 12 / steps to theta's variance") {
+  // Eight equal steps with almost no noise: theta's uncertainty is the step instants' sampling
+  // resolution alone. Each instant is off by its own error, so the pooled dead time averages
+  // eight of them: dt / sqrt(12) / sqrt(8), not the dt / sqrt(12) of one step.
+  Truth tr;
+  const double fs = 100;
+  std::vector<fitting::StepRecord> recs;
+  for (unsigned j = 0; j < 8; ++j) recs.push_back(synth_step(tr, 1e-6, 500 + j, fs));
+  const auto f = fitting::fit_steps_pooled(recs, fitting::StepModel::fopdt);
+  const double r = 1 / fs / std::sqrt(12.0);
+  const auto& theta = f.param("theta_s");
+  INFO("theta " << theta.value << " +- " << theta.std_error << " (" << theta.ci95_method << ")");
+  CHECK(theta.std_error == Approx(r / std::sqrt(8.0)).epsilon(0.05));
+  CHECK(theta.ci95_method.find("sampling resolution") != std::string::npos);
+  // One step alone keeps the whole resolution.
+  CHECK(fitting::fit_step(recs.front(), fitting::StepModel::fopdt).param("theta_s").std_error ==
+        Approx(r).epsilon(0.05));
+}
+
 TEST_CASE("the step fit ends where Ceres finds no lower cost, also with theta_s on its bound or on a sample") {
   // Coarse, noisy records (20 Hz) put theta_s on a sample instant, where the cost has a kink, or
   // on its bound 0; one fine record has no dead time at all. A Ceres solve with its strictest

@@ -19,6 +19,13 @@ struct WhitenessTest {
 };
 WhitenessTest ljung_box(std::span<const double> residuals, int lags);
 
+/// Variance factor of a fit whose residuals are correlated in time: 1 + 2 sum of the residuals'
+/// autocorrelation up to its first non-positive lag (at most n / 10 lags, 2000), at least 1. The
+/// parameters' variances from s^2 (J^T J)^-1 are multiplied by it (the effective number of
+/// independent residuals is n / f: Bartlett, "Some aspects of the time-correlation problem in
+/// regard to tests of significance", 1935). 1 for white residuals.
+double residual_variance_factor(std::span<const double> residuals);
+
 /// Median of `v` (taken by value: it is partially reordered). 0 for an empty vector.
 double median(std::vector<double> v);
 
