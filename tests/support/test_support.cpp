@@ -119,8 +119,15 @@ std::string write_scratch(const std::string& name, const std::string& content) {
   const auto dir = std::filesystem::path(TUNEKIT_TEST_TMP_DIR) / "files";
   std::filesystem::create_directories(dir);
   const auto path = dir / name;
-  std::ofstream f(path, std::ios::binary);
-  f << content;
+  // Test cases run as parallel processes and several write the same named file: each writes its
+  // own temporary and renames it into place, so a reader (a tunekit child that maps the file)
+  // never sees it truncated under it.
+  const auto tmp = dir / (name + ".tmp" + std::to_string(::getpid()));
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    f << content;
+  }
+  std::filesystem::rename(tmp, path);
   return path.string();
 }
 
