@@ -253,27 +253,6 @@ FitResult solve_full(ModelProblem& full, const std::array<double, 6>& start, con
   return f;
 }
 
-/// 1 + 2 sum of the residuals' autocorrelation up to its first non-positive lag (>= 1).
-double variance_factor(const std::vector<double>& r) {
-  const std::size_t n = r.size();
-  double mean = 0;
-  for (double v : r) mean += v;
-  mean /= static_cast<double>(n);
-  double c0 = 0;
-  for (double v : r) c0 += (v - mean) * (v - mean);
-  if (!(c0 > 0)) return 1;
-  double f = 1;
-  const std::size_t max_lag = std::min<std::size_t>(n / 10, 2000);
-  for (std::size_t k = 1; k <= max_lag; ++k) {
-    double ck = 0;
-    for (std::size_t i = k; i < n; ++i) ck += (r[i] - mean) * (r[i - k] - mean);
-    const double rho = ck / c0;
-    if (!(rho > 0)) break;
-    f += 2 * rho;
-  }
-  return std::max(1.0, f);
-}
-
 std::vector<double> residuals_at(ModelProblem& mp, const FitResult& f) {
   std::vector<double> r(mp.rec.t.size());
   const auto p = values(f);
@@ -494,14 +473,14 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   FitResult nl = solve_full(full, values(best), o, rec, !o.fit_b);
   out.substeps = full.substeps;
   if (!o.fit_b) {
-    out.variance_factor = variance_factor(residuals_at(full, nl));
+    out.variance_factor = residual_variance_factor(residuals_at(full, nl));
     finish_intervals(nl, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
     if (o.profile) out.profile_solves += profile(full, nl, out.variance_factor, o.confidence);
     out.linear_chosen = true;
     out.fit = out.nonlinear = nl;
     return out;
   }
-  out.variance_factor = variance_factor(residuals_at(full, nl));
+  out.variance_factor = residual_variance_factor(residuals_at(full, nl));
   const FitResult nl_raw = nl;
   finish_intervals(nl, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
   if (o.profile) out.profile_solves += profile(full, nl, out.variance_factor, o.confidence);
