@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -249,7 +250,11 @@ void render_figure(const Figure& fig, const std::string& path) {
   const char* device = plot_device(path);
   std::lock_guard lock(plplot_mutex());
   const auto dir = std::filesystem::path(path).parent_path();
-  if (!dir.empty()) std::filesystem::create_directories(dir);
+  std::error_code dir_ec;
+  if (!dir.empty()) std::filesystem::create_directories(dir, dir_ec);
+  // PLplot aborts the whole process (its own message, exit 1) on a file it cannot open: try first.
+  if (!std::ofstream(path, std::ios::binary | std::ios::app))
+    throw InputError("cannot write the figure there (a missing or read-only directory)", path);
   {
     PlStream pls;
     pls->sdev(device);

@@ -197,4 +197,10 @@ TEST_CASE("tunekit step --plot draws the same figure: the record, the whole-reco
       {"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--plot", dir + "/x.pdf"});
   CHECK(pdf.code == 2);
   CHECK(!std::filesystem::exists(dir + "/x.svg"));
+  // A place the figure cannot be written: one plain error, not the plotting library's abort.
+  const auto unwritable = tunekit::test::run_cli(
+      {"step", csv, "--time", "time", "--input", "feed", "--output", "force", "--plot", "/proc/x.svg"});
+  CHECK(unwritable.code == 2);
+  CHECK(unwritable.err.find("tunekit: error: /proc/x.svg: cannot write the figure there") != std::string::npos);
+  CHECK(unwritable.err.find("PLPLOT") == std::string::npos);
 }
