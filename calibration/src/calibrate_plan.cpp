@@ -14,6 +14,7 @@
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/sim/sim_camera.hpp"
+#include "tunekit/sim/simulator.hpp"
 
 #ifndef TUNEKIT_DATASETS_DIR
 #define TUNEKIT_DATASETS_DIR "datasets"
@@ -101,7 +102,8 @@ CalibrationPlan plan_calibration(const CalibrateArgs& a, const CalibrationProfil
   plan.chirp = protocols::plan_liquefier_chirp(protocols::kLiteratureLiquefierTau_s);
   plan.chirp_basis = fmt::format("the literature time constant {} s", display_number(plan.chirp.expected_tau_s));
   // The simulated camera photographs everything the simulated printer prints.
-  if (plan.camera_path && a.camera.camera == "sim") plan.bed = std::make_shared<sim::SimPrintBed>();
+  if (plan.camera_path && a.camera.camera == "sim")
+    plan.bed = std::make_shared<sim::SimPrintBed>(sim::SimConfig::from_options(a.sim_options).seed);
 
   // Safety first: every protocol is built and checked against the limits before any byte is sent.
   for (auto& e : plan.experiments)

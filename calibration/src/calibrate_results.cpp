@@ -160,7 +160,8 @@ void add_axes(RunRecord& r, const Identification& id) {
 // The advance's 95 % interval: from the design's standard error of tau when it has one (K = the
 // pooled tau), else, for K built from the per-level taus (K = the stored melt volume over the
 // flow, an average of the taus up to the design flow), K scaled by the widest relative interval of
-// those taus: every tau within its interval keeps their average within that bound.
+// those taus: every tau within its interval keeps their average within that bound; that around the
+// flow design's bounds of the melt stored below the lowest identified flow.
 std::optional<std::pair<double, double>> advance_interval(const ExportOutcome& ex,
                                                           const std::optional<StepOutcome>& step) {
   const double k = *ex.settings.pa_k_s;
@@ -174,6 +175,12 @@ std::optional<std::pair<double, double>> advance_interval(const ExportOutcome& e
     widest = std::max({widest, (tau.value - tau.ci95_lo) / tau.value, (tau.ci95_hi - tau.value) / tau.value});
   }
   if (step->analysis.arrival_levels.empty() || !(widest < 1)) return std::nullopt;
+  // The flow design bounds what no level measured (the melt stored below the lowest identified
+  // flow, flow_advance.hpp) and, when its levels carry intervals, the levels' spread already.
+  if (ex.flow && std::isfinite(ex.flow->k_design_lo_s) && std::isfinite(ex.flow->k_design_hi_s)) {
+    if (ex.flow->band_from_levels) return std::pair{ex.flow->k_design_lo_s, ex.flow->k_design_hi_s};
+    return std::pair{ex.flow->k_design_lo_s * (1 - widest), ex.flow->k_design_hi_s * (1 + widest)};
+  }
   return std::pair{k * (1 - widest), k * (1 + widest)};
 }
 

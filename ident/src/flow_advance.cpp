@@ -56,6 +56,23 @@ double fa_table_volume(const FaKnots& k, double Q) {
   return v;
 }
 
+/// The volume a power-law trend stores from zero flow up to q. No level measured tau below the
+/// lowest identified flow q0, so that part is bounded: tau held at its value at q0 (the melt turns
+/// Newtonian right below the data) and the power law followed down to zero flow (the melt keeps
+/// thinning). A shear-thinning melt whose viscosity lies below its power-law asymptote, as the
+/// Cross and Carreau models' do (Bird, Armstrong and Hassager, Dynamics of polymeric liquids,
+/// 1987), stores a volume between the two. The estimate follows the power law: a melt's Newtonian
+/// plateau begins at shear rates well below those of a nozzle at the flows a liquefier test holds.
+/// `which` -1 takes the smaller bound, +1 the larger, 0 the power law.
+double fa_trend_volume(const TauPowerLaw& t, double q0, double q, int which) {
+  const double below = std::min(q, q0);
+  const double held = t.a * std::pow(q0, t.b) * below;
+  const double power = t.a * std::pow(below, t.b + 1) / (t.b + 1);
+  const double low = which < 0 ? std::min(held, power) : which > 0 ? std::max(held, power) : power;
+  const double above = q > q0 ? t.a * (std::pow(q, t.b + 1) - std::pow(q0, t.b + 1)) / (t.b + 1) : 0.0;
+  return low + above;
+}
+
 double fa_kalico_shape(KalicoModel m, double x) {
   return m == KalicoModel::tanh ? std::tanh(x) : 1.0 - 1.0 / (1.0 + x);
 }
@@ -159,10 +176,9 @@ double stored_volume_mm3(const FlowAdvanceInputs& in, double q, int which) {
   if (q <= 0) return 0;
   const FaKnots k = fa_knots(in, which);
   if (fa_trend_usable(in)) {
-    const double b = in.trend->b;
-    const double est = in.trend->a * std::pow(q, b + 1) / (b + 1);
+    const double est = fa_trend_volume(*in.trend, k.q.front(), q, which);
     if (which == 0) return est;
-    // The band of a trend: its estimate scaled by the levels' bound over their estimate.
+    // The band of a trend: its bound below the data scaled by the levels' bound over their estimate.
     const FaKnots k0 = fa_knots(in, 0);
     return est * fa_table_volume(k, q) / fa_table_volume(k0, q);
   }
@@ -220,6 +236,27 @@ KalicoFit fit_kalico(const FlowAdvanceInputs& in, KalicoModel model, const std::
   return f;
 }
 
+namespace {
+
+// Below this share of the design flow's stored volume the part below the data is not worth a note.
+constexpr double kLowFlowShareNote = 0.1;
+
+/// How much of the design flow's stored volume lies below the lowest identified flow, where a
+/// power-law trend is bounded rather than followed (fa_trend_volume); said when it matters.
+void fa_note_low_flow(const FlowAdvanceInputs& in, FlowAdvanceDesign& d) {
+  if (!fa_trend_usable(in)) return;
+  const double q0 = d.flow_min_mm3_s, qd = d.design_flow_mm3_s;
+  d.low_flow_share = fa_trend_volume(*in.trend, q0, std::min(qd, q0), 0) / fa_trend_volume(*in.trend, q0, qd, 0);
+  if (d.low_flow_share < kLowFlowShareNote) return;
+  d.notes.push_back(
+      fmt::format("{:.0f} % of the melt stored at the design flow lies below the lowest identified flow {:.3g} mm^3/s, "
+                  "where no level measured tau: the advance follows the power law there, and its bounds span tau held "
+                  "at that flow too ({:.4g}-{:.4g} s)",
+                  100 * d.low_flow_share, q0, d.k_design_lo_s, d.k_design_hi_s));
+}
+
+}  // namespace
+
 FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   fa_validate(in);
   FlowAdvanceDesign d;
@@ -229,8 +266,10 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
         "trend would store an unbounded melt volume, so it is not used; the advance is designed from the measured "
         "levels, assuming tau holds the lowest level's value below it",
         in.trend->b));
-  d.has_band = std::all_of(in.levels.begin(), in.levels.end(),
-                           [](const FlowTau& l) { return fa_finite(l.tau_lo_s) && fa_finite(l.tau_hi_s); });
+  const bool level_band = std::all_of(in.levels.begin(), in.levels.end(),
+                                      [](const FlowTau& l) { return fa_finite(l.tau_lo_s) && fa_finite(l.tau_hi_s); });
+  d.has_band = level_band || fa_trend_usable(in);
+  d.band_from_levels = level_band;
   const FaKnots k = fa_knots(in, 0);
   d.flow_min_mm3_s = k.q.front();
   d.flow_max_mm3_s = k.q.back();
@@ -246,6 +285,9 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
                     "tau is held at the nearest level there",
                     d.design_flow_mm3_s, d.flow_min_mm3_s, d.flow_max_mm3_s));
   d.k_design_s = needed_advance_s(in, d.design_flow_mm3_s);
+  d.k_design_lo_s = needed_advance_s(in, d.design_flow_mm3_s, -1);
+  d.k_design_hi_s = needed_advance_s(in, d.design_flow_mm3_s, +1);
+  fa_note_low_flow(in, d);
 
   // Curve over the identified range (linear in flow).
   const int ns = std::max(8, in.samples);
@@ -323,7 +365,9 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   d.notes.push_back(
       "advance designed as the stored melt volume V(Q) = integral of tau over 0..Q (one first-order store, "
       "tau held at the lowest level below it); the single K at flow Q is V(Q)/Q");
-  if (!d.has_band) d.notes.push_back("no 95 % intervals per level: the advance is drawn without a band");
+  if (!level_band)
+    d.notes.push_back(d.has_band ? "no 95 % intervals per level: the advance's band is that of the flows below the data"
+                                 : "no 95 % intervals per level: the advance is drawn without a band");
   return d;
 }
 
@@ -355,6 +399,8 @@ nlohmann::json FlowAdvanceDesign::to_json() const {
           {"design_flow_mm3_s", fa_num(design_flow_mm3_s)},
           {"single",
            {{"K_s", fa_num(k_design_s)},
+            {"K_bounds_s", {fa_num(k_design_lo_s), fa_num(k_design_hi_s)}},
+            {"low_flow_share", fa_num(low_flow_share)},
             {"within_10pct_flow_mm3_s", {fa_num(k_within_lo_mm3_s), fa_num(k_within_hi_mm3_s)}}}},
           {"kalico", kj},
           {"kalico_other_model", kal(kalico_other)},

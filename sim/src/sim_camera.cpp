@@ -112,7 +112,8 @@ cv::Mat SimPrintBed::photograph(const SimCameraOptions& o, SimCameraFrame* frame
   if (o.blur_px > 0) cv::GaussianBlur(cover, cover, cv::Size(0, 0), o.blur_px);
 
   // The bed: a smooth texture (low-pass noise), then lighting and sensor noise.
-  std::mt19937 rng(o.seed);
+  std::seed_seq seeds{o.seed, noise_seed_};
+  std::mt19937 rng = noise_seed_ == 0 ? std::mt19937(o.seed) : std::mt19937(seeds);
   std::normal_distribution<float> n01(0.f, 1.f);
   cv::Mat tex(std::max(2, H / 16), std::max(2, W / 16), CV_32F);
   for (int v = 0; v < tex.rows; ++v)

@@ -190,3 +190,19 @@ TEST_CASE("calibrate --help shows the three liquefier paths with an example each
                         "--photo tests.jpg", "--liquefier load-cell\n"})
     CHECK(r.out.find(s) != std::string::npos);
 }
+
+TEST_CASE("calibrate camera path: the simulated photo's sensor noise follows the simulator's seed", "[calibrate]") {
+  // Each seed draws its own photo noise (coverage over seeds needs it); one seed is reproducible.
+  auto photo = [](const std::string& name, const std::string& seed) {
+    const std::string dir = tunekit::test::scratch_dir("calibrate_camera_seed_" + name) + "/run";
+    const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--camera", "sim",
+                                           "--skip-axes", "--out", dir, "--sim", "seed=" + seed});
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    return tunekit::vision::read_image(dir + "/liquefier-camera/photo.png", tunekit::vision::ImageColor::gray);
+  };
+  const cv::Mat a = photo("a", "3"), b = photo("b", "3"), c = photo("c", "4");
+  REQUIRE(a.size() == c.size());
+  CHECK(cv::norm(a, b, cv::NORM_L1) == 0);
+  CHECK(cv::norm(a, c, cv::NORM_L1) > 0);
+}

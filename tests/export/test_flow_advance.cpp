@@ -47,6 +47,14 @@ ident::FlowAdvanceInputs power_law_levels(double a, double b, bool with_ci) {
   return in;
 }
 
+/// A power law's stored volume up to q >= q0 with the part below the lowest level q0 taken as tau
+/// held at q0 (`below` = "held") or the power law to zero flow ("power").
+double trend_volume(double a, double b, double q0, double q, const std::string& below) {
+  const double held = a * std::pow(q0, b) * q0, power = a * std::pow(q0, b + 1) / (b + 1);
+  const double low = below == "held" ? held : power;
+  return low + a * (std::pow(q, b + 1) - std::pow(q0, b + 1)) / (b + 1);
+}
+
 }  // namespace
 
 TEST_CASE("flow advance: a constant tau needs K = tau at every flow") {
@@ -63,11 +71,22 @@ TEST_CASE("flow advance: a constant tau needs K = tau at every flow") {
 }
 
 TEST_CASE("flow advance: the need is the integral of tau over flow, V(Q)/Q") {
-  // tau = a Q^b: V = a Q^(b+1)/(b+1), K = a Q^b/(b+1) (larger than tau(Q) when b < 0).
+  // tau = a Q^b: V = a Q^(b+1)/(b+1), K = a Q^b/(b+1) (larger than tau(Q) when b < 0). Below the
+  // lowest level (2 mm^3/s) no level measured tau: the lower bound holds tau at 2 mm^3/s there.
   const double a = 0.09, b = -0.45;
   auto in = power_law_levels(a, b, false);
-  for (double q : {1.0, 3.0, 10.0, 17.0})
+  for (double q : {3.0, 10.0, 17.0}) {
     CHECK(ident::needed_advance_s(in, q) == Approx(a * std::pow(q, b) / (b + 1)).epsilon(1e-12));
+    CHECK(ident::needed_advance_s(in, q, -1) == Approx(trend_volume(a, b, 2.0, q, "held") / q).epsilon(1e-12));
+    CHECK(ident::needed_advance_s(in, q, +1) == Approx(trend_volume(a, b, 2.0, q, "power") / q).epsilon(1e-12));
+  }
+  CHECK(ident::stored_volume_mm3(in, 1.0, -1) == Approx(a * std::pow(2.0, b) * 1.0).epsilon(1e-12));
+  // The design says how much of the stored melt lies below the data, and its bounds span both.
+  in.design_flow_mm3_s = 10;
+  const auto d = ident::design_flow_advance(in);
+  CHECK(d.low_flow_share == Approx(std::pow(2.0 / 10.0, b + 1)));
+  CHECK(d.k_design_lo_s == Approx(trend_volume(a, b, 2.0, 10.0, "held") / 10.0));
+  CHECK(d.k_design_hi_s == Approx(d.k_design_s));
   // The piecewise-linear table (no trend): tau held below the first level, exact trapezoids.
   in.trend.reset();
   const double t0 = a * std::pow(2.0, b), t1 = a * std::pow(4.0, b);
@@ -77,8 +96,10 @@ TEST_CASE("flow advance: the need is the integral of tau over flow, V(Q)/Q") {
 }
 
 TEST_CASE("flow advance: the single K holds within 10 % over a stated range around the design flow") {
-  const auto in0 = power_law_levels(0.09, -0.45, false);
-  auto in = in0;
+  // A level at a very low flow leaves almost nothing below the data (0.7 % of the volume at
+  // 8 mm^3/s), so K(Q) is the power law's c Q^b to within 0.2 %.
+  auto in = power_law_levels(0.09, -0.45, false);
+  in.levels.insert(in.levels.begin(), ident::FlowTau{0.001, 0.09 * std::pow(0.001, -0.45)});
   in.design_flow_mm3_s = 8;
   const auto d = ident::design_flow_advance(in);
   REQUIRE(std::isfinite(d.k_within_lo_mm3_s));
@@ -128,8 +149,12 @@ TEST_CASE("flow advance: the 95 % band brackets the need and the Orca table is t
   for (const auto& s : d.curve) {
     CHECK(s.k_lo_s <= s.k_need_s);
     CHECK(s.k_hi_s >= s.k_need_s);
-    CHECK(s.k_lo_s == Approx(0.9 * s.k_need_s));
+    // The levels' 10 % intervals scale the bounds of the melt below the data (held / power law).
+    const double q = s.flow_mm3_s;
+    CHECK(s.k_lo_s == Approx(0.9 * trend_volume(0.08, -0.4, 2.0, q, "held") / q));
+    CHECK(s.k_hi_s == Approx(1.1 * trend_volume(0.08, -0.4, 2.0, q, "power") / q));
   }
+  CHECK(d.band_from_levels);
   REQUIRE(d.orca.size() == 12);
   for (std::size_t i = 1; i < d.orca.size(); ++i) {
     CHECK(d.orca[i].flow_mm3_s >= d.orca[i - 1].flow_mm3_s);

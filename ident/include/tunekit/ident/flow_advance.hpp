@@ -28,8 +28,9 @@
 // flow in at steady state; a gain other than 1 is an extrusion-multiplier matter); (3) below the
 // lowest identified level tau is held at that level's value (a Newtonian melt at low shear);
 // between levels tau is interpolated linearly, or follows the fitted power law tau = a Q^b when
-// one is given (then V = a Q^(b+1) / (b+1), needing b > -1); above the highest level tau is
-// held; (4) the acceleration does not enter: a linear store's need does not depend on it.
+// one is given (then V = a Q^(b+1) / (b+1), needing b > -1; below the lowest level the estimate
+// follows the power law and its lower bound holds tau there); above the highest level tau is held; (4) the acceleration
+// does not enter: a linear store's need does not depend on it.
 //
 // 95 % band. When each level carries an interval for tau, the band of the need is computed with
 // every level at its lower (upper) bound: V is monotone in every tau, so this brackets V(Q) for
@@ -117,6 +118,12 @@ struct FlowAdvanceDesign {
   double flow_max_mm3_s = kAdvanceNaN;
   double design_flow_mm3_s = kAdvanceNaN;
   double k_design_s = kAdvanceNaN;  ///< single K = V(Qd)/Qd (Klipper, Marlin, RepRapFirmware)
+  /// Bounds of the single K (s): the levels' 95 % intervals when they carry them, and, with a
+  /// power-law trend, the volume below the lowest identified flow taken at both of its bounds.
+  double k_design_lo_s = kAdvanceNaN;
+  double k_design_hi_s = kAdvanceNaN;
+  /// Share of V(Qd) that lies below the lowest identified flow (NaN without a power-law trend).
+  double low_flow_share = kAdvanceNaN;
   /// Flows (within the identified range) where the single K is within the tolerance of the need.
   double k_within_lo_mm3_s = kAdvanceNaN;
   double k_within_hi_mm3_s = kAdvanceNaN;
@@ -126,6 +133,7 @@ struct FlowAdvanceDesign {
   std::vector<OrcaPoint> orca;                ///< sorted by flow, then acceleration
   std::vector<FlowAdvanceSample> curve;
   bool has_band = false;
+  bool band_from_levels = false;  ///< the band holds the levels' 95 % intervals (else only the low flows')
   std::vector<std::string> notes;
   std::vector<std::string> warnings;
 

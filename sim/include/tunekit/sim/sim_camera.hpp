@@ -44,6 +44,9 @@ struct SimCameraFrame {
 
 class SimPrintBed {
  public:
+  /// `noise_seed` (the simulator's seed) joins the photo options' seed in drawing the sensor
+  /// noise, so that each simulated run's photo has its own noise; 0 keeps the options' seed alone.
+  explicit SimPrintBed(unsigned noise_seed = 0) : noise_seed_(noise_seed) {}
   /// One simulation step (see Simulator::deposit_sink). Thread-safe.
   void deposit(double t_s, const std::array<double, 4>& pos, double speed_xy_mm_s, double flow_out_mm3_s);
   /// Number of bead pieces laid down.
@@ -56,6 +59,7 @@ class SimPrintBed {
   struct Piece {
     double x0, y0, x1, y1, width_mm;
   };
+  unsigned noise_seed_ = 0;
   mutable std::mutex mu_;
   std::vector<Piece> pieces_;
   // The piece being accumulated (consecutive steps are merged into ~0.05 mm pieces).
