@@ -157,35 +157,7 @@ void add_axes(RunRecord& r, const Identification& id) {
   }
 }
 
-// The advance's 95 % interval: from the design's standard error of tau when it has one (K = the
-// pooled tau), else, for K built from the per-level taus (K = the stored melt volume over the
-// flow, an average of the taus up to the design flow), K scaled by the widest relative interval of
-// those taus: every tau within its interval keeps their average within that bound; that around the
-// flow design's bounds of the melt stored below the lowest identified flow.
-std::optional<std::pair<double, double>> advance_interval(const ExportOutcome& ex,
-                                                          const std::optional<StepOutcome>& step) {
-  const double k = *ex.settings.pa_k_s;
-  const double se = ex.design ? ex.design->k_stderr_s : fitting::kNaN;
-  if (std::isfinite(se)) return std::pair{k - kZ95 * se, k + kZ95 * se};
-  if (!step || !ex.design || ex.design->k_source != "operating points") return std::nullopt;
-  double widest = 0;
-  for (const auto& level : step->analysis.arrival_levels) {
-    const auto& tau = level.fit.param("tau_s");
-    if (!(tau.value > 0) || !std::isfinite(tau.ci95_lo) || !std::isfinite(tau.ci95_hi)) return std::nullopt;
-    widest = std::max({widest, (tau.value - tau.ci95_lo) / tau.value, (tau.ci95_hi - tau.value) / tau.value});
-  }
-  if (step->analysis.arrival_levels.empty() || !(widest < 1)) return std::nullopt;
-  // The flow design bounds what no level measured (the melt stored below the lowest identified
-  // flow, flow_advance.hpp) and, when its levels carry intervals, the levels' spread already.
-  if (ex.flow && std::isfinite(ex.flow->k_design_lo_s) && std::isfinite(ex.flow->k_design_hi_s)) {
-    if (ex.flow->band_from_levels) return std::pair{ex.flow->k_design_lo_s, ex.flow->k_design_hi_s};
-    return std::pair{ex.flow->k_design_lo_s * (1 - widest), ex.flow->k_design_hi_s * (1 + widest)};
-  }
-  return std::pair{k * (1 - widest), k * (1 + widest)};
-}
-
-void add_compensators(RunRecord& r, const CompensatorDesign& design, const std::optional<StepOutcome>& step,
-                      const std::string& run_dir) {
+void add_compensators(RunRecord& r, const CompensatorDesign& design, const std::string& run_dir) {
   const ExportOutcome& ex = design.exported;
   if (design.marlin_ft_live) r.res()["firmware_ft_motion"] = "active (M493): settings written as M493";
   r.res()["compensators"] = analysis_results(ex);
@@ -193,7 +165,7 @@ void add_compensators(RunRecord& r, const CompensatorDesign& design, const std::
   if (ex.flow) r.plot["flow_advance"] = ex.flow->to_json();
   r.res()["config_diff"] = ex.change.diff;
   if (ex.settings.pa_k_s) {
-    const auto ci = advance_interval(ex, step);
+    const auto& ci = ex.pa_k_ci95;  // export's own interval: `tunekit export` prints the same
     if (ci) {
       r.res()["compensators"]["pa_k_ci95"] = {ci->first, ci->second};
       r.row("pressure advance K", "compensators.settings.pa_k_s", "s", "compensators.pa_k_ci95");
@@ -238,7 +210,7 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
   else if (id.step) add_load_cell_step(r, *id.step, plan.profile.profile.filament_area_mm2());
   if (id.freq) add_freq(r, *id.freq, runs, id.step);
   add_axes(r, id);
-  add_compensators(r, design, id.step, plan.run_dir);
+  add_compensators(r, design, plan.run_dir);
   r.res()["summary"] = r.summary;
   r.res()["agreement"] = r.agreement;
   r.res()["notes"] = r.notes;

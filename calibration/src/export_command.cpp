@@ -324,6 +324,7 @@ void fill_results(const ExportOptions& a, const export_design::LiquefierInputs& 
   const auto& flow = outcome.flow;
   const auto& design = outcome.design;
   res["settings"] = settings_json(outcome.settings, outcome.firmware, ft_motion);
+  if (outcome.pa_k_ci95) res["pa_k_ci95"] = {outcome.pa_k_ci95->first, outcome.pa_k_ci95->second};
   res["design"] = design ? design->to_json() : nlohmann::json(nullptr);
   if (!li.agreement.empty()) res["agreement"] = li.agreement;
   res["flow_advance"] = flow ? flow->to_json() : nlohmann::json(nullptr);
@@ -361,6 +362,7 @@ ExportOutcome compute_export(const ExportOptions& a, const DesignInputs& inputs)
   set_extruder(a, fw, outcome.settings);
   outcome.settings.change_note = change_note(a, inputs);
   const nlohmann::json rheology = export_design::design_advance(a, li, outcome);
+  outcome.pa_k_ci95 = export_design::advance_interval(li, outcome);
   finish_settings(a, inputs, std::move(shapers), outcome);
 
   outcome.change = firmware::export_config_file(fw, a.config, outcome.settings);
@@ -405,8 +407,10 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
     print_text(o, ctx.out);
     if (design)
       ctx.err << fmt::format(
-          "tunekit: advance K = {:.4g} s ({}) at {:.3g} mm^3/s{}\n", design->k_s, design->k_source,
-          design->design_flow_mm3_s,
+          "tunekit: advance K = {:.4g} s{} ({}) at {:.3g} mm^3/s{}\n", design->k_s,
+          o.pa_k_ci95 ? fmt::format(" [{:.4g}, {:.4g}] (95 %)", o.pa_k_ci95->first, o.pa_k_ci95->second)
+                      : std::string(),
+          design->k_source, design->design_flow_mm3_s,
           settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s) : std::string());
     if (flow) {
       // No band (the single K is off the need even at the design flow): said so, not "nan to nan".

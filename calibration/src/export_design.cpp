@@ -16,6 +16,8 @@
 namespace tunekit::calibration::export_design {
 namespace {
 
+constexpr double kZ95 = 1.959963984540054;  ///< two-sided 95 % quantile of the standard normal
+
 /// An estimate for the agreement rule: false when the value or its interval is not finite.
 bool estimate_of(const EstimatedValue& v, const std::string& method, Estimate& out) {
   out = {method, v.value, v.ci95_lo, v.ci95_hi};
@@ -247,7 +249,33 @@ firmware::KalicoAdvanceSetting kalico_setting(const ident::FlowAdvanceDesign& fl
   return k;
 }
 
+/// The widest relative 95 % interval of the levels' tau (NaN when a level has none).
+double widest_level_interval(const LiquefierInputs& li) {
+  double widest = 0;
+  for (const auto& l : li.levels) {
+    if (!(l.tau_s > 0) || !std::isfinite(l.tau_ci95_lo) || !std::isfinite(l.tau_ci95_hi)) return fitting::kNaN;
+    widest = std::max({widest, (l.tau_s - l.tau_ci95_lo) / l.tau_s, (l.tau_ci95_hi - l.tau_s) / l.tau_s});
+  }
+  return !li.levels.empty() && widest < 1 ? widest : fitting::kNaN;
+}
+
 }  // namespace
+
+std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs& li, const ExportOutcome& outcome) {
+  const auto& design = outcome.design;
+  if (!design || !outcome.settings.pa_k_s) return std::nullopt;
+  const double k = *outcome.settings.pa_k_s;
+  if (!outcome.flow) {
+    if (!std::isfinite(design->k_stderr_s)) return std::nullopt;
+    return std::pair{k - kZ95 * design->k_stderr_s, k + kZ95 * design->k_stderr_s};
+  }
+  const auto& flow = *outcome.flow;
+  if (!std::isfinite(flow.k_design_lo_s) || !std::isfinite(flow.k_design_hi_s)) return std::nullopt;
+  if (flow.band_from_levels) return std::pair{flow.k_design_lo_s, flow.k_design_hi_s};
+  const double widest = widest_level_interval(li);
+  if (!std::isfinite(widest)) return std::nullopt;
+  return std::pair{flow.k_design_lo_s * (1 - widest), flow.k_design_hi_s * (1 + widest)};
+}
 
 nlohmann::json design_advance(const ExportOptions& a, LiquefierInputs& li, ExportOutcome& outcome) {
   Envelope& env = outcome.envelope;

@@ -30,6 +30,14 @@ struct LiquefierInputs {
 
 /// Step (else frequency response) tau and the levels; --pa-k overrides them. Compares the step
 /// and frequency-response tau by the one agreement rule (agreement.hpp) and warns when they differ.
+/// The advance's 95 % interval (s). Without a flow design: K +- 1.96 times the design's standard
+/// error of tau (K = the pooled tau). With one: the flow design's bounds (the levels' intervals,
+/// and the melt stored below the lowest identified flow, flow_advance.hpp); when those bounds do
+/// not hold the levels' intervals (a whole-record model's trend), they are widened by the widest
+/// relative interval of the levels' tau: every tau within its interval keeps V(Q)/Q, an average
+/// of the taus up to Q, within that bound. nullopt when neither is known.
+std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs& li, const ExportOutcome& outcome);
+
 LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, Envelope& env);
 
 /// The machine profile's filament, line and limits (assumed defaults without --profile).

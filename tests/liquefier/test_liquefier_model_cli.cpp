@@ -66,6 +66,15 @@ TEST_CASE("export designs the advance V(Q)/Q of the whole-record model within 10
   const double k = ex.at("settings").at("pa_k_s").get<double>();
   INFO("exported K " << k << " s, truth V(Q)/Q " << truth << " s");
   CHECK(std::abs(k - truth) < 0.10 * truth);
+  // Its 95 % interval holds the truth; most of the melt at 8 mm^3/s is stored below the lowest
+  // level (4 mm^3/s), so the interval's lower end holds tau there and lies well below K.
+  REQUIRE(ex.contains("pa_k_ci95"));
+  const double lo = ex.at("pa_k_ci95").at(0).get<double>(), hi = ex.at("pa_k_ci95").at(1).get<double>();
+  INFO("interval [" << lo << ", " << hi << "] s");
+  CHECK(lo <= truth);
+  CHECK(hi >= truth);
+  CHECK(lo < 0.9 * k);
+  CHECK(ex.at("flow_advance").at("single").at("low_flow_share").get<double>() > 0.3);
 }
 
 TEST_CASE("on a linear liquefier's record the exported advance equals tau within 2 %") {

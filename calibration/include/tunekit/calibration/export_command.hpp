@@ -55,10 +55,12 @@ struct ExportOutcome {
   firmware::CompensatorSettings settings;        ///< what is set
   std::optional<ident::AdvanceDesign> design;    ///< the advance design, when one was made
   std::optional<ident::FlowAdvanceDesign> flow;  ///< the flow-dependent design (two or more levels)
-  firmware::ExportResult change;                 ///< the configuration before/after, diff and G-code
-  std::string schedule_gcode;                    ///< flow-dependent advance as G-code (per feature)
-  std::string backup;                            ///< the backup's path when --write changes the file
-  core::FileBatch files;                         ///< everything commit_export() writes (not the JSON)
+  /// 95 % interval of the advance K (s), when the design has one (export_design.hpp says how).
+  std::optional<std::pair<double, double>> pa_k_ci95;
+  firmware::ExportResult change;  ///< the configuration before/after, diff and G-code
+  std::string schedule_gcode;     ///< flow-dependent advance as G-code (per feature)
+  std::string backup;             ///< the backup's path when --write changes the file
+  core::FileBatch files;          ///< everything commit_export() writes (not the JSON)
   Envelope envelope{"export"};
 };
 
