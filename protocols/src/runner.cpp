@@ -66,6 +66,7 @@ std::string join_lines(const std::vector<std::string>& lines) {
 /// The simulated Marlin build's answer to what identify() asks about FT_MOTION (M493, and M493 V
 /// after a 2025-form report), for a dry run on the simulator.
 firmware::FtMotionReport sim_m493_report(const sim::SimConfig& cfg) {
+  if (cfg.ft_motion == "none") return {};
   sim::Simulator s(cfg);
   auto ask = [&s](const char* cmd) {
     std::string out;
@@ -127,8 +128,10 @@ RunResult run_experiment(const RunOptions& o) {
   // The simulator follows the firmware named by its "firmware=" option (Marlin by default).
   const std::string fw_name = sim ? sim_cfg.firmware : profile.firmware;
   firmware::Dialect dialect(fw_name.empty() ? firmware::Firmware::marlin : firmware::firmware_from_name(fw_name));
-  // A dry run on the simulator plans for the simulated build's M493 report (what identify() reads).
-  if (sim && dialect.firmware() == firmware::Firmware::marlin) dialect.set_ft_motion(sim_m493_report(sim_cfg));
+  // A dry run on the simulator plans for the simulated build's M493 report (what identify() reads),
+  // on a printer for the report its profile keeps ([firmware_state] m493_report).
+  if (dialect.firmware() == firmware::Firmware::marlin)
+    dialect.set_ft_motion(sim ? sim_m493_report(sim_cfg) : firmware::parse_m493_report(profile.state.m493_report));
 
   RunResult res;
   res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect, o.limits);

@@ -25,9 +25,11 @@
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/sim/simulator.hpp"
 
+using tunekit::InputError;
 using tunekit::MachineError;
 using namespace tunekit::firmware;
 using namespace tunekit::protocols;
@@ -254,4 +256,31 @@ TEST_CASE("a sweep on a Marlin running FT_MOTION stopped part-way still restores
     CHECK(index_of(received, back.front(), at_stop) != std::string::npos);
     check_same(ask_m493(server.sim()), original);
   }
+}
+
+TEST_CASE("a printer profile keeps its Marlin's M493 report: the dry run shows the FT shaper off and back",
+          "[machine]") {
+  const std::string dir = tunekit::test::scratch_dir("marlin_m493_profile");
+  std::string toml = tunekit::test::read_text(tunekit::test::dataset("machines/sim.toml"));
+  const std::string report = R"(m493_report = ["Fixed-Time Motion enabled with X axis MZV shaping.",
+  "X static shaper frequency: 47.50Hz", "Y static shaper frequency: 37.00 Hz", "Linear Advance disabled"])";
+  const auto at = toml.find("[firmware_state]\n");
+  REQUIRE(at != std::string::npos);
+  toml.insert(at + 17, report + "\n");
+  const std::string path = tunekit::test::write_scratch("marlin_m493_profile.toml", toml);
+  const auto profile = tunekit::machine::load_machine_profile(path);
+  CHECK(profile.state.m493_report.size() == 4);
+  RunOptions o;
+  o.protocol = "axis-sweep";
+  o.axis = "x";
+  o.machine = path;
+  o.port = dir + "/no-printer";  // a dry run opens nothing
+  o.dry_run = true;
+  const auto plan = run_experiment(o).gcode;
+  const auto epi = index_of(plan, ";@epilogue");
+  CHECK(index_of(plan, "M493 X0") < epi);
+  CHECK(index_of(plan, "M493 X8 A47.5", epi) != std::string::npos);
+  CHECK(index_of(plan, "M593 F0") == std::string::npos);  // bypassed with fixed-time motion active
+  toml.replace(toml.find("m493_report = ["), 15, "m493_report = [1, ");
+  CHECK_THROWS_AS(tunekit::machine::parse_machine_profile(toml, path), InputError);
 }
