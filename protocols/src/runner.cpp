@@ -227,11 +227,13 @@ RunResult run_experiment(const RunOptions& o) {
                                {"version", session->firmware.version},
                                {"dialect", to_string(session->dialect.firmware())},
                                {"ft_motion", session->firmware.ft_motion},
-                               {"ft_motion_active", session->firmware.ft_motion_active}});
+                               {"ft_motion_active", session->firmware.ft_motion_active},
+                               {"m493_form", to_string(session->firmware.m493.form)}});
     summary["firmware"] = {{"name", session->firmware.name}, {"version", session->firmware.version}};
     if (session->firmware.ft_motion) {
       res.ft_motion = session->firmware.ft_motion_active ? "active" : "built, inactive";
       summary["firmware"]["ft_motion"] = res.ft_motion;
+      summary["firmware"]["m493_form"] = to_string(session->firmware.m493.form);
     }
     adapt_to_firmware(o, sim, profile, *session, port, journal, summary, res, progress);
     // Fail before heating and homing when the link cannot record what the protocol needs.

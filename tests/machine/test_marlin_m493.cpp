@@ -20,6 +20,8 @@
 #include <thread>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
@@ -206,7 +208,9 @@ TEST_CASE("an axis sweep on a Marlin running FT_MOTION turns its shaper off and 
     o.run_dir = dir + "/" + f.name;
     SimPtyServer server(cfg);
     o.port = server.path();
-    run_experiment(o);
+    const auto res = run_experiment(o);
+    const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at("summary")));
+    CHECK(run.at("firmware").at("m493_form") == to_string(original.form));
     server.stop();
     server.wait();
     const auto received = received_commands(server.sim());
