@@ -84,41 +84,6 @@ FirmwareInfo parse_m115(const std::vector<std::string>& lines) {
   return info;
 }
 
-FtMotionReport parse_m493_report(const std::vector<std::string>& lines) {
-  FtMotionReport r;
-  for (const auto& raw : lines) {
-    std::string line = raw;
-    if (line.rfind("echo:", 0) == 0) line = line.substr(5);
-    const auto ft = line.find("Fixed-Time Motion ");
-    if (ft != std::string::npos) {
-      r.present = true;
-      r.active = line.compare(ft + 18, 7, "enabled") == 0;
-      // " with X axis ZV shaping" / " and with Y axis MZV shaping" (A/B on CoreXY/CoreXZ builds).
-      static const char* const kTags[2][2] = {{" with ", "x"}, {" and with ", "y"}};
-      for (const auto& tag_axis : kTags) {
-        const std::string tag = tag_axis[0], axis = tag_axis[1];
-        std::size_t p = line.find(tag);
-        // X's " with " is the first one not preceded by " and" (Y's).
-        if (axis == "x" && p != std::string::npos && p >= 4 && line.compare(p - 4, 4, " and") == 0)
-          p = std::string::npos;
-        if (p == std::string::npos) continue;
-        const auto ax = line.find(" axis ", p);
-        const auto end = line.find(" shaping", ax == std::string::npos ? p : ax);
-        if (ax != std::string::npos && end != std::string::npos && end > ax + 6)
-          r.shapers[axis] = line.substr(ax + 6, end - ax - 6);
-      }
-      continue;
-    }
-    const auto la = line.find("Linear Advance ");
-    if (la != std::string::npos && r.present) {
-      r.linear_advance = line.compare(la + 15, 7, "enabled") == 0;
-      const auto g = line.find("Gain: ");
-      if (g != std::string::npos) r.linear_advance_k = std::strtod(line.c_str() + g + 6, nullptr);
-    }
-  }
-  return r;
-}
-
 std::string Dialect::set_accel(double a) const {
   switch (fw_) {
     case Firmware::klipper: return fmt::format("SET_VELOCITY_LIMIT ACCEL={:.0f}", a);

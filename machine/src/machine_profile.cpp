@@ -204,6 +204,17 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
     }
   }
   auto& st = p.state;
+  if (const auto* node = fs.get("m493_report")) {
+    const auto* lines = node->as_array();
+    if (lines)
+      for (const auto& l : *lines)
+        if (const auto v = l.value<std::string>()) st.m493_report.push_back(*v);
+    if (!lines || st.m493_report.size() != lines->size())
+      throw InputError(
+          "[firmware_state] m493_report must be the printer's M493 answer as a list of lines, e.g. "
+          "[\"Fixed-Time Motion enabled (X=ZV ; Y=MZV)\", \"X static shaper frequency: 40.00Hz\"]",
+          r.where_of(*node));
+  }
   if (const auto* node = fs.get("minimum_cruise_ratio")) {
     const auto v = node->value<double>();
     if (!v || *v < 0 || *v >= 1)

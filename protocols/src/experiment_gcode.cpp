@@ -132,9 +132,19 @@ StateShaper split_state_shaper(const std::string& v) {
 /// Input shaping off for a test and its restore lines, per firmware, when the profile says the
 /// machine has shaping configured ([firmware_state] shaper_x/y): Klipper as its resonance tester
 /// (SET_INPUT_SHAPER with zero frequencies), Marlin M593 F0 (M593.cpp: without X/Y every shaped
-/// axis), RepRapFirmware M593 P"none".
+/// axis), RepRapFirmware M593 P"none". A Marlin running fixed-time motion with a shaper (its M493
+/// report, in the dialect) bypasses M593 (stepper.cpp isr()): its FT_MOTION shapers are turned
+/// off and set back instead, in the M493 letters of the form its report took (marlin_m493.hpp).
 void shaping_off(const machine::MachineProfile& profile, const firmware::Dialect& d, std::vector<std::string>& prologue,
                  std::vector<std::string>& restore, nlohmann::json& changed) {
+  if (d.firmware() == firmware::Firmware::marlin && d.ft_motion().shaping()) {
+    const auto off = firmware::m493_shaping_off(d.ft_motion());
+    const auto back = firmware::m493_shaping_restore(d.ft_motion());
+    prologue.insert(prologue.end(), off.begin(), off.end());
+    restore.insert(restore.end(), back.begin(), back.end());
+    changed.push_back("M493");
+    return;
+  }
   const auto& shaper = profile.state.shaper;
   if (shaper.empty()) return;
   switch (d.firmware()) {

@@ -48,10 +48,17 @@ class GcodeSession : public Session {
     // Marlin's M115 names no FT_MOTION capability: ask M493 (a bare M493 only reports; a build
     // without FT_MOTION answers "Unknown command"). With fixed-time motion active the classic
     // shaper and smooth linear advance are bypassed, so settings go to M493.
+    // The 2025 report form ("(X=ZV ; Y=MZV)") does not tell which letters set a shaper: builds
+    // that take C<shaper> answer M493 V with "FTM V2" (M493.cpp), earlier ones nothing.
     if (f.firmware == firmware::Firmware::marlin) {
-      const auto ft = firmware::parse_m493_report(link_.send("M493"));
-      f.ft_motion = ft.present;
-      f.ft_motion_active = ft.active;
+      auto answer = link_.send("M493");
+      if (firmware::parse_m493_report(answer).form == firmware::M493Form::axis_list) {
+        const auto v = link_.send("M493 V");
+        answer.insert(answer.end(), v.begin(), v.end());
+      }
+      f.m493 = firmware::parse_m493_report(answer);
+      f.ft_motion = f.m493.present;
+      f.ft_motion_active = f.m493.active;
     }
     return f;
   }

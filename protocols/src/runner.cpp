@@ -63,6 +63,27 @@ std::string join_lines(const std::vector<std::string>& lines) {
   return s;
 }
 
+/// The simulated Marlin build's answer to what identify() asks about FT_MOTION (M493, and M493 V
+/// after a 2025-form report), for a dry run on the simulator.
+firmware::FtMotionReport sim_m493_report(const sim::SimConfig& cfg) {
+  if (cfg.ft_motion == "none") return {};
+  sim::Simulator s(cfg);
+  auto ask = [&s](const char* cmd) {
+    std::string out;
+    s.handle_line(cmd, [&out](std::string_view t) { out += t; });
+    std::vector<std::string> lines;
+    for (std::size_t b = 0, e; (e = out.find('\n', b)) != std::string::npos; b = e + 1)
+      lines.push_back(out.substr(b, e - b));
+    return lines;
+  };
+  auto answer = ask("M493");
+  if (firmware::parse_m493_report(answer).form == firmware::M493Form::axis_list) {
+    const auto v = ask("M493 V");
+    answer.insert(answer.end(), v.begin(), v.end());
+  }
+  return firmware::parse_m493_report(answer);
+}
+
 /// After the firmware is identified, before anything but the identification was sent: a profile
 /// naming another firmware is refused (RunOptions::strict_firmware) or overridden with a warning;
 /// the protocol is rebuilt for the firmware found, within the stricter of the profile's and the
@@ -106,7 +127,11 @@ RunResult run_experiment(const RunOptions& o) {
   if (!sim && o.port.empty()) throw InputError("--port is needed with a machine profile (or use --machine sim)");
   // The simulator follows the firmware named by its "firmware=" option (Marlin by default).
   const std::string fw_name = sim ? sim_cfg.firmware : profile.firmware;
-  const firmware::Dialect dialect(fw_name.empty() ? firmware::Firmware::marlin : firmware::firmware_from_name(fw_name));
+  firmware::Dialect dialect(fw_name.empty() ? firmware::Firmware::marlin : firmware::firmware_from_name(fw_name));
+  // A dry run on the simulator plans for the simulated build's M493 report (what identify() reads),
+  // on a printer for the report its profile keeps ([firmware_state] m493_report).
+  if (dialect.firmware() == firmware::Firmware::marlin)
+    dialect.set_ft_motion(sim ? sim_m493_report(sim_cfg) : firmware::parse_m493_report(profile.state.m493_report));
 
   RunResult res;
   res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect, o.limits);
@@ -197,15 +222,18 @@ RunResult run_experiment(const RunOptions& o) {
     session->firmware = session->identify();
     session->dialect = firmware::Dialect(
         session->firmware.firmware == firmware::Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
+    session->dialect.set_ft_motion(session->firmware.m493);
     journal.event("firmware", {{"name", session->firmware.name},
                                {"version", session->firmware.version},
                                {"dialect", to_string(session->dialect.firmware())},
                                {"ft_motion", session->firmware.ft_motion},
-                               {"ft_motion_active", session->firmware.ft_motion_active}});
+                               {"ft_motion_active", session->firmware.ft_motion_active},
+                               {"m493_form", to_string(session->firmware.m493.form)}});
     summary["firmware"] = {{"name", session->firmware.name}, {"version", session->firmware.version}};
     if (session->firmware.ft_motion) {
       res.ft_motion = session->firmware.ft_motion_active ? "active" : "built, inactive";
       summary["firmware"]["ft_motion"] = res.ft_motion;
+      summary["firmware"]["m493_form"] = to_string(session->firmware.m493.form);
     }
     adapt_to_firmware(o, sim, profile, *session, port, journal, summary, res, progress);
     // Fail before heating and homing when the link cannot record what the protocol needs.

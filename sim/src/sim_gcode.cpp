@@ -1,6 +1,6 @@
 // The simulator's G-code command table: line numbers and checksums, then one branch per
 // command (G0/G1 moves into the planner, G4, G28, M105, M109/M190, M114, M115, M204/M205,
-// M400, M410, M112, M493, M566, M955, M956, M4100, SET_VELOCITY_LIMIT), answering as the
+// M400, M410, M112, M493 (sim_m493.cpp), M566, M955, M956, M4100, SET_VELOCITY_LIMIT), answering as the
 // firmware named by SimConfig::firmware does.
 #include <algorithm>
 #include <chrono>
@@ -48,72 +48,6 @@ void Simulator::m956(std::string_view body, const machine::GcodeWords& /*words*/
   capture_text_ = "Sample,X,Y,Z\n";
   std::lock_guard<std::mutex> lock(mu_);
   files_[capture_name_] = capture_text_;
-}
-
-// Marlin's M493 (Marlin/src/gcode/feature/ft_motion/M493.cpp), on a build without
-// HAS_DYNAMIC_FREQ: S on/off, X/Y shaper (0 NONE, 1 ZV, 2 ZVD, 3 ZVDD, 4 ZVDDD, 5 EI, 6 2HEI,
-// 7 3HEI, 8 MZV), A/B base frequency (needs a shaper on the axis), I/J zeta, P linear advance
-// on/off, K its gain; without parameters, or after a change that sets flag.report, it prints
-// say_shaping(). A build without FT_MOTION answers as gcode.cpp does for any unknown command.
-void Simulator::m493(const machine::GcodeWords& w, const Emit& emit) {
-  if (cfg_.ft_motion == "none") {
-    emit("echo:Unknown command: \"M493\"\n");
-    return;
-  }
-  bool report = w.args.empty();
-  if (w.has("S")) {
-    const bool on = w.get("S", 0) != 0;
-    if (on != ftm_active_) report = true;
-    ftm_active_ = on;
-  }
-  static const char* const kNames[] = {"", "ZV", "ZVD", "ZVDD", "ZVDDD", "EI", "2 Hump EI", "3 Hump EI", "MZV"};
-  for (int a = 0; a < 2; ++a) {
-    const std::string letter = a == 0 ? "X" : "Y";
-    if (!w.has(letter)) continue;
-    const int sh = static_cast<int>(w.get(letter, 0));
-    if (sh < 0 || sh > sim::kFtmLastShaper) {
-      emit(fmt::format("?Invalid [{}] shaper.\n", letter));
-      return;
-    }
-    if (sh != ftm_shaper_[a]) report = true;
-    ftm_shaper_[a] = sh;
-  }
-  if (w.has("P")) {
-    ftm_la_ = w.get("P", 0) != 0;
-    report = true;
-    emit(ftm_la_ ? "Linear Advance enabled.\n" : "Linear Advance disabled.\n");
-  }
-  if (w.has("K")) {
-    const double k = w.get("K", 0);
-    if (k >= 0) {
-      ftm_k_ = k;
-      report = true;
-    } else {
-      emit("Linear Advance gain out of range.\n");
-    }
-  }
-  for (int a = 0; a < 2; ++a) {
-    const std::string f = a == 0 ? "A" : "B", z = a == 0 ? "I" : "J";
-    if (w.has(f)) {
-      if (ftm_shaper_[a] == 0) emit(fmt::format("Wrong mode for [{}] frequency.\n", f));
-      else {
-        ftm_freq_[a] = w.get(f, ftm_freq_[a]);
-        report = true;
-      }
-    }
-    if (w.has(z) && ftm_shaper_[a] != 0) ftm_zeta_[a] = w.get(z, ftm_zeta_[a]);
-  }
-  if (!report) return;
-  std::string l = fmt::format("Fixed-Time Motion {}abled", ftm_active_ ? "en" : "dis");
-  if (ftm_shaper_[0]) l += fmt::format(" with X axis {} shaping", kNames[ftm_shaper_[0]]);
-  if (ftm_shaper_[1]) l += fmt::format(" and with Y axis {} shaping", kNames[ftm_shaper_[1]]);
-  emit(l + ".\n");
-  if (ftm_shaper_[0] || ftm_shaper_[1]) {
-    emit(fmt::format("X static shaper frequency: {:.2f}Hz\n", ftm_freq_[0]));
-    emit(fmt::format("Y static shaper frequency: {:.2f} Hz\n", ftm_freq_[1]));
-  }
-  emit(ftm_la_ ? fmt::format("Linear Advance enabled. Gain: {:.2f}\n", ftm_k_)
-               : std::string("Linear Advance disabled\n"));
 }
 
 bool Simulator::handle_line(std::string_view raw, const Emit& emit) {

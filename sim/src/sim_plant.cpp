@@ -20,6 +20,10 @@ Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed
   dt_ = 1.0 / (cfg_.accel_rate_hz * sim::kStepsPerAccelSample);
   accel_every_ = sim::kStepsPerAccelSample;
   ftm_active_ = cfg_.ft_motion == "on";
+  for (int a = 0; a < 2; ++a) {
+    ftm_shaper_[a] = cfg_.ft_shaper[a];
+    ftm_freq_[a] = cfg_.ft_freq_hz[a];
+  }
   load_every_ = std::max(1, static_cast<int>(std::lround(1.0 / (cfg_.load_cell_rate_hz * dt_))));
   for (const auto& [axis, modes] : cfg_.modes) mode_state_[axis].assign(modes.size(), {0.0, 0.0});
   delay_.assign(std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(cfg_.theta_s / dt_))), 0.0);

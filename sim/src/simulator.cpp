@@ -42,6 +42,18 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
+/// "ft_shaper_x=<code>:<Hz>": ftMotionShaper_t code (0 none .. 8 MZV) and base frequency.
+void parse_ft_shaper(SimConfig& c, const std::string& key, const std::string& v) {
+  const auto parts = split(v, ':');
+  const double code = parse_double(key, parts.front());
+  if (parts.size() != 2 || code < 0 || code > sim::kFtmLastShaper || code != std::floor(code))
+    throw InputError(
+        fmt::format("simulator option {} must be <shaper 0-{}>:<Hz>, e.g. 1:41", key, sim::kFtmLastShaper));
+  const int axis = key.back() == 'x' ? 0 : 1;
+  c.ft_shaper[axis] = static_cast<int>(code);
+  c.ft_freq_hz[axis] = parse_double(key, parts.back());
+}
+
 const char* liquefier_model_name(LiquefierModel m) { return m == LiquefierModel::fopdt ? "fopdt" : "physics"; }
 
 }  // namespace
@@ -121,6 +133,12 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
       if (v != "none" && v != "off" && v != "on")
         throw InputError("simulator option ft_motion must be none, off or on");
       c.ft_motion = v;
+    } else if (k == "m493_form") {
+      if (v != "mode" && v != "axis_slash" && v != "axis_named" && v != "axis_list" && v != "axis_list_v2")
+        throw InputError("simulator option m493_form must be mode, axis_slash, axis_named, axis_list or axis_list_v2");
+      c.m493_form = v;
+    } else if (k == "ft_shaper_x" || k == "ft_shaper_y") {
+      parse_ft_shaper(c, k, v);
     } else if (k == "minimum_cruise_ratio") {
       c.minimum_cruise_ratio = parse_double(k, v);
       if (c.minimum_cruise_ratio < 0 || c.minimum_cruise_ratio >= 1)
@@ -232,7 +250,12 @@ nlohmann::json SimConfig::truth() const {
       {"rate_hz", accel_rate_hz}, {"noise_mm_s2", accel_noise_mm_s2}, {"cross_coupling", cross_coupling}};
   j["jerk_mm_s3"] = jerk_mm_s3;
   j["firmware"] = firmware;
-  if (firmware == "marlin") j["ft_motion"] = ft_motion;
+  if (firmware == "marlin") {
+    j["ft_motion"] = ft_motion;
+    j["m493_form"] = m493_form;
+    j["ft_shaper"] = {{"x", {{"code", ft_shaper[0]}, {"freq_hz", ft_freq_hz[0]}}},
+                      {"y", {{"code", ft_shaper[1]}, {"freq_hz", ft_freq_hz[1]}}}};
+  }
   if (firmware == "rrf") j["rrf_http"] = rrf_http;
   j["planner"] = {{"steps_per_mm", steps_per_mm},
                   {"max_extrude_only_distance_mm", max_extrude_only_distance_mm},

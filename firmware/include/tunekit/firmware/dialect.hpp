@@ -13,7 +13,10 @@
 
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "tunekit/firmware/marlin_m493.hpp"
 
 namespace tunekit::firmware {
 
@@ -35,20 +38,8 @@ struct FirmwareInfo {
   /// from the M493 report (parse_m493_report).
   bool ft_motion = false;
   bool ft_motion_active = false;
+  FtMotionReport m493;  ///< the M493 report itself (marlin_m493.hpp), when Marlin answered one
 };
-
-/// What a Marlin machine answered to a bare M493 (Marlin/src/gcode/feature/ft_motion/M493.cpp:
-/// without parameters GcodeSuite::M493() reports with say_shaping(), whose first line is
-/// "Fixed-Time Motion enabled|disabled[ with X axis ZV shaping][ and with Y axis MZV shaping].").
-/// A build without FT_MOTION answers 'echo:Unknown command: "M493"' (gcode.cpp, STR_UNKNOWN_COMMAND).
-struct FtMotionReport {
-  bool present = false;                        ///< the build has FT_MOTION
-  bool active = false;                         ///< "Fixed-Time Motion enabled"
-  std::map<std::string, std::string> shapers;  ///< axis "x"/"y" -> shaper as reported ("ZV", "2 Hump EI", ...)
-  bool linear_advance = false;                 ///< "Linear Advance enabled. Gain: K"
-  double linear_advance_k = 0;
-};
-FtMotionReport parse_m493_report(const std::vector<std::string>& lines);
 
 /// Parses the lines a machine printed in answer to M115 (any order, other lines ignored).
 FirmwareInfo parse_m115(const std::vector<std::string>& lines);
@@ -68,9 +59,14 @@ class Dialect {
   /// G-code that starts/stops a sensor stream (tunekit-sim's M4100); empty when the firmware
   /// streams through another channel (Klipper's API server).
   std::string sensor_stream(const std::string& sensor, bool on) const;
+  /// Marlin's FT_MOTION as its M493 report said (marlin_m493.hpp): the M493 letters that turn
+  /// its shapers off for a test and set them back depend on the form of that report.
+  const FtMotionReport& ft_motion() const { return ft_; }
+  void set_ft_motion(FtMotionReport r) { ft_ = std::move(r); }
 
  private:
   Firmware fw_;
+  FtMotionReport ft_;
 };
 
 }  // namespace tunekit::firmware

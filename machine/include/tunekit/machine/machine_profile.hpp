@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace tunekit::machine {
 
@@ -73,6 +74,10 @@ struct FirmwareState {
   /// Klipper: the acceleration in force (toolhead max_accel) when the machine was identified,
   /// mm/s^2, restored after a test; 0 when not known (then [print] max_accel_mm_s2 is restored).
   double accel_in_force_mm_s2 = 0;
+  /// Marlin with FT_MOTION: its answer to M493 (and to M493 V), line by line as printed
+  /// (firmware/marlin_m493.hpp), so that a dry run shows the M493 lines that turn its shaper off
+  /// for a test and set it back; a live run reads the report again on connecting.
+  std::vector<std::string> m493_report;
 };
 
 /// True for the accelerometer chips Klipper's API server streams (see klipper_sensors.hpp).

@@ -143,6 +143,16 @@ struct SimConfig {
   /// an unknown command), "off" (built, M493 S0) or "on" (built and active, M493 S1). M493
   /// answers as Marlin/src/gcode/feature/ft_motion/M493.cpp does (say_shaping()).
   std::string ft_motion = "none";
+  /// Marlin only: which form of M493 the FT_MOTION build speaks (firmware/marlin_m493.hpp):
+  /// "mode" (2023: one mode S10..S15 for X and Y), "axis_slash" (2024: "with X/A axis ..."),
+  /// "axis_named" (2024-2025: "with X axis ..."), "axis_list" (2025: "(X=ZV ; Y=MZV)" with
+  /// X/Y<shaper> letters) or "axis_list_v2" (the same report with "None" for unshaped axes,
+  /// C<shaper> for the axes flagged X/Y, and "FTM V2" in answer to M493 V).
+  std::string m493_form = "axis_named";
+  /// The build's FT_MOTION shaper per axis at start (ftMotionShaper_t code, 0 none .. 8 MZV)
+  /// and its base frequency, Hz ("ft_shaper_x=1:41").
+  int ft_shaper[2] = {0, 0};
+  double ft_freq_hz[2] = {37, 37};
   /// RepRapFirmware only ("rrf_http=1"): the board's web server on 127.0.0.1 (an ephemeral
   /// port), serving rr_download of the files M956 writes, as src/Networking/HttpResponder.cpp
   /// does. M955 P0 reports the accelerometer and M956 P0 S<n> A<m> [F"name"] records n samples
@@ -231,6 +241,11 @@ class Simulator {
   bool klipper() const { return firmware_ == FirmwareRules::klipper; }
   bool rrf() const { return firmware_ == FirmwareRules::rrf; }
   void m493(const machine::GcodeWords& w, const Emit& emit);
+  void m493_mode(const machine::GcodeWords& w, bool& report, const Emit& emit);
+  bool m493_axis_letters(const machine::GcodeWords& w, bool& report, const Emit& emit);
+  void m493_flags(const machine::GcodeWords& w, bool& report, const Emit& emit);
+  void m493_advance(const machine::GcodeWords& w, bool& report, const Emit& emit);
+  void m493_say_shaping(const Emit& emit) const;
   void m956(std::string_view body, const machine::GcodeWords& w, const Emit& emit);
   bool marlin() const { return firmware_ == FirmwareRules::marlin; }
   /// Applies the faults planned for the line just received (sim_faults.cpp): may corrupt `line`
