@@ -123,6 +123,19 @@ std::vector<std::string> Dialect::safe_state(bool heaters_off) const {
   return out;
 }
 
+std::string klipper_param_value(const std::string& value) {
+  const bool plain = !value.empty() && std::none_of(value.begin(), value.end(), [](char c) {
+    return std::isspace(static_cast<unsigned char>(c)) || c == '"' || c == '\'' || c == '\\' || c == '#' || c == ';';
+  });
+  if (plain) return value;
+  std::string q = "\"";
+  for (char c : value) {
+    if (c == '"' || c == '\\') q += '\\';
+    q += c;
+  }
+  return q + "\"";
+}
+
 std::string Dialect::sensor_stream(const std::string& sensor, bool on) const {
   if (fw_ == Firmware::klipper) return {};
   const char* code = sensor == "accelerometer" ? "A" : sensor == "load_cell" ? "L" : "F";

@@ -518,16 +518,20 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
     // The frequency with fewest vibrations, or a lower-scoring one (less smoothing) that is
     // not much worse (within 10 % + 0.05 percentage points), scanning from low frequencies.
     // When the smoothing limit cut the scan short, Klipper keeps the fewest-vibrations one.
+    // Above a vibrations limit the lowest such frequency is taken whatever its score.
     ShaperCandidate chosen = results[best_res];
+    const bool limit = o.max_vibrations > 0;
     if (!smoothing_limited) {
       const double vibr_limit = results[best_res].vibrations * 1.1 + 0.0005;
+      const bool over = limit && results[best_res].vibrations > o.max_vibrations;
       for (auto it = results.rbegin(); it != results.rend(); ++it)
-        if (it->vibrations < vibr_limit && it->score < chosen.score) chosen = *it;
+        if (it->vibrations < vibr_limit && (it->score < chosen.score || over)) chosen = *it;
     }
     // Across types: a new type wins by a 20 % better score, or a 5 % better score with 10 %
-    // less smoothing.
+    // less smoothing, or fewer vibrations while the best is above the limit.
     if (!have_best || chosen.score * 1.2 < best.score ||
-        (chosen.score * 1.05 < best.score && chosen.smoothing_mm * 1.1 < best.smoothing_mm)) {
+        (chosen.score * 1.05 < best.score && chosen.smoothing_mm * 1.1 < best.smoothing_mm) ||
+        (limit && best.vibrations > o.max_vibrations && chosen.vibrations < best.vibrations)) {
       best = chosen;
       have_best = true;
     }

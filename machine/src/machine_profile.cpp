@@ -190,6 +190,7 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
       throw InputError(e.message(), path);
     }
   }
+  p.http_password = r.text(net, "password", "");  // never echoed: see rrf_http.hpp
 
   const auto& fs = r.section("firmware_state", false);
   for (const char* axis : {"x", "y"}) {

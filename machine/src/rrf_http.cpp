@@ -5,12 +5,15 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "tunekit/core/error.hpp"
 
@@ -58,6 +61,31 @@ int http_connect(const HttpAddress& to) {
   return fd;
 }
 
+/// The request target as messages show it: a password's value replaced by "***".
+std::string shown_target(const std::string& path_and_query) {
+  std::string s = path_and_query;
+  for (auto p = s.find("password="); p != std::string::npos; p = s.find("password=", p + 1)) {
+    const auto b = p + 9, e = std::min(s.find('&', b), s.size());
+    s.replace(b, e - b, "***");
+  }
+  return s;
+}
+
+/// The local time as rr_connect's "time" takes it (HttpResponder.cpp: "%Y-%m-%dT%H:%M:%S").
+std::string rrf_local_time() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  ::localtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+  return buf;
+}
+
+/// The X-Session-Key header line of a session with a key.
+std::string session_header(const RrfSession& s) {
+  return s.key == 0 ? std::string() : fmt::format("X-Session-Key: {}\r\n", s.key);
+}
+
 }  // namespace
 
 std::string HttpAddress::text() const { return fmt::format("http://{}:{}", host, port); }
@@ -94,10 +122,11 @@ std::string url_encode(std::string_view v) {
   return out;
 }
 
-HttpReply http_get(const HttpAddress& to, const std::string& path_and_query, std::chrono::milliseconds timeout) {
+HttpReply http_get(const HttpAddress& to, const std::string& path_and_query, std::chrono::milliseconds timeout,
+                   const std::string& extra_headers) {
   HttpSocket sock(http_connect(to));
   const std::string req =
-      fmt::format("GET {} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n\r\n", path_and_query, to.host);
+      fmt::format("GET {} HTTP/1.1\r\nHost: {}\r\n{}Connection: close\r\n\r\n", path_and_query, to.host, extra_headers);
   for (std::size_t sent = 0; sent < req.size();) {
     const ssize_t n = ::send(sock.fd(), req.data() + sent, req.size() - sent, MSG_NOSIGNAL);
     if (n < 0) {
@@ -117,8 +146,9 @@ HttpReply http_get(const HttpAddress& to, const std::string& path_and_query, std
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0)
-      throw MachineError(fmt::format("no complete reply to GET {} within {} ms", path_and_query, timeout.count()),
-                         to.text());
+      throw MachineError(
+          fmt::format("no complete reply to GET {} within {} ms", shown_target(path_and_query), timeout.count()),
+          to.text());
     pollfd p{sock.fd(), POLLIN, 0};
     const int pr = ::poll(&p, 1, static_cast<int>(left.count()));
     if (pr < 0 && errno == EINTR) continue;
@@ -142,7 +172,7 @@ HttpReply http_get(const HttpAddress& to, const std::string& path_and_query, std
     }
   }
   if (data.rfind("HTTP/1.", 0) != 0 || header_end == std::string::npos)
-    throw MachineError(fmt::format("the reply to GET {} is not HTTP", path_and_query), to.text());
+    throw MachineError(fmt::format("the reply to GET {} is not HTTP", shown_target(path_and_query)), to.text());
   HttpReply r;
   const auto eol = data.find("\r\n");
   const std::string status_line = data.substr(0, eol);
@@ -156,11 +186,58 @@ HttpReply http_get(const HttpAddress& to, const std::string& path_and_query, std
   return r;
 }
 
-std::string rrf_download(const HttpAddress& to, const std::string& name, std::chrono::milliseconds timeout) {
-  const auto r = http_get(to, "/rr_download?name=" + url_encode(name), timeout);
+std::optional<std::string> rrf_password(const std::string& configured) {
+  if (const char* env = std::getenv(kRrfPasswordEnv); env != nullptr && *env != '\0') return std::string(env);
+  if (!configured.empty()) return configured;
+  return std::nullopt;
+}
+
+RrfSession rrf_connect(const HttpAddress& to, const std::optional<std::string>& password,
+                       std::chrono::milliseconds timeout) {
+  // RepRapFirmware's default password: a board without M551 accepts it (RepRap.cpp NoPasswordSet).
+  const std::string pw = password.value_or("reprap");
+  const auto r = http_get(
+      to, fmt::format("/rr_connect?password={}&time={}&sessionKey=yes", url_encode(pw), url_encode(rrf_local_time())),
+      timeout);
   if (r.status != 200)
-    throw MachineError(fmt::format("rr_download of '{}' answered {} {}", name, r.status, r.reason), to.text());
+    throw MachineError(fmt::format("RepRapFirmware's web server answered rr_connect with {} {}", r.status, r.reason),
+                       to.text());
+  const auto j = nlohmann::json::parse(r.body, nullptr, false);
+  const int err = j.is_object() && j.contains("err") && j["err"].is_number_integer() ? j["err"].get<int>() : -1;
+  if (err == 1 && password)
+    throw MachineError(fmt::format("RepRapFirmware refused the password (check {} or the profile's [network] password)",
+                                   kRrfPasswordEnv),
+                       to.text());
+  if (err == 1)
+    throw MachineError(fmt::format("RepRapFirmware's web server is protected by a password (M551) and none was given: "
+                                   "set {} or the profile's [network] password",
+                                   kRrfPasswordEnv),
+                       to.text());
+  if (err == 2)
+    throw MachineError("RepRapFirmware has no HTTP session free (too many clients connected); close one and retry",
+                       to.text());
+  if (err != 0) throw MachineError("RepRapFirmware's answer to rr_connect is not {\"err\":0,...}", to.text());
+  RrfSession s{to, 0};
+  if (j.contains("sessionKey") && j["sessionKey"].is_number_unsigned()) s.key = j["sessionKey"].get<std::uint32_t>();
+  return s;
+}
+
+void rrf_disconnect(const RrfSession& s, std::chrono::milliseconds timeout) noexcept {
+  try {
+    (void)http_get(s.to, "/rr_disconnect", timeout, session_header(s));
+  } catch (...) {  // the session ends by itself after its timeout
+  }
+}
+
+std::string rrf_download(const RrfSession& s, const std::string& name, std::chrono::milliseconds timeout) {
+  const auto r = http_get(s.to, "/rr_download?name=" + url_encode(name), timeout, session_header(s));
+  if (r.status != 200)
+    throw MachineError(fmt::format("rr_download of '{}' answered {} {}", name, r.status, r.reason), s.to.text());
   return r.body;
+}
+
+std::string rrf_download(const HttpAddress& to, const std::string& name, std::chrono::milliseconds timeout) {
+  return rrf_download(RrfSession{to, 0}, name, timeout);
 }
 
 std::optional<double> parse_m955_rate_hz(const std::vector<std::string>& lines) {

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/protocols/camera_prints.hpp"
@@ -154,8 +155,10 @@ void shaping_off(const machine::MachineProfile& profile, const firmware::Dialect
       for (const auto& [ax, v] : shaper) {
         const auto sv = split_state_shaper(v);
         const std::string U = ax == "x" ? "X" : "Y";
-        r +=
-            fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", U, sv.type, U, sv.freq, U, sv.zeta);
+        // The type as Klipper reported it, parameters and all ("mzv(n=4,t=0.9)", klippy/extras/
+        // shaper_defs.py init_shaper, Klipper 2026), quoted only where Klipper's parser needs it.
+        r += fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", U,
+                         firmware::klipper_param_value(sv.type), U, sv.freq, U, sv.zeta);
       }
       restore.push_back(r);
       changed.push_back("input_shaper");

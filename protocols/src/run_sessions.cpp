@@ -32,11 +32,19 @@ int parse_numbers(std::string_view s, double* out, int max) {
 
 namespace {
 
+constexpr std::chrono::milliseconds kHttpTimeout{5000};
+
 class GcodeSession : public Session {
  public:
   GcodeSession(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
-               const machine::LinkOptions& lo, const std::atomic<bool>* abort, SendGuard& guard, std::string http)
-      : t_(std::move(t)), link_(*t_, &j, lo), j_(j), rec_(rec), http_(std::move(http)) {
+               const machine::LinkOptions& lo, const std::atomic<bool>* abort, SendGuard& guard, std::string http,
+               std::optional<std::string> http_password)
+      : t_(std::move(t)),
+        link_(*t_, &j, lo),
+        j_(j),
+        rec_(rec),
+        http_(std::move(http)),
+        http_password_(std::move(http_password)) {
     link_.guard = &guard;
     link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
     link_.on_batch = [&j] { j.flush(); };
@@ -84,6 +92,12 @@ class GcodeSession : public Session {
   bool can_record(const std::string& sensor) const override {
     return firmware.sensor_stream() || rrf_file_accelerometer(sensor);
   }
+  void check_recording(const std::string& sensor) override {
+    // A wrong or missing password fails here, before heating or homing, not after the test.
+    if (!firmware.sensor_stream() && rrf_file_accelerometer(sensor)) {
+      const machine::RrfLogin login(machine::parse_http_address(http_), http_password_, kHttpTimeout);
+    }
+  }
   void finish() override {}
   void safe_state(const std::vector<std::string>& commands) override {
     link_.send_best_effort(commands, std::chrono::milliseconds(300));
@@ -121,13 +135,14 @@ class GcodeSession : public Session {
   void fetch_m956() {
     link_.send("M400");
     const auto addr = machine::parse_http_address(http_);
+    const machine::RrfLogin login(addr, http_password_, kHttpTimeout);
     const std::string name = "0:/sys/accelerometer/" + m956_name_;
     std::string bytes;
     // The run ends after its sample count, in the board's time: poll, waiting G4 P250 between
     // reads (on a real board 250 ms; the simulator's clock runs with the dwell).
     const int polls = static_cast<int>(std::ceil(m956_window_s_ / 0.25)) + 40;
     for (int i = 0;; ++i) {
-      bytes = machine::rrf_download(addr, name, std::chrono::milliseconds(5000));
+      bytes = machine::rrf_download(login.session(), name, kHttpTimeout);
       if (machine::rrf_accelerometer_file_complete(bytes)) break;
       if (i >= polls)
         throw MachineError(fmt::format("the accelerometer file {} did not finish within {:.1f} s", name, polls * 0.25),
@@ -150,6 +165,7 @@ class GcodeSession : public Session {
   machine::Journal& j_;
   Recorder& rec_;
   std::string http_;
+  std::optional<std::string> http_password_;  // never journaled or shown
   std::string m956_name_;
   double m956_rate_hz_ = 0, m956_window_s_ = 0;
   std::vector<std::string> m956_files_;
@@ -298,8 +314,10 @@ class KlipperSession : public Session {
 
 std::unique_ptr<Session> make_gcode_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                             const machine::LinkOptions& lo, const std::atomic<bool>* abort,
-                                            SendGuard& guard, std::string http) {
-  return std::make_unique<GcodeSession>(std::move(t), j, rec, lo, abort, guard, std::move(http));
+                                            SendGuard& guard, std::string http,
+                                            std::optional<std::string> http_password) {
+  return std::make_unique<GcodeSession>(std::move(t), j, rec, lo, abort, guard, std::move(http),
+                                        std::move(http_password));
 }
 std::unique_ptr<Session> make_klipper_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                               const machine::LinkOptions& lo, const machine::Sensors& sensors,

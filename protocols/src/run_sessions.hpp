@@ -5,6 +5,7 @@
 // server, each identifying the firmware before anything else is sent.
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -88,6 +89,9 @@ class Session {
   /// Whether this link can record `sensor` (checked before anything is sent: no heating or
   /// homing for a protocol whose data cannot be recorded).
   virtual bool can_record(const std::string& sensor) const = 0;
+  /// Checks, still before anything but the identification is sent, what recording `sensor`
+  /// will need from the machine (RepRapFirmware: logging in to its web server).
+  virtual void check_recording(const std::string& /*sensor*/) {}
   virtual void finish() = 0;
   virtual void safe_state(const std::vector<std::string>& commands) = 0;
   virtual nlohmann::json stats() const = 0;
@@ -103,7 +107,8 @@ class Session {
 
 std::unique_ptr<Session> make_gcode_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                             const machine::LinkOptions& lo, const std::atomic<bool>* abort,
-                                            SendGuard& guard, std::string http);
+                                            SendGuard& guard, std::string http,
+                                            std::optional<std::string> http_password);
 std::unique_ptr<Session> make_klipper_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                               const machine::LinkOptions& lo, const machine::Sensors& sensors,
                                               SendGuard& guard);

@@ -218,7 +218,8 @@ RunResult run_experiment(const RunOptions& o) {
     if (api) session = detail::make_klipper_session(std::move(transport), journal, rec, o.link, profile.sensors, guard);
     else
       session = detail::make_gcode_session(std::move(transport), journal, rec, o.link, abort_flag, guard,
-                                           server ? server->http_url() : profile.http_address);
+                                           server ? server->http_url() : profile.http_address,
+                                           machine::rrf_password(profile.http_password));
     session->firmware = session->identify();
     session->dialect = firmware::Dialect(
         session->firmware.firmware == firmware::Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
@@ -251,6 +252,7 @@ RunResult run_experiment(const RunOptions& o) {
                     : "no tunekit sensor stream"),
             port);
       }
+    for (const auto& sensor : res.experiment.sensors) session->check_recording(sensor);
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
     for (const auto& line : res.gcode) {

@@ -1,5 +1,6 @@
 // The simulated RepRapFirmware board's web server (simulator.hpp SimHttpServer), answering
-// rr_download as RepRapFirmware's src/Networking/HttpResponder.cpp does.
+// rr_connect, rr_disconnect and rr_download, with its sessions, as RepRapFirmware's
+// src/Networking/HttpResponder.cpp does.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -8,6 +9,8 @@
 
 #include <cctype>
 #include <cerrno>
+#include <cstdlib>
+#include <map>
 #include <string>
 
 #include <fmt/format.h>
@@ -45,6 +48,40 @@ void sim_http_send_all(int fd, const std::string& s) {
 std::string sim_http_reject(const std::string& response, int code) {
   return fmt::format("HTTP/1.1 {} {}\r\nConnection: close\r\n\r\n<html><body>{}</body></html>", code, response,
                      response);
+}
+
+/// A 200 reply with a body (HttpResponder.cpp's JSON replies and SendFile).
+std::string sim_http_ok(const std::string& type, const std::string& body) {
+  return fmt::format(
+      "HTTP/1.1 200 OK\r\nCache-Control: no-cache, no-store, must-revalidate\r\nPragma: no-cache\r\nExpires: "
+      "0\r\nContent-Type: {}\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{}",
+      type, body.size(), body);
+}
+
+/// The query's key/value pairs, decoded ('&' separates, '=' splits at its first).
+std::map<std::string, std::string> sim_http_query(const std::string& target) {
+  std::map<std::string, std::string> q;
+  const auto mark = target.find('?');
+  if (mark == std::string::npos) return q;
+  std::string_view rest(target);
+  rest.remove_prefix(mark + 1);
+  while (!rest.empty()) {
+    const auto amp = rest.find('&');
+    const std::string_view kv = rest.substr(0, amp);
+    const auto eq = kv.find('=');
+    q[std::string(kv.substr(0, eq))] =
+        eq == std::string_view::npos ? std::string() : sim_http_url_decode(kv.substr(eq + 1));
+    rest = amp == std::string_view::npos ? std::string_view() : rest.substr(amp + 1);
+  }
+  return q;
+}
+
+/// HttpResponder.cpp GetSessionKey: the X-Session-Key header's number, 0 without one.
+std::uint32_t sim_http_session_key(const std::string& request) {
+  std::string lower = request;
+  for (auto& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const auto p = lower.find("\r\nx-session-key:");
+  return p == std::string::npos ? 0 : static_cast<std::uint32_t>(std::strtoul(request.c_str() + p + 17, nullptr, 10));
 }
 
 }  // namespace
@@ -90,32 +127,58 @@ void SimHttpServer::serve() {
       req.append(buf, static_cast<std::size_t>(n));
     }
     ++requests_;
-    std::string reply;
     const auto sp1 = req.find(' '), sp2 = req.find(' ', sp1 == std::string::npos ? 0 : sp1 + 1);
     const std::string method = sp1 == std::string::npos ? std::string() : req.substr(0, sp1);
     const std::string target = sp2 == std::string::npos ? std::string() : req.substr(sp1 + 1, sp2 - sp1 - 1);
-    const std::string prefix = "/rr_download?name=";
-    if (method != "GET") {
-      reply = sim_http_reject("only rr_upload is supported for POST requests", 500);
-    } else if (target.rfind(prefix, 0) == 0) {
-      std::string name = sim_http_url_decode(target.substr(prefix.size()));
-      if (const auto amp = name.find('&'); amp != std::string::npos) name.resize(amp);
-      if (const auto body = sim_.file(name)) {
-        reply = fmt::format(
-            "HTTP/1.1 200 OK\r\nCache-Control: no-cache, no-store, must-revalidate\r\nPragma: no-cache\r\nExpires: "
-            "0\r\nAccess-Control-Allow-Origin: *\r\nContent-Type: application/octet-stream\r\nContent-Length: {}\r\n"
-            "Connection: close\r\n\r\n",
-            body->size());
-        reply += *body;
-      } else {
-        reply = sim_http_reject("file not found", 404);
-      }
-    } else {
-      reply = sim_http_reject("page not found", 404);
+    {
+      const std::lock_guard<std::mutex> lock(targets_mu_);
+      targets_.push_back(target);
     }
+    const std::string reply =
+        method != "GET" ? sim_http_reject("only rr_upload is supported for POST requests", 500) : answer(target, req);
     sim_http_send_all(fd, reply);
     ::close(fd);
   }
+}
+
+std::vector<std::string> SimHttpServer::targets() const {
+  const std::lock_guard<std::mutex> lock(targets_mu_);
+  return targets_;
+}
+
+std::string SimHttpServer::connect(const std::map<std::string, std::string>& query) {
+  const std::string& board = sim_.config().rrf_password;
+  const bool protected_board = !board.empty() && board != "reprap";  // RepRap.cpp NoPasswordSet
+  if (protected_board && query.at("password") != board) return sim_http_ok("application/json", "{\"err\":1}");
+  if (static_cast<int>(sessions_.size()) >= sim_.config().rrf_http_sessions)
+    return sim_http_ok("application/json", "{\"err\":2}");
+  const auto want_key = query.find("sessionKey");
+  const std::uint32_t key = want_key != query.end() && want_key->second == "yes" ? next_key_++ : 0;
+  sessions_.insert(key);
+  return sim_http_ok("application/json",
+                     fmt::format("{{\"err\":0,\"sessionTimeout\":8000,\"boardType\":\"tunekit-sim\",\"apiLevel\":1,"
+                                 "\"sessionKey\":{}}}",
+                                 key));
+}
+
+std::string SimHttpServer::answer(const std::string& target, const std::string& request) {
+  const std::string path = target.substr(0, target.find('?'));
+  const auto query = sim_http_query(target);
+  const std::uint32_t key = sim_http_session_key(request);
+  const std::string& board = sim_.config().rrf_password;
+  // SendJsonResponse: without a password any request but rr_connect opens an address session.
+  if (path != "/rr_connect" && !sessions_.count(key) && (board.empty() || board == "reprap") &&
+      static_cast<int>(sessions_.size()) < sim_.config().rrf_http_sessions)
+    sessions_.insert(0);
+  if (path == "/rr_connect" && query.count("password")) return connect(query);
+  if (!sessions_.count(key)) return sim_http_reject("Not authorized", 401);
+  if (path == "/rr_disconnect") {
+    sessions_.erase(key);
+    return sim_http_ok("application/json", "{\"err\":0}");
+  }
+  if (path != "/rr_download" || !query.count("name")) return sim_http_reject("page not found", 404);
+  const auto body = sim_.file(query.at("name"));
+  return body ? sim_http_ok("application/octet-stream", *body) : sim_http_reject("file not found", 404);
 }
 
 }  // namespace tunekit::sim

@@ -129,6 +129,13 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     } else if (k == "rrf_http") {
       if (v != "0" && v != "1") throw InputError("simulator option rrf_http must be 0 or 1");
       c.rrf_http = v == "1";
+    } else if (k == "rrf_password") {
+      c.rrf_password = v;
+    } else if (k == "rrf_http_sessions") {
+      const double n = parse_double(k, v);
+      if (n < 0 || n != std::floor(n))
+        throw InputError("simulator option rrf_http_sessions must be a whole number >= 0");
+      c.rrf_http_sessions = static_cast<int>(n);
     } else if (k == "ft_motion") {
       if (v != "none" && v != "off" && v != "on")
         throw InputError("simulator option ft_motion must be none, off or on");
@@ -364,6 +371,9 @@ SimPtyServer::~SimPtyServer() {
 void SimPtyServer::stop() { stop_ = true; }
 
 std::string SimPtyServer::http_url() const { return http_ ? http_->url() : std::string(); }
+std::vector<std::string> SimPtyServer::http_targets() const {
+  return http_ ? http_->targets() : std::vector<std::string>();
+}
 
 void SimPtyServer::wait() {
   if (thread_.joinable()) thread_.join();

@@ -86,6 +86,9 @@ struct FakeKlipperConfig {
   double smooth_time = 0.04;                    ///< [extruder] pressure_advance_smooth_time, s
   double shaper_freq_x = 0, shaper_freq_y = 0;  ///< [input_shaper]; 0: no section
   std::string shaper_type = "mzv";
+  /// [input_shaper] shaper_type_x/_y as written in printer.cfg, e.g. a parameterized
+  /// "mzv(n=4,t=0.9)" (klippy/extras/shaper_defs.py, Klipper 2026); empty: not set.
+  std::string shaper_type_x, shaper_type_y;
   std::string state = "ready";  ///< what info reports
 };
 
@@ -140,6 +143,12 @@ class FakeKlipper {
     std::lock_guard<std::mutex> l(mu_);
     return unknown_;
   }
+  /// The parameters of the last SET_INPUT_SHAPER, split as Klipper splits an extended command
+  /// (shell words, each at its first '='; names upper-cased), e.g. {"SHAPER_TYPE_X": "mzv(n=4,t=0.9)"}.
+  std::map<std::string, std::string> last_input_shaper() {
+    std::lock_guard<std::mutex> l(mu_);
+    return input_shaper_;
+  }
   /// The simulator's clock (s) when the last script finished.
   double machine_time_s() const { return machine_time_; }
   long load_cell_samples_sent() const { return load_sent_; }
@@ -150,6 +159,48 @@ class FakeKlipper {
     return sp == std::string::npos ? s : s.substr(sp + 1);
   }
   static double round6(double v) { return std::round(v * 1e6) / 1e6; }
+  /// Shell words of `args`: whitespace separates, double quotes group ('\\' escapes '"' and
+  /// '\\' inside them), single quotes group literally.
+  static std::vector<std::string> shell_words(const std::string& args) {
+    std::vector<std::string> words;
+    std::string w;
+    bool in_word = false;
+    char quote = 0;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+      const char c = args[i];
+      if (quote == '"' && c == '\\' && i + 1 < args.size() && (args[i + 1] == '"' || args[i + 1] == '\\')) {
+        w += args[++i];
+      } else if (quote && c == quote) {
+        quote = 0;
+      } else if (quote) {
+        w += c;
+      } else if (c == '"' || c == '\'') {
+        quote = c;
+        in_word = true;
+      } else if (std::isspace(static_cast<unsigned char>(c))) {
+        if (in_word) words.push_back(w);
+        w.clear();
+        in_word = false;
+      } else {
+        w += c;
+        in_word = true;
+      }
+    }
+    if (in_word) words.push_back(w);
+    return words;
+  }
+  void remember_input_shaper(const std::string& line) {
+    const auto sp = line.find_first_of(" \t");
+    std::map<std::string, std::string> params;
+    for (const auto& word : shell_words(sp == std::string::npos ? std::string() : line.substr(sp + 1))) {
+      const auto eq = word.find('=');
+      std::string key = word.substr(0, eq);
+      for (auto& c : key) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+      params[key] = eq == std::string::npos ? std::string() : word.substr(eq + 1);
+    }
+    std::lock_guard<std::mutex> l(mu_);
+    input_shaper_ = params;
+  }
   // A Klipper peer plans moves as Klipper does: the simulator follows Klipper's planner rules.
   static tunekit::sim::SimConfig klipper_rules(tunekit::sim::SimConfig c) {
     c.firmware = "klipper";
@@ -247,6 +298,8 @@ class FakeKlipper {
                                     {"shaper_freq_y", fake_.shaper_freq_y},
                                     {"damping_ratio_x", 0.1},
                                     {"damping_ratio_y", 0.1}};
+      if (!fake_.shaper_type_x.empty()) settings["input_shaper"]["shaper_type_x"] = fake_.shaper_type_x;
+      if (!fake_.shaper_type_y.empty()) settings["input_shaper"]["shaper_type_y"] = fake_.shaper_type_y;
       return {{"settings", settings}};
     }
     if (name == "toolhead")
@@ -410,6 +463,7 @@ class FakeKlipper {
               unknown_.push_back(cmd);  // gcode.py: respond_info('Unknown command:"%s"'); not run
               continue;
             }
+            if (cmd == "SET_INPUT_SHAPER") remember_input_shaper(line);
             sim_.handle_line(line, ignore);
           }
           sim_.flush(ignore);
@@ -463,6 +517,7 @@ class FakeKlipper {
   std::atomic<long> sent_{0}, load_sent_{0};
   std::mutex mu_;
   std::vector<std::string> scripts_;
+  std::map<std::string, std::string> input_shaper_;
   std::vector<std::string> unknown_;
   std::atomic<double> machine_time_{0};
   std::vector<nlohmann::json> requests_;

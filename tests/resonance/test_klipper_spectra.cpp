@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -153,6 +154,32 @@ TEST_CASE("klipper-compatible shaper with a smoothing limit stops each scan wher
   REQUIRE(r.code == 0);
   check_against_klipper(nlohmann::json::parse(r.out)["results"]["axes"]["x"],
                         klipper_reference().at("resonances_x_20220317_143228.csv@max_smoothing=0.08"));
+}
+
+TEST_CASE("klipper-compatible shaper with a vibrations limit prefers fewer vibrations where Klipper does",
+          "[resonance][shaper][klipper]") {
+  // calibrate_shaper.py -v <per cent> (Klipper 2026, shaper_calibrate.py max_vibrations): Zippy y
+  // ei @ 50.0 Hz (2hump_ei @ 60.0 Hz without), Neptune x 3hump_ei @ 123.6 Hz (ei @ 89.4 Hz), Neptune
+  // y ei @ 82.8 Hz (ei @ 92.2 Hz).
+  const auto ref = klipper_reference();
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {"resonances_y_20220317_143943.csv", "y", "1"},
+      {"resonances_x_20250509_131744.csv", "x", "1"},
+      {"resonances_y_20250509_125633.csv", "y", "0.5"}};
+  for (const auto& [name, axis, pct] : cases) {
+    INFO(name << " --max-vibrations " << pct);
+    const auto r = run_cli({"shaper", dataset("klipper_spectra/" + name), "--axis", axis, "--klipper-compatible",
+                            "--max-vibrations", pct, "--json"});
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const auto doc = nlohmann::json::parse(r.out);
+    CHECK(doc["options"]["max_vibrations_pct"].get<double>() == Approx(std::stod(pct)));
+    check_against_klipper(doc["results"]["axes"][axis], ref.at(name + "@max_vibrations_pct=" + pct));
+  }
+  const auto bad = run_cli({"shaper", dataset("klipper_spectra/resonances_y_20250509_125633.csv"), "--axis", "y",
+                            "--klipper-compatible", "--max-vibrations", "0.05"});
+  CHECK(bad.code == 2);
+  CHECK(bad.err.find("--max-vibrations") != std::string::npos);
 }
 
 TEST_CASE("a spectrum file tunekit writes in Klipper's layout reads back to the same recommendation",

@@ -95,7 +95,9 @@ void register_run(CLI::App& app, CliContext& ctx) {
               "  tunekit run axis-sweep --axis y --machine printer.toml --port unix:/tmp/klippy_uds\n"
               "  tunekit run liquefier-step --machine sim --sim fault=garble@12 --json\n"
               "Each run directory holds journal.jsonl, the sensor CSVs, protocol.gcode, run.json and, on the\n"
-              "simulator, truth.json. Exit code 3: the machine or link failed (the partial run is kept).");
+              "simulator, truth.json. Exit code 3: the machine or link failed (the partial run is kept).\n"
+              "RepRapFirmware's web server password (M551): the environment variable TUNEKIT_RRF_PASSWORD, or\n"
+              "[network] password in the profile; it is never printed.");
   sub->callback([cmd, &ctx] {
     cmd->options.run.progress = [&ctx](const std::string& m) {
       if (ctx.verbosity > 0) ctx.err << "tunekit: " << m << "\n";

@@ -50,6 +50,10 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
                   fmt::format("Square-corner velocity for smoothing, mm/s (default {:g})", o.selection.scv_mm_s));
   sub->add_option("--max-smoothing", o.selection.max_smoothing_mm,
                   "Largest acceptable smoothing, mm (default: no limit)");
+  sub->add_option_function<double>(
+      "--max-vibrations", [&o](double pct) { o.selection.max_vibrations = pct / 100; },
+      "Remaining vibrations to stay under, per cent: above it a shaper with fewer vibrations is preferred to a "
+      "better score, as Klipper's calibrate_shaper.py -v (default: no limit)");
   sub->add_option("--damping-ratio", o.damping_ratio,
                   fmt::format("Design damping ratio (dimensionless; default: identified, or {:g} with "
                               "--klipper-compatible)",

@@ -32,7 +32,8 @@ struct ShaperOptions {
   /// Shaper types considered; empty: all seven (identified damping) or the library's default
   /// list, Klipper's (klipper_compatible, or an axis without an identified mode).
   std::vector<ident::ShaperType> shapers;
-  /// scv_mm_s (square-corner velocity, mm/s), max_smoothing_mm (0: no limit) and max_freq_hz
+  /// scv_mm_s (square-corner velocity, mm/s), max_smoothing_mm (0: no limit), max_vibrations
+  /// (fraction, 0: no limit; 0.001 to 1 otherwise) and max_freq_hz
   /// (highest PSD frequency scored, Hz) are used as given. Its max_shaper_freq_hz is the highest
   /// shaper frequency tried without klipper_compatible, its design_damping_ratio and
   /// test_damping_ratios are Klipper's assumed damping; types and the damping ratios are set

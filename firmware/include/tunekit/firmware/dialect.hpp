@@ -41,6 +41,13 @@ struct FirmwareInfo {
   FtMotionReport m493;  ///< the M493 report itself (marlin_m493.hpp), when Marlin answered one
 };
 
+/// A value as a Klipper extended G-code parameter carries it (`NAME=<value>`). Klipper splits the
+/// parameters like a POSIX shell (klippy/gcode.py _get_extended_params: shlex, whitespace_split,
+/// '#' and ';' start a comment), then each at its first '='; so a value with whitespace, a quote,
+/// a backslash, '#' or ';' is double-quoted ('"' and '\' escaped) and any other, such as
+/// "mzv(n=4,t=0.9)", is written as it is.
+std::string klipper_param_value(const std::string& value);
+
 /// Parses the lines a machine printed in answer to M115 (any order, other lines ignored).
 FirmwareInfo parse_m115(const std::vector<std::string>& lines);
 

@@ -103,6 +103,9 @@ struct ShaperSelectionOptions {
   std::vector<double> test_damping_ratios = {0.075, 0.1, 0.15};  ///< vibrations are pessimized over these
   double scv_mm_s = 5.0;                                         ///< square-corner velocity
   double max_smoothing_mm = 0;                                   ///< 0: no limit
+  /// Remaining vibrations the recommendation should stay under, as a fraction (0.01 = 1 %; 0: no
+  /// limit): Klipper's max_vibrations (calibrate_shaper.py -v, in per cent; Klipper 2026).
+  double max_vibrations = 0;
   /// PSD bins above max(max_freq_hz, highest shaper frequency tried) are ignored (Klipper's rule).
   double max_freq_hz = 200.0;
   double max_shaper_freq_hz = 200.0;          ///< shaper frequencies tried are below this

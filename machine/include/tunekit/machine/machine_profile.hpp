@@ -110,6 +110,9 @@ struct MachineProfile {
   /// fetches the accelerometer files M956 writes (rrf_http.hpp; RepRapFirmware cannot send a
   /// file over USB serial). Empty: serial only.
   std::string http_address;
+  /// [network] password: the web server's password (M551), if it has one. The environment
+  /// variable TUNEKIT_RRF_PASSWORD wins over it (rrf_password); tunekit never prints it.
+  std::string http_password;
   std::string source_path;
 
   /// Filament cross-section area, mm^2.

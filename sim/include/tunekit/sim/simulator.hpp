@@ -18,12 +18,14 @@
 // M115 answers "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim ...)" and "Cap:TUNEKIT_SENSOR_STREAM:1".
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <random>
+#include <set>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -158,6 +160,13 @@ struct SimConfig {
   /// does. M955 P0 reports the accelerometer and M956 P0 S<n> A<m> [F"name"] records n samples
   /// into 0:/sys/accelerometer/ (src/Accelerometers/Accelerometers.cpp) in either case.
   bool rrf_http = false;
+  /// The board's web server password (M551, "rrf_password=WORD"); empty or "reprap" (RepRap.cpp
+  /// NoPasswordSet): none, any request opens a session. Otherwise a client must log in with
+  /// rr_connect first. The simulated board's own setting: it is not written into truth.json.
+  std::string rrf_password;
+  /// How many HTTP sessions the board holds at once ("rrf_http_sessions=N"; M122 "HTTP sessions:
+  /// n of 8"); rr_connect answers {"err":2} beyond.
+  int rrf_http_sessions = 8;
   std::vector<SimFault> faults;
 
   /// "key=value" options (tunekit-sim flags and `tunekit run --sim`), e.g. "preset=peek", "tau_s=0.5",
@@ -299,7 +308,10 @@ class Simulator {
 
 /// The simulated RepRapFirmware board's web server: GET /rr_download?name=<file> answers as
 /// src/Networking/HttpResponder.cpp SendFile/RejectMessage do ("HTTP/1.1 200 OK" with
-/// Content-Length and the bytes, or "HTTP/1.1 404 file not found"). Listens on 127.0.0.1.
+/// Content-Length and the bytes, or "HTTP/1.1 404 file not found"); sessions as its
+/// GetJsonResponse/CheckAuthenticated keep them (rr_connect with SimConfig::rrf_password, the
+/// X-Session-Key header, rr_disconnect, "401 Not authorized" without a session). Listens on
+/// 127.0.0.1.
 class SimHttpServer {
  public:
   explicit SimHttpServer(const Simulator& sim);
@@ -308,10 +320,18 @@ class SimHttpServer {
   SimHttpServer& operator=(const SimHttpServer&) = delete;
   std::string url() const;
   long requests() const { return requests_; }
+  /// Every request target received, in order (what a test checks the client sent).
+  std::vector<std::string> targets() const;
 
  private:
   void serve();
+  std::string answer(const std::string& target, const std::string& request);
+  std::string connect(const std::map<std::string, std::string>& query);
   const Simulator& sim_;
+  std::set<std::uint32_t> sessions_;  // session keys; 0: the client's address
+  std::uint32_t next_key_ = 0x2f5a0001;
+  mutable std::mutex targets_mu_;
+  std::vector<std::string> targets_;
   int listen_fd_ = -1;
   int port_ = 0;
   std::atomic<bool> stop_{false};
@@ -338,6 +358,8 @@ class SimPtyServer {
   Simulator& sim() { return *sim_; }
   /// "http://127.0.0.1:PORT" of the simulated board's web server (SimConfig::rrf_http); empty without.
   std::string http_url() const;
+  /// The request targets the board's web server received, in order (empty without one).
+  std::vector<std::string> http_targets() const;
 
  private:
   void serve();
