@@ -177,8 +177,7 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
         } else {
           if (pending_) {
             const double v_exit = junction_speed(*pending_, *m);
-            execute(*pending_, pending_entry_, v_exit, emit);
-            pending_entry_ = v_exit;
+            pending_entry_ = std::min(v_exit, execute(*pending_, pending_entry_, v_exit, emit));
           }
           pending_ = *m;
         }
