@@ -142,7 +142,13 @@ void build_axis_sweep(const ExperimentRequest& r, Experiment& e) {
   const std::string A = axis_in == "x" ? "X" : "Y", O = axis_in == "x" ? "Y" : "X";
   const double axis_max_accel = profile.axis(axis_in).max_accel_mm_s2;
   const double travel_accel = std::min(3000.0, axis_max_accel);
-  const auto segments = add_sweeping(vibration_pulses(design), design);
+  const auto pulses = vibration_pulses(design);
+  // The pulses' own time (a first half period 1/(2 f0) can be far longer than the rate says) and
+  // the sweeping motion's switches, two more moves each, within the caps before they are made.
+  const double pulses_s = pulses.empty() ? 0.0 : pulses.back().t_end_s;
+  check_plan(r.protocol, design.sweeping() ? 4 * pulses_s / (design.sweeping_period_s / 2) : 0.0,
+             pulses_s + 2 * p.at("settle_s"), r.limits);
+  const auto segments = add_sweeping(pulses, design);
   // Klipper ends a sweep that is still moving at the acceleration it restores (run_test).
   const auto moves = sweep_moves(segments, std::min(travel_accel, accel_to_restore(profile)));
   double peak_accel = 0, peak_speed = 0, sweep_s = 0;

@@ -212,6 +212,7 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     } else if (c == "M410") {
       pending_.reset();  // quickstop: queued motion is dropped
       pending_entry_ = 0;
+      step_carry_s_ = 0;
     } else if (c == "M112") {
       pending_.reset();
       halted_ = true;

@@ -208,12 +208,14 @@ double Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_
   v_max = std::max(v_max, sim::kMinPeakSpeed_mm_s);
   const machine::Profile prof = machine::Profile::move(L, v_entry, v_max, v_exit, accel, cfg_.jerk_mm_s3);
   const auto u = m.unit();
-  // The move starts step_carry_s_ before the sample grid's current time (what the moves before
-  // left of their last step): its steps sample it that much later, so that many short moves
-  // keep their total time.
+  // A move joined at speed to the one before starts step_carry_s_ before the sample grid's
+  // current time (what that move left of its last step): its steps sample it that much later, so
+  // that a chain of short moves keeps its total time. A move that ends at rest drops the
+  // fraction of a step left over: the next one starts on the sample grid.
   const double T = prof.duration_s(), shift = step_carry_s_;
   const int n = static_cast<int>(std::floor((T + shift) / dt_ + sim::kStepCountSlack));
-  step_carry_s_ = std::max(0.0, T + shift - n * dt_);
+  const double v_end = prof.at(T).vel_mm_s;
+  step_carry_s_ = v_end > 0 ? std::max(0.0, T + shift - n * dt_) : 0.0;
   if (move_sink && n > 0) move_sink(t_, n * dt_, prof, m.start, u);
   for (int i = 0; i < n; ++i) {
     const double tau = i * dt_ - shift;
@@ -231,12 +233,11 @@ double Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_
     }
     step(pos, vel, acc0, accm, acc1, emit);
   }
-  return prof.at(T).vel_mm_s;  // below v_exit when the move is too short to reach it
+  return v_end;  // below v_exit when the move is too short to reach it
 }
 
 void Simulator::dwell(double seconds, const Emit& emit) {
-  const int n = static_cast<int>(std::lround((seconds + step_carry_s_) / dt_));
-  step_carry_s_ = 0;
+  const int n = static_cast<int>(std::lround(seconds / dt_));
   const std::array<double, 4> zero4{};
   const std::array<double, 3> zero3{};
   for (int i = 0; i < n; ++i) step(zero4, zero4, zero4, zero3, zero3, emit);
