@@ -210,12 +210,14 @@ double Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_
   const auto u = m.unit();
   // A move joined at speed to the one before starts step_carry_s_ before the sample grid's
   // current time (what that move left of its last step): its steps sample it that much later, so
-  // that a chain of short moves keeps its total time. A move that ends at rest drops the
-  // fraction of a step left over: the next one starts on the sample grid.
+  // that a chain of short moves (a resonance sweep) keeps its total time. After a move that ends
+  // at rest, or extrudes (the printing and feeding protocols' timing on the grid, which their
+  // tests were measured with), the fraction of a step left over is dropped.
   const double T = prof.duration_s(), shift = step_carry_s_;
   const int n = static_cast<int>(std::floor((T + shift) / dt_ + sim::kStepCountSlack));
   const double v_end = prof.at(T).vel_mm_s;
-  step_carry_s_ = v_end > 0 ? std::max(0.0, T + shift - n * dt_) : 0.0;
+  const bool joined = v_end > 0 && m.end[3] == m.start[3];
+  step_carry_s_ = joined ? std::max(0.0, T + shift - n * dt_) : 0.0;
   if (move_sink && n > 0) move_sink(t_, n * dt_, prof, m.start, u);
   for (int i = 0; i < n; ++i) {
     const double tau = i * dt_ - shift;
