@@ -82,9 +82,22 @@ MoveSpeeds move_speeds(double d, double v_entry, double v_max, double v_exit, do
     // Too short to reach v_max: search the peak speed (entering faster than this move's speed,
     // the move slows down to it first, with no search).
     double lo = std::max(v_entry, v_exit), hi = v_max;
-    if (need(lo) > d) {
-      // Too short even to go from the entry speed to the exit speed: lower the exit speed.
-      double elo = 0, ehi = v_exit;
+    if (need(lo) > d && v_entry > v_exit) {
+      // Too short to slow from the entry speed to the exit speed: it leaves faster (a planner's
+      // backward pass would have let it enter slower; the distance of the slowing down falls as
+      // the exit speed rises).
+      double elo = v_exit, ehi = v_entry;
+      for (int i = 0; i < 60; ++i) {
+        const double m = 0.5 * (elo + ehi);
+        v_exit = m;
+        (need(v_entry) > d ? elo : ehi) = m;
+      }
+      v_exit = ehi;
+      lo = hi = v_entry;
+    } else if (need(lo) > d) {
+      // Too short even to go from the entry speed to the exit speed: lower the exit speed (not
+      // below the entry speed: the distance grows again under it).
+      double elo = v_entry, ehi = v_exit;
       for (int i = 0; i < 60; ++i) {
         const double m = 0.5 * (elo + ehi);
         v_exit = m;

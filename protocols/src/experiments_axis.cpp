@@ -19,128 +19,182 @@
 #include "tunekit/machine/trajectory.hpp"
 
 #include "experiment_gcode.hpp"
+#include "sweep_moves.hpp"
 
 namespace tunekit::protocols::experiment_gcode {
 
+namespace {
+
+/// The sweep's test settings: everything the firmware would do differently from the labelled
+/// moves is turned off for the test and restored after (the epilogue, also sent after an abort).
+void sweep_test_settings(const ExperimentRequest& r, double peak_accel, std::vector<std::string>& prologue,
+                         std::vector<std::string>& restore, nlohmann::json& changed) {
+  const machine::MachineProfile& profile = r.profile;
+  switch (r.dialect.firmware()) {
+    case firmware::Firmware::klipper:
+      // As Klipper's own TEST_RESONANCES (klippy/extras/resonance_tester.py, run_test):
+      // MINIMUM_CRUISE_RATIO=0 and input shaping off.
+      prologue.push_back("SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO=0");
+      restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={} MINIMUM_CRUISE_RATIO={}",
+                                    num(accel_to_restore(profile), 0), num(profile.state.minimum_cruise_ratio, 3)));
+      changed.push_back("minimum_cruise_ratio");
+      break;
+    case firmware::Firmware::reprapfirmware:
+      // RRF joins a reversal at M566/2 (DDA.cpp MatchSpeeds, totalFraction 2): the lowest jerk
+      // it accepts (Configuration.h MinimumJerk 0.1 mm/s) makes every half period rest to rest.
+      prologue.push_back("M566 X6 Y6");
+      restore.push_back(fmt::format("M566 X{} Y{}", num(profile.state.jerk_xy_mm_s * 60, 1),
+                                    num(profile.state.jerk_xy_mm_s * 60, 1)));
+      changed.push_back("M566");
+      prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
+      restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
+                                    num(profile.state.max_accel_xy_mm_s2, 0)));
+      changed.push_back("M201");
+      break;
+    default:
+      // Marlin: moves shorter than DEFAULT_MINSEGMENTTIME (M205 B, us) are slowed
+      // (planner.cpp), M204 is capped by M201 (planner.cpp limit_and_warn).
+      prologue.push_back("M205 B0");
+      restore.push_back(fmt::format("M205 B{}", num(profile.state.min_segment_time_s * 1e6, 0)));
+      changed.push_back("M205 B");
+      prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
+      restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
+                                    num(profile.state.max_accel_xy_mm_s2, 0)));
+      changed.push_back("M201");
+      break;
+  }
+  shaping_off(profile, r.dialect, prologue, restore, changed);
+}
+
+/// The sweep's design from the parameters: the sweeping motion is Klipper's (on by default
+/// there, refused elsewhere: its moves join at speed, which only Klipper's planner was checked for).
+SweepDesign sweep_design(const ExperimentRequest& r, std::map<std::string, double>& p) {
+  const bool klipper = r.dialect.firmware() == firmware::Firmware::klipper;
+  if (std::isnan(p["sweeping_accel"])) p["sweeping_accel"] = klipper ? kKlipperSweepingAccel_mm_s2 : 0.0;
+  SweepDesign d;
+  d.freq_start_hz = p.at("freq_start_hz");
+  d.freq_end_hz = p.at("freq_end_hz");
+  d.hz_per_sec = p.at("hz_per_sec");
+  d.accel_per_hz = p.at("accel_per_hz");
+  d.sweeping_accel_mm_s2 = p.at("sweeping_accel");
+  d.sweeping_period_s = p.at("sweeping_period");
+  d.max_accel_mm_s2 = r.profile.axis(r.axis_in).max_accel_mm_s2;
+  if (d.sweeping() && !klipper)
+    throw InputError(fmt::format(
+        "axis-sweep's sweeping motion (sweeping_accel {:g} mm/s^2) follows Klipper's TEST_RESONANCES and is made "
+        "for Klipper's planner only; on {} give -p sweeping_accel=0",
+        d.sweeping_accel_mm_s2, firmware::to_string(r.dialect.firmware())));
+  if (r.dialect.firmware() == firmware::Firmware::marlin || r.dialect.firmware() == firmware::Firmware::prusa) {
+    // Marlin joins a move with fewer than MIN_STEPS_PER_SEGMENT steps with the next one
+    // (planner.cpp _buffer_steps; Configuration_adv.h MIN_STEPS_PER_SEGMENT 6).
+    const double spm = r.axis_in == "x" ? r.profile.state.steps_per_mm_x : r.profile.state.steps_per_mm_y;
+    d.min_half_mm = firmware::limits::kMarlinMinStepsPerSegment / spm;
+  }
+  return d;
+}
+
+/// The sweep's moves as G-code from `center` along axis letter `A`; returns the farthest
+/// excursions from the centre (mm, below and above).
+std::pair<double, double> emit_sweep(const ExperimentRequest& r, const std::vector<SweepMove>& moves,
+                                     const std::string& A, double center, std::vector<std::string>& g) {
+  const bool klipper = r.dialect.firmware() == firmware::Firmware::klipper;
+  double pos = center, lo = 0, hi = 0, accel = -1;
+  for (const auto& m : moves) {
+    if (m.dwell_s > 0) {
+      g.push_back(fmt::format("G4 P{}", num(m.dwell_s * 1000, 3)));
+      continue;
+    }
+    if (m.accel_mm_s2 > 0 && m.accel_mm_s2 != accel) {
+      accel = m.accel_mm_s2;
+      // Klipper takes a fractional ACCEL: the sweeping motion leaves accelerations of a few mm/s^2.
+      g.push_back(klipper ? fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(accel, 3)) : r.dialect.set_accel(accel));
+    }
+    pos += m.dist_mm;
+    lo = std::min(lo, pos - center);
+    hi = std::max(hi, pos - center);
+    g.push_back(fmt::format("G1 {}{} F{}", A, num(pos, 5), num(m.feed_mm_s * 60, 3)));
+    if (m.stop_after) g.push_back("G4 P0");
+    guard_line_count(g, r.limits, r.protocol);
+  }
+  return {lo, hi};
+}
+
+void build_axis_sweep(const ExperimentRequest& r, Experiment& e) {
+  const std::string& axis_in = r.axis_in;
+  const machine::MachineProfile& profile = r.profile;
+  const firmware::Dialect& d = r.dialect;
+  auto& p = e.params;
+  auto& g = e.gcode;
+  if (axis_in != "x" && axis_in != "y")
+    throw InputError(fmt::format("axis-sweep needs --axis x or y, not '{}'", axis_in));
+  e.axis = axis_in;
+  const std::string other = axis_in == "x" ? "y" : "x";
+  if (std::isnan(p["center_mm"])) p["center_mm"] = mid(profile, axis_in);
+  if (std::isnan(p["other_mm"])) p["other_mm"] = mid(profile, other);
+  const SweepDesign design = sweep_design(r, p);
+  const double f0 = design.freq_start_hz, f1 = design.freq_end_hz, rate = design.hz_per_sec;
+  if (f1 <= f0) throw InputError("freq_end_hz must exceed freq_start_hz");
+  // Half periods of the sweep: the integral of 2 f dt = 2 f df / rate from f0 to f1; two lines
+  // each, about five with the sweeping motion (two moves and their accelerations, a held
+  // slowest point).
+  check_plan(r.protocol, (design.sweeping() ? 5.5 : 2.0) * (f1 * f1 - f0 * f0) / rate + 12,
+             (f1 - f0) / rate + 2 * p.at("settle_s"), r.limits);
+  const std::string A = axis_in == "x" ? "X" : "Y", O = axis_in == "x" ? "Y" : "X";
+  const double axis_max_accel = profile.axis(axis_in).max_accel_mm_s2;
+  const double travel_accel = std::min(3000.0, axis_max_accel);
+  const auto pulses = vibration_pulses(design);
+  // The pulses' own time (a first half period 1/(2 f0) can be far longer than the rate says) and
+  // the sweeping motion's switches, two more moves each, within the caps before they are made.
+  const double pulses_s = pulses.empty() ? 0.0 : pulses.back().t_end_s;
+  check_plan(r.protocol, design.sweeping() ? 4 * pulses_s / (design.sweeping_period_s / 2) : 0.0,
+             pulses_s + 2 * p.at("settle_s"), r.limits);
+  const auto segments = add_sweeping(pulses, design);
+  // Klipper ends a sweep that is still moving at the acceleration it restores (run_test).
+  const auto moves = sweep_moves(segments, std::min(travel_accel, accel_to_restore(profile)));
+  double peak_accel = 0, peak_speed = 0, sweep_s = 0;
+  for (const auto& m : moves) {
+    peak_accel = std::max(peak_accel, m.accel_mm_s2);
+    peak_speed = std::max(peak_speed, m.feed_mm_s);
+    sweep_s += m.duration_s;
+  }
+  std::vector<std::string> prologue, restore;
+  nlohmann::json changed = nlohmann::json::array();
+  sweep_test_settings(r, peak_accel, prologue, restore, changed);
+  e.excitation["test_settings"] = prologue;
+  e.excitation["changed"] = changed;
+  e.excitation["peak_accel_mm_s2"] = peak_accel;
+  e.excitation["peak_speed_mm_s"] = peak_speed;
+  e.excitation["sweep_duration_s"] = sweep_s;  // the moves as planned, without the settle dwells
+  if (design.min_half_mm > 0) e.excitation["min_move_mm"] = design.min_half_mm;
+  g.push_back("G28");
+  g.push_back("G90");
+  g.push_back(d.set_accel(travel_accel));
+  g.push_back(fmt::format("G1 {}{} {}{} F{}", A, num(p["center_mm"]), O, num(p["other_mm"]),
+                          num(p.at("travel_speed_mm_s") * 60, 1)));
+  g.push_back(d.wait_for_moves());
+  g.insert(g.end(), prologue.begin(), prologue.end());
+  g.push_back(";@record accelerometer on");
+  g.push_back(fmt::format("G4 P{}", std::lround(p["settle_s"] * 1000)));
+  const auto [lo, hi] = emit_sweep(r, moves, A, p["center_mm"], g);
+  e.excitation["excursion_mm"] = {lo, hi};
+  if (design.sweeping()) e.excitation["sweeping_excursion_mm"] = sweeping_excursion_mm(design);
+  g.push_back(fmt::format("G4 P{}", std::lround(p["settle_s"] * 1000)));
+  g.push_back(d.wait_for_moves());
+  g.push_back(";@record accelerometer off");
+  epilogue(g, restore);
+}
+
+}  // namespace
+
 bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
   const std::string& protocol = r.protocol;
-  const std::string& axis_in = r.axis_in;
   const machine::MachineProfile& profile = r.profile;
   const firmware::Dialect& d = r.dialect;
   const ProtocolLimits& limits = r.limits;
   auto& p = e.params;
   auto& g = e.gcode;
-  auto guard = [&] { guard_line_count(g, r.limits, r.protocol); };
   if (protocol == "axis-sweep") {
-    if (axis_in != "x" && axis_in != "y")
-      throw InputError(fmt::format("axis-sweep needs --axis x or y, not '{}'", axis_in));
-    e.axis = axis_in;
-    const std::string other = axis_in == "x" ? "y" : "x";
-    if (std::isnan(p["center_mm"])) p["center_mm"] = mid(profile, axis_in);
-    if (std::isnan(p["other_mm"])) p["other_mm"] = mid(profile, other);
-    const double f0 = p.at("freq_start_hz"), f1 = p.at("freq_end_hz"), rate = p.at("hz_per_sec");
-    const double aph = p.at("accel_per_hz");
-    if (f1 <= f0) throw InputError("freq_end_hz must exceed freq_start_hz");
-    // Half-periods of the sweep: the integral of 2 f dt = 2 f df / rate from f0 to f1; two lines each.
-    check_plan(protocol, 2 * (f1 * f1 - f0 * f0) / rate + 12, (f1 - f0) / rate + 2 * p.at("settle_s"), limits);
-    const std::string A = axis_in == "x" ? "X" : "Y", O = axis_in == "x" ? "Y" : "X";
-    const double axis_max_accel = profile.axis(axis_in).max_accel_mm_s2;
-    // The sweep's moves, designed within the firmware's planner rules.
-    struct SweepMove {
-      double accel, dist, vpk;
-    };
-    std::vector<SweepMove> moves;
-    double min_len = 0;
-    if (d.firmware() == firmware::Firmware::marlin || d.firmware() == firmware::Firmware::prusa) {
-      // Marlin joins a move with fewer than MIN_STEPS_PER_SEGMENT steps with the next one
-      // (planner.cpp _buffer_steps; Configuration_adv.h MIN_STEPS_PER_SEGMENT 6).
-      const double spm = axis_in == "x" ? profile.state.steps_per_mm_x : profile.state.steps_per_mm_y;
-      min_len = firmware::limits::kMarlinMinStepsPerSegment / spm;
-    }
-    {
-      double t = 0, f = f0;
-      while (f < f1) {
-        const double th = 1.0 / (2 * f);
-        double a = aph * f;
-        // A triangle of duration th at acceleration a covers a th^2 / 4.
-        if (a * th * th / 4 < 1.5 * min_len) a = 1.5 * min_len * 4 / (th * th);
-        if (a > axis_max_accel)
-          throw InputError(fmt::format(
-              "axis-sweep at {:.1f} Hz on Marlin: a half period must move at least {} steps (MIN_STEPS_PER_SEGMENT, "
-              "Configuration_adv.h) = {:.4g} mm, which needs {:.0f} mm/s^2, above the axis limit {:.0f} mm/s^2; lower "
-              "freq_end_hz or raise [firmware_state] steps_per_mm",
-              f, firmware::limits::kMarlinMinStepsPerSegment, min_len, a, axis_max_accel));
-        moves.push_back({a, a * th * th / 4, a * th / 2});
-        t += th;
-        f = f0 + rate * t;
-      }
-    }
-    double peak_accel = 0;
-    for (const auto& m : moves) peak_accel = std::max(peak_accel, m.accel);
-    // Test settings: everything the firmware would do differently from the labelled moves is
-    // turned off for the test and restored after (the epilogue, also sent after an abort).
-    std::vector<std::string> prologue, restore;
-    nlohmann::json changed = nlohmann::json::array();
-    switch (d.firmware()) {
-      case firmware::Firmware::klipper:
-        // As Klipper's own TEST_RESONANCES (klippy/extras/resonance_tester.py:194-199):
-        // MINIMUM_CRUISE_RATIO=0 and input shaping off.
-        prologue.push_back("SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO=0");
-        restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={} MINIMUM_CRUISE_RATIO={}",
-                                      num(accel_to_restore(profile), 0), num(profile.state.minimum_cruise_ratio, 3)));
-        changed.push_back("minimum_cruise_ratio");
-        break;
-      case firmware::Firmware::reprapfirmware:
-        // RRF joins a reversal at M566/2 (DDA.cpp MatchSpeeds, totalFraction 2): the lowest jerk
-        // it accepts (Configuration.h MinimumJerk 0.1 mm/s) makes every half period rest to rest.
-        prologue.push_back("M566 X6 Y6");
-        restore.push_back(fmt::format("M566 X{} Y{}", num(profile.state.jerk_xy_mm_s * 60, 1),
-                                      num(profile.state.jerk_xy_mm_s * 60, 1)));
-        changed.push_back("M566");
-        prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
-        restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
-                                      num(profile.state.max_accel_xy_mm_s2, 0)));
-        changed.push_back("M201");
-        break;
-      default:
-        // Marlin: moves shorter than DEFAULT_MINSEGMENTTIME (M205 B, us) are slowed
-        // (planner.cpp), M204 is capped by M201 (planner.cpp limit_and_warn).
-        prologue.push_back("M205 B0");
-        restore.push_back(fmt::format("M205 B{}", num(profile.state.min_segment_time_s * 1e6, 0)));
-        changed.push_back("M205 B");
-        prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
-        restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
-                                      num(profile.state.max_accel_xy_mm_s2, 0)));
-        changed.push_back("M201");
-        break;
-    }
-    shaping_off(profile, d, prologue, restore, changed);
-    e.excitation["test_settings"] = prologue;
-    e.excitation["changed"] = changed;
-    e.excitation["peak_accel_mm_s2"] = peak_accel;
-    if (min_len > 0) e.excitation["min_move_mm"] = min_len;
-    g.push_back("G28");
-    g.push_back("G90");
-    g.push_back(d.set_accel(std::min(3000.0, axis_max_accel)));
-    g.push_back(fmt::format("G1 {}{} {}{} F{}", A, num(p["center_mm"]), O, num(p["other_mm"]),
-                            num(p.at("travel_speed_mm_s") * 60, 1)));
-    g.push_back(d.wait_for_moves());
-    g.insert(g.end(), prologue.begin(), prologue.end());
-    g.push_back(";@record accelerometer on");
-    g.push_back(fmt::format("G4 P{}", std::lround(p["settle_s"] * 1000)));
-    double pos = p["center_mm"];
-    int sign = 1;
-    for (const auto& m : moves) {
-      g.push_back(d.set_accel(m.accel));
-      pos += sign * m.dist;
-      g.push_back(fmt::format("G1 {}{} F{}", A, num(pos, 5), num(m.vpk * 60, 3)));
-      guard();
-      sign = -sign;
-    }
-    g.push_back(fmt::format("G4 P{}", std::lround(p["settle_s"] * 1000)));
-    g.push_back(d.wait_for_moves());
-    g.push_back(";@record accelerometer off");
-    epilogue(g, restore);
+    build_axis_sweep(r, e);
   } else if (protocol == "axis-rectangle") {
     const double w = p.at("width_mm"), h = p.at("height_mm"), v = p.at("speed_mm_s");
     const int reps = static_cast<int>(p.at("repeats"));

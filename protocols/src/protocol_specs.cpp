@@ -18,6 +18,8 @@
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/machine/trajectory.hpp"
 
+#include "sweep_moves.hpp"
+
 namespace tunekit::protocols {
 namespace {
 
@@ -159,13 +161,21 @@ std::vector<ProtocolSpec> make_specs() {
                false});
   s.push_back(
       {"axis-sweep",
-       "resonance sweep like Klipper's TEST_RESONANCES: back-and-forth moves whose acceleration is "
-       "accel_per_hz * f while f rises at hz_per_sec; the accelerometer is recorded",
+       "resonance sweep like Klipper's TEST_RESONANCES (resonance_tester.py, 2024-12 to 2026-08): back-and-forth "
+       "moves whose acceleration is accel_per_hz * f while f rises at hz_per_sec, with Klipper's slow sweeping "
+       "motion added on Klipper; the accelerometer is recorded",
        {{"freq_start_hz", 10, "Hz", "first frequency", ParamDomain::positive, kMaxFreqHz},
         {"freq_end_hz", 100, "Hz", "last frequency", ParamDomain::positive, kMaxFreqHz},
         {"hz_per_sec", 2, "Hz/s", "sweep rate", ParamDomain::positive, kMaxFreqHz},
         {"accel_per_hz", 60, "mm/s^2/Hz", "acceleration amplitude per Hz", ParamDomain::positive,
          kMaxAccelMmS2 / kMaxFreqHz},
+        {"sweeping_accel", kMachineDefault, "mm/s^2",
+         "acceleration of the slow sweeping motion added to the moves, which swings the toolhead about the centre "
+         "(+-sweeping_accel sweeping_period^2 / 32 mm) so it does not vibrate at one spot; 0 turns it off "
+         "(default: 400 on Klipper, as its TEST_RESONANCES; 0 elsewhere, the only value accepted there)",
+         ParamDomain::non_negative, kMaxAccelMmS2},
+        {"sweeping_period", experiment_gcode::kKlipperSweepingPeriod_s, "s",
+         "period of the sweeping motion; 0 turns it off", ParamDomain::non_negative, kMaxTimeS},
         {"center_mm", kMachineDefault, "mm", "position of the swept axis (default: middle of its travel)",
          ParamDomain::any, kMaxLengthMm},
         {"other_mm", kMachineDefault, "mm", "position of the other horizontal axis (default: middle)", ParamDomain::any,

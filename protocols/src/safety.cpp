@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -161,9 +162,31 @@ std::optional<std::string> non_finite_word(std::string_view line) {
   return std::nullopt;
 }
 
+namespace {
+
+/// The speed two consecutive moves are joined at in the estimate, mm/s: moves without
+/// extrusion going straight on at the lower of their speeds (as every planner joins them at
+/// most), anything else at rest.
+double estimate_junction(const machine::GcodeMove& a, const machine::GcodeMove& b) {
+  if (a.end[3] != a.start[3] || b.end[3] != b.start[3]) return 0;
+  const auto ua = a.unit(), ub = b.unit();
+  double dot = 0;
+  for (std::size_t k = 0; k < 3; ++k) dot += ua[k] * ub[k];
+  return dot > 1 - 1e-9 ? std::min(a.feed_mm_s, b.feed_mm_s) : 0.0;
+}
+
+}  // namespace
+
 double estimate_gcode_duration_s(const std::vector<std::string>& gcode) {
   machine::GcodeInterpreter in;
-  double t = 0;
+  double t = 0, entry = 0;
+  std::optional<machine::GcodeMove> prev;
+  auto run_prev = [&](double exit) {
+    if (prev)
+      t += machine::Profile::move_duration_s(prev->length_mm(), entry, prev->feed_mm_s, exit, prev->accel_mm_s2,
+                                             kGateJerkMmS3);
+    entry = exit;
+  };
   for (const auto& l : gcode) {
     const auto w = machine::parse_gcode(l);
     if (!w) continue;
@@ -171,10 +194,15 @@ double estimate_gcode_duration_s(const std::vector<std::string>& gcode) {
     if (m) {
       if (!(m->feed_mm_s > 0) || !(m->accel_mm_s2 > 0) || !std::isfinite(m->length_mm()))
         return std::numeric_limits<double>::infinity();
-      t += machine::Profile::move_duration_s(m->length_mm(), 0, m->feed_mm_s, 0, m->accel_mm_s2, kGateJerkMmS3);
+      run_prev(prev ? estimate_junction(*prev, *m) : 0.0);
+      prev = *m;
+    } else if (w->command == "G4" || w->command == "M400" || w->command == "G28") {
+      run_prev(0);  // the planner comes to rest
+      prev.reset();
     }
     t += in.dwell_s();
   }
+  run_prev(0);
   return t;
 }
 

@@ -111,8 +111,7 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
         } else {
           if (pending_) {
             const double v_exit = junction_speed(*pending_, *m);
-            execute(*pending_, pending_entry_, v_exit, emit);
-            pending_entry_ = v_exit;
+            pending_entry_ = std::min(v_exit, execute(*pending_, pending_entry_, v_exit, emit));
           }
           pending_ = *m;
         }
@@ -147,6 +146,7 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     } else if (c == "M410") {
       pending_.reset();  // quickstop: queued motion is dropped
       pending_entry_ = 0;
+      step_carry_s_ = 0;
     } else if (c == "M112") {
       pending_.reset();
       halted_ = true;

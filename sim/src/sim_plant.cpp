@@ -53,7 +53,9 @@ double Simulator::junction_speed(const machine::GcodeMove& a, const machine::Gco
     }
     dot /= std::sqrt(na * nb);
   }
-  if (dot > sim::kStraightJunctionCos) return a.feed_mm_s;
+  // Straight on: the lower of the two moves' speeds (Klipper toolhead.py calc_junction: the
+  // minimum of both max_cruise_v2; Marlin planner.cpp: the previous and this block's nominal speed).
+  if (dot > sim::kStraightJunctionCos) return std::min(a.feed_mm_s, b.feed_mm_s);
   if (rrf() && dot < -sim::kStraightJunctionCos) {
     // DDA.cpp MatchSpeeds: the speed change across the junction, |d_a - d_b| v = 2 v for a
     // reversal, may not exceed the axis' M566 jerk.
@@ -198,7 +200,7 @@ void Simulator::emit_pending_load_sample() {
   fed_in_window_mm_ = 0;
 }
 
-void Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit) {
+double Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit) {
   double accel = m.accel_mm_s2, v_max = m.feed_mm_s;
   const double L = m.length_mm();
   if (klipper()) {
@@ -210,12 +212,19 @@ void Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_ex
   v_max = std::max(v_max, sim::kMinPeakSpeed_mm_s);
   const machine::Profile prof = machine::Profile::move(L, v_entry, v_max, v_exit, accel, cfg_.jerk_mm_s3);
   const auto u = m.unit();
-  const double t0 = t_;
-  const double T = prof.duration_s();
-  const int n = static_cast<int>(std::floor(T / dt_ + sim::kStepCountSlack));
+  // A move joined at speed to the one before starts step_carry_s_ before the sample grid's
+  // current time (what that move left of its last step): its steps sample it that much later, so
+  // that a chain of short moves (a resonance sweep) keeps its total time. After a move that ends
+  // at rest, or extrudes (the printing and feeding protocols' timing on the grid, which their
+  // tests were measured with), the fraction of a step left over is dropped.
+  const double T = prof.duration_s(), shift = step_carry_s_;
+  const int n = static_cast<int>(std::floor((T + shift) / dt_ + sim::kStepCountSlack));
+  const double v_end = prof.at(T).vel_mm_s;
+  const bool joined = v_end > 0 && m.end[3] == m.start[3];
+  step_carry_s_ = joined ? std::max(0.0, T + shift - n * dt_) : 0.0;
   if (move_sink && n > 0) move_sink(t_, n * dt_, prof, m.start, u);
   for (int i = 0; i < n; ++i) {
-    const double tau = i * dt_;
+    const double tau = i * dt_ - shift;
     const machine::PathState s0 = prof.at(tau), sm = prof.at(tau + dt_ / 2), s1 = prof.at(tau + dt_);
     std::array<double, 4> pos{}, vel{}, acc0{};
     std::array<double, 3> accm{}, acc1{};
@@ -230,8 +239,7 @@ void Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_ex
     }
     step(pos, vel, acc0, accm, acc1, emit);
   }
-  (void)t0;
-  // The fraction of a step left over is dropped: moves start on the sample grid.
+  return v_end;  // below v_exit when the move is too short to reach it
 }
 
 void Simulator::dwell(double seconds, const Emit& emit) {

@@ -466,7 +466,9 @@ class FakeKlipper {
             if (cmd == "SET_INPUT_SHAPER") remember_input_shaper(line);
             sim_.handle_line(line, ignore);
           }
-          sim_.flush(ignore);
+          // No flush at the end of a script: Klipper keeps the last moves in its lookahead queue
+          // until more moves come or a dwell/M400 flushes it (klippy/toolhead.py LookAheadQueue),
+          // so moves sent in several scripts join at speed as moves of one script do.
           machine_time_ = sim_.time_s();
           sent_ += flush_rows(accel_rows, accel_templates, true);
           load_sent_ += flush_rows(load_rows, load_templates, true);

@@ -14,7 +14,8 @@
 //   liquefier-chirp     linear chirp of the feed, load cell recorded
 //   ring-print          Holtrup's (2019) ring: a circle printed with the feed modulated by A sin(N theta)
 //   line-steps          camera path: straight lines whose flow steps low -> high -> low (camera_prints.hpp)
-//   axis-sweep          resonance sweep: acceleration accel_per_hz * f, f rising at hz_per_sec
+//   axis-sweep          resonance sweep: acceleration accel_per_hz * f, f rising at hz_per_sec; on Klipper
+//                       with the slow +-sweeping_accel motion of period sweeping_period Klipper adds
 //   axis-rectangle      Hemminger's (UCLA, 2022) overshoot rectangle: XY rectangle with pauses, repeated
 //   test-pattern        pads, line steps and rings ordered by the coverage planner (coverage_planner.hpp)
 

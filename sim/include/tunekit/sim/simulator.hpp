@@ -229,7 +229,8 @@ class Simulator {
   struct Pending {
     machine::GcodeMove move;
   };
-  void execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit);
+  /// Runs one move; returns the speed it leaves at (mm/s).
+  double execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit);
   void dwell(double seconds, const Emit& emit);
   void step(const std::array<double, 4>& pos, const std::array<double, 4>& vel, const std::array<double, 4>& acc,
             const std::array<double, 3>& acc_mid, const std::array<double, 3>& acc_end, const Emit& emit);
@@ -239,6 +240,7 @@ class Simulator {
   machine::GcodeInterpreter interp_;
   std::optional<machine::GcodeMove> pending_;
   double pending_entry_ = 0;
+  double step_carry_s_ = 0;                           ///< time of the last move not yet run as a step, s (< one step)
   std::optional<std::array<double, 4>> carry_start_;  ///< Marlin: start of a move joined with the next
   double min_segment_time_s_ = 0.020;                 ///< Marlin M205 B
   double jerk_x_mm_s_ = 15, jerk_y_mm_s_ = 15;        ///< RRF M566
