@@ -63,11 +63,13 @@ CompensatorDesign design_and_export(const CalibrationPlan& plan, const Experimen
   eo.profile = plan.profile.path;
   // A Marlin printer that answered M493 with fixed-time motion enabled bypasses M593/M900 U:
   // its settings go to M493 (the runner records the answer in each run).
-  const bool ft_live =
-      std::any_of(runs.runs.begin(), runs.runs.end(), [](const auto& kv) { return kv.second.ft_motion == "active"; });
-  design.marlin_ft_live =
-      ft_live && firmware::parse_export_firmware(plan.options.firmware) == firmware::ExportFirmware::marlin;
+  // The G-code takes the letters of the form that report took (run.json firmware.m493_form).
+  const auto live =
+      std::find_if(runs.runs.begin(), runs.runs.end(), [](const auto& kv) { return kv.second.ft_motion == "active"; });
+  design.marlin_ft_live = live != runs.runs.end() &&
+                          firmware::parse_export_firmware(plan.options.firmware) == firmware::ExportFirmware::marlin;
   eo.marlin_ft_live = design.marlin_ft_live;
+  if (design.marlin_ft_live) eo.marlin_m493_form = live->second.m493_form;
   eo.write = plan.options.write;
   const DesignInputs inputs = typed_design_inputs(plan, identified);
   design.exported = calibrate_analysis("export", [&] { return compute_export(eo, inputs); });

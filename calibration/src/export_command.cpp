@@ -160,12 +160,29 @@ long long checked_extruder(const ExportOptions& a) {
   return *n;
 }
 
+/// The letters of the running Marlin's M493 (--marlin-m493-form; default the 2024-2025 form;
+/// "none", which calibrate passes for a report that did not show its form, warns and uses them).
+firmware::M493Syntax marlin_m493_syntax(const ExportOptions& a) {
+  if (a.marlin_m493_form.empty()) return {};
+  if (!a.marlin_ft_live)
+    throw InputError("--marlin-m493-form needs --marlin-ft-motion (a printer running fixed-time motion)");
+  try {
+    return firmware::parse_m493_syntax(a.marlin_m493_form);
+  } catch (const InputError&) {
+    throw InputError(
+        fmt::format("--marlin-m493-form '{}' is not one of mode, axis_slash, axis_named, axis_list, "
+                    "axis_list_v2",
+                    shown(a.marlin_m493_form)));
+  }
+}
+
 /// Where the settings go: Klipper's section, Marlin's extruder entry, RepRapFirmware's drive.
 /// --extruder N (a number) or extruderN: Klipper's [extruder] / [extruderN], Marlin's ADVANCE_K
 /// entry N (M900 T), RepRapFirmware's drive N unless --drive is given.
 void set_extruder(const ExportOptions& a, firmware::ExportFirmware fw, firmware::CompensatorSettings& settings) {
   const int n = static_cast<int>(checked_extruder(a));
   settings.marlin_ft_motion_live = fw == firmware::ExportFirmware::marlin && a.marlin_ft_live;
+  settings.marlin_m493 = marlin_m493_syntax(a);
   settings.extruder_index = n;
   settings.klipper_extruder = n == 0 ? "extruder" : fmt::format("extruder{}", n);
   settings.rrf_drive = a.drive_given ? a.drive : n;
@@ -237,6 +254,7 @@ nlohmann::json settings_json(const firmware::CompensatorSettings& settings, firm
                            {"firmware_type", firmware::firmware_shaper_name(fw, sh.type, ft_motion)},
                            {"freq_hz", sh.freq_hz},
                            {"damping", sh.damping}};
+  if (settings.marlin_ft_motion_live) sj["marlin_m493_form"] = firmware::to_string(settings.marlin_m493);
   return sj;
 }
 

@@ -205,6 +205,43 @@ class MarlinEditor {
 
 namespace {
 
+/// The runtime M493 lines for a Marlin running fixed-time motion, in the letters of the form its
+/// M493 report took (marlin_m493.hpp, Marlin/src/gcode/feature/ft_motion/M493.cpp): S1 keeps
+/// fixed-time motion on, the shapers by ftMotionShaper_t code (ft_types.h order), damping at
+/// least 0.01 (M493 accepts 0.01-1), then the advance gain where the form has a letter for it.
+/// What the form cannot say becomes a warning.
+std::string marlin_m493_gcode(ExportResult& r, const CompensatorSettings& s) {
+  std::vector<FtShaperWords> axes;
+  for (const auto& [axis, sh] : s.shapers) {
+    const std::string t = firmware_shaper_name(ExportFirmware::marlin, sh.type, true);
+    int code = 0;
+    for (std::size_t i = 0; i < std::size(limits::kMarlinFtMotionShapers); ++i)
+      if (t == limits::kMarlinFtMotionShapers[i].firmware_name) code = static_cast<int>(i) + 1;
+    axes.push_back({axis, code, format_number(sh.freq_hz, kDecimalsFreq),
+                    format_number(std::max(0.01, sh.damping), kDecimalsZeta)});
+  }
+  auto set = m493_set_shapers(s.marlin_m493, axes, true);
+  std::string g;
+  for (const auto& l : set.lines) g += l + "\n";
+  if (s.pa_k_s) {
+    const std::string la = m493_linear_advance(s.marlin_m493, format_number(*s.pa_k_s, kDecimalsK));
+    if (la.empty())
+      set.left_out.push_back(fmt::format("the advance K {} (this form's M493 has no linear advance letter)",
+                                         format_number(*s.pa_k_s, kDecimalsK)));
+    else g += la + "\n";
+  }
+  if (s.marlin_m493.form == M493Form::none && !g.empty())
+    r.warnings.push_back(
+        fmt::format("{}: the printer's M493 report did not show which letters its M493 takes (no "
+                    "axis was shaped): the G-code uses those of 2024-2025 (axis_named); check them "
+                    "against the build's M493",
+                    r.path));
+  for (const auto& what : set.left_out)
+    r.warnings.push_back(fmt::format("{}: the printer's M493 ({} form) cannot set {}: it is left out of the G-code",
+                                     r.path, to_string(s.marlin_m493), what));
+  return g;
+}
+
 /// FT_MOTION build (Marlin/src/module/ft_motion.cpp): with fixed-time motion active (M493 S1)
 /// the classic shaper and smooth linear advance are bypassed (stepper.cpp isr()), so the
 /// FT_MOTION defaults are written instead: FTM_DEFAULT_SHAPER_X/Y (ftMotionShaper_<TYPE>,
@@ -260,24 +297,7 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
   r.diff = m.editor().unified_diff(r.path);
   std::string g;
   if (s.marlin_ft_motion_live) {
-    // M493's letters as Marlin/src/gcode/feature/ft_motion/M493.cpp parses them (the version
-    // whose report the printer gave): S1 keeps fixed-time motion on; X/Y the shaper
-    // (1 ZV, 2 ZVD, 3 ZVDD, 4 ZVDDD, 5 EI, 6 2HEI, 7 3HEI, 8 MZV: ft_types.h order), set before
-    // A/B (frequency) and I/J (damping, accepted 0.01-1) which need a shaper on the axis;
-    // P1 K<gain> its linear advance.
-    std::string line = "M493 S1";
-    for (const auto& [axis, sh] : s.shapers) {
-      const std::string t = firmware_shaper_name(ExportFirmware::marlin, sh.type, true);
-      int number = 0;
-      for (std::size_t i = 0; i < std::size(limits::kMarlinFtMotionShapers); ++i)
-        if (t == limits::kMarlinFtMotionShapers[i].firmware_name) number = static_cast<int>(i) + 1;
-      const bool x = axis == "x";
-      line +=
-          fmt::format(" {}{} {}{} {}{}", x ? "X" : "Y", number, x ? "A" : "B", format_number(sh.freq_hz, kDecimalsFreq),
-                      x ? "I" : "J", format_number(std::max(0.01, sh.damping), kDecimalsZeta));
-    }
-    g += line + "\n";
-    if (s.pa_k_s) g += fmt::format("M493 P1 K{}\n", format_number(*s.pa_k_s, kDecimalsK));
+    g += marlin_m493_gcode(r, s);
   } else {
     // Known from the file only: M493's parameter letters differ between Marlin versions, so no
     // runtime shaping line is guessed; the compiled defaults are loaded with M502 and stored with M500.

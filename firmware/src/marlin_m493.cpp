@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/core/error.hpp"
+
 namespace tunekit::firmware {
 namespace {
 
@@ -115,12 +117,73 @@ void read_line(FtMotionReport& r, const std::string& line) {
 
 char letter(const std::string& axis) { return static_cast<char>(axis[0] - 'a' + 'A'); }
 
-std::string freq_word(const FtAxisShaper& s, char l) {
-  return std::isfinite(s.freq_hz) ? fmt::format(" {}{:g}", l, s.freq_hz) : std::string();
+/// ftMotionShaper_t's entry of a shaper code or report name (kShapers[0], None, when unknown).
+const ShaperName& shaper_of(int code) {
+  for (const auto& k : kShapers)
+    if (k.code == code) return k;
+  return kShapers[0];
+}
+int code_of(const std::string& name) {
+  for (const auto& k : kShapers)
+    if (name == k.name) return k.code;
+  return 0;
 }
 
-/// The frequency letter of the X/Y<shaper> forms (A for X, B for Y; Z and E are left alone).
+/// " <letter><value>", or nothing for an empty value or no letter.
+std::string word(char l, const std::string& value) {
+  return l == '\0' || value.empty() ? std::string() : fmt::format(" {}{}", l, value);
+}
+
+/// The per-axis letters of the X/Y<shaper> forms: frequency A/B and damping I/J for X/Y (Z and E
+/// have a shaper letter only).
 char freq_letter(const std::string& axis) { return axis == "x" ? 'A' : axis == "y" ? 'B' : '\0'; }
+char zeta_letter(const std::string& axis) { return axis == "x" ? 'I' : axis == "y" ? 'J' : '\0'; }
+
+/// 2023: one S<mode> for X and Y, A/B frequency, no damping letter.
+M493Lines mode_lines(const std::vector<FtShaperWords>& axes) {
+  M493Lines out;
+  const auto& first = axes.front();
+  const ShaperName& sh = shaper_of(first.code);
+  if (sh.mode_code == 0) {
+    out.left_out.push_back(fmt::format("the {} shaper (the 2023 form's single mode has no such shaper)", sh.name));
+    return out;
+  }
+  std::string line = fmt::format("M493 S{}", sh.mode_code);
+  for (const auto& a : axes) {
+    line += word(freq_letter(a.axis), a.freq_hz);
+    if (a.code != first.code)
+      out.left_out.push_back(
+          fmt::format("the {} axis's own shaper type ({}): the 2023 form sets one mode for X and "
+                      "Y, the {} axis's {}",
+                      letter(a.axis), shaper_of(a.code).name, letter(first.axis), sh.name));
+    if (!a.zeta.empty())
+      out.left_out.push_back(
+          fmt::format("the {} axis's damping ratio {} (the 2023 form has no damping letter)", letter(a.axis), a.zeta));
+  }
+  out.lines.push_back(line);
+  return out;
+}
+
+/// FTM V2: one line per axis, the axis flagged, C<shaper> A<Hz> I<damping>.
+M493Lines flag_lines(const std::vector<FtShaperWords>& axes, bool turn_on) {
+  M493Lines out;
+  for (const auto& a : axes)
+    out.lines.push_back(
+        fmt::format("M493{} {} C{}", turn_on && out.lines.empty() ? " S1" : "", letter(a.axis), a.code) +
+        word('A', a.freq_hz) + word('I', a.zeta));
+  return out;
+}
+
+/// 2024-2025: X/Y<shaper>, then A/B frequencies and I/J damping ratios, in one line.
+M493Lines axis_lines(const std::vector<FtShaperWords>& axes, bool turn_on) {
+  std::string line = turn_on ? "M493 S1" : "M493", freqs, zetas;
+  for (const auto& a : axes) {
+    line += fmt::format(" {}{}", letter(a.axis), a.code);
+    freqs += word(freq_letter(a.axis), a.freq_hz);
+    zetas += word(zeta_letter(a.axis), a.zeta);
+  }
+  return {{line + freqs + zetas}, {}};
+}
 
 }  // namespace
 
@@ -155,27 +218,40 @@ std::vector<std::string> m493_shaping_off(const FtMotionReport& r) {
 
 std::vector<std::string> m493_shaping_restore(const FtMotionReport& r) {
   if (!r.shaping()) return {};
-  if (r.form == M493Form::mode) {
-    const auto& x = r.axes.at("x");
-    std::string line = fmt::format("M493 S{}", x.code) + freq_word(x, 'A');
-    if (r.axes.count("y")) line += freq_word(r.axes.at("y"), 'B');
-    return {line};
+  std::vector<FtShaperWords> axes;
+  for (const auto& [axis, s] : r.axes) {
+    if (!r.shapers.count(axis)) continue;
+    const std::string f = std::isfinite(s.freq_hz) ? fmt::format("{:g}", s.freq_hz) : std::string();
+    axes.push_back({axis, code_of(s.name), f, {}});
   }
-  std::vector<std::string> out;
-  if (r.form == M493Form::axis_list && r.version >= 2) {
-    for (const auto& [axis, name] : r.shapers) {
-      const auto& s = r.axes.at(axis);
-      out.push_back(fmt::format("M493 {} C{}", letter(axis), s.code) + freq_word(s, 'A'));
-    }
-    return out;
-  }
-  std::string line = "M493", freqs;
-  for (const auto& [axis, name] : r.shapers) {
-    const auto& s = r.axes.at(axis);
-    line += fmt::format(" {}{}", letter(axis), s.code);
-    if (const char l = freq_letter(axis)) freqs += freq_word(s, l);
-  }
-  return {line + freqs};
+  return m493_set_shapers(m493_syntax(r), axes, false).lines;
+}
+
+M493Syntax m493_syntax(const FtMotionReport& r) { return {r.form, r.form == M493Form::axis_list ? r.version : 1}; }
+
+std::string to_string(const M493Syntax& s) {
+  return s.form == M493Form::axis_list && s.version >= 2 ? "axis_list_v2" : to_string(s.form);
+}
+
+M493Syntax parse_m493_syntax(const std::string& name) {
+  for (const M493Form f :
+       {M493Form::none, M493Form::mode, M493Form::axis_slash, M493Form::axis_named, M493Form::axis_list})
+    if (name == to_string(f)) return {f, 1};
+  if (name == "axis_list_v2") return {M493Form::axis_list, 2};
+  throw InputError(
+      fmt::format("M493 form '{}' is not one of mode, axis_slash, axis_named, axis_list, axis_list_v2", name));
+}
+
+M493Lines m493_set_shapers(const M493Syntax& syntax, const std::vector<FtShaperWords>& axes, bool turn_on) {
+  if (axes.empty()) return {};
+  if (syntax.form == M493Form::mode) return mode_lines(axes);
+  if (syntax.form == M493Form::axis_list && syntax.version >= 2) return flag_lines(axes, turn_on);
+  return axis_lines(axes, turn_on);
+}
+
+std::string m493_linear_advance(const M493Syntax& syntax, const std::string& k) {
+  if (syntax.form == M493Form::axis_list && syntax.version >= 2) return {};
+  return "M493 P1 K" + k;
 }
 
 }  // namespace tunekit::firmware

@@ -229,12 +229,13 @@ RunResult run_experiment(const RunOptions& o) {
                                {"dialect", to_string(session->dialect.firmware())},
                                {"ft_motion", session->firmware.ft_motion},
                                {"ft_motion_active", session->firmware.ft_motion_active},
-                               {"m493_form", to_string(session->firmware.m493.form)}});
+                               {"m493_form", to_string(m493_syntax(session->firmware.m493))}});
     summary["firmware"] = {{"name", session->firmware.name}, {"version", session->firmware.version}};
     if (session->firmware.ft_motion) {
       res.ft_motion = session->firmware.ft_motion_active ? "active" : "built, inactive";
       summary["firmware"]["ft_motion"] = res.ft_motion;
-      summary["firmware"]["m493_form"] = to_string(session->firmware.m493.form);
+      res.m493_form = to_string(m493_syntax(session->firmware.m493));
+      summary["firmware"]["m493_form"] = res.m493_form;
     }
     adapt_to_firmware(o, sim, profile, *session, port, journal, summary, res, progress);
     // Fail before heating and homing when the link cannot record what the protocol needs.

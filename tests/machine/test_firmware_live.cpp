@@ -134,7 +134,7 @@ TEST_CASE("a live Marlin with FT_MOTION active is detected from M493, and its se
   s.marlin_ft_motion_live = true;
   const std::string cfg = tunekit::read_file_bytes(std::string(TUNEKIT_DATASETS_DIR) + "/firmware/Configuration_adv.h");
   const auto r = export_config_text(ExportFirmware::marlin, cfg, "Configuration_adv.h", s);
-  CHECK(r.gcode == "M493 S1 X8 A45.2 I0.1 Y1 B38 J0.08\nM493 P1 K0.045\nM500\n");
+  CHECK(r.gcode == "M493 S1 X8 Y1 A45.2 B38 I0.1 J0.08\nM493 P1 K0.045\nM500\n");
   CHECK(r.gcode.find("M593") == std::string::npos);
   CHECK(r.gcode.find("M900") == std::string::npos);
   // This file does not build FT_MOTION: not the running build's; its classic lines stay.
@@ -157,7 +157,12 @@ TEST_CASE("calibrate on a simulated Marlin running FT_MOTION writes M493, on a c
     const std::string gcode = res.at("compensators").at("export").at("gcode").get<std::string>();
     INFO(gcode);
     if (std::string(mode) == "on") {
-      CHECK(gcode.rfind("M493 S1 X1 A", 0) == 0);
+      CHECK(gcode.rfind("M493 S1 X1 ", 0) == 0);
+      // The simulated build shapes no axis at the start: its report does not show its form.
+      bool said = false;
+      for (const auto& w : res.at("compensators").at("export").at("warnings"))
+        said |= w.get<std::string>().find("did not show which letters") != std::string::npos;
+      CHECK(said);
       CHECK(gcode.find("M593") == std::string::npos);
     } else {
       CHECK(gcode.find("M593 X F") != std::string::npos);

@@ -100,6 +100,11 @@ void register_export(CLI::App& app, CliContext& ctx) {
   sub->add_flag("--marlin-ft-motion", o.marlin_ft_live,
                 "The running Marlin reports fixed-time motion enabled (M493): shapers among FT_MOTION's, runtime "
                 "G-code M493 instead of M593/M900 (tunekit calibrate sets it from the printer's answer)");
+  sub->add_option("--marlin-m493-form", o.marlin_m493_form,
+                  "With --marlin-ft-motion: the form of the printer's M493 report, whose letters the G-code uses: "
+                  "mode (2023), axis_slash (2024), axis_named (2024-2025, the default), axis_list (2025), "
+                  "axis_list_v2 (late 2025 on, M493 V answers FTM V2), or none (not known: axis_named, with a "
+                  "warning); tunekit run records it in run.json");
   sub->add_flag("--no-pa", o.no_pa, "Leave pressure/linear advance alone");
   sub->add_flag("--no-shaper", o.no_shaper, "Leave input shaping alone");
   sub->add_flag("--write", o.write,

@@ -27,8 +27,12 @@
 namespace tunekit::calibration {
 
 struct ExportOptions {
-  std::string firmware;                ///< klipper, kalico, marlin or rrf
-  bool marlin_ft_live = false;         ///< the running Marlin reported fixed-time motion active (M493)
+  std::string firmware;         ///< klipper, kalico, marlin or rrf
+  bool marlin_ft_live = false;  ///< the running Marlin reported fixed-time motion active (M493)
+  /// With marlin_ft_live: the form of its M493 report, as firmware::to_string(M493Syntax) names it
+  /// ("mode", "axis_slash", "axis_named", "axis_list", "axis_list_v2"); empty: axis_named; "none"
+  /// (a report that did not show its form): axis_named with a warning.
+  std::string marlin_m493_form;
   std::string config;                  ///< the configuration file to change
   std::vector<std::string> results;    ///< JSON results of step, freq, shaper, rheo
   std::string profile;                 ///< machine profile TOML; empty: assumed defaults

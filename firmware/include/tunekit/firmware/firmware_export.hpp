@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tunekit/firmware/marlin_m493.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
 
 namespace tunekit::firmware {
@@ -67,10 +68,13 @@ struct CompensatorSettings {
   /// bypassed.
   bool marlin_ft_motion = false;
   /// The running Marlin reported fixed-time motion active (its M493 report, runner.cpp): the
-  /// runtime G-code is M493 (Marlin/src/gcode/feature/ft_motion/M493.cpp letters: S1, X/Y shaper
-  /// 1-8, A/B frequency, I/J damping, P1 K advance) instead of M593/M900, and a configuration
-  /// without FT_MOTION is not the running build's: its classic lines are left alone.
+  /// runtime G-code is M493 (Marlin/src/gcode/feature/ft_motion/M493.cpp) instead of M593/M900,
+  /// and a configuration without FT_MOTION is not the running build's: its classic lines are
+  /// left alone.
   bool marlin_ft_motion_live = false;
+  /// The letters of that M493 (marlin_m493.hpp: the form its report took); default the
+  /// 2024-2025 axis_named form: S1, X/Y shaper 1-8, A/B frequency, I/J damping, P1 K advance.
+  M493Syntax marlin_m493;
   /// Replaces the trailing comment of a line whose value changes (the old comment described
   /// the old value), e.g. "tunekit 2026-01-31: from step.json"; empty: comments are kept.
   std::string change_note;

@@ -58,6 +58,44 @@ FtMotionReport parse_m493_report(const std::vector<std::string>& lines);
 /// "mode", "axis_slash", "axis_named", "axis_list" (or "none").
 std::string to_string(M493Form f);
 
+/// Which letters a build's M493 takes: the form of its report and, for axis_list, the FTM
+/// version its M493 V gave (2: the C<shaper> letter, one line per axis).
+struct M493Syntax {
+  M493Form form = M493Form::axis_named;
+  int version = 1;
+};
+/// The report's syntax (`version` counts only in the axis_list form).
+M493Syntax m493_syntax(const FtMotionReport& r);
+/// "mode", "axis_slash", "axis_named", "axis_list" or "axis_list_v2" (the list form of FTM V2).
+std::string to_string(const M493Syntax& s);
+/// The inverse of to_string(M493Syntax) ("none": a report that did not show its form, e.g. one
+/// with no axis shaped); InputError for another name.
+M493Syntax parse_m493_syntax(const std::string& name);
+
+/// One axis's FT_MOTION shaper to set: axis "x" or "y", Marlin's ftMotionShaper_t code (1 ZV ..
+/// 8 MZV), and its base frequency (Hz) and damping ratio as the G-code words should print
+/// them (empty: not set).
+struct FtShaperWords {
+  std::string axis;
+  int code = 0;
+  std::string freq_hz;
+  std::string zeta;
+};
+/// M493 lines and what the form could not say (one phrase each, e.g. that it has no damping).
+struct M493Lines {
+  std::vector<std::string> lines;
+  std::vector<std::string> left_out;
+};
+/// The M493 lines that set `axes` in the letters of `syntax`, with "S1" (fixed-time motion on)
+/// first when `turn_on` (the mode form's S<mode> always turns it on). mode: one S<mode> for X and
+/// Y (X's shaper when they differ), A/B frequency, no damping; axis_slash, axis_named and a
+/// version-1 axis_list (and none, the form unknown): X/Y<shaper>, A/B frequency, I/J damping in
+/// one line; FTM V2: one line per axis, X|Y C<shaper> A<Hz> I<damping>.
+M493Lines m493_set_shapers(const M493Syntax& syntax, const std::vector<FtShaperWords>& axes, bool turn_on);
+/// The M493 line that sets fixed-time motion's linear advance gain `k` ("P1 K<k>"), or empty
+/// when the form has no such letter (FTM V2).
+std::string m493_linear_advance(const M493Syntax& syntax, const std::string& k);
+
 /// The M493 lines that turn every reported FT_MOTION shaper off while fixed-time motion stays
 /// on, in the letters of the form that printed `r`; empty when nothing is shaping.
 std::vector<std::string> m493_shaping_off(const FtMotionReport& r);

@@ -85,6 +85,9 @@ struct RunResult {
   /// Marlin's fixed-time motion as its M493 report said: "active", "built, inactive", or empty
   /// (not built in, or not Marlin). Also in summary.firmware.ft_motion.
   std::string ft_motion;
+  /// The form of that M493 report, whose letters set its shapers (firmware::to_string(M493Syntax):
+  /// "mode" .. "axis_list_v2"); also summary.firmware.m493_form. Empty without FT_MOTION.
+  std::string m493_form;
 };
 
 /// The built-in simulated printer's machine profile (same content as datasets/machines/sim.toml).
