@@ -28,17 +28,17 @@ std::vector<std::string> lines_of(const std::string& text) {
   return out;
 }
 
-std::vector<std::string> sim_answer(Simulator& sim, const std::string& line) {
+std::vector<std::string> m493_export_sim_answer(Simulator& sim, const std::string& line) {
   std::string out;
   sim.handle_line(line, [&](std::string_view s) { out += s; });
   return lines_of(out);
 }
 
 /// What the runner asks: M493, and M493 V after a list-form report.
-FtMotionReport ask_m493(Simulator& sim) {
-  auto lines = sim_answer(sim, "M493");
+FtMotionReport m493_export_ask(Simulator& sim) {
+  auto lines = m493_export_sim_answer(sim, "M493");
   if (parse_m493_report(lines).form == M493Form::axis_list) {
-    const auto v = sim_answer(sim, "M493 V");
+    const auto v = m493_export_sim_answer(sim, "M493 V");
     lines.insert(lines.end(), v.begin(), v.end());
   }
   return parse_m493_report(lines);
@@ -119,12 +119,12 @@ TEST_CASE("the simulated Marlin of each M493 form takes the exported G-code and 
                                            "ft_shaper_x=1:30", "ft_shaper_y=1:31"}));
     for (const auto& line : lines_of(export_for(e.form, e.y_type).gcode)) {
       INFO(line);
-      for (const auto& answer : sim_answer(sim, line)) {
+      for (const auto& answer : m493_export_sim_answer(sim, line)) {
         CHECK(answer.find("Invalid") == std::string::npos);
         CHECK(answer.find("Wrong mode") == std::string::npos);
       }
     }
-    const auto r = ask_m493(sim);
+    const auto r = m493_export_ask(sim);
     CHECK(r.active);
     CHECK(to_string(m493_syntax(r)) == e.form);
     REQUIRE(r.axes.count("x"));
