@@ -25,6 +25,16 @@ namespace tunekit::protocols::experiment_gcode {
 
 namespace {
 
+/// Marlin's and RepRapFirmware's M201 caps the acceleration a move may ask for: raised to the
+/// sweep's peak for the test, the profile's value restored after.
+void raise_max_accel(double peak_accel, const machine::MachineProfile& profile, std::vector<std::string>& prologue,
+                     std::vector<std::string>& restore, nlohmann::json& changed) {
+  prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
+  restore.push_back(
+      fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0), num(profile.state.max_accel_xy_mm_s2, 0)));
+  changed.push_back("M201");
+}
+
 /// The sweep's test settings: everything the firmware would do differently from the labelled
 /// moves is turned off for the test and restored after (the epilogue, also sent after an abort).
 void sweep_test_settings(const ExperimentRequest& r, double peak_accel, std::vector<std::string>& prologue,
@@ -46,10 +56,7 @@ void sweep_test_settings(const ExperimentRequest& r, double peak_accel, std::vec
       restore.push_back(fmt::format("M566 X{} Y{}", num(profile.state.jerk_xy_mm_s * 60, 1),
                                     num(profile.state.jerk_xy_mm_s * 60, 1)));
       changed.push_back("M566");
-      prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
-      restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
-                                    num(profile.state.max_accel_xy_mm_s2, 0)));
-      changed.push_back("M201");
+      raise_max_accel(peak_accel, profile, prologue, restore, changed);
       break;
     default:
       // Marlin: moves shorter than DEFAULT_MINSEGMENTTIME (M205 B, us) are slowed
@@ -57,10 +64,7 @@ void sweep_test_settings(const ExperimentRequest& r, double peak_accel, std::vec
       prologue.push_back("M205 B0");
       restore.push_back(fmt::format("M205 B{}", num(profile.state.min_segment_time_s * 1e6, 0)));
       changed.push_back("M205 B");
-      prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
-      restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
-                                    num(profile.state.max_accel_xy_mm_s2, 0)));
-      changed.push_back("M201");
+      raise_max_accel(peak_accel, profile, prologue, restore, changed);
       break;
   }
   shaping_off(profile, r.dialect, prologue, restore, changed);

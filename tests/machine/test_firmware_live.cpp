@@ -42,6 +42,7 @@
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/sim/simulator.hpp"
 #include "tunekit/core/file_bytes.hpp"
+#include "sim_m493_answers.hpp"
 
 using tunekit::InputError;
 using tunekit::MachineError;
@@ -49,19 +50,6 @@ using namespace tunekit::protocols;
 using namespace tunekit::machine;
 using namespace tunekit::firmware;
 using namespace tunekit::sim;
-
-namespace {
-
-std::vector<std::string> sim_answer(Simulator& sim, const std::string& line) {
-  std::string out;
-  sim.handle_line(line, [&](std::string_view s) { out += s; });
-  std::vector<std::string> lines;
-  std::size_t b = 0;
-  for (std::size_t e; (e = out.find('\n', b)) != std::string::npos; b = e + 1) lines.push_back(out.substr(b, e - b));
-  return lines;
-}
-
-}  // namespace
 
 TEST_CASE("Marlin M493 reports: fixed-time motion present, active, its shapers and advance", "[machine]") {
   const auto on =
@@ -86,17 +74,17 @@ TEST_CASE("Marlin M493 reports: fixed-time motion present, active, its shapers a
 
 TEST_CASE("the simulator's Marlin answers M493 like an FT_MOTION build, or as an unknown command", "[machine]") {
   Simulator built(SimConfig::from_options({"firmware=marlin", "ft_motion=on"}));
-  auto r = parse_m493_report(sim_answer(built, "M493"));
+  auto r = parse_m493_report(tunekit::test::sim_answer_lines(built, "M493"));
   CHECK(r.present);
   CHECK(r.active);
   // M493 X1 A41 sets ZV at 41 Hz on X and reports (flag.report); S0 switches it off.
-  const auto set = sim_answer(built, "M493 X1 A41 I0.12");
+  const auto set = tunekit::test::sim_answer_lines(built, "M493 X1 A41 I0.12");
   r = parse_m493_report(set);
   CHECK(r.shapers.at("x") == "ZV");
   CHECK(std::find(set.begin(), set.end(), "X static shaper frequency: 41.00Hz") != set.end());
-  CHECK_FALSE(parse_m493_report(sim_answer(built, "M493 S0")).active);
+  CHECK_FALSE(parse_m493_report(tunekit::test::sim_answer_lines(built, "M493 S0")).active);
   Simulator classic(SimConfig::from_options({"firmware=marlin"}));
-  const auto unknown = sim_answer(classic, "M493");
+  const auto unknown = tunekit::test::sim_answer_lines(classic, "M493");
   CHECK(unknown.front() == "echo:Unknown command: \"M493\"");
   CHECK_FALSE(parse_m493_report(unknown).present);
   CHECK_THROWS_AS(SimConfig::from_options({"ft_motion=maybe"}), InputError);

@@ -30,6 +30,7 @@
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/sim/simulator.hpp"
+#include "sim_m493_answers.hpp"
 
 using tunekit::InputError;
 using tunekit::MachineError;
@@ -38,25 +39,6 @@ using namespace tunekit::protocols;
 using namespace tunekit::sim;
 
 namespace {
-
-std::vector<std::string> sim_answer(Simulator& sim, const std::string& line) {
-  std::string out;
-  sim.handle_line(line, [&](std::string_view s) { out += s; });
-  std::vector<std::string> lines;
-  std::size_t b = 0;
-  for (std::size_t e; (e = out.find('\n', b)) != std::string::npos; b = e + 1) lines.push_back(out.substr(b, e - b));
-  return lines;
-}
-
-/// What identify() asks: M493, and M493 V after a 2025-form report.
-FtMotionReport ask_m493(Simulator& sim) {
-  auto lines = sim_answer(sim, "M493");
-  if (parse_m493_report(lines).form == M493Form::axis_list) {
-    const auto v = sim_answer(sim, "M493 V");
-    lines.insert(lines.end(), v.begin(), v.end());
-  }
-  return parse_m493_report(lines);
-}
 
 /// Active, form and each axis's shaper code and frequency agree.
 void check_same(const FtMotionReport& a, const FtMotionReport& b) {
@@ -170,15 +152,15 @@ TEST_CASE("the simulator's Marlin answers M493 in each form and takes that form'
   for (const auto& f : kForms) {
     INFO(f.name);
     Simulator sim(SimConfig::from_options(sim_options(f)));
-    const auto original = ask_m493(sim);
+    const auto original = tunekit::test::ask_sim_m493(sim);
     CHECK(to_string(original.form) == (std::string(f.name) == "axis_list_v2" ? "axis_list" : f.name));
     REQUIRE(original.shaping());
-    for (const auto& l : m493_shaping_off(original)) sim_answer(sim, l);
-    const auto off = ask_m493(sim);
+    for (const auto& l : m493_shaping_off(original)) tunekit::test::sim_answer_lines(sim, l);
+    const auto off = tunekit::test::ask_sim_m493(sim);
     CHECK(off.active);
     CHECK_FALSE(off.shaping());
-    for (const auto& l : m493_shaping_restore(original)) sim_answer(sim, l);
-    check_same(ask_m493(sim), original);
+    for (const auto& l : m493_shaping_restore(original)) tunekit::test::sim_answer_lines(sim, l);
+    check_same(tunekit::test::ask_sim_m493(sim), original);
   }
 }
 
@@ -189,7 +171,7 @@ TEST_CASE("an axis sweep on a Marlin running FT_MOTION turns its shaper off and 
     INFO(f.name);
     const auto cfg = SimConfig::from_options(sim_options(f));
     Simulator fresh(cfg);
-    const auto original = ask_m493(fresh);
+    const auto original = tunekit::test::ask_sim_m493(fresh);
     const auto off = m493_shaping_off(original), back = m493_shaping_restore(original);
     REQUIRE_FALSE(off.empty());
     RunOptions o;
@@ -217,7 +199,7 @@ TEST_CASE("an axis sweep on a Marlin running FT_MOTION turns its shaper off and 
     const auto at_off = index_of(received, off.front());
     REQUIRE(at_off != std::string::npos);
     CHECK(index_of(received, back.front(), at_off) != std::string::npos);
-    check_same(ask_m493(server.sim()), original);
+    check_same(tunekit::test::ask_sim_m493(server.sim()), original);
   }
 }
 
@@ -227,7 +209,7 @@ TEST_CASE("a sweep on a Marlin running FT_MOTION stopped part-way still restores
     INFO(f.name);
     const auto cfg = SimConfig::from_options(sim_options(f));
     Simulator fresh(cfg);
-    const auto original = ask_m493(fresh);
+    const auto original = tunekit::test::ask_sim_m493(fresh);
     const auto off = m493_shaping_off(original), back = m493_shaping_restore(original);
     SimPtyServer server(cfg);
     std::atomic<bool> abort{false};
@@ -258,7 +240,7 @@ TEST_CASE("a sweep on a Marlin running FT_MOTION stopped part-way still restores
     REQUIRE(at_stop != std::string::npos);
     CHECK(index_of(received, off.front()) < at_stop);
     CHECK(index_of(received, back.front(), at_stop) != std::string::npos);
-    check_same(ask_m493(server.sim()), original);
+    check_same(tunekit::test::ask_sim_m493(server.sim()), original);
   }
 }
 

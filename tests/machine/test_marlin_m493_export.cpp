@@ -14,35 +14,13 @@
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/firmware/marlin_m493.hpp"
 #include "tunekit/sim/simulator.hpp"
+#include "sim_m493_answers.hpp"
 
 using namespace tunekit::firmware;
 using tunekit::sim::SimConfig;
 using tunekit::sim::Simulator;
 
 namespace {
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::size_t b = 0;
-  for (std::size_t e; (e = text.find('\n', b)) != std::string::npos; b = e + 1) out.push_back(text.substr(b, e - b));
-  return out;
-}
-
-std::vector<std::string> m493_export_sim_answer(Simulator& sim, const std::string& line) {
-  std::string out;
-  sim.handle_line(line, [&](std::string_view s) { out += s; });
-  return lines_of(out);
-}
-
-/// What the runner asks: M493, and M493 V after a list-form report.
-FtMotionReport m493_export_ask(Simulator& sim) {
-  auto lines = m493_export_sim_answer(sim, "M493");
-  if (parse_m493_report(lines).form == M493Form::axis_list) {
-    const auto v = m493_export_sim_answer(sim, "M493 V");
-    lines.insert(lines.end(), v.begin(), v.end());
-  }
-  return parse_m493_report(lines);
-}
 
 /// X MZV at 45.2 Hz, Y `y_type` at 38 Hz, K 0.045, exported for a live Marlin of `form`.
 ExportResult export_for(const std::string& form, const std::string& y_type = "zv") {
@@ -86,7 +64,7 @@ TEST_CASE("the exported M493 G-code takes the letters of each report form, and s
   for (const auto& e : expected_forms()) {
     INFO(e.form);
     const auto r = export_for(e.form, e.y_type);
-    CHECK(lines_of(r.gcode) == e.gcode);
+    CHECK(tunekit::test::text_lines(r.gcode) == e.gcode);
     CHECK(r.gcode.find("M593") == std::string::npos);
     CHECK(r.gcode.find("M900") == std::string::npos);
     const std::string form = e.form;
@@ -96,7 +74,7 @@ TEST_CASE("the exported M493 G-code takes the letters of each report form, and s
   }
   // The 2023 form's one mode for X and Y: X's shaper, and a warning naming Y's.
   const auto mixed = export_for("mode", "zv");
-  CHECK(lines_of(mixed.gcode).front() == "M493 S15 A45.2 B38");
+  CHECK(tunekit::test::text_lines(mixed.gcode).front() == "M493 S15 A45.2 B38");
   CHECK(warned(mixed, "one mode for X and Y"));
   // A shaper that came after the 2023 form (ZVDD) is left out there, with a warning.
   CompensatorSettings s;
@@ -117,14 +95,14 @@ TEST_CASE("the simulated Marlin of each M493 form takes the exported G-code and 
     // Start from other shapers and frequencies than the export's.
     Simulator sim(SimConfig::from_options({"firmware=marlin", "ft_motion=on", std::string("m493_form=") + e.form,
                                            "ft_shaper_x=1:30", "ft_shaper_y=1:31"}));
-    for (const auto& line : lines_of(export_for(e.form, e.y_type).gcode)) {
+    for (const auto& line : tunekit::test::text_lines(export_for(e.form, e.y_type).gcode)) {
       INFO(line);
-      for (const auto& answer : m493_export_sim_answer(sim, line)) {
+      for (const auto& answer : tunekit::test::sim_answer_lines(sim, line)) {
         CHECK(answer.find("Invalid") == std::string::npos);
         CHECK(answer.find("Wrong mode") == std::string::npos);
       }
     }
-    const auto r = m493_export_ask(sim);
+    const auto r = tunekit::test::ask_sim_m493(sim);
     CHECK(r.active);
     CHECK(to_string(m493_syntax(r)) == e.form);
     REQUIRE(r.axes.count("x"));
@@ -179,7 +157,7 @@ TEST_CASE("calibrate on a simulated Marlin running FT_MOTION exports the letters
     INFO(gcode);
     const auto analysis = nlohmann::json::parse(tunekit::read_file_bytes(dir + "/analysis/export.json"));
     CHECK(analysis.at("results").at("settings").at("marlin_m493_form") == form);
-    const auto lines = lines_of(gcode);
+    const auto lines = tunekit::test::text_lines(gcode);
     REQUIRE(lines.size() >= 2);
     if (form == "mode") {
       CHECK(lines.front().rfind("M493 S1", 0) == 0);  // S10 ZV .. S15 MZV
