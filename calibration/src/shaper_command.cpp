@@ -124,9 +124,9 @@ ShaperOutcome compute_shaper(const ShaperOptions& a) {
   if (!(a.selection.max_freq_hz > 0)) throw InputError("--max-freq must be positive");
   if (!(max_shaper_freq > 0)) throw InputError("--max-shaper-freq must be positive");
   if (!(a.selection.scv_mm_s >= 0)) throw InputError("--scv must not be negative");
-  // calibrate_shaper.py refuses -v below 0.1 (per cent).
-  if (a.selection.max_vibrations != 0 && !(a.selection.max_vibrations >= 0.001 && a.selection.max_vibrations <= 1))
-    throw InputError("--max-vibrations must be from 0.1 to 100 (per cent)");
+  // calibrate_shaper.py refuses -v below 0.1 (per cent); NaN, infinities and an empty value too.
+  const auto& mv = a.selection.max_vibrations;
+  if (mv && !(*mv >= 0.001 && *mv <= 1)) throw InputError("--max-vibrations must be from 0.1 to 100 (per cent)");
   if (a.damping_ratio >= 1) throw InputError("--damping-ratio must be below 1");
 
   AccelAnalysis analysis = analyze_accel_files(a.accel);

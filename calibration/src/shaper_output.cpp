@@ -83,7 +83,8 @@ Envelope to_envelope(const ShaperOutcome& o) {
   opts["shapers"] = names;
   opts["scv_mm_s"] = a.selection.scv_mm_s;
   opts["max_smoothing_mm"] = a.selection.max_smoothing_mm;
-  opts["max_vibrations_pct"] = a.selection.max_vibrations * 100;
+  opts["max_vibrations_pct"] =
+      a.selection.max_vibrations ? nlohmann::json(*a.selection.max_vibrations * 100) : nlohmann::json(nullptr);
   opts["damping_ratio"] = a.damping_ratio;
   opts["max_shaper_freq_hz"] = o.max_shaper_freq_hz;
   opts["max_freq_hz"] = a.selection.max_freq_hz;

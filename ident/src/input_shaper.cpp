@@ -520,10 +520,11 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
     // When the smoothing limit cut the scan short, Klipper keeps the fewest-vibrations one.
     // Above a vibrations limit the lowest such frequency is taken whatever its score.
     ShaperCandidate chosen = results[best_res];
-    const bool limit = o.max_vibrations > 0;
+    const bool limit = o.max_vibrations.has_value();
+    const double max_vibrations = o.max_vibrations.value_or(0.0);
     if (!smoothing_limited) {
       const double vibr_limit = results[best_res].vibrations * 1.1 + 0.0005;
-      const bool over = limit && results[best_res].vibrations > o.max_vibrations;
+      const bool over = limit && results[best_res].vibrations > max_vibrations;
       for (auto it = results.rbegin(); it != results.rend(); ++it)
         if (it->vibrations < vibr_limit && (it->score < chosen.score || over)) chosen = *it;
     }
@@ -531,7 +532,7 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
     // less smoothing, or fewer vibrations while the best is above the limit.
     if (!have_best || chosen.score * 1.2 < best.score ||
         (chosen.score * 1.05 < best.score && chosen.smoothing_mm * 1.1 < best.smoothing_mm) ||
-        (limit && best.vibrations > o.max_vibrations && chosen.vibrations < best.vibrations)) {
+        (limit && best.vibrations > max_vibrations && chosen.vibrations < best.vibrations)) {
       best = chosen;
       have_best = true;
     }

@@ -319,3 +319,16 @@ TEST_CASE("bad Klipper spectrum files exit 2 with the reason", "[resonance][shap
     CHECK(r.err.find("{axis}") != std::string::npos);
   }
 }
+
+TEST_CASE("shaper --max-vibrations: 0, -0, empty, nan, inf and out-of-range values are one clear error, exit 2") {
+  // Klipper's calibrate_shaper.py takes -v 0 as a limit of 0 %; tunekit refuses what Klipper's
+  // own check (below 0.1 %) refuses, and never reads a value it cannot use as "no limit".
+  const std::string f = tunekit::test::dataset("klipper_spectra/resonances_x_20220317_143228.csv");
+  for (const std::string v : {"0", "-0", "", "nan", "inf", "-5", "1e308", "0.05"}) {
+    INFO("--max-vibrations '" << v << "'");
+    const auto r = tunekit::test::run_cli({"shaper", f, "--klipper-compatible", "--max-vibrations", v});
+    CHECK(r.code == 2);
+    CHECK(r.err.find("--max-vibrations") != std::string::npos);
+    CHECK(r.out.empty());
+  }
+}

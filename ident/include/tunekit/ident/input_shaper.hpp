@@ -19,6 +19,7 @@
 //   s180 = sum_i A_i a/2 (T_i - t_s)^2,   smoothing = max(s90, s180)   [mm].
 // Both are linear in a, so the acceleration giving a target smoothing is solved exactly.
 
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -103,9 +104,9 @@ struct ShaperSelectionOptions {
   std::vector<double> test_damping_ratios = {0.075, 0.1, 0.15};  ///< vibrations are pessimized over these
   double scv_mm_s = 5.0;                                         ///< square-corner velocity
   double max_smoothing_mm = 0;                                   ///< 0: no limit
-  /// Remaining vibrations the recommendation should stay under, as a fraction (0.01 = 1 %; 0: no
-  /// limit): Klipper's max_vibrations (calibrate_shaper.py -v, in per cent; Klipper 2026).
-  double max_vibrations = 0;
+  /// Remaining vibrations the recommendation should stay under, as a fraction (0.01 = 1 %; none:
+  /// no limit): Klipper's max_vibrations (calibrate_shaper.py -v, in per cent; Klipper 2026).
+  std::optional<double> max_vibrations;
   /// PSD bins above max(max_freq_hz, highest shaper frequency tried) are ignored (Klipper's rule).
   double max_freq_hz = 200.0;
   double max_shaper_freq_hz = 200.0;          ///< shaper frequencies tried are below this
