@@ -1,5 +1,6 @@
 #include "tunekit/firmware/dialect.hpp"
 #include "text_util.hpp"
+#include "tunekit/core/error.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -124,6 +125,10 @@ std::vector<std::string> Dialect::safe_state(bool heaters_off) const {
 }
 
 std::string klipper_param_value(const std::string& value) {
+  // A line break or other control character would end or corrupt the G-code line it is sent in:
+  // such a value (a machine's answer, a profile's text) is refused before anything is sent.
+  if (std::any_of(value.begin(), value.end(), [](char c) { return std::iscntrl(static_cast<unsigned char>(c)); }))
+    throw InputError("a Klipper parameter value holds a line break or another control character; it is not sent");
   const bool plain = !value.empty() && std::none_of(value.begin(), value.end(), [](char c) {
     return std::isspace(static_cast<unsigned char>(c)) || c == '"' || c == '\'' || c == '\\' || c == '#' || c == ';';
   });

@@ -12,6 +12,7 @@
 
 #include "fake_klipper.hpp"
 #include "test_support.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/machine/klipper_settings.hpp"
 #include "tunekit/protocols/runner.hpp"
@@ -29,6 +30,9 @@ TEST_CASE("a Klipper extended parameter's value is quoted only where Klipper's p
   CHECK(klipper_param_value("a#b") == "\"a#b\"");
   CHECK(klipper_param_value("say \"hi\"\\") == "\"say \\\"hi\\\"\\\\\"");
   CHECK(klipper_param_value("") == "\"\"");
+  // A line break would start another command on the machine: refused, never quoted and sent.
+  CHECK_THROWS_AS(klipper_param_value("mzv\nG28"), tunekit::InputError);
+  CHECK_THROWS_AS(klipper_param_value(std::string("zv\0x", 4)), tunekit::InputError);
 }
 
 TEST_CASE("Klipper's settings keep a parameterized shaper type verbatim", "[machine][klipper]") {

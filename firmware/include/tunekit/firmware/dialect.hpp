@@ -45,7 +45,8 @@ struct FirmwareInfo {
 /// parameters like a POSIX shell (klippy/gcode.py _get_extended_params: shlex, whitespace_split,
 /// '#' and ';' start a comment), then each at its first '='; so a value with whitespace, a quote,
 /// a backslash, '#' or ';' is double-quoted ('"' and '\' escaped) and any other, such as
-/// "mzv(n=4,t=0.9)", is written as it is.
+/// "mzv(n=4,t=0.9)", is written as it is. A value with a control character (a line break would
+/// end the line and start another command) is refused: InputError.
 std::string klipper_param_value(const std::string& value);
 
 /// Parses the lines a machine printed in answer to M115 (any order, other lines ignored).
