@@ -134,4 +134,21 @@ double TrapqTimeline::velocity_x_at(double t) const {
   return (m.start_velocity + m.acceleration * std::min(dt, m.duration_s)) * m.direction[0];
 }
 
+double TrapqTimeline::mean_velocity_x(double t0, double t1) const {
+  if (!(t1 > t0)) return velocity_x_at(t0);
+  // The first move that ends after t0; moves are sorted by start and do not overlap.
+  auto it = std::upper_bound(moves_.begin(), moves_.end(), t0,
+                             [](double v, const TrapqMove& m) { return v < m.print_time_s; });
+  if (it != moves_.begin()) --it;
+  double distance = 0;
+  for (; it != moves_.end() && it->print_time_s < t1; ++it) {
+    const double a = std::max(t0, it->print_time_s) - it->print_time_s;
+    const double b = std::min(t1, it->print_time_s + it->duration_s) - it->print_time_s;
+    if (!(b > a)) continue;
+    // Integral of v0 + acc s over s in [a, b].
+    distance += (it->start_velocity * (b - a) + 0.5 * it->acceleration * (b * b - a * a)) * it->direction[0];
+  }
+  return distance / (t1 - t0);
+}
+
 }  // namespace tunekit::machine

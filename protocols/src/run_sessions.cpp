@@ -285,8 +285,17 @@ class KlipperSession : public Session {
       extruder_.add(p);
     }
   }
+  // Each force sample's feed is the mean commanded feed over the sample's share of the time axis
+  // (from halfway to the previous sample to halfway to the next), as the filament moved it: a
+  // model driven by samples held over their interval then feeds the right length of filament,
+  // where the velocity at the sample's instant catches a junction's brief slow-down whole.
   void write_load_cell() {
-    for (const auto& s : load_) rec_.load_cell(s.time_s, extruder_.velocity_x_at(s.time_s), s.force_N);
+    for (std::size_t i = 0; i < load_.size(); ++i) {
+      const double t = load_[i].time_s;
+      const double prev = i > 0 ? load_[i - 1].time_s : (i + 1 < load_.size() ? 2 * t - load_[i + 1].time_s : t);
+      const double next = i + 1 < load_.size() ? load_[i + 1].time_s : 2 * t - prev;
+      rec_.load_cell(t, extruder_.mean_velocity_x(0.5 * (prev + t), 0.5 * (t + next)), load_[i].force_N);
+    }
     load_.clear();
   }
   void flush_script() {

@@ -24,7 +24,6 @@ Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed
     ftm_shaper_[a] = cfg_.ft_shaper[a];
     ftm_freq_[a] = cfg_.ft_freq_hz[a];
   }
-  load_every_ = std::max(1, static_cast<int>(std::lround(1.0 / (cfg_.load_cell_rate_hz * dt_))));
   for (const auto& [axis, modes] : cfg_.modes) mode_state_[axis].assign(modes.size(), {0.0, 0.0});
   delay_.assign(std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(cfg_.theta_s / dt_))), 0.0);
   mcr_ = cfg_.minimum_cruise_ratio;
@@ -170,34 +169,58 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
       files_[capture_name_] = capture_text_;
     }
   }
-  fed_in_window_mm_ += u * h;
-  if (stream_load_ && step_ % load_every_ == load_every_ / 2) {
-    emit_pending_load_sample();
-    window_start_t_ = t_;
-  }
-  if (stream_load_ && step_ % load_every_ == 0) {
-    const double f = cfg_.force_offset_N + force + cfg_.force_noise_N * normal_(rng_);
-    if (load_cell_sink) {
-      load_cell_sink(t_, f);
-      ++load_sent_;
-    } else {
-      load_pending_ = true;
-      pending_t_ = t_;
-      pending_force_ = f;
-    }
-  }
+  const double fed_before = fed_total_mm_;
+  fed_total_mm_ += u * h;
+  if (stream_load_) sample_load_cell(h, fed_before, cfg_.force_offset_N + force);
+  load_force_before_ = cfg_.force_offset_N + force;
   if (out_.size() > sim::kOutputFlushBytes) out_flush(emit);
 }
 
-void Simulator::emit_pending_load_sample() {
+void Simulator::sample_load_cell(double h, double fed_before, double force_now) {
+  const double t0 = t_ - h, period = load_cell_period();
+  auto at = [&](double t, double before, double now) { return before + (now - before) * (t - t0) / h; };
+  while (next_load_edge_t_ <= t_ || next_load_t_ <= t_) {
+    if (next_load_edge_t_ <= next_load_t_) {  // a window ends: the sample waiting for it goes out
+      emit_pending_load_sample(next_load_edge_t_, at(next_load_edge_t_, fed_before, fed_total_mm_));
+      next_load_edge_t_ += period;
+      continue;
+    }
+    const double f = at(next_load_t_, load_force_before_, force_now) + cfg_.force_noise_N * normal_(rng_);
+    if (load_cell_sink) {
+      load_cell_sink(next_load_t_, f);
+      ++load_sent_;
+    } else {
+      load_pending_ = true;
+      pending_t_ = next_load_t_;
+      pending_force_ = f;
+    }
+    next_load_t_ += period;
+  }
+}
+
+double Simulator::load_cell_period() const { return 1.0 / (cfg_.load_cell_rate_hz * (1 + cfg_.load_cell_clock_error)); }
+
+void Simulator::start_load_cell() {
+  const double period = load_cell_period();
+  // The converter's clock ticks at whole periods from power-up (t = 0), whenever the stream starts.
+  next_load_t_ = (std::floor(t_ / period) + 1) * period;
+  // The first sample's window opens half a period before it (at the stream's start if later).
+  next_load_edge_t_ = next_load_t_ - 0.5 * period;
+  if (next_load_edge_t_ < t_) next_load_edge_t_ += period;
+  window_start_t_ = t_;
+  fed_at_window_start_ = fed_total_mm_;
+}
+
+void Simulator::emit_pending_load_sample(double t, double fed_mm) {
   if (load_pending_) {
-    const double span = t_ - window_start_t_;
-    const double u_mean = span > 0 ? fed_in_window_mm_ / span : 0.0;
+    const double span = t - window_start_t_;
+    const double u_mean = span > 0 ? (fed_mm - fed_at_window_start_) / span : 0.0;
     fmt::format_to(std::back_inserter(out_), "echo:TKL {:.6f} {:.5f} {:.5f}\n", pending_t_, u_mean, pending_force_);
     load_pending_ = false;
     ++load_sent_;
   }
-  fed_in_window_mm_ = 0;
+  window_start_t_ = t;
+  fed_at_window_start_ = fed_mm;
 }
 
 double Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit) {

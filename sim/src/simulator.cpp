@@ -96,6 +96,11 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
       if (!(d > 0)) throw InputError(fmt::format("simulator option {} must be positive", k));
       return d;
     };
+    auto clock_error = [&](double d) {
+      if (!(std::abs(d) < 0.1))
+        throw InputError(fmt::format("simulator option {} must be a fraction between -0.1 and 0.1", k));
+      return d;
+    };
     if (k == "liquefier") {
       if (v != "fopdt" && v != "physics") throw InputError("simulator option liquefier must be fopdt or physics");
       c.liquefier = v == "fopdt" ? LiquefierModel::fopdt : LiquefierModel::physics;
@@ -111,6 +116,7 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     else if (k == "force_offset_N") c.force_offset_N = parse_double(k, v);
     else if (k == "force_noise_N") c.force_noise_N = std::max(0.0, parse_double(k, v));
     else if (k == "load_cell_rate_hz") c.load_cell_rate_hz = pos(parse_double(k, v));
+    else if (k == "load_cell_clock_error") c.load_cell_clock_error = clock_error(parse_double(k, v));
     else if (k == "accel_rate_hz") c.accel_rate_hz = pos(parse_double(k, v));
     else if (k == "accel_noise_mm_s2") c.accel_noise_mm_s2 = std::max(0.0, parse_double(k, v));
     else if (k == "cross_coupling") c.cross_coupling = parse_double(k, v);
@@ -211,7 +217,7 @@ nlohmann::json SimConfig::truth() const {
   nlohmann::json liq{{"model", liquefier_model_name(liquefier)}, {"input", "feed (mm/s), commanded filament feed"},
                      {"output", "force (N), load cell"},         {"theta_s", theta_s},
                      {"force_offset_N", force_offset_N},         {"force_noise_N", force_noise_N},
-                     {"load_cell_rate_hz", load_cell_rate_hz}};
+                     {"load_cell_rate_hz", load_cell_rate_hz},   {"load_cell_clock_error", load_cell_clock_error}};
   if (liquefier == LiquefierModel::fopdt) {
     liq["K"] = K_N_per_mm_s;
     liq["K_unit"] = "N/(mm/s)";
@@ -285,11 +291,8 @@ std::vector<std::string> Simulator::received() const {
 void Simulator::set_streaming(const std::string& sensor, bool on) {
   if (sensor == "accelerometer") stream_accel_ = on;
   else if (sensor == "load_cell") {
-    if (on && !stream_load_) {
-      fed_in_window_mm_ = 0;
-      window_start_t_ = t_;
-    }
-    if (!on && stream_load_) emit_pending_load_sample();  // its window ends here
+    if (on && !stream_load_) start_load_cell();
+    if (!on && stream_load_) emit_pending_load_sample(t_, fed_total_mm_);  // its window ends here
     stream_load_ = on;
   }
 }

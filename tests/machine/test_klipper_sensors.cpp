@@ -93,6 +93,24 @@ TEST_CASE("Klipper sensor rows: grams to newtons, an uncalibrated cell refused, 
   CHECK(ex.velocity_x_at(11.0) == Approx(3.0));
 }
 
+TEST_CASE("the trapq's mean feed over a sample's window counts a stop between moves for its share", "[machine]") {
+  // Two extrude-only moves that each stop (Klipper does not join them): 3 mm/s cruise, 1 ms ramps
+  // at 3000 mm/s^2, a stop at 20 ms. At the stop the speed is 0; over the 5 ms window centred on
+  // it the filament moves 2 x (1.5 mm/s x 1 ms + 3 mm/s x 1.5 ms) = 12 um: 2.4 mm/s.
+  tp::TrapqTimeline ex;
+  ex.add(nlohmann::json::parse(R"({"data": [
+      [0.000, 0.001, 0.0, 3000.0, [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
+      [0.001, 0.018, 3.0, 0.0, [0.0015, 0.0, 0.0], [1.0, 0.0, 0.0]],
+      [0.019, 0.001, 3.0, -3000.0, [0.0555, 0.0, 0.0], [1.0, 0.0, 0.0]],
+      [0.020, 0.001, 0.0, 3000.0, [0.057, 0.0, 0.0], [1.0, 0.0, 0.0]],
+      [0.021, 0.018, 3.0, 0.0, [0.0585, 0.0, 0.0], [1.0, 0.0, 0.0]]]})"));
+  CHECK(ex.velocity_x_at(0.020) == Approx(0.0).margin(1e-9));
+  CHECK(ex.mean_velocity_x(0.0175, 0.0225) == Approx(2.4));
+  CHECK(ex.mean_velocity_x(0.005, 0.010) == Approx(3.0));  // within a cruise
+  CHECK(ex.mean_velocity_x(0.030, 0.030) == Approx(3.0));  // an empty window: the speed there
+  CHECK(ex.mean_velocity_x(0.050, 0.060) == Approx(0.0));  // after the last move
+}
+
 TEST_CASE("an axis sweep recorded under each Klipper accelerometer chip gives the mode within 1 %", "[machine]") {
   struct Chip {
     const char* chip;

@@ -84,6 +84,10 @@ class TrapqTimeline {
   /// Velocity along direction[0] (for an extruder: the filament feed, mm/s) at print time t;
   /// 0 outside every move.
   double velocity_x_at(double t_s) const;
+  /// Mean of that velocity over [t0_s, t1_s] (mm/s): the distance fed over the window divided by
+  /// its length, what a sample standing for the window carries (a brief slow-down at a junction
+  /// counts for its share of the window, not for the whole sample). t1_s <= t0_s: velocity at t0_s.
+  double mean_velocity_x(double t0_s, double t1_s) const;
   std::size_t size() const { return moves_.size(); }
   bool empty() const { return moves_.empty(); }
 

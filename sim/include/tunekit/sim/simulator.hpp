@@ -108,7 +108,11 @@ struct SimConfig {
   double filament_diameter_mm = 1.75;
   double force_offset_N = 0.5;
   double force_noise_N = 0.02;
-  double load_cell_rate_hz = 200;
+  double load_cell_rate_hz = 200;  ///< the converter's nominal rate (Hz)
+  /// The converter's clock runs on its own oscillator, this fraction fast (negative: slow): its
+  /// samples slide along the planner's moves as a real converter's do. 0 locks a nominal rate
+  /// that divides a staircase's move time onto the moves' junctions.
+  double load_cell_clock_error = 0.0025;
   // Axes.
   std::map<std::string, std::vector<SimMode>> modes{{"x", {{48, 0.08, 1}}}, {"y", {{42, 0.09, 1}}}};
   double accel_rate_hz = 3200;
@@ -283,7 +287,7 @@ class Simulator {
   double t_ = 0;
   double dt_;
   long step_ = 0;
-  int accel_every_, load_every_;
+  int accel_every_;
   std::map<std::string, std::vector<std::array<double, 2>>> mode_state_;
   // Unshaped commanded accelerations (start, middle, end of each step) of x and y, for shaping.
   std::array<std::vector<std::array<double, 3>>, 2> shape_hist_;
@@ -291,15 +295,23 @@ class Simulator {
   std::vector<double> delay_;
   std::size_t delay_pos_ = 0;
   double liq_ = 0;  ///< FOPDT output (N) or pressure (MPa)
+  /// The load cell's converter runs on its own clock: samples at whole periods of
+  /// 1 / load_cell_rate_hz from power-up, between the simulation's steps (the force and the fed
+  /// length linear over a step), not locked to the planner's grid, which a rate that divides a
+  /// staircase's move time would alias onto its stops.
   /// The feed a load-cell sample reports is the mean over the sample interval centred on it (the
   /// planned extruder position's change, as Klipper's motion queue gives it), not the speed at
   /// the sample instant, which a staircase of moves that stop between them would alias. A sample
-  /// waits half an interval for the second half of its window: filament fed (mm) since the
-  /// window began, when it began (s), and the sample waiting for it.
-  double fed_in_window_mm_ = 0, window_start_t_ = 0;
+  /// waits half an interval for the second half of its window: the filament fed (mm) since
+  /// power-up, and when and at what length the window began.
+  double fed_total_mm_ = 0, fed_at_window_start_ = 0, window_start_t_ = 0;
+  double next_load_t_ = 0, next_load_edge_t_ = 0, load_force_before_ = 0;
   bool load_pending_ = false;
   double pending_t_ = 0, pending_force_ = 0;
-  void emit_pending_load_sample();
+  void start_load_cell();
+  double load_cell_period() const;  ///< s, on the converter's own clock
+  void sample_load_cell(double h, double fed_before, double force_now);
+  void emit_pending_load_sample(double t, double fed_mm);
   std::mt19937 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
   std::string out_;
