@@ -184,7 +184,9 @@ void freq_fits(FreqOutcome& o, const FreqOptions& a, const std::vector<double>& 
   for (const auto& w : o.tf_fit->warnings) o.warnings.push_back("tf fit: " + w);
   if (o.mode != FreqMode::oe) return;
   const double dt = 1.0 / bb.sample_rate_hz;
-  freq_located(a.file, [&] { o.oe_fit = fitting::fit_tf_output_error(u, y, dt, *st, *o.tf_fit, gain_unit); });
+  freq_located(a.file, [&] {
+    o.oe_fit = fitting::fit_tf_output_error(u, y, dt, *st, *o.tf_fit, gain_unit, {}, a.inter_sample);
+  });
   for (const auto& w : o.oe_fit->warnings) o.warnings.push_back("output-error fit: " + w);
 }
 
@@ -353,6 +355,7 @@ Envelope to_envelope(const FreqOutcome& o) {
                    {"freq_hz", a.freq_hz},
                    {"fit_tf", a.fit_tf},
                    {"tf_delay", a.tf_delay},
+                   {"intersample", fitting::to_string(a.inter_sample)},
                    {"segment", a.welch.segment_length},
                    {"window", ident::to_string(a.welch.window)},
                    {"fmin_hz", a.fmin_hz},

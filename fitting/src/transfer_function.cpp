@@ -399,8 +399,27 @@ void widen_for_correlated_residuals(FitResult& f, const LsqProblem& prob, const 
 
 }  // namespace
 
+InterSample parse_inter_sample(const std::string& name) {
+  if (name == "auto") return InterSample::automatic;
+  if (name == "hold") return InterSample::hold;
+  if (name == "centred" || name == "centered") return InterSample::hold_centred;
+  if (name == "bandlimited") return InterSample::band_limited;
+  throw InputError("unknown inter-sample behaviour '" + name + "' (expected auto, hold, centred or bandlimited)");
+}
+
+std::string to_string(InterSample s) {
+  switch (s) {
+    case InterSample::automatic: return "auto";
+    case InterSample::hold: return "hold";
+    case InterSample::hold_centred: return "centred";
+    case InterSample::band_limited: return "bandlimited";
+  }
+  return "auto";
+}
+
 FitResult fit_tf_output_error(std::span<const double> u, std::span<const double> y, double dt, const TfStructure& s,
-                              const FitResult& start, const std::string& gain_unit, const LsqOptions& options) {
+                              const FitResult& start, const std::string& gain_unit, const LsqOptions& options,
+                              InterSample inter_sample) {
   if (u.size() != y.size()) throw InputError("output-error fit: input and output lengths differ");
   const auto names = tf_param_names(s);
   if (y.size() < 4 * (names.size() + 1))
@@ -417,17 +436,18 @@ FitResult fit_tf_output_error(std::span<const double> u, std::span<const double>
   prob.num_residuals = static_cast<int>(yv.size());
   prob.observed = yv;
   const std::size_t k = names.size();
-  // An input that holds its value over most samples (a staircase, a digital command) is held
-  // between samples; a sampled continuous input (a chirp) is linear between them.
-  std::size_t repeats = 0;
-  for (std::size_t i = 1; i < du.size(); ++i)
-    if (du[i] == du[i - 1]) ++repeats;
-  const bool held = 2 * repeats > du.size();
-  // A sampled continuous input is band-limited; linear interpolation between its samples
-  // attenuates a component at f by sinc^2(f dt) (0.8 % at a twentieth of the sampling rate),
-  // which the gain and the poles would absorb. The three-tap filter [-1/12, 7/6, -1/12]
-  // (response 1 + (1 - cos 2 pi f dt) / 6) undoes that to fourth order in f dt.
-  if (!held && du.size() >= 3) {
+  if (inter_sample == InterSample::automatic) {
+    // An input that repeats its value over most samples is a staircase, not band-limited.
+    std::size_t repeats = 0;
+    for (std::size_t i = 1; i < du.size(); ++i)
+      if (du[i] == du[i - 1]) ++repeats;
+    inter_sample = 2 * repeats > du.size() ? InterSample::hold_centred : InterSample::band_limited;
+  }
+  // Linear interpolation between the samples of a band-limited input attenuates a component at
+  // f by sinc^2(f dt) (0.8 % at a twentieth of the sampling rate), which the gain and the poles
+  // would absorb. The three-tap filter [-1/12, 7/6, -1/12] (response 1 + (1 - cos 2 pi f dt) / 6)
+  // undoes that to fourth order in f dt.
+  if (inter_sample == InterSample::band_limited && du.size() >= 3) {
     std::vector<double> pre(du.size());
     for (std::size_t i = 0; i < du.size(); ++i) {
       const double l = du[i == 0 ? 0 : i - 1], r = du[i + 1 < du.size() ? i + 1 : i];
@@ -435,6 +455,11 @@ FitResult fit_tf_output_error(std::span<const double> u, std::span<const double>
     }
     du = std::move(pre);
   }
+  // A centred sample held from its time stamp would come half a sample late and the dead time
+  // would read short by as much; linear between the samples, each change is centred where it
+  // belongs, and the output is smooth in the dead time (a held input's output has a kink
+  // wherever the delay crosses a sample, where a minimum often sits).
+  const bool held = inter_sample == InterSample::hold;
   prob.residuals = [s, du, yv, dt, k, held](const double* p, double* r) {
     const auto tf = tf_from_params(s, p);
     std::vector<double> sim;

@@ -274,8 +274,8 @@ TEST_CASE("output-error fit of a transfer function with dead time to a random-st
     p.value = truth[i] * (i == 4 ? 0.6 : 1.15);
     start.params.push_back(p);
   }
-  std::vector<double> du(u.size());
-  const auto fit = fitting::fit_tf_output_error(u, y, dt, st, start);
+  // The record was made by holding each sample from its time stamp: said so.
+  const auto fit = fitting::fit_tf_output_error(u, y, dt, st, start, "1", {}, fitting::InterSample::hold);
   const auto names = fitting::tf_param_names(st);
   for (std::size_t i = 0; i < names.size(); ++i) {
     const auto& p = fit.param(names[i]);
@@ -283,6 +283,53 @@ TEST_CASE("output-error fit of a transfer function with dead time to a random-st
     CHECK(p.value == Approx(truth[i]).epsilon(0.05).margin(0.005));
   }
   CHECK(fit.diagnostics.rms == Approx(0.01).epsilon(0.2));
+}
+
+TEST_CASE("output-error fit of a staircase whose changes fall between samples: the dead time read in full") {
+  // A logger samples a feed whose steps come at any moment of a sample interval, and records each
+  // sample as the feed's mean over the interval centred on its time stamp (what tunekit's
+  // recorder writes). Read as held from each time stamp, every change would come half a sample
+  // late and the dead time read short by half a sample; read as centred (the default for a
+  // staircase), it is found to within a tenth of a sample.
+  const double dt = 0.01;
+  const int fine = 40;  // plant simulated on a grid 40 times finer than the samples
+  fitting::TfStructure st{1, 0, true};
+  const std::vector<double> truth{2.0, 0.05, 0.0537};  // K, tau_s, theta_s (not a whole number of samples)
+  const auto tf = fitting::tf_from_params(st, truth.data());
+  std::mt19937 rng(17);
+  std::uniform_int_distribution<int> coin(0, 1), phase(0, fine - 1);
+  std::normal_distribution<double> noise(0, 0.002);
+  std::vector<double> u_fine;
+  double level = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const int switch_at = i >= 50 && i % 15 == 0 ? phase(rng) : fine;
+    const double next = coin(rng) ? 1.0 : -1.0;
+    for (int j = 0; j < fine; ++j) {
+      if (j == switch_at) level = next;
+      u_fine.push_back(level);
+    }
+  }
+  const auto y_fine = tf.simulate_zoh(u_fine, dt / fine);
+  std::vector<double> u, y;
+  for (std::size_t k = 1; (k + 1) * fine < u_fine.size(); ++k) {
+    double sum = 0;  // mean over [t_k - dt/2, t_k + dt/2)
+    for (std::size_t j = k * fine - fine / 2; j < k * fine + fine / 2; ++j) sum += u_fine[j];
+    u.push_back(sum / fine);
+    y.push_back(y_fine[k * fine] + noise(rng));
+  }
+  fitting::FitResult start;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    fitting::Param p;
+    p.name = fitting::tf_param_names(st)[i];
+    p.value = truth[i] * 1.2;
+    start.params.push_back(p);
+  }
+  const auto centred = fitting::fit_tf_output_error(u, y, dt, st, start);
+  const auto held = fitting::fit_tf_output_error(u, y, dt, st, start, "1", {}, fitting::InterSample::hold);
+  INFO("centred theta " << centred.value("theta_s") << ", held " << held.value("theta_s") << ", truth " << truth[2]);
+  CHECK(std::abs(centred.value("theta_s") - truth[2]) < 0.1 * dt);
+  CHECK(std::abs(centred.value("tau_s") - truth[1]) < 0.02 * truth[1]);
+  CHECK(held.value("theta_s") - truth[2] == Approx(-0.5 * dt).margin(0.15 * dt));
 }
 
 TEST_CASE("output-error fit with coloured output noise: the intervals widened for it cover tau") {
@@ -318,7 +365,7 @@ TEST_CASE("output-error fit with coloured output noise: the intervals widened fo
       p.value = truth[i] * 1.1;
       start.params.push_back(p);
     }
-    const auto fit = fitting::fit_tf_output_error(u, y, dt, st, start);
+    const auto fit = fitting::fit_tf_output_error(u, y, dt, st, start, "1", {}, fitting::InterSample::hold);
     const auto& tau = fit.param("tau_s");
     if (tau.ci95_lo <= truth[1] && truth[1] <= tau.ci95_hi) ++covered;
     if (tau.ci95_method.find("widened for correlated residuals") != std::string::npos) ++widened;

@@ -53,6 +53,13 @@ void register_freq(CLI::App& app, CliContext& ctx) {
                   "Fit a transfer function with P,Z poles and zeros (P 1-3, Z 0-2); default for oe: the liquefier "
                   "model, 1,0 with dead time");
   sub->add_flag("--tf-delay", o.tf_delay, "Include a dead time theta_s (s) in the fitted transfer function");
+  add_parsed_option(
+      sub, "--intersample", o.inter_sample, fitting::parse_inter_sample,
+      [](fitting::InterSample s) { return fitting::to_string(s); },
+      "Output-error fit: the input between its samples. hold: held from each time stamp (a command "
+      "applied when it was logged); centred: each sample stands for the interval around its time stamp "
+      "(tunekit's feed column, a logger sampling a command); bandlimited: a smooth signal; auto "
+      "(default): centred for a staircase, else bandlimited");
   sub->add_option("--segment", o.welch.segment_length,
                   "Welch segment length (samples; default: a power of two resolving the excited band in 16 bins, "
                   "at least about 16 segments' resolution, at most a quarter of the record)");

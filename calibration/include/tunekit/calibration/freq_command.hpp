@@ -49,6 +49,9 @@ struct FreqOptions {
   /// liquefier model "1,0" with dead time (tf_delay is then implied).
   std::string fit_tf;
   bool tf_delay = false;  ///< with a dead time theta_s
+  /// The output-error fit's input between samples (fitting::InterSample): automatic treats a
+  /// staircase as centred on its time stamps (tunekit's recordings), a smooth input as band-limited.
+  fitting::InterSample inter_sample = fitting::InterSample::automatic;
   /// Welch's method for h1/oe; segment_length 0: from the excited band (bins a sixteenth of its
   /// top apart), at least about 16 segments' worth of resolution, at most a quarter of the record.
   ident::WelchOptions welch;

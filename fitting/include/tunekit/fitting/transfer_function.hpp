@@ -64,14 +64,33 @@ TransferFunction tf_from_fit(const TfStructure& s, const FitResult& f);
 FitResult fit_tf_frf(std::span<const double> freq_hz, std::span<const std::complex<double>> h,
                      std::span<const double> sigma, const TfStructure& s, const std::string& gain_unit = "1");
 
+/// How the input behaves between its samples (the inter-sample behaviour of Ljung, System
+/// Identification: Theory for the User, 1999, ch. 13; MATLAB's iddata InterSample property).
+enum class InterSample {
+  /// From the record: `hold_centred` when the input repeats its value over most samples (a
+  /// staircase), else `band_limited` (a sampled continuous input such as a chirp).
+  automatic,
+  /// Held from each sample's time stamp to the next (zero-order hold): a command a controller
+  /// applied at the instant it logged it.
+  hold,
+  /// Each sample stands for the interval centred on its time stamp (a mean over it, or a value
+  /// that changed at an unknown moment of the interval before): linear between the samples, so
+  /// each change is centred half a sample before the sample that first shows it. tunekit's own
+  /// recordings (the feed column of a load-cell record) are of this kind.
+  hold_centred,
+  /// A band-limited continuous signal: linear between the samples, with the interpolation's
+  /// attenuation undone to fourth order in f dt.
+  band_limited,
+};
+InterSample parse_inter_sample(const std::string& name);  ///< auto, hold, centred, bandlimited
+std::string to_string(InterSample s);
+
 /// Output-error fit of G (plus an output offset y0) to a uniformly sampled record: the model
-/// output is the simulation of (u - u[0]) plus y0, the input held between samples (ZOH) when
-/// it repeats its value over most samples (a staircase, a digital command), else linear
-/// between them (FOH: a sampled continuous input such as a chirp). `start` gives the TF parameters to start
-/// from (e.g. from fit_tf_frf); y0 starts at y[0].
+/// output is the simulation of (u - u[0]) plus y0, the input between samples as `inter_sample`
+/// says. `start` gives the TF parameters to start from (e.g. from fit_tf_frf); y0 starts at y[0].
 FitResult fit_tf_output_error(std::span<const double> u, std::span<const double> y, double dt, const TfStructure& s,
                               const FitResult& start, const std::string& gain_unit = "1",
-                              const LsqOptions& options = {});
+                              const LsqOptions& options = {}, InterSample inter_sample = InterSample::automatic);
 
 /// The uncertainty of an H1 estimate from its coherence and the number of averaged segments
 /// (Bendat & Piersol): sigma = |H| sqrt((1 - g2) / (2 n g2)); g2 is clamped to [1e-6, 0.9999].
