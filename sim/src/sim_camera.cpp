@@ -21,6 +21,27 @@ double sim_cam_segment_distance(double px, double py, double ax, double ay, doub
   return std::hypot(px - (ax + t * dx), py - (ay + t * dy));
 }
 
+// The lens blur's reach beyond the pixel: 6 sigma (the Gaussian's tail beyond is below 1e-9).
+constexpr double kSimCamBlurReach = 6.0;
+
+// The filament's share of a pixel whose centre lies x px inside a straight edge (outside for
+// x < 0), the edge blurred by a Gaussian of sigma s px and the light averaged over the pixel's
+// width: s [psi((x + 1/2) / s) - psi((x - 1/2) / s)], psi(z) = z Phi(z) + phi(z); s = 0 is the
+// sharp edge's clamp(x + 1/2, 0, 1).
+double sim_cam_edge(double x, double s) {
+  if (!(s > 0)) return std::clamp(x + 0.5, 0.0, 1.0);
+  auto psi = [s](double y) {
+    const double z = y / s;
+    return s * (z * 0.5 * std::erfc(-z * M_SQRT1_2) + std::exp(-0.5 * z * z) / std::sqrt(2 * M_PI));
+  };
+  return psi(x + 0.5) - psi(x - 0.5);
+}
+
+// A bead of half-width `half` px whose centreline lies d px from the pixel's centre.
+double sim_cam_bar(double half, double d, double s) {
+  return std::max(0.0, sim_cam_edge(half - d, s) + sim_cam_edge(half + d, s) - 1.0);
+}
+
 }  // namespace
 
 void SimPrintBed::deposit(double /*t_s*/, const std::array<double, 4>& pos, double speed, double flow) {
@@ -90,26 +111,43 @@ cv::Mat SimPrintBed::photograph(const SimCameraOptions& o, SimCameraFrame* frame
   const int W = static_cast<int>(std::ceil((x1 - x0) * ppm)), H = static_cast<int>(std::ceil((y1 - y0) * ppm));
   if (frame_out) *frame_out = {x0, y1, ppm, cv::Size(W, H)};
 
-  // Coverage of the filament, anti-aliased: a pixel whose centre lies d px from a bead piece's
-  // centreline is covered by clamp(w/2 - d + 1/2, 0, 1).
-  cv::Mat cover(H, W, CV_32F, cv::Scalar(0));
-  for (const auto& p : pieces) {
+  // Coverage of the filament as a camera pixel records it: the bead blurred by the lens (a
+  // Gaussian of sigma blur_px), then integrated over the pixel's area. Blurring after sampling
+  // (a pixel grid of sharp coverage, then a discrete blur) is not the same picture: its edges move
+  // by up to 0.04 px with where they fall between pixel centres. Each piece covers the stretch of
+  // the pixel along the bead that it spans (pieces of one continuous bead add up, so the bead's
+  // width changes where the flow changed, not a round cap early); the first and the last piece of
+  // a bead end in a round cap.
+  cv::Mat body(H, W, CV_32F, cv::Scalar(0)), caps(H, W, CV_32F, cv::Scalar(0));
+  const double reach = 0.5 + kSimCamBlurReach * o.blur_px;
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    const Piece& p = pieces[i];
+    const bool cap0 = i == 0 || pieces[i - 1].x1 != p.x0 || pieces[i - 1].y1 != p.y0;
+    const bool cap1 = i + 1 == pieces.size() || pieces[i + 1].x0 != p.x1 || pieces[i + 1].y0 != p.y1;
     const double ax = (p.x0 - x0) * ppm, ay = (y1 - p.y0) * ppm, bx = (p.x1 - x0) * ppm, by = (y1 - p.y1) * ppm;
+    const double len = std::hypot(bx - ax, by - ay);
+    const double ux = len > 0 ? (bx - ax) / len : 1.0, uy = len > 0 ? (by - ay) / len : 0.0;
     const double half = p.width_mm * ppm / 2;
-    const int u0 = std::max(0, static_cast<int>(std::floor(std::min(ax, bx) - half - 1)));
-    const int u1 = std::min(W - 1, static_cast<int>(std::ceil(std::max(ax, bx) + half + 1)));
-    const int v0 = std::max(0, static_cast<int>(std::floor(std::min(ay, by) - half - 1)));
-    const int v1 = std::min(H - 1, static_cast<int>(std::ceil(std::max(ay, by) + half + 1)));
+    const int u0 = std::max(0, static_cast<int>(std::floor(std::min(ax, bx) - half - reach)));
+    const int u1 = std::min(W - 1, static_cast<int>(std::ceil(std::max(ax, bx) + half + reach)));
+    const int v0 = std::max(0, static_cast<int>(std::floor(std::min(ay, by) - half - reach)));
+    const int v1 = std::min(H - 1, static_cast<int>(std::ceil(std::max(ay, by) + half + reach)));
     for (int v = v0; v <= v1; ++v) {
-      float* row = cover.ptr<float>(v);
+      float* brow = body.ptr<float>(v);
+      float* crow = caps.ptr<float>(v);
       for (int u = u0; u <= u1; ++u) {
-        const double d = sim_cam_segment_distance(u + 0.5, v + 0.5, ax, ay, bx, by);
-        const double c = std::clamp(half - d + 0.5, 0.0, 1.0);
-        if (c > row[u]) row[u] = static_cast<float>(c);
+        const double rx = u + 0.5 - ax, ry = v + 0.5 - ay;
+        const double t = rx * ux + ry * uy, d = std::abs(ry * ux - rx * uy);
+        const double overlap = std::clamp(std::min(t + 0.5, len) - std::max(t - 0.5, 0.0), 0.0, 1.0);
+        if (overlap > 0) brow[u] += static_cast<float>(overlap * sim_cam_bar(half, d, o.blur_px));
+        if ((cap0 && t < 0) || (cap1 && t > len)) {
+          const double c = sim_cam_bar(half, sim_cam_segment_distance(u + 0.5, v + 0.5, ax, ay, bx, by), o.blur_px);
+          if (c > crow[u]) crow[u] = static_cast<float>(c);
+        }
       }
     }
   }
-  if (o.blur_px > 0) cv::GaussianBlur(cover, cover, cv::Size(0, 0), o.blur_px);
+  cv::Mat cover = cv::max(cv::min(body, 1.0), caps);
 
   // The bed: a smooth texture (low-pass noise), then lighting and sensor noise.
   std::seed_seq seeds{o.seed, noise_seed_};

@@ -1,7 +1,10 @@
 // Line edge profile: the width at one station of the centreline. The photo is sampled across
-// the line (averaged along it), a neighbouring line inside the window is cut off at the valley
-// between them, and a blurred bar, I(u) = b0 + b1 u + c [Phi((u-a)/s) - Phi((u-b)/s)], is
-// fitted by Levenberg-Marquardt: the width is b - a with its standard error from the fit.
+// the line (averaged along it) for the start values and to cut off a neighbouring line inside the
+// window at the valley between them; then a blurred bar, I(u) = b0 + b1 u + c [E(u; a) - E(u; b)],
+// E the edge blurred by a Gaussian of sigma s and averaged over a pixel's width, is fitted by
+// Levenberg-Marquardt to the pixels themselves (each at its own offset u across the line, weighted
+// as the averaging along the line weighs it): the width is b - a with its standard error from the
+// fit.
 
 #include <algorithm>
 #include <cmath>
@@ -34,7 +37,8 @@ constexpr double kPeakSearchPerWidth = 0.5;
 constexpr double kBlurStartPerWidth = 0.25 * 0.2;
 constexpr double kBlurStartMinPx = 0.4;
 constexpr double kBlurStartMaxPx = 2.0;
-// Beyond 6 sigma Phi is 0 or 1 to within 1e-9: the edge term is not evaluated there.
+// Beyond 6 sigma of a pixel's edge Phi is 0 or 1 to within 1e-9: the edge term is not evaluated
+// there.
 constexpr double kEdgeTailSigmas = 6.0;
 // Levenberg-Marquardt: damping starts at 1e-3, shrinks 4x after a good step (floor 1e-7), grows
 // 8x after a bad one; beyond 1e8 the steps are negligible and the fit has stalled. At most 40
@@ -78,6 +82,36 @@ inline void normal_cdf_pdf(double z, double& cdf, double& pdf) {
   cdf = z >= 0 ? 0.5 * (1.0 + erf_abs) : 0.5 * (1.0 - erf_abs);
 }
 
+// An edge at `edge` (px) blurred by a Gaussian of sigma s (px), as a pixel centred at u records
+// it: the blurred step averaged over the pixel's width across the line,
+// E = s [psi(z+) - psi(z-)], z+- = (u +- 1/2 - edge) / s, psi(z) = z Phi(z) + phi(z) (a camera
+// pixel integrates the light over its area; for a line along a pixel axis this is exact, at other
+// angles the pixel's footprint across the line is a trapezoid of the same variance). Its
+// derivatives: dE/d(edge) = -(Phi(z+) - Phi(z-)), dE/ds = phi(z+) - phi(z-).
+struct PixelEdge {
+  double e = 0, d_edge = 0, d_s = 0;
+  bool near = false;  // within reach of the edge (the derivatives are nonzero)
+};
+
+inline PixelEdge pixel_edge(double u, double edge, double s) {
+  PixelEdge r;
+  const double inv_s = 1.0 / s;
+  const double zp = (u + 0.5 - edge) * inv_s, zm = (u - 0.5 - edge) * inv_s;
+  if (zm > kEdgeTailSigmas) {
+    r.e = 1.0;
+    return r;
+  }
+  if (zp < -kEdgeTailSigmas) return r;
+  double cp, fp, cm, fm;
+  normal_cdf_pdf(zp, cp, fp);
+  normal_cdf_pdf(zm, cm, fm);
+  r.e = s * ((zp * cp + fp) - (zm * cm + fm));
+  r.d_edge = -(cp - cm);
+  r.d_s = fp - fm;
+  r.near = true;
+  return r;
+}
+
 struct BarFit {
   bool ok = false;
   double b0 = 0, b1 = 0, c = 0, a = 0, b = 0, s = 1;
@@ -85,8 +119,11 @@ struct BarFit {
   bool neighbour = false;
 };
 
-// Fits I(u) = b0 + b1 u + c [Phi((u-a)/s) - Phi((u-b)/s)] to p[k] at u = u0 + k.
-BarFit fit_bar(const std::vector<double>& p, double u0, double w_guess) {
+// Fits I(u) = b0 + b1 u + c [Phi((u-a)/s) - Phi((u-b)/s)] to the pixels (du[i], dv[i]): their
+// offsets across the line and values. The start values and the neighbour check come from the
+// interpolated profile p[k] at u = u0 + k.
+BarFit fit_bar(const std::vector<double>& p, double u0, double w_guess, const std::vector<double>& du,
+               const std::vector<double>& dv, const std::vector<double>& dw) {
   BarFit f;
   const int n = static_cast<int>(p.size());
   if (n < kBarMinSamples) return f;
@@ -138,23 +175,17 @@ BarFit fit_bar(const std::vector<double>& p, double u0, double w_guess) {
       JtJ->setZero();
       Jtr->setZero();
     }
-    const double inv_s = 1.0 / t[5];
-    for (int k = 0; k < n; ++k) {
-      const double u = u0 + k;
-      const double za = (u - t[3]) * inv_s, zb = (u - t[4]) * inv_s;
-      const bool ea = std::abs(za) <= kEdgeTailSigmas, eb = std::abs(zb) <= kEdgeTailSigmas;
-      double Pa = za > 0 ? 1.0 : 0.0, Pb = zb > 0 ? 1.0 : 0.0, fa = 0.0, fb = 0.0;
-      if (ea) normal_cdf_pdf(za, Pa, fa);
-      if (eb) normal_cdf_pdf(zb, Pb, fb);
-      const double r = t[0] + t[1] * u + t[2] * (Pa - Pb) - p[static_cast<std::size_t>(k)];
-      rss += r * r;
+    for (std::size_t k = 0; k < du.size(); ++k) {
+      const double u = du[k];
+      const PixelEdge ea = pixel_edge(u, t[3], t[5]), eb = pixel_edge(u, t[4], t[5]);
+      const double r = t[0] + t[1] * u + t[2] * (ea.e - eb.e) - dv[k];
+      rss += dw[k] * r * r;
       if (JtJ) {
-        const double j[6] = {
-            1.0, u, Pa - Pb, -t[2] * fa * inv_s, t[2] * fb * inv_s, t[2] * (-fa * za + fb * zb) * inv_s};
-        const int m = (ea || eb) ? 6 : 3;  // far from both edges only the background and contrast terms move
+        const double j[6] = {1.0, u, ea.e - eb.e, t[2] * ea.d_edge, -t[2] * eb.d_edge, t[2] * (ea.d_s - eb.d_s)};
+        const int m = (ea.near || eb.near) ? 6 : 3;  // far from both edges only the background and contrast terms move
         for (int a = 0; a < m; ++a) {
-          (*Jtr)(a) += j[a] * r;
-          for (int b = 0; b <= a; ++b) (*JtJ)(a, b) += j[a] * j[b];
+          (*Jtr)(a) += dw[k] * j[a] * r;
+          for (int b = 0; b <= a; ++b) (*JtJ)(a, b) += dw[k] * j[a] * j[b];
         }
       }
     }
@@ -202,7 +233,9 @@ BarFit fit_bar(const std::vector<double>& p, double u0, double w_guess) {
   f.a = th[3];
   f.b = th[4];
   f.s = th[5];
-  const double dof = std::max(1, n - 6);
+  double w_sum = 0;
+  for (double w : dw) w_sum += w;
+  const double dof = std::max(1.0, w_sum - 6);
   const double s2 = cost / dof;
   Eigen::LDLT<Mat6> ldlt(JtJ);
   if (ldlt.info() != Eigen::Success) return f;
@@ -328,7 +361,32 @@ void measure_station(const cv::Mat& img, bool light, const Station& st, double h
   if (lo_k > 0 || hi_k < n - 1) {
     prof = std::vector<double>(prof.begin() + lo_k, prof.begin() + hi_k + 1);
   }
-  const BarFit f = fit_bar(prof, -L + lo_k, w_guess);
+  // The fit reads the pixels themselves, each at its own offset across the line: an interpolated
+  // sample between two pixels is not a value the bar model describes, and it biases the edges by
+  // up to a few hundredths of a pixel depending on where they fall between pixel centres.
+  std::vector<double> du, dv, dw;
+  {
+    const double u_lo = -L + lo_k, u_hi = -L + hi_k, t_half = taps + 1.0;
+    const double ex = L * std::abs(st.n.x) + t_half * std::abs(tx), ey = L * std::abs(st.n.y) + t_half * std::abs(ty);
+    const int x0 = std::max(0, static_cast<int>(std::floor(st.c.x - ex)));
+    const int x1 = std::min(img.cols - 1, static_cast<int>(std::ceil(st.c.x + ex)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(st.c.y - ey)));
+    const int y1 = std::min(img.rows - 1, static_cast<int>(std::ceil(st.c.y + ey)));
+    for (int y = y0; y <= y1; ++y) {
+      const float* row = img.ptr<float>(y);
+      for (int x = x0; x <= x1; ++x) {
+        const double rx = x - st.c.x, ry = y - st.c.y;
+        const double u = rx * st.n.x + ry * st.n.y, t = rx * tx + ry * ty;
+        if (u < u_lo || u > u_hi || !(std::abs(t) < t_half)) continue;
+        double w = 0;
+        for (int k = -taps; k <= taps; ++k) w += std::max(0.0, 1.0 - std::abs(t - k));
+        du.push_back(u);
+        dv.push_back(sign * row[x]);
+        dw.push_back(w);
+      }
+    }
+  }
+  const BarFit f = fit_bar(prof, -L + lo_k, w_guess, du, dv, dw);
   if (!f.ok) {
     out.flags |= kFlagOccluded;
     return;

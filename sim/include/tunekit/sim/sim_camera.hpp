@@ -3,8 +3,9 @@
 // bead laid down at every simulation step has the width the simulated liquefier's output flow
 // gives at the nozzle's speed, w = Q_out / (v h) (h the nozzle height above the bed, a
 // rectangular bead), so the photo carries the liquefier's true width response. The picture is
-// made like a real one: light filament on a textured dark bed, anti-aliased edges and a slight
-// optical blur, vignetting, a lighting gradient across the frame and sensor noise.
+// made like a real one: light filament on a textured dark bed, the bead blurred by the lens and
+// then integrated over each pixel's area (in that order, as a camera forms it), vignetting, a
+// lighting gradient across the frame and sensor noise.
 //
 //   auto bed = std::make_shared<SimPrintBed>();
 //   RunOptions o; o.sim_bed = bed; run_experiment(o);        // every printed run lands on it
@@ -32,7 +33,7 @@ struct SimCameraOptions {
   double vignetting = 0.30;     ///< relative darkening at the frame corners
   double gradient = 0.18;       ///< relative lighting change across the frame (left to right)
   double noise_sigma = 3.0;     ///< sensor noise (grey levels)
-  double blur_px = 0.6;         ///< optical blur (Gaussian sigma, px)
+  double blur_px = 0.6;         ///< lens blur across the bead (Gaussian sigma, px), before the pixels
   unsigned seed = 7;
 };
 

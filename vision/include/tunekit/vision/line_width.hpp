@@ -8,11 +8,13 @@
 // than the strongest line (< 30 % of its contrast) are dropped with a warning;
 // (2) each component is thinned to a skeleton, the longest path through it becomes the
 // centreline (closed loops such as Holtrup's (2019) ring are cut and re-closed), which is smoothed
-// and resampled at a fixed arc-length step; (3) at every sample the full-resolution image is
-// read along the normal (averaged over a short stretch of the tangent) and a blurred-bar
-// model  I(u) = b0 + b1 u + c [Phi((u - a)/sigma) - Phi((u - b)/sigma)]  is fitted by damped
-// Gauss-Newton; a and b are the sub-pixel edges, b - a the width. The centreline is then
-// re-centred on the measured mid-points and the profile measured again.
+// and resampled at a fixed arc-length step; (3) at every sample a blurred-bar model
+// I(u) = b0 + b1 u + c [E(u; a) - E(u; b)], E(u; a) the step Phi((x - a)/sigma) averaged over the
+// pixel's width around u, is fitted by damped Gauss-Newton to the full-resolution pixels within a
+// short stretch of the tangent, each at its own offset u across the line (not to values
+// interpolated between pixels, which the model does not describe); a and b are the sub-pixel
+// edges, b - a the width, sigma the lens's blur. The centreline is then re-centred on the measured
+// mid-points and the profile measured again.
 //
 // Everything here is in pixels of the image passed in; scale (mm) is applied by the caller.
 
