@@ -50,6 +50,54 @@ void Simulator::m956(std::string_view body, const machine::GcodeWords& /*words*/
   files_[capture_name_] = capture_text_;
 }
 
+// A G0/G1: queued behind the move before it (joined at the junction speed the firmware's rules
+// give), or refused as the firmware would. False when the line is answered already.
+bool Simulator::queue_move(const machine::GcodeWords& words, const Emit& emit) {
+  if (auto m = interp_.apply(words)) {
+    if (carry_start_) {
+      m->start = *carry_start_;  // Marlin: the joined move's distance is added to this one
+      carry_start_.reset();
+    }
+    if (klipper() && m->extruder_only() && m->length_mm() > cfg_.max_extrude_only_distance_mm) {
+      out_flush(emit);
+      emit(fmt::format("!! Extrude only move too long ({:.3f}mm vs {:.3f}mm)\n", m->length_mm(),
+                       cfg_.max_extrude_only_distance_mm));
+      emit("ok\n");
+      return false;
+    }
+    double steps = 0;
+    for (std::size_t k = 0; k < 3; ++k) steps = std::max(steps, std::abs(m->end[k] - m->start[k]) * cfg_.steps_per_mm);
+    if (marlin() && !m->extruder_only() && std::lround(steps) < sim::kMarlinMinStepsPerSegment) {
+      carry_start_ = m->start;  // Configuration_adv.h MIN_STEPS_PER_SEGMENT 6
+    } else {
+      if (pending_) {
+        const double v_exit = junction_speed(*pending_, *m);
+        pending_entry_ = std::min(v_exit, execute(*pending_, pending_entry_, v_exit, emit));
+      }
+      pending_ = *m;
+    }
+  }
+  return true;
+}
+
+// M115: the firmware's name and capabilities, as each firmware words them.
+void Simulator::report_firmware(const Emit& emit) const {
+  if (klipper()) emit(fmt::format("FIRMWARE_NAME:Klipper FIRMWARE_VERSION:v0.13.0-tunekit-sim-{}\n", core::kVersion));
+  else if (rrf())
+    emit(
+        fmt::format("FIRMWARE_NAME: RepRapFirmware for tunekit-sim FIRMWARE_VERSION: 3.5.1 ELECTRONICS: tunekit-sim "
+                    "{} FIRMWARE_DATE: 2024-01-01\n",
+                    core::kVersion));
+  else
+    emit(fmt::format(
+        "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
+        "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
+        "UUID:00000000-0000-0000-0000-000000000000\n"
+        "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
+        core::kVersion));
+  if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
+}
+
 bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
   std::string line(raw);
   while (!line.empty() && (line.back() == '\r' || line.back() == '\n' || line.back() == ' ')) line.pop_back();
@@ -91,31 +139,7 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
   if (words) {
     const std::string& c = words->command;
     if (c == "G0" || c == "G1") {
-      if (auto m = interp_.apply(*words)) {
-        if (carry_start_) {
-          m->start = *carry_start_;  // Marlin: the joined move's distance is added to this one
-          carry_start_.reset();
-        }
-        if (klipper() && m->extruder_only() && m->length_mm() > cfg_.max_extrude_only_distance_mm) {
-          out_flush(emit);
-          emit(fmt::format("!! Extrude only move too long ({:.3f}mm vs {:.3f}mm)\n", m->length_mm(),
-                           cfg_.max_extrude_only_distance_mm));
-          emit("ok\n");
-          return true;
-        }
-        double steps = 0;
-        for (std::size_t k = 0; k < 3; ++k)
-          steps = std::max(steps, std::abs(m->end[k] - m->start[k]) * cfg_.steps_per_mm);
-        if (marlin() && !m->extruder_only() && std::lround(steps) < sim::kMarlinMinStepsPerSegment) {
-          carry_start_ = m->start;  // Configuration_adv.h MIN_STEPS_PER_SEGMENT 6
-        } else {
-          if (pending_) {
-            const double v_exit = junction_speed(*pending_, *m);
-            pending_entry_ = std::min(v_exit, execute(*pending_, pending_entry_, v_exit, emit));
-          }
-          pending_ = *m;
-        }
-      }
+      if (!queue_move(*words, emit)) return true;
     } else if (c == "G4") {
       flush(emit);
       interp_.apply(*words);
@@ -171,21 +195,7 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
       m493(*words, emit);
     } else if (c == "M115") {
       out_flush(emit);
-      if (klipper())
-        emit(fmt::format("FIRMWARE_NAME:Klipper FIRMWARE_VERSION:v0.13.0-tunekit-sim-{}\n", core::kVersion));
-      else if (rrf())
-        emit(fmt::format(
-            "FIRMWARE_NAME: RepRapFirmware for tunekit-sim FIRMWARE_VERSION: 3.5.1 ELECTRONICS: tunekit-sim "
-            "{} FIRMWARE_DATE: 2024-01-01\n",
-            core::kVersion));
-      else
-        emit(fmt::format(
-            "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
-            "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
-            "UUID:00000000-0000-0000-0000-000000000000\n"
-            "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
-            core::kVersion));
-      if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
+      report_firmware(emit);
     } else if (c == "M105") {
       out_flush(emit);
       const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);

@@ -255,6 +255,8 @@ class Simulator {
   FirmwareRules firmware_ = FirmwareRules::marlin;
   bool klipper() const { return firmware_ == FirmwareRules::klipper; }
   bool rrf() const { return firmware_ == FirmwareRules::rrf; }
+  bool queue_move(const machine::GcodeWords& words, const Emit& emit);
+  void report_firmware(const Emit& emit) const;
   void m493(const machine::GcodeWords& w, const Emit& emit);
   void m493_mode(const machine::GcodeWords& w, bool& report, const Emit& emit);
   bool m493_axis_letters(const machine::GcodeWords& w, bool& report, const Emit& emit);
