@@ -64,10 +64,9 @@ void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widt
   r.plot["step"] = step_plotdata(widths, "set-point width (mm)", "width (mm)");
   r.plot["linewidth"] = cam.linewidth_plot;
   const std::string p = "liquefier.step.pooled.params.";
-  r.plain_row("liquefier time constant tau (line widths)", p + "tau_s.value", "s");
-  r.plain_row("tau standard error", p + "tau_s.stderr", "s");
-  r.plain_row("liquefier dead time theta", p + "theta_s.value", "s");
-  r.plain_row("width gain K", p + "K.value", "1");
+  r.row("liquefier time constant tau (line widths)", p + "tau_s.value", "s", p + "tau_s.ci95");
+  r.row("liquefier dead time theta (line widths)", p + "theta_s.value", "s", p + "theta_s.ci95");
+  r.row("width gain K (line widths)", p + "K.value", "1", p + "K.ci95");
   if (cam.ring) {
     r.plain_row("ring frequency", "liquefier.camera.ring.freq_hz", "Hz");
     r.plain_row("ring gain (measured)", "liquefier.camera.ring.gain", "1");
