@@ -28,6 +28,8 @@ void take_step(const StepDesignInput& s, LiquefierInputs& li) {
   ident::AdvanceInputs& in = li.in;
   in.tau_s = s.tau_s.value;
   in.tau_stderr_s = s.tau_s.std_error;
+  li.tau_ci95_lo = s.tau_s.ci95_lo;
+  li.tau_ci95_hi = s.tau_s.ci95_hi;
   in.theta_s = s.theta_s.value;
   in.gain = s.K.value;
   in.gain_unit = s.K_unit;
@@ -67,6 +69,8 @@ LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, 
   if (!std::isfinite(in.tau_s) && freq_tau) {
     in.tau_s = d.freq->tau_s.value;
     in.tau_stderr_s = d.freq->tau_s.std_error;
+    li.tau_ci95_lo = d.freq->tau_s.ci95_lo;
+    li.tau_ci95_hi = d.freq->tau_s.ci95_hi;
     in.tau_source = "freq";
   } else if (std::isfinite(in.tau_s) && freq_tau) {
     compare_step_and_freq(*d.step, *d.freq, li, env);
@@ -80,6 +84,7 @@ LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, 
     li.model.reset();
     in.tau_s = a.pa_k;
     in.tau_stderr_s = fitting::kNaN;
+    li.tau_ci95_lo = li.tau_ci95_hi = fitting::kNaN;
     in.tau_source = "command line";
     in.points.clear();
     in.rheo_flow_mm3_s.clear();
@@ -266,6 +271,11 @@ std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs&
   if (!design || !outcome.settings.pa_k_s) return std::nullopt;
   const double k = *outcome.settings.pa_k_s;
   if (!outcome.flow) {
+    // K is tau (or tau times a factor): its interval is tau's, as the fit that gave tau reports it
+    // (a t quantile, a cluster-robust variance), not a normal one from the standard error.
+    const double tau = li.in.tau_s;
+    if (tau > 0 && std::isfinite(li.tau_ci95_lo) && std::isfinite(li.tau_ci95_hi))
+      return std::pair{k * li.tau_ci95_lo / tau, k * li.tau_ci95_hi / tau};
     if (!std::isfinite(design->k_stderr_s)) return std::nullopt;
     return std::pair{k - kZ95 * design->k_stderr_s, k + kZ95 * design->k_stderr_s};
   }

@@ -3,6 +3,7 @@
 // advance design, the flow-dependent design and the firmware's shapers. Private to calibration.
 
 #include <map>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,12 +27,16 @@ struct LiquefierInputs {
   std::optional<ident::TauPowerLaw> trend_u;           ///< tau = a u^b over the levels' u
   std::optional<StepModelInput> model;                 ///< the whole-record model (designed from first)
   nlohmann::json agreement = nlohmann::json::array();  ///< step against frequency response tau
+  /// The 95 % interval (s) of the tau the advance is designed from, as its fit reports it.
+  double tau_ci95_lo = std::numeric_limits<double>::quiet_NaN();
+  double tau_ci95_hi = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Step (else frequency response) tau and the levels; --pa-k overrides them. Compares the step
 /// and frequency-response tau by the one agreement rule (agreement.hpp) and warns when they differ.
-/// The advance's 95 % interval (s). Without a flow design: K +- 1.96 times the design's standard
-/// error of tau (K = the pooled tau). With one: the flow design's bounds (the levels' intervals,
+/// The advance's 95 % interval (s). Without a flow design: tau's own interval, scaled by K / tau
+/// (K is the pooled tau, or tau times a rheology factor), else K +- 1.96 times tau's standard
+/// error. With one: the flow design's bounds (the levels' intervals,
 /// and the melt stored below the lowest identified flow, flow_advance.hpp); when those bounds do
 /// not hold the levels' intervals (a whole-record model's trend), they are widened by the widest
 /// relative interval of the levels' tau: every tau within its interval keeps V(Q)/Q, an average

@@ -60,8 +60,15 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   CHECK(tunekit::test::embedded_png_base64_length(html, "linewidth_overlay") > 10000);
   CHECK(tunekit::test::embedded_image_base64_length(html, "step") > 2000);
   CHECK(fs::exists(dir + "/liquefier-camera/photo.png"));
-  // Pressure advance is designed from the camera's tau.
-  CHECK(res.at("compensators").at("settings").at("pa_k_s").get<double>() > 0);
+  // Pressure advance is designed from the camera's tau, and carries tau's interval as its fit
+  // reports it (cluster-robust, a t quantile), not a normal one from the standard error.
+  const double k = res.at("compensators").at("settings").at("pa_k_s").get<double>();
+  REQUIRE(k > 0);
+  const double tau_fit = p.at("tau_s").at("value").get<double>();
+  const auto& tau_ci = p.at("tau_s").at("ci95");
+  const auto& k_ci = res.at("compensators").at("pa_k_ci95");
+  CHECK(k_ci[0].get<double>() == Approx(k * tau_ci[0].get<double>() / tau_fit).epsilon(1e-9));
+  CHECK(k_ci[1].get<double>() == Approx(k * tau_ci[1].get<double>() / tau_fit).epsilon(1e-9));
 }
 
 TEST_CASE(
