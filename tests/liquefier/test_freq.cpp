@@ -251,6 +251,19 @@ TEST_CASE("broadband: a chirp through a known second-order system, H1 within 1 d
   CHECK(fit.param("fn_hz").std_error > 0);
 }
 
+// Start values for an output-error fit: each true parameter times factor(its index).
+template <class Factor>
+fitting::FitResult start_from(const fitting::TfStructure& st, const std::vector<double>& truth, Factor factor) {
+  fitting::FitResult start;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    fitting::Param p;
+    p.name = fitting::tf_param_names(st)[i];
+    p.value = truth[i] * factor(i);
+    start.params.push_back(p);
+  }
+  return start;
+}
+
 TEST_CASE("output-error fit of a transfer function with dead time to a random-step record") {
   const double dt = 0.01;
   fitting::TfStructure st{2, 1, true};
@@ -267,13 +280,7 @@ TEST_CASE("output-error fit of a transfer function with dead time to a random-st
   }
   auto y = tf.simulate_zoh(u, dt);
   for (auto& v : y) v += 0.3 + noise(rng);
-  fitting::FitResult start;
-  for (std::size_t i = 0; i < truth.size(); ++i) {
-    fitting::Param p;
-    p.name = fitting::tf_param_names(st)[i];
-    p.value = truth[i] * (i == 4 ? 0.6 : 1.15);
-    start.params.push_back(p);
-  }
+  const fitting::FitResult start = start_from(st, truth, [](std::size_t i) { return i == 4 ? 0.6 : 1.15; });
   // The record was made by holding each sample from its time stamp: said so.
   const auto fit = fitting::fit_tf_output_error(u, y, dt, st, start, "1", {}, fitting::InterSample::hold);
   const auto names = fitting::tf_param_names(st);
@@ -317,13 +324,7 @@ TEST_CASE("output-error fit of a staircase whose changes fall between samples: t
     u.push_back(sum / fine);
     y.push_back(y_fine[k * fine] + noise(rng));
   }
-  fitting::FitResult start;
-  for (std::size_t i = 0; i < truth.size(); ++i) {
-    fitting::Param p;
-    p.name = fitting::tf_param_names(st)[i];
-    p.value = truth[i] * 1.2;
-    start.params.push_back(p);
-  }
+  const fitting::FitResult start = start_from(st, truth, [](std::size_t) { return 1.2; });
   const auto centred = fitting::fit_tf_output_error(u, y, dt, st, start);
   const auto held = fitting::fit_tf_output_error(u, y, dt, st, start, "1", {}, fitting::InterSample::hold);
   INFO("centred theta " << centred.value("theta_s") << ", held " << held.value("theta_s") << ", truth " << truth[2]);
@@ -358,13 +359,7 @@ TEST_CASE("output-error fit with coloured output noise: the intervals widened fo
       ar = 0.9 * ar + e(rng);
       v += ar;
     }
-    fitting::FitResult start;
-    for (std::size_t i = 0; i < truth.size(); ++i) {
-      fitting::Param p;
-      p.name = fitting::tf_param_names(st)[i];
-      p.value = truth[i] * 1.1;
-      start.params.push_back(p);
-    }
+    const fitting::FitResult start = start_from(st, truth, [](std::size_t) { return 1.1; });
     const auto fit = fitting::fit_tf_output_error(u, y, dt, st, start, "1", {}, fitting::InterSample::hold);
     const auto& tau = fit.param("tau_s");
     if (tau.ci95_lo <= truth[1] && truth[1] <= tau.ci95_hi) ++covered;
