@@ -23,19 +23,25 @@ double calibrate_param(const fitting::FitResult& f, const std::string& name) {
 namespace {
 
 // Each step's model over the samples its fit used and nowhere else (not over the warm-up from
-// rest, which no step models); NaN elsewhere.
-std::vector<double> step_fits_output(const std::vector<double>& t, const ident::StepAnalysis& steps) {
+// rest, which no step models), driven by the record's input as the fit was; NaN elsewhere.
+std::vector<double> step_fits_output(const std::vector<double>& t, const std::vector<double>& u,
+                                     const ident::StepAnalysis& steps) {
   std::vector<double> yf(t.size(), std::nan(""));
   for (const auto& s : steps.steps) {
     if (!s.fit) continue;
     const std::size_t begin = s.step.begin, end = std::min(s.step.end, t.size());
-    const double ts = s.step.t_step_s;
-    const double du = s.step.u_after - s.step.u_before;
+    fitting::StepRecord r;
+    r.t_step = s.step.t_step_s;
+    r.du = s.step.u_after - s.step.u_before;
+    r.t.assign(t.begin() + static_cast<std::ptrdiff_t>(begin), t.begin() + static_cast<std::ptrdiff_t>(end));
+    r.u.assign(u.begin() + static_cast<std::ptrdiff_t>(begin), u.begin() + static_cast<std::ptrdiff_t>(end));
+    r.u_hold = steps.input_hold;
     const auto& f = *s.fit;
-    const double K = calibrate_param(f, "K"), tau = calibrate_param(f, "tau_s"), y0 = calibrate_param(f, "y0");
     double theta = calibrate_param(f, "theta_s");
     if (!std::isfinite(theta)) theta = 0;
-    for (std::size_t i = begin; i < end; ++i) yf[i] = fitting::step_response(t[i], ts, du, K, tau, theta, y0);
+    const auto m = fitting::step_model_output(r, calibrate_param(f, "K"), calibrate_param(f, "tau_s"), theta,
+                                              calibrate_param(f, "y0"));
+    std::copy(m.begin(), m.end(), yf.begin() + static_cast<std::ptrdiff_t>(begin));
   }
   return yf;
 }
@@ -56,7 +62,7 @@ nlohmann::json step_plotdata(const StepOutcome& step, const std::string& u_label
   const auto& t = table.column(tc).values;
   const auto& u = table.column(in_col).values;
   const auto& y = table.column(out_col).values;
-  const std::vector<double> yf = step_fits_output(t, step.analysis);
+  const std::vector<double> yf = step_fits_output(t, u, step.analysis);
   std::vector<double> ym;
   nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};
   if (const auto& m = step.whole_record.model) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include <array>
@@ -35,6 +36,9 @@ void check_record(const StepRecord& r, const std::string& what) {
                        " (t = " + text::g4(r.t[i]) + " s)");
   }
   if (!(std::abs(r.du) > 0) || !std::isfinite(r.du)) throw InputError(what + ": the input step size is zero");
+  if (!r.u.empty() && r.u.size() != r.t.size()) throw InputError(what + ": time and input have different lengths");
+  for (double v : r.u)
+    if (!std::isfinite(v)) throw InputError(what + ": NaN or infinite input sample");
   const auto [lo, hi] = std::minmax_element(r.y.begin(), r.y.end());
   if (!(*hi > *lo)) throw InputError(what + ": the output is constant; there is no response to fit");
   std::size_t after = 0;
@@ -61,9 +65,120 @@ StepModelPoint step_model_at(const StepRecord& r, std::size_t i, double K, doubl
   return {y0 + K * r.du * (1 - e), r.du * (1 - e), -K * r.du * e * s / (tau * tau), -K * r.du * e / tau};
 }
 
+namespace {
+
+// The input a record's response starts settled at: the mean recorded input before the step (the
+// first value when the record starts at the step).
+double settled_input(const StepRecord& r) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < r.t.size() && r.t[i] < r.t_step; ++i, ++n) sum += r.u[i];
+  return n > 0 ? sum / static_cast<double>(n) : r.u.front();
+}
+
+// Where (s) the window in which r.u[k] holds begins (StepRecord::u_hold); the last window ends
+// one sample interval (from_stamp) or half of one (centred) after its stamp.
+double window_begin(const StepRecord& r, std::size_t k) {
+  const std::size_t n = r.t.size();
+  if (n < 2) return r.t[0];
+  const bool centred = r.u_hold == InputHold::centred;
+  if (k == n) return r.t[n - 1] + (centred ? 0.5 : 1.0) * (r.t[n - 1] - r.t[n - 2]);
+  if (!centred) return r.t[k];
+  if (k == 0) return r.t[0] - 0.5 * (r.t[1] - r.t[0]);
+  return 0.5 * (r.t[k - 1] + r.t[k]);
+}
+
+// The input the driven model follows: the ideal step from u_before to u_after at t_step, which
+// places the change within its window where the record's instant says, plus each window's
+// departure from that step's mean over the window (a pause, a ramp, a level a little off), held
+// over the window. A record of an ideal step has no departures and gives the ideal step's model.
+struct DrivenInput {
+  double u_before, u_after;
+  std::vector<double> departure;  // per window
+};
+
+DrivenInput driven_input(const StepRecord& r) {
+  DrivenInput in;
+  in.u_before = settled_input(r);
+  in.u_after = in.u_before + r.du;
+  const std::size_t n = r.t.size();
+  in.departure.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double b = window_begin(r, k), e = window_begin(r, k + 1);
+    const double before = std::clamp((r.t_step - b) / (e - b), 0.0, 1.0);  // share of the window before the step
+    in.departure[k] = r.u[k] - (before * in.u_before + (1 - before) * in.u_after);
+  }
+  return in;
+}
+
+// The first-order response x to that input, dx/dt = (u(t - theta) - x) / tau, exact for an input
+// constant between the window boundaries and the step: across a stretch d of constant input v,
+// x <- v + (x - v) e and its sensitivity w = dx/dtau <- w e + (x - v) e d / tau^2, e = exp(-d / tau).
+// The samples are taken at s = t - theta in the input's time, so dx/dtheta = -(v - x) / tau.
+void driven_model_points(const StepRecord& r, double K, double tau, double theta, double y0,
+                         std::vector<StepModelPoint>& out) {
+  const std::size_t n = r.t.size();
+  out.resize(n);
+  const DrivenInput in = driven_input(r);
+  const double x0 = in.u_before;
+  double x = x0, w = 0, s_cur = 0, ideal = in.u_before, dep = 0;
+  bool started = false, stepped = false;  // until the first event, x rests at x0
+  auto advance = [&](double s_new) {
+    const double d = s_new - s_cur, v = ideal + dep;
+    if (started && d > 0) {
+      const double e = std::exp(-d / tau);
+      w = w * e + (x - v) * e * d / (tau * tau);
+      x = v + (x - v) * e;
+    }
+    if (!started || d > 0) s_cur = s_new;
+    started = true;
+  };
+  std::size_t next = 0;  // the next window to begin
+  for (std::size_t i = 0; i < n; ++i) {
+    const double s = r.t[i] - theta;
+    for (;;) {
+      const double b = next < n ? window_begin(r, next) : std::numeric_limits<double>::infinity();
+      const double at = std::min(b, stepped ? std::numeric_limits<double>::infinity() : r.t_step);
+      if (!(at <= s)) break;
+      advance(at);
+      if (!stepped && r.t_step <= b) {
+        ideal = in.u_after;
+        stepped = true;
+      } else {
+        dep = in.departure[next++];
+      }
+    }
+    advance(s);
+    out[i] = {y0 + K * (x - x0), x - x0, K * w, -K * (ideal + dep - x) / tau};
+  }
+}
+
+}  // namespace
+
+void step_model_points(const StepRecord& r, double K, double tau, double theta, double y0,
+                       std::vector<StepModelPoint>& out) {
+  if (!r.u.empty()) return driven_model_points(r, K, tau, theta, y0, out);
+  out.resize(r.t.size());
+  for (std::size_t i = 0; i < r.t.size(); ++i) out[i] = step_model_at(r, i, K, tau, theta, y0);
+}
+
 void step_residuals(const StepRecord& r, double K, double tau, double theta, double y0, double* res, double* jac,
                     std::size_t width, const std::size_t cols[4]) {
   const std::size_t n = r.t.size();
+  if (!r.u.empty()) {
+    std::vector<StepModelPoint> pts;
+    driven_model_points(r, K, tau, theta, y0, pts);
+    for (std::size_t i = 0; i < n; ++i) {
+      res[i] = pts[i].m - r.y[i];
+      if (jac == nullptr) continue;
+      double* row = jac + i * width;
+      row[cols[0]] = pts[i].dK;
+      row[cols[1]] = pts[i].dtau;
+      row[cols[2]] = pts[i].dtheta;
+      row[cols[3]] = 1.0;
+    }
+    return;
+  }
   if (jac == nullptr) {  // the residuals alone: the model value of step_model_at, no derivatives
     for (std::size_t i = 0; i < n; ++i) {
       const double s = r.t[i] - r.t_step - theta;
@@ -101,9 +216,30 @@ std::array<double, 3> line_fit(const std::vector<double>& t, const std::vector<d
   return {mz - b * mt, b, r2};
 }
 
+namespace {
+// normal_equations for a record driven by its recorded input: the rows of driven_model_points.
+double driven_normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
+  std::vector<StepModelPoint> pts;
+  driven_model_points(r, p[0], p[1], p[2], p[3], pts);
+  JtJ.setZero();
+  Jtr.setZero();
+  double rss = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Eigen::Vector4d j(pts[i].dK, pts[i].dtau, pts[i].dtheta, 1.0);
+    const double res = pts[i].m - r.y[i];
+    rss += res * res;
+    JtJ.selfadjointView<Eigen::Upper>().rankUpdate(j);
+    Jtr += j * res;
+  }
+  JtJ.triangularView<Eigen::StrictlyLower>() = JtJ.transpose();
+  return rss;
+}
+}  // namespace
+
 // Accumulates J^T J (4x4), J^T r and the residual sum of squares for one record without storing
 // the Jacobian (100k samples cost a few milliseconds).
 double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
+  if (!r.u.empty()) return driven_normal_equations(r, p, JtJ, Jtr);
   // Before the response starts the Jacobian row is (0, 0, 0, 1): only the count and the sum of
   // residuals matter there. Afterwards the ten products of the symmetric 4x4 are accumulated in
   // scalars (an Eigen outer product per row costs twice as much on 100k rows). The exponentials
@@ -334,6 +470,14 @@ StepModel parse_step_model(const std::string& name) {
 }
 
 std::string model_name(StepModel m) { return m == StepModel::fo ? "first_order" : "fopdt"; }
+
+std::vector<double> step_model_output(const StepRecord& r, double K, double tau_s, double theta_s, double y0) {
+  std::vector<StepModelPoint> pts;
+  step_model_points(r, K, tau_s, theta_s, y0, pts);
+  std::vector<double> out(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) out[i] = pts[i].m;
+  return out;
+}
 
 double step_response(double t, double t_step, double du, double K, double tau_s, double theta_s, double y0) {
   const double s = t - t_step - theta_s;

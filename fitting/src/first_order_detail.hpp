@@ -26,6 +26,11 @@ struct StepModelPoint {
 };
 StepModelPoint step_model_at(const StepRecord& r, std::size_t i, double K, double tau, double theta, double y0);
 
+/// The model and its derivatives at every sample of a record: step_model_at for an ideal step,
+/// the response to the recorded input (StepRecord::u) when the record has one.
+void step_model_points(const StepRecord& r, double K, double tau, double theta, double y0,
+                       std::vector<StepModelPoint>& out);
+
 /// Residuals (model - data) of every sample into res, and, when jac is not null, the Jacobian
 /// row-major with `width` columns, K, tau, theta and y0 in columns cols[0..3].
 void step_residuals(const StepRecord& r, double K, double tau, double theta, double y0, double* res, double* jac,

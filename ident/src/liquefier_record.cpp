@@ -32,17 +32,20 @@ nlohmann::json param_json(const fitting::Param& p) {
           {"ci95_method", p.fixed ? std::string("fixed") : p.ci95_method}};
 }
 
-/// The model's response over one step's window, fitted as the step was.
-void check_step(const WholeRecordModel& m, const std::vector<double>& tv, const std::vector<double>& sim,
-                const StepFit& s, std::size_t index, std::vector<StepModelCheck>& out) {
+/// The model's response over one step's window, fitted as the step was (driven by the same
+/// recorded input).
+void check_step(const WholeRecordModel& m, const fitting::LiquefierRecord& rec, const std::vector<double>& sim,
+                const StepFit& s, fitting::InputHold hold, std::size_t index, std::vector<StepModelCheck>& out) {
   if (!s.fit) return;
   fitting::StepRecord r;
   r.t_step = s.step.t_step_s;
   r.du = s.step.u_after - s.step.u_before;
-  for (std::size_t i = s.step.begin; i < s.step.end && i < tv.size(); ++i) {
-    r.t.push_back(tv[i]);
+  for (std::size_t i = s.step.begin; i < s.step.end && i < rec.t.size(); ++i) {
+    r.t.push_back(rec.t[i]);
     r.y.push_back(sim[i]);
+    r.u.push_back(rec.u[i]);
   }
+  r.u_hold = hold;
   StepModelCheck c;
   c.step = index;
   c.u_after = s.step.u_after;
@@ -128,7 +131,8 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
   // to_json reports the factor (variance_factor) beside the Ljung-Box test.
   if (steps != nullptr) {
     const std::vector<double> sim = fitting::simulate_liquefier(rec.t, rec.u, m.model.params(), sensor);
-    for (std::size_t i = 0; i < steps->steps.size(); ++i) check_step(m, rec.t, sim, steps->steps[i], i, m.checks);
+    for (std::size_t i = 0; i < steps->steps.size(); ++i)
+      check_step(m, rec, sim, steps->steps[i], steps->input_hold, i, m.checks);
     std::size_t bad = 0;
     for (const auto& c : m.checks) bad += c.disagrees;
     // Each check flags a step at a 5 % false-alarm rate: warn only when more steps disagree than

@@ -15,11 +15,20 @@ namespace {
 using fitting::FitResult;
 using fitting::StepRecord;
 
-StepRecord make_record(std::span<const double> t, std::span<const double> y, const DetectedStep& s,
-                       const StepAnalysisOptions& o) {
+fitting::InputHold input_hold(StepInstant instant) {
+  return instant == StepInstant::first_sample ? fitting::InputHold::from_stamp : fitting::InputHold::centred;
+}
+
+// One step's samples, with the recorded input that drives the model over them (the instant
+// convention decides how a value stands for the input between samples).
+StepRecord make_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                       const DetectedStep& s, const StepAnalysisOptions& o) {
   StepRecord r;
-  r.t.assign(t.begin() + static_cast<std::ptrdiff_t>(s.begin), t.begin() + static_cast<std::ptrdiff_t>(s.end));
-  r.y.assign(y.begin() + static_cast<std::ptrdiff_t>(s.begin), y.begin() + static_cast<std::ptrdiff_t>(s.end));
+  const auto b = static_cast<std::ptrdiff_t>(s.begin), e = static_cast<std::ptrdiff_t>(s.end);
+  r.t.assign(t.begin() + b, t.begin() + e);
+  r.y.assign(y.begin() + b, y.begin() + e);
+  r.u.assign(u.begin() + b, u.begin() + e);
+  r.u_hold = input_hold(o.detect.instant);
   r.t_step = s.t_step_s;
   r.du = s.u_after - s.u_before;
   r.output_unit = o.output_unit;
@@ -203,11 +212,12 @@ StepAnalysis analyze_steps(std::span<const double> t, std::span<const double> u,
     if (!(*hi > *lo)) throw InputError("the output column is constant; there is no response to fit");
   }
   StepAnalysis a;
+  a.input_hold = input_hold(o.detect.instant);
   auto det = detect_steps(t, u, o.detect);
   std::vector<StepRecord> recs;
   for (auto& s : det) {
     s.begin = settled_begin(y, s.begin, s.sample);
-    recs.push_back(make_record(t, y, s, o));
+    recs.push_back(make_record(t, u, y, s, o));
     StepFit sf;
     sf.step = s;
     try {

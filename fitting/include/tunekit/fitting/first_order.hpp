@@ -4,7 +4,8 @@
 //   y(t) = y0                                           for t <= t_step + theta
 //   y(t) = y0 + K du (1 - exp(-(t - t_step - theta) / tau))  afterwards
 //
-// "fo" holds theta at 0 (first order), "fopdt" estimates it (first order plus dead time).
+// "fo" holds theta at 0 (first order), "fopdt" estimates it (first order plus dead time). A record
+// that carries its logged input (StepRecord::u) is fitted as the response to that input instead.
 // Single-step fits start from the log-incomplete-response method (Holtrup 2019 eq. 4.4), solve by
 // Levenberg-Marquardt on the 4x4 normal equations (analytic Jacobian, one pass over the samples
 // per trial) until Ceres Solver's convergence tests hold, with solve_least_squares taking over if
@@ -25,8 +26,23 @@ StepModel parse_step_model(const std::string& name);
 /// Model name used in FitResult::model: "first_order" or "fopdt".
 std::string model_name(StepModel m);
 
+/// How a recorded input's samples stand for the input between them. `centred`: each value is
+/// the input over a window centred on its time stamp, from half-way to the previous sample to
+/// half-way to the next (a mean over the sample's window, as a printer's log of the feed
+/// delivered around each force sample is; an input that changes between two samples changes
+/// half-way, the same instant as StepInstant::midpoint). `from_stamp`: each value holds from its
+/// stamp to the next (an input that changes exactly at sample instants).
+enum class InputHold { centred, from_stamp };
+
 /// The samples of one step: time (s), output, when the input changed and by how much.
 /// Samples before t_step (the steady state before the step) determine y0 and theta.
+///
+/// Without `u` the input is an ideal step of du at t_step. With `u` (the recorded input, one value
+/// per sample of t) the model is the first-order response to that input (held as `u_hold` says),
+/// started settled at the mean input before t_step: a planner that pauses the feed for a few
+/// milliseconds between moves, or ramps it over a few samples, is then in the model instead of
+/// in the residuals (an ideal step reads the force's dip after a pause as a faster response).
+/// y0 is the output at that settled start in both cases, K and tau_s mean the same.
 struct StepRecord {
   std::vector<double> t;          ///< s, increasing
   std::vector<double> y;          ///< output samples
@@ -34,6 +50,8 @@ struct StepRecord {
   double du = 1;                  ///< input change u_after - u_before (nonzero)
   std::string output_unit = "1";  ///< unit of y (and y0)
   std::string gain_unit = "1";    ///< unit of K (output unit per input unit)
+  std::vector<double> u;          ///< the recorded input at t (input unit), or empty
+  InputHold u_hold = InputHold::centred;
 };
 
 /// Start values found by the log-incomplete-response method.
@@ -53,6 +71,11 @@ StepStart log_incomplete_start(const StepRecord& rec);
 
 /// Model value at time t.
 double step_response(double t, double t_step, double du, double K, double tau_s, double theta_s, double y0);
+
+/// The model at every sample of a record, as the fits compute it: the ideal step's response, or
+/// the response to the record's input when it has one (StepRecord::u). The output samples r.y are
+/// not used.
+std::vector<double> step_model_output(const StepRecord& r, double K, double tau_s, double theta_s, double y0);
 
 /// Fits one step. Parameters: K (gain_unit), tau_s, theta_s (held at 0 for fo), y0 (output_unit).
 /// Throws InputError for too few samples, a constant output or a zero step, and FitError when

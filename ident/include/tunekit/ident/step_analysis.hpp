@@ -101,6 +101,8 @@ struct StepAnalysis {
   std::vector<ArrivalLevel> arrival_levels;
   LevelTrends level_trends;      ///< the trends of the operating points with u
   std::string input_unit = "1";  ///< unit of u, as StepAnalysisOptions::input_unit
+  /// How the step fits read the logged input between samples (from the step instant convention).
+  fitting::InputHold input_hold = fitting::InputHold::centred;
   std::vector<std::string> warnings;
 };
 
