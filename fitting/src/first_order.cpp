@@ -111,6 +111,9 @@ DrivenInput driven_input(const StepRecord& r) {
   return in;
 }
 
+// A departure this small against the step is rounding in the log, not feed.
+constexpr double kNegligibleDeparture = 1e-9;
+
 // The first-order response x to that input, dx/dt = (u(t - theta) - x) / tau, exact for an input
 // constant between the window boundaries and the step: across a stretch d of constant input v,
 // x <- v + (x - v) e and its sensitivity w = dx/dtau <- w e + (x - v) e d / tau^2, e = exp(-d / tau).
@@ -140,12 +143,13 @@ void driven_model_points(const StepRecord& r, double K, double tau, double theta
       const double b = next < n ? window_begin(r, next) : std::numeric_limits<double>::infinity();
       const double at = std::min(b, stepped ? std::numeric_limits<double>::infinity() : r.t_step);
       if (!(at <= s)) break;
-      advance(at);
       if (!stepped && r.t_step <= b) {
+        advance(at);
         ideal = in.u_after;
         stepped = true;
-      } else {
-        dep = in.departure[next++];
+      } else if (const double d = in.departure[next++]; d != dep) {
+        advance(at);  // a window that holds the input as it is needs no stop
+        dep = d;
       }
     }
     advance(s);
@@ -154,6 +158,14 @@ void driven_model_points(const StepRecord& r, double K, double tau, double theta
 }
 
 }  // namespace
+
+bool input_is_ideal_step(const StepRecord& r) {
+  if (r.u.empty() || r.u.size() != r.t.size()) return false;
+  const DrivenInput in = driven_input(r);
+  const double negligible = kNegligibleDeparture * std::max(std::abs(r.du), std::abs(in.u_before));
+  return std::all_of(in.departure.begin(), in.departure.end(),
+                     [negligible](double d) { return std::abs(d) <= negligible; });
+}
 
 void step_model_points(const StepRecord& r, double K, double tau, double theta, double y0,
                        std::vector<StepModelPoint>& out) {
@@ -470,6 +482,8 @@ StepModel parse_step_model(const std::string& name) {
 }
 
 std::string model_name(StepModel m) { return m == StepModel::fo ? "first_order" : "fopdt"; }
+
+bool logged_input_is_ideal_step(const StepRecord& r) { return input_is_ideal_step(r); }
 
 std::vector<double> step_model_output(const StepRecord& r, double K, double tau_s, double theta_s, double y0) {
   std::vector<StepModelPoint> pts;

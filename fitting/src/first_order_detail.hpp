@@ -26,6 +26,9 @@ struct StepModelPoint {
 };
 StepModelPoint step_model_at(const StepRecord& r, std::size_t i, double K, double tau, double theta, double y0);
 
+/// logged_input_is_ideal_step (first_order.hpp).
+bool input_is_ideal_step(const StepRecord& r);
+
 /// The model and its derivatives at every sample of a record: step_model_at for an ideal step,
 /// the response to the recorded input (StepRecord::u) when the record has one.
 void step_model_points(const StepRecord& r, double K, double tau, double theta, double y0,

@@ -42,10 +42,10 @@ class PooledStepCost final : public ceres::CostFunction {
     double* j_y0 = jac != nullptr ? jac[1] : nullptr;
     const std::size_t n = r_.t.size();
     const double K = p[0][0], tau = p[0][1], theta = p[0][2], y0 = p[1][0];
-    std::vector<StepModelPoint> pts;
-    step_model_points(r_, K, tau, theta, y0, pts);
+    std::vector<StepModelPoint> pts;  // a driven record's model, computed over the whole record
+    if (!r_.u.empty()) step_model_points(r_, K, tau, theta, y0, pts);
     for (std::size_t i = 0; i < n; ++i) {
-      const StepModelPoint& m = pts[i];
+      const StepModelPoint m = r_.u.empty() ? step_model_at(r_, i, K, tau, theta, y0) : pts[i];
       res[i] = m.m - r_.y[i];
       if (j_shared != nullptr) {
         j_shared[3 * i] = m.dK;

@@ -69,6 +69,11 @@ struct StepStart {
 /// candidates beyond the last samples are tried and the one that makes Z most linear is kept.
 StepStart log_incomplete_start(const StepRecord& rec);
 
+/// Whether a record's logged input is the ideal step over every sample window (a commanded
+/// staircase logged at its levels): its driven model is then the ideal step's, which computes
+/// several times faster, and the input can be left out. False for a record without an input.
+bool logged_input_is_ideal_step(const StepRecord& r);
+
 /// Model value at time t.
 double step_response(double t, double t_step, double du, double K, double tau_s, double theta_s, double y0);
 
