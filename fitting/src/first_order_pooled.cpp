@@ -9,6 +9,7 @@
 #include <memory>
 
 #include <Eigen/Dense>
+#include <fmt/format.h>
 #include <ceres/ceres.h>
 
 #include "tunekit/fitting/first_order.hpp"
@@ -94,6 +95,75 @@ void polish_pooled_start(const std::vector<StepRecord>& recs, std::vector<double
   lm_detail::polish<Eigen::MatrixXd, Eigen::VectorXd>(p, lo, hi, fixed, equations);
 }
 
+// The step instants are known to one sample: a rectangular uncertainty r = dt / sqrt(12) in
+// each (JCGM 100:2008, "Guide to the expression of uncertainty in measurement", 4.3.7). An error
+// e_j in step j's instant shifts that step's response alone, which moves the estimates by
+// a_j e_j, a_j = (J^T J)^-1 J_j^T J_j,theta (J_j,theta: the model's derivative in the dead time
+// over step j's samples); the instants of different steps fall at unrelated phases of the sample
+// clock, so their errors are independent and add r^2 sum_j a_j a_j^T to the covariance (law of
+// propagation, ibid. 5.1.2). Shifting every step alike moves the dead time by the same amount
+// (sum_j a_j = 1 in theta): r^2 would be the one common clock offset, which the pooled steps
+// do not share. C is (J^T J)^-1 over the free parameters (free_idx), p the estimates.
+Eigen::MatrixXd instant_resolution_variance(const std::vector<StepRecord>& recs, const std::vector<double>& p,
+                                            const std::vector<int>& free_idx, const Eigen::MatrixXd& C) {
+  const int k = static_cast<int>(free_idx.size());
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(k, k);
+  if (std::find(free_idx.begin(), free_idx.end(), 2) == free_idx.end()) return W;  // theta fixed
+  for (std::size_t j = 0; j < recs.size(); ++j) {
+    const double r = step_instant_resolution(recs[j]);
+    if (!(r > 0)) continue;
+    const double q[4] = {p[0], p[1], p[2], p[3 + j]};
+    Eigen::Matrix4d JtJ;
+    Eigen::Vector4d Jtr;
+    normal_equations(recs[j], q, JtJ, Jtr);
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(k);
+    const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
+    for (int a = 0; a < k; ++a)
+      for (int c = 0; c < 4; ++c)
+        if (free_idx[static_cast<std::size_t>(a)] == idx[c]) v(a) = JtJ(c, 2);
+    const Eigen::VectorXd aj = C * v;
+    W += r * r * aj * aj.transpose();
+  }
+  return W;
+}
+
+// The residuals' variance factor 1 + 2 sum rho_k (residual_variance_factor) over the steps'
+// residuals, each step's from its own lags (p: K, tau_s, theta_s, then each step's y0).
+double pooled_variance_factor(const std::vector<StepRecord>& recs, const std::vector<double>& p) {
+  static constexpr std::size_t cols[4] = {0, 1, 2, 3};
+  double weighted = 0, n = 0;
+  for (std::size_t j = 0; j < recs.size(); ++j) {
+    std::vector<double> res(recs[j].t.size());
+    step_residuals(recs[j], p[0], p[1], p[2], p[3 + j], res.data(), nullptr, 4, cols);
+    weighted += residual_variance_factor(res) * static_cast<double>(res.size());
+    n += static_cast<double>(res.size());
+  }
+  return n > 0 ? weighted / n : 1.0;
+}
+
+// The cluster-robust sandwich C B C, one cluster per step: B the sum over steps of each step's
+// score g_j g_j^T (g_j = J_j^T r_j over the free parameters) times G/(G-1).
+Eigen::MatrixXd cluster_robust_variance(const std::vector<StepRecord>& recs, const std::vector<double>& p,
+                                        const std::vector<int>& free_idx, const Eigen::MatrixXd& C) {
+  const int k = static_cast<int>(free_idx.size());
+  const std::size_t G = recs.size();
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(k, k);
+  for (std::size_t j = 0; j < G; ++j) {
+    const double q[4] = {p[0], p[1], p[2], p[3 + j]};
+    Eigen::Matrix4d JtJ;
+    Eigen::Vector4d Jtr;
+    normal_equations(recs[j], q, JtJ, Jtr);
+    Eigen::VectorXd gj = Eigen::VectorXd::Zero(k);
+    const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
+    for (int a = 0; a < k; ++a)
+      for (int c = 0; c < 4; ++c)
+        if (free_idx[static_cast<std::size_t>(a)] == idx[c]) gj(a) = Jtr(c);
+    B += gj * gj.transpose();
+  }
+  B *= static_cast<double>(G) / static_cast<double>(G - 1);
+  return C * B * C;
+}
+
 // Covariance of the pooled fit from its (3 + steps)-square normal matrix J^T J
 // (pooled_normal_equations): s^2 (J^T J)^-1, what ceres::Covariance computes
 // from the tall Jacobian with a dense SVD, at a cost independent of the number of samples.
@@ -149,22 +219,9 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
   // takes whatever correlation there is within a step; an interval is never made narrower
   // than the noise-only one.
   const std::size_t G = recs.size();
-  if (!o.absolute_sigma && G >= 4 && f.diagnostics.whiteness_p < kWhitenessRobustP) {
-    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(k, k);
-    for (std::size_t j = 0; j < G; ++j) {
-      const double q[4] = {p[0], p[1], p[2], p[3 + j]};
-      Eigen::Matrix4d JtJ;
-      Eigen::Vector4d Jtr;
-      normal_equations(recs[j], q, JtJ, Jtr);
-      Eigen::VectorXd gj = Eigen::VectorXd::Zero(k);
-      const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
-      for (int a = 0; a < k; ++a)
-        for (int c = 0; c < 4; ++c)
-          if (free_idx[static_cast<std::size_t>(a)] == idx[c]) gj(a) = Jtr(c);
-      B += gj * gj.transpose();
-    }
-    B *= static_cast<double>(G) / static_cast<double>(G - 1);
-    Eigen::MatrixXd R = C * B * C;
+  const bool not_white = !o.absolute_sigma && f.diagnostics.whiteness_p < kWhitenessRobustP;
+  if (not_white && G >= 4) {
+    Eigen::MatrixXd R = cluster_robust_variance(recs, p, free_idx, C);
     bool wider = false;
     for (int a = 0; a < k; ++a) {
       if (free_idx[static_cast<std::size_t>(a)] < 3 && R(a, a) > V(a, a)) wider = true;
@@ -175,33 +232,19 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
       method = "cluster-robust over steps";
       tq = t_multiplier(o.confidence, static_cast<int>(G) - 1);
     }
+  } else if (const double factor = not_white ? pooled_variance_factor(recs, p) : 1.0; factor > 1) {
+    // Too few steps for the sandwich (the two arrivals at one flow level): the noise's variance
+    // is widened by the residuals' variance factor and the degrees of freedom divided by it, as
+    // the output-error fits do (Bartlett, "Some aspects of the time-correlation problem in
+    // regard to tests of significance", 1935).
+    V *= factor;
+    tq = t_multiplier(o.confidence, std::max(1.0, dof / factor));
+    method = fmt::format("wald, widened for correlated residuals (variance factor {:.3g})", factor);
   }
-  // The step instants are known to one sample: a rectangular uncertainty r = dt / sqrt(12) in
-  // each (JCGM 100:2008, "Guide to the expression of uncertainty in measurement", 4.3.7). An error
-  // e_j in step j's instant shifts that step's response alone, which moves the estimates by
-  // a_j e_j, a_j = (J^T J)^-1 J_j^T J_j,theta (J_j,theta: the model's derivative in the dead time
-  // over step j's samples); the instants of different steps fall at unrelated phases of the sample
-  // clock, so their errors are independent and add r^2 sum_j a_j a_j^T to the covariance (law of
-  // propagation, ibid. 5.1.2). Shifting every step alike moves the dead time by the same amount
-  // (sum_j a_j = 1 in theta): r^2 would be the one common clock offset, which the pooled steps
-  // do not share.
-  double theta_resolution = 0;
-  for (const auto& r : recs) theta_resolution = std::max(theta_resolution, step_instant_resolution(r));
-  const int theta_pos = static_cast<int>(std::find(free_idx.begin(), free_idx.end(), 2) - free_idx.begin());
-  if (theta_resolution > 0 && theta_pos < k) {
-    for (std::size_t j = 0; j < G; ++j) {
-      const double q[4] = {p[0], p[1], p[2], p[3 + j]};
-      Eigen::Matrix4d JtJ;
-      Eigen::Vector4d Jtr;
-      normal_equations(recs[j], q, JtJ, Jtr);
-      Eigen::VectorXd v = Eigen::VectorXd::Zero(k);
-      const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
-      for (int a = 0; a < k; ++a)
-        for (int c = 0; c < 4; ++c)
-          if (free_idx[static_cast<std::size_t>(a)] == idx[c]) v(a) = JtJ(c, 2);
-      const Eigen::VectorXd aj = C * v;
-      V += theta_resolution * theta_resolution * aj * aj.transpose();
-    }
+  const Eigen::MatrixXd W = instant_resolution_variance(recs, p, free_idx, C);
+  if (W.trace() > 0) {
+    V += W;
+    method += ", with the step instants' sampling resolution";
   }
   f.covariance.assign(static_cast<std::size_t>(n * n), 0.0);
   for (int a = 0; a < k; ++a)
@@ -213,7 +256,6 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
     auto& prm = f.params[static_cast<std::size_t>(j)];
     prm.ci95_method = method;
     const double var = V(a, a);
-    if (theta_resolution > 0 && theta_pos < k) prm.ci95_method += ", with the step instants' sampling resolution";
     prm.std_error = var >= 0 ? std::sqrt(var) : kNaN;
     prm.ci95_lo = prm.value - tq * prm.std_error;
     prm.ci95_hi = prm.value + tq * prm.std_error;
