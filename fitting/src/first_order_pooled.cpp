@@ -9,7 +9,6 @@
 #include <memory>
 
 #include <Eigen/Dense>
-#include <fmt/format.h>
 #include <ceres/ceres.h>
 
 #include "tunekit/fitting/first_order.hpp"
@@ -127,20 +126,6 @@ Eigen::MatrixXd instant_resolution_variance(const std::vector<StepRecord>& recs,
   return W;
 }
 
-// The residuals' variance factor 1 + 2 sum rho_k (residual_variance_factor) over the steps'
-// residuals, each step's from its own lags (p: K, tau_s, theta_s, then each step's y0).
-double pooled_variance_factor(const std::vector<StepRecord>& recs, const std::vector<double>& p) {
-  static constexpr std::size_t cols[4] = {0, 1, 2, 3};
-  double weighted = 0, n = 0;
-  for (std::size_t j = 0; j < recs.size(); ++j) {
-    std::vector<double> res(recs[j].t.size());
-    step_residuals(recs[j], p[0], p[1], p[2], p[3 + j], res.data(), nullptr, 4, cols);
-    weighted += residual_variance_factor(res) * static_cast<double>(res.size());
-    n += static_cast<double>(res.size());
-  }
-  return n > 0 ? weighted / n : 1.0;
-}
-
 // The cluster-robust sandwich C B C, one cluster per step: B the sum over steps of each step's
 // score g_j g_j^T (g_j = J_j^T r_j over the free parameters) times G/(G-1).
 Eigen::MatrixXd cluster_robust_variance(const std::vector<StepRecord>& recs, const std::vector<double>& p,
@@ -232,14 +217,6 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
       method = "cluster-robust over steps";
       tq = t_multiplier(o.confidence, static_cast<int>(G) - 1);
     }
-  } else if (const double factor = not_white ? pooled_variance_factor(recs, p) : 1.0; factor > 1) {
-    // Too few steps for the sandwich (the two arrivals at one flow level): the noise's variance
-    // is widened by the residuals' variance factor and the degrees of freedom divided by it, as
-    // the output-error fits do (Bartlett, "Some aspects of the time-correlation problem in
-    // regard to tests of significance", 1935).
-    V *= factor;
-    tq = t_multiplier(o.confidence, std::max(1.0, dof / factor));
-    method = fmt::format("wald, widened for correlated residuals (variance factor {:.3g})", factor);
   }
   const Eigen::MatrixXd W = instant_resolution_variance(recs, p, free_idx, C);
   if (W.trace() > 0) {
