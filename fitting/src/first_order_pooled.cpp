@@ -94,6 +94,31 @@ void polish_pooled_start(const std::vector<StepRecord>& recs, std::vector<double
   lm_detail::polish<Eigen::MatrixXd, Eigen::VectorXd>(p, lo, hi, fixed, equations);
 }
 
+// Step j's normal equations at the pooled estimates p (K, tau_s, theta_s, then each step's
+// y0), and a 4-vector of that step's parameters (K, tau_s, theta_s, its y0) placed on the free
+// parameters (free_idx; fixed ones and other steps' offsets are 0).
+struct StepNormal {
+  Eigen::Matrix4d JtJ;
+  Eigen::Vector4d Jtr;
+};
+
+StepNormal step_normal(const std::vector<StepRecord>& recs, const std::vector<double>& p, std::size_t j) {
+  const double q[4] = {p[0], p[1], p[2], p[3 + j]};
+  StepNormal out;
+  normal_equations(recs[j], q, out.JtJ, out.Jtr);
+  return out;
+}
+
+Eigen::VectorXd on_free_params(const Eigen::Vector4d& v, std::size_t j, const std::vector<int>& free_idx) {
+  const int k = static_cast<int>(free_idx.size());
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(k);
+  const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
+  for (int a = 0; a < k; ++a)
+    for (int c = 0; c < 4; ++c)
+      if (free_idx[static_cast<std::size_t>(a)] == idx[c]) out(a) = v(c);
+  return out;
+}
+
 // The step instants are known to one sample: a rectangular uncertainty r = dt / sqrt(12) in
 // each (JCGM 100:2008, "Guide to the expression of uncertainty in measurement", 4.3.7). An error
 // e_j in step j's instant shifts that step's response alone, which moves the estimates by
@@ -111,16 +136,8 @@ Eigen::MatrixXd instant_resolution_variance(const std::vector<StepRecord>& recs,
   for (std::size_t j = 0; j < recs.size(); ++j) {
     const double r = step_instant_resolution(recs[j]);
     if (!(r > 0)) continue;
-    const double q[4] = {p[0], p[1], p[2], p[3 + j]};
-    Eigen::Matrix4d JtJ;
-    Eigen::Vector4d Jtr;
-    normal_equations(recs[j], q, JtJ, Jtr);
-    Eigen::VectorXd v = Eigen::VectorXd::Zero(k);
-    const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
-    for (int a = 0; a < k; ++a)
-      for (int c = 0; c < 4; ++c)
-        if (free_idx[static_cast<std::size_t>(a)] == idx[c]) v(a) = JtJ(c, 2);
-    const Eigen::VectorXd aj = C * v;
+    const Eigen::Vector4d by_theta = step_normal(recs, p, j).JtJ.col(2);
+    const Eigen::VectorXd aj = C * on_free_params(by_theta, j, free_idx);
     W += r * r * aj * aj.transpose();
   }
   return W;
@@ -134,15 +151,7 @@ Eigen::MatrixXd cluster_robust_variance(const std::vector<StepRecord>& recs, con
   const std::size_t G = recs.size();
   Eigen::MatrixXd B = Eigen::MatrixXd::Zero(k, k);
   for (std::size_t j = 0; j < G; ++j) {
-    const double q[4] = {p[0], p[1], p[2], p[3 + j]};
-    Eigen::Matrix4d JtJ;
-    Eigen::Vector4d Jtr;
-    normal_equations(recs[j], q, JtJ, Jtr);
-    Eigen::VectorXd gj = Eigen::VectorXd::Zero(k);
-    const int idx[4] = {0, 1, 2, 3 + static_cast<int>(j)};
-    for (int a = 0; a < k; ++a)
-      for (int c = 0; c < 4; ++c)
-        if (free_idx[static_cast<std::size_t>(a)] == idx[c]) gj(a) = Jtr(c);
+    const Eigen::VectorXd gj = on_free_params(step_normal(recs, p, j).Jtr, j, free_idx);
     B += gj * gj.transpose();
   }
   B *= static_cast<double>(G) / static_cast<double>(G - 1);
