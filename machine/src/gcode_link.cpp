@@ -51,7 +51,11 @@ void GcodeLink::reset_line_numbers() {
   if (opt_.line_numbers) send("M110 N0");
 }
 
-std::vector<std::string> GcodeLink::send(const std::string& command) {
+void GcodeLink::check_abort() const {
+  if (abort_flag && abort_flag->load()) throw MachineError("interrupted", t_.describe());
+}
+
+void GcodeLink::write_checked(const std::string& command) {
   if (guard)
     if (const auto why = guard->refuse(command)) {
       if (journal_) journal_->error("refused to send a line", {{"line", command}, {"reason", *why}});
@@ -62,12 +66,17 @@ std::vector<std::string> GcodeLink::send(const std::string& command) {
   history_[n] = command;
   if (history_.size() > 64) history_.erase(history_.begin());
   write_numbered(n);
+}
+
+std::vector<std::string> GcodeLink::send(const std::string& command) {
+  write_checked(command);
+  const long n = line_no_;
   std::vector<std::string> info;
   long resend_pending = -1;  // line the firmware asked for, sent after the next ok
   int retries = 0;
   auto last_activity = std::chrono::steady_clock::now();
   for (;;) {
-    if (abort_flag && abort_flag->load()) throw MachineError("interrupted", t_.describe());
+    check_abort();
     const auto silent = std::chrono::steady_clock::now() - last_activity;
     if (silent >= opt_.timeout) {
       if (++retries > opt_.max_retries)
@@ -125,6 +134,47 @@ std::vector<std::string> GcodeLink::send(const std::string& command) {
     }
     if (journal_) journal_->received(l);
     info.emplace_back(l);
+  }
+}
+
+void GcodeLink::send_pipelined(const std::vector<std::string>& commands, std::size_t window) {
+  if (window <= 1) {
+    for (const auto& c : commands) {
+      check_abort();
+      send(c);
+    }
+    return;
+  }
+  std::size_t written = 0, answered = 0;
+  auto last_activity = std::chrono::steady_clock::now();
+  while (answered < commands.size()) {
+    check_abort();
+    for (; written < commands.size() && written - answered < window; ++written) write_checked(commands[written]);
+    const auto silent = std::chrono::steady_clock::now() - last_activity;
+    if (silent >= opt_.timeout)
+      throw MachineError(fmt::format("no answer to '{}' for {} ms with {} lines sent ahead (not sent again)",
+                                     commands[answered], opt_.timeout.count(), written - answered),
+                         t_.describe());
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(opt_.timeout - silent);
+    auto line = reader_.next(
+        std::min<std::chrono::milliseconds>(left + std::chrono::milliseconds(1), std::chrono::milliseconds(200)));
+    if (!line) continue;
+    last_activity = std::chrono::steady_clock::now();
+    const std::string_view l = *line;
+    if (is_ok(l)) {
+      if (journal_) journal_->received(l);
+      ++answered;
+      if (on_batch) on_batch();
+    } else if (resend_number(l) || starts_with(l, "Error:") || starts_with(l, "error:") || starts_with(l, "!!")) {
+      if (journal_) journal_->received(l);
+      throw MachineError(fmt::format("firmware answer after '{}' with lines sent ahead: {}", commands[answered], l),
+                         t_.describe());
+    } else if (on_line && on_line(l)) {
+      if (++stats_.data_lines % 64 == 0 && on_batch) on_batch();
+    } else {
+      if (starts_with(l, "busy:") || starts_with(l, "echo:busy:")) ++stats_.busy;
+      if (journal_) journal_->received(l);
+    }
   }
 }
 

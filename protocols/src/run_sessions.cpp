@@ -33,6 +33,10 @@ int parse_numbers(std::string_view s, double* out, int max) {
 namespace {
 
 constexpr std::chrono::milliseconds kHttpTimeout{5000};
+// Lines kept unanswered on Klipper's G-code pseudo-terminal. Klipper stops reading at 20
+// pending commands (klippy/gcode.py); 8 keeps the link busy without filling its queue, and an
+// interrupted run has at most 8 lines queued beyond the one that was answering.
+constexpr std::size_t kKlipperReadAhead = 8;
 
 class GcodeSession : public Session {
  public:
@@ -71,6 +75,12 @@ class GcodeSession : public Session {
     return f;
   }
   void send(const std::string& line) override { link_.send(line); }
+  void send_lines(const std::vector<std::string>& lines, const std::atomic<bool>& /*abort: the link's flag*/) override {
+    // Klipper reads ahead and answers each line in order (its API session sends scripts of 50
+    // lines); Marlin's and RepRapFirmware's small receive buffers and line-number resends want
+    // one line in flight.
+    link_.send_pipelined(lines, firmware.firmware == firmware::Firmware::klipper ? kKlipperReadAhead : 1);
+  }
   void record(const std::string& sensor, bool on, double window_s) override {
     if (!firmware.sensor_stream() && rrf_file_accelerometer(sensor)) {
       if (on) start_m956(window_s);

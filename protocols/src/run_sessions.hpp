@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/machine/journal.hpp"
@@ -83,6 +84,14 @@ class Session {
   virtual ~Session() = default;
   virtual firmware::FirmwareInfo identify() = 0;
   virtual void send(const std::string& line) = 0;
+  /// Sends a run of protocol lines (no recording directive among them), in order. By default one
+  /// by one, stopping before the next line once `abort` is set.
+  virtual void send_lines(const std::vector<std::string>& lines, const std::atomic<bool>& abort) {
+    for (const auto& l : lines) {
+      if (abort.load()) throw MachineError("interrupted");
+      send(l);
+    }
+  }
   /// `window_s`: how long the recording is expected to last (RepRapFirmware's M956 takes a
   /// sample count, not a stop command).
   virtual void record(const std::string& sensor, bool on, double window_s) = 0;

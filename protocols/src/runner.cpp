@@ -256,9 +256,15 @@ RunResult run_experiment(const RunOptions& o) {
     for (const auto& sensor : res.experiment.sensors) session->check_recording(sensor);
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
+    std::vector<std::string> run;  // the lines since the last recording directive
+    const auto send_run = [&] {
+      session->send_lines(run, *abort_flag);
+      run.clear();
+    };
     for (const auto& line : res.gcode) {
       if (abort_flag->load()) throw MachineError("interrupted", port);
       if (line.rfind(";@record ", 0) == 0) {
+        send_run();
         const auto rest = line.substr(9);
         const auto sp = rest.find(' ');
         const std::string sensor = rest.substr(0, sp);
@@ -276,8 +282,9 @@ RunResult run_experiment(const RunOptions& o) {
       if (line.empty() || line[0] == ';') continue;
       std::string cmd = line.substr(0, line.find(';'));
       while (!cmd.empty() && cmd.back() == ' ') cmd.pop_back();
-      session->send(cmd);
+      run.push_back(std::move(cmd));
     }
+    send_run();
     session->finish();
   } catch (const MachineError& e) {
     const bool interrupted = abort_flag->load();

@@ -214,8 +214,8 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
       interp_.apply(*words);
     }
   }
-  out_flush(emit);
   if (late_ms > 0) {
+    out_flush(emit);  // what the line produced arrives on time; only its "ok" is late
     // Waited in short slices, so that stopping the simulator ends the wait (set_cancel).
     using Clock = std::chrono::steady_clock;
     const Clock::time_point until =
@@ -223,7 +223,10 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     while (!(cancel_ && cancel_->load()) && Clock::now() < until)
       std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(10), until - Clock::now()));
   }
-  emit("ok\n");
+  // The data a line produced and its "ok" leave in one write, as from a firmware's serial
+  // buffer: the host wakes once per line, not once for the data and again for the "ok".
+  out_ += "ok\n";
+  out_flush(emit);
   return true;
 }
 

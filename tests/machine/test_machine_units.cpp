@@ -3,11 +3,13 @@
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <cmath>
 #include <thread>
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
@@ -222,6 +224,75 @@ TEST_CASE("firmware errors and silence are MachineErrors", "[machine]") {
     GcodeLink link(*ip.pair.first, nullptr, {std::chrono::milliseconds(100), 1, true});
     link.reset_line_numbers();
     CHECK_THROWS_AS(link.send("M83"), tunekit::MachineError);
+  }
+}
+
+namespace {
+
+std::vector<std::string> sweep_lines(int n) {
+  std::vector<std::string> lines;
+  for (int i = 0; i < n; ++i) lines.push_back("G1 X" + std::to_string(100 + i % 20) + " F6000");
+  return lines;
+}
+
+/// The most lines the journal shows sent and not yet answered by an "ok".
+int most_unanswered(const std::string& journal_path) {
+  std::ifstream f(journal_path);
+  std::string line;
+  int in_flight = 0, most = 0;
+  while (std::getline(f, line)) {
+    const auto rec = nlohmann::json::parse(line);
+    if (rec["kind"] == "tx") most = std::max(most, ++in_flight);
+    if (rec["kind"] == "rx" && rec["line"] == "ok") --in_flight;
+  }
+  return most;
+}
+
+}  // namespace
+
+TEST_CASE("lines sent ahead to Klipper arrive once each and in order, never more than the window unanswered",
+          "[machine]") {
+  InProcess ip({"firmware=klipper"});
+  const auto dir = tunekit::test::scratch_dir("machine_link_ahead");
+  {
+    Journal j(dir);
+    GcodeLink link(*ip.pair.first, &j, {std::chrono::milliseconds(2000), 2, true});
+    link.reset_line_numbers();  // N0, answered before the run below
+    link.send_pipelined(sweep_lines(300), 8);
+    CHECK(link.stats().lines_sent == 301);
+  }
+  const auto rx = ip.sim.received();
+  REQUIRE(rx.size() == 301);
+  for (std::size_t i = 1; i < rx.size(); ++i) CHECK(rx[i].rfind("N" + std::to_string(i) + " G1 X", 0) == 0);
+  CHECK(most_unanswered(dir + "/journal.jsonl") == 8);  // sent ahead, and no further than the window
+}
+
+TEST_CASE("a Klipper that stops answering lines sent ahead ends the run and gets no line twice", "[machine]") {
+  InProcess ip({"firmware=klipper", "fault=late-ok@6:2000"});
+  GcodeLink link(*ip.pair.first, nullptr, {std::chrono::milliseconds(200), 3, true});
+  link.reset_line_numbers();
+  try {
+    link.send_pipelined(sweep_lines(40), 8);
+    FAIL("no error");
+  } catch (const tunekit::MachineError& e) {
+    CHECK(std::string(e.message()).find("not sent again") != std::string::npos);
+    CHECK(static_cast<int>(e.code()) == 3);
+  }
+  CHECK(link.stats().retries == 0);
+  const auto rx = ip.sim.received();
+  CHECK(std::set<std::string>(rx.begin(), rx.end()).size() == rx.size());
+}
+
+TEST_CASE("a firmware error among lines sent ahead ends the run with that error", "[machine]") {
+  InProcess ip({"firmware=klipper", "fault=error@5"});
+  GcodeLink link(*ip.pair.first, nullptr, {std::chrono::milliseconds(1000), 1, true});
+  link.reset_line_numbers();
+  try {
+    link.send_pipelined(sweep_lines(40), 8);
+    FAIL("no error");
+  } catch (const tunekit::MachineError& e) {
+    CHECK(std::string(e.message()).find("Thermal Runaway") != std::string::npos);
+    CHECK(std::string(e.message()).find("sent ahead") != std::string::npos);
   }
 }
 

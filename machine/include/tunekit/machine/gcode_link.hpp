@@ -70,6 +70,13 @@ class GcodeLink {
   /// Sends one command and waits for its "ok". Returns the informational lines received
   /// meanwhile (e.g. the M115 report). Throws MachineError as described above.
   std::vector<std::string> send(const std::string& command);
+  /// Sends `commands` in order keeping up to `window` of them unanswered, for a firmware that
+  /// reads ahead and answers every line with one "ok" in order, never asking for a line again:
+  /// Klipper's G-code pseudo-terminal queues what it reads and stops reading at 20 pending
+  /// commands (klippy/gcode.py, GCodeIO). Each line passes the guard before it is written. A line
+  /// is never sent twice here: a silence of the link's timeout, an error or a resend request
+  /// ends the run with MachineError. A window of 1 is send() line by line.
+  void send_pipelined(const std::vector<std::string>& commands, std::size_t window);
   /// Resets the firmware's line counter (M110 N0) and ours.
   void reset_line_numbers();
   /// Best effort, for aborts: sends commands without line numbers, waits at most `wait` in
@@ -81,6 +88,8 @@ class GcodeLink {
 
  private:
   void write_numbered(long n);
+  void write_checked(const std::string& command);
+  void check_abort() const;
   Transport& t_;
   Journal* journal_;
   LinkOptions opt_;
