@@ -45,7 +45,8 @@ std::string write_pluck(const std::string& name, const PluckTruth& tr, unsigned 
 
 TEST_CASE(
     "synthetic plucks, 2nd harmonic 0.5-3x the fundamental, 3 axes mixed: the fundamental within 0.5 % in 100 "
-    "of 100 draws") {
+    "of 100 draws",
+    "[repeats]") {
   std::mt19937 rng(31);
   int within = 0, harmonic_strongest = 0, with_harmonic = 0;
   for (int i = 0; i < 100; ++i) {
@@ -73,7 +74,8 @@ TEST_CASE(
   CHECK(harmonic_strongest >= 10);  // 12 of these 100 draws
 }
 
-TEST_CASE("synthetic plucks: the 95 % interval of the fundamental covers the truth in 90-98 % of 300 draws") {
+TEST_CASE("synthetic plucks: the 95 % interval of the fundamental covers the truth in 90-98 % of 300 draws",
+          "[repeats]") {
   std::mt19937 rng(3131);
   int covered = 0;
   const int draws = 300;

@@ -96,7 +96,8 @@ TEST_CASE(
   CHECK(res.strength > 5);
 }
 
-TEST_CASE("Monte-Carlo: the 95 % interval of the ring-down damping covers the truth in 90-99 % of 200 noise draws") {
+TEST_CASE("Monte-Carlo: the 95 % interval of the ring-down damping covers the truth in 90-99 % of 200 noise draws",
+          "[repeats]") {
   const DecayTruth tr;
   int covered = 0, freq_ok = 0;
   const int draws = 200;

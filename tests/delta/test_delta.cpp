@@ -142,7 +142,7 @@ TEST_CASE("delta fit: 9-factor standard errors agree with a finite-difference Ja
   }
 }
 
-TEST_CASE("delta fit: 6-factor 95 % intervals cover each true error in 90-99 % of 200 noise draws") {
+TEST_CASE("delta fit: 6-factor 95 % intervals cover each true error in 90-99 % of 200 noise draws", "[repeats]") {
   const auto n = nominal_delta();
   const auto t = true_delta();
   const auto pts = sim::delta_probe_pattern(85, 2, 8);

@@ -215,7 +215,8 @@ TEST_CASE("history cli: 32 processes recording concurrently into one database lo
                    "WHERE q.record_id = r.id)") == 0);
 }
 
-TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the run where it exceeds the margin") {
+TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the run where it exceeds the margin",
+          "[repeats]") {
   // Ten calibrations of the simulated printer's axes (the liquefier tests are left out: the
   // belt is what changes), its X resonance lowered step by step as a loosening belt lowers it.
   // The simulator's noise is the same in every run (same seed), so what changes is the belt.
@@ -330,7 +331,8 @@ TEST_CASE("history cli: on the simulator, a loosening belt is flagged from the r
   CHECK(steady_row.substr(0, steady_row.find("</tr>")).find("data-drifted") == std::string::npos);
 }
 
-TEST_CASE("history cli: three calibrations of one simulated printer drift in nothing, a 5 % lower resonance is drift") {
+TEST_CASE("history cli: three calibrations of one simulated printer drift in nothing, a 5 % lower resonance is drift",
+          "[repeats]") {
   // The same simulated printer calibrated three times with different noise (seeds), then a
   // fourth time with its X belt loosened so that the X resonance is 5 % lower.
   const std::string dir = scratch_dir("history-same-printer");

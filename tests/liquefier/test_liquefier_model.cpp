@@ -213,11 +213,11 @@ void check_coverage(double rate, int draws) {
 
 // The figures in docs/liquefier-model.md are from 200 draws (TUNEKIT_STORE_DRAWS=200); the
 // defaults keep the tests short.
-TEST_CASE("the 95 % intervals of a, b and theta cover the truth in 90-98 % of draws at 25 Hz") {
+TEST_CASE("the 95 % intervals of a, b and theta cover the truth in 90-98 % of draws at 25 Hz", "[repeats]") {
   check_coverage(25.0, 24);
 }
 
-TEST_CASE("the 95 % intervals of a, b and theta cover the truth in 90-98 % of draws at 1 kHz") {
+TEST_CASE("the 95 % intervals of a, b and theta cover the truth in 90-98 % of draws at 1 kHz", "[repeats]") {
   check_coverage(1000.0, 6);
 }
 

@@ -122,7 +122,7 @@ TEST_CASE("FOPDT with noise recovers K, tau and theta within their 95 % interval
   CHECK(f.diagnostics.aic < fo.diagnostics.aic);
 }
 
-TEST_CASE("Monte-Carlo: the 95 % interval of tau covers the truth in 90-99 % of 200 noise draws") {
+TEST_CASE("Monte-Carlo: the 95 % interval of tau covers the truth in 90-99 % of 200 noise draws", "[repeats]") {
   Truth tr;
   int covered = 0, n = 0;
   for (unsigned seed = 1000; seed < 1200; ++seed) {

@@ -73,7 +73,8 @@ void check_no_nulls(const nlohmann::json& j, const std::string& path = "") {
 
 }  // namespace
 
-TEST_CASE("Cross-WLF at three temperatures: 95 % intervals of D2 and A1 cover the truth in 90-99 % of 200 draws") {
+TEST_CASE("Cross-WLF at three temperatures: 95 % intervals of D2 and A1 cover the truth in 90-99 % of 200 draws",
+          "[repeats]") {
   const auto truth = ridge_truth();
   std::mt19937 rng(20261123);
   ViscosityFitOptions o;
