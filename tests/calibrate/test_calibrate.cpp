@@ -90,7 +90,7 @@ TEST_CASE("calibrate on the simulated printer writes a report whose plots and nu
   CHECK(diff.find("shaper_freq_x") != std::string::npos);
 }
 
-TEST_CASE("two calibrations of the simulated printer give byte-identical results.json") {
+TEST_CASE("two calibrations of the simulated printer give byte-identical results.json", "[repeats]") {
   const auto a = calibrate("calibrate_det_a");
   const auto b = calibrate("calibrate_det_b");
   INFO(a.cli.err << b.cli.err);

@@ -31,7 +31,8 @@ std::string sim_run(const std::string& name, const std::vector<std::string>& ext
 
 }  // namespace
 
-TEST_CASE("calibrate on each firmware's simulated planner never says the step and frequency taus do NOT agree") {
+TEST_CASE("calibrate on each firmware's simulated planner never says the step and frequency taus do NOT agree",
+          "[repeats]") {
   const std::string fw = GENERATE(as<std::string>{}, "marlin", "rrf", "klipper");
   const std::string preset = GENERATE(as<std::string>{}, "desktop", "peek");
   INFO("firmware " << fw << ", preset " << preset);
