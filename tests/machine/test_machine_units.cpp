@@ -248,6 +248,20 @@ int most_unanswered(const std::string& journal_path) {
   return most;
 }
 
+/// Sends 40 lines ahead (window 8) where the run must fail; returns the MachineError's message
+/// (exit code 3 checked).
+std::string pipelined_failure(GcodeLink& link) {
+  link.reset_line_numbers();
+  try {
+    link.send_pipelined(sweep_lines(40), 8);
+  } catch (const tunekit::MachineError& e) {
+    CHECK(static_cast<int>(e.code()) == 3);
+    return e.message();
+  }
+  FAIL("no error");
+  return {};
+}
+
 }  // namespace
 
 TEST_CASE("lines sent ahead to Klipper arrive once each and in order, never more than the window unanswered",
@@ -270,14 +284,7 @@ TEST_CASE("lines sent ahead to Klipper arrive once each and in order, never more
 TEST_CASE("a Klipper that stops answering lines sent ahead ends the run and gets no line twice", "[machine]") {
   InProcess ip({"firmware=klipper", "fault=late-ok@6:2000"});
   GcodeLink link(*ip.pair.first, nullptr, {std::chrono::milliseconds(200), 3, true});
-  link.reset_line_numbers();
-  try {
-    link.send_pipelined(sweep_lines(40), 8);
-    FAIL("no error");
-  } catch (const tunekit::MachineError& e) {
-    CHECK(std::string(e.message()).find("not sent again") != std::string::npos);
-    CHECK(static_cast<int>(e.code()) == 3);
-  }
+  CHECK(pipelined_failure(link).find("not sent again") != std::string::npos);
   CHECK(link.stats().retries == 0);
   const auto rx = ip.sim.received();
   CHECK(std::set<std::string>(rx.begin(), rx.end()).size() == rx.size());
@@ -286,14 +293,9 @@ TEST_CASE("a Klipper that stops answering lines sent ahead ends the run and gets
 TEST_CASE("a firmware error among lines sent ahead ends the run with that error", "[machine]") {
   InProcess ip({"firmware=klipper", "fault=error@5"});
   GcodeLink link(*ip.pair.first, nullptr, {std::chrono::milliseconds(1000), 1, true});
-  link.reset_line_numbers();
-  try {
-    link.send_pipelined(sweep_lines(40), 8);
-    FAIL("no error");
-  } catch (const tunekit::MachineError& e) {
-    CHECK(std::string(e.message()).find("Thermal Runaway") != std::string::npos);
-    CHECK(std::string(e.message()).find("sent ahead") != std::string::npos);
-  }
+  const std::string why = pipelined_failure(link);
+  CHECK(why.find("Thermal Runaway") != std::string::npos);
+  CHECK(why.find("sent ahead") != std::string::npos);
 }
 
 TEST_CASE("simulated liquefier follows its first-order truth", "[machine]") {
