@@ -1,6 +1,7 @@
 #include "run_sessions.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 
@@ -17,15 +18,16 @@ namespace tunekit::protocols::detail {
 
 /// Parses whitespace-separated numbers after a prefix; returns how many were read.
 int parse_numbers(std::string_view s, double* out, int max) {
-  std::string tmp(s);
-  const char* p = tmp.c_str();
+  const char* p = s.data();
+  const char* const end = s.data() + s.size();
   int n = 0;
   while (n < max) {
-    char* end = nullptr;
-    const double v = std::strtod(p, &end);
-    if (end == p) break;
-    out[n++] = v;
-    p = end;
+    while (p < end && (*p == ' ' || *p == '\t')) ++p;
+    if (p < end && *p == '+') ++p;
+    const auto [next, ec] = std::from_chars(p, end, out[n]);
+    if (ec != std::errc() || next == p) break;
+    ++n;
+    p = next;
   }
   return n;
 }

@@ -2,6 +2,7 @@
 // the physical models it drives each step (input shaping, the axes' resonant modes with the
 // accelerometer, the liquefier with the load cell). The liquefier model is SimConfig::liquefier.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
 #include <numbers>
@@ -9,9 +10,31 @@
 #include <fmt/format.h>
 
 #include "sim_constants.hpp"
+#include "tunekit/core/text.hpp"
 #include "tunekit/sim/simulator.hpp"
 
 namespace tunekit::sim {
+
+namespace {
+
+struct DataField {
+  double value;
+  int decimals;
+};
+
+/// One sensor line of the simulator's stream: "<tag> <v1> <v2> ...\n", each value with its
+/// decimals (the resolution the line's format documents, simulator.hpp).
+template <std::size_t N>
+void append_data_line(std::string& out, std::string_view tag, const std::array<DataField, N>& fields) {
+  out.append(tag);
+  for (const auto& f : fields) {
+    out.push_back(' ');
+    core::append_fixed(out, f.value, f.decimals);
+  }
+  out.push_back('\n');
+}
+
+}  // namespace
 
 Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed) {
   firmware_ = cfg_.firmware == "klipper" ? FirmwareRules::klipper
@@ -148,10 +171,11 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
     const double ax = meas[0] + cfg_.cross_coupling * meas[1] + cfg_.accel_noise_mm_s2 * normal_(rng_);
     const double ay = meas[1] + cfg_.cross_coupling * meas[0] + cfg_.accel_noise_mm_s2 * normal_(rng_);
     const double az = sim::kAccelRestZ_mm_s2 + meas[2] + cfg_.accel_noise_mm_s2 * normal_(rng_);
-    if (accel_sink) accel_sink(t_, ax, ay, az);
-    else
-      fmt::format_to(std::back_inserter(out_), "echo:TKA {:.6f} {:.2f} {:.2f} {:.2f} {:.2f} {:.2f}\n", t_, ax, ay, az,
-                     acc1[0], acc1[1]);
+    if (accel_sink) {
+      accel_sink(t_, ax, ay, az);
+    } else {
+      append_data_line<6>(out_, "echo:TKA", {{{t_, 6}, {ax, 2}, {ay, 2}, {az, 2}, {acc1[0], 2}, {acc1[1], 2}}});
+    }
     ++accel_sent_;
   }
   if (capture_left_ > 0 && step_ % accel_every_ == 0) {
@@ -215,7 +239,7 @@ void Simulator::emit_pending_load_sample(double t, double fed_mm) {
   if (load_pending_) {
     const double span = t - window_start_t_;
     const double u_mean = span > 0 ? (fed_mm - fed_at_window_start_) / span : 0.0;
-    fmt::format_to(std::back_inserter(out_), "echo:TKL {:.6f} {:.5f} {:.5f}\n", pending_t_, u_mean, pending_force_);
+    append_data_line<3>(out_, "echo:TKL", {{{pending_t_, 6}, {u_mean, 5}, {pending_force_, 5}}});
     load_pending_ = false;
     ++load_sent_;
   }

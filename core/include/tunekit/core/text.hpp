@@ -5,6 +5,7 @@
 // locale; bytes outside ASCII pass through unchanged.
 
 #include <cctype>
+#include <charconv>
 #include <cstddef>
 #include <cstdlib>
 #include <optional>
@@ -58,6 +59,16 @@ inline std::optional<double> parse_decimal(std::string_view s) {
   if (!is_decimal_number(s)) return std::nullopt;
   const std::string text(s);
   return std::strtod(text.c_str(), nullptr);
+}
+
+/// Appends `v` with `decimals` digits after the point, as printf's "%.*f" writes it (correctly
+/// rounded, "-0.00" for a small negative). For the sensor streams, hundreds of thousands of
+/// numbers per run: std::to_chars needs no format string and no allocation. `decimals` <= 60
+/// (the buffer holds the largest double's 309 integer digits with them).
+inline void append_fixed(std::string& out, double v, int decimals) {
+  char buf[400];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+  out.append(buf, r.ec == std::errc() ? r.ptr : buf);
 }
 
 }  // namespace tunekit::core
