@@ -31,10 +31,16 @@ Run calibrate(const std::string& name, std::vector<std::string> extra = {}) {
   return r;
 }
 
+// The default calibration the tests that only read it share (test_support.hpp).
+Run default_run() {
+  const auto& shared = tunekit::test::default_calibration();
+  return {shared.dir, shared.cli};
+}
+
 }  // namespace
 
 TEST_CASE("calibrate on the simulated printer writes a report whose plots and numbers come from results.json") {
-  const auto run = calibrate("calibrate_report");
+  const auto run = default_run();
   INFO(run.cli.err);
   REQUIRE(run.cli.code == 0);
   CHECK(run.cli.out.find("report: " + run.dir + "/report.html") != std::string::npos);
@@ -194,7 +200,7 @@ TEST_CASE("calibrate warns about nothing on the simulated PEEK machine") {
 TEST_CASE("calibrate on the default simulated desktop printer proposes a direct-drive advance and explains it") {
   // The README's first command: the terminal shows what was identified, with intervals, before
   // the diff, then what to do next; the advance is a direct-drive desktop printer's.
-  const auto run = calibrate("calibrate_terminal");
+  const auto run = default_run();
   INFO(run.cli.out << run.cli.err);
   REQUIRE(run.cli.code == 0);
   const auto env = nlohmann::json::parse(read_file_bytes(run.dir + "/results.json"));

@@ -21,19 +21,12 @@ struct CalibrateRun {
   nlohmann::json results;
 };
 
-CalibrateRun calibrate(const std::string& name, const std::vector<std::string>& extra) {
-  CalibrateRun r;
-  r.dir = tunekit::test::scratch_dir(name) + "/run";
-  std::vector<std::string> args{"calibrate", "--machine", "sim", "--out", r.dir};
-  args.insert(args.end(), extra.begin(), extra.end());
-  r.cli = tunekit::test::run_cli(args);
+// The default calibration the tests that only read it share (test_support.hpp).
+CalibrateRun shared_run() {
+  const auto& shared = tunekit::test::default_calibration();
+  CalibrateRun r{shared.dir, shared.cli, {}};
   if (r.cli.code == 0) r.results = tunekit::test::read_json(r.dir + "/results.json").at("results");
   return r;
-}
-
-// The axes alone, one run directory per case: ctest runs the cases as separate processes at once.
-CalibrateRun axes_run(const char* axis) {
-  return calibrate(std::string("calibrate_reproduce_axes_") + axis, {"--skip-liquefier"});
 }
 
 // The reproduce entry of `analysis`, or null.
@@ -52,7 +45,7 @@ nlohmann::json reproduce(const std::string& run_dir, const std::string& command)
 }
 
 void check_axis_reproduced(const char* axis) {
-  const auto run = axes_run(axis);
+  const auto run = shared_run();
   INFO(run.cli.err);
   REQUIRE(run.cli.code == 0);
   const auto* e = entry(run.results, std::string("shaper_") + axis);
@@ -85,7 +78,7 @@ TEST_CASE("calibrate's reproduce command for y gives its resonance, damping and 
 }
 
 TEST_CASE("calibrate names a reproduce command for every analysis it made, and the analysis README lists them") {
-  const auto run = calibrate_reproduce_test::calibrate("calibrate_reproduce_all", {});
+  const auto run = calibrate_reproduce_test::shared_run();
   INFO(run.cli.err);
   REQUIRE(run.cli.code == 0);
   std::set<std::string> analyses;

@@ -214,11 +214,10 @@ std::map<std::string, std::string> embedded_svgs(const std::string& html) {
 }  // namespace
 
 TEST_CASE("no legend in the calibration report's plots lies over plotted data or beyond the figure") {
-  const auto dir = tunekit::test::scratch_dir("plot_layout") + "/run";
-  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--out", dir});
-  INFO(r.err);
-  REQUIRE(r.code == 0);
-  const auto svgs = embedded_svgs(tunekit::test::read_text(dir + "/report.html"));
+  const auto& run = tunekit::test::default_calibration();  // shared, read only
+  INFO(run.cli.err);
+  REQUIRE(run.cli.code == 0);
+  const auto svgs = embedded_svgs(tunekit::test::read_text(run.dir + "/report.html"));
   REQUIRE(svgs.size() >= 3);  // step response, Bode plot and at least one axis's PSD
   int legends = 0;
   for (const auto& [id, text] : svgs) {

@@ -23,6 +23,19 @@ CliRun run_cli(const std::vector<std::string>& args);
 CliRun run_reproduce_command(const std::string& run_dir, const std::string& command,
                              const std::vector<std::string>& extra = {});
 
+/// The default simulated calibration (`tunekit calibrate --machine sim --out DIR`, nothing else),
+/// run once per build of the tests and shared by the tests that only read what it wrote and
+/// printed: ctest runs each test case as its own process, and a whole calibration is the
+/// longest thing most of them do (about 4 s, 15 s under the sanitizers). The first process to
+/// ask runs it under a file lock; the others wait for it and read the same run. A new tunekit
+/// executable (a rebuild) runs it again. A test that writes into the run directory, or needs
+/// other options, runs its own calibration.
+struct SharedCalibration {
+  std::string dir;  // the run directory (read only)
+  CliRun cli;       // its exit code, stdout and stderr
+};
+const SharedCalibration& default_calibration();
+
 /// Runs the built tunekit executable through the shell (for end-to-end checks of the real
 /// process: exit status, stdout/stderr separation). `args` is appended as one shell string.
 CliRun run_exe(const std::string& args);
