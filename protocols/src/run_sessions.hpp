@@ -3,7 +3,6 @@
 // samples into the run directory (Recorder), and one session per kind of link, G-code over a
 // serial line or pseudo-terminal (Marlin, Prusa, RepRapFirmware, tunekit-sim) or Klipper's API
 // server, each identifying the firmware before anything else is sent.
-#include <array>
 #include <atomic>
 #include <memory>
 #include <optional>
@@ -42,17 +41,17 @@ class Recorder {
 
   void load_cell(double t, double feed, double force) {
     auto& c = j_.csv(load_file_, "time (s),feed (mm/s),force (N)");
-    c.row(csv_row<3>({{{t, 6}, {feed, 5}, {force, 5}}}));
+    c.row(csv_row({{t, 6}, {feed, 5}, {force, 5}}));
     ++load_;
   }
   void accel(double t, double ax, double ay, double az) {
     auto& c = j_.csv(accel_file_, "#time,accel_x,accel_y,accel_z");
-    c.row(csv_row<4>({{{t, 6}, {ax, 2}, {ay, 2}, {az, 2}}}));
+    c.row(csv_row({{t, 6}, {ax, 2}, {ay, 2}, {az, 2}}));
     ++accel_;
   }
   void commanded(double t, double cx, double cy) {
     auto& c = j_.csv(cmd_file_, "time (s),accel_x (mm/s^2),accel_y (mm/s^2)");
-    c.row(csv_row<3>({{{t, 6}, {cx, 2}, {cy, 2}}}));
+    c.row(csv_row({{t, 6}, {cx, 2}, {cy, 2}}));
   }
   /// Handles a tunekit-sim data line; true if it was one.
   bool line(std::string_view l) {
@@ -76,18 +75,10 @@ class Recorder {
   const std::string& commanded_file() const { return cmd_file_; }
 
  private:
-  struct Field {
-    double value;
-    int decimals;  // the column's resolution
-  };
   /// One CSV row, each value with its decimals; the buffer is reused from row to row.
-  template <std::size_t N>
-  std::string_view csv_row(const std::array<Field, N>& fields) {
+  std::string_view csv_row(std::initializer_list<core::FixedField> fields) {
     row_.clear();
-    for (const auto& f : fields) {
-      if (!row_.empty()) row_.push_back(',');
-      core::append_fixed(row_, f.value, f.decimals);
-    }
+    core::append_fixed_fields(row_, ',', fields);
     return row_;
   }
 

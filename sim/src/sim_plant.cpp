@@ -2,7 +2,6 @@
 // the physical models it drives each step (input shaping, the axes' resonant modes with the
 // accelerometer, the liquefier with the load cell). The liquefier model is SimConfig::liquefier.
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <iterator>
 #include <numbers>
@@ -17,20 +16,12 @@ namespace tunekit::sim {
 
 namespace {
 
-struct DataField {
-  double value;
-  int decimals;
-};
-
 /// One sensor line of the simulator's stream: "<tag> <v1> <v2> ...\n", each value with its
 /// decimals (the resolution the line's format documents, simulator.hpp).
-template <std::size_t N>
-void append_data_line(std::string& out, std::string_view tag, const std::array<DataField, N>& fields) {
+void append_data_line(std::string& out, std::string_view tag, std::initializer_list<core::FixedField> fields) {
   out.append(tag);
-  for (const auto& f : fields) {
-    out.push_back(' ');
-    core::append_fixed(out, f.value, f.decimals);
-  }
+  out.push_back(' ');
+  core::append_fixed_fields(out, ' ', fields);
   out.push_back('\n');
 }
 
@@ -174,7 +165,7 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
     if (accel_sink) {
       accel_sink(t_, ax, ay, az);
     } else {
-      append_data_line<6>(out_, "echo:TKA", {{{t_, 6}, {ax, 2}, {ay, 2}, {az, 2}, {acc1[0], 2}, {acc1[1], 2}}});
+      append_data_line(out_, "echo:TKA", {{t_, 6}, {ax, 2}, {ay, 2}, {az, 2}, {acc1[0], 2}, {acc1[1], 2}});
     }
     ++accel_sent_;
   }
@@ -239,7 +230,7 @@ void Simulator::emit_pending_load_sample(double t, double fed_mm) {
   if (load_pending_) {
     const double span = t - window_start_t_;
     const double u_mean = span > 0 ? (fed_mm - fed_at_window_start_) / span : 0.0;
-    append_data_line<3>(out_, "echo:TKL", {{{pending_t_, 6}, {u_mean, 5}, {pending_force_, 5}}});
+    append_data_line(out_, "echo:TKL", {{pending_t_, 6}, {u_mean, 5}, {pending_force_, 5}});
     load_pending_ = false;
     ++load_sent_;
   }

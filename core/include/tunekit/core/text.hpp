@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cstddef>
 #include <cstdlib>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -69,6 +70,22 @@ inline void append_fixed(std::string& out, double v, int decimals) {
   char buf[400];
   const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
   out.append(buf, r.ec == std::errc() ? r.ptr : buf);
+}
+
+/// A value and the decimals it is written with (the resolution of its column or field).
+struct FixedField {
+  double value;
+  int decimals;
+};
+
+/// Appends the fields with append_fixed(), `separator` between them (a CSV row, a sensor line).
+inline void append_fixed_fields(std::string& out, char separator, std::initializer_list<FixedField> fields) {
+  bool first = true;
+  for (const auto& f : fields) {
+    if (!first) out.push_back(separator);
+    first = false;
+    append_fixed(out, f.value, f.decimals);
+  }
 }
 
 }  // namespace tunekit::core
