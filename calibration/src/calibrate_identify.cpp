@@ -58,11 +58,15 @@ void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs,
     keep_analysis(*id.step, out, ctx);
     id.inputs.push_back(csv);
     id.export_inputs.push_back(out);
-    id.reproduce.push_back(
-        columns_command("step",
-                        "the liquefier's step responses in the load cell's flow sweep: tau, K, theta "
-                        "per step, pooled and per flow level",
-                        csv, "feed", "force", plan.run_dir));
+    Reproduction r = columns_command("step",
+                                     "the liquefier's step responses in the load cell's flow sweep: tau, K, theta "
+                                     "per step, pooled and per flow level",
+                                     csv, "feed", "force", plan.run_dir);
+    if (const std::string& track = id.step->options.feed_track; !track.empty()) {
+      r.args.insert(r.args.end(), {"--feed-track", relative_to(track, plan.run_dir)});
+      id.inputs.push_back(track);
+    }
+    id.reproduce.push_back(std::move(r));
   }
   if (const auto it = runs.runs.find("liquefier-chirp"); it != runs.runs.end()) {
     const std::string csv = it->second.files.at("load_cell");
@@ -74,13 +78,20 @@ void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs,
     fo.time_column = "time";
     fo.input_column = "feed";
     fo.output_column = "force";
+    if (const auto track = it->second.files.find("feed_track"); track != it->second.files.end())
+      fo.feed_track = track->second;
     id.freq = calibrate_analysis("freq", [&] { return compute_freq(fo); });
     keep_analysis(*id.freq, out, ctx);
     id.inputs.push_back(csv);
-    id.reproduce.push_back(columns_command("freq",
-                                           "the liquefier's frequency response to the chirp and the transfer function "
-                                           "fitted to it",
-                                           csv, "feed", "force", plan.run_dir));
+    Reproduction r = columns_command("freq",
+                                     "the liquefier's frequency response to the chirp and the transfer function "
+                                     "fitted to it",
+                                     csv, "feed", "force", plan.run_dir);
+    if (!fo.feed_track.empty()) {
+      r.args.insert(r.args.end(), {"--feed-track", relative_to(fo.feed_track, plan.run_dir)});
+      id.inputs.push_back(fo.feed_track);
+    }
+    id.reproduce.push_back(std::move(r));
   }
 }
 

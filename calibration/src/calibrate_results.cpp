@@ -58,15 +58,39 @@ bool calibrate_estimate(const fitting::Param& p, const std::string& method, Esti
   return std::isfinite(out.value) && std::isfinite(out.ci95_lo) && std::isfinite(out.ci95_hi);
 }
 
+// The liquefier as the whole-record model identifies it from the flow sweep (one model for every
+// step: tau = a u^b, a dead time and the load cell's gain): its time constant at the model's
+// reference feed (the median feed, where its interval is narrowest) in that feed's flow, its flow
+// exponent, the dead time and the gain. The pooled step fit, one tau for steps at flows whose
+// time constants differ, stays in the results for information.
+// `where`: the reference input in words ("3.6 mm^3/s").
+void add_whole_record_rows(RunRecord& r, const ident::WholeRecordModel& m, const std::string& where,
+                           const std::string& gain_label) {
+  const std::string p = "liquefier.step.whole_record.";
+  r.row(fmt::format("liquefier time constant tau at {} (whole-record model)", where), p + "tau_ref_s.value", "s",
+        p + "tau_ref_s.ci95");
+  if (!m.model.fit.param("b").fixed)
+    r.row("tau's flow exponent b (tau = a u^b, whole-record model)", p + "b.value", "1", p + "b.ci95");
+  r.row("liquefier dead time theta (whole-record model)", p + "theta_s.value", "s", p + "theta_s.ci95");
+  const bool flow_sensor = m.model.sensor == fitting::LiquefierSensor::flow;
+  r.row(flow_sensor ? gain_label + " (whole-record model)" : "force per stored filament g (whole-record model)",
+        p + "model.params.g.value", m.model.fit.param("g").unit, p + "model.params.g.ci95");
+}
+
 void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths) {
   r.res()["liquefier"]["step"] = analysis_results(widths);
   r.res()["liquefier"]["camera"] = cam.results;
   r.plot["step"] = step_plotdata(widths, "set-point width (mm)", "width (mm)");
   r.plot["linewidth"] = cam.linewidth_plot;
-  const std::string p = "liquefier.step.pooled.params.";
-  r.row("liquefier time constant tau (line widths)", p + "tau_s.value", "s", p + "tau_s.ci95");
-  r.row("liquefier dead time theta (line widths)", p + "theta_s.value", "s", p + "theta_s.ci95");
-  r.row("width gain K (line widths)", p + "K.value", "1", p + "K.ci95");
+  if (const auto& m = widths.whole_record.model) {
+    add_whole_record_rows(r, *m, "a " + display_number(m->model.reference_input) + " mm line (line widths)",
+                          "width gain K");
+  } else {
+    const std::string p = "liquefier.step.pooled.params.";
+    r.row("liquefier time constant tau (line widths)", p + "tau_s.value", "s", p + "tau_s.ci95");
+    r.row("liquefier dead time theta (line widths)", p + "theta_s.value", "s", p + "theta_s.ci95");
+    r.row("width gain K (line widths)", p + "K.value", "1", p + "K.ci95");
+  }
   if (cam.ring) {
     r.plain_row("ring frequency", "liquefier.camera.ring.freq_hz", "Hz");
     r.plain_row("ring gain (measured)", "liquefier.camera.ring.gain", "1");
@@ -97,6 +121,11 @@ void add_load_cell_step(RunRecord& r, const StepOutcome& step, double filament_a
       trend = fmt::format(" (tau = a u^b, b = {})", display_number(tau_trend->value("b")));
     r.notes.push_back(fmt::format("flow sweep: tau at each level reached from both sides, {}{}", levels, trend));
   }
+  if (const auto& m = step.whole_record.model) {
+    add_whole_record_rows(r, *m, display_number(m->model.reference_input * filament_area_mm2) + " mm^3/s",
+                          "liquefier gain K");
+    return;
+  }
   const std::string p = "liquefier.step.pooled.params.";
   r.row("liquefier time constant tau (step response)", p + "tau_s.value", "s", p + "tau_s.ci95");
   r.row("liquefier dead time theta (step response)", p + "theta_s.value", "s", p + "theta_s.ci95");
@@ -104,7 +133,7 @@ void add_load_cell_step(RunRecord& r, const StepOutcome& step, double filament_a
 }
 
 void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs,
-              const std::optional<StepOutcome>& step) {
+              const std::optional<StepOutcome>& step, double filament_area_mm2) {
   const auto& plan = runs.chirp;
   r.res()["liquefier"]["freq"] = analysis_results(chirp);
   r.res()["liquefier"]["chirp_plan"] = {{"expected_tau_s", plan.expected_tau_s},
@@ -117,7 +146,14 @@ void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs
   r.plot["bode"] = bode_plotdata(chirp);
   const auto& bb = *chirp.broadband;
   const fitting::FitResult* fit = chirp.reported_fit();
-  if (fit != nullptr) {
+  if (const auto& m = chirp.whole_record.model) {
+    // The chirp's record identifies the same model as the flow sweep's (the transfer function
+    // fitted to it, a linear model of a liquefier whose tau follows the flow, stays in the
+    // results): its tau at its own reference feed.
+    r.row(fmt::format("liquefier time constant tau at {} mm^3/s (chirp, whole-record model)",
+                      display_number(m->model.reference_input * filament_area_mm2)),
+          "liquefier.freq.whole_record.tau_ref_s.value", "s", "liquefier.freq.whole_record.tau_ref_s.ci95");
+  } else if (fit != nullptr) {
     const std::string p = "liquefier.freq.fit.params.";
     r.row(fmt::format("tau from the frequency response (chirp, {})", chirp.reported_fit_method()), p + "tau_s.value",
           "s", p + "tau_s.ci95");
@@ -207,7 +243,7 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
   r.res()["machine"] = plan.profile.profile.name;
   if (id.camera) add_camera(r, *id.camera, *id.step);
   else if (id.step) add_load_cell_step(r, *id.step, plan.profile.profile.filament_area_mm2());
-  if (id.freq) add_freq(r, *id.freq, runs, id.step);
+  if (id.freq) add_freq(r, *id.freq, runs, id.step, plan.profile.profile.filament_area_mm2());
   add_axes(r, id);
   add_compensators(r, design, plan.run_dir);
   r.res()["summary"] = r.summary;

@@ -12,11 +12,12 @@
 
 namespace tunekit::calibration {
 
-StepOptions load_cell_step_options(const std::string& csv) {
+StepOptions load_cell_step_options(const std::string& csv, const std::string& feed_track) {
   // The analysis `tunekit step` makes of this log with its defaults: the same steps and
   // operating points (the levels the steps arrive at), which export designs from.
   StepOptions so;
   so.file = csv;
+  so.feed_track = feed_track;
   so.time_column = "time";
   so.input_column = "feed";
   so.output_column = "force";
@@ -45,7 +46,9 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
     const auto& run = out.runs[e.name] = protocols::run_experiment(experiment_run_options(plan, e, out.chirp, false));
     progress.end(run.status);
     if (e.name == "liquefier-step") {
-      const auto options = load_cell_step_options(run.files.at("load_cell"));
+      const auto track = run.files.find("feed_track");
+      const auto options =
+          load_cell_step_options(run.files.at("load_cell"), track != run.files.end() ? track->second : std::string());
       out.liquefier_step = calibrate_analysis("step", [&] { return compute_step(options); });
     }
   }

@@ -48,7 +48,7 @@ protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const 
                                              const protocols::ChirpPlan& chirp, bool dry);
 
 /// The liquefier step test analysed as `tunekit step FILE --input feed --output force` does.
-StepOptions load_cell_step_options(const std::string& csv);
+StepOptions load_cell_step_options(const std::string& csv, const std::string& feed_track);
 
 /// What the technician reads after the progress (calibrate_terminal.cpp): the summary rows of
 /// `results` (each identified quantity, its value and 95 % interval or basis), the configuration's

@@ -264,7 +264,9 @@ void freq_dwell(FreqOutcome& o, const FreqOptions& a, const ident::CsvTable& tab
 }
 
 // The whole-record model beside the per-frequency results, fitted to the record from --tmin on
-// (all of it without --tmin: the model starts from any state, V0 is one of its parameters).
+// (without --tmin: from where the frequency response is analysed, the excitation's onset, when
+// there is one, else all of it; the model starts from any state, V0 is one of its parameters, but
+// a record that starts from rest begins at flows below any the excitation reaches).
 void freq_whole_record(FreqOutcome& o, const FreqOptions& a, const ident::CsvTable& table) {
   if (a.input_column.empty()) {
     o.whole_record.error = "the record has no input column (--input COL), and the model is driven by the input";
@@ -272,12 +274,16 @@ void freq_whole_record(FreqOutcome& o, const FreqOptions& a, const ident::CsvTab
     return;
   }
   const std::span<const double> t = table.column(table.time_column).values;
+  const std::optional<double> from = a.tmin_s      ? a.tmin_s
+                                     : o.broadband ? std::optional(o.broadband->start_s)
+                                                   : std::nullopt;
   const std::size_t first =
-      a.tmin_s ? static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), *a.tmin_s) - t.begin()) : 0;
+      from ? static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), *from) - t.begin()) : 0;
   const std::span<const double> u = table.column(a.input_column).values;
   const std::span<const double> y = table.column(a.output_column).values;
+  const auto track = aligned_feed_track(a.feed_track, t, u);  // placed on the whole record
   o.whole_record = fit_whole_record(t.subspan(first), u.subspan(first), y.subspan(first), o.input_unit, o.output_unit,
-                                    nullptr, a.profile_intervals, o.warnings);
+                                    nullptr, a.profile_intervals, o.warnings, track ? &*track : nullptr);
 }
 
 }  // namespace

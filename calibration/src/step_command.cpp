@@ -136,9 +136,12 @@ StepOutcome compute_step(const StepOptions& a) {
     throw;
   }
 
-  if (!a.input_column.empty())  // the whole-record model beside the per-step fits: any excitation
-    outcome.whole_record = fit_whole_record(tcol.values, table.column(a.input_column).values, ycol.values, input_unit,
-                                            opt.output_unit, &res, a.profile_intervals, res.warnings);
+  if (!a.input_column.empty()) {  // the whole-record model beside the per-step fits: any excitation
+    const auto& u = table.column(a.input_column).values;
+    const auto track = aligned_feed_track(a.feed_track, tcol.values, u);
+    outcome.whole_record = fit_whole_record(tcol.values, u, ycol.values, input_unit, opt.output_unit, &res,
+                                            a.profile_intervals, res.warnings, track ? &*track : nullptr);
+  }
   outcome.time_column = table.time_column;
   outcome.input_sha256 = sha256_hex(bytes);
   outcome.input_size_bytes = bytes.size();

@@ -30,7 +30,7 @@ fitting::LiquefierSensor other_sensor(fitting::LiquefierSensor s) {
 WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
                                    const std::string& input_unit, const std::string& output_unit,
                                    const ident::StepAnalysis* steps, bool profile_intervals,
-                                   std::vector<std::string>& warnings) {
+                                   std::vector<std::string>& warnings, const ident::FeedTrackAlignment* track) {
   WholeRecordResult r;
   fitting::LiquefierFitOptions fo;
   fo.profile = profile_intervals;
@@ -39,18 +39,20 @@ WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const do
   bool refused = false;  // the record cannot carry the model (too short, an input below zero, ...)
   try {
     const auto sensor = steps != nullptr ? ident::sensor_for_record(*steps, by_unit, &basis) : by_unit;
-    r.model = ident::analyze_whole_record(t, u, y, sensor, input_unit, output_unit, steps, fo);
+    r.model = ident::analyze_whole_record(t, u, y, sensor, input_unit, output_unit, steps, fo, track);
   } catch (const Error& e) {
     r.error = plain_reason(e);
     refused = e.code() == ExitCode::bad_input;
   }
-  if (steps == nullptr && !refused && !(r.model && r.model->model.linear_chosen)) {
+  if (steps == nullptr && !refused) {
     // Without operating points to read the sensor from, the record decides: both sensors' models
     // have the same parameters, and the one with the smaller residuals (so the smaller AIC) is
     // kept; a tie keeps the unit's. The linear model is one model for either sensor (y = g a q + c
-    // or y = g q + c): when the unit's sensor chose it, there is nothing to decide.
+    // or y = g q + c), but the unit's sensor may choose it only because its nonlinear model is
+    // the wrong one for the record (b's interval then holds 0): the other sensor is fitted too.
     try {
-      auto other = ident::analyze_whole_record(t, u, y, other_sensor(by_unit), input_unit, output_unit, nullptr, fo);
+      auto other =
+          ident::analyze_whole_record(t, u, y, other_sensor(by_unit), input_unit, output_unit, nullptr, fo, track);
       if (!r.model || other.model.fit.diagnostics.rms < (1 - 1e-6) * r.model->model.fit.diagnostics.rms) {
         r.model = std::move(other);
         r.error.clear();
@@ -63,6 +65,12 @@ WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const do
   if (r.model) r.model->sensor_basis = basis;
   else warnings.push_back("whole-record model not fitted: " + r.error);
   return r;
+}
+
+std::optional<ident::FeedTrackAlignment> aligned_feed_track(const std::string& path, std::span<const double> t,
+                                                            std::span<const double> u) {
+  if (path.empty()) return std::nullopt;
+  return ident::align_feed_track(ident::read_feed_track_csv(path), t, u);
 }
 
 void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_compare) {
@@ -104,11 +112,6 @@ void add_whole_record(Envelope& env, const WholeRecordResult& r) {
   } else if (!r.error.empty()) {
     env.results()["whole_record"] = {{"error", r.error}};
   }
-}
-
-std::vector<double> whole_record_output(const ident::WholeRecordModel& m, const std::vector<double>& t,
-                                        const std::vector<double>& u) {
-  return fitting::simulate_liquefier(t, u, m.model.params(), m.model.sensor);
 }
 
 }  // namespace tunekit::calibration

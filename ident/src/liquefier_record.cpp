@@ -109,31 +109,78 @@ double WholeRecordModel::tau_stderr_at(double q) const {
   return tau_at(q) * std::sqrt(std::max(var, 0.0));
 }
 
+namespace {
+
+/// The record from `first` on, with the track when it matches (else a warning in m).
+fitting::LiquefierRecord whole_record_input(std::span<const double> t, std::span<const double> u,
+                                            std::span<const double> y, std::size_t first,
+                                            const FeedTrackAlignment* track, WholeRecordModel& m) {
+  fitting::LiquefierRecord rec;
+  rec.t.assign(t.begin() + static_cast<std::ptrdiff_t>(first), t.end());
+  rec.u.assign(u.begin() + static_cast<std::ptrdiff_t>(first), u.end());
+  rec.y.assign(y.begin() + static_cast<std::ptrdiff_t>(first), y.end());
+  if (track == nullptr) return rec;
+  m.track_alignment = *track;
+  if (m.track_alignment->matches) {
+    m.input_track = m.track_alignment->aligned;
+    rec.input_t = m.input_track.t;
+    rec.input_u = m.input_track.u;
+  } else {
+    m.warnings.push_back(fmt::format(
+        "the feed track does not match the record's feed (rms {:.3g} against at most {:.3g}, {:.0f} % of the largest "
+        "feed): the model is driven by the logged feed",
+        m.track_alignment->rms_mismatch, kFeedTrackMismatch * m.track_alignment->feed_scale, 100 * kFeedTrackMismatch));
+  }
+  return rec;
+}
+
+}  // namespace
+
+std::vector<double> whole_record_output(const WholeRecordModel& m, const std::vector<double>& t,
+                                        const std::vector<double>& u) {
+  std::vector<double> out(t.size(), fitting::kNaN);
+  if (m.first_sample >= t.size()) return out;
+  const std::vector<double> tt(t.begin() + static_cast<std::ptrdiff_t>(m.first_sample), t.end());
+  const std::vector<double> uu(u.begin() + static_cast<std::ptrdiff_t>(m.first_sample), u.end());
+  const auto sim = m.input_track.empty() ? fitting::simulate_liquefier(tt, uu, m.model.params(), m.model.sensor)
+                                         : fitting::simulate_liquefier(tt, m.input_track.t, m.input_track.u,
+                                                                       m.model.params(), m.model.sensor);
+  std::copy(sim.begin(), sim.end(), out.begin() + static_cast<std::ptrdiff_t>(m.first_sample));
+  return out;
+}
+
 WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
                                       fitting::LiquefierSensor sensor, const std::string& input_unit,
                                       const std::string& output_unit, const StepAnalysis* steps,
-                                      const fitting::LiquefierFitOptions& options) {
-  fitting::LiquefierRecord rec;
-  rec.t.assign(t.begin(), t.end());
-  rec.u.assign(u.begin(), u.end());
-  rec.y.assign(y.begin(), y.end());
-  rec.sensor = sensor;
-  rec.input_unit = input_unit;
-  rec.output_unit = output_unit;
+                                      const fitting::LiquefierFitOptions& options, const FeedTrackAlignment* track) {
   WholeRecordModel m;
   m.input_unit = input_unit;
   m.output_unit = output_unit;
+  if (steps != nullptr && !steps->steps.empty()) {
+    std::size_t first = t.size();
+    for (const auto& s : steps->steps) first = std::min(first, s.step.begin);
+    m.first_sample = first < t.size() ? first : 0;
+  }
+  fitting::LiquefierRecord rec = whole_record_input(t, u, y, m.first_sample, track, m);
+  rec.sensor = sensor;
+  rec.input_unit = input_unit;
+  rec.output_unit = output_unit;
   m.model = fitting::fit_liquefier_model(rec, options);
   m.input_max = *std::max_element(rec.u.begin(), rec.u.end());
   for (double v : rec.u)
     if (v > 0 && !(v >= m.input_min_positive)) m.input_min_positive = v;
-  m.warnings = m.model.fit.warnings;
+  const auto fit_warnings = m.model.fit.warnings;
+  m.warnings.insert(m.warnings.end(), fit_warnings.begin(), fit_warnings.end());
   // Correlated residuals are not a warning: the intervals are already widened for them, and
   // to_json reports the factor (variance_factor) beside the Ljung-Box test.
   if (steps != nullptr) {
-    const std::vector<double> sim = fitting::simulate_liquefier(rec.t, rec.u, m.model.params(), sensor);
+    const std::vector<double> tv(t.begin(), t.end()), uv(u.begin(), u.end());
+    const std::vector<double> sim = whole_record_output(m, tv, uv);
+    fitting::LiquefierRecord full;
+    full.t = tv;
+    full.u = uv;
     for (std::size_t i = 0; i < steps->steps.size(); ++i)
-      check_step(m, rec, sim, steps->steps[i], steps->input_hold, i, m.checks);
+      check_step(m, full, sim, steps->steps[i], steps->input_hold, i, m.checks);
     std::size_t bad = 0;
     for (const auto& c : m.checks) bad += c.disagrees;
     // Each check flags a step at a 5 % false-alarm rate: warn only when more steps disagree than
@@ -146,6 +193,20 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
   }
   return m;
 }
+
+namespace {
+
+/// How the model was driven: by the feed track (its offset and how well it matched) or the log.
+nlohmann::json track_json(const WholeRecordModel& m) {
+  if (!m.track_alignment) return {{"used", false}, {"why", "no feed track given: driven by the logged feed"}};
+  const auto& a = *m.track_alignment;
+  return {{"used", !m.input_track.empty()},
+          {"offset_s", number_or_null(a.offset_s)},
+          {"rms_mismatch", number_or_null(a.rms_mismatch)},
+          {"breakpoints", a.aligned.t.size()}};
+}
+
+}  // namespace
 
 nlohmann::json to_json(const WholeRecordModel& m) {
   const auto& f = m.model.fit;
@@ -179,6 +240,8 @@ nlohmann::json to_json(const WholeRecordModel& m) {
           {"variance_factor", number_or_null(m.model.variance_factor)},
           {"substeps", m.model.substeps},
           {"step_checks", checks},
+          {"fitted_from_sample", m.first_sample},
+          {"input_track", track_json(m)},
           {"warnings", m.warnings}};
 }
 

@@ -19,6 +19,7 @@
 #include "tunekit/machine/journal.hpp"
 #include "tunekit/machine/klipper_api.hpp"
 #include "tunekit/machine/klipper_sensors.hpp"
+#include "tunekit/protocols/feed_track_plan.hpp"
 #include "tunekit/protocols/safety.hpp"
 #include "tunekit/protocols/stop_signals.hpp"
 #include "tunekit/sim/sim_camera.hpp"
@@ -116,6 +117,11 @@ void adapt_to_firmware(const RunOptions& o, bool sim, const machine::MachineProf
   summary["experiment"] = res.experiment.to_json();
   summary["dialect"] = to_string(found);
   core::write_file_atomic(journal.path("protocol.gcode"), join_lines(res.gcode));
+  // The commanded feed as the firmware plans it, for the analysis (feed_track_plan.hpp).
+  if (const auto track = planned_feed_track(res.experiment); !track.empty()) {
+    core::write_file_atomic(journal.path("feed_track.csv"), ident::feed_track_csv(track));
+    res.files["feed_track"] = journal.path("feed_track.csv");
+  }
 }
 
 }  // namespace

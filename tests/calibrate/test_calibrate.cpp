@@ -86,9 +86,9 @@ TEST_CASE("calibrate on the simulated printer writes a report whose plots and nu
       CHECK(row.at("basis").get<std::string>().find("designed") == 0);
     }
   }
-  // tau, theta, K by step; tau by frequency response; frequency and damping of x and y; the
-  // pressure advance (from the per-level taus it is built from).
-  CHECK(with_interval == 9);
+  // The whole-record model of the flow sweep (tau at its reference feed, b, theta, K) and of the
+  // chirp (tau at its reference feed); frequency and damping of x and y; the pressure advance.
+  CHECK(with_interval == 10);
   CHECK(html.find("<th>95 % interval</th>") != std::string::npos);
   // The configuration preview changes pressure advance and both shapers.
   const std::string diff = results.at("config_diff").get<std::string>();

@@ -54,20 +54,22 @@ TEST_CASE("calibrate's flow sweep on the physics liquefier recovers the true tau
   CHECK(schedule.size() == levels.size());
 }
 
-TEST_CASE("tunekit step with its defaults reproduces calibrate's pooled liquefier fit within 1 %") {
-  const std::string dir = tunekit::test::scratch_dir("calibrate_step_defaults") + "/run";
-  const auto cli = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--skip-axes", "--out", dir});
-  INFO(cli.err);
-  REQUIRE(cli.code == 0);
+TEST_CASE("tunekit step with the run's feed track reproduces calibrate's liquefier fits within 1 %") {
+  const auto& run = tunekit::test::default_calibration();
+  const std::string& dir = run.dir;
+  INFO(run.cli.err);
+  REQUIRE(run.cli.code == 0);
   const auto env = nlohmann::json::parse(read_file_bytes(dir + "/results.json"));
   const auto& cal = env.at("results").at("liquefier").at("step").at("pooled").at("params");
   // The command results.json names for the step analysis, run as a user types it (the load
-  // cell's log named relative to the run directory, only its columns given).
+  // cell's log and the commanded feed track named relative to the run directory, only the
+  // columns given besides).
   std::string command;
   for (const auto& e : env.at("results").at("reproduce"))
     if (e.at("analysis") == "step") command = e.at("command").get<std::string>();
   INFO(command);
-  CHECK(command == "tunekit step liquefier-step/step.csv --input feed --output force");
+  CHECK(command ==
+        "tunekit step liquefier-step/step.csv --input feed --output force --feed-track liquefier-step/feed_track.csv");
   const auto step = tunekit::test::run_reproduce_command(dir, command, {"--json"});
   INFO(step.err);
   REQUIRE(step.code == 0);
@@ -76,6 +78,15 @@ TEST_CASE("tunekit step with its defaults reproduces calibrate's pooled liquefie
   for (const char* name : {"tau_s", "K", "theta_s"}) {
     const double own = mine.at("pooled").at("params").at(name).at("value").get<double>(),
                  theirs = cal.at(name).at("value").get<double>();
+    INFO(name << ": tunekit step " << own << ", calibrate " << theirs);
+    CHECK(own == Approx(theirs).epsilon(0.01));
+  }
+  // The whole-record model, which calibrate's summary lists, driven by the same track.
+  const auto& wr = env.at("results").at("liquefier").at("step").at("whole_record");
+  CHECK(mine.at("whole_record").at("input_track").at("used") == true);
+  for (const char* name : {"tau_ref_s", "b", "theta_s"}) {
+    const double own = mine.at("whole_record").at(name).at("value").get<double>(),
+                 theirs = wr.at(name).at("value").get<double>();
     INFO(name << ": tunekit step " << own << ", calibrate " << theirs);
     CHECK(own == Approx(theirs).epsilon(0.01));
   }

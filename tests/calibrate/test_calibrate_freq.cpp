@@ -75,7 +75,9 @@ TEST_CASE("freq with only the file and its columns gives calibrate's frequency-r
   std::string command;
   for (const auto& e : run.results.at("reproduce"))
     if (e.at("analysis") == "freq") command = e.at("command").get<std::string>();
-  CHECK(command == "tunekit freq liquefier-chirp/feed_force.csv --input feed --output force");
+  CHECK(command ==
+        "tunekit freq liquefier-chirp/feed_force.csv --input feed --output force --feed-track "
+        "liquefier-chirp/feed_track.csv");
   const auto cli = tunekit::test::run_reproduce_command(run.dir, command, {"--json"});
   INFO(cli.err);
   REQUIRE(cli.code == 0);
@@ -94,15 +96,21 @@ TEST_CASE("one frequency-response tau: the report, the history, export's design 
   CHECK(freq.at("fit").at("source") == "tf_oe_fit");
   CHECK(freq.at("tf_oe_fit").at("params").at("tau_s").at("value").get<double>() == tau);
 
-  // The report: its summary row and the cell report.html shows.
-  int rows = 0;
-  for (const auto& r : run.results.at("summary"))
-    if (r.at("path") == kFreqTauPath) ++rows;
+  // The report: its summary lists the chirp's whole-record model (tau at its reference feed, a
+  // quantity of its own), not the transfer function's tau; its cell shows results.json's value.
+  const std::string wr_tau = "liquefier.freq.whole_record.tau_ref_s.value";
+  int rows = 0, tf_rows = 0;
+  for (const auto& r : run.results.at("summary")) {
+    rows += r.at("path") == wr_tau;
+    tf_rows += r.at("path") == kFreqTauPath;
+  }
   CHECK(rows == 1);
+  CHECK(tf_rows == 0);
   int cells = 0;
   for (const auto& c : tunekit::test::summary_cells(tunekit::read_file_bytes(run.dir + "/report.html"))) {
-    if (c.path != kFreqTauPath) continue;
-    CHECK(nlohmann::json::parse(c.value).get<double>() == tau);
+    if (c.path != wr_tau) continue;
+    CHECK(nlohmann::json::parse(c.value).get<double>() ==
+          tunekit::calibration::json_at(run.results, wr_tau)->get<double>());
     ++cells;
   }
   CHECK(cells == 1);
@@ -161,6 +169,7 @@ TEST_CASE("freq's whole-record model on calibrate's chirp: its tau at the mean f
   o.file = run.chirp_csv();
   o.input_column = "feed";
   o.output_column = "force";
+  o.feed_track = run.dir + "/liquefier-chirp/feed_track.csv";  // as calibrate analyses it
   const auto own = tunekit::calibration::compute_freq(o);
   REQUIRE(own.whole_record.model);
   REQUIRE(own.reported_fit() != nullptr);

@@ -9,6 +9,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -147,18 +149,25 @@ TEST_CASE("calibrate's report: the step figure holds the whole-record model fitt
   const auto& t = pd.at("t_s");
   const auto& ym = pd.at("y_model");
   REQUIRE(ym.size() == t.size());
+  // The model is fitted from the first step's window on (before it the liquefier fills from
+  // rest, 3 s of the 45 s record): from there on every plotted sample has the model's value, none
+  // before.
+  const std::size_t first = static_cast<std::size_t>(
+      std::find_if(ym.begin(), ym.end(), [](const nlohmann::json& v) { return v.is_number(); }) - ym.begin());
   std::size_t finite = 0;
   for (const auto& v : ym) finite += v.is_number();
-  CHECK(finite == ym.size());
+  CHECK(first > 0);
+  CHECK(first < ym.size() / 10);
+  CHECK(finite == ym.size() - first);
   // The model follows the record: its residuals are small against the output's range.
   const auto& y = pd.at("y");
   double lo = 1e300, hi = -1e300, ss = 0;
-  for (std::size_t i = 0; i < y.size(); ++i) {
+  for (std::size_t i = first; i < y.size(); ++i) {
     lo = std::min(lo, y[i].get<double>());
     hi = std::max(hi, y[i].get<double>());
     ss += std::pow(y[i].get<double>() - ym[i].get<double>(), 2);
   }
-  const double rms = std::sqrt(ss / static_cast<double>(y.size()));
+  const double rms = std::sqrt(ss / static_cast<double>(y.size() - first));
   INFO("model rms " << rms << " over an output range " << hi - lo);
   CHECK(rms < 0.05 * (hi - lo));
   const std::string html = tunekit::read_file_bytes(dir + "/report.html");

@@ -63,6 +63,9 @@ struct FreqOptions {
   /// The whole-record model's intervals of b and theta by profile likelihood (slower) instead of
   /// Wald intervals widened for correlated residuals.
   bool profile_intervals = false;
+  /// With input_column: the commanded feed on its own instants (ident/feed_track.hpp), which drives
+  /// the whole-record model where it matches the logged window means. Empty: the logged feed.
+  std::string feed_track;
 };
 
 /// The H1 estimate inside [fmin, fmax].

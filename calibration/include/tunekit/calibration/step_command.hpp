@@ -33,6 +33,10 @@ struct StepOptions {
   /// With input_column: also draw the step figure of the calibration report here (.svg or .png):
   /// the record, the whole-record model over all of it, each step's fit over its step, residuals.
   std::string plot_out;
+  /// With input_column: the commanded feed on its own instants (ident/feed_track.hpp; calibrate's
+  /// runs write it as feed_track.csv), which drives the whole-record model instead of the logged
+  /// window means where it matches them. Empty: the logged feed.
+  std::string feed_track;
 };
 
 struct StepOutcome {

@@ -34,11 +34,19 @@ struct WholeRecordResult {
 /// is not the unit's. Intervals of b and theta by profile likelihood when
 /// `profile_intervals`, else widened Wald intervals.
 /// A record that cannot carry the model is no failure: the result holds the reason, and
-/// "whole-record model not fitted: <reason>" is added to `warnings`.
+/// "whole-record model not fitted: <reason>" is added to `warnings`. With a `track` (the commanded
+/// feed on its own instants, ident/feed_track.hpp, aligned with the record) the model is driven by
+/// it where it matches.
 WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
                                    const std::string& input_unit, const std::string& output_unit,
                                    const ident::StepAnalysis* steps, bool profile_intervals,
-                                   std::vector<std::string>& warnings);
+                                   std::vector<std::string>& warnings,
+                                   const ident::FeedTrackAlignment* track = nullptr);
+
+/// The feed track in `path` (empty: none) aligned with the record (t, u: time stamps and logged
+/// window-mean feeds): ident::read_feed_track_csv, then ident::align_feed_track on the whole record.
+std::optional<ident::FeedTrackAlignment> aligned_feed_track(const std::string& path, std::span<const double> t,
+                                                            std::span<const double> u);
 
 /// The terminal line: "  whole record: tau = a u^b, a = ..., b = ..., theta = ... s; <sensor>"
 /// (with the step fits that disagree with it when it checked any), or
@@ -51,11 +59,5 @@ void print_whole_record(std::ostream& os, const WholeRecordResult& r,
 /// results.whole_record: ident::to_json of the model (and its warnings added to the envelope), or
 /// {error: reason}; nothing when it was not tried.
 void add_whole_record(Envelope& env, const WholeRecordResult& r);
-
-/// The model's output at every sample of (t, u) (output unit): fitting::simulate_liquefier with
-/// the chosen parameters and the fitted stored volume at the first sample. The record must be the
-/// one the model was fitted to (its first sample is where V0 applies).
-std::vector<double> whole_record_output(const ident::WholeRecordModel& m, const std::vector<double>& t,
-                                        const std::vector<double>& u);
 
 }  // namespace tunekit::calibration

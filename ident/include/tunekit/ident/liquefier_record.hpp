@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tunekit/fitting/liquefier_model.hpp"
+#include "tunekit/ident/feed_track.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
 namespace tunekit::ident {
@@ -49,6 +50,13 @@ struct WholeRecordModel {
   /// either sensor, the smaller residuals kept; set by the caller).
   std::string sensor_basis = "unit";
   std::vector<std::string> warnings;
+  /// The model was fitted from this sample on (the record before it is the settling from rest,
+  /// below the flows the model describes), and driven by this input track (empty: the logged
+  /// input); whole_record_output simulates it the same way.
+  std::size_t first_sample = 0;
+  FeedTrack input_track;
+  /// The feed track's alignment with the record, when one was given.
+  std::optional<FeedTrackAlignment> track_alignment;
   /// tau at input q from the chosen model (s), and its standard error from the fit's covariance.
   double tau_at(double q) const;
   double tau_stderr_at(double q) const;
@@ -56,10 +64,23 @@ struct WholeRecordModel {
 
 /// Fits the model to (t, u, y) and, when `steps` is given, checks its step fits against it.
 /// The intervals are Wald intervals widened for correlated residuals unless `options.profile`.
+/// With `steps`, the fit starts at the first step's window: what comes before it is the liquefier
+/// settling from rest, at flows below the sweep's, where a power law of the flow says nothing
+/// (a melt's viscosity levels off at low shear; the stored volume at the start is a parameter).
+/// With a `track` (feed_track.hpp, aligned with the record's window means by align_feed_track,
+/// on the whole record: a part of it may not hold enough to place the track) the model is driven
+/// by the commanded feed on its own instants instead of the means; a track that does not match
+/// the record is not used, and a warning says so.
 WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
                                       fitting::LiquefierSensor sensor, const std::string& input_unit,
                                       const std::string& output_unit, const StepAnalysis* steps,
-                                      const fitting::LiquefierFitOptions& options);
+                                      const fitting::LiquefierFitOptions& options,
+                                      const FeedTrackAlignment* track = nullptr);
+
+/// The chosen model's output at the record's instants t (the ones it was fitted on), simulated as
+/// it was fitted (from its first sample, with its track); NaN before the first sample.
+std::vector<double> whole_record_output(const WholeRecordModel& m, const std::vector<double>& t,
+                                        const std::vector<double>& u);
 
 /// {model (the fit), sensor, reference_input, a, b, theta_s (each {value, ci95, method}),
 /// linear_chosen, test, variance_factor, substeps, input_range, step_checks, warnings}.

@@ -296,7 +296,8 @@ class Simulator {
   std::size_t shape_pos_ = 0;
   std::vector<double> delay_;
   std::size_t delay_pos_ = 0;
-  double liq_ = 0;  ///< FOPDT output (N) or pressure (MPa)
+  double delay_frac_ = 0;  ///< the dead time's fraction of a step beyond delay_.size() - 1 steps
+  double liq_ = 0;         ///< FOPDT output (N) or pressure (MPa)
   /// The load cell's converter runs on its own clock: samples at whole periods of
   /// 1 / load_cell_rate_hz from power-up, between the simulation's steps (the force and the fed
   /// length linear over a step), not locked to the planner's grid, which a rate that divides a
