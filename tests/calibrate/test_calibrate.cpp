@@ -258,7 +258,7 @@ TEST_CASE("calibrate on the default simulated desktop printer proposes a direct-
 
 TEST_CASE(
     "calibrate on the default desktop printer: no warning, its taus one story, Klipper's smoothing default kept") {
-  const auto run = calibrate("calibrate_desktop_story", {"--skip-axes"});
+  const auto run = default_run();
   INFO(run.cli.out << run.cli.err);
   REQUIRE(run.cli.code == 0);
   // A first run on the simulated printer gives the technician nothing to doubt.
