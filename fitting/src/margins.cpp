@@ -53,8 +53,9 @@ Margin equivalence_margin(const std::string& name) {
                     "of frequency a shaper tolerates");
   if (k == "shaper" || k == "shaper_freq_hz" || k == "max_accel_mm_s2")
     return designed({pre + "freq_hz", pre + "zeta"});
-  if (k == "pa_k_s") return designed({"tau_s", "freq.tau_s"});
-  if (k == "pa_smooth_s") return designed({"tau_s", "theta_s", "freq.tau_s"});
+  if (k == "pa_k_s") return designed({"tau_s", "freq.tau_s", "record.tau_s", "freq.record.tau_s"});
+  if (k == "pa_smooth_s")
+    return designed({"tau_s", "theta_s", "freq.tau_s", "record.tau_s", "record.theta_s", "freq.record.tau_s"});
   return measured("other", 0.05, "a quantity of no known kind: 5 %");
 }
 

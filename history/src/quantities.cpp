@@ -56,8 +56,24 @@ class QuantityList {
   std::set<std::string> seen_;
 };
 
+// The whole-record model's tau at its reference feed, dead time and (a flow-like sensor's) gain:
+// the liquefier's quantities calibrate's summary lists. `prefix` names the record they come from.
+void whole_record_quantities(QuantityList& out, const nlohmann::json* step, const std::string& prefix) {
+  const auto* wr = step != nullptr ? qty_at(*step, {"whole_record"}) : nullptr;
+  if (wr == nullptr || !wr->is_object() || wr->contains("error")) return;
+  out.param(prefix + "tau_s", qty_at(*wr, {"tau_ref_s"}), "s");
+  out.param(prefix + "theta_s", qty_at(*wr, {"theta_s"}), "s");
+  const auto* sensor = qty_at(*wr, {"sensor"});
+  const auto* g = qty_at(*wr, {"model", "params", "g"});
+  if (sensor != nullptr && *sensor == "flow" && g != nullptr) {
+    const auto* unit = qty_at(*g, {"unit"});
+    out.param(prefix + "K", g, unit != nullptr && unit->is_string() ? unit->get<std::string>() : std::string("1"));
+  }
+}
+
 void liquefier_step(QuantityList& out, const nlohmann::json* step) {
   if (step == nullptr) return;
+  whole_record_quantities(out, step, "record.");
   const auto* params = qty_at(*step, {"pooled", "params"});
   if (params == nullptr) return;
   std::string gain_unit = "1";
@@ -72,6 +88,7 @@ void liquefier_step(QuantityList& out, const nlohmann::json* step) {
 // written before freq named its fit (imports of older runs) are read by the same rule.
 void liquefier_freq(QuantityList& out, const nlohmann::json* freq) {
   if (freq == nullptr) return;
+  whole_record_quantities(out, freq, "freq.record.");
   const auto* params = qty_at(*freq, {"fit", "params"});
   if (params == nullptr) params = qty_at(*freq, {"tf_oe_fit", "params"});
   if (params == nullptr) params = qty_at(*freq, {"tf_fit", "params"});
