@@ -58,6 +58,19 @@ std::string step_instant_option_name(ident::StepInstant instant) {
   return instant == ident::StepInstant::first_sample ? "first" : "midpoint";
 }
 
+namespace {
+
+// A warning that the steps' dynamics differ with the level is explained when the whole-record
+// model (nonlinear: its tau follows the flow) describes the record to its noise: white residuals
+// and no warning of its own (no step fit disagreeing with it).
+bool explained_by_whole_record(const std::string& warning, const WholeRecordResult& wr) {
+  if (warning.find(ident::kDoNotShareDynamics) == std::string::npos || !wr.model) return false;
+  const auto& m = *wr.model;
+  return !m.model.linear_chosen && m.warnings.empty() && m.model.fit.diagnostics.whiteness_p >= ident::kWhitenessAlarmP;
+}
+
+}  // namespace
+
 StepOutcome compute_step(const StepOptions& a) {
   StepOutcome outcome;
   outcome.options = a;
@@ -149,7 +162,8 @@ StepOutcome compute_step(const StepOptions& a) {
   outcome.output_unit = opt.output_unit;
   outcome.gain_unit = opt.gain_unit;
   outcome.warnings = table.warnings;
-  outcome.warnings.insert(outcome.warnings.end(), res.warnings.begin(), res.warnings.end());
+  for (auto& w : res.warnings)
+    (explained_by_whole_record(w, outcome.whole_record) ? outcome.notes : outcome.warnings).push_back(std::move(w));
   if (!a.plot_out.empty())
     render_figure(step_figure(step_plotdata(outcome, column_label(a.input_column, outcome.input_unit),
                                             column_label(a.output_column, outcome.output_unit))),
@@ -178,6 +192,7 @@ Envelope to_envelope(const StepOutcome& o) {
   env.results() = ident::to_json(o.analysis);
   env.results()["units"] = {{"input", o.input_unit}, {"output", o.output_unit}, {"K", o.gain_unit}, {"time", "s"}};
   add_whole_record(env, o.whole_record);
+  env.results()["notes"] = o.notes;
   for (const auto& w : o.warnings) env.warn(w);
   return env;
 }
@@ -218,6 +233,7 @@ void print_text(const StepOutcome& o, std::ostream& os) {
     os << "\n";
   }
   print_whole_record(os, o.whole_record);
+  for (const auto& n : o.notes) os << "  note (explained by the whole-record model): " << n << "\n";
   os << fmt::format("  K in {}, y0 in {}; 95 % intervals in the JSON (--json)\n", o.gain_unit, o.output_unit);
 }
 

@@ -134,9 +134,8 @@ std::string pooled_whiteness_warning(const FitResult& pooled, const std::vector<
   if (!beyond) return {};
   return fmt::format(
       "{}: its residuals are not white (Ljung-Box p = {:.2g}) while {} of the {} single-step fits' "
-      "are: the steps do not share one K, tau and theta (the dynamics change with the level; see the "
-      "arrival levels and their trend)",
-      what, p, white, tested);
+      "are: the steps {} (the dynamics change with the level; see the arrival levels and their trend)",
+      what, p, white, tested, kDoNotShareDynamics);
 }
 
 void analyze_arrival_levels(StepAnalysis& a, const std::vector<StepRecord>& recs, const StepAnalysisOptions& o) {
@@ -207,9 +206,9 @@ void analyze_arrival_levels(StepAnalysis& a, const std::vector<StepRecord>& recs
   if (!not_white.empty())
     a.warnings.push_back(
         fmt::format("arrival levels u = {}: the pooled fit's residuals are not white (Ljung-Box p < "
-                    "{:g}) while the single-step fits' are: the rising and falling arrivals do not share "
-                    "one K, tau and theta (see rising_minus_falling_tau_s)",
-                    not_white, kWhitenessAlarmP));
+                    "{:g}) while the single-step fits' are: the rising and falling arrivals {} (see "
+                    "rising_minus_falling_tau_s)",
+                    not_white, kWhitenessAlarmP, kDoNotShareDynamics));
   fit_level_trends(a, o);
 }
 

@@ -49,6 +49,11 @@ struct StepOutcome {
   /// The whole-record model (records with an input channel), or why it could not be fitted.
   WholeRecordResult whole_record;
   std::vector<std::string> warnings;  ///< the CSV reader's, then the analysis'
+  /// What the analysis found and the whole-record model explains (results "notes"): that the
+  /// steps' dynamics differ with the level, when the model, whose tau follows the flow, describes
+  /// the record to its noise (white residuals, every step fit agreeing with it). Nothing in them
+  /// is left for the user to act on.
+  std::vector<std::string> notes;
 };
 
 /// Reads the log and fits every step, the pooled steps and each operating point (and draws the

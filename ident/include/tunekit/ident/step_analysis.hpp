@@ -145,6 +145,9 @@ inline constexpr double kWhitenessAlarmP = 1e-3;
 /// The warning (empty when none) for a pooled fit over `members` single-step fits: its
 /// residuals are not white (p < kWhitenessAlarmP) while at least three quarters of the
 /// single-step fits' residuals are. `what` names the pooled fit ("pooled fit over all steps").
+/// The words of the warnings that say the steps' dynamics differ with the level (the pooled fit
+/// over all steps, and the rising and falling arrivals at one level).
+inline constexpr const char* kDoNotShareDynamics = "do not share one K, tau and theta";
 std::string pooled_whiteness_warning(const fitting::FitResult& pooled,
                                      const std::vector<const fitting::FitResult*>& members, const std::string& what);
 
