@@ -37,29 +37,32 @@ WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const do
   std::string basis = "unit";
   const auto by_unit = ident::sensor_for_output_unit(output_unit);
   bool refused = false;  // the record cannot carry the model (too short, an input below zero, ...)
+  const auto sensor = steps != nullptr ? ident::sensor_for_record(*steps, by_unit, &basis) : by_unit;
   try {
-    const auto sensor = steps != nullptr ? ident::sensor_for_record(*steps, by_unit, &basis) : by_unit;
     r.model = ident::analyze_whole_record(t, u, y, sensor, input_unit, output_unit, steps, fo, track);
   } catch (const Error& e) {
     r.error = plain_reason(e);
     refused = e.code() == ExitCode::bad_input;
   }
-  if (steps == nullptr && !refused) {
-    // Without operating points to read the sensor from, the record decides: both sensors' models
-    // have the same parameters, and the one with the smaller residuals (so the smaller AIC) is
-    // kept; a tie keeps the unit's. The linear model is one model for either sensor (y = g a q + c
-    // or y = g q + c), but the unit's sensor may choose it only because its nonlinear model is
-    // the wrong one for the record (b's interval then holds 0): the other sensor is fitted too.
+  if (!refused) {
+    // The record decides: both sensors' models have the same parameters, and the one with the
+    // smaller residuals (so the smaller AIC) is kept; a tie keeps the first choice (the operating
+    // points', or the unit's). The operating points read the sensor from how K follows tau across
+    // the levels, which ten times the simulated load cell's noise blurs: 14 of 200 such flow
+    // sweeps chose the pressure sensor, whose model then took b = 0 and read tau 11-13 half-widths
+    // off. The linear model is one model for either sensor (y = g a q + c or y = g q + c), but a
+    // sensor may choose it only because its nonlinear model is the wrong one for the record (b's
+    // interval then holds 0): the other sensor is fitted too.
     try {
       auto other =
-          ident::analyze_whole_record(t, u, y, other_sensor(by_unit), input_unit, output_unit, nullptr, fo, track);
+          ident::analyze_whole_record(t, u, y, other_sensor(sensor), input_unit, output_unit, steps, fo, track);
       if (!r.model || other.model.fit.diagnostics.rms < (1 - 1e-6) * r.model->model.fit.diagnostics.rms) {
         r.model = std::move(other);
         r.error.clear();
         basis = "residuals";
       }
     } catch (const Error&) {
-      // The unit's model (or its reason) stands.
+      // The first choice's model (or its reason) stands.
     }
   }
   if (r.model) r.model->sensor_basis = basis;
