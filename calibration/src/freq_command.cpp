@@ -281,7 +281,7 @@ void freq_whole_record(FreqOutcome& o, const FreqOptions& a, const ident::CsvTab
       from ? static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), *from) - t.begin()) : 0;
   const std::span<const double> u = table.column(a.input_column).values;
   const std::span<const double> y = table.column(a.output_column).values;
-  const auto track = aligned_feed_track(a.feed_track, t, u);  // placed on the whole record
+  const auto track = aligned_feed_track(feed_track_for(a.feed_track, a.file), t, u);  // on the whole record
   o.whole_record = fit_whole_record(t.subspan(first), u.subspan(first), y.subspan(first), o.input_unit, o.output_unit,
                                     nullptr, a.profile_intervals, o.warnings, track ? &*track : nullptr);
 }

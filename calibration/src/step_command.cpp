@@ -151,7 +151,7 @@ StepOutcome compute_step(const StepOptions& a) {
 
   if (!a.input_column.empty()) {  // the whole-record model beside the per-step fits: any excitation
     const auto& u = table.column(a.input_column).values;
-    const auto track = aligned_feed_track(a.feed_track, tcol.values, u);
+    const auto track = aligned_feed_track(feed_track_for(a.feed_track, a.file), tcol.values, u);
     outcome.whole_record = fit_whole_record(tcol.values, u, ycol.values, input_unit, opt.output_unit, &res,
                                             a.profile_intervals, res.warnings, track ? &*track : nullptr);
   }

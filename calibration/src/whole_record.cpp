@@ -2,6 +2,7 @@
 #include "tunekit/calibration/whole_record.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <string_view>
 
 #include <fmt/format.h>
@@ -68,6 +69,13 @@ WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const do
   if (r.model) r.model->sensor_basis = basis;
   else warnings.push_back("whole-record model not fitted: " + r.error);
   return r;
+}
+
+std::string feed_track_for(const std::string& given, const std::string& log) {
+  if (!given.empty()) return given;
+  const auto beside = std::filesystem::path(log).parent_path() / "feed_track.csv";
+  std::error_code ec;
+  return std::filesystem::is_regular_file(beside, ec) ? beside.string() : std::string();
 }
 
 std::optional<ident::FeedTrackAlignment> aligned_feed_track(const std::string& path, std::span<const double> t,

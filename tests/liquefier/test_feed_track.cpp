@@ -154,3 +154,17 @@ TEST_CASE("step and freq with the run's feed track warn of nothing on the defaul
     if (analysis == "step") CHECK(env.at("results").at("notes").size() == 2);
   }
 }
+
+TEST_CASE("step with only the file and its columns finds the run's feed track and gives calibrate's tau") {
+  const auto& run = test::default_calibration();
+  REQUIRE(run.cli.code == 0);
+  const auto res = nlohmann::json::parse(read_file_bytes(run.dir + "/results.json")).at("results");
+  const auto cli =
+      test::run_cli({"step", run.dir + "/liquefier-step/step.csv", "--input", "feed", "--output", "force", "--json"});
+  INFO(cli.err);
+  REQUIRE(cli.code == 0);
+  const auto& wr = nlohmann::json::parse(cli.out).at("results").at("whole_record");
+  CHECK(wr.at("input_track").at("used") == true);
+  CHECK(wr.at("tau_ref_s").at("value").get<double>() ==
+        res.at("liquefier").at("step").at("whole_record").at("tau_ref_s").at("value").get<double>());
+}

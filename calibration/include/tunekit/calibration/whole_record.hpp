@@ -43,6 +43,11 @@ WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const do
                                    std::vector<std::string>& warnings,
                                    const ident::FeedTrackAlignment* track = nullptr);
 
+/// The feed track for the log at `log`: `given` when not empty, else the feed_track.csv calibrate
+/// writes beside each load-cell record when there is one (so that the single command on the
+/// run's log reproduces calibrate's number), else none ("").
+std::string feed_track_for(const std::string& given, const std::string& log);
+
 /// The feed track in `path` (empty: none) aligned with the record (t, u: time stamps and logged
 /// window-mean feeds): ident::read_feed_track_csv, then ident::align_feed_track on the whole record.
 std::optional<ident::FeedTrackAlignment> aligned_feed_track(const std::string& path, std::span<const double> t,
