@@ -163,7 +163,8 @@ TEST_CASE("step with only the file and its columns finds the run's feed track an
       test::run_cli({"step", run.dir + "/liquefier-step/step.csv", "--input", "feed", "--output", "force", "--json"});
   INFO(cli.err);
   REQUIRE(cli.code == 0);
-  const auto& wr = nlohmann::json::parse(cli.out).at("results").at("whole_record");
+  const auto out = nlohmann::json::parse(cli.out);
+  const auto& wr = out.at("results").at("whole_record");
   CHECK(wr.at("input_track").at("used") == true);
   CHECK(wr.at("tau_ref_s").at("value").get<double>() ==
         res.at("liquefier").at("step").at("whole_record").at("tau_ref_s").at("value").get<double>());
