@@ -33,8 +33,10 @@ void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Id
   StepOptions so;
   so.file = cam.width_csv;
   so.time_column = "time";
-  so.input_column = "setpoint_width";
-  so.output_column = "width";
+  // The widths as filament feeds (the commanded and the one that lays the measured width): the
+  // record in the load-cell path's unit, so its model designs the advance the same way.
+  so.input_column = "feed";
+  so.output_column = "delivered_feed";
   so.analysis.model = fitting::StepModel::fopdt;  // `tunekit step`'s default model
   id.step = calibrate_analysis("step", [&] { return compute_step(so); });
   const std::string out = plan.run_dir + "/analysis/step.json";
@@ -44,7 +46,7 @@ void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Id
   id.export_inputs.push_back(out);
   id.reproduce.push_back(columns_command("step",
                                          "the liquefier's step responses in the printed line widths: tau, K, theta",
-                                         cam.width_csv, "setpoint_width", "width", plan.run_dir));
+                                         cam.width_csv, "feed", "delivered_feed", plan.run_dir));
   const auto& pooled = id.step->analysis.pooled;
   add_ring_prediction(*id.camera, pooled ? pooled->value("K") : std::nan(""),
                       pooled ? pooled->value("tau_s") : std::nan(""), pooled ? pooled->value("theta_s") : std::nan(""));

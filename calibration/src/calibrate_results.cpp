@@ -63,33 +63,44 @@ bool calibrate_estimate(const fitting::Param& p, const std::string& method, Esti
 // reference feed (the median feed, where its interval is narrowest) in that feed's flow, its flow
 // exponent, the dead time and the gain. The pooled step fit, one tau for steps at flows whose
 // time constants differ, stays in the results for information.
-// `where`: the reference input in words ("3.6 mm^3/s").
-void add_whole_record_rows(RunRecord& r, const ident::WholeRecordModel& m, const std::string& where) {
+// `where`: the reference input in words ("3.6 mm^3/s"); `model`: the model's name in the rows;
+// `gain`: the gain's name when the model's sensor reads the flow.
+struct WholeRecordWords {
+  std::string where, model = "whole-record model", gain = "liquefier gain K";
+};
+
+void add_whole_record_rows(RunRecord& r, const ident::WholeRecordModel& m, const WholeRecordWords& w) {
   const std::string p = "liquefier.step.whole_record.";
-  r.row(fmt::format("liquefier time constant tau at {} (whole-record model)", where), p + "tau_ref_s.value", "s",
+  r.row(fmt::format("liquefier time constant tau at {} ({})", w.where, w.model), p + "tau_ref_s.value", "s",
         p + "tau_ref_s.ci95");
   if (!m.model.fit.param("b").fixed)
-    r.row("tau's flow exponent b (tau = a u^b, whole-record model)", p + "b.value", "1", p + "b.ci95");
-  r.row("liquefier dead time theta (whole-record model)", p + "theta_s.value", "s", p + "theta_s.ci95");
+    r.row(fmt::format("tau's flow exponent b (tau = a u^b, {})", w.model), p + "b.value", "1", p + "b.ci95");
+  r.row(fmt::format("liquefier dead time theta ({})", w.model), p + "theta_s.value", "s", p + "theta_s.ci95");
   const bool flow_sensor = m.model.sensor == fitting::LiquefierSensor::flow;
-  r.row(flow_sensor ? "liquefier gain K (whole-record model)" : "force per stored filament g (whole-record model)",
+  r.row(fmt::format("{} ({})", flow_sensor ? w.gain : "force per stored filament g", w.model),
         p + "model.params.g.value", m.model.fit.param("g").unit, p + "model.params.g.ci95");
 }
 
-void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths) {
+void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths, double filament_area_mm2) {
   r.res()["liquefier"]["step"] = analysis_results(widths);
   r.res()["liquefier"]["camera"] = cam.results;
-  r.plot["step"] = step_plotdata(widths, "set-point width (mm)", "width (mm)");
+  r.plot["step"] = step_plotdata(widths, "feed (mm/s)", "delivered feed (mm/s, from the width)");
   r.plot["linewidth"] = cam.linewidth_plot;
-  // The pooled fit of the line test's two levels, not the whole-record model: the widths' input
-  // is the set-point staircase at the profile's samples, with no commanded track to place its
-  // steps, and the measurement's averaging along the line rounds the response's corner; over
-  // 200 simulated seeds the model's dead time covered the truth 31 % of the time, its tau 71.5 %,
-  // the pooled fit's 82.5 and 91 % (docs/interval-coverage.md).
-  const std::string p = "liquefier.step.pooled.params.";
-  r.row("liquefier time constant tau (line widths)", p + "tau_s.value", "s", p + "tau_s.ci95");
-  r.row("liquefier dead time theta (line widths)", p + "theta_s.value", "s", p + "theta_s.ci95");
-  r.row("width gain K (line widths)", p + "K.value", "1", p + "K.ci95");
+  // The whole-record model of the line widths, as the load-cell path lists it; the pooled fit of
+  // the line test's two levels when the model could not be fitted. Each width sample's set-point
+  // is the commanded width's mean over the sample's window (vision::map_path), which places the
+  // line test's flow changes inside their samples: over 40 simulated seeds the model's dead time
+  // then covered the truth 97.5 % of the time, its tau 92.5 % (31 and 71.5 % over 200 seeds with
+  // the set-point taken at each sample's centre; docs/interval-coverage.md).
+  if (const auto& m = widths.whole_record.model) {
+    add_whole_record_rows(
+        r, *m, {display_number(m->model.reference_input * filament_area_mm2) + " mm^3/s", "line widths", "width gain"});
+  } else {
+    const std::string p = "liquefier.step.pooled.params.";
+    r.row("liquefier time constant tau (line widths)", p + "tau_s.value", "s", p + "tau_s.ci95");
+    r.row("liquefier dead time theta (line widths)", p + "theta_s.value", "s", p + "theta_s.ci95");
+    r.row("width gain K (line widths)", p + "K.value", "1", p + "K.ci95");
+  }
   if (cam.ring) {
     r.plain_row("ring frequency", "liquefier.camera.ring.freq_hz", "Hz");
     r.plain_row("ring gain (measured)", "liquefier.camera.ring.gain", "1");
@@ -121,7 +132,7 @@ void add_load_cell_step(RunRecord& r, const StepOutcome& step, double filament_a
     r.notes.push_back(fmt::format("flow sweep: tau at each level reached from both sides, {}{}", levels, trend));
   }
   if (const auto& m = step.whole_record.model) {
-    add_whole_record_rows(r, *m, display_number(m->model.reference_input * filament_area_mm2) + " mm^3/s");
+    add_whole_record_rows(r, *m, {display_number(m->model.reference_input * filament_area_mm2) + " mm^3/s"});
     return;
   }
   const std::string p = "liquefier.step.pooled.params.";
@@ -239,7 +250,7 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
                      {"write", a.write},
                      {"sim", a.sim_options}});
   r.res()["machine"] = plan.profile.profile.name;
-  if (id.camera) add_camera(r, *id.camera, *id.step);
+  if (id.camera) add_camera(r, *id.camera, *id.step, plan.profile.profile.filament_area_mm2());
   else if (id.step) add_load_cell_step(r, *id.step, plan.profile.profile.filament_area_mm2());
   if (id.freq) add_freq(r, *id.freq, runs, id.step, plan.profile.profile.filament_area_mm2());
   add_axes(r, id);

@@ -79,6 +79,8 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
     m.linear = value_at_or_null(res, "/whole_record/linear_chosen"_json_pointer) == json(true);
     m.u_min = number_at(res, "/whole_record/input_range/0", "whole_record.input_range[0]", path);
     m.u_max = number_at(res, "/whole_record/input_range/1", "whole_record.input_range[1]", path);
+    m.tau_rel_ci95 =
+        number_at(res, "/whole_record/tau_rel_ci95_over_range", "whole_record.tau_rel_ci95_over_range", path);
     std::size_t checks = 0, disagreeing = 0;
     if (const json& sc = value_at_or_null(res, "/whole_record/step_checks"_json_pointer); sc.is_array())
       for (const json& c : sc) {
@@ -235,6 +237,7 @@ StepDesignInput step_design_input(const StepOutcome& o, const std::string& origi
     m.linear = wr->model.linear_chosen;
     m.u_min = wr->input_min_positive;
     m.u_max = wr->input_max;
+    m.tau_rel_ci95 = wr->tau_relative_half_width_over_range();
     std::size_t disagreeing = 0;
     for (const auto& c : wr->checks) disagreeing += c.disagrees;
     if (model_agrees_with_steps(wr->checks.size(), disagreeing)) in.model = m;

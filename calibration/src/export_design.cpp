@@ -164,7 +164,8 @@ ident::FlowAdvanceInputs model_flow_inputs(const LiquefierInputs& li, const iden
   fin.filament_area_mm2 = in.filament_area_mm2;
   // tau = a u^b with u = Q / to_flow: in flow, a to_flow^-b Q^b.
   fin.trend = ident::TauPowerLaw{m.a.value * std::pow(to_flow, -m.b.value), m.b.value};
-  const double q_lo = m.u_min * to_flow, q_hi = std::max(m.u_max * to_flow, 1.5 * q_lo);
+  // The flows the record reached (a record at one flow: half as much again, for a spread).
+  const double q_lo = m.u_min * to_flow, q_hi = m.u_max * to_flow > q_lo ? m.u_max * to_flow : 1.5 * q_lo;
   for (int i = 0; i < 6; ++i) {
     const double q = q_lo * std::pow(q_hi / q_lo, i / 5.0);
     fin.levels.push_back({q, fin.trend->a * std::pow(q, fin.trend->b), fitting::kNaN, fitting::kNaN});
@@ -282,8 +283,11 @@ std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs&
   const auto& flow = *outcome.flow;
   if (!std::isfinite(flow.k_design_lo_s) || !std::isfinite(flow.k_design_hi_s)) return std::nullopt;
   if (flow.band_from_levels) return std::pair{flow.k_design_lo_s, flow.k_design_hi_s};
-  const double widest = widest_level_interval(li);
-  if (!std::isfinite(widest)) return std::nullopt;
+  // Designed from the whole-record model: the model's own uncertainty of tau over the flows it
+  // saw (the levels' separate fits are narrower than the model they do not feed: on the camera's
+  // two-level line test they covered the simulator's tau 49 % of the time).
+  const double widest = model_usable(li) ? li.model->tau_rel_ci95 : widest_level_interval(li);
+  if (!std::isfinite(widest) || !(widest < 1)) return std::nullopt;
   return std::pair{flow.k_design_lo_s * (1 - widest), flow.k_design_hi_s * (1 + widest)};
 }
 
@@ -302,8 +306,12 @@ nlohmann::json design_advance(const ExportOptions& a, LiquefierInputs& li, Expor
   settings.pa_k_s = design->k_s;
   settings.pa_smooth_s = firmware::smoothing_time_for(outcome.firmware, *design);
   for (const auto& w : design->warnings) env.warn(w);
-  // Flow-dependent design (flow_advance.hpp) when two or more levels were identified.
-  if (!model_usable(li) && !(design->schedule.size() >= 2 && design->k_source == "operating points")) return nullptr;
+  // Flow-dependent design (flow_advance.hpp) when two or more levels were identified; its own
+  // warning says when the design flow lies outside the flows identified.
+  if (!model_usable(li) && !(design->schedule.size() >= 2 && design->k_source == "operating points")) {
+    if (!design->outside_range_warning.empty()) env.warn(design->outside_range_warning);
+    return nullptr;
+  }
   const ident::FlowAdvanceInputs fin = flow_inputs(li, *design);
   outcome.flow = ident::design_flow_advance(fin);
   auto& flow = *outcome.flow;

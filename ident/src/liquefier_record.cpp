@@ -109,6 +109,19 @@ double WholeRecordModel::tau_stderr_at(double q) const {
   return tau_at(q) * std::sqrt(std::max(var, 0.0));
 }
 
+double WholeRecordModel::tau_relative_half_width_over_range() const {
+  // Two-sided 95 % quantile of the normal distribution.
+  constexpr double kZ95 = 1.959963984540054;
+  if (!(input_min_positive > 0) || !(input_max >= input_min_positive)) return fitting::kNaN;
+  double widest = 0;
+  for (const double q : {input_min_positive, input_max}) {
+    const double rel = kZ95 * tau_stderr_at(q) / tau_at(q);
+    if (!std::isfinite(rel)) return fitting::kNaN;
+    widest = std::max(widest, rel);
+  }
+  return widest;
+}
+
 namespace {
 
 /// The record from `first` on, with the track when it matches (else a warning in m).
@@ -227,6 +240,7 @@ nlohmann::json to_json(const WholeRecordModel& m) {
           {"reference_input", number_or_null(m.model.reference_input)},
           {"input_unit", m.input_unit},
           {"input_range", {number_or_null(m.input_min_positive), number_or_null(m.input_max)}},
+          {"tau_rel_ci95_over_range", number_or_null(m.tau_relative_half_width_over_range())},
           {"a", param_json(f.derived.front())},
           {"b", param_json(f.param("b"))},
           {"theta_s", param_json(f.param("theta_s"))},

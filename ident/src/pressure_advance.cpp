@@ -102,10 +102,10 @@ AdvanceDesign design_advance(const AdvanceInputs& in) {
         "K at each flow is the stored melt volume over the flow (the integral of tau over 0..Q, divided by "
         "Q; tau held at the lowest level below it), not tau at that flow");
     if (d.design_flow_mm3_s < q.front() || d.design_flow_mm3_s > q.back())
-      d.warnings.push_back(
-          fmt::format("design flow {:.3g} mm^3/s lies outside the identified range {:.3g}-{:.3g} "
-                      "mm^3/s: tau is held at the nearest operating point there",
-                      d.design_flow_mm3_s, q.front(), q.back()));
+      d.outside_range_warning = fmt::format(
+          "design flow {:.3g} mm^3/s lies outside the identified range {:.3g}-{:.3g} mm^3/s: tau is held at the "
+          "nearest operating point there",
+          d.design_flow_mm3_s, q.front(), q.back());
     if (!finite(d.theta_s)) {
       std::vector<double> th;
       for (const auto& p : pts) th.push_back(p.theta_s);

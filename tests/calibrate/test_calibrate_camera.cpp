@@ -60,15 +60,25 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   CHECK(tunekit::test::embedded_png_base64_length(html, "linewidth_overlay") > 10000);
   CHECK(tunekit::test::embedded_image_base64_length(html, "step") > 2000);
   CHECK(fs::exists(dir + "/liquefier-camera/photo.png"));
-  // Pressure advance is designed from the camera's tau, and carries tau's interval as its fit
-  // reports it (cluster-robust, a t quantile), not a normal one from the standard error.
+  // The summary lists the whole-record model of the line widths (in feed, as the load-cell path's).
+  const auto& wr = res.at("liquefier").at("step").at("whole_record");
+  CHECK(wr.at("input_unit") == "mm/s");
+  bool listed = false;
+  for (const auto& row : res.at("summary"))
+    listed = listed || row.value("path", "") == "liquefier.step.whole_record.tau_ref_s.value";
+  CHECK(listed);
+  // Pressure advance is designed from that model: on this flow-independent liquefier the model
+  // keeps b = 0, the advance is its tau, and the advance's interval is the model's tau interval
+  // (not the narrower one of the two levels' separate fits).
+  REQUIRE(wr.at("linear_chosen") == true);
   const double k = res.at("compensators").at("settings").at("pa_k_s").get<double>();
-  REQUIRE(k > 0);
-  const double tau_fit = p.at("tau_s").at("value").get<double>();
-  const auto& tau_ci = p.at("tau_s").at("ci95");
+  const double tau_ref = wr.at("tau_ref_s").at("value").get<double>();
+  CHECK(k == Approx(tau_ref).epsilon(1e-9));
+  CHECK(tau_ref == Approx(tau).epsilon(0.10));
+  const auto& tau_ci = wr.at("tau_ref_s").at("ci95");
   const auto& k_ci = res.at("compensators").at("pa_k_ci95");
-  CHECK(k_ci[0].get<double>() == Approx(k * tau_ci[0].get<double>() / tau_fit).epsilon(1e-9));
-  CHECK(k_ci[1].get<double>() == Approx(k * tau_ci[1].get<double>() / tau_fit).epsilon(1e-9));
+  CHECK(k_ci[0].get<double>() == Approx(tau_ci[0].get<double>()).epsilon(1e-4));
+  CHECK(k_ci[1].get<double>() == Approx(tau_ci[1].get<double>()).epsilon(1e-4));
 }
 
 TEST_CASE(
@@ -103,6 +113,31 @@ TEST_CASE(
   CHECK(tau < 1.1 * t_hi);
   CHECK(step.at("pooled").at("params").at("theta_s").at("value").get<double>() ==
         Approx(truth.at("theta_s").get<double>()).epsilon(0.20));
+
+  // One number per quantity: the reproduce command (`tunekit step` on the width record's feed
+  // columns) gives calibrate's whole-record tau, and `tunekit export` of its step.json the advance.
+  const auto& wr = step.at("whole_record");
+  const double tau_ref = wr.at("tau_ref_s").at("value").get<double>();
+  // The model's tau at its reference feed holds the simulator's there (tau's flow exponent is
+  // the simulator's -0.5; the dead time is within a millisecond).
+  const double ref_feed = wr.at("reference_input").get<double>();
+  CHECK(tau_ref ==
+        Approx(truth.at("tau_s").get<double>() * std::pow(ref_feed / truth.at("tau_ref_feed_mm_s").get<double>(),
+                                                          truth.at("tau_flow_exponent").get<double>()))
+            .epsilon(0.05));
+  CHECK(wr.at("theta_s").at("value").get<double>() == Approx(truth.at("theta_s").get<double>()).margin(0.001));
+  const auto st = tunekit::test::run_cli(
+      {"step", dir + "/liquefier-camera/line_widths.csv", "--input", "feed", "--output", "delivered_feed", "--json"});
+  INFO(st.err);
+  REQUIRE(st.code == 0);
+  CHECK(nlohmann::json::parse(st.out).at("results").at("whole_record").at("tau_ref_s").at("value").get<double>() ==
+        Approx(tau_ref).epsilon(1e-12));
+  const auto ex = tunekit::test::run_cli(
+      {"export", "-f", "klipper", "-c", dir + "/config/printer.cfg", dir + "/analysis/step.json", "--json"});
+  INFO(ex.err);
+  REQUIRE(ex.code == 0);
+  CHECK(nlohmann::json::parse(ex.out).at("results").at("design").at("K_s").get<double>() ==
+        Approx(res.at("compensators").at("settings").at("pa_k_s").get<double>()).epsilon(1e-12));
 }
 
 TEST_CASE("tunekit linewidth on calibrate's camera photo gives calibrate's line widths, ring gain and phase",

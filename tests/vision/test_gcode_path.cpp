@@ -117,3 +117,27 @@ TEST_CASE(
   CHECK(tau_fit == Approx(tau).epsilon(0.05));
   CHECK(k_fit == Approx(1.0).epsilon(0.03));
 }
+
+TEST_CASE("map_path: a sample whose window holds the feed change carries the set-point's mean over its window") {
+  // Two segments at 20 mm/s; the feed per mm rises by half at 10 mm. Samples every 0.1 mm, one of
+  // them 0.02 mm before the change: its window (+-0.05 mm) holds 0.03 mm of the new level.
+  const double d = 1.75, h = 0.2, area = M_PI * 0.25 * d * d;
+  const double v = 20.0, w_lo = 0.4, w_hi = 0.6;
+  const std::vector<vision::PathSegment> path{{10.0, v, w_lo * h * 10.0 / area}, {10.0, v, w_hi * h * 10.0 / area}};
+  std::vector<double> s, w, c;
+  for (int i = 0; i < 190; ++i) {
+    s.push_back(0.58 + 0.1 * i);  // 9.98 mm at i = 94
+    w.push_back(0.5);
+    c.push_back(1.0);
+  }
+  vision::PathMapping how;
+  how.offset_mm = 0.58;
+  how.filament_diameter_mm = d;
+  how.layer_height_mm = h;
+  const auto rows = vision::map_path(s, w, c, path, how);
+  REQUIRE(rows.size() == s.size());
+  CHECK(rows[93].setpoint_mm == Approx(w_lo).epsilon(1e-9));
+  CHECK(rows[94].setpoint_mm == Approx(0.7 * w_lo + 0.3 * w_hi).epsilon(1e-6));
+  CHECK(rows[95].setpoint_mm == Approx(w_hi).epsilon(1e-9));
+  CHECK(rows[94].t_s == Approx(9.98 / v).epsilon(1e-9));
+}

@@ -91,6 +91,45 @@ double feed_setpoint_width_mm(const PathSegment& seg, double filament_diameter_m
   return seg.feed_mm * area / (seg.length_mm * layer_height_mm);
 }
 
+namespace {
+
+// Each row's set-point as the mean of the commanded set-point over the row's window, from
+// half-way to the previous sample to half-way to the next (in time; the first and the last row
+// mirror their one neighbour). A width sample is the bead averaged over its pixel's extent along
+// the line, about that window: where the feed changes inside it, the sample shows part of the new
+// level. The set-point taken at the sample's centre alone would put the change at a sample, and
+// the printed line test's changes fall at the same phase of the pixel grid on every line (whole
+// millimetres on a grid of 1/12 mm), so a step fit that assumes the change half-way between two
+// samples read the dead time half a sample (2 ms at 20 mm/s) long on every line alike. With the
+// window means the change sits inside its window where the record says (InputHold::centred).
+void window_mean_setpoints(std::vector<TimedWidth>& rows, const std::vector<PathSegment>& path,
+                           const std::vector<double>& t0, const PathMapping& how) {
+  if (rows.size() < 2) return;
+  std::vector<double> w(path.size()), area(path.size() + 1, 0.0);  // area: integral of the set-point dt
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    w[k] = feed_setpoint_width_mm(path[k], how.filament_diameter_mm, how.layer_height_mm);
+    area[k + 1] = area[k] + (std::isfinite(w[k]) ? w[k] * (t0[k + 1] - t0[k]) : 0.0);
+  }
+  auto integral = [&](double t) {
+    t = std::clamp(t, 0.0, t0.back());
+    const auto k = static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(
+        std::upper_bound(t0.begin(), t0.end(), t) - t0.begin() - 1, 0, static_cast<std::ptrdiff_t>(path.size()) - 1));
+    return area[k] + (std::isfinite(w[k]) ? w[k] * (t - t0[k]) : 0.0);
+  };
+  const std::size_t n = rows.size();
+  std::vector<double> mean(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double left = i > 0 ? rows[i].t_s - rows[i - 1].t_s : rows[1].t_s - rows[0].t_s;
+    const double right = i + 1 < n ? rows[i + 1].t_s - rows[i].t_s : rows[n - 1].t_s - rows[n - 2].t_s;
+    const double a = std::max(0.0, rows[i].t_s - 0.5 * left), b = std::min(t0.back(), rows[i].t_s + 0.5 * right);
+    mean[i] = b > a ? (integral(b) - integral(a)) / (b - a) : rows[i].setpoint_mm;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::isfinite(mean[i])) rows[i].setpoint_mm = mean[i];
+}
+
+}  // namespace
+
 std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vector<double>& width_mm,
                                  const std::vector<double>& confidence, const std::vector<PathSegment>& path,
                                  const PathMapping& how) {
@@ -102,6 +141,7 @@ std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vec
   }
   if (path.empty() || !(total > 0)) throw InputError("the commanded path is empty (no extruding moves)");
   const bool from_feed = how.filament_diameter_mm > 0 && how.layer_height_mm > 0;
+  const double filament_area = M_PI * 0.25 * how.filament_diameter_mm * how.filament_diameter_mm;
   if (!from_feed && !(how.setpoint_width_mm > 0))
     throw InputError("a set-point width is needed: filament diameter and layer height, or a constant width");
   const double len = s_mm.empty() ? 0.0 : s_mm.back() - s_mm.front();
@@ -123,12 +163,15 @@ std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vec
     const double t = t0[k] + (sp - s0[k]) / path[k].speed_mm_s;
     const double w_sp = from_feed ? feed_setpoint_width_mm(path[k], how.filament_diameter_mm, how.layer_height_mm)
                                   : how.setpoint_width_mm;
-    rows.push_back({t, sp, width_mm[i], w_sp, confidence[i]});
+    TimedWidth row{t, sp, width_mm[i], w_sp, confidence[i]};
+    if (from_feed) row.feed_per_width = how.layer_height_mm * path[k].speed_mm_s / filament_area;
+    rows.push_back(row);
   }
   std::sort(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return a.t_s < b.t_s; });
   rows.erase(
       std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
       rows.end());
+  if (from_feed) window_mean_setpoints(rows, path, t0, how);
   return rows;
 }
 
@@ -136,9 +179,16 @@ std::string timed_width_csv(const std::vector<TimedWidth>& rows, const std::stri
   std::ostringstream o;
   std::istringstream c(comment);
   for (std::string line; std::getline(c, line);) o << "# " << line << "\n";
-  o << "time (s),s (mm),width (mm),setpoint_width (mm),confidence\n";
-  for (const auto& r : rows)
-    o << fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.4f}\n", r.t_s, r.s_mm, r.width_mm, r.setpoint_mm, r.confidence);
+  const bool feeds = !rows.empty() && std::all_of(rows.begin(), rows.end(), [](const TimedWidth& r) {
+    return std::isfinite(r.feed_per_width) && r.feed_per_width > 0;
+  });
+  o << "time (s),s (mm),width (mm),setpoint_width (mm),confidence"
+    << (feeds ? ",feed (mm/s),delivered_feed (mm/s)\n" : "\n");
+  for (const auto& r : rows) {
+    o << fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.4f}", r.t_s, r.s_mm, r.width_mm, r.setpoint_mm, r.confidence);
+    if (feeds) o << fmt::format(",{:.9g},{:.9g}", r.setpoint_mm * r.feed_per_width, r.width_mm * r.feed_per_width);
+    o << "\n";
+  }
   return o.str();
 }
 

@@ -46,6 +46,9 @@ struct StepModelInput {
   EstimatedValue a, b, theta_s;
   bool linear = false;  ///< b held at 0 (the data do not support a flow-dependent tau)
   double u_min = fitting::kNaN, u_max = fitting::kNaN;
+  /// tau's widest relative 95 % half-width over [u_min, u_max] (WholeRecordModel::
+  /// tau_relative_half_width_over_range); NaN when unknown.
+  double tau_rel_ci95 = fitting::kNaN;
 };
 
 /// From `tunekit step`: the pooled fit, the arrival levels (u > 0) and tau's trend over them.

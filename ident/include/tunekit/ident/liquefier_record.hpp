@@ -60,6 +60,10 @@ struct WholeRecordModel {
   /// tau at input q from the chosen model (s), and its standard error from the fit's covariance.
   double tau_at(double q) const;
   double tau_stderr_at(double q) const;
+  /// The widest relative 95 % half-width of tau over the flows the record reached (at their
+  /// ends: the variance of log tau is quadratic in log q): what a design from the model's tau
+  /// inherits from the fit. NaN when the range or the errors are unknown.
+  double tau_relative_half_width_over_range() const;
 };
 
 /// Fits the model to (t, u, y) and, when `steps` is given, checks its step fits against it.

@@ -104,6 +104,9 @@ struct AdvanceDesign {
   double single_k_max_rel_error = kAdvanceNaN;  ///< max |K(Q) - K| / K(Q) over the schedule
   std::vector<std::string> notes;               ///< what the design means (informational)
   std::vector<std::string> warnings;            ///< what the user should look at or change
+  /// The design flow lies outside the operating points' flows (tau held at the nearest): a warning
+  /// the caller gives unless a flow-dependent design restates it (flow_advance.hpp). Empty otherwise.
+  std::string outside_range_warning;
 
   nlohmann::json to_json() const;
 };

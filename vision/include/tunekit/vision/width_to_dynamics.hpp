@@ -43,6 +43,9 @@ struct TimedWidth {
   double width_mm = 0;
   double setpoint_mm = 0;
   double confidence = 0;
+  /// Filament feed (mm/s) per mm of width at this sample: layer height x speed / filament area
+  /// (a rectangular bead); NaN when the path's feed is not known.
+  double feed_per_width = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Circle through points (algebraic least squares). Returns centre and radius (same units).
@@ -87,13 +90,17 @@ double feed_setpoint_width_mm(const PathSegment& seg, double filament_diameter_m
 
 /// Rows of an open line's profile printed along `path`: each sample's position on the path
 /// gives the time (piecewise constant speed from the first segment's start) and the set-point
-/// width (from the segment's feed, or constant). Samples off the path are dropped. Rows come
-/// out sorted by time. Throws InputError for an empty path or one without length.
+/// width (from the feed: its mean over the sample's window, half-way to each neighbour, so a
+/// change between two segments shows in the sample whose window holds it; or constant). Samples
+/// off the path are dropped. Rows come out sorted by time. Throws InputError for an empty path or one without length.
 std::vector<TimedWidth> map_path(const std::vector<double>& s_mm, const std::vector<double>& width_mm,
                                  const std::vector<double>& confidence, const std::vector<PathSegment>& path,
                                  const PathMapping& how);
 
 /// CSV text with columns `time (s)`, `s (mm)`, `width (mm)`, `setpoint_width (mm)`, `confidence`.
+/// When every row knows its feed_per_width, two columns follow: "feed (mm/s)", the set-point in
+/// filament feed, and "delivered_feed (mm/s)", the feed that lays the measured width: the record
+/// in the load-cell record's input unit, for the liquefier's identification.
 std::string timed_width_csv(const std::vector<TimedWidth>& rows, const std::string& comment);
 
 }  // namespace tunekit::vision
