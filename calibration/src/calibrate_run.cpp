@@ -37,7 +37,8 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
       const double tau = out.liquefier_step->analysis.pooled->value("tau_s");
       if (std::isfinite(tau) && tau > 0) {
         out.chirp = protocols::plan_liquefier_chirp(tau);
-        out.chirp_basis = fmt::format("the step test's time constant {} s", display_number(tau));
+        out.chirp_basis =
+            fmt::format("the pooled step fit's time constant {} s (one tau over every step)", display_number(tau));
         // The dry run timed the chirp of the plan; this one is longer or shorter by the difference.
         estimate_s += out.chirp.duration_s - plan.chirp.duration_s;
       }

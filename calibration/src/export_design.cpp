@@ -30,7 +30,8 @@ void take_step(const StepDesignInput& s, LiquefierInputs& li) {
   in.tau_stderr_s = s.tau_s.std_error;
   li.tau_ci95_lo = s.tau_s.ci95_lo;
   li.tau_ci95_hi = s.tau_s.ci95_hi;
-  in.theta_s = s.theta_s.value;
+  // The dead time the summary lists: the whole-record model's when it was fitted.
+  in.theta_s = s.model && std::isfinite(s.model->theta_s.value) ? s.model->theta_s.value : s.theta_s.value;
   in.gain = s.K.value;
   in.gain_unit = s.K_unit;
   in.tau_source = "step";
