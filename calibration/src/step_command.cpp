@@ -101,7 +101,7 @@ StepOutcome compute_step(const StepOptions& a) {
   if (!a.input_unit.empty()) input_unit = a.input_unit;
   if (ident::is_volumetric_flow_unit(input_unit)) input_unit = "mm^3/s";
   opt.input_unit = input_unit;
-  opt.gain_unit = opt.output_unit + "/(" + input_unit + ")";
+  opt.gain_unit = opt.output_unit == input_unit ? "1" : opt.output_unit + "/(" + input_unit + ")";
 
   ident::StepAnalysis& res = outcome.analysis;
   try {

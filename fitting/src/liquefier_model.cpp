@@ -183,7 +183,8 @@ std::vector<ParamSpec> specs(const ModelProblem& mp, const std::array<double, 6>
                              const LiquefierRecord& rec, bool fix_b) {
   const double T = mp.rec.t.back() - mp.rec.t.front();
   const std::string in = rec.input_unit, out = rec.output_unit;
-  const std::string gunit = mp.volume ? out + "/(" + in + ".s)" : out + "/(" + in + ")";
+  // Output per input: "1" when both are the same unit (a width against a width, a feed against a feed).
+  const std::string gunit = mp.volume ? out + "/(" + in + ".s)" : out == in ? "1" : out + "/(" + in + ")";
   return {{"tau_ref_s", "s", start[0], 1e-6 * T, 10 * T},
           {"b", "1", fix_b ? 0.0 : std::clamp(start[1], o.b_lower, o.b_upper), o.b_lower, o.b_upper, fix_b},
           {"theta_s", "s", std::clamp(start[2], 0.0, kThetaMaxFraction * T), 0.0, kThetaMaxFraction * T},
