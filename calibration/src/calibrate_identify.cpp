@@ -26,6 +26,25 @@ Reproduction columns_command(const char* analysis, const std::string& what, cons
           {"tunekit", analysis, relative_to(csv, run_dir), "--input", input, "--output", output}};
 }
 
+// The liquefier as the ring's prediction takes it: the whole-record model's gain, dead time and
+// tau at the ring's mean feed (its set-point width, the profile's line, laid at the ring's speed
+// and layer height), the numbers the summary lists; the pooled fit's when the model was not fitted.
+RingModel ring_model(const StepOutcome& widths, const CalibrationPlan& plan, const ExperimentRuns& runs) {
+  if (const auto& m = widths.whole_record.model) {
+    const auto ring = runs.runs.find("liquefier-ring");
+    const auto& prm = ring != runs.runs.end() ? ring->second.experiment.params : std::map<std::string, double>{};
+    const auto& profile = plan.profile.profile;
+    if (prm.count("speed_mm_s") && prm.count("z_mm")) {
+      const double feed =
+          profile.print.line_width_mm * prm.at("z_mm") * prm.at("speed_mm_s") / profile.filament_area_mm2();
+      return {m->model.fit.value("g"), m->tau_at(feed), m->model.fit.value("theta_s")};
+    }
+  }
+  const auto& pooled = widths.analysis.pooled;
+  if (!pooled) return {};
+  return {pooled->value("K"), pooled->value("tau_s"), pooled->value("theta_s")};
+}
+
 void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {
   id.camera = std::make_shared<CameraAnalysis>(analyze_camera_prints(
       plan.run_dir, plan.options.camera, plan.profile.profile, runs.runs, plan.bed, plan.can_prompt, ctx));
@@ -47,9 +66,7 @@ void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Id
   id.reproduce.push_back(columns_command("step",
                                          "the liquefier's step responses in the printed line widths: tau, K, theta",
                                          cam.width_csv, "feed", "delivered_feed", plan.run_dir));
-  const auto& pooled = id.step->analysis.pooled;
-  add_ring_prediction(*id.camera, pooled ? pooled->value("K") : std::nan(""),
-                      pooled ? pooled->value("tau_s") : std::nan(""), pooled ? pooled->value("theta_s") : std::nan(""));
+  add_ring_prediction(*id.camera, ring_model(*id.step, plan, runs));
 }
 
 void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {

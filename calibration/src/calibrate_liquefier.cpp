@@ -264,7 +264,9 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   return out;
 }
 
-void add_ring_prediction(CameraAnalysis& camera, double K, double tau, double theta) {
+void add_ring_prediction(CameraAnalysis& camera, const RingModel& model) {
+  const double K = model.K, tau = model.tau_s;
+  double theta = model.theta_s;
   if (!camera.ring || !std::isfinite(tau)) return;
   const double w = 2 * std::numbers::pi * camera.ring->freq_hz;
   if (!std::isfinite(theta)) theta = 0;

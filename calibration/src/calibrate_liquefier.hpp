@@ -11,6 +11,7 @@
 // device through OpenCV's videoio (--camera-device, several frames averaged), or a file path
 // typed at a terminal.
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -65,8 +66,14 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
                                      const std::map<std::string, protocols::RunResult>& runs,
                                      const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx);
 
+/// The liquefier the ring's prediction is made with: gain, tau (s) at the ring's feed, dead time (s).
+struct RingModel {
+  double K = std::numeric_limits<double>::quiet_NaN(), tau_s = std::numeric_limits<double>::quiet_NaN(),
+         theta_s = std::numeric_limits<double>::quiet_NaN();
+};
+
 /// The ring's gain and phase, added to the camera analysis once tau and theta are known from
 /// the lines (the model's prediction at the ring frequency is reported beside the measurement).
-void add_ring_prediction(CameraAnalysis& camera, double K, double tau_s, double theta_s);
+void add_ring_prediction(CameraAnalysis& camera, const RingModel& model);
 
 }  // namespace tunekit::calibration
