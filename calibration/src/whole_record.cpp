@@ -107,6 +107,10 @@ void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_c
     os << fmt::format("; {} of {} step fits disagree with it", bad, m.checks.size());
   }
   os << "\n";
+  // The model's tau where its interval is narrowest: the number calibrate's summary lists.
+  const auto& ref = f.param("tau_ref_s");
+  os << fmt::format("    its tau at its reference input u = {:.4g} {}: {:.4g} s [{:.4g}, {:.4g}]\n",
+                    m.model.reference_input, m.input_unit, ref.value, ref.ci95_lo, ref.ci95_hi);
   if (std::isfinite(u_compare) && u_compare > 0) {
     // Two-sided 95 % quantile of the normal distribution.
     constexpr double kZ95 = 1.959963984540054;

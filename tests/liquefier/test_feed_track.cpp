@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
@@ -168,4 +169,11 @@ TEST_CASE("step with only the file and its columns finds the run's feed track an
   CHECK(wr.at("input_track").at("used") == true);
   CHECK(wr.at("tau_ref_s").at("value").get<double>() ==
         res.at("liquefier").at("step").at("whole_record").at("tau_ref_s").at("value").get<double>());
+  // The terminal shows that number too, beside the pooled fit's.
+  const auto text =
+      test::run_cli({"step", run.dir + "/liquefier-step/step.csv", "--input", "feed", "--output", "force"});
+  REQUIRE(text.code == 0);
+  CHECK(text.out.find(fmt::format("its tau at its reference input u = {:.4g} mm/s: {:.4g} s",
+                                  wr.at("reference_input").get<double>(),
+                                  wr.at("tau_ref_s").at("value").get<double>())) != std::string::npos);
 }

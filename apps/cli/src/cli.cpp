@@ -206,6 +206,15 @@ static void add_record_options(CLI::App* sub, OutputOptions& o) {
                               kDefaultHistoryDb));
 }
 
+void add_feed_track_option(CLI::App* sub, std::string& target) {
+  sub->add_option(
+      "--feed-track", target,
+      "With --input: the commanded feed on its own instants (CSV: time (s), feed; calibrate writes "
+      "feed_track.csv beside each load-cell record), aligned with the input column's window means; it "
+      "drives the whole-record model where it matches them (default: feed_track.csv beside the log when there "
+      "is one, else the input column)");
+}
+
 void add_output_options(CLI::App* sub, OutputOptions& o, bool recordable) {
   sub->add_flag("--json", o.json, "Print the results as JSON on stdout");
   // The long name is --json-file: --output names the output column in step and freq.

@@ -49,12 +49,7 @@ void register_freq(CLI::App& app, CliContext& ctx) {
       "coherence; oe: h1, TF fit, then output-error refinement on the record; auto (default): dwell with "
       "--freq-hz, else oe");
   sub->add_option("-f,--freq-hz", o.freq_hz, "Excitation frequency for --mode dwell (Hz)");
-  sub->add_option(
-      "--feed-track", o.feed_track,
-      "With --input: the commanded feed on its own instants (CSV: time (s), feed; calibrate writes "
-      "feed_track.csv beside each load-cell record), aligned with the input column's window means; it "
-      "drives the whole-record model where it matches them (default: feed_track.csv beside the log when there "
-      "is one, else the input column)");
+  add_feed_track_option(sub, o.feed_track);
   sub->add_option("--fit-tf", o.fit_tf,
                   "Fit a transfer function with P,Z poles and zeros (P 1-3, Z 0-2); default for oe: the liquefier "
                   "model, 1,0 with dead time");

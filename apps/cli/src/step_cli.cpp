@@ -65,12 +65,7 @@ void register_step(CLI::App& app, CliContext& ctx) {
   sub->add_flag("--profile-intervals", o.profile_intervals,
                 "With --input: the whole-record model's 95 % intervals of b and theta_s by profile likelihood "
                 "(several times slower; default: Wald intervals widened for correlated residuals)");
-  sub->add_option(
-      "--feed-track", o.feed_track,
-      "With --input: the commanded feed on its own instants (CSV: time (s), feed; calibrate writes "
-      "feed_track.csv beside each load-cell record), aligned with the input column's window means; it "
-      "drives the whole-record model where it matches them (default: feed_track.csv beside the log when there "
-      "is one, else the input column)");
+  add_feed_track_option(sub, o.feed_track);
   sub->add_option("--plot", o.plot_out,
                   "With --input: also draw the record, the whole-record model, each step's fit and the residuals "
                   "(the calibration report's step figure) into this .svg or .png file");

@@ -55,6 +55,10 @@ CLI::Option* add_parsed_option(CLI::App* sub, const std::string& names, T& targe
   return opt;
 }
 
+/// Adds --feed-track FILE (tunekit step and freq): the commanded feed track for the whole-record
+/// model, default feed_track.csv beside the log.
+void add_feed_track_option(CLI::App* sub, std::string& target);
+
 /// Adds --json, -o/--json-file and --require to a subcommand, and (unless `recordable` is
 /// false) the history options --record, --machine-id and --db.
 void add_output_options(CLI::App* sub, calibration::OutputOptions& o, bool recordable = true);
