@@ -30,9 +30,9 @@ Reproduction columns_command(const char* analysis, const std::string& what, cons
 // tau at the ring's mean feed (its set-point width, the profile's line, laid at the ring's speed
 // and layer height), the numbers the summary lists; the pooled fit's when the model was not fitted.
 RingModel ring_model(const StepOutcome& widths, const CalibrationPlan& plan, const ExperimentRuns& runs) {
-  if (const auto& m = widths.whole_record.model) {
-    const auto ring = runs.runs.find("liquefier-ring");
-    const auto& prm = ring != runs.runs.end() ? ring->second.experiment.params : std::map<std::string, double>{};
+  const auto ring = runs.runs.find("liquefier-ring");
+  if (const auto& m = widths.whole_record.model; m && ring != runs.runs.end()) {
+    const auto& prm = ring->second.experiment.params;
     const auto& profile = plan.profile.profile;
     if (prm.count("speed_mm_s") && prm.count("z_mm")) {
       const double feed =
