@@ -288,7 +288,7 @@ std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs&
   // saw (the levels' separate fits are narrower than the model they do not feed: on the camera's
   // two-level line test they covered the simulator's tau 49 % of the time).
   const double widest = model_usable(li) ? li.model->tau_rel_ci95 : widest_level_interval(li);
-  if (!std::isfinite(widest) || !(widest < 1)) return std::nullopt;
+  if (!(widest >= 0 && widest < 1)) return std::nullopt;  // NaN, negative or a width of 100 % and more
   return std::pair{flow.k_design_lo_s * (1 - widest), flow.k_design_hi_s * (1 + widest)};
 }
 

@@ -138,6 +138,19 @@ TEST_CASE(
   REQUIRE(ex.code == 0);
   CHECK(nlohmann::json::parse(ex.out).at("results").at("design").at("K_s").get<double>() ==
         Approx(res.at("compensators").at("settings").at("pa_k_s").get<double>()).epsilon(1e-12));
+  // A hostile width of the model's tau interval in step.json (negative, huge) gives the advance
+  // no interval rather than an inverted or infinite one.
+  for (const double bad : {-1.0, 1e308}) {
+    auto sj = tunekit::test::read_json(dir + "/analysis/step.json");
+    sj["results"]["whole_record"]["tau_rel_ci95_over_range"] = bad;
+    const std::string path = dir + "/hostile_step.json";
+    std::ofstream(path) << sj.dump();
+    const auto hx =
+        tunekit::test::run_cli({"export", "-f", "klipper", "-c", dir + "/config/printer.cfg", path, "--json"});
+    INFO(hx.err);
+    REQUIRE(hx.code == 0);
+    CHECK(nlohmann::json::parse(hx.out).at("results").value("pa_k_ci95", nlohmann::json()).is_null());
+  }
 }
 
 TEST_CASE("tunekit linewidth on calibrate's camera photo gives calibrate's line widths, ring gain and phase",
