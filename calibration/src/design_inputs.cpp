@@ -60,6 +60,27 @@ bool levels_are_feed_or_flow(const std::string& input_unit) {
   return input_unit.empty() || input_unit == "1" || input_unit == "mm/s" || ident::is_volumetric_flow_unit(input_unit);
 }
 
+/// The whole-record model's stored-volume fields: the sensor, V's relative width, the rest volume.
+void read_volume_fields(const json& res, const std::string& path, StepModelInput& m) {
+  m.sensor_reads_volume = value_at_or_null(res, "/whole_record/sensor"_json_pointer) == json("pressure");
+  m.u_ref = number_at(res, "/whole_record/reference_input", "whole_record.reference_input", path);
+  const std::string cov = "/whole_record/ln_tau_ref_b_covariance/";
+  auto cov_at = [&](const std::string& name) {
+    return number_at(res, (cov + name).c_str(), "whole_record.ln_tau_ref_b_covariance." + name, path);
+  };
+  m.ln_tau_b_cov = {cov_at("var_ln_tau_ref"), cov_at("cov_ln_tau_ref_b"), cov_at("var_b")};
+  m.volume_rel_ci95 =
+      number_at(res, "/whole_record/volume_rel_ci95_over_range", "whole_record.volume_rel_ci95_over_range", path);
+  if (value_at_or_null(res, "/whole_record/rest_volume/measured"_json_pointer) != json(true)) return;
+  StepModelInput::RestVolume v;
+  v.u = number_at(res, "/whole_record/rest_volume/input", "whole_record.rest_volume.input", path);
+  v.value = number_at(res, "/whole_record/rest_volume/value", "whole_record.rest_volume.value", path);
+  v.ci95_lo = number_at(res, "/whole_record/rest_volume/ci95/0", "whole_record.rest_volume.ci95[0]", path);
+  v.ci95_hi = number_at(res, "/whole_record/rest_volume/ci95/1", "whole_record.rest_volume.ci95[1]", path);
+  if (v.u > 0 && v.value > 0 && v.ci95_lo <= v.value && v.value <= v.ci95_hi && std::isfinite(v.ci95_hi))
+    m.rest_volume = v;
+}
+
 StepDesignInput read_step_results(const json& res, const std::string& path) {
   StepDesignInput in;
   in.origin = path;
@@ -81,6 +102,7 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
     m.u_max = number_at(res, "/whole_record/input_range/1", "whole_record.input_range[1]", path);
     m.tau_rel_ci95 =
         number_at(res, "/whole_record/tau_rel_ci95_over_range", "whole_record.tau_rel_ci95_over_range", path);
+    read_volume_fields(res, path, m);
     std::size_t checks = 0, disagreeing = 0;
     if (const json& sc = value_at_or_null(res, "/whole_record/step_checks"_json_pointer); sc.is_array())
       for (const json& c : sc) {
@@ -238,6 +260,12 @@ StepDesignInput step_design_input(const StepOutcome& o, const std::string& origi
     m.u_min = wr->input_min_positive;
     m.u_max = wr->input_max;
     m.tau_rel_ci95 = wr->tau_relative_half_width_over_range();
+    m.sensor_reads_volume = wr->model.sensor == fitting::LiquefierSensor::pressure;
+    m.u_ref = wr->model.reference_input;
+    m.ln_tau_b_cov = wr->ln_tau_ref_b_covariance();
+    m.volume_rel_ci95 = wr->volume_relative_half_width_over_range();
+    if (const auto& rv = wr->rest_volume)
+      m.rest_volume = StepModelInput::RestVolume{rv->input, rv->value, rv->ci95_lo, rv->ci95_hi};
     std::size_t disagreeing = 0;
     for (const auto& c : wr->checks) disagreeing += c.disagrees;
     if (model_agrees_with_steps(wr->checks.size(), disagreeing)) in.model = m;

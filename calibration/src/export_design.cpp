@@ -171,13 +171,30 @@ ident::FlowAdvanceInputs model_flow_inputs(const LiquefierInputs& li, const iden
     const double q = q_lo * std::pow(q_hi / q_lo, i / 5.0);
     fin.levels.push_back({q, fin.trend->a * std::pow(q, fin.trend->b), fitting::kNaN, fitting::kNaN});
   }
+  // The melt below the data: read by a pressure sensor at every level, or measured at the first
+  // level from the record's start-up transient; else bounded by the flow design.
+  fin.trend_rel_half_width = m.tau_rel_ci95;
+  fin.volume_measured = m.sensor_reads_volume;
+  fin.volume_rel_half_width = m.volume_rel_ci95;
+  if (m.u_ref > 0 && std::isfinite(m.ln_tau_b_cov[0]))
+    fin.trend_covariance = ident::FlowAdvanceInputs::TrendCovariance{m.u_ref * to_flow, m.ln_tau_b_cov[0],
+                                                                     m.ln_tau_b_cov[1], m.ln_tau_b_cov[2]};
+  if (const auto& rv = m.rest_volume; rv && !m.sensor_reads_volume)
+    fin.low_volume =
+        ident::MeasuredVolume{rv->u * to_flow, rv->value * to_flow, 0.5 * (rv->ci95_hi - rv->ci95_lo) * to_flow};
   fin.design_flow_mm3_s = design.design_flow_mm3_s;
   fin.theta_s = std::isfinite(m.theta_s.value) ? m.theta_s.value : design.theta_s;
   if (std::isfinite(in.print_accel_mm_s2) && in.print_accel_mm_s2 > 0) fin.orca_accels_mm_s2 = {in.print_accel_mm_s2};
   return fin;
 }
 
-std::string model_note(double b, bool linear) {
+std::string model_note(double b, bool linear, bool rest_volume) {
+  if (rest_volume)
+    return fmt::format(
+        "designed from the whole-record model tau = a Q^b with b = {:.3g} above the first level Q1 and the volume V1 "
+        "held at Q1, measured from the record's start-up transient: the advance at flow Q is V(Q)/Q = (V1 + a (Q^(b+1) "
+        "- Q1^(b+1)) / (b + 1)) / Q",
+        b);
   if (linear)
     return "designed from the whole-record model with b = 0 (the data do not support a flow-dependent tau): the "
            "advance is tau";
@@ -283,7 +300,7 @@ std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs&
   }
   const auto& flow = *outcome.flow;
   if (!std::isfinite(flow.k_design_lo_s) || !std::isfinite(flow.k_design_hi_s)) return std::nullopt;
-  if (flow.band_from_levels) return std::pair{flow.k_design_lo_s, flow.k_design_hi_s};
+  if (flow.band_from_levels || flow.band_is_interval) return std::pair{flow.k_design_lo_s, flow.k_design_hi_s};
   // Designed from the whole-record model: the model's own uncertainty of tau over the flows it
   // saw (the levels' separate fits are narrower than the model they do not feed: on the camera's
   // two-level line test they covered the simulator's tau 49 % of the time).
@@ -317,7 +334,8 @@ nlohmann::json design_advance(const ExportOptions& a, LiquefierInputs& li, Expor
   outcome.flow = ident::design_flow_advance(fin);
   auto& flow = *outcome.flow;
   if (model_usable(li)) {
-    std::string note = li.model->linear ? model_note(0.0, true) : model_note(li.model->b.value, false);
+    const bool rest = fin.low_volume.has_value();
+    std::string note = li.model->linear ? model_note(0.0, true, rest) : model_note(li.model->b.value, false, rest);
     flow.notes.insert(flow.notes.begin(), std::move(note));
   }
   for (const auto& w : flow.warnings) env.warn(w);

@@ -39,8 +39,10 @@ struct LiquefierInputs {
 /// error. With one: the flow design's bounds (the levels' intervals,
 /// and the melt stored below the lowest identified flow, flow_advance.hpp); when those bounds do
 /// not hold the levels' intervals (a whole-record model's trend), they are widened by the widest
-/// relative interval of the levels' tau: every tau within its interval keeps V(Q)/Q, an average
-/// of the taus up to Q, within that bound. nullopt when neither is known.
+/// relative interval of the model's tau: every tau within its interval keeps V(Q)/Q, an average
+/// of the taus up to Q, within that bound. When the melt below the data is known (measured from
+/// the record's start-up transient, or read by a pressure sensor at every level) the design's
+/// band is already the 95 % interval of V(Q)/Q and is returned as it is. nullopt when neither is known.
 std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs& li, const ExportOutcome& outcome);
 
 LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, Envelope& env);

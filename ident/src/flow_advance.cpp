@@ -73,6 +73,53 @@ double fa_trend_volume(const TauPowerLaw& t, double q0, double q, int which) {
   return low + above;
 }
 
+/// The volume below the data is known: measured at one flow (low_volume) or read by the sensor at
+/// every level (volume_measured).
+bool fa_volume_known(const FlowAdvanceInputs& in) {
+  return fa_trend_usable(in) && (in.low_volume || in.volume_measured);
+}
+
+/// The 95 % half-width of the trend's volume between flows q0 and q1 (q0 = 0: from zero flow).
+/// Delta method with the trend's covariance: V(q) = tau_ref q_ref^-b q^(b+1) / (b+1) has
+/// dV/d ln tau_ref = V and dV/db = V (ln(q / q_ref) - 1 / (b+1)). Without a covariance, the given
+/// widest relative half-width of the trend (of tau, or of V from zero flow) times the volume.
+double fa_trend_volume_half_width(const FlowAdvanceInputs& in, double q0, double q1, double rel_fallback) {
+  const TauPowerLaw& t = *in.trend;
+  const double e = t.b + 1;
+  auto volume = [&](double q) { return q > 0 ? t.a * std::pow(q, e) / e : 0.0; };
+  const double dv = volume(q1) - volume(q0);
+  const auto& c = in.trend_covariance;
+  if (!c || !(c->reference_flow_mm3_s > 0) || !fa_finite(c->var_ln_tau_ref)) return rel_fallback * dv;
+  auto dvdb = [&](double q) { return q > 0 ? volume(q) * (std::log(q / c->reference_flow_mm3_s) - 1 / e) : 0.0; };
+  const double gb = dvdb(q1) - dvdb(q0);
+  const double cov = fa_finite(c->cov_ln_tau_ref_b) ? c->cov_ln_tau_ref_b : 0.0;
+  const double vb = fa_finite(c->var_b) ? c->var_b : 0.0;
+  constexpr double kZ95 = 1.959963984540054;
+  return kZ95 * std::sqrt(std::max(dv * dv * c->var_ln_tau_ref + 2 * dv * gb * cov + gb * gb * vb, 0.0));
+}
+
+/// V(q) of a trend whose volume below the data is known; `which` -1 / +1 its 95 % bounds. With a
+/// measured low volume: that volume plus the trend's integral from its flow (below its flow, the
+/// trend's shape scaled through it); the bounds add the two half-widths in quadrature.
+double fa_known_volume(const FlowAdvanceInputs& in, double q, int which) {
+  const TauPowerLaw& t = *in.trend;
+  const double e = t.b + 1;
+  if (!in.low_volume) {
+    const double hw = which == 0 ? 0.0 : fa_trend_volume_half_width(in, 0.0, q, in.volume_rel_half_width);
+    return t.a * std::pow(q, e) / e + which * hw;
+  }
+  const MeasuredVolume& lv = *in.low_volume;
+  if (q < lv.flow_mm3_s) {
+    const double scale = std::pow(q / lv.flow_mm3_s, e);
+    return scale * (lv.volume_mm3 + which * lv.half_width_mm3);
+  }
+  const double above = t.a * (std::pow(q, e) - std::pow(lv.flow_mm3_s, e)) / e;
+  const double hw = which == 0 ? 0.0
+                               : std::hypot(lv.half_width_mm3,
+                                            fa_trend_volume_half_width(in, lv.flow_mm3_s, q, in.trend_rel_half_width));
+  return lv.volume_mm3 + above + which * hw;
+}
+
 double fa_kalico_shape(KalicoModel m, double x) {
   return m == KalicoModel::tanh ? std::tanh(x) : 1.0 - 1.0 / (1.0 + x);
 }
@@ -142,6 +189,10 @@ void fa_validate(const FlowAdvanceInputs& in) {
                                    l.flow_mm3_s, l.tau_lo_s, l.tau_hi_s, l.tau_s));
     qs.push_back(l.flow_mm3_s);
   }
+  if (const auto& lv = in.low_volume; lv && !(lv->flow_mm3_s > 0 && lv->volume_mm3 > 0 && lv->half_width_mm3 >= 0 &&
+                                              fa_finite(lv->flow_mm3_s) && fa_finite(lv->volume_mm3)))
+    throw InputError(fmt::format("the measured stored volume {} mm^3 at {} mm^3/s must be positive", lv->volume_mm3,
+                                 lv->flow_mm3_s));
   std::sort(qs.begin(), qs.end());
   for (std::size_t i = 1; i < qs.size(); ++i)
     if (qs[i] == qs[i - 1]) throw InputError(fmt::format("two flow levels at the same flow {} mm^3/s", qs[i]));
@@ -175,6 +226,7 @@ double flow_tau_s(const FlowAdvanceInputs& in, double q, int which) {
 double stored_volume_mm3(const FlowAdvanceInputs& in, double q, int which) {
   if (q <= 0) return 0;
   const FaKnots k = fa_knots(in, which);
+  if (fa_volume_known(in)) return fa_known_volume(in, q, which);
   if (fa_trend_usable(in)) {
     const double est = fa_trend_volume(*in.trend, k.q.front(), q, which);
     if (which == 0) return est;
@@ -246,6 +298,22 @@ constexpr double kLowFlowShareNote = 0.1;
 void fa_note_low_flow(const FlowAdvanceInputs& in, FlowAdvanceDesign& d) {
   if (!fa_trend_usable(in)) return;
   const double q0 = d.flow_min_mm3_s, qd = d.design_flow_mm3_s;
+  if (in.volume_measured && !in.low_volume) {
+    d.notes.push_back(
+        "the sensor reads the stored melt volume at every level (a pressure sensor): V(Q) at the design flow is "
+        "measured, not extrapolated below the data; its band is the model's 95 % interval of V");
+    return;
+  }
+  if (const auto& lv = in.low_volume) {
+    d.low_flow_share = stored_volume_mm3(in, std::min(qd, lv->flow_mm3_s)) / stored_volume_mm3(in, qd);
+    d.notes.push_back(fmt::format(
+        "{:.0f} % of the melt stored at the design flow is the volume held at the first level {:.3g} mm^3/s, "
+        "measured from the record's start-up transient ({:.4g} mm^3 [{:.4g}, {:.4g}]): the flows below the data are "
+        "not extrapolated",
+        100 * d.low_flow_share, lv->flow_mm3_s, lv->volume_mm3, lv->volume_mm3 - lv->half_width_mm3,
+        lv->volume_mm3 + lv->half_width_mm3));
+    return;
+  }
   d.low_flow_share = fa_trend_volume(*in.trend, q0, std::min(qd, q0), 0) / fa_trend_volume(*in.trend, q0, qd, 0);
   if (d.low_flow_share < kLowFlowShareNote) return;
   d.notes.push_back(
@@ -269,7 +337,10 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   const bool level_band = std::all_of(in.levels.begin(), in.levels.end(),
                                       [](const FlowTau& l) { return fa_finite(l.tau_lo_s) && fa_finite(l.tau_hi_s); });
   d.has_band = level_band || fa_trend_usable(in);
-  d.band_from_levels = level_band;
+  d.band_from_levels = level_band && !fa_volume_known(in);
+  d.band_is_interval = fa_volume_known(in) &&
+                       fa_finite(in.low_volume ? std::hypot(in.low_volume->half_width_mm3, in.trend_rel_half_width)
+                                               : in.volume_rel_half_width);
   const FaKnots k = fa_knots(in, 0);
   d.flow_min_mm3_s = k.q.front();
   d.flow_max_mm3_s = k.q.back();
@@ -362,10 +433,15 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   for (double q : k.q)
     for (double acc : accels) d.orca.push_back({needed_advance_s(in, q), q, acc});
 
-  d.notes.push_back(
-      "advance designed as the stored melt volume V(Q) = integral of tau over 0..Q (one first-order store, "
-      "tau held at the lowest level below it); the single K at flow Q is V(Q)/Q");
-  if (!level_band)
+  const char* below = fa_volume_known(in)
+                          ? (in.low_volume ? "the volume at the first level measured" : "the volume read by the sensor")
+                      : fa_trend_usable(in) ? "the power law below the lowest level, bounded by tau held there"
+                                            : "tau held at the lowest level below it";
+  d.notes.push_back(fmt::format(
+      "advance designed as the stored melt volume V(Q) = integral of tau over 0..Q (one first-order store, {}); the "
+      "single K at flow Q is V(Q)/Q",
+      below));
+  if (!level_band && !d.band_is_interval)
     d.notes.push_back(d.has_band ? "no 95 % intervals per level: the advance's band is that of the flows below the data"
                                  : "no 95 % intervals per level: the advance is drawn without a band");
   return d;
@@ -407,6 +483,7 @@ nlohmann::json FlowAdvanceDesign::to_json() const {
           {"orca", orca_j},
           {"curve", curve_j},
           {"has_band", has_band},
+          {"band_is_interval", band_is_interval},
           {"notes", notes},
           {"warnings", warnings}};
 }

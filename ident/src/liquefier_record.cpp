@@ -2,6 +2,7 @@
 #include "tunekit/ident/liquefier_record.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -96,30 +97,64 @@ double WholeRecordModel::tau_at(double q) const {
   return model.fit.value("tau_ref_s") * std::pow(q / model.reference_input, model.fit.value("b"));
 }
 
-double WholeRecordModel::tau_stderr_at(double q) const {
-  const auto& f = model.fit;
-  const auto& tau = f.param("tau_ref_s");
-  const auto& b = f.param("b");
-  const double L = std::log(q / model.reference_input);
-  double var = std::pow(tau.std_error / tau.value, 2);
-  const std::size_t k = f.params.size();
-  if (!b.fixed && f.covariance.size() == k * k) {
-    var += L * L * b.std_error * b.std_error + 2 * L * f.covariance[1] * model.variance_factor / tau.value;
-  }
-  return tau_at(q) * std::sqrt(std::max(var, 0.0));
+namespace {
+
+/// The standard error of ln tau_ref + L b (the fit's covariance, widened by its variance factor).
+double log_stderr(const WholeRecordModel& m, double L) {
+  const auto c = m.ln_tau_ref_b_covariance();
+  return std::sqrt(std::max(c[0] + 2 * L * c[1] + L * L * c[2], 0.0));
 }
 
-double WholeRecordModel::tau_relative_half_width_over_range() const {
+/// The widest relative 95 % half-width of a quantity over the input range, given its relative
+/// standard error at an input (the variance of a logarithm quadratic in ln q: widest at the ends).
+template <class RelativeError>
+double widest_over_range(const WholeRecordModel& m, RelativeError rel_se) {
   // Two-sided 95 % quantile of the normal distribution.
   constexpr double kZ95 = 1.959963984540054;
-  if (!(input_min_positive > 0) || !(input_max >= input_min_positive)) return fitting::kNaN;
+  if (!(m.input_min_positive > 0) || !(m.input_max >= m.input_min_positive)) return fitting::kNaN;
   double widest = 0;
-  for (const double q : {input_min_positive, input_max}) {
-    const double rel = kZ95 * tau_stderr_at(q) / tau_at(q);
+  for (const double q : {m.input_min_positive, m.input_max}) {
+    const double rel = kZ95 * rel_se(q);
     if (!std::isfinite(rel)) return fitting::kNaN;
     widest = std::max(widest, rel);
   }
   return widest;
+}
+
+}  // namespace
+
+std::array<double, 3> WholeRecordModel::ln_tau_ref_b_covariance() const {
+  const auto& f = model.fit;
+  const auto& tau = f.param("tau_ref_s");
+  const auto& b = f.param("b");
+  std::array<double, 3> c{std::pow(tau.std_error / tau.value, 2), 0.0, 0.0};
+  const std::size_t k = f.params.size();
+  if (!b.fixed && f.covariance.size() == k * k) {
+    c[1] = f.covariance[1] * model.variance_factor / tau.value;
+    c[2] = b.std_error * b.std_error;
+  }
+  return c;
+}
+
+double WholeRecordModel::tau_stderr_at(double q) const {
+  return tau_at(q) * log_stderr(*this, std::log(q / model.reference_input));
+}
+
+double WholeRecordModel::tau_relative_half_width_over_range() const {
+  return widest_over_range(*this, [this](double q) { return tau_stderr_at(q) / tau_at(q); });
+}
+
+double WholeRecordModel::volume_at(double q) const { return fitting::liquefier_volume(model.params(), q); }
+
+double WholeRecordModel::volume_stderr_at(double q) const {
+  // ln V = ln tau_ref + b ln(q / q_ref) + ln q - ln(b + 1): d/db = ln(q / q_ref) - 1 / (b + 1).
+  const double b = model.fit.value("b");
+  const double L = std::log(q / model.reference_input) - (model.fit.param("b").fixed ? 0.0 : 1.0 / (b + 1));
+  return volume_at(q) * log_stderr(*this, L);
+}
+
+double WholeRecordModel::volume_relative_half_width_over_range() const {
+  return widest_over_range(*this, [this](double q) { return volume_stderr_at(q) / volume_at(q); });
 }
 
 namespace {
@@ -204,6 +239,7 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
           "uncertainty (flagged in whole_record.step_checks)",
           bad, m.checks.size()));
   }
+  m.rest_volume = measure_rest_volume(t, y, m, &m.rest_volume_why);
   return m;
 }
 
@@ -217,6 +253,18 @@ nlohmann::json track_json(const WholeRecordModel& m) {
           {"offset_s", number_or_null(a.offset_s)},
           {"rms_mismatch", number_or_null(a.rms_mismatch)},
           {"breakpoints", a.aligned.t.size()}};
+}
+
+}  // namespace
+
+namespace {
+
+/// {var_ln_tau_ref, cov_ln_tau_ref_b, var_b}: what a design from the model needs for the delta method.
+nlohmann::json ln_covariance_json(const WholeRecordModel& m) {
+  const auto c = m.ln_tau_ref_b_covariance();
+  return {{"var_ln_tau_ref", number_or_null(c[0])},
+          {"cov_ln_tau_ref_b", number_or_null(c[1])},
+          {"var_b", number_or_null(c[2])}};
 }
 
 }  // namespace
@@ -241,6 +289,9 @@ nlohmann::json to_json(const WholeRecordModel& m) {
           {"input_unit", m.input_unit},
           {"input_range", {number_or_null(m.input_min_positive), number_or_null(m.input_max)}},
           {"tau_rel_ci95_over_range", number_or_null(m.tau_relative_half_width_over_range())},
+          {"volume_rel_ci95_over_range", number_or_null(m.volume_relative_half_width_over_range())},
+          {"ln_tau_ref_b_covariance", ln_covariance_json(m)},
+          {"rest_volume", to_json(m.rest_volume, m.rest_volume_why)},
           {"a", param_json(f.derived.front())},
           {"b", param_json(f.param("b"))},
           {"theta_s", param_json(f.param("theta_s"))},

@@ -2,6 +2,7 @@
 // simulated printer: run directory, report, summary numbers, determinism, --require.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -283,6 +284,42 @@ TEST_CASE(
   CHECK(wr.at("b").at("value").get<double>() == Approx(b_true).margin(0.05));
   // Klipper's 0.040 s default smoothing, not the 2 ms lower bound of a direct-drive extruder.
   CHECK(res.at("compensators").at("settings").at("pa_smooth_s").get<double>() == Approx(0.040));
+}
+
+TEST_CASE("calibrate on the default desktop printer measures the melt stored below the sweep and designs its advance") {
+  // The simulated melt turns Newtonian below 0.2 mm/s (tau held there); the sweep's lowest level
+  // is 0.56 mm/s. A power law followed to zero flow would store 40 % more melt below that level
+  // and propose an advance 17 % too large; the record's start-up transient measures it instead.
+  const auto run = default_run();
+  REQUIRE(run.cli.code == 0);
+  const auto res = nlohmann::json::parse(read_file_bytes(run.dir + "/results.json")).at("results");
+  const auto truth = tunekit::test::read_json(run.dir + "/liquefier-step/truth.json").at("liquefier");
+  const double tau_s = truth.at("tau_s").get<double>(), u_ref = truth.at("tau_ref_feed_mm_s").get<double>(),
+               b_true = truth.at("tau_flow_exponent").get<double>(),
+               floor = truth.at("tau_floor_feed_mm_s").get<double>();
+  const auto stored = [&](double u) {  // integral of the simulator's tau over 0..u (midpoint rule)
+    const int n = 20000;
+    double v = 0;
+    for (int i = 0; i < n; ++i) v += tau_s * std::pow(std::max((i + 0.5) * u / n, floor) / u_ref, b_true) * u / n;
+    return v;
+  };
+  const auto& rv = res.at("liquefier").at("step").at("whole_record").at("rest_volume");
+  REQUIRE(rv.at("measured") == true);
+  const double u1 = rv.at("input").get<double>();
+  INFO("rest volume " << rv.dump() << ", truth " << stored(u1) << " mm");
+  CHECK(rv.at("ci95").at(0).get<double>() <= stored(u1));
+  CHECK(rv.at("ci95").at(1).get<double>() >= stored(u1));
+  const auto& comp = res.at("compensators");
+  const double k = comp.at("settings").at("pa_k_s").get<double>();
+  const double feed = comp.at("design").at("design_feed_mm_s").get<double>();
+  const double lo = comp.at("pa_k_ci95").at(0).get<double>(), hi = comp.at("pa_k_ci95").at(1).get<double>();
+  const double k_true = stored(feed) / feed;
+  INFO("advance " << k << " [" << lo << ", " << hi << "] s, truth V(u)/u " << k_true << " s");
+  CHECK(std::abs(k - k_true) < 0.02 * k_true);
+  CHECK(lo <= k_true);
+  CHECK(hi >= k_true);
+  // An interval of the measurement, not a band spanning the unmeasured flows (that was -25 %).
+  CHECK(hi - lo < 0.05 * k);
 }
 
 TEST_CASE("calibrate --write says what it wrote, where the backup is and that Klipper needs RESTART") {

@@ -52,6 +52,19 @@ TEST_CASE("calibrate's flow sweep on the physics liquefier recovers the true tau
   // Export designed from the operating points, the arrival levels (flow-dependent advance).
   const auto& schedule = env.at("results").at("compensators").at("design").at("schedule");
   CHECK(schedule.size() == levels.size());
+  // The load cell reads the melt pressure, the stored volume C P over the compliance: V(Q) is
+  // measured at every level, so the advance V(Q)/Q = C k Q^(n-1) carries the model's own 95 %
+  // interval, not a band over an unmeasured low-flow melt.
+  const auto& comp = env.at("results").at("compensators");
+  const double q = comp.at("design").at("design_feed_mm_s").get<double>() * area;
+  const double k_true = C * k * std::pow(q, n - 1);
+  const double pa = comp.at("settings").at("pa_k_s").get<double>();
+  const double lo = comp.at("pa_k_ci95").at(0).get<double>(), hi = comp.at("pa_k_ci95").at(1).get<double>();
+  INFO("advance " << pa << " [" << lo << ", " << hi << "] s at " << q << " mm^3/s, truth " << k_true << " s");
+  CHECK(lo <= k_true);
+  CHECK(hi >= k_true);
+  CHECK(hi - lo < 0.05 * pa);
+  CHECK(comp.at("flow_advance").at("band_is_interval") == true);
 }
 
 TEST_CASE("tunekit step with the run's feed track reproduces calibrate's liquefier fits within 1 %") {

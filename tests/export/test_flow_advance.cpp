@@ -189,3 +189,50 @@ TEST_CASE("flow advance: a trend steeper than 1/Q is set aside and the levels de
   for (const auto& w : d.warnings) reason = reason || w.find("designed from the measured levels") != std::string::npos;
   CHECK(reason);
 }
+
+TEST_CASE("flow advance: a measured volume at the first level replaces the bounds below the data") {
+  // tau = 0.08 Q^-0.5 above 2 mm^3/s; the volume at 2 mm^3/s measured as 0.3 mm^3 +- 0.01 (a melt
+  // Newtonian below the data stores less than the power law's 0.08 * 2 * sqrt(2) = 0.453 mm^3).
+  auto in = power_law_levels(0.08, -0.5, false);
+  in.low_volume = ident::MeasuredVolume{2.0, 0.3, 0.01};
+  in.trend_rel_half_width = 0.02;
+  in.design_flow_mm3_s = 8;
+  const auto d = ident::design_flow_advance(in);
+  const double above = 0.08 * 2 * (std::sqrt(8.0) - std::sqrt(2.0));
+  CHECK(d.k_design_s == Approx((0.3 + above) / 8).epsilon(1e-12));
+  // Without the trend's covariance its integral is widened by its widest relative half-width; the
+  // two half-widths add in quadrature.
+  const double hw = std::hypot(0.01, 0.02 * above) / 8;
+  CHECK(d.band_is_interval);
+  CHECK(d.k_design_lo_s == Approx(d.k_design_s - hw).epsilon(1e-12));
+  CHECK(d.k_design_hi_s == Approx(d.k_design_s + hw).epsilon(1e-12));
+  CHECK(d.low_flow_share == Approx(0.3 / (0.3 + above)).epsilon(1e-9));
+
+  // With the covariance: the delta method. A tau_ref known to 1 % and b exact scales the integral:
+  // its standard error is 1 % of it.
+  in.trend_covariance = ident::FlowAdvanceInputs::TrendCovariance{4.0, 1e-4, 0.0, 0.0};
+  const auto c = ident::design_flow_advance(in);
+  const double hw_c = std::hypot(0.01, 1.959963984540054 * 0.01 * above) / 8;
+  CHECK(c.k_design_hi_s - c.k_design_s == Approx(hw_c).epsilon(1e-9));
+
+  // A non-positive measured volume is an input error.
+  in.low_volume->volume_mm3 = 0;
+  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+}
+
+TEST_CASE("flow advance: a sensor that reads the stored volume needs no bound below the data") {
+  auto in = power_law_levels(0.08, -0.5, false);
+  in.volume_measured = true;
+  in.volume_rel_half_width = 0.03;
+  in.design_flow_mm3_s = 8;
+  const auto d = ident::design_flow_advance(in);
+  const double v = 0.08 * std::pow(8.0, 0.5) / 0.5;
+  CHECK(d.k_design_s == Approx(v / 8).epsilon(1e-12));
+  CHECK(d.band_is_interval);
+  CHECK(d.k_design_lo_s == Approx(0.97 * v / 8).epsilon(1e-12));
+  CHECK(d.k_design_hi_s == Approx(1.03 * v / 8).epsilon(1e-12));
+  // b uncertain: dV/db = V (ln(Q / Q_ref) - 1 / (b + 1)); at Q = Q_ref that is -2 V for b = -0.5.
+  in.trend_covariance = ident::FlowAdvanceInputs::TrendCovariance{8.0, 0.0, 0.0, 0.01 * 0.01};
+  const auto c = ident::design_flow_advance(in);
+  CHECK(c.k_design_hi_s - c.k_design_s == Approx(1.959963984540054 * 2 * 0.01 * v / 8).epsilon(1e-9));
+}

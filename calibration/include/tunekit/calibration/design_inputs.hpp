@@ -8,6 +8,7 @@
 // boundary, from the results files a user names: read_design_inputs() has one reader per kind of
 // result (step, freq, shaper, rheo) and is the only place export reads results JSON.
 
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
@@ -49,6 +50,21 @@ struct StepModelInput {
   /// tau's widest relative 95 % half-width over [u_min, u_max] (WholeRecordModel::
   /// tau_relative_half_width_over_range); NaN when unknown.
   double tau_rel_ci95 = fitting::kNaN;
+  /// The sensor reads the stored volume at every level (a pressure sensor, y = g V + c): the
+  /// model's V(Q) is measured, nothing below the data is extrapolated. volume_rel_ci95 is V's
+  /// widest relative 95 % half-width over [u_min, u_max]; NaN when unknown.
+  /// The model's reference input (input unit) and {var(ln tau_ref), cov(ln tau_ref, b), var(b)}
+  /// (WholeRecordModel::ln_tau_ref_b_covariance): the delta method of V(Q). NaN when unknown.
+  double u_ref = fitting::kNaN;
+  std::array<double, 3> ln_tau_b_cov{fitting::kNaN, fitting::kNaN, fitting::kNaN};
+  bool sensor_reads_volume = false;
+  double volume_rel_ci95 = fitting::kNaN;
+  /// The stored volume at the record's first level measured from its start-up transient (input
+  /// unit s: mm of filament for a feed), with its 95 % interval (ident/rest_volume.hpp).
+  struct RestVolume {
+    double u = fitting::kNaN, value = fitting::kNaN, ci95_lo = fitting::kNaN, ci95_hi = fitting::kNaN;
+  };
+  std::optional<RestVolume> rest_volume;
 };
 
 /// From `tunekit step`: the pooled fit, the arrival levels (u > 0) and tau's trend over them.

@@ -89,9 +89,35 @@ struct OrcaPoint {
   double accel_mm_s2 = kAdvanceNaN;
 };
 
+/// The stored volume at one flow, measured rather than integrated from tau (a record's start-up
+/// transient from rest, rest_volume.hpp), with its 95 % half-width.
+struct MeasuredVolume {
+  double flow_mm3_s = kAdvanceNaN;
+  double volume_mm3 = kAdvanceNaN;
+  double half_width_mm3 = kAdvanceNaN;
+};
+
 struct FlowAdvanceInputs {
   std::vector<FlowTau> levels;       ///< >= 2 levels with distinct positive flows
   std::optional<TauPowerLaw> trend;  ///< used for tau(Q) instead of interpolation when given
+  /// With a trend: the volume below the data is this measurement instead of a bound, V(Q) =
+  /// volume + integral of the trend from its flow to Q; the band is the measurement's half-width
+  /// and the trend's (trend_rel_half_width of its integral), added in quadrature (the two come
+  /// from different parts of the record).
+  std::optional<MeasuredVolume> low_volume;
+  /// With a trend: the sensor read the stored volume at every level (a pressure sensor), so the
+  /// trend's V(Q) from zero flow is measured, not extrapolated; its band is V's relative half-width.
+  bool volume_measured = false;
+  double volume_rel_half_width = kAdvanceNaN;
+  double trend_rel_half_width = kAdvanceNaN;  ///< the trend's tau, widest relative 95 % half-width
+  /// The trend's covariance, when its fit gave one: tau = tau_ref (Q / reference_flow)^b with
+  /// {var(ln tau_ref), cov(ln tau_ref, b), var(b)}. With it the band of a known volume is the
+  /// delta method's 95 % interval of V(Q) (else the widest relative half-width above, conservative).
+  struct TrendCovariance {
+    double reference_flow_mm3_s = kAdvanceNaN;
+    double var_ln_tau_ref = kAdvanceNaN, cov_ln_tau_ref_b = kAdvanceNaN, var_b = kAdvanceNaN;
+  };
+  std::optional<TrendCovariance> trend_covariance;
   double filament_area_mm2 = kAdvanceNaN;
   double design_flow_mm3_s = kAdvanceNaN;  ///< flow the single-number K is designed for
   double theta_s = kAdvanceNaN;            ///< identified dead time (Kalico's time offset)
@@ -134,6 +160,9 @@ struct FlowAdvanceDesign {
   std::vector<FlowAdvanceSample> curve;
   bool has_band = false;
   bool band_from_levels = false;  ///< the band holds the levels' 95 % intervals (else only the low flows')
+  /// The band is the 95 % interval of the need (a measured low volume or a volume-reading sensor
+  /// with the trend's own widths): k_design_lo_s..k_design_hi_s needs no further widening.
+  bool band_is_interval = false;
   std::vector<std::string> notes;
   std::vector<std::string> warnings;
 

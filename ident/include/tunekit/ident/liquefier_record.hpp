@@ -15,6 +15,7 @@
 
 #include "tunekit/fitting/liquefier_model.hpp"
 #include "tunekit/ident/feed_track.hpp"
+#include "tunekit/ident/rest_volume.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
 namespace tunekit::ident {
@@ -60,10 +61,24 @@ struct WholeRecordModel {
   /// tau at input q from the chosen model (s), and its standard error from the fit's covariance.
   double tau_at(double q) const;
   double tau_stderr_at(double q) const;
+  /// {var(ln tau_ref), cov(ln tau_ref, b), var(b)}, widened by the variance factor (b's terms 0
+  /// when b is held): the delta method of any function of tau(q) needs only these.
+  std::array<double, 3> ln_tau_ref_b_covariance() const;
   /// The widest relative 95 % half-width of tau over the flows the record reached (at their
   /// ends: the variance of log tau is quadratic in log q): what a design from the model's tau
   /// inherits from the fit. NaN when the range or the errors are unknown.
   double tau_relative_half_width_over_range() const;
+  /// The stored volume at steady input q from the chosen model, V(q) = a q^(b+1) / (b+1) (input
+  /// unit s), and its standard error from the fit's covariance (delta method in ln V).
+  double volume_at(double q) const;
+  double volume_stderr_at(double q) const;
+  /// The widest relative 95 % half-width of V over the flows the record reached: with a pressure
+  /// sensor V is what the sensor reads at every level, and a design from V(Q) inherits this.
+  double volume_relative_half_width_over_range() const;
+  /// The stored volume at the first level measured from the record's start-up transient
+  /// (rest_volume.hpp), or the reason it was not.
+  std::optional<RestVolume> rest_volume;
+  std::string rest_volume_why;
 };
 
 /// Fits the model to (t, u, y) and, when `steps` is given, checks its step fits against it.
