@@ -118,6 +118,16 @@ void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_c
     os << fmt::format("    its tau at the record's mean input u = {:.4g} {}: {:.4g} s [{:.4g}, {:.4g}]\n", u_compare,
                       m.input_unit, tau, tau - kZ95 * se, tau + kZ95 * se);
   }
+  // The melt below the data, measured: what the advance's design starts from (docs/export.md).
+  if (const auto& v = m.rest_volume) {
+    // The input unit times s: a feed's mm/s gives mm of filament, a flow's mm^3/s mm^3.
+    const std::string& in = m.input_unit;
+    const bool per_s = in.size() > 2 && in.compare(in.size() - 2, 2, "/s") == 0;
+    const std::string volume = per_s ? in.substr(0, in.size() - 2) : in + ".s";
+    os << fmt::format(
+        "    stored at its first level u = {:.4g} {} (from the start-up transient): {:.4g} {} [{:.4g}, {:.4g}]\n",
+        v->input, in, v->value, volume, v->ci95_lo, v->ci95_hi);
+  }
 }
 
 void add_whole_record(Envelope& env, const WholeRecordResult& r) {

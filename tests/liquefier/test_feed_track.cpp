@@ -176,4 +176,11 @@ TEST_CASE("step with only the file and its columns finds the run's feed track an
   CHECK(text.out.find(fmt::format("its tau at its reference input u = {:.4g} mm/s: {:.4g} s",
                                   wr.at("reference_input").get<double>(),
                                   wr.at("tau_ref_s").at("value").get<double>())) != std::string::npos);
+  // And the melt stored at the first level, measured from the start-up transient: calibrate's.
+  const auto& rv = wr.at("rest_volume");
+  REQUIRE(rv.at("measured") == true);
+  CHECK(rv.at("value").get<double>() ==
+        res.at("liquefier").at("step").at("whole_record").at("rest_volume").at("value").get<double>());
+  CHECK(text.out.find(fmt::format("stored at its first level u = {:.4g} mm/s (from the start-up transient): {:.4g} mm",
+                                  rv.at("input").get<double>(), rv.at("value").get<double>())) != std::string::npos);
 }
