@@ -77,8 +77,12 @@ void read_volume_fields(const json& res, const std::string& path, StepModelInput
   v.value = number_at(res, "/whole_record/rest_volume/value", "whole_record.rest_volume.value", path);
   v.ci95_lo = number_at(res, "/whole_record/rest_volume/ci95/0", "whole_record.rest_volume.ci95[0]", path);
   v.ci95_hi = number_at(res, "/whole_record/rest_volume/ci95/1", "whole_record.rest_volume.ci95[1]", path);
-  if (v.u > 0 && v.value > 0 && v.ci95_lo <= v.value && v.value <= v.ci95_hi && std::isfinite(v.ci95_hi))
-    m.rest_volume = v;
+  if (!(v.u > 0 && v.value > 0 && v.ci95_lo <= v.value && v.value <= v.ci95_hi && std::isfinite(v.ci95_hi)))
+    throw InputError(fmt::format("whole_record.rest_volume: a measured volume needs a positive input and value inside "
+                                 "its 95 % interval (input {}, value {}, ci95 [{}, {}])",
+                                 v.u, v.value, v.ci95_lo, v.ci95_hi),
+                     path);
+  m.rest_volume = v;
 }
 
 StepDesignInput read_step_results(const json& res, const std::string& path) {

@@ -320,6 +320,26 @@ TEST_CASE("calibrate on the default desktop printer measures the melt stored bel
   CHECK(hi >= k_true);
   // An interval of the measurement, not a band spanning the unmeasured flows (that was -25 %).
   CHECK(hi - lo < 0.05 * k);
+  // `tunekit export` of the run's step.json gives the same advance and interval; a corrupted
+  // measured volume in it (negative, not a number) is a located error, not a silent fallback.
+  const auto ex = tunekit::test::run_cli(
+      {"export", "-f", "klipper", "-c", run.dir + "/config/printer.cfg", run.dir + "/analysis/step.json", "--json"});
+  INFO(ex.err);
+  REQUIRE(ex.code == 0);
+  const auto exr = nlohmann::json::parse(ex.out).at("results");
+  CHECK(exr.at("settings").at("pa_k_s").get<double>() == Approx(k).epsilon(1e-12));
+  CHECK(exr.at("pa_k_ci95").at(0).get<double>() == Approx(lo).epsilon(1e-12));
+  const std::string scratch = tunekit::test::scratch_dir("calibrate_rest_volume_hostile");
+  for (const nlohmann::json& bad : {nlohmann::json(-1.0), nlohmann::json("x")}) {
+    auto sj = tunekit::test::read_json(run.dir + "/analysis/step.json");
+    sj["results"]["whole_record"]["rest_volume"]["value"] = bad;
+    const std::string path = scratch + "/hostile_step.json";
+    std::ofstream(path) << sj.dump();
+    const auto hx = tunekit::test::run_cli({"export", "-f", "klipper", "-c", run.dir + "/config/printer.cfg", path});
+    INFO(hx.err);
+    CHECK(hx.code == 2);
+    CHECK(hx.err.find("whole_record.rest_volume") != std::string::npos);
+  }
 }
 
 TEST_CASE("calibrate --write says what it wrote, where the backup is and that Klipper needs RESTART") {
