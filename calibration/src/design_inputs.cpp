@@ -69,6 +69,8 @@ void read_volume_fields(const json& res, const std::string& path, StepModelInput
     return number_at(res, (cov + name).c_str(), "whole_record.ln_tau_ref_b_covariance." + name, path);
   };
   m.ln_tau_b_cov = {cov_at("var_ln_tau_ref"), cov_at("cov_ln_tau_ref_b"), cov_at("var_b")};
+  if (m.ln_tau_b_cov[0] < 0 || m.ln_tau_b_cov[2] < 0)
+    throw InputError("whole_record.ln_tau_ref_b_covariance: a variance must not be negative", path);
   m.volume_rel_ci95 =
       number_at(res, "/whole_record/volume_rel_ci95_over_range", "whole_record.volume_rel_ci95_over_range", path);
   if (value_at_or_null(res, "/whole_record/rest_volume/measured"_json_pointer) != json(true)) return;

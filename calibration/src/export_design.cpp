@@ -300,7 +300,13 @@ std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs&
   }
   const auto& flow = *outcome.flow;
   if (!std::isfinite(flow.k_design_lo_s) || !std::isfinite(flow.k_design_hi_s)) return std::nullopt;
-  if (flow.band_from_levels || flow.band_is_interval) return std::pair{flow.k_design_lo_s, flow.k_design_hi_s};
+  if (flow.band_from_levels) return std::pair{flow.k_design_lo_s, flow.k_design_hi_s};
+  // A measured interval of V(Q)/Q: none when it reaches 0 or beyond twice K (a relative half-width
+  // of 100 % and more says nothing; a results file's hostile variances give such widths).
+  if (flow.band_is_interval) {
+    if (!(flow.k_design_lo_s > 0 && flow.k_design_hi_s < 2 * k)) return std::nullopt;
+    return std::pair{flow.k_design_lo_s, flow.k_design_hi_s};
+  }
   // Designed from the whole-record model: the model's own uncertainty of tau over the flows it
   // saw (the levels' separate fits are narrower than the model they do not feed: on the camera's
   // two-level line test they covered the simulator's tau 49 % of the time).

@@ -340,6 +340,28 @@ TEST_CASE("calibrate on the default desktop printer measures the melt stored bel
     CHECK(hx.code == 2);
     CHECK(hx.err.find("whole_record.rest_volume") != std::string::npos);
   }
+  // A negative variance is a located error; a huge one (or a huge measured interval) leaves the
+  // advance finite and without an interval, not [-1e152, 1e152].
+  auto hostile = [&](const std::string& pointer, const nlohmann::json& v) {
+    auto sj = tunekit::test::read_json(run.dir + "/analysis/step.json");
+    sj[nlohmann::json::json_pointer(pointer)] = v;
+    const std::string path = scratch + "/hostile_step.json";
+    std::ofstream(path) << sj.dump();
+    return tunekit::test::run_cli({"export", "-f", "klipper", "-c", run.dir + "/config/printer.cfg", path, "--json"});
+  };
+  const auto neg = hostile("/results/whole_record/ln_tau_ref_b_covariance/var_ln_tau_ref", -1.0);
+  CHECK(neg.code == 2);
+  CHECK(neg.err.find("ln_tau_ref_b_covariance") != std::string::npos);
+  for (const auto& [pointer, v] :
+       {std::pair<std::string, nlohmann::json>{"/results/whole_record/ln_tau_ref_b_covariance/var_ln_tau_ref", 1e308},
+        {"/results/whole_record/rest_volume/ci95", nlohmann::json::array({0.0, 1e308})}}) {
+    const auto hx = hostile(pointer, v);
+    INFO(pointer << ": " << hx.err);
+    REQUIRE(hx.code == 0);
+    const auto r = nlohmann::json::parse(hx.out).at("results");
+    CHECK(r.at("settings").at("pa_k_s").get<double>() == Approx(k).epsilon(1e-12));
+    CHECK(r.value("pa_k_ci95", nlohmann::json()).is_null());
+  }
 }
 
 TEST_CASE("calibrate --write says what it wrote, where the backup is and that Klipper needs RESTART") {
