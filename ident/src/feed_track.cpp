@@ -21,17 +21,6 @@ constexpr double kLocalSearchSamples = 2;
 constexpr int kGridPerSample = 40;
 constexpr int kGoldenIterations = 40;
 
-/// The window edges of the samples: halfway between time stamps, half an interval beyond the
-/// first and the last (how the recorder shares the time axis among the samples).
-std::vector<double> window_edges(std::span<const double> t) {
-  const std::size_t n = t.size();
-  std::vector<double> e(n + 1);
-  e[0] = t[0] - 0.5 * (t[1] - t[0]);
-  for (std::size_t i = 1; i < n; ++i) e[i] = 0.5 * (t[i - 1] + t[i]);
-  e[n] = t[n - 1] + 0.5 * (t[n - 1] - t[n - 2]);
-  return e;
-}
-
 /// The cumulative integral at every breakpoint, for feed_track_integral.
 class TrackIntegral {
  public:
@@ -115,6 +104,15 @@ FeedTrack read_feed_track_csv(const std::string& path) {
   return k;
 }
 
+std::vector<double> sample_window_edges(std::span<const double> t) {
+  const std::size_t n = t.size();
+  std::vector<double> e(n + 1);
+  e[0] = t[0] - 0.5 * (t[1] - t[0]);
+  for (std::size_t i = 1; i < n; ++i) e[i] = 0.5 * (t[i - 1] + t[i]);
+  e[n] = t[n - 1] + 0.5 * (t[n - 1] - t[n - 2]);
+  return e;
+}
+
 double feed_track_integral(const FeedTrack& track, double x) { return TrackIntegral(track).at(x); }
 
 namespace {
@@ -171,7 +169,7 @@ FeedTrackAlignment align_feed_track(const FeedTrack& track, std::span<const doub
   if (track.t.size() < 2 || track.t.size() != track.u.size())
     throw InputError("feed track: it needs at least two breakpoints");
   const TrackIntegral P(track);
-  const auto edges = window_edges(t);
+  const auto edges = sample_window_edges(t);
   double fed = 0;
   for (std::size_t k = 0; k < u.size(); ++k) fed += u[k] * (edges[k + 1] - edges[k]);
   if (!(fed > 0) || !(P.total() > 0)) throw InputError("feed track: the record or the track feeds nothing");

@@ -55,14 +55,6 @@ std::optional<FirstLevel> first_level(const FeedTrack& k) {
   return std::nullopt;
 }
 
-/// Each sample's share of the window: half-way to each neighbour (the first and last sample: as
-/// far again outward).
-double sample_width(std::span<const double> t, std::size_t i) {
-  const double left = i > 0 ? t[i] - t[i - 1] : t[1] - t[0];
-  const double right = i + 1 < t.size() ? t[i + 1] - t[i] : left;
-  return 0.5 * (left + right);
-}
-
 }  // namespace
 
 std::optional<RestVolume> measure_rest_volume(std::span<const double> t, std::span<const double> y,
@@ -95,16 +87,17 @@ std::optional<RestVolume> measure_rest_volume(std::span<const double> t, std::sp
 
   RestVolume v;
   v.input = u1;
+  const std::vector<double> edges = sample_window_edges(t);
   double out = 0, width_sq = 0;
   std::size_t i = 0;
   for (; i < t.size() && t[i] <= t_settle; ++i) {
-    const double w = sample_width(t, i);
+    const double w = edges[i + 1] - edges[i];
     out += (y[i] - c) / g * w;
     width_sq += w * w;
   }
   v.samples = i;
-  v.window_begin_s = t.front() - 0.5 * sample_width(t, 0);
-  v.window_end_s = t[i - 1] + 0.5 * sample_width(t, i - 1);
+  v.window_begin_s = edges.front();
+  v.window_end_s = edges[i];
   const double fed = feed_track_integral(m.input_track, v.window_end_s - theta) -
                      feed_track_integral(m.input_track, v.window_begin_s - theta);
   v.value = fed - out;

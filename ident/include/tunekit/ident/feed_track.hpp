@@ -29,6 +29,10 @@ std::string feed_track_csv(const FeedTrack& track);
 /// non-finite value, or fewer than two rows.
 FeedTrack read_feed_track_csv(const std::string& path);
 
+/// The window edges of samples at times t (at least two): halfway between time stamps, half an
+/// interval beyond the first and the last (how a recorder shares the time axis among its samples).
+std::vector<double> sample_window_edges(std::span<const double> t);
+
 /// The track's integral from its first breakpoint to x (input unit s): the length fed.
 double feed_track_integral(const FeedTrack& track, double x);
 
