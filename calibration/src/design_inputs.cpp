@@ -50,11 +50,13 @@ EstimatedValue estimated_of(const fitting::Param& p) { return {p.value, p.std_er
 /// input is something else (the set-point width of a printed line, in mm) has levels the design
 /// cannot place on the flow axis: its pooled fit is designed from. An unstated unit ("1") is
 /// taken as a feed, as export has always read it.
-/// The whole-record model designs the advance only when it agrees with the record's own step fits:
-/// when more than a quarter of them disagree with its prediction (ident/liquefier_record.hpp), the
-/// store does not describe this liquefier well enough and the operating points design instead
-/// (the step analysis' warning says how many disagree).
-bool model_agrees_with_steps(std::size_t checks, std::size_t disagreeing) { return 4 * disagreeing <= checks; }
+/// The whole-record model designs the advance only when the record's own step fits do not
+/// contradict it (ident::step_checks_contradict_model, the rule the step analysis warns by):
+/// otherwise the store does not describe this liquefier well enough and the operating points
+/// design instead.
+bool model_agrees_with_steps(std::size_t checks, std::size_t disagreeing) {
+  return !ident::step_checks_contradict_model(checks, disagreeing);
+}
 
 bool levels_are_feed_or_flow(const std::string& input_unit) {
   return input_unit.empty() || input_unit == "1" || input_unit == "mm/s" || ident::is_volumetric_flow_unit(input_unit);

@@ -72,6 +72,10 @@ void check_step(const WholeRecordModel& m, const fitting::LiquefierRecord& rec, 
 
 }  // namespace
 
+bool step_checks_contradict_model(std::size_t checks, std::size_t disagreeing) {
+  return disagreeing > 0 && binomial_upper_tail(checks, disagreeing, 0.05) < 0.01;
+}
+
 fitting::LiquefierSensor sensor_for_output_unit(const std::string& unit) {
   for (const char* p : {"N", "kN", "Pa", "kPa", "MPa", "bar", "lbf", "g", "kg"})
     if (unit == p) return fitting::LiquefierSensor::pressure;
@@ -231,9 +235,7 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
       check_step(m, full, sim, steps->steps[i], steps->input_hold, i, m.checks);
     std::size_t bad = 0;
     for (const auto& c : m.checks) bad += c.disagrees;
-    // Each check flags a step at a 5 % false-alarm rate: warn only when more steps disagree than
-    // that rate explains (binomial upper tail below 1 %).
-    if (bad > 0 && binomial_upper_tail(m.checks.size(), bad, 0.05) < 0.01)
+    if (step_checks_contradict_model(m.checks.size(), bad))
       m.warnings.push_back(fmt::format(
           "{} of {} step fits disagree with the whole-record model's prediction for that step beyond their combined "
           "uncertainty (flagged in whole_record.step_checks)",

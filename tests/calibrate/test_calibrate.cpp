@@ -12,6 +12,7 @@
 #include "test_support.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/liquefier_record.hpp"
 #include "tunekit/core/file_bytes.hpp"
 
 namespace {
@@ -362,6 +363,52 @@ TEST_CASE("calibrate on the default desktop printer measures the melt stored bel
     CHECK(r.at("settings").at("pa_k_s").get<double>() == Approx(k).epsilon(1e-12));
     CHECK(r.value("pa_k_ci95", nlohmann::json()).is_null());
   }
+}
+
+TEST_CASE("the record's step checks set the whole-record model aside by the rule the step analysis warns by") {
+  // Each check flags a step at a 5 % false-alarm rate; the steps contradict the model only when
+  // more disagree than that explains (binomial upper tail below 1 %). The design used to drop the
+  // model at more than a quarter, 2 of 6, where the step analysis saw nothing to warn of.
+  CHECK_FALSE(tunekit::ident::step_checks_contradict_model(0, 0));
+  CHECK_FALSE(tunekit::ident::step_checks_contradict_model(6, 1));
+  CHECK_FALSE(tunekit::ident::step_checks_contradict_model(6, 2));
+  CHECK(tunekit::ident::step_checks_contradict_model(6, 3));
+  CHECK_FALSE(tunekit::ident::step_checks_contradict_model(14, 3));
+  CHECK(tunekit::ident::step_checks_contradict_model(14, 4));
+  const auto run = default_run();
+  REQUIRE(run.cli.code == 0);
+  const double k = tunekit::test::read_json(run.dir + "/results.json")
+                       .at("results")
+                       .at("compensators")
+                       .at("settings")
+                       .at("pa_k_s")
+                       .get<double>();
+  const std::string scratch = tunekit::test::scratch_dir("calibrate_step_check_rule");
+  auto export_with = [&](int disagreeing) {
+    auto sj = tunekit::test::read_json(run.dir + "/analysis/step.json");
+    auto& checks = sj["results"]["whole_record"]["step_checks"];
+    REQUIRE(checks.size() >= 6);
+    checks.erase(checks.begin() + 6, checks.end());
+    for (int i = 0; i < 6; ++i) checks[static_cast<std::size_t>(i)]["disagrees"] = i < disagreeing;
+    const std::string path = scratch + "/step.json";
+    std::ofstream(path) << sj.dump();
+    const auto ex =
+        tunekit::test::run_cli({"export", "-f", "klipper", "-c", run.dir + "/config/printer.cfg", path, "--json"});
+    INFO(ex.err);
+    REQUIRE(ex.code == 0);
+    return nlohmann::json::parse(ex.out).at("results");
+  };
+  auto from_model = [](const nlohmann::json& r) {
+    for (const auto& note : r.at("flow_advance").at("notes"))
+      if (note.get<std::string>().find("start-up transient") != std::string::npos) return true;
+    return false;
+  };
+  const auto kept = export_with(2);
+  CHECK(from_model(kept));
+  CHECK(kept.at("settings").at("pa_k_s").get<double>() == Approx(k).epsilon(1e-12));
+  const auto aside = export_with(3);
+  CHECK_FALSE(from_model(aside));
+  CHECK(aside.at("settings").at("pa_k_s").get<double>() != Approx(k).epsilon(1e-6));
 }
 
 TEST_CASE("calibrate --write says what it wrote, where the backup is and that Klipper needs RESTART") {

@@ -42,6 +42,13 @@ struct StepModelCheck {
   bool disagrees = false;
 };
 
+/// The one rule for whether a record's step fits, taken together, contradict the whole-record
+/// model: each check flags a step at a 5 % false-alarm rate (beyond 1.96 combined standard
+/// errors), so the steps contradict the model when more of them disagree than that rate
+/// explains, P(X >= disagreeing) < 1 % for X ~ Binomial(checks, 0.05). The step analysis warns by
+/// it and the advance's design sets the model aside by it.
+bool step_checks_contradict_model(std::size_t checks, std::size_t disagreeing);
+
 struct WholeRecordModel {
   fitting::LiquefierModelFit model;
   std::string input_unit = "1", output_unit = "1";
