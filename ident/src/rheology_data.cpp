@@ -72,6 +72,78 @@ double pressure_unit_factor(std::string_view unit) {
   throw InputError("unknown pressure unit '" + std::string(unit) + "' (use Pa, kPa, MPa or bar)");
 }
 
+namespace {
+
+enum class TUnit { none, degc, kelvin };
+
+/// The temperature column's unit (the stated one, else the column's): degC or K; an empty or
+/// unknown unit is an error at the header.
+TUnit temperature_unit(const CsvColumn& temp, const RheologyCsvOptions& o, const std::string& where) {
+  const std::string& temp_unit = o.temperature_unit.empty() ? temp.unit : o.temperature_unit;
+  const auto u = lower_nospace(temp_unit);
+  if (u == "degc" || u == "c" ||
+      u == "\xc2\xb0"
+           "c" ||
+      u == "celsius")
+    return TUnit::degc;
+  if (u == "k" || u == "kelvin") return TUnit::kelvin;
+  if (u.empty())
+    throw InputError(
+        "the temperature column has no unit: write 'temperature (degC)' or 'temperature (K)', or give "
+        "--temperature-unit degC|K",
+        where);
+  throw InputError("unknown temperature unit '" + temp_unit + "' (use degC or K)", where);
+}
+
+/// One row's temperature in kelvin, refused where the values look like the other unit.
+double row_temperature_K(double v, TUnit tu, double kelvin_offset, const std::string& where) {
+  if (tu == TUnit::kelvin) {
+    if (v < 273.15)
+      throw InputError(fmt::format("temperature {:g} K is below 0 degC; the values look like degC but the "
+                                   "column says K (write 'temperature (degC)')",
+                                   v),
+                       where);
+    if (v > 1200) throw InputError(fmt::format("temperature {:g} K is implausible for a polymer melt", v), where);
+    return v;
+  }
+  if (v > 600)
+    throw InputError(fmt::format("temperature {:g} degC is above 600 degC; the values look like kelvin but the "
+                                 "column says degC (write 'temperature (K)')",
+                                 v),
+                     where);
+  if (v < -50) throw InputError(fmt::format("temperature {:g} degC is implausible for a polymer melt", v), where);
+  return v + kelvin_offset;
+}
+
+/// The flow curve tau(gamma) = eta gamma rises with the shear rate in every stable melt (a
+/// falling one is flow instability or a column mix-up): checked per temperature, located.
+template <class At>
+void warn_falling_flow_curve(const fitting::RheologyData& d, const std::vector<std::size_t>& kept_row, const At& at,
+                             std::vector<std::string>& warnings) {
+  for (double T : d.temperature_levels_K()) {
+    std::vector<std::pair<double, std::size_t>> at_T;
+    for (std::size_t i = 0; i < d.size(); ++i)
+      if (std::abs(d.temperature_K[i] - T) <= 0.05 + 1e-9) at_T.push_back({d.shear_rate_1_s[i], i});
+    std::sort(at_T.begin(), at_T.end());
+    for (std::size_t q = 1; q < at_T.size(); ++q) {
+      const auto [g0, i0] = at_T[q - 1];
+      const auto [g1, i1] = at_T[q];
+      if (!(g1 > g0 * (1 + 1e-9))) continue;
+      const double s0 = d.viscosity_Pa_s[i0] * g0, s1 = d.viscosity_Pa_s[i1] * g1;
+      if (s1 < s0 * (1 - kStressDropTolerance)) {
+        warnings.push_back(
+            fmt::format("{}: the shear stress falls from {:g} to {:g} Pa as the shear rate rises from {:g} to {:g} "
+                        "1/s at {:g} K; "
+                        "a melt's flow curve rises (flow instability, or a column or unit mix-up)",
+                        at(kept_row[i1]), s0, s1, g0, g1, T));
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace
+
 RheologyTable parse_rheology_csv(std::string_view text, const std::string& path, const RheologyCsvOptions& o) {
   const auto t = parse_csv(text, path);
   const auto lines = data_row_lines(text, t.header_line);
@@ -121,24 +193,9 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
                        source_location(path, t.header_line));
     sf = pressure_unit_factor(o.stress_unit.empty() ? tau->unit : o.stress_unit);
   }
-  enum class TUnit { none, degc, kelvin } tu = TUnit::none;
+  TUnit tu = TUnit::none;
   if (temp) {
-    const std::string& temp_unit = o.temperature_unit.empty() ? temp->unit : o.temperature_unit;
-    const auto u = lower_nospace(temp_unit);
-    if (u == "degc" || u == "c" ||
-        u == "\xc2\xb0"
-             "c" ||
-        u == "celsius")
-      tu = TUnit::degc;
-    else if (u == "k" || u == "kelvin") tu = TUnit::kelvin;
-    else if (u.empty())
-      throw InputError(
-          "the temperature column has no unit: write 'temperature (degC)' or 'temperature (K)', or give "
-          "--temperature-unit degC|K",
-          source_location(path, t.header_line));
-    else
-      throw InputError("unknown temperature unit '" + temp_unit + "' (use degC or K)",
-                       source_location(path, t.header_line));
+    tu = temperature_unit(*temp, o, source_location(path, t.header_line));
     if (tu == TUnit::degc) out.notes.push_back(fmt::format("temperature: degC -> K (+{:g})", o.kelvin_offset));
   } else if (!std::isfinite(o.temperature_degC)) {
     throw InputError("no temperature: add a 'temperature (degC)' or '(K)' column, or give the temperature of the data",
@@ -173,29 +230,8 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
       e = s / gi;
     }
     if (!std::isfinite(e)) throw InputError(fmt::format("viscosity {:g} Pa.s is not finite", e), at(i));
-    double TK = 0;
-    if (temp) {
-      const double v = temp->values[i];
-      if (tu == TUnit::kelvin) {
-        if (v < 273.15)
-          throw InputError(fmt::format("temperature {:g} K is below 0 degC; the values look like degC but the "
-                                       "column says K (write 'temperature (degC)')",
-                                       v),
-                           at(i));
-        if (v > 1200) throw InputError(fmt::format("temperature {:g} K is implausible for a polymer melt", v), at(i));
-        TK = v;
-      } else {
-        if (v > 600)
-          throw InputError(fmt::format("temperature {:g} degC is above 600 degC; the values look like kelvin but the "
-                                       "column says degC (write 'temperature (K)')",
-                                       v),
-                           at(i));
-        if (v < -50) throw InputError(fmt::format("temperature {:g} degC is implausible for a polymer melt", v), at(i));
-        TK = v + o.kelvin_offset;
-      }
-    } else {
-      TK = o.temperature_degC + o.kelvin_offset;
-    }
+    const double TK =
+        temp ? row_temperature_K(temp->values[i], tu, o.kelvin_offset, at(i)) : o.temperature_degC + o.kelvin_offset;
     if (select_T) {
       const double degc = TK - o.kelvin_offset;
       if (!(degc >= t_lo - 1e-9 && degc <= t_hi + 1e-9)) {
@@ -223,31 +259,7 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
   if (select_T)
     out.notes.push_back(fmt::format("temperatures {:g}..{:g} degC selected: {} of {} rows kept", t_lo, t_hi, d.size(),
                                     d.size() + skipped));
-  {
-    // The flow curve tau(gamma) = eta gamma rises with the shear rate in every stable melt (a
-    // falling one is flow instability or a column mix-up): checked per temperature, located.
-    const auto levels = d.temperature_levels_K();
-    for (double T : levels) {
-      std::vector<std::pair<double, std::size_t>> at_T;
-      for (std::size_t i = 0; i < d.size(); ++i)
-        if (std::abs(d.temperature_K[i] - T) <= 0.05 + 1e-9) at_T.push_back({d.shear_rate_1_s[i], i});
-      std::sort(at_T.begin(), at_T.end());
-      for (std::size_t q = 1; q < at_T.size(); ++q) {
-        const auto [g0, i0] = at_T[q - 1];
-        const auto [g1, i1] = at_T[q];
-        if (!(g1 > g0 * (1 + 1e-9))) continue;
-        const double s0 = d.viscosity_Pa_s[i0] * g0, s1 = d.viscosity_Pa_s[i1] * g1;
-        if (s1 < s0 * (1 - kStressDropTolerance)) {
-          out.warnings.push_back(
-              fmt::format("{}: the shear stress falls from {:g} to {:g} Pa as the shear rate rises from {:g} to {:g} "
-                          "1/s at {:g} K; "
-                          "a melt's flow curve rises (flow instability, or a column or unit mix-up)",
-                          at(kept_row[i1]), s0, s1, g0, g1, T));
-          break;
-        }
-      }
-    }
-  }
+  warn_falling_flow_curve(d, kept_row, at, out.warnings);
   if (!stress_ratio.empty()) {
     // eta = tau / gamma must hold row by row; a factor between the columns is a unit mix-up.
     const double r = fitting::median(std::move(stress_ratio));
