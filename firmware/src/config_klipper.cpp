@@ -301,10 +301,11 @@ const Section* last_section(const std::vector<Section>& secs, const std::string&
 
 }  // namespace
 
-void write_klipper(ExportResult& r, const CompensatorSettings& s) {
-  LineEditor ed(r.original);
-  const Doc doc = parse(ed, r.path);
+namespace {
 
+/// The options to set, in the order they are written: the advance (or Kalico's model), its
+/// smoothing time, each axis' shaper.
+std::vector<Want> klipper_wants(const CompensatorSettings& s) {
   std::vector<Want> wants;
   auto num = [&](const std::string& sec, const std::string& opt, double v, int dec) {
     wants.push_back({sec, opt, format_number(v, dec), true, v, dec});
@@ -326,9 +327,98 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
     num("input_shaper", "shaper_freq_" + axis, sh.freq_hz, kDecimalsFreq);
     num("input_shaper", "damping_ratio_" + axis, sh.damping, kDecimalsZeta);
   }
+  return wants;
+}
+
+using NewSections = std::vector<std::pair<std::string, std::vector<std::string>>>;
+
+/// New sections at the file's end: those of the SAVE_CONFIG block (as "#*# " lines) and those of
+/// a file without one, each with one header.
+void append_new_sections(LineEditor& ed, const NewSections& new_block_sections, const NewSections& new_file_sections) {
+  std::vector<std::string> tail;
+  const bool last_blank = ed.size() == 0 || trim(ed.line(ed.size() - 1)).empty();
+  const bool last_block_blank = ed.size() > 0 && trim(ed.line(ed.size() - 1)) == "#*#";
+  bool first = true;
+  for (const auto& [sec, lines] : new_block_sections) {
+    if (!(first && last_block_blank)) tail.push_back("#*#");
+    tail.push_back("#*# [" + sec + "]");
+    tail.insert(tail.end(), lines.begin(), lines.end());
+    first = false;
+  }
+  first = true;
+  for (const auto& [sec, lines] : new_file_sections) {
+    if (!(first && last_blank)) tail.push_back("");
+    tail.push_back("[" + sec + "]");
+    tail.insert(tail.end(), lines.begin(), lines.end());
+    first = false;
+  }
+  if (!tail.empty()) ed.insert_before(ed.size(), tail);
+}
+
+/// A nonlinear model does not read pressure_advance, and Klipper-style config checking refuses
+/// an option nobody reads ("Option '...' is not valid in section", klippy/configfile.py
+/// check_unused_options): the body's line is commented out.
+void comment_out_pressure_advance(LineEditor& ed, const Doc& doc, const CompensatorSettings& s, ExportResult& r) {
+  for (const auto& sec : doc.main)
+    if (sec.name == s.klipper_extruder)
+      for (const auto& o : sec.opts)
+        if (o.name == "pressure_advance") {
+          ed.replace(o.line, "#" + ed.line(o.line));
+          r.changes.push_back({fmt::format("[{}] pressure_advance", s.klipper_extruder), o.value, "(commented out)",
+                               o.line + 1, "section"});
+        }
+  if (find_opt(doc.block, s.klipper_extruder, "pressure_advance"))
+    r.warnings.push_back(
+        fmt::format("{}: the SAVE_CONFIG block sets [{}] pressure_advance, which Kalico's {} model "
+                    "does not read: remove it there before restarting",
+                    r.path, s.klipper_extruder, s.kalico->model));
+}
+
+/// The runtime commands that apply the same values without a restart.
+std::string klipper_runtime_gcode(const CompensatorSettings& s) {
+  std::string g;
+  if (s.kalico) {
+    // Kalico's runtime form (docs/Nonlinear_Pressure_Advance.md, "Setting values via G-Code";
+    // extruder.py cmd_SET_PRESSURE_ADVANCE reads MODEL, ADVANCE, OFFSET, VELOCITY, TIME_OFFSET).
+    g += "SET_PRESSURE_ADVANCE";
+    if (s.klipper_extruder != "extruder") g += " EXTRUDER=" + s.klipper_extruder;
+    g += " MODEL=" + s.kalico->model + " ADVANCE=" + format_number(s.kalico->linear_advance_s, kDecimalsKalico) +
+         " OFFSET=" + format_number(s.kalico->nonlinear_offset_mm, kDecimalsKalico) +
+         " VELOCITY=" + format_number(s.kalico->linearization_velocity_mm_s, kDecimalsKalico);
+    if (s.kalico->time_offset_s) g += " TIME_OFFSET=" + format_number(*s.kalico->time_offset_s, kDecimalsKalico);
+    if (s.pa_smooth_s) g += " SMOOTH_TIME=" + format_number(*s.pa_smooth_s, kDecimalsSmooth);
+    g += "\n";
+  } else if (s.pa_k_s || s.pa_smooth_s) {
+    g += "SET_PRESSURE_ADVANCE";
+    if (s.klipper_extruder != "extruder") g += " EXTRUDER=" + s.klipper_extruder;
+    if (s.pa_k_s) g += " ADVANCE=" + format_number(*s.pa_k_s, kDecimalsK);
+    if (s.pa_smooth_s) g += " SMOOTH_TIME=" + format_number(*s.pa_smooth_s, kDecimalsSmooth);
+    g += "\n";
+  }
+  if (!s.shapers.empty()) {
+    g += "SET_INPUT_SHAPER";
+    for (const auto& [axis, sh] : s.shapers) {
+      std::string a = axis;
+      std::transform(a.begin(), a.end(), a.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+      g += fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", a,
+                       firmware_shaper_name(ExportFirmware::klipper, sh.type), a,
+                       format_number(sh.freq_hz, kDecimalsFreq), a, format_number(sh.damping, kDecimalsZeta));
+    }
+    g += "\n";
+  }
+  return g;
+}
+
+}  // namespace
+
+void write_klipper(ExportResult& r, const CompensatorSettings& s) {
+  LineEditor ed(r.original);
+  const Doc doc = parse(ed, r.path);
+
+  const std::vector<Want> wants = klipper_wants(s);
 
   // New sections are collected so that each gets one header.
-  std::vector<std::pair<std::string, std::vector<std::string>>> new_block_sections, new_file_sections;
+  NewSections new_block_sections, new_file_sections;
   auto pending = [](auto& list, const std::string& sec) -> std::vector<std::string>& {
     for (auto& [name, lines] : list)
       if (name == sec) return lines;
@@ -347,7 +437,7 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
   if (doc.header) {
     while (body_end > 0 && trim(ed.line(body_end - 1)).empty()) --body_end;
   }
-  std::vector<std::pair<std::string, std::vector<std::string>>> new_body_sections;
+  NewSections new_body_sections;
 
   for (const auto& w : wants) {
     const std::string key = fmt::format("[{}] {}", w.section, w.option);
@@ -441,78 +531,13 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
     else new_file_sections.insert(new_file_sections.begin(), new_body_sections.begin(), new_body_sections.end());
   }
 
-  std::vector<std::string> tail;
-  const bool last_blank = ed.size() == 0 || trim(ed.line(ed.size() - 1)).empty();
-  const bool last_block_blank = ed.size() > 0 && trim(ed.line(ed.size() - 1)) == "#*#";
-  bool first = true;
-  for (const auto& [sec, lines] : new_block_sections) {
-    if (!(first && last_block_blank)) tail.push_back("#*#");
-    tail.push_back("#*# [" + sec + "]");
-    tail.insert(tail.end(), lines.begin(), lines.end());
-    first = false;
-  }
-  first = true;
-  for (const auto& [sec, lines] : new_file_sections) {
-    if (!(first && last_blank)) tail.push_back("");
-    tail.push_back("[" + sec + "]");
-    tail.insert(tail.end(), lines.begin(), lines.end());
-    first = false;
-  }
-  if (!tail.empty()) ed.insert_before(ed.size(), tail);
+  append_new_sections(ed, new_block_sections, new_file_sections);
 
-  if (s.kalico) {
-    // A nonlinear model does not read pressure_advance, and Klipper-style config checking refuses
-    // an option nobody reads ("Option '...' is not valid in section", klippy/configfile.py
-    // check_unused_options): the body's line is commented out.
-    for (const auto& sec : doc.main)
-      if (sec.name == s.klipper_extruder)
-        for (const auto& o : sec.opts)
-          if (o.name == "pressure_advance") {
-            ed.replace(o.line, "#" + ed.line(o.line));
-            r.changes.push_back({fmt::format("[{}] pressure_advance", s.klipper_extruder), o.value, "(commented out)",
-                                 o.line + 1, "section"});
-          }
-    if (find_opt(doc.block, s.klipper_extruder, "pressure_advance"))
-      r.warnings.push_back(
-          fmt::format("{}: the SAVE_CONFIG block sets [{}] pressure_advance, which Kalico's {} model "
-                      "does not read: remove it there before restarting",
-                      r.path, s.klipper_extruder, s.kalico->model));
-  }
+  if (s.kalico) comment_out_pressure_advance(ed, doc, s, r);
   r.updated = ed.render();
   r.diff = ed.unified_diff(r.path);
 
-  // Runtime commands with the same values.
-  std::string g;
-  if (s.kalico) {
-    // Kalico's runtime form (docs/Nonlinear_Pressure_Advance.md, "Setting values via G-Code";
-    // extruder.py cmd_SET_PRESSURE_ADVANCE reads MODEL, ADVANCE, OFFSET, VELOCITY, TIME_OFFSET).
-    g += "SET_PRESSURE_ADVANCE";
-    if (s.klipper_extruder != "extruder") g += " EXTRUDER=" + s.klipper_extruder;
-    g += " MODEL=" + s.kalico->model + " ADVANCE=" + format_number(s.kalico->linear_advance_s, kDecimalsKalico) +
-         " OFFSET=" + format_number(s.kalico->nonlinear_offset_mm, kDecimalsKalico) +
-         " VELOCITY=" + format_number(s.kalico->linearization_velocity_mm_s, kDecimalsKalico);
-    if (s.kalico->time_offset_s) g += " TIME_OFFSET=" + format_number(*s.kalico->time_offset_s, kDecimalsKalico);
-    if (s.pa_smooth_s) g += " SMOOTH_TIME=" + format_number(*s.pa_smooth_s, kDecimalsSmooth);
-    g += "\n";
-  } else if (s.pa_k_s || s.pa_smooth_s) {
-    g += "SET_PRESSURE_ADVANCE";
-    if (s.klipper_extruder != "extruder") g += " EXTRUDER=" + s.klipper_extruder;
-    if (s.pa_k_s) g += " ADVANCE=" + format_number(*s.pa_k_s, kDecimalsK);
-    if (s.pa_smooth_s) g += " SMOOTH_TIME=" + format_number(*s.pa_smooth_s, kDecimalsSmooth);
-    g += "\n";
-  }
-  if (!s.shapers.empty()) {
-    g += "SET_INPUT_SHAPER";
-    for (const auto& [axis, sh] : s.shapers) {
-      std::string a = axis;
-      std::transform(a.begin(), a.end(), a.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-      g += fmt::format(" SHAPER_TYPE_{}={} SHAPER_FREQ_{}={} DAMPING_RATIO_{}={}", a,
-                       firmware_shaper_name(ExportFirmware::klipper, sh.type), a,
-                       format_number(sh.freq_hz, kDecimalsFreq), a, format_number(sh.damping, kDecimalsZeta));
-    }
-    g += "\n";
-  }
-  r.gcode = g;
+  r.gcode = klipper_runtime_gcode(s);
   if (s.shapers.count("z"))
     r.notes.push_back(
         "shaper_type_z, shaper_freq_z and damping_ratio_z are read by Klipper since its Z-axis input shaper "
