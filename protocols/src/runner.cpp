@@ -124,6 +124,106 @@ void adapt_to_firmware(const RunOptions& o, bool sim, const machine::MachineProf
   }
 }
 
+/// The dialect the protocol is planned in before the firmware answers: the simulator's "firmware="
+/// option (Marlin by default) or the profile's firmware. A dry run on the simulator plans for the
+/// simulated build's M493 report (what identify() reads), on a printer for the report its profile
+/// keeps ([firmware_state] m493_report).
+firmware::Dialect planned_dialect(bool sim, const sim::SimConfig& sim_cfg, const machine::MachineProfile& profile) {
+  const std::string fw_name = sim ? sim_cfg.firmware : profile.firmware;
+  firmware::Dialect dialect(fw_name.empty() ? firmware::Firmware::marlin : firmware::firmware_from_name(fw_name));
+  if (dialect.firmware() == firmware::Firmware::marlin)
+    dialect.set_ft_motion(sim ? sim_m493_report(sim_cfg) : firmware::parse_m493_report(profile.state.m493_report));
+  return dialect;
+}
+
+/// The firmware the session identified, in the journal and the run's summary.
+void note_firmware(const Session& session, machine::Journal& journal, nlohmann::json& summary, RunResult& res) {
+  journal.event("firmware", {{"name", session.firmware.name},
+                             {"version", session.firmware.version},
+                             {"dialect", to_string(session.dialect.firmware())},
+                             {"ft_motion", session.firmware.ft_motion},
+                             {"ft_motion_active", session.firmware.ft_motion_active},
+                             {"m493_form", to_string(m493_syntax(session.firmware.m493))}});
+  summary["firmware"] = {{"name", session.firmware.name}, {"version", session.firmware.version}};
+  if (session.firmware.ft_motion) {
+    res.ft_motion = session.firmware.ft_motion_active ? "active" : "built, inactive";
+    summary["firmware"]["ft_motion"] = res.ft_motion;
+    res.m493_form = to_string(m493_syntax(session.firmware.m493));
+    summary["firmware"]["m493_form"] = res.m493_form;
+  }
+}
+
+/// Fails before heating and homing when the link cannot record what the protocol needs.
+void require_recordable(Session& session, const std::vector<std::string>& sensors, const std::string& port) {
+  for (const auto& sensor : sensors)
+    if (!session.can_record(sensor)) {
+      const bool rrf = session.firmware.firmware == firmware::Firmware::reprapfirmware && sensor == "accelerometer";
+      throw MachineError(
+          fmt::format("the firmware ({}) cannot record {} data over this link ({}); nothing but M115 was sent",
+                      session.firmware.name.empty() ? "unidentified" : session.firmware.name, sensor,
+                      rrf ? "RepRapFirmware records its accelerometer with M956 into 0:/sys/accelerometer/ and offers "
+                            "no way to read a file over USB serial (M28/M29 write, M20 lists, M36/M38 describe a "
+                            "file); give the profile its web server, [network] http = \"http://HOST\", to fetch it "
+                            "with rr_download"
+                          : "no tunekit sensor stream"),
+          port);
+    }
+  for (const auto& sensor : sensors) session.check_recording(sensor);
+}
+
+/// Sends the protocol's lines in runs between its recording directives (";@record SENSOR on|off"),
+/// each "on" with the planned machine time up to its "off".
+void send_protocol(Session& session, const std::vector<std::string>& gcode, const std::atomic<bool>& abort_flag,
+                   const std::string& port) {
+  std::vector<std::string> run;  // the lines since the last recording directive
+  const auto send_run = [&] {
+    session.send_lines(run, abort_flag);
+    run.clear();
+  };
+  for (const auto& line : gcode) {
+    if (abort_flag.load()) throw MachineError("interrupted", port);
+    if (line.rfind(";@record ", 0) == 0) {
+      send_run();
+      const auto rest = line.substr(9);
+      const auto sp = rest.find(' ');
+      const std::string sensor = rest.substr(0, sp);
+      const bool on = rest.substr(sp + 1) == "on";
+      double window_s = 0;
+      if (on) {
+        // The planned machine time up to this sensor's "off" directive.
+        const auto here = gcode.begin() + (&line - gcode.data());
+        const auto off = std::find(here, gcode.end(), ";@record " + sensor + " off");
+        window_s = estimate_gcode_duration_s(std::vector<std::string>(here, off));
+      }
+      session.record(sensor, on, window_s);
+      continue;
+    }
+    if (line.empty() || line[0] == ';') continue;
+    std::string cmd = line.substr(0, line.find(';'));
+    while (!cmd.empty() && cmd.back() == ' ') cmd.pop_back();
+    run.push_back(std::move(cmd));
+  }
+  send_run();
+}
+
+/// Stops the simulator and keeps what it received and counted beside the run's data.
+void stop_sim_and_keep_record(sim::SimPtyServer& server, machine::Journal& journal, RunResult& res) {
+  server.stop();
+  server.wait();
+  const auto received = server.sim().received();
+  core::write_file_atomic(journal.path("sim_received.gcode"), join_lines(received));
+  core::write_file_atomic(journal.path("sim_stats.json"),
+                          nlohmann::json{{"lines_received", received.size()},
+                                         {"accel_samples_sent", server.sim().accel_samples_sent()},
+                                         {"load_cell_samples_sent", server.sim().load_cell_samples_sent()},
+                                         {"disconnected", server.disconnected()},
+                                         {"halted", server.sim().halted()},
+                                         {"machine_time_s", server.sim().time_s()}}
+                                  .dump(2) +
+                              "\n");
+  res.files["sim_received"] = journal.path("sim_received.gcode");
+}
+
 }  // namespace
 
 RunResult run_experiment(const RunOptions& o) {
@@ -131,13 +231,7 @@ RunResult run_experiment(const RunOptions& o) {
   const machine::MachineProfile profile = sim ? builtin_sim_profile() : machine::load_machine_profile(o.machine);
   const sim::SimConfig sim_cfg = sim::SimConfig::from_options(o.sim_options);  // bad options fail before anything else
   if (!sim && o.port.empty()) throw InputError("--port is needed with a machine profile (or use --machine sim)");
-  // The simulator follows the firmware named by its "firmware=" option (Marlin by default).
-  const std::string fw_name = sim ? sim_cfg.firmware : profile.firmware;
-  firmware::Dialect dialect(fw_name.empty() ? firmware::Firmware::marlin : firmware::firmware_from_name(fw_name));
-  // A dry run on the simulator plans for the simulated build's M493 report (what identify() reads),
-  // on a printer for the report its profile keeps ([firmware_state] m493_report).
-  if (dialect.firmware() == firmware::Firmware::marlin)
-    dialect.set_ft_motion(sim ? sim_m493_report(sim_cfg) : firmware::parse_m493_report(profile.state.m493_report));
+  const firmware::Dialect dialect = planned_dialect(sim, sim_cfg, profile);
 
   RunResult res;
   res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect, o.limits);
@@ -193,21 +287,7 @@ RunResult run_experiment(const RunOptions& o) {
   };
 
   auto finish_sim = [&] {
-    if (!server) return;
-    server->stop();
-    server->wait();
-    const auto received = server->sim().received();
-    core::write_file_atomic(journal.path("sim_received.gcode"), join_lines(received));
-    core::write_file_atomic(journal.path("sim_stats.json"),
-                            nlohmann::json{{"lines_received", received.size()},
-                                           {"accel_samples_sent", server->sim().accel_samples_sent()},
-                                           {"load_cell_samples_sent", server->sim().load_cell_samples_sent()},
-                                           {"disconnected", server->disconnected()},
-                                           {"halted", server->sim().halted()},
-                                           {"machine_time_s", server->sim().time_s()}}
-                                    .dump(2) +
-                                "\n");
-    res.files["sim_received"] = journal.path("sim_received.gcode");
+    if (server) stop_sim_and_keep_record(*server, journal, res);
   };
   auto list_files = [&] {
     if (journal.has_csv(rec.load_file())) res.files["load_cell"] = journal.path(rec.load_file());
@@ -230,67 +310,12 @@ RunResult run_experiment(const RunOptions& o) {
     session->dialect = firmware::Dialect(
         session->firmware.firmware == firmware::Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
     session->dialect.set_ft_motion(session->firmware.m493);
-    journal.event("firmware", {{"name", session->firmware.name},
-                               {"version", session->firmware.version},
-                               {"dialect", to_string(session->dialect.firmware())},
-                               {"ft_motion", session->firmware.ft_motion},
-                               {"ft_motion_active", session->firmware.ft_motion_active},
-                               {"m493_form", to_string(m493_syntax(session->firmware.m493))}});
-    summary["firmware"] = {{"name", session->firmware.name}, {"version", session->firmware.version}};
-    if (session->firmware.ft_motion) {
-      res.ft_motion = session->firmware.ft_motion_active ? "active" : "built, inactive";
-      summary["firmware"]["ft_motion"] = res.ft_motion;
-      res.m493_form = to_string(m493_syntax(session->firmware.m493));
-      summary["firmware"]["m493_form"] = res.m493_form;
-    }
+    note_firmware(*session, journal, summary, res);
     adapt_to_firmware(o, sim, profile, *session, port, journal, summary, res, progress);
-    // Fail before heating and homing when the link cannot record what the protocol needs.
-    for (const auto& sensor : res.experiment.sensors)
-      if (!session->can_record(sensor)) {
-        const bool rrf = session->firmware.firmware == firmware::Firmware::reprapfirmware && sensor == "accelerometer";
-        throw MachineError(
-            fmt::format(
-                "the firmware ({}) cannot record {} data over this link ({}); nothing but M115 was sent",
-                session->firmware.name.empty() ? "unidentified" : session->firmware.name, sensor,
-                rrf ? "RepRapFirmware records its accelerometer with M956 into 0:/sys/accelerometer/ and offers "
-                      "no way to read a file over USB serial (M28/M29 write, M20 lists, M36/M38 describe a "
-                      "file); give the profile its web server, [network] http = \"http://HOST\", to fetch it "
-                      "with rr_download"
-                    : "no tunekit sensor stream"),
-            port);
-      }
-    for (const auto& sensor : res.experiment.sensors) session->check_recording(sensor);
+    require_recordable(*session, res.experiment.sensors, port);
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
-    std::vector<std::string> run;  // the lines since the last recording directive
-    const auto send_run = [&] {
-      session->send_lines(run, *abort_flag);
-      run.clear();
-    };
-    for (const auto& line : res.gcode) {
-      if (abort_flag->load()) throw MachineError("interrupted", port);
-      if (line.rfind(";@record ", 0) == 0) {
-        send_run();
-        const auto rest = line.substr(9);
-        const auto sp = rest.find(' ');
-        const std::string sensor = rest.substr(0, sp);
-        const bool on = rest.substr(sp + 1) == "on";
-        double window_s = 0;
-        if (on) {
-          // The planned machine time up to this sensor's "off" directive.
-          const auto here = res.gcode.begin() + (&line - res.gcode.data());
-          const auto off = std::find(here, res.gcode.end(), ";@record " + sensor + " off");
-          window_s = estimate_gcode_duration_s(std::vector<std::string>(here, off));
-        }
-        session->record(sensor, on, window_s);
-        continue;
-      }
-      if (line.empty() || line[0] == ';') continue;
-      std::string cmd = line.substr(0, line.find(';'));
-      while (!cmd.empty() && cmd.back() == ' ') cmd.pop_back();
-      run.push_back(std::move(cmd));
-    }
-    send_run();
+    send_protocol(*session, res.gcode, *abort_flag, port);
     session->finish();
   } catch (const MachineError& e) {
     const bool interrupted = abort_flag->load();
