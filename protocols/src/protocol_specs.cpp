@@ -38,14 +38,19 @@ constexpr double kMaxLengthMm = 10000;    // sizes and positions, mm
 constexpr double kMaxTemperatureC = 500;  // set temperature, degC (the profile's hotend_max_c applies too)
 constexpr double kMaxFlowMm3S = 1000;     // volumetric flow, mm^3/s
 
-std::vector<ProtocolSpec> make_specs() {
-  const ProtocolParam hotend{"hotend_c",
-                             210,
-                             "degC",
-                             "hot-end temperature set (and waited for) first; 0 leaves the heater alone",
-                             ParamDomain::non_negative,
-                             kMaxTemperatureC};
-  std::vector<ProtocolSpec> s;
+/// The hot end's set temperature, a parameter of every protocol that extrudes.
+ProtocolParam hotend_param() {
+  return {"hotend_c",
+          210,
+          "degC",
+          "hot-end temperature set (and waited for) first; 0 leaves the heater alone",
+          ParamDomain::non_negative,
+          kMaxTemperatureC};
+}
+
+/// The liquefier's experiments with the load cell: steps, the flow sweep, sine dwells, the chirp.
+void add_liquefier_specs(std::vector<ProtocolSpec>& s) {
+  const ProtocolParam hotend = hotend_param();
   s.push_back(
       {"liquefier-step",
        "extrusion-rate steps (low, then high/low cycles) with the load cell recording the filament force",
@@ -116,6 +121,11 @@ std::vector<ProtocolSpec> make_specs() {
         hotend},
        {"load_cell"},
        false});
+}
+
+/// Printed tests measured from a photo: Holtrup's ring and the camera path's line test.
+void add_print_specs(std::vector<ProtocolSpec>& s) {
+  const ProtocolParam hotend = hotend_param();
   s.push_back(
       {"ring-print",
        "Holtrup's frequency test (Tuning liquefier dynamics, MSc thesis, University of Twente, 2019): a ring "
@@ -159,6 +169,10 @@ std::vector<ProtocolSpec> make_specs() {
                 hotend},
                {},
                false});
+}
+
+/// The axes' experiments with the accelerometer: the resonance sweep and the overshoot rectangle.
+void add_axis_specs(std::vector<ProtocolSpec>& s) {
   s.push_back(
       {"axis-sweep",
        "resonance sweep like Klipper's TEST_RESONANCES (resonance_tester.py, 2024-12 to 2026-08): back-and-forth "
@@ -197,6 +211,11 @@ std::vector<ProtocolSpec> make_specs() {
                 {"pause_s", 0.3, "s", "pause at each corner", ParamDomain::positive, kMaxTimeS}},
                {"accelerometer"},
                false});
+}
+
+/// The one-layer test pattern (pads, lines, rings) in a coverage planner's order.
+void add_pattern_spec(std::vector<ProtocolSpec>& s) {
+  const ProtocolParam hotend = hotend_param();
   s.push_back(
       {"test-pattern",
        "test prints (pads for photos, line steps, rings) on one layer, ordered by the grid-based coverage "
@@ -216,6 +235,14 @@ std::vector<ProtocolSpec> make_specs() {
         hotend},
        {},
        false});
+}
+
+std::vector<ProtocolSpec> make_specs() {
+  std::vector<ProtocolSpec> s;
+  add_liquefier_specs(s);
+  add_print_specs(s);
+  add_axis_specs(s);
+  add_pattern_spec(s);
   return s;
 }
 
