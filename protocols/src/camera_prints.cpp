@@ -92,6 +92,11 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
   g.push_back(fmt::format("G1 Z{} F{}", line_steps_num(z),
                           line_steps_num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
   g.push_back(d.set_accel(accel));
+  // Every line starts retracted, the first too: each travel is preceded by a retraction, so each
+  // prime only restores it (a prime without one would push retract_mm of filament, about 20 mm of
+  // line's worth at the defaults, out as a blob at the first line's start).
+  if (retract > 0)
+    g.push_back(fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
   for (const auto& l : lines) {
     g.push_back(
         fmt::format("G1 X{} Y{} F{}", line_steps_num(l.x0_mm), line_steps_num(l.y_mm), line_steps_num(travel * 60, 1)));

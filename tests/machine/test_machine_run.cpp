@@ -61,6 +61,26 @@ TEST_CASE("run --dry-run prints the checked G-code and sends nothing", "[machine
   CHECK(env["results"]["experiment"]["axis"] == "y");
 }
 
+TEST_CASE("the line test's lines all start alike: every prime follows a retraction", "[machine]") {
+  const auto r = run_cli({"run", "line-steps", "--dry-run", "--json"});
+  REQUIRE(r.code == 0);
+  const auto env = nlohmann::json::parse(r.out);
+  double e_net = 0;  // filament pushed by retractions and primes so far (mm)
+  int primes = 0;
+  for (const auto& line : env["results"]["gcode"]) {
+    const std::string l = line.get<std::string>();
+    const bool retract = l.find("; retract") != std::string::npos, prime = l.find("; prime") != std::string::npos;
+    if (!retract && !prime) continue;
+    const auto e = l.find(" E");
+    REQUIRE(e != std::string::npos);
+    e_net += std::stod(l.substr(e + 2));
+    INFO(l);
+    CHECK(e_net <= 1e-9);  // never more primed than retracted
+    primes += prime;
+  }
+  CHECK(primes == 3);
+}
+
 TEST_CASE("a protocol over the profile's limits is refused before any byte is sent", "[machine]") {
   tunekit::sim::SimPtyServer server(tunekit::sim::SimConfig{});
   const auto dir = scratch_dir("machine_refused");
