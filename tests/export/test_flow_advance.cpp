@@ -48,10 +48,11 @@ ident::FlowAdvanceInputs power_law_levels(double a, double b, bool with_ci) {
 }
 
 /// A power law's stored volume up to q >= q0 with the part below the lowest level q0 taken as tau
-/// held at q0 (`below` = "held") or the power law to zero flow ("power").
+/// held at q0 (`below` = "held"), the power law to zero flow ("power") or the middle of the two
+/// ("middle", the estimate: the value whose largest error over that range is smallest).
 double trend_volume(double a, double b, double q0, double q, const std::string& below) {
   const double held = a * std::pow(q0, b) * q0, power = a * std::pow(q0, b + 1) / (b + 1);
-  const double low = below == "held" ? held : power;
+  const double low = below == "held" ? held : below == "power" ? power : 0.5 * (held + power);
   return low + a * (std::pow(q, b + 1) - std::pow(q0, b + 1)) / (b + 1);
 }
 
@@ -76,7 +77,7 @@ TEST_CASE("flow advance: the need is the integral of tau over flow, V(Q)/Q") {
   const double a = 0.09, b = -0.45;
   auto in = power_law_levels(a, b, false);
   for (double q : {3.0, 10.0, 17.0}) {
-    CHECK(ident::needed_advance_s(in, q) == Approx(a * std::pow(q, b) / (b + 1)).epsilon(1e-12));
+    CHECK(ident::needed_advance_s(in, q) == Approx(trend_volume(a, b, 2.0, q, "middle") / q).epsilon(1e-12));
     CHECK(ident::needed_advance_s(in, q, -1) == Approx(trend_volume(a, b, 2.0, q, "held") / q).epsilon(1e-12));
     CHECK(ident::needed_advance_s(in, q, +1) == Approx(trend_volume(a, b, 2.0, q, "power") / q).epsilon(1e-12));
   }
@@ -84,9 +85,10 @@ TEST_CASE("flow advance: the need is the integral of tau over flow, V(Q)/Q") {
   // The design says how much of the stored melt lies below the data, and its bounds span both.
   in.design_flow_mm3_s = 10;
   const auto d = ident::design_flow_advance(in);
-  CHECK(d.low_flow_share == Approx(std::pow(2.0 / 10.0, b + 1)));
+  CHECK(d.low_flow_share == Approx(trend_volume(a, b, 2.0, 2.0, "middle") / trend_volume(a, b, 2.0, 10.0, "middle")));
   CHECK(d.k_design_lo_s == Approx(trend_volume(a, b, 2.0, 10.0, "held") / 10.0));
-  CHECK(d.k_design_hi_s == Approx(d.k_design_s));
+  CHECK(d.k_design_hi_s == Approx(trend_volume(a, b, 2.0, 10.0, "power") / 10.0));
+  CHECK(d.k_design_s == Approx(0.5 * (d.k_design_lo_s + d.k_design_hi_s)));
   // The piecewise-linear table (no trend): tau held below the first level, exact trapezoids.
   in.trend.reset();
   const double t0 = a * std::pow(2.0, b), t1 = a * std::pow(4.0, b);

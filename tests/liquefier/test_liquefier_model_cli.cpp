@@ -49,7 +49,7 @@ nlohmann::json step_then_export(const std::string& log, const std::string& dir, 
 
 }  // namespace
 
-TEST_CASE("export designs the advance V(Q)/Q of the whole-record model within 10 % of the truth's") {
+TEST_CASE("export designs the advance V(Q)/Q of the whole-record model, within half its bounds of the truth's") {
   const StoreTruth tr;
   const auto s = synth_store(tr, 25.0, 60.0, 0.02, 31);
   const std::string dir = test::scratch_dir("store_export_nonlinear");
@@ -65,7 +65,16 @@ TEST_CASE("export designs the advance V(Q)/Q of the whole-record model within 10
   const double truth = tr.volume(qd) / qd;
   const double k = ex.at("settings").at("pa_k_s").get<double>();
   INFO("exported K " << k << " s, truth V(Q)/Q " << truth << " s");
-  CHECK(std::abs(k - truth) < 0.10 * truth);
+  // This record does not start at rest: the melt below its lowest level is bounded (tau held there,
+  // the power law to zero flow) and K is the middle of the two. This store follows the power law
+  // down to zero flow, so its truth is near the upper bound: K is within half the bounds' span of
+  // it (and within 15 %), and above the lower bound's K.
+  const auto& bounds = ex.at("flow_advance").at("single").at("K_bounds_s");
+  const double k_lo = bounds.at(0).get<double>(), k_hi = bounds.at(1).get<double>();
+  INFO("bounds [" << k_lo << ", " << k_hi << "] s");
+  CHECK(k == Approx(0.5 * (k_lo + k_hi)).epsilon(1e-9));
+  CHECK(std::abs(k - truth) < 0.5 * (k_hi - k_lo) + 0.03 * truth);
+  CHECK(std::abs(k - truth) < 0.15 * truth);
   // Its 95 % interval holds the truth; most of the melt at 8 mm^3/s is stored below the lowest
   // level (4 mm^3/s), so the interval's lower end holds tau there and lies well below K.
   REQUIRE(ex.contains("pa_k_ci95"));
