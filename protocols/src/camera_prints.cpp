@@ -81,6 +81,10 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
   // Retraction as fast as the profile allows (the safety check counts it as flow too), at most 30 mm/s.
   const double retract_v = std::min(
       {30.0, profile.extruder.max_velocity_mm_s, 0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2()});
+  const std::string retract_line =
+      fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1));
+  const std::string prime_line =
+      fmt::format("G1 E{} F{} ; prime", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1));
   g.push_back(fmt::format("; {} lines along +X, flow steps at {} mm and {} mm", lines.size(),
                           line_steps_num(lines[0].path[0].length_mm),
                           line_steps_num(lines[0].path[0].length_mm + lines[0].path[1].length_mm)));
@@ -95,21 +99,18 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
   // Every line starts retracted, the first too: each travel is preceded by a retraction, so each
   // prime only restores it (a prime without one would push retract_mm of filament, about 20 mm of
   // line's worth at the defaults, out as a blob at the first line's start).
-  if (retract > 0)
-    g.push_back(fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
+  if (retract > 0) g.push_back(retract_line);
   for (const auto& l : lines) {
     g.push_back(
         fmt::format("G1 X{} Y{} F{}", line_steps_num(l.x0_mm), line_steps_num(l.y_mm), line_steps_num(travel * 60, 1)));
-    if (retract > 0)
-      g.push_back(fmt::format("G1 E{} F{} ; prime", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
+    if (retract > 0) g.push_back(prime_line);
     double x = l.x0_mm;
     for (const auto& s : l.path) {
       x += s.length_mm;
       g.push_back(fmt::format("G1 X{} E{} F{}", line_steps_num(x), line_steps_num(s.feed_mm, 5),
                               line_steps_num(s.speed_mm_s * 60, 1)));
     }
-    if (retract > 0)
-      g.push_back(fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1)));
+    if (retract > 0) g.push_back(retract_line);
   }
   g.push_back(d.wait_for_moves());
 }
