@@ -25,8 +25,7 @@ nlohmann::json compare_estimates(const std::string& quantity, const std::string&
   const int where = fitting::beyond_margin(diff, combined, m);
   const char* verdict = where > 0 ? "differ" : where < 0 ? "equivalent" : "undecided";
   auto est = [&](const Estimate& e) {
-    return fmt::format("{} {} [{}, {}] {}", e.method, display_number(e.value), display_number(e.ci95_lo),
-                       display_number(e.ci95_hi), unit);
+    return fmt::format("{} {} {} {}", e.method, display_number(e.value), display_interval(e.ci95_lo, e.ci95_hi), unit);
   };
   const std::string gap = fmt::format("difference {} ± {} {} (95 %), margin {} {} ({:g} %)", display_number(diff),
                                       display_number(combined), unit, display_number(m), unit, 100 * margin.relative);

@@ -31,7 +31,7 @@ std::string interval_text(const nlohmann::json& results, const nlohmann::json& r
   const auto* ci = json_at(results, ci_path);
   if (ci == nullptr || !ci->is_array() || ci->size() != 2 || !(*ci)[0].is_number() || !(*ci)[1].is_number())
     return "n/a";
-  return fmt::format("[{}, {}]", display_number((*ci)[0].get<double>()), display_number((*ci)[1].get<double>()));
+  return display_interval((*ci)[0].get<double>(), (*ci)[1].get<double>());
 }
 
 std::vector<QuantityLine> quantity_lines(const nlohmann::json& results) {

@@ -70,6 +70,17 @@ std::string display_number(double v) {
   return fmt::format("{:.4g}", v);
 }
 
+std::string display_interval(double lo, double hi) {
+  if (!std::isfinite(lo) || !std::isfinite(hi)) return fmt::format("[{}, {}]", display_number(lo), display_number(hi));
+  // 8 significant digits tell apart bounds 1e-7 apart relative to their size: an interval narrower
+  // than that is a measurement's rounding, not information, and prints as equal bounds.
+  constexpr int kMaxDigits = 8;
+  int digits = 4;
+  while (digits < kMaxDigits && lo != hi && fmt::format("{:.{}g}", lo, digits) == fmt::format("{:.{}g}", hi, digits))
+    ++digits;
+  return fmt::format("[{:.{}g}, {:.{}g}]", lo, digits, hi, digits);
+}
+
 std::string step_model_note(const nlohmann::json& d) {
   if (d.contains("y_model")) return "";
   const std::string why = d.value("model_missing", std::string());
@@ -263,8 +274,8 @@ std::string interval_cell(const nlohmann::json& results, const nlohmann::json& r
   if (!ci_path.empty()) {
     const auto* ci = json_at(results, ci_path);
     if (ci != nullptr && ci->is_array() && ci->size() == 2 && (*ci)[0].is_number() && (*ci)[1].is_number())
-      return fmt::format("<td class=\"ci\" data-path=\"{}\">[{}, {}]</td>", html::escape(ci_path),
-                         display_number((*ci)[0].get<double>()), display_number((*ci)[1].get<double>()));
+      return fmt::format("<td class=\"ci\" data-path=\"{}\">{}</td>", html::escape(ci_path),
+                         display_interval((*ci)[0].get<double>(), (*ci)[1].get<double>()));
     return "<td class=\"ci\">n/a</td>";
   }
   return "<td class=\"ci\">" + html::escape(row.value("basis", std::string("n/a"))) + "</td>";
