@@ -89,8 +89,12 @@ CalibrationPlan plan_calibration(const CalibrateArgs& a, const CalibrationProfil
   plan.can_prompt = can_prompt;
   plan.camera_path =
       !a.skip_liquefier && choose_liquefier_path(a.liquefier, profile.profile, profile.path) == LiquefierPath::camera;
+  // The simulated printer's own camera is the photo source of its camera path unless another is given.
+  auto& cam = plan.options.camera;
+  if (plan.camera_path && plan.sim && cam.camera.empty() && cam.photo.empty() && cam.camera_device.empty())
+    cam.camera = "sim";
   // Off a terminal the photo source must be known before anything is printed.
-  if (plan.camera_path) check_photo_source(a.camera, plan.sim, can_prompt);
+  if (plan.camera_path) check_photo_source(cam, plan.sim, can_prompt);
   plan.experiments = choose_experiments(a, profile, plan.camera_path);
   plan.output = a.output;
   prepare_record(plan.output,
@@ -102,7 +106,7 @@ CalibrationPlan plan_calibration(const CalibrateArgs& a, const CalibrationProfil
   plan.chirp = protocols::plan_liquefier_chirp(protocols::kLiteratureLiquefierTau_s);
   plan.chirp_basis = fmt::format("the literature time constant {} s", display_number(plan.chirp.expected_tau_s));
   // The simulated camera photographs everything the simulated printer prints.
-  if (plan.camera_path && a.camera.camera == "sim")
+  if (plan.camera_path && cam.camera == "sim")
     plan.bed = std::make_shared<sim::SimPrintBed>(sim::SimConfig::from_options(a.sim_options).seed);
 
   // Safety first: every protocol is built and checked against the limits before any byte is sent.

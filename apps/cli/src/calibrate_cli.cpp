@@ -58,7 +58,8 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
                   "Liquefier path: load-cell (feed steps and chirp against a load cell), camera (printed line and ring "
                   "tests, photographed), auto (load-cell when the profile has one, else camera)")
       ->capture_default_str();
-  sub->add_option("--camera", a->camera.camera, "Camera path: 'sim' photographs the simulated printer's print");
+  sub->add_option("--camera", a->camera.camera,
+                  "Camera path: 'sim' photographs the simulated printer's print (the default with --machine sim)");
   sub->add_option("--photo", a->camera.photo,
                   "Camera path: a photo of the printed tests from above (bed X to the right)");
   sub->add_option(
