@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "resonance_json.hpp"
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/calibration/belts_command.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
@@ -65,10 +66,10 @@ void belts_advice(BeltsOutcome& o) {
   const auto& rl = a_tighter ? o.b : o.a;
   const auto& rt = a_tighter ? o.a : o.b;
   if (o.tension_a && o.tension_b) {
-    if (std::abs(o.difference_n) <= 1.96 * o.difference_stderr_n) {
+    if (std::abs(o.difference_n) <= fitting::kZ95 * o.difference_stderr_n) {
       o.advice.push_back(fmt::format("the belts agree within their uncertainty: A - B = {:+.1f} N [{:+.1f}, {:+.1f}]",
-                                     o.difference_n, o.difference_n - 1.96 * o.difference_stderr_n,
-                                     o.difference_n + 1.96 * o.difference_stderr_n));
+                                     o.difference_n, o.difference_n - fitting::kZ95 * o.difference_stderr_n,
+                                     o.difference_n + fitting::kZ95 * o.difference_stderr_n));
       return;
     }
     o.advice.push_back(
@@ -77,7 +78,7 @@ void belts_advice(BeltsOutcome& o) {
                     loose, std::abs(o.difference_n), rl.damped_freq_hz, rt.damped_freq_hz, tight, tight));
     return;
   }
-  if (std::abs(o.difference_hz) <= 1.96 * o.difference_stderr_hz) {
+  if (std::abs(o.difference_hz) <= fitting::kZ95 * o.difference_stderr_hz) {
     o.advice.push_back(fmt::format("the belts agree within their uncertainty: A - B = {:+.2f} Hz", o.difference_hz));
     return;
   }
@@ -180,10 +181,10 @@ Envelope to_envelope(const BeltsOutcome& o) {
   res["freq_b_hz"] = o.b.damped_freq_hz;
   res["difference_hz"] = diff;
   res["difference_stderr_hz"] = diff_se;
-  res["difference_ci95"] = {diff - 1.96 * diff_se, diff + 1.96 * diff_se};
+  res["difference_ci95"] = {diff - fitting::kZ95 * diff_se, diff + fitting::kZ95 * diff_se};
   res["tension_ratio"] = ratio;
   res["tension_ratio_stderr"] = ratio_se;
-  res["tension_ratio_ci95"] = {ratio - 1.96 * ratio_se, ratio + 1.96 * ratio_se};
+  res["tension_ratio_ci95"] = {ratio - fitting::kZ95 * ratio_se, ratio + fitting::kZ95 * ratio_se};
   res["units"] = {{"freq", "Hz"}, {"tension_ratio", "1"}, {"tension", "N"}};
   if (o.tension_a && o.tension_b) {
     res["belt"] = {{"type", a.belt_mass_g_m > 0 ? std::string() : (a.belt.empty() ? std::string("gt2-6mm") : a.belt)},
@@ -195,8 +196,8 @@ Envelope to_envelope(const BeltsOutcome& o) {
     res["tension_b_n"] = tension_json(*o.tension_b);
     res["difference_n"] = o.difference_n;
     res["difference_stderr_n"] = o.difference_stderr_n;
-    res["difference_n_ci95"] = {o.difference_n - 1.96 * o.difference_stderr_n,
-                                o.difference_n + 1.96 * o.difference_stderr_n};
+    res["difference_n_ci95"] = {o.difference_n - fitting::kZ95 * o.difference_stderr_n,
+                                o.difference_n + fitting::kZ95 * o.difference_stderr_n};
     if (a.target_n > 0) res["target_n"] = a.target_n;
   }
   res["advice"] = o.advice;
@@ -221,7 +222,7 @@ void print_text(const BeltsOutcome& o, std::ostream& os) {
   line('B', o.options.file_b, o.b, o.tension_b);
   const double diff = o.difference_hz, diff_se = o.difference_stderr_hz;
   os << fmt::format("difference A - B: {:+.2f} Hz [{:+.2f}, {:+.2f}]   tension ratio (fA/fB)^2: {:.3f}\n", diff,
-                    diff - 1.96 * diff_se, diff + 1.96 * diff_se, o.tension_ratio);
+                    diff - fitting::kZ95 * diff_se, diff + fitting::kZ95 * diff_se, o.tension_ratio);
   if (o.tension_a)
     os << fmt::format("tensions from T = 4 mu L^2 f^2: mu {:.4g} g/m, span {:g} +- {:g} mm\n", o.mass_kg_m * 1e3,
                       o.options.span_mm, o.options.span_uncertainty_mm);

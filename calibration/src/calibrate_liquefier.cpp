@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
@@ -237,17 +238,7 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
 
   // 4. The ring: width against the angle travelled -> gain and phase at f = N v / (2 pi R).
   nlohmann::json ring_json;
-  if (pw.ring) {
-    const auto& r = *pw.ring;
-    ring_json = {{"freq_hz", r.freq_hz},
-                 {"gain", r.gain},
-                 {"phase_deg", r.phase_deg},
-                 {"samples", r.samples},
-                 {"radius_mm", r.radius_mm},
-                 {"measured_radius_mm", r.measured_radius_mm},
-                 {"setpoint_amplitude_mm", r.setpoint_amplitude_mm},
-                 {"width_amplitude_mm", r.width_amplitude_mm}};
-  }
+  if (pw.ring) ring_json = vision::to_json(*pw.ring);
 
   out.results = {{"photo", out.photo},
                  {"overlay", out.overlay},
@@ -264,6 +255,16 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   return out;
 }
 
+namespace {
+
+// value +- 1.96 stderr as a JSON interval (null when the standard error is not known).
+nlohmann::json normal_ci95(double value, double stderr_) {
+  if (!std::isfinite(value) || !std::isfinite(stderr_)) return nullptr;
+  return {value - fitting::kZ95 * stderr_, value + fitting::kZ95 * stderr_};
+}
+
+}  // namespace
+
 void add_ring_prediction(CameraAnalysis& camera, const RingModel& model) {
   const double K = model.K, tau = model.tau_s;
   double theta = model.theta_s;
@@ -272,13 +273,23 @@ void add_ring_prediction(CameraAnalysis& camera, const RingModel& model) {
   if (!std::isfinite(theta)) theta = 0;
   const std::complex<double> G = K * std::exp(std::complex<double>(0, -w * theta)) / std::complex<double>(1, w * tau);
   auto& ring = camera.results["ring"];
+  constexpr double kDeg = 180 / std::numbers::pi;
+  // d(-atan(w tau))/d tau = -w / (1 + (w tau)^2): tau's error as phase (rad).
+  const double tau_phase_se = w * model.tau_stderr_s / (1 + w * w * tau * tau);
   ring["model_gain"] = std::abs(G);
-  ring["model_phase_deg"] = std::arg(G) * 180 / std::numbers::pi;
+  ring["model_phase_deg"] = std::arg(G) * kDeg;
+  // tau and theta from one fit are negatively correlated; adding their variances overstates the
+  // phase's, so this interval is on the wide side.
+  ring["model_phase_ci95_deg"] =
+      normal_ci95(std::arg(G) * kDeg, std::hypot(tau_phase_se, w * model.theta_stderr_s) * kDeg);
   // The dead time the ring's phase implies with the lines' tau: phase = -atan(w tau) - w theta.
   // It does not depend on where the lines lie on their paths (the weak point of a photo whose
-  // placement on the bed is not known), only on the ring's start direction (+X).
-  const double lag = -camera.ring->phase_deg * std::numbers::pi / 180 - std::atan(w * tau);
+  // placement on the bed is not known), only on the ring's start direction (+X). Its error: the
+  // ring's phase and the lines' tau, independent measurements.
+  const double lag = -camera.ring->phase_deg / kDeg - std::atan(w * tau);
   ring["theta_from_phase_s"] = lag / w;
+  ring["theta_from_phase_ci95_s"] =
+      normal_ci95(lag / w, std::hypot(camera.ring->phase_stderr_deg / kDeg, tau_phase_se) / w);
   camera.ring_predicted = true;
 }
 

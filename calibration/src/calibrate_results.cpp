@@ -14,6 +14,7 @@
 #include "calibrate_liquefier.hpp"
 #include "calibrate_plotdata.hpp"
 #include "calibrate_stages.hpp"
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/calibration/agreement.hpp"
 #include "tunekit/calibration/design_inputs.hpp"
@@ -28,7 +29,6 @@ namespace {
 namespace fs = std::filesystem;
 
 /// Two-sided 95 % quantile of the normal distribution: the advance's interval from its standard error.
-constexpr double kZ95 = 1.959963984540054;
 
 // What results.json and plotdata.json are assembled in.
 struct RunRecord {
@@ -45,9 +45,6 @@ struct RunRecord {
     if (!ci_path.empty()) r["ci_path"] = ci_path;
     else r["basis"] = basis;
     summary.push_back(r);
-  }
-  void plain_row(const std::string& label, const std::string& path, const std::string& unit) {
-    summary.push_back({{"label", label}, {"path", path}, {"unit", unit}});
   }
 };
 
@@ -102,12 +99,13 @@ void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widt
     r.row("width gain K (line widths)", p + "K.value", "1", p + "K.ci95");
   }
   if (cam.ring) {
-    r.plain_row("ring frequency", "liquefier.camera.ring.freq_hz", "Hz");
-    r.plain_row("ring gain (measured)", "liquefier.camera.ring.gain", "1");
-    r.plain_row("ring phase (measured)", "liquefier.camera.ring.phase_deg", "deg");
+    const std::string p = "liquefier.camera.ring.";
+    r.row("ring frequency", p + "freq_hz", "Hz", "", "set by the test (N v / (2 pi R))");
+    r.row("ring gain (measured)", p + "gain", "1", p + "gain_ci95");
+    r.row("ring phase (measured)", p + "phase_deg", "deg", p + "phase_ci95_deg");
     if (cam.ring_predicted) {
-      r.plain_row("ring phase (step model)", "liquefier.camera.ring.model_phase_deg", "deg");
-      r.plain_row("dead time from the ring's phase", "liquefier.camera.ring.theta_from_phase_s", "s");
+      r.row("ring phase (step model)", p + "model_phase_deg", "deg", p + "model_phase_ci95_deg");
+      r.row("dead time from the ring's phase", p + "theta_from_phase_s", "s", p + "theta_from_phase_ci95_s");
     }
   }
   for (const auto& w : cam.warnings) r.env.warn(w);

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/calibration/agreement.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
@@ -15,8 +16,6 @@
 
 namespace tunekit::calibration::export_design {
 namespace {
-
-constexpr double kZ95 = 1.959963984540054;  ///< two-sided 95 % quantile of the standard normal
 
 /// An estimate for the agreement rule: false when the value or its interval is not finite.
 bool estimate_of(const EstimatedValue& v, const std::string& method, Estimate& out) {
@@ -296,7 +295,7 @@ std::optional<std::pair<double, double>> advance_interval(const LiquefierInputs&
     if (tau > 0 && std::isfinite(li.tau_ci95_lo) && std::isfinite(li.tau_ci95_hi))
       return std::pair{k * li.tau_ci95_lo / tau, k * li.tau_ci95_hi / tau};
     if (!std::isfinite(design->k_stderr_s)) return std::nullopt;
-    return std::pair{k - kZ95 * design->k_stderr_s, k + kZ95 * design->k_stderr_s};
+    return std::pair{k - fitting::kZ95 * design->k_stderr_s, k + fitting::kZ95 * design->k_stderr_s};
   }
   const auto& flow = *outcome.flow;
   if (!std::isfinite(flow.k_design_lo_s) || !std::isfinite(flow.k_design_hi_s)) return std::nullopt;

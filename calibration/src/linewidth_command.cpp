@@ -17,6 +17,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "linewidth_profile_csv.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/linewidth_command.hpp"
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/core/error.hpp"
@@ -339,17 +340,10 @@ Envelope to_envelope(const LinewidthOutcome& o) {
   for (const auto& run : o.images)
     if (run.ring) {
       const auto& r = *run.ring;
-      results["ring"] = {{"image", run.path},
-                         {"line", r.feature + 1},
-                         {"freq_hz", r.freq_hz},
-                         {"gain", r.gain},
-                         {"phase_deg", r.phase_deg},
-                         {"samples", r.samples},
-                         {"radius_mm", r.radius_mm},
-                         {"measured_radius_mm", r.measured_radius_mm},
-                         {"centre_px", {r4(r.centre_px.x), r4(r.centre_px.y)}},
-                         {"setpoint_amplitude_mm", r.setpoint_amplitude_mm},
-                         {"width_amplitude_mm", r.width_amplitude_mm}};
+      results["ring"] = vision::to_json(r);
+      results["ring"]["image"] = run.path;
+      results["ring"]["line"] = r.feature + 1;
+      results["ring"]["centre_px"] = {r4(r.centre_px.x), r4(r.centre_px.y)};
       break;
     }
 
@@ -401,6 +395,15 @@ void print_text(const LinewidthOutcome& o, std::ostream& os) {
       os << fmt::format("{} line {}: width {:.4f} mm (std {:.4f} mm), {} of {} samples, length {:.2f} mm{}\n", run.path,
                         k + 1, r6(l.mean_width_px / ppm), r6(l.std_width_px / ppm), l.valid_samples, l.samples.size(),
                         r6(l.length_px / ppm), l.closed ? " (closed loop)" : "");
+    }
+  for (const auto& run : o.images)
+    if (run.ring) {
+      const auto& r = *run.ring;
+      os << fmt::format("{} ring (line {}) at {} Hz: gain {} {}, phase {} deg {}\n", run.path, r.feature + 1,
+                        display_number(r.freq_hz), display_number(r.gain),
+                        display_interval(r.gain_ci95[0], r.gain_ci95[1]), display_number(r.phase_deg),
+                        display_interval(r.phase_ci95_deg[0], r.phase_ci95_deg[1]));
+      break;
     }
   if (!o.profile_csv.is_null())
     os << fmt::format("profile written to {} ({} rows)\n", o.options.profile_csv,

@@ -1,4 +1,5 @@
 // The whole-record liquefier model as tunekit step and tunekit freq report it (whole_record.hpp).
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/calibration/whole_record.hpp"
 
 #include <cmath>
@@ -113,10 +114,9 @@ void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_c
                     m.model.reference_input, m.input_unit, ref.value, ref.ci95_lo, ref.ci95_hi);
   if (std::isfinite(u_compare) && u_compare > 0) {
     // Two-sided 95 % quantile of the normal distribution.
-    constexpr double kZ95 = 1.959963984540054;
     const double tau = m.tau_at(u_compare), se = m.tau_stderr_at(u_compare);
     os << fmt::format("    its tau at the record's mean input u = {:.4g} {}: {:.4g} s [{:.4g}, {:.4g}]\n", u_compare,
-                      m.input_unit, tau, tau - kZ95 * se, tau + kZ95 * se);
+                      m.input_unit, tau, tau - fitting::kZ95 * se, tau + fitting::kZ95 * se);
   }
   // The melt below the data, measured: what the advance's design starts from (docs/export.md).
   if (const auto& v = m.rest_volume) {

@@ -1,3 +1,4 @@
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/belt_tension.hpp"
 
 #include <cmath>
@@ -39,8 +40,8 @@ StringTension string_tension(double mu, double span_m, double span_se, double f,
   const double rel =
       2 * std::hypot(std::isfinite(f_se) ? f_se / f : 0.0, std::isfinite(span_se) ? span_se / span_m : 0.0);
   t.stderr_n = t.tension_n * rel;
-  t.ci95_lo = t.tension_n - 1.96 * t.stderr_n;
-  t.ci95_hi = t.tension_n + 1.96 * t.stderr_n;
+  t.ci95_lo = t.tension_n - fitting::kZ95 * t.stderr_n;
+  t.ci95_hi = t.tension_n + fitting::kZ95 * t.stderr_n;
   return t;
 }
 

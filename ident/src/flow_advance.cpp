@@ -1,3 +1,4 @@
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 
 #include <algorithm>
@@ -98,8 +99,7 @@ double fa_trend_volume_half_width(const FlowAdvanceInputs& in, double q0, double
   const double gb = dvdb(q1) - dvdb(q0);
   const double cov = fa_finite(c->cov_ln_tau_ref_b) ? c->cov_ln_tau_ref_b : 0.0;
   const double vb = fa_finite(c->var_b) ? c->var_b : 0.0;
-  constexpr double kZ95 = 1.959963984540054;
-  return kZ95 * std::sqrt(std::max(dv * dv * c->var_ln_tau_ref + 2 * dv * gb * cov + gb * gb * vb, 0.0));
+  return fitting::kZ95 * std::sqrt(std::max(dv * dv * c->var_ln_tau_ref + 2 * dv * gb * cov + gb * gb * vb, 0.0));
 }
 
 /// V(q) of a trend whose volume below the data is known; `which` -1 / +1 its 95 % bounds. With a

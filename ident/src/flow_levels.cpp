@@ -129,7 +129,7 @@ std::string pooled_whiteness_warning(const FitResult& pooled, const std::vector<
       const auto *q = find(*m, name), *qp = find(pooled, name);
       if (q == nullptr || qp == nullptr || !std::isfinite(q->std_error)) continue;
       const double margin = fitting::equivalence_margin(name).relative * std::abs(qp->value);
-      if (fitting::beyond_margin(q->value - qp->value, 1.96 * q->std_error, margin) > 0) beyond = true;
+      if (fitting::beyond_margin(q->value - qp->value, fitting::kZ95 * q->std_error, margin) > 0) beyond = true;
     }
   if (!beyond) return {};
   return fmt::format(

@@ -1,4 +1,5 @@
 // The whole-record liquefier model beside the per-step fits (liquefier_record.hpp).
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/liquefier_record.hpp"
 
 #include <algorithm>
@@ -66,7 +67,7 @@ void check_step(const WholeRecordModel& m, const fitting::LiquefierRecord& rec, 
   const double q = std::max(c.u_after, 1e-9);
   c.tau_model_stderr_s = c.tau_model_s * m.tau_stderr_at(q) / m.tau_at(q);
   const double comb = std::hypot(c.tau_step_stderr_s, c.tau_model_stderr_s);
-  c.disagrees = std::isfinite(comb) && std::abs(c.tau_step_s - c.tau_model_s) > 1.96 * comb;
+  c.disagrees = std::isfinite(comb) && std::abs(c.tau_step_s - c.tau_model_s) > fitting::kZ95 * comb;
   out.push_back(c);
 }
 
@@ -114,11 +115,10 @@ double log_stderr(const WholeRecordModel& m, double L) {
 template <class RelativeError>
 double widest_over_range(const WholeRecordModel& m, RelativeError rel_se) {
   // Two-sided 95 % quantile of the normal distribution.
-  constexpr double kZ95 = 1.959963984540054;
   if (!(m.input_min_positive > 0) || !(m.input_max >= m.input_min_positive)) return fitting::kNaN;
   double widest = 0;
   for (const double q : {m.input_min_positive, m.input_max}) {
-    const double rel = kZ95 * rel_se(q);
+    const double rel = fitting::kZ95 * rel_se(q);
     if (!std::isfinite(rel)) return fitting::kNaN;
     widest = std::max(widest, rel);
   }

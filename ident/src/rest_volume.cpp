@@ -1,4 +1,5 @@
 // The stored volume at a record's first level from its start-up transient (rest_volume.hpp).
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/rest_volume.hpp"
 
 #include <algorithm>
@@ -12,7 +13,6 @@ namespace tunekit::ident {
 namespace {
 
 // Two-sided 95 % quantile of the normal distribution: the area sums hundreds of samples.
-constexpr double kZ95 = 1.959963984540054;
 // Time constants of the first level waited after the store has reached it at its mean rate: the
 // transient left then is e^-10 (5e-5) of the level's volume, far below the area's noise.
 constexpr double kSettleTimeConstants = 10.0;
@@ -112,8 +112,8 @@ std::optional<RestVolume> measure_rest_volume(std::span<const double> t, std::sp
       for (std::size_t b = 0; b < 3; ++b)
         var += J[a] * J[b] * f.covariance[idx[a] * n + idx[b]] * m.model.variance_factor;
   v.std_error = std::sqrt(var);
-  v.ci95_lo = v.value - kZ95 * v.std_error;
-  v.ci95_hi = v.value + kZ95 * v.std_error;
+  v.ci95_lo = v.value - fitting::kZ95 * v.std_error;
+  v.ci95_hi = v.value + fitting::kZ95 * v.std_error;
   if (!(v.value > 0) || !std::isfinite(v.std_error))
     return refuse(why, "the start-up transient's area is not positive (the record's start is not a rise from rest)");
   return v;

@@ -17,6 +17,7 @@
 #include "synth_pluck.hpp"
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/belt_tension.hpp"
 #include "tunekit/ident/ringdown.hpp"
 
@@ -143,8 +144,8 @@ TEST_CASE(
     CHECK(t["value"].get<double>() == Approx(T).epsilon(1e-9));
     const double uT = T * 2 * std::hypot(uf / f, uL / L);
     CHECK(t["stderr"].get<double>() == Approx(uT).epsilon(1e-9));
-    CHECK(t["ci95"][0].get<double>() == Approx(T - 1.96 * uT).epsilon(1e-9));
-    CHECK(t["ci95"][1].get<double>() == Approx(T + 1.96 * uT).epsilon(1e-9));
+    CHECK(t["ci95"][0].get<double>() == Approx(T - tunekit::fitting::kZ95 * uT).epsilon(1e-9));
+    CHECK(t["ci95"][1].get<double>() == Approx(T + tunekit::fitting::kZ95 * uT).epsilon(1e-9));
     CHECK(t["unit"] == "N");
   }
   CHECK(res["belt"]["span_mm"].get<double>() == 150);

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/vision/image_io.hpp"
@@ -55,6 +56,22 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   CHECK(cam["ring"]["phase_deg"].get<double>() == Approx(cam["ring"]["model_phase_deg"].get<double>()).margin(15));
   CHECK(cam["ring"]["gain"].get<double>() == Approx(cam["ring"]["model_gain"].get<double>()).epsilon(0.25));
   CHECK(cam["ring"]["theta_from_phase_s"].get<double>() == Approx(theta).epsilon(0.5));
+  // Every measured ring quantity carries its 95 % interval, around its value; the dead time the
+  // ring's phase implies holds the simulator's.
+  for (const char* key : {"gain", "phase_deg", "model_phase_deg", "theta_from_phase_s"}) {
+    INFO(key);
+    const std::string ci = std::string(key) == "gain" ? "gain_ci95"
+                           : std::string(key) == "theta_from_phase_s"
+                               ? "theta_from_phase_ci95_s"
+                               : std::string(key).substr(0, std::string(key).size() - 4) + "_ci95_deg";
+    REQUIRE(cam["ring"].contains(ci));
+    const double v = cam["ring"][key].get<double>(), lo = cam["ring"][ci][0].get<double>(),
+                 hi = cam["ring"][ci][1].get<double>();
+    CHECK(lo < v);
+    CHECK(v < hi);
+  }
+  CHECK(cam["ring"]["theta_from_phase_ci95_s"][0].get<double>() <= theta);
+  CHECK(theta <= cam["ring"]["theta_from_phase_ci95_s"][1].get<double>());
   // The report shows the photo with the measured edges.
   const std::string html = read_file_bytes(dir + "/report.html");
   CHECK(tunekit::test::embedded_png_base64_length(html, "linewidth_overlay") > 10000);
@@ -182,6 +199,20 @@ TEST_CASE("tunekit linewidth on calibrate's camera photo gives calibrate's line 
   CHECK(a.at("freq_hz").get<double>() == Approx(b.at("freq_hz").get<double>()).epsilon(0.01));
   CHECK(a.at("gain").get<double>() == Approx(b.at("gain").get<double>()).epsilon(0.01));
   CHECK(a.at("phase_deg").get<double>() == Approx(b.at("phase_deg").get<double>()).epsilon(0.01));
+  // ... with the same intervals (one measurement, one JSON shape), printed with the text output.
+  for (const char* ci : {"gain_ci95", "phase_ci95_deg"})
+    for (int k = 0; k < 2; ++k) CHECK(a.at(ci)[k].get<double>() == Approx(b.at(ci)[k].get<double>()).epsilon(0.01));
+  const auto text = tunekit::test::run_cli(
+      {"linewidth", dir + "/liquefier-camera/photo.png", "--px-per-mm", num(cam.at("px_per_mm").get<double>()),
+       "--speed-mm-s", num(ring.at("speed_mm_s").get<double>()), "--ring-sines",
+       std::to_string(std::lround(ring.at("periods").get<double>())), "--ring-radius-mm",
+       num(ring.at("radius_mm").get<double>()), "--ring-flow-amplitude", num(ring.at("amplitude").get<double>()),
+       "--ring-segments", std::to_string(std::lround(ring.at("segments").get<double>())), "--setpoint-width-mm",
+       num(profile.print.line_width_mm)});
+  REQUIRE(text.code == 0);
+  CHECK(text.out.find("ring (line") != std::string::npos);
+  CHECK(text.out.find("gain " + tunekit::calibration::display_number(a.at("gain").get<double>()) + " [") !=
+        std::string::npos);
   // The line test's lines, top to bottom (print order): the same median width.
   std::vector<nlohmann::json> straight;
   for (const auto& l : res.at("lines"))
@@ -222,11 +253,20 @@ TEST_CASE("calibrate camera path: a blank photo or an unopenable camera is one c
 TEST_CASE("calibrate camera path off a terminal without a photo source exits 2 before anything is printed",
           "[calibrate]") {
   const std::string base = tunekit::test::scratch_dir("calibrate_camera_noterm");
-  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--px-per-mm", "12",
-                                         "--skip-axes", "--out", base + "/r"});
+  // A printer on a port (none answers there: the photo source is checked before it is opened).
+  const auto r = tunekit::test::run_cli({"calibrate", "--machine", base + "/no-such-port", "--profile",
+                                         tunekit::test::dataset("machines/sim.toml"), "--liquefier", "camera",
+                                         "--px-per-mm", "12", "--skip-axes", "--out", base + "/r"});
   CHECK(r.code == 2);
   CHECK(r.err.find("--photo") != std::string::npos);
   CHECK(!fs::exists(base + "/r"));
+  // The simulated printer photographs its own print unless another source is given.
+  const auto s = tunekit::test::run_cli(
+      {"calibrate", "--machine", "sim", "--liquefier", "camera", "--skip-axes", "--out", base + "/sim", "--json"});
+  INFO(s.err);
+  CHECK(s.code == 0);
+  CHECK(s.err.find("--photo") == std::string::npos);
+  CHECK(fs::exists(base + "/sim/liquefier-camera"));
   // --liquefier load-cell on a profile without one is refused the same way.
   std::string profile = read_file_bytes(tunekit::test::dataset("machines/sim.toml"));
   profile.replace(profile.find("load_cell = true"), 16, "load_cell = false");

@@ -7,6 +7,9 @@
 
 namespace tunekit::fitting {
 
+/// The two-sided 95 % quantile of the standard normal: a normal 95 % interval is value +- kZ95 stderr.
+inline constexpr double kZ95 = 1.959963984540054;
+
 /// Two-sided Student-t multiplier: the t value with `dof` degrees of freedom such that
 /// P(|T| <= t) = confidence. Falls back to the normal quantile for dof <= 0 or huge dof.
 double t_multiplier(double confidence, double dof);

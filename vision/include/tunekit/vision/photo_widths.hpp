@@ -16,10 +16,13 @@
 //                 thesis, University of Twente, 2019, section 4.3.3); gain and phase of the width
 //                 against the set-point at the ring's frequency f = N v / (2 pi R).
 
+#include <array>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include "tunekit/vision/camera_calibration.hpp"
@@ -118,6 +121,13 @@ struct LineTestResult {
 struct RingResult {
   std::size_t feature = 0;
   double freq_hz = 0, gain = 0, phase_deg = 0;  ///< width / set-point at f (phase < 0: lag)
+  /// Standard errors and 95 % intervals of gain and phase: from the sine fit's residuals, their
+  /// correlation along the ring included (the photo's noise; not a misplaced ring start, which
+  /// shifts the phase by the start's angle error times N).
+  double gain_stderr = std::numeric_limits<double>::quiet_NaN(),
+         phase_stderr_deg = std::numeric_limits<double>::quiet_NaN();
+  std::array<double, 2> gain_ci95{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()},
+      phase_ci95_deg{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   std::size_t samples = 0;
   double radius_mm = 0, measured_radius_mm = 0;
   cv::Point2d centre_px;
@@ -154,5 +164,10 @@ bool looks_like_ring(const MeasuredLine& feature);
 /// tests). Empty with a warning added when too few samples lie past the ring's start.
 std::optional<RingResult> measure_ring(const MeasuredLine& feature, double px_per_mm, const RingTest& ring,
                                        std::vector<std::string>& warnings);
+
+/// The ring's measurement as JSON, the same in every command that reports it: freq_hz, gain,
+/// gain_stderr, gain_ci95, phase_deg, phase_stderr_deg, phase_ci95_deg, samples, radius_mm,
+/// measured_radius_mm, setpoint_amplitude_mm, width_amplitude_mm.
+nlohmann::json to_json(const RingResult& r);
 
 }  // namespace tunekit::vision
