@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "export_design.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/design_inputs.hpp"
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/calibration/export_command.hpp"
@@ -426,7 +427,7 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
     if (design)
       ctx.err << fmt::format(
           "tunekit: advance K = {:.4g} s{} ({}) at {:.3g} mm^3/s{}\n", design->k_s,
-          o.pa_k_ci95 ? fmt::format(" [{:.4g}, {:.4g}] (95 %)", o.pa_k_ci95->first, o.pa_k_ci95->second)
+          o.pa_k_ci95 ? fmt::format(" {} (95 %)", display_interval(o.pa_k_ci95->first, o.pa_k_ci95->second))
                       : std::string(),
           design->k_source, design->design_flow_mm3_s,
           settings.pa_smooth_s ? fmt::format(", smoothing {:.4g} s", *settings.pa_smooth_s) : std::string());

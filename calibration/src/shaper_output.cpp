@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "resonance_json.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/shaper_command.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 
@@ -126,7 +127,11 @@ void print_text(const ShaperOutcome& o, std::ostream& os) {
     if (modes.empty()) os << "no mode identified\n";
     else {
       os << "modes";
-      for (const auto& m : modes) os << fmt::format("  {:.1f} Hz (zeta {:.3f})", m.freq_hz, m.zeta);
+      // Each mode with its 95 % intervals, as `tunekit resonance` and calibrate print them.
+      for (const auto& m : modes)
+        os << fmt::format("  {} Hz {} (zeta {} {})", display_number(m.freq_hz),
+                          display_interval(m.freq_ci95_lo, m.freq_ci95_hi), display_number(m.zeta),
+                          display_interval(m.zeta_ci95_lo, m.zeta_ci95_hi));
       os << "\n";
     }
     for (const auto& c : x.choice.candidates) {

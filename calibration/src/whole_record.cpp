@@ -1,4 +1,5 @@
 // The whole-record liquefier model as tunekit step and tunekit freq report it (whole_record.hpp).
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "tunekit/calibration/whole_record.hpp"
 
@@ -95,13 +96,12 @@ void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_c
   const auto& a = f.derived.front();
   const auto& b = f.param("b");
   const auto& th = f.param("theta_s");
-  os << fmt::format(
-      "  whole record: tau = a u^b, a = {:.4g} [{:.4g}, {:.4g}], b = {} , theta = {:.3g} s [{:.3g}, {:.3g}]; "
-      "{} sensor",
-      a.value, a.ci95_lo, a.ci95_hi,
-      b.fixed ? std::string("0 (linear: b's interval holds 0)")
-              : fmt::format("{:.3g} [{:.3g}, {:.3g}]", b.value, b.ci95_lo, b.ci95_hi),
-      th.value, th.ci95_lo, th.ci95_hi, fitting::to_string(m.model.sensor));
+  os << fmt::format("  whole record: tau = a u^b, a = {} {}, b = {}, theta = {} s {}; {} sensor",
+                    display_number(a.value), display_interval(a.ci95_lo, a.ci95_hi),
+                    b.fixed ? std::string("0 (linear: b's interval holds 0)")
+                            : display_number(b.value) + " " + display_interval(b.ci95_lo, b.ci95_hi),
+                    display_number(th.value), display_interval(th.ci95_lo, th.ci95_hi),
+                    fitting::to_string(m.model.sensor));
   if (!m.checks.empty()) {
     std::size_t bad = 0;
     for (const auto& c : m.checks) bad += c.disagrees;
@@ -110,13 +110,13 @@ void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_c
   os << "\n";
   // The model's tau where its interval is narrowest: the number calibrate's summary lists.
   const auto& ref = f.param("tau_ref_s");
-  os << fmt::format("    its tau at its reference input u = {:.4g} {}: {:.4g} s [{:.4g}, {:.4g}]\n",
-                    m.model.reference_input, m.input_unit, ref.value, ref.ci95_lo, ref.ci95_hi);
+  os << fmt::format("    its tau at its reference input u = {:.4g} {}: {} s {}\n", m.model.reference_input,
+                    m.input_unit, display_number(ref.value), display_interval(ref.ci95_lo, ref.ci95_hi));
   if (std::isfinite(u_compare) && u_compare > 0) {
     // Two-sided 95 % quantile of the normal distribution.
     const double tau = m.tau_at(u_compare), se = m.tau_stderr_at(u_compare);
-    os << fmt::format("    its tau at the record's mean input u = {:.4g} {}: {:.4g} s [{:.4g}, {:.4g}]\n", u_compare,
-                      m.input_unit, tau, tau - fitting::kZ95 * se, tau + fitting::kZ95 * se);
+    os << fmt::format("    its tau at the record's mean input u = {:.4g} {}: {} s {}\n", u_compare, m.input_unit,
+                      display_number(tau), display_interval(tau - fitting::kZ95 * se, tau + fitting::kZ95 * se));
   }
   // The melt below the data, measured: what the advance's design starts from (docs/export.md).
   if (const auto& v = m.rest_volume) {
@@ -124,9 +124,8 @@ void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_c
     const std::string& in = m.input_unit;
     const bool per_s = in.size() > 2 && in.compare(in.size() - 2, 2, "/s") == 0;
     const std::string volume = per_s ? in.substr(0, in.size() - 2) : in + ".s";
-    os << fmt::format(
-        "    stored at its first level u = {:.4g} {} (from the start-up transient): {:.4g} {} [{:.4g}, {:.4g}]\n",
-        v->input, in, v->value, volume, v->ci95_lo, v->ci95_hi);
+    os << fmt::format("    stored at its first level u = {:.4g} {} (from the start-up transient): {} {} {}\n", v->input,
+                      in, display_number(v->value), volume, display_interval(v->ci95_lo, v->ci95_hi));
   }
 }
 

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 
 using tunekit::test::dataset;
@@ -189,6 +190,12 @@ TEST_CASE("without --firmware, shaper recommends a shaper Klipper has, in Klippe
   REQUIRE(text.code == 0);
   CHECK(text.out.find("recommended: shaper_type_" + axis + " = " + type + " ") != std::string::npos);
   CHECK(text.out.find("assuming Klipper; --firmware marlin|rrf|kalico to choose") != std::string::npos);
+  // The dominant mode as the JSON gives it, with its 95 % intervals (as calibrate prints them).
+  const auto& m0 = a["modes"][0];
+  CHECK(text.out.find(
+            tunekit::calibration::display_number(m0["freq_hz"].get<double>()) + " Hz " +
+            tunekit::calibration::display_interval(m0["freq_ci95"][0].get<double>(), m0["freq_ci95"][1].get<double>()) +
+            " (zeta ") != std::string::npos);
 
   // The seven compared as asked: the winner Klipper lacks is named in no firmware's syntax.
   std::vector<std::string> args = {"shaper", dataset(file)};
