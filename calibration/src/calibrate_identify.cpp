@@ -37,13 +37,13 @@ RingModel ring_model(const StepOutcome& widths, const CalibrationPlan& plan, con
     if (prm.count("speed_mm_s") && prm.count("z_mm")) {
       const double feed =
           profile.print.line_width_mm * prm.at("z_mm") * prm.at("speed_mm_s") / profile.filament_area_mm2();
-      return {m->model.fit.value("g"), m->tau_at(feed), m->model.fit.value("theta_s"), m->tau_stderr_at(feed),
+      return {m->tau_at(feed), m->model.fit.value("theta_s"), m->tau_stderr_at(feed),
               m->model.fit.param("theta_s").std_error};
     }
   }
   const auto& pooled = widths.analysis.pooled;
   if (!pooled) return {};
-  return {pooled->value("K"), pooled->value("tau_s"), pooled->value("theta_s"), pooled->param("tau_s").std_error,
+  return {pooled->value("tau_s"), pooled->value("theta_s"), pooled->param("tau_s").std_error,
           pooled->param("theta_s").std_error};
 }
 

@@ -266,12 +266,14 @@ nlohmann::json normal_ci95(double value, double stderr_) {
 }  // namespace
 
 void add_ring_prediction(CameraAnalysis& camera, const RingModel& model) {
-  const double K = model.K, tau = model.tau_s;
+  const double tau = model.tau_s;
   double theta = model.theta_s;
   if (!camera.ring || !std::isfinite(tau)) return;
   const double w = 2 * std::numbers::pi * camera.ring->freq_hz;
   if (!std::isfinite(theta)) theta = 0;
-  const std::complex<double> G = K * std::exp(std::complex<double>(0, -w * theta)) / std::complex<double>(1, w * tau);
+  // The ring's gain is relative to the steady width (vision::RingResult), the model's likewise:
+  // its response at f over its steady gain K.
+  const std::complex<double> G = std::exp(std::complex<double>(0, -w * theta)) / std::complex<double>(1, w * tau);
   auto& ring = camera.results["ring"];
   constexpr double kDeg = 180 / std::numbers::pi;
   // d(-atan(w tau))/d tau = -w / (1 + (w tau)^2): tau's error as phase (rad).

@@ -66,11 +66,11 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
                                      const std::map<std::string, protocols::RunResult>& runs,
                                      const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx);
 
-/// The liquefier the ring's prediction is made with: gain, tau (s) at the ring's feed, dead time
-/// (s), and the standard errors of tau and theta (s; NaN: not known).
+/// The liquefier the ring's prediction is made with: tau (s) at the ring's feed, dead time (s),
+/// and their standard errors (s; NaN: not known). The prediction is relative to the steady gain,
+/// as the ring's measured gain is.
 struct RingModel {
-  double K = std::numeric_limits<double>::quiet_NaN(), tau_s = std::numeric_limits<double>::quiet_NaN(),
-         theta_s = std::numeric_limits<double>::quiet_NaN();
+  double tau_s = std::numeric_limits<double>::quiet_NaN(), theta_s = std::numeric_limits<double>::quiet_NaN();
   double tau_stderr_s = std::numeric_limits<double>::quiet_NaN(),
          theta_stderr_s = std::numeric_limits<double>::quiet_NaN();
 };

@@ -52,13 +52,14 @@ double aspect_wide(const cv::Rect& b) { return static_cast<double>(b.width) / st
 constexpr int kRingHarmonics = 4;
 
 // y ~ a0 + a1 t + sum_k c_k cos(k w t) + s_k sin(k w t): the complex amplitude c_1 - j s_1 at w,
-// and the covariance of its real and imaginary parts. The residuals (the photo's noise, the
-// bead's ripple) are correlated along the ring: the least-squares covariance is scaled by their
-// variance factor (fitting::residual_variance_factor, Bartlett 1935), and the degrees of freedom
-// are those of the effective number of independent samples.
+// the mean level a0 + a1 mean(t), and the covariance of (level, real, imaginary). The residuals
+// (the photo's noise, the bead's ripple) are correlated along the ring: the least-squares
+// covariance is scaled by their variance factor (fitting::residual_variance_factor, Bartlett
+// 1935), and the degrees of freedom are those of the effective number of independent samples.
 struct SineFit {
   std::complex<double> amplitude;
-  Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< of (real, imaginary)
+  double level = 0;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< of (level, real, imaginary)
   double dof = 0;
 };
 
@@ -67,8 +68,10 @@ SineFit sine_fit(const std::vector<double>& t, const std::vector<double>& y, dou
   constexpr Eigen::Index p = 2 + 2 * kRingHarmonics;
   Eigen::MatrixXd A(n, p);
   Eigen::VectorXd b(n);
+  double t_mean = 0;
   for (Eigen::Index r = 0; r < n; ++r) {
     const double ti = t[static_cast<std::size_t>(r)];
+    t_mean += ti / static_cast<double>(n);
     A(r, 0) = 1;
     A(r, 1) = ti;
     for (int k = 1; k <= kRingHarmonics; ++k) {
@@ -82,26 +85,38 @@ SineFit sine_fit(const std::vector<double>& t, const std::vector<double>& y, dou
   const std::vector<double> rv(res.data(), res.data() + n);
   const double factor = fitting::residual_variance_factor(rv);
   const Eigen::MatrixXd C = (res.squaredNorm() / static_cast<double>(n - p)) * factor * (A.transpose() * A).inverse();
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, p);  // (level, real, imaginary) from the coefficients
+  J(0, 0) = 1;
+  J(0, 1) = t_mean;
+  J(1, 2) = 1;
+  J(2, 3) = -1;
   SineFit f;
   f.amplitude = {x(2), -x(3)};
-  f.covariance << C(2, 2), -C(2, 3), -C(3, 2), C(3, 3);
+  f.level = x(0) + x(1) * t_mean;
+  f.covariance = J * C * J.transpose();
   f.dof = std::max(1.0, static_cast<double>(n) / factor - static_cast<double>(p));
   return f;
 }
 
-// Gain and phase of the measured sine over the set-point's, with their standard errors (the
-// delta method; the set-point is known exactly).
-void ring_gain_phase(const SineFit& m, std::complex<double> sp, RingResult& r) {
-  const std::complex<double> H = m.amplitude / sp;
+// The ring's gain is that of the width's relative modulation, amplitude over mean width, over the
+// set-point's: the response at f over the steady response. A photo's scale (px/mm from a
+// chessboard or a nominal width) and the extrusion multiplier both scale the mean width and the
+// amplitude alike, so they cancel from it; an absolute ratio would carry their per-cent errors,
+// which no interval from the photo's noise includes. The phase is the measured sine's less the
+// set-point's. Standard errors by the delta method (the set-point is known exactly).
+void ring_gain_phase(const SineFit& m, const SineFit& sp, RingResult& r) {
+  const std::complex<double> H = (m.amplitude / m.level) / (sp.amplitude / sp.level);
   r.gain = std::abs(H);
   r.phase_deg = std::arg(H) * 180 / std::numbers::pi;
   const double a = m.amplitude.real(), b = m.amplitude.imag(), mag2 = std::norm(m.amplitude);
-  const Eigen::Vector2d d_mag(a / std::sqrt(mag2), b / std::sqrt(mag2)), d_arg(-b / mag2, a / mag2);
-  r.gain_stderr = std::sqrt(d_mag.dot(m.covariance * d_mag)) / std::abs(sp);
+  // Gradients over (level, real, imaginary) of ln(gain) and of the phase (rad).
+  const Eigen::Vector3d d_ln_gain(-1 / m.level, a / mag2, b / mag2), d_arg(0, -b / mag2, a / mag2);
+  r.gain_stderr = r.gain * std::sqrt(d_ln_gain.dot(m.covariance * d_ln_gain));
   r.phase_stderr_deg = std::sqrt(d_arg.dot(m.covariance * d_arg)) * 180 / std::numbers::pi;
   const double k = fitting::t_multiplier(0.95, m.dof);
   r.gain_ci95 = {r.gain - k * r.gain_stderr, r.gain + k * r.gain_stderr};
   r.phase_ci95_deg = {r.phase_deg - k * r.phase_stderr_deg, r.phase_deg + k * r.phase_stderr_deg};
+  r.mean_width_mm = m.level;
 }
 
 // Valid samples of a straight line as (position on its path, width, confidence), by position.
@@ -255,12 +270,11 @@ std::optional<RingResult> measure_ring(const MeasuredLine& feature, double ppm, 
   std::vector<double> t, y, ysp;
   for (const auto& row : r.rows) t.push_back(row.t_s), y.push_back(row.width_mm), ysp.push_back(row.setpoint_mm);
   const double w = ring.sines * ring.speed_mm_s / r.radius_mm;
-  const auto m = sine_fit(t, y, w);
-  const auto sp = sine_fit(t, ysp, w).amplitude;
+  const auto m = sine_fit(t, y, w), sp = sine_fit(t, ysp, w);
   r.freq_hz = w / kTwoPi;
   ring_gain_phase(m, sp, r);
   r.samples = t.size();
-  r.setpoint_amplitude_mm = std::abs(sp);
+  r.setpoint_amplitude_mm = std::abs(sp.amplitude);
   r.width_amplitude_mm = std::abs(m.amplitude);
   r.skipped_start_rad = kRingSkipRad;
   return r;
@@ -277,6 +291,7 @@ nlohmann::json to_json(const RingResult& r) {
           {"samples", r.samples},
           {"radius_mm", r.radius_mm},
           {"measured_radius_mm", r.measured_radius_mm},
+          {"mean_width_mm", r.mean_width_mm},
           {"setpoint_amplitude_mm", r.setpoint_amplitude_mm},
           {"width_amplitude_mm", r.width_amplitude_mm}};
 }

@@ -120,7 +120,10 @@ struct LineTestResult {
 
 struct RingResult {
   std::size_t feature = 0;
-  double freq_hz = 0, gain = 0, phase_deg = 0;  ///< width / set-point at f (phase < 0: lag)
+  /// At f: the width's relative modulation (amplitude over mean width) over the set-point's, and
+  /// the width's phase less the set-point's (< 0: lag). Relative, so the photo's scale and the
+  /// extrusion multiplier cancel: 1 for a liquefier that follows the set-point at f.
+  double freq_hz = 0, gain = 0, phase_deg = 0;
   /// Standard errors and 95 % intervals of gain and phase: from the sine fit's residuals, their
   /// correlation along the ring included (the photo's noise; not a misplaced ring start, which
   /// shifts the phase by the start's angle error times N).
@@ -132,6 +135,7 @@ struct RingResult {
   double radius_mm = 0, measured_radius_mm = 0;
   cv::Point2d centre_px;
   double setpoint_amplitude_mm = 0, width_amplitude_mm = 0;
+  double mean_width_mm = 0;      ///< the fitted mean width over the samples
   double skipped_start_rad = 0;  ///< samples before this angle travelled are left out (still filling)
   /// The samples fitted, by time from theta = 0: s = theta R, the set-point at each.
   std::vector<TimedWidth> rows;
@@ -167,7 +171,7 @@ std::optional<RingResult> measure_ring(const MeasuredLine& feature, double px_pe
 
 /// The ring's measurement as JSON, the same in every command that reports it: freq_hz, gain,
 /// gain_stderr, gain_ci95, phase_deg, phase_stderr_deg, phase_ci95_deg, samples, radius_mm,
-/// measured_radius_mm, setpoint_amplitude_mm, width_amplitude_mm.
+/// measured_radius_mm, mean_width_mm, setpoint_amplitude_mm, width_amplitude_mm.
 nlohmann::json to_json(const RingResult& r);
 
 }  // namespace tunekit::vision
