@@ -78,6 +78,29 @@ void add_whole_record_rows(RunRecord& r, const ident::WholeRecordModel& m, const
         p + "model.params.g.value", m.model.fit.param("g").unit, p + "model.params.g.ci95");
 }
 
+// The camera path's two dead times: the line test's (its whole-record model's, else its pooled
+// fit's) and the one the ring's phase implies with the lines' tau, which does not depend on where
+// the photo places the lines on their paths (docs/calibrate.md). They differ when that placement is
+// off, or the ring's start direction.
+void add_camera_theta_agreement(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths) {
+  if (!cam.ring_predicted || !cam.results.contains("ring")) return;
+  const auto& ring = cam.results.at("ring");
+  const auto ci = ring.value("theta_from_phase_ci95_s", nlohmann::json());
+  if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number()) return;
+  const Estimate by_ring{"ring test's phase", ring.at("theta_from_phase_s").get<double>(), ci[0].get<double>(),
+                         ci[1].get<double>()};
+  const fitting::FitResult* lines_fit = widths.whole_record.model ? &widths.whole_record.model->model.fit
+                                        : widths.analysis.pooled  ? &*widths.analysis.pooled
+                                                                  : nullptr;
+  Estimate by_lines;
+  if (lines_fit == nullptr || !calibrate_estimate(lines_fit->param("theta_s"), "line test", by_lines)) return;
+  auto a =
+      compare_estimates("liquefier dead time theta", "s", by_lines, by_ring, fitting::equivalence_margin("theta_s"));
+  a["id"] = "theta";
+  if (!a.at("agree").get<bool>()) r.env.warn(a.at("statement").get<std::string>());
+  r.agreement.push_back(a);
+}
+
 void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths, double filament_area_mm2) {
   r.res()["liquefier"]["step"] = analysis_results(widths);
   r.res()["liquefier"]["camera"] = cam.results;
@@ -108,6 +131,7 @@ void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widt
       r.row("dead time from the ring's phase", p + "theta_from_phase_s", "s", p + "theta_from_phase_ci95_s");
     }
   }
+  add_camera_theta_agreement(r, cam, widths);
   for (const auto& w : cam.warnings) r.env.warn(w);
 }
 

@@ -72,6 +72,14 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   }
   CHECK(cam["ring"]["theta_from_phase_ci95_s"][0].get<double>() <= theta);
   CHECK(theta <= cam["ring"]["theta_from_phase_ci95_s"][1].get<double>());
+  // The two dead times, the lines' and the ring's, are compared (they differ only when the photo
+  // misplaces the lines or the ring's start).
+  const auto& agreement = res.at("agreement");
+  const auto theta_check = std::find_if(agreement.begin(), agreement.end(),
+                                        [](const nlohmann::json& x) { return x.value("id", "") == "theta"; });
+  REQUIRE(theta_check != agreement.end());
+  CHECK(theta_check->at("verdict") != "differ");
+  CHECK(theta_check->at("estimates")[1].at("value").get<double>() == cam["ring"]["theta_from_phase_s"].get<double>());
   // The report shows the photo with the measured edges.
   const std::string html = read_file_bytes(dir + "/report.html");
   CHECK(tunekit::test::embedded_png_base64_length(html, "linewidth_overlay") > 10000);
