@@ -106,6 +106,24 @@ TEST_CASE("calibrate --liquefier camera --camera sim recovers tau and theta from
   CHECK(k_ci[1].get<double>() == Approx(tau_ci[1].get<double>()).epsilon(1e-4));
 }
 
+TEST_CASE("calibrate camera path: the width record's model reads the width as the flow it is, on every seed",
+          "[calibrate]") {
+  // The line widths as delivered feed are the flow leaving the nozzle: the whole-record model's
+  // sensor is the flow, not chosen by the residuals. On the PEEK plant's seed 3 the residuals chose
+  // the pressure sensor: width gain 2.25 and tau 0.40 s [0.37, 0.44] for the plant's 0.45 s.
+  const std::string dir = tunekit::test::scratch_dir("calibrate_camera_sensor") + "/run";
+  const auto r = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--liquefier", "camera", "--skip-axes",
+                                         "--out", dir, "--json", "--sim", "preset=peek", "--sim", "seed=3"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto env = nlohmann::json::parse(r.out);
+  const auto& wr = env.at("results").at("liquefier").at("step").at("whole_record");
+  CHECK(wr.at("sensor") == "flow");
+  CHECK(wr.at("sensor_chosen_by") == "unit");
+  CHECK(wr.at("model").at("params").at("g").at("value").get<double>() == Approx(1.0).epsilon(0.05));
+  CHECK(wr.at("tau_ref_s").at("value").get<double>() == Approx(0.45).epsilon(0.05));
+}
+
 TEST_CASE(
     "calibrate's camera path on the default desktop printer: every step of every line, tau of the line test's flows",
     "[calibrate]") {
