@@ -46,9 +46,10 @@ constexpr std::size_t kMinRingSamples = 50;
 
 double aspect_wide(const cv::Rect& b) { return static_cast<double>(b.width) / std::max(1, b.height); }
 
-// The ring's harmonics fitted beside its fundamental: a liquefier whose time constant changes with
-// the flow answers a +-30 % sine with a few per cent at 2w and 3w. Fitted, they neither leak into
-// the fundamental over the ring's part turn nor count as noise in its interval.
+// The sines fitted to the ring: its fundamental and the next three harmonics (k w, k = 1..4). A
+// liquefier whose time constant changes with the flow answers a +-30 % sine with a few per cent at
+// 2w and 3w; fitted, they neither leak into the fundamental over the ring's part turn nor count as
+// noise in its interval.
 constexpr int kRingHarmonics = 4;
 
 // y ~ a0 + a1 t + sum_k c_k cos(k w t) + s_k sin(k w t): the complex amplitude c_1 - j s_1 at w,
