@@ -274,9 +274,7 @@ StepDesignInput step_design_input(const StepOutcome& o, const std::string& origi
     m.volume_rel_ci95 = wr->volume_relative_half_width_over_range();
     if (const auto& rv = wr->rest_volume)
       m.rest_volume = StepModelInput::RestVolume{rv->input, rv->value, rv->ci95_lo, rv->ci95_hi};
-    std::size_t disagreeing = 0;
-    for (const auto& c : wr->checks) disagreeing += c.disagrees;
-    if (model_agrees_with_steps(wr->checks.size(), disagreeing)) in.model = m;
+    if (!ident::step_checks_contradict_model(wr->checks)) in.model = m;
   }
   if (!levels_are_feed_or_flow(o.input_unit)) {
     in.model.reset();

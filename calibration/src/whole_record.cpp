@@ -1,6 +1,4 @@
 // The whole-record liquefier model as tunekit step and tunekit freq report it (whole_record.hpp).
-#include "tunekit/calibration/report.hpp"
-#include "tunekit/fitting/stats.hpp"
 #include "tunekit/calibration/whole_record.hpp"
 
 #include <cmath>
@@ -11,6 +9,8 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/liquefier_model.hpp"
+#include "tunekit/calibration/report.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::calibration {
 
@@ -107,11 +107,8 @@ void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_c
                             : display_number(b.value) + " " + display_interval(b.ci95_lo, b.ci95_hi),
                     display_number(th.value), display_interval(th.ci95_lo, th.ci95_hi),
                     fitting::to_string(m.model.sensor));
-  if (!m.checks.empty()) {
-    std::size_t bad = 0;
-    for (const auto& c : m.checks) bad += c.disagrees;
-    os << fmt::format("; {} of {} step fits disagree with it", bad, m.checks.size());
-  }
+  if (!m.checks.empty())
+    os << fmt::format("; {} of {} step fits disagree with it", ident::disagreeing_checks(m.checks), m.checks.size());
   os << "\n";
   // The model's tau where its interval is narrowest: the number calibrate's summary lists.
   const auto& ref = f.param("tau_ref_s");

@@ -1,4 +1,3 @@
-#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/belt_tension.hpp"
 
 #include <cmath>
@@ -7,6 +6,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/text.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::ident {
 

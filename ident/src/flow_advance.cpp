@@ -1,4 +1,3 @@
-#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/flow_advance.hpp"
 
 #include <algorithm>
@@ -9,6 +8,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/interpolate.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::ident {
 namespace {

@@ -1,5 +1,4 @@
 // The whole-record liquefier model beside the per-step fits (liquefier_record.hpp).
-#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/liquefier_record.hpp"
 
 #include <algorithm>
@@ -10,6 +9,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/first_order.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -75,6 +75,15 @@ void check_step(const WholeRecordModel& m, const fitting::LiquefierRecord& rec, 
 
 bool step_checks_contradict_model(std::size_t checks, std::size_t disagreeing) {
   return disagreeing > 0 && binomial_upper_tail(checks, disagreeing, 0.05) < 0.01;
+}
+
+std::size_t disagreeing_checks(const std::vector<StepModelCheck>& checks) {
+  return static_cast<std::size_t>(
+      std::count_if(checks.begin(), checks.end(), [](const StepModelCheck& c) { return c.disagrees; }));
+}
+
+bool step_checks_contradict_model(const std::vector<StepModelCheck>& checks) {
+  return step_checks_contradict_model(checks.size(), disagreeing_checks(checks));
 }
 
 fitting::LiquefierSensor sensor_for_output_unit(const std::string& unit) {
@@ -233,8 +242,7 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
     full.u = uv;
     for (std::size_t i = 0; i < steps->steps.size(); ++i)
       check_step(m, full, sim, steps->steps[i], steps->input_hold, i, m.checks);
-    std::size_t bad = 0;
-    for (const auto& c : m.checks) bad += c.disagrees;
+    const std::size_t bad = disagreeing_checks(m.checks);
     if (step_checks_contradict_model(m.checks.size(), bad))
       m.warnings.push_back(fmt::format(
           "{} of {} step fits disagree with the whole-record model's prediction for that step beyond their combined "

@@ -1,5 +1,4 @@
 // The stored volume at a record's first level from its start-up transient (rest_volume.hpp).
-#include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/rest_volume.hpp"
 
 #include <algorithm>
@@ -8,6 +7,7 @@
 #include <limits>
 
 #include "tunekit/ident/liquefier_record.hpp"
+#include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::ident {
 namespace {

@@ -48,6 +48,10 @@ struct StepModelCheck {
 /// explains, P(X >= disagreeing) < 1 % for X ~ Binomial(checks, 0.05). The step analysis warns by
 /// it and the advance's design sets the model aside by it.
 bool step_checks_contradict_model(std::size_t checks, std::size_t disagreeing);
+/// How many of a model's step checks disagree with it.
+std::size_t disagreeing_checks(const std::vector<StepModelCheck>& checks);
+/// The rule above applied to a model's own step checks.
+bool step_checks_contradict_model(const std::vector<StepModelCheck>& checks);
 
 struct WholeRecordModel {
   fitting::LiquefierModelFit model;
