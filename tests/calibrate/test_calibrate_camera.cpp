@@ -209,13 +209,25 @@ TEST_CASE("tunekit linewidth on calibrate's camera photo gives calibrate's line 
   // parameters, the profile's line width).
   const auto ring = tunekit::test::read_json(dir + "/liquefier-ring/run.json").at("experiment").at("params");
   const auto profile = tunekit::machine::load_machine_profile(tunekit::test::dataset("machines/sim.toml"));
-  const auto lw = tunekit::test::run_cli(
-      {"linewidth", dir + "/liquefier-camera/photo.png", "--px-per-mm", num(cam.at("px_per_mm").get<double>()),
-       "--speed-mm-s", num(ring.at("speed_mm_s").get<double>()), "--ring-sines",
-       std::to_string(std::lround(ring.at("periods").get<double>())), "--ring-radius-mm",
-       num(ring.at("radius_mm").get<double>()), "--ring-flow-amplitude", num(ring.at("amplitude").get<double>()),
-       "--ring-segments", std::to_string(std::lround(ring.at("segments").get<double>())), "--setpoint-width-mm",
-       num(profile.print.line_width_mm), "--json"});
+  const std::vector<std::string> args = {"linewidth",
+                                         dir + "/liquefier-camera/photo.png",
+                                         "--px-per-mm",
+                                         num(cam.at("px_per_mm").get<double>()),
+                                         "--speed-mm-s",
+                                         num(ring.at("speed_mm_s").get<double>()),
+                                         "--ring-sines",
+                                         std::to_string(std::lround(ring.at("periods").get<double>())),
+                                         "--ring-radius-mm",
+                                         num(ring.at("radius_mm").get<double>()),
+                                         "--ring-flow-amplitude",
+                                         num(ring.at("amplitude").get<double>()),
+                                         "--ring-segments",
+                                         std::to_string(std::lround(ring.at("segments").get<double>())),
+                                         "--setpoint-width-mm",
+                                         num(profile.print.line_width_mm)};
+  auto json_args = args;
+  json_args.push_back("--json");
+  const auto lw = tunekit::test::run_cli(json_args);
   INFO(lw.err);
   REQUIRE(lw.code == 0);
   const auto res = nlohmann::json::parse(lw.out).at("results");
@@ -228,13 +240,7 @@ TEST_CASE("tunekit linewidth on calibrate's camera photo gives calibrate's line 
   // ... with the same intervals (one measurement, one JSON shape), printed with the text output.
   for (const char* ci : {"gain_ci95", "phase_ci95_deg"})
     for (int k = 0; k < 2; ++k) CHECK(a.at(ci)[k].get<double>() == Approx(b.at(ci)[k].get<double>()).epsilon(0.01));
-  const auto text = tunekit::test::run_cli(
-      {"linewidth", dir + "/liquefier-camera/photo.png", "--px-per-mm", num(cam.at("px_per_mm").get<double>()),
-       "--speed-mm-s", num(ring.at("speed_mm_s").get<double>()), "--ring-sines",
-       std::to_string(std::lround(ring.at("periods").get<double>())), "--ring-radius-mm",
-       num(ring.at("radius_mm").get<double>()), "--ring-flow-amplitude", num(ring.at("amplitude").get<double>()),
-       "--ring-segments", std::to_string(std::lround(ring.at("segments").get<double>())), "--setpoint-width-mm",
-       num(profile.print.line_width_mm)});
+  const auto text = tunekit::test::run_cli(args);
   REQUIRE(text.code == 0);
   CHECK(text.out.find("ring (line") != std::string::npos);
   CHECK(text.out.find("gain " + tunekit::calibration::display_number(a.at("gain").get<double>()) + " [") !=
