@@ -40,11 +40,7 @@ WholeRecordResult fit_whole_record(std::span<const double> t, std::span<const do
   std::string basis = "unit";
   const auto by_unit = ident::sensor_for_output_unit(output_unit);
   bool refused = false;  // the record cannot carry the model (too short, an input below zero, ...)
-  // An output measured as a flow (a feed or a volumetric flow: the camera's delivered feed, a
-  // bead's width times its speed) is the flow leaving the nozzle by what it is: only a force or a
-  // pressure leaves the sensor to the record (a load cell reads the pressure, or the flow where
-  // the melt's force follows it).
-  const bool output_is_flow = output_unit == "mm/s" || output_unit == "mm^3/s";
+  const bool output_is_flow = ident::output_is_flow(output_unit);  // the sensor is not the record's to choose
   const auto sensor = steps != nullptr && !output_is_flow ? ident::sensor_for_record(*steps, by_unit, &basis) : by_unit;
   try {
     r.model = ident::analyze_whole_record(t, u, y, sensor, input_unit, output_unit, steps, fo, track);

@@ -92,6 +92,8 @@ fitting::LiquefierSensor sensor_for_output_unit(const std::string& unit) {
   return fitting::LiquefierSensor::flow;
 }
 
+bool output_is_flow(const std::string& unit) { return unit == "mm/s" || unit == "mm^3/s"; }
+
 fitting::LiquefierSensor sensor_for_record(const StepAnalysis& steps, fitting::LiquefierSensor by_unit,
                                            std::string* basis) {
   if (basis != nullptr) *basis = "unit";

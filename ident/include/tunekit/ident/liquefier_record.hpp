@@ -24,6 +24,12 @@ namespace tunekit::ident {
 /// anything else (a flow, a line width) the outflow.
 fitting::LiquefierSensor sensor_for_output_unit(const std::string& unit);
 
+/// An output in a flow's unit (mm/s of filament feed, mm^3/s: a camera's delivered feed, a bead's
+/// width times its speed) is the flow leaving the nozzle by what it is: its sensor is not for the
+/// record to choose (a force or a pressure is the stored volume, or the flow where the melt's
+/// force follows it, and the record decides).
+bool output_is_flow(const std::string& unit);
+
 /// What the output senses, read from the operating points when they show it: a sensor of the
 /// stored volume (pressure, V = a q^(b+1)/(b+1)) has a step gain that follows tau, K(u) = g tau(u),
 /// a sensor of the outflow a gain that does not depend on u. When tau's trend exponent is
