@@ -42,6 +42,25 @@ double sim_cam_bar(double half, double d, double s) {
   return std::max(0.0, sim_cam_edge(half - d, s) + sim_cam_edge(half + d, s) - 1.0);
 }
 
+// The joint between two consecutive pieces of one bead: the line through their common point
+// that halves the angle between them, given by its unit normal (the mean of the two pieces'
+// directions, in image px; image y runs along -Y). Each piece covers the pixels between its two
+// joint lines, so the pieces of a curved bead tile it: a piece bounded square to its own
+// direction would leave a wedge uncovered on the outside of the curve and cover one twice on the
+// inside (the bead's outer half rendered dimmer by d / R, d px from the centreline on a ring of
+// R px). `a`, `b`: the two pieces' directions on the bed (mm); `ux`, `uy`: the piece's own
+// direction in image px, the normal of a square end, which a turn of 90 deg or more keeps (the
+// joint line would run nearly along the pieces).
+constexpr double kSimCamMiterMinCos = 0.0;
+std::array<double, 2> sim_cam_miter(const std::array<double, 2>& a, const std::array<double, 2>& b, double ux,
+                                    double uy) {
+  const double la = std::hypot(a[0], a[1]), lb = std::hypot(b[0], b[1]);
+  if (!(la > 0) || !(lb > 0) || !(a[0] * b[0] + a[1] * b[1] > kSimCamMiterMinCos * la * lb)) return {ux, uy};
+  const double mx = a[0] / la + b[0] / lb, my = -(a[1] / la + b[1] / lb);
+  const double m = std::hypot(mx, my);
+  return m > 1e-9 ? std::array<double, 2>{mx / m, my / m} : std::array<double, 2>{ux, uy};
+}
+
 }  // namespace
 
 void SimPrintBed::deposit(double /*t_s*/, const std::array<double, 4>& pos, double speed, double flow) {
@@ -115,11 +134,13 @@ cv::Mat SimPrintBed::photograph(const SimCameraOptions& o, SimCameraFrame* frame
   // Gaussian of sigma blur_px), then integrated over the pixel's area. Blurring after sampling
   // (a pixel grid of sharp coverage, then a discrete blur) is not the same picture: its edges move
   // by up to 0.04 px with where they fall between pixel centres. Each piece covers the stretch of
-  // the pixel along the bead that it spans (pieces of one continuous bead add up, so the bead's
-  // width changes where the flow changed, not a round cap early); the first and the last piece of
-  // a bead end in a round cap.
+  // the pixel along the bead between its joint lines (sim_cam_miter; pieces of one continuous bead
+  // add up, so the bead's width changes where the flow changed, not a round cap early, and a
+  // curved bead is as bright on the outside of the curve as on the inside); the first and the last
+  // piece of a bead end in a round cap.
   cv::Mat body(H, W, CV_32F, cv::Scalar(0)), caps(H, W, CV_32F, cv::Scalar(0));
   const double reach = 0.5 + kSimCamBlurReach * o.blur_px;
+  auto direction = [](const Piece& q) { return std::array<double, 2>{q.x1 - q.x0, q.y1 - q.y0}; };
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     const Piece& p = pieces[i];
     const bool cap0 = i == 0 || pieces[i - 1].x1 != p.x0 || pieces[i - 1].y1 != p.y0;
@@ -127,6 +148,10 @@ cv::Mat SimPrintBed::photograph(const SimCameraOptions& o, SimCameraFrame* frame
     const double ax = (p.x0 - x0) * ppm, ay = (y1 - p.y0) * ppm, bx = (p.x1 - x0) * ppm, by = (y1 - p.y1) * ppm;
     const double len = std::hypot(bx - ax, by - ay);
     const double ux = len > 0 ? (bx - ax) / len : 1.0, uy = len > 0 ? (by - ay) / len : 0.0;
+    const auto n0 =
+        cap0 ? std::array<double, 2>{ux, uy} : sim_cam_miter(direction(pieces[i - 1]), direction(p), ux, uy);
+    const auto n1 =
+        cap1 ? std::array<double, 2>{ux, uy} : sim_cam_miter(direction(p), direction(pieces[i + 1]), ux, uy);
     const double half = p.width_mm * ppm / 2;
     const int u0 = std::max(0, static_cast<int>(std::floor(std::min(ax, bx) - half - reach)));
     const int u1 = std::min(W - 1, static_cast<int>(std::ceil(std::max(ax, bx) + half + reach)));
@@ -138,7 +163,9 @@ cv::Mat SimPrintBed::photograph(const SimCameraOptions& o, SimCameraFrame* frame
       for (int u = u0; u <= u1; ++u) {
         const double rx = u + 0.5 - ax, ry = v + 0.5 - ay;
         const double t = rx * ux + ry * uy, d = std::abs(ry * ux - rx * uy);
-        const double overlap = std::clamp(std::min(t + 0.5, len) - std::max(t - 0.5, 0.0), 0.0, 1.0);
+        // The share of the pixel between the piece's two joint lines (along the bead).
+        const double s0 = rx * n0[0] + ry * n0[1], s1 = (u + 0.5 - bx) * n1[0] + (v + 0.5 - by) * n1[1];
+        const double overlap = std::max(0.0, std::clamp(s0 + 0.5, 0.0, 1.0) + std::clamp(0.5 - s1, 0.0, 1.0) - 1.0);
         if (overlap > 0) brow[u] += static_cast<float>(overlap * sim_cam_bar(half, d, o.blur_px));
         if ((cap0 && t < 0) || (cap1 && t > len)) {
           const double c = sim_cam_bar(half, sim_cam_segment_distance(u + 0.5, v + 0.5, ax, ay, bx, by), o.blur_px);
