@@ -352,13 +352,16 @@ nlohmann::json design_advance(const ExportOptions& a, LiquefierInputs& li, Expor
   // power-law trend when the step analysis gave one).
   design->k_s = flow.k_design_s;
   if (std::isfinite(flow.low_flow_share)) {
-    // The operating points' note holds tau below the lowest level; the trend follows its power law.
+    // The operating points' note holds tau below the lowest level; the flow design says what it did
+    // there (ident::design_flow_advance's notes): measured from a start at rest, or bounded.
     std::erase_if(design->notes, [](const std::string& n) { return n.rfind("K at each flow is", 0) == 0; });
     design->notes.push_back(fmt::format(
         "K at each flow is the stored melt volume over the flow (the integral of tau over 0..Q, divided by Q), not "
-        "tau at that flow; {:.0f} % of it at the design flow lies below the lowest identified flow, where tau follows "
-        "the fitted power law (the interval's lower end holds tau there)",
-        100 * flow.low_flow_share));
+        "tau at that flow; {:.0f} % of it at the design flow lies below the lowest identified flow, {}",
+        100 * flow.low_flow_share,
+        fin.low_volume ? "measured from the record's start at rest"
+                       : "bounded by tau held there and the fitted power law followed to zero flow (K is the middle "
+                         "of the two, its interval spans both)"));
   }
   for (auto& s : design->schedule) s.k_s = ident::needed_advance_s(fin, s.flow_mm3_s);
   if (outcome.firmware == firmware::ExportFirmware::kalico) settings.kalico = kalico_setting(flow);

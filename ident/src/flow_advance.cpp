@@ -327,6 +327,24 @@ void fa_note_low_flow(const FlowAdvanceInputs& in, FlowAdvanceDesign& d) {
       100 * d.low_flow_share, q0, d.k_design_lo_s, d.k_design_hi_s));
 }
 
+/// A design flow outside the identified flows. Above them a power-law trend (the whole-record
+/// model's tau ~ Q^b) carries tau on, and its band is the law's own: said as a note. Without a
+/// trend tau is held at the nearest level, which a liquefier whose tau falls with the flow does
+/// not do: a warning.
+void fa_note_design_flow_range(const FlowAdvanceInputs& in, FlowAdvanceDesign& d) {
+  const double qd = d.design_flow_mm3_s;
+  if (qd >= d.flow_min_mm3_s && qd <= d.flow_max_mm3_s) return;
+  const std::string where =
+      fmt::format("design flow {:.3g} mm^3/s lies {} the identified flows {:.3g}-{:.3g} mm^3/s", qd,
+                  qd > d.flow_max_mm3_s ? "above" : "below", d.flow_min_mm3_s, d.flow_max_mm3_s);
+  if (fa_trend_usable(in) && qd > d.flow_max_mm3_s)
+    d.notes.push_back(fmt::format(
+        "{}: tau there follows the power law tau ~ Q^{:.3g} fitted to the record beyond it (its band assumes the "
+        "law holds there); a test at the design flow would measure it",
+        where, in.trend->b));
+  else if (!fa_trend_usable(in)) d.warnings.push_back(where + ": tau is held at the nearest level there");
+}
+
 }  // namespace
 
 FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
@@ -354,11 +372,7 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   if (!fa_finite(in.design_flow_mm3_s))
     d.notes.push_back(fmt::format("no design flow given: the geometric middle of the identified range, {:.3g} mm^3/s",
                                   d.design_flow_mm3_s));
-  if (d.design_flow_mm3_s < d.flow_min_mm3_s || d.design_flow_mm3_s > d.flow_max_mm3_s)
-    d.warnings.push_back(
-        fmt::format("design flow {:.3g} mm^3/s lies outside the identified flows {:.3g}-{:.3g} mm^3/s: "
-                    "tau is held at the nearest level there",
-                    d.design_flow_mm3_s, d.flow_min_mm3_s, d.flow_max_mm3_s));
+  fa_note_design_flow_range(in, d);
   d.k_design_s = needed_advance_s(in, d.design_flow_mm3_s);
   d.k_design_lo_s = needed_advance_s(in, d.design_flow_mm3_s, -1);
   d.k_design_hi_s = needed_advance_s(in, d.design_flow_mm3_s, +1);

@@ -134,6 +134,21 @@ TEST_CASE(
   REQUIRE(r.code == 0);
   const auto env = nlohmann::json::parse(r.out);
   const auto& res = env.at("results");
+  // The simulator's own clean run warns of nothing. The line test's flows lie below the design
+  // flow: tau there follows the record's power law, a note (it warned "tau is held at the nearest
+  // level there", which the design did not do), and the melt below the line test's flows is
+  // bounded, as the design's note says (it said "tau follows the fitted power law" there).
+  CHECK(env.at("warnings").empty());
+  const auto& comp = res.at("compensators");
+  auto has_note = [](const nlohmann::json& notes, const std::string& a, const std::string& b) {
+    return std::any_of(notes.begin(), notes.end(), [&](const nlohmann::json& n) {
+      const auto t = n.get<std::string>();
+      return t.find(a) != std::string::npos && t.find(b) != std::string::npos;
+    });
+  };
+  CHECK(has_note(comp.at("flow_advance").at("notes"), "lies above the identified flows", "follows the power law"));
+  CHECK(has_note(comp.at("design").at("notes"), "K at each flow is", "bounded by tau held there"));
+  CHECK_FALSE(has_note(comp.at("design").at("notes"), "K at each flow is", "where tau follows the fitted power law"));
   // Both flow changes of each of the 3 lines are in the measured widths (a wide stretch taken for
   // two merged beads would drop the high-flow part and its falling step).
   const auto& step = res.at("liquefier").at("step");
