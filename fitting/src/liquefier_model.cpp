@@ -261,16 +261,19 @@ std::vector<double> residuals_at(ModelProblem& mp, const FitResult& f) {
   return r;
 }
 
-/// Widens the Wald intervals by sqrt(f) and adds a.
-void finish_intervals(FitResult& f, double q_ref, double factor, double confidence, const std::string& input_unit) {
+/// Widens the Wald intervals by sqrt(f), ends them at the parameters' domain (a dead time that
+/// ended at 0 has no interval below it) and adds a.
+void finish_intervals(FitResult& f, const std::vector<ParamSpec>& specs, double q_ref, double factor, double confidence,
+                      const std::string& input_unit) {
   const int dof = f.diagnostics.num_observations - f.diagnostics.num_parameters;
   const double tq = t_multiplier(confidence, dof);
   const double w = std::sqrt(factor);
-  for (auto& p : f.params) {
+  for (std::size_t j = 0; j < f.params.size(); ++j) {
+    auto& p = f.params[j];
     if (p.fixed) continue;
     p.std_error *= w;
-    p.ci95_lo = p.value - tq * p.std_error;
-    p.ci95_hi = p.value + tq * p.std_error;
+    p.ci95_lo = std::max(p.value - tq * p.std_error, specs[j].lower);
+    p.ci95_hi = std::min(p.value + tq * p.std_error, specs[j].upper);
     p.ci95_method = "wald";
   }
   // a = tau_ref Q_ref^-b; ln a = ln tau_ref - b ln Q_ref (delta method in ln).
@@ -475,7 +478,7 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   out.substeps = full.substeps;
   if (!o.fit_b) {
     out.variance_factor = residual_variance_factor(residuals_at(full, nl));
-    finish_intervals(nl, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
+    finish_intervals(nl, full.lsq.params, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
     if (o.profile) out.profile_solves += profile(full, nl, out.variance_factor, o.confidence);
     out.linear_chosen = true;
     out.fit = out.nonlinear = nl;
@@ -483,7 +486,7 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   }
   out.variance_factor = residual_variance_factor(residuals_at(full, nl));
   const FitResult nl_raw = nl;
-  finish_intervals(nl, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
+  finish_intervals(nl, full.lsq.params, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
   if (o.profile) out.profile_solves += profile(full, nl, out.variance_factor, o.confidence);
 
   // The linear model: b held at 0, refitted; the F-test of b = 0 at the confidence level.
@@ -504,7 +507,7 @@ LiquefierModelFit fit_liquefier_model(const LiquefierRecord& rec, const Liquefie
   out.linear_chosen = out.f_statistic <= out.f_threshold;
   out.nonlinear = nl;
   if (out.linear_chosen) {
-    finish_intervals(lin, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
+    finish_intervals(lin, full.lsq.params, out.reference_input, out.variance_factor, o.confidence, rec.input_unit);
     if (o.profile) out.profile_solves += profile(full, lin, out.variance_factor, o.confidence);
     out.fit = lin;
   } else {

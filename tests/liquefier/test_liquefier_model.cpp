@@ -287,3 +287,22 @@ TEST_CASE("a record that cannot carry the model is refused with a plain reason")
   r.input_u.pop_back();
   CHECK_THROWS_WITH(fitting::fit_liquefier_model(r), Catch::Contains("differ in length"));
 }
+
+TEST_CASE("a dead time that ends at its bound 0 has no interval below 0") {
+  // The response leads its commanded input by 10 ms (a photo placed 0.2 mm off at 20 mm/s does
+  // that): the best dead time is 0, at its bound. Its interval was value +- t s, half of it
+  // negative; every interval now ends at its parameter's domain.
+  StoreTruth tr;
+  tr.theta_s = 0;
+  auto s = synth_store(tr, 100.0, 40.0, 0.002, 43);
+  for (double& ti : s.rec.input_t) ti += 0.010;
+  fitting::LiquefierFitOptions o;
+  o.profile = false;  // the Wald intervals alone (the profile's end at a bound is its own)
+  const auto m = fitting::fit_liquefier_model(s.rec, o);
+  const auto& theta = m.fit.param("theta_s");
+  INFO("theta " << theta.value << " [" << theta.ci95_lo << ", " << theta.ci95_hi << "]");
+  CHECK(theta.value < 1e-6);
+  CHECK(theta.ci95_lo >= 0);
+  CHECK(theta.ci95_hi > theta.value);
+  CHECK(m.fit.param("tau_ref_s").ci95_lo > 0);
+}

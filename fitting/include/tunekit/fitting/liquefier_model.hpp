@@ -29,7 +29,8 @@
 // thinned record, then the whole record.
 //
 // Intervals: profile likelihood for b and theta (profile_likelihood.hpp), linearised (Wald) for
-// tau_ref, g, c, V0 and a. Every interval is widened by the variance factor
+// tau_ref, g, c, V0 and a; a Wald interval ends at its parameter's domain (a dead time that ended
+// at 0 is reported [0, hi], not +- around 0). Every interval is widened by the variance factor
 // f = 1 + 2 sum_k rho_k of the residuals' autocorrelation (the sum over the lags up to the first
 // non-positive rho_k; f >= 1, about 1 for white residuals): correlated residuals (a model that
 // misses some dynamics, steps caught between samples) leave about n / f independent residuals,
