@@ -39,6 +39,9 @@ namespace fs = std::filesystem;
 // attenuated width swing stays well above the measurement noise.
 constexpr double kRingAmplitude = 0.3;
 constexpr double kRingPeriods = 6;
+// The line test's longest lead-in, and the room it leaves at each end of the X travel (line_lead_mm).
+constexpr double kLineLeadMaxMm = 90;
+constexpr double kLineClearMm = 10;
 // Averages `frames` frames of a camera after `settle_s`, through the tunekit-capture helper
 // (the only program linked with OpenCV's videoio, so that `tunekit` itself starts fast).
 std::string capture_from_device(const LiquefierCameraArgs& a, const std::string& out_png) {
@@ -145,8 +148,32 @@ void check_photo_source(const LiquefierCameraArgs& a, bool sim_machine, bool can
         "give --photo FILE, --camera-device DEVICE (or --camera sim with --machine sim)");
 }
 
-std::vector<CameraTest> camera_tests() {
-  return {{"liquefier-lines", "line-steps", {}},
+namespace {
+
+double protocol_default(const std::string& protocol, const std::string& param) {
+  for (const auto& q : protocols::protocol_spec(protocol).params)
+    if (q.name == param) return q.default_value;
+  throw std::logic_error(protocol + " has no parameter " + param);
+}
+
+// The line test's lead-in (line-steps lead_mm) as long as the X travel takes, up to 90 mm. The
+// photo's record keeps only its last 15 mm (the restart after the travel and the prime is left
+// out, vision's photo_tests), so the lead sets how far a restart's transient has decayed by then:
+// 75 mm at 20 mm/s is 3.75 s, 8 time constants of a slow (PEEK-like, 0.45 s) liquefier. The
+// protocol's 45 mm left 1.5 s, 3.3 of them: on the simulated PEEK printer the width still stood
+// 3 % above its level where the record started, on every line, which read tau 3.5 % low and the
+// width gain 0.98 with an interval that excluded 1.
+double line_lead_mm(const machine::MachineProfile& profile) {
+  const auto& x = profile.axis("x");
+  const double rest = protocol_default("line-steps", "step_mm") + protocol_default("line-steps", "tail_mm");
+  return std::clamp(x.max_mm - x.min_mm - rest - 2 * kLineClearMm, protocol_default("line-steps", "lead_mm"),
+                    kLineLeadMaxMm);
+}
+
+}  // namespace
+
+std::vector<CameraTest> camera_tests(const machine::MachineProfile& profile) {
+  return {{"liquefier-lines", "line-steps", {{"lead_mm", line_lead_mm(profile)}}},
           {"liquefier-ring", "ring-print", {{"amplitude", kRingAmplitude}, {"periods", kRingPeriods}}}};
 }
 

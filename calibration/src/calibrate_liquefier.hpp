@@ -45,7 +45,8 @@ struct CameraTest {
   std::string protocol;
   std::map<std::string, double> params;
 };
-std::vector<CameraTest> camera_tests();
+/// The line test's lead-in is as long as the profile's X travel takes (up to 90 mm; see line_lead_mm).
+std::vector<CameraTest> camera_tests(const machine::MachineProfile& profile);
 
 struct CameraAnalysis {                    // declared in calibration_pipeline.hpp
   std::string photo;                       ///< the photo used (in the run directory)

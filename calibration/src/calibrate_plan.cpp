@@ -44,7 +44,7 @@ std::vector<PlannedExperiment> choose_experiments(const CalibrateArgs& a, const 
     exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}, 0});
   }
   if (camera_path)
-    for (const auto& t : camera_tests()) exps.push_back({t.name, t.protocol, "", t.params, 0});
+    for (const auto& t : camera_tests(p.profile)) exps.push_back({t.name, t.protocol, "", t.params, 0});
   if (!a.skip_axes) {
     if (!p.profile.sensors.accelerometer)
       throw InputError("the axis sweeps need an accelerometer ([sensors] accelerometer = true)", p.path);

@@ -28,10 +28,17 @@ constexpr double kRingMaxAspect = 3;
 // Where the camera's placement is unknown, the line is placed by its far end, whose bead width
 // is read over the last 5 mm (several bead widths: a stable median, yet short of the step).
 constexpr double kEndWindowMm = 5;
-// The first two thirds of each line's lead-in are left out: there the nozzle is still filling
-// after the travel move (a start from empty, not the step under test); the rest is the settled
-// level before the step.
-constexpr double kLeadSkip = 2.0 / 3.0;
+// Each line's lead-in is left out but for its last third, at most its last 15 mm: before that
+// the nozzle is still recovering from the travel move and the prime (a restart, not the step under
+// test); the rest is the settled level before the step (15 mm: 0.75 s and 180 samples at the line
+// test's 20 mm/s and 12 px/mm). A longer lead-in (calibrate prints 90 mm) gives a slow liquefier
+// more time to settle, not more record.
+constexpr double kLeadKeptFraction = 1.0 / 3.0;
+constexpr double kLeadKeptMaxMm = 15;
+// Each line's last 5 mm are left out too: there the nozzle stops (v^2 / 2a = 0.2 mm at the line
+// test's 20 mm/s and 1000 mm/s^2) while the melt still flows, and the bead ends in its cap; the
+// width read there is the stop, not the level (0.6 % wide over the last 5 mm of a 195 mm line).
+constexpr double kLineEndSkipMm = 5;
 // Fewer samples on the path than this (a few mm at 12 px/mm) cannot show a step response.
 constexpr std::size_t kMinLineSamples = 20;
 // Ring samples before this angle (rad) are left out: the liquefier is still filling after the
@@ -135,12 +142,14 @@ PathSamples on_path(const MeasuredLine& ml, const TestLine& tl, double ppm, cons
   for (const auto& s : ml.samples)
     if (s.valid() && s.x_px > x_end_px + 0.5 - kEndWindowMm * ppm) end_widths.push_back(s.width_px);
   const double w_end_px = fitting::median(end_widths);
+  const double lead = tl.path.front().length_mm;
+  const double lead_skip = lead - std::min(kLeadKeptFraction * lead, kLeadKeptMaxMm);
   std::vector<std::array<double, 3>> rows;
   for (const auto& s : ml.samples) {
     if (!s.valid()) continue;
     const double pos = placement.known ? placement.x0_mm + (s.x_px + 0.5) / ppm - tl.x0_mm
                                        : length - (x_end_px - s.x_px - w_end_px / 2) / ppm;
-    if (pos < kLeadSkip * tl.path.front().length_mm || pos > length) continue;
+    if (pos < lead_skip || pos > length - kLineEndSkipMm) continue;
     rows.push_back({pos, s.width_px / ppm, s.confidence});
   }
   std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
