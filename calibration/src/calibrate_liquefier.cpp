@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iostream>
 #include <numbers>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
