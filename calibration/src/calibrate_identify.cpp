@@ -58,6 +58,7 @@ void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Id
   // record in the load-cell path's unit, so its model designs the advance the same way.
   so.input_column = "feed";
   so.output_column = "delivered_feed";
+  so.feed_track = cam.feed_track_csv;
   so.analysis.model = fitting::StepModel::fopdt;  // `tunekit step`'s default model
   id.step = calibrate_analysis("step", [&] { return compute_step(so); });
   const std::string out = plan.run_dir + "/analysis/step.json";
@@ -65,9 +66,11 @@ void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Id
   id.inputs.push_back(cam.width_csv);
   id.inputs.push_back(cam.photo);
   id.export_inputs.push_back(out);
-  id.reproduce.push_back(columns_command("step",
-                                         "the liquefier's step responses in the printed line widths: tau, K, theta",
-                                         cam.width_csv, "feed", "delivered_feed", plan.run_dir));
+  Reproduction r = columns_command("step", "the liquefier's step responses in the printed line widths: tau, K, theta",
+                                   cam.width_csv, "feed", "delivered_feed", plan.run_dir);
+  r.args.insert(r.args.end(), {"--feed-track", relative_to(cam.feed_track_csv, plan.run_dir)});
+  id.inputs.push_back(cam.feed_track_csv);
+  id.reproduce.push_back(std::move(r));
   add_ring_prediction(*id.camera, ring_model(*id.step, plan, runs));
 }
 

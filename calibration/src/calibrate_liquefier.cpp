@@ -18,6 +18,7 @@
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
+#include "tunekit/ident/feed_track.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/vision/line_width.hpp"
 #include "tunekit/vision/photo_widths.hpp"
@@ -43,6 +44,8 @@ constexpr double kRingPeriods = 6;
 // The line test's longest lead-in, and the room it leaves at each end of the X travel (line_lead_mm).
 constexpr double kLineLeadMaxMm = 90;
 constexpr double kLineClearMm = 10;
+// The width record lays the lines end to end, each 1 s after the one before.
+constexpr double kLineGapS = 1.0;
 // Averages `frames` frames of a camera after `settle_s`, through the tunekit-capture helper
 // (the only program linked with OpenCV's videoio, so that `tunekit` itself starts fast).
 std::string capture_from_device(const LiquefierCameraArgs& a, const std::string& out_png) {
@@ -166,9 +169,49 @@ double protocol_default(const std::string& protocol, const std::string& param) {
 // width gain 0.98 with an interval that excluded 1.
 double line_lead_mm(const machine::MachineProfile& profile) {
   const auto& x = profile.axis("x");
-  const double rest = protocol_default("line-steps", "step_mm") + protocol_default("line-steps", "tail_mm");
+  const double rest = protocol_default("line-steps", "step_mm") + protocol_default("line-steps", "tail_mm") +
+                      protocol_default("line-steps", "rest_mm");
   return std::clamp(x.max_mm - x.min_mm - rest - 2 * kLineClearMm, protocol_default("line-steps", "lead_mm"),
                     kLineLeadMaxMm);
+}
+
+// The length along a line one width sample averages (mm): its pixel and `along_half_px` pixels
+// (rounded) on each side (line_edge_profile's measure_station; the start's integrated widths alike).
+double sample_averaged_mm(const vision::LineWidthOptions& o, double px_per_mm) {
+  return (2.0 * std::max(0L, std::lround(o.along_half_px)) + 1) / px_per_mm;
+}
+
+// The line test's commanded feed in the width record's time (line k's path from t_k, the lines
+// laid end to end 1 s apart as in the record) as the photo's width samples see it: constant over
+// each segment, each change spread linearly over the length a width sample averages (its pixel
+// and one on each side along the line: 3 px). A model driven by the sharp step reads the samples'
+// smoothing as a slower liquefier with a shorter dead time (theta 0.45 half-widths short over 40
+// seeds of the simulated camera). The step analysis drives its whole-record model by it, and a
+// line that starts from rest (a run-up without extrusion) gives the instant its feed begins, for
+// the melt stored at its first level. Between lines the feed is held at the level the next line
+// starts at.
+ident::FeedTrack line_test_feed_track(const std::vector<protocols::PrintedLine>& layout, double line_gap_s,
+                                      double averaged_mm) {
+  ident::FeedTrack k;
+  double t = 0;
+  for (const auto& line : layout) {
+    double prev = std::nan("");
+    for (const auto& sg : line.path) {
+      const double dt = sg.length_mm / sg.speed_mm_s, rate = dt > 0 ? sg.feed_mm / dt : 0.0;
+      const double half = 0.5 * averaged_mm / sg.speed_mm_s;
+      if (std::isnan(prev)) {
+        k.t.push_back(t), k.u.push_back(rate);
+      } else if (rate != prev) {
+        k.t.insert(k.t.end(), {t - half, t + half});
+        k.u.insert(k.u.end(), {prev, rate});
+      }
+      prev = rate;
+      t += dt;
+    }
+    k.t.push_back(t), k.u.push_back(prev);
+    t += line_gap_s;
+  }
+  return k;
 }
 
 }  // namespace
@@ -258,9 +301,14 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
                           {"mean_width_mm", lt.mean_width_mm},
                           {"median_width_mm", lt.median_width_mm},
                           {"placement", lt.placed_by_camera ? "camera frame" : "line end"}});
-    t_offset += layout[k].length_mm() / v_line + 1.0;
+    t_offset += layout[k].length_mm() / v_line + kLineGapS;
   }
   out.width_csv = dir + "/line_widths.csv";
+  // Beside the record, where `tunekit step` finds it.
+  out.feed_track_csv = dir + "/feed_track.csv";
+  core::write_file_atomic(out.feed_track_csv,
+                          ident::feed_track_csv(line_test_feed_track(
+                              layout, kLineGapS, sample_averaged_mm(vision::LineWidthOptions{}, pw.scale.px_per_mm))));
   core::write_file_atomic(
       out.width_csv, vision::timed_width_csv(rows, "widths along the line test (t = s / v per line, lines 1 s apart)"));
 

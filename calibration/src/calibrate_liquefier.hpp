@@ -52,6 +52,7 @@ struct CameraAnalysis {                    // declared in calibration_pipeline.h
   std::string photo;                       ///< the photo used (in the run directory)
   std::string overlay;                     ///< the photo with the measured edges (PNG, in the run directory)
   std::string width_csv;                   ///< time, setpoint width, width of the line test (for `tunekit step`)
+  std::string feed_track_csv;              ///< the line test's commanded feed in the record's time, beside it
   nlohmann::json results;                  ///< lines, ring (gain and phase), warnings
   std::optional<vision::RingResult> ring;  ///< the ring's gain and phase, when the photo shows it
   bool ring_predicted = false;             ///< the step model's prediction was added (add_ring_prediction)

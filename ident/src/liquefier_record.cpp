@@ -34,6 +34,15 @@ nlohmann::json param_json(const fitting::Param& p) {
           {"ci95_method", p.fixed ? std::string("fixed") : p.ci95_method}};
 }
 
+// A step from no feed: the liquefier filling from rest, through flows below every level, where a
+// melt's viscosity levels off and the model's power law does not follow it. The model is fitted
+// from the first step between two flows on; the filling is measured by its area instead
+// (rest_volume.hpp).
+constexpr double kRestInputShare = 0.02;
+bool rises_from_rest(const StepFit& s) {
+  return std::abs(s.step.u_before) <= kRestInputShare * std::abs(s.step.u_after);
+}
+
 /// The model's response over one step's window, fitted as the step was (driven by the same
 /// recorded input).
 void check_step(const WholeRecordModel& m, const fitting::LiquefierRecord& rec, const std::vector<double>& sim,
@@ -221,7 +230,8 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
   m.output_unit = output_unit;
   if (steps != nullptr && !steps->steps.empty()) {
     std::size_t first = t.size();
-    for (const auto& s : steps->steps) first = std::min(first, s.step.begin);
+    for (const auto& s : steps->steps)
+      if (!rises_from_rest(s)) first = std::min(first, s.step.begin);
     m.first_sample = first < t.size() ? first : 0;
   }
   fitting::LiquefierRecord rec = whole_record_input(t, u, y, m.first_sample, track, m);
@@ -243,7 +253,8 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
     full.t = tv;
     full.u = uv;
     for (std::size_t i = 0; i < steps->steps.size(); ++i)
-      check_step(m, full, sim, steps->steps[i], steps->input_hold, i, m.checks);
+      if (steps->steps[i].step.begin >= m.first_sample)
+        check_step(m, full, sim, steps->steps[i], steps->input_hold, i, m.checks);
     const std::size_t bad = disagreeing_checks(m.checks);
     if (step_checks_contradict_model(m.checks.size(), bad))
       m.warnings.push_back(fmt::format(

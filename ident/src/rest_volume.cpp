@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "tunekit/ident/liquefier_record.hpp"
 #include "tunekit/fitting/stats.hpp"
@@ -20,6 +21,13 @@ constexpr double kSettleTimeConstants = 10.0;
 // three standard errors of zero, or within this share of the first level (a load cell's offset
 // drifts by a few mN between a tare and a run).
 constexpr double kRestShare = 0.02;
+// The start of a record may be measured less precisely than the rest (a camera's line test: where
+// the bead is thin or not yet there its width is the integrated contrast, several times noisier
+// than the edge fit that takes over at 80 % of the line's width): up to the first sample at 80 %
+// of the first level, the noise is that of the samples at rest, when there are at least 20 of
+// them, with their own correlation's variance factor.
+constexpr double kStartShare = 0.8;
+constexpr std::size_t kMinRestSamples = 20;
 // Parameter order of the whole-record fit (fitting/liquefier_model.hpp): tau_ref_s, b, theta_s, g, c, V0.
 constexpr std::size_t kTheta = 2, kGain = 3, kOffset = 4;
 
@@ -55,6 +63,20 @@ std::optional<FirstLevel> first_level(const FeedTrack& k) {
   return std::nullopt;
 }
 
+// The noise (output unit, variance factor included) of the samples at rest before the first feed
+// arrives; `s` (the model's) when there are too few of them.
+double start_noise(std::span<const double> t, std::span<const double> y, const FirstLevel& level, double theta,
+                   double c, double s) {
+  std::vector<double> r;
+  for (std::size_t i = 0; i < t.size() && t[i] < level.t_on + theta; ++i) r.push_back(y[i] - c);
+  if (r.size() < kMinRestSamples) return s;
+  double mean = 0;
+  for (double v : r) mean += v / static_cast<double>(r.size());
+  double ss = 0;
+  for (double& v : r) v -= mean, ss += v * v;
+  return std::sqrt(ss / static_cast<double>(r.size() - 1) * fitting::residual_variance_factor(r));
+}
+
 }  // namespace
 
 std::optional<RestVolume> measure_rest_volume(std::span<const double> t, std::span<const double> y,
@@ -88,14 +110,17 @@ std::optional<RestVolume> measure_rest_volume(std::span<const double> t, std::sp
   RestVolume v;
   v.input = u1;
   const std::vector<double> edges = sample_window_edges(t);
-  double out = 0, width_sq = 0;
+  double out = 0, width_sq = 0, start_width_sq = 0;
   std::size_t i = 0;
+  bool rising = true;
   for (; i < t.size() && t[i] <= t_settle; ++i) {
-    const double w = edges[i + 1] - edges[i];
-    out += (y[i] - c) / g * w;
-    width_sq += w * w;
+    const double w = edges[i + 1] - edges[i], q = (y[i] - c) / g;
+    out += q * w;
+    rising = rising && !(q >= kStartShare * u1);
+    (rising ? start_width_sq : width_sq) += w * w;
   }
   v.samples = i;
+  const double s_start = start_noise(t, y, *level, theta, c, s);
   v.window_begin_s = edges.front();
   v.window_end_s = edges[i];
   const double fed = feed_track_integral(m.input_track, v.window_end_s - theta) -
@@ -106,7 +131,7 @@ std::optional<RestVolume> measure_rest_volume(std::span<const double> t, std::sp
   const std::array<double, 3> J{-u1, out / g, (v.window_end_s - v.window_begin_s) / g};
   const std::array<std::size_t, 3> idx{kTheta, kGain, kOffset};
   const std::size_t n = f.params.size();
-  double var = s * s * width_sq / (g * g);
+  double var = (s * s * width_sq + s_start * s_start * start_width_sq) / (g * g);
   if (f.covariance.size() == n * n)
     for (std::size_t a = 0; a < 3; ++a)
       for (std::size_t b = 0; b < 3; ++b)

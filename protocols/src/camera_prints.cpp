@@ -51,6 +51,8 @@ std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& 
                     "photo takes a line that much wider for two merged beads)",
                     hi, lo, kMaxLineStepRatio));
   const double spacing = line_steps_param(p, "spacing_mm");
+  // The first line's run-up (no extrusion, at the line's speed): 0 leaves it out.
+  const double runup = p.count("rest_mm") ? std::max(0.0, p.at("rest_mm")) : 0.0;
   const int n = std::max(1, static_cast<int>(std::lround(line_steps_param(p, "lines"))));
   const double e_per_mm = profile.line_area_mm2() / profile.filament_area_mm2();
   const double total = lead + step + tail;
@@ -63,8 +65,12 @@ std::vector<PrintedLine> line_steps_layout(const std::map<std::string, double>& 
   std::vector<PrintedLine> out;
   for (int k = 0; k < n; ++k) {
     PrintedLine l;
-    l.x0_mm = cx - total / 2;
+    l.x0_mm = cx - (total - runup) / 2;  // the lines and the first one's run-up centred together
     l.y_mm = y0 - k * spacing;
+    if (k == 0 && runup > 0) {
+      l.x0_mm -= runup;
+      l.path.push_back({runup, v, 0.0});
+    }
     for (const auto& [len, flow] : {std::pair{lead, lo}, std::pair{step, hi}, std::pair{tail, lo}})
       l.path.push_back({len, v, e_per_mm * len * flow});
     out.push_back(l);
@@ -85,9 +91,9 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
       fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1));
   const std::string prime_line =
       fmt::format("G1 E{} F{} ; prime", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1));
+  const auto& last = lines.back().path;  // without the first line's run-up
   g.push_back(fmt::format("; {} lines along +X, flow steps at {} mm and {} mm", lines.size(),
-                          line_steps_num(lines[0].path[0].length_mm),
-                          line_steps_num(lines[0].path[0].length_mm + lines[0].path[1].length_mm)));
+                          line_steps_num(last[0].length_mm), line_steps_num(last[0].length_mm + last[1].length_mm)));
   g.push_back("G28");
   g.push_back("G90");
   g.push_back("M83 ; relative extrusion");
@@ -100,13 +106,24 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
   // prime only restores it (a prime without one would push retract_mm of filament, about 20 mm of
   // line's worth at the defaults, out as a blob at the first line's start).
   if (retract > 0) g.push_back(retract_line);
+  const double dwell = p.count("rest_dwell_s") ? std::max(0.0, p.at("rest_dwell_s")) : 0.0;
   for (const auto& l : lines) {
     g.push_back(
         fmt::format("G1 X{} Y{} F{}", line_steps_num(l.x0_mm), line_steps_num(l.y_mm), line_steps_num(travel * 60, 1)));
     if (retract > 0) g.push_back(prime_line);
+    // A line that begins with a run-up starts from rest: the melt the prime pushed oozes out at
+    // the run-up's start while the nozzle waits, and the extrusion then starts at the line's
+    // speed, so the width rises from zero (the filling the record measures the stored melt by).
+    const bool from_rest = !l.path.empty() && l.path.front().feed_mm == 0;
+    if (from_rest && dwell > 0)
+      g.push_back(fmt::format("G4 P{} ; wait for the melt to come to rest", std::lround(dwell * 1000)));
     double x = l.x0_mm;
     for (const auto& s : l.path) {
       x += s.length_mm;
+      if (s.feed_mm == 0) {
+        g.push_back(fmt::format("G1 X{} F{} ; run-up", line_steps_num(x), line_steps_num(s.speed_mm_s * 60, 1)));
+        continue;
+      }
       g.push_back(fmt::format("G1 X{} E{} F{}", line_steps_num(x), line_steps_num(s.feed_mm, 5),
                               line_steps_num(s.speed_mm_s * 60, 1)));
     }

@@ -165,6 +165,12 @@ void add_print_specs(std::vector<ProtocolSpec>& s) {
                  ParamDomain::any, kMaxLengthMm},
                 {"z_mm", 0.2, "mm", "layer height / nozzle height"},
                 {"retract_mm", 0.8, "mm", "retraction after each line (primed again before the next)"},
+                {"rest_mm", 10, "mm",
+                 "run-up without extrusion before the first line, which then starts from rest (its width rises from "
+                 "zero: the melt stored at the low flow); 0: none",
+                 ParamDomain::non_negative, kMaxLengthMm},
+                {"rest_dwell_s", 10, "s", "wait before the run-up while the primed melt comes to rest",
+                 ParamDomain::non_negative, kMaxTimeS},
                 {"accel_mm_s2", 1000, "mm/s^2", "print acceleration"},
                 hotend},
                {},

@@ -4,9 +4,11 @@
 // of Twente, 2019, section 4.3.3).
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <string>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -39,6 +41,9 @@ constexpr double kLeadKeptMaxMm = 15;
 // test's 20 mm/s and 1000 mm/s^2) while the melt still flows, and the bead ends in its cap; the
 // width read there is the stop, not the level (0.6 % wide over the last 5 mm of a 195 mm line).
 constexpr double kLineEndSkipMm = 5;
+// A line that starts from rest keeps its run-up from half-way on: the first half holds the nozzle's
+// start and, on a printer, the ooze of the wait before it at the run-up's start.
+constexpr double kRunupKeptFrom = 0.5;
 // Fewer samples on the path than this (a few mm at 12 px/mm) cannot show a step response.
 constexpr std::size_t kMinLineSamples = 20;
 // Ring samples before this angle (rad) are left out: the liquefier is still filling after the
@@ -132,26 +137,77 @@ struct PathSamples {
   std::vector<double> s, w, c;
 };
 
-PathSamples on_path(const MeasuredLine& ml, const TestLine& tl, double ppm, const BedPlacement& placement) {
+// Where a photo column lies on a line's path (mm from the path's start) and back: by the camera's
+// placement, or without it by the line's far end (the nozzle stopped at the path's end, the bead
+// ends half a width beyond it).
+struct PathPlacement {
+  bool by_camera = false;
+  double a = 0, ppm = 1;  ///< pos = a + x_px / ppm
+  double pos(double x_px) const { return a + x_px / ppm; }
+  double x_px(double pos_mm) const { return (pos_mm - a) * ppm; }
+};
+
+PathPlacement path_placement(const MeasuredLine& ml, const TestLine& tl, double ppm, const BedPlacement& placement) {
+  PathPlacement p;
+  p.ppm = ppm;
+  p.by_camera = placement.known;
+  if (placement.known) {
+    p.a = placement.x0_mm + 0.5 / ppm - tl.x0_mm;
+    return p;
+  }
   double length = 0;
   for (const auto& sg : tl.path) length += sg.length_mm;
-  // Without the camera's placement: the nozzle stopped at the path's end, the bead ends half a
-  // width beyond it.
   const double x_end_px = ml.bbox.x + ml.bbox.width - 0.5;
   std::vector<double> end_widths;
   for (const auto& s : ml.samples)
     if (s.valid() && s.x_px > x_end_px + 0.5 - kEndWindowMm * ppm) end_widths.push_back(s.width_px);
   const double w_end_px = fitting::median(end_widths);
-  const double lead = tl.path.front().length_mm;
-  const double lead_skip = lead - std::min(kLeadKeptFraction * lead, kLeadKeptMaxMm);
+  p.a = length - (x_end_px - w_end_px / 2) / ppm;
+  return p;
+}
+
+// A line whose path begins with a run-up (no extrusion) starts from rest: its record keeps the
+// run-up's second half (the first holds the nozzle's start and, on a printer, the ooze of the
+// wait before it) and the whole lead-in, the thin start measured by its integrated contrast
+// (start_widths). Returns false (and why) when the start cannot be measured.
+bool from_rest_samples(const cv::Mat& img, const MeasuredLine& ml, const TestLine& tl, const PathPlacement& pp,
+                       std::vector<std::array<double, 3>>& rows, std::string& why) {
+  const double runup = tl.path.front().length_mm;
+  const double keep_from = kRunupKeptFrom * runup;
+  const auto start = detail::start_widths(img, ml, pp.ppm, pp.x_px(keep_from), &why);
+  if (!start) return false;
+  std::vector<double> conf;
+  for (const auto& s : ml.samples)
+    if (s.valid()) conf.push_back(s.confidence);
+  const double c = fitting::median(conf);
+  for (std::size_t i = 0; i < start->x_px.size(); ++i)
+    rows.push_back({pp.pos(start->x_px[i]), start->width_px[i] / pp.ppm, c});
+  for (const auto& s : ml.samples)
+    if (s.valid() && s.x_px >= start->edge_fit_from_px && pp.pos(s.x_px) >= keep_from)
+      rows.push_back({pp.pos(s.x_px), s.width_px / pp.ppm, s.confidence});
+  return true;
+}
+
+PathSamples on_path(const cv::Mat& img, const MeasuredLine& ml, const TestLine& tl, double ppm,
+                    const BedPlacement& placement, std::vector<std::string>& warnings, std::size_t k) {
+  double length = 0;
+  for (const auto& sg : tl.path) length += sg.length_mm;
+  const PathPlacement pp = path_placement(ml, tl, ppm, placement);
+  const bool runup = tl.path.size() > 1 && tl.path.front().feed_mm == 0;
   std::vector<std::array<double, 3>> rows;
-  for (const auto& s : ml.samples) {
-    if (!s.valid()) continue;
-    const double pos = placement.known ? placement.x0_mm + (s.x_px + 0.5) / ppm - tl.x0_mm
-                                       : length - (x_end_px - s.x_px - w_end_px / 2) / ppm;
-    if (pos < lead_skip || pos > length - kLineEndSkipMm) continue;
-    rows.push_back({pos, s.width_px / ppm, s.confidence});
+  std::string why;
+  if (!(runup && from_rest_samples(img, ml, tl, pp, rows, why))) {
+    if (runup)
+      warnings.push_back(
+          fmt::format("line {}: its start from rest was not measured ({}); its lead-in is left out", k + 1, why));
+    rows.clear();
+    const double before = runup ? tl.path.front().length_mm : 0.0;
+    const double lead = tl.path[runup ? 1 : 0].length_mm;
+    const double lead_skip = before + lead - std::min(kLeadKeptFraction * lead, kLeadKeptMaxMm);
+    for (const auto& s : ml.samples)
+      if (s.valid() && pp.pos(s.x_px) >= lead_skip) rows.push_back({pp.pos(s.x_px), s.width_px / ppm, s.confidence});
   }
+  std::erase_if(rows, [&](const auto& r) { return r[0] > length - kLineEndSkipMm; });
   std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
   PathSamples out;
   for (const auto& r : rows) out.s.push_back(r[0]), out.w.push_back(r[1]), out.c.push_back(r[2]);
@@ -196,7 +252,7 @@ void measure_line_test(PhotoWidths& out, const LineTest& test, const BedPlacemen
                     test.lines.size(), std::min(straight.size(), test.lines.size())));
   for (std::size_t k = 0; k < std::min(straight.size(), test.lines.size()); ++k) {
     const auto& ml = out.features.lines[straight[k]];
-    const auto ps = on_path(ml, test.lines[k], ppm, placement);
+    const auto ps = on_path(out.measured, ml, test.lines[k], ppm, placement, out.warnings, k);
     if (ps.s.size() < kMinLineSamples) {
       out.warnings.push_back(fmt::format("line {}: too few measured samples on the path", k + 1));
       continue;

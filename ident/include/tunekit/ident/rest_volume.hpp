@@ -45,7 +45,10 @@ struct RestVolume {
 /// reason in `why` (may be null): a pressure sensor (it reads V itself), no commanded feed track
 /// (a step known only to a sample interval moves the area by up to u1 times that interval), a
 /// feed already on when the track begins, a record that does not start at rest, or a first level
-/// too short to settle within it (theta + the model's V(u1)/u1 + 10 tau(u1)).
+/// too short to settle within it (theta + the model's V(u1)/u1 + 10 tau(u1)). The interval sums
+/// the noise over the window: the model's residual noise, and up to the first sample at 80 % of
+/// u1 that of the samples at rest when it has at least 20 (a start measured less precisely than
+/// the rest of the record, as a camera's thin bead).
 std::optional<RestVolume> measure_rest_volume(std::span<const double> t, std::span<const double> y,
                                               const WholeRecordModel& m, std::string* why = nullptr);
 
