@@ -196,8 +196,11 @@ PathSamples on_path(const cv::Mat& img, const MeasuredLine& ml, const TestLine& 
   const bool runup = tl.path.size() > 1 && tl.path.front().feed_mm == 0;
   std::vector<std::array<double, 3>> rows;
   std::string why;
-  if (!(runup && from_rest_samples(img, ml, tl, pp, rows, why))) {
-    if (runup)
+  // Placed by its far end, a line's position along its path is known only to about the dead time
+  // times the speed (the bead's end is where the melt stopped, not the nozzle), and the area of a
+  // start from rest moves by the level times that time: its start is then left out like a restart.
+  if (!(runup && pp.by_camera && from_rest_samples(img, ml, tl, pp, rows, why))) {
+    if (runup && pp.by_camera)
       warnings.push_back(
           fmt::format("line {}: its start from rest was not measured ({}); its lead-in is left out", k + 1, why));
     rows.clear();
