@@ -257,15 +257,6 @@ BarFit fit_bar(const std::vector<double>& p, double u0, double w_guess, const st
   return f;
 }
 
-inline float bilinear(const cv::Mat& img, double x, double y) {
-  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-  const double fx = x - x0, fy = y - y0;
-  const float* r0 = img.ptr<float>(y0);
-  const float* r1 = img.ptr<float>(std::min(y0 + 1, img.rows - 1));
-  const int x1 = std::min(x0 + 1, img.cols - 1);
-  return static_cast<float>((1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x1]));
-}
-
 }  // namespace
 
 std::vector<Station> stations_from(const std::vector<Pt>& p, bool closed) {

@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 
+#include "line_width_stages.hpp"
 #include "photo_widths_stages.hpp"
 #include "tunekit/fitting/stats.hpp"
 
@@ -48,17 +49,10 @@ constexpr double kContrastWindowMm = 30;
 // Fewer columns than this over the contrast window are not a calibration.
 constexpr std::size_t kMinContrastColumns = 10;
 
-// Bilinear sample of a CV_32F image (clamped to its border).
+// The image at (x, y) px, clamped to its border (the bed bands of a line near the frame's edge).
 double at(const cv::Mat& img, double x, double y) {
-  const double xc = std::clamp(x, 0.0, img.cols - 1.0), yc = std::clamp(y, 0.0, img.rows - 1.0);
-  const int x0 = std::max(0, std::min(static_cast<int>(xc), img.cols - 2));
-  const int y0 = std::max(0, std::min(static_cast<int>(yc), img.rows - 2));
-  const int x1 = std::min(x0 + 1, img.cols - 1), y1 = std::min(y0 + 1, img.rows - 1);
-  const double fx = xc - x0, fy = yc - y0;
-  return (1 - fy) * ((1 - fx) * img.at<float>(y0, x0) + fx * img.at<float>(y0, x1)) +
-         fy * ((1 - fx) * img.at<float>(y1, x0) + fx * img.at<float>(y1, x1));
+  return bilinear(img, std::clamp(x, 0.0, img.cols - 1.0), std::clamp(y, 0.0, img.rows - 1.0));
 }
-
 // The profile's integral above the bed's level across the line at column x (image units x px).
 double integrated_contrast(const cv::Mat& img, double x, double yc, int half) {
   double lo = 0, hi = 0;

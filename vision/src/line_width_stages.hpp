@@ -5,6 +5,7 @@
 //   line_edge_profile.cpp  one station of the centreline -> width from an edge-profile fit
 // line_width.cpp runs them and flags outlying samples.
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -22,6 +23,17 @@ namespace tunekit::vision::detail {
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// MAD -> standard deviation of a normal distribution (1 / Phi^-1(3/4)): robust noise levels.
 inline constexpr double kMadToSigma = 1.4826;
+
+/// Bilinear sample of a CV_32F image at (x, y) px, pixel centres at whole numbers; (x, y) must lie
+/// inside the image (0 <= x <= cols - 1, 0 <= y <= rows - 1).
+inline float bilinear(const cv::Mat& img, double x, double y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const double fx = x - x0, fy = y - y0;
+  const float* r0 = img.ptr<float>(y0);
+  const float* r1 = img.ptr<float>(std::min(y0 + 1, img.rows - 1));
+  const int x1 = std::min(x0 + 1, img.cols - 1);
+  return static_cast<float>((1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x1]));
+}
 
 /// Median, NaN when there are no samples (fitting::median gives 0 there).
 inline double median_of(std::vector<double> v) { return v.empty() ? kNaN : fitting::median(std::move(v)); }

@@ -143,6 +143,7 @@ struct PathSamples {
 struct PathPlacement {
   bool by_camera = false;
   double a = 0, ppm = 1;  ///< pos = a + x_px / ppm
+  double length_mm = 0;   ///< the path's length
   double pos(double x_px) const { return a + x_px / ppm; }
   double x_px(double pos_mm) const { return (pos_mm - a) * ppm; }
 };
@@ -151,18 +152,17 @@ PathPlacement path_placement(const MeasuredLine& ml, const TestLine& tl, double 
   PathPlacement p;
   p.ppm = ppm;
   p.by_camera = placement.known;
+  for (const auto& sg : tl.path) p.length_mm += sg.length_mm;
   if (placement.known) {
     p.a = placement.x0_mm + 0.5 / ppm - tl.x0_mm;
     return p;
   }
-  double length = 0;
-  for (const auto& sg : tl.path) length += sg.length_mm;
   const double x_end_px = ml.bbox.x + ml.bbox.width - 0.5;
   std::vector<double> end_widths;
   for (const auto& s : ml.samples)
     if (s.valid() && s.x_px > x_end_px + 0.5 - kEndWindowMm * ppm) end_widths.push_back(s.width_px);
   const double w_end_px = fitting::median(end_widths);
-  p.a = length - (x_end_px - w_end_px / 2) / ppm;
+  p.a = p.length_mm - (x_end_px - w_end_px / 2) / ppm;
   return p;
 }
 
@@ -190,8 +190,6 @@ bool from_rest_samples(const cv::Mat& img, const MeasuredLine& ml, const TestLin
 
 PathSamples on_path(const cv::Mat& img, const MeasuredLine& ml, const TestLine& tl, double ppm,
                     const BedPlacement& placement, std::vector<std::string>& warnings, std::size_t k) {
-  double length = 0;
-  for (const auto& sg : tl.path) length += sg.length_mm;
   const PathPlacement pp = path_placement(ml, tl, ppm, placement);
   const bool runup = tl.path.size() > 1 && tl.path.front().feed_mm == 0;
   std::vector<std::array<double, 3>> rows;
@@ -210,7 +208,7 @@ PathSamples on_path(const cv::Mat& img, const MeasuredLine& ml, const TestLine& 
     for (const auto& s : ml.samples)
       if (s.valid() && pp.pos(s.x_px) >= lead_skip) rows.push_back({pp.pos(s.x_px), s.width_px / ppm, s.confidence});
   }
-  std::erase_if(rows, [&](const auto& r) { return r[0] > length - kLineEndSkipMm; });
+  std::erase_if(rows, [&](const auto& r) { return r[0] > pp.length_mm - kLineEndSkipMm; });
   std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
   PathSamples out;
   for (const auto& r : rows) out.s.push_back(r[0]), out.w.push_back(r[1]), out.c.push_back(r[2]);
