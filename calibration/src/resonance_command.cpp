@@ -8,6 +8,8 @@
 
 #include "resonance_json.hpp"
 #include "tunekit/calibration/resonance_command.hpp"
+
+#include "tunekit/calibration/report.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/ringdown.hpp"
 
@@ -72,12 +74,16 @@ void print_text(const ResonanceOutcome& o, std::ostream& os) {
                                               : std::string());
   }
   for (const auto& r : o.analysis.axes) {
-    os << fmt::format("{} {}: {} file(s), {} Welch segments of {} samples, {} modes ({} fit)\n",
+    const std::string how = r.modes.method.empty()             ? "no fit"
+                            : r.modes.method == "output_error" ? "fitted to the record against its commanded motion"
+                                                               : r.modes.method + " fit";
+    os << fmt::format("{} {}: {} file(s), {} Welch segments of {} samples, {} modes ({})\n",
                       r.axis != 0 ? "axis" : "record", r.label, r.spectrum.files.size(), r.spectrum.segments,
-                      r.spectrum.segment_length, r.modes.modes.size(), r.modes.method.empty() ? "no" : r.modes.method);
+                      r.spectrum.segment_length, r.modes.modes.size(), how);
     for (const auto& m : r.modes.modes)
-      os << fmt::format("  f = {:.2f} Hz [{:.2f}, {:.2f}]   zeta = {:.4f} [{:.4f}, {:.4f}]\n", m.freq_hz,
-                        m.freq_ci95_lo, m.freq_ci95_hi, m.zeta, m.zeta_ci95_lo, m.zeta_ci95_hi);
+      os << fmt::format("  f = {} Hz {}   zeta = {} {}\n", display_number(m.freq_hz),
+                        display_interval(m.freq_ci95_lo, m.freq_ci95_hi), display_number(m.zeta),
+                        display_interval(m.zeta_ci95_lo, m.zeta_ci95_hi));
   }
 }
 

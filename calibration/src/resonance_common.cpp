@@ -13,6 +13,8 @@
 
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/ident/axis_response_fit.hpp"
+#include "tunekit/ident/commanded_motion.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/klipper_spectrum.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
@@ -49,6 +51,41 @@ std::string record_label(char axis, const std::string& path) {
   return std::filesystem::path(path).stem().string();
 }
 
+namespace {
+
+/// A raw record whose commanded motion was recorded beside it.
+struct TimedRecord {
+  ident::AccelRecord record;
+  std::vector<ident::AccelPiece> motion;
+};
+
+/// The modes from the record against its commanded motion, started from the spectrum's. If that
+/// fit fails the spectrum's modes stay, with the reason as a warning.
+void fit_against_motion(ident::AxisModes& m, const TimedRecord& t) {
+  if (m.modes.empty()) return;
+  std::vector<fitting::ModeStart> starts;
+  for (const auto& e : m.modes) starts.push_back({e.freq_hz, e.zeta, 1.0});
+  try {
+    auto fit = ident::fit_axis_response(t.record, t.motion, starts);
+    const double strongest = m.peaks.front().freq_hz;
+    m.modes = fit.modes;
+    m.method = "output_error";
+    m.time_fit_variance_inflation = fit.variance_inflation;
+    m.time_fit = std::move(fit.fit);
+    double best = 1e300;
+    for (std::size_t k = 0; k < m.modes.size(); ++k)
+      if (std::abs(m.modes[k].freq_hz - strongest) < best) {
+        best = std::abs(m.modes[k].freq_hz - strongest);
+        m.dominant = static_cast<int>(k);
+      }
+  } catch (const Error& e) {
+    m.warnings.push_back("the fit against the commanded motion failed (" + e.message() +
+                         "); the modes are the spectrum's");
+  }
+}
+
+}  // namespace
+
 AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion ringdown) {
   const ident::WelchOptions& welch = a.welch;
   const ident::ResonanceOptions& ro = a.modes;
@@ -62,6 +99,7 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
 
   AccelAnalysis result;
   std::map<std::string, std::vector<ident::AxisSpectrum>> by_axis;
+  std::map<std::string, TimedRecord> timed;  // raw records with their commanded motion, per axis
   // The inputs' digests (about 10 ms for a 20 MB raw file) are computed on another core while
   // the analysis goes on, and collected at the end; the files stay mapped until then.
   std::vector<std::unique_ptr<const ident::InputFileBytes>> files;
@@ -116,6 +154,19 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
         continue;
       }
       file_spectra.push_back(ident::record_spectrum(rec, welch));
+      record_input();
+      const std::string motion = ro.use_commanded_motion ? ident::commanded_motion_beside(path) : std::string{};
+      if (!motion.empty() && (rec.axis == 'x' || rec.axis == 'y') && !timed.count(record_label(rec.axis, path))) {
+        files.push_back(std::make_unique<const ident::InputFileBytes>(motion));
+        const std::string_view mbytes = files.back()->view();
+        auto pieces = ident::load_commanded_motion_csv(motion, mbytes, rec.axis);
+        result.inputs.push_back({motion, {}, mbytes.size()});
+        digests.push_back(a.digest_inputs ? std::async(std::launch::async, [mbytes] { return sha256_hex(mbytes); })
+                                          : std::future<std::string>{});
+        timed.emplace(record_label(rec.axis, path), TimedRecord{std::move(rec), std::move(pieces)});
+      }
+      for (auto& s : file_spectra) by_axis[record_label(s.axis, path)].push_back(std::move(s));
+      continue;
     }
     record_input();
     for (auto& s : file_spectra) by_axis[record_label(s.axis, path)].push_back(std::move(s));
@@ -146,6 +197,7 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
     r.datasets = std::move(spectra);
     for (const auto& w : r.spectrum.warnings) result.warnings.push_back(w);
     r.modes = ident::identify_modes(r.spectrum, ro);
+    if (const auto it = timed.find(label); it != timed.end()) fit_against_motion(r.modes, it->second);
     for (const auto& w : r.modes.warnings) result.warnings.push_back(fmt::format("axis {}: {}", label, w));
     result.axes.push_back(std::move(r));
   }

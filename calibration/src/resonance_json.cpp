@@ -42,6 +42,7 @@ nlohmann::json accel_options_json(const AccelFilesOptions& a, bool ringdown, con
           {"excitation_exponent", a.modes.excitation_exponent},
           {"full_scale_mm_s2", a.input.full_scale_mm_s2},
           {"no_frf", !a.modes.use_frf},
+          {"no_commanded_motion", !a.modes.use_commanded_motion},
           {"ringdown", ringdown},
           {"channel", r.channel},
           {"min_strength", r.min_strength},
@@ -54,9 +55,11 @@ void add_accel_inputs(const AccelAnalysis& analysis, Envelope& env) {
   for (const auto& w : analysis.warnings) env.warn(w);
 }
 
-nlohmann::json modes_json(const ident::AxisModes& m) {
+nlohmann::json modes_json(const ident::AxisModes& m) { return modes_json(m.modes); }
+
+nlohmann::json modes_json(const std::vector<fitting::ModeEstimate>& modes) {
   nlohmann::json arr = nlohmann::json::array();
-  for (const auto& e : m.modes)
+  for (const auto& e : modes)
     arr.push_back({{"freq_hz", e.freq_hz},
                    {"zeta", e.zeta},
                    {"freq_ci95", resonance_pair(e.freq_ci95_lo, e.freq_ci95_hi)},
@@ -110,7 +113,17 @@ nlohmann::json fit_json(const ident::AxisModes& m) {
   nlohmann::json peaks = nlohmann::json::array();
   for (const auto& p : m.peaks) peaks.push_back({{"freq_hz", p.freq_hz}, {"half_power_zeta", p.half_power_zeta}});
   j["peaks"] = peaks;
-  if (m.fit) {
+  if (m.time_fit) {
+    // The modes from the record against its commanded motion; the spectrum's fit started it.
+    j["diagnostics"] = fitting::to_json(m.time_fit->diagnostics);
+    j["variance_inflation"] = m.time_fit_variance_inflation;
+    j["offset_mm_s2"] = m.time_fit->value("offset_mm_s2");
+    if (m.fit)
+      j["spectrum_fit"] = {{"method", "psd"},
+                           {"modes", modes_json(m.fit->modes)},
+                           {"diagnostics", fitting::to_json(m.fit->fit.diagnostics)},
+                           {"variance_inflation", m.fit->variance_inflation}};
+  } else if (m.fit) {
     j["diagnostics"] = fitting::to_json(m.fit->fit.diagnostics);
     j["variance_inflation"] = m.fit->variance_inflation;
     j["direct_term"] = m.fit->direct_term;

@@ -18,6 +18,8 @@ nlohmann::json accel_options_json(const AccelFilesOptions& a, bool ringdown, con
 void add_accel_inputs(const AccelAnalysis& analysis, Envelope& env);
 /// modes[] as in the results contract.
 nlohmann::json modes_json(const ident::AxisModes& m);
+/// The same for a list of mode estimates (the spectrum's fit beside an output-error fit).
+nlohmann::json modes_json(const std::vector<fitting::ModeEstimate>& modes);
 /// PSD (and FRF) arrays up to max_plot_hz for plotting.
 nlohmann::json spectrum_json(const ident::AxisSpectrum& s, double max_plot_hz);
 /// The fit's method, band, peaks and diagnostics.

@@ -161,6 +161,17 @@ void replace_wild_samples(CsvTable& table, std::string_view bytes, std::size_t c
 
 }  // namespace
 
+namespace {
+
+/// The start of the grid t_i = start + i * interval closest to the times in the mean.
+double grid_start(const std::vector<double>& t, double interval) {
+  double offset = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) offset += t[i] - t.front() - static_cast<double>(i) * interval;
+  return t.front() + offset / static_cast<double>(t.size());
+}
+
+}  // namespace
+
 char axis_from_filename(const std::string& path) {
   std::string base = path;
   if (const auto slash = base.find_last_of('/'); slash != std::string::npos) base = base.substr(slash + 1);
@@ -207,6 +218,7 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
     std::nth_element(dt.begin(), mid, dt.end());
     med = *mid;
   }
+  r.start_time_s = t.front();
   auto& s = r.sampling;
   s.samples = n;
   s.duration_s = t.back() - t.front();
@@ -252,6 +264,11 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
       table.columns[c].values = resample(t, table.columns[c].values, t.front(), med, m);
   } else {
     s.sample_rate_hz = static_cast<double>(n - 1) / s.duration_s;
+    // The grid's start from every sample, not from the first alone: loggers round their times
+    // (Klipper writes microseconds), and an output-error fit against the commanded motion
+    // (axis_response_fit.hpp) sees a tenth of a microsecond as a shift of the resonance by
+    // several times its noise.
+    r.start_time_s = grid_start(t, 1.0 / s.sample_rate_hz);
   }
 
   for (std::size_t c = 1; c <= accel.size(); ++c) {

@@ -31,7 +31,7 @@ constexpr std::size_t kMinRestSamples = 20;
 // Parameter order of the whole-record fit (fitting/liquefier_model.hpp): tau_ref_s, b, theta_s, g, c, V0.
 constexpr std::size_t kTheta = 2, kGain = 3, kOffset = 4;
 
-nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+nlohmann::json rest_num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 std::optional<RestVolume> refuse(std::string* why, std::string reason) {
   if (why != nullptr) *why = std::move(reason);
@@ -147,11 +147,11 @@ std::optional<RestVolume> measure_rest_volume(std::span<const double> t, std::sp
 nlohmann::json to_json(const std::optional<RestVolume>& v, const std::string& why) {
   if (!v) return {{"measured", false}, {"why", why}};
   return {{"measured", true},
-          {"input", num(v->input)},
-          {"value", num(v->value)},
-          {"stderr", num(v->std_error)},
-          {"ci95", {num(v->ci95_lo), num(v->ci95_hi)}},
-          {"window_s", {num(v->window_begin_s), num(v->window_end_s)}},
+          {"input", rest_num(v->input)},
+          {"value", rest_num(v->value)},
+          {"stderr", rest_num(v->std_error)},
+          {"ci95", {rest_num(v->ci95_lo), rest_num(v->ci95_hi)}},
+          {"window_s", {rest_num(v->window_begin_s), rest_num(v->window_end_s)}},
           {"samples", v->samples},
           {"basis",
            "the start-up transient's area from rest, integral of (u(t - theta) - (y - c) / g) dt until settled at the "

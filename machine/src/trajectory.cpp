@@ -157,6 +157,13 @@ PathState Profile::at(double t) const {
   return advance(s.s0, s.jerk, t - s.t0);
 }
 
+std::vector<Profile::Piece> Profile::pieces() const {
+  std::vector<Piece> out;
+  out.reserve(segs_.size());
+  for (const auto& s : segs_) out.push_back({s.t0, s.duration, s.s0.accel_mm_s2, s.jerk});
+  return out;
+}
+
 double Profile::peak_accel() const {
   double m = 0;
   for (const auto& s : segs_) {

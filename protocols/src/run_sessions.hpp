@@ -33,11 +33,13 @@ int parse_numbers(std::string_view s, double* out, int max);
 /// Sensor samples -> CSV files of the run directory.
 class Recorder {
  public:
-  Recorder(machine::Journal& j, std::string load_cell_file, std::string accel_file, std::string commanded_file)
+  Recorder(machine::Journal& j, std::string load_cell_file, std::string accel_file, std::string commanded_file,
+           std::string motion_file)
       : j_(j),
         load_file_(std::move(load_cell_file)),
         accel_file_(std::move(accel_file)),
-        cmd_file_(std::move(commanded_file)) {}
+        cmd_file_(std::move(commanded_file)),
+        motion_file_(std::move(motion_file)) {}
 
   void load_cell(double t, double feed, double force) {
     auto& c = j_.csv(load_file_, "time (s),feed (mm/s),force (N)");
@@ -46,16 +48,26 @@ class Recorder {
   }
   void accel(double t, double ax, double ay, double az) {
     auto& c = j_.csv(accel_file_, "#time,accel_x,accel_y,accel_z");
-    c.row(csv_row({{t, 6}, {ax, 2}, {ay, 2}, {az, 2}}));
+    c.row(csv_row({{t, 7}, {ax, 2}, {ay, 2}, {az, 2}}));
     ++accel_;
   }
   void commanded(double t, double cx, double cy) {
     auto& c = j_.csv(cmd_file_, "time (s),accel_x (mm/s^2),accel_y (mm/s^2)");
-    c.row(csv_row({{t, 6}, {cx, 2}, {cy, 2}}));
+    c.row(csv_row({{t, 7}, {cx, 2}, {cy, 2}}));
+  }
+  /// One piece of commanded motion: from t0 for `duration`, the acceleration accel + jerk * (t - t0).
+  void motion(const double* v) {
+    auto& c =
+        j_.csv(motion_file_, "time (s),duration (s),accel_x (mm/s^2),accel_y (mm/s^2),jerk_x (mm/s^3),jerk_y (mm/s^3)");
+    c.row(csv_row({{v[0], 9}, {v[1], 9}, {v[2], 4}, {v[3], 4}, {v[4], 1}, {v[5], 1}}));
   }
   /// Handles a tunekit-sim data line; true if it was one.
   bool line(std::string_view l) {
     double v[6];
+    if (l.rfind("echo:TKM ", 0) == 0) {
+      if (parse_numbers(l.substr(9), v, 6) == 6) motion(v);
+      return true;
+    }
     if (l.rfind("echo:TKA ", 0) == 0) {
       const int n = parse_numbers(l.substr(9), v, 6);
       if (n >= 4) accel(v[0], v[1], v[2], v[3]);
@@ -73,6 +85,7 @@ class Recorder {
   const std::string& load_file() const { return load_file_; }
   const std::string& accel_file() const { return accel_file_; }
   const std::string& commanded_file() const { return cmd_file_; }
+  const std::string& motion_file() const { return motion_file_; }
 
  private:
   /// One CSV row, each value with its decimals; the buffer is reused from row to row.
@@ -84,7 +97,7 @@ class Recorder {
 
   machine::Journal& j_;
   std::string row_;
-  std::string load_file_, accel_file_, cmd_file_;
+  std::string load_file_, accel_file_, cmd_file_, motion_file_;
   long load_ = 0, accel_ = 0;
 };
 

@@ -253,7 +253,8 @@ RunResult run_experiment(const RunOptions& o) {
   const std::string tag = o.file_tag.empty() ? stamp : o.file_tag;
   Recorder rec(
       journal, o.protocol == "liquefier-step" || o.protocol == "liquefier-flow-sweep" ? "step.csv" : "feed_force.csv",
-      fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag));
+      fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag),
+      fmt::format("commanded_motion_{}_{}.csv", axis_tag, tag));
   res.files["journal"] = journal.path("journal.jsonl");
   res.files["gcode"] = journal.path("protocol.gcode");
   res.files["summary"] = journal.path("run.json");
@@ -293,6 +294,7 @@ RunResult run_experiment(const RunOptions& o) {
     if (journal.has_csv(rec.load_file())) res.files["load_cell"] = journal.path(rec.load_file());
     if (journal.has_csv(rec.accel_file())) res.files["accel"] = journal.path(rec.accel_file());
     if (journal.has_csv(rec.commanded_file())) res.files["commanded_accel"] = journal.path(rec.commanded_file());
+    if (journal.has_csv(rec.motion_file())) res.files["commanded_motion"] = journal.path(rec.motion_file());
   };
 
   SendGuard guard(profile);  // the last check of every line, in the link

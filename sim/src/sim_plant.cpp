@@ -38,7 +38,13 @@ Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed
     ftm_shaper_[a] = cfg_.ft_shaper[a];
     ftm_freq_[a] = cfg_.ft_freq_hz[a];
   }
-  for (const auto& [axis, modes] : cfg_.modes) mode_state_[axis].assign(modes.size(), {0.0, 0.0});
+  for (const auto& [axis, modes] : cfg_.modes) {
+    mode_state_[axis].assign(modes.size(), {0.0, 0.0});
+    for (const auto& md : modes) {
+      mode_physics_[axis].emplace_back(md.freq_hz, md.zeta);
+      mode_dt_step_[axis].push_back(mode_physics_[axis].back().step(dt_));
+    }
+  }
   // The dead time in whole steps and a fraction of one: the delayed feed is interpolated between
   // the two steps around it, so that the plant's dead time is theta_s, not theta_s rounded to the
   // step (up to half of 78 us off, which is about the width of a fitted dead time's interval).
@@ -83,9 +89,47 @@ double Simulator::junction_speed(const machine::GcodeMove& a, const machine::Gco
   return 0;
 }
 
+std::array<double, 3> Simulator::step_modes(const std::array<double, 4>& acc0, const std::array<double, 3>& accm,
+                                            const std::array<double, 3>& acc1, const std::vector<PathPiece>* path,
+                                            const std::array<double, 4>* unit) {
+  const double h = dt_;
+  std::array<double, 3> meas{acc1[0], acc1[1], acc1[2]};
+  for (std::size_t ax = 0; ax < 3; ++ax) {
+    const auto it = cfg_.modes.find(machine::kAxisNames[ax]);
+    if (it == cfg_.modes.end()) continue;
+    const std::string& name = it->first;
+    auto& states = mode_state_[name];
+    const auto& physics = mode_physics_[name];
+    const bool exact = path != nullptr && unit != nullptr && cfg_.shapers.find(name) == cfg_.shapers.end();
+    double rel = 0;
+    for (std::size_t m = 0; m < it->second.size(); ++m) {
+      ident::ModeState x{states[m][0], states[m][1]};
+      if (exact) {
+        const double u = (*unit)[ax];
+        for (const auto& p : *path)
+          x = p.h_s == h ? ident::BaseExcitedMode::apply(mode_dt_step_[name][m], x, u * p.accel_mm_s2, u * p.jerk_mm_s3)
+                         : physics[m].advance(x, p.h_s, u * p.accel_mm_s2, u * p.jerk_mm_s3);
+      } else {
+        auto f = [&](double z, double zd, double a) { return physics[m].relative_accel({z, zd}, a); };
+        const double z = x.z_mm, zd = x.v_mm_s;
+        const double k1z = zd, k1v = f(z, zd, acc0[ax]);
+        const double k2z = zd + h / 2 * k1v, k2v = f(z + h / 2 * k1z, zd + h / 2 * k1v, accm[ax]);
+        const double k3z = zd + h / 2 * k2v, k3v = f(z + h / 2 * k2z, zd + h / 2 * k2v, accm[ax]);
+        const double k4z = zd + h * k3v, k4v = f(z + h * k3z, zd + h * k3v, acc1[ax]);
+        x = {z + h / 6 * (k1z + 2 * k2z + 2 * k3z + k4z), zd + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)};
+      }
+      states[m] = {x.z_mm, x.v_mm_s};
+      rel += it->second[m].weight * physics[m].relative_accel(x, acc1[ax]);
+    }
+    meas[ax] = acc1[ax] + rel;
+  }
+  return meas;
+}
+
 void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 4>& vel,
                      const std::array<double, 4>& acc0_in, const std::array<double, 3>& accm_in,
-                     const std::array<double, 3>& acc1_in, const Emit& emit) {
+                     const std::array<double, 3>& acc1_in, const Emit& emit, const std::vector<PathPiece>* path,
+                     const std::array<double, 4>* unit) {
   const double h = dt_;
   std::array<double, 4> acc0 = acc0_in;
   std::array<double, 3> accm = accm_in, acc1 = acc1_in;
@@ -114,28 +158,7 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
     }
     ++shape_pos_;
   }
-  std::array<double, 3> meas{acc1[0], acc1[1], acc1[2]};
-  for (std::size_t ax = 0; ax < 3; ++ax) {
-    const auto it = cfg_.modes.find(machine::kAxisNames[ax]);
-    if (it == cfg_.modes.end()) continue;
-    auto& states = mode_state_[machine::kAxisNames[ax]];
-    double rel = 0;
-    for (std::size_t m = 0; m < it->second.size(); ++m) {
-      const auto& md = it->second[m];
-      const double w = 2 * std::numbers::pi * md.freq_hz, c = 2 * md.zeta * w, k = w * w;
-      auto f = [&](double z, double zd, double a) { return -c * zd - k * z - a; };
-      double z = states[m][0], zd = states[m][1];
-      const double k1z = zd, k1v = f(z, zd, acc0[ax]);
-      const double k2z = zd + h / 2 * k1v, k2v = f(z + h / 2 * k1z, zd + h / 2 * k1v, accm[ax]);
-      const double k3z = zd + h / 2 * k2v, k3v = f(z + h / 2 * k2z, zd + h / 2 * k2v, accm[ax]);
-      const double k4z = zd + h * k3v, k4v = f(z + h * k3z, zd + h * k3v, acc1[ax]);
-      z += h / 6 * (k1z + 2 * k2z + 2 * k3z + k4z);
-      zd += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
-      states[m] = {z, zd};
-      rel += md.weight * f(z, zd, acc1[ax]);
-    }
-    meas[ax] = acc1[ax] + rel;
-  }
+  const std::array<double, 3> meas = step_modes(acc0, accm, acc1, path, unit);
   // Liquefier: input is the commanded filament feed, delayed by the dead time.
   const double u = vel[3];
   // delay_[delay_pos_] was written delay_.size() steps ago, the next one a step later.
@@ -180,7 +203,7 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
     if (accel_sink) {
       accel_sink(t_, ax, ay, az);
     } else {
-      append_data_line(out_, "echo:TKA", {{t_, 6}, {ax, 2}, {ay, 2}, {az, 2}, {acc1[0], 2}, {acc1[1], 2}});
+      append_data_line(out_, "echo:TKA", {{t_, 7}, {ax, 2}, {ay, 2}, {az, 2}, {acc1[0], 2}, {acc1[1], 2}});
     }
     ++accel_sent_;
   }
@@ -253,6 +276,59 @@ void Simulator::emit_pending_load_sample(double t, double fed_mm) {
   fed_at_window_start_ = fed_mm;
 }
 
+namespace {
+
+/// The commanded path acceleration over profile times [ta, tb] of one step, piece by piece. Before
+/// the profile's start it holds the start's acceleration, after its end the end's (Profile::at
+/// clamps the same way). `cursor` is the first piece that may still overlap, kept between steps.
+void step_path(const std::vector<machine::Profile::Piece>& pieces, const machine::Profile& prof, double ta, double tb,
+               std::size_t& cursor, std::vector<Simulator::PathPiece>& out) {
+  out.clear();
+  double t = ta;
+  if (t < 0) {
+    const double until = std::min(tb, 0.0);
+    out.push_back({until - t, prof.at(0).accel_mm_s2, 0.0});
+    t = until;
+  }
+  while (t < tb && cursor < pieces.size()) {
+    const auto& p = pieces[cursor];
+    const double end = p.t0_s + p.duration_s;
+    if (end <= t) {
+      ++cursor;
+      continue;
+    }
+    const double to = std::min(tb, end);
+    out.push_back({to - t, p.accel_mm_s2 + p.jerk_mm_s3 * (t - p.t0_s), p.jerk_mm_s3});
+    t = to;
+  }
+  if (t < tb) out.push_back({tb - t, prof.at(prof.duration_s()).accel_mm_s2, 0.0});
+  // One piece over the whole step: exactly dt, so that the mode's step of dt applies.
+  if (out.size() == 1) out.front().h_s = tb - ta;
+}
+
+}  // namespace
+
+/// Pieces shorter than the streamed times' resolution (1 ns) are left out of echo:TKM: their
+/// acceleration acts for under a nanosecond, and their rounded start would not follow the one before.
+constexpr double kShortestStreamedPiece_s = 1e-9;
+
+void Simulator::stream_commanded_motion(double t_start, double t_end, double origin, const machine::Profile& prof,
+                                        const std::array<double, 4>& u) {
+  // What the steps of this move run: the profile from origin, clipped to [t_start, t_end]; before
+  // the origin the profile's start holds (step_path).
+  auto line = [&](double t0, double d, double a, double j) {
+    if (!(d >= kShortestStreamedPiece_s)) return;
+    append_data_line(out_, "echo:TKM", {{t0, 9}, {d, 9}, {u[0] * a, 4}, {u[1] * a, 4}, {u[0] * j, 1}, {u[1] * j, 1}});
+  };
+  if (origin > t_start) line(t_start, std::min(origin, t_end) - t_start, prof.at(0).accel_mm_s2, 0);
+  for (const auto& p : prof.pieces()) {
+    const double s0 = origin + p.t0_s, cs = std::max(s0, t_start), ce = std::min(s0 + p.duration_s, t_end);
+    if (ce > cs) line(cs, ce - cs, p.accel_mm_s2 + p.jerk_mm_s3 * (cs - s0), p.jerk_mm_s3);
+  }
+  const double end = origin + prof.duration_s();
+  if (end < t_end) line(end, t_end - end, prof.at(prof.duration_s()).accel_mm_s2, 0);
+}
+
 double Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit) {
   double accel = m.accel_mm_s2, v_max = m.feed_mm_s;
   const double L = m.length_mm();
@@ -276,8 +352,13 @@ double Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_
   const bool joined = v_end > 0 && m.end[3] == m.start[3];
   step_carry_s_ = joined ? std::max(0.0, T + shift - n * dt_) : 0.0;
   if (move_sink && n > 0) move_sink(t_, n * dt_, prof, m.start, u);
+  if (stream_accel_ && !accel_sink && n > 0) stream_commanded_motion(t_, t_ + n * dt_, t_ + shift, prof, u);
+  const std::vector<machine::Profile::Piece> pieces = prof.pieces();
+  std::vector<PathPiece> path;
+  std::size_t cursor = 0;
   for (int i = 0; i < n; ++i) {
     const double tau = i * dt_ - shift;
+    step_path(pieces, prof, tau, tau + dt_, cursor, path);
     const machine::PathState s0 = prof.at(tau), sm = prof.at(tau + dt_ / 2), s1 = prof.at(tau + dt_);
     std::array<double, 4> pos{}, vel{}, acc0{};
     std::array<double, 3> accm{}, acc1{};
@@ -290,7 +371,7 @@ double Simulator::execute(const machine::GcodeMove& m, double v_entry, double v_
         acc1[k] = u[k] * s1.accel_mm_s2;
       }
     }
-    step(pos, vel, acc0, accm, acc1, emit);
+    step(pos, vel, acc0, accm, acc1, emit, &path, &u);
   }
   return v_end;  // below v_exit when the move is too short to reach it
 }
@@ -299,7 +380,8 @@ void Simulator::dwell(double seconds, const Emit& emit) {
   const int n = static_cast<int>(std::lround(seconds / dt_));
   const std::array<double, 4> zero4{};
   const std::array<double, 3> zero3{};
-  for (int i = 0; i < n; ++i) step(zero4, zero4, zero4, zero3, zero3, emit);
+  const std::vector<PathPiece> rest{{dt_, 0.0, 0.0}};
+  for (int i = 0; i < n; ++i) step(zero4, zero4, zero4, zero3, zero3, emit, &rest, &zero4);
 }
 
 void Simulator::flush(const Emit& emit) {

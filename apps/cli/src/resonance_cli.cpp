@@ -119,6 +119,10 @@ void add_accel_files_options(CLI::App* sub, AccelFilesOptions& o, OutputOptions&
                   fmt::format("Highest frequency of the PSD arrays in the JSON, Hz (default {:g})", o.max_plot_hz));
   sub->add_flag_callback(
       "--no-frf", [&o] { o.modes.use_frf = false; }, "Fit the PSD even when an excitation column gives the FRF");
+  sub->add_flag_callback(
+      "--no-commanded-motion", [&o] { o.modes.use_commanded_motion = false; },
+      "Fit the spectrum alone even when the record's commanded motion lies beside it "
+      "(commanded_motion_<axis>_<name>.csv beside raw_data_<axis>_<name>.csv)");
   add_output_options(sub, output);
 }
 

@@ -72,6 +72,7 @@ struct AccelRecord {
   char axis = 0;
   std::vector<std::string> channel_names;
   std::vector<std::vector<double>> channels;  ///< mm/s^2, uniform sampling
+  double start_time_s = 0;                    ///< time of the first sample, on the file's clock
   std::vector<double> excitation;             ///< commanded acceleration, empty if none
   std::string excitation_name;
   SamplingReport sampling;
@@ -131,6 +132,9 @@ struct ResonanceOptions {
   double peak_threshold = 0.05;     ///< peaks below this fraction of the highest are ignored
   double excitation_exponent = -1;  ///< <0: 2 for raw PSDs, 1 for Klipper-normalized ones
   bool use_frf = true;              ///< fit the FRF when there is an excitation channel
+  /// Fit the record against its commanded motion (axis_response_fit.hpp) when the motion was
+  /// recorded beside it (commanded_motion_<axis>_<tag>.csv beside raw_data_<axis>_<tag>.csv).
+  bool use_commanded_motion = true;
   double min_coherence = 0.5;
 };
 
@@ -138,7 +142,11 @@ struct AxisModes {
   std::vector<Peak> peaks;
   std::vector<fitting::ModeEstimate> modes;  ///< sorted by frequency
   std::optional<fitting::ModalFit> fit;
-  std::string method;  ///< "psd" or "frf"
+  std::string method;  ///< "psd", "frf", or "output_error" (the record against its commanded motion)
+  /// The output-error fit that gave `modes` (method "output_error"); `fit` is then the spectrum's
+  /// fit, which started it.
+  std::optional<fitting::FitResult> time_fit;
+  double time_fit_variance_inflation = 1;
   double band_lo_hz = 0, band_hi_hz = 0;
   int dominant = -1;  ///< index into modes of the strongest peak
   std::vector<std::string> warnings;

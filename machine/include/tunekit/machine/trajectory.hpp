@@ -36,6 +36,13 @@ class Profile {
   /// Peak |acceleration| reached.
   double peak_accel() const;
 
+  /// One piece of the profile: from `t0_s` (s after the move's start) for `duration_s`, the
+  /// acceleration `accel_mm_s2 + jerk_mm_s3 * (t - t0_s)`. The pieces tile [0, duration_s()].
+  struct Piece {
+    double t0_s, duration_s, accel_mm_s2, jerk_mm_s3;
+  };
+  std::vector<Piece> pieces() const;
+
   /// Velocity change v0 -> v1 under a_max, j_max: its duration and distance.
   static double ramp_duration(double v0, double v1, double a_max, double j_max);
   static double ramp_distance(double v0, double v1, double a_max, double j_max);

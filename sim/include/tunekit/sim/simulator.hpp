@@ -13,7 +13,10 @@
 // "Error:checksum mismatch, Last Line: <n>" + "Resend: <n+1>" + "ok". Moves are queued with a
 // one-move lookahead (consecutive same-direction moves blend at the first move's speed) and run
 // when the next move, G4, M400, M4100, G28 or M410 arrives. Sensor streaming (M4100):
-//   M4100 A1 / A0   accelerometer on/off: "echo:TKA <t_s> <ax> <ay> <az> <cmd_ax> <cmd_ay>" (mm/s^2)
+//   M4100 A1 / A0   accelerometer on/off: "echo:TKA <t_s> <ax> <ay> <az> <cmd_ax> <cmd_ay>" (mm/s^2),
+//                   and each piece of commanded motion the simulator runs meanwhile, "echo:TKM <t0_s>
+//                   <duration_s> <accel_x> <accel_y> <jerk_x> <jerk_y>" (mm/s^2, mm/s^3): the
+//                   acceleration accel + jerk * (t - t0) over [t0, t0 + duration]
 //   M4100 L1 / L0   load cell on/off:     "echo:TKL <t_s> <feed_mm_s> <force_N>"
 // M115 answers "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim ...)" and "Cap:TUNEKIT_SENSOR_STREAM:1".
 
@@ -33,6 +36,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tunekit/ident/base_excited_mode.hpp"
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/machine/trajectory.hpp"
 #include "tunekit/machine/transport.hpp"
@@ -199,6 +203,12 @@ class Simulator {
   /// stop flag; nullptr waits the whole delay.
   void set_cancel(const std::atomic<bool>* cancel) { cancel_ = cancel; }
 
+  /// One piece of a step's commanded acceleration along the move's path: h_s seconds of
+  /// accel_mm_s2 + jerk_mm_s3 * s.
+  struct PathPiece {
+    double h_s, accel_mm_s2, jerk_mm_s3;
+  };
+
   /// For Klipper-API style use: samples go to this callback instead of echo:TKA lines.
   std::function<void(double t_s, double ax, double ay, double az)> accel_sink;
   /// Klipper-API style: load-cell samples (force in N, offset and noise included) go here
@@ -236,8 +246,22 @@ class Simulator {
   /// Runs one move; returns the speed it leaves at (mm/s).
   double execute(const machine::GcodeMove& m, double v_entry, double v_exit, const Emit& emit);
   void dwell(double seconds, const Emit& emit);
+  /// One simulation step. `path` (with the move's unit direction) is the step's commanded
+  /// acceleration exactly, piece by piece: the axes' modes follow it exactly where the axis is not
+  /// shaped (base_excited_mode.hpp); a shaped axis, or a step without it, is integrated with the
+  /// classical Runge-Kutta method from the accelerations at the step's start, middle and end.
   void step(const std::array<double, 4>& pos, const std::array<double, 4>& vel, const std::array<double, 4>& acc,
-            const std::array<double, 3>& acc_mid, const std::array<double, 3>& acc_end, const Emit& emit);
+            const std::array<double, 3>& acc_mid, const std::array<double, 3>& acc_end, const Emit& emit,
+            const std::vector<PathPiece>* path = nullptr, const std::array<double, 4>* unit = nullptr);
+  /// The axes' modes over one step (see step()); returns the x, y, z accelerometer readings
+  /// before noise and cross-coupling.
+  std::array<double, 3> step_modes(const std::array<double, 4>& acc0, const std::array<double, 3>& accm,
+                                   const std::array<double, 3>& acc1, const std::vector<PathPiece>* path,
+                                   const std::array<double, 4>* unit);
+  /// Streams the pieces of a move the simulator ran (echo:TKM lines) while the accelerometer
+  /// streams.
+  void stream_commanded_motion(double t_start, double t_end, double origin, const machine::Profile& prof,
+                               const std::array<double, 4>& unit);
   void out_flush(const Emit& emit);
 
   SimConfig cfg_;
@@ -291,6 +315,8 @@ class Simulator {
   long step_ = 0;
   int accel_every_;
   std::map<std::string, std::vector<std::array<double, 2>>> mode_state_;
+  std::map<std::string, std::vector<ident::BaseExcitedMode>> mode_physics_;
+  std::map<std::string, std::vector<ident::ModeStep>> mode_dt_step_;  ///< each mode's step of dt_
   // Unshaped commanded accelerations (start, middle, end of each step) of x and y, for shaping.
   std::array<std::vector<std::array<double, 3>>, 2> shape_hist_;
   std::size_t shape_pos_ = 0;
