@@ -59,31 +59,6 @@ struct TimedRecord {
   std::vector<ident::AccelPiece> motion;
 };
 
-/// The modes from the record against its commanded motion, started from the spectrum's. If that
-/// fit fails the spectrum's modes stay, with the reason as a warning.
-void fit_against_motion(ident::AxisModes& m, const TimedRecord& t) {
-  if (m.modes.empty()) return;
-  std::vector<fitting::ModeStart> starts;
-  for (const auto& e : m.modes) starts.push_back({e.freq_hz, e.zeta, 1.0});
-  try {
-    auto fit = ident::fit_axis_response(t.record, t.motion, starts);
-    const double strongest = m.peaks.front().freq_hz;
-    m.modes = fit.modes;
-    m.method = "output_error";
-    m.time_fit_variance_inflation = fit.variance_inflation;
-    m.time_fit = std::move(fit.fit);
-    double best = 1e300;
-    for (std::size_t k = 0; k < m.modes.size(); ++k)
-      if (std::abs(m.modes[k].freq_hz - strongest) < best) {
-        best = std::abs(m.modes[k].freq_hz - strongest);
-        m.dominant = static_cast<int>(k);
-      }
-  } catch (const Error& e) {
-    m.warnings.push_back("the fit against the commanded motion failed (" + e.message() +
-                         "); the modes are the spectrum's");
-  }
-}
-
 }  // namespace
 
 AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion ringdown) {
@@ -197,7 +172,8 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
     r.datasets = std::move(spectra);
     for (const auto& w : r.spectrum.warnings) result.warnings.push_back(w);
     r.modes = ident::identify_modes(r.spectrum, ro);
-    if (const auto it = timed.find(label); it != timed.end()) fit_against_motion(r.modes, it->second);
+    if (const auto it = timed.find(label); it != timed.end())
+      ident::refine_modes_with_motion(r.modes, it->second.record, it->second.motion);
     for (const auto& w : r.modes.warnings) result.warnings.push_back(fmt::format("axis {}: {}", label, w));
     result.axes.push_back(std::move(r));
   }

@@ -214,4 +214,53 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
   return out;
 }
 
+namespace {
+
+/// Why the fit against the motion is not believed beside the spectrum's (empty: it is).
+std::string disagreement(const std::vector<fitting::ModeEstimate>& spectrum,
+                         const std::vector<fitting::ModeEstimate>& motion) {
+  for (std::size_t k = 0; k < spectrum.size() && k < motion.size(); ++k) {
+    const auto& s = spectrum[k];
+    const auto& t = motion[k];
+    const double f_hw = 0.5 * (s.freq_ci95_hi - s.freq_ci95_lo), z_hw = 0.5 * (s.zeta_ci95_hi - s.zeta_ci95_lo);
+    if (std::abs(t.freq_hz - s.freq_hz) > kMotionFitAgreementHalfWidths * f_hw ||
+        std::abs(t.zeta - s.zeta) > kMotionFitAgreementHalfWidths * z_hw)
+      return fmt::format(
+          "against the commanded motion f {:.4g} Hz, zeta {:.4g}; the spectrum's f {:.4g} Hz "
+          "[{:.4g}, {:.4g}], zeta {:.4g} [{:.4g}, {:.4g}]",
+          t.freq_hz, t.zeta, s.freq_hz, s.freq_ci95_lo, s.freq_ci95_hi, s.zeta, s.zeta_ci95_lo, s.zeta_ci95_hi);
+  }
+  return {};
+}
+
+}  // namespace
+
+void refine_modes_with_motion(AxisModes& m, const AccelRecord& record, const std::vector<AccelPiece>& motion) {
+  if (m.modes.empty()) return;
+  std::vector<fitting::ModeStart> starts;
+  for (const auto& e : m.modes) starts.push_back({e.freq_hz, e.zeta, 1.0});
+  try {
+    auto fit = fit_axis_response(record, motion, starts);
+    if (const auto why = disagreement(m.modes, fit.modes); !why.empty()) {
+      m.warnings.push_back("the fit against the commanded motion does not agree with the spectrum's (" + why +
+                           "); the modes are the spectrum's. Is the motion on the samples' clock?");
+      return;
+    }
+    const double strongest = m.peaks.front().freq_hz;
+    m.modes = fit.modes;
+    m.method = "output_error";
+    m.time_fit_variance_inflation = fit.variance_inflation;
+    m.time_fit = std::move(fit.fit);
+    double best = 1e300;
+    for (std::size_t k = 0; k < m.modes.size(); ++k)
+      if (std::abs(m.modes[k].freq_hz - strongest) < best) {
+        best = std::abs(m.modes[k].freq_hz - strongest);
+        m.dominant = static_cast<int>(k);
+      }
+  } catch (const Error& e) {
+    m.warnings.push_back("the fit against the commanded motion failed (" + e.message() +
+                         "); the modes are the spectrum's");
+  }
+}
+
 }  // namespace tunekit::ident

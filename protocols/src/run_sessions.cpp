@@ -225,12 +225,19 @@ class KlipperSession : public Session {
     flush_script();
     if (sensor == "accelerometer") {
       if (on && !accel_subscribed_) {
+        // The samples, and the toolhead's commanded motion on the same print-time clock (what
+        // Klipper's motan data logger records): the modes are then fitted against the motion.
         const auto ep =
             machine::klipper_accelerometer_endpoint(sensors_.accelerometer_chip, sensors_.accelerometer_name);
         client_.call(ep.method, ep.params({{"tunekit", "accel"}}), timeout_);
+        const auto tq = machine::klipper_trapq_endpoint("toolhead");
+        client_.call(tq.method, tq.params({{"tunekit", "trapq_toolhead"}}), timeout_);
         accel_subscribed_ = true;
       }
-      if (!on) client_.pump(kBatchWait);  // the last batch of samples
+      if (!on) {
+        client_.pump(kBatchWait);  // the last batch of samples
+        write_toolhead_motion();
+      }
       accel_on_ = on;
       return;
     }
@@ -255,6 +262,7 @@ class KlipperSession : public Session {
   }
   void finish() override {
     flush_script();
+    if (accel_on_) write_toolhead_motion();
     if (load_on_) {
       client_.pump(kBatchWait);
       write_load_cell();
@@ -295,7 +303,19 @@ class KlipperSession : public Session {
       }
     } else if (tag == "trapq_extruder") {
       extruder_.add(p);
+    } else if (tag == "trapq_toolhead" && accel_on_) {
+      toolhead_.add(p);
     }
+  }
+  // Each toolhead move of the recording as a piece of commanded motion: Klipper's trapq entries
+  // hold their acceleration constant along their direction.
+  void write_toolhead_motion() {
+    for (const auto& m : toolhead_.moves()) {
+      const double v[6] = {
+          m.print_time_s, m.duration_s, m.acceleration * m.direction[0], m.acceleration * m.direction[1], 0.0, 0.0};
+      rec_.motion(v);
+    }
+    toolhead_ = {};
   }
   // Each force sample's feed is the mean commanded feed over the sample's share of the time axis
   // (from halfway to the previous sample to halfway to the next), as the filament moved it: a
@@ -326,7 +346,7 @@ class KlipperSession : public Session {
   SendGuard& guard_;
   std::vector<std::string> pending_;
   std::vector<machine::KlipperLoadCellSample> load_;
-  machine::TrapqTimeline extruder_;
+  machine::TrapqTimeline extruder_, toolhead_;
   long load_raw_ = 0;
   bool accel_subscribed_ = false, accel_on_ = false, load_subscribed_ = false, load_on_ = false;
 };

@@ -69,3 +69,32 @@ TEST_CASE("the simulator's clean runs through step and freq and resonance print 
     CHECK(env.at("warnings").empty());
   }
 }
+
+TEST_CASE("calibrate fits the axes against their commanded motion, and the 95 % intervals hold the simulator's modes") {
+  const auto& run = tunekit::test::default_calibration();
+  INFO(run.cli.err);
+  REQUIRE(run.cli.code == 0);
+  const auto results = tunekit::test::read_json(run.dir + "/results.json").at("results");
+  for (const char* axis : {"x", "y"}) {
+    INFO("axis " << axis);
+    const auto& a = results.at("axes").at(axis);
+    const std::string dir = run.dir + "/axis-" + axis;
+    CHECK(std::filesystem::exists(dir + "/commanded_motion_" + axis + "_tunekit.csv"));
+    CHECK(a.at("fit").at("method") == "output_error");
+    const auto truth = tunekit::test::read_json(dir + "/truth.json").at("axes").at(axis).at("modes").at(0);
+    const auto& m = a.at("modes").at(a.at("fit").at("dominant_mode").get<int>());
+    INFO(m.dump() << "\ntruth " << truth.dump());
+    const double f = truth.at("freq_hz"), zeta = truth.at("zeta");
+    CHECK(m.at("freq_ci95").at(0).get<double>() <= f);
+    CHECK(m.at("freq_ci95").at(1).get<double>() >= f);
+    CHECK(m.at("zeta_ci95").at(0).get<double>() <= zeta);
+    CHECK(m.at("zeta_ci95").at(1).get<double>() >= zeta);
+    // The sensor's noise alone: the intervals are hundreds of times narrower than the spectrum's.
+    const double hw = 0.5 * (m.at("freq_ci95").at(1).get<double>() - m.at("freq_ci95").at(0).get<double>());
+    const auto& s = a.at("fit").at("spectrum_fit").at("modes").at(0);
+    CHECK(hw < 0.01 * 0.5 * (s.at("freq_ci95").at(1).get<double>() - s.at("freq_ci95").at(0).get<double>()));
+    // The residuals are the sensor's noise, 20 mm/s^2 rms, and white.
+    CHECK(a.at("fit").at("diagnostics").at("rms").get<double>() == Approx(20).epsilon(0.02));
+    CHECK(a.at("fit").at("variance_inflation").get<double>() < 1.1);
+  }
+}

@@ -217,4 +217,16 @@ TEST_CASE("a Klipper API server's accelerometer stream is recorded and analyzed"
   REQUIRE(!modes.empty());
   CHECK(modes[0]["freq_hz"].get<double>() == Approx(f_mode).epsilon(0.01));
   CHECK(modes[0]["zeta"].get<double>() == Approx(zeta_mode).epsilon(0.20));
+  // The toolhead's trapq was recorded beside the samples, and the modes were fitted against it.
+  REQUIRE(env["results"]["files"].contains("commanded_motion"));
+  const std::string motion = env["results"]["files"]["commanded_motion"];
+  CHECK(fs::path(motion).parent_path() == fs::path(accel).parent_path());
+  CHECK(csv_rows(motion) > 100);
+  const auto res = nlohmann::json::parse(fit.out)["results"]["axes"]["x"];
+  CHECK(res["fit"]["method"] == "output_error");
+  INFO(res["modes"].dump());
+  // The fake cuts each move into 1 ms pieces of mean acceleration, which moves a switch of the
+  // acceleration by up to half a millisecond: f and zeta within 0.3 % and 3 %, not exactly.
+  CHECK(modes[0]["freq_hz"].get<double>() == Approx(f_mode).epsilon(0.003));
+  CHECK(modes[0]["zeta"].get<double>() == Approx(zeta_mode).epsilon(0.03));
 }

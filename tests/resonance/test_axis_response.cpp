@@ -182,3 +182,28 @@ TEST_CASE("commanded motion files: read, found beside their record, and refused 
   CHECK(ident::commanded_motion_beside("/nonexistent/raw_data_x_1.csv").empty());
   CHECK(ident::commanded_motion_beside("accel_x.csv").empty());
 }
+
+TEST_CASE("modes from the spectrum are refined against the motion, unless the two do not agree", "[resonance]") {
+  const Synth s = synth(45.3, 0.07, 30, 3);
+  const auto spectrum = ident::record_spectrum(s.record, ident::klipper_welch_options());
+  ident::ResonanceOptions ro;
+  ro.fit_min_hz = 15;
+  ro.fit_max_hz = 80;
+  const ident::AxisModes from_spectrum = ident::identify_modes(spectrum, ro);
+  REQUIRE(from_spectrum.modes.size() == 1);
+  ident::AxisModes refined = from_spectrum;
+  ident::refine_modes_with_motion(refined, s.record, s.motion);
+  CHECK(refined.method == "output_error");
+  REQUIRE(refined.time_fit.has_value());
+  CHECK(std::abs(refined.modes[0].freq_hz - 45.3) < std::abs(from_spectrum.modes[0].freq_hz - 45.3) + 1e-9);
+  CHECK(refined.warnings.size() == from_spectrum.warnings.size());
+  // The motion on a clock 5 ms off the samples': the fit against it is not believed.
+  std::vector<ident::AccelPiece> late = s.motion;
+  for (auto& p : late) p.t0_s += 0.005;
+  ident::AxisModes kept = from_spectrum;
+  ident::refine_modes_with_motion(kept, s.record, late);
+  CHECK(kept.method == from_spectrum.method);
+  CHECK(kept.modes[0].freq_hz == from_spectrum.modes[0].freq_hz);
+  REQUIRE(kept.warnings.size() == from_spectrum.warnings.size() + 1);
+  CHECK(kept.warnings.back().find("commanded motion") != std::string::npos);
+}

@@ -46,4 +46,16 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
                                   const std::vector<fitting::ModeStart>& starts,
                                   const AxisResponseOptions& options = {});
 
+/// How far the fit against the motion may lie from the spectrum's fit, in half-widths of the
+/// spectrum's 95 % interval, before it is not believed: the spectrum's interval carries its own
+/// model error, so two estimates of one mode lie within it; three half-widths apart, one of them
+/// is wrong (a motion on another clock than the samples, a record of something else).
+inline constexpr double kMotionFitAgreementHalfWidths = 3.0;
+
+/// Replaces the spectrum's modes in `m` by the fit of `record` against `motion` (method
+/// "output_error"), started from them. The spectrum's modes stay, with a warning that says why,
+/// when that fit fails or when a mode's frequency or damping ratio lies more than
+/// kMotionFitAgreementHalfWidths of the spectrum's interval away from the spectrum's estimate.
+void refine_modes_with_motion(AxisModes& m, const AccelRecord& record, const std::vector<AccelPiece>& motion);
+
 }  // namespace tunekit::ident

@@ -88,6 +88,7 @@ class TrapqTimeline {
   /// its length, what a sample standing for the window carries (a brief slow-down at a junction
   /// counts for its share of the window, not for the whole sample). t1_s <= t0_s: velocity at t0_s.
   double mean_velocity_x(double t0_s, double t1_s) const;
+  const std::vector<TrapqMove>& moves() const { return moves_; }
   std::size_t size() const { return moves_.size(); }
   bool empty() const { return moves_.empty(); }
 
