@@ -35,7 +35,7 @@ void eval_h(const double* p, int modes, double f, cd& h, cd* dh) {
 SpectralKernel identity_kernel() { return {{0.0}, {1.0}}; }
 
 // Variance inflation factor from Bartlett-weighted residual autocorrelations.
-double bartlett_inflation(const std::vector<double>& r, int lags) {
+double variance_inflation(const std::vector<double>& r, int lags) {
   if (lags <= 0 || r.size() < 8) return 1.0;
   const double n = static_cast<double>(r.size());
   const double mean = std::accumulate(r.begin(), r.end(), 0.0) / n;
@@ -221,7 +221,7 @@ ModalFit fit_modal_psd(const std::vector<double>& freq, const std::vector<double
     for (std::size_t b = 0; b < f.size(); ++b) out.model[b] = std::exp(r[b] + logy[b]) * pmax;
     out.direct_term = p[static_cast<std::size_t>(np - 2)] * std::sqrt(pmax);
     out.noise_floor = p[static_cast<std::size_t>(np - 1)] * pmax;
-    const double vif = bartlett_inflation(r, o.correlation_lags);
+    const double vif = variance_inflation(r, o.correlation_lags);
     finish(out, modes, vif, o.confidence);
     for (auto& m : out.modes) m.gain *= std::sqrt(pmax);
     // A floor at its lower bound 0 means the spectrum shows no floor above the modes' tails
@@ -332,15 +332,11 @@ ModalFit fit_modal_frf(const std::vector<double>& freq, const std::vector<cd>& h
       out.model[b] = std::abs(m);
     }
     out.direct_term = p[static_cast<std::size_t>(np - 1)];
-    finish(out, modes, bartlett_inflation(re, o.correlation_lags), o.confidence);
+    finish(out, modes, variance_inflation(re, o.correlation_lags), o.confidence);
     for (const auto& w : out.fit.warnings) out.warnings.push_back("modal fit: " + w);
     return out;
   }
   throw FitError("modal fit of " + std::to_string(modes) + " mode(s) to the frequency response failed: " + last_error);
-}
-
-double residual_variance_inflation(const std::vector<double>& residuals, int lags) {
-  return bartlett_inflation(residuals, lags);
 }
 
 }  // namespace tunekit::fitting

@@ -206,10 +206,7 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
   model(sched, modes, p.data(), m);
   std::vector<double> res(n);
   for (std::size_t i = 0; i < n; ++i) res[i] = y[i] - m[i];
-  double f_low = out.fit.params[0].value;
-  for (std::size_t k = 1; k < modes; ++k) f_low = std::min(f_low, out.fit.params[kParamsPerMode * k].value);
-  const int lags = std::clamp(static_cast<int>(std::lround(record.sampling.sample_rate_hz / f_low)), 1, 4000);
-  out.variance_inflation = fitting::residual_variance_inflation(res, lags);
+  out.variance_inflation = fitting::residual_variance_factor(res);
   finish(out, modes, o.confidence);
   return out;
 }

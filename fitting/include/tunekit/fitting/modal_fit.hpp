@@ -83,10 +83,4 @@ ModalFit fit_modal_frf(const std::vector<double>& freq_hz, const std::vector<std
                        const std::vector<double>& coherence, double min_coherence, const std::vector<ModeStart>& starts,
                        const SpectralKernel& kernel, const ModalFitOptions& options = {});
 
-/// The factor by which correlated residuals inflate a least-squares variance: 1 + 2 sum over
-/// lags 1..L of (1 - l/(L+1)) rho_l, with rho_l the residuals' autocorrelation at lag l (Bartlett
-/// weights, as Newey and West, A simple, positive semi-definite, heteroskedasticity and
-/// autocorrelation consistent covariance matrix, 1987), held within [1, 50].
-double residual_variance_inflation(const std::vector<double>& residuals, int lags);
-
 }  // namespace tunekit::fitting

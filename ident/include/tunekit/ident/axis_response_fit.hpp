@@ -13,9 +13,9 @@
 // the record's first sample is estimated too (what the motion before the record left ringing).
 // The parameters minimise the squared difference with the record (Ljung, System Identification:
 // Theory for the User, 1999, section 7.2, the output-error model). Their intervals are the
-// least-squares ones, inflated by the residuals' autocorrelation over one period of the lowest
-// mode (fitting::residual_variance_inflation) where the model does not describe the record to
-// its noise. Starting values come from the spectrum's modal fit.
+// least-squares ones, inflated by the residuals' autocorrelation (fitting::residual_variance_factor,
+// Bartlett 1935) where the model does not describe the record to its noise. Starting values come
+// from the spectrum's modal fit.
 
 #include <vector>
 
