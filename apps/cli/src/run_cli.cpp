@@ -64,6 +64,9 @@ void register_run(CLI::App& app, CliContext& ctx) {
                   fmt::format("'{}' (the built-in simulated printer, default) or a machine profile TOML (limits in mm, "
                               "mm/s, mm/s^2, degC)",
                               r.machine));
+  sub->add_option("--profile", r.profile_path,
+                  "With --machine sim: the printer to simulate, a machine profile TOML or its firmware configuration "
+                  "(its limits, firmware, steps and extruder)");
   sub->add_option("--port", r.port,
                   "Serial device (/dev/ttyACM0), pseudo-terminal (/tmp/printer) or unix:SOCKET (Klipper API server); "
                   "with --machine sim: an external tunekit-sim link");
@@ -92,6 +95,7 @@ void register_run(CLI::App& app, CliContext& ctx) {
               "  tunekit run liquefier-step --machine sim\n"
               "  tunekit run axis-sweep --axis x --machine sim -p freq_start_hz=20 -p freq_end_hz=80\n"
               "  tunekit run liquefier-step --dry-run -p feed_high_mm_s=4\n"
+              "  tunekit run axis-sweep --axis x --machine sim --profile printer.cfg --dry-run\n"
               "  tunekit run axis-sweep --axis y --machine printer.toml --port unix:/tmp/klippy_uds\n"
               "  tunekit run liquefier-step --machine sim --sim fault=garble@12 --json\n"
               "Each run directory holds journal.jsonl, the sensor CSVs, protocol.gcode, run.json and, on the\n"
