@@ -33,6 +33,13 @@ void set(Experiment& e, const std::string& name, double value, const std::string
   e.excitation["machine_defaults"][name] = why;
 }
 
+void capped(const ExperimentRequest& r, Experiment& e, const std::string& name, double nominal, double limit,
+            const std::string& what) {
+  if (!unset(r, e, name)) return;
+  set(e, name, std::min(nominal, limit),
+      limit < nominal ? fmt::format("the {} {:g} (below {:g})", what, limit, nominal) : std::string("nominal"));
+}
+
 double axes_min(const machine::MachineProfile& p, double machine::AxisLimits::*field) {
   return std::min(p.axis("x").*field, p.axis("y").*field);
 }
@@ -66,7 +73,8 @@ void staircase_defaults(const ExperimentRequest& r, Experiment& e) {
   if (unset(r, e, "amplitude_mm_s")) set(e, "amplitude_mm_s", kNominalFeedAmplitude_mm_s * scale, scaled);
   if (unset(r, e, "segment_s")) {
     const double top = e.params.at("feed_mean_mm_s") + e.params.at("amplitude_mm_s");
-    const double a = stops ? std::min(e.params.at("accel_mm_s2"), r.profile.extruder.max_accel_mm_s2) : 0.0;
+    // The acceleration as written (whole mm/s^2, rounded down: experiment_gcode.cpp extruder_accel).
+    const double a = stops ? std::floor(std::min(e.params.at("accel_mm_s2"), r.profile.extruder.max_accel_mm_s2)) : 0.0;
     const double keep = shortest_staircase_step_s(top, a, stops);
     set(e, "segment_s", std::max(kNominalSegment_s, keep),
         keep > kNominalSegment_s
@@ -75,6 +83,10 @@ void staircase_defaults(const ExperimentRequest& r, Experiment& e) {
                           top, a)
             : std::string("nominal"));
   }
+  // The sine dwells hold at least 20 steps a period (experiments_liquefier.cpp).
+  if (r.protocol == "liquefier-sine")
+    capped(r, e, "freq_max_hz", kNominalSineMax_hz, 1.0 / (20 * e.params.at("segment_s")),
+           "frequency whose period holds 20 staircase steps");
 }
 
 /// The pulses' largest speed amplitude (mm/s): a quarter period 1/(4f) at +-accel_per_hz f.
@@ -150,13 +162,6 @@ void accel_per_hz_default(const ExperimentRequest& r, Experiment& e) {
           : std::string("Klipper's default"));
 }
 
-void capped(const ExperimentRequest& r, Experiment& e, const std::string& name, double nominal, double limit,
-            const std::string& what) {
-  if (!unset(r, e, name)) return;
-  set(e, name, std::min(nominal, limit),
-      limit < nominal ? fmt::format("the {} {:g} (below {:g})", what, limit, nominal) : std::string("nominal"));
-}
-
 void motion_defaults(const ExperimentRequest& r, Experiment& e) {
   const auto& p = r.profile;
   const double accel = axes_min(p, &machine::AxisLimits::max_accel_mm_s2);
@@ -169,12 +174,23 @@ void motion_defaults(const ExperimentRequest& r, Experiment& e) {
   } else if (r.protocol == "axis-rectangle") {
     capped(r, e, "speed_mm_s", 100, speed, "axes' speed limit (90 %)");
     capped(r, e, "accel_mm_s2", 3000, accel, "axes' acceleration limit");
-  } else if (r.protocol == "ring-print" || r.protocol == "line-steps") {
-    capped(r, e, "accel_mm_s2", 1000, accel, "axes' acceleration limit");
-  } else if (r.protocol == "test-pattern") {
-    capped(r, e, "accel_mm_s2", 1500, accel, "axes' acceleration limit");
+  } else if (r.protocol == "ring-print" || r.protocol == "line-steps" || r.protocol == "test-pattern") {
+    // Their retractions and primes are extrude-only moves at the print acceleration as the gate
+    // reads it (Klipper caps them at max_extrude_only_accel by itself, Marlin and RepRapFirmware
+    // at M204 R and M201 E, which these prints do not set): the extruder's limit applies too.
+    const double print = std::min(accel, p.extruder.max_accel_mm_s2);
+    const std::string what =
+        print < accel ? "extruder's acceleration limit (its retractions and primes)" : "axes' acceleration limit";
+    capped(r, e, "accel_mm_s2", r.protocol == "test-pattern" ? 1500 : 1000, print, what);
     capped(r, e, "travel_speed_mm_s", 150, speed, "axes' speed limit (90 %)");
   }
+}
+
+/// The step test's two feeds within the extruder's and the hot end's limits.
+void step_feed_defaults(const ExperimentRequest& r, Experiment& e) {
+  const double cap = kDefaultMargin * feed_cap_mm_s(r.profile);
+  capped(r, e, "feed_high_mm_s", kNominalStepHigh_mm_s, cap, "extruder's and hot end's feed limit (90 %)");
+  capped(r, e, "feed_low_mm_s", kNominalStepLow_mm_s, e.params.at("feed_high_mm_s") / 3, "third of the high feed");
 }
 
 }  // namespace
@@ -194,6 +210,7 @@ double shortest_staircase_step_s(double feed_mm_s, double accel_mm_s2, bool stop
 }
 
 void fill_machine_defaults(const ExperimentRequest& r, Experiment& e) {
+  if (r.protocol == "liquefier-step") step_feed_defaults(r, e);
   if (r.protocol == "liquefier-step" || r.protocol == "liquefier-flow-sweep")
     feed_defaults(r, e, kNominalStepAccel_mm_s2);
   else if (r.protocol == "liquefier-sine" || r.protocol == "liquefier-chirp") staircase_defaults(r, e);

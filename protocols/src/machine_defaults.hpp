@@ -13,12 +13,15 @@
 namespace tunekit::protocols::experiment_gcode {
 
 /// The nominal values the machine defaults start from (a desktop printer's), capped by the limits.
-inline constexpr double kNominalStepAccel_mm_s2 = 2000;   ///< feed steps and the flow sweep
+inline constexpr double kNominalStepAccel_mm_s2 = 2000;  ///< feed steps and the flow sweep
+inline constexpr double kNominalStepLow_mm_s = 1.0;      ///< the step test's low and high feeds
+inline constexpr double kNominalStepHigh_mm_s = 3.0;
 inline constexpr double kNominalChirpAccel_mm_s2 = 3000;  ///< sine dwells and the chirp
 inline constexpr double kNominalFeedMean_mm_s = 2.0;      ///< sine/chirp mean feed (4.8 mm^3/s at 1.75 mm)
 inline constexpr double kNominalFeedAmplitude_mm_s = 1.0;
 inline constexpr double kNominalSegment_s = 0.02;  ///< one constant-feed move of a sine/chirp staircase
 inline constexpr double kNominalSweepEnd_hz = 100;
+inline constexpr double kNominalSineMax_hz = 2;  ///< the sine dwells' highest frequency
 /// Klipper's [resonance_tester] accel_per_hz default (klippy/extras/resonance_tester.py), mm/s^2/Hz.
 inline constexpr double kKlipperAccelPerHz = 60;
 inline constexpr double kNominalTravel_mm_s = 100;
