@@ -33,7 +33,9 @@ class ProfileTomlWriter {
   void table(const std::string& name) { out_ += fmt::format("\n[{}]\n", name); }
   void line(const std::string& key, const std::string& full_key, const std::string& value) {
     const auto it = p_.sources.find(full_key);
-    const std::string src = it == p_.sources.end() ? "not in the configuration: tunekit's default" : it->second;
+    const std::string src = it != p_.sources.end() ? it->second
+                            : p_.sources.empty()   ? "read from " + p_.source_path + " (or the profile's default)"
+                                                   : "not in the configuration: tunekit's default";
     out_ += fmt::format("{} = {}  # {}\n", key, value, comment_text(src));
   }
   void number(const std::string& table, const std::string& key, double v) {

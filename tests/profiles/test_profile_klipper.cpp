@@ -212,6 +212,33 @@ TEST_CASE("Klipper: [include] reads globs relative to the including file, nested
   CHECK_THAT(import_error(dir + "/self.cfg").message(), Contains("loops"));
 }
 
+TEST_CASE("Klipper: accelerometer, load cell and input shaper sections become sensors and firmware state",
+          "[profiles][klipper][sensors]") {
+  const std::string dir = tunekit::test::scratch_dir("klipper_sensors");
+  write(dir + "/printer.cfg", "[include " + klipper("printer-creality-ender3-v2-2020.cfg") +
+                                  "]\n"
+                                  "[adxl345 bed]\ncs_pin: PA4\n"
+                                  "[lis2dw toolhead]\ncs_pin: PB12\n"
+                                  "[resonance_tester]\naccel_chip: lis2dw toolhead\nprobe_points: 100, 100, 20\n"
+                                  "[load_cell probe]\nsensor_type: hx711\n"
+                                  "[input_shaper]\nshaper_type: ei\nshaper_freq_x: 48.6\ndamping_ratio_x: 0.05\n");
+  const MachineProfile p = tunekit::machine::load_machine_profile(dir + "/printer.cfg");
+  CHECK(p.sensors.accelerometer);
+  CHECK(p.sensors.accelerometer_chip == "lis2dw");  // the chip [resonance_tester] accel_chip names
+  CHECK(p.sensors.accelerometer_name == "lis2dw toolhead");
+  CHECK(p.sensors.accelerometer_rate_hz == 1600);  // lis2dw.py's rate
+  CHECK(p.sensors.load_cell);
+  CHECK(p.sensors.load_cell_name == "load_cell probe");
+  // shaper_type ei for both axes, shaper_freq_y 0 (default): Y unshaped.
+  CHECK(p.state.shaper.at("x") == "ei:48.6:0.05");
+  CHECK(p.state.shaper.count("y") == 0);
+  const auto back = tunekit::machine::parse_machine_profile(tunekit::machine::machine_profile_toml(p), "back.toml");
+  CHECK(back.sensors.accelerometer_chip == "lis2dw");
+  CHECK(back.sensors.accelerometer_name == "lis2dw toolhead");
+  CHECK(back.sensors.load_cell_name == "load_cell probe");
+  CHECK(back.state.shaper.at("x") == "ei:48.6:0.05");
+}
+
 TEST_CASE("Klipper: the SAVE_CONFIG block applies where the sections above do not set the option",
           "[profiles][klipper][save_config]") {
   const std::string stock = tunekit::test::read_text(klipper("printer-creality-ender3-v2-2020.cfg"));
