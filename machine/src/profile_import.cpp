@@ -114,15 +114,34 @@ bool is_firmware_configuration(const std::string& path) {
   }
 }
 
+namespace {
+
+/// The imported profile as load_machine_profile() reads its TOML: the same checks as every TOML
+/// profile, and the same defaults for what the TOML leaves out. What the TOML does not carry (the
+/// sources, Klipper's acceleration in force) is kept.
+MachineProfile as_loaded(const MachineProfile& imported, const std::string& path) {
+  MachineProfile p;
+  try {
+    p = parse_machine_profile(machine_profile_toml(imported), path);
+  } catch (const InputError& e) {
+    throw InputError("the imported profile does not pass the machine profile's checks: " + e.message(), path);
+  }
+  p.sources = imported.sources;
+  p.state.accel_in_force_mm_s2 = imported.state.accel_in_force_mm_s2;
+  return p;
+}
+
+}  // namespace
+
 MachineProfile import_machine_profile(const std::string& path, const ProfileImportOptions& options) {
   const std::string text = read_file_bytes(path);
   const ConfigFormat f = has_extension(path, ".toml") ? ConfigFormat::profile_toml : detect_config_format(text, path);
   switch (f) {
     case ConfigFormat::profile_toml: return parse_machine_profile(text, path);
-    case ConfigFormat::klipper: return profile_from_klipper(path, options);
+    case ConfigFormat::klipper: return as_loaded(profile_from_klipper(path, options), path);
     case ConfigFormat::marlin_m503:
-    case ConfigFormat::marlin_config: return profile_from_marlin(path, options);
-    case ConfigFormat::rrf: return profile_from_rrf(path, options);
+    case ConfigFormat::marlin_config: return as_loaded(profile_from_marlin(path, options), path);
+    case ConfigFormat::rrf: return as_loaded(profile_from_rrf(path, options), path);
   }
   return parse_machine_profile(text, path);
 }

@@ -130,6 +130,14 @@ std::string machine_profile_toml(const MachineProfile& p) {
       "# Every value names its source: the file and line it was read from, the firmware's default and its\n"
       "# formula, or tunekit's default and its reason. Units are in the key names.\n",
       comment_text(p.source_path), p.firmware.empty() ? "TOML" : p.firmware);
+  if (p.firmware == "klipper")
+    w.out() +=
+        "# Klipper's defaults and formulas: Kevin O'Connor et al., Klipper 3D printer firmware, klippy/, 2016-2026.\n";
+  else if (p.firmware == "marlin")
+    w.out() +=
+        "# Marlin's defaults and rules: MarlinFirmware, Marlin 3D printer firmware 2.1, Marlin/src/, 2011-2026.\n";
+  else if (p.firmware == "rrf")
+    w.out() += "# RepRapFirmware's defaults: Duet3D, RepRapFirmware 3.5, src/, 2013-2026.\n";
   w.table("machine");
   w.text("machine", "name", p.name);
   if (!p.id.empty()) w.text("machine", "id", p.id);

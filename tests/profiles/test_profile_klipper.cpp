@@ -88,6 +88,9 @@ TEST_CASE("Klipper: the Creality Ender-3 V2's stock printer.cfg gives Klipper's 
   CHECK(p.print.layer_height_mm == Approx(0.2));
   CHECK_FALSE(p.sensors.accelerometer);
   CHECK(p.state.shaper.empty());
+  // The profile is the one its TOML loads as: the loader's default for what the TOML leaves out
+  // (max_accel_e_mm_s2 = the extruder's limit), Klipper's acceleration in force kept.
+  CHECK(p.state.max_accel_e_mm_s2 == p.extruder.max_accel_mm_s2);
 
   // Every value names its source.
   CHECK(p.sources.at("print.max_accel_mm_s2") == path + ":93 [printer] max_accel: 3000");

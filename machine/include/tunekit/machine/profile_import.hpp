@@ -62,7 +62,9 @@ MachineProfile profile_from_marlin(const std::string& path, const ProfileImportO
 MachineProfile profile_from_rrf(const std::string& path, const ProfileImportOptions& options = {});
 
 /// Any supported file: a TOML profile (parse_machine_profile; sources stay empty) or a firmware
-/// configuration (the importer of its format).
+/// configuration (the importer of its format), returned as load_machine_profile() reads the TOML
+/// machine_profile_toml() writes of it: the same checks and defaults as every TOML profile, with
+/// the sources kept.
 MachineProfile import_machine_profile(const std::string& path, const ProfileImportOptions& options = {});
 
 /// Whether the file at `path` (the first bytes are read) is a firmware configuration rather than a
