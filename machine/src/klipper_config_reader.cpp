@@ -110,7 +110,7 @@ void KlipperParser::line(const std::string& raw, const Site& site, bool includes
   }
   const auto sep = t.find_first_of(":=");
   if (sep == std::string::npos || sep == 0)
-    throw InputError(fmt::format("'{}' is neither a [section] nor an option (key: value)", t), site.where());
+    throw InputError(fmt::format("'{}' is neither a [section] nor an option (key: value)", shown(t)), site.where());
   if (section_ == nullptr)
     throw InputError(fmt::format("the option '{}' comes before any [section] header", cfg_trim(t.substr(0, sep))),
                      site.where());

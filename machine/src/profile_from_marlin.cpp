@@ -97,7 +97,8 @@ class Evaluator {
     while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
   }
   [[noreturn]] void fail() const {
-    throw InputError(fmt::format("cannot evaluate '{}' (numbers, other defines and + - * / only)", s_), site_.where());
+    throw InputError(fmt::format("cannot evaluate '{}' (numbers, other defines and + - * / only)", detail::shown(s_)),
+                     site_.where());
   }
   double sum() {
     double v = product();
@@ -119,17 +120,24 @@ class Evaluator {
   }
   double unary() {
     skip();
-    if (i_ < s_.size() && (s_[i_] == '-' || s_[i_] == '+')) return s_[i_++] == '-' ? -unary() : unary();
-    if (i_ < s_.size() && s_[i_] == '(') {
+    if (++nesting_ > kMaxNesting) fail();  // "------1" or "((((1": no recursion without bound
+    double v = 0;
+    if (i_ < s_.size() && (s_[i_] == '-' || s_[i_] == '+')) {
+      v = s_[i_++] == '-' ? -unary() : unary();
+    } else if (i_ < s_.size() && s_[i_] == '(') {
       ++i_;
-      const double v = sum();
+      v = sum();
       skip();
       if (i_ >= s_.size() || s_[i_] != ')') fail();
       ++i_;
-      return v;
+    } else {
+      v = atom();
     }
-    return atom();
+    --nesting_;
+    return v;
   }
+  static constexpr int kMaxNesting = 64;
+  int nesting_ = 0;
   double atom();
   const std::map<std::string, Define>& d_;
   const Site& site_;

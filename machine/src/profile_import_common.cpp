@@ -44,7 +44,7 @@ double checked(double v, const Range& range, const Site& site, const std::string
 
 double parse_number(const std::string& text, const Range& range, const Site& site, const std::string& name) {
   const auto v = core::parse_decimal(text);
-  if (!v) throw InputError(fmt::format("{} = '{}' is not a number", name, text), site.where());
+  if (!v) throw InputError(fmt::format("{} = '{}' is not a number", name, shown(text)), site.where());
   return checked(*v, range, site, name);
 }
 
@@ -62,6 +62,8 @@ void set_axis(MachineProfile& p, const std::string& name, const Sourced& lo, con
   set_value(p, k + "max_velocity_mm_s", ax.max_velocity_mm_s, v.value, v.source);
   set_value(p, k + "max_accel_mm_s2", ax.max_accel_mm_s2, a.value, a.source);
 }
+
+std::string shown(const std::string& text) { return text.size() > 60 ? text.substr(0, 60) + "..." : text; }
 
 std::string number_text(double v) { return fmt::format("{}", v); }
 

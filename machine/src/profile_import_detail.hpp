@@ -62,6 +62,9 @@ struct Sourced {
 void set_axis(MachineProfile& p, const std::string& name, const Sourced& lo, const Sourced& hi, const Sourced& v,
               const Sourced& a);
 
+/// `text` for a message: at most 60 characters ("..." marks a cut), so an error stays one short line.
+std::string shown(const std::string& text);
+
 /// Sets `field` to `v` and notes `source` under `key` in p.sources.
 void set_value(MachineProfile& p, const std::string& key, double& field, double v, std::string source);
 /// The shortest text that reads back as `v` ("798.1" is written with 4 significant digits where

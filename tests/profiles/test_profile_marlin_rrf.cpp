@@ -187,4 +187,7 @@ TEST_CASE("Marlin and RepRapFirmware: hostile values give one located error", "[
   p = copy_with("marlin_configs/creality-ender3-v2/Configuration.h", "marlin_huge/Configuration.h",
                 "{ 500, 500, 100, 1000 }", "{ 1e308, 500, 100, 1000 }");
   expect(p, p + ":1316", "is not a plausible acceleration");
+  p = copy_with("marlin_configs/creality-ender3-v2/Configuration.h", "marlin_deep/Configuration.h",
+                "#define X_BED_SIZE 220", "#define X_BED_SIZE " + std::string(100000, '(') + "220");
+  expect(p, p + ":1881", "cannot evaluate");  // nesting is bounded, not a stack overflow
 }
