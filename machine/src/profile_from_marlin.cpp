@@ -20,6 +20,7 @@
 
 #include <fmt/format.h>
 
+#include "marlin_header.hpp"
 #include "profile_import_detail.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/text.hpp"
@@ -41,140 +42,18 @@ std::string marlin_trim(const std::string& s) {
 
 // --- Configuration.h ---------------------------------------------------------------------------
 
-struct Define {
-  std::string value;  ///< the text after the name, comments dropped (empty for a flag)
-  Site site;
-};
-
-/// The active `#define NAME value` lines of a header (the first of each name; `//#define` and
-/// block comments are not active). Conditional blocks (#if) are not evaluated.
-void read_defines(const std::string& path, std::map<std::string, Define>& out) {
-  std::istringstream in(firmware::read_config_file(path));
-  const std::string name = std::filesystem::path(path).string();
-  bool block = false;
-  std::size_t n = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++n;
-    if (block) {
-      const auto end = line.find("*/");
-      if (end == std::string::npos) continue;
-      line = line.substr(end + 2);
-      block = false;
-    }
-    if (const auto open = line.find("/*"); open != std::string::npos && line.find("*/", open) == std::string::npos) {
-      line = line.substr(0, open);
-      block = true;
-    }
-    std::string t = marlin_trim(line.substr(0, line.find("//")));
-    if (t.empty() || t[0] != '#') continue;
-    t = marlin_trim(t.substr(1));
-    if (t.rfind("define", 0) != 0 || t.size() < 7 || !std::isspace(static_cast<unsigned char>(t[6]))) continue;
-    t = marlin_trim(t.substr(6));
-    std::size_t k = 0;
-    while (k < t.size() && (std::isalnum(static_cast<unsigned char>(t[k])) || t[k] == '_')) ++k;
-    if (k == 0 || (k < t.size() && t[k] == '(')) continue;  // function-like macros are not settings
-    out.try_emplace(t.substr(0, k),
-                    Define{marlin_trim(t.substr(k)), Site{name, n, marlin_trim(line.substr(0, line.find("//")))}});
-  }
-}
-
-/// Evaluates a define's value: numbers (with an f/F suffix), other defines by name, + - * / and
-/// parentheses. InputError at the define's line for anything else.
-class Evaluator {
- public:
-  Evaluator(const std::map<std::string, Define>& d, const Site& site, int depth) : d_(d), site_(site), depth_(depth) {}
-  double eval(const std::string& text) {
-    s_ = text;
-    i_ = 0;
-    const double v = sum();
-    skip();
-    if (i_ != s_.size()) fail();
-    return v;
-  }
-
- private:
-  void skip() {
-    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
-  }
-  [[noreturn]] void fail() const {
-    throw InputError(fmt::format("cannot evaluate '{}' (numbers, other defines and + - * / only)", detail::shown(s_)),
-                     site_.where());
-  }
-  double sum() {
-    double v = product();
-    for (skip(); i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-'); skip()) {
-      const char op = s_[i_++];
-      const double r = product();
-      v = op == '+' ? v + r : v - r;
-    }
-    return v;
-  }
-  double product() {
-    double v = unary();
-    for (skip(); i_ < s_.size() && (s_[i_] == '*' || s_[i_] == '/'); skip()) {
-      const char op = s_[i_++];
-      const double r = unary();
-      v = op == '*' ? v * r : v / r;
-    }
-    return v;
-  }
-  double unary() {
-    skip();
-    if (++nesting_ > kMaxNesting) fail();  // "------1" or "((((1": no recursion without bound
-    double v = 0;
-    if (i_ < s_.size() && (s_[i_] == '-' || s_[i_] == '+')) {
-      v = s_[i_++] == '-' ? -unary() : unary();
-    } else if (i_ < s_.size() && s_[i_] == '(') {
-      ++i_;
-      v = sum();
-      skip();
-      if (i_ >= s_.size() || s_[i_] != ')') fail();
-      ++i_;
-    } else {
-      v = atom();
-    }
-    --nesting_;
-    return v;
-  }
-  static constexpr int kMaxNesting = 64;
-  int nesting_ = 0;
-  double atom();
-  const std::map<std::string, Define>& d_;
-  const Site& site_;
-  int depth_;
-  std::string s_;
-  std::size_t i_ = 0;
-};
-
-double Evaluator::atom() {
-  const std::size_t start = i_;
-  while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '_' || s_[i_] == '.')) ++i_;
-  std::string word = s_.substr(start, i_ - start);
-  if (word.empty()) fail();
-  if (std::isdigit(static_cast<unsigned char>(word[0])) || word[0] == '.') {
-    while (!word.empty() && (word.back() == 'f' || word.back() == 'F' || word.back() == 'L' || word.back() == 'U'))
-      word.pop_back();
-    const auto v = core::parse_decimal(word);
-    if (!v) fail();
-    return *v;
-  }
-  const auto it = d_.find(word);
-  if (it == d_.end() || depth_ > 16 || it->second.value.empty()) fail();
-  return Evaluator(d_, it->second.site, depth_ + 1).eval(it->second.value);
-}
-
 class MarlinHeader {
  public:
   explicit MarlinHeader(const std::string& path) : path_(path) {
-    read_defines(path, d_);
+    detail::read_marlin_defines(path, d_);
     const auto adv = std::filesystem::path(path).parent_path() / "Configuration_adv.h";
-    if (std::filesystem::is_regular_file(adv)) read_defines(adv.string(), d_);
+    if (std::filesystem::is_regular_file(adv)) detail::read_marlin_defines(adv.string(), d_);
   }
-  bool enabled(const std::string& name) const { return d_.count(name) != 0; }
+  bool enabled(const std::string& name) const { return detail::marlin_enabled(d_, name); }
   std::optional<Sourced> number(const std::string& name, const detail::Range& range) const {
     const auto it = d_.find(name);
     if (it == d_.end()) return std::nullopt;
-    const double v = Evaluator(d_, it->second.site, 0).eval(it->second.value);
+    const double v = detail::eval_marlin_expression(d_, it->second.value, it->second.site);
     return Sourced{detail::checked(v, range, it->second.site, name), it->second.site.cite()};
   }
   Sourced required(const std::string& name, const detail::Range& range) const {
@@ -193,14 +72,14 @@ class MarlinHeader {
     std::stringstream ss(v.substr(1, v.size() - 2));
     for (std::string part; std::getline(ss, part, ',');) parts.push_back(part);
     if (parts.size() < 4) throw InputError(fmt::format("{} needs X, Y, Z and E values", name), it->second.site.where());
-    const double x = Evaluator(d_, it->second.site, 0).eval(parts[std::min(index, parts.size() - 1)]);
+    const double x = detail::eval_marlin_expression(d_, parts[std::min(index, parts.size() - 1)], it->second.site);
     return {detail::checked(x, range, it->second.site, name), it->second.site.cite()};
   }
   const std::string& path() const { return path_; }
 
  private:
   std::string path_;
-  std::map<std::string, Define> d_;
+  detail::MarlinDefines d_;
 };
 
 // --- What both sources give ----------------------------------------------------------------------
@@ -250,10 +129,12 @@ void header_kinematics(const MarlinHeader& h, MarlinSettings& m) {
   if (h.enabled("DELTA")) {
     m.kinematics = "delta";
     m.kinematics_source = h.path() + ": DELTA is defined";
-    const auto r = h.required("DELTA_PRINTABLE_RADIUS", detail::kLength);
+    // PRINTABLE_RADIUS since Marlin 2.1.3, DELTA_PRINTABLE_RADIUS before.
+    const auto printable = h.number("PRINTABLE_RADIUS", detail::kLength);
+    const auto r = printable ? *printable : h.required("DELTA_PRINTABLE_RADIUS", detail::kLength);
     const double half = r.value / std::numbers::sqrt2;
     const std::string why = fmt::format(
-        "DELTA_PRINTABLE_RADIUS {:g} mm; tunekit's travel is a box: the square inside "
+        "printable radius {:g} mm; tunekit's travel is a box: the square inside "
         "that circle, radius / sqrt(2) = {:.6g} mm ({})",
         r.value, half, r.source);
     for (std::size_t i = 0; i < 2; ++i) m.lo[i] = Sourced{-half, why}, m.hi[i] = Sourced{half, why};

@@ -61,6 +61,37 @@ TEST_CASE("Marlin: the Ender-3 V2's Configuration.h gives the limits Marlin sets
   CHECK(back.state.retract_accel_mm_s2 == 500);
 }
 
+TEST_CASE("Marlin: the Anycubic Kossel Linear Plus's delta Configuration.h, its #if branches followed",
+          "[profiles][marlin][delta]") {
+  const std::string path = dataset("marlin_configs/anycubic-kossel-linear-plus/Configuration.h");
+  const MachineProfile p = tunekit::machine::load_machine_profile(path);
+  CHECK(p.kinematics == "delta");  // #define DELTA
+  // #if ENABLED(ANYCUBIC_KOSSEL_PLUS): PRINTABLE_RADIUS 120.0 (the #else branch has 90, a POLAR
+  // block 82); tunekit's box is the square inside the circle: +-120 / sqrt(2) = +-84.853 mm.
+  CHECK(p.axis("x").max_mm == Approx(84.85281).epsilon(1e-6));
+  CHECK(p.axis("y").min_mm == Approx(-84.85281).epsilon(1e-6));
+  // Z_MAX_POS MANUAL_Z_HOME_POS, MANUAL_Z_HOME_POS DELTA_HEIGHT, DELTA_HEIGHT 300.00.
+  CHECK(p.axis("z").min_mm == 0);
+  CHECK(p.axis("z").max_mm == 300);
+  CHECK(p.axis("x").max_velocity_mm_s == 100);  // DEFAULT_MAX_FEEDRATE { 100, 100, 100, 100}
+  CHECK(p.axis("x").max_accel_mm_s2 == 3000);
+  CHECK(p.print.max_accel_mm_s2 == 600);
+  CHECK(p.extruder.max_accel_mm_s2 == 3000);  // M204 R 3000 = M201 E 3000
+  // DEFAULT_XYZ_STEPS_PER_UNIT ((200) * (16) / double(2) / double(20)) = 80.
+  CHECK(p.state.steps_per_mm_x == 80);
+  CHECK(p.extruder.max_extrude_only_distance_mm == 750);
+  CHECK(p.temperature.hotend_max_c == 260);  // 275 - 15
+  CHECK(p.temperature.bed_max_c == 110);     // 120 - 10
+
+  // The normal-size Kossel: the #else branch's PRINTABLE_RADIUS 90.0.
+  std::string t = tunekit::test::read_text(path);
+  t.replace(t.find("#define ANYCUBIC_KOSSEL_PLUS"), 28, "//#define ANYCUBIC_KOSSEL_PLUS");
+  const std::string dir = tunekit::test::scratch_dir("marlin_kossel_normal");
+  std::ofstream(dir + "/Configuration.h", std::ios::binary) << t;
+  const MachineProfile n = tunekit::machine::load_machine_profile(dir + "/Configuration.h");
+  CHECK(n.axis("x").max_mm == Approx(90 / std::sqrt(2.0)));
+}
+
 TEST_CASE("RepRapFirmware: an Ender-3 Pro's config.g gives the limits the firmware sets", "[profiles][rrf]") {
   const std::string path = dataset("rrf_configs/ender3pro-x0r-maestro-rrf3/config.g");
   const MachineProfile p = tunekit::machine::load_machine_profile(path);
