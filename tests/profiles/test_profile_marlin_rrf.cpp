@@ -144,6 +144,29 @@ TEST_CASE("RepRapFirmware: a Prusa MK3S's config.g (M208 min:max, no M204) gives
   CHECK(p.state.steps_per_mm_x == 200);      // M92 X200.00 at x16
 }
 
+TEST_CASE("RepRapFirmware: a Kossel delta's config.g (M665, no M208, no M143) gives the firmware's limits",
+          "[profiles][rrf][delta]") {
+  const MachineProfile p =
+      tunekit::machine::load_machine_profile(dataset("rrf_configs/kossel-dc42-smart-effector/config.g"));
+  CHECK(p.kinematics == "delta");  // M665 L361.676 R180.679 H470.070 B150.0
+  // Printable radius B 150 mm: the box inside the circle, +-150 / sqrt(2) = +-106.066 mm; Z from the
+  // firmware's default minimum 0 to the homed height H 470.07 mm.
+  CHECK(p.axis("x").max_mm == Approx(106.06602).epsilon(1e-6));
+  CHECK(p.axis("y").min_mm == Approx(-106.06602).epsilon(1e-6));
+  CHECK(p.axis("z").min_mm == 0);
+  CHECK(p.axis("z").max_mm == Approx(470.07));
+  CHECK(p.axis("x").max_velocity_mm_s == Approx(250));  // M203 X15000 mm/min
+  CHECK(p.axis("z").max_accel_mm_s2 == 3000);           // M201 Z3000
+  CHECK(p.extruder.max_velocity_mm_s == Approx(60));    // M203 E3600 mm/min
+  CHECK(p.extruder.max_accel_mm_s2 == 1000);            // M201 E1000
+  CHECK(p.print.max_accel_mm_s2 == 3000);               // no M204: M201 X/Y
+  // No M143: RepRapFirmware's default limits (285 degC, the lower of the versions' hot-end
+  // defaults; 125 degC for the bed).
+  CHECK(p.temperature.hotend_max_c == 285);
+  CHECK(p.temperature.bed_max_c == 125);
+  CHECK(p.state.shaper.empty());  // M593 F0: off
+}
+
 TEST_CASE("Marlin: an M503 report is read, and what it lacks is named in one error", "[profiles][marlin][m503]") {
   // Written for this test in the layout Marlin 2.1 prints (Marlin/src/module/settings.cpp), with
   // the OctoPrint terminal's "Recv: " prefix on some lines.
