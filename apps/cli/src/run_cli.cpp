@@ -60,10 +60,12 @@ void register_run(CLI::App& app, CliContext& ctx) {
       ->required()
       ->check(CLI::IsMember(names));
   sub->add_option("--axis", r.axis, "Axis of an axis protocol: x or y")->check(CLI::IsMember({"x", "y"}));
-  sub->add_option("-m,--machine", r.machine,
-                  fmt::format("'{}' (the built-in simulated printer, default) or a machine profile TOML (limits in mm, "
-                              "mm/s, mm/s^2, degC)",
-                              r.machine));
+  sub->add_option(
+      "-m,--machine", r.machine,
+      fmt::format("'{}' (the built-in simulated printer, default) or a machine profile: TOML (limits in mm, "
+                  "mm/s, mm/s^2, degC) or the firmware's configuration (Klipper printer.cfg, Marlin "
+                  "Configuration.h, RepRapFirmware config.g; see tunekit profile)",
+                  r.machine));
   sub->add_option("--profile", r.profile_path,
                   "With --machine sim: the printer to simulate, a machine profile TOML or its firmware configuration "
                   "(its limits, firmware, steps and extruder)");
