@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "export_writers.hpp"
+#include "tunekit/core/file_lock.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/marlin_smoothing.hpp"
 #include "tunekit/firmware/config_edit.hpp"
@@ -223,6 +224,9 @@ ExportResult export_config_file(ExportFirmware fw, const std::string& path, cons
 
 std::string apply_export(const ExportResult& r, const std::function<void(const std::string&)>& before_rename) {
   if (!r.changed()) return {};
+  // Writers of one configuration take turns (file_lock.hpp): compare and replace under the lock.
+  const core::FileLock lock(r.path);
+  lock.remove_stale_temporaries();
   // Refuse to overwrite a file that changed since it was read.
   if (read_config_file(r.path) != r.original)
     throw InputError("the configuration file changed since it was read; run the export again", r.path);

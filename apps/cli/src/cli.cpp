@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <optional>
@@ -288,6 +289,10 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     return static_cast<int>(e.code());
   } catch (const std::bad_alloc&) {
     err << "tunekit: error: out of memory\n";
+    return static_cast<int>(ExitCode::bad_input);
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A read-only place, a name too long, a missing directory: the condition in plain words.
+    err << "tunekit: error: " << core::plain_filesystem_error(e.what()) << "\n";
     return static_cast<int>(ExitCode::bad_input);
   } catch (const std::exception& e) {
     // A JSON library error that escaped is told in plain words, never in the library's text.
