@@ -225,6 +225,12 @@ void finish_settings(const ExportOptions& a, const DesignInputs& d,
   }
   if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty()) {
     if (!d.unnamed_axes.empty()) throw InputError("nothing to export; " + d.unnamed_axes.front());
+    if (d.rheo && !a.no_pa)
+      throw InputError(
+          "the rheology prediction gives how tau changes with the flow (relative_tau, 1 at its reference flow), not "
+          "tau itself: give it beside the results of 'tunekit step' or 'freq' (export step.json rheo.json), which "
+          "size the advance, or set the advance with --pa-k",
+          d.rheo->origin);
     throw InputError("nothing to export: give results of 'tunekit step', 'freq' or 'shaper', or --pa-k / --shaper-x");
   }
   check_plausible(settings);
