@@ -32,6 +32,7 @@
 #include "tunekit/ident/pressure_advance.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/file_lock.hpp"
+#include "tunekit/core/text.hpp"
 #include "tunekit/firmware/config_edit.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
@@ -112,7 +113,9 @@ std::string change_note(const ExportOptions& a, const DesignInputs& d) {
   ::gmtime_r(&now, &tm);
   char day[16];
   std::strftime(day, sizeof day, "%Y-%m-%d", &tm);
-  return fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : from, day);
+  // File names reach the configuration's comments (RepRapFirmware's config.g is G-code): comment-safe.
+  return fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : core::comment_safe(from),
+                     day);
 }
 
 // Klipper reads its extruders from the sections [extruder], [extruder1], [extruder2] ...

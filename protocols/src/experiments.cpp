@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/core/text.hpp"
+
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
@@ -86,7 +88,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     if (!(std::isnan(prm.default_value) && !overrides.count(prm.name)))
       check_param_domain(protocol, prm, e.params.at(prm.name));
   auto& g = e.gcode;
-  g.push_back(fmt::format("; tunekit {} on {}", protocol, profile.name));
+  g.push_back(fmt::format("; tunekit {} on {}", protocol, core::comment_safe(profile.name)));
   const experiment_gcode::ExperimentRequest request{protocol, overrides, axis_in, profile, d, limits};
   if (!experiment_gcode::build_liquefier_experiment(request, e) && !experiment_gcode::build_axis_experiment(request, e))
     experiment_gcode::build_print_experiment(request, e);
