@@ -23,7 +23,9 @@ using tunekit::test::read_text;
 using tunekit::test::scratch_dir;
 namespace fs = std::filesystem;
 
-namespace {
+// The whole file in a namespace of its own: the test areas are unity builds, and other files
+// have helpers of the same names.
+namespace test_concurrent_writers {
 
 const std::string kConfig =
     "[printer]\nkinematics: cartesian\n\n[extruder]\nstep_pin: PA1\npressure_advance: 0.02\n\n"
@@ -58,8 +60,6 @@ pid_t spawn_export(const std::string& cfg, const Writer& w, const std::string& l
   REQUIRE(rc == 0);
   return pid;
 }
-
-}  // namespace
 
 TEST_CASE("two to four concurrent export --write on one configuration lose no update (100 trials)",
           "[export][concurrency]") {
@@ -115,3 +115,5 @@ TEST_CASE("a temporary file a killed writer left beside the configuration is rem
   CHECK(fs::exists(other));
   CHECK(r.err.find(".e.cfg.tmp.Ab12Cd") != std::string::npos);
 }
+
+}  // namespace test_concurrent_writers

@@ -19,7 +19,9 @@ using tunekit::test::read_text;
 using tunekit::test::run_cli;
 using tunekit::test::scratch_dir;
 
-namespace {
+// The whole file in a namespace of its own: the test areas are unity builds, and other files
+// have helpers of the same names.
+namespace test_results_refused {
 
 const std::string kKlipper = "[printer]\nkinematics: cartesian\n\n[extruder]\nstep_pin: PA1\npressure_advance: 0.02\n";
 
@@ -41,8 +43,6 @@ std::string edited_step(const std::string& dir, const std::string& name,
   std::ofstream(path) << j.dump(2);
   return path;
 }
-
-}  // namespace
 
 TEST_CASE("an all-zero step results file is refused and the configuration keeps its advance", "[export]") {
   const std::string dir = scratch_dir("results_zero");
@@ -119,3 +119,5 @@ TEST_CASE("rheo results reach a configuration beside a step result, and alone sa
   CHECK(res["settings"]["pa_k_s"].is_number());
   CHECK(res["flow_advance"].contains("rheology"));
 }
+
+}  // namespace test_results_refused

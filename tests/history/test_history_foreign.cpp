@@ -17,7 +17,9 @@ using tunekit::test::run_cli;
 using tunekit::test::scratch_dir;
 namespace fs = std::filesystem;
 
-namespace {
+// The whole file in a namespace of its own: the test areas are unity builds, and other files
+// have helpers of the same names.
+namespace test_history_foreign {
 
 void sql(const std::string& db, const std::string& statement) {
   sqlite3* h = nullptr;
@@ -55,8 +57,6 @@ std::vector<std::string> step_record(const std::string& db) {
 bool one_line(const std::string& err) {
   return err.rfind("tunekit: error: ", 0) == 0 && err.find('\n') == err.size() - 1;
 }
-
-}  // namespace
 
 TEST_CASE("history: another program's SQLite database is refused and left unchanged", "[history]") {
   const std::string dir = scratch_dir("history_foreign");
@@ -97,7 +97,7 @@ TEST_CASE("history: a database with another application id is refused, tunekit's
 TEST_CASE("history: --record to ':memory:' or a 'file:' URI is refused, not lost", "[history]") {
   const std::string dir = scratch_dir("history_uri");
   fs::current_path(dir);
-  for (const std::string db :
+  for (const std::string& db :
        {std::string("file:x.sqlite?mode=memory"), std::string(":memory:"), std::string("file:") + dir + "/y.sqlite"}) {
     const auto r = run_cli(step_record(db));
     INFO(db << ": " << r.err);
@@ -107,3 +107,5 @@ TEST_CASE("history: --record to ':memory:' or a 'file:' URI is refused, not lost
   }
   CHECK_FALSE(fs::exists(dir + "/y.sqlite"));
 }
+
+}  // namespace test_history_foreign
