@@ -17,6 +17,8 @@
 #include <unistd.h>
 
 #include "calibrate_stages.hpp"
+#include "tunekit/protocols/runner.hpp"
+#include "tunekit/protocols/stop_signals.hpp"
 
 namespace tunekit::calibration {
 
@@ -64,6 +66,13 @@ int print_plan(const CalibrationPlan& plan, CliContext& ctx) {
   return 0;
 }
 
+/// The experiment that ran last (the plan's order).
+const protocols::RunResult& last_run(const CalibrationPlan& plan, const ExperimentRuns& runs) {
+  for (auto e = plan.experiments.rbegin(); e != plan.experiments.rend(); ++e)
+    if (const auto it = runs.runs.find(e->name); it != runs.runs.end()) return it->second;
+  return runs.runs.begin()->second;
+}
+
 }  // namespace
 
 int run_calibrate(const CalibrateArgs& given, CliContext& ctx, Progress& progress) {
@@ -75,10 +84,22 @@ int run_calibrate(const CalibrateArgs& given, CliContext& ctx, Progress& progres
   const CalibrationPlan plan = plan_calibration(options, profile, can_prompt);
   if (plan.options.dry_run) return print_plan(plan, ctx);
   progress.expect(static_cast<int>(plan.experiments.size()) + 3);
+  // A stop signal at any instant, the analysis and the report included, ends the calibration
+  // with exit code 128 + its number; the last experiment's run.json says where (stop_signals.hpp).
+  const protocols::StopSignals stop_signals;
   const ExperimentRuns runs = run_experiments(plan, progress);
+  const auto stop_point = [&](const std::string& where) {
+    if (!runs.runs.empty()) protocols::throw_if_stopped_after_run(last_run(plan, runs), "calibrate: " + where);
+    protocols::StopSignals::throw_if_stopped("calibrate: " + where);
+  };
+  stop_point("after the experiments, before identifying the models");
   const Identification identified = identify(plan, runs, progress, ctx);
+  stop_point("after the experiments, while identifying the models");
   const CompensatorDesign design = design_and_export(plan, runs, identified, progress, ctx);
-  return write_run(plan, runs, identified, design, progress, ctx);
+  stop_point("after the experiments, while designing the compensators");
+  const int code = write_run(plan, runs, identified, design, progress, ctx);
+  stop_point("after the experiments, while writing the results and the report");
+  return code;
 }
 
 }  // namespace tunekit::calibration

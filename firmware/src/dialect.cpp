@@ -119,14 +119,14 @@ std::vector<std::string> Dialect::safe_state(bool heaters_off) const {
     case Firmware::reprapfirmware: out.push_back("M112"); break;
     default: out.push_back("M410"); break;  // Marlin/Prusa quickstop: stop all steppers now
   }
-  if (heaters_off) {
-    if (fw_ == Firmware::klipper) out.push_back("TURN_OFF_HEATERS");
-    else {
-      out.push_back("M104 S0");
-      out.push_back("M140 S0");
-    }
-  }
+  if (heaters_off)
+    for (auto& l : this->heaters_off()) out.push_back(std::move(l));
   return out;
+}
+
+std::vector<std::string> Dialect::heaters_off() const {
+  if (fw_ == Firmware::klipper) return {"TURN_OFF_HEATERS"};
+  return {"M104 S0", "M140 S0"};
 }
 
 std::string klipper_param_value(const std::string& value) {

@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/core/text.hpp"
+
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
@@ -94,7 +96,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
     if (std::isnan(prm.default_value) && !overrides.count(prm.name) && !std::isnan(e.params.at(prm.name)))
       check_param_domain(protocol, prm, e.params.at(prm.name));
   auto& g = e.gcode;
-  g.push_back(fmt::format("; tunekit {} on {}", protocol, profile.name));
+  g.push_back(fmt::format("; tunekit {} on {}", protocol, core::comment_safe(profile.name)));
   if (!experiment_gcode::build_liquefier_experiment(request, e) && !experiment_gcode::build_axis_experiment(request, e))
     experiment_gcode::build_print_experiment(request, e);
   e.estimated_duration_s = estimate_gcode_duration_s(g);

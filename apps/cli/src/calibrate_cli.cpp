@@ -62,6 +62,8 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
                 "Apply the configuration change (backup + atomic replace); default: preview the diff");
   sub->add_flag("--skip-liquefier", a->skip_liquefier, "Leave out the liquefier flow sweep and chirp tests");
   sub->add_flag("--skip-axes", a->skip_axes, "Leave out the X and Y resonance sweeps");
+  sub->add_flag("--keep-heaters", a->keep_heaters,
+                "Leave the hot end at the experiments' temperature when they end (default: turned off)");
   sub->add_option("--sim", a->sim_options, "Simulator truth and faults, KEY=VALUE (see 'tunekit run --help')");
   sub->add_option("--liquefier", a->liquefier,
                   "Liquefier path: load-cell (feed steps and chirp against a load cell), camera (printed line and ring "

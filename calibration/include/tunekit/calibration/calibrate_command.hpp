@@ -36,6 +36,9 @@ struct CalibrateArgs {
   bool write = false;
   bool skip_liquefier = false;
   bool skip_axes = false;
+  /// Leave the heaters at the experiments' temperatures at the end (protocols::RunOptions::keep_heaters);
+  /// by default every experiment that heated turns them off when it ends.
+  bool keep_heaters = false;
   std::vector<std::string> sim_options;
   std::string liquefier = "auto";  // auto, load-cell, camera
   LiquefierCameraArgs camera;
