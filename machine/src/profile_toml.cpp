@@ -91,7 +91,9 @@ void write_sensors(ProfileTomlWriter& w, const MachineProfile& p) {
   w.table("sensors");
   if (s.accelerometer && is_klipper_accelerometer_chip(s.accelerometer_chip) && p.firmware == "klipper") {
     w.text("sensors", "accelerometer", s.accelerometer_chip);
-    w.line("accelerometer_name", "sensors.accelerometer", toml_quoted(s.accelerometer_name));
+    // A declared accelerometer without a section of its own keeps the chip's name (the default).
+    if (!s.accelerometer_name.empty())
+      w.line("accelerometer_name", "sensors.accelerometer", toml_quoted(s.accelerometer_name));
   } else {
     w.flag("sensors", "accelerometer", s.accelerometer);
   }
