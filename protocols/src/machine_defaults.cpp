@@ -76,12 +76,24 @@ void staircase_defaults(const ExperimentRequest& r, Experiment& e) {
     // The acceleration as written (whole mm/s^2, rounded down: experiment_gcode.cpp extruder_accel).
     const double a = stops ? std::floor(std::min(e.params.at("accel_mm_s2"), r.profile.extruder.max_accel_mm_s2)) : 0.0;
     const double keep = shortest_staircase_step_s(top, a, stops);
-    set(e, "segment_s", std::max(kNominalSegment_s, keep),
-        keep > kNominalSegment_s
-            ? fmt::format("the shortest step the extruder keeps at {:.4g} mm/s and {:g} mm/s^2 when it stops after "
-                          "every extrude-only move",
-                          top, a)
-            : std::string("nominal"));
+    double step = std::max(kNominalSegment_s, keep);
+    std::string why = keep > kNominalSegment_s ? fmt::format(
+                                                     "the shortest step the extruder keeps at {:.4g} mm/s and {:g} "
+                                                     "mm/s^2 when it stops after every extrude-only move",
+                                                     top, a)
+                                               : std::string("nominal");
+    // Where the stops take a noticeable share of each step, the longest step a chirp takes: each
+    // stop leaves a ripple in the force at the step rate, which a load cell's samples alias into
+    // the chirp's band (on the simulated Klipper printer with a 798 mm/s^2 extruder, 20 ms steps
+    // read the frequency response's tau 0.053 s against the step test's 0.030 s; 50 ms steps 0.031 s).
+    if (stops && 2 * top / (a * step) > kMaxStopShare && step < kLongestStaircaseStep_s) {
+      step = kLongestStaircaseStep_s;
+      why = fmt::format(
+          "the longest step, so that fewer stops ripple the force: the extruder's ramps at {:g} mm/s^2 "
+          "take more than {:g} % of a shorter one",
+          a, 100 * kMaxStopShare);
+    }
+    set(e, "segment_s", step, why);
   }
   // The sine dwells hold at least 20 steps a period (experiments_liquefier.cpp).
   if (r.protocol == "liquefier-sine")

@@ -34,6 +34,10 @@ inline constexpr double kLineBelowMiddle_mm = 50;
 /// is run faster so that with its ramps it keeps its time: its peak is at most this factor above
 /// v (the step then lasts (1 + e)^2 v / (a e), e the excess).
 inline constexpr double kStaircasePeakExcess = 0.25;
+/// ... and where its ramps (2 v / a) would take more than this share of a step, the step is the
+/// longest a chirp takes (kLongestStaircaseStep_s, the chirp's own cap: chirp_plan.hpp).
+inline constexpr double kMaxStopShare = 0.1;
+inline constexpr double kLongestStaircaseStep_s = 0.05;
 
 /// Fills in every machine default of `e.params` that is still NaN and the caller did not set,
 /// recording each value's reason in e.excitation["machine_defaults"]; the builders fill the
