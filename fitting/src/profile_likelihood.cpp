@@ -8,7 +8,7 @@
 
 #include <Eigen/Dense>
 
-#include "levenberg_marquardt.hpp"
+#include "tunekit/fitting/levenberg_marquardt.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/stats.hpp"
 
