@@ -26,9 +26,10 @@ namespace {
 class NormalEquationsSolve {
  public:
   explicit NormalEquationsSolve(const LsqProblem& prob)
-      : prob_(prob), m_(static_cast<std::size_t>(prob.num_residuals)), n_(prob.params.size()), r_(m_), jac_(m_ * n_) {}
+      : prob_(prob), m_(static_cast<std::size_t>(prob.num_residuals)), n_(prob.params.size()) {}
 
   double operator()(std::vector<double>& x, const LsqOptions& o) {
+    if (jac_.empty()) r_.resize(m_), jac_.resize(m_ * n_);  // once, for the profile's every point
     std::vector<double> lo(n_), hi(n_);
     std::vector<bool> fixed(n_);
     for (std::size_t q = 0; q < n_; ++q) {
