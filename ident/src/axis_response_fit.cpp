@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <span>
 #include <string>
 
@@ -125,6 +126,102 @@ void model(const Schedule& s, std::size_t modes, const double* p, std::vector<do
   }
 }
 
+/// Damping ratio below which a mode's frequency and damping derivatives are propagated exactly
+/// (mode_sensitivities: the under-damped transition); closer to critical damping its form divides
+/// by sqrt(1 - zeta^2), and the Jacobian's columns are differenced instead.
+constexpr double kSensitivityMaxZeta = 0.999;
+
+/// The free transition over h of an under-damped mode (BaseExcitedMode::free_map's) and its
+/// derivatives d[p] in w (rad/s, p = 0) and zeta (p = 1): the product rule through the decay
+/// exp(-zeta w h) and the damped oscillation's cos and sin(w sqrt(1 - zeta^2) h).
+struct Transition {
+  double phi[2][2];
+  double d[2][2][2];
+};
+
+Transition transition(double w, double zeta, double h) {
+  Transition t;
+  const double k = w * w, sg = zeta * w, r1 = std::sqrt(1 - zeta * zeta), wd = w * r1;
+  const double D = std::exp(-sg * h), C = std::cos(wd * h), S = std::sin(wd * h), q = S / wd;
+  t.phi[0][0] = D * (C + sg * q);
+  t.phi[0][1] = D * q;
+  t.phi[1][0] = -k * D * q;
+  t.phi[1][1] = D * (C - sg * q);
+  for (int p = 0; p < 2; ++p) {
+    const double dsg = p == 0 ? zeta : w, dwd = p == 0 ? r1 : -w * zeta / r1, dk = p == 0 ? 2 * w : 0;
+    const double dD = -h * D * dsg, dC = -S * h * dwd, dq = dwd * (C * h - q) / wd;
+    t.d[p][0][0] = dD * (C + sg * q) + D * (dC + dsg * q + sg * dq);
+    t.d[p][0][1] = dD * q + D * dq;
+    t.d[p][1][0] = -(dk * D * q + k * t.d[p][0][1]);
+    t.d[p][1][1] = dD * (C - sg * q) + D * (dC - dsg * q - sg * dq);
+  }
+  return t;
+}
+
+/// A mode's state, its derivatives in w and zeta, and its free responses to a unit deflection
+/// and a unit rate at the first sample.
+struct SensitivityState {
+  double z = 0, v = 0;
+  double sz[2] = {0, 0}, sv[2] = {0, 0};
+  double e1z = 1, e1v = 0, e2z = 0, e2v = 1;
+};
+
+/// One exact step of h under a(s) = a0 + j s (BaseExcitedMode::advance: the free transition of
+/// the state less the particular solution z_p = -(a0 + j s)/k + c j/k^2, k = w^2, c = 2 zeta w)
+/// with the derivatives carried through it.
+void sensitivity_step(SensitivityState& x, const Transition& t, double w, double zeta, double h, double a0, double j) {
+  const double k = w * w, c = 2 * zeta * w, k2 = k * k;
+  const double zp0 = -a0 / k + c * j / k2, vp = -j / k, zp1 = zp0 - j * h / k;
+  const double ez = x.z - zp0, ev = x.v - vp;
+  for (int p = 0; p < 2; ++p) {
+    const double dk = p == 0 ? 2 * w : 0, dc = p == 0 ? 2 * zeta : 2 * w;
+    const double dzp0 = a0 * dk / k2 + j * dc / k2 - 2 * c * j * dk / (k2 * k), dvp = j * dk / k2;
+    const double dzp1 = dzp0 + j * h * dk / k2;
+    const double dez = x.sz[p] - dzp0, dev = x.sv[p] - dvp;
+    const double nz = t.d[p][0][0] * ez + t.d[p][0][1] * ev + t.phi[0][0] * dez + t.phi[0][1] * dev + dzp1;
+    const double nv = t.d[p][1][0] * ez + t.d[p][1][1] * ev + t.phi[1][0] * dez + t.phi[1][1] * dev + dvp;
+    x.sz[p] = nz, x.sv[p] = nv;
+  }
+  x.z = t.phi[0][0] * ez + t.phi[0][1] * ev + zp1;
+  x.v = t.phi[1][0] * ez + t.phi[1][1] * ev + vp;
+  const double e1z = t.phi[0][0] * x.e1z + t.phi[0][1] * x.e1v, e2z = t.phi[0][0] * x.e2z + t.phi[0][1] * x.e2v;
+  x.e1v = t.phi[1][0] * x.e1z + t.phi[1][1] * x.e1v, x.e2v = t.phi[1][0] * x.e2z + t.phi[1][1] * x.e2v;
+  x.e1z = e1z, x.e2z = e2z;
+}
+
+/// Columns of one under-damped mode's relative acceleration z'' = -c v - k z - a at every sample
+/// (forward sensitivities, exact for the model): out[0][i] its derivative in the frequency (Hz),
+/// out[1][i] in zeta, out[2][i] the value itself, out[3][i] and out[4][i] the derivatives in the
+/// first deflection and rate.
+void mode_sensitivities(const Schedule& s, double freq_hz, double zeta, ModeState x0, double* const out[5]) {
+  const double w = 2 * std::numbers::pi * freq_hz, k = w * w, c = 2 * zeta * w;
+  const Transition whole = transition(w, zeta, s.dt_s);
+  SensitivityState x;
+  x.z = x0.z_mm, x.v = x0.v_mm_s;
+  auto record = [&](std::size_t i) {
+    for (int p = 0; p < 2; ++p) {
+      const double dk = p == 0 ? 2 * w : 0, dc = p == 0 ? 2 * zeta : 2 * w;
+      out[p][i] = -dc * x.v - dk * x.z - c * x.sv[p] - k * x.sz[p];
+    }
+    out[0][i] *= 2 * std::numbers::pi;  // dw / df
+    out[2][i] = -c * x.v - k * x.z - s.accel_at[i];
+    out[3][i] = -c * x.e1v - k * x.e1z;
+    out[4][i] = -c * x.e2v - k * x.e2z;
+  };
+  record(0);
+  for (std::size_t i = 1; i < s.accel_at.size(); ++i) {
+    if (s.whole[i]) {
+      const Sub& u = s.subs[s.sample_end[i - 1]];
+      sensitivity_step(x, whole, w, zeta, s.dt_s, u.a0, u.jerk);
+    } else {
+      for (std::size_t j = s.sample_end[i - 1]; j < s.sample_end[i]; ++j)
+        if (s.subs[j].h_s > 0)
+          sensitivity_step(x, transition(w, zeta, s.subs[j].h_s), w, zeta, s.subs[j].h_s, s.subs[j].a0, s.subs[j].jerk);
+    }
+    record(i);
+  }
+}
+
 /// Are the modes' frequencies and damping ratios in the model's domain?
 bool in_domain(const double* p, std::size_t modes) {
   for (std::size_t k = 0; k < modes; ++k)
@@ -134,9 +231,9 @@ bool in_domain(const double* p, std::size_t modes) {
 
 /// The residuals y - model and their Jacobian (samples x parameters, column-major, its storage kept
 /// from one evaluation to the next). The gain, the first state and the offset enter the model
-/// linearly, so their columns are exact; a mode's frequency and damping ratio by central
-/// differences of that mode's response alone, with the step of solve_least_squares' numeric
-/// Jacobian (1e-6 of the value).
+/// linearly; a mode's frequency and damping ratio by forward sensitivities (mode_sensitivities),
+/// or, for a mode near critical damping, by central differences of that mode's response alone
+/// with the step of solve_least_squares' numeric Jacobian (1e-6 of the value).
 class RecordJacobian {
  public:
   RecordJacobian(const Schedule& s, std::size_t modes, const std::vector<double>& y)
@@ -169,6 +266,19 @@ class RecordJacobian {
     const double gain = q[2];
     const auto c = static_cast<Eigen::Index>(kParamsPerMode * k);
     const std::size_t n = y_.size();
+    if (q[1] < kSensitivityMaxZeta) {
+      double* const cols[5] = {plus_.data(), minus_.data(), rel_.data(), dz_.data(), dv_.data()};
+      mode_sensitivities(s_, q[0], q[1], x0, cols);
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto row = static_cast<Eigen::Index>(i);
+        jac_(row, c) = -gain * plus_[i];
+        jac_(row, c + 1) = -gain * minus_[i];
+        jac_(row, c + 2) = -rel_[i];
+        jac_(row, c + 3) = -gain * dz_[i];
+        jac_(row, c + 4) = -gain * dv_[i];
+      }
+      return;
+    }
     mode_response(s_, q[0], q[1], x0, rel_.data(), dz_.data(), dv_.data());
     for (std::size_t i = 0; i < n; ++i) {
       const auto row = static_cast<Eigen::Index>(i);
