@@ -15,6 +15,7 @@
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/core/text.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/machine/profile_import.hpp"
 #include "tunekit/sim/sim_camera.hpp"
 #include "tunekit/sim/simulator.hpp"
 
@@ -122,7 +123,16 @@ CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
   if (a.machine != "sim" && a.profile.empty())
     throw InputError(
         "a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
-  if (!a.profile.empty()) return {machine::load_machine_profile(a.profile), a.profile};
+  if (!a.profile.empty()) {
+    if (!a.sensors.empty() && !machine::is_firmware_configuration(a.profile))
+      throw InputError(
+          "--sensor declares sensors a firmware configuration does not list; a TOML profile lists its own "
+          "in [sensors]",
+          a.profile);
+    machine::ProfileImportOptions io;
+    io.sensors = a.sensors;
+    return {machine::import_machine_profile(a.profile, io), a.profile};
+  }
   return {protocols::builtin_sim_profile(), (fs::path(TUNEKIT_DATASETS_DIR) / "machines" / "sim.toml").string()};
 }
 

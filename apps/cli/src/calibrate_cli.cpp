@@ -49,6 +49,9 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
   sub->add_option("--param", a->params,
                   "A protocol parameter for one experiment or protocol, EXPERIMENT.NAME=VALUE in the unit the name "
                   "carries (repeatable; 'tunekit run --help' lists them), e.g. axis-x.freq_end_hz=80");
+  sub->add_option("--sensor", a->sensors,
+                  "A sensor the firmware configuration given as --profile does not list but the machine has: "
+                  "accelerometer, load_cell or camera (repeatable)");
   sub->add_flag("--dry-run", a->dry_run,
                 "Plan every experiment for the profile's limits, check it, print the plan and stop (nothing is sent)");
   sub->add_option("--port", a->port, "Serial device, pseudo-terminal or unix:SOCKET of a real machine");
@@ -89,7 +92,7 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
       "Examples:\n"
       "  tunekit calibrate --machine sim                      # the built-in simulated printer\n"
       "  tunekit calibrate --machine sim --firmware marlin --out runs/demo\n"
-      "  tunekit calibrate --machine sim --profile printer.cfg --dry-run  # a Klipper printer's plan, checked\n"
+      "  tunekit calibrate --machine sim --profile printer.cfg --sensor accelerometer --dry-run  # checked plan\n"
       "  tunekit calibrate --machine sim --profile printer.cfg --param axis-sweep.accel_per_hz=40\n"
       "  tunekit calibrate --machine /dev/ttyACM0 --profile my-printer.toml --firmware marlin \\\n"
       "                    --config Marlin/Configuration_adv.h\n"

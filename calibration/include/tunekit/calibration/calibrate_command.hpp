@@ -49,6 +49,10 @@ struct CalibrateArgs {
   /// Plan and check every experiment against the limits, print the plan (each experiment's
   /// protocol, parameters and machine time) and stop: nothing is sent, no run directory is made.
   bool dry_run = false;
+  /// Sensors the firmware configuration given as --profile does not list but the machine has
+  /// ("accelerometer", "load_cell", "camera"): `tunekit profile --sensor`'s. A TOML profile lists
+  /// its own ([sensors]).
+  std::vector<std::string> sensors;
   OutputOptions output;
 };
 
