@@ -124,6 +124,11 @@ KlipperToolhead read_klipper_printer(const KlipperView& k, MachineProfile& p) {
                               klipper_default(t.max_velocity.value, kin_file, "max_z_velocity = max_velocity"));
   t.max_z_accel = k.number("printer", "max_z_accel", detail::kAccel,
                            klipper_default(t.max_accel.value, kin_file, "max_z_accel = max_accel"));
+  if (t.max_z_velocity.value > t.max_velocity.value || t.max_z_accel.value > t.max_accel.value)
+    throw InputError(fmt::format("[printer] max_z_velocity and max_z_accel may not exceed max_velocity and max_accel "
+                                 "({}: maxval)",
+                                 kin_file),
+                     k.section("printer").site.where());
   const auto mcr = k.number("printer", "minimum_cruise_ratio", detail::kFraction,
                             klipper_default(firmware::limits::kKlipperMinimumCruiseRatioDefault, "klippy/toolhead.py",
                                             "minimum_cruise_ratio 0.5"));
