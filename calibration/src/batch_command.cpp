@@ -222,6 +222,9 @@ int run_batch(const BatchArgs& a, CliContext& ctx) {
       } catch (const std::bad_alloc&) {
         err << "tunekit: error: out of memory\n";
         j.code = static_cast<int>(ExitCode::bad_input);
+      } catch (const std::filesystem::filesystem_error& e) {
+        err << "tunekit: error: " << core::plain_filesystem_error(e.what()) << "\n";
+        j.code = static_cast<int>(ExitCode::bad_input);
       } catch (const std::exception& e) {
         // A JSON library error that escaped is told in plain words, never in the library's text.
         err << "tunekit: error: internal error: " << core::plain_json_error(e.what()) << "\n";

@@ -14,6 +14,7 @@
 #include "calibrate_liquefier.hpp"
 #include "calibrate_plotdata.hpp"
 #include "calibrate_stages.hpp"
+#include "tunekit/calibration/report_command.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/calibration/agreement.hpp"
@@ -219,7 +220,9 @@ void add_axes(RunRecord& r, const Identification& id) {
     r.row(label + " resonance frequency", base + ".modes[0].freq_hz", "Hz", base + ".modes[0].freq_ci95");
     r.row(label + " damping ratio", base + ".modes[0].zeta", "1", base + ".modes[0].zeta_ci95");
     r.row(label + " shaper frequency", base + ".recommended.freq_hz", "Hz", "", "designed");
-    r.row(label + " max acceleration", base + ".recommended.max_accel_mm_s2", "mm/s^2", "", "designed");
+    r.row(label + " max acceleration", base + ".proposed_max_accel_mm_s2", "mm/s^2", "",
+          r.res()["axes"][label].contains("proposed_max_accel_note") ? "the printer's limit (the shaper allows more)"
+                                                                     : "designed");
   }
 }
 
@@ -307,8 +310,18 @@ int write_run(const CalibrationPlan& plan, const ExperimentRuns& runs, const Ide
   core::write_file_atomic(plan.run_dir + "/analysis/README", analysis_readme(identified));
   core::write_file_atomic(plan.run_dir + "/results.json", r.env.dump());
   core::write_file_atomic(plan.run_dir + "/plotdata.json", r.plot.dump() + "\n");
-  const std::string report = write_report(plan.run_dir);
+  const ReportOutcome written = compute_report({plan.run_dir});
+  const std::string& report = written.html_path;
   progress.end(report);
+  // A plot library that failed (a memory cap): one line; the report holds everything but the figures.
+  const auto failed = std::count_if(written.images.begin(), written.images.end(),
+                                    [](const ReportImage& i) { return !i.failure.empty(); });
+  if (failed > 0)
+    ctx.err << fmt::format(
+        "tunekit: warning: {} of the report's {} figures: {}; the results and the report's text are complete\n", failed,
+        written.images.size(), std::find_if(written.images.begin(), written.images.end(), [](const ReportImage& i) {
+                                 return !i.failure.empty();
+                               })->failure);
   if (!plan.options.output.json) print_calibrate_terminal(r.res(), design, report, ctx.out);
   OutputOptions output = plan.output;
   output.record_source = plan.run_dir;

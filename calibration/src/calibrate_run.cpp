@@ -8,6 +8,7 @@
 #include "calibrate_stages.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/calibration/results_json.hpp"
+#include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/stop_signals.hpp"
 
 namespace tunekit::calibration {
@@ -25,8 +26,7 @@ StepOptions load_cell_step_options(const std::string& csv, const std::string& fe
 }
 
 ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) {
-  // A stop signal between two experiments stops the calibration too: the next run sees it
-  // before its first line and ends as "interrupted" (stop_signals.hpp).
+  // A stop signal between two experiments stops the calibration too (stop_signals.hpp).
   const protocols::StopSignals stop_signals;
   ExperimentRuns out;
   out.chirp = plan.chirp;
@@ -36,22 +36,32 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
     if (e.protocol == "liquefier-chirp" && out.liquefier_step && out.liquefier_step->analysis.pooled) {
       const double tau = out.liquefier_step->analysis.pooled->value("tau_s");
       if (std::isfinite(tau) && tau > 0) {
-        out.chirp = protocols::plan_liquefier_chirp(tau);
+        const double sized = clamped_chirp_tau_s(tau);
+        out.chirp = protocols::plan_liquefier_chirp(sized, e.checked.params.at("segment_s"));
         out.chirp_basis =
             fmt::format("the pooled step fit's time constant {} s (one tau over every step)", display_number(tau));
+        if (sized != tau)
+          out.chirp_basis += fmt::format(", held at {} s, the end of the range checked", display_number(sized));
         // The dry run timed the chirp of the plan; this one is longer or shorter by the difference.
         estimate_s += out.chirp.duration_s - plan.chirp.duration_s;
       }
     }
     progress.begin("run " + e.name, plan.sim ? std::max(1.0, estimate_s / 4) : estimate_s);
-    const auto& run = out.runs[e.name] = protocols::run_experiment(experiment_run_options(plan, e, out.chirp, false));
+    protocols::RunOptions run_options = experiment_run_options(plan, e, out.chirp, false);
+    run_options.keep_heaters = plan.options.keep_heaters;
+    const auto& run = out.runs[e.name] = protocols::run_experiment(run_options);
     progress.end(run.status);
+    // The chirp as run: the protocol sized its staircase step from the chirp's end (never shorter
+    // than the machine's), which sets the band the plan describes.
+    if (e.protocol == "liquefier-chirp")
+      out.chirp = protocols::plan_liquefier_chirp(out.chirp.expected_tau_s, run.experiment.params.at("segment_s"));
     if (e.name == "liquefier-step") {
       const auto track = run.files.find("feed_track");
       const auto options =
           load_cell_step_options(run.files.at("load_cell"), track != run.files.end() ? track->second : std::string());
       out.liquefier_step = calibrate_analysis("step", [&] { return compute_step(options); });
     }
+    protocols::throw_if_stopped_after_run(run, "after the experiment " + e.name + " had ended, before the next stage");
   }
   return out;
 }

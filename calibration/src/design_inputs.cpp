@@ -43,6 +43,38 @@ EstimatedValue estimated_at(const json& param, const std::string& what, const st
   return e;
 }
 
+/// A fitted parameter of a results file, checked before anything is designed from it: a value
+/// that is given must be finite (and above 0 when `positive`: a time constant, a gain), and its
+/// 95 % interval, when given, finite and wider than zero (a fit gives every estimate an
+/// uncertainty). A compensator is only ever turned off by an option (--no-pa, --pa-k 0), never
+/// by a results file of zeros.
+EstimatedValue fitted_at(const json& param, const std::string& what, const std::string& path, bool positive = true) {
+  const EstimatedValue e = estimated_at(param, what, path);
+  const bool given = !value_at_or_null(param, "/value"_json_pointer).is_null();
+  if (given && (!std::isfinite(e.value) || (positive && !(e.value > 0))))
+    throw InputError(fmt::format("{}.value is {}: a fitted {} must be {}; refused before designing anything", what,
+                                 e.value, what, positive ? "finite and above 0" : "finite"),
+                     path);
+  const bool has_interval = value_at_or_null(param, "/ci95"_json_pointer).is_array();
+  if (given && has_interval && !(std::isfinite(e.ci95_lo) && std::isfinite(e.ci95_hi) && e.ci95_hi > e.ci95_lo))
+    throw InputError(fmt::format("{}.ci95 [{}, {}] is not a 95 % interval of non-zero width: not the result of a "
+                                 "fit; refused before designing anything",
+                                 what, e.ci95_lo, e.ci95_hi),
+                     path);
+  return e;
+}
+
+/// An operating point's time constant: absent, or finite and above 0 with an interval of non-zero width.
+void check_level_tau(const StepLevel& l, const std::string& path) {
+  if (std::isnan(l.tau_s) && std::isnan(l.tau_ci95_lo) && std::isnan(l.tau_ci95_hi)) return;
+  if (!(std::isfinite(l.tau_s) && l.tau_s > 0) ||
+      ((std::isfinite(l.tau_ci95_lo) || std::isfinite(l.tau_ci95_hi)) && !(l.tau_ci95_hi > l.tau_ci95_lo)))
+    throw InputError(fmt::format("operating_points[].tau_s {} s [{}, {}] is not a fitted time constant (finite, above "
+                                 "0, with an interval of non-zero width); refused before designing anything",
+                                 l.tau_s, l.tau_ci95_lo, l.tau_ci95_hi),
+                     path);
+}
+
 EstimatedValue estimated_of(const fitting::Param& p) { return {p.value, p.std_error, p.ci95_lo, p.ci95_hi}; }
 
 /// Whether the step analysis' operating points are levels of the extruder's feed (mm/s) or of
@@ -94,15 +126,15 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
   in.origin = path;
   const json& params = value_at_or_null(res, "/pooled/params"_json_pointer);
   if (params.is_object()) {
-    in.tau_s = estimated_at(value_at_or_null(params, "/tau_s"_json_pointer), "pooled.params.tau_s", path);
+    in.tau_s = fitted_at(value_at_or_null(params, "/tau_s"_json_pointer), "pooled.params.tau_s", path, true);
     in.theta_s = estimated_at(value_at_or_null(params, "/theta_s"_json_pointer), "pooled.params.theta_s", path);
-    in.K = estimated_at(value_at_or_null(params, "/K"_json_pointer), "pooled.params.K", path);
+    in.K = fitted_at(value_at_or_null(params, "/K"_json_pointer), "pooled.params.K", path, true);
     if (const json& unit = value_at_or_null(params, "/K/unit"_json_pointer); unit.is_string())
       in.K_unit = unit.get<std::string>();
   }
   if (const json& wr = value_at_or_null(res, "/whole_record/a"_json_pointer); wr.is_object()) {
     StepModelInput m;
-    m.a = estimated_at(wr, "whole_record.a", path);
+    m.a = fitted_at(wr, "whole_record.a", path, true);
     m.b = estimated_at(value_at_or_null(res, "/whole_record/b"_json_pointer), "whole_record.b", path);
     m.theta_s = estimated_at(value_at_or_null(res, "/whole_record/theta_s"_json_pointer), "whole_record.theta_s", path);
     m.linear = value_at_or_null(res, "/whole_record/linear_chosen"_json_pointer) == json(true);
@@ -144,6 +176,7 @@ StepDesignInput read_step_results(const json& res, const std::string& path) {
     l.flow_mm3_s = number_at(op, "/flow_mm3_s", "operating_points[].flow_mm3_s", path);
     l.tau_ci95_lo = number_at(op, "/tau_ci95/0", "operating_points[].tau_ci95[0]", path);
     l.tau_ci95_hi = number_at(op, "/tau_ci95/1", "operating_points[].tau_ci95[1]", path);
+    check_level_tau(l, path);
     in.levels.push_back(l);
   }
   return in;
@@ -153,7 +186,7 @@ FreqDesignInput read_freq_results(const json& res, const std::string& path) {
   // The fit freq reports as its result (results.fit), as its report and the history do.
   FreqDesignInput in;
   in.origin = path;
-  in.tau_s = estimated_at(value_at_or_null(res, "/fit/params/tau_s"_json_pointer), "fit.params.tau_s", path);
+  in.tau_s = fitted_at(value_at_or_null(res, "/fit/params/tau_s"_json_pointer), "fit.params.tau_s", path, true);
   in.input_min = number_at(res, "/input_range/min", "input_range.min", path);
   in.input_max = number_at(res, "/input_range/max", "input_range.max", path);
   in.input_mean = number_at(res, "/input_range/mean", "input_range.mean", path);
@@ -166,6 +199,9 @@ firmware::ShaperSetting shaper_setting_at(const json& c, const std::string& what
   if (!type.is_string()) throw InputError(fmt::format("{}.type must be a string", what), path);
   s.type = type.get<std::string>();
   s.freq_hz = number_at(c, "/freq_hz", what + ".freq_hz", path);
+  if (!std::isnan(s.freq_hz) && !(std::isfinite(s.freq_hz) && s.freq_hz > 0))
+    throw InputError(fmt::format("{}.freq_hz is {}: a shaper frequency must be finite and above 0", what, s.freq_hz),
+                     path);
   const double z = number_at(c, "/damping", what + ".damping", path);
   if (std::isfinite(z)) s.damping = z;
   return s;
@@ -204,7 +240,7 @@ RheoDesignInput read_rheo_results(const json& res, const std::string& path) {
   if (!pred.is_object())
     throw InputError(
         "rheo results without 'prediction': run 'tunekit rheo' with the nozzle (--nozzle-d, and --nozzle-l) so that "
-        "it predicts tau over flow",
+        "it predicts how tau changes over the flow, and export it beside the results of 'tunekit step' or 'freq'",
         path);
   RheoDesignInput in;
   in.origin = path;

@@ -31,6 +31,8 @@
 #include "tunekit/ident/flow_advance.hpp"
 #include "tunekit/ident/pressure_advance.hpp"
 #include "tunekit/core/atomic_file.hpp"
+#include "tunekit/core/file_lock.hpp"
+#include "tunekit/core/text.hpp"
 #include "tunekit/firmware/config_edit.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
@@ -111,7 +113,9 @@ std::string change_note(const ExportOptions& a, const DesignInputs& d) {
   ::gmtime_r(&now, &tm);
   char day[16];
   std::strftime(day, sizeof day, "%Y-%m-%d", &tm);
-  return fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : from, day);
+  // File names reach the configuration's comments (RepRapFirmware's config.g is G-code): comment-safe.
+  return fmt::format("set by tunekit export from {} on {}", from.empty() ? "its defaults" : core::comment_safe(from),
+                     day);
 }
 
 // Klipper reads its extruders from the sections [extruder], [extruder1], [extruder2] ...
@@ -224,6 +228,12 @@ void finish_settings(const ExportOptions& a, const DesignInputs& d,
   }
   if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty()) {
     if (!d.unnamed_axes.empty()) throw InputError("nothing to export; " + d.unnamed_axes.front());
+    if (d.rheo && !a.no_pa)
+      throw InputError(
+          "the rheology prediction gives how tau changes with the flow (relative_tau, 1 at its reference flow), not "
+          "tau itself: give it beside the results of 'tunekit step' or 'freq' (export step.json rheo.json), which "
+          "size the advance, or set the advance with --pa-k",
+          d.rheo->origin);
     throw InputError("nothing to export: give results of 'tunekit step', 'freq' or 'shaper', or --pa-k / --shaper-x");
   }
   check_plausible(settings);
@@ -321,6 +331,13 @@ void prepare_sliced_gcode(const ExportOptions& a, const export_design::Liquefier
   outcome.files.add(a.sliced_out, g.text);
 }
 
+/// Names the temporary files a killed writer of the configuration had left (now removed).
+void warn_stale_temporaries(const std::vector<std::string>& removed, CliContext& ctx) {
+  for (const auto& t : removed)
+    ctx.err << "tunekit: warning: removed " << t
+            << ", a temporary file left by a configuration write that was interrupted\n";
+}
+
 /// Everything that will be written is computed first (configuration, backup, G-code, profiles);
 /// commit_export() then writes all of it together or none of it (core::FileBatch).
 void prepare_files(const ExportOptions& a, const export_design::LiquefierInputs& li, ExportOutcome& outcome) {
@@ -328,8 +345,8 @@ void prepare_files(const ExportOptions& a, const export_design::LiquefierInputs&
   if (a.write && result.changed()) {
     outcome.backup = firmware::backup_path_for(a.config);
     outcome.envelope.results()["written"] = true;
-    outcome.files.add(outcome.backup, result.original, a.config);  // the backup keeps the original's mode
-    outcome.files.add(a.config, result.updated);
+    outcome.files.add(outcome.backup, result.original, a.config);          // the backup keeps the original's mode
+    outcome.files.add(a.config, result.updated, {}, core::Links::follow);  // a configuration: links followed
   }
   if (!a.gcode_out.empty()) outcome.files.add(a.gcode_out, result.gcode);
   if (!a.orca_out.empty()) prepare_orca_profile(a, li, outcome);
@@ -413,13 +430,21 @@ int commit_export(const ExportOutcome& o, const OutputOptions& output, CliContex
   std::vector<std::string> inputs = option_inputs(a);
   for (const auto& p : env.input_paths()) inputs.push_back(p);
   check_outputs(a, output.output_path, inputs);
-  // Refuse to overwrite a file that changed since it was read.
-  if (a.write && result.changed() && read_file_bytes(a.config) != result.original)
-    throw InputError("the configuration file changed since it was read; run the export again", a.config);
   const Emission emission = prepare_emission(env, output);
   const bool output_is_device = !output.output_path.empty() && is_special_output(output.output_path);
   if (!output.output_path.empty() && !output_is_device) batch.add(output.output_path, emission.text);
-  batch.commit();
+  {
+    // Writers of one configuration take turns (file_lock.hpp): compare and replace under the lock.
+    std::optional<core::FileLock> lock;
+    if (a.write && result.changed()) {
+      lock.emplace(a.config);
+      warn_stale_temporaries(lock->remove_stale_temporaries(), ctx);
+    }
+    // Refuse to overwrite a file that changed since it was read.
+    if (a.write && result.changed() && read_file_bytes(a.config) != result.original)
+      throw InputError("the configuration file changed since it was read; run the export again", a.config);
+    batch.commit();
+  }
   if (output_is_device) write_output_text(output.output_path, emission.text);  // -o /dev/stdout: nothing to undo
 
   if (!output.json) {

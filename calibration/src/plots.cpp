@@ -1,6 +1,14 @@
 #include "tunekit/calibration/plots.hpp"
 
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <functional>
+#include <iostream>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +20,7 @@
 #include <fmt/format.h>
 #include <plplot/plplot.h>
 
+#include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/shared_library.hpp"
 
@@ -245,6 +254,150 @@ void render_svg(const Figure& fig, const std::string& path) {
   render_figure(fig, path);
 }
 
+/// Draws the figure with PLplot into `path` (the device for its extension).
+void draw_figure(const Figure& fig, const std::string& path, const char* device) {
+  PlStream pls;
+  pls->sdev(device);
+  pls->sfnam(path.c_str());
+  pls->spage(90, 90, fig.width_px, fig.height_px, 0, 0);
+  set_palette(pls);
+  pls->init();
+  pls->adv(0);
+  pls->schr(0, 0.8);
+
+  double total = 0;
+  for (const auto& p : fig.panels) total += p.height_weight;
+  Range shared_x;  // with share_x: the x range of every panel's data
+  if (fig.share_x)
+    for (const auto& p : fig.panels)
+      for (const auto& s : p.series)
+        for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k)
+          if (std::isfinite(axis_value(s.y[k], p.log_y))) shared_x.add(axis_value(s.x[k], p.log_x));
+  const double top_margin = fig.title.empty() ? 0.04 : 0.09, bottom = 0.03;
+  double y_top = 1.0 - top_margin;
+  const double usable = 1.0 - top_margin - bottom;
+  for (std::size_t i = 0; i < fig.panels.size(); ++i) {
+    const Panel& p = fig.panels[i];
+    const double h = usable * p.height_weight / total;
+    const double y0 = y_top - h + 0.075, y1 = y_top - 0.02;
+    y_top -= h;
+    // The legend sits right of the data, never over it: the plot area leaves it room.
+    // With a shared x axis every panel leaves the same room, so that their x axes line up.
+    std::size_t longest_label = 0;
+    for (const auto& q : fig.panels)
+      if (&q == &p || fig.share_x)
+        for (const auto& s : q.series) longest_label = std::max(longest_label, s.label.size());
+    const double legend_room = longest_label == 0 ? 0.0 : std::min(0.4, 0.05 + 0.0095 * longest_label);
+    pls->vpor(0.09, 0.97 - legend_room, y0, y1);
+
+    Range rx, ry;
+    for (const auto& s : p.series)
+      for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
+        const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
+        if (std::isfinite(ax) && std::isfinite(ay)) {
+          rx.add(ax);
+          ry.add(ay);
+        }
+      }
+    if (!rx.valid() || !ry.valid())
+      throw InputError(fmt::format("panel '{}' has no finite data to plot", p.title), path);
+    if (fig.share_x && shared_x.valid()) rx = shared_x;
+    if (!p.log_x) rx.pad(0.0);
+    if (rx.hi == rx.lo) rx.pad(0.05);
+    ry.pad(0.06);
+    pls->wind(rx.lo, rx.hi, ry.lo, ry.hi);
+    pls->col0(15);
+    pls->width(1);
+    pls->lsty(1);
+    // Log axes: ticks and grid from PLplot, numbers from label_log_axis.
+    const std::string xopt = p.log_x ? "bcstgl" : "bcnstg";
+    const std::string yopt = p.log_y ? "bcstvgl" : "bcnstvg";
+    pls->box(xopt.c_str(), 0, 0, yopt.c_str(), 0, 0);
+    if (p.log_x) label_log_axis(pls, true, rx.lo, rx.hi);
+    if (p.log_y) label_log_axis(pls, false, ry.lo, ry.hi);
+    // The panel's title left-aligned above its frame (centred, it read as the axis label of the
+    // panel above).
+    pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), "");
+    pls->mtex("t", 0.8, 0.0, 0.0, p.title.c_str());
+
+    std::vector<const Series*> legend;
+    for (const auto& s : p.series) {
+      // A line is drawn in pieces between missing (non-finite) values: a gap stays a gap.
+      std::vector<std::vector<PLFLT>> xs(1), ys(1);
+      bool any = false;
+      for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
+        const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
+        if (std::isfinite(ax) && std::isfinite(ay)) {
+          xs.back().push_back(ax);
+          ys.back().push_back(ay);
+          any = true;
+        } else if (!xs.back().empty()) {
+          xs.emplace_back();
+          ys.emplace_back();
+        }
+      }
+      if (!any) continue;
+      pls->col0(s.color);
+      for (std::size_t piece = 0; piece < xs.size(); ++piece) {
+        const auto n = static_cast<PLINT>(xs[piece].size());
+        if (n == 0) continue;
+        if (s.style == Series::Style::points) {
+          pls->poin(n, xs[piece].data(), ys[piece].data(), 17);
+        } else {
+          pls->lsty(s.style == Series::Style::dashed ? 2 : 1);
+          pls->width(1.6);
+          pls->line(n, xs[piece].data(), ys[piece].data());
+          pls->lsty(1);
+          pls->width(1);
+        }
+      }
+      if (!s.label.empty()) legend.push_back(&s);
+    }
+    // The legend sits right of the data, its top level with the panel's frame.
+    if (!legend.empty()) draw_legend(pls, legend, 0.97 - legend_room + 0.01, 0.99, y1, fig.width_px);
+  }
+  if (!fig.title.empty()) {
+    pls->vpor(0, 1, 0, 1);
+    pls->wind(0, 1, 0, 1);
+    pls->col0(15);
+    pls->schr(0, 1.0);
+    pls->mtex("t", -1.6, 0.5, 0.5, fig.title.c_str());
+  }
+}  // ~PlStream ends the stream and closes the file
+
+/// Runs `draw` in a child process: the plot library aborts its process on conditions tunekit
+/// cannot catch (GLib's g_error when a memory cap keeps pango from starting a thread, SIGTRAP;
+/// PLplot's exit on a file it cannot open). A child that does not end normally is one plain
+/// InputError, and tunekit carries on without the figure. The child's messages go nowhere.
+void draw_isolated(const std::function<void()>& draw, const std::string& path) {
+  std::cout.flush();
+  std::cerr.flush();
+  const pid_t pid = ::fork();
+  if (pid < 0) throw InputError("the figure was not drawn: cannot start the plot process (out of memory?)", path);
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (null >= 0) {
+      ::dup2(null, STDOUT_FILENO);
+      ::dup2(null, STDERR_FILENO);
+    }
+    try {
+      draw();
+    } catch (...) {
+      ::_exit(1);
+    }
+    ::_exit(0);
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+  throw InputError(WIFSIGNALED(status)
+                       ? fmt::format("the figure was not drawn: the plot library died ({}; out of memory?)",
+                                     ::strsignal(WTERMSIG(status)))
+                       : std::string("the figure was not drawn: the plot library failed"),
+                   path);
+}
+
 void render_figure(const Figure& fig, const std::string& path) {
   if (fig.panels.empty()) throw InputError("a figure without panels", path);
   const char* device = plot_device(path);
@@ -252,118 +405,12 @@ void render_figure(const Figure& fig, const std::string& path) {
   const auto dir = std::filesystem::path(path).parent_path();
   std::error_code dir_ec;
   if (!dir.empty()) std::filesystem::create_directories(dir, dir_ec);
+  // PLplot opens the file itself: a link out of the directory is refused first (atomic_file.hpp).
+  core::require_link_within_directory(path);
   // PLplot aborts the whole process (its own message, exit 1) on a file it cannot open: try first.
   if (!std::ofstream(path, std::ios::binary | std::ios::app))
     throw InputError("cannot write the figure there (a missing or read-only directory)", path);
-  {
-    PlStream pls;
-    pls->sdev(device);
-    pls->sfnam(path.c_str());
-    pls->spage(90, 90, fig.width_px, fig.height_px, 0, 0);
-    set_palette(pls);
-    pls->init();
-    pls->adv(0);
-    pls->schr(0, 0.8);
-
-    double total = 0;
-    for (const auto& p : fig.panels) total += p.height_weight;
-    Range shared_x;  // with share_x: the x range of every panel's data
-    if (fig.share_x)
-      for (const auto& p : fig.panels)
-        for (const auto& s : p.series)
-          for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k)
-            if (std::isfinite(axis_value(s.y[k], p.log_y))) shared_x.add(axis_value(s.x[k], p.log_x));
-    const double top_margin = fig.title.empty() ? 0.04 : 0.09, bottom = 0.03;
-    double y_top = 1.0 - top_margin;
-    const double usable = 1.0 - top_margin - bottom;
-    for (std::size_t i = 0; i < fig.panels.size(); ++i) {
-      const Panel& p = fig.panels[i];
-      const double h = usable * p.height_weight / total;
-      const double y0 = y_top - h + 0.075, y1 = y_top - 0.02;
-      y_top -= h;
-      // The legend sits right of the data, never over it: the plot area leaves it room.
-      // With a shared x axis every panel leaves the same room, so that their x axes line up.
-      std::size_t longest_label = 0;
-      for (const auto& q : fig.panels)
-        if (&q == &p || fig.share_x)
-          for (const auto& s : q.series) longest_label = std::max(longest_label, s.label.size());
-      const double legend_room = longest_label == 0 ? 0.0 : std::min(0.4, 0.05 + 0.0095 * longest_label);
-      pls->vpor(0.09, 0.97 - legend_room, y0, y1);
-
-      Range rx, ry;
-      for (const auto& s : p.series)
-        for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
-          const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
-          if (std::isfinite(ax) && std::isfinite(ay)) {
-            rx.add(ax);
-            ry.add(ay);
-          }
-        }
-      if (!rx.valid() || !ry.valid())
-        throw InputError(fmt::format("panel '{}' has no finite data to plot", p.title), path);
-      if (fig.share_x && shared_x.valid()) rx = shared_x;
-      if (!p.log_x) rx.pad(0.0);
-      if (rx.hi == rx.lo) rx.pad(0.05);
-      ry.pad(0.06);
-      pls->wind(rx.lo, rx.hi, ry.lo, ry.hi);
-      pls->col0(15);
-      pls->width(1);
-      pls->lsty(1);
-      // Log axes: ticks and grid from PLplot, numbers from label_log_axis.
-      const std::string xopt = p.log_x ? "bcstgl" : "bcnstg";
-      const std::string yopt = p.log_y ? "bcstvgl" : "bcnstvg";
-      pls->box(xopt.c_str(), 0, 0, yopt.c_str(), 0, 0);
-      if (p.log_x) label_log_axis(pls, true, rx.lo, rx.hi);
-      if (p.log_y) label_log_axis(pls, false, ry.lo, ry.hi);
-      // The panel's title left-aligned above its frame (centred, it read as the axis label of the
-      // panel above).
-      pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), "");
-      pls->mtex("t", 0.8, 0.0, 0.0, p.title.c_str());
-
-      std::vector<const Series*> legend;
-      for (const auto& s : p.series) {
-        // A line is drawn in pieces between missing (non-finite) values: a gap stays a gap.
-        std::vector<std::vector<PLFLT>> xs(1), ys(1);
-        bool any = false;
-        for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
-          const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
-          if (std::isfinite(ax) && std::isfinite(ay)) {
-            xs.back().push_back(ax);
-            ys.back().push_back(ay);
-            any = true;
-          } else if (!xs.back().empty()) {
-            xs.emplace_back();
-            ys.emplace_back();
-          }
-        }
-        if (!any) continue;
-        pls->col0(s.color);
-        for (std::size_t piece = 0; piece < xs.size(); ++piece) {
-          const auto n = static_cast<PLINT>(xs[piece].size());
-          if (n == 0) continue;
-          if (s.style == Series::Style::points) {
-            pls->poin(n, xs[piece].data(), ys[piece].data(), 17);
-          } else {
-            pls->lsty(s.style == Series::Style::dashed ? 2 : 1);
-            pls->width(1.6);
-            pls->line(n, xs[piece].data(), ys[piece].data());
-            pls->lsty(1);
-            pls->width(1);
-          }
-        }
-        if (!s.label.empty()) legend.push_back(&s);
-      }
-      // The legend sits right of the data, its top level with the panel's frame.
-      if (!legend.empty()) draw_legend(pls, legend, 0.97 - legend_room + 0.01, 0.99, y1, fig.width_px);
-    }
-    if (!fig.title.empty()) {
-      pls->vpor(0, 1, 0, 1);
-      pls->wind(0, 1, 0, 1);
-      pls->col0(15);
-      pls->schr(0, 1.0);
-      pls->mtex("t", -1.6, 0.5, 0.5, fig.title.c_str());
-    }
-  }  // ~PlStream ends the stream and closes the file
+  draw_isolated([&] { draw_figure(fig, path, device); }, path);
   std::error_code ec;
   if (!std::filesystem::exists(path, ec) || std::filesystem::file_size(path, ec) == 0)
     throw InputError("the plot could not be written", path);

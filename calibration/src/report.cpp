@@ -226,8 +226,12 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
   const std::string dir = run_dir + "/plots";
   auto add = [&](const std::string& id, const std::string& caption, const Figure& fig) {
     const std::string path = dir + "/" + id + ".svg";
-    render_svg(fig, path);
-    images.push_back({id, caption, path});
+    try {
+      render_svg(fig, path);
+      images.push_back({id, caption, path, {}});
+    } catch (const InputError& e) {
+      images.push_back({id, caption, {}, e.message()});  // the report goes on without it
+    }
   };
   if (pd.contains("step")) {
     const std::string note = step_model_note(pd["step"]);
@@ -260,7 +264,7 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
       const std::string path = run_dir + "/" + overlay;
       if (!std::filesystem::exists(path))
         throw InputError("the line-width overlay named in plotdata.json is missing", path);
-      images.push_back({"linewidth_overlay", "Photo overlay: detected edges and centreline", path});  // a PNG photo
+      images.push_back({"linewidth_overlay", "Photo overlay: detected edges and centreline", path, {}});  // a PNG photo
     }
   }
   return images;
@@ -335,6 +339,11 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
   }
   if (!images.empty()) h << "<h2>Plots</h2>\n";
   for (const auto& img : images) {
+    if (!img.failure.empty()) {
+      h << "<figure id=\"plot-" << img.id << "\"><figcaption>" << html::escape(img.caption) << " ("
+        << html::escape(img.failure) << ")</figcaption></figure>\n";
+      continue;
+    }
     const std::string bytes = read_file_bytes(img.path);
     h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html::escape(img.caption)
       << "\" src=\"data:" << image_mime(img.path) << ";base64," << base64(bytes) << "\"><figcaption>"

@@ -71,6 +71,22 @@ std::string resolve_links(const std::string& path) {
   fail("cannot follow the symbolic link", path, ELOOP);
 }
 
+// `path` after its links, when they may be followed: a link whose target lies in another
+// directory than `path`'s is refused unless `links` is Links::follow.
+std::string resolve_allowed_links(const std::string& path, Links links) {
+  const std::string target = resolve_links(path);
+  if (links == Links::follow || target == path) return target;
+  std::error_code e1, e2;
+  const auto here = std::filesystem::weakly_canonical(std::filesystem::absolute(path, e1).parent_path(), e1);
+  const auto there = std::filesystem::weakly_canonical(std::filesystem::absolute(target, e2).parent_path(), e2);
+  if (e1 || e2 || here != there)
+    throw InputError(fmt::format("is a symbolic link to {}, outside its directory: it is not followed (nothing was "
+                                 "written); remove the link or write elsewhere",
+                                 target),
+                     path);
+  return target;
+}
+
 // Refuses to replace a file with several hard links: the rename would give only this name
 // the new content and leave the others with the old, and writing in place instead could
 // leave a half-written file after a crash. Neither is acceptable for a configuration file.
@@ -105,8 +121,7 @@ void keep_owner(int fd, const std::string& mode_of) {
 std::string stage_temporary(const std::string& path, std::string_view content, const std::string& mode_of) {
   const std::filesystem::path target(path);
   const std::filesystem::path dir = target.parent_path();
-  std::string tmpl =
-      (dir.empty() ? std::string(".") : dir.string()) + "/." + target.filename().string() + ".tmp.XXXXXX";
+  std::string tmpl = (dir.empty() ? std::string(".") : dir.string()) + "/" + temporary_name_prefix(path) + "XXXXXX";
   std::vector<char> name(tmpl.begin(), tmpl.end());
   name.push_back('\0');
   const int fd = ::mkstemp(name.data());
@@ -143,14 +158,26 @@ std::string stage_temporary(const std::string& path, std::string_view content, c
 
 }  // namespace
 
-void write_file_atomic(const std::string& path, std::string_view content,
-                       const std::function<void(const std::string&)>& before_rename) {
-  write_file_atomic_as(path, content, path, before_rename);
+std::string shorten_file_name(std::string_view name, std::size_t max_bytes) {
+  if (name.size() <= max_bytes) return std::string(name);
+  std::size_t n = max_bytes;
+  while (n > 0 && (static_cast<unsigned char>(name[n]) & 0xC0) == 0x80) --n;  // not inside a character
+  return std::string(name.substr(0, n));
 }
 
-void write_file_atomic_as(const std::string& link_path, std::string_view content, const std::string& mode_of,
-                          const std::function<void(const std::string&)>& before_rename) {
-  const std::string path = resolve_links(link_path);
+std::string temporary_name_prefix(const std::string& path) {
+  constexpr std::size_t kAround = 1 + 5 + 6;  // ".", ".tmp.", mkstemp's six characters
+  return "." + shorten_file_name(std::filesystem::path(path).filename().string(), kMaxFileNameBytes - kAround) +
+         ".tmp.";
+}
+
+void require_link_within_directory(const std::string& path) { resolve_allowed_links(path, Links::within_directory); }
+
+namespace {
+
+void write_atomic(const std::string& link_path, std::string_view content, const std::string& mode_of,
+                  const std::function<void(const std::string&)>& before_rename, Links links) {
+  const std::string path = resolve_allowed_links(link_path, links);
   refuse_hard_links(path);
   const std::string tmp = stage_temporary(path, content, mode_of);
   auto cleanup = [&] { ::unlink(tmp.c_str()); };
@@ -170,22 +197,35 @@ void write_file_atomic_as(const std::string& link_path, std::string_view content
   fsync_directory(std::filesystem::path(path).parent_path());
 }
 
-void FileBatch::add(std::string path, std::string content, std::string mode_of) {
+}  // namespace
+
+void write_file_atomic(const std::string& path, std::string_view content,
+                       const std::function<void(const std::string&)>& before_rename, Links links) {
+  write_atomic(path, content, path, before_rename, links);
+}
+
+void write_file_atomic_as(const std::string& path, std::string_view content, const std::string& mode_of,
+                          const std::function<void(const std::string&)>& before_rename) {
+  write_atomic(path, content, mode_of, before_rename, Links::within_directory);
+}
+
+void FileBatch::add(std::string path, std::string content, std::string mode_of, Links links) {
   if (mode_of.empty()) mode_of = path;
   for (auto& f : files_)
     if (f.path == path) {
       f.content = std::move(content);
       f.mode_of = std::move(mode_of);
+      f.links = links;
       return;
     }
-  files_.push_back({std::move(path), std::move(content), std::move(mode_of)});
+  files_.push_back({std::move(path), std::move(content), std::move(mode_of), links});
 }
 
 void FileBatch::commit(const std::function<void(const std::string&)>& before_rename) {
   // What each target holds now, to put back if a later rename fails.
   std::vector<std::optional<std::string>> previous;
   for (auto& f : files_) {
-    f.path = resolve_links(f.path);  // a symbolic link's target is written, the link stays
+    f.path = resolve_allowed_links(f.path, f.links);  // a symbolic link's target is written, the link stays
     refuse_hard_links(f.path);
     std::error_code ec;
     const auto st = std::filesystem::status(f.path, ec);
@@ -221,7 +261,7 @@ void FileBatch::commit(const std::function<void(const std::string&)>& before_ren
     std::string rollback_failed;
     for (std::size_t k = 0; k < i; ++k) {
       try {
-        if (previous[k]) write_file_atomic(files_[k].path, *previous[k]);
+        if (previous[k]) write_file_atomic(files_[k].path, *previous[k], {}, Links::follow);
         else if (::unlink(files_[k].path.c_str()) != 0) throw InputError(std::strerror(errno), files_[k].path);
       } catch (const std::exception&) {
         rollback_failed += (rollback_failed.empty() ? "" : ", ") + files_[k].path;

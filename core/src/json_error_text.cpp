@@ -87,4 +87,19 @@ std::string plain_json_error(std::string_view what) {
   return rephrase(text) + where;
 }
 
+std::string plain_filesystem_error(std::string_view what) {
+  constexpr std::string_view kTag = "filesystem error: ";
+  if (what.substr(0, kTag.size()) == kTag) what.remove_prefix(kTag.size());
+  // The paths follow in brackets: "WHAT [first] [second]".
+  const auto first = what.find(" [");
+  std::string paths;
+  for (auto open = first; open != std::string_view::npos; open = what.find(" [", open + 2)) {
+    const auto close = what.find(']', open);
+    if (close == std::string_view::npos) break;
+    paths += (paths.empty() ? "" : ", ") + std::string(what.substr(open + 2, close - open - 2));
+  }
+  const std::string text(what.substr(0, first));
+  return paths.empty() ? text : paths + ": " + text;
+}
+
 }  // namespace tunekit::core

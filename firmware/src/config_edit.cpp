@@ -232,9 +232,15 @@ std::string backup_path_for(const std::string& path) {
   ::gmtime_r(&now, &tm);
   char stamp[32];
   std::strftime(stamp, sizeof stamp, "%Y%m%d-%H%M%S", &tm);
-  std::string base = fmt::format("{}.{}.bak", path, stamp);
-  std::string candidate = base;
-  for (int i = 1; std::filesystem::exists(candidate); ++i) candidate = fmt::format("{}.{}.{}.bak", path, stamp, i);
+  // NAME.STAMP[.N].bak, NAME shortened so that the backup's name stays within the file system's
+  // limit (a configuration named near 255 bytes still gets its backup).
+  const std::filesystem::path p(path);
+  const std::string dir = p.has_parent_path() ? p.parent_path().string() + "/" : std::string();
+  const std::string name = core::shorten_file_name(p.filename().string(), core::kMaxFileNameBytes - 32);
+  std::string candidate = fmt::format("{}{}.{}.bak", dir, name, stamp);
+  std::error_code ec;
+  for (int i = 1; std::filesystem::exists(candidate, ec); ++i)
+    candidate = fmt::format("{}{}.{}.{}.bak", dir, name, stamp, i);
   return candidate;
 }
 
@@ -262,7 +268,7 @@ std::string write_with_backup(const std::string& path, std::string_view new_cont
   const std::string old = read_config_file(path);
   const std::string backup = backup_path_for(path);
   core::write_file_atomic_as(backup, old, path);  // the backup keeps the original's mode
-  core::write_file_atomic(path, new_content, before_rename);
+  core::write_file_atomic(path, new_content, before_rename, core::Links::follow);  // a configuration: links followed
   return backup;
 }
 

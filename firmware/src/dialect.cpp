@@ -6,6 +6,8 @@
 #include <cctype>
 #include <cstdlib>
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 namespace tunekit::firmware {
@@ -86,11 +88,14 @@ FirmwareInfo parse_m115(const std::vector<std::string>& lines) {
 }
 
 std::string Dialect::set_accel(double a) const {
+  // Whole mm/s^2, rounded down: the acceleration set never exceeds the one the protocol was
+  // checked with (a limit of 332.6 is written 332, not 333).
+  const double w = std::floor(a);
   switch (fw_) {
-    case Firmware::klipper: return fmt::format("SET_VELOCITY_LIMIT ACCEL={:.0f}", a);
-    case Firmware::reprapfirmware: return fmt::format("M204 P{:.0f} T{:.0f}", a, a);
+    case Firmware::klipper: return fmt::format("SET_VELOCITY_LIMIT ACCEL={:.0f}", w);
+    case Firmware::reprapfirmware: return fmt::format("M204 P{0:.0f} T{0:.0f}", w);
     // Marlin: P (printing moves) and T (travel moves, those without E); M204 S is deprecated.
-    default: return fmt::format("M204 P{:.0f} T{:.0f}", a, a);
+    default: return fmt::format("M204 P{0:.0f} T{0:.0f}", w);
   }
 }
 
@@ -114,14 +119,14 @@ std::vector<std::string> Dialect::safe_state(bool heaters_off) const {
     case Firmware::reprapfirmware: out.push_back("M112"); break;
     default: out.push_back("M410"); break;  // Marlin/Prusa quickstop: stop all steppers now
   }
-  if (heaters_off) {
-    if (fw_ == Firmware::klipper) out.push_back("TURN_OFF_HEATERS");
-    else {
-      out.push_back("M104 S0");
-      out.push_back("M140 S0");
-    }
-  }
+  if (heaters_off)
+    for (auto& l : this->heaters_off()) out.push_back(std::move(l));
   return out;
+}
+
+std::vector<std::string> Dialect::heaters_off() const {
+  if (fw_ == Firmware::klipper) return {"TURN_OFF_HEATERS"};
+  return {"M104 S0", "M140 S0"};
 }
 
 std::string klipper_param_value(const std::string& value) {

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "export_writers.hpp"
+#include "tunekit/core/file_lock.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/marlin_smoothing.hpp"
 #include "tunekit/firmware/config_edit.hpp"
@@ -150,9 +151,12 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& settings) {
           fmt::format("Klipper accepts pressure_advance_smooth_time above 0 and up to {} s "
                       "(klippy/kinematics/extruder.py:15); {} is out of range",
                       kKlipperSmoothMax, t));
-    else if (fw == ExportFirmware::marlin && t > kMarlinTauMax)
+    else if (fw == ExportFirmware::marlin && (t <= 0 || t > kMarlinTauMax))
+      // As for Klipper: a time written as 0 would silently turn the smoothing off.
       bad.push_back(
-          fmt::format("Marlin accepts ADVANCE_TAU (M900 U) from 0 to {} s; {} is out of range", kMarlinTauMax, t));
+          fmt::format("Marlin's ADVANCE_TAU (M900 U) is written with {} decimals; {} s is out of range "
+                      "(accepted: above 0, as written, up to {} s; 0 would turn the smoothing off)",
+                      detail::kDecimalsSmooth, fmt::format("{:g}", *settings.pa_smooth_s), kMarlinTauMax));
   }
   for (const auto& [axis, sh] : s.shapers) {
     if (axis == "z" && fw != ExportFirmware::klipper) {
@@ -223,6 +227,9 @@ ExportResult export_config_file(ExportFirmware fw, const std::string& path, cons
 
 std::string apply_export(const ExportResult& r, const std::function<void(const std::string&)>& before_rename) {
   if (!r.changed()) return {};
+  // Writers of one configuration take turns (file_lock.hpp): compare and replace under the lock.
+  const core::FileLock lock(r.path);
+  lock.remove_stale_temporaries();
   // Refuse to overwrite a file that changed since it was read.
   if (read_config_file(r.path) != r.original)
     throw InputError("the configuration file changed since it was read; run the export again", r.path);
@@ -251,7 +258,11 @@ std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::Advance
   if (fw == ExportFirmware::marlin) {
     // Marlin smooths with its own exponential cascade, designed on the written grid.
     if (!std::isfinite(d.window_box_s) || d.window_box_s <= 0) return std::nullopt;
-    return ident::design_marlin_advance_tau(d.window_box_s, {}, std::pow(10.0, -detail::kDecimalsSmooth)).tau_s;
+    const double tau =
+        ident::design_marlin_advance_tau(d.window_box_s, {}, std::pow(10.0, -detail::kDecimalsSmooth)).tau_s;
+    // A time that would be written as 0 turns the smoothing off: none is designed then.
+    if (!(std::round(tau * std::pow(10.0, detail::kDecimalsSmooth)) > 0)) return std::nullopt;
+    return tau;
   }
   if (!std::isfinite(w) || w <= 0) return std::nullopt;
   const double scale = std::pow(10.0, detail::kDecimalsSmooth);

@@ -19,6 +19,7 @@
 #include "levenberg_marquardt.hpp"
 #include "number_text.hpp"
 #include "solver_logging.hpp"
+#include "solver_text.hpp"
 
 namespace tunekit::fitting {
 using namespace first_order_detail;
@@ -344,10 +345,9 @@ FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model,
   ceres::Solve(so, &problem, &summary);
   if (summary.termination_type == ceres::FAILURE || summary.termination_type == ceres::USER_FAILURE ||
       !summary.IsSolutionUsable())
-    throw FitError(name + ": the solver failed: " + summary.message + " (" + summary.BriefReport() + ")");
+    throw FitError(name + ": " + detail::plain_solver_failure(summary));
   if (summary.termination_type == ceres::NO_CONVERGENCE && options.require_convergence)
-    throw FitError(name + ": did not converge in " + std::to_string(options.max_iterations) + " iterations (" +
-                   summary.BriefReport() + ")");
+    throw FitError(name + ": did not converge in " + std::to_string(options.max_iterations) + " iterations");
   FitResult f;
   f.model = name;
   f.diagnostics.iterations = static_cast<int>(summary.iterations.size());

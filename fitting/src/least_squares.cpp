@@ -12,6 +12,7 @@
 #include <glog/logging.h>
 
 #include "solver_logging.hpp"
+#include "solver_text.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/stats.hpp"
 
@@ -262,10 +263,9 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
   if (n_free > 0) {
     if (summary.termination_type == ceres::FAILURE || summary.termination_type == ceres::USER_FAILURE ||
         !summary.IsSolutionUsable())
-      throw FitError(model + ": the solver failed: " + summary.message + " (" + summary.BriefReport() + ")");
+      throw FitError(model + ": " + detail::plain_solver_failure(summary));
     if (summary.termination_type == ceres::NO_CONVERGENCE && opt.require_convergence)
-      throw FitError(model + ": did not converge in " + std::to_string(opt.max_iterations) + " iterations (" +
-                     summary.BriefReport() + ")");
+      throw FitError(model + ": did not converge in " + std::to_string(opt.max_iterations) + " iterations");
   }
   for (double v : x)
     if (!std::isfinite(v)) throw FitError(model + ": the solution is not finite (" + r.diagnostics.solver + ")");

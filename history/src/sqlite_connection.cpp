@@ -9,6 +9,7 @@
 // add an fsync to every record: 2.5 ms of work became 50 ms on a busy disk.
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
@@ -21,7 +22,9 @@
 namespace tunekit::history {
 namespace {
 
-constexpr int kSqliteBusyTimeoutMs = 60000;  // many printers recording into one file take turns
+constexpr int kSqliteBusyTimeoutMs = 60000;
+// The SQLite header's application id of a tunekit history ("TKHS"; sqlite.org/fileformat.html).
+constexpr std::int64_t kHistoryApplicationId = 0x544B4853;  // many printers recording into one file take turns
 
 class SqliteConnection final : public Connection {
  public:
@@ -51,6 +54,7 @@ class SqliteConnection final : public Connection {
  private:
   void configure() {
     sqlite3_busy_timeout(db_, kSqliteBusyTimeoutMs);
+    require_tunekit_database();  // before anything changes the file (journal_mode=WAL does)
     // SQLite's own checkpoint when the last connection closes is off: every read-only
     // command (list, trend) would pay its fsyncs. A connection that committed records
     // checkpoints on close instead (checkpoint_into_file), and the log is also checkpointed
@@ -162,6 +166,33 @@ class SqliteConnection final : public Connection {
     sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_TRUNCATE, nullptr, nullptr);
   }
 
+  // Only tunekit's own databases are opened: the SQLite header's application id is tunekit's, or
+  // (a database made before the id was set) its tables are tunekit's, or it has no table yet (a
+  // new file, which gets the id). Another program's database is refused before it is changed.
+  void require_tunekit_database() {
+    const auto id_rows = query("PRAGMA application_id", {});
+    const std::int64_t id = id_rows.empty() ? 0 : std::get<std::int64_t>(id_rows[0][0]);
+    if (id == kHistoryApplicationId) return;
+    std::vector<std::string> tables;
+    for (const auto& row : query("SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name", {}))
+      tables.push_back(std::get<std::string>(row[0]));
+    const auto has = [&](const char* t) { return std::find(tables.begin(), tables.end(), t) != tables.end(); };
+    if (id == 0 && (tables.empty() || (has("schema_migrations") && has("records")))) {
+      // Marked as tunekit's (on a file it may not write, e.g. a read-only copy, it stays unmarked).
+      sqlite3_exec(db_, fmt::format("PRAGMA application_id = {}", kHistoryApplicationId).c_str(), nullptr, nullptr,
+                   nullptr);
+      return;
+    }
+    std::string names;
+    for (std::size_t i = 0; i < tables.size() && i < 3; ++i) names += (i ? ", " : "") + tables[i];
+    throw InputError(
+        fmt::format("not a tunekit history database but another program's SQLite file ({}); nothing was changed: "
+                    "give --db a new file or a tunekit history",
+                    id != 0 ? fmt::format("application id {:#x}", id)
+                            : fmt::format("tables {}{}", names, tables.size() > 3 ? ", ..." : "")),
+        path_);
+  }
+
   [[noreturn]] void fail(int rc, const std::string& msg) const {
     const int primary = rc & 0xff;
     // A file that is not a database, or one that is not tunekit's, is bad input; everything
@@ -180,6 +211,16 @@ class SqliteConnection final : public Connection {
 
 }  // namespace
 
-std::unique_ptr<Connection> connect_sqlite(const std::string& path) { return std::make_unique<SqliteConnection>(path); }
+std::unique_ptr<Connection> connect_sqlite(const std::string& path) {
+  // SQLite reads ":memory:" and "file:" URIs (mode=memory, vfs=...) as other places than a
+  // file: a record stored there would be lost when the command ends.
+  if (path == ":memory:" || path.rfind("file:", 0) == 0)
+    throw InputError(
+        "the history database must be a file path; SQLite's ':memory:' and 'file:' URIs are refused (a record "
+        "there would be lost when tunekit ends; for a file of that name write ./" +
+            path + ")",
+        path);
+  return std::make_unique<SqliteConnection>(path);
+}
 
 }  // namespace tunekit::history

@@ -1,5 +1,6 @@
 #include "tunekit/machine/journal.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -11,10 +12,30 @@
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::machine {
+namespace {
+
+/// Opens `path` for appending without following a symbolic link (a link planted in the run
+/// directory must not send the run's data elsewhere).
+std::FILE* open_append(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NOFOLLOW, 0666);
+  if (fd < 0) {
+    const int err = errno;
+    throw InputError(err == ELOOP ? std::string("cannot create: it is a symbolic link, which is not followed")
+                                  : fmt::format("cannot create: {}", std::strerror(err)),
+                     path);
+  }
+  std::FILE* f = ::fdopen(fd, "a");
+  if (!f) {
+    ::close(fd);
+    throw InputError(fmt::format("cannot create: {}", std::strerror(errno)), path);
+  }
+  return f;
+}
+
+}  // namespace
 
 CsvAppender::CsvAppender(const std::string& path, const std::string& header_line) : path_(path) {
-  f_ = std::fopen(path.c_str(), "ae");
-  if (!f_) throw InputError(fmt::format("cannot create: {}", std::strerror(errno)), path);
+  f_ = open_append(path);
   std::fputs(header_line.c_str(), f_);
   std::fputc('\n', f_);
   std::fflush(f_);
@@ -43,8 +64,7 @@ Journal::Journal(std::string dir) : dir_(std::move(dir)), t0_(std::chrono::stead
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec) throw InputError(fmt::format("cannot create the run directory: {}", ec.message()), dir_);
-  f_ = std::fopen(path("journal.jsonl").c_str(), "ae");
-  if (!f_) throw InputError(fmt::format("cannot create: {}", std::strerror(errno)), path("journal.jsonl"));
+  f_ = open_append(path("journal.jsonl"));
 }
 
 Journal::~Journal() {

@@ -43,6 +43,8 @@ class Reader {
     if (!node) return fallback;
     const auto v = node->value<double>();
     if (!v) throw InputError(fmt::format("[{}] {} must be a number", section, key), where_of(*node));
+    if (!std::isfinite(*v))
+      throw InputError(fmt::format("[{}] {} must be a finite number, not {}", section, key, *v), where_of(*node));
     return *v;
   }
 
@@ -95,6 +97,49 @@ const AxisLimits& MachineProfile::axis(const std::string& name) const {
   if (it == axes.end()) throw InputError(fmt::format("the machine profile has no axis '{}'", name), source_path);
   return it->second;
 }
+
+namespace {
+
+// The physical ranges of a profile's limits: a value beyond is a typing error (a travel of a
+// kilometre, a hot end at 1e9 degC), and the gate checks protocols against these limits.
+constexpr double kMaxTravel_mm = 10000;   // 10 m: beyond any printer's axis
+constexpr double kMaxSpeed_mm_s = 10000;  // 10 m/s
+constexpr double kMaxAccel_mm_s2 = 1e6;   // 100 g
+constexpr double kMaxHotend_c = 600;      // above any polymer's processing temperature (PEEK: 400-450)
+constexpr double kMaxBed_c = 400;         // PEEK-class chambers and beds stay below
+constexpr double kMaxFilament_mm = 10;    // 1.75, 2.85, pellets' screws aside
+constexpr double kMaxFlow_mm3_s = 2000;   // large-format pellet extruders reach a few hundred
+constexpr double kMaxSampleRate_hz = 100000;
+
+/// Every limit of the profile within its physical range (InputError naming the key otherwise).
+void check_physical_ranges(const MachineProfile& p, const std::string& path) {
+  const auto within = [&](double v, double hi, const std::string& key, const char* unit) {
+    if (!(std::isfinite(v) && std::fabs(v) <= hi))
+      throw InputError(
+          fmt::format("{} = {} is beyond the physical range of a printer (at most {} {})", key, v, hi, unit), path);
+  };
+  for (const auto& [name, a] : p.axes) {
+    within(a.min_mm, kMaxTravel_mm, "[axes." + name + "] min_mm", "mm");
+    within(a.max_mm, kMaxTravel_mm, "[axes." + name + "] max_mm", "mm");
+    within(a.max_velocity_mm_s, kMaxSpeed_mm_s, "[axes." + name + "] max_velocity_mm_s", "mm/s");
+    within(a.max_accel_mm_s2, kMaxAccel_mm_s2, "[axes." + name + "] max_accel_mm_s2", "mm/s^2");
+  }
+  within(p.extruder.filament_diameter_mm, kMaxFilament_mm, "[extruder] filament_diameter_mm", "mm");
+  within(p.extruder.nozzle_diameter_mm, kMaxFilament_mm, "[extruder] nozzle_diameter_mm", "mm");
+  within(p.extruder.max_flow_mm3_s, kMaxFlow_mm3_s, "[extruder] max_flow_mm3_s", "mm^3/s");
+  within(p.extruder.max_velocity_mm_s, kMaxSpeed_mm_s, "[extruder] max_velocity_mm_s", "mm/s");
+  within(p.extruder.max_accel_mm_s2, kMaxAccel_mm_s2, "[extruder] max_accel_mm_s2", "mm/s^2");
+  within(p.extruder.max_extrude_only_distance_mm, kMaxTravel_mm, "[extruder] max_extrude_only_distance_mm", "mm");
+  within(p.print.max_accel_mm_s2, kMaxAccel_mm_s2, "[print] max_accel_mm_s2", "mm/s^2");
+  within(p.print.speed_mm_s, kMaxSpeed_mm_s, "[print] speed_mm_s", "mm/s");
+  within(p.print.line_width_mm, kMaxFilament_mm, "[print] line_width_mm", "mm");
+  within(p.print.layer_height_mm, kMaxFilament_mm, "[print] layer_height_mm", "mm");
+  within(p.temperature.hotend_max_c, kMaxHotend_c, "[temperature] hotend_max_c", "degC");
+  within(p.temperature.bed_max_c, kMaxBed_c, "[temperature] bed_max_c", "degC");
+  within(p.sensors.accelerometer_rate_hz, kMaxSampleRate_hz, "[sensors] accelerometer_rate_hz", "Hz");
+}
+
+}  // namespace
 
 MachineProfile parse_machine_profile(const std::string& text, const std::string& path) {
   toml::table root;
@@ -236,6 +281,7 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
                                       firmware::limits::kMarlinDefaultRetractAccel_mm_s2);
   st.max_accel_e_mm_s2 = r.positive(fs, "firmware_state", "max_accel_e_mm_s2", false, p.extruder.max_accel_mm_s2);
   st.jerk_xy_mm_s = r.positive(fs, "firmware_state", "jerk_xy_mm_s", false, 15.0);
+  check_physical_ranges(p, path);
   return p;
 }
 

@@ -15,6 +15,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/atomic_file.hpp"
+#include "tunekit/core/file_bytes.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/machine/journal.hpp"
 #include "tunekit/machine/klipper_api.hpp"
@@ -224,12 +225,86 @@ void stop_sim_and_keep_record(sim::SimPtyServer& server, machine::Journal& journ
   res.files["sim_received"] = journal.path("sim_received.gcode");
 }
 
+/// The profile the run is checked against (RunOptions::profile, profile_path, machine).
+machine::MachineProfile run_profile(const RunOptions& o, bool sim) {
+  if (o.profile) return *o.profile;
+  if (sim) return o.profile_path.empty() ? builtin_sim_profile() : machine::load_machine_profile(o.profile_path);
+  if (!o.profile_path.empty() && o.profile_path != o.machine)
+    throw InputError(
+        "a real machine's profile is --machine FILE; --profile describes the printer --machine sim simulates");
+  return machine::load_machine_profile(o.machine);
+}
+
+/// Whether the protocol sets a heater to a temperature above 0 (then the run turns the heaters
+/// off at its end, unless RunOptions::keep_heaters).
+bool heats(const std::vector<std::string>& gcode) {
+  for (const auto& line : gcode) {
+    const std::string cmd = line.substr(0, line.find(';'));
+    const bool heater = cmd.rfind("M104", 0) == 0 || cmd.rfind("M109", 0) == 0 || cmd.rfind("M140", 0) == 0 ||
+                        cmd.rfind("M190", 0) == 0 || cmd.rfind("SET_HEATER_TEMPERATURE", 0) == 0;
+    if (!heater) continue;
+    for (const std::string key : {" S", " R", " TARGET="})
+      if (const auto at = cmd.find(key);
+          at != std::string::npos && std::strtod(cmd.c_str() + at + key.size(), nullptr) > 0)
+        return true;
+  }
+  return false;
+}
+
+/// The end of a run that heated: the heaters go back off (journaled as "heaters off").
+void restore_heaters(Session& session, const std::vector<std::string>& gcode, bool keep, machine::Journal& journal,
+                     const std::atomic<bool>& abort_flag) {
+  if (!heats(gcode)) return;
+  if (keep) {
+    journal.event("heaters kept", {{"reason", "--keep-heaters"}});
+    return;
+  }
+  const auto off = session.dialect.heaters_off();
+  journal.event("heaters off", {{"commands", off}});
+  session.send_lines(off, abort_flag);
+}
+
+/// After a failure or a stop: the firmware's stop and heaters off (as the profile says), then what
+/// the protocol changed for its test, each journaled.
+void send_safe_state(Session& session, const machine::MachineProfile& profile, const std::vector<std::string>& gcode,
+                     machine::Journal& journal) {
+  const auto safe = session.dialect.safe_state(profile.temperature.heaters_off_on_abort);
+  journal.event("safe state", {{"commands", safe}});
+  session.safe_state(safe);
+  // Restore what the protocol changed for its test (after the stop). After an emergency
+  // stop (M112) the firmware must be restarted, which reloads its configuration anyway.
+  const auto restore = epilogue_lines(gcode);
+  if (!restore.empty() && std::find(safe.begin(), safe.end(), "M112") == safe.end()) {
+    journal.event("restore", {{"commands", restore}});
+    session.safe_state(restore);
+  }
+}
+
+/// Rewrites run.json of a run that had completed when a stop signal arrived: "interrupted", and
+/// where it was.
+void mark_interrupted(const std::string& run_json, const std::string& where) {
+  nlohmann::json summary = nlohmann::json::parse(read_file_bytes(run_json), nullptr, false);
+  if (summary.is_discarded()) summary = nlohmann::json::object();
+  summary["status"] = "interrupted";
+  summary["stopped_at"] = where;
+  summary["error"] = "interrupted by " + StopSignals::received() + " " + where;
+  core::write_file_atomic(run_json, summary.dump(2) + "\n");
+}
+
 }  // namespace
+
+void throw_if_stopped_after_run(const RunResult& r, const std::string& where) {
+  if (!StopSignals::flag().load() || StopSignals::received_number() == 0) return;
+  if (r.files.count("summary")) mark_interrupted(r.files.at("summary"), where);
+  StopSignals::throw_if_stopped(fmt::format("{} (the run is kept in {})", where, r.run_dir));
+}
 
 RunResult run_experiment(const RunOptions& o) {
   const bool sim = o.machine == "sim";
-  const machine::MachineProfile profile = sim ? builtin_sim_profile() : machine::load_machine_profile(o.machine);
-  const sim::SimConfig sim_cfg = sim::SimConfig::from_options(o.sim_options);  // bad options fail before anything else
+  const machine::MachineProfile profile = run_profile(o, sim);
+  // Bad simulator options fail before anything else; the simulated printer is the profile's.
+  const sim::SimConfig sim_cfg =
+      sim ? sim::SimConfig::for_machine(profile, o.sim_options) : sim::SimConfig::from_options(o.sim_options);
   if (!sim && o.port.empty()) throw InputError("--port is needed with a machine profile (or use --machine sim)");
   const firmware::Dialect dialect = planned_dialect(sim, sim_cfg, profile);
 
@@ -259,11 +334,9 @@ RunResult run_experiment(const RunOptions& o) {
   res.files["gcode"] = journal.path("protocol.gcode");
   res.files["summary"] = journal.path("run.json");
 
-  nlohmann::json summary{{"protocol", o.protocol},
-                         {"experiment", res.experiment.to_json()},
-                         {"machine", sim ? "sim" : o.machine},
-                         {"profile", profile.name},
-                         {"started_utc", stamp}};
+  nlohmann::json summary{
+      {"protocol", o.protocol},  {"experiment", res.experiment.to_json()}, {"machine", sim ? "sim" : o.machine},
+      {"profile", profile.name}, {"profile_source", profile.source_path},  {"started_utc", stamp}};
   std::unique_ptr<sim::SimPtyServer> server;
   std::string port = o.port;
   if (sim) {
@@ -299,6 +372,7 @@ RunResult run_experiment(const RunOptions& o) {
 
   SendGuard guard(profile);  // the last check of every line, in the link
   std::unique_ptr<Session> session;
+  std::string stage = "while connecting";  // where a stop or failure found the run (run.json "stopped_at")
   try {
     progress(fmt::format("connecting to {}", port));
     const bool api = port.rfind("unix:", 0) == 0;
@@ -308,6 +382,7 @@ RunResult run_experiment(const RunOptions& o) {
       session = detail::make_gcode_session(std::move(transport), journal, rec, o.link, abort_flag, guard,
                                            server ? server->http_url() : profile.http_address,
                                            machine::rrf_password(profile.http_password));
+    stage = "while identifying the firmware";
     session->firmware = session->identify();
     session->dialect = firmware::Dialect(
         session->firmware.firmware == firmware::Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
@@ -317,28 +392,24 @@ RunResult run_experiment(const RunOptions& o) {
     require_recordable(*session, res.experiment.sensors, port);
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
+    stage = "while sending the protocol";
     send_protocol(*session, res.gcode, *abort_flag, port);
+    stage = "after the protocol's last line, turning the heaters off";
+    restore_heaters(*session, res.gcode, o.keep_heaters, journal, *abort_flag);
+    stage = "after the protocol's last line, collecting the last samples";
     session->finish();
+    // A stop that arrived once every line was answered still stops the run (stop_signals.hpp).
+    if (abort_flag->load()) throw MachineError("interrupted", port);
   } catch (const MachineError& e) {
     const bool interrupted = abort_flag->load();
     const std::string signal = StopSignals::received();
     const MachineError why =
         interrupted && !signal.empty() ? MachineError("interrupted by " + signal, e.location()) : e;
     journal.error(why.formatted());
-    const auto safe = (session ? session->dialect : dialect).safe_state(profile.temperature.heaters_off_on_abort);
-    if (session) {
-      journal.event("safe state", {{"commands", safe}});
-      session->safe_state(safe);
-      // Restore what the protocol changed for its test (after the stop). After an emergency
-      // stop (M112) the firmware must be restarted, which reloads its configuration anyway.
-      const auto restore = epilogue_lines(res.gcode);
-      if (!restore.empty() && std::find(safe.begin(), safe.end(), "M112") == safe.end()) {
-        journal.event("restore", {{"commands", restore}});
-        session->safe_state(restore);
-      }
-    }
+    if (session) send_safe_state(*session, profile, res.gcode, journal);
     journal.sync();
     summary["status"] = interrupted ? "interrupted" : "failed";
+    summary["stopped_at"] = stage;
     summary["error"] = why.formatted();
     summary["samples"] = {{"load_cell", rec.load_samples()}, {"accel", rec.accel_samples()}};
     if (session) summary["link"] = session->stats();
@@ -347,6 +418,10 @@ RunResult run_experiment(const RunOptions& o) {
     list_files();
     summary["files"] = res.files;
     core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
+    if (interrupted && !signal.empty())
+      throw InterruptedError(StopSignals::received_number(),
+                             fmt::format("{} {} (the partial run is kept in {})", why.message(), stage, res.run_dir),
+                             why.location());
     throw MachineError(fmt::format("{} (the partial run is kept in {})", why.message(), res.run_dir), why.location());
   }
   journal.event("end", {{"load_cell_samples", rec.load_samples()}, {"accel_samples", rec.accel_samples()}});
@@ -361,6 +436,7 @@ RunResult run_experiment(const RunOptions& o) {
   core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
   res.status = "complete";
   res.summary = summary;
+  throw_if_stopped_after_run(res, "after the run had ended (every line answered; the machine was idle)");
   return res;
 }
 

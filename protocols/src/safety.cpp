@@ -1,5 +1,6 @@
 #include "tunekit/protocols/safety.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -9,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/text.hpp"
 #include "tunekit/machine/trajectory.hpp"
 
 namespace tunekit::protocols {
@@ -228,6 +230,12 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
   if (bytes > limits.max_bytes)
     out.push_back({0, "", fmt::format("{} bytes of G-code exceed the limit of {} bytes", bytes, limits.max_bytes)});
   if (!out.empty() && (gcode.size() > limits.max_lines || bytes > limits.max_bytes)) return out;
+  // One element, one line: a line break inside one (a comment carrying a profile's text) would
+  // print or send lines the gate never saw.
+  for (std::size_t i = 0; i < gcode.size(); ++i)
+    if (std::any_of(gcode[i].begin(), gcode[i].end(), [](char c) { return c == '\n' || c == '\r' || c == '\0'; }))
+      out.push_back({i + 1, core::comment_safe(gcode[i]), "a G-code line holds a line break or NUL"});
+  if (!out.empty()) return out;
 
   machine::GcodeInterpreter in;
   home_to_minimums(in, p);

@@ -3,6 +3,8 @@
 #include <csignal>
 #include <mutex>
 
+#include "tunekit/core/error.hpp"
+
 namespace tunekit::protocols {
 namespace {
 
@@ -54,6 +56,13 @@ std::string StopSignals::received() {
     case SIGHUP: return "SIGHUP";
     default: return {};
   }
+}
+
+int StopSignals::received_number() { return g_signal.load(); }
+
+void StopSignals::throw_if_stopped(const std::string& where) {
+  if (!g_stop.load() || g_signal.load() == 0) return;
+  throw InterruptedError(g_signal.load(), "interrupted by " + received() + " " + where);
 }
 
 }  // namespace tunekit::protocols

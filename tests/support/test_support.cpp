@@ -95,14 +95,16 @@ const SharedCalibration& default_calibration() {
   return c;
 }
 
-CliRun run_exe(const std::string& args) {
+CliRun run_exe(const std::string& args) { return run_exe_prefixed("", args); }
+
+CliRun run_exe_prefixed(const std::string& prefix, const std::string& args) {
   // One stderr file per process and call: ctest runs test cases in parallel processes.
   static int calls = 0;
   const auto dir = std::filesystem::path(TUNEKIT_TEST_TMP_DIR) / "run_exe";
   std::filesystem::create_directories(dir);
   const std::string err_path =
       (dir / ("stderr." + std::to_string(::getpid()) + "." + std::to_string(++calls))).string();
-  const std::string cmd = std::string(TUNEKIT_EXE) + " " + args + " 2>" + err_path;
+  const std::string cmd = prefix + std::string(TUNEKIT_EXE) + " " + args + " 2>" + err_path;
   CliRun r;
   FILE* p = ::popen(cmd.c_str(), "r");
   if (!p) throw std::runtime_error("popen failed");

@@ -39,6 +39,8 @@ const SharedCalibration& default_calibration();
 /// Runs the built tunekit executable through the shell (for end-to-end checks of the real
 /// process: exit status, stdout/stderr separation). `args` is appended as one shell string.
 CliRun run_exe(const std::string& args);
+/// run_exe() with `prefix` (a command such as "setpriv ... " or "prlimit ... ") before the executable.
+CliRun run_exe_prefixed(const std::string& prefix, const std::string& args);
 
 /// The whole content of the file at `path` ("" if it cannot be read).
 std::string read_text(const std::string& path);

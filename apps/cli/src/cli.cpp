@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <optional>
@@ -246,7 +247,9 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   app.require_subcommand(1);
   app.fallthrough();
   app.footer(
-      "Exit codes: 0 ok, 1 fit failed or requirement unmet, 2 usage or bad input, 3 machine failure.\n"
+      "Exit codes: 0 ok, 1 fit failed or requirement unmet, 2 usage or bad input, 3 machine failure;\n"
+      "130, 143, 129: a run stopped by SIGINT, SIGTERM, SIGHUP (machine stopped, heaters off); 141: the\n"
+      "reader of stdout went away (SIGPIPE, as for `tunekit ... | head`), after the files were written.\n"
       "Run 'tunekit COMMAND --help' for a command's options and examples.");
 
   register_step(app, ctx);
@@ -273,13 +276,12 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses from the back
     app.parse(reversed);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() != 0) {
-      // CLI11 has no suggestions of its own ("A subcommand is required" for `tunekit stpe`).
-      const std::string typo = cli_typo_message(app, args);
-      if (!typo.empty()) {
-        err << "tunekit: error: " << typo << "\n";
-        return static_cast<int>(ExitCode::bad_input);
-      }
+    // CLI11 has no suggestions of its own ("A subcommand is required" for `tunekit stpe`); and
+    // `tunekit thermal --help` names no command: an error, not the main help with exit 0.
+    const std::string typo = cli_typo_message(app, args);
+    if (!typo.empty() && (e.get_exit_code() != 0 || typo.rfind("unknown command", 0) == 0)) {
+      err << "tunekit: error: " << typo << "\n";
+      return static_cast<int>(ExitCode::bad_input);
     }
     if (e.get_exit_code() == 0) return app.exit(e, out, err);  // --help, --version
     err << cli_parse_error_line(e, app, args) << "\n";
@@ -289,6 +291,10 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     return static_cast<int>(e.code());
   } catch (const std::bad_alloc&) {
     err << "tunekit: error: out of memory\n";
+    return static_cast<int>(ExitCode::bad_input);
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A read-only place, a name too long, a missing directory: the condition in plain words.
+    err << "tunekit: error: " << core::plain_filesystem_error(e.what()) << "\n";
     return static_cast<int>(ExitCode::bad_input);
   } catch (const std::exception& e) {
     // A JSON library error that escaped is told in plain words, never in the library's text.

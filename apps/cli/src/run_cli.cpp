@@ -11,6 +11,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/protocols/stop_signals.hpp"
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -66,6 +67,9 @@ void register_run(CLI::App& app, CliContext& ctx) {
                   "mm/s, mm/s^2, degC) or the firmware's configuration (Klipper printer.cfg, Marlin "
                   "Configuration.h, RepRapFirmware config.g; see tunekit profile)",
                   r.machine));
+  sub->add_option("--profile", r.profile_path,
+                  "With --machine sim: the printer to simulate, a machine profile TOML or its firmware configuration "
+                  "(its limits, firmware, steps and extruder)");
   sub->add_option("--port", r.port,
                   "Serial device (/dev/ttyACM0), pseudo-terminal (/tmp/printer) or unix:SOCKET (Klipper API server); "
                   "with --machine sim: an external tunekit-sim link");
@@ -86,6 +90,9 @@ void register_run(CLI::App& app, CliContext& ctx) {
                               r.limits.max_duration_s));
   sub->add_option("--max-lines", r.limits.max_lines,
                   fmt::format("Refuse a protocol of more G-code lines than this (default {})", r.limits.max_lines));
+  sub->add_flag("--keep-heaters", r.keep_heaters,
+                "Leave the hot end and bed at the protocol's temperatures when it ends (default: a protocol that "
+                "heated turns them off)");
   sub->add_flag("--dry-run", r.dry_run,
                 "Print the protocol's G-code (checked against the profile) instead of sending it");
   add_output_options(sub, cmd->output);
@@ -94,17 +101,26 @@ void register_run(CLI::App& app, CliContext& ctx) {
               "  tunekit run liquefier-step --machine sim\n"
               "  tunekit run axis-sweep --axis x --machine sim -p freq_start_hz=20 -p freq_end_hz=80\n"
               "  tunekit run liquefier-step --dry-run -p feed_high_mm_s=4\n"
+              "  tunekit run axis-sweep --axis x --machine sim --profile printer.cfg --dry-run\n"
               "  tunekit run axis-sweep --axis y --machine printer.toml --port unix:/tmp/klippy_uds\n"
               "  tunekit run liquefier-step --machine sim --sim fault=garble@12 --json\n"
               "Each run directory holds journal.jsonl, the sensor CSVs, protocol.gcode, run.json and, on the\n"
-              "simulator, truth.json. Exit code 3: the machine or link failed (the partial run is kept).\n"
+              "simulator, truth.json. Exit code 3: the machine or link failed (the partial run is kept); 130, 143,\n"
+              "129: stopped by SIGINT, SIGTERM, SIGHUP (motion stopped, heaters off; run.json says where).\n"
               "RepRapFirmware's web server password (M551): the environment variable TUNEKIT_RRF_PASSWORD, or\n"
               "[network] password in the profile; it is never printed.");
   sub->callback([cmd, &ctx] {
     cmd->options.run.progress = [&ctx](const std::string& m) {
       if (ctx.verbosity > 0) ctx.err << "tunekit: " << m << "\n";
     };
-    set_exit_code(report_outcome(compute_run(cmd->options), cmd->output, ctx));
+    // A stop signal at any instant, reading and printing the results included, ends the command
+    // with exit code 128 + its number and run.json saying where (stop_signals.hpp).
+    const protocols::StopSignals stop_signals;
+    const RunOutcome outcome = compute_run(cmd->options);
+    protocols::throw_if_stopped_after_run(outcome.result, "after the run had ended, while reading its results");
+    const int code = report_outcome(outcome, cmd->output, ctx);
+    protocols::throw_if_stopped_after_run(outcome.result, "after the run had ended, while printing its results");
+    set_exit_code(code);
   });
 }
 

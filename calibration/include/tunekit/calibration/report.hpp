@@ -51,7 +51,10 @@ Figure overshoot_grid_figure(const nlohmann::json& d);
 struct ReportImage {
   std::string id;  ///< e.g. "step", "psd_x"
   std::string caption;
-  std::string path;  ///< the image file (.svg plot or .png photo)
+  std::string path;  ///< the image file (.svg plot or .png photo); empty when not drawn
+  /// Why the figure was not drawn (the plot library failed, e.g. under a memory cap): the report
+  /// says so in its place and keeps everything else. Empty when it was drawn.
+  std::string failure;
 };
 
 /// Renders every plot that plotdata.json has data for into RUN_DIR/plots/*.svg.

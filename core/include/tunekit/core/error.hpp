@@ -1,6 +1,7 @@
 #pragma once
 // Errors that carry the process exit code they map to:
-// 0 ok, 1 fit failed or a requirement unmet, 2 usage or bad input, 3 machine or transport failure.
+// 0 ok, 1 fit failed or a requirement unmet, 2 usage or bad input, 3 machine or transport failure;
+// 128 + N when a stop signal N ended a run (InterruptedError: 130 SIGINT, 143 SIGTERM, 129 SIGHUP).
 // The CLI prints them as one line: `tunekit: error: LOCATION: message`.
 
 #include <stdexcept>
@@ -45,6 +46,15 @@ class MachineError : public Error {
  public:
   explicit MachineError(std::string message, std::string location = {})
       : Error(ExitCode::machine, std::move(message), std::move(location)) {}
+};
+
+/// A run stopped from outside by a signal (SIGINT, SIGTERM, SIGHUP): the exit code is the
+/// shell's for a process ended by that signal, 128 + the signal's number (130, 143, 129), after
+/// the machine was brought to its safe state and the run's files were written.
+class InterruptedError : public Error {
+ public:
+  InterruptedError(int signal_number, std::string message, std::string location = {})
+      : Error(static_cast<ExitCode>(128 + signal_number), std::move(message), std::move(location)) {}
 };
 
 /// "FILE:LINE" or "FILE:LINE:COLUMN" (a column of 0 is left out).

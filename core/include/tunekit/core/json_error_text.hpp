@@ -14,4 +14,9 @@ namespace tunekit::core {
 /// passes through without the tag.
 std::string plain_json_error(std::string_view what);
 
+/// The one-line form of a std::filesystem::filesystem_error's what() for a user's message:
+/// "filesystem error: cannot create directories: Permission denied [ro/run]" becomes
+/// "ro/run: cannot create directories: Permission denied" (libstdc++'s wording).
+std::string plain_filesystem_error(std::string_view what);
+
 }  // namespace tunekit::core

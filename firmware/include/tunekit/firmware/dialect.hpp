@@ -64,6 +64,9 @@ class Dialect {
   /// Commands that bring the machine to a safe state after an abort: stop motion, then
   /// heaters off if `heaters_off`.
   std::vector<std::string> safe_state(bool heaters_off) const;
+  /// Commands that turn the hot end and the bed off (the end of a run that heated them, and
+  /// the second half of safe_state).
+  std::vector<std::string> heaters_off() const;
   /// G-code that starts/stops a sensor stream (tunekit-sim's M4100); empty when the firmware
   /// streams through another channel (Klipper's API server).
   std::string sensor_stream(const std::string& sensor, bool on) const;

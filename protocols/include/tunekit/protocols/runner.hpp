@@ -21,14 +21,17 @@
 // opened; a machine/transport failure is a MachineError (exit 3) thrown after the journal has
 // been flushed, safe-state commands sent (best effort) and run.json written with
 // "status": "failed" — everything received before the failure stays in the run directory.
-// SIGINT, SIGTERM and SIGHUP during a run do the same with "status": "interrupted"
-// (stop_signals.hpp), unless the caller gives its own abort_flag.
+// SIGINT, SIGTERM and SIGHUP at any instant of a run, up to and after the last line's answer, do
+// the same with "status": "interrupted" and "stopped_at" saying where, and throw InterruptedError
+// (exit code 130, 143, 129) (stop_signals.hpp); with the caller's own abort_flag, a MachineError.
+// A run whose protocol heated turns the heaters off at its normal end (RunOptions::keep_heaters).
 
 #include <atomic>
 #include <chrono>
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,8 +55,16 @@ struct RunOptions {
   std::string protocol;                  ///< see protocol_specs()
   std::map<std::string, double> params;  ///< protocol parameter overrides
   std::string axis = "x";                ///< axis protocols
-  std::string machine = "sim";           ///< "sim" or a machine profile (TOML) path
-  std::string port;                      ///< device / PTY / "unix:PATH"; empty with "sim"
+  std::string machine = "sim";           ///< "sim" or a machine profile path (TOML or a firmware configuration)
+  /// The machine's profile, already loaded (the C++ API's way; calibrate passes its own). With
+  /// "sim" it is the printer the simulator simulates (SimConfig::for_machine): its limits,
+  /// firmware, steps and extruder; otherwise the limits of the machine on `port`. Empty: the
+  /// built-in simulated printer's profile, or the file `machine` names.
+  std::optional<machine::MachineProfile> profile;
+  /// "sim" only: the profile file of the printer to simulate (tunekit run --profile), when
+  /// `profile` is empty.
+  std::string profile_path;
+  std::string port;  ///< device / PTY / "unix:PATH"; empty with "sim"
   int baud = 250000;
   std::string run_dir;   ///< default: <runs_root>/<protocol>-<UTC stamp>
   std::string file_tag;  ///< names raw_data_<axis>_<tag>.csv; default: the UTC stamp
@@ -69,6 +80,10 @@ struct RunOptions {
   /// refused (InputError naming both) when set; otherwise the protocol is built for the firmware
   /// found and the difference is reported as a warning (run.json "warnings").
   bool strict_firmware = false;
+  /// A protocol that heats the hot end or the bed turns them off at its normal end (after its
+  /// epilogue) unless this is set (`--keep-heaters`): then they stay at the protocol's last
+  /// temperatures, for a run that follows at once.
+  bool keep_heaters = false;
   /// Set to stop the run safely; default: set by SIGINT, SIGTERM or SIGHUP (stop_signals.hpp).
   const std::atomic<bool>* abort_flag = nullptr;
   std::function<void(const std::string&)> progress;  ///< human progress messages
@@ -95,5 +110,11 @@ machine::MachineProfile builtin_sim_profile();
 
 /// Runs (or, with dry_run, only builds and checks) an experiment. See the header comment.
 RunResult run_experiment(const RunOptions& options);
+
+/// For a caller that keeps a StopSignals guard after a run completed (the analysis of `run`,
+/// calibrate's stages): when a stop signal has arrived, rewrites the run's run.json as
+/// "interrupted" with "stopped_at": `where` and throws InterruptedError (exit code 128 + the
+/// signal's number); nothing otherwise.
+void throw_if_stopped_after_run(const RunResult& run, const std::string& where);
 
 }  // namespace tunekit::protocols

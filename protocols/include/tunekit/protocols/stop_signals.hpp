@@ -5,7 +5,10 @@
 // between lines and the link checks while it waits for an answer, so the run stops the machine
 // (the firmware's stop sequence and heaters off), flushes its journal and writes run.json with
 // "status": "interrupted" before it returns (runner.hpp). SIGHUP ignored when the guard is
-// installed (as under nohup(1)) stays ignored.
+// installed (as under nohup(1)) stays ignored. A command that runs experiments keeps a guard for
+// its whole length and checks the flag between its stages (throw_if_stopped), so a signal that
+// arrives after the last line was answered, or during the analysis, still ends the command with
+// exit code 128 + the signal's number (130 SIGINT, 143 SIGTERM, 129 SIGHUP), never 0.
 
 #include <atomic>
 #include <string>
@@ -25,6 +28,11 @@ class StopSignals {
   static const std::atomic<bool>& flag();
   /// The signal's name ("SIGTERM"), or empty when none arrived.
   static std::string received();
+  /// The signal's number (SIGTERM), or 0 when none arrived.
+  static int received_number();
+  /// Throws InterruptedError (exit code 128 + the signal's number) saying `where` the run was
+  /// when one of the signals arrived; nothing when none did.
+  static void throw_if_stopped(const std::string& where);
 };
 
 }  // namespace tunekit::protocols
