@@ -256,13 +256,13 @@ void read_klipper_extruder(const KlipperView& k, MachineProfile& p, const Klippe
   detail::set_value(p, "extruder.max_accel_mm_s2", e.max_accel_mm_s2, ea.value, ea.source);
   detail::set_value(p, "extruder.max_extrude_only_distance_mm", e.max_extrude_only_distance_mm, dist.value,
                     dist.source);
-  const auto tmax = k.number("extruder", "max_temp", detail::kTemperature);
+  const auto tmax = k.number("extruder", "max_temp", detail::kHotendTemperature);
   detail::set_value(p, "temperature.hotend_max_c", p.temperature.hotend_max_c, tmax.value, tmax.source);
 }
 
 void read_klipper_bed(const KlipperView& k, MachineProfile& p) {
   if (k.has("heater_bed")) {
-    const auto b = k.number("heater_bed", "max_temp", detail::kTemperature);
+    const auto b = k.number("heater_bed", "max_temp", detail::kBedTemperature);
     detail::set_value(p, "temperature.bed_max_c", p.temperature.bed_max_c, b.value, b.source);
     return;
   }
