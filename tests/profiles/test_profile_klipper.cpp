@@ -168,6 +168,10 @@ TEST_CASE("Klipper: every stock printer-*.cfg of a supported kinematics imports 
     INFO(name);
     MachineProfile p;
     REQUIRE_NOTHROW(p = tunekit::machine::load_machine_profile(entry.path().string()));
+    // With the sensors a technician declares (calibrate's load-cell path) it imports too.
+    tunekit::machine::ProfileImportOptions declared;
+    declared.sensors = {"accelerometer", "load_cell"};
+    CHECK_NOTHROW(tunekit::machine::import_machine_profile(entry.path().string(), declared));
     for (const char* axis : {"x", "y", "z"}) {
       const auto& a = p.axis(axis);
       CHECK(std::isfinite(a.min_mm));
