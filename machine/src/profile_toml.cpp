@@ -91,16 +91,15 @@ void write_sensors(ProfileTomlWriter& w, const MachineProfile& p) {
   w.table("sensors");
   if (s.accelerometer && is_klipper_accelerometer_chip(s.accelerometer_chip) && p.firmware == "klipper") {
     w.text("sensors", "accelerometer", s.accelerometer_chip);
-    // Klipper names the section after the chip unless the configuration names it ([lis2dw toolhead]).
-    const std::string name = s.accelerometer_name.empty() ? s.accelerometer_chip : s.accelerometer_name;
-    w.line("accelerometer_name", "sensors.accelerometer", toml_quoted(name));
+    // A declared accelerometer without a section of its own keeps the chip's name (the default).
+    if (!s.accelerometer_name.empty())
+      w.line("accelerometer_name", "sensors.accelerometer", toml_quoted(s.accelerometer_name));
   } else {
     w.flag("sensors", "accelerometer", s.accelerometer);
   }
   w.number("sensors", "accelerometer_rate_hz", s.accelerometer_rate_hz);
   w.flag("sensors", "load_cell", s.load_cell);
-  if (s.load_cell && !s.load_cell_name.empty())
-    w.line("load_cell_name", "sensors.load_cell", toml_quoted(s.load_cell_name));
+  if (s.load_cell) w.line("load_cell_name", "sensors.load_cell", toml_quoted(s.load_cell_name));
   w.flag("sensors", "filament_encoder", s.filament_encoder);
   w.flag("sensors", "camera", s.camera);
 }

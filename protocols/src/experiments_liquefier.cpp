@@ -19,6 +19,7 @@
 #include "tunekit/machine/trajectory.hpp"
 
 #include "experiment_gcode.hpp"
+#include "machine_defaults.hpp"
 
 namespace tunekit::protocols::experiment_gcode {
 
@@ -27,7 +28,7 @@ namespace {
 // The longest staircase step of a chirp sized from a time constant, s: fewer, longer moves keep
 // the delivered feed close to the recorded staircase on a firmware that stops after every
 // extrude-only move (Klipper), while 50 ms still resolves the liquefier's slowest corners.
-constexpr double kLongestChirpStep_s = 0.05;
+constexpr double kLongestChirpStep_s = kLongestStaircaseStep_s;
 
 /// The chirp sized from expected_tau_s (chirp_plan.hpp): its band, duration and settle time, and
 /// a staircase step as long as the chirp's end allows (ten per period, at most 50 ms) but never

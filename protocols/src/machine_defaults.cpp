@@ -76,12 +76,24 @@ void staircase_defaults(const ExperimentRequest& r, Experiment& e) {
     // The acceleration as written (whole mm/s^2, rounded down: experiment_gcode.cpp extruder_accel).
     const double a = stops ? std::floor(std::min(e.params.at("accel_mm_s2"), r.profile.extruder.max_accel_mm_s2)) : 0.0;
     const double keep = shortest_staircase_step_s(top, a, stops);
-    set(e, "segment_s", std::max(kNominalSegment_s, keep),
-        keep > kNominalSegment_s
-            ? fmt::format("the shortest step the extruder keeps at {:.4g} mm/s and {:g} mm/s^2 when it stops after "
-                          "every extrude-only move",
-                          top, a)
-            : std::string("nominal"));
+    double step = std::max(kNominalSegment_s, keep);
+    std::string why = keep > kNominalSegment_s ? fmt::format(
+                                                     "the shortest step the extruder keeps at {:.4g} mm/s and {:g} "
+                                                     "mm/s^2 when it stops after every extrude-only move",
+                                                     top, a)
+                                               : std::string("nominal");
+    // Where the stops take a noticeable share of each step, the longest step a chirp takes: each
+    // stop leaves a ripple in the force at the step rate, which a load cell's samples alias into
+    // the chirp's band (on the simulated Klipper printer with a 798 mm/s^2 extruder, 20 ms steps
+    // read the frequency response's tau 0.053 s against the step test's 0.030 s; 50 ms steps 0.031 s).
+    if (stops && 2 * top / (a * step) > kMaxStopShare && step < kLongestStaircaseStep_s) {
+      step = kLongestStaircaseStep_s;
+      why = fmt::format(
+          "the longest step, so that fewer stops ripple the force: the extruder's ramps at {:g} mm/s^2 "
+          "take more than {:g} % of a shorter one",
+          a, 100 * kMaxStopShare);
+    }
+    set(e, "segment_s", step, why);
   }
   // The sine dwells hold at least 20 steps a period (experiments_liquefier.cpp).
   if (r.protocol == "liquefier-sine")
@@ -162,6 +174,35 @@ void accel_per_hz_default(const ExperimentRequest& r, Experiment& e) {
           : std::string("Klipper's default"));
 }
 
+/// The camera path's line test on a bed too short for its lines: every length and the speed
+/// scaled together, so that the lines keep their durations (the photo's width at s is the
+/// liquefier's response at t = s / v), and the lines placed above the travel's lower end.
+void line_test_fit(const ExperimentRequest& r, Experiment& e) {
+  constexpr const char* kLengths[] = {"rest_mm", "lead_mm", "step_mm", "tail_mm"};
+  const auto& x = r.profile.axis("x");
+  const auto& y = r.profile.axis("y");
+  if (unset(r, e, "first_y_mm")) {
+    const double lowest = y.min_mm + kLineClear_mm + (e.params.at("lines") - 1) * e.params.at("spacing_mm");
+    const double nominal = 0.5 * (y.min_mm + y.max_mm) - kLineBelowMiddle_mm;
+    set(e, "first_y_mm", std::max(nominal, lowest),
+        nominal < lowest ? "raised so that every line lies on the bed" : "50 mm below the middle of the travel");
+  }
+  bool given = r.overrides.count("speed_mm_s") > 0;
+  double need = 2 * kLineClear_mm;
+  for (const char* k : kLengths) {
+    given = given || r.overrides.count(k) > 0;
+    need += e.params.at(k);
+  }
+  const double travel = x.max_mm - x.min_mm;
+  if (given || need <= travel) return;
+  const double scale = (travel - 2 * kLineClear_mm) / (need - 2 * kLineClear_mm);
+  const std::string why = fmt::format(
+      "scaled by {:.3g} with the speed, so that the lines fit the {:g} mm X travel and keep their durations", scale,
+      travel);
+  for (const char* k : kLengths) set(e, k, e.params.at(k) * scale, why);
+  set(e, "speed_mm_s", e.params.at("speed_mm_s") * scale, why);
+}
+
 void motion_defaults(const ExperimentRequest& r, Experiment& e) {
   const auto& p = r.profile;
   const double accel = axes_min(p, &machine::AxisLimits::max_accel_mm_s2);
@@ -174,7 +215,9 @@ void motion_defaults(const ExperimentRequest& r, Experiment& e) {
   } else if (r.protocol == "axis-rectangle") {
     capped(r, e, "speed_mm_s", 100, speed, "axes' speed limit (90 %)");
     capped(r, e, "accel_mm_s2", 3000, accel, "axes' acceleration limit");
-  } else if (r.protocol == "ring-print" || r.protocol == "line-steps" || r.protocol == "test-pattern") {
+  }
+  if (r.protocol == "line-steps") line_test_fit(r, e);
+  if (r.protocol == "ring-print" || r.protocol == "line-steps" || r.protocol == "test-pattern") {
     // Their retractions and primes are extrude-only moves at the print acceleration as the gate
     // reads it (Klipper caps them at max_extrude_only_accel by itself, Marlin and RepRapFirmware
     // at M204 R and M201 E, which these prints do not set): the extruder's limit applies too.

@@ -25,10 +25,19 @@ inline constexpr double kNominalSineMax_hz = 2;  ///< the sine dwells' highest f
 /// Klipper's [resonance_tester] accel_per_hz default (klippy/extras/resonance_tester.py), mm/s^2/Hz.
 inline constexpr double kKlipperAccelPerHz = 60;
 inline constexpr double kNominalTravel_mm_s = 100;
+/// The camera path's line test: the room left at each end of the X travel and at the lower end
+/// of the Y travel, and how far below the middle of the bed the first line lies (the ring test
+/// is printed at the middle).
+inline constexpr double kLineClear_mm = 10;
+inline constexpr double kLineBelowMiddle_mm = 50;
 /// On a firmware that stops after every extrude-only move (Klipper), a staircase step of feed v
 /// is run faster so that with its ramps it keeps its time: its peak is at most this factor above
 /// v (the step then lasts (1 + e)^2 v / (a e), e the excess).
 inline constexpr double kStaircasePeakExcess = 0.25;
+/// ... and where its ramps (2 v / a) would take more than this share of a step, the step is the
+/// longest a chirp takes (kLongestStaircaseStep_s, the chirp's own cap: chirp_plan.hpp).
+inline constexpr double kMaxStopShare = 0.1;
+inline constexpr double kLongestStaircaseStep_s = 0.05;
 
 /// Fills in every machine default of `e.params` that is still NaN and the caller did not set,
 /// recording each value's reason in e.excitation["machine_defaults"]; the builders fill the
