@@ -100,16 +100,15 @@ const AxisLimits& MachineProfile::axis(const std::string& name) const {
 
 namespace {
 
-// The physical ranges of a profile's limits: a value beyond is a typing error (a travel of a
-// kilometre, a hot end at 1e9 degC), and the gate checks protocols against these limits.
-constexpr double kMaxTravel_mm = 10000;   // 10 m: beyond any printer's axis
-constexpr double kMaxSpeed_mm_s = 10000;  // 10 m/s
-constexpr double kMaxAccel_mm_s2 = 1e6;   // 100 g
-constexpr double kMaxHotend_c = 600;      // above any polymer's processing temperature (PEEK: 400-450)
-constexpr double kMaxBed_c = 400;         // PEEK-class chambers and beds stay below
-constexpr double kMaxFilament_mm = 10;    // 1.75, 2.85, pellets' screws aside
-constexpr double kMaxFlow_mm3_s = 2000;   // large-format pellet extruders reach a few hundred
-constexpr double kMaxSampleRate_hz = 100000;
+// The physical ranges of a profile's limits (machine_profile.hpp, profile_limits).
+constexpr double kMaxTravel_mm = profile_limits::kMaxTravel_mm;
+constexpr double kMaxSpeed_mm_s = profile_limits::kMaxSpeed_mm_s;
+constexpr double kMaxAccel_mm_s2 = profile_limits::kMaxAccel_mm_s2;
+constexpr double kMaxHotend_c = profile_limits::kMaxHotend_c;
+constexpr double kMaxBed_c = profile_limits::kMaxBed_c;
+constexpr double kMaxFilament_mm = profile_limits::kMaxFilament_mm;
+constexpr double kMaxFlow_mm3_s = profile_limits::kMaxFlow_mm3_s;
+constexpr double kMaxSampleRate_hz = profile_limits::kMaxSampleRate_hz;
 
 /// Every limit of the profile within its physical range (InputError naming the key otherwise).
 void check_physical_ranges(const MachineProfile& p, const std::string& path) {

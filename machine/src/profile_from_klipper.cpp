@@ -124,6 +124,11 @@ KlipperToolhead read_klipper_printer(const KlipperView& k, MachineProfile& p) {
                               klipper_default(t.max_velocity.value, kin_file, "max_z_velocity = max_velocity"));
   t.max_z_accel = k.number("printer", "max_z_accel", detail::kAccel,
                            klipper_default(t.max_accel.value, kin_file, "max_z_accel = max_accel"));
+  if (t.max_z_velocity.value > t.max_velocity.value || t.max_z_accel.value > t.max_accel.value)
+    throw InputError(fmt::format("[printer] max_z_velocity and max_z_accel may not exceed max_velocity and max_accel "
+                                 "({}: maxval)",
+                                 kin_file),
+                     k.section("printer").site.where());
   const auto mcr = k.number("printer", "minimum_cruise_ratio", detail::kFraction,
                             klipper_default(firmware::limits::kKlipperMinimumCruiseRatioDefault, "klippy/toolhead.py",
                                             "minimum_cruise_ratio 0.5"));
@@ -251,13 +256,13 @@ void read_klipper_extruder(const KlipperView& k, MachineProfile& p, const Klippe
   detail::set_value(p, "extruder.max_accel_mm_s2", e.max_accel_mm_s2, ea.value, ea.source);
   detail::set_value(p, "extruder.max_extrude_only_distance_mm", e.max_extrude_only_distance_mm, dist.value,
                     dist.source);
-  const auto tmax = k.number("extruder", "max_temp", detail::kTemperature);
+  const auto tmax = k.number("extruder", "max_temp", detail::kHotendTemperature);
   detail::set_value(p, "temperature.hotend_max_c", p.temperature.hotend_max_c, tmax.value, tmax.source);
 }
 
 void read_klipper_bed(const KlipperView& k, MachineProfile& p) {
   if (k.has("heater_bed")) {
-    const auto b = k.number("heater_bed", "max_temp", detail::kTemperature);
+    const auto b = k.number("heater_bed", "max_temp", detail::kBedTemperature);
     detail::set_value(p, "temperature.bed_max_c", p.temperature.bed_max_c, b.value, b.source);
     return;
   }

@@ -281,9 +281,9 @@ MarlinSettings from_m503(const std::string& path, const ProfileImportOptions& o)
     m.hi[i] = Sourced{detail::checked(o.travel_mm[i], detail::kLength, given, "--travel"),
                       "given on the command line (--travel)"};
   }
-  m.hotend_max = Sourced{detail::checked(o.hotend_max_c, detail::kTemperature, given, "--hotend-max-c"),
+  m.hotend_max = Sourced{detail::checked(o.hotend_max_c, detail::kHotendTemperature, given, "--hotend-max-c"),
                          "given on the command line (--hotend-max-c)"};
-  m.bed_max = Sourced{detail::checked(o.bed_max_c, detail::kTemperature, given, "--bed-max-c"),
+  m.bed_max = Sourced{detail::checked(o.bed_max_c, detail::kBedTemperature, given, "--bed-max-c"),
                       "given on the command line (--bed-max-c)"};
   return m;
 }

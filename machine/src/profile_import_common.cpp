@@ -57,8 +57,17 @@ void set_axis(MachineProfile& p, const std::string& name, const Sourced& lo, con
               const Sourced& a) {
   auto& ax = p.axes[name];
   const std::string k = "axes." + name + ".";
-  set_value(p, k + "min_mm", ax.min_mm, lo.value, lo.source);
-  set_value(p, k + "max_mm", ax.max_mm, hi.value, hi.source);
+  // An endless axis (a belt printer's Z: Klipper's CR-30 file says 20000000 mm) ends at the range.
+  const auto within = [](const Sourced& end) {
+    const double limit = profile_limits::kMaxTravel_mm;
+    if (std::fabs(end.value) <= limit) return end;
+    return Sourced{std::copysign(limit, end.value),
+                   fmt::format("{}; beyond a profile's travel range (an endless axis): taken as {:g} mm", end.source,
+                               std::copysign(limit, end.value))};
+  };
+  const Sourced l = within(lo), h = within(hi);
+  set_value(p, k + "min_mm", ax.min_mm, l.value, l.source);
+  set_value(p, k + "max_mm", ax.max_mm, h.value, h.source);
   set_value(p, k + "max_velocity_mm_s", ax.max_velocity_mm_s, v.value, v.source);
   set_value(p, k + "max_accel_mm_s2", ax.max_accel_mm_s2, a.value, a.source);
 }

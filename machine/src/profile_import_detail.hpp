@@ -33,17 +33,22 @@ struct Range {
   const char* what;
   const char* unit;
 };
-inline constexpr Range kPosition{-1e9, 1e9, false, "position", "mm"};  // belt printers: 2e7 (CR-30)
-inline constexpr Range kLength{0, 1e5, true, "length", "mm"};
-inline constexpr Range kDiameter{0, 100, true, "diameter", "mm"};
-inline constexpr Range kVelocity{0, 1e5, true, "speed", "mm/s"};
-inline constexpr Range kAccel{0, 1e7, true, "acceleration", "mm/s^2"};
-inline constexpr Range kTemperature{0, 1000, true, "temperature", "degC"};
+// The limits a profile holds are bounded by the profile's own physical ranges (machine_profile.hpp
+// profile_limits); positions may reach 1e9 mm, Klipper's marker of an endless axis (the CR-30 belt
+// printer's position_max 20000000), and set_axis() takes travel beyond the profile's range as its end.
+inline constexpr Range kPosition{-1e9, 1e9, false, "position", "mm"};
+inline constexpr Range kLength{0, profile_limits::kMaxTravel_mm, true, "length", "mm"};
+inline constexpr Range kDiameter{0, profile_limits::kMaxFilament_mm, true, "diameter", "mm"};
+inline constexpr Range kVelocity{0, profile_limits::kMaxSpeed_mm_s, true, "speed", "mm/s"};
+inline constexpr Range kAccel{0, profile_limits::kMaxAccel_mm_s2, true, "acceleration", "mm/s^2"};
+inline constexpr Range kHotendTemperature{0, profile_limits::kMaxHotend_c, true, "hot-end temperature", "degC"};
+inline constexpr Range kBedTemperature{0, profile_limits::kMaxBed_c, true, "bed temperature", "degC"};
+inline constexpr Range kTemperature{0, 1000, true, "temperature", "degC"};  ///< a heater whose role is not known yet
 inline constexpr Range kStepsPerMm{0, 1e7, true, "steps per mm", "steps/mm"};
 inline constexpr Range kCount{0, 1e7, true, "count", ""};
 inline constexpr Range kFraction{0, 1, false, "fraction", ""};
 inline constexpr Range kSeconds{0, 100, false, "time", "s"};
-inline constexpr Range kFrequency{0, 1e4, false, "frequency", "Hz"};
+inline constexpr Range kFrequency{0, profile_limits::kMaxSampleRate_hz, false, "frequency", "Hz"};
 
 /// Checks `v` against `range`; InputError located at `site` naming `name` when it is NaN,
 /// infinite or outside.
@@ -58,7 +63,9 @@ struct Sourced {
   std::string source;
 };
 
-/// Sets the axis' travel and limits with their sources.
+/// Sets the axis' travel and limits with their sources. A travel end beyond the profile's range
+/// (profile_limits::kMaxTravel_mm: an endless belt axis) is taken as that range's end, and its
+/// source says so.
 void set_axis(MachineProfile& p, const std::string& name, const Sourced& lo, const Sourced& hi, const Sourced& v,
               const Sourced& a);
 

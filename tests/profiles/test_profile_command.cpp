@@ -18,7 +18,7 @@ using tunekit::test::run_cli;
 TEST_CASE("tunekit profile writes a TOML profile that loads back, every value with its source", "[profiles][cli]") {
   const std::string cfg = dataset("klipper_configs/printer-creality-ender3-v2-2020.cfg");
   const std::string out = tunekit::test::scratch_dir("profile_cli") + "/ender3.toml";
-  const auto r = run_cli({"profile", cfg, "-o", out, "--sensor", "load_cell"});
+  const auto r = run_cli({"profile", cfg, "-o", out, "--sensor", "load_cell", "--sensor", "accelerometer"});
   REQUIRE(r.code == 0);
   CHECK_THAT(r.out, Contains("klipper configuration, cartesian kinematics: profile written to"));
   const std::string toml = tunekit::test::read_text(out);
@@ -38,8 +38,10 @@ TEST_CASE("tunekit profile writes a TOML profile that loads back, every value wi
   CHECK(p.firmware == "klipper");
   CHECK(p.axis("x").max_mm == 235);
   CHECK(p.extruder.max_accel_mm_s2 == Approx(798.2432).epsilon(1e-6));
-  CHECK(p.sensors.load_cell);  // --sensor load_cell
-  CHECK_FALSE(p.sensors.accelerometer);
+  CHECK(p.sensors.load_cell);      // --sensor load_cell
+  CHECK(p.sensors.accelerometer);  // --sensor accelerometer: Klipper's [adxl345] by default
+  CHECK(p.sensors.accelerometer_chip == "adxl345");
+  CHECK(p.sensors.accelerometer_name == "adxl345");
 }
 
 TEST_CASE("tunekit profile --json gives the profile and the source of every value", "[profiles][cli]") {

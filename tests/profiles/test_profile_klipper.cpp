@@ -124,6 +124,15 @@ TEST_CASE("Klipper: the Creality Ender-6's corexy printer.cfg gives Klipper's li
   CHECK(p.temperature.bed_max_c == 100);
 }
 
+TEST_CASE("Klipper: the Creality CR-30's endless belt Z ends at the profile's travel range", "[profiles][klipper]") {
+  // [stepper_z] position_max: 20000000 (line 47): Klipper's marker of an endless belt axis.
+  const MachineProfile p = tunekit::machine::load_machine_profile(klipper("printer-creality-cr30-2021.cfg"));
+  CHECK(p.kinematics == "corexy");
+  CHECK(p.axis("z").max_mm == tunekit::machine::profile_limits::kMaxTravel_mm);
+  CHECK_THAT(p.sources.at("axes.z.max_mm"),
+             Contains(":47 [stepper_z] position_max: 20000000") && Contains("an endless axis): taken as 10000 mm"));
+}
+
 TEST_CASE("Klipper: the Anycubic Kossel Plus's delta printer.cfg gives Klipper's build volume as a box",
           "[profiles][klipper][delta]") {
   const MachineProfile p = tunekit::machine::load_machine_profile(klipper("printer-anycubic-kossel-plus-2017.cfg"));
@@ -159,6 +168,10 @@ TEST_CASE("Klipper: every stock printer-*.cfg of a supported kinematics imports 
     INFO(name);
     MachineProfile p;
     REQUIRE_NOTHROW(p = tunekit::machine::load_machine_profile(entry.path().string()));
+    // With the sensors a technician declares (calibrate's load-cell path) it imports too.
+    tunekit::machine::ProfileImportOptions declared;
+    declared.sensors = {"accelerometer", "load_cell"};
+    CHECK_NOTHROW(tunekit::machine::import_machine_profile(entry.path().string(), declared));
     for (const char* axis : {"x", "y", "z"}) {
       const auto& a = p.axis(axis);
       CHECK(std::isfinite(a.min_mm));

@@ -80,6 +80,21 @@ struct FirmwareState {
   std::vector<std::string> m493_report;
 };
 
+/// The physical ranges of a profile's limits: a value beyond is a typing error (a travel of a
+/// kilometre, a hot end at 1e9 degC), and the gate checks protocols against these limits.
+/// parse_machine_profile() refuses a profile beyond them; the firmware-configuration importers
+/// (profile_import.hpp) check what they read against the same ranges.
+namespace profile_limits {
+inline constexpr double kMaxTravel_mm = 10000;       ///< |min_mm|, |max_mm|: 10 m, beyond any printer's axis
+inline constexpr double kMaxSpeed_mm_s = 10000;      ///< 10 m/s
+inline constexpr double kMaxAccel_mm_s2 = 1e6;       ///< 100 g
+inline constexpr double kMaxHotend_c = 600;          ///< above any polymer's processing temperature (PEEK: 400-450)
+inline constexpr double kMaxBed_c = 400;             ///< PEEK-class chambers and beds stay below
+inline constexpr double kMaxFilament_mm = 10;        ///< filament and nozzle diameters, line sizes: 1.75, 2.85 ...
+inline constexpr double kMaxFlow_mm3_s = 2000;       ///< large-format pellet extruders reach a few hundred
+inline constexpr double kMaxSampleRate_hz = 100000;  ///< accelerometer sample rate
+}  // namespace profile_limits
+
 /// True for the accelerometer chips Klipper's API server streams (see klipper_sensors.hpp).
 bool is_klipper_accelerometer_chip(const std::string& chip);
 /// "adxl345, lis2dw, ..." for messages.
