@@ -199,10 +199,14 @@ TEST_CASE(
   }
   const std::map<std::string, double> sine{{"freq_count", 3}, {"periods", 2}, {"accel_mm_s2", 800}, {"hotend_c", 0}};
   const auto e = build_experiment("liquefier-sine", sine, "", profile, Dialect(Firmware::klipper));
+  // The band and the staircase step as the machine's defaults made them (at 800 mm/s^2 Klipper's
+  // stops take over 10 % of a 20 ms step: 50 ms steps, and a band whose period holds 20 of them).
+  const double seg = e.params.at("segment_s"), f0 = e.params.at("freq_min_hz"), f1 = e.params.at("freq_max_hz");
+  CHECK(seg == Approx(0.05));
   double label = 2.0 + 1.0;
   for (int i = 0; i < 3; ++i) {
-    const double f = 0.2 * std::pow(10.0, i / 2.0);
-    const double dt = std::min(0.02, 1.0 / (20 * f));
+    const double f = f0 * std::pow(f1 / f0, i / 2.0);
+    const double dt = std::min(seg, 1.0 / (20 * f));
     label += std::ceil(2 / f / dt) * dt;
   }
   CHECK(run_on(e.gcode, "klipper").recorded_s == Approx(label).epsilon(0.01));
