@@ -286,7 +286,8 @@ void mark_interrupted(const std::string& run_json, const std::string& where) {
 void throw_if_stopped_after_run(const RunResult& r, const std::string& where) {
   if (!StopSignals::flag().load() || StopSignals::received_number() == 0) return;
   if (r.files.count("summary")) mark_interrupted(r.files.at("summary"), where);
-  StopSignals::throw_if_stopped(fmt::format("{} (the run is kept in {})", where, r.run_dir));
+  StopSignals::throw_if_stopped(r.run_dir.empty() ? where
+                                                  : fmt::format("{} (the run is kept in {})", where, r.run_dir));
 }
 
 RunResult run_experiment(const RunOptions& o) {
