@@ -409,10 +409,12 @@ RunResult run_experiment(const RunOptions& o) {
     list_files();
     summary["files"] = res.files;
     core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
-    if (interrupted && !signal.empty())
+    if (interrupted && !signal.empty()) {
+      StopSignals::report();
       throw InterruptedError(StopSignals::received_number(),
                              fmt::format("{} {} (the partial run is kept in {})", why.message(), stage, res.run_dir),
                              why.location());
+    }
     throw MachineError(fmt::format("{} (the partial run is kept in {})", why.message(), res.run_dir), why.location());
   }
   journal.event("end", {{"load_cell_samples", rec.load_samples()}, {"accel_samples", rec.accel_samples()}});
