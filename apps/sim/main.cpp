@@ -30,11 +30,15 @@ int main(int argc, char** argv) {
       "tunekit-sim: a simulated 3D printer (Marlin-flavoured G-code on a pseudo-terminal) with a liquefier,\n"
       "a load cell, resonant axes and an accelerometer, for tunekit's experiment protocols.",
       "tunekit-sim"};
-  std::string link, truth_path, received_path;
+  std::string link, truth_path, received_path, profile_path;
   std::vector<std::string> options;
   app.add_option("--link", link, "Also make this symlink to the pseudo-terminal (like Klipper's /tmp/printer)");
   app.add_option("--truth", truth_path, "Write the simulated truth (model parameters) to this JSON file");
   app.add_option("--received", received_path, "On exit, write every line received to this file");
+  app.add_option("--profile", profile_path,
+                 "Simulate the printer this machine profile describes (tunekit's TOML or the firmware's configuration: "
+                 "Klipper printer.cfg, Marlin M503 or Configuration.h, RRF config.g): its firmware's planner rules, "
+                 "steps per mm, extruder and acceleration limits; --set options win over it");
   app.add_option("-s,--set", options,
                  "Simulator option KEY=VALUE (repeatable): preset=desktop|peek (a direct-drive desktop printer, or "
                  "the thesis' PEEK liquefier with tau 0.45 s), liquefier=fopdt|physics, K=3.5 (N/(mm/s)), tau_s=0.026 "
@@ -49,10 +53,13 @@ int main(int argc, char** argv) {
       "Examples:\n"
       "  tunekit-sim --link /tmp/tksim --truth truth.json\n"
       "  tunekit-sim --link /tmp/tksim -s tau_s=0.3 -s mode_x=52:0.06 -s fault=garble@20\n"
+      "  tunekit-sim --link /tmp/tksim --profile printer.cfg     # a Klipper printer's limits and planner\n"
       "  tunekit run liquefier-step --machine sim --port /tmp/tksim");
   CLI11_PARSE(app, argc, argv);
   try {
-    const auto cfg = tunekit::sim::SimConfig::from_options(options);
+    const auto cfg = profile_path.empty() ? tunekit::sim::SimConfig::from_options(options)
+                                          : tunekit::sim::SimConfig::for_machine(
+                                                tunekit::machine::load_machine_profile(profile_path), options);
     if (!truth_path.empty()) tunekit::core::write_file_atomic(truth_path, cfg.truth().dump(2) + "\n");
     tunekit::sim::SimPtyServer server(cfg);
     if (!link.empty()) {

@@ -32,12 +32,48 @@ void strip_prefix(nlohmann::json& j, const std::string& prefix) {
   }
 }
 
+namespace {
+
+/// calibrate --dry-run: the plan as checked (each experiment's protocol, parameters with the
+/// reasons of those derived from the machine, and machine time), as JSON or text.
+int print_plan(const CalibrationPlan& plan, CliContext& ctx) {
+  Envelope env("calibrate");
+  nlohmann::json exps = nlohmann::json::array();
+  double total_s = 0;
+  for (const auto& e : plan.experiments) {
+    nlohmann::json j = e.checked.to_json();
+    j["name"] = e.name;
+    exps.push_back(j);
+    total_s += e.estimated_s;
+  }
+  env.results() = {{"dry_run", true},
+                   {"profile", plan.profile.profile.name},
+                   {"profile_source", plan.profile.path},
+                   {"firmware", plan.options.firmware},
+                   {"experiments", exps},
+                   {"machine_time_s", total_s}};
+  if (plan.output.json || !plan.output.output_path.empty()) return emit(env, plan.output, ctx);
+  ctx.out << fmt::format("calibrate plan for {} ({}), checked against its limits; nothing was sent\n",
+                         plan.profile.profile.name, plan.options.firmware);
+  for (const auto& e : plan.experiments) {
+    ctx.out << fmt::format("  {:<16} {:<22} ~{:.1f} s of machine time\n", e.name, e.protocol, e.estimated_s);
+    if (const auto it = e.checked.excitation.find("machine_defaults"); it != e.checked.excitation.end())
+      for (const auto& [name, why] : it->items())
+        ctx.out << fmt::format("      {} = {:g}: {}\n", name, e.checked.params.at(name), why.get<std::string>());
+  }
+  ctx.out << fmt::format("  total ~{:.1f} s of machine time ('tunekit run PROTOCOL --dry-run' prints its G-code)\n",
+                         total_s);
+  return 0;
+}
+
 /// The experiment that ran last (the plan's order).
 const protocols::RunResult& last_run(const CalibrationPlan& plan, const ExperimentRuns& runs) {
   for (auto e = plan.experiments.rbegin(); e != plan.experiments.rend(); ++e)
     if (const auto it = runs.runs.find(e->name); it != runs.runs.end()) return it->second;
   return runs.runs.begin()->second;
 }
+
+}  // namespace
 
 int run_calibrate(const CalibrateArgs& given, CliContext& ctx, Progress& progress) {
   // `--machine DEVICE --profile FILE`: the machine named by its device is the port to use.
@@ -46,6 +82,7 @@ int run_calibrate(const CalibrateArgs& given, CliContext& ctx, Progress& progres
   const CalibrationProfile profile = load_calibration_profile(options);
   const bool can_prompt = ::isatty(STDIN_FILENO) != 0 && ctx.interactive;
   const CalibrationPlan plan = plan_calibration(options, profile, can_prompt);
+  if (plan.options.dry_run) return print_plan(plan, ctx);
   progress.expect(static_cast<int>(plan.experiments.size()) + 3);
   // A stop signal at any instant, the analysis and the report included, ends the calibration
   // with exit code 128 + its number; the last experiment's run.json says where (stop_signals.hpp).

@@ -131,6 +131,8 @@ void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Iden
     so.accel.files = {csv};
     so.accel.input.axis = axis;
     so.firmware = firmware::parse_export_firmware(plan.options.firmware);
+    // The proposed maximum acceleration stays within the printer's limit on this axis.
+    so.accel_limit_mm_s2 = plan.profile.profile.axis(std::string(1, axis)).max_accel_mm_s2;
     const auto& shaper = id.shapers[axis] = calibrate_analysis("shaper", [&] { return compute_shaper(so); });
     keep_analysis(shaper, out, ctx);
     id.inputs.push_back(csv);
@@ -140,7 +142,7 @@ void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Iden
          "analysis/" + name + ".json",
          std::string("axis ") + axis + "'s resonances (frequency, damping) and the recommended input shaper",
          {"tunekit", "shaper", relative_to(csv, plan.run_dir), "--axis", std::string(1, axis), "--firmware",
-          plan.options.firmware}});
+          plan.options.firmware, "--accel-limit", fmt::format("{:g}", so.accel_limit_mm_s2)}});
   }
 }
 

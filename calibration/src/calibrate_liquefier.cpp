@@ -217,7 +217,14 @@ ident::FeedTrack line_test_feed_track(const std::vector<protocols::PrintedLine>&
 }  // namespace
 
 std::vector<CameraTest> camera_tests(const machine::MachineProfile& profile) {
-  return {{"liquefier-lines", "line-steps", {{"lead_mm", line_lead_mm(profile)}}},
+  // A bed too short for the protocol's own lead-in: the protocol fits its lines to the travel
+  // (every length and the speed scaled together, the durations kept; machine defaults).
+  std::map<std::string, double> lines;
+  const auto& x = profile.axis("x");
+  const double room = x.max_mm - x.min_mm - 2 * kLineClearMm - protocol_default("line-steps", "step_mm") -
+                      protocol_default("line-steps", "tail_mm") - protocol_default("line-steps", "rest_mm");
+  if (room >= protocol_default("line-steps", "lead_mm")) lines["lead_mm"] = line_lead_mm(profile);
+  return {{"liquefier-lines", "line-steps", lines},
           {"liquefier-ring", "ring-print", {{"amplitude", kRingAmplitude}, {"periods", kRingPeriods}}}};
 }
 

@@ -220,7 +220,9 @@ void add_axes(RunRecord& r, const Identification& id) {
     r.row(label + " resonance frequency", base + ".modes[0].freq_hz", "Hz", base + ".modes[0].freq_ci95");
     r.row(label + " damping ratio", base + ".modes[0].zeta", "1", base + ".modes[0].zeta_ci95");
     r.row(label + " shaper frequency", base + ".recommended.freq_hz", "Hz", "", "designed");
-    r.row(label + " max acceleration", base + ".recommended.max_accel_mm_s2", "mm/s^2", "", "designed");
+    r.row(label + " max acceleration", base + ".proposed_max_accel_mm_s2", "mm/s^2", "",
+          r.res()["axes"][label].contains("proposed_max_accel_note") ? "the printer's limit (the shaper allows more)"
+                                                                     : "designed");
   }
 }
 

@@ -36,9 +36,12 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
     if (e.protocol == "liquefier-chirp" && out.liquefier_step && out.liquefier_step->analysis.pooled) {
       const double tau = out.liquefier_step->analysis.pooled->value("tau_s");
       if (std::isfinite(tau) && tau > 0) {
-        out.chirp = protocols::plan_liquefier_chirp(tau);
+        const double sized = clamped_chirp_tau_s(tau);
+        out.chirp = protocols::plan_liquefier_chirp(sized, e.checked.params.at("segment_s"));
         out.chirp_basis =
             fmt::format("the pooled step fit's time constant {} s (one tau over every step)", display_number(tau));
+        if (sized != tau)
+          out.chirp_basis += fmt::format(", held at {} s, the end of the range checked", display_number(sized));
         // The dry run timed the chirp of the plan; this one is longer or shorter by the difference.
         estimate_s += out.chirp.duration_s - plan.chirp.duration_s;
       }
@@ -48,6 +51,10 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
     run_options.keep_heaters = plan.options.keep_heaters;
     const auto& run = out.runs[e.name] = protocols::run_experiment(run_options);
     progress.end(run.status);
+    // The chirp as run: the protocol sized its staircase step from the chirp's end (never shorter
+    // than the machine's), which sets the band the plan describes.
+    if (e.protocol == "liquefier-chirp")
+      out.chirp = protocols::plan_liquefier_chirp(out.chirp.expected_tau_s, run.experiment.params.at("segment_s"));
     if (e.name == "liquefier-step") {
       const auto track = run.files.find("feed_track");
       const auto options =

@@ -47,6 +47,14 @@ nlohmann::json analysis_results(const Outcome& outcome) {
 protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const PlannedExperiment& e,
                                              const protocols::ChirpPlan& chirp, bool dry);
 
+/// Builds and checks every planned experiment against the limits (the chirp for the extremes of
+/// its time constants too), fills in their machine times and the chirp plan. InputError naming
+/// the limit when one is exceeded.
+void check_plan(CalibrationPlan& plan);
+
+/// The time constant (s) a chirp is sized from: `tau_s` within the range the plan checked.
+double clamped_chirp_tau_s(double tau_s);
+
 /// The liquefier step test analysed as `tunekit step FILE --input feed --output force` does.
 StepOptions load_cell_step_options(const std::string& csv, const std::string& feed_track);
 

@@ -137,10 +137,16 @@ OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome
     if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE[,VALUE...]", p));
     lists[p.substr(0, eq)] = parse_overshoot_grid_list(p.substr(0, eq), p.substr(eq + 1));
   }
-  if (!lists.count("speed_mm_s"))
-    lists["speed_mm_s"] = {protocols::protocol_spec("axis-rectangle").params[2].default_value};
-  if (!lists.count("accel_mm_s2"))
-    lists["accel_mm_s2"] = {protocols::protocol_spec("axis-rectangle").params[3].default_value};
+  if (!lists.count("speed_mm_s") || !lists.count("accel_mm_s2")) {
+    // The rectangle's defaults come from the machine's limits: its dry run on this machine.
+    protocols::RunOptions dry = a.run;
+    dry.protocol = "axis-rectangle";
+    dry.dry_run = true;
+    for (const auto& [k, vals] : lists) dry.params[k] = vals.front();
+    const auto defaults = protocols::run_experiment(dry).experiment.params;
+    for (const char* k : {"speed_mm_s", "accel_mm_s2"})
+      if (!lists.count(k)) lists[k] = {defaults.at(k)};
+  }
   for (const auto& [k, v] : lists)
     if (k != "speed_mm_s" && k != "accel_mm_s2" && v.size() != 1)
       throw InputError(fmt::format("-p {}: only speed_mm_s and accel_mm_s2 take lists", k));

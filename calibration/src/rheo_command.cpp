@@ -133,10 +133,14 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
                                    return fitting::ViscositySpec{c.model, c.shift, {}}.name() == want;
                                  }),
                   cands.end());
-      fit = fitting::fit_viscosity(data, primary);  // throws with the reason when it cannot be fitted
       cands.insert(cands.begin(), primary);
     }
-    const auto cmp = fitting::compare_viscosity_models(data, cands);
+    // The requested model's fit, intervals included, is the comparison's first: fitted once.
+    const auto cmp = fitting::compare_viscosity_models(data, cands, auto_model ? cands.size() : 0);
+    if (!auto_model) {
+      if (cmp.entries.front().ok) fit = cmp.fits.front();
+      else fit = fitting::fit_viscosity(data, primary);  // throws with the reason it cannot be fitted
+    }
     o.comparison = cmp;
     if (auto_model) {
       if (cmp.best.empty()) {

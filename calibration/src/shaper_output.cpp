@@ -90,6 +90,7 @@ Envelope to_envelope(const ShaperOutcome& o) {
   opts["max_shaper_freq_hz"] = o.max_shaper_freq_hz;
   opts["max_freq_hz"] = a.selection.max_freq_hz;
   opts["klipper_csv"] = a.klipper_csv;
+  opts["accel_limit_mm_s2"] = a.accel_limit_mm_s2;
   env.set_options(opts);
   for (const auto& d : o.inputs) env.add_input_digest(d.path, d.sha256, d.size_bytes);
   for (const auto& w : o.warnings) env.warn(w);
@@ -105,6 +106,15 @@ nlohmann::json shaper_axis_json(const ShaperOutcome& o, const ShaperAxis& x) {
   j["modes"] = modes_json(r.modes);
   j["fit"] = fit_json(r.modes);
   j["recommended"] = shaper_candidate_json(x.choice.recommended);
+  // The acceleration to use with it: the shaper's own maximum, never above the printer's limit.
+  const double shaper_max = x.choice.recommended.max_accel_mm_s2, limit = o.options.accel_limit_mm_s2;
+  const bool capped = limit > 0 && shaper_max > limit;
+  j["proposed_max_accel_mm_s2"] = capped ? limit : shaper_klipper_suggested_accel(shaper_max);
+  if (limit > 0) j["accel_limit_mm_s2"] = limit;
+  if (capped)
+    j["proposed_max_accel_note"] = fmt::format(
+        "the shaper's smoothing allows {:.0f} mm/s^2, above the printer's limit {:g} mm/s^2: the limit is proposed",
+        shaper_max, limit);
   nlohmann::json cands = nlohmann::json::array();
   for (const auto& c : x.choice.candidates) cands.push_back(shaper_candidate_json(c));
   j["candidates"] = cands;
@@ -145,6 +155,10 @@ void print_text(const ShaperOutcome& o, std::ostream& os) {
                         accel);
     }
     print_recommended(o, ax, x.choice.recommended, os);
+    const double limit = o.options.accel_limit_mm_s2;
+    if (limit > 0 && x.choice.recommended.max_accel_mm_s2 > limit)
+      os << fmt::format("  max acceleration: the printer's limit {:g} mm/s^2 (the shaper would allow {:.0f})\n", limit,
+                        x.choice.recommended.max_accel_mm_s2);
   }
   if (o.firmware_assumed)
     os << "recommended among Klipper's shapers (assuming Klipper; --firmware marlin|rrf|kalico to choose)\n";

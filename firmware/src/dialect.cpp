@@ -6,6 +6,8 @@
 #include <cctype>
 #include <cstdlib>
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 namespace tunekit::firmware {
@@ -86,11 +88,14 @@ FirmwareInfo parse_m115(const std::vector<std::string>& lines) {
 }
 
 std::string Dialect::set_accel(double a) const {
+  // Whole mm/s^2, rounded down: the acceleration set never exceeds the one the protocol was
+  // checked with (a limit of 332.6 is written 332, not 333).
+  const double w = std::floor(a);
   switch (fw_) {
-    case Firmware::klipper: return fmt::format("SET_VELOCITY_LIMIT ACCEL={:.0f}", a);
-    case Firmware::reprapfirmware: return fmt::format("M204 P{:.0f} T{:.0f}", a, a);
+    case Firmware::klipper: return fmt::format("SET_VELOCITY_LIMIT ACCEL={:.0f}", w);
+    case Firmware::reprapfirmware: return fmt::format("M204 P{0:.0f} T{0:.0f}", w);
     // Marlin: P (printing moves) and T (travel moves, those without E); M204 S is deprecated.
-    default: return fmt::format("M204 P{:.0f} T{:.0f}", a, a);
+    default: return fmt::format("M204 P{0:.0f} T{0:.0f}", w);
   }
 }
 

@@ -17,7 +17,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "first_order_detail.hpp"
-#include "levenberg_marquardt.hpp"
+#include "tunekit/fitting/levenberg_marquardt.hpp"
 #include "number_text.hpp"
 #include "solver_logging.hpp"
 

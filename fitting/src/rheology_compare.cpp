@@ -49,7 +49,8 @@ std::vector<ViscosityFitOptions> default_candidates(const RheologyData& data, co
   return c;
 }
 
-ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates) {
+ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates,
+                                         std::size_t also_finish) {
   ModelComparison c;
   double best = kInf;
   // The candidates are ranked by AIC, which needs no intervals: profile-likelihood intervals
@@ -94,17 +95,19 @@ ModelComparison compare_viscosity_models(const RheologyData& data, const std::ve
       c.best = e.model;
       break;
     }
+  std::size_t winner = candidates.size();
+  for (std::size_t i = 0; i < c.entries.size() && winner == candidates.size(); ++i)
+    if (c.entries[i].model == c.best) winner = i;
   for (std::size_t i = 0; i < c.entries.size(); ++i)
-    if (c.entries[i].model == c.best && candidates[i].profile_intervals) {
-      // The winner's estimate is the one its own fit would find (the same problem and search):
-      // only its intervals are added, on that estimate.
+    if ((i == winner || i == also_finish) && c.entries[i].ok && candidates[i].profile_intervals) {
+      // The estimate is the one the candidate's own fit would find (the same problem and
+      // search): only its intervals are added, on that estimate.
       try {
         const auto vp = viscosity_problem_for(data, candidates[i]);
         c.fits[i] = finish_viscosity_fit(data, candidates[i], *vp, estimates[i]);
       } catch (const Error&) {
         // Keep the fit without profile intervals (its linearised intervals stand).
       }
-      break;
     }
   double wsum = 0;
   for (auto& e : c.entries)

@@ -3,12 +3,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
+#include <span>
 #include <string>
 
+#include <Eigen/Dense>
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/least_squares.hpp"
+#include "tunekit/fitting/levenberg_marquardt.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/base_excited_mode.hpp"
 
@@ -75,31 +79,231 @@ Schedule make_schedule(const std::vector<AccelPiece>& motion, double t0, double 
   return s;
 }
 
+/// One mode's relative acceleration z''_i at every sample, its state started at x0 on the first
+/// sample (rel); when d_z0 and d_v0 are not null, also that of its free response to a unit
+/// deflection and a unit rate there: the response is affine in x0, so these are its derivatives
+/// in z0 and v0.
+void mode_response(const Schedule& s, double freq_hz, double zeta, ModeState x0, double* rel, double* d_z0,
+                   double* d_v0) {
+  const std::size_t n = s.accel_at.size();
+  const BaseExcitedMode mode(freq_hz, zeta);
+  const ModeStep step = mode.step(s.dt_s);
+  const bool basis = d_z0 != nullptr && d_v0 != nullptr;
+  ModeState x = x0, e1{1, 0}, e2{0, 1};
+  auto record = [&](std::size_t i) {
+    rel[i] = mode.relative_accel(x, s.accel_at[i]);
+    if (basis) d_z0[i] = mode.relative_accel(e1, 0), d_v0[i] = mode.relative_accel(e2, 0);
+  };
+  record(0);
+  for (std::size_t i = 1; i < n; ++i) {
+    if (s.whole[i]) {
+      const Sub& u = s.subs[s.sample_end[i - 1]];
+      x = BaseExcitedMode::apply(step, x, u.a0, u.jerk);
+      if (basis) e1 = BaseExcitedMode::apply(step, e1, 0, 0), e2 = BaseExcitedMode::apply(step, e2, 0, 0);
+    } else {
+      for (std::size_t j = s.sample_end[i - 1]; j < s.sample_end[i]; ++j) {
+        double phi[2][2];
+        mode.free_map(s.subs[j].h_s, phi);
+        x = mode.advance(x, s.subs[j].h_s, s.subs[j].a0, s.subs[j].jerk, phi);
+        if (basis) e1 = mode.advance(e1, s.subs[j].h_s, 0, 0, phi), e2 = mode.advance(e2, s.subs[j].h_s, 0, 0, phi);
+      }
+    }
+    record(i);
+  }
+}
+
 /// The record's model for parameters p (see axis_response_fit.hpp): y_i = a_i + sum_k g_k z_k''
-/// + offset.
-void model(const Schedule& s, std::size_t modes, const double* p, std::vector<double>& y) {
+/// + offset. `rel` is scratch of the record's length.
+void model(const Schedule& s, std::size_t modes, const double* p, std::vector<double>& y, std::vector<double>& rel) {
   const std::size_t n = s.accel_at.size();
   const double offset = p[kParamsPerMode * modes];
   for (std::size_t i = 0; i < n; ++i) y[i] = s.accel_at[i] + offset;
   for (std::size_t k = 0; k < modes; ++k) {
     const double* q = p + kParamsPerMode * k;
-    const BaseExcitedMode mode(q[0], q[1]);
-    const ModeStep step = mode.step(s.dt_s);
+    mode_response(s, q[0], q[1], {q[3], q[4]}, rel.data(), nullptr, nullptr);
     const double gain = q[2];
-    ModeState x{q[3], q[4]};
-    y[0] += gain * mode.relative_accel(x, s.accel_at[0]);
-    for (std::size_t i = 1; i < n; ++i) {
-      if (s.whole[i]) {
-        const Sub& u = s.subs[s.sample_end[i - 1]];
-        x = BaseExcitedMode::apply(step, x, u.a0, u.jerk);
-      } else {
-        for (std::size_t j = s.sample_end[i - 1]; j < s.sample_end[i]; ++j)
-          x = mode.advance(x, s.subs[j].h_s, s.subs[j].a0, s.subs[j].jerk);
-      }
-      y[i] += gain * mode.relative_accel(x, s.accel_at[i]);
-    }
+    for (std::size_t i = 0; i < n; ++i) y[i] += gain * rel[i];
   }
 }
+
+/// Damping ratio below which a mode's frequency and damping derivatives are propagated exactly
+/// (mode_sensitivities: the under-damped transition); closer to critical damping its form divides
+/// by sqrt(1 - zeta^2), and the Jacobian's columns are differenced instead.
+constexpr double kSensitivityMaxZeta = 0.999;
+
+/// The free transition over h of an under-damped mode (BaseExcitedMode::free_map's) and its
+/// derivatives d[p] in w (rad/s, p = 0) and zeta (p = 1): the product rule through the decay
+/// exp(-zeta w h) and the damped oscillation's cos and sin(w sqrt(1 - zeta^2) h).
+struct Transition {
+  double phi[2][2];
+  double d[2][2][2];
+};
+
+Transition transition(double w, double zeta, double h) {
+  Transition t;
+  const double k = w * w, sg = zeta * w, r1 = std::sqrt(1 - zeta * zeta), wd = w * r1;
+  const double D = std::exp(-sg * h), C = std::cos(wd * h), S = std::sin(wd * h), q = S / wd;
+  t.phi[0][0] = D * (C + sg * q);
+  t.phi[0][1] = D * q;
+  t.phi[1][0] = -k * D * q;
+  t.phi[1][1] = D * (C - sg * q);
+  for (int p = 0; p < 2; ++p) {
+    const double dsg = p == 0 ? zeta : w, dwd = p == 0 ? r1 : -w * zeta / r1, dk = p == 0 ? 2 * w : 0;
+    const double dD = -h * D * dsg, dC = -S * h * dwd, dq = dwd * (C * h - q) / wd;
+    t.d[p][0][0] = dD * (C + sg * q) + D * (dC + dsg * q + sg * dq);
+    t.d[p][0][1] = dD * q + D * dq;
+    t.d[p][1][0] = -(dk * D * q + k * t.d[p][0][1]);
+    t.d[p][1][1] = dD * (C - sg * q) + D * (dC - dsg * q - sg * dq);
+  }
+  return t;
+}
+
+/// A mode's state, its derivatives in w and zeta, and its free responses to a unit deflection
+/// and a unit rate at the first sample.
+struct SensitivityState {
+  double z = 0, v = 0;
+  double sz[2] = {0, 0}, sv[2] = {0, 0};
+  double e1z = 1, e1v = 0, e2z = 0, e2v = 1;
+};
+
+/// One exact step of h under a(s) = a0 + j s (BaseExcitedMode::advance: the free transition of
+/// the state less the particular solution z_p = -(a0 + j s)/k + c j/k^2, k = w^2, c = 2 zeta w)
+/// with the derivatives carried through it.
+void sensitivity_step(SensitivityState& x, const Transition& t, double w, double zeta, double h, double a0, double j) {
+  const double k = w * w, c = 2 * zeta * w, k2 = k * k;
+  const double zp0 = -a0 / k + c * j / k2, vp = -j / k, zp1 = zp0 - j * h / k;
+  const double ez = x.z - zp0, ev = x.v - vp;
+  for (int p = 0; p < 2; ++p) {
+    const double dk = p == 0 ? 2 * w : 0, dc = p == 0 ? 2 * zeta : 2 * w;
+    const double dzp0 = a0 * dk / k2 + j * dc / k2 - 2 * c * j * dk / (k2 * k), dvp = j * dk / k2;
+    const double dzp1 = dzp0 + j * h * dk / k2;
+    const double dez = x.sz[p] - dzp0, dev = x.sv[p] - dvp;
+    const double nz = t.d[p][0][0] * ez + t.d[p][0][1] * ev + t.phi[0][0] * dez + t.phi[0][1] * dev + dzp1;
+    const double nv = t.d[p][1][0] * ez + t.d[p][1][1] * ev + t.phi[1][0] * dez + t.phi[1][1] * dev + dvp;
+    x.sz[p] = nz, x.sv[p] = nv;
+  }
+  x.z = t.phi[0][0] * ez + t.phi[0][1] * ev + zp1;
+  x.v = t.phi[1][0] * ez + t.phi[1][1] * ev + vp;
+  const double e1z = t.phi[0][0] * x.e1z + t.phi[0][1] * x.e1v, e2z = t.phi[0][0] * x.e2z + t.phi[0][1] * x.e2v;
+  x.e1v = t.phi[1][0] * x.e1z + t.phi[1][1] * x.e1v, x.e2v = t.phi[1][0] * x.e2z + t.phi[1][1] * x.e2v;
+  x.e1z = e1z, x.e2z = e2z;
+}
+
+/// Columns of one under-damped mode's relative acceleration z'' = -c v - k z - a at every sample
+/// (forward sensitivities, exact for the model): out[0][i] its derivative in the frequency (Hz),
+/// out[1][i] in zeta, out[2][i] the value itself, out[3][i] and out[4][i] the derivatives in the
+/// first deflection and rate.
+void mode_sensitivities(const Schedule& s, double freq_hz, double zeta, ModeState x0, double* const out[5]) {
+  const double w = 2 * std::numbers::pi * freq_hz, k = w * w, c = 2 * zeta * w;
+  const Transition whole = transition(w, zeta, s.dt_s);
+  SensitivityState x;
+  x.z = x0.z_mm, x.v = x0.v_mm_s;
+  auto record = [&](std::size_t i) {
+    for (int p = 0; p < 2; ++p) {
+      const double dk = p == 0 ? 2 * w : 0, dc = p == 0 ? 2 * zeta : 2 * w;
+      out[p][i] = -dc * x.v - dk * x.z - c * x.sv[p] - k * x.sz[p];
+    }
+    out[0][i] *= 2 * std::numbers::pi;  // dw / df
+    out[2][i] = -c * x.v - k * x.z - s.accel_at[i];
+    out[3][i] = -c * x.e1v - k * x.e1z;
+    out[4][i] = -c * x.e2v - k * x.e2z;
+  };
+  record(0);
+  for (std::size_t i = 1; i < s.accel_at.size(); ++i) {
+    if (s.whole[i]) {
+      const Sub& u = s.subs[s.sample_end[i - 1]];
+      sensitivity_step(x, whole, w, zeta, s.dt_s, u.a0, u.jerk);
+    } else {
+      for (std::size_t j = s.sample_end[i - 1]; j < s.sample_end[i]; ++j)
+        if (s.subs[j].h_s > 0)
+          sensitivity_step(x, transition(w, zeta, s.subs[j].h_s), w, zeta, s.subs[j].h_s, s.subs[j].a0, s.subs[j].jerk);
+    }
+    record(i);
+  }
+}
+
+/// Are the modes' frequencies and damping ratios in the model's domain?
+bool in_domain(const double* p, std::size_t modes) {
+  for (std::size_t k = 0; k < modes; ++k)
+    if (!(p[kParamsPerMode * k] > 0) || !(p[kParamsPerMode * k + 1] > 0)) return false;
+  return true;
+}
+
+/// The residuals y - model and their Jacobian (samples x parameters, column-major, its storage kept
+/// from one evaluation to the next). The gain, the first state and the offset enter the model
+/// linearly; a mode's frequency and damping ratio by forward sensitivities (mode_sensitivities),
+/// or, for a mode near critical damping, by central differences of that mode's response alone
+/// with the step of solve_least_squares' numeric Jacobian (1e-6 of the value).
+class RecordJacobian {
+ public:
+  RecordJacobian(const Schedule& s, std::size_t modes, const std::vector<double>& y)
+      : s_(s),
+        modes_(modes),
+        y_(y),
+        m_(y.size()),
+        rel_(y.size()),
+        dz_(y.size()),
+        dv_(y.size()),
+        plus_(y.size()),
+        minus_(y.size()),
+        jac_(static_cast<Eigen::Index>(y.size()), static_cast<Eigen::Index>(modes * kParamsPerMode + 1)) {}
+
+  /// The residuals at p into r and the Jacobian into jacobian(); false outside the model's domain.
+  bool evaluate(const double* p, std::vector<double>& r) {
+    if (!in_domain(p, modes_)) return false;
+    model(s_, modes_, p, m_, rel_);
+    for (std::size_t i = 0; i < y_.size(); ++i) r[i] = y_[i] - m_[i];
+    jac_.col(jac_.cols() - 1).setConstant(-1);  // the offset
+    for (std::size_t k = 0; k < modes_; ++k) mode_columns(p, k);
+    return true;
+  }
+  const Eigen::MatrixXd& jacobian() const { return jac_; }
+
+ private:
+  void mode_columns(const double* p, std::size_t k) {
+    const double* q = p + kParamsPerMode * k;
+    const ModeState x0{q[3], q[4]};
+    const double gain = q[2];
+    const auto c = static_cast<Eigen::Index>(kParamsPerMode * k);
+    const std::size_t n = y_.size();
+    if (q[1] < kSensitivityMaxZeta) {
+      double* const cols[5] = {plus_.data(), minus_.data(), rel_.data(), dz_.data(), dv_.data()};
+      mode_sensitivities(s_, q[0], q[1], x0, cols);
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto row = static_cast<Eigen::Index>(i);
+        jac_(row, c) = -gain * plus_[i];
+        jac_(row, c + 1) = -gain * minus_[i];
+        jac_(row, c + 2) = -rel_[i];
+        jac_(row, c + 3) = -gain * dz_[i];
+        jac_(row, c + 4) = -gain * dv_[i];
+      }
+      return;
+    }
+    mode_response(s_, q[0], q[1], x0, rel_.data(), dz_.data(), dv_.data());
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto row = static_cast<Eigen::Index>(i);
+      jac_(row, c + 2) = -rel_[i];
+      jac_(row, c + 3) = -gain * dz_[i];
+      jac_(row, c + 4) = -gain * dv_[i];
+    }
+    for (int d = 0; d < 2; ++d) {
+      const double h = 1e-6 * std::max(std::abs(q[d]), 1e-6);
+      double qp[2] = {q[0], q[1]}, qm[2] = {q[0], q[1]};
+      qp[d] += h;
+      qm[d] -= h;
+      mode_response(s_, qp[0], qp[1], x0, plus_.data(), nullptr, nullptr);
+      mode_response(s_, qm[0], qm[1], x0, minus_.data(), nullptr, nullptr);
+      for (std::size_t i = 0; i < n; ++i)
+        jac_(static_cast<Eigen::Index>(i), c + d) = -gain * (plus_[i] - minus_[i]) / (2 * h);
+    }
+  }
+
+  const Schedule& s_;
+  std::size_t modes_;
+  const std::vector<double>& y_;
+  std::vector<double> m_, rel_, dz_, dv_, plus_, minus_;
+  Eigen::MatrixXd jac_;
+};
 
 const std::vector<double>& axis_channel(const AccelRecord& r) {
   const std::string want = fmt::format("accel_{}", r.axis);
@@ -152,6 +356,155 @@ void finish(AxisResponseFit& out, std::size_t modes, double confidence) {
   std::sort(out.modes.begin(), out.modes.end(), [](const auto& a, const auto& b) { return a.freq_hz < b.freq_hz; });
 }
 
+/// Below this ratio of the extreme singular values of the Jacobian with unit-scaled columns the
+/// parameters are not identifiable: the check of the FOPDT fit's covariance (first_order.cpp,
+/// fill_covariance), about a millionth of the rounding that a double's 16 digits allow in J'J.
+constexpr double kMinScaledReciprocalCondition = 1e-10;
+
+/// Standard errors, 95 % intervals and the covariance s^2 (J'J)^-1 from the normal matrix at the
+/// solution: what ceres::Covariance computes from J, with the rank check on the columns scaled
+/// to unit length (so that the units of the parameters do not decide it). FitError when rank
+/// deficient.
+void set_covariance(fitting::FitResult& f, const Eigen::MatrixXd& JtJ, double confidence) {
+  const Eigen::Index k = JtJ.rows();
+  Eigen::VectorXd d(k);
+  for (Eigen::Index j = 0; j < k; ++j) d(j) = 1.0 / std::sqrt(std::max(JtJ(j, j), 1e-300));
+  const Eigen::MatrixXd S = d.asDiagonal() * JtJ * d.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S, Eigen::EigenvaluesOnly);
+  const double lmin = es.eigenvalues().minCoeff(), lmax = es.eigenvalues().maxCoeff();
+  if (!(lmax > 0) || !(lmin > 0) || std::sqrt(lmin / lmax) < kMinScaledReciprocalCondition) {
+    std::string names;
+    for (const auto& p : f.params) names += (names.empty() ? "" : ", ") + p.name;
+    throw FitError(f.model + ": parameters not identifiable from these data (the Jacobian of " + names +
+                   " is rank deficient); record a longer or richer response, or fix a parameter");
+  }
+  const Eigen::MatrixXd Sinv = S.inverse();
+  const int dof = f.diagnostics.num_observations - static_cast<int>(k);
+  if (dof <= 0) throw FitError(f.model + ": as many parameters as data points; no uncertainty can be estimated");
+  const double s2 = f.diagnostics.rss / dof, tq = fitting::t_multiplier(confidence, dof);
+  f.covariance.assign(static_cast<std::size_t>(k * k), 0.0);
+  for (Eigen::Index i = 0; i < k; ++i)
+    for (Eigen::Index j = 0; j < k; ++j)
+      f.covariance[static_cast<std::size_t>(i * k + j)] = Sinv(i, j) * d(i) * d(j) * s2;
+  for (Eigen::Index j = 0; j < k; ++j) {
+    auto& p = f.params[static_cast<std::size_t>(j)];
+    p.ci95_method = "wald";
+    p.std_error = std::sqrt(f.covariance[static_cast<std::size_t>(j * k + j)]);
+    p.ci95_lo = p.value - tq * p.std_error;
+    p.ci95_hi = p.value + tq * p.std_error;
+    if (!std::isfinite(p.std_error))
+      throw FitError(f.model + ": the uncertainty of " + p.name + " is not finite; it is not identifiable");
+  }
+}
+
+/// Rows of the Jacobian taken together when J'J is summed: their columns stay in the first-level
+/// cache while every pair of columns is multiplied (a general matrix product of the 6 x 100k-odd
+/// transpose with the 100k-odd x 6 Jacobian took several times longer than the model's evaluation).
+constexpr Eigen::Index kRowBlock = 512;
+
+/// J'J and J'r of the column-major Jacobian J and residuals r; returns r'r.
+double normal_matrix(const Eigen::MatrixXd& J, const std::vector<double>& r, Eigen::MatrixXd& N, Eigen::VectorXd& g) {
+  const Eigen::Index m = J.rows(), k = J.cols();
+  N.setZero(k, k);
+  g.setZero(k);
+  const Eigen::Map<const Eigen::VectorXd> rv(r.data(), m);
+  for (Eigen::Index b = 0; b < m; b += kRowBlock) {
+    const Eigen::Index len = std::min(kRowBlock, m - b);
+    for (Eigen::Index i = 0; i < k; ++i) {
+      const auto ci = J.col(i).segment(b, len);
+      for (Eigen::Index j = 0; j <= i; ++j) N(i, j) += ci.dot(J.col(j).segment(b, len));
+      g(i) += ci.dot(rv.segment(b, len));
+    }
+  }
+  N.triangularView<Eigen::StrictlyUpper>() = N.transpose();
+  return rv.squaredNorm();
+}
+
+/// The FitResult of a converged solve on the normal equations at p, J'J there: what
+/// solve_least_squares reports for the same solution (residual diagnostics, bound warnings, the
+/// covariance).
+fitting::FitResult normal_solve_result(const Schedule& sched, std::size_t modes, const std::vector<double>& y,
+                                       const fitting::LsqProblem& prob, const std::vector<double>& p,
+                                       const Eigen::MatrixXd& JtJ, const fitting::lm_detail::Confirmed& c,
+                                       double confidence) {
+  fitting::FitResult f;
+  f.model = "axis_output_error";
+  f.diagnostics.iterations = c.iterations;
+  f.diagnostics.num_parameters = static_cast<int>(p.size());
+  f.diagnostics.converged = true;
+  f.diagnostics.solver =
+      fmt::format("Levenberg-Marquardt on the {}x{} normal equations: {} iterations after the polish, converged",
+                  p.size(), p.size(), c.iterations);
+  for (double v : p)
+    if (!std::isfinite(v)) throw FitError(f.model + ": the solution is not finite (" + f.diagnostics.solver + ")");
+  std::vector<double> m(y.size()), rel(y.size()), res(y.size());
+  model(sched, modes, p.data(), m, rel);
+  for (std::size_t i = 0; i < y.size(); ++i) res[i] = y[i] - m[i];
+  fitting::fill_residual_diagnostics(f, res, y, true);
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    const auto& ps = prob.params[j];
+    fitting::Param q;
+    q.name = ps.name;
+    q.unit = ps.unit;
+    q.value = p[j];
+    if (p[j] <= ps.lower || p[j] >= ps.upper)
+      f.warnings.push_back(ps.name + " ended on its bound (" + std::to_string(p[j]) + ")");
+    f.params.push_back(q);
+  }
+  set_covariance(f, JtJ, confidence);
+  return f;
+}
+
+/// Ceres from p, with the numeric Jacobian of the model's residuals (the fit before the solve on
+/// the normal equations).
+fitting::FitResult ceres_from(const Schedule& sched, std::size_t modes, const std::vector<double>& y,
+                              fitting::LsqProblem& prob, const fitting::LsqOptions& lo, const std::vector<double>& p) {
+  for (std::size_t j = 0; j < p.size(); ++j) prob.params[j].start = p[j];
+  std::vector<double> m(y.size()), rel(y.size());
+  prob.residuals = [&](const double* q, double* r) {
+    if (!in_domain(q, modes)) return false;
+    model(sched, modes, q, m, rel);
+    for (std::size_t i = 0; i < y.size(); ++i) r[i] = y[i] - m[i];
+    return true;
+  };
+  return fitting::solve_least_squares("axis_output_error", prob, lo);
+}
+
+/// The fit by Levenberg-Marquardt on the normal equations (levenberg_marquardt.hpp) to Ceres
+/// Solver's convergence tests with the tolerances `lo`, as solve_least_squares reports it; the
+/// record's 100k-odd rows are never factorised (Ceres' dense QR of the whole Jacobian, its
+/// projected line search on the bounded frequencies and damping ratios, which evaluates each
+/// trial with its Jacobian, and the SVD of the Jacobian for the covariance cost about six times
+/// the model's evaluations). When that does not converge, Ceres takes over from where it ended.
+fitting::FitResult solve_record(const Schedule& sched, std::size_t modes, const std::vector<double>& y,
+                                fitting::LsqProblem& prob, const fitting::LsqOptions& lo) {
+  const std::size_t k = prob.params.size(), n = y.size();
+  std::vector<double> p(k), lower(k), upper(k), r(n);
+  const std::vector<bool> fixed(k, false);
+  for (std::size_t j = 0; j < k; ++j)
+    lower[j] = prob.params[j].lower, upper[j] = prob.params[j].upper,
+    p[j] = std::clamp(prob.params[j].start, lower[j], upper[j]);
+  RecordJacobian jac(sched, modes, y);
+  auto equations = [&](std::span<const double> q, Eigen::MatrixXd& N, Eigen::VectorXd& g) {
+    if (!jac.evaluate(q.data(), r)) return HUGE_VAL;
+    return normal_matrix(jac.jacobian(), r, N, g);
+  };
+  fitting::lm_detail::Equations<Eigen::MatrixXd, Eigen::VectorXd> at;
+  at.cost = equations(std::span<const double>(p), at.N, at.g);
+  fitting::lm_detail::Confirmed c;
+  if (std::isfinite(at.cost)) {
+    double lambda = fitting::lm_detail::kInitialDamping;
+    const std::span<double> ps(p);
+    const std::span<const double> los(lower), his(upper);
+    fitting::lm_detail::polish_from(ps, los, his, fixed, equations, at, lambda, true);
+    c = fitting::lm_detail::confirm(
+        ps, los, his, fixed, equations, at, lambda,
+        {lo.function_tolerance, lo.parameter_tolerance, lo.gradient_tolerance, lo.max_iterations});
+  }
+  if (!c.converged()) return ceres_from(sched, modes, y, prob, lo, p);
+  return normal_solve_result(sched, modes, y, prob, p, at.N, c, lo.confidence);
+}
+
 }  // namespace
 
 AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<AccelPiece>& motion,
@@ -183,14 +536,6 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
   prob.params = params_for(starts, o.max_zeta);
   prob.num_residuals = static_cast<int>(n);
   prob.observed = y;
-  std::vector<double> m(n);
-  prob.residuals = [&](const double* p, double* r) {
-    for (std::size_t k = 0; k < modes; ++k)
-      if (!(p[kParamsPerMode * k] > 0) || !(p[kParamsPerMode * k + 1] > 0)) return false;
-    model(sched, modes, p, m);
-    for (std::size_t i = 0; i < n; ++i) r[i] = y[i] - m[i];
-    return true;
-  };
   fitting::LsqOptions lo;
   lo.max_iterations = 100;
   lo.function_tolerance = 1e-12;
@@ -198,12 +543,13 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
   lo.gradient_tolerance = 1e-14;
   lo.confidence = o.confidence;
   AxisResponseFit out;
-  out.fit = fitting::solve_least_squares("axis_output_error", prob, lo);
+  out.fit = solve_record(sched, modes, y, prob, lo);
   out.samples = n;
   out.pieces = sched.pieces_used;
   std::vector<double> p;
   for (const auto& q : out.fit.params) p.push_back(q.value);
-  model(sched, modes, p.data(), m);
+  std::vector<double> m(n), rel(n);
+  model(sched, modes, p.data(), m, rel);
   std::vector<double> res(n);
   for (std::size_t i = 0; i < n; ++i) res[i] = y[i] - m[i];
   out.variance_inflation = fitting::residual_variance_factor(res);

@@ -49,6 +49,33 @@ ModeState BaseExcitedMode::advance(const ModeState& x, double h, double a0, doub
   return {e.z_mm + zp1, e.v_mm_s + vp};
 }
 
+void BaseExcitedMode::free_map(double h, double phi[2][2]) const {
+  if (zeta_ < 1 && std::abs(1 - zeta_) >= kCriticalDampingBand) {
+    // free_response's under-damped form for (1, 0) and (0, 1).
+    const double s = zeta_ * w_, wd = w_ * std::sqrt(1 - zeta_ * zeta_);
+    const double decay = std::exp(-s * h), cs = decay * std::cos(wd * h), sn = decay * std::sin(wd * h) / wd;
+    phi[0][0] = cs + s * sn;
+    phi[0][1] = sn;
+    phi[1][0] = -k_ * sn;
+    phi[1][1] = cs - s * sn;
+    return;
+  }
+  const ModeState c0 = free_response({1, 0}, h), c1 = free_response({0, 1}, h);
+  phi[0][0] = c0.z_mm;
+  phi[1][0] = c0.v_mm_s;
+  phi[0][1] = c1.z_mm;
+  phi[1][1] = c1.v_mm_s;
+}
+
+ModeState BaseExcitedMode::advance(const ModeState& x, double h, double a0, double j, const double phi[2][2]) const {
+  if (h <= 0) return x;
+  // As advance() without phi: the free response of the state less the particular solution.
+  const double zp0 = -a0 / k_ + c_ * j / (k_ * k_), vp = -j / k_;
+  const double zp1 = zp0 - j * h / k_;
+  const double e0 = x.z_mm - zp0, d0 = x.v_mm_s - vp;
+  return {phi[0][0] * e0 + phi[0][1] * d0 + zp1, phi[1][0] * e0 + phi[1][1] * d0 + vp};
+}
+
 ModeStep BaseExcitedMode::step(double h) const {
   ModeStep s;
   s.h_s = h;

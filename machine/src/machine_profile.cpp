@@ -1,4 +1,5 @@
 #include "tunekit/machine/machine_profile.hpp"
+#include "tunekit/machine/profile_import.hpp"
 #include "tunekit/machine/rrf_http.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 
@@ -285,6 +286,7 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
 }
 
 MachineProfile load_machine_profile(const std::string& path) {
+  if (is_firmware_configuration(path)) return import_machine_profile(path);  // profile_import.hpp
   return parse_machine_profile(read_file_bytes(path), path);
 }
 

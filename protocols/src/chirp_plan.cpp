@@ -27,8 +27,10 @@ ChirpPlan plan_liquefier_chirp(double tau_s, double staircase_step_s) {
   ChirpPlan p;
   p.expected_tau_s = tau_s;
   p.corner_hz = 1.0 / (2 * std::numbers::pi * tau_s);
-  p.freq_min_hz = p.corner_hz / 10;
   const double reach_hz = 1.0 / (10 * staircase_step_s);  // 10 feed levels per period
+  // A decade below the corner, but an octave below the staircase's reach at most: an extruder
+  // whose staircase is slow (a low extrude-only acceleration) still gets a chirp it can run.
+  p.freq_min_hz = std::min(p.corner_hz / 10, reach_hz / 2);
   p.freq_max_hz = std::max(std::min(5 * p.corner_hz, reach_hz), 2 * p.freq_min_hz);
   p.duration_s = std::max(20.0, 20.0 / p.corner_hz);
   p.settle_s = std::max(2.0, 10 * tau_s);

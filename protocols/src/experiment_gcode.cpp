@@ -79,22 +79,26 @@ FeedPlan extruder_accel(std::vector<std::string>& g, std::vector<std::string>& r
                         const machine::MachineProfile& profile, const firmware::Dialect& d) {
   FeedPlan fp;
   fp.max_len_mm = profile.extruder.max_extrude_only_distance_mm;
+  // Whole mm/s^2 rounded down (never above what was checked); the machine's own values restored
+  // as its configuration has them.
+  a = std::floor(a);
   switch (d.firmware()) {
     case firmware::Firmware::klipper:
       g.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(a, 0)));
-      restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(accel_to_restore(profile), 0)));
+      restore.push_back(fmt::format("SET_VELOCITY_LIMIT ACCEL={}", num(accel_to_restore(profile), 3)));
       fp.stops = true;
       fp.accel_mm_s2 = std::min(a, profile.extruder.max_accel_mm_s2);
       break;
     case firmware::Firmware::reprapfirmware:
       g.push_back(fmt::format("M201 E{}", num(a, 0)));
-      restore.push_back(fmt::format("M201 E{}", num(profile.state.max_accel_e_mm_s2, 0)));
+      restore.push_back(fmt::format("M201 E{}", num(profile.state.max_accel_e_mm_s2, 3)));
       fp.accel_mm_s2 = a;
       break;
     default:
+      // Marlin caps M204 R by the extruder's M201 E (planner.cpp: every axis' max acceleration).
       g.push_back(fmt::format("M204 R{}", num(a, 0)));
-      restore.push_back(fmt::format("M204 R{}", num(profile.state.retract_accel_mm_s2, 0)));
-      fp.accel_mm_s2 = a;
+      restore.push_back(fmt::format("M204 R{}", num(profile.state.retract_accel_mm_s2, 3)));
+      fp.accel_mm_s2 = std::min(a, profile.state.max_accel_e_mm_s2);
       break;
   }
   return fp;

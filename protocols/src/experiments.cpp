@@ -21,6 +21,7 @@
 #include "tunekit/machine/trajectory.hpp"
 
 #include "experiment_gcode.hpp"
+#include "machine_defaults.hpp"
 
 namespace tunekit::protocols {
 
@@ -87,9 +88,15 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
   for (const auto& prm : spec.params)
     if (!(std::isnan(prm.default_value) && !overrides.count(prm.name)))
       check_param_domain(protocol, prm, e.params.at(prm.name));
+  const experiment_gcode::ExperimentRequest request{protocol, overrides, axis_in, profile, d, limits};
+  // The defaults that come from the machine's limits, in their domains too (the positions stay
+  // NaN: the builders put them at the middle of the travel).
+  experiment_gcode::fill_machine_defaults(request, e);
+  for (const auto& prm : spec.params)
+    if (std::isnan(prm.default_value) && !overrides.count(prm.name) && !std::isnan(e.params.at(prm.name)))
+      check_param_domain(protocol, prm, e.params.at(prm.name));
   auto& g = e.gcode;
   g.push_back(fmt::format("; tunekit {} on {}", protocol, core::comment_safe(profile.name)));
-  const experiment_gcode::ExperimentRequest request{protocol, overrides, axis_in, profile, d, limits};
   if (!experiment_gcode::build_liquefier_experiment(request, e) && !experiment_gcode::build_axis_experiment(request, e))
     experiment_gcode::build_print_experiment(request, e);
   e.estimated_duration_s = estimate_gcode_duration_s(g);

@@ -29,9 +29,8 @@ namespace {
 /// sweep's peak for the test, the profile's value restored after.
 void raise_max_accel(double peak_accel, const machine::MachineProfile& profile, std::vector<std::string>& prologue,
                      std::vector<std::string>& restore, nlohmann::json& changed) {
-  prologue.push_back(fmt::format("M201 X{} Y{}", num(peak_accel, 0), num(peak_accel, 0)));
-  restore.push_back(
-      fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0), num(profile.state.max_accel_xy_mm_s2, 0)));
+  prologue.push_back(fmt::format("M201 X{0} Y{0}", num(std::floor(peak_accel), 0)));
+  restore.push_back(fmt::format("M201 X{0} Y{0}", num(profile.state.max_accel_xy_mm_s2, 3)));
   changed.push_back("M201");
 }
 
@@ -74,7 +73,6 @@ void sweep_test_settings(const ExperimentRequest& r, double peak_accel, std::vec
 /// there, refused elsewhere: its moves join at speed, which only Klipper's planner was checked for).
 SweepDesign sweep_design(const ExperimentRequest& r, std::map<std::string, double>& p) {
   const bool klipper = r.dialect.firmware() == firmware::Firmware::klipper;
-  if (std::isnan(p["sweeping_accel"])) p["sweeping_accel"] = klipper ? kKlipperSweepingAccel_mm_s2 : 0.0;
   SweepDesign d;
   d.freq_start_hz = p.at("freq_start_hz");
   d.freq_end_hz = p.at("freq_end_hz");
@@ -88,6 +86,11 @@ SweepDesign sweep_design(const ExperimentRequest& r, std::map<std::string, doubl
         "axis-sweep's sweeping motion (sweeping_accel {:g} mm/s^2) follows Klipper's TEST_RESONANCES and is made "
         "for Klipper's planner only; on {} give -p sweeping_accel=0",
         d.sweeping_accel_mm_s2, firmware::to_string(r.dialect.firmware())));
+  if (!(d.pulse_accel_cap() > 0))
+    throw InputError(fmt::format(
+        "axis-sweep's sweeping motion (sweeping_accel {:g} mm/s^2) leaves the pulses no acceleration under the {} "
+        "axis' limit {:g} mm/s^2: give a lower sweeping_accel",
+        d.sweeping_accel_mm_s2, r.axis_in, d.max_accel_mm_s2));
   if (r.dialect.firmware() == firmware::Firmware::marlin || r.dialect.firmware() == firmware::Firmware::prusa) {
     // Marlin joins a move with fewer than MIN_STEPS_PER_SEGMENT steps with the next one
     // (planner.cpp _buffer_steps; Configuration_adv.h MIN_STEPS_PER_SEGMENT 6).
@@ -167,6 +170,8 @@ void build_axis_sweep(const ExperimentRequest& r, Experiment& e) {
   e.excitation["test_settings"] = prologue;
   e.excitation["changed"] = changed;
   e.excitation["peak_accel_mm_s2"] = peak_accel;
+  e.excitation["accel_held_above_hz"] = design.held_above_hz();
+  e.excitation["accel_limit_mm_s2"] = design.max_accel_mm_s2;
   e.excitation["peak_speed_mm_s"] = peak_speed;
   e.excitation["sweep_duration_s"] = sweep_s;  // the moves as planned, without the settle dwells
   if (design.min_half_mm > 0) e.excitation["min_move_mm"] = design.min_half_mm;

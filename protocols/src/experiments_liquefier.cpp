@@ -19,8 +19,38 @@
 #include "tunekit/machine/trajectory.hpp"
 
 #include "experiment_gcode.hpp"
+#include "machine_defaults.hpp"
 
 namespace tunekit::protocols::experiment_gcode {
+
+namespace {
+
+// The longest staircase step of a chirp sized from a time constant, s: fewer, longer moves keep
+// the delivered feed close to the recorded staircase on a firmware that stops after every
+// extrude-only move (Klipper), while 50 ms still resolves the liquefier's slowest corners.
+constexpr double kLongestChirpStep_s = kLongestStaircaseStep_s;
+
+/// The chirp sized from expected_tau_s (chirp_plan.hpp): its band, duration and settle time, and
+/// a staircase step as long as the chirp's end allows (ten per period, at most 50 ms) but never
+/// shorter than the machine's (segment_s as filled in from its limits); what the caller set stays.
+void size_chirp(const std::map<std::string, double>& overrides, Experiment& e) {
+  auto& p = e.params;
+  const double shortest = p.at("segment_s");
+  const auto plan = plan_liquefier_chirp(p.at("expected_tau_s"), shortest);
+  if (!overrides.count("segment_s")) {
+    p["segment_s"] = std::max(shortest, std::min(kLongestChirpStep_s, 1.0 / (10 * plan.freq_max_hz)));
+    if (p["segment_s"] > shortest)
+      e.excitation["machine_defaults"]["segment_s"] = fmt::format(
+          "as long as the chirp's end {:.3g} Hz allows (ten steps a period, at most {:g} s); the machine's shortest "
+          "is {:.3g} s",
+          plan.freq_max_hz, kLongestChirpStep_s, shortest);
+  }
+  for (const auto& [k, v] : {std::pair{"freq_min_hz", plan.freq_min_hz}, std::pair{"freq_max_hz", plan.freq_max_hz},
+                             std::pair{"duration_s", plan.duration_s}, std::pair{"settle_s", plan.settle_s}})
+    if (!overrides.count(k)) p[k] = v;
+}
+
+}  // namespace
 
 bool build_liquefier_experiment(const ExperimentRequest& r, Experiment& e) {
   const std::string& protocol = r.protocol;
@@ -94,13 +124,8 @@ bool build_liquefier_experiment(const ExperimentRequest& r, Experiment& e) {
     const double mean = p.at("feed_mean_mm_s");
     const double amp = p.at("amplitude_mm_s");
     if (amp >= mean) throw InputError("amplitude_mm_s must be in [0, feed_mean_mm_s) so the feed stays positive");
+    if (protocol == "liquefier-chirp" && p.at("expected_tau_s") != 0) size_chirp(overrides, e);
     const double seg = p.at("segment_s");
-    if (protocol == "liquefier-chirp" && p.at("expected_tau_s") != 0) {
-      const auto plan = plan_liquefier_chirp(p.at("expected_tau_s"), seg);
-      for (const auto& [k, v] : {std::pair{"freq_min_hz", plan.freq_min_hz}, std::pair{"freq_max_hz", plan.freq_max_hz},
-                                 std::pair{"duration_s", plan.duration_s}, std::pair{"settle_s", plan.settle_s}})
-        if (!overrides.count(k)) p[k] = v;
-    }
     const double f0 = p.at("freq_min_hz"), f1 = p.at("freq_max_hz");
     std::vector<std::string> restore;
     FeedPlan fp;

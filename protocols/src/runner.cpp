@@ -225,6 +225,16 @@ void stop_sim_and_keep_record(sim::SimPtyServer& server, machine::Journal& journ
   res.files["sim_received"] = journal.path("sim_received.gcode");
 }
 
+/// The profile the run is checked against (RunOptions::profile, profile_path, machine).
+machine::MachineProfile run_profile(const RunOptions& o, bool sim) {
+  if (o.profile) return *o.profile;
+  if (sim) return o.profile_path.empty() ? builtin_sim_profile() : machine::load_machine_profile(o.profile_path);
+  if (!o.profile_path.empty() && o.profile_path != o.machine)
+    throw InputError(
+        "a real machine's profile is --machine FILE; --profile describes the printer --machine sim simulates");
+  return machine::load_machine_profile(o.machine);
+}
+
 /// Whether the protocol sets a heater to a temperature above 0 (then the run turns the heaters
 /// off at its end, unless RunOptions::keep_heaters).
 bool heats(const std::vector<std::string>& gcode) {
@@ -292,8 +302,10 @@ void throw_if_stopped_after_run(const RunResult& r, const std::string& where) {
 
 RunResult run_experiment(const RunOptions& o) {
   const bool sim = o.machine == "sim";
-  const machine::MachineProfile profile = sim ? builtin_sim_profile() : machine::load_machine_profile(o.machine);
-  const sim::SimConfig sim_cfg = sim::SimConfig::from_options(o.sim_options);  // bad options fail before anything else
+  const machine::MachineProfile profile = run_profile(o, sim);
+  // Bad simulator options fail before anything else; the simulated printer is the profile's.
+  const sim::SimConfig sim_cfg =
+      sim ? sim::SimConfig::for_machine(profile, o.sim_options) : sim::SimConfig::from_options(o.sim_options);
   if (!sim && o.port.empty()) throw InputError("--port is needed with a machine profile (or use --machine sim)");
   const firmware::Dialect dialect = planned_dialect(sim, sim_cfg, profile);
 
@@ -323,11 +335,9 @@ RunResult run_experiment(const RunOptions& o) {
   res.files["gcode"] = journal.path("protocol.gcode");
   res.files["summary"] = journal.path("run.json");
 
-  nlohmann::json summary{{"protocol", o.protocol},
-                         {"experiment", res.experiment.to_json()},
-                         {"machine", sim ? "sim" : o.machine},
-                         {"profile", profile.name},
-                         {"started_utc", stamp}};
+  nlohmann::json summary{
+      {"protocol", o.protocol},  {"experiment", res.experiment.to_json()}, {"machine", sim ? "sim" : o.machine},
+      {"profile", profile.name}, {"profile_source", profile.source_path},  {"started_utc", stamp}};
   std::unique_ptr<sim::SimPtyServer> server;
   std::string port = o.port;
   if (sim) {

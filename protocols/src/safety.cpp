@@ -232,13 +232,11 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
   if (!out.empty() && (gcode.size() > limits.max_lines || bytes > limits.max_bytes)) return out;
   // One element, one line: a line break inside one (a comment carrying a profile's text) would
   // print or send lines the gate never saw.
-  bool broken = false;
+  const std::size_t before = out.size();
   for (std::size_t i = 0; i < gcode.size(); ++i)
-    if (std::any_of(gcode[i].begin(), gcode[i].end(), [](char c) { return c == '\n' || c == '\r' || c == '\0'; })) {
+    if (std::any_of(gcode[i].begin(), gcode[i].end(), [](char c) { return c == '\n' || c == '\r' || c == '\0'; }))
       out.push_back({i + 1, core::comment_safe(gcode[i]), "a G-code line holds a line break or NUL"});
-      broken = true;
-    }
-  if (broken) return out;
+  if (out.size() > before) return out;  // the other violations are listed with the rest
 
   machine::GcodeInterpreter in;
   home_to_minimums(in, p);

@@ -131,15 +131,17 @@ std::vector<SweepSegment> vibration_pulses(const SweepDesign& d) {
   double t = 0, f = d.freq_start_hz, sign = 1;
   while (f <= d.freq_end_hz + kFreqEndSlack_hz) {
     const double quarter = 0.25 / f;
-    double a = d.accel_per_hz * f;
+    // accel_per_hz f up to the axis' limit, then held there (the fit against the commanded motion
+    // does not need the amplitude to grow with f).
+    double a = std::min(d.accel_per_hz * f, d.pulse_accel_cap());
     // A half period at +-a from rest to rest covers a quarter^2.
     if (a * quarter * quarter < 1.5 * d.min_half_mm) a = 1.5 * d.min_half_mm / (quarter * quarter);
-    if (a > d.max_accel_mm_s2)
+    if (a > d.pulse_accel_cap())
       throw InputError(fmt::format(
           "axis-sweep at {:.1f} Hz on Marlin: a half period must move at least {} steps (MIN_STEPS_PER_SEGMENT, "
-          "Configuration_adv.h) = {:.4g} mm, which needs {:.0f} mm/s^2, above the axis limit {:.0f} mm/s^2; lower "
-          "freq_end_hz or raise [firmware_state] steps_per_mm",
-          f, firmware::limits::kMarlinMinStepsPerSegment, d.min_half_mm, a, d.max_accel_mm_s2));
+          "Configuration_adv.h) = {:.4g} mm, which needs {:.0f} mm/s^2, above the {:.0f} mm/s^2 the axis limit "
+          "leaves the pulses; lower freq_end_hz or raise [firmware_state] steps_per_mm",
+          f, firmware::limits::kMarlinMinStepsPerSegment, d.min_half_mm, a, d.pulse_accel_cap()));
     t += quarter;
     out.push_back({t, sign * a, f});
     t += quarter;

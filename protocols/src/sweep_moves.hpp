@@ -19,12 +19,18 @@ inline constexpr double kKlipperSweepingPeriod_s = 1.2;
 /// mm/s^2, sweeping_period s (0 in either turns the sweeping motion off). min_half_mm: the
 /// shortest distance a half period of the pulses may cover (Marlin's MIN_STEPS_PER_SEGMENT; 0
 /// elsewhere), which raises the acceleration of the highest frequencies; max_accel_mm_s2 is
-/// the axis limit such a raised acceleration may not pass (InputError otherwise).
+/// the axis limit. The pulses' acceleration accel_per_hz f is held at what that limit leaves
+/// them beside the sweeping motion (pulse_accel_cap) above the frequency where it meets it; a
+/// raised acceleration above the cap is refused (InputError).
 struct SweepDesign {
   double freq_start_hz = 0, freq_end_hz = 0, hz_per_sec = 0, accel_per_hz = 0;
   double sweeping_accel_mm_s2 = 0, sweeping_period_s = 0;
   double min_half_mm = 0, max_accel_mm_s2 = 0;
   bool sweeping() const { return sweeping_accel_mm_s2 > 0 && sweeping_period_s > 0; }
+  /// The pulses' highest acceleration, mm/s^2: the axis limit less the sweeping motion's.
+  double pulse_accel_cap() const { return max_accel_mm_s2 - (sweeping() ? sweeping_accel_mm_s2 : 0.0); }
+  /// The frequency (Hz) above which the pulses' acceleration is held at pulse_accel_cap().
+  double held_above_hz() const { return pulse_accel_cap() / accel_per_hz; }
 };
 
 /// One piece of constant commanded acceleration: it ends at t_end_s (from the sweep's start),

@@ -48,11 +48,15 @@ inline constexpr double kStepCountSlack = 1e-9;
 
 // --- Firmware rules (G-code command table) ---
 /// Marlin Configuration.h DEFAULT_MAX_ACCELERATION {3000, 3000, 100, 10000} and
-/// DEFAULT_RETRACT_ACCELERATION 3000, applied as G-code when the simulator starts.
-inline constexpr std::array<const char*, 2> kMarlinDefaultAccelerationGcode{"M201 X3000 Y3000 Z100 E10000",
-                                                                            "M204 R3000"};
-/// RepRapFirmware: the M201 of a typical config.g.
-inline constexpr const char* kRrfDefaultAccelerationGcode = "M201 X3000 Y3000 Z100 E3000";
+/// DEFAULT_RETRACT_ACCELERATION 3000, applied as G-code when the simulator starts unless the
+/// simulated machine's profile sets its own (SimConfig::acceleration_gcode).
+inline constexpr double kMarlinDefaultMaxAccelXY_mm_s2 = 3000;
+inline constexpr double kMarlinDefaultMaxAccelE_mm_s2 = 10000;
+inline constexpr double kMarlinDefaultRetractAccel_mm_s2 = 3000;
+inline constexpr double kDefaultMaxAccelZ_mm_s2 = 100;
+/// RepRapFirmware: the M201 of a typical config.g (X/Y 3000, E 3000).
+inline constexpr double kRrfDefaultMaxAccelXY_mm_s2 = 3000;
+inline constexpr double kRrfDefaultMaxAccelE_mm_s2 = 3000;
 /// Marlin Configuration_adv.h MIN_STEPS_PER_SEGMENT: a move with fewer steps is joined with the
 /// next (planner.cpp).
 inline constexpr long kMarlinMinStepsPerSegment = 6;

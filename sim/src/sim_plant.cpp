@@ -53,11 +53,7 @@ Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed
   delay_.assign(static_cast<std::size_t>(std::floor(steps)) + 1, 0.0);
   mcr_ = cfg_.minimum_cruise_ratio;
   // The firmware's default acceleration limits (sim_constants.hpp names their sources).
-  if (marlin()) {
-    for (const char* l : sim::kMarlinDefaultAccelerationGcode) interp_.apply(*machine::parse_gcode(l));
-  } else if (rrf()) {
-    interp_.apply(*machine::parse_gcode(sim::kRrfDefaultAccelerationGcode));
-  }
+  for (const auto& l : cfg_.acceleration_gcode()) interp_.apply(*machine::parse_gcode(l));
 }
 
 double Simulator::junction_speed(const machine::GcodeMove& a, const machine::GcodeMove& b) const {

@@ -129,6 +129,9 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     } else if (k == "steps_per_mm") c.steps_per_mm = pos(parse_double(k, v));
     else if (k == "max_extrude_only_distance_mm") c.max_extrude_only_distance_mm = pos(parse_double(k, v));
     else if (k == "max_extrude_only_accel_mm_s2") c.max_extrude_only_accel_mm_s2 = pos(parse_double(k, v));
+    else if (k == "max_accel_xy_mm_s2") c.max_accel_xy_mm_s2 = pos(parse_double(k, v));
+    else if (k == "retract_accel_mm_s2") c.retract_accel_mm_s2 = pos(parse_double(k, v));
+    else if (k == "max_accel_e_mm_s2") c.max_accel_e_mm_s2 = pos(parse_double(k, v));
     else if (k == "sensor_stream") {
       if (v != "0" && v != "1") throw InputError("simulator option sensor_stream must be 0 or 1");
       c.sensor_stream = v == "1";
@@ -211,6 +214,46 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
   return c;
 }
 
+std::vector<std::string> SimConfig::machine_options(const machine::MachineProfile& p) {
+  std::vector<std::string> o;
+  if (p.firmware == "klipper" || p.firmware == "kalico") o.push_back("firmware=klipper");
+  else if (p.firmware == "marlin" || p.firmware == "prusa") o.push_back("firmware=marlin");
+  else if (p.firmware == "rrf") o.push_back("firmware=rrf");
+  auto add = [&o](const char* key, double v) {
+    if (std::isfinite(v) && v > 0) o.push_back(fmt::format("{}={}", key, v));
+  };
+  add("steps_per_mm", std::min(p.state.steps_per_mm_x, p.state.steps_per_mm_y));
+  add("max_extrude_only_accel_mm_s2", p.extruder.max_accel_mm_s2);
+  add("max_extrude_only_distance_mm", p.extruder.max_extrude_only_distance_mm);
+  add("max_accel_xy_mm_s2", p.state.max_accel_xy_mm_s2);
+  add("retract_accel_mm_s2", p.state.retract_accel_mm_s2);
+  add("max_accel_e_mm_s2", p.state.max_accel_e_mm_s2);
+  add("accel_rate_hz", p.sensors.accelerometer_rate_hz);
+  add("filament_diameter_mm", p.extruder.filament_diameter_mm);
+  if (p.state.minimum_cruise_ratio >= 0 && p.state.minimum_cruise_ratio < 1)
+    o.push_back(fmt::format("minimum_cruise_ratio={}", p.state.minimum_cruise_ratio));
+  return o;
+}
+
+std::vector<std::string> SimConfig::acceleration_gcode() const {
+  auto or_default = [](double v, double d) { return v > 0 ? v : d; };
+  if (firmware == "marlin")
+    return {
+        fmt::format("M201 X{0} Y{0} Z{1} E{2}", or_default(max_accel_xy_mm_s2, sim::kMarlinDefaultMaxAccelXY_mm_s2),
+                    sim::kDefaultMaxAccelZ_mm_s2, or_default(max_accel_e_mm_s2, sim::kMarlinDefaultMaxAccelE_mm_s2)),
+        fmt::format("M204 R{}", or_default(retract_accel_mm_s2, sim::kMarlinDefaultRetractAccel_mm_s2))};
+  if (firmware == "rrf")
+    return {fmt::format("M201 X{0} Y{0} Z{1} E{2}", or_default(max_accel_xy_mm_s2, sim::kRrfDefaultMaxAccelXY_mm_s2),
+                        sim::kDefaultMaxAccelZ_mm_s2, or_default(max_accel_e_mm_s2, sim::kRrfDefaultMaxAccelE_mm_s2))};
+  return {};
+}
+
+SimConfig SimConfig::for_machine(const machine::MachineProfile& profile, const std::vector<std::string>& options) {
+  std::vector<std::string> all = machine_options(profile);
+  all.insert(all.end(), options.begin(), options.end());
+  return from_options(all);
+}
+
 nlohmann::json SimConfig::truth() const {
   nlohmann::json j;
   const double area = std::numbers::pi / 4 * filament_diameter_mm * filament_diameter_mm;
@@ -274,6 +317,8 @@ nlohmann::json SimConfig::truth() const {
                   {"max_extrude_only_distance_mm", max_extrude_only_distance_mm},
                   {"max_extrude_only_accel_mm_s2", max_extrude_only_accel_mm_s2},
                   {"minimum_cruise_ratio", minimum_cruise_ratio}};
+  if (firmware != "klipper")
+    for (const auto& line : acceleration_gcode()) j["planner"]["acceleration_gcode"].push_back(line);
   for (const auto& [axis, name] : shaper_names) j["input_shaper"][axis] = name;
   j["seed"] = seed;
   nlohmann::json faults = nlohmann::json::array();

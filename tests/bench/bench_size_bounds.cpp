@@ -1,9 +1,13 @@
 // Benchmark: the three file analyses at the sizes of their row bounds' tests: `tunekit rheo` on
 // a 10,000-row viscosity file (model comparison, superposition check and intervals included),
+// `tunekit rheo --model cross-wlf` on 10,000 rows at five temperatures where D1, D2 and A1 are
+// not separately identifiable (profile-likelihood intervals on the WLF ridge),
 // `tunekit nozzle --fit` on 100,000 measurements and `tunekit delta` on 100,000 probe heights,
 // each the command's in-process compute function on a generated file. Prints the median of
 // several runs (wall and CPU) and BENCH lines.
 //   build/tests/bench/bench_size_bounds [runs]
+//   build/tests/bench/bench_size_bounds --write-cross-wlf FILE   (only writes that file: time
+//       the whole process with `tunekit rheo FILE --model cross-wlf`)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -75,12 +79,17 @@ void time_command(const char* key, const char* what, int runs, F&& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 3 && std::string(argv[1]) == "--write-cross-wlf") {
+    write(argv[2], test::cross_wlf_rheometer_csv(10000));
+    return 0;
+  }
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
   const auto dir = std::filesystem::temp_directory_path() / ("tunekit_bench_size_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const std::string rheo = (dir / "rheo_10000.csv").string(), nozzle = (dir / "nozzle_100000.csv").string(),
-                    delta = (dir / "delta_100001.csv").string();
+                    delta = (dir / "delta_100001.csv").string(), wlf = (dir / "rheo_cross_wlf_10000.csv").string();
   write(rheo, test::cross_rheometer_csv(10000));
+  write(wlf, test::cross_wlf_rheometer_csv(10000));
   write(nozzle, nozzle_csv(100000));
   write(delta, test::delta_probe_csv(100, 1000));
 
@@ -88,6 +97,12 @@ int main(int argc, char** argv) {
   ro.file = rheo;
   time_command("rheo_10k_rows", "tunekit rheo, 10,000 rows, model auto (comparison, superposition, intervals)", runs,
                [&] { (void)calibration::compute_rheo(ro); });
+  calibration::RheoOptions wo;
+  wo.file = wlf;
+  wo.model = "cross-wlf";
+  time_command("rheo_cross_wlf_10k_rows",
+               "tunekit rheo --model cross-wlf, 10,000 rows at 5 temperatures, D1, D2, A1 on a ridge", runs,
+               [&] { (void)calibration::compute_rheo(wo); });
   calibration::NozzleOptions no;
   no.fit_file = nozzle;
   time_command("nozzle_fit_100k_rows", "tunekit nozzle --fit, 100,000 rows", runs,

@@ -140,8 +140,9 @@ TEST_CASE("Klipper's reported limits are applied where stricter than the profile
       {"firmware=klipper", "max_extrude_only_accel_mm_s2=1200", "max_extrude_only_distance_mm=30"});
   auto o = bundled_profile_on(sock, "liquefier-step", dir + "/run");
   {
-    // The step's default feed acceleration, 2000 mm/s^2, is within the profile (5000) but not
-    // within Klipper's 1200: refused before the protocol's first line is sent.
+    // A feed acceleration of 2000 mm/s^2 asked for is within the profile (5000) but not within
+    // Klipper's 1200: refused before the protocol's first line is sent.
+    o.params = {{"accel_mm_s2", 2000}};
     FakeKlipper refusing(sock, sim_cfg, fake);
     try {
       tprot::run_experiment(o);
@@ -150,6 +151,15 @@ TEST_CASE("Klipper's reported limits are applied where stricter than the profile
       CHECK(std::string(e.what()).find("1200") != std::string::npos);
     }
     CHECK(refusing.scripts().empty());
+  }
+  {
+    // The default is derived from the limits in force: Klipper's 1200, reported over the link.
+    o.params = {};
+    o.run_dir = dir + "/run-default";
+    FakeKlipper defaults(sock, sim_cfg, fake);
+    const auto res = tprot::run_experiment(o);
+    REQUIRE(res.status == "complete");
+    CHECK(res.experiment.params.at("accel_mm_s2") == Approx(1200));
   }
   FakeKlipper server(sock, sim_cfg, fake);
   o.params = {{"accel_mm_s2", 1000}};

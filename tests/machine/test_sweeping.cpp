@@ -96,11 +96,19 @@ TEST_CASE("the sweeping motion is refused on Marlin and RepRapFirmware with the 
 }
 
 TEST_CASE("the safety gate sees the sweeping motion's travel and the dry run prints its moves", "[machine][safety]") {
-  // 15 mm from the end of the travel: room for the pulses, not for the 18 mm swing.
-  const auto near_end = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", "sim", "--sim", "firmware=klipper",
-                                 "--dry-run", "-p", "center_mm=15", "-p", "freq_end_hz=40"});
+  // 15 mm from the end of the travel: room for the pulses, not for the 18 mm swing of Klipper's
+  // 400 mm/s^2. Asked for, it is refused; by default the swing is lowered to fit the travel.
+  const auto near_end =
+      run_cli({"run", "axis-sweep", "--axis", "x", "--machine", "sim", "--sim", "firmware=klipper", "--dry-run", "-p",
+               "center_mm=15", "-p", "freq_end_hz=40", "-p", "sweeping_accel=400"});
   CHECK(near_end.code == 2);
   CHECK(near_end.err.find("outside the travel 0..220") != std::string::npos);
+  const auto fitted = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", "sim", "--sim", "firmware=klipper",
+                               "--dry-run", "--json", "-p", "center_mm=15", "-p", "freq_end_hz=40"});
+  REQUIRE(fitted.code == 0);
+  const auto params = nlohmann::json::parse(fitted.out).at("results").at("experiment").at("params");
+  // 32 x 90 % of the 15 mm to the travel's end over the 1.2 s period squared: 300 mm/s^2.
+  CHECK(params.at("sweeping_accel").get<double>() == Approx(300));
   const auto no_swing = run_cli({"run", "axis-sweep", "--axis", "x", "--machine", "sim", "--sim", "firmware=klipper",
                                  "--dry-run", "-p", "center_mm=15", "-p", "freq_end_hz=40", "-p", "sweeping_period=0"});
   CHECK(no_swing.code == 0);

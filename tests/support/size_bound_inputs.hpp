@@ -34,6 +34,30 @@ inline std::string cross_rheometer_csv(int rows) {
   return csv.str();
 }
 
+/// A PEEK melt on Cross-WLF (Holtrup 2019, Table 2.4: n 0.4266, tau* 124139 Pa, D1 2.89808e16
+/// Pa.s, D2 403.15 K, A1 36.041, A2 51.6 K) at five temperatures, 370-450 degC, shear rates
+/// 0.1-10^4 1/s, 3 % log-normal noise: `rows` rows of shear rate (1/s), viscosity (Pa.s) and
+/// temperature (degC). Over 80 K, 240 K above D2, the WLF shift is nearly an Arrhenius one: D1,
+/// D2 and A1 are not separately identifiable (`tunekit rheo --model cross-wlf` warns, and their
+/// intervals are profile-likelihood ones).
+inline std::string cross_wlf_rheometer_csv(int rows) {
+  constexpr double kA1 = 36.041, kA2 = 51.6, kD1 = 2.89808e16, kD2 = 403.15, kN = 0.4266, kTau = 124139;
+  std::mt19937 gen(20190405);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  std::ostringstream csv;
+  csv << "shear_rate (1/s),viscosity (Pa.s),temperature (degC)\n";
+  const double temps[] = {370, 390, 410, 430, 450};
+  const int per = rows / 5;
+  for (int i = 0; i < rows; ++i) {
+    const double T = temps[i % 5], TK = T + 273.15;
+    const double g = std::pow(10.0, -1.0 + 5.0 * (i / 5) / std::max(per - 1, 1));
+    const double eta0 = kD1 * std::exp(-kA1 * (TK - kD2) / (kA2 + TK - kD2));
+    const double eta = eta0 / (1 + std::pow(eta0 * g / kTau, 1 - kN));
+    csv << g << "," << eta * std::exp(noise(gen)) << "," << T << "\n";
+  }
+  return csv.str();
+}
+
 /// Probe points (x, y, z in mm) of a 105 mm radius delta whose real radius is 104.2 mm, endstops
 /// and tower angles a little off: `rings` rings of `points_per_ring` points plus the centre.
 inline std::string delta_probe_csv(int rings, int points_per_ring) {

@@ -42,11 +42,23 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
   auto* sub = app.add_subcommand("calibrate", "Guided calibration: experiments, identification, compensators, report");
   sub->add_option("-m,--machine", a->machine, "'sim' (the built-in simulated printer) or a port (with --profile)")
       ->capture_default_str();
-  sub->add_option("-p,--profile", a->profile, "Machine profile TOML: limits (mm, mm/s, mm/s^2) and sensors");
+  sub->add_option("-p,--profile", a->profile,
+                  "Machine profile: tunekit's TOML (limits in mm, mm/s, mm/s^2, and sensors) or the firmware's own "
+                  "configuration (Klipper printer.cfg, Marlin M503 report or Configuration.h, RRF config.g); with "
+                  "--machine sim the printer to simulate");
+  sub->add_option("--param", a->params,
+                  "A protocol parameter for one experiment or protocol, EXPERIMENT.NAME=VALUE in the unit the name "
+                  "carries (repeatable; 'tunekit run --help' lists them), e.g. axis-x.freq_end_hz=80");
+  sub->add_option("--sensor", a->sensors,
+                  "A sensor the firmware configuration given as --profile does not list but the machine has: "
+                  "accelerometer, load_cell or camera (repeatable)");
+  sub->add_flag("--dry-run", a->dry_run,
+                "Plan every experiment for the profile's limits, check it, print the plan and stop (nothing is sent)");
   sub->add_option("--port", a->port, "Serial device, pseudo-terminal or unix:SOCKET of a real machine");
   sub->add_option("--out", a->out_dir, "Run directory (default: runs/calibrate-UTCSTAMP)");
-  sub->add_option("-f,--firmware", a->firmware, "Configuration dialect to update: klipper, kalico, marlin or rrf")
-      ->capture_default_str();
+  sub->add_option("-f,--firmware", a->firmware,
+                  "Configuration dialect to update (and the firmware the simulator runs): klipper, kalico, marlin or "
+                  "rrf; default: the profile's [machine] firmware, else klipper");
   sub->add_option("-c,--config", a->config,
                   "Firmware configuration to update (default: a copy of the bundled example in the run directory)");
   sub->add_flag("--write", a->write,
@@ -80,6 +92,8 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
       "Examples:\n"
       "  tunekit calibrate --machine sim                      # the built-in simulated printer\n"
       "  tunekit calibrate --machine sim --firmware marlin --out runs/demo\n"
+      "  tunekit calibrate --machine sim --profile printer.cfg --sensor accelerometer --dry-run  # checked plan\n"
+      "  tunekit calibrate --machine sim --profile printer.cfg --param axis-sweep.accel_per_hz=40\n"
       "  tunekit calibrate --machine /dev/ttyACM0 --profile my-printer.toml --firmware marlin \\\n"
       "                    --config Marlin/Configuration_adv.h\n"
       "Liquefier paths (--liquefier):\n"

@@ -270,6 +270,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   register_belts(app, ctx);
   register_delta(app, ctx);
   register_overshoot(app, ctx);
+  register_profile(app, ctx);
 
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses from the back

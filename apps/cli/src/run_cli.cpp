@@ -61,10 +61,15 @@ void register_run(CLI::App& app, CliContext& ctx) {
       ->required()
       ->check(CLI::IsMember(names));
   sub->add_option("--axis", r.axis, "Axis of an axis protocol: x or y")->check(CLI::IsMember({"x", "y"}));
-  sub->add_option("-m,--machine", r.machine,
-                  fmt::format("'{}' (the built-in simulated printer, default) or a machine profile TOML (limits in mm, "
-                              "mm/s, mm/s^2, degC)",
-                              r.machine));
+  sub->add_option(
+      "-m,--machine", r.machine,
+      fmt::format("'{}' (the built-in simulated printer, default) or a machine profile: TOML (limits in mm, "
+                  "mm/s, mm/s^2, degC) or the firmware's configuration (Klipper printer.cfg, Marlin "
+                  "Configuration.h, RepRapFirmware config.g; see tunekit profile)",
+                  r.machine));
+  sub->add_option("--profile", r.profile_path,
+                  "With --machine sim: the printer to simulate, a machine profile TOML or its firmware configuration "
+                  "(its limits, firmware, steps and extruder)");
   sub->add_option("--port", r.port,
                   "Serial device (/dev/ttyACM0), pseudo-terminal (/tmp/printer) or unix:SOCKET (Klipper API server); "
                   "with --machine sim: an external tunekit-sim link");
@@ -96,6 +101,7 @@ void register_run(CLI::App& app, CliContext& ctx) {
               "  tunekit run liquefier-step --machine sim\n"
               "  tunekit run axis-sweep --axis x --machine sim -p freq_start_hz=20 -p freq_end_hz=80\n"
               "  tunekit run liquefier-step --dry-run -p feed_high_mm_s=4\n"
+              "  tunekit run axis-sweep --axis x --machine sim --profile printer.cfg --dry-run\n"
               "  tunekit run axis-sweep --axis y --machine printer.toml --port unix:/tmp/klippy_uds\n"
               "  tunekit run liquefier-step --machine sim --sim fault=garble@12 --json\n"
               "Each run directory holds journal.jsonl, the sensor CSVs, protocol.gcode, run.json and, on the\n"

@@ -66,6 +66,8 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
                   fmt::format("Highest PSD frequency the shapers are scored on, Hz (default {:g}; never below the "
                               "highest shaper frequency tried, as in Klipper's calibrate_shaper.py --max_freq)",
                               o.selection.max_freq_hz));
+  sub->add_option("--accel-limit", o.accel_limit_mm_s2,
+                  "The printer's acceleration limit (mm/s^2): the proposed maximum acceleration never exceeds it");
   sub->add_option("--klipper-csv", o.klipper_csv,
                   "Also write each axis's spectrum and shaper responses in Klipper's calibration_data layout "
                   "(freq,psd_x,psd_y,psd_z,psd_xyz,shapers:,...), readable by Klipper's calibrate_shaper.py; "

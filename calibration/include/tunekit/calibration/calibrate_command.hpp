@@ -29,7 +29,9 @@ struct CalibrateArgs {
   std::string profile;
   std::string port;
   std::string out_dir;
-  std::string firmware = "klipper";
+  /// The configuration dialect to update, and the firmware the simulator runs: klipper, kalico,
+  /// marlin or rrf; empty: the --profile's [machine] firmware (prusa: marlin), else klipper.
+  std::string firmware;
   std::string config;
   bool write = false;
   bool skip_liquefier = false;
@@ -40,7 +42,22 @@ struct CalibrateArgs {
   std::vector<std::string> sim_options;
   std::string liquefier = "auto";  // auto, load-cell, camera
   LiquefierCameraArgs camera;
+  /// Protocol parameters, "EXPERIMENT.NAME=VALUE" or "PROTOCOL.NAME=VALUE" (axis-x.freq_end_hz=80,
+  /// axis-sweep.accel_per_hz=40, liquefier-chirp.segment_s=0.05), value in the unit its name
+  /// carries; checked with the protocol's other parameters before anything is sent.
+  std::vector<std::string> params;
+  /// Plan and check every experiment against the limits, print the plan (each experiment's
+  /// protocol, parameters and machine time) and stop: nothing is sent, no run directory is made.
+  bool dry_run = false;
+  /// Sensors the firmware configuration given as --profile does not list but the machine has
+  /// ("accelerometer", "load_cell", "camera"): `tunekit profile --sensor`'s. A TOML profile lists
+  /// its own ([sensors]).
+  std::vector<std::string> sensors;
   OutputOptions output;
 };
+
+/// The firmware calibrate designs for (and simulates): `requested` when given, else the
+/// profile's [machine] firmware as an export dialect (prusa: marlin), else klipper.
+std::string resolved_calibrate_firmware(const std::string& requested, const std::string& profile_firmware);
 
 }  // namespace tunekit::calibration

@@ -67,6 +67,7 @@ struct PlannedExperiment {
   std::string axis;                      ///< "x" or "y" for the axis sweeps, else empty
   std::map<std::string, double> params;  ///< protocol parameter overrides
   double estimated_s = 0;                ///< the protocol's machine time (s), from its dry run
+  protocols::Experiment checked;         ///< the experiment as built and checked by that dry run
 };
 
 struct CalibrationPlan {
@@ -76,10 +77,12 @@ struct CalibrationPlan {
   bool camera_path = false;                    ///< the liquefier is identified from photographed prints
   bool can_prompt = false;                     ///< a terminal can be asked for the photo's path
   OutputOptions output;                        ///< options.output with the history record prepared (--record)
-  std::string run_dir;                         ///< created, empty, with analysis/ and config/
+  std::string run_dir;                         ///< created, empty, with analysis/ and config/ (empty: dry run)
   std::vector<PlannedExperiment> experiments;  ///< in the order they run
-  /// The chirp as sized from the literature time constant; run_experiments() sizes it again
-  /// from the step test's tau (within the same limits check: its parameters are checked when sent).
+  /// The chirp as sized from the literature time constant with the machine's staircase step;
+  /// run_experiments() sizes it again from the step test's tau, clamped to the range whose
+  /// extremes the plan checked (the step and the feed levels do not change with tau), so that
+  /// it holds the limits checked before anything was sent.
   protocols::ChirpPlan chirp;
   std::string chirp_basis;  ///< what the chirp was sized from, in words
   /// The simulated camera's print bed (camera path on the simulator), else null.

@@ -52,6 +52,9 @@ struct ShaperOptions {
   /// no `shapers` given): Klipper is assumed, so that the recommendation is one Klipper
   /// accepts; with `shapers` given, they are compared as asked.
   std::optional<firmware::ExportFirmware> firmware;
+  /// The printer's acceleration limit on the axes, mm/s^2 (0: not known). The proposed maximum
+  /// acceleration is the shaper's (the highest its smoothing allows) capped by it.
+  double accel_limit_mm_s2 = 0;
 };
 
 /// One axis (or one record whose axis is not known) and the shaper chosen for it.

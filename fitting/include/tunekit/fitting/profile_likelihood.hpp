@@ -13,11 +13,16 @@
 // follows the ridge, which the linearised interval cannot.
 //
 // Each end is found by stepping out from the estimate (first step: the Wald half-width; then
-// doubling) until the profile crosses the threshold, then bisecting the bracket; every profile
-// point is a Ceres solve (solve_least_squares without covariance) warm-started from the nearest
-// point already solved, so an end costs a handful of small solves. An end that reaches the
-// parameter's bound without crossing is reported at the bound (`*_at_bound`): the data do not
-// bound the parameter there.
+// doubling) until the profile crosses the threshold, then narrowing the bracket to the tolerance:
+// each new point where the profile t statistic sqrt((S(v) - S_min) / s^2), interpolated linearly
+// between the bracket's ends, reaches the threshold's root (exact for a model linear in its
+// parameters), kept a little inside the bracket, and a bisection when two points in a row fall on
+// one side. Every profile point is a solve of the other parameters (Levenberg-Marquardt on the
+// normal equations when the problem has an analytic Jacobian, otherwise solve_least_squares
+// without covariance) started where the points already solved predict the profile's trace (the
+// line through the two neighbouring points, or the covariance's regression from the estimate),
+// so an end costs a handful of short solves. An end that reaches the parameter's bound without
+// crossing is reported at the bound (`*_at_bound`): the data do not bound the parameter there.
 //
 // Everything here is in the coordinates the problem is solved in (a parameter estimated as a
 // logarithm has its interval in ln; transform both ends).

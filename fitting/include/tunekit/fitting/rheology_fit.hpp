@@ -83,8 +83,12 @@ struct ModelComparison {
   std::string best;             ///< lowest AIC
 };
 /// Fits every candidate to the same data and ranks them by AIC (Akaike weights). AICs within
-/// 1e-9 relative tie (equivalent models), and a tie goes to the earlier candidate.
-ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates);
+/// 1e-9 relative tie (equivalent models), and a tie goes to the earlier candidate. The winner's
+/// fit, and candidate `also_finish`'s when it is one (the model a user asked for), carry their
+/// intervals as fit_viscosity gives them (profile likelihood where needed); the others' are the
+/// linearised ones.
+ModelComparison compare_viscosity_models(const RheologyData& data, const std::vector<ViscosityFitOptions>& candidates,
+                                         std::size_t also_finish = static_cast<std::size_t>(-1));
 /// The default candidates for these data (with shifts when there are several temperatures).
 std::vector<ViscosityFitOptions> default_candidates(const RheologyData& data, const ViscosityFitOptions& base = {});
 nlohmann::json to_json(const ModelComparison& c);

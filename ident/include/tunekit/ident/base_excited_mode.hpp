@@ -40,6 +40,12 @@ class BaseExcitedMode {
   ModeState advance(const ModeState& x, double h_s, double a0_mm_s2, double jerk_mm_s3) const;
   /// The affine map of advance() for one step length, to apply many times (apply()).
   ModeStep step(double h_s) const;
+  /// The free response's transition over h_s >= 0: the deflection and rate after h_s of a mode
+  /// left alone from (z, v) are (phi[0][0] z + phi[0][1] v, phi[1][0] z + phi[1][1] v). One
+  /// exponential, sine and cosine for every state moved over the same h_s.
+  void free_map(double h_s, double phi[2][2]) const;
+  /// advance() with free_map(h_s) given.
+  ModeState advance(const ModeState& x, double h_s, double a0_mm_s2, double jerk_mm_s3, const double phi[2][2]) const;
   static ModeState apply(const ModeStep& s, const ModeState& x, double a0_mm_s2, double jerk_mm_s3) {
     return {s.phi[0][0] * x.z_mm + s.phi[0][1] * x.v_mm_s + s.g_accel[0] * a0_mm_s2 + s.g_jerk[0] * jerk_mm_s3,
             s.phi[1][0] * x.z_mm + s.phi[1][1] * x.v_mm_s + s.g_accel[1] * a0_mm_s2 + s.g_jerk[1] * jerk_mm_s3};

@@ -114,6 +114,11 @@ struct MachineProfile {
   /// variable TUNEKIT_RRF_PASSWORD wins over it (rrf_password); tunekit never prints it.
   std::string http_password;
   std::string source_path;
+  /// Where each value came from, by profile key ("axes.x.max_accel_mm_s2", "extruder.max_flow_mm3_s"):
+  /// "printer.cfg:14 [printer] max_accel: 3000", a firmware's default with its formula, or
+  /// tunekit's default with its reason. Filled by the firmware-configuration importers
+  /// (profile_import.hpp); empty for a TOML profile.
+  std::map<std::string, std::string> sources;
 
   /// Filament cross-section area, mm^2.
   double filament_area_mm2() const;
@@ -122,8 +127,10 @@ struct MachineProfile {
   const AxisLimits& axis(const std::string& name) const;  ///< throws InputError if absent
 };
 
-/// Parses a profile; throws InputError (exit 2) with FILE:LINE for syntax errors, missing
-/// required keys, non-positive limits, or unknown kinematics.
+/// Reads a profile; throws InputError (exit 2) with FILE:LINE for syntax errors, missing
+/// required keys, non-positive limits, or unknown kinematics. The file may also be a firmware
+/// configuration (a Klipper printer.cfg, a Marlin M503 report or Configuration.h, a
+/// RepRapFirmware config.g), recognized by its content and imported (profile_import.hpp).
 MachineProfile load_machine_profile(const std::string& path);
 MachineProfile parse_machine_profile(const std::string& toml_text, const std::string& path_for_messages);
 

@@ -20,7 +20,7 @@ inline constexpr double kLiteratureLiquefierTau_s = 0.45;
 struct ChirpPlan {
   double expected_tau_s = 0;    ///< s, what the plan was sized for
   double corner_hz = 0;         ///< 1 / (2 pi tau), Hz
-  double freq_min_hz = 0;       ///< chirp start: a decade below the corner
+  double freq_min_hz = 0;       ///< chirp start: a decade below the corner (at most half the staircase's reach)
   double freq_max_hz = 0;       ///< chirp end: five times the corner, within the staircase's reach
   double duration_s = 0;        ///< chirp duration: 20 corner periods, at least 20 s
   double settle_s = 0;          ///< steady feed before the chirp: 10 tau, at least 2 s

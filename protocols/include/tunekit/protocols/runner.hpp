@@ -31,6 +31,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,8 +55,16 @@ struct RunOptions {
   std::string protocol;                  ///< see protocol_specs()
   std::map<std::string, double> params;  ///< protocol parameter overrides
   std::string axis = "x";                ///< axis protocols
-  std::string machine = "sim";           ///< "sim" or a machine profile (TOML) path
-  std::string port;                      ///< device / PTY / "unix:PATH"; empty with "sim"
+  std::string machine = "sim";           ///< "sim" or a machine profile path (TOML or a firmware configuration)
+  /// The machine's profile, already loaded (the C++ API's way; calibrate passes its own). With
+  /// "sim" it is the printer the simulator simulates (SimConfig::for_machine): its limits,
+  /// firmware, steps and extruder; otherwise the limits of the machine on `port`. Empty: the
+  /// built-in simulated printer's profile, or the file `machine` names.
+  std::optional<machine::MachineProfile> profile;
+  /// "sim" only: the profile file of the printer to simulate (tunekit run --profile), when
+  /// `profile` is empty.
+  std::string profile_path;
+  std::string port;  ///< device / PTY / "unix:PATH"; empty with "sim"
   int baud = 250000;
   std::string run_dir;   ///< default: <runs_root>/<protocol>-<UTC stamp>
   std::string file_tag;  ///< names raw_data_<axis>_<tag>.csv; default: the UTC stamp

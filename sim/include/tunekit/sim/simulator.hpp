@@ -38,6 +38,7 @@
 
 #include "tunekit/ident/base_excited_mode.hpp"
 #include "tunekit/machine/gcode.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/machine/trajectory.hpp"
 #include "tunekit/machine/transport.hpp"
 
@@ -146,6 +147,12 @@ struct SimConfig {
   double max_extrude_only_distance_mm = 50;    ///< Klipper [extruder] max_extrude_only_distance
   double max_extrude_only_accel_mm_s2 = 5000;  ///< Klipper [extruder] max_extrude_only_accel
   double minimum_cruise_ratio = 0.5;           ///< Klipper [printer] minimum_cruise_ratio
+  /// Marlin and RepRapFirmware: the acceleration limits in force at start (M201 X/Y, M204 R and
+  /// M201 E, mm/s^2), as the firmware's configuration sets them; 0 takes the firmware's default
+  /// (sim_constants.hpp: Marlin's Configuration.h, a typical RepRapFirmware config.g).
+  double max_accel_xy_mm_s2 = 0;
+  double retract_accel_mm_s2 = 0;
+  double max_accel_e_mm_s2 = 0;
   /// Whether M115 offers tunekit's sensor stream (Cap:TUNEKIT_SENSOR_STREAM:1); off, the
   /// simulator is a firmware that cannot stream its sensors over the G-code link.
   bool sensor_stream = true;
@@ -183,6 +190,17 @@ struct SimConfig {
   /// "fault=garble@12", "fault=late-ok@12:300", "fault=drop@12", "fault=disconnect@40",
   /// "fault=error@30", "seed=3". InputError for unknown keys or bad values.
   static SimConfig from_options(const std::vector<std::string>& options);
+  /// The simulated printer a machine profile describes: its firmware's planner rules
+  /// ([machine] firmware; prusa runs Marlin's, kalico Klipper's), X/Y steps per mm, the
+  /// extruder's extrude-only acceleration and longest move, Klipper's minimum cruise ratio, the
+  /// firmware's acceleration limits ([firmware_state]) and the accelerometer's rate; then
+  /// `options` (from_options' keys), which win over the profile.
+  static SimConfig for_machine(const machine::MachineProfile& profile, const std::vector<std::string>& options);
+  /// The from_options keys for_machine derives from a profile ("firmware=klipper", ...).
+  static std::vector<std::string> machine_options(const machine::MachineProfile& profile);
+  /// Marlin and RepRapFirmware: the G-code that sets the acceleration limits in force at start
+  /// (M201, and Marlin's M204 R); empty for Klipper.
+  std::vector<std::string> acceleration_gcode() const;
   /// The truth the simulator runs with (also written to truth.json).
   nlohmann::json truth() const;
   /// The defaults of a preset (SimPreset), and its option name ("desktop", "peek").

@@ -44,5 +44,6 @@ void register_history(CLI::App& app, CliContext& ctx);
 void register_belts(CLI::App& app, CliContext& ctx);
 void register_delta(CLI::App& app, CliContext& ctx);
 void register_overshoot(CLI::App& app, CliContext& ctx);
+void register_profile(CLI::App& app, CliContext& ctx);
 
 }  // namespace tunekit::cli

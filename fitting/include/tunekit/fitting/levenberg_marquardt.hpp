@@ -1,11 +1,12 @@
 #pragma once
-// The Levenberg-Marquardt loop on small normal equations of the first-order step fits: it
-// polishes a start before the pooled fit's Ceres solve, and carries the single-step fit to
-// convergence by Ceres Solver's own tests (confirm). Each trial costs one pass over the samples
-// and no Jacobian is stored. Damping scaled by the diagonal of J'J (Marquardt, An
-// algorithm for least-squares estimation of nonlinear parameters, 1963); start value and the
-// multiplicative update as in Press, Teukolsky, Vetterling and Flannery, Numerical Recipes,
-// 3rd ed., 2007, ch. 15.5. Private to the fitting library.
+// The Levenberg-Marquardt loop on small normal equations J'J and J'r that the model computes
+// itself: it polishes a start before the pooled first-order fit's Ceres solve, carries the
+// single-step fit, the profile-likelihood points and the output-error fit of an axis
+// (ident/axis_response_fit) to convergence by Ceres Solver's own tests (confirm). Each trial
+// costs one evaluation of the normal equations; the m x k Jacobian need not be stored or
+// factorised. Damping scaled by the diagonal of J'J (Marquardt, An algorithm for least-squares
+// estimation of nonlinear parameters, 1963); start value and the multiplicative update as in
+// Press, Teukolsky, Vetterling and Flannery, Numerical Recipes, 3rd ed., 2007, ch. 15.5.
 
 #include <algorithm>
 #include <cmath>
