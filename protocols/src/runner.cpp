@@ -296,7 +296,8 @@ void mark_interrupted(const std::string& run_json, const std::string& where) {
 void throw_if_stopped_after_run(const RunResult& r, const std::string& where) {
   if (!StopSignals::flag().load() || StopSignals::received_number() == 0) return;
   if (r.files.count("summary")) mark_interrupted(r.files.at("summary"), where);
-  StopSignals::throw_if_stopped(fmt::format("{} (the run is kept in {})", where, r.run_dir));
+  StopSignals::throw_if_stopped(r.run_dir.empty() ? where
+                                                  : fmt::format("{} (the run is kept in {})", where, r.run_dir));
 }
 
 RunResult run_experiment(const RunOptions& o) {
@@ -418,10 +419,12 @@ RunResult run_experiment(const RunOptions& o) {
     list_files();
     summary["files"] = res.files;
     core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
-    if (interrupted && !signal.empty())
+    if (interrupted && !signal.empty()) {
+      StopSignals::report();
       throw InterruptedError(StopSignals::received_number(),
                              fmt::format("{} {} (the partial run is kept in {})", why.message(), stage, res.run_dir),
                              why.location());
+    }
     throw MachineError(fmt::format("{} (the partial run is kept in {})", why.message(), res.run_dir), why.location());
   }
   journal.event("end", {{"load_cell_samples", rec.load_samples()}, {"accel_samples", rec.accel_samples()}});

@@ -12,6 +12,7 @@ constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
 
 std::atomic<bool> g_stop{false};
 std::atomic<int> g_signal{0};
+std::atomic<bool> g_reported{false};  // an InterruptedError said so: the signal was handled
 std::mutex g_mu;
 int g_depth = 0;
 struct sigaction g_old[3];
@@ -28,6 +29,7 @@ StopSignals::StopSignals() {
   if (g_depth++ > 0) return;
   g_stop = false;
   g_signal = 0;
+  g_reported = false;
   struct sigaction sa {};
   sa.sa_handler = on_stop_signal;
   sigemptyset(&sa.sa_mask);
@@ -45,6 +47,12 @@ StopSignals::~StopSignals() {
   std::lock_guard<std::mutex> lock(g_mu);
   if (--g_depth > 0) return;
   for (int i = 0; i < 3; ++i) ::sigaction(kSignals[i], &g_old[i], nullptr);
+  // A signal that arrived after the command's last check was never reported: the process ends
+  // by it, as it would have without the guard, never with exit code 0.
+  if (g_stop.load() && !g_reported.load() && g_signal.load() != 0) {
+    ::signal(g_signal.load(), SIG_DFL);
+    ::raise(g_signal.load());
+  }
 }
 
 const std::atomic<bool>& StopSignals::flag() { return g_stop; }
@@ -62,7 +70,10 @@ int StopSignals::received_number() { return g_signal.load(); }
 
 void StopSignals::throw_if_stopped(const std::string& where) {
   if (!g_stop.load() || g_signal.load() == 0) return;
+  report();
   throw InterruptedError(g_signal.load(), "interrupted by " + received() + " " + where);
 }
+
+void StopSignals::report() { g_reported = true; }
 
 }  // namespace tunekit::protocols

@@ -417,7 +417,7 @@ TEST_CASE("tunekit step on Table B.1 by print-speed groups gives per-speed fits 
   CHECK(text.out.find("pooled") != std::string::npos);
 }
 
-TEST_CASE("a fit that does not converge is a FitError carrying the solver's summary") {
+TEST_CASE("a fit that does not converge is a FitError saying so in plain words, without the solver's report") {
   // The step fit with one iteration allowed from a poor start: Ceres stops at its limit.
   auto r = synth_step(Truth{}, 0.01, 4);
   fitting::LsqOptions o;
@@ -437,7 +437,7 @@ TEST_CASE("a fit that does not converge is a FitError carrying the solver's summ
     const std::string m = e.message();
     INFO(m);
     CHECK(m.find("did not converge in 1 iterations") != std::string::npos);
-    CHECK(m.find("Ceres Solver Report") != std::string::npos);
+    CHECK(m.find("Ceres") == std::string::npos);  // the solver's report stays in the fit's diagnostics
     CHECK(e.code() == ExitCode::fit_failed);
   }
 }

@@ -177,13 +177,15 @@ TEST_CASE("a profile's name never reaches the G-code as live lines, for hostile 
 TEST_CASE("file names reach a configuration's comments only in a comment-safe form", "[safety][export]") {
   const std::string dir = scratch_dir("hostile_file_names");
   const std::string cfg = dir + "/config.g";
-  std::ofstream(cfg) << "; RepRapFirmware\nM572 D0 S0.02\n";
+  // The line's trailing comment is where export puts its change note, naming the results file.
+  std::ofstream(cfg) << "; RepRapFirmware\nM572 D0 S0.02 ; pressure advance\n";
   const std::string step = dir + "/x\nM104 S300\n.json";
   fs::copy_file(dataset("../tests/export/fixtures/step.json"), step);
   const auto r = run_cli({"export", "-f", "rrf", "-c", cfg, step, "--write"});
   INFO(r.err);
   REQUIRE(r.code == 0);
   check_no_live_injection(read_text(cfg));
+  CHECK(read_text(cfg).find("set by tunekit export from x?M104 S300?.json") != std::string::npos);
 }
 
 }  // namespace test_reliability_round3

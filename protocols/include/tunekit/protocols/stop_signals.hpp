@@ -33,6 +33,10 @@ class StopSignals {
   /// Throws InterruptedError (exit code 128 + the signal's number) saying `where` the run was
   /// when one of the signals arrived; nothing when none did.
   static void throw_if_stopped(const std::string& where);
+  /// Notes that the signal was reported (an InterruptedError is on its way). When the outermost
+  /// guard ends with a signal received and not reported (it arrived after the command's last
+  /// check), the guard re-raises it: the process ends by that signal, never with exit code 0.
+  static void report();
 };
 
 }  // namespace tunekit::protocols
