@@ -208,6 +208,35 @@ TEST_CASE("Marlin: an M503 report is read, and what it lacks is named in one err
   CHECK(p.sources.at("axes.x.max_mm") == "given on the command line (--travel)");
 }
 
+TEST_CASE("Marlin: a real Ender 5's M503 report gives the limits Marlin applies", "[profiles][marlin][m503]") {
+  // A user's Ender 5 (Marlin bugfix-2.1.x, Creality v4.2.7 board), datasets/marlin_configs; the
+  // report holds no travel and no heater limits: the Ender 5's 220 x 220 x 300 mm and Marlin's
+  // stock HEATER_0_MAXTEMP 275 - HOTEND_OVERSHOOT 15 and BED_MAXTEMP 125 - BED_OVERSHOOT 10.
+  const std::string path = tunekit::test::dataset("marlin_configs/creality-ender5-m503/m503.txt");
+  tunekit::machine::ProfileImportOptions o;
+  o.travel_mm = {220, 220, 300};
+  o.hotend_max_c = 260;
+  o.bed_max_c = 115;
+  const MachineProfile p = tunekit::machine::import_machine_profile(path, o);
+  CHECK(p.firmware == "marlin");
+  for (const char* a : {"x", "y"}) {
+    CHECK(p.axis(a).max_velocity_mm_s == 500);  // M203 X500 Y500
+    CHECK(p.axis(a).max_accel_mm_s2 == 500);    // M201 X500 Y500
+  }
+  CHECK(p.axis("z").max_velocity_mm_s == 5);
+  CHECK(p.axis("z").max_accel_mm_s2 == 100);
+  CHECK(p.axis("z").max_mm == 300);
+  CHECK(p.extruder.max_velocity_mm_s == 25);  // M203 E25
+  // Extrude-only moves: M204 R500, below M201 E5000 (planner.cpp: the retract acceleration).
+  CHECK(p.extruder.max_accel_mm_s2 == 500);
+  CHECK(p.print.max_accel_mm_s2 == 500);  // M204 P500
+  CHECK(p.state.steps_per_mm_x == 80);
+  CHECK(p.state.steps_per_mm_y == 80);
+  CHECK(p.state.min_segment_time_s == Approx(0.02));  // M205 B20000 (us)
+  CHECK(p.sources.at("axes.x.max_accel_mm_s2").find(":14 M201 X500.00 Y500.00 Z100.00 E5000.00") != std::string::npos);
+  CHECK(p.temperature.hotend_max_c == 260);
+}
+
 TEST_CASE("Marlin and RepRapFirmware: hostile values give one located error", "[profiles][errors]") {
   const std::string dir = tunekit::test::scratch_dir("marlin_rrf_hostile");
   const auto copy_with = [&](const std::string& from, const std::string& name, const std::string& a,
