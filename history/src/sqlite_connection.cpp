@@ -40,18 +40,26 @@ class SqliteConnection final : public Connection {
     try {
       configure();
     } catch (...) {
-      sqlite3_close(db_);
-      db_ = nullptr;
+      close_connection();  // the checks' statements are cached: finalized first, or the file stays open
       throw;
     }
   }
   ~SqliteConnection() override {
-    for (auto& [sql, stmt] : cache_) sqlite3_finalize(stmt);
     if (committed_) checkpoint_into_file();
-    sqlite3_close(db_);
+    close_connection();
   }
 
  private:
+  /// Finalizes the cached statements and closes the database. sqlite3_close_v2 closes it once
+  /// the last statement is finalized even if one were left (sqlite3_close would leave the
+  /// connection, and its file descriptor, open with SQLITE_BUSY).
+  void close_connection() {
+    for (auto& [sql, stmt] : cache_) sqlite3_finalize(stmt);
+    cache_.clear();
+    sqlite3_close_v2(db_);
+    db_ = nullptr;
+  }
+
   void configure() {
     sqlite3_busy_timeout(db_, kSqliteBusyTimeoutMs);
     require_tunekit_database();  // before anything changes the file (journal_mode=WAL does)
