@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include <fmt/format.h>
+
 #include "connections.hpp"
 #include "tunekit/core/error.hpp"
 
@@ -24,7 +26,13 @@ bool is_null(const Value& v) { return std::holds_alternative<std::monostate>(v);
 
 std::int64_t as_int(const Value& v) {
   if (const auto* n = std::get_if<std::int64_t>(&v)) return *n;
-  if (const auto* d = std::get_if<double>(&v)) return static_cast<std::int64_t>(*d);
+  if (const auto* d = std::get_if<double>(&v)) {
+    // A whole number stored as a real (another writer, a damaged file): one outside the 64-bit
+    // range, or NaN, is not a count or an id this history wrote.
+    if (!(std::abs(*d) < 9.2e18))
+      throw InputError(fmt::format("the history database holds {} where it keeps a whole number", *d));
+    return static_cast<std::int64_t>(*d);
+  }
   if (const auto* s = std::get_if<std::string>(&v)) return std::strtoll(s->c_str(), nullptr, 10);
   return 0;
 }
