@@ -218,8 +218,9 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
                          : s == "camera"           ? p.sensors.camera
                                                    : false;
     if (!present)
-      out.push_back(
-          {0, "", fmt::format("the protocol needs a {} and the profile has none ([sensors] {} = true)", s, s)});
+      out.push_back({0, "",
+                     fmt::format("the protocol needs {} {} and the profile has none ([sensors] {} = true)",
+                                 s.find_first_of("aeiou") == 0 ? "an" : "a", s, s)});
   }
   // Size first: a protocol beyond the caps is not interpreted line by line.
   std::size_t bytes = 0;
