@@ -44,17 +44,8 @@ double axes_min(const machine::MachineProfile& p, double machine::AxisLimits::*f
   return std::min(p.axis("x").*field, p.axis("y").*field);
 }
 
-/// The acceleration the firmware gives extrude-only moves when `a` is asked for (FeedPlan).
-double extrude_only_accel(const ExperimentRequest& r, double nominal, std::string& why) {
-  const double limit = r.profile.extruder.max_accel_mm_s2;
-  why = "nominal";
-  if (limit < nominal) why = fmt::format("the extruder's max_accel_mm_s2 {:g} (below {:g})", limit, nominal);
-  return std::min(nominal, limit);
-}
-
 void feed_defaults(const ExperimentRequest& r, Experiment& e, double nominal_accel) {
-  std::string why;
-  if (unset(r, e, "accel_mm_s2")) set(e, "accel_mm_s2", extrude_only_accel(r, nominal_accel, why), why);
+  capped(r, e, "accel_mm_s2", nominal_accel, r.profile.extruder.max_accel_mm_s2, "extruder's max_accel_mm_s2");
 }
 
 /// The sine's and the chirp's feed levels and staircase step within the extruder's limits.
