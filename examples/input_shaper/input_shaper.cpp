@@ -18,9 +18,9 @@
 #include <cstdlib>
 #include <exception>
 
-#include "tunekit/ident/input_shaper.hpp"
+#include "tunekit/design/input_shaper.hpp"
 
-namespace id = tunekit::ident;
+namespace sd = tunekit::design;
 
 int main(int argc, char** argv) {
   const double freq_hz = argc > 1 ? std::strtod(argv[1], nullptr) : 42.0;
@@ -28,13 +28,13 @@ int main(int argc, char** argv) {
   std::printf("resonance %.1f Hz, damping ratio %.3f\n", freq_hz, zeta);
 
   try {
-    for (id::ShaperType type :
-         {id::ShaperType::zv, id::ShaperType::mzv, id::ShaperType::ei, id::ShaperType::two_hump_ei}) {
+    for (sd::ShaperType type :
+         {sd::ShaperType::zv, sd::ShaperType::mzv, sd::ShaperType::ei, sd::ShaperType::two_hump_ei}) {
       // 1. The impulse sequence, designed at the measured frequency and damping. The EI family
       //    is designed as Klipper runs it (Singhose's damped fits); vibration tolerance 5 %.
-      const id::Shaper s =
-          id::design_shaper(type, freq_hz, zeta, id::kDefaultVibrationTolerance, id::EiDesign::damped_fit);
-      std::printf("%-8s %zu impulses over %5.1f ms:", id::to_string(type).c_str(), s.amplitudes.size(),
+      const sd::Shaper s =
+          sd::design_shaper(type, freq_hz, zeta, sd::kDefaultVibrationTolerance, sd::EiDesign::damped_fit);
+      std::printf("%-8s %zu impulses over %5.1f ms:", sd::to_string(type).c_str(), s.amplitudes.size(),
                   1e3 * s.duration_s());
       for (std::size_t i = 0; i < s.amplitudes.size(); ++i)
         std::printf(" %.3f@%.1fms", s.amplitudes[i], 1e3 * s.times_s[i]);
@@ -47,9 +47,9 @@ int main(int argc, char** argv) {
       std::printf(
           "         vibration left at 0.8 f %4.1f %%, at f %4.1f %%, at 1.2 f %4.1f %%; "
           "smoothing %.3f mm; max accel %.0f mm/s^2\n",
-          100 * id::residual_vibration(s, 0.8 * freq_hz, zeta), 100 * id::residual_vibration(s, freq_hz, zeta),
-          100 * id::residual_vibration(s, 1.2 * freq_hz, zeta), id::shaper_smoothing(s, 5000.0, 5.0),
-          id::shaper_max_accel(s, 5.0, 0.12));
+          100 * sd::residual_vibration(s, 0.8 * freq_hz, zeta), 100 * sd::residual_vibration(s, freq_hz, zeta),
+          100 * sd::residual_vibration(s, 1.2 * freq_hz, zeta), sd::shaper_smoothing(s, 5000.0, 5.0),
+          sd::shaper_max_accel(s, 5.0, 0.12));
     }
   } catch (const std::exception& e) {  // e.g. a non-positive frequency or damping ratio >= 1
     std::fprintf(stderr, "input_shaper: %s\n", e.what());

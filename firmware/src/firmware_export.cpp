@@ -13,7 +13,7 @@
 #include "export_writers.hpp"
 #include "tunekit/core/file_lock.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/marlin_smoothing.hpp"
+#include "tunekit/design/marlin_smoothing.hpp"
 #include "tunekit/firmware/config_edit.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 #include "text_util.hpp"
@@ -250,8 +250,8 @@ nlohmann::json ExportResult::to_json() const {
           {"gcode", gcode}};
 }
 
-std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::AdvanceDesign& d) {
-  double w = ident::kAdvanceNaN;
+std::optional<double> smoothing_time_for(ExportFirmware fw, const design::AdvanceDesign& d) {
+  double w = design::kAdvanceNaN;
   // Kalico's smoother is a 4th-order polynomial kernel whose peak (15/8) is below the
   // triangle's 2: the triangular window is the safe choice for both.
   if (fw == ExportFirmware::klipper || fw == ExportFirmware::kalico) w = d.window_triangular_s;
@@ -259,7 +259,7 @@ std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::Advance
     // Marlin smooths with its own exponential cascade, designed on the written grid.
     if (!std::isfinite(d.window_box_s) || d.window_box_s <= 0) return std::nullopt;
     const double tau =
-        ident::design_marlin_advance_tau(d.window_box_s, {}, std::pow(10.0, -detail::kDecimalsSmooth)).tau_s;
+        design::design_marlin_advance_tau(d.window_box_s, {}, std::pow(10.0, -detail::kDecimalsSmooth)).tau_s;
     // A time that would be written as 0 turns the smoothing off: none is designed then.
     if (!(std::round(tau * std::pow(10.0, detail::kDecimalsSmooth)) > 0)) return std::nullopt;
     return tau;
@@ -271,7 +271,7 @@ std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::Advance
   return std::max(limits::kKlipperSmoothTimeDefault_s, std::max(1.0 / scale, std::ceil(w * scale - 1e-9) / scale));
 }
 
-std::string advance_schedule_gcode(ExportFirmware fw, const std::vector<ident::ScheduledAdvance>& schedule,
+std::string advance_schedule_gcode(ExportFirmware fw, const std::vector<design::ScheduledAdvance>& schedule,
                                    const CompensatorSettings& s) {
   std::string g;
   for (const auto& p : schedule) {

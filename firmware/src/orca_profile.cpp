@@ -146,10 +146,10 @@ std::string orca_indent_before(const std::string& t, std::size_t pos) {
 
 }  // namespace
 
-std::string orca_model_text(const std::vector<ident::OrcaPoint>& table) {
+std::string orca_model_text(const std::vector<design::OrcaPoint>& table) {
   namespace L = limits;
   if (table.size() < 2) throw InputError("OrcaSlicer's adaptive pressure advance needs at least two lines");
-  std::vector<ident::OrcaPoint> t = table;
+  std::vector<design::OrcaPoint> t = table;
   for (const auto& p : t) {
     if (!(std::isfinite(p.k_s) && p.k_s >= 0 && p.k_s <= L::kOrcaAdvanceMax_s))
       throw InputError(

@@ -7,9 +7,13 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 
 namespace tunekit::ident {
+
+using formats::CsvOptions;
+using formats::CsvTable;
+using formats::parse_csv;
 
 std::vector<AccelPiece> load_commanded_motion_csv(const std::string& path, std::string_view bytes, char axis) {
   if (axis != 'x' && axis != 'y')

@@ -8,9 +8,13 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 
 namespace tunekit::ident {
+
+using formats::CsvOptions;
+using formats::CsvTable;
+using formats::read_csv;
 
 namespace {
 

@@ -9,9 +9,15 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/interpolate.hpp"
 #include "tunekit/fitting/stats.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/core/text.hpp"
+#include "tunekit/formats/csv.hpp"
 
 namespace tunekit::ident {
+
+using core::iequals;
+using formats::CsvOptions;
+using formats::CsvTable;
+using formats::parse_csv;
 namespace {
 
 std::string_view spectrum_trim(std::string_view s) {

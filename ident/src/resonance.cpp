@@ -11,10 +11,14 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/core/text.hpp"
 
 namespace tunekit::ident {
+
+using formats::CsvOptions;
+using formats::CsvTable;
+using formats::parse_csv;
 namespace {
 
 // Linear interpolation of (t, x) onto t0 + i dt, i < n.

@@ -12,10 +12,13 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/damped_sinusoids.hpp"
 #include "tunekit/fitting/stats.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/core/text.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/spectrum.hpp"
 
 namespace tunekit::ident {
+
+using core::iequals;
 namespace {
 
 namespace rd = ringdown_detail;

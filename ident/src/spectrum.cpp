@@ -9,9 +9,12 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/core/text.hpp"
+#include "tunekit/formats/csv.hpp"
 
 namespace tunekit::ident {
+
+using core::iequals;
 namespace {
 
 // FFTW's planner is not thread-safe; execution with new-array functions is.

@@ -12,7 +12,7 @@
 #include <toml++/toml.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "toml_depth.hpp"
 

@@ -17,7 +17,7 @@
 
 #include "sim_constants.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/input_shaper.hpp"
+#include "tunekit/design/shaper_defs.hpp"
 
 namespace tunekit::sim {
 namespace {
@@ -176,7 +176,8 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
       if (parts.size() < 2 || parts.size() > 3)
         throw InputError(fmt::format("simulator option {}: '{}' is not TYPE:FREQ_HZ[:DAMPING]", k, v));
       const double damping = parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultShaperDamping;
-      const auto sh = ident::design_shaper(ident::parse_shaper_type(parts[0]), pos(parse_double(k, parts[1])), damping);
+      const auto sh =
+          design::design_shaper(design::parse_shaper_type(parts[0]), pos(parse_double(k, parts[1])), damping);
       std::vector<std::pair<double, double>> imp;
       for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) imp.push_back({sh.amplitudes[i], sh.times_s[i]});
       c.shapers[k.substr(7)] = imp;

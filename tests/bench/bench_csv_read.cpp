@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 
 #include "bench_common.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 
 namespace {
 
@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
   }
   std::size_t rows = 0;
   const auto timing = tunekit::bench::time_ms([&] {
-    const auto t = tunekit::ident::read_csv(argv[1], {{"accel_x", "accel_y", "accel_z"}, "time"});
+    const auto t = tunekit::formats::read_csv(argv[1], {{"accel_x", "accel_y", "accel_z"}, "time"});
     rows = t.rows;
   });
   fmt::print("read_csv {}: {} rows, median {:.1f} ms over 15 runs\n", argv[1], rows, timing.median_ms);

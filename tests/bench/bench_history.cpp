@@ -21,10 +21,10 @@
 
 #include "bench_common.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/history_record.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/results/history_record.hpp"
 #include "tunekit/history/store.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
 
 namespace fs = std::filesystem;

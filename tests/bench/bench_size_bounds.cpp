@@ -24,9 +24,9 @@
 
 #include "../support/size_bound_inputs.hpp"
 #include "bench_common.hpp"
-#include "tunekit/calibration/delta_command.hpp"
-#include "tunekit/calibration/nozzle_command.hpp"
-#include "tunekit/calibration/rheo_command.hpp"
+#include "tunekit/calibration/analyses/delta_command.hpp"
+#include "tunekit/calibration/analyses/nozzle_command.hpp"
+#include "tunekit/calibration/analyses/rheo_command.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
 #include "tunekit/sim/delta_probe_sim.hpp"
 

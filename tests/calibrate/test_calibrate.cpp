@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/report.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/liquefier_record.hpp"
 #include "tunekit/core/file_bytes.hpp"
 

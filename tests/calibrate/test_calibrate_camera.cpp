@@ -16,8 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/report.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/core/file_bytes.hpp"

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 #include "tunekit/core/file_bytes.hpp"
 

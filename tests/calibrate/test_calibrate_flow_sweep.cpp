@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
 
 using tunekit::read_file_bytes;

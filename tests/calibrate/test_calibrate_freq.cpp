@@ -11,10 +11,10 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/freq_command.hpp"
-#include "tunekit/calibration/json_access.hpp"
+#include "tunekit/calibration/analyses/freq_command.hpp"
+#include "tunekit/calibration/results/json_access.hpp"
 #include "tunekit/history/store.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
 
 namespace {

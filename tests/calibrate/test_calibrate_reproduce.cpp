@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 
 namespace calibrate_reproduce_test {
 

@@ -13,7 +13,7 @@
 #include <regex>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/calibration_pipeline.hpp"
+#include "tunekit/calibration/guided/calibration_pipeline.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/machine/profile_import.hpp"
 

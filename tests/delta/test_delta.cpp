@@ -8,7 +8,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
 #include "tunekit/ident/delta_kinematics.hpp"
 #include "tunekit/firmware/delta_export.hpp"
@@ -225,7 +225,7 @@ TEST_CASE("delta CLI: fits a probe CSV and exports, listed in --help") {
 TEST_CASE("delta probe model agrees with an independent solution of the rod equations") {
   // datasets/delta: heights computed by a separate Newton solution of the three rod
   // equations (see its README), truth and nominal as in true_delta() / nominal_delta().
-  const auto t = ident::read_csv(test::dataset("delta/probes_simulated.csv"));
+  const auto t = formats::read_csv(test::dataset("delta/probes_simulated.csv"));
   const auto &x = t.column("x_mm"), &y = t.column("y_mm"), &z = t.column("z_exact_mm");
   REQUIRE(t.rows == 17);
   for (std::size_t i = 0; i < t.rows; ++i)

@@ -8,9 +8,9 @@
 
 #include "../liquefier/synth_flow_sweep.hpp"
 #include "test_support.hpp"
-#include "tunekit/calibration/design_inputs.hpp"
-#include "tunekit/calibration/export_command.hpp"
-#include "tunekit/calibration/step_command.hpp"
+#include "tunekit/calibration/commands/design_inputs.hpp"
+#include "tunekit/calibration/commands/export_command.hpp"
+#include "tunekit/calibration/analyses/step_command.hpp"
 #include "tunekit/core/error.hpp"
 
 using namespace tunekit;

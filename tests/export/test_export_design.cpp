@@ -11,7 +11,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/pressure_advance.hpp"
+#include "tunekit/design/pressure_advance.hpp"
 #include "tunekit/firmware/config_edit.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
@@ -24,9 +24,9 @@ namespace {
 
 std::string fixture(const std::string& name) { return tunekit::test::dataset("../tests/export/fixtures/" + name); }
 
-ident::AdvanceInputs sim_inputs() {
+design::AdvanceInputs sim_inputs() {
   const auto prof = machine::load_machine_profile(tunekit::test::dataset("machines/sim.toml"));
-  ident::AdvanceInputs in;
+  design::AdvanceInputs in;
   in.filament_area_mm2 = prof.filament_area_mm2();
   in.line_area_mm2 = prof.line_area_mm2();
   in.print_speed_mm_s = prof.print.speed_mm_s;
@@ -39,19 +39,19 @@ ident::AdvanceInputs sim_inputs() {
 
 TEST_CASE("Smoothing window: the shortest T that keeps the extra extruder acceleration at the limit") {
   const double k = 0.05, a = 3000, r = 0.09 / (std::numbers::pi / 4 * 1.75 * 1.75), lim = 5000;
-  const double t_box = ident::min_smoothing_window_s(k, a, r, lim, ident::SmoothingKernel::box);
+  const double t_box = design::min_smoothing_window_s(k, a, r, lim, design::SmoothingKernel::box);
   // The defining property: at T the extra acceleration K*a*r/T equals the limit; longer
   // windows stay below it, shorter ones exceed it.
   CHECK(k * a * r / t_box == Approx(lim));
   CHECK(k * a * r / (1.01 * t_box) < lim);
   CHECK(k * a * r / (0.99 * t_box) > lim);
   // Klipper's triangular weighting peaks at 2/T: twice the window for the same bound.
-  CHECK(ident::min_smoothing_window_s(k, a, r, lim, ident::SmoothingKernel::triangular) == Approx(2 * t_box));
+  CHECK(design::min_smoothing_window_s(k, a, r, lim, design::SmoothingKernel::triangular) == Approx(2 * t_box));
   // Twice the advance or twice the acceleration needs twice the window.
-  CHECK(ident::min_smoothing_window_s(2 * k, a, r, lim) == Approx(2 * t_box));
-  CHECK(ident::min_smoothing_window_s(k, 2 * a, r, lim) == Approx(2 * t_box));
-  CHECK_THROWS_AS(ident::min_smoothing_window_s(k, a, r, 0), InputError);
-  CHECK_THROWS_AS(ident::min_smoothing_window_s(-k, a, r, lim), InputError);
+  CHECK(design::min_smoothing_window_s(2 * k, a, r, lim) == Approx(2 * t_box));
+  CHECK(design::min_smoothing_window_s(k, 2 * a, r, lim) == Approx(2 * t_box));
+  CHECK_THROWS_AS(design::min_smoothing_window_s(k, a, r, 0), InputError);
+  CHECK_THROWS_AS(design::min_smoothing_window_s(-k, a, r, lim), InputError);
 }
 
 TEST_CASE("Advance design: K = tau, dead time reported, window from the machine profile") {
@@ -59,7 +59,7 @@ TEST_CASE("Advance design: K = tau, dead time reported, window from the machine 
   in.tau_s = 0.045;
   in.theta_s = 0.03;
   in.gain = 0.95;
-  const auto d = ident::design_advance(in);
+  const auto d = design::design_advance(in);
   CHECK(d.k_s == Approx(0.045));
   CHECK(d.area_ratio == Approx(in.line_area_mm2 / in.filament_area_mm2));
   CHECK(d.design_flow_mm3_s == Approx(in.print_speed_mm_s * in.line_area_mm2));
@@ -86,7 +86,7 @@ TEST_CASE("Flow-dependent advance from operating points and from a rheology pred
   const double af = in.filament_area_mm2;
   in.points = {{1.0, 0.96, 0.06, 0.035}, {4.0, 0.93, 0.03, 0.025}, {2.0, 0.95, 0.04, 0.03}};
   in.design_flow_mm3_s = 3.0 * af;  // halfway between the 2 and 4 mm/s feed points
-  auto d = ident::design_advance(in);
+  auto d = design::design_advance(in);
   CHECK(d.k_source == "operating points");
   // K(Q) = V(Q)/Q, V the integral of tau (held at 0.06 s below the first point, linear between):
   // V(3 af) = af (0.06 + (0.06 + 0.04)/2 + (0.04 + 0.035)/2) = 0.1475 af.
@@ -100,19 +100,19 @@ TEST_CASE("Flow-dependent advance from operating points and from a rheology pred
   CHECK(d.single_k_max_rel_error == Approx((0.06 - 0.1475 / 3) / 0.06));
   CHECK(d.trend_k1_s_per_mm3_s < 0);
 
-  ident::AdvanceInputs rh = sim_inputs();
+  design::AdvanceInputs rh = sim_inputs();
   rh.tau_s = 0.05;
   rh.rheo_flow_mm3_s = {1, 2, 4, 8};
   rh.rheo_relative_tau = {1.25, 1.0, 0.8, 0.64};
   rh.rheo_reference_flow_mm3_s = 2;
   rh.design_flow_mm3_s = 4;
-  d = ident::design_advance(rh);
+  d = design::design_advance(rh);
   CHECK(d.k_source == "rheology");
   CHECK(d.k_s == Approx(0.05 * 0.8));
   CHECK(d.schedule.front().k_s == Approx(0.05 * 1.25));
 
-  ident::AdvanceInputs none = sim_inputs();
-  CHECK_THROWS_AS(ident::design_advance(none), InputError);
+  design::AdvanceInputs none = sim_inputs();
+  CHECK_THROWS_AS(design::design_advance(none), InputError);
 }
 
 TEST_CASE("tunekit export: preview by default, --write applies with a backup, a second run changes nothing") {
@@ -145,7 +145,7 @@ TEST_CASE("tunekit export: preview by default, --write applies with a backup, a 
   auto in = sim_inputs();
   in.points = {{1.0, 0.96, 0.06, 0.035}, {2.0, 0.95, 0.04, 0.03}, {4.0, 0.93, 0.03, 0.025}};
   in.tau_s = 0.045;
-  const auto d = ident::design_advance(in);
+  const auto d = design::design_advance(in);
   const auto smooth = firmware::smoothing_time_for(firmware::ExportFirmware::klipper, d);
   REQUIRE(smooth);
   const std::string k_line = "pressure_advance: " + firmware::format_number(d.k_s, 4) + "   ;";

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/flow_advance.hpp"
+#include "tunekit/design/flow_advance.hpp"
 #include "tunekit/firmware/config_edit.hpp"
 
 using namespace tunekit;
@@ -30,11 +30,11 @@ double kalico_reference(const std::string& model, double la, double off, double 
 /// The values as the export writes them (6 decimals, Kalico's own %.6f precision).
 double written(double v) { return std::stod(firmware::format_number(v, 6)); }
 
-ident::FlowAdvanceInputs power_law_levels(double a, double b, bool with_ci) {
-  ident::FlowAdvanceInputs in;
+design::FlowAdvanceInputs power_law_levels(double a, double b, bool with_ci) {
+  design::FlowAdvanceInputs in;
   in.filament_area_mm2 = M_PI * 0.875 * 0.875;
   for (double q : {2.0, 4.0, 6.5, 9.0, 13.0, 18.0}) {
-    ident::FlowTau l;
+    design::FlowTau l;
     l.flow_mm3_s = q;
     l.tau_s = a * std::pow(q, b);
     if (with_ci) {
@@ -43,7 +43,7 @@ ident::FlowAdvanceInputs power_law_levels(double a, double b, bool with_ci) {
     }
     in.levels.push_back(l);
   }
-  in.trend = ident::TauPowerLaw{a, b};
+  in.trend = design::TauPowerLaw{a, b};
   return in;
 }
 
@@ -59,11 +59,11 @@ double trend_volume(double a, double b, double q0, double q, const std::string& 
 }  // namespace
 
 TEST_CASE("flow advance: a constant tau needs K = tau at every flow") {
-  ident::FlowAdvanceInputs in;
+  design::FlowAdvanceInputs in;
   in.filament_area_mm2 = 2.405;
   in.levels = {{2.0, 0.05}, {8.0, 0.05}, {15.0, 0.05}};
   in.design_flow_mm3_s = 6;
-  const auto d = ident::design_flow_advance(in);
+  const auto d = design::design_flow_advance(in);
   CHECK(d.k_design_s == Approx(0.05).epsilon(1e-12));
   for (const auto& s : d.curve) CHECK(s.k_need_s == Approx(0.05).epsilon(1e-12));
   CHECK(d.k_within_lo_mm3_s == Approx(2.0));
@@ -77,14 +77,14 @@ TEST_CASE("flow advance: the need is the integral of tau over flow, V(Q)/Q") {
   const double a = 0.09, b = -0.45;
   auto in = power_law_levels(a, b, false);
   for (double q : {3.0, 10.0, 17.0}) {
-    CHECK(ident::needed_advance_s(in, q) == Approx(trend_volume(a, b, 2.0, q, "middle") / q).epsilon(1e-12));
-    CHECK(ident::needed_advance_s(in, q, -1) == Approx(trend_volume(a, b, 2.0, q, "held") / q).epsilon(1e-12));
-    CHECK(ident::needed_advance_s(in, q, +1) == Approx(trend_volume(a, b, 2.0, q, "power") / q).epsilon(1e-12));
+    CHECK(design::needed_advance_s(in, q) == Approx(trend_volume(a, b, 2.0, q, "middle") / q).epsilon(1e-12));
+    CHECK(design::needed_advance_s(in, q, -1) == Approx(trend_volume(a, b, 2.0, q, "held") / q).epsilon(1e-12));
+    CHECK(design::needed_advance_s(in, q, +1) == Approx(trend_volume(a, b, 2.0, q, "power") / q).epsilon(1e-12));
   }
-  CHECK(ident::stored_volume_mm3(in, 1.0, -1) == Approx(a * std::pow(2.0, b) * 1.0).epsilon(1e-12));
+  CHECK(design::stored_volume_mm3(in, 1.0, -1) == Approx(a * std::pow(2.0, b) * 1.0).epsilon(1e-12));
   // The design says how much of the stored melt lies below the data, and its bounds span both.
   in.design_flow_mm3_s = 10;
-  const auto d = ident::design_flow_advance(in);
+  const auto d = design::design_flow_advance(in);
   CHECK(d.low_flow_share == Approx(trend_volume(a, b, 2.0, 2.0, "middle") / trend_volume(a, b, 2.0, 10.0, "middle")));
   CHECK(d.k_design_lo_s == Approx(trend_volume(a, b, 2.0, 10.0, "held") / 10.0));
   CHECK(d.k_design_hi_s == Approx(trend_volume(a, b, 2.0, 10.0, "power") / 10.0));
@@ -92,18 +92,18 @@ TEST_CASE("flow advance: the need is the integral of tau over flow, V(Q)/Q") {
   // The piecewise-linear table (no trend): tau held below the first level, exact trapezoids.
   in.trend.reset();
   const double t0 = a * std::pow(2.0, b), t1 = a * std::pow(4.0, b);
-  CHECK(ident::stored_volume_mm3(in, 1.5) == Approx(t0 * 1.5));
-  CHECK(ident::stored_volume_mm3(in, 4.0) == Approx(t0 * 2.0 + 0.5 * (t0 + t1) * 2.0));
-  CHECK_THROWS_AS(ident::needed_advance_s(in, 0.0), InputError);
+  CHECK(design::stored_volume_mm3(in, 1.5) == Approx(t0 * 1.5));
+  CHECK(design::stored_volume_mm3(in, 4.0) == Approx(t0 * 2.0 + 0.5 * (t0 + t1) * 2.0));
+  CHECK_THROWS_AS(design::needed_advance_s(in, 0.0), InputError);
 }
 
 TEST_CASE("flow advance: the single K holds within 10 % over a stated range around the design flow") {
   // A level at a very low flow leaves almost nothing below the data (0.7 % of the volume at
   // 8 mm^3/s), so K(Q) is the power law's c Q^b to within 0.2 %.
   auto in = power_law_levels(0.09, -0.45, false);
-  in.levels.insert(in.levels.begin(), ident::FlowTau{0.001, 0.09 * std::pow(0.001, -0.45)});
+  in.levels.insert(in.levels.begin(), design::FlowTau{0.001, 0.09 * std::pow(0.001, -0.45)});
   in.design_flow_mm3_s = 8;
-  const auto d = ident::design_flow_advance(in);
+  const auto d = design::design_flow_advance(in);
   REQUIRE(std::isfinite(d.k_within_lo_mm3_s));
   CHECK(d.k_within_lo_mm3_s < 8);
   CHECK(d.k_within_hi_mm3_s > 8);
@@ -119,9 +119,9 @@ TEST_CASE(
   for (double b : {-0.2, -0.45, -0.7}) {
     auto in = power_law_levels(0.08, b, true);
     in.theta_s = 0.03;
-    const auto d = ident::design_flow_advance(in);
+    const auto d = design::design_flow_advance(in);
     const auto& k = d.kalico;
-    const std::string model = ident::to_string(k.model);
+    const std::string model = design::to_string(k.model);
     REQUIRE((model == "tanh" || model == "recipr"));
     CHECK(k.linear_advance_s >= 0);
     CHECK(k.nonlinear_offset_mm >= 0);
@@ -133,7 +133,7 @@ TEST_CASE(
     for (int i = 0; i <= 200; ++i) {
       const double q = 2.0 + (18.0 - 2.0) * i / 200.0;
       const double v = q / in.filament_area_mm2;
-      const double need_mm = ident::stored_volume_mm3(in, q) / in.filament_area_mm2;
+      const double need_mm = design::stored_volume_mm3(in, q) / in.filament_area_mm2;
       worst = std::max(worst, std::abs(kalico_reference(model, la, off, lv, v) - need_mm) / need_mm);
     }
     INFO("b = " << b << ", model " << model << ", worst relative error " << worst);
@@ -146,7 +146,7 @@ TEST_CASE(
 TEST_CASE("flow advance: the 95 % band brackets the need and the Orca table is the need at each level") {
   auto in = power_law_levels(0.08, -0.4, true);
   in.orca_accels_mm_s2 = {10000, 3000};
-  const auto d = ident::design_flow_advance(in);
+  const auto d = design::design_flow_advance(in);
   REQUIRE(d.has_band);
   for (const auto& s : d.curve) {
     CHECK(s.k_lo_s <= s.k_need_s);
@@ -162,30 +162,30 @@ TEST_CASE("flow advance: the 95 % band brackets the need and the Orca table is t
     CHECK(d.orca[i].flow_mm3_s >= d.orca[i - 1].flow_mm3_s);
     if (d.orca[i].flow_mm3_s == d.orca[i - 1].flow_mm3_s) CHECK(d.orca[i].accel_mm_s2 > d.orca[i - 1].accel_mm_s2);
   }
-  CHECK(d.orca.front().k_s == Approx(ident::needed_advance_s(in, 2.0)));
+  CHECK(d.orca.front().k_s == Approx(design::needed_advance_s(in, 2.0)));
 }
 
 TEST_CASE("flow advance: bad levels are refused") {
-  ident::FlowAdvanceInputs in;
+  design::FlowAdvanceInputs in;
   in.filament_area_mm2 = 2.4;
   in.levels = {{2.0, 0.05}};
-  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  CHECK_THROWS_AS(design::design_flow_advance(in), InputError);
   in.levels = {{2.0, 0.05}, {2.0, 0.04}};
-  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  CHECK_THROWS_AS(design::design_flow_advance(in), InputError);
   in.levels = {{2.0, 0.05}, {4.0, -0.04}};
-  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  CHECK_THROWS_AS(design::design_flow_advance(in), InputError);
   in.levels = {{2.0, 0.05, 0.06, 0.07}, {4.0, 0.04}};
-  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  CHECK_THROWS_AS(design::design_flow_advance(in), InputError);
 }
 
 TEST_CASE("flow advance: a trend steeper than 1/Q is set aside and the levels design, with the reason") {
-  ident::FlowAdvanceInputs in;
+  design::FlowAdvanceInputs in;
   in.filament_area_mm2 = 2.4;
   in.levels = {{2.0, 0.05}, {4.0, 0.04}};
   in.design_flow_mm3_s = 3.0;
-  const double from_levels = ident::design_flow_advance(in).k_design_s;
-  in.trend = ident::TauPowerLaw{0.1, -1.2};
-  const auto d = ident::design_flow_advance(in);
+  const double from_levels = design::design_flow_advance(in).k_design_s;
+  in.trend = design::TauPowerLaw{0.1, -1.2};
+  const auto d = design::design_flow_advance(in);
   CHECK(d.k_design_s == Approx(from_levels));
   bool reason = false;
   for (const auto& w : d.warnings) reason = reason || w.find("designed from the measured levels") != std::string::npos;
@@ -196,10 +196,10 @@ TEST_CASE("flow advance: a measured volume at the first level replaces the bound
   // tau = 0.08 Q^-0.5 above 2 mm^3/s; the volume at 2 mm^3/s measured as 0.3 mm^3 +- 0.01 (a melt
   // Newtonian below the data stores less than the power law's 0.08 * 2 * sqrt(2) = 0.453 mm^3).
   auto in = power_law_levels(0.08, -0.5, false);
-  in.low_volume = ident::MeasuredVolume{2.0, 0.3, 0.01};
+  in.low_volume = design::MeasuredVolume{2.0, 0.3, 0.01};
   in.trend_rel_half_width = 0.02;
   in.design_flow_mm3_s = 8;
-  const auto d = ident::design_flow_advance(in);
+  const auto d = design::design_flow_advance(in);
   const double above = 0.08 * 2 * (std::sqrt(8.0) - std::sqrt(2.0));
   CHECK(d.k_design_s == Approx((0.3 + above) / 8).epsilon(1e-12));
   // Without the trend's covariance its integral is widened by its widest relative half-width; the
@@ -212,14 +212,14 @@ TEST_CASE("flow advance: a measured volume at the first level replaces the bound
 
   // With the covariance: the delta method. A tau_ref known to 1 % and b exact scales the integral:
   // its standard error is 1 % of it.
-  in.trend_covariance = ident::FlowAdvanceInputs::TrendCovariance{4.0, 1e-4, 0.0, 0.0};
-  const auto c = ident::design_flow_advance(in);
+  in.trend_covariance = design::FlowAdvanceInputs::TrendCovariance{4.0, 1e-4, 0.0, 0.0};
+  const auto c = design::design_flow_advance(in);
   const double hw_c = std::hypot(0.01, 1.959963984540054 * 0.01 * above) / 8;
   CHECK(c.k_design_hi_s - c.k_design_s == Approx(hw_c).epsilon(1e-9));
 
   // A non-positive measured volume is an input error.
   in.low_volume->volume_mm3 = 0;
-  CHECK_THROWS_AS(ident::design_flow_advance(in), InputError);
+  CHECK_THROWS_AS(design::design_flow_advance(in), InputError);
 }
 
 TEST_CASE("flow advance: a sensor that reads the stored volume needs no bound below the data") {
@@ -227,14 +227,14 @@ TEST_CASE("flow advance: a sensor that reads the stored volume needs no bound be
   in.volume_measured = true;
   in.volume_rel_half_width = 0.03;
   in.design_flow_mm3_s = 8;
-  const auto d = ident::design_flow_advance(in);
+  const auto d = design::design_flow_advance(in);
   const double v = 0.08 * std::pow(8.0, 0.5) / 0.5;
   CHECK(d.k_design_s == Approx(v / 8).epsilon(1e-12));
   CHECK(d.band_is_interval);
   CHECK(d.k_design_lo_s == Approx(0.97 * v / 8).epsilon(1e-12));
   CHECK(d.k_design_hi_s == Approx(1.03 * v / 8).epsilon(1e-12));
   // b uncertain: dV/db = V (ln(Q / Q_ref) - 1 / (b + 1)); at Q = Q_ref that is -2 V for b = -0.5.
-  in.trend_covariance = ident::FlowAdvanceInputs::TrendCovariance{8.0, 0.0, 0.0, 0.01 * 0.01};
-  const auto c = ident::design_flow_advance(in);
+  in.trend_covariance = design::FlowAdvanceInputs::TrendCovariance{8.0, 0.0, 0.0, 0.01 * 0.01};
+  const auto c = design::design_flow_advance(in);
   CHECK(c.k_design_hi_s - c.k_design_s == Approx(1.959963984540054 * 2 * 0.01 * v / 8).epsilon(1e-9));
 }

@@ -12,7 +12,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/flow_advance.hpp"
+#include "tunekit/design/flow_advance.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/firmware/gcode_advance.hpp"
 #include "tunekit/firmware/orca_profile.hpp"
@@ -28,7 +28,7 @@ std::string read_bytes(const std::string& path) {
   return ss.str();
 }
 
-std::vector<ident::OrcaPoint> sample_table() {
+std::vector<design::OrcaPoint> sample_table() {
   // Deliberately unsorted, with values needing rounding.
   return {{0.04123, 9.004, 5000}, {0.05871, 1.5, 5000}, {0.0499, 4.25, 5000}, {0.0371, 15.999, 5000}};
 }

@@ -22,8 +22,8 @@
 #include <catch2/catch.hpp>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/marlin_smoothing.hpp"
-#include "tunekit/ident/pressure_advance.hpp"
+#include "tunekit/design/marlin_smoothing.hpp"
+#include "tunekit/design/pressure_advance.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 
 using namespace tunekit;
@@ -80,10 +80,10 @@ TEST_CASE("Marlin ADVANCE_TAU: the designed tau keeps a simulated Marlin filter 
   // A 0.45 x 0.2 mm line from 1.75 mm filament, K 0.05 s, 3000 mm/s^2, a weak extruder
   // (limit 400 mm/s^2): the limit, not the 5 ms floor, sets tau (about 14 ms).
   const double k = 0.05, a = 3000, v = 150, r = 0.45 * 0.2 / (std::numbers::pi / 4 * 1.75 * 1.75), lim = 400;
-  const double box = ident::min_smoothing_window_s(k, a, r, lim);
-  const auto d = ident::design_marlin_advance_tau(box);
-  const ident::MarlinSmoothingFilter marlin;  // 5 stages at SMOOTH_LIN_ADV_HZ 1000
-  REQUIRE(d.tau_s > d.floor_tau_s);           // the limit, not the floor, sets tau here
+  const double box = design::min_smoothing_window_s(k, a, r, lim);
+  const auto d = design::design_marlin_advance_tau(box);
+  const design::MarlinSmoothingFilter marlin;  // 5 stages at SMOOTH_LIN_ADV_HZ 1000
+  REQUIRE(d.tau_s > d.floor_tau_s);            // the limit, not the floor, sets tau here
   // A long cruise: the acceleration step is the worst case (each phase longer than tau).
   const auto at = run_marlin_la(k, r, a, v, 0.5, d.tau_s, marlin.order, marlin.update_hz, true);
   CHECK(at.peak_extra_accel <= lim * (1 + 1e-9));
@@ -92,7 +92,7 @@ TEST_CASE("Marlin ADVANCE_TAU: the designed tau keeps a simulated Marlin filter 
   const auto shorter = run_marlin_la(k, r, a, v, 0.5, d.tau_s - 1e-4, marlin.order, marlin.update_hz, true);
   CHECK(shorter.peak_extra_accel > lim);
   // The model's peak is the simulation's.
-  CHECK(ident::marlin_smoothing_peak_slope_per_s(d.tau_s) * k * r * a == Approx(at.peak_extra_accel).epsilon(1e-6));
+  CHECK(design::marlin_smoothing_peak_slope_per_s(d.tau_s) * k * r * a == Approx(at.peak_extra_accel).epsilon(1e-6));
   // Smoothing moves the advance in time but keeps it: at cruise the extruder is K r v ahead.
   const auto held = run_marlin_la(k, r, a, v, 0.5, d.tau_s, marlin.order, marlin.update_hz, false);
   CHECK(held.final_advance == Approx(k * r * v).epsilon(1e-6));
@@ -101,34 +101,34 @@ TEST_CASE("Marlin ADVANCE_TAU: the designed tau keeps a simulated Marlin filter 
 TEST_CASE("Marlin ADVANCE_TAU: the cascade's peak tends to the Erlang peak, and the documented range holds") {
   // Continuous limit c(N) = N (N-1)^(N-1) e^-(N-1) / (N-1)!: 1 for one stage (a plain
   // exponential, peak 1/tau), 0.977 for five.
-  CHECK(ident::marlin_smoothing_continuous_peak_factor(1) == Approx(1.0));
-  CHECK(ident::marlin_smoothing_continuous_peak_factor(5) == Approx(5 * 256 * std::exp(-4.0) / 24));
+  CHECK(design::marlin_smoothing_continuous_peak_factor(1) == Approx(1.0));
+  CHECK(design::marlin_smoothing_continuous_peak_factor(5) == Approx(5 * 256 * std::exp(-4.0) / 24));
   const double tau = 0.2;  // 200 updates: near the continuous limit
   const auto sim = run_marlin_la(1.0, 1.0, 1.0, 1.0, 2.0, tau, 5, 1000, true);
-  CHECK(sim.peak_extra_accel * tau == Approx(ident::marlin_smoothing_continuous_peak_factor(5)).epsilon(0.02));
+  CHECK(sim.peak_extra_accel * tau == Approx(design::marlin_smoothing_continuous_peak_factor(5)).epsilon(0.02));
   // Marlin's own example (Configuration_adv.h): K 0.04 at 10000 mm/s^2 can run "as low as
   // 0.0075" s; with a 0.45 x 0.2 mm line from 1.75 mm filament that is an extruder limit near
   // 2000 mm/s^2, and the design lands in the same few milliseconds.
   const double r = 0.45 * 0.2 / (std::numbers::pi / 4 * 1.75 * 1.75);
-  const auto orbiter = ident::design_marlin_advance_tau(ident::min_smoothing_window_s(0.04, 10000, r, 2000));
+  const auto orbiter = design::design_marlin_advance_tau(design::min_smoothing_window_s(0.04, 10000, r, 2000));
   CHECK(orbiter.tau_s >= 0.005);
   CHECK(orbiter.tau_s <= 0.010);
   // A tiny K: one update period per stage (5 ms at 1000 Hz) is the floor, with a note.
-  const auto tiny = ident::design_marlin_advance_tau(1e-5);
+  const auto tiny = design::design_marlin_advance_tau(1e-5);
   CHECK(tiny.tau_s == Approx(0.005));
   CHECK(tiny.required_tau_s < tiny.tau_s);
   // Beyond M900 U's 0.5 s the design is refused with the reason.
-  CHECK_THROWS_WITH(ident::design_marlin_advance_tau(0.6), Catch::Contains("0.5"));
-  CHECK_THROWS_AS(ident::design_marlin_advance_tau(0), InputError);
+  CHECK_THROWS_WITH(design::design_marlin_advance_tau(0.6), Catch::Contains("0.5"));
+  CHECK_THROWS_AS(design::design_marlin_advance_tau(0), InputError);
 }
 
 TEST_CASE("Marlin export writes the cascade's ADVANCE_TAU, not the box window") {
-  ident::AdvanceDesign d;
+  design::AdvanceDesign d;
   d.k_s = 0.05;
   d.window_box_s = 0.0093;
   const auto tau = firmware::smoothing_time_for(firmware::ExportFirmware::marlin, d);
   REQUIRE(tau);
-  CHECK(*tau == Approx(ident::design_marlin_advance_tau(0.0093).tau_s));
-  CHECK(ident::marlin_smoothing_peak_slope_per_s(*tau) * d.window_box_s <= 1.0);
-  CHECK(ident::marlin_smoothing_peak_slope_per_s(*tau - 1e-4) * d.window_box_s > 1.0);
+  CHECK(*tau == Approx(design::design_marlin_advance_tau(0.0093).tau_s));
+  CHECK(design::marlin_smoothing_peak_slope_per_s(*tau) * d.window_box_s <= 1.0);
+  CHECK(design::marlin_smoothing_peak_slope_per_s(*tau - 1e-4) * d.window_box_s > 1.0);
 }

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 
 using tunekit::test::run_cli;
 using tunekit::test::run_exe;

@@ -12,7 +12,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 
 using tunekit::test::run_cli;
 using tunekit::test::write_scratch;
@@ -32,8 +32,8 @@ void expect_rejected(const std::string& name, const std::string& content, const 
 }  // namespace
 
 TEST_CASE("a well-formed CSV with units in names is read by column name") {
-  const auto t = tunekit::ident::parse_csv("# a log\ntime (s),force [N], speed\n0,1.5,2\n0.1,+2.5,3e-1\n", "mem.csv",
-                                           {{"Force", "time"}, "time"});
+  const auto t = tunekit::formats::parse_csv("# a log\ntime (s),force [N], speed\n0,1.5,2\n0.1,+2.5,3e-1\n", "mem.csv",
+                                             {{"Force", "time"}, "time"});
   REQUIRE(t.rows == 2);
   REQUIRE(t.columns.size() == 2);
   CHECK(t.column("force").unit == "N");
@@ -44,8 +44,8 @@ TEST_CASE("a well-formed CSV with units in names is read by column name") {
 }
 
 TEST_CASE("Klipper raw accelerometer files take their header from the comment line") {
-  const auto t = tunekit::ident::parse_csv("#time,accel_x,accel_y,accel_z\n100.0,1,2,3\n100.0003125,4,5,6\n", "raw.csv",
-                                           {{"accel_x", "accel_z"}, "time"});
+  const auto t = tunekit::formats::parse_csv("#time,accel_x,accel_y,accel_z\n100.0,1,2,3\n100.0003125,4,5,6\n",
+                                             "raw.csv", {{"accel_x", "accel_z"}, "time"});
   CHECK(t.rows == 2);
   CHECK(t.column("accel_z").values == std::vector<double>{3, 6});
   CHECK(t.column("time").values[1] == Approx(100.0003125));
@@ -100,7 +100,7 @@ TEST_CASE("a file that does not exist is an input error") {
 
 TEST_CASE("the reader throws InputError with the location for library users") {
   try {
-    tunekit::ident::parse_csv("t,y\n0,1\n1,x\n", "lib.csv", {{"y"}, "t"});
+    tunekit::formats::parse_csv("t,y\n0,1\n1,x\n", "lib.csv", {{"y"}, "t"});
     FAIL("no exception");
   } catch (const tunekit::InputError& e) {
     CHECK(e.code() == tunekit::ExitCode::bad_input);
@@ -109,7 +109,7 @@ TEST_CASE("the reader throws InputError with the location for library users") {
 }
 
 TEST_CASE("unit suffixes in snake_case names are read as units, and the column is found with or without them") {
-  using tunekit::ident::split_unit_suffix;
+  using tunekit::formats::split_unit_suffix;
   CHECK(split_unit_suffix("flow_mm3_s") == std::pair<std::string, std::string>{"flow", "mm^3/s"});
   CHECK(split_unit_suffix("shear_rate_1_s") == std::pair<std::string, std::string>{"shear_rate", "1/s"});
   CHECK(split_unit_suffix("viscosity_Pa_s") == std::pair<std::string, std::string>{"viscosity", "Pa.s"});
@@ -121,13 +121,13 @@ TEST_CASE("unit suffixes in snake_case names are read as units, and the column i
   CHECK(split_unit_suffix("accel_x") == std::pair<std::string, std::string>{"accel_x", ""});
   CHECK(split_unit_suffix("_s") == std::pair<std::string, std::string>{"_s", ""});
   CHECK(split_unit_suffix("flow") == std::pair<std::string, std::string>{"flow", ""});
-  CHECK(tunekit::ident::is_volumetric_flow_unit("mm3/s"));
-  CHECK(tunekit::ident::is_volumetric_flow_unit("mm^3/s"));
-  CHECK(tunekit::ident::is_volumetric_flow_unit("mm\xc2\xb3/s"));
-  CHECK_FALSE(tunekit::ident::is_volumetric_flow_unit("mm/s"));
+  CHECK(tunekit::formats::is_volumetric_flow_unit("mm3/s"));
+  CHECK(tunekit::formats::is_volumetric_flow_unit("mm^3/s"));
+  CHECK(tunekit::formats::is_volumetric_flow_unit("mm\xc2\xb3/s"));
+  CHECK_FALSE(tunekit::formats::is_volumetric_flow_unit("mm/s"));
 
-  const auto t = tunekit::ident::parse_csv("time_ms,flow_mm3_s,force [N],shear_rate_1_s\n0,1,2,3\n10,4,5,6\n",
-                                           "mem.csv", {{"flow", "force_N", "shear_rate_1_s"}, "", true});
+  const auto t = tunekit::formats::parse_csv("time_ms,flow_mm3_s,force [N],shear_rate_1_s\n0,1,2,3\n10,4,5,6\n",
+                                             "mem.csv", {{"flow", "force_N", "shear_rate_1_s"}, "", true});
   CHECK(t.time_column == "time_ms");
   CHECK(t.header == std::vector<std::string>{"time_ms", "flow_mm3_s", "force", "shear_rate_1_s"});
   CHECK(t.column("flow").unit == "mm^3/s");
@@ -142,13 +142,13 @@ TEST_CASE("unit suffixes in snake_case names are read as units, and the column i
 TEST_CASE("the time column is found by its usual names, and its absence is one clear error") {
   for (const char* h : {"t,y", "timestamp,y", "Time (s),y", "time_s,y"}) {
     INFO(h);
-    const auto t = tunekit::ident::parse_csv(std::string(h) + "\n0,1\n1,2\n", "mem.csv", {{}, "", true});
+    const auto t = tunekit::formats::parse_csv(std::string(h) + "\n0,1\n1,2\n", "mem.csv", {{}, "", true});
     REQUIRE_FALSE(t.time_column.empty());
     CHECK(t.columns.front().name == t.time_column);
   }
-  CHECK(tunekit::ident::parse_csv("#time,accel_x\n0,1\n1,2\n", "mem.csv", {{"accel_x"}, "", true}).time_column ==
+  CHECK(tunekit::formats::parse_csv("#time,accel_x\n0,1\n1,2\n", "mem.csv", {{"accel_x"}, "", true}).time_column ==
         "time");
-  CHECK_THROWS_WITH(tunekit::ident::parse_csv("when,y\n0,1\n", "mem.csv", {{}, "", true}),
+  CHECK_THROWS_WITH(tunekit::formats::parse_csv("when,y\n0,1\n", "mem.csv", {{}, "", true}),
                     Catch::Contains("no time column") && Catch::Contains("the file has: when, y"));
 }
 
@@ -163,8 +163,8 @@ TEST_CASE("plain decimals and the general number forms read the same values, map
       "2.5,-1.25e1,3.000000000000000\n"
       "3.5,-12.50000000000000000001,0.3e1\n";
   const std::string path = write_scratch("csv_fast_general_" + std::to_string(getpid()) + ".csv", text);
-  const auto mapped = tunekit::ident::read_csv(path, {{"a", "b"}, "time"});
-  const auto parsed = tunekit::ident::parse_csv(text, path, {{"a", "b"}, "time"});
+  const auto mapped = tunekit::formats::read_csv(path, {{"a", "b"}, "time"});
+  const auto parsed = tunekit::formats::parse_csv(text, path, {{"a", "b"}, "time"});
   REQUIRE(mapped.rows == 4);
   for (const auto* t : {&mapped, &parsed}) {
     for (std::size_t r = 0; r < 4; ++r) {
@@ -199,7 +199,7 @@ std::string large_raw_csv(std::size_t rows) {
 
 std::string error_of(const std::string& text) {
   try {
-    (void)tunekit::ident::parse_csv(text, "big.csv", {{}, "time"});
+    (void)tunekit::formats::parse_csv(text, "big.csv", {{}, "time"});
   } catch (const tunekit::InputError& e) {
     return e.location() + ": " + e.message();
   }
@@ -212,7 +212,7 @@ TEST_CASE("a large file parsed on two threads gives every row once, in order, wi
   const std::size_t rows = 200'000;  // 9 MB: above the size at which the rows are split
   const std::string text = large_raw_csv(rows);
   REQUIRE(text.size() > (std::size_t{8} << 20));
-  const auto t = tunekit::ident::parse_csv(text, "big.csv", {{}, "time"});
+  const auto t = tunekit::formats::parse_csv(text, "big.csv", {{}, "time"});
   REQUIRE(t.rows == rows);
   const auto& time = t.column("time").values;
   const auto& x = t.column("accel_x").values;
@@ -254,7 +254,7 @@ TEST_CASE(
   for (const std::string text : {",", "time,x", "time,x\r", "# comment\ntime,x"}) {
     INFO(text);
     try {
-      (void)tunekit::ident::parse_csv(text, "short.csv", {});
+      (void)tunekit::formats::parse_csv(text, "short.csv", {});
       FAIL("accepted");
     } catch (const tunekit::InputError& e) {
       CHECK(e.message() == "a header but no data rows");

@@ -5,9 +5,9 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/json_access.hpp"
-#include "tunekit/calibration/requirements.hpp"
-#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/calibration/results/json_access.hpp"
+#include "tunekit/calibration/results/requirements.hpp"
+#include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/json_error_text.hpp"
 

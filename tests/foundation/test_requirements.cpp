@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/requirements.hpp"
+#include "tunekit/calibration/results/requirements.hpp"
 #include "tunekit/core/error.hpp"
 
 using tunekit::calibration::evaluate_requirement;

@@ -1,9 +1,9 @@
 // tunekit's results JSON read back: parsing with located errors, the envelope check, the
 // --require evaluation and the HTML report built from it.
 #include "fuzz_common.hpp"
-#include "tunekit/calibration/report.hpp"
-#include "tunekit/calibration/requirements.hpp"
-#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/calibration/results/requirements.hpp"
+#include "tunekit/calibration/results/results_json.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size > 65536) return -1;

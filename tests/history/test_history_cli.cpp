@@ -13,7 +13,7 @@
 
 #include "history_fixture.hpp"
 #include "test_support.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/history/store.hpp"
 
 using tunekit::test::dataset;

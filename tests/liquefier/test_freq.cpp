@@ -13,7 +13,7 @@
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/transfer_function.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/excitation.hpp"
 #include "tunekit/ident/sine_dwell.hpp"
 #include "tunekit/ident/spectrum.hpp"
@@ -31,7 +31,7 @@ struct Exp {
   double freq_hz;
 };
 std::vector<Exp> design() {
-  const auto d = ident::read_csv(dataset("liquefier/appendix_d/design.csv"));
+  const auto d = formats::read_csv(dataset("liquefier/appendix_d/design.csv"));
   std::vector<Exp> v;
   for (std::size_t i = 0; i < d.rows; ++i)
     v.push_back({static_cast<int>(d.column("experiment").values[i]), d.column("freq_hz").values[i]});
@@ -48,9 +48,9 @@ TEST_CASE("appendix D: every experiment's sine-dwell gain and phase lag, and exp
   const auto exps = design();
   REQUIRE(exps.size() == 12);
   for (const auto& e : exps) {
-    ident::CsvOptions o;
+    formats::CsvOptions o;
     o.time_column = "time";
-    const auto tab = ident::read_csv(exp_path(e.id), o);
+    const auto tab = formats::read_csv(exp_path(e.id), o);
     const auto sd = ident::sine_dwell(tab.column("time").values, tab.column("width").values, e.freq_hz,
                                       tab.column("setpoint_width").values, "mm", "mm");
     INFO("experiment " << e.id << " at " << e.freq_hz << " Hz: gain " << sd.gain.value << " +- " << sd.gain.std_error

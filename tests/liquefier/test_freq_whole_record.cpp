@@ -13,7 +13,7 @@
 
 #include "synth_store.hpp"
 #include "test_support.hpp"
-#include "tunekit/calibration/freq_command.hpp"
+#include "tunekit/calibration/analyses/freq_command.hpp"
 
 using namespace tunekit;
 

@@ -14,7 +14,7 @@
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/first_order.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
 using namespace tunekit;
@@ -46,8 +46,8 @@ fitting::StepRecord synth_step(const Truth& tr, double sigma, unsigned seed, dou
 
 // Seed 001 Table B.1 / Table 4.3 from datasets/liquefier.
 std::map<double, std::pair<std::vector<double>, std::vector<double>>> table_b1() {
-  ident::CsvOptions o;
-  const auto tab = ident::read_csv(dataset("liquefier/holtrup_table_b1_ooze.csv"), o);
+  formats::CsvOptions o;
+  const auto tab = formats::read_csv(dataset("liquefier/holtrup_table_b1_ooze.csv"), o);
   std::map<double, std::pair<std::vector<double>, std::vector<double>>> m;
   const auto& v = tab.column("v_print_mm_s").values;
   for (std::size_t i = 0; i < tab.rows; ++i) {
@@ -61,7 +61,7 @@ std::map<double, std::pair<std::vector<double>, std::vector<double>>> table_b1()
 
 TEST_CASE("Table B.1: first-order fit per print speed is at least as good as the thesis's Table 4.3 parameters") {
   const auto b1 = table_b1();
-  const auto t43 = ident::read_csv(dataset("liquefier/holtrup_table_4_3.csv"));
+  const auto t43 = formats::read_csv(dataset("liquefier/holtrup_table_4_3.csv"));
   REQUIRE(t43.rows == 4);
   REQUIRE(b1.size() == 4);
   for (std::size_t i = 0; i < t43.rows; ++i) {

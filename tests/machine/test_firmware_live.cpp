@@ -34,7 +34,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/firmware/firmware_export.hpp"

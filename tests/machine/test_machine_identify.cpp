@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 
 using tunekit::test::run_cli;
 
@@ -42,7 +42,7 @@ TEST_CASE("liquefier-step on the simulator identifies K, tau and theta within 5 
     CHECK(s["params"]["tau_s"]["value"].get<double>() == Approx(truth["tau_s"].get<double>()).epsilon(0.05));
     CHECK(s["params"]["theta_s"]["value"].get<double>() == Approx(truth["theta_s"].get<double>()).epsilon(0.05));
   }
-  const auto table = tunekit::ident::read_csv(csv, {{}, "time"});
+  const auto table = tunekit::formats::read_csv(csv, {{}, "time"});
   const auto& t = table.column("time").values;
   const auto& u = table.column("feed").values;
   const auto& y = table.column("force").values;

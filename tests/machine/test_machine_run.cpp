@@ -17,7 +17,7 @@
 
 #include "fake_klipper.hpp"
 #include "test_support.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/sim/simulator.hpp"
 #include "tunekit/machine/transport.hpp"
 
@@ -108,7 +108,7 @@ TEST_CASE("liquefier-step on the simulator writes a complete run directory", "[m
   CHECK(res["status"] == "complete");
   const std::string csv = res["files"]["load_cell"];
   CHECK(fs::path(csv).filename() == "step.csv");
-  const auto table = tunekit::ident::read_csv(csv, {{}, "time"});
+  const auto table = tunekit::formats::read_csv(csv, {{}, "time"});
   CHECK(table.column("feed").values.size() == res["samples"]["load_cell"].get<std::size_t>());
   // 3 s settle + 2 cycles of 2 x 3 s at 200 Hz.
   CHECK(table.rows == Approx(15 * 200).epsilon(0.02));
@@ -164,7 +164,7 @@ TEST_CASE("a disconnect ends with exit 3 and keeps every sample received", "[mac
   const auto run = tunekit::test::read_json(dir + "/run.json");
   CHECK(run["status"] == "failed");
   // The partial file is analyzable: the reader accepts it.
-  CHECK(tunekit::ident::read_csv(dir + "/step.csv", {{}, "time"}).rows == sent);
+  CHECK(tunekit::formats::read_csv(dir + "/step.csv", {{}, "time"}).rows == sent);
 }
 
 TEST_CASE("a firmware error ends with exit 3 after the safe-state commands", "[machine]") {

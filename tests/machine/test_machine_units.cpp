@@ -23,7 +23,7 @@
 #include "tunekit/sim/simulator.hpp"
 #include "tunekit/machine/trajectory.hpp"
 #include "tunekit/machine/transport.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 
 using namespace tunekit::protocols;
 using namespace tunekit::machine;
@@ -363,7 +363,7 @@ TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseud
   o.run_dir = base + "/step";
   const auto r = run_experiment(o);
   CHECK(r.status == "complete");
-  const auto t = tunekit::ident::read_csv(r.files.at("load_cell"), {{}, "time"});
+  const auto t = tunekit::formats::read_csv(r.files.at("load_cell"), {{}, "time"});
   CHECK(t.rows == Approx(3000).epsilon(0.02));
   // The force settles at offset + K * feed on each plateau.
   const auto& f = t.column("force").values;
@@ -379,9 +379,9 @@ TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseud
   s.run_dir = base + "/sweep";
   s.params = {{"freq_start_hz", 30}, {"freq_end_hz", 70}, {"hz_per_sec", 8}};
   const auto rs = run_experiment(s);
-  const auto a = tunekit::ident::read_csv(rs.files.at("accel"), {{}, "time"});
+  const auto a = tunekit::formats::read_csv(rs.files.at("accel"), {{}, "time"});
   CHECK(a.rows == Approx(3200 * (5 + 0.6)).epsilon(0.05));
-  const auto c = tunekit::ident::read_csv(rs.files.at("commanded_accel"), {{}, "time"});
+  const auto c = tunekit::formats::read_csv(rs.files.at("commanded_accel"), {{}, "time"});
   CHECK(c.rows == a.rows);
   double peak = 0;
   for (double v : c.column("accel_x").values) peak = std::max(peak, std::abs(v));
@@ -412,7 +412,7 @@ TEST_CASE("run_experiment: a disconnect is exit 3 and the journal keeps every sa
   const auto stats = nlohmann::json::parse(read_all(o.run_dir + "/sim_stats.json"));
   const std::size_t sent = stats["load_cell_samples_sent"];
   CHECK(sent > 1000);
-  CHECK(tunekit::ident::read_csv(o.run_dir + "/step.csv", {{}, "time"}).rows == sent);
+  CHECK(tunekit::formats::read_csv(o.run_dir + "/step.csv", {{}, "time"}).rows == sent);
   CHECK(nlohmann::json::parse(read_all(o.run_dir + "/run.json"))["status"] == "failed");
 }
 
@@ -430,7 +430,7 @@ TEST_CASE("run_experiment: a firmware error is exit 3 after the safe-state comma
   CHECK(after.find("\nM104 S0\n") != std::string::npos);
   CHECK(after.find("\nM140 S0\n") != std::string::npos);
   const auto stats = nlohmann::json::parse(read_all(o.run_dir + "/sim_stats.json"));
-  CHECK(tunekit::ident::read_csv(o.run_dir + "/step.csv", {{}, "time"}).rows ==
+  CHECK(tunekit::formats::read_csv(o.run_dir + "/step.csv", {{}, "time"}).rows ==
         stats["load_cell_samples_sent"].get<std::size_t>());
 }
 
@@ -443,7 +443,7 @@ TEST_CASE("run_experiment: garbled and dropped lines are recovered", "[machine]"
   const auto r = run_experiment(o);
   CHECK(r.summary["link"]["resends"] == 1);
   CHECK(r.summary["link"]["retries"] == 1);
-  CHECK(tunekit::ident::read_csv(r.files.at("load_cell"), {{}, "time"}).rows == Approx(3000).epsilon(0.02));
+  CHECK(tunekit::formats::read_csv(r.files.at("load_cell"), {{}, "time"}).rows == Approx(3000).epsilon(0.02));
 }
 
 TEST_CASE("run_experiment: over-limit protocols are refused before the simulator hears anything", "[machine]") {

@@ -17,7 +17,7 @@
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
@@ -51,7 +51,9 @@ std::pair<double, double> recorded_range(const Experiment& e) {
 }
 
 /// Columns of a CSV file the run wrote.
-tunekit::ident::CsvTable read_table(const std::string& path) { return tunekit::ident::read_csv(path, {{}, "time"}); }
+tunekit::formats::CsvTable read_table(const std::string& path) {
+  return tunekit::formats::read_csv(path, {{}, "time"});
+}
 
 }  // namespace
 

@@ -1,13 +1,13 @@
 // Agreement of a quantity measured two ways, and when a liquefier gain is compared with 1.
 #include <catch2/catch.hpp>
 
-#include "tunekit/calibration/agreement.hpp"
-#include "tunekit/calibration/warning_advice.hpp"
+#include "tunekit/calibration/analyses/agreement.hpp"
+#include "tunekit/calibration/results/warning_advice.hpp"
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/pressure_advance.hpp"
+#include "tunekit/design/pressure_advance.hpp"
 
 using namespace tunekit::calibration;
 
@@ -46,14 +46,14 @@ TEST_CASE("an estimate whose interval does not hold its value is refused") {
 }
 
 TEST_CASE("the liquefier gain is compared with 1 only when input and output share units") {
-  using tunekit::ident::gain_is_dimensionless;
+  using tunekit::design::gain_is_dimensionless;
   CHECK(gain_is_dimensionless("1"));
   CHECK(gain_is_dimensionless("mm/(mm)"));
   CHECK(gain_is_dimensionless("mm/mm"));
   CHECK(gain_is_dimensionless("mm^3/s/(mm^3/s)"));
   CHECK_FALSE(gain_is_dimensionless("N/(mm/s)"));
   CHECK_FALSE(gain_is_dimensionless(""));
-  tunekit::ident::AdvanceInputs in;
+  tunekit::design::AdvanceInputs in;
   in.tau_s = 0.45;
   in.gain = 3.5;
   in.filament_area_mm2 = 2.405;
@@ -61,15 +61,15 @@ TEST_CASE("the liquefier gain is compared with 1 only when input and output shar
   in.print_speed_mm_s = 60;
   in.print_accel_mm_s2 = 3000;
   in.extruder_accel_limit_mm_s2 = 5000;
-  auto gain_warned = [](const tunekit::ident::AdvanceDesign& d) {
+  auto gain_warned = [](const tunekit::design::AdvanceDesign& d) {
     for (const auto& w : d.warnings)
       if (w.find("differs from 1") != std::string::npos) return true;
     return false;
   };
   in.gain_unit = "N/(mm/s)";  // feed in, force out: no natural 1
-  CHECK_FALSE(gain_warned(tunekit::ident::design_advance(in)));
+  CHECK_FALSE(gain_warned(tunekit::design::design_advance(in)));
   in.gain_unit = "mm/(mm)";  // width in, width out
-  CHECK(gain_warned(tunekit::ident::design_advance(in)));
+  CHECK(gain_warned(tunekit::design::design_advance(in)));
 }
 
 TEST_CASE("export compares the step and frequency-response taus by the margin rule, not by their gap") {

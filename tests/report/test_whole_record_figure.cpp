@@ -20,7 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/core/file_bytes.hpp"
 
 using namespace tunekit::calibration;

@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 
 using tunekit::test::dataset;

@@ -10,7 +10,7 @@
 
 #include "synth_sweep.hpp"
 #include "test_support.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
 
 using tunekit::test::run_cli;

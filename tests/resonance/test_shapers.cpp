@@ -5,9 +5,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "tunekit/ident/input_shaper.hpp"
+#include "tunekit/design/input_shaper.hpp"
 
-using namespace tunekit::ident;
+using namespace tunekit::design;
 
 namespace {
 constexpr double kPi = std::numbers::pi;

@@ -11,7 +11,7 @@
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/fitting/viscosity.hpp"
 #include "tunekit/ident/liquefier_prediction.hpp"
-#include "tunekit/ident/rheology_data.hpp"
+#include "tunekit/formats/rheology_data.hpp"
 
 using namespace tunekit::fitting;
 

@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/atomic_file.hpp"
 

@@ -13,7 +13,7 @@
 #include "../resonance/synth_sweep.hpp"
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/vision/image_io.hpp"
 
 using tunekit::test::run_cli;
@@ -161,7 +161,7 @@ TEST_CASE("CSV files with a UTF-16 or a doubled byte-order mark are read", "[saf
     return out;
   };
   for (const std::string& bytes : {utf16(true), utf16(false), "\xEF\xBB\xBF\xEF\xBB\xBF" + text}) {
-    const auto t = tunekit::ident::parse_csv(bytes, "bom.csv", {{"time", "force"}, "time"});
+    const auto t = tunekit::formats::parse_csv(bytes, "bom.csv", {{"time", "force"}, "time"});
     CHECK(t.rows == 3);
     CHECK(t.column("force").values.back() == 3.5);
     CHECK(t.column("force").unit == "N");
@@ -173,5 +173,5 @@ TEST_CASE("CSV files with a UTF-16 or a doubled byte-order mark are read", "[saf
   CHECK(r.code == 0);
   CHECK(r.err.find("\xEF\xBF\xBD") == std::string::npos);  // no replacement characters
   // An odd byte count after a UTF-16 mark is refused clearly.
-  CHECK_THROWS_AS(tunekit::ident::parse_csv(utf16(true) + "x", "odd.csv"), tunekit::InputError);
+  CHECK_THROWS_AS(tunekit::formats::parse_csv(utf16(true) + "x", "odd.csv"), tunekit::InputError);
 }

@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/calibration/requirements.hpp"
+#include "tunekit/calibration/results/requirements.hpp"
 #include "tunekit/core/error.hpp"
 
 using tunekit::test::run_cli;

@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "test_support.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/vision/exif_orientation.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/core/file_bytes.hpp"

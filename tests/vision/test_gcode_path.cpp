@@ -14,7 +14,7 @@
 
 #include "synthetic_render.hpp"
 #include "test_support.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/vision/width_to_dynamics.hpp"
 
@@ -71,8 +71,8 @@ TEST_CASE(
   CHECK(map["setpoint"] == "feed");
 
   // The CSV: set-point from the feed (w1 before the step, w2 after), time from the speed.
-  ident::CsvOptions co;
-  const auto table = ident::read_csv(csv, co);
+  formats::CsvOptions co;
+  const auto table = formats::read_csv(csv, co);
   const auto& t = table.column("time").values;
   const auto& sp = table.column("setpoint_width").values;
   const auto& w = table.column("width").values;

@@ -15,7 +15,7 @@
 #include "synthetic_render.hpp"
 #include "test_support.hpp"
 #include "tunekit/vision/camera_calibration.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/vision/line_width.hpp"
 #include "tunekit/vision/width_to_dynamics.hpp"

@@ -4,15 +4,15 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/batch_command.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/commands/batch_command.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/requirements.hpp"
-#include "tunekit/calibration/rheo_command.hpp"
-#include "tunekit/calibration/shaper_command.hpp"
-#include "tunekit/calibration/step_command.hpp"
+#include "tunekit/calibration/results/requirements.hpp"
+#include "tunekit/calibration/analyses/rheo_command.hpp"
+#include "tunekit/calibration/analyses/shaper_command.hpp"
+#include "tunekit/calibration/analyses/step_command.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include <algorithm>
 #include <atomic>
 #include <filesystem>

@@ -3,12 +3,12 @@
 // calibration library's compute function.
 
 #include "resonance_cli.hpp"
-#include "tunekit/calibration/belts_command.hpp"
+#include "tunekit/calibration/analyses/belts_command.hpp"
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include <cmath>
 #include <fmt/format.h>
 #include <memory>

@@ -5,9 +5,9 @@
 #include <memory>
 #include <string>
 
-#include "tunekit/calibration/calibrate_command.hpp"
-#include "tunekit/calibration/calibration_pipeline.hpp"
-#include "tunekit/calibration/progress.hpp"
+#include "tunekit/calibration/guided/calibrate_command.hpp"
+#include "tunekit/calibration/guided/calibration_pipeline.hpp"
+#include "tunekit/calibration/presentation/progress.hpp"
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"

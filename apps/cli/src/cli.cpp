@@ -14,7 +14,7 @@
 
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/history_record.hpp"
+#include "tunekit/calibration/results/history_record.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/version.hpp"

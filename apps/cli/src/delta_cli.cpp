@@ -4,14 +4,14 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/delta_command.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/analyses/delta_command.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/delta_export.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/delta_calibration.hpp"
 #include <cmath>
 #include <fmt/format.h>

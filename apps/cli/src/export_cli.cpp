@@ -4,11 +4,11 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/export_command.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/commands/export_command.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/plots.hpp"
-#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/calibration/presentation/plots.hpp"
+#include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/config_edit.hpp"
@@ -17,9 +17,9 @@
 #include "tunekit/firmware/gcode_advance.hpp"
 #include "tunekit/firmware/orca_profile.hpp"
 #include "tunekit/fitting/fit_result.hpp"
-#include "tunekit/ident/csv.hpp"
-#include "tunekit/ident/flow_advance.hpp"
-#include "tunekit/ident/pressure_advance.hpp"
+#include "tunekit/formats/csv.hpp"
+#include "tunekit/design/flow_advance.hpp"
+#include "tunekit/design/pressure_advance.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include <algorithm>
 #include <cmath>

@@ -4,12 +4,12 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/freq_command.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/analyses/freq_command.hpp"
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/transfer_function.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/sine_dwell.hpp"
 #include "tunekit/ident/spectrum.hpp"
 #include <algorithm>

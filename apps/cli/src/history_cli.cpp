@@ -4,11 +4,11 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/history_command.hpp"
-#include "tunekit/calibration/history_record.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/commands/history_command.hpp"
+#include "tunekit/calibration/results/history_record.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/history/store.hpp"
 #include <algorithm>

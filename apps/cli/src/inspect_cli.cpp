@@ -4,10 +4,10 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/inspect_command.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/analyses/inspect_command.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>

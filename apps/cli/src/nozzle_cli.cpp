@@ -4,16 +4,16 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/nozzle_command.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/analyses/nozzle_command.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/results_json.hpp"
+#include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/nozzle_pressure.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/liquefier_prediction.hpp"
-#include "tunekit/ident/rheology_data.hpp"
+#include "tunekit/formats/rheology_data.hpp"
 #include <cmath>
 #include <fmt/format.h>
 #include <memory>

@@ -4,13 +4,13 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/overshoot_command.hpp"
-#include "tunekit/calibration/report.hpp"
+#include "tunekit/calibration/analyses/overshoot_command.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/overshoot.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include <algorithm>

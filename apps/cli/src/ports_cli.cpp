@@ -4,9 +4,9 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/ports_command.hpp"
+#include "tunekit/calibration/commands/ports_command.hpp"
 #include "tunekit/machine/serial_transport.hpp"
 #include <fmt/format.h>
 #include <memory>

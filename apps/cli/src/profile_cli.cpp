@@ -3,7 +3,7 @@
 
 #include <memory>
 
-#include "tunekit/calibration/profile_command.hpp"
+#include "tunekit/calibration/commands/profile_command.hpp"
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 

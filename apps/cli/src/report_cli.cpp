@@ -5,7 +5,7 @@
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/report_command.hpp"
+#include "tunekit/calibration/presentation/report_command.hpp"
 #include <memory>
 
 namespace tunekit::cli {

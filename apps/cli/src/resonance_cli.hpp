@@ -9,9 +9,9 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "tunekit/calibration/context.hpp"
-#include "tunekit/calibration/envelope.hpp"
-#include "tunekit/calibration/resonance_common.hpp"
+#include "tunekit/calibration/results/context.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/analyses/resonance_common.hpp"
 #include "tunekit/ident/ringdown.hpp"
 
 namespace tunekit::cli {

@@ -6,7 +6,7 @@
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/resonance_command.hpp"
+#include "tunekit/calibration/analyses/resonance_command.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/ringdown.hpp"
 #include <algorithm>

@@ -4,14 +4,14 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/rheo_command.hpp"
+#include "tunekit/calibration/analyses/rheo_command.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/liquefier_prediction.hpp"
-#include "tunekit/ident/rheology_data.hpp"
+#include "tunekit/formats/rheology_data.hpp"
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>

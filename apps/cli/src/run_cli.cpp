@@ -4,10 +4,10 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/results_json.hpp"
-#include "tunekit/calibration/run_command.hpp"
+#include "tunekit/calibration/results/results_json.hpp"
+#include "tunekit/calibration/commands/run_command.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"

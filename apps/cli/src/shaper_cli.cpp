@@ -6,7 +6,7 @@
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/shaper_command.hpp"
+#include "tunekit/calibration/analyses/shaper_command.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
@@ -42,7 +42,7 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
       "--shapers",
       [&o](const std::vector<std::string>& names) {
         o.shapers.clear();
-        for (const auto& n : names) o.shapers.push_back(ident::parse_shaper_type(n));
+        for (const auto& n : names) o.shapers.push_back(design::parse_shaper_type(n));
       },
       "Shaper types to consider: zv mzv zvd zvdd ei 2hump_ei 3hump_ei (default: all that the --firmware "
       "has, Klipper's without it; with --klipper-compatible: zv mzv ei 2hump_ei 3hump_ei)");

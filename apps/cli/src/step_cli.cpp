@@ -4,11 +4,11 @@
 
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
-#include "tunekit/calibration/step_command.hpp"
+#include "tunekit/calibration/analyses/step_command.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/ident/csv.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 #include <algorithm>
 #include <cmath>

@@ -21,7 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tunekit/firmware/marlin_m493.hpp"
-#include "tunekit/ident/pressure_advance.hpp"
+#include "tunekit/design/pressure_advance.hpp"
 
 namespace tunekit::firmware {
 
@@ -136,12 +136,12 @@ ExportResult export_config_file(ExportFirmware fw, const std::string& path, cons
 /// RepRapFirmware has none. Rounded up to the written precision (0.1 ms) so that the
 /// acceleration bound still holds. nullopt when the firmware has no such setting, or the design
 /// has no window or a zero one.
-std::optional<double> smoothing_time_for(ExportFirmware fw, const ident::AdvanceDesign& d);
+std::optional<double> smoothing_time_for(ExportFirmware fw, const design::AdvanceDesign& d);
 
 /// Flow-dependent advance as runtime commands, one per scheduled flow (for a slicer's
 /// per-feature or per-speed G-code): SET_PRESSURE_ADVANCE, M900 K or M572, each with a comment
 /// giving the flow. Empty for an empty schedule.
-std::string advance_schedule_gcode(ExportFirmware fw, const std::vector<ident::ScheduledAdvance>& schedule,
+std::string advance_schedule_gcode(ExportFirmware fw, const std::vector<design::ScheduledAdvance>& schedule,
                                    const CompensatorSettings& s);
 
 /// Writes an export result: backup of the current file, then atomic replacement. Returns the

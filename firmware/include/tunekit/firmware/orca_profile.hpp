@@ -21,19 +21,19 @@
 #include <string>
 #include <vector>
 
-#include "tunekit/ident/flow_advance.hpp"
+#include "tunekit/design/flow_advance.hpp"
 
 namespace tunekit::firmware {
 
 struct OrcaAdvanceProfile {
-  std::vector<ident::OrcaPoint> table;  ///< at least two points per acceleration
-  double fallback_k_s = 0;              ///< pressure_advance (the single K at the design flow)
+  std::vector<design::OrcaPoint> table;  ///< at least two points per acceleration
+  double fallback_k_s = 0;               ///< pressure_advance (the single K at the design flow)
 };
 
 /// The adaptive_pressure_advance_model text ("PA,flow,acceleration" lines joined by "\n").
 /// Throws InputError for non-finite or out-of-range values (firmware_limits.hpp) or flows that
 /// coincide within an acceleration after rounding.
-std::string orca_model_text(const std::vector<ident::OrcaPoint>& table);
+std::string orca_model_text(const std::vector<design::OrcaPoint>& table);
 
 struct OrcaMergeResult {
   std::string text;

@@ -5,7 +5,7 @@
 //                             command line binds straight to them and a default lives in one place
 //   XOutcome compute_x(opts)  does the work and returns typed results; throws tunekit::Error
 //                             (InputError, FitError, MachineError) with its exit code
-//   Envelope to_envelope(o)   the JSON envelope (tunekit/calibration/envelope.hpp) the command writes
+//   Envelope to_envelope(o)   the JSON envelope (tunekit/calibration/results/envelope.hpp) the command writes
 //   void print_text(o, os)    the human-readable summary
 //   register_x(app, ctx)      binds XOptions to the command line (CLI11) and prints; nothing else
 //
@@ -14,8 +14,8 @@
 
 #include <ostream>
 
-#include "tunekit/calibration/context.hpp"
-#include "tunekit/calibration/envelope.hpp"
+#include "tunekit/calibration/results/context.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 
 namespace tunekit::cli {
 

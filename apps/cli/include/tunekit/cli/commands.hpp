@@ -8,7 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "tunekit/calibration/context.hpp"
+#include "tunekit/calibration/results/context.hpp"
 
 namespace tunekit::cli {
 

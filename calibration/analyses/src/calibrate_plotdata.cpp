@@ -1,0 +1,139 @@
+// The series behind the plots of tunekit calibrate's report (see calibrate_plotdata.hpp).
+#include "tunekit/calibration/analyses/calibrate_plotdata.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "tunekit/calibration/analyses/whole_record.hpp"
+#include "tunekit/fitting/first_order.hpp"
+#include "tunekit/formats/csv.hpp"
+#include "tunekit/design/input_shaper.hpp"
+
+namespace tunekit::calibration {
+
+// A fitted parameter's value, NaN when the model has no such parameter (theta_s of a first-order fit).
+double calibrate_param(const fitting::FitResult& f, const std::string& name) {
+  for (const auto& p : f.params)
+    if (p.name == name) return p.value;
+  return std::nan("");
+}
+
+namespace {
+
+// Each step's model over the samples its fit used and nowhere else (not over the warm-up from
+// rest, which no step models), driven by the record's input as the fit was; NaN elsewhere.
+std::vector<double> step_fits_output(const std::vector<double>& t, const std::vector<double>& u,
+                                     const ident::StepAnalysis& steps) {
+  std::vector<double> yf(t.size(), std::nan(""));
+  for (const auto& s : steps.steps) {
+    if (!s.fit) continue;
+    const std::size_t begin = s.step.begin, end = std::min(s.step.end, t.size());
+    fitting::StepRecord r;
+    r.t_step = s.step.t_step_s;
+    r.du = s.step.u_after - s.step.u_before;
+    r.t.assign(t.begin() + static_cast<std::ptrdiff_t>(begin), t.begin() + static_cast<std::ptrdiff_t>(end));
+    r.u.assign(u.begin() + static_cast<std::ptrdiff_t>(begin), u.begin() + static_cast<std::ptrdiff_t>(end));
+    r.u_hold = steps.input_hold;
+    const auto& f = *s.fit;
+    double theta = calibrate_param(f, "theta_s");
+    if (!std::isfinite(theta)) theta = 0;
+    const auto m = fitting::step_model_output(r, calibrate_param(f, "K"), calibrate_param(f, "tau_s"), theta,
+                                              calibrate_param(f, "y0"));
+    std::copy(m.begin(), m.end(), yf.begin() + static_cast<std::ptrdiff_t>(begin));
+  }
+  return yf;
+}
+
+// The whole-record model's legend text: its form and exponent.
+std::string model_label(const ident::WholeRecordModel& m) {
+  const auto& b = m.model.fit.param("b");
+  if (b.fixed) return "whole-record model (linear)";
+  return fmt::format("whole-record model (b = {:.2g})", b.value);
+}
+
+}  // namespace
+
+// Series for the step plot: the measured record, each step's own fitted model and the whole-record model.
+nlohmann::json step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label) {
+  const std::string &tc = step.time_column, &in_col = step.options.input_column, &out_col = step.options.output_column;
+  const auto table = formats::read_csv(step.options.file, {{tc, in_col, out_col}, tc});
+  const auto& t = table.column(tc).values;
+  const auto& u = table.column(in_col).values;
+  const auto& y = table.column(out_col).values;
+  const std::vector<double> yf = step_fits_output(t, u, step.analysis);
+  std::vector<double> ym;
+  nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};
+  if (const auto& m = step.whole_record.model) {
+    ym = whole_record_output(*m, t, u);
+    d["model_label"] = model_label(*m);
+  } else {
+    d["model_missing"] =
+        step.whole_record.error.empty() ? std::string("the record has no input column") : step.whole_record.error;
+  }
+  // Thin very long records for the plot (every n-th sample).
+  const std::size_t stride = std::max<std::size_t>(1, t.size() / 4000);
+  std::vector<double> ts, us, ys, fs_, ms;
+  for (std::size_t i = 0; i < t.size(); i += stride) {
+    ts.push_back(t[i]);
+    us.push_back(u[i]);
+    ys.push_back(y[i]);
+    fs_.push_back(yf[i]);
+    if (!ym.empty()) ms.push_back(ym[i]);
+  }
+  d["t_s"] = ts;
+  d["u"] = us;
+  d["y"] = ys;
+  d["y_fit"] = fs_;
+  if (!ym.empty()) d["y_model"] = ms;
+  return d;
+}
+
+nlohmann::json bode_plotdata(const FreqOutcome& chirp) {
+  nlohmann::json d;
+  const BodeCurve b = measured_bode(chirp);
+  d["freq_hz"] = b.freq_hz;
+  d["mag_db"] = b.magnitude_db;
+  d["phase_deg"] = b.phase_deg;
+  if (chirp.broadband) d["coherence"] = chirp.broadband->coherence;
+  // The model the summary reports: the fit freq names as its result.
+  if (const auto m = reported_fit_bode(chirp))
+    d["model"] = {{"freq_hz", m->freq_hz},
+                  {"mag_db", m->magnitude_db},
+                  {"phase_deg", m->phase_deg},
+                  {"label", chirp.reported_fit_method()}};
+  return d;
+}
+
+nlohmann::json psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis) {
+  nlohmann::json d;
+  const ident::AxisSpectrum& s = axis.resonance.spectrum;
+  std::vector<double> f, psd;
+  for (std::size_t b = 0; b < s.freq_hz.size() && s.freq_hz[b] <= shaper.options.accel.max_plot_hz; ++b) {
+    f.push_back(s.freq_hz[b]);
+    psd.push_back(s.psd_sum[b]);
+  }
+  d["freq_hz"] = f;
+  d["psd"] = psd;
+  d["modes"] = nlohmann::json::array();
+  const auto& modes = axis.resonance.modes;
+  for (const auto& m : modes.modes) d["modes"].push_back({{"freq_hz", m.freq_hz}});
+  // Each candidate shaper's remaining vibration against frequency, at the identified damping.
+  double zeta = 0.1;
+  if (modes.dominant >= 0 && std::isfinite(modes.modes[static_cast<std::size_t>(modes.dominant)].zeta))
+    zeta = modes.modes[static_cast<std::size_t>(modes.dominant)].zeta;
+  d["shapers"] = nlohmann::json::array();
+  d["recommended"] = {{"type", design::to_string(axis.choice.recommended.type)},
+                      {"freq_hz", axis.choice.recommended.freq_hz}};
+  for (const auto& c : axis.choice.candidates) {
+    const auto shaper_design = design::design_shaper(c.type, c.freq_hz, c.damping_ratio,
+                                                     design::kDefaultVibrationTolerance, design::EiDesign::damped_fit);
+    d["shapers"].push_back({{"type", design::to_string(c.type)},
+                            {"freq_hz", f},
+                            {"response", design::residual_vibration_curve(shaper_design, f, zeta)}});
+  }
+  return d;
+}
+
+}  // namespace tunekit::calibration

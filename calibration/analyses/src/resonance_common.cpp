@@ -1,0 +1,186 @@
+// The accelerometer pipeline `tunekit resonance` and `tunekit shaper` share: files -> per-axis
+// Welch spectra -> modes (tunekit/calibration/analyses/resonance_common.hpp).
+#include "tunekit/calibration/analyses/resonance_common.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <future>
+#include <map>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/core/error.hpp"
+#include "tunekit/core/text.hpp"
+#include "tunekit/ident/axis_response_fit.hpp"
+#include "tunekit/ident/commanded_motion.hpp"
+#include "tunekit/formats/csv.hpp"
+#include "tunekit/ident/klipper_spectrum.hpp"
+#include "tunekit/ident/rrf_accelerometer.hpp"
+#include "tunekit/ident/shaketune_stdata.hpp"
+#include "tunekit/core/file_bytes.hpp"
+
+namespace tunekit::calibration {
+
+std::string detrend_name(ident::Detrend d) {
+  switch (d) {
+    case ident::Detrend::none: return "none";
+    case ident::Detrend::constant: return "constant";
+    case ident::Detrend::linear: return "linear";
+  }
+  return "?";
+}
+
+ident::Detrend parse_detrend_name(const std::string& s) {
+  if (core::iequals(s, "none")) return ident::Detrend::none;
+  if (core::iequals(s, "constant") || core::iequals(s, "mean")) return ident::Detrend::constant;
+  if (core::iequals(s, "linear")) return ident::Detrend::linear;
+  throw InputError("unknown detrend '" + s + "' (none, constant, linear)");
+}
+
+char parse_axis_name(const std::string& s) {
+  if (s.empty()) return 0;
+  if (s.size() == 1 && (s[0] == 'x' || s[0] == 'y' || s[0] == 'z' || s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z'))
+    return static_cast<char>(std::tolower(static_cast<unsigned char>(s[0])));
+  throw InputError("--axis must be x, y or z, not '" + s + "'");
+}
+
+std::string record_label(char axis, const std::string& path) {
+  if (axis != 0) return std::string(1, axis);
+  return std::filesystem::path(path).stem().string();
+}
+
+namespace {
+
+/// A raw record whose commanded motion was recorded beside it.
+struct TimedRecord {
+  ident::AccelRecord record;
+  std::vector<ident::AccelPiece> motion;
+};
+
+}  // namespace
+
+AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion ringdown) {
+  const ident::WelchOptions& welch = a.welch;
+  const ident::ResonanceOptions& ro = a.modes;
+  if (!(welch.overlap >= 0 && welch.overlap <= 0.95))
+    throw InputError(fmt::format("--overlap {} must be in [0, 0.95]", welch.overlap));
+  if (!(ro.fit_max_hz > ro.fit_min_hz) || !(ro.fit_min_hz >= 0))
+    throw InputError(fmt::format("--fit-min {} Hz must be below --fit-max {} Hz", ro.fit_min_hz, ro.fit_max_hz));
+  if (ro.max_modes < 1) throw InputError("--max-modes must be at least 1");
+  if (!(ro.peak_threshold > 0 && ro.peak_threshold < 1)) throw InputError("--peak-threshold must be in (0, 1)");
+  const ident::AccelInputOptions& in = a.input;
+
+  AccelAnalysis result;
+  std::map<std::string, std::vector<ident::AxisSpectrum>> by_axis;
+  std::map<std::string, TimedRecord> timed;  // raw records with their commanded motion, per axis
+  // The inputs' digests (about 10 ms for a 20 MB raw file) are computed on another core while
+  // the analysis goes on, and collected at the end; the files stay mapped until then.
+  std::vector<std::unique_ptr<const formats::InputFileBytes>> files;
+  std::vector<std::future<std::string>> digests;
+  for (const auto& path : a.files) {
+    // Mapped, not copied: a fresh 20 MB buffer costs more in page faults than the parse.
+    files.push_back(std::make_unique<const formats::InputFileBytes>(path));
+    const std::string_view bytes = files.back()->view();
+    std::future<std::string> digest;
+    auto start_digest = [&] {
+      if (a.digest_inputs && !digest.valid())
+        digest = std::async(std::launch::async, [bytes] { return sha256_hex(bytes); });
+    };
+    auto record_input = [&] {
+      start_digest();
+      result.inputs.push_back({path, {}, bytes.size()});
+      digests.push_back(std::move(digest));
+    };
+    // A raw accelerometer CSV is parsed on both cores: its digest starts after the parse, beside
+    // the record's checks.
+    const bool raw_csv = !ident::is_klipper_spectrum(bytes) && !ident::is_shaketune_stdata(bytes) &&
+                         !ident::is_rrf_accelerometer_csv(bytes);
+    if (!raw_csv) start_digest();
+    std::vector<ident::AxisSpectrum> file_spectra;
+    if (ident::is_klipper_spectrum(bytes)) {
+      // Klipper's spectrum files: one or several datasets; measured PSDs unless the file has
+      // shaper columns (then Klipper normalized them before writing).
+      file_spectra = std::move(ident::read_klipper_spectrum(path, bytes, in.axis).datasets);
+    } else if (ident::is_shaketune_stdata(bytes)) {
+      // Shake&Tune's .stdata: every measurement is a record; one without an axis in its name
+      // (a belt, a vibration run) is its own group under its measurement name.
+      for (auto& m : ident::load_shaketune_stdata(path, bytes, in)) {
+        auto s = ident::record_spectrum(m.record, welch);
+        by_axis[m.record.axis != 0 ? std::string(1, m.record.axis) : m.name].push_back(std::move(s));
+      }
+      record_input();
+      continue;
+    } else if (ident::is_rrf_accelerometer_csv(bytes)) {
+      file_spectra.push_back(ident::record_spectrum(ident::load_rrf_accelerometer_csv(path, bytes, in), welch));
+    } else {
+      auto rec = ident::load_accel_csv(path, bytes, in, start_digest);
+      const bool too_short =
+          rec.sampling.samples < 2 * ident::resolve_segment_length(welch, rec.sampling.sample_rate_hz);
+      if (ringdown == RingdownDiversion::all || (ringdown == RingdownDiversion::too_short && too_short)) {
+        if (ringdown != RingdownDiversion::all)
+          result.warnings.push_back(
+              fmt::format("{}: {:.3f} s at {:.0f} Hz is too short for Welch's method; analysed as "
+                          "a ring-down",
+                          path, rec.sampling.duration_s, rec.sampling.sample_rate_hz));
+        record_input();
+        result.ringdown_records.push_back(std::move(rec));
+        continue;
+      }
+      file_spectra.push_back(ident::record_spectrum(rec, welch));
+      record_input();
+      const std::string motion = ro.use_commanded_motion ? ident::commanded_motion_beside(path) : std::string{};
+      if (!motion.empty() && (rec.axis == 'x' || rec.axis == 'y') && !timed.count(record_label(rec.axis, path))) {
+        files.push_back(std::make_unique<const formats::InputFileBytes>(motion));
+        const std::string_view mbytes = files.back()->view();
+        auto pieces = ident::load_commanded_motion_csv(motion, mbytes, rec.axis);
+        result.inputs.push_back({motion, {}, mbytes.size()});
+        digests.push_back(a.digest_inputs ? std::async(std::launch::async, [mbytes] { return sha256_hex(mbytes); })
+                                          : std::future<std::string>{});
+        timed.emplace(record_label(rec.axis, path), TimedRecord{std::move(rec), std::move(pieces)});
+      }
+      for (auto& s : file_spectra) by_axis[record_label(s.axis, path)].push_back(std::move(s));
+      continue;
+    }
+    record_input();
+    for (auto& s : file_spectra) by_axis[record_label(s.axis, path)].push_back(std::move(s));
+  }
+  for (auto& [label, spectra] : by_axis) {
+    // Spectra Klipper normalized (files with shaper columns) and measured ones (raw data, files
+    // without them) of one axis are brought to Klipper's normalization before they are averaged,
+    // as calibrate_shaper.py does; the datasets are kept as read.
+    AxisResult r;
+    r.axis = spectra.front().axis;
+    r.label = label;
+    const bool any_normalized =
+        std::any_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
+    const bool all_normalized =
+        std::all_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
+    if (any_normalized && !all_normalized) {
+      std::vector<ident::AxisSpectrum> same = spectra;
+      for (auto& s : same)
+        if (!s.klipper_normalized) {
+          for (auto* p : {&s.psd_sum, &s.psd_x, &s.psd_y, &s.psd_z})
+            if (!p->empty()) *p = ident::klipper_normalize(s.freq_hz, *p);
+          s.klipper_normalized = true;
+        }
+      r.spectrum = ident::average_spectra(same);
+    } else {
+      r.spectrum = ident::average_spectra(spectra);
+    }
+    r.datasets = std::move(spectra);
+    for (const auto& w : r.spectrum.warnings) result.warnings.push_back(w);
+    r.modes = ident::identify_modes(r.spectrum, ro);
+    if (const auto it = timed.find(label); it != timed.end())
+      ident::refine_modes_with_motion(r.modes, it->second.record, it->second.motion);
+    for (const auto& w : r.modes.warnings) result.warnings.push_back(fmt::format("axis {}: {}", label, w));
+    result.axes.push_back(std::move(r));
+  }
+  for (std::size_t i = 0; i < digests.size(); ++i)
+    if (digests[i].valid()) result.inputs[i].sha256 = digests[i].get();
+  return result;
+}
+
+}  // namespace tunekit::calibration

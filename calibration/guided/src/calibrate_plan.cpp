@@ -1,0 +1,224 @@
+// tunekit calibrate, stage 1: the plan. The experiments for the profile and the liquefier path,
+// a fresh run directory, and every protocol checked against the machine's limits before any
+// byte is sent.
+#include <algorithm>
+#include <ctime>
+#include <cmath>
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "calibrate_liquefier.hpp"
+#include "calibrate_stages.hpp"
+#include "tunekit/calibration/results/history_record.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/calibration/results/results_json.hpp"
+#include "tunekit/core/text.hpp"
+#include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/machine/profile_import.hpp"
+#include "tunekit/sim/sim_camera.hpp"
+#include "tunekit/sim/simulator.hpp"
+
+#ifndef TUNEKIT_DATASETS_DIR
+#define TUNEKIT_DATASETS_DIR "datasets"
+#endif
+
+namespace tunekit::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string utc_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
+  return buf;
+}
+
+std::vector<PlannedExperiment> choose_experiments(const CalibrateArgs& a, const CalibrationProfile& p,
+                                                  bool camera_path) {
+  std::vector<PlannedExperiment> exps;
+  if (!a.skip_liquefier && !camera_path) {
+    // The step test is a flow sweep: every level reached from below and from above, so that tau,
+    // K and theta are known per arrival level (the liquefier's dynamics change with the flow).
+    exps.push_back({"liquefier-step", "liquefier-flow-sweep", "", {}, 0, {}});
+    exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}, 0, {}});
+  }
+  if (camera_path)
+    for (const auto& t : camera_tests(p.profile)) exps.push_back({t.name, t.protocol, "", t.params, 0, {}});
+  if (!a.skip_axes) {
+    if (!p.profile.sensors.accelerometer)
+      throw InputError("the axis sweeps need an accelerometer ([sensors] accelerometer = true)", p.path);
+    exps.push_back({"axis-x", "axis-sweep", "x", {}, 0, {}});
+    exps.push_back({"axis-y", "axis-sweep", "y", {}, 0, {}});
+  }
+  if (exps.empty()) throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given");
+  return exps;
+}
+
+/// --param: "EXPERIMENT.NAME=VALUE" or "PROTOCOL.NAME=VALUE", applied to every experiment of that
+/// name or protocol (the protocol checks the name and the value with its other parameters).
+void apply_params(const std::vector<std::string>& params, std::vector<PlannedExperiment>& exps) {
+  for (const auto& text : params) {
+    const auto eq = text.find('='), dot = text.find('.');
+    if (eq == std::string::npos || dot == std::string::npos || dot > eq)
+      throw InputError(fmt::format(
+          "--param '{}' is not EXPERIMENT.NAME=VALUE (e.g. axis-x.freq_end_hz=80 or liquefier-chirp.segment_s=0.05)",
+          text));
+    const std::string who = text.substr(0, dot), name = text.substr(dot + 1, eq - dot - 1);
+    const auto value = core::parse_decimal(text.substr(eq + 1));
+    if (!value || !std::isfinite(*value))
+      throw InputError(fmt::format("--param {}: '{}' is not a finite decimal number", text, text.substr(eq + 1)));
+    std::string known;
+    bool used = false;
+    for (auto& e : exps) {
+      known += fmt::format("{}{} ({})", known.empty() ? "" : ", ", e.name, e.protocol);
+      if (e.name == who || e.protocol == who) e.params[name] = *value, used = true;
+    }
+    if (!used)
+      throw InputError(fmt::format("--param {}: this calibration has no experiment or protocol '{}' (it has: {})", text,
+                                   who, known));
+  }
+}
+
+// The chirp is designed within the limits checked before anything is sent: its staircase step
+// and feed levels come from the machine (the same for any time constant), and the time constant
+// it is sized from lies in [kChirpTauMin_s, kChirpTauMax_s] (the step test's, clamped), whose
+// extremes are checked too. Below 2 ms the band is the staircase's reach whatever tau is; above
+// twice Bellini's 0.45 s (a PEEK-class liquefier's) the chirp would only grow longer.
+constexpr double kChirpTauMin_s = 0.002;
+constexpr double kChirpTauMax_s = 2 * protocols::kLiteratureLiquefierTau_s;
+
+// Each calibration keeps its own run directory: a used one is never written into again.
+std::string make_run_dir(const std::string& out_dir) {
+  std::string run_dir = out_dir;
+  if (run_dir.empty()) {
+    const std::string base = "runs/calibrate-" + utc_stamp();
+    run_dir = base;
+    for (int k = 2; fs::exists(run_dir); ++k) run_dir = base + "-" + std::to_string(k);
+  } else if (fs::exists(run_dir) && !(fs::is_directory(run_dir) && fs::is_empty(run_dir))) {
+    throw InputError("the run directory already exists; give a new --out (or leave it out for runs/calibrate-UTCSTAMP)",
+                     run_dir);
+  }
+  fs::create_directories(run_dir + "/analysis");
+  fs::create_directories(run_dir + "/config");
+  return run_dir;
+}
+
+}  // namespace
+
+std::string resolved_calibrate_firmware(const std::string& requested, const std::string& profile_firmware) {
+  if (!requested.empty()) return firmware::to_string(firmware::parse_export_firmware(requested));
+  const std::string fw = core::lower(profile_firmware);
+  if (fw == "prusa") return "marlin";
+  if (fw == "klipper" || fw == "kalico" || fw == "marlin" || fw == "rrf") return fw;
+  return "klipper";
+}
+
+double clamped_chirp_tau_s(double tau_s) { return std::clamp(tau_s, kChirpTauMin_s, kChirpTauMax_s); }
+
+CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
+  if (a.machine != "sim" && a.profile.empty())
+    throw InputError(
+        "a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
+  if (!a.profile.empty()) {
+    if (!a.sensors.empty() && !machine::is_firmware_configuration(a.profile))
+      throw InputError(
+          "--sensor declares sensors a firmware configuration does not list; a TOML profile lists its own "
+          "in [sensors]",
+          a.profile);
+    machine::ProfileImportOptions io;
+    io.sensors = a.sensors;
+    return {machine::import_machine_profile(a.profile, io), a.profile};
+  }
+  return {protocols::builtin_sim_profile(), (fs::path(TUNEKIT_DATASETS_DIR) / "machines" / "sim.toml").string()};
+}
+
+CalibrationPlan plan_calibration(const CalibrateArgs& given, const CalibrationProfile& profile, bool can_prompt) {
+  CalibrationPlan plan;
+  plan.options = given;
+  // The firmware of the profile given (the built-in simulated printer's calibration is Klipper's).
+  plan.options.firmware =
+      resolved_calibrate_firmware(given.firmware, given.profile.empty() ? std::string() : profile.profile.firmware);
+  const CalibrateArgs& a = plan.options;
+  plan.profile = profile;
+  plan.sim = a.machine == "sim";
+  plan.can_prompt = can_prompt;
+  plan.camera_path =
+      !a.skip_liquefier && choose_liquefier_path(a.liquefier, profile.profile, profile.path) == LiquefierPath::camera;
+  // The simulated printer's own camera is the photo source of its camera path unless another is given.
+  auto& cam = plan.options.camera;
+  if (plan.camera_path && plan.sim && cam.camera.empty() && cam.photo.empty() && cam.camera_device.empty())
+    cam.camera = "sim";
+  // Off a terminal the photo source must be known before anything is printed.
+  if (plan.camera_path) check_photo_source(cam, plan.sim, can_prompt);
+  plan.experiments = choose_experiments(a, profile, plan.camera_path);
+  apply_params(a.params, plan.experiments);
+  plan.output = a.output;
+  if (!a.dry_run) {
+    prepare_record(plan.output,
+                   profile.profile.id);  // --record: a bad machine id or database fails before the machine moves
+    plan.run_dir = make_run_dir(a.out_dir);
+  }
+  // The simulated camera photographs everything the simulated printer prints.
+  if (plan.camera_path && cam.camera == "sim")
+    plan.bed = std::make_shared<sim::SimPrintBed>(sim::SimConfig::from_options(a.sim_options).seed);
+  check_plan(plan);
+  return plan;
+}
+
+void check_plan(CalibrationPlan& plan) {
+  // The chirp is sized from the expected liquefier corner: the literature time constant until
+  // the step test has measured one (it runs first).
+  plan.chirp = protocols::plan_liquefier_chirp(protocols::kLiteratureLiquefierTau_s);
+  plan.chirp_basis = fmt::format("the literature time constant {} s", display_number(plan.chirp.expected_tau_s));
+  // Safety first: every protocol is built and checked against the limits before any byte is sent;
+  // the chirp also for the extremes of the time constants it may be sized from later.
+  for (auto& e : plan.experiments) {
+    const auto built = protocols::run_experiment(experiment_run_options(plan, e, plan.chirp, true)).experiment;
+    e.estimated_s = built.estimated_duration_s;
+    e.checked = built;
+    if (e.protocol != "liquefier-chirp") continue;
+    plan.chirp = protocols::plan_liquefier_chirp(plan.chirp.expected_tau_s, built.params.at("segment_s"));
+    for (const double tau : {kChirpTauMin_s, kChirpTauMax_s})
+      protocols::run_experiment(experiment_run_options(plan, e, protocols::plan_liquefier_chirp(tau), true));
+  }
+}
+
+protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const PlannedExperiment& e,
+                                             const protocols::ChirpPlan& chirp, bool dry) {
+  const CalibrateArgs& a = plan.options;
+  protocols::RunOptions o;
+  o.protocol = e.protocol;
+  o.params = e.params;
+  if (plan.sim) o.sim_bed = plan.bed;
+  o.axis = e.axis.empty() ? "x" : e.axis;
+  o.machine = plan.sim ? "sim" : a.profile;
+  o.profile = plan.profile.profile;  // with "sim": the printer the simulator simulates
+  o.port = a.port;
+  o.sim_options = a.sim_options;
+  // The simulated printer runs the firmware being calibrated (its planner rules and dialect).
+  if (plan.sim && std::none_of(o.sim_options.begin(), o.sim_options.end(),
+                               [](const std::string& s) { return s.rfind("firmware=", 0) == 0; })) {
+    // Kalico is a Klipper fork: its G-code, API server and planner are Klipper's.
+    const auto fw = firmware::parse_export_firmware(a.firmware);
+    o.sim_options.push_back(
+        "firmware=" + (fw == firmware::ExportFirmware::kalico ? std::string("klipper") : firmware::to_string(fw)));
+  }
+  o.dry_run = dry;
+  o.run_dir = plan.run_dir + "/" + e.name;
+  o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
+  if (e.protocol == "liquefier-chirp") {
+    // Sized from the time constant (the protocol's staircase step as long as the chirp's end
+    // allows, never shorter than the machine's: chirp_plan.hpp, machine_defaults) ...
+    if (!e.params.count("expected_tau_s")) o.params["expected_tau_s"] = chirp.expected_tau_s;
+    // ... with as short a stop as the extruder allows: its own acceleration limit.
+    if (plan.profile.profile.extruder.max_accel_mm_s2 > 0 && !e.params.count("accel_mm_s2"))
+      o.params["accel_mm_s2"] = plan.profile.profile.extruder.max_accel_mm_s2;
+  }
+  return o;
+}
+
+}  // namespace tunekit::calibration

@@ -1,0 +1,74 @@
+#pragma once
+// The calibration report: one self-contained HTML file (plots embedded as SVG data URIs, the
+// line-width photo as a PNG one; no scripts, no external files, and a Content-Security-Policy
+// that forbids any request leaving the file) built from a run directory's results.json and
+// plotdata.json. `tunekit report RUN_DIR` rebuilds it at any time.
+//
+// results.json is a tunekit envelope. `results.summary` lists the rows of the summary table as
+// {label, path, unit, ci_path?, basis?}: `path` points at a number inside `results`
+// (e.g. "compensators.settings.pa_k_s"), `ci_path` at its 95 % interval [lo, hi]; a row
+// without an interval says why in `basis` ("designed", "fixed"). `results.agreement` lists
+// quantities measured two ways (see agreement.hpp); `results.notes` informational lines.
+// Every warning is shown with a one-line "what to do" (warning_advice.hpp).
+// plotdata.json holds the series of each plot:
+//   step:      {t_s[], u[], y[], y_fit[] (each step's fit over its step, null elsewhere), u_label, y_label,
+//              y_model[] (the whole-record model's output over the record) and model_label, or
+//              model_missing (why there is no model)}
+//   bode:      {freq_hz[], mag_db[], phase_deg[], coherence[], model: {freq_hz[], mag_db[], phase_deg[], label}}
+//   psd.<axis>: {freq_hz[], psd[], modes: [{freq_hz}], shapers: [{type, freq_hz[], response[]}]}
+//   viscosity: {series: [{temperature_K, shear_rate_1_s[], viscosity_Pa_s[], fit_shear_rate_1_s[],
+//   fit_viscosity_Pa_s[]}]} linewidth: {s_mm[], width_mm[], setpoint_mm[], overlay_png: "file name in the run
+//   directory"}
+// Plots whose data are absent are left out.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tunekit/calibration/results/json_access.hpp"  // json_at(): the summary rows' dotted paths
+#include "tunekit/calibration/presentation/plots.hpp"
+
+namespace tunekit::calibration {
+
+/// The record's input, its output with the whole-record model (colour kWholeRecordModelColor) and
+/// each step's fit (colour 2, dashed), and the residuals; without the model the output panel's
+/// title says why.
+Figure step_figure(const nlohmann::json& d);
+/// The step plot's sentence on a missing whole-record model ("whole-record model not fitted:
+/// <reason>"); empty when the plot data have the model.
+std::string step_model_note(const nlohmann::json& d);
+/// The palette colour of the whole-record model's curves.
+constexpr int kWholeRecordModelColor = 5;
+Figure bode_figure(const nlohmann::json& d);
+Figure psd_figure(const nlohmann::json& d, const std::string& axis);
+Figure viscosity_figure(const nlohmann::json& d);
+Figure linewidth_figure(const nlohmann::json& d);
+/// overshoot_grid: {tolerance_mm, cells: [{speed_mm_s, accel_mm_s2, overshoot_mm, completion_time_s, figure_of_merit}]}
+Figure overshoot_grid_figure(const nlohmann::json& d);
+
+struct ReportImage {
+  std::string id;  ///< e.g. "step", "psd_x"
+  std::string caption;
+  std::string path;  ///< the image file (.svg plot or .png photo); empty when not drawn
+  /// Why the figure was not drawn (the plot library failed, e.g. under a memory cap): the report
+  /// says so in its place and keeps everything else. Empty when it was drawn.
+  std::string failure;
+};
+
+/// Renders every plot that plotdata.json has data for into RUN_DIR/plots/*.svg.
+std::vector<ReportImage> render_report_plots(const std::string& run_dir, const nlohmann::json& plotdata);
+
+/// The HTML text for an envelope (results.json contents) and rendered images.
+std::string build_report_html(const nlohmann::json& envelope, const std::vector<ReportImage>& images);
+
+/// Formats a number for display with 4 significant digits ("0.4512", "1.25e+04").
+std::string display_number(double v);
+
+/// Formats a 95 % interval for display as "[lo, hi]": 4 significant digits like display_number,
+/// more (up to 8) where 4 would print two different bounds as the same number ("[3.5, 3.5]" reads
+/// as an interval of zero width; "[3.4995, 3.5004]" says what was measured).
+std::string display_interval(double lo, double hi);
+
+}  // namespace tunekit::calibration

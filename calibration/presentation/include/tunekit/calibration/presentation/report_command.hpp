@@ -1,0 +1,36 @@
+#pragma once
+// tunekit report as a function: (re)build the self-contained HTML calibration report of a run
+// directory from its results.json and plotdata.json (what the report holds: report.hpp). The
+// shape of a command is described in docs/cpp-api.md; `report` writes no JSON envelope,
+// so it has no to_envelope().
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "tunekit/calibration/presentation/report.hpp"
+
+namespace tunekit::calibration {
+
+struct ReportOptions {
+  std::string run_dir;  ///< a run directory holding results.json (and plotdata.json, optional)
+};
+
+struct ReportOutcome {
+  ReportOptions options;
+  std::string html_path;            ///< RUN_DIR/report.html, written atomically
+  std::vector<ReportImage> images;  ///< the plots rendered into RUN_DIR/plots/*.svg and the photos embedded
+};
+
+/// Reads RUN_DIR/results.json and plotdata.json, renders the plots and writes report.html.
+/// InputError (exit 2, located at the file) for a missing or malformed results file.
+ReportOutcome compute_report(const ReportOptions& options);
+
+/// The report's path, one line.
+void print_text(const ReportOutcome& outcome, std::ostream& os);
+
+/// Reads RUN_DIR/results.json and RUN_DIR/plotdata.json (optional), renders the plots and
+/// writes RUN_DIR/report.html atomically. Returns the report's path.
+std::string write_report(const std::string& run_dir);
+
+}  // namespace tunekit::calibration
