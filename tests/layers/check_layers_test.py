@@ -104,6 +104,8 @@ def main():
          '#include "tunekit/protocols/safety.hpp"', "tunekit/protocols/safety.hpp"),
         ("machine includes sim", lambda t: first_source(t, "machine/src"),
          '#include "tunekit/sim/simulator.hpp"', "tunekit/sim/simulator.hpp"),
+        ("machine includes ident (firmware builds on it, machine does not)",
+         lambda t: first_source(t, "machine/src"), '#include "tunekit/ident/csv.hpp"', "tunekit/ident/csv.hpp"),
         ("machine includes protocols", lambda t: first_source(t, "machine/src"),
          '#include "tunekit/protocols/runner.hpp"', "tunekit/protocols/runner.hpp"),
         ("sim includes protocols", lambda t: first_source(t, "sim/src"),
