@@ -16,6 +16,7 @@
 #include "tunekit/core/text.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/machine/profile_import.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/sim_camera.hpp"
 #include "tunekit/sim/simulator.hpp"
 
@@ -133,7 +134,7 @@ CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
     io.sensors = a.sensors;
     return {machine::import_machine_profile(a.profile, io), a.profile};
   }
-  return {protocols::builtin_sim_profile(), (fs::path(TUNEKIT_DATASETS_DIR) / "machines" / "sim.toml").string()};
+  return {sim::builtin_sim_profile(), (fs::path(TUNEKIT_DATASETS_DIR) / "machines" / "sim.toml").string()};
 }
 
 CalibrationPlan plan_calibration(const CalibrateArgs& given, const CalibrationProfile& profile, bool can_prompt) {

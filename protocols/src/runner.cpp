@@ -23,6 +23,7 @@
 #include "tunekit/protocols/feed_track_plan.hpp"
 #include "tunekit/protocols/safety.hpp"
 #include "tunekit/protocols/stop_signals.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/sim_camera.hpp"
 #include "tunekit/machine/serial_transport.hpp"
 #include "tunekit/sim/simulator.hpp"
@@ -228,7 +229,7 @@ void stop_sim_and_keep_record(sim::SimPtyServer& server, machine::Journal& journ
 /// The profile the run is checked against (RunOptions::profile, profile_path, machine).
 machine::MachineProfile run_profile(const RunOptions& o, bool sim) {
   if (o.profile) return *o.profile;
-  if (sim) return o.profile_path.empty() ? builtin_sim_profile() : machine::load_machine_profile(o.profile_path);
+  if (sim) return o.profile_path.empty() ? sim::builtin_sim_profile() : machine::load_machine_profile(o.profile_path);
   if (!o.profile_path.empty() && o.profile_path != o.machine)
     throw InputError(
         "a real machine's profile is --machine FILE; --profile describes the printer --machine sim simulates");

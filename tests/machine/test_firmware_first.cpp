@@ -20,6 +20,7 @@
 #include "tunekit/machine/klipper_settings.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using tunekit::test::FakeKlipper;
 using tunekit::test::FakeKlipperConfig;
@@ -209,7 +210,7 @@ TEST_CASE("Klipper settings: live values win over the configuration, missing one
   CHECK(k.shaper.at("x") == "ei:55:0.1");
   CHECK(k.shaper.count("y") == 0);
   std::vector<std::string> notes;
-  auto profile = tprot::builtin_sim_profile();
+  auto profile = tunekit::sim::builtin_sim_profile();
   const double feed_limit = profile.extruder.max_velocity_mm_s;
   const auto p = tunekit::machine::with_klipper_settings(profile, k, notes);
   CHECK(p.extruder.max_accel_mm_s2 == 800);           // stricter than the profile's 5000

@@ -24,6 +24,7 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/simulator.hpp"
 
 using tunekit::InputError;

@@ -18,8 +18,10 @@
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/machine/journal.hpp"
+#include "tunekit/machine/profile_import.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/simulator.hpp"
 #include "tunekit/machine/trajectory.hpp"
 #include "tunekit/machine/transport.hpp"
@@ -346,9 +348,15 @@ TEST_CASE("simulator options are validated", "[machine]") {
   CHECK(c.faults.at(0).delay_ms == Approx(250));
 }
 
-TEST_CASE("the built-in simulator profile matches datasets/machines/sim.toml", "[machine]") {
+TEST_CASE("the built-in simulator profile is datasets/machines/sim.toml", "[machine]") {
+  // The file tunekit-sim --profile and calibrate --machine sim name; built in at compile time.
+  const std::string path = tunekit::test::dataset("machines/sim.toml");
+  CHECK(builtin_sim_profile_toml() == tunekit::test::read_text(path));
   const auto a = builtin_sim_profile();
-  const auto b = load_machine_profile(tunekit::test::dataset("machines/sim.toml"));
+  auto b = load_machine_profile(path);
+  CHECK(a.source_path == "<built-in simulated printer profile>");
+  b.source_path = a.source_path;  // every value alike, only the file's name differs
+  CHECK(machine_profile_toml(a) == machine_profile_toml(b));
   CHECK(a.name == b.name);
   CHECK(a.axes.at("x").max_accel_mm_s2 == b.axes.at("x").max_accel_mm_s2);
   CHECK(a.extruder.max_flow_mm3_s == b.extruder.max_flow_mm3_s);

@@ -20,6 +20,7 @@
 #include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/simulator.hpp"
 #include "tunekit/machine/transport.hpp"
 

@@ -105,9 +105,6 @@ struct RunResult {
   std::string m493_form;
 };
 
-/// The built-in simulated printer's machine profile (same content as datasets/machines/sim.toml).
-machine::MachineProfile builtin_sim_profile();
-
 /// Runs (or, with dry_run, only builds and checks) an experiment. See the header comment.
 RunResult run_experiment(const RunOptions& options);
 
