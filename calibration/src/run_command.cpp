@@ -8,6 +8,7 @@
 #include "tunekit/calibration/envelope.hpp"
 #include "tunekit/calibration/results_json.hpp"
 #include "tunekit/calibration/run_command.hpp"
+#include "tunekit/calibration/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/text.hpp"
 #include "tunekit/protocols/experiments.hpp"
@@ -72,6 +73,7 @@ RunOutcome compute_run(const RunCommandOptions& a) {
         "--port is needed with a machine profile (a serial device, a PTY such as /tmp/printer, or "
         "unix:/tmp/klippy_uds)");
   if (o.machine != "sim" && o.port.empty()) o.port = "(dry run)";
+  load_run_machine(o, a.profile_path, a.sim_options);
   outcome.result = protocols::run_experiment(o);
   if (!o.dry_run && outcome.result.files.count("truth"))
     outcome.truth = read_json_file(outcome.result.files.at("truth"));
@@ -89,7 +91,7 @@ Envelope to_envelope(const RunOutcome& outcome) {
                    {"machine", a.machine},
                    {"port", a.port},
                    {"params", params},
-                   {"sim", a.sim_options},
+                   {"sim", outcome.options.sim_options},
                    {"dry_run", a.dry_run}});
   auto& res = env.results();
   res["experiment"] = r.experiment.to_json();

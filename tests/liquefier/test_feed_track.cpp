@@ -49,8 +49,7 @@ void window_means(const ident::FeedTrack& track, double offset, double t0, doubl
 }
 
 protocols::Experiment flow_sweep(firmware::Firmware fw) {
-  return protocols::build_experiment("liquefier-flow-sweep", {}, "", sim::builtin_sim_profile(),
-                                     firmware::Dialect(fw));
+  return protocols::build_experiment("liquefier-flow-sweep", {}, "", sim::builtin_sim_profile(), firmware::Dialect(fw));
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 
 #include "fake_klipper.hpp"
 #include "test_support.hpp"
+#include "tunekit/calibration/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/machine/klipper_settings.hpp"
 #include "tunekit/protocols/experiments.hpp"
@@ -36,6 +37,7 @@ tprot::RunOptions bundled_profile_on(const std::string& sock, const std::string&
   o.port = "unix:" + sock;
   o.run_dir = dir;
   if (tprot::protocol_spec(protocol).uses_axis) o.axis = "x";
+  tunekit::calibration::load_run_machine(o, "", {});
   return o;
 }
 

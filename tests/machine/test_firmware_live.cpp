@@ -33,6 +33,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
@@ -98,7 +99,7 @@ TEST_CASE("a live Marlin with FT_MOTION active is detected from M493, and its se
     o.protocol = "axis-sweep";
     o.run_dir = dir + "/" + mode;
     o.params = {{"freq_start_hz", 30}, {"freq_end_hz", 60}};
-    o.sim_options = {"firmware=marlin", std::string("ft_motion=") + mode};
+    tunekit::calibration::load_run_machine(o, "", {"firmware=marlin", std::string("ft_motion=") + mode});
     const auto res = run_experiment(o);
     const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at("summary")));
     const auto* ft = run.at("firmware").contains("ft_motion") ? &run.at("firmware").at("ft_motion") : nullptr;
@@ -190,7 +191,8 @@ TEST_CASE("axis-sweep on RepRapFirmware records with M956 and fetches the file o
   o.protocol = "axis-sweep";
   o.run_dir = dir + "/run";
   o.params = {{"freq_start_hz", 30}, {"freq_end_hz", 70}};
-  o.sim_options = {"firmware=rrf", "sensor_stream=0", "rrf_http=1", "accel_rate_hz=1344"};
+  tunekit::calibration::load_run_machine(o, "",
+                                         {"firmware=rrf", "sensor_stream=0", "rrf_http=1", "accel_rate_hz=1344"});
   const auto res = run_experiment(o);
   REQUIRE(res.status == "complete");
   const std::string sent = tunekit::test::read_text(res.files.at("sim_received"));
@@ -222,7 +224,7 @@ TEST_CASE("serial-only RepRapFirmware is refused before heating or homing, with 
   RunOptions o;
   o.protocol = "axis-sweep";
   o.run_dir = dir + "/run";
-  o.sim_options = {"firmware=rrf", "sensor_stream=0"};  // no web server
+  tunekit::calibration::load_run_machine(o, "", {"firmware=rrf", "sensor_stream=0"});  // no web server
   std::string why;
   try {
     run_experiment(o);

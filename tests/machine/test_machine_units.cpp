@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
@@ -369,6 +370,7 @@ TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseud
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = base + "/step";
+  tunekit::calibration::load_run_machine(o, "", {});
   const auto r = run_experiment(o);
   CHECK(r.status == "complete");
   const auto t = tunekit::ident::read_csv(r.files.at("load_cell"), {{}, "time"});
@@ -386,6 +388,7 @@ TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseud
   s.axis = "x";
   s.run_dir = base + "/sweep";
   s.params = {{"freq_start_hz", 30}, {"freq_end_hz", 70}, {"hz_per_sec", 8}};
+  tunekit::calibration::load_run_machine(s, "", {});
   const auto rs = run_experiment(s);
   const auto a = tunekit::ident::read_csv(rs.files.at("accel"), {{}, "time"});
   CHECK(a.rows == Approx(3200 * (5 + 0.6)).epsilon(0.05));
@@ -409,7 +412,8 @@ TEST_CASE("run_experiment: a disconnect is exit 3 and the journal keeps every sa
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = tunekit::test::scratch_dir("machine_api_disconnect") + "/run";
-  o.sim_options = {"fault=disconnect@11"};  // N0 M110, M115, M493 (Marlin), then the protocol
+  tunekit::calibration::load_run_machine(o, "",
+                                         {"fault=disconnect@11"});  // N0 M110, M115, M493 (Marlin), then the protocol
   o.link.timeout = std::chrono::milliseconds(2000);
   try {
     run_experiment(o);
@@ -428,7 +432,7 @@ TEST_CASE("run_experiment: a firmware error is exit 3 after the safe-state comma
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = tunekit::test::scratch_dir("machine_api_error") + "/run";
-  o.sim_options = {"fault=error@10"};
+  tunekit::calibration::load_run_machine(o, "", {"fault=error@10"});
   CHECK_THROWS_AS(run_experiment(o), tunekit::MachineError);
   const std::string rx = read_all(o.run_dir + "/sim_received.gcode");
   const auto at = rx.find("N9 ");
@@ -446,7 +450,7 @@ TEST_CASE("run_experiment: garbled and dropped lines are recovered", "[machine]"
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = tunekit::test::scratch_dir("machine_api_recover") + "/run";
-  o.sim_options = {"fault=garble@8", "fault=drop@11"};
+  tunekit::calibration::load_run_machine(o, "", {"fault=garble@8", "fault=drop@11"});
   o.link.timeout = std::chrono::milliseconds(300);
   const auto r = run_experiment(o);
   CHECK(r.summary["link"]["resends"] == 1);
@@ -461,6 +465,7 @@ TEST_CASE("run_experiment: over-limit protocols are refused before the simulator
   o.machine = tunekit::test::dataset("machines/sim.toml");
   o.port = server.path();
   o.run_dir = tunekit::test::scratch_dir("machine_api_refused") + "/run";
+  tunekit::calibration::load_run_machine(o, "", {});
   o.params = {{"feed_high_mm_s", 100}, {"hotend_c", 350}};
   try {
     run_experiment(o);

@@ -14,6 +14,7 @@
 #include <catch2/catch.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
@@ -161,6 +162,7 @@ TEST_CASE("the simulator hears nothing of a protocol with accel_per_hz=1e308", "
   o.machine = tunekit::test::dataset("machines/sim.toml");
   o.port = server.path();
   o.run_dir = scratch_dir("gate_sim_1e308") + "/run";
+  tunekit::calibration::load_run_machine(o, "", {});
   o.params = {{"accel_per_hz", 1e308}};
   CHECK_THROWS_AS(run_experiment(o), tunekit::InputError);
   std::this_thread::sleep_for(std::chrono::milliseconds(100));

@@ -4,13 +4,14 @@
 // violations listed; nothing is sent if there is one), then sent over the link while every
 // line and sensor sample is journaled into the run directory.
 //
-//   RunOptions o;  o.protocol = "liquefier-step";  o.machine = "sim";
+//   RunOptions o;  o.protocol = "liquefier-step";  o.profile = ...;  o.port = "/dev/ttyACM0";
 //   RunResult r = run_experiment(o);   // r.run_dir, r.files["load_cell"] = ".../step.csv"
 //
-// Machines: "sim" (the built-in simulated printer, served on a pseudo-terminal in a background
-// thread of this process; its truth.json lands in the run directory) or a profile TOML path
-// with `port`: a serial device, a pseudo-terminal (Klipper's /tmp/printer), or
-// "unix:/tmp/klippy_uds" for Klipper's API server.
+// The machine is the printer on `port` (a serial device, a pseudo-terminal such as Klipper's
+// /tmp/printer, or "unix:/tmp/klippy_uds" for Klipper's API server), checked against the
+// machine profile the caller loaded, or a machine the runner brings up itself for each run
+// (RunOptions::host, machine_host.hpp): calibration/ serves the simulated printer that way, on a
+// pseudo-terminal in a background thread of this process, its truth.json in the run directory.
 //
 // Before the protocol is built for the machine, the firmware on the link is identified (M115, or
 // Klipper's API server: info and the configuration in force): the protocol is built for that
@@ -31,48 +32,36 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "tunekit/protocols/experiments.hpp"
+#include "tunekit/protocols/machine_host.hpp"
 #include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 
-namespace tunekit::protocols {
-
-/// The simulated camera's print bed (sim_camera.hpp; declared only, so that this header and the
-/// code that runs experiments need no OpenCV).
-}  // namespace tunekit::protocols
-namespace tunekit::sim {
-class SimPrintBed;
-}  // namespace tunekit::sim
 namespace tunekit::protocols {
 
 struct RunOptions {
   std::string protocol;                  ///< see protocol_specs()
   std::map<std::string, double> params;  ///< protocol parameter overrides
   std::string axis = "x";                ///< axis protocols
-  std::string machine = "sim";           ///< "sim" or a machine profile path (TOML or a firmware configuration)
-  /// The machine's profile, already loaded (the C++ API's way; calibrate passes its own). With
-  /// "sim" it is the printer the simulator simulates (SimConfig::for_machine): its limits,
-  /// firmware, steps and extruder; otherwise the limits of the machine on `port`. Empty: the
-  /// built-in simulated printer's profile, or the file `machine` names.
-  std::optional<machine::MachineProfile> profile;
-  /// "sim" only: the profile file of the printer to simulate (tunekit run --profile), when
-  /// `profile` is empty.
-  std::string profile_path;
-  std::string port;  ///< device / PTY / "unix:PATH"; empty with "sim"
+  /// The machine as run.json names it: "sim", or the path of its profile (TOML or a firmware
+  /// configuration).
+  std::string machine = "sim";
+  /// The machine's profile, loaded by the caller once for all its runs: the limits every line is
+  /// checked against. With a `host` serving the simulated printer it is the printer simulated.
+  machine::MachineProfile profile;
+  /// The machine the runner brings up for each run (the simulated printer); null: the printer on
+  /// `port`.
+  std::shared_ptr<const MachineHost> host;
+  std::string port;  ///< device / PTY / "unix:PATH"; with a `host`, empty (or an outside link to it)
   int baud = 250000;
   std::string run_dir;   ///< default: <runs_root>/<protocol>-<UTC stamp>
   std::string file_tag;  ///< names raw_data_<axis>_<tag>.csv; default: the UTC stamp
   std::string runs_root = "runs";
-  std::vector<std::string> sim_options;  ///< SimConfig::from_options keys ("tau_s=0.5", "fault=drop@12")
-  /// "sim" only: what the simulated printer prints is laid down on this bed (for its camera,
-  /// sim_camera.hpp); several runs may share one bed.
-  std::shared_ptr<sim::SimPrintBed> sim_bed;
   machine::LinkOptions link;  ///< timeouts and retries
   ProtocolLimits limits;      ///< caps on the protocol's machine time, lines and bytes
   bool dry_run = false;       ///< build and check only; RunResult::gcode is filled
