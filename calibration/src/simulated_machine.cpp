@@ -66,7 +66,7 @@ class ServedSimulator final : public protocols::ServedMachine {
                                            {"machine_time_s", server_.sim().time_s()}}
                                     .dump(2) +
                                 "\n");
-    files["sim_received"] = journal.path("sim_received.gcode");
+    files[protocols::RunFile::sim_received] = journal.path("sim_received.gcode");
   }
 
  private:
@@ -93,7 +93,7 @@ class SimulatorHost final : public protocols::MachineHost {
   std::unique_ptr<protocols::ServedMachine> start(machine::Journal& journal, protocols::RunFiles& files,
                                                   const std::string& port) const override {
     core::write_file_atomic(journal.path("truth.json"), truth_);
-    files["truth"] = journal.path("truth.json");
+    files[protocols::RunFile::truth] = journal.path("truth.json");
     if (!port.empty()) return nullptr;
     return std::make_unique<ServedSimulator>(config_, bed_);
   }

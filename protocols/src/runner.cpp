@@ -99,7 +99,7 @@ void adapt_to_firmware(const RunOptions& o, const machine::MachineProfile& profi
   // The commanded feed as the firmware plans it, for the analysis (feed_track_plan.hpp).
   if (const auto track = planned_feed_track(res.experiment); !track.empty()) {
     core::write_file_atomic(journal.path("feed_track.csv"), ident::feed_track_csv(track));
-    res.files["feed_track"] = journal.path("feed_track.csv");
+    res.files[RunFile::feed_track] = journal.path("feed_track.csv");
   }
 }
 
@@ -186,6 +186,13 @@ void send_protocol(Session& session, const std::vector<std::string>& gcode, cons
   send_run();
 }
 
+/// The load cell's file: step.csv for the step tests (what `tunekit step` reads), else
+/// feed_force.csv.
+std::string load_cell_file(const std::string& protocol) {
+  const Protocol id = protocol_spec(protocol).id;
+  return id == Protocol::liquefier_step || id == Protocol::liquefier_flow_sweep ? "step.csv" : "feed_force.csv";
+}
+
 /// Whether the protocol sets a heater to a temperature above 0 (then the run turns the heaters
 /// off at its end, unless RunOptions::keep_heaters).
 bool heats(const std::vector<std::string>& gcode) {
@@ -246,7 +253,7 @@ void mark_interrupted(const std::string& run_json, const std::string& where) {
 
 void throw_if_stopped_after_run(const RunResult& r, const std::string& where) {
   if (!StopSignals::flag().load() || StopSignals::received_number() == 0) return;
-  if (r.files.count("summary")) mark_interrupted(r.files.at("summary"), where);
+  if (r.files.count(RunFile::summary)) mark_interrupted(r.files.at(RunFile::summary), where);
   StopSignals::throw_if_stopped(r.run_dir.empty() ? where
                                                   : fmt::format("{} (the run is kept in {})", where, r.run_dir));
 }
@@ -274,13 +281,12 @@ RunResult run_experiment(const RunOptions& o) {
   machine::Journal journal(res.run_dir);
   const std::string axis_tag = res.experiment.axis.empty() ? "xy" : res.experiment.axis;
   const std::string tag = o.file_tag.empty() ? stamp : o.file_tag;
-  Recorder rec(
-      journal, o.protocol == "liquefier-step" || o.protocol == "liquefier-flow-sweep" ? "step.csv" : "feed_force.csv",
-      fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag),
-      fmt::format("commanded_motion_{}_{}.csv", axis_tag, tag));
-  res.files["journal"] = journal.path("journal.jsonl");
-  res.files["gcode"] = journal.path("protocol.gcode");
-  res.files["summary"] = journal.path("run.json");
+  Recorder rec(journal, load_cell_file(o.protocol), fmt::format("raw_data_{}_{}.csv", axis_tag, tag),
+               fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag),
+               fmt::format("commanded_motion_{}_{}.csv", axis_tag, tag));
+  res.files[RunFile::journal] = journal.path("journal.jsonl");
+  res.files[RunFile::gcode] = journal.path("protocol.gcode");
+  res.files[RunFile::summary] = journal.path("run.json");
 
   nlohmann::json summary{{"protocol", o.protocol},  {"experiment", res.experiment.to_json()}, {"machine", o.machine},
                          {"profile", profile.name}, {"profile_source", profile.source_path},  {"started_utc", stamp}};
@@ -297,10 +303,10 @@ RunResult run_experiment(const RunOptions& o) {
     if (served) served->stop(journal, res.files);
   };
   auto list_files = [&] {
-    if (journal.has_csv(rec.load_file())) res.files["load_cell"] = journal.path(rec.load_file());
-    if (journal.has_csv(rec.accel_file())) res.files["accel"] = journal.path(rec.accel_file());
-    if (journal.has_csv(rec.commanded_file())) res.files["commanded_accel"] = journal.path(rec.commanded_file());
-    if (journal.has_csv(rec.motion_file())) res.files["commanded_motion"] = journal.path(rec.motion_file());
+    if (journal.has_csv(rec.load_file())) res.files[RunFile::load_cell] = journal.path(rec.load_file());
+    if (journal.has_csv(rec.accel_file())) res.files[RunFile::accel] = journal.path(rec.accel_file());
+    if (journal.has_csv(rec.commanded_file())) res.files[RunFile::commanded_accel] = journal.path(rec.commanded_file());
+    if (journal.has_csv(rec.motion_file())) res.files[RunFile::commanded_motion] = journal.path(rec.motion_file());
   };
 
   SendGuard guard(profile);  // the last check of every line, in the link
@@ -349,7 +355,7 @@ RunResult run_experiment(const RunOptions& o) {
     session.reset();
     stop_served();
     list_files();
-    summary["files"] = res.files;
+    summary["files"] = to_json(res.files);
     core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
     if (interrupted && !signal.empty()) {
       StopSignals::report();
@@ -367,7 +373,7 @@ RunResult run_experiment(const RunOptions& o) {
   session.reset();
   stop_served();
   list_files();
-  summary["files"] = res.files;
+  summary["files"] = to_json(res.files);
   core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
   res.status = "complete";
   res.summary = summary;

@@ -99,7 +99,7 @@ TEST_CASE("the axis sweep on a Klipper peer takes its nominal time within 2 %", 
   CHECK(moves_s == Approx((p.at("freq_end_hz") - p.at("freq_start_hz")) / p.at("hz_per_sec")).epsilon(0.01));
   const double nominal = 2 * p.at("settle_s") + moves_s;
   // On the peer: the span of the samples it streamed while recording.
-  std::istringstream in(tunekit::test::read_text(res.files.at("accel")));
+  std::istringstream in(tunekit::test::read_text(res.files.at(tunekit::protocols::RunFile::accel)));
   std::vector<double> t;
   for (std::string line; std::getline(in, line);)
     if (!line.empty() && line[0] != '#') t.push_back(std::stod(line.substr(0, line.find(','))));

@@ -1,8 +1,10 @@
 // Unit tests of the machine link: G-code framing, firmware identification, S-curve profiles,
 // safety limits, the line protocol against the in-process simulator (with injected faults).
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 #include <cmath>
@@ -365,6 +367,40 @@ TEST_CASE("the built-in simulator profile is datasets/machines/sim.toml", "[mach
   CHECK(a.sensors.load_cell == b.sensors.load_cell);
 }
 
+TEST_CASE("every protocol has one entry in the protocol table, found by its id and by its name", "[machine]") {
+  const Protocol all[] = {Protocol::liquefier_step,  Protocol::liquefier_flow_sweep, Protocol::liquefier_sine,
+                          Protocol::liquefier_chirp, Protocol::ring_print,           Protocol::line_steps,
+                          Protocol::axis_sweep,      Protocol::axis_rectangle,       Protocol::test_pattern};
+  REQUIRE(protocol_specs().size() == std::size(all));
+  for (const Protocol id : all) {
+    const auto& spec = protocol_spec(id);
+    CHECK(spec.id == id);
+    CHECK(to_string(id) == spec.name);
+    CHECK(protocol_spec(spec.name).id == id);
+  }
+  CHECK(to_string(Protocol::liquefier_flow_sweep) == "liquefier-flow-sweep");
+}
+
+TEST_CASE("a run's files are listed under their roles' names, in run.json's order", "[machine]") {
+  RunFiles files{{RunFile::truth, "t.json"},
+                 {RunFile::load_cell, "step.csv"},
+                 {RunFile::accel, "a.csv"},
+                 {RunFile::commanded_motion, "m.csv"}};
+  const auto j = to_json(files);
+  CHECK(j.dump() == R"({"accel":"a.csv","commanded_motion":"m.csv","load_cell":"step.csv","truth":"t.json"})");
+  // The map's order is the names' order, as run.json (a sorted JSON object) lists them.
+  for (const RunFile f : {RunFile::commanded_accel, RunFile::feed_track, RunFile::gcode, RunFile::journal,
+                          RunFile::sim_received, RunFile::summary})
+    files[f] = "x";
+  REQUIRE(files.size() == 10);
+  std::vector<std::string> names;
+  for (const auto& [file, path] : files) names.emplace_back(to_string(file));
+  CHECK(std::is_sorted(names.begin(), names.end()));
+  CHECK(std::set<std::string>(names.begin(), names.end()).size() == names.size());
+  CHECK(to_string(RunFile::commanded_accel) == "commanded_accel");
+  CHECK(to_string(RunFile::sim_received) == "sim_received");
+}
+
 TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseudo-terminal", "[machine]") {
   const auto base = tunekit::test::scratch_dir("machine_api");
   RunOptions o;
@@ -373,7 +409,7 @@ TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseud
   tunekit::calibration::load_run_machine(o, "", {});
   const auto r = run_experiment(o);
   CHECK(r.status == "complete");
-  const auto t = tunekit::ident::read_csv(r.files.at("load_cell"), {{}, "time"});
+  const auto t = tunekit::ident::read_csv(r.files.at(tunekit::protocols::RunFile::load_cell), {{}, "time"});
   CHECK(t.rows == Approx(3000).epsilon(0.02));
   // The force settles at offset + K * feed on each plateau.
   const auto& f = t.column("force").values;
@@ -390,9 +426,9 @@ TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseud
   s.params = {{"freq_start_hz", 30}, {"freq_end_hz", 70}, {"hz_per_sec", 8}};
   tunekit::calibration::load_run_machine(s, "", {});
   const auto rs = run_experiment(s);
-  const auto a = tunekit::ident::read_csv(rs.files.at("accel"), {{}, "time"});
+  const auto a = tunekit::ident::read_csv(rs.files.at(tunekit::protocols::RunFile::accel), {{}, "time"});
   CHECK(a.rows == Approx(3200 * (5 + 0.6)).epsilon(0.05));
-  const auto c = tunekit::ident::read_csv(rs.files.at("commanded_accel"), {{}, "time"});
+  const auto c = tunekit::ident::read_csv(rs.files.at(tunekit::protocols::RunFile::commanded_accel), {{}, "time"});
   CHECK(c.rows == a.rows);
   double peak = 0;
   for (double v : c.column("accel_x").values) peak = std::max(peak, std::abs(v));
@@ -455,7 +491,8 @@ TEST_CASE("run_experiment: garbled and dropped lines are recovered", "[machine]"
   const auto r = run_experiment(o);
   CHECK(r.summary["link"]["resends"] == 1);
   CHECK(r.summary["link"]["retries"] == 1);
-  CHECK(tunekit::ident::read_csv(r.files.at("load_cell"), {{}, "time"}).rows == Approx(3000).epsilon(0.02));
+  CHECK(tunekit::ident::read_csv(r.files.at(tunekit::protocols::RunFile::load_cell), {{}, "time"}).rows ==
+        Approx(3000).epsilon(0.02));
 }
 
 TEST_CASE("run_experiment: over-limit protocols are refused before the simulator hears anything", "[machine]") {

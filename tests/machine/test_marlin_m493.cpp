@@ -192,7 +192,8 @@ TEST_CASE("an axis sweep on a Marlin running FT_MOTION turns its shaper off and 
     SimPtyServer server(cfg);
     o.port = server.path();
     const auto res = run_experiment(o);
-    const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at("summary")));
+    const auto run =
+        nlohmann::json::parse(tunekit::read_file_bytes(res.files.at(tunekit::protocols::RunFile::summary)));
     CHECK(run.at("firmware").at("m493_form") == to_string(m493_syntax(original)));
     server.stop();
     server.wait();

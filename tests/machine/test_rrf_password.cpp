@@ -145,7 +145,7 @@ TEST_CASE("axis-sweep on a password-protected RepRapFirmware fetches its file an
   o.progress = [&](const std::string& m) { progress += m + "\n"; };
   const auto res = tunekit::protocols::run_experiment(o);
   REQUIRE(res.status == "complete");
-  REQUIRE(res.files.count("accel"));
+  REQUIRE(res.files.count(tunekit::protocols::RunFile::accel));
   const std::string everything = all_files(res.run_dir) + progress;
   CHECK(everything.find("rrf_tunekit_1.csv") != std::string::npos);
   CHECK(everything.find(kBoardPassword) == std::string::npos);

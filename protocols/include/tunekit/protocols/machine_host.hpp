@@ -4,17 +4,14 @@
 // (tunekit/calibration/simulated_machine.hpp). The runner knows only the interface, so the
 // protocols library needs no simulator.
 
-#include <map>
 #include <memory>
 #include <string>
 
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/machine/journal.hpp"
+#include "tunekit/protocols/run_files.hpp"
 
 namespace tunekit::protocols {
-
-/// A run's files by role (RunResult::files): role -> path.
-using RunFiles = std::map<std::string, std::string>;
 
 /// One run's machine, served in this process until stop().
 class ServedMachine {
@@ -25,7 +22,7 @@ class ServedMachine {
   /// The machine's web server, "http://127.0.0.1:PORT"; empty when it has none.
   virtual std::string http_url() const = 0;
   /// Stops serving, once the runner has closed its link, and keeps what the machine received and
-  /// counted in the run directory (the files added to `files` by role).
+  /// counted in the run directory (the files added to `files`).
   virtual void stop(machine::Journal& journal, RunFiles& files) = 0;
 };
 
@@ -37,7 +34,7 @@ class MachineHost {
   /// The dialect the protocol is planned in before the firmware answers (what a dry run uses).
   virtual firmware::Dialect planned_dialect() const = 0;
   /// Once the run directory exists: keeps what is known of the machine there (the files added to
-  /// `files` by role), then serves the machine for this run; with a `port` given, an outside
+  /// `files`), then serves the machine for this run; with a `port` given, an outside
   /// link to the same machine, serves nothing and returns null.
   virtual std::unique_ptr<ServedMachine> start(machine::Journal& journal, RunFiles& files,
                                                const std::string& port) const = 0;

@@ -5,7 +5,7 @@
 // line and sensor sample is journaled into the run directory.
 //
 //   RunOptions o;  o.protocol = "liquefier-step";  o.profile = ...;  o.port = "/dev/ttyACM0";
-//   RunResult r = run_experiment(o);   // r.run_dir, r.files["load_cell"] = ".../step.csv"
+//   RunResult r = run_experiment(o);   // r.run_dir, r.files[RunFile::load_cell] = ".../step.csv"
 //
 // The machine is the printer on `port` (a serial device, a pseudo-terminal such as Klipper's
 // /tmp/printer, or "unix:/tmp/klippy_uds" for Klipper's API server), checked against the
@@ -39,6 +39,7 @@
 
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/machine_host.hpp"
+#include "tunekit/protocols/run_files.hpp"
 #include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 
@@ -81,8 +82,7 @@ struct RunOptions {
 struct RunResult {
   std::string run_dir;  ///< empty for a dry run
   std::string status;   ///< "complete" or "dry-run"
-  std::map<std::string, std::string>
-      files;  ///< role -> path: load_cell, accel, commanded_accel, journal, truth, gcode, summary
+  RunFiles files;       ///< what each file of the run holds -> its path (run_files.hpp)
   Experiment experiment;
   std::vector<std::string> gcode;  ///< the protocol's G-code (with ;@record directives)
   nlohmann::json summary;          ///< what run.json holds
