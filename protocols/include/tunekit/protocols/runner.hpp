@@ -16,7 +16,7 @@
 // Before the protocol is built for the machine, the firmware on the link is identified (M115, or
 // Klipper's API server: info and the configuration in force): the protocol is built for that
 // firmware, within the stricter of the profile's and the firmware's limits (a dry run uses the
-// profile's firmware).
+// profile's firmware, or the one the host says its machine runs).
 //
 // Failures: a limit violation or bad parameter is an InputError (exit 2) before anything is
 // opened; a machine/transport failure is a MachineError (exit 3) thrown after the journal has
@@ -68,7 +68,8 @@ struct RunOptions {
   bool dry_run = false;       ///< build and check only; RunResult::gcode is filled
   /// A profile whose [machine] firmware differs from the firmware the machine identifies as is
   /// refused (InputError naming both) when set; otherwise the protocol is built for the firmware
-  /// found and the difference is reported as a warning (run.json "warnings").
+  /// found and the difference is reported as a warning (run.json "warnings"). A machine the
+  /// runner brings up (`host`) runs the firmware it was set up with, whatever the profile names.
   bool strict_firmware = false;
   /// A protocol that heats the hot end or the bed turns them off at its normal end (after its
   /// epilogue) unless this is set (`--keep-heaters`): then they stay at the protocol's last
