@@ -48,8 +48,8 @@ ProtocolParam hotend_param() {
           kMaxTemperatureC};
 }
 
-/// The liquefier's experiments with the load cell: steps, the flow sweep, sine dwells, the chirp.
-void add_liquefier_specs(std::vector<ProtocolSpec>& s) {
+/// The liquefier's experiments with the load cell (1/2): the steps and the flow sweep.
+void add_liquefier_step_specs(std::vector<ProtocolSpec>& s) {
   const ProtocolParam hotend = hotend_param();
   s.push_back(
       {Protocol::liquefier_step,
@@ -95,6 +95,11 @@ void add_liquefier_specs(std::vector<ProtocolSpec>& s) {
         hotend},
        {"load_cell"},
        false});
+}
+
+/// The liquefier's experiments with the load cell (2/2): the sine dwells and the chirp.
+void add_liquefier_periodic_specs(std::vector<ProtocolSpec>& s) {
+  const ProtocolParam hotend = hotend_param();
   s.push_back(
       {Protocol::liquefier_sine,
        "liquefier-sine",
@@ -291,7 +296,8 @@ void add_pattern_spec(std::vector<ProtocolSpec>& s) {
 
 std::vector<ProtocolSpec> make_specs() {
   std::vector<ProtocolSpec> s;
-  add_liquefier_specs(s);
+  add_liquefier_step_specs(s);
+  add_liquefier_periodic_specs(s);
   add_print_specs(s);
   add_axis_specs(s);
   add_pattern_spec(s);
