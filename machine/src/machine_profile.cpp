@@ -12,7 +12,6 @@
 #include <toml++/toml.h>
 
 #include "tunekit/core/error.hpp"
-#include "tunekit/formats/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "toml_depth.hpp"
 

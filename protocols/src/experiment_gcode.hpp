@@ -49,7 +49,8 @@ void guard_line_count(const std::vector<std::string>& g, const ProtocolLimits& l
 
 /// What build_experiment was asked for.
 struct ExperimentRequest {
-  const std::string& protocol;
+  Protocol id;
+  const std::string& protocol;  ///< its name
   const std::map<std::string, double>& overrides;
   const std::string& axis_in;
   const machine::MachineProfile& profile;

@@ -88,7 +88,7 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
   for (const auto& prm : spec.params)
     if (!(std::isnan(prm.default_value) && !overrides.count(prm.name)))
       check_param_domain(protocol, prm, e.params.at(prm.name));
-  const experiment_gcode::ExperimentRequest request{protocol, overrides, axis_in, profile, d, limits};
+  const experiment_gcode::ExperimentRequest request{spec.id, protocol, overrides, axis_in, profile, d, limits};
   // The defaults that come from the machine's limits, in their domains too (the positions stay
   // NaN: the builders put them at the middle of the travel).
   experiment_gcode::fill_machine_defaults(request, e);

@@ -202,9 +202,9 @@ bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
   const ProtocolLimits& limits = r.limits;
   auto& p = e.params;
   auto& g = e.gcode;
-  if (protocol == "axis-sweep") {
+  if (r.id == Protocol::axis_sweep) {
     build_axis_sweep(r, e);
-  } else if (protocol == "axis-rectangle") {
+  } else if (r.id == Protocol::axis_rectangle) {
     const double w = p.at("width_mm"), h = p.at("height_mm"), v = p.at("speed_mm_s");
     const int reps = static_cast<int>(p.at("repeats"));
     check_plan(protocol, 8.0 * reps + 12, (reps * 4 + 1) * p.at("pause_s") + reps * 2 * (w + h) / v, limits);

@@ -29,7 +29,7 @@ bool build_print_experiment(const ExperimentRequest& r, Experiment& e) {
   const ProtocolLimits& limits = r.limits;
   auto& p = e.params;
   auto& g = e.gcode;
-  if (protocol == "ring-print") {
+  if (r.id == Protocol::ring_print) {
     const double R = p.at("radius_mm"), v = p.at("speed_mm_s"), A = p.at("amplitude");
     if (A >= 1)
       throw InputError(
@@ -59,11 +59,11 @@ bool build_print_experiment(const ExperimentRequest& r, Experiment& e) {
                               num(v * 60, 1)));
     }
     g.push_back(d.wait_for_moves());
-  } else if (protocol == "line-steps") {
+  } else if (r.id == Protocol::line_steps) {
     if (std::isnan(p["center_x_mm"])) p["center_x_mm"] = mid(profile, "x");
     if (std::isnan(p["first_y_mm"])) p["first_y_mm"] = mid(profile, "y") - 50;
     append_line_steps_gcode(g, p, profile, d);
-  } else if (protocol == "test-pattern") {
+  } else if (r.id == Protocol::test_pattern) {
     TestPatternSet set;
     set.pads = static_cast<int>(std::lround(p.at("pads")));
     set.pad_mm = p.at("pad_mm");

@@ -87,7 +87,7 @@ void staircase_defaults(const ExperimentRequest& r, Experiment& e) {
     set(e, "segment_s", step, why);
   }
   // The sine dwells hold at least 20 steps a period (experiments_liquefier.cpp).
-  if (r.protocol == "liquefier-sine")
+  if (r.id == Protocol::liquefier_sine)
     capped(r, e, "freq_max_hz", kNominalSineMax_hz, 1.0 / (20 * e.params.at("segment_s")),
            "frequency whose period holds 20 staircase steps");
 }
@@ -198,24 +198,24 @@ void motion_defaults(const ExperimentRequest& r, Experiment& e) {
   const auto& p = r.profile;
   const double accel = axes_min(p, &machine::AxisLimits::max_accel_mm_s2);
   const double speed = kDefaultMargin * axes_min(p, &machine::AxisLimits::max_velocity_mm_s);
-  if (r.protocol == "axis-sweep") {
+  if (r.id == Protocol::axis_sweep) {
     capped(r, e, "travel_speed_mm_s", kNominalTravel_mm_s, speed, "axes' speed limit (90 %)");
     sweeping_default(r, e);
     sweep_end_default(r, e);
     accel_per_hz_default(r, e);
-  } else if (r.protocol == "axis-rectangle") {
+  } else if (r.id == Protocol::axis_rectangle) {
     capped(r, e, "speed_mm_s", 100, speed, "axes' speed limit (90 %)");
     capped(r, e, "accel_mm_s2", 3000, accel, "axes' acceleration limit");
   }
-  if (r.protocol == "line-steps") line_test_fit(r, e);
-  if (r.protocol == "ring-print" || r.protocol == "line-steps" || r.protocol == "test-pattern") {
+  if (r.id == Protocol::line_steps) line_test_fit(r, e);
+  if (r.id == Protocol::ring_print || r.id == Protocol::line_steps || r.id == Protocol::test_pattern) {
     // Their retractions and primes are extrude-only moves at the print acceleration as the gate
     // reads it (Klipper caps them at max_extrude_only_accel by itself, Marlin and RepRapFirmware
     // at M204 R and M201 E, which these prints do not set): the extruder's limit applies too.
     const double print = std::min(accel, p.extruder.max_accel_mm_s2);
     const std::string what =
         print < accel ? "extruder's acceleration limit (its retractions and primes)" : "axes' acceleration limit";
-    capped(r, e, "accel_mm_s2", r.protocol == "test-pattern" ? 1500 : 1000, print, what);
+    capped(r, e, "accel_mm_s2", r.id == Protocol::test_pattern ? 1500 : 1000, print, what);
     capped(r, e, "travel_speed_mm_s", 150, speed, "axes' speed limit (90 %)");
   }
 }
@@ -244,10 +244,10 @@ double shortest_staircase_step_s(double feed_mm_s, double accel_mm_s2, bool stop
 }
 
 void fill_machine_defaults(const ExperimentRequest& r, Experiment& e) {
-  if (r.protocol == "liquefier-step") step_feed_defaults(r, e);
-  if (r.protocol == "liquefier-step" || r.protocol == "liquefier-flow-sweep")
+  if (r.id == Protocol::liquefier_step) step_feed_defaults(r, e);
+  if (r.id == Protocol::liquefier_step || r.id == Protocol::liquefier_flow_sweep)
     feed_defaults(r, e, kNominalStepAccel_mm_s2);
-  else if (r.protocol == "liquefier-sine" || r.protocol == "liquefier-chirp") staircase_defaults(r, e);
+  else if (r.id == Protocol::liquefier_sine || r.id == Protocol::liquefier_chirp) staircase_defaults(r, e);
   else motion_defaults(r, e);
 }
 

@@ -48,11 +48,12 @@ ProtocolParam hotend_param() {
           kMaxTemperatureC};
 }
 
-/// The liquefier's experiments with the load cell: steps, the flow sweep, sine dwells, the chirp.
-void add_liquefier_specs(std::vector<ProtocolSpec>& s) {
+/// The liquefier's experiments with the load cell (1/2): the steps and the flow sweep.
+void add_liquefier_step_specs(std::vector<ProtocolSpec>& s) {
   const ProtocolParam hotend = hotend_param();
   s.push_back(
-      {"liquefier-step",
+      {Protocol::liquefier_step,
+       "liquefier-step",
        "extrusion-rate steps (low, then high/low cycles) with the load cell recording the filament force",
        {{"feed_low_mm_s", kMachineDefault, "mm/s",
          "filament feed before and between steps (default: 1, or a third of feed_high_mm_s when lower)",
@@ -70,7 +71,8 @@ void add_liquefier_specs(std::vector<ProtocolSpec>& s) {
        {"load_cell"},
        false});
   s.push_back(
-      {"liquefier-flow-sweep",
+      {Protocol::liquefier_flow_sweep,
+       "liquefier-flow-sweep",
        "feed steps up and down through flow levels spread over the hot end's range (each level reached "
        "from below and from above), load cell recorded; tau, K, theta per level and their trend with flow",
        {{"levels", 6, "", "measured flow levels, spaced geometrically between the turning flows", ParamDomain::count,
@@ -93,8 +95,14 @@ void add_liquefier_specs(std::vector<ProtocolSpec>& s) {
         hotend},
        {"load_cell"},
        false});
+}
+
+/// The liquefier's experiments with the load cell (2/2): the sine dwells and the chirp.
+void add_liquefier_periodic_specs(std::vector<ProtocolSpec>& s) {
+  const ProtocolParam hotend = hotend_param();
   s.push_back(
-      {"liquefier-sine",
+      {Protocol::liquefier_sine,
+       "liquefier-sine",
        "sine-dwell list: the feed oscillates around a mean at log-spaced frequencies, load cell recorded",
        {{"feed_mean_mm_s", kMachineDefault, "mm/s",
          "mean filament feed (default: 2, lowered with the amplitude so that the highest feed stays within 90 % of "
@@ -120,7 +128,8 @@ void add_liquefier_specs(std::vector<ProtocolSpec>& s) {
        {"load_cell"},
        false});
   s.push_back(
-      {"liquefier-chirp",
+      {Protocol::liquefier_chirp,
+       "liquefier-chirp",
        "linear chirp of the feed from freq_min_hz to freq_max_hz, load cell recorded",
        {{"feed_mean_mm_s", kMachineDefault, "mm/s",
          "mean filament feed (default: 2, lowered with the amplitude so that the highest feed stays within 90 % of "
@@ -153,7 +162,8 @@ void add_liquefier_specs(std::vector<ProtocolSpec>& s) {
 void add_print_specs(std::vector<ProtocolSpec>& s) {
   const ProtocolParam hotend = hotend_param();
   s.push_back(
-      {"ring-print",
+      {Protocol::ring_print,
+       "ring-print",
        "Holtrup's frequency test (Tuning liquefier dynamics, MSc thesis, University of Twente, 2019): a ring "
        "printed at constant speed with the extrusion modulated by (1 + amplitude sin(periods theta)); "
        "f = periods v / (2 pi R). Measure the width with 'tunekit linewidth'",
@@ -173,7 +183,8 @@ void add_print_specs(std::vector<ProtocolSpec>& s) {
         hotend},
        {},
        false});
-  s.push_back({"line-steps",
+  s.push_back({Protocol::line_steps,
+               "line-steps",
                "the camera path's line test: straight lines along +X whose flow steps low -> high -> low part-way; "
                "photographed, the width along each line is the liquefier's step response (t = s / v)",
                {{"speed_mm_s", 20, "mm/s", "print speed v"},
@@ -207,7 +218,8 @@ void add_print_specs(std::vector<ProtocolSpec>& s) {
 /// The axes' experiments with the accelerometer: the resonance sweep and the overshoot rectangle.
 void add_axis_specs(std::vector<ProtocolSpec>& s) {
   s.push_back(
-      {"axis-sweep",
+      {Protocol::axis_sweep,
+       "axis-sweep",
        "resonance sweep like Klipper's TEST_RESONANCES (resonance_tester.py, 2024-12 to 2026-08): back-and-forth "
        "moves whose acceleration is accel_per_hz * f while f rises at hz_per_sec, with Klipper's slow sweeping "
        "motion added on Klipper; the accelerometer is recorded",
@@ -240,7 +252,8 @@ void add_axis_specs(std::vector<ProtocolSpec>& s) {
         {"settle_s", 0.3, "s", "recorded rest before and after the sweep", ParamDomain::non_negative, kMaxTimeS}},
        {"accelerometer"},
        true});
-  s.push_back({"axis-rectangle",
+  s.push_back({Protocol::axis_rectangle,
+               "axis-rectangle",
                "the overshoot test of Hemminger, Improvements and Characterization of Error, Speed, and Capabilities "
                "in Low-Cost Additive Manufacturing Systems, UCLA, 2022: an XY rectangle with pauses at the corners, "
                "repeated; each axis sees step motions; the accelerometer is recorded (analyze: tunekit overshoot)",
@@ -260,7 +273,8 @@ void add_axis_specs(std::vector<ProtocolSpec>& s) {
 void add_pattern_spec(std::vector<ProtocolSpec>& s) {
   const ProtocolParam hotend = hotend_param();
   s.push_back(
-      {"test-pattern",
+      {Protocol::test_pattern,
+       "test-pattern",
        "test prints (pads for photos, line steps, rings) on one layer, ordered by the grid-based coverage "
        "planner after Li and Yao, Coverage Path Planning Application on FDM 3D Printer, USC, 2018 (fewer "
        "travels and retractions than a zigzag; zigzag=1 prints the zigzag for comparison)",
@@ -282,7 +296,8 @@ void add_pattern_spec(std::vector<ProtocolSpec>& s) {
 
 std::vector<ProtocolSpec> make_specs() {
   std::vector<ProtocolSpec> s;
-  add_liquefier_specs(s);
+  add_liquefier_step_specs(s);
+  add_liquefier_periodic_specs(s);
   add_print_specs(s);
   add_axis_specs(s);
   add_pattern_spec(s);
@@ -303,5 +318,13 @@ const ProtocolSpec& protocol_spec(const std::string& name) {
   for (const auto& s : protocol_specs()) known += (known.empty() ? "" : ", ") + s.name;
   throw InputError(fmt::format("unknown protocol '{}' (known: {})", name, known));
 }
+
+const ProtocolSpec& protocol_spec(Protocol id) {
+  for (const auto& s : protocol_specs())
+    if (s.id == id) return s;
+  throw std::logic_error(fmt::format("protocol {} has no entry in the protocol table", static_cast<int>(id)));
+}
+
+const std::string& to_string(Protocol id) { return protocol_spec(id).name; }
 
 }  // namespace tunekit::protocols

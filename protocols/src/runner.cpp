@@ -23,9 +23,7 @@
 #include "tunekit/protocols/feed_track_plan.hpp"
 #include "tunekit/protocols/safety.hpp"
 #include "tunekit/protocols/stop_signals.hpp"
-#include "tunekit/sim/sim_camera.hpp"
 #include "tunekit/machine/serial_transport.hpp"
-#include "tunekit/sim/simulator.hpp"
 
 namespace tunekit::protocols {
 namespace {
@@ -65,38 +63,18 @@ std::string join_lines(const std::vector<std::string>& lines) {
   return s;
 }
 
-/// The simulated Marlin build's answer to what identify() asks about FT_MOTION (M493, and M493 V
-/// after a 2025-form report), for a dry run on the simulator.
-firmware::FtMotionReport sim_m493_report(const sim::SimConfig& cfg) {
-  if (cfg.ft_motion == "none") return {};
-  sim::Simulator s(cfg);
-  auto ask = [&s](const char* cmd) {
-    std::string out;
-    s.handle_line(cmd, [&out](std::string_view t) { out += t; });
-    std::vector<std::string> lines;
-    for (std::size_t b = 0, e; (e = out.find('\n', b)) != std::string::npos; b = e + 1)
-      lines.push_back(out.substr(b, e - b));
-    return lines;
-  };
-  auto answer = ask("M493");
-  if (firmware::parse_m493_report(answer).form == firmware::M493Form::axis_list) {
-    const auto v = ask("M493 V");
-    answer.insert(answer.end(), v.begin(), v.end());
-  }
-  return firmware::parse_m493_report(answer);
-}
-
 /// After the firmware is identified, before anything but the identification was sent: a profile
 /// naming another firmware is refused (RunOptions::strict_firmware) or overridden with a warning;
 /// the protocol is rebuilt for the firmware found, within the stricter of the profile's and the
 /// firmware's limits, and checked again.
-void adapt_to_firmware(const RunOptions& o, bool sim, const machine::MachineProfile& profile, Session& session,
+void adapt_to_firmware(const RunOptions& o, const machine::MachineProfile& profile, Session& session,
                        const std::string& port, machine::Journal& journal, nlohmann::json& summary, RunResult& res,
                        const std::function<void(const std::string&)>& progress) {
   const auto found = session.dialect.firmware();
   const auto named = firmware::firmware_from_name(profile.firmware);
   nlohmann::json warnings = nlohmann::json::array();
-  if (!sim && !profile.firmware.empty() && named != found && session.firmware.firmware != firmware::Firmware::unknown) {
+  if (!o.host && !profile.firmware.empty() && named != found &&
+      session.firmware.firmware != firmware::Firmware::unknown) {
     const std::string what =
         fmt::format("the profile {} names the firmware '{}' but the machine on {} is {} {}", profile.name,
                     profile.firmware, port, session.firmware.name, session.firmware.version);
@@ -121,19 +99,20 @@ void adapt_to_firmware(const RunOptions& o, bool sim, const machine::MachineProf
   // The commanded feed as the firmware plans it, for the analysis (feed_track_plan.hpp).
   if (const auto track = planned_feed_track(res.experiment); !track.empty()) {
     core::write_file_atomic(journal.path("feed_track.csv"), ident::feed_track_csv(track));
-    res.files["feed_track"] = journal.path("feed_track.csv");
+    res.files[RunFile::feed_track] = journal.path("feed_track.csv");
   }
 }
 
-/// The dialect the protocol is planned in before the firmware answers: the simulator's "firmware="
-/// option (Marlin by default) or the profile's firmware. A dry run on the simulator plans for the
-/// simulated build's M493 report (what identify() reads), on a printer for the report its profile
-/// keeps ([firmware_state] m493_report).
-firmware::Dialect planned_dialect(bool sim, const sim::SimConfig& sim_cfg, const machine::MachineProfile& profile) {
-  const std::string fw_name = sim ? sim_cfg.firmware : profile.firmware;
-  firmware::Dialect dialect(fw_name.empty() ? firmware::Firmware::marlin : firmware::firmware_from_name(fw_name));
+/// The dialect the protocol is planned in before the firmware answers: the host's (the simulated
+/// printer's firmware) or the profile's firmware (Marlin when it names none). A dry run on a
+/// printer plans for the M493 report its profile keeps ([firmware_state] m493_report).
+firmware::Dialect planned_dialect(const RunOptions& o) {
+  if (o.host) return o.host->planned_dialect();
+  const auto& profile = o.profile;
+  firmware::Dialect dialect(profile.firmware.empty() ? firmware::Firmware::marlin
+                                                     : firmware::firmware_from_name(profile.firmware));
   if (dialect.firmware() == firmware::Firmware::marlin)
-    dialect.set_ft_motion(sim ? sim_m493_report(sim_cfg) : firmware::parse_m493_report(profile.state.m493_report));
+    dialect.set_ft_motion(firmware::parse_m493_report(profile.state.m493_report));
   return dialect;
 }
 
@@ -207,32 +186,11 @@ void send_protocol(Session& session, const std::vector<std::string>& gcode, cons
   send_run();
 }
 
-/// Stops the simulator and keeps what it received and counted beside the run's data.
-void stop_sim_and_keep_record(sim::SimPtyServer& server, machine::Journal& journal, RunResult& res) {
-  server.stop();
-  server.wait();
-  const auto received = server.sim().received();
-  core::write_file_atomic(journal.path("sim_received.gcode"), join_lines(received));
-  core::write_file_atomic(journal.path("sim_stats.json"),
-                          nlohmann::json{{"lines_received", received.size()},
-                                         {"accel_samples_sent", server.sim().accel_samples_sent()},
-                                         {"load_cell_samples_sent", server.sim().load_cell_samples_sent()},
-                                         {"disconnected", server.disconnected()},
-                                         {"halted", server.sim().halted()},
-                                         {"machine_time_s", server.sim().time_s()}}
-                                  .dump(2) +
-                              "\n");
-  res.files["sim_received"] = journal.path("sim_received.gcode");
-}
-
-/// The profile the run is checked against (RunOptions::profile, profile_path, machine).
-machine::MachineProfile run_profile(const RunOptions& o, bool sim) {
-  if (o.profile) return *o.profile;
-  if (sim) return o.profile_path.empty() ? builtin_sim_profile() : machine::load_machine_profile(o.profile_path);
-  if (!o.profile_path.empty() && o.profile_path != o.machine)
-    throw InputError(
-        "a real machine's profile is --machine FILE; --profile describes the printer --machine sim simulates");
-  return machine::load_machine_profile(o.machine);
+/// The load cell's file: step.csv for the step tests (what `tunekit step` reads), else
+/// feed_force.csv.
+std::string load_cell_file(const std::string& protocol) {
+  const Protocol id = protocol_spec(protocol).id;
+  return id == Protocol::liquefier_step || id == Protocol::liquefier_flow_sweep ? "step.csv" : "feed_force.csv";
 }
 
 /// Whether the protocol sets a heater to a temperature above 0 (then the run turns the heaters
@@ -295,19 +253,15 @@ void mark_interrupted(const std::string& run_json, const std::string& where) {
 
 void throw_if_stopped_after_run(const RunResult& r, const std::string& where) {
   if (!StopSignals::flag().load() || StopSignals::received_number() == 0) return;
-  if (r.files.count("summary")) mark_interrupted(r.files.at("summary"), where);
+  if (r.files.count(RunFile::summary)) mark_interrupted(r.files.at(RunFile::summary), where);
   StopSignals::throw_if_stopped(r.run_dir.empty() ? where
                                                   : fmt::format("{} (the run is kept in {})", where, r.run_dir));
 }
 
 RunResult run_experiment(const RunOptions& o) {
-  const bool sim = o.machine == "sim";
-  const machine::MachineProfile profile = run_profile(o, sim);
-  // Bad simulator options fail before anything else; the simulated printer is the profile's.
-  const sim::SimConfig sim_cfg =
-      sim ? sim::SimConfig::for_machine(profile, o.sim_options) : sim::SimConfig::from_options(o.sim_options);
-  if (!sim && o.port.empty()) throw InputError("--port is needed with a machine profile (or use --machine sim)");
-  const firmware::Dialect dialect = planned_dialect(sim, sim_cfg, profile);
+  const machine::MachineProfile& profile = o.profile;
+  if (!o.host && o.port.empty()) throw InputError("--port is needed with a machine profile (or use --machine sim)");
+  const firmware::Dialect dialect = planned_dialect(o);
 
   RunResult res;
   res.experiment = build_experiment(o.protocol, o.params, o.axis, profile, dialect, o.limits);
@@ -327,48 +281,32 @@ RunResult run_experiment(const RunOptions& o) {
   machine::Journal journal(res.run_dir);
   const std::string axis_tag = res.experiment.axis.empty() ? "xy" : res.experiment.axis;
   const std::string tag = o.file_tag.empty() ? stamp : o.file_tag;
-  Recorder rec(
-      journal, o.protocol == "liquefier-step" || o.protocol == "liquefier-flow-sweep" ? "step.csv" : "feed_force.csv",
-      fmt::format("raw_data_{}_{}.csv", axis_tag, tag), fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag),
-      fmt::format("commanded_motion_{}_{}.csv", axis_tag, tag));
-  res.files["journal"] = journal.path("journal.jsonl");
-  res.files["gcode"] = journal.path("protocol.gcode");
-  res.files["summary"] = journal.path("run.json");
+  Recorder rec(journal, load_cell_file(o.protocol), fmt::format("raw_data_{}_{}.csv", axis_tag, tag),
+               fmt::format("commanded_accel_{}_{}.csv", axis_tag, tag),
+               fmt::format("commanded_motion_{}_{}.csv", axis_tag, tag));
+  res.files[RunFile::journal] = journal.path("journal.jsonl");
+  res.files[RunFile::gcode] = journal.path("protocol.gcode");
+  res.files[RunFile::summary] = journal.path("run.json");
 
-  nlohmann::json summary{
-      {"protocol", o.protocol},  {"experiment", res.experiment.to_json()}, {"machine", sim ? "sim" : o.machine},
-      {"profile", profile.name}, {"profile_source", profile.source_path},  {"started_utc", stamp}};
-  std::unique_ptr<sim::SimPtyServer> server;
-  std::string port = o.port;
-  if (sim) {
-    core::write_file_atomic(journal.path("truth.json"), sim_cfg.truth().dump(2) + "\n");
-    res.files["truth"] = journal.path("truth.json");
-    if (port.empty()) {
-      std::function<void(sim::Simulator&)> setup;
-      if (o.sim_bed)
-        setup = [bed = o.sim_bed](sim::Simulator& s) {
-          s.deposit_sink = [bed](double t, const std::array<double, 4>& pos, double v, double q) {
-            bed->deposit(t, pos, v, q);
-          };
-        };
-      server = std::make_unique<sim::SimPtyServer>(sim_cfg, setup);
-      port = server->path();
-    }
-  }
+  nlohmann::json summary{{"protocol", o.protocol},  {"experiment", res.experiment.to_json()}, {"machine", o.machine},
+                         {"profile", profile.name}, {"profile_source", profile.source_path},  {"started_utc", stamp}};
+  // The machine the host brings up for this run (the simulated printer), or the one on o.port.
+  const std::unique_ptr<ServedMachine> served = o.host ? o.host->start(journal, res.files, o.port) : nullptr;
+  const std::string port = served ? served->port() : o.port;
   summary["port"] = port;
   journal.event("start", {{"protocol", o.protocol}, {"port", port}, {"params", res.experiment.params}});
   auto progress = [&](const std::string& m) {
     if (o.progress) o.progress(m);
   };
 
-  auto finish_sim = [&] {
-    if (server) stop_sim_and_keep_record(*server, journal, res);
+  auto stop_served = [&] {
+    if (served) served->stop(journal, res.files);
   };
   auto list_files = [&] {
-    if (journal.has_csv(rec.load_file())) res.files["load_cell"] = journal.path(rec.load_file());
-    if (journal.has_csv(rec.accel_file())) res.files["accel"] = journal.path(rec.accel_file());
-    if (journal.has_csv(rec.commanded_file())) res.files["commanded_accel"] = journal.path(rec.commanded_file());
-    if (journal.has_csv(rec.motion_file())) res.files["commanded_motion"] = journal.path(rec.motion_file());
+    if (journal.has_csv(rec.load_file())) res.files[RunFile::load_cell] = journal.path(rec.load_file());
+    if (journal.has_csv(rec.accel_file())) res.files[RunFile::accel] = journal.path(rec.accel_file());
+    if (journal.has_csv(rec.commanded_file())) res.files[RunFile::commanded_accel] = journal.path(rec.commanded_file());
+    if (journal.has_csv(rec.motion_file())) res.files[RunFile::commanded_motion] = journal.path(rec.motion_file());
   };
 
   SendGuard guard(profile);  // the last check of every line, in the link
@@ -381,7 +319,7 @@ RunResult run_experiment(const RunOptions& o) {
     if (api) session = detail::make_klipper_session(std::move(transport), journal, rec, o.link, profile.sensors, guard);
     else
       session = detail::make_gcode_session(std::move(transport), journal, rec, o.link, abort_flag, guard,
-                                           server ? server->http_url() : profile.http_address,
+                                           served ? served->http_url() : profile.http_address,
                                            machine::rrf_password(profile.http_password));
     stage = "while identifying the firmware";
     session->firmware = session->identify();
@@ -389,7 +327,7 @@ RunResult run_experiment(const RunOptions& o) {
         session->firmware.firmware == firmware::Firmware::unknown ? dialect.firmware() : session->firmware.firmware);
     session->dialect.set_ft_motion(session->firmware.m493);
     note_firmware(*session, journal, summary, res);
-    adapt_to_firmware(o, sim, profile, *session, port, journal, summary, res, progress);
+    adapt_to_firmware(o, profile, *session, port, journal, summary, res, progress);
     require_recordable(*session, res.experiment.sensors, port);
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));
@@ -415,9 +353,9 @@ RunResult run_experiment(const RunOptions& o) {
     summary["samples"] = {{"load_cell", rec.load_samples()}, {"accel", rec.accel_samples()}};
     if (session) summary["link"] = session->stats();
     session.reset();
-    finish_sim();
+    stop_served();
     list_files();
-    summary["files"] = res.files;
+    summary["files"] = to_json(res.files);
     core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
     if (interrupted && !signal.empty()) {
       StopSignals::report();
@@ -433,9 +371,9 @@ RunResult run_experiment(const RunOptions& o) {
   summary["samples"] = {{"load_cell", rec.load_samples()}, {"accel", rec.accel_samples()}};
   summary["link"] = session->stats();
   session.reset();
-  finish_sim();
+  stop_served();
   list_files();
-  summary["files"] = res.files;
+  summary["files"] = to_json(res.files);
   core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
   res.status = "complete";
   res.summary = summary;

@@ -12,6 +12,7 @@
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
 #include "tunekit/machine/transport.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using namespace tunekit::protocols;
 using namespace tunekit::machine;
@@ -26,7 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (std::string l; std::getline(in, l);) lines.push_back(l);
   }
   tunekit::fuzz::expect_result_or_error([&] { parse_m115(lines); });
-  static const MachineProfile profile = builtin_sim_profile();
+  static const MachineProfile profile = tunekit::sim::builtin_sim_profile();
   SendGuard guard(profile);
   for (const auto& l : lines) {
     split_numbered(l);

@@ -10,6 +10,7 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using namespace tunekit::protocols;
 using namespace tunekit::firmware;
@@ -17,7 +18,7 @@ using tunekit::machine::MachineProfile;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 2) return -1;
-  static const MachineProfile profile = builtin_sim_profile();
+  static const MachineProfile profile = tunekit::sim::builtin_sim_profile();
   const auto& specs = protocol_specs();
   const auto& spec = specs[data[0] % specs.size()];
   const Firmware fw = data[1] % 3 == 0   ? Firmware::marlin

@@ -18,6 +18,7 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/feed_track_plan.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using namespace tunekit;
 
@@ -48,8 +49,7 @@ void window_means(const ident::FeedTrack& track, double offset, double t0, doubl
 }
 
 protocols::Experiment flow_sweep(firmware::Firmware fw) {
-  return protocols::build_experiment("liquefier-flow-sweep", {}, "", protocols::builtin_sim_profile(),
-                                     firmware::Dialect(fw));
+  return protocols::build_experiment("liquefier-flow-sweep", {}, "", sim::builtin_sim_profile(), firmware::Dialect(fw));
 }
 
 }  // namespace
@@ -85,7 +85,7 @@ TEST_CASE("a feed track is placed on a record's clock by its window means, and a
   CHECK(a.rms_mismatch < 1e-4);
   // A sweep to another top flow is another run: it does not match.
   const auto other = protocols::planned_feed_track(
-      protocols::build_experiment("liquefier-flow-sweep", {{"flow_max_mm3_s", 8}}, "", protocols::builtin_sim_profile(),
+      protocols::build_experiment("liquefier-flow-sweep", {{"flow_max_mm3_s", 8}}, "", sim::builtin_sim_profile(),
                                   firmware::Dialect(firmware::Firmware::klipper)));
   const auto b = ident::align_feed_track(other, t, u);
   CHECK_FALSE(b.matches);

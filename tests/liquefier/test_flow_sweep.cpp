@@ -15,6 +15,7 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/flow_sweep_plan.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using namespace tunekit;
 
@@ -157,7 +158,7 @@ TEST_CASE("the pooled-fit whiteness warning needs white single-step fits that di
 }
 
 TEST_CASE("liquefier-flow-sweep reaches every level from below and above, within the profile's flow limit") {
-  const auto profile = protocols::builtin_sim_profile();
+  const auto profile = sim::builtin_sim_profile();
   using firmware::Firmware;
   for (const auto fw : {Firmware::marlin, Firmware::klipper, Firmware::reprapfirmware}) {
     INFO(firmware::to_string(fw));

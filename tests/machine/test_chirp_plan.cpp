@@ -11,6 +11,7 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using namespace tunekit::protocols;
 using namespace tunekit::machine;
@@ -44,7 +45,7 @@ TEST_CASE("the chirp plan brackets the corner and puts several Welch bins below 
 }
 
 TEST_CASE("the chirp protocol sizes itself from expected_tau_s unless a parameter is given") {
-  const auto profile = builtin_sim_profile();
+  const auto profile = tunekit::sim::builtin_sim_profile();
   const auto plan = plan_liquefier_chirp(0.3);
   const auto e = build_experiment("liquefier-chirp", {{"expected_tau_s", 0.3}}, "x", profile, Dialect());
   CHECK(e.params.at("freq_min_hz") == plan.freq_min_hz);

@@ -16,10 +16,12 @@
 
 #include "fake_klipper.hpp"
 #include "test_support.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/machine/klipper_settings.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using tunekit::test::FakeKlipper;
 using tunekit::test::FakeKlipperConfig;
@@ -35,6 +37,7 @@ tprot::RunOptions bundled_profile_on(const std::string& sock, const std::string&
   o.port = "unix:" + sock;
   o.run_dir = dir;
   if (tprot::protocol_spec(protocol).uses_axis) o.axis = "x";
+  tunekit::calibration::load_run_machine(o, "", {});
   return o;
 }
 
@@ -96,7 +99,7 @@ TEST_CASE("the axis sweep on a Klipper peer takes its nominal time within 2 %", 
   CHECK(moves_s == Approx((p.at("freq_end_hz") - p.at("freq_start_hz")) / p.at("hz_per_sec")).epsilon(0.01));
   const double nominal = 2 * p.at("settle_s") + moves_s;
   // On the peer: the span of the samples it streamed while recording.
-  std::istringstream in(tunekit::test::read_text(res.files.at("accel")));
+  std::istringstream in(tunekit::test::read_text(res.files.at(tunekit::protocols::RunFile::accel)));
   std::vector<double> t;
   for (std::string line; std::getline(in, line);)
     if (!line.empty() && line[0] != '#') t.push_back(std::stod(line.substr(0, line.find(','))));
@@ -209,7 +212,7 @@ TEST_CASE("Klipper settings: live values win over the configuration, missing one
   CHECK(k.shaper.at("x") == "ei:55:0.1");
   CHECK(k.shaper.count("y") == 0);
   std::vector<std::string> notes;
-  auto profile = tprot::builtin_sim_profile();
+  auto profile = tunekit::sim::builtin_sim_profile();
   const double feed_limit = profile.extruder.max_velocity_mm_s;
   const auto p = tunekit::machine::with_klipper_settings(profile, k, notes);
   CHECK(p.extruder.max_accel_mm_s2 == 800);           // stricter than the profile's 5000

@@ -33,6 +33,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
@@ -98,9 +99,10 @@ TEST_CASE("a live Marlin with FT_MOTION active is detected from M493, and its se
     o.protocol = "axis-sweep";
     o.run_dir = dir + "/" + mode;
     o.params = {{"freq_start_hz", 30}, {"freq_end_hz", 60}};
-    o.sim_options = {"firmware=marlin", std::string("ft_motion=") + mode};
+    tunekit::calibration::load_run_machine(o, "", {"firmware=marlin", std::string("ft_motion=") + mode});
     const auto res = run_experiment(o);
-    const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at("summary")));
+    const auto run =
+        nlohmann::json::parse(tunekit::read_file_bytes(res.files.at(tunekit::protocols::RunFile::summary)));
     const auto* ft = run.at("firmware").contains("ft_motion") ? &run.at("firmware").at("ft_motion") : nullptr;
     if (std::string(mode) == "on") {
       REQUIRE(ft != nullptr);
@@ -111,7 +113,8 @@ TEST_CASE("a live Marlin with FT_MOTION active is detected from M493, and its se
     } else {
       CHECK(ft == nullptr);
     }
-    CHECK(tunekit::test::read_text(res.files.at("sim_received")).find("M493") != std::string::npos);
+    CHECK(tunekit::test::read_text(res.files.at(tunekit::protocols::RunFile::sim_received)).find("M493") !=
+          std::string::npos);
   }
   // The export for the active machine: M493 instead of M593 / M900.
   CompensatorSettings s;
@@ -190,10 +193,11 @@ TEST_CASE("axis-sweep on RepRapFirmware records with M956 and fetches the file o
   o.protocol = "axis-sweep";
   o.run_dir = dir + "/run";
   o.params = {{"freq_start_hz", 30}, {"freq_end_hz", 70}};
-  o.sim_options = {"firmware=rrf", "sensor_stream=0", "rrf_http=1", "accel_rate_hz=1344"};
+  tunekit::calibration::load_run_machine(o, "",
+                                         {"firmware=rrf", "sensor_stream=0", "rrf_http=1", "accel_rate_hz=1344"});
   const auto res = run_experiment(o);
   REQUIRE(res.status == "complete");
-  const std::string sent = tunekit::test::read_text(res.files.at("sim_received"));
+  const std::string sent = tunekit::test::read_text(res.files.at(tunekit::protocols::RunFile::sim_received));
   const auto m955 = sent.find("M955 P0"), m956 = sent.find("M956 P0 S"), g1 = sent.find("G1 X");
   REQUIRE(m955 != std::string::npos);
   REQUIRE(m956 != std::string::npos);
@@ -201,14 +205,15 @@ TEST_CASE("axis-sweep on RepRapFirmware records with M956 and fetches the file o
   CHECK(sent.find("F\"tunekit_1.csv\"", m956) != std::string::npos);
   CHECK(sent.find("M4100") == std::string::npos);  // no tunekit stream on this board
   // The file as the board wrote it is kept, and reads as an RRF accelerometer file.
-  const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at("summary")));
+  const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at(tunekit::protocols::RunFile::summary)));
   const std::string kept = res.run_dir + "/" + run.at("link").at("rrf_accelerometer_files").at(0).get<std::string>();
   const std::string bytes = tunekit::read_file_bytes(kept);
   CHECK(tunekit::ident::is_rrf_accelerometer_csv(bytes));
   CHECK(rrf_accelerometer_file_complete(bytes));
   // The accelerometer record the analysis reads, and the simulated X mode (48 Hz) in it.
-  REQUIRE(res.files.count("accel"));
-  const auto cli = tunekit::test::run_cli({"resonance", res.files.at("accel"), "--axis", "x", "--json"});
+  REQUIRE(res.files.count(tunekit::protocols::RunFile::accel));
+  const auto cli =
+      tunekit::test::run_cli({"resonance", res.files.at(tunekit::protocols::RunFile::accel), "--axis", "x", "--json"});
   INFO(cli.err);
   REQUIRE(cli.code == 0);
   const auto modes = nlohmann::json::parse(cli.out).at("results").at("axes").at("x").at("modes");
@@ -222,7 +227,7 @@ TEST_CASE("serial-only RepRapFirmware is refused before heating or homing, with 
   RunOptions o;
   o.protocol = "axis-sweep";
   o.run_dir = dir + "/run";
-  o.sim_options = {"firmware=rrf", "sensor_stream=0"};  // no web server
+  tunekit::calibration::load_run_machine(o, "", {"firmware=rrf", "sensor_stream=0"});  // no web server
   std::string why;
   try {
     run_experiment(o);

@@ -19,11 +19,13 @@
 #include <vector>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/simulator.hpp"
 
 using tunekit::InputError;
@@ -301,6 +303,7 @@ TEST_CASE("an aborted sweep on Marlin is stopped with M410, then its test settin
   o.run_dir = dir;
   o.run_dir += "/run";
   o.abort_flag = &abort;
+  tunekit::calibration::load_run_machine(o, "", {});
   int lines = 0;
   o.progress = [&](const std::string& m) {
     if (m.rfind("firmware:", 0) == 0) abort = true;  // interrupted before the first line
@@ -325,7 +328,7 @@ TEST_CASE("a protocol whose sensor the firmware cannot record fails before heati
     o.run_dir = dir;
     o.run_dir += "/";
     o.run_dir += protocol;
-    o.sim_options = {"firmware=rrf", "sensor_stream=0"};
+    tunekit::calibration::load_run_machine(o, "", {"firmware=rrf", "sensor_stream=0"});
     std::string why;
     try {
       run_experiment(o);

@@ -12,6 +12,7 @@
 
 #include "fake_klipper.hpp"
 #include "test_support.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/machine/klipper_settings.hpp"
@@ -66,6 +67,7 @@ TEST_CASE("a sweep restores the parameterized shapers Klipper reports, verbatim"
   o.port = "unix:" + dir + "/klippy_uds";
   o.run_dir = dir + "/run";
   o.params = {{"freq_start_hz", 35}, {"freq_end_hz", 45}, {"hz_per_sec", 5}};
+  tunekit::calibration::load_run_machine(o, "", {});
   const auto res = tprot::run_experiment(o);
   REQUIRE(res.status == "complete");
   const std::string restore =

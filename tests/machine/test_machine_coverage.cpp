@@ -13,13 +13,14 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using namespace tunekit::protocols;
 using namespace tunekit::firmware;
 
 TEST_CASE("coverage planner travels less and retracts less than the zigzag on the standard test patterns",
           "[machine][coverage]") {
-  const auto profile = builtin_sim_profile();
+  const auto profile = tunekit::sim::builtin_sim_profile();
   const TestPatternSet set;
   const CoverageMotion motion;
   const auto pce = plan_test_patterns(set, profile, "pce", motion);
@@ -58,7 +59,7 @@ TEST_CASE("coverage planner travels less and retracts less than the zigzag on th
 }
 
 TEST_CASE("test-pattern G-code of both planners passes the machine profile's safety check", "[machine][coverage]") {
-  const auto profile = builtin_sim_profile();
+  const auto profile = tunekit::sim::builtin_sim_profile();
   const Dialect d;  // Marlin
   for (double zigzag : {0.0, 1.0}) {
     const auto e = build_experiment("test-pattern", {{"zigzag", zigzag}}, "", profile, d);

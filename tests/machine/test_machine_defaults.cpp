@@ -16,6 +16,7 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using namespace tunekit::protocols;
 using tunekit::firmware::Dialect;
@@ -27,7 +28,7 @@ namespace {
 /// The built-in printer with a stock Klipper printer's limits (generic-ramps.cfg's max_accel and
 /// max_velocity, Klipper's extrude-only defaults, a hot end melting 8 mm^3/s).
 MachineProfile stock_profile(double max_accel, double extruder_accel) {
-  MachineProfile p = builtin_sim_profile();
+  MachineProfile p = tunekit::sim::builtin_sim_profile();
   for (const char* a : {"x", "y"}) {
     p.axes[a].max_accel_mm_s2 = max_accel;
     p.axes[a].max_velocity_mm_s = 300;

@@ -1,8 +1,10 @@
 // Unit tests of the machine link: G-code framing, firmware identification, S-curve profiles,
 // safety limits, the line protocol against the in-process simulator (with injected faults).
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 #include <cmath>
@@ -12,14 +14,17 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/machine/journal.hpp"
+#include "tunekit/machine/profile_import.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/simulator.hpp"
 #include "tunekit/machine/trajectory.hpp"
 #include "tunekit/machine/transport.hpp"
@@ -346,9 +351,15 @@ TEST_CASE("simulator options are validated", "[machine]") {
   CHECK(c.faults.at(0).delay_ms == Approx(250));
 }
 
-TEST_CASE("the built-in simulator profile matches datasets/machines/sim.toml", "[machine]") {
+TEST_CASE("the built-in simulator profile is datasets/machines/sim.toml", "[machine]") {
+  // The file tunekit-sim --profile and calibrate --machine sim name; built in at compile time.
+  const std::string path = tunekit::test::dataset("machines/sim.toml");
+  CHECK(builtin_sim_profile_toml() == tunekit::test::read_text(path));
   const auto a = builtin_sim_profile();
-  const auto b = load_machine_profile(tunekit::test::dataset("machines/sim.toml"));
+  auto b = load_machine_profile(path);
+  CHECK(a.source_path == "<built-in simulated printer profile>");
+  b.source_path = a.source_path;  // every value alike, only the file's name differs
+  CHECK(machine_profile_toml(a) == machine_profile_toml(b));
   CHECK(a.name == b.name);
   CHECK(a.axes.at("x").max_accel_mm_s2 == b.axes.at("x").max_accel_mm_s2);
   CHECK(a.extruder.max_flow_mm3_s == b.extruder.max_flow_mm3_s);
@@ -356,14 +367,49 @@ TEST_CASE("the built-in simulator profile matches datasets/machines/sim.toml", "
   CHECK(a.sensors.load_cell == b.sensors.load_cell);
 }
 
+TEST_CASE("every protocol has one entry in the protocol table, found by its id and by its name", "[machine]") {
+  const Protocol all[] = {Protocol::liquefier_step,  Protocol::liquefier_flow_sweep, Protocol::liquefier_sine,
+                          Protocol::liquefier_chirp, Protocol::ring_print,           Protocol::line_steps,
+                          Protocol::axis_sweep,      Protocol::axis_rectangle,       Protocol::test_pattern};
+  REQUIRE(protocol_specs().size() == std::size(all));
+  for (const Protocol id : all) {
+    const auto& spec = protocol_spec(id);
+    CHECK(spec.id == id);
+    CHECK(to_string(id) == spec.name);
+    CHECK(protocol_spec(spec.name).id == id);
+  }
+  CHECK(to_string(Protocol::liquefier_flow_sweep) == "liquefier-flow-sweep");
+}
+
+TEST_CASE("a run's files are listed under their roles' names, in run.json's order", "[machine]") {
+  RunFiles files{{RunFile::truth, "t.json"},
+                 {RunFile::load_cell, "step.csv"},
+                 {RunFile::accel, "a.csv"},
+                 {RunFile::commanded_motion, "m.csv"}};
+  const auto j = to_json(files);
+  CHECK(j.dump() == R"({"accel":"a.csv","commanded_motion":"m.csv","load_cell":"step.csv","truth":"t.json"})");
+  // The map's order is the names' order, as run.json (a sorted JSON object) lists them.
+  for (const RunFile f : {RunFile::commanded_accel, RunFile::feed_track, RunFile::gcode, RunFile::journal,
+                          RunFile::sim_received, RunFile::summary})
+    files[f] = "x";
+  REQUIRE(files.size() == 10);
+  std::vector<std::string> names;
+  for (const auto& [file, path] : files) names.emplace_back(to_string(file));
+  CHECK(std::is_sorted(names.begin(), names.end()));
+  CHECK(std::set<std::string>(names.begin(), names.end()).size() == names.size());
+  CHECK(to_string(RunFile::commanded_accel) == "commanded_accel");
+  CHECK(to_string(RunFile::sim_received) == "sim_received");
+}
+
 TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseudo-terminal", "[machine]") {
   const auto base = tunekit::test::scratch_dir("machine_api");
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = base + "/step";
+  tunekit::calibration::load_run_machine(o, "", {});
   const auto r = run_experiment(o);
   CHECK(r.status == "complete");
-  const auto t = tunekit::formats::read_csv(r.files.at("load_cell"), {{}, "time"});
+  const auto t = tunekit::formats::read_csv(r.files.at(tunekit::protocols::RunFile::load_cell), {{}, "time"});
   CHECK(t.rows == Approx(3000).epsilon(0.02));
   // The force settles at offset + K * feed on each plateau.
   const auto& f = t.column("force").values;
@@ -378,10 +424,11 @@ TEST_CASE("run_experiment (C++ API) runs protocols on the simulator over a pseud
   s.axis = "x";
   s.run_dir = base + "/sweep";
   s.params = {{"freq_start_hz", 30}, {"freq_end_hz", 70}, {"hz_per_sec", 8}};
+  tunekit::calibration::load_run_machine(s, "", {});
   const auto rs = run_experiment(s);
-  const auto a = tunekit::formats::read_csv(rs.files.at("accel"), {{}, "time"});
+  const auto a = tunekit::formats::read_csv(rs.files.at(tunekit::protocols::RunFile::accel), {{}, "time"});
   CHECK(a.rows == Approx(3200 * (5 + 0.6)).epsilon(0.05));
-  const auto c = tunekit::formats::read_csv(rs.files.at("commanded_accel"), {{}, "time"});
+  const auto c = tunekit::formats::read_csv(rs.files.at(tunekit::protocols::RunFile::commanded_accel), {{}, "time"});
   CHECK(c.rows == a.rows);
   double peak = 0;
   for (double v : c.column("accel_x").values) peak = std::max(peak, std::abs(v));
@@ -401,7 +448,8 @@ TEST_CASE("run_experiment: a disconnect is exit 3 and the journal keeps every sa
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = tunekit::test::scratch_dir("machine_api_disconnect") + "/run";
-  o.sim_options = {"fault=disconnect@11"};  // N0 M110, M115, M493 (Marlin), then the protocol
+  tunekit::calibration::load_run_machine(o, "",
+                                         {"fault=disconnect@11"});  // N0 M110, M115, M493 (Marlin), then the protocol
   o.link.timeout = std::chrono::milliseconds(2000);
   try {
     run_experiment(o);
@@ -420,7 +468,7 @@ TEST_CASE("run_experiment: a firmware error is exit 3 after the safe-state comma
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = tunekit::test::scratch_dir("machine_api_error") + "/run";
-  o.sim_options = {"fault=error@10"};
+  tunekit::calibration::load_run_machine(o, "", {"fault=error@10"});
   CHECK_THROWS_AS(run_experiment(o), tunekit::MachineError);
   const std::string rx = read_all(o.run_dir + "/sim_received.gcode");
   const auto at = rx.find("N9 ");
@@ -438,12 +486,13 @@ TEST_CASE("run_experiment: garbled and dropped lines are recovered", "[machine]"
   RunOptions o;
   o.protocol = "liquefier-step";
   o.run_dir = tunekit::test::scratch_dir("machine_api_recover") + "/run";
-  o.sim_options = {"fault=garble@8", "fault=drop@11"};
+  tunekit::calibration::load_run_machine(o, "", {"fault=garble@8", "fault=drop@11"});
   o.link.timeout = std::chrono::milliseconds(300);
   const auto r = run_experiment(o);
   CHECK(r.summary["link"]["resends"] == 1);
   CHECK(r.summary["link"]["retries"] == 1);
-  CHECK(tunekit::formats::read_csv(r.files.at("load_cell"), {{}, "time"}).rows == Approx(3000).epsilon(0.02));
+  CHECK(tunekit::formats::read_csv(r.files.at(tunekit::protocols::RunFile::load_cell), {{}, "time"}).rows ==
+        Approx(3000).epsilon(0.02));
 }
 
 TEST_CASE("run_experiment: over-limit protocols are refused before the simulator hears anything", "[machine]") {
@@ -453,6 +502,7 @@ TEST_CASE("run_experiment: over-limit protocols are refused before the simulator
   o.machine = tunekit::test::dataset("machines/sim.toml");
   o.port = server.path();
   o.run_dir = tunekit::test::scratch_dir("machine_api_refused") + "/run";
+  tunekit::calibration::load_run_machine(o, "", {});
   o.params = {{"feed_high_mm_s", 100}, {"hotend_c", 350}};
   try {
     run_experiment(o);

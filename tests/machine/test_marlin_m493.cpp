@@ -23,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/firmware/dialect.hpp"
@@ -178,7 +179,7 @@ TEST_CASE("an axis sweep on a Marlin running FT_MOTION turns its shaper off and 
     o.protocol = "axis-sweep";
     o.axis = "x";
     o.params = {{"freq_start_hz", 30}, {"freq_end_hz", 60}};
-    o.sim_options = sim_options(f);
+    tunekit::calibration::load_run_machine(o, "", sim_options(f));
     // The dry run shows both, the restore after the epilogue marker; the gate accepts them.
     o.dry_run = true;
     const auto plan = run_experiment(o).gcode;
@@ -191,7 +192,8 @@ TEST_CASE("an axis sweep on a Marlin running FT_MOTION turns its shaper off and 
     SimPtyServer server(cfg);
     o.port = server.path();
     const auto res = run_experiment(o);
-    const auto run = nlohmann::json::parse(tunekit::read_file_bytes(res.files.at("summary")));
+    const auto run =
+        nlohmann::json::parse(tunekit::read_file_bytes(res.files.at(tunekit::protocols::RunFile::summary)));
     CHECK(run.at("firmware").at("m493_form") == to_string(m493_syntax(original)));
     server.stop();
     server.wait();
@@ -217,7 +219,7 @@ TEST_CASE("a sweep on a Marlin running FT_MOTION stopped part-way still restores
     o.protocol = "axis-sweep";
     o.axis = "x";
     o.params = {{"freq_start_hz", 30}, {"freq_end_hz", 60}};
-    o.sim_options = sim_options(f);
+    tunekit::calibration::load_run_machine(o, "", sim_options(f));
     o.run_dir = dir + "/" + f.name;
     o.port = server.path();
     o.abort_flag = &abort;
@@ -261,6 +263,7 @@ TEST_CASE("a printer profile keeps its Marlin's M493 report: the dry run shows t
   o.axis = "x";
   o.machine = path;
   o.port = dir + "/no-printer";  // a dry run opens nothing
+  tunekit::calibration::load_run_machine(o, "", {});
   o.dry_run = true;
   const auto plan = run_experiment(o).gcode;
   const auto epi = index_of(plan, ";@epilogue");

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/machine/rrf_http.hpp"
@@ -64,8 +65,8 @@ tunekit::protocols::RunOptions rrf_sweep(const std::string& dir, const std::stri
   o.protocol = "axis-sweep";
   o.run_dir = dir + "/run";
   o.params = {{"freq_start_hz", 40}, {"freq_end_hz", 56}};
-  o.sim_options = {"firmware=rrf", "sensor_stream=0", "rrf_http=1", "accel_rate_hz=1344",
-                   "rrf_password=" + board_password};
+  tunekit::calibration::load_run_machine(
+      o, "", {"firmware=rrf", "sensor_stream=0", "rrf_http=1", "accel_rate_hz=1344", "rrf_password=" + board_password});
   return o;
 }
 
@@ -144,7 +145,7 @@ TEST_CASE("axis-sweep on a password-protected RepRapFirmware fetches its file an
   o.progress = [&](const std::string& m) { progress += m + "\n"; };
   const auto res = tunekit::protocols::run_experiment(o);
   REQUIRE(res.status == "complete");
-  REQUIRE(res.files.count("accel"));
+  REQUIRE(res.files.count(tunekit::protocols::RunFile::accel));
   const std::string everything = all_files(res.run_dir) + progress;
   CHECK(everything.find("rrf_tunekit_1.csv") != std::string::npos);
   CHECK(everything.find(kBoardPassword) == std::string::npos);

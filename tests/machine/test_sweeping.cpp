@@ -21,6 +21,7 @@
 #include "tunekit/machine/gcode.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 
 using tunekit::test::run_cli;
 using namespace tunekit::protocols;
@@ -58,7 +59,7 @@ tunekit::formats::CsvTable read_table(const std::string& path) {
 }  // namespace
 
 TEST_CASE("Klipper's axis sweep swings about the centre by sweeping_accel sweeping_period^2 / 32", "[machine]") {
-  const auto profile = builtin_sim_profile();
+  const auto profile = tunekit::sim::builtin_sim_profile();
   const std::map<std::string, double> p{{"freq_start_hz", 20}, {"freq_end_hz", 60}, {"hz_per_sec", 4}};
   const auto on = build_experiment("axis-sweep", p, "x", profile, Dialect(Firmware::klipper));
   CHECK(on.params.at("sweeping_accel") == 400);
@@ -83,7 +84,7 @@ TEST_CASE("Klipper's axis sweep swings about the centre by sweeping_accel sweepi
 
 TEST_CASE("the sweeping motion is refused on Marlin and RepRapFirmware with the way out, off there by default",
           "[machine]") {
-  const auto profile = builtin_sim_profile();
+  const auto profile = tunekit::sim::builtin_sim_profile();
   for (const auto fw : {Firmware::marlin, Firmware::reprapfirmware}) {
     const auto e = build_experiment("axis-sweep", {}, "x", profile, Dialect(fw));
     CHECK(e.params.at("sweeping_accel") == 0);

@@ -14,12 +14,14 @@
 #include <catch2/catch.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/dialect.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/safety.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/simulator.hpp"
 #include "tunekit/machine/transport.hpp"
 
@@ -160,6 +162,7 @@ TEST_CASE("the simulator hears nothing of a protocol with accel_per_hz=1e308", "
   o.machine = tunekit::test::dataset("machines/sim.toml");
   o.port = server.path();
   o.run_dir = scratch_dir("gate_sim_1e308") + "/run";
+  tunekit::calibration::load_run_machine(o, "", {});
   o.params = {{"accel_per_hz", 1e308}};
   CHECK_THROWS_AS(run_experiment(o), tunekit::InputError);
   std::this_thread::sleep_for(std::chrono::milliseconds(100));

@@ -65,8 +65,7 @@ void register_overshoot(CLI::App& app, CliContext& ctx) {
       "Grid mode: axis-rectangle parameter NAME=V1,V2,... (speed_mm_s and accel_mm_s2 take lists; others one value)");
   sub->add_option("-m,--machine", o.run.machine, "Grid mode: 'sim' or a machine profile TOML")->capture_default_str();
   sub->add_option("--port", o.run.port, "Grid mode: the machine's port (see tunekit run)");
-  sub->add_option("--sim", o.run.sim_options,
-                  "Grid mode: simulator option KEY=VALUE (repeatable), e.g. mode_x=40:0.05");
+  sub->add_option("--sim", o.sim_options, "Grid mode: simulator option KEY=VALUE (repeatable), e.g. mode_x=40:0.05");
   sub->add_option("--tolerance-mm", o.tolerance_mm, "Grid mode: overshoot tolerance of the figure of merit (mm)")
       ->capture_default_str();
   sub->add_option("--shaper", o.shapers,

@@ -67,7 +67,7 @@ void register_run(CLI::App& app, CliContext& ctx) {
                   "mm/s, mm/s^2, degC) or the firmware's configuration (Klipper printer.cfg, Marlin "
                   "Configuration.h, RepRapFirmware config.g; see tunekit profile)",
                   r.machine));
-  sub->add_option("--profile", r.profile_path,
+  sub->add_option("--profile", o.profile_path,
                   "With --machine sim: the printer to simulate, a machine profile TOML or its firmware configuration "
                   "(its limits, firmware, steps and extruder)");
   sub->add_option("--port", r.port,
@@ -76,7 +76,7 @@ void register_run(CLI::App& app, CliContext& ctx) {
   sub->add_option("--baud", r.baud, "Serial baud rate (bit/s)");
   sub->add_option("-p,--param", o.params, "Protocol parameter NAME=VALUE, in the unit its name carries (repeatable)");
   sub->add_option(
-      "--sim", r.sim_options,
+      "--sim", o.sim_options,
       "Simulator option KEY=VALUE (repeatable), e.g. preset=peek (the thesis' PEEK liquefier), tau_s=0.5 (s), "
       "K=3.5 (N/(mm/s)), theta_s=0.04 (s), "
       "mode_x=48:0.08 (Hz:damping ratio), liquefier=physics, fault=garble@12; see docs/machine.md");

@@ -14,7 +14,7 @@
 #include "tunekit/calibration/analyses/overshoot_command.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
-#include "tunekit/calibration/presentation/report_command.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/text.hpp"
 #include "tunekit/protocols/stop_signals.hpp"
@@ -138,9 +138,12 @@ OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome
     if (eq == std::string::npos) throw InputError(fmt::format("-p {}: expected NAME=VALUE[,VALUE...]", p));
     lists[p.substr(0, eq)] = parse_overshoot_grid_list(p.substr(0, eq), p.substr(eq + 1));
   }
+  // The machine of every grid run: its profile loaded, the simulator's options read, once.
+  protocols::RunOptions machine_run = a.run;
+  load_run_machine(machine_run, "", a.sim_options);
   if (!lists.count("speed_mm_s") || !lists.count("accel_mm_s2")) {
     // The rectangle's defaults come from the machine's limits: its dry run on this machine.
-    protocols::RunOptions dry = a.run;
+    protocols::RunOptions dry = machine_run;
     dry.protocol = "axis-rectangle";
     dry.dry_run = true;
     for (const auto& [k, vals] : lists) dry.params[k] = vals.front();
@@ -167,14 +170,20 @@ OvershootGrid compute_overshoot_grid(const OvershootOptions& a, OvershootOutcome
     throw InputError(
         "--shaper compares shaping on/off on the simulator; on a machine run the grid twice, with the "
         "firmware's input shaper enabled and disabled");
+  // The shaped grid's simulator: the same with the shapers.
+  std::shared_ptr<const protocols::MachineHost> shaped_host;
+  if (!shaper_opts.empty()) {
+    shaper_opts.insert(shaper_opts.begin(), a.sim_options.begin(), a.sim_options.end());
+    shaped_host = simulated_machine(machine_run.profile, shaper_opts);
+  }
   auto& cells = g.cells;
   const protocols::StopSignals stop_signals;  // between two grid points too (stop_signals.hpp)
   for (const bool shaped : shaper_opts.empty() ? std::vector<bool>{false} : std::vector<bool>{false, true})
     for (double v : lists["speed_mm_s"])
       for (double acc : lists["accel_mm_s2"]) {
-        protocols::RunOptions o = a.run;
+        protocols::RunOptions o = machine_run;
         o.protocol = "axis-rectangle";
-        if (shaped) o.sim_options.insert(o.sim_options.end(), shaper_opts.begin(), shaper_opts.end());
+        if (shaped) o.host = shaped_host;
         for (const auto& [k, vals] : lists) o.params[k] = vals.front();
         o.params["speed_mm_s"] = v;
         o.params["accel_mm_s2"] = acc;
@@ -239,7 +248,7 @@ Envelope overshoot_grid_envelope(const OvershootOutcome& o) {
   for (const auto& [k, v] : g.lists) lj[k] = v;
   env.set_options({{"grid", lj},
                    {"machine", a.run.machine},
-                   {"sim", a.run.sim_options},
+                   {"sim", a.sim_options},
                    {"tolerance_mm", a.tolerance_mm},
                    {"band_mm", a.analysis.band_mm}});
   auto& res = env.results();

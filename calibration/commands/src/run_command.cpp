@@ -8,6 +8,7 @@
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/calibration/commands/run_command.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/text.hpp"
 #include "tunekit/protocols/experiments.hpp"
@@ -72,9 +73,10 @@ RunOutcome compute_run(const RunCommandOptions& a) {
         "--port is needed with a machine profile (a serial device, a PTY such as /tmp/printer, or "
         "unix:/tmp/klippy_uds)");
   if (o.machine != "sim" && o.port.empty()) o.port = "(dry run)";
+  load_run_machine(o, a.profile_path, a.sim_options);
   outcome.result = protocols::run_experiment(o);
-  if (!o.dry_run && outcome.result.files.count("truth"))
-    outcome.truth = read_json_file(outcome.result.files.at("truth"));
+  if (!o.dry_run && outcome.result.files.count(protocols::RunFile::truth))
+    outcome.truth = read_json_file(outcome.result.files.at(protocols::RunFile::truth));
   return outcome;
 }
 
@@ -89,7 +91,7 @@ Envelope to_envelope(const RunOutcome& outcome) {
                    {"machine", a.machine},
                    {"port", a.port},
                    {"params", params},
-                   {"sim", a.sim_options},
+                   {"sim", outcome.options.sim_options},
                    {"dry_run", a.dry_run}});
   auto& res = env.results();
   res["experiment"] = r.experiment.to_json();
@@ -99,7 +101,7 @@ Envelope to_envelope(const RunOutcome& outcome) {
   }
   res["run_dir"] = r.run_dir;
   res["status"] = r.status;
-  res["files"] = r.files;
+  res["files"] = protocols::to_json(r.files);
   res["samples"] = r.summary.value("samples", nlohmann::json::object());
   res["link"] = r.summary.value("link", nlohmann::json::object());
   if (outcome.truth) res["truth"] = *outcome.truth;
@@ -114,11 +116,14 @@ void print_text(const RunOutcome& outcome, std::ostream& os) {
     return;
   }
   os << fmt::format("{} {}: {}\n", a.protocol, r.status, r.run_dir);
-  for (const auto& [role, path] : r.files) os << fmt::format("  {:<16} {}\n", role, path);
-  if (r.files.count("load_cell") && (a.protocol == "liquefier-step" || a.protocol == "liquefier-flow-sweep"))
-    os << fmt::format("analyze: tunekit step {} --time time --input feed --output force\n", r.files.at("load_cell"));
-  if (r.files.count("accel"))
-    os << fmt::format("analyze: tunekit resonance {} --axis {}\n", r.files.at("accel"), a.axis);
+  for (const auto& [role, path] : r.files) os << fmt::format("  {:<16} {}\n", protocols::to_string(role), path);
+  const auto id = protocols::protocol_spec(a.protocol).id;
+  if (r.files.count(protocols::RunFile::load_cell) &&
+      (id == protocols::Protocol::liquefier_step || id == protocols::Protocol::liquefier_flow_sweep))
+    os << fmt::format("analyze: tunekit step {} --time time --input feed --output force\n",
+                      r.files.at(protocols::RunFile::load_cell));
+  if (r.files.count(protocols::RunFile::accel))
+    os << fmt::format("analyze: tunekit resonance {} --axis {}\n", r.files.at(protocols::RunFile::accel), a.axis);
 }
 
 }  // namespace tunekit::calibration

@@ -76,7 +76,7 @@ void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Id
 
 void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {
   if (runs.liquefier_step) {
-    const std::string csv = runs.runs.at("liquefier-step").files.at("load_cell");
+    const std::string csv = runs.runs.at("liquefier-step").files.at(protocols::RunFile::load_cell);
     const std::string out = plan.run_dir + "/analysis/step.json";
     id.step = runs.liquefier_step;
     keep_analysis(*id.step, out, ctx);
@@ -93,7 +93,7 @@ void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs,
     id.reproduce.push_back(std::move(r));
   }
   if (const auto it = runs.runs.find("liquefier-chirp"); it != runs.runs.end()) {
-    const std::string csv = it->second.files.at("load_cell");
+    const std::string csv = it->second.files.at(protocols::RunFile::load_cell);
     const std::string out = plan.run_dir + "/analysis/freq.json";
     // Analysed as a user would analyse the file: `tunekit freq FILE --input feed --output force`
     // sizes the analysis from the record itself (where the chirp starts, the band it excites).
@@ -102,7 +102,7 @@ void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs,
     fo.time_column = "time";
     fo.input_column = "feed";
     fo.output_column = "force";
-    if (const auto track = it->second.files.find("feed_track"); track != it->second.files.end())
+    if (const auto track = it->second.files.find(protocols::RunFile::feed_track); track != it->second.files.end())
       fo.feed_track = track->second;
     id.freq = calibrate_analysis("freq", [&] { return compute_freq(fo); });
     keep_analysis(*id.freq, out, ctx);
@@ -123,7 +123,7 @@ void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Iden
   for (const char axis : {'x', 'y'}) {
     const auto it = runs.runs.find(std::string("axis-") + axis);
     if (it == runs.runs.end()) continue;
-    const std::string csv = it->second.files.at("accel");
+    const std::string csv = it->second.files.at(protocols::RunFile::accel);
     const std::string name = std::string("shaper_") + axis;
     const std::string out = plan.run_dir + "/analysis/" + name + ".json";
     // The recommendation is made among the target firmware's shapers (and its damping bounds).

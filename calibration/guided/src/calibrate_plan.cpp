@@ -13,9 +13,11 @@
 #include "tunekit/calibration/results/history_record.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
+#include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/text.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/machine/profile_import.hpp"
+#include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/sim_camera.hpp"
 #include "tunekit/sim/simulator.hpp"
 
@@ -133,8 +135,25 @@ CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
     io.sensors = a.sensors;
     return {machine::import_machine_profile(a.profile, io), a.profile};
   }
-  return {protocols::builtin_sim_profile(), (fs::path(TUNEKIT_DATASETS_DIR) / "machines" / "sim.toml").string()};
+  return {sim::builtin_sim_profile(), (fs::path(TUNEKIT_DATASETS_DIR) / "machines" / "sim.toml").string()};
 }
+
+namespace {
+
+/// The simulator's options of a calibration on it: --sim, and the firmware being calibrated,
+/// which the simulated printer runs (its planner rules and dialect) unless --sim names one.
+std::vector<std::string> simulator_options(const CalibrateArgs& a) {
+  std::vector<std::string> options = a.sim_options;
+  if (std::none_of(options.begin(), options.end(), [](const std::string& s) { return s.rfind("firmware=", 0) == 0; })) {
+    // Kalico is a Klipper fork: its G-code, API server and planner are Klipper's.
+    const auto fw = firmware::parse_export_firmware(a.firmware);
+    options.push_back("firmware=" +
+                      (fw == firmware::ExportFirmware::kalico ? std::string("klipper") : firmware::to_string(fw)));
+  }
+  return options;
+}
+
+}  // namespace
 
 CalibrationPlan plan_calibration(const CalibrateArgs& given, const CalibrationProfile& profile, bool can_prompt) {
   CalibrationPlan plan;
@@ -162,9 +181,12 @@ CalibrationPlan plan_calibration(const CalibrateArgs& given, const CalibrationPr
                    profile.profile.id);  // --record: a bad machine id or database fails before the machine moves
     plan.run_dir = make_run_dir(a.out_dir);
   }
-  // The simulated camera photographs everything the simulated printer prints.
-  if (plan.camera_path && cam.camera == "sim")
-    plan.bed = std::make_shared<sim::SimPrintBed>(sim::SimConfig::from_options(a.sim_options).seed);
+  // The simulator's options, read once: the simulated printer of every run, whose prints the
+  // simulated camera photographs.
+  const sim::SimConfig sim_config = plan.sim ? sim::SimConfig::for_machine(profile.profile, simulator_options(a))
+                                             : sim::SimConfig::from_options(a.sim_options);
+  if (plan.camera_path && cam.camera == "sim") plan.bed = std::make_shared<sim::SimPrintBed>(sim_config.seed);
+  if (plan.sim) plan.simulator = simulated_machine(sim_config, plan.bed);
   check_plan(plan);
   return plan;
 }
@@ -193,20 +215,11 @@ protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const 
   protocols::RunOptions o;
   o.protocol = e.protocol;
   o.params = e.params;
-  if (plan.sim) o.sim_bed = plan.bed;
   o.axis = e.axis.empty() ? "x" : e.axis;
   o.machine = plan.sim ? "sim" : a.profile;
   o.profile = plan.profile.profile;  // with "sim": the printer the simulator simulates
+  o.host = plan.simulator;
   o.port = a.port;
-  o.sim_options = a.sim_options;
-  // The simulated printer runs the firmware being calibrated (its planner rules and dialect).
-  if (plan.sim && std::none_of(o.sim_options.begin(), o.sim_options.end(),
-                               [](const std::string& s) { return s.rfind("firmware=", 0) == 0; })) {
-    // Kalico is a Klipper fork: its G-code, API server and planner are Klipper's.
-    const auto fw = firmware::parse_export_firmware(a.firmware);
-    o.sim_options.push_back(
-        "firmware=" + (fw == firmware::ExportFirmware::kalico ? std::string("klipper") : firmware::to_string(fw)));
-  }
   o.dry_run = dry;
   o.run_dir = plan.run_dir + "/" + e.name;
   o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run

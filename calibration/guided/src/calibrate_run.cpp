@@ -56,9 +56,9 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
     if (e.protocol == "liquefier-chirp")
       out.chirp = protocols::plan_liquefier_chirp(out.chirp.expected_tau_s, run.experiment.params.at("segment_s"));
     if (e.name == "liquefier-step") {
-      const auto track = run.files.find("feed_track");
-      const auto options =
-          load_cell_step_options(run.files.at("load_cell"), track != run.files.end() ? track->second : std::string());
+      const auto track = run.files.find(protocols::RunFile::feed_track);
+      const auto options = load_cell_step_options(run.files.at(protocols::RunFile::load_cell),
+                                                  track != run.files.end() ? track->second : std::string());
       out.liquefier_step = calibrate_analysis("step", [&] { return compute_step(options); });
     }
     protocols::throw_if_stopped_after_run(run, "after the experiment " + e.name + " had ended, before the next stage");

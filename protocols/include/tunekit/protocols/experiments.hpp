@@ -52,8 +52,22 @@ struct ProtocolParam {
   double max_value = 1e6;  ///< |value| must not exceed this
 };
 
+/// The experiment protocols (protocol_specs() describes each).
+enum class Protocol {
+  liquefier_step,
+  liquefier_flow_sweep,
+  liquefier_sine,
+  liquefier_chirp,
+  ring_print,
+  line_steps,
+  axis_sweep,
+  axis_rectangle,
+  test_pattern,
+};
+
 struct ProtocolSpec {
-  std::string name;
+  Protocol id;
+  std::string name;  ///< what the command line and run.json call it: "liquefier-step"
   std::string description;
   std::vector<ProtocolParam> params;
   std::vector<std::string> sensors;  ///< needed sensors
@@ -62,6 +76,9 @@ struct ProtocolSpec {
 
 const std::vector<ProtocolSpec>& protocol_specs();
 const ProtocolSpec& protocol_spec(const std::string& name);  ///< InputError if unknown
+const ProtocolSpec& protocol_spec(Protocol id);
+/// The protocol's name: "liquefier-step", ...
+const std::string& to_string(Protocol id);
 
 struct Experiment {
   std::string protocol;

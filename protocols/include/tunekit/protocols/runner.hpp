@@ -4,18 +4,19 @@
 // violations listed; nothing is sent if there is one), then sent over the link while every
 // line and sensor sample is journaled into the run directory.
 //
-//   RunOptions o;  o.protocol = "liquefier-step";  o.machine = "sim";
-//   RunResult r = run_experiment(o);   // r.run_dir, r.files["load_cell"] = ".../step.csv"
+//   RunOptions o;  o.protocol = "liquefier-step";  o.profile = ...;  o.port = "/dev/ttyACM0";
+//   RunResult r = run_experiment(o);   // r.run_dir, r.files[RunFile::load_cell] = ".../step.csv"
 //
-// Machines: "sim" (the built-in simulated printer, served on a pseudo-terminal in a background
-// thread of this process; its truth.json lands in the run directory) or a profile TOML path
-// with `port`: a serial device, a pseudo-terminal (Klipper's /tmp/printer), or
-// "unix:/tmp/klippy_uds" for Klipper's API server.
+// The machine is the printer on `port` (a serial device, a pseudo-terminal such as Klipper's
+// /tmp/printer, or "unix:/tmp/klippy_uds" for Klipper's API server), checked against the
+// machine profile the caller loaded, or a machine the runner brings up itself for each run
+// (RunOptions::host, machine_host.hpp): calibration/ serves the simulated printer that way, on a
+// pseudo-terminal in a background thread of this process, its truth.json in the run directory.
 //
 // Before the protocol is built for the machine, the firmware on the link is identified (M115, or
 // Klipper's API server: info and the configuration in force): the protocol is built for that
 // firmware, within the stricter of the profile's and the firmware's limits (a dry run uses the
-// profile's firmware).
+// profile's firmware, or the one the host says its machine runs).
 //
 // Failures: a limit violation or bad parameter is an InputError (exit 2) before anything is
 // opened; a machine/transport failure is a MachineError (exit 3) thrown after the journal has
@@ -31,54 +32,44 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "tunekit/protocols/experiments.hpp"
+#include "tunekit/protocols/machine_host.hpp"
+#include "tunekit/protocols/run_files.hpp"
 #include "tunekit/machine/gcode_link.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 
-namespace tunekit::protocols {
-
-/// The simulated camera's print bed (sim_camera.hpp; declared only, so that this header and the
-/// code that runs experiments need no OpenCV).
-}  // namespace tunekit::protocols
-namespace tunekit::sim {
-class SimPrintBed;
-}  // namespace tunekit::sim
 namespace tunekit::protocols {
 
 struct RunOptions {
   std::string protocol;                  ///< see protocol_specs()
   std::map<std::string, double> params;  ///< protocol parameter overrides
   std::string axis = "x";                ///< axis protocols
-  std::string machine = "sim";           ///< "sim" or a machine profile path (TOML or a firmware configuration)
-  /// The machine's profile, already loaded (the C++ API's way; calibrate passes its own). With
-  /// "sim" it is the printer the simulator simulates (SimConfig::for_machine): its limits,
-  /// firmware, steps and extruder; otherwise the limits of the machine on `port`. Empty: the
-  /// built-in simulated printer's profile, or the file `machine` names.
-  std::optional<machine::MachineProfile> profile;
-  /// "sim" only: the profile file of the printer to simulate (tunekit run --profile), when
-  /// `profile` is empty.
-  std::string profile_path;
-  std::string port;  ///< device / PTY / "unix:PATH"; empty with "sim"
+  /// The machine as run.json names it: "sim", or the path of its profile (TOML or a firmware
+  /// configuration).
+  std::string machine = "sim";
+  /// The machine's profile, loaded by the caller once for all its runs: the limits every line is
+  /// checked against. With a `host` serving the simulated printer it is the printer simulated.
+  machine::MachineProfile profile;
+  /// The machine the runner brings up for each run (the simulated printer); null: the printer on
+  /// `port`.
+  std::shared_ptr<const MachineHost> host;
+  std::string port;  ///< device / PTY / "unix:PATH"; with a `host`, empty (or an outside link to it)
   int baud = 250000;
   std::string run_dir;   ///< default: <runs_root>/<protocol>-<UTC stamp>
   std::string file_tag;  ///< names raw_data_<axis>_<tag>.csv; default: the UTC stamp
   std::string runs_root = "runs";
-  std::vector<std::string> sim_options;  ///< SimConfig::from_options keys ("tau_s=0.5", "fault=drop@12")
-  /// "sim" only: what the simulated printer prints is laid down on this bed (for its camera,
-  /// sim_camera.hpp); several runs may share one bed.
-  std::shared_ptr<sim::SimPrintBed> sim_bed;
   machine::LinkOptions link;  ///< timeouts and retries
   ProtocolLimits limits;      ///< caps on the protocol's machine time, lines and bytes
   bool dry_run = false;       ///< build and check only; RunResult::gcode is filled
   /// A profile whose [machine] firmware differs from the firmware the machine identifies as is
   /// refused (InputError naming both) when set; otherwise the protocol is built for the firmware
-  /// found and the difference is reported as a warning (run.json "warnings").
+  /// found and the difference is reported as a warning (run.json "warnings"). A machine the
+  /// runner brings up (`host`) runs the firmware it was set up with, whatever the profile names.
   bool strict_firmware = false;
   /// A protocol that heats the hot end or the bed turns them off at its normal end (after its
   /// epilogue) unless this is set (`--keep-heaters`): then they stay at the protocol's last
@@ -92,8 +83,7 @@ struct RunOptions {
 struct RunResult {
   std::string run_dir;  ///< empty for a dry run
   std::string status;   ///< "complete" or "dry-run"
-  std::map<std::string, std::string>
-      files;  ///< role -> path: load_cell, accel, commanded_accel, journal, truth, gcode, summary
+  RunFiles files;       ///< what each file of the run holds -> its path (run_files.hpp)
   Experiment experiment;
   std::vector<std::string> gcode;  ///< the protocol's G-code (with ;@record directives)
   nlohmann::json summary;          ///< what run.json holds
@@ -104,9 +94,6 @@ struct RunResult {
   /// "mode" .. "axis_list_v2"); also summary.firmware.m493_form. Empty without FT_MOTION.
   std::string m493_form;
 };
-
-/// The built-in simulated printer's machine profile (same content as datasets/machines/sim.toml).
-machine::MachineProfile builtin_sim_profile();
 
 /// Runs (or, with dry_run, only builds and checks) an experiment. See the header comment.
 RunResult run_experiment(const RunOptions& options);

@@ -31,9 +31,11 @@ struct OvershootOptions {
   bool traces = false;               ///< include each corner's deviation trace in the JSON
   // Grid mode.
   std::vector<std::string> params;  ///< axis-rectangle parameters NAME=V1,V2,... (lists for speed and accel)
-  /// machine ("sim" or a profile), port, sim_options and runs_root of every grid run; the
-  /// protocol, parameters and run directory are set per grid point.
+  /// machine ("sim" or a profile), port and runs_root of every grid run; the protocol,
+  /// parameters and run directory are set per grid point.
   protocols::RunOptions run;
+  /// Simulator options KEY=VALUE (sim::SimConfig::from_options), with machine "sim".
+  std::vector<std::string> sim_options;
   std::string out_dir;               ///< the grid's directory; empty: <runs_root>/overshoot-grid
   double tolerance_mm = 0.05;        ///< overshoot tolerance of the figure of merit (mm)
   std::vector<std::string> shapers;  ///< on the simulator: AXIS=TYPE:FREQ_HZ[:DAMPING], grid run again with them

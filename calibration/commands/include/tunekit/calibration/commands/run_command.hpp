@@ -18,11 +18,16 @@
 namespace tunekit::calibration {
 
 struct RunCommandOptions {
-  /// Protocol, axis, machine ("sim" or a profile TOML), port, baud, run directory, simulator
-  /// options, link retries, limits (max_duration_s in s, max_lines) and dry_run: the runner's own
-  /// options and defaults. compute_run() fills in params and link.timeout;
-  /// `progress` (human progress lines) is the caller's.
+  /// Protocol, axis, machine ("sim" or a profile TOML), port, baud, run directory, link retries,
+  /// limits (max_duration_s in s, max_lines) and dry_run: the runner's own options and defaults.
+  /// compute_run() fills in params, link.timeout, the profile and (with "sim") the simulated
+  /// printer; `progress` (human progress lines) is the caller's.
   protocols::RunOptions run;
+  /// With --machine sim: the profile file of the printer to simulate (tunekit run --profile);
+  /// empty: the built-in simulated printer.
+  std::string profile_path;
+  /// Simulator options KEY=VALUE (sim::SimConfig::from_options: "tau_s=0.5", "fault=drop@12").
+  std::vector<std::string> sim_options;
   /// Protocol parameters as NAME=VALUE (value in the unit the name carries), checked by compute_run().
   std::vector<std::string> params;
   /// Silence allowed while waiting for the firmware's "ok" (s); the link's default.

@@ -26,7 +26,12 @@
 #include "tunekit/calibration/analyses/step_command.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
+#include "tunekit/protocols/machine_host.hpp"
 #include "tunekit/protocols/runner.hpp"
+
+namespace tunekit::sim {
+class SimPrintBed;  // sim/sim_camera.hpp; declared only, so that this header needs no OpenCV
+}  // namespace tunekit::sim
 
 namespace tunekit::calibration {
 
@@ -87,6 +92,9 @@ struct CalibrationPlan {
   std::string chirp_basis;  ///< what the chirp was sized from, in words
   /// The simulated camera's print bed (camera path on the simulator), else null.
   std::shared_ptr<sim::SimPrintBed> bed;
+  /// The simulated printer every run is made on (with `sim`; simulated_machine.hpp), its options
+  /// read once; else null.
+  std::shared_ptr<const protocols::MachineHost> simulator;
 };
 
 /// Chooses the experiments, creates the run directory and checks every protocol against the
