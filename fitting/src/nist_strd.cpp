@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <sstream>
 
 #include <ceres/jet.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::fitting {
 namespace {
@@ -77,8 +77,7 @@ std::vector<std::string> nist_supported_problems() {
 double nist_model(const std::string& name, const double* b, double x) { return eval_model<double>(name, b, x); }
 
 NistProblem read_nist_problem(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open NIST StRD file", path);
+  std::istringstream in(read_file_bytes(path));
   NistProblem p;
   std::string line;
   std::size_t ln = 0;

@@ -10,11 +10,6 @@
 #include <memory>
 #include <tuple>
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
@@ -204,29 +199,6 @@ bool CsvTable::has_column(std::string_view name) const {
              columns.size(), [&](std::size_t k) -> const std::string& { return columns[k].name; },
              [&](std::size_t k) -> const std::string& { return columns[k].base; },
              [&](std::size_t k) -> const std::string& { return columns[k].unit; }, name) < columns.size();
-}
-
-InputFileBytes::InputFileBytes(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  struct stat st {};
-  // Files beyond kMaxMappedBytes go through read_file_bytes too, whose size limit then applies.
-  constexpr off_t kMaxMappedBytes = off_t{1} << 30;
-  if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0 && st.st_size <= kMaxMappedBytes) {
-    // Not MAP_POPULATE: the kernel maps a file's cached pages sixteen at a time as they are
-    // first read, and for a large CSV that happens on both parsing threads at once; mapping all
-    // of them up front is one more serial millisecond for a 20 MB file.
-    void* p = ::mmap(nullptr, static_cast<std::size_t>(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
-    if (p != MAP_FAILED) {
-      map_ = static_cast<const char*>(p);
-      size_ = static_cast<std::size_t>(st.st_size);
-    }
-  }
-  if (fd >= 0) ::close(fd);
-  if (map_ == nullptr) copy_ = read_file_bytes(path);  // not a regular file, empty, or not mappable
-}
-
-InputFileBytes::~InputFileBytes() {
-  if (map_ != nullptr) ::munmap(const_cast<char*>(map_), size_);
 }
 
 CsvTable read_csv(const std::string& path, const CsvOptions& options) {

@@ -91,9 +91,14 @@ std::string feed_track_csv(const FeedTrack& track) {
 }
 
 FeedTrack read_feed_track_csv(const std::string& path) {
+  const InputFileBytes bytes(path);
+  return parse_feed_track_csv(bytes.view(), path);
+}
+
+FeedTrack parse_feed_track_csv(std::string_view text, const std::string& path) {
   CsvOptions o;
   o.time_must_increase = false;
-  const CsvTable table = read_csv(path, o);
+  const CsvTable table = parse_csv(text, path, o);
   if (table.columns.size() < 2 || table.rows < 2)
     throw InputError("a feed track needs two columns (time, feed) and at least two rows", path);
   FeedTrack k{table.columns[0].values, table.columns[1].values};

@@ -283,9 +283,12 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
   return p;
 }
 
-MachineProfile load_machine_profile(const std::string& path) {
-  if (is_firmware_configuration(path)) return import_machine_profile(path);  // profile_import.hpp
-  return parse_machine_profile(read_file_bytes(path), path);
+MachineProfile load_machine_profile(const std::string& path, std::string* bytes) {
+  if (is_firmware_configuration(path)) return import_machine_profile(path, {}, bytes);  // profile_import.hpp
+  std::string text = read_file_bytes(path);
+  MachineProfile p = parse_machine_profile(text, path);
+  if (bytes != nullptr) *bytes = std::move(text);
+  return p;
 }
 
 }  // namespace tunekit::machine

@@ -133,8 +133,11 @@ MachineProfile as_loaded(const MachineProfile& imported, const std::string& path
 
 }  // namespace
 
-MachineProfile import_machine_profile(const std::string& path, const ProfileImportOptions& options) {
-  const std::string text = read_file_bytes(path);
+MachineProfile import_machine_profile(const std::string& path, const ProfileImportOptions& options,
+                                      std::string* bytes) {
+  std::string local;
+  std::string& text = bytes != nullptr ? *bytes : local;
+  text = read_file_bytes(path);
   const ConfigFormat f = has_extension(path, ".toml") ? ConfigFormat::profile_toml : detect_config_format(text, path);
   switch (f) {
     case ConfigFormat::profile_toml: return parse_machine_profile(text, path);

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <regex>
 #include <sstream>
 
@@ -12,6 +11,7 @@
 
 #include "tunekit/core/json_error_text.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::vision {
 namespace {
@@ -232,12 +232,12 @@ CameraProfile calibrate_camera(const std::vector<cv::Mat>& grays, const Chessboa
   return p;
 }
 
-CameraProfile load_camera_profile(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw InputError("cannot read camera profile", path);
+CameraProfile load_camera_profile(const std::string& path) { return parse_camera_profile(read_file_bytes(path), path); }
+
+CameraProfile parse_camera_profile(std::string_view text, const std::string& path) {
   nlohmann::json j;
   try {
-    f >> j;
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(fmt::format("camera profile is not valid JSON: {}", core::plain_json_error(e.what())), path);
   }

@@ -22,7 +22,7 @@
 namespace tunekit::vision {
 namespace {
 
-bool starts_with(const std::string& s, const char* magic, std::size_t n) {
+bool starts_with(std::string_view s, const char* magic, std::size_t n) {
   return s.size() >= n && std::memcmp(s.data(), magic, n) == 0;
 }
 
@@ -60,7 +60,7 @@ void set_max_image_pixels(std::uint64_t pixels) {
 
 std::uint64_t max_image_pixels() { return g_max_image_pixels; }
 
-cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageColor color) {
+cv::Mat decode_image(std::string_view bytes, const std::string& name, ImageColor color) {
   if (bytes.empty()) throw InputError("empty image file (0 bytes)", name);
   if (starts_with(bytes, "II*\0", 4) || starts_with(bytes, "MM\0*", 4))
     throw InputError("TIFF images are not supported: convert the photo to PNG (16-bit PNG keeps the depth)", name);
@@ -114,10 +114,14 @@ cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageCol
   return convert_color(m, color);
 }
 
-cv::Mat read_image(const std::string& path, ImageColor color) {
+std::string read_image_bytes(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw InputError("cannot read image: no such file", path);
-  return decode_image(read_file_bytes(path), path, color);
+  return read_file_bytes(path);
+}
+
+cv::Mat read_image(const std::string& path, ImageColor color) {
+  return decode_image(read_image_bytes(path), path, color);
 }
 
 std::string encode_png(const cv::Mat& image) {
@@ -145,13 +149,14 @@ std::string encode_png(const cv::Mat& image) {
   return out;
 }
 
-void write_png(const std::string& path, const cv::Mat& image) {
+std::string write_png(const std::string& path, const cv::Mat& image) {
   const std::string png = encode_png(image);
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) throw InputError("cannot write image: cannot create the file", path);
   out.write(png.data(), static_cast<std::streamsize>(png.size()));
   out.close();
   if (!out) throw InputError("cannot write image: write error", path);
+  return png;
 }
 
 }  // namespace tunekit::vision

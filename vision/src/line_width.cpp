@@ -15,6 +15,7 @@
 
 #include "line_width_stages.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/file_bytes.hpp"
 #include "tunekit/vision/image_io.hpp"
 
 namespace tunekit::vision {
@@ -60,8 +61,10 @@ cv::Mat to_gray_float(const cv::Mat& image) {
   return f;
 }
 
-cv::Mat load_gray_image(const std::string& path) {
-  const cv::Mat img = read_image(path, ImageColor::keep);
+cv::Mat load_gray_image(const std::string& path) { return gray_image_from_bytes(read_file_bytes(path), path); }
+
+cv::Mat gray_image_from_bytes(std::string_view bytes, const std::string& path) {
+  const cv::Mat img = decode_image(bytes, path, ImageColor::keep);
   if (img.cols < kMinImageSidePx || img.rows < kMinImageSidePx)
     throw InputError(fmt::format("image too small ({}x{} px)", img.cols, img.rows), path);
   return to_gray_float(img);

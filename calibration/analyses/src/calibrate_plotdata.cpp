@@ -8,7 +8,6 @@
 
 #include "tunekit/calibration/analyses/whole_record.hpp"
 #include "tunekit/fitting/first_order.hpp"
-#include "tunekit/formats/csv.hpp"
 #include "tunekit/design/input_shaper.hpp"
 
 namespace tunekit::calibration {
@@ -57,11 +56,10 @@ std::string model_label(const ident::WholeRecordModel& m) {
 
 // Series for the step plot: the measured record, each step's own fitted model and the whole-record model.
 nlohmann::json step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label) {
-  const std::string &tc = step.time_column, &in_col = step.options.input_column, &out_col = step.options.output_column;
-  const auto table = formats::read_csv(step.options.file, {{tc, in_col, out_col}, tc});
-  const auto& t = table.column(tc).values;
-  const auto& u = table.column(in_col).values;
-  const auto& y = table.column(out_col).values;
+  // The record as compute_step() analysed it (the file is not read again).
+  const auto& t = step.record.t;
+  const auto& u = step.record.u;
+  const auto& y = step.record.y;
   const std::vector<double> yf = step_fits_output(t, u, step.analysis);
   std::vector<double> ym;
   nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};

@@ -281,10 +281,14 @@ void freq_whole_record(FreqOutcome& o, const FreqOptions& a, const formats::CsvT
       from ? static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), *from) - t.begin()) : 0;
   const std::span<const double> u = table.column(a.input_column).values;
   const std::span<const double> y = table.column(a.output_column).values;
-  const auto track = aligned_feed_track(feed_track_for(a.feed_track, a.file), t, u);  // on the whole record
-  o.whole_record =
-      ident::fit_whole_record(t.subspan(first), u.subspan(first), y.subspan(first), o.input_unit, o.output_unit,
-                              nullptr, a.profile_intervals, o.warnings, track ? &*track : nullptr);
+  std::optional<InputFile> track_file;
+  if (const std::string path = feed_track_for(a.feed_track, a.file); !path.empty()) {
+    track_file = InputFile::read(path);
+    o.feed_track_input = track_file->digest();
+  }
+  const auto track = aligned_feed_track(track_file ? &*track_file : nullptr, t, u);  // on the whole record
+  o.whole_record = ident::fit_whole_record(t.subspan(first), u.subspan(first), y.subspan(first), o.input_unit, o.output_unit,
+                                    nullptr, a.profile_intervals, o.warnings, track ? &*track : nullptr);
 }
 
 }  // namespace
@@ -293,7 +297,8 @@ FreqOutcome compute_freq(const FreqOptions& a) {
   FreqOutcome o;
   o.options = a;
   o.mode = resolved_mode(a);
-  const std::string bytes = read_file_bytes(a.file);
+  const InputFile file = InputFile::read(a.file);
+  const std::string_view bytes = file.bytes();
   formats::CsvOptions copt;
   copt.columns = {a.output_column};
   if (!a.input_column.empty()) copt.columns.push_back(a.input_column);
@@ -301,7 +306,7 @@ FreqOutcome compute_freq(const FreqOptions& a) {
   copt.find_time_column = a.time_column.empty();
   const auto table = formats::parse_csv(bytes, a.file, copt);
   o.time_column = table.time_column;
-  o.input_sha256 = sha256_hex(bytes);
+  o.input_sha256 = file.digest().sha256;
   o.input_size_bytes = bytes.size();
   const auto& t_all = table.column(table.time_column).values;
   o.samples = t_all.size();

@@ -30,7 +30,6 @@
 #include "tunekit/formats/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/machine/gcode.hpp"
-#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 
@@ -158,9 +157,10 @@ void check_measured(const LinewidthOptions& a, const ImageRun& run, std::ostream
   }
 }
 
-ImageRun measure_image(const LinewidthOptions& a, const std::string& path,
+// `bytes`: the image file's, read once (their digest is the input's).
+ImageRun measure_image(const LinewidthOptions& a, const std::string& path, const std::string& bytes,
                        const std::optional<vision::CameraProfile>& cam, std::ostream& err) {
-  auto pw = vision::measure_photo_widths(vision::load_gray_image(path), photo_request(a, cam), path);
+  auto pw = vision::measure_photo_widths(vision::gray_image_from_bytes(bytes, path), photo_request(a, cam), path);
   ImageRun run;
   run.path = path;
   run.measured = pw.measured;
@@ -187,8 +187,9 @@ LinewidthOutcome compute_linewidth_camera(const LinewidthOptions& a) {
   outcome.options = a;
   std::vector<cv::Mat> grays;
   for (const auto& p : a.images) {
-    grays.push_back(vision::load_gray_image(p));
-    outcome.inputs.push_back(input_digest(p, read_file_bytes(p)));
+    const std::string bytes = vision::read_image_bytes(p);
+    grays.push_back(vision::gray_image_from_bytes(bytes, p));
+    outcome.inputs.push_back(input_digest(p, bytes));
   }
   std::vector<int> skipped;
   outcome.camera = vision::calibrate_camera(grays, spec, &skipped);
@@ -244,16 +245,18 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
   outcome.options = a;
   std::optional<vision::CameraProfile> cam;
   if (!a.camera.empty()) {
-    cam = vision::load_camera_profile(a.camera);
-    outcome.inputs.push_back(input_digest(a.camera, read_file_bytes(a.camera)));
+    const InputFile profile = InputFile::read(a.camera);
+    cam = vision::parse_camera_profile(profile.bytes(), a.camera);
+    outcome.inputs.push_back(profile.digest());
     if (!cam->has_bed_plane && a.px_per_mm <= 0 && !board && a.reference_width_mm <= 0)
       throw InputError("camera profile has no bed plane scale: add --px-per-mm, --chessboard or --reference-width-mm",
                        a.camera);
   }
   std::vector<ImageRun> runs;
   for (const auto& path : a.images) {
-    runs.push_back(measure_image(a, path, cam, err));
-    outcome.inputs.push_back(input_digest(path, read_file_bytes(path)));
+    const std::string bytes = vision::read_image_bytes(path);
+    runs.push_back(measure_image(a, path, bytes, cam, err));
+    outcome.inputs.push_back(input_digest(path, bytes));
     const auto& run = runs.back();
     const auto& res = run.result;
     for (const auto& w : run.warnings) outcome.warnings.push_back(fmt::format("{}: {}", path, w));

@@ -22,7 +22,6 @@
 #include "tunekit/ident/overshoot.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/protocols/runner.hpp"
-#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -49,15 +48,17 @@ ident::OvershootAnalysis overshoot_from_run_dir(const std::string& dir, const id
   formats::CsvOptions ro;
   ro.columns = {"time", "accel_x", "accel_y"};
   ro.time_column = "time";
-  const auto a = formats::read_csv(raw[0], ro);
+  const InputFile raw_file = InputFile::read(raw[0]);
+  const auto a = formats::parse_csv(raw_file.bytes(), raw[0], ro);
   formats::CsvOptions co;
   co.columns = {"time", "accel_x", "accel_y"};
   co.time_column = "time";
-  const auto c = formats::read_csv(cmd[0], co);
+  const InputFile cmd_file = InputFile::read(cmd[0]);
+  const auto c = formats::parse_csv(cmd_file.bytes(), cmd[0], co);
   if (a.rows != c.rows)
     throw InputError(fmt::format("{} has {} rows but {} has {}: not one time base", raw[0], a.rows, cmd[0], c.rows),
                      dir);
-  if (inputs) *inputs = {input_digest(raw[0], read_file_bytes(raw[0])), input_digest(cmd[0], read_file_bytes(cmd[0]))};
+  if (inputs) *inputs = {raw_file.digest(), cmd_file.digest()};
   try {
     return ident::analyze_overshoot_accel(a.column("time").values, a.column("accel_x").values,
                                           a.column("accel_y").values, c.column("accel_x").values,
@@ -83,8 +84,9 @@ ident::OvershootAnalysis overshoot_from_csv(const OvershootOptions& a, std::vect
           "acceleration, mm/s^2) with the accelerometer columns");
     co.columns.insert(co.columns.end(), {a.accel_x, a.accel_y, a.cmd_x, a.cmd_y});
   }
-  const auto t = formats::read_csv(a.input, co);
-  inputs = {input_digest(a.input, read_file_bytes(a.input))};
+  const InputFile file = InputFile::read(a.input);
+  const auto t = formats::parse_csv(file.bytes(), a.input, co);
+  inputs = {file.digest()};
   try {
     if (position)
       return ident::analyze_overshoot_position(

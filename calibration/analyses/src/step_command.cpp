@@ -69,15 +69,29 @@ bool explained_by_whole_record(const std::string& warning, const WholeRecordResu
   return !m.model.linear_chosen && m.warnings.empty() && m.model.fit.diagnostics.whiteness_p >= ident::kWhitenessAlarmP;
 }
 
-}  // namespace
-
-StepOutcome compute_step(const StepOptions& a) {
-  StepOutcome outcome;
-  outcome.options = a;
+// The options checked before the log is read.
+void check_step_options(const StepOptions& a) {
   if (!(a.analysis.detect.min_step_fraction > 0 && a.analysis.detect.min_step_fraction < 1))
     throw InputError("--min-step must be between 0 and 1 (a fraction of the input range)");
   check_plot_option(a);
-  const std::string bytes = read_file_bytes(a.file);
+}
+
+}  // namespace
+
+StepOutcome compute_step(const StepOptions& a) {
+  check_step_options(a);
+  const InputFile file = InputFile::read(a.file);
+  std::optional<InputFile> track;
+  if (!a.input_column.empty())
+    if (const std::string path = feed_track_for(a.feed_track, a.file); !path.empty()) track = InputFile::read(path);
+  return compute_step(a, file, track ? &*track : nullptr);
+}
+
+StepOutcome compute_step(const StepOptions& a, const InputFile& file, const InputFile* feed_track) {
+  StepOutcome outcome;
+  outcome.options = a;
+  check_step_options(a);
+  const std::string_view bytes = file.bytes();
   formats::CsvOptions copt;
   copt.columns = {a.output_column};
   if (!a.input_column.empty()) copt.columns.push_back(a.input_column);
@@ -151,12 +165,14 @@ StepOutcome compute_step(const StepOptions& a) {
 
   if (!a.input_column.empty()) {  // the whole-record model beside the per-step fits: any excitation
     const auto& u = table.column(a.input_column).values;
-    const auto track = aligned_feed_track(feed_track_for(a.feed_track, a.file), tcol.values, u);
+    const auto track = aligned_feed_track(feed_track, tcol.values, u);
+    if (feed_track) outcome.feed_track_input = feed_track->digest();
+    outcome.record = {tcol.values, u, ycol.values};
     outcome.whole_record = ident::fit_whole_record(tcol.values, u, ycol.values, input_unit, opt.output_unit, &res,
-                                                   a.profile_intervals, res.warnings, track ? &*track : nullptr);
+                                            a.profile_intervals, res.warnings, track ? &*track : nullptr);
   }
   outcome.time_column = table.time_column;
-  outcome.input_sha256 = sha256_hex(bytes);
+  outcome.input_sha256 = file.digest().sha256;
   outcome.input_size_bytes = bytes.size();
   outcome.input_unit = input_unit;
   outcome.output_unit = opt.output_unit;

@@ -21,10 +21,10 @@ std::string feed_track_for(const std::string& given, const std::string& log) {
   return std::filesystem::is_regular_file(beside, ec) ? beside.string() : std::string();
 }
 
-std::optional<ident::FeedTrackAlignment> aligned_feed_track(const std::string& path, std::span<const double> t,
+std::optional<ident::FeedTrackAlignment> aligned_feed_track(const InputFile* track, std::span<const double> t,
                                                             std::span<const double> u) {
-  if (path.empty()) return std::nullopt;
-  return ident::align_feed_track(ident::read_feed_track_csv(path), t, u);
+  if (track == nullptr) return std::nullopt;
+  return ident::align_feed_track(ident::parse_feed_track_csv(track->bytes(), track->path()), t, u);
 }
 
 void print_whole_record(std::ostream& os, const WholeRecordResult& r, double u_compare) {

@@ -258,7 +258,7 @@ RheoDesignInput read_rheo_results(const json& res, const std::string& path) {
 void read_one_results_file(const std::string& path, DesignInputs& out) {
   std::string bytes;
   const json j = read_results_json(path, &bytes);
-  out.files.emplace_back(path, bytes);
+  out.files.push_back(input_digest(path, bytes));
   out.origins.push_back(path);
   const std::string cmd = j.value("command", std::string());
   const json& res = value_at_or_null(j, "/results"_json_pointer);

@@ -389,7 +389,7 @@ ExportOutcome compute_export(const ExportOptions& a, const DesignInputs& inputs)
   check_given_options(a);
   check_outputs(a, "", option_inputs(a));
   Envelope& env = outcome.envelope;
-  for (const auto& [path, bytes] : inputs.files) env.add_input(path, bytes);
+  for (const auto& d : inputs.files) add_input(env, d);
   for (const auto& w : inputs.warnings) env.warn(w);
   const bool ft_motion = marlin_ft_motion(a, fw);
   auto shapers = export_design::firmware_shapers(inputs, fw, ft_motion, env);

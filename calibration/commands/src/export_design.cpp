@@ -96,8 +96,9 @@ LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, 
 void apply_machine_profile(const ExportOptions& a, LiquefierInputs& li, Envelope& env) {
   machine::MachineProfile profile;
   if (!a.profile.empty()) {
-    profile = machine::load_machine_profile(a.profile);
-    env.add_input(a.profile);
+    std::string bytes;
+    profile = machine::load_machine_profile(a.profile, &bytes);
+    env.add_input(a.profile, bytes);
   }
   design::AdvanceInputs& in = li.in;
   in.filament_area_mm2 = profile.filament_area_mm2();

@@ -10,7 +10,6 @@
 #include "calibrate_stages.hpp"
 #include "tunekit/calibration/commands/design_inputs.hpp"
 #include "tunekit/core/atomic_file.hpp"
-#include "tunekit/core/file_bytes.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 
 #ifndef TUNEKIT_DATASETS_DIR
@@ -39,9 +38,9 @@ std::string configuration_to_update(const CalibrateArgs& a, const std::string& r
 /// (the file `tunekit export` would read: its digest is recorded as export's input).
 DesignInputs typed_design_inputs(const CalibrationPlan& plan, const Identification& identified) {
   DesignInputs d;
-  for (const auto& path : identified.export_inputs) {
-    d.origins.push_back(path);
-    d.files.emplace_back(path, read_file_bytes(path));
+  for (const auto& file : identified.export_inputs) {
+    d.origins.push_back(file.path());
+    d.files.push_back(file.digest());  // of the text written, not read back
   }
   if (identified.step) d.step = step_design_input(*identified.step, plan.run_dir + "/analysis/step.json");
   for (const auto& [axis, outcome] : identified.shapers)

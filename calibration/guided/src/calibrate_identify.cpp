@@ -3,6 +3,7 @@
 // defaults; only the file, its columns, the axis and the target firmware are named), so that
 // the command it records in results.json reproduces it from the run directory.
 #include <filesystem>
+#include <stdexcept>
 
 #include "calibrate_liquefier.hpp"
 #include "calibrate_stages.hpp"
@@ -15,6 +16,18 @@ namespace fs = std::filesystem;
 
 std::string relative_to(const std::string& path, const std::string& run_dir) {
   return fs::relative(path, run_dir).generic_string();
+}
+
+// The digest an analysis took of the file `path` as it read it (its outcome carries it).
+InputDigest read_input(const std::optional<InputDigest>& read, const std::string& path) {
+  if (!read || read->path != path) throw std::logic_error("the analysis did not read " + path);
+  return *read;
+}
+
+InputDigest read_input(const std::vector<InputDigest>& read, const std::string& path) {
+  for (const auto& d : read)
+    if (d.path == path) return d;
+  throw std::logic_error("the analysis did not read " + path);
 }
 
 // The command's words for a step or freq analysis of `csv` (columns named as calibrate names them).
@@ -60,16 +73,16 @@ void identify_camera(const CalibrationPlan& plan, const ExperimentRuns& runs, Id
   so.output_column = "delivered_feed";
   so.feed_track = cam.feed_track_csv;
   so.analysis.model = fitting::StepModel::fopdt;  // `tunekit step`'s default model
-  id.step = calibrate_analysis("step", [&] { return compute_step(so); });
+  // The widths and the feed track as the camera analysis wrote them (not read back).
+  id.step = calibrate_analysis("step", [&] { return compute_step(so, cam.width_record, &cam.feed_track); });
   const std::string out = plan.run_dir + "/analysis/step.json";
-  keep_analysis(*id.step, out, ctx);
-  id.inputs.push_back(cam.width_csv);
-  id.inputs.push_back(cam.photo);
-  id.export_inputs.push_back(out);
+  id.export_inputs.push_back(keep_analysis(*id.step, out, ctx));
+  id.inputs.push_back(cam.width_record.digest());
+  id.inputs.push_back(cam.photo_input);
   Reproduction r = columns_command("step", "the liquefier's step responses in the printed line widths: tau, K, theta",
                                    cam.width_csv, "feed", "delivered_feed", plan.run_dir);
   r.args.insert(r.args.end(), {"--feed-track", relative_to(cam.feed_track_csv, plan.run_dir)});
-  id.inputs.push_back(cam.feed_track_csv);
+  id.inputs.push_back(cam.feed_track.digest());
   id.reproduce.push_back(std::move(r));
   add_ring_prediction(*id.camera, ring_model(*id.step, plan, runs));
 }
@@ -79,16 +92,15 @@ void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs,
     const std::string csv = runs.runs.at("liquefier-step").files.at(protocols::RunFile::load_cell);
     const std::string out = plan.run_dir + "/analysis/step.json";
     id.step = runs.liquefier_step;
-    keep_analysis(*id.step, out, ctx);
-    id.inputs.push_back(csv);
-    id.export_inputs.push_back(out);
+    id.export_inputs.push_back(keep_analysis(*id.step, out, ctx));
+    id.inputs.push_back({csv, id.step->input_sha256, id.step->input_size_bytes});
     Reproduction r = columns_command("step",
                                      "the liquefier's step responses in the load cell's flow sweep: tau, K, theta "
                                      "per step, pooled and per flow level",
                                      csv, "feed", "force", plan.run_dir);
     if (const std::string& track = id.step->options.feed_track; !track.empty()) {
       r.args.insert(r.args.end(), {"--feed-track", relative_to(track, plan.run_dir)});
-      id.inputs.push_back(track);
+      id.inputs.push_back(read_input(id.step->feed_track_input, track));
     }
     id.reproduce.push_back(std::move(r));
   }
@@ -106,14 +118,14 @@ void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs,
       fo.feed_track = track->second;
     id.freq = calibrate_analysis("freq", [&] { return compute_freq(fo); });
     keep_analysis(*id.freq, out, ctx);
-    id.inputs.push_back(csv);
+    id.inputs.push_back({csv, id.freq->input_sha256, id.freq->input_size_bytes});
     Reproduction r = columns_command("freq",
                                      "the liquefier's frequency response to the chirp and the transfer function "
                                      "fitted to it",
                                      csv, "feed", "force", plan.run_dir);
     if (!fo.feed_track.empty()) {
       r.args.insert(r.args.end(), {"--feed-track", relative_to(fo.feed_track, plan.run_dir)});
-      id.inputs.push_back(fo.feed_track);
+      id.inputs.push_back(read_input(id.freq->feed_track_input, fo.feed_track));
     }
     id.reproduce.push_back(std::move(r));
   }
@@ -134,9 +146,8 @@ void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Iden
     // The proposed maximum acceleration stays within the printer's limit on this axis.
     so.accel_limit_mm_s2 = plan.profile.profile.axis(std::string(1, axis)).max_accel_mm_s2;
     const auto& shaper = id.shapers[axis] = calibrate_analysis("shaper", [&] { return compute_shaper(so); });
-    keep_analysis(shaper, out, ctx);
-    id.inputs.push_back(csv);
-    id.export_inputs.push_back(out);
+    id.export_inputs.push_back(keep_analysis(shaper, out, ctx));
+    id.inputs.push_back(read_input(shaper.inputs, csv));
     id.reproduce.push_back(
         {name,
          "analysis/" + name + ".json",

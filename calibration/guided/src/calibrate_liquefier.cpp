@@ -244,7 +244,7 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
     sim::SimCameraFrame frame;
     photo = bed->photograph(sim::SimCameraOptions{}, &frame);
     out.photo = dir + "/photo.png";
-    vision::write_png(out.photo, photo);
+    out.photo_input = input_digest(out.photo, vision::write_png(out.photo, photo));
     px_per_mm = frame.px_per_mm;
     placement = {true, frame.x0_mm, frame.y1_mm};
   } else {
@@ -258,13 +258,15 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
       if (!std::getline(std::cin, path) || path.empty()) throw InputError("no photo file was given");
       while (!path.empty() && (path.back() == ' ' || path.back() == '\r')) path.pop_back();
     }
-    photo = vision::read_image(path, vision::ImageColor::gray);
+    const std::string bytes = vision::read_image_bytes(path);
+    photo = vision::decode_image(bytes, path, vision::ImageColor::gray);
     out.photo = path;
     if (path != dir + "/photo.png") {
-      // The photo is kept with the run.
+      // The photo is kept with the run: the bytes read, written there.
       out.photo = dir + "/photo" + fs::path(path).extension().string();
-      fs::copy_file(path, out.photo, fs::copy_options::overwrite_existing);
+      core::write_file_atomic(out.photo, bytes);
     }
+    out.photo_input = input_digest(out.photo, bytes);
   }
 
   // 2. The lines and the ring in it: one measurement, the same as `tunekit linewidth`'s.
@@ -313,11 +315,13 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   out.width_csv = dir + "/line_widths.csv";
   // Beside the record, where `tunekit step` finds it.
   out.feed_track_csv = dir + "/feed_track.csv";
-  core::write_file_atomic(out.feed_track_csv,
-                          ident::feed_track_csv(line_test_feed_track(
+  out.feed_track = InputFile::from_bytes(
+      out.feed_track_csv, ident::feed_track_csv(line_test_feed_track(
                               layout, kLineGapS, sample_averaged_mm(vision::LineWidthOptions{}, pw.scale.px_per_mm))));
-  core::write_file_atomic(
+  core::write_file_atomic(out.feed_track_csv, out.feed_track.bytes());
+  out.width_record = InputFile::from_bytes(
       out.width_csv, vision::timed_width_csv(rows, "widths along the line test (t = s / v per line, lines 1 s apart)"));
+  core::write_file_atomic(out.width_csv, out.width_record.bytes());
 
   // 4. The ring: width against the angle travelled -> gain and phase at f = N v / (2 pi R).
   nlohmann::json ring_json;

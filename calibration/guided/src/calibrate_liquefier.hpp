@@ -22,6 +22,7 @@
 
 #include "tunekit/calibration/guided/calibrate_command.hpp"
 #include "tunekit/calibration/results/context.hpp"
+#include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/sim/sim_camera.hpp"
@@ -53,6 +54,9 @@ struct CameraAnalysis {                    // declared in calibration_pipeline.h
   std::string overlay;                     ///< the photo with the measured edges (PNG, in the run directory)
   std::string width_csv;                   ///< time, setpoint width, width of the line test (for `tunekit step`)
   std::string feed_track_csv;              ///< the line test's commanded feed in the record's time, beside it
+  InputFile width_record;                  ///< width_csv as written: the step analysis takes it from memory
+  InputFile feed_track;                    ///< feed_track_csv as written, likewise
+  InputDigest photo_input;                 ///< the photo's digest, of the bytes read (or written)
   nlohmann::json results;                  ///< lines, ring (gain and phase), warnings
   std::optional<vision::RingResult> ring;  ///< the ring's gain and phase, when the photo shows it
   bool ring_predicted = false;             ///< the step model's prediction was added (add_ring_prediction)

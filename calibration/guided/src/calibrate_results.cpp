@@ -266,8 +266,9 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
   const CalibrateArgs& a = plan.options;
   // Inputs are recorded relative to the run directory: the run can move, and two runs of the
   // same machine give byte-identical results.json files.
-  for (const auto& path : id.inputs)
-    r.env.add_input(fs::relative(path, plan.run_dir).generic_string(), read_file_bytes(path));
+  // The digests the analyses took of the bytes they read (the files are not read again).
+  for (const auto& in : id.inputs)
+    r.env.add_input_digest(fs::relative(in.path, plan.run_dir).generic_string(), in.sha256, in.size_bytes);
   r.env.set_options({{"machine", a.machine},
                      {"profile", a.profile.empty() ? "builtin" : a.profile},
                      {"firmware", a.firmware},

@@ -9,6 +9,7 @@
 
 #include "tunekit/calibration/guided/calibration_pipeline.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::calibration {
@@ -30,11 +31,13 @@ auto calibrate_analysis(const char* command, Fn&& compute) {
 }
 
 /// Writes an analysis' JSON envelope where the run keeps it (RUN_DIR/analysis/NAME.json, the
-/// file the command's --json-file would write).
+/// file the command's --json-file would write); returns the file as written, with its digest.
 template <class Outcome>
-void keep_analysis(const Outcome& outcome, const std::string& json_path, CliContext& ctx) {
+InputFile keep_analysis(const Outcome& outcome, const std::string& json_path, CliContext& ctx) {
   if (ctx.verbosity > 0) print_text(outcome, ctx.err);
-  write_output_text(json_path, prepare_emission(to_envelope(outcome), OutputOptions{}).text);
+  std::string text = prepare_emission(to_envelope(outcome), OutputOptions{}).text;
+  write_output_text(json_path, text);
+  return InputFile::from_bytes(json_path, std::move(text));
 }
 
 /// The analysis' results as its JSON holds them (the same serialisation of the typed outcome).

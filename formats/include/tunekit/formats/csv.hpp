@@ -55,24 +55,8 @@ struct CsvTable {
   bool has_column(std::string_view name) const;
 };
 
-/// A whole input file's bytes for the parsers. A regular file is mapped into memory read-only
-/// (the page cache is parsed in place: no copy and no fresh pages to fault in, which costs more
-/// than the parsing of a 20 MB file); anything else (a pipe, a device, an empty file) is read
-/// through read_file_bytes with its checks, as is a file over 1 GiB. A mapped file must not shrink while it is read.
-class InputFileBytes {
- public:
-  /// InputError (exit code 2, located at the file) if it cannot be opened or read.
-  explicit InputFileBytes(const std::string& path);
-  ~InputFileBytes();
-  InputFileBytes(const InputFileBytes&) = delete;
-  InputFileBytes& operator=(const InputFileBytes&) = delete;
-  std::string_view view() const { return map_ != nullptr ? std::string_view(map_, size_) : std::string_view(copy_); }
-
- private:
-  const char* map_ = nullptr;
-  std::size_t size_ = 0;
-  std::string copy_;
-};
+/// A whole input file's bytes for the parsers, mapped when it can be (core's MappedFileBytes).
+using InputFileBytes = MappedFileBytes;
 
 /// Reads a CSV file. Throws InputError (exit code 2) for an unreadable or empty file, a
 /// header without rows, ragged rows, non-numeric, NaN or infinite values, a missing column,

@@ -11,6 +11,7 @@
 
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tunekit::ident {
@@ -28,6 +29,8 @@ std::string feed_track_csv(const FeedTrack& track);
 /// InputError naming the file and line for a malformed row, a time that decreases, a negative or
 /// non-finite value, or fewer than two rows.
 FeedTrack read_feed_track_csv(const std::string& path);
+/// The same of the file's text already read; `path` locates the errors.
+FeedTrack parse_feed_track_csv(std::string_view text, const std::string& path);
 
 /// The window edges of samples at times t (at least two): halfway between time stamps, half an
 /// interval beyond the first and the last (how a recorder shares the time axis among its samples).

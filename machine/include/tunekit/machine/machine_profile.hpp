@@ -146,7 +146,8 @@ struct MachineProfile {
 /// required keys, non-positive limits, or unknown kinematics. The file may also be a firmware
 /// configuration (a Klipper printer.cfg, a Marlin M503 report or Configuration.h, a
 /// RepRapFirmware config.g), recognized by its content and imported (profile_import.hpp).
-MachineProfile load_machine_profile(const std::string& path);
+/// With `bytes`, the file's bytes as they were read and parsed are stored there (for its digest).
+MachineProfile load_machine_profile(const std::string& path, std::string* bytes = nullptr);
 MachineProfile parse_machine_profile(const std::string& toml_text, const std::string& path_for_messages);
 
 }  // namespace tunekit::machine

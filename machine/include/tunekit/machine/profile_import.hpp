@@ -64,8 +64,10 @@ MachineProfile profile_from_rrf(const std::string& path, const ProfileImportOpti
 /// Any supported file: a TOML profile (parse_machine_profile; sources stay empty) or a firmware
 /// configuration (the importer of its format), returned as load_machine_profile() reads the TOML
 /// machine_profile_toml() writes of it: the same checks and defaults as every TOML profile, with
-/// the sources kept.
-MachineProfile import_machine_profile(const std::string& path, const ProfileImportOptions& options = {});
+/// the sources kept. With `bytes`, the file's bytes as read are stored there (the importers of
+/// firmware configurations read the file, and the files it includes, themselves).
+MachineProfile import_machine_profile(const std::string& path, const ProfileImportOptions& options = {},
+                                      std::string* bytes = nullptr);
 
 /// Whether the file at `path` (the first bytes are read) is a firmware configuration rather than a
 /// TOML profile; false when it cannot be read (the TOML reader then reports why).

@@ -5,6 +5,7 @@
 // profile (JSON).
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -60,7 +61,10 @@ struct CameraProfile {
 CameraProfile calibrate_camera(const std::vector<cv::Mat>& grays, const ChessboardSpec& spec,
                                std::vector<int>* skipped = nullptr);
 
+/// A camera profile JSON file (as --save-camera writes it); InputError located at `path`.
 CameraProfile load_camera_profile(const std::string& path);
+/// The same of the file's bytes already read.
+CameraProfile parse_camera_profile(std::string_view text, const std::string& path);
 
 /// Removes lens distortion (no-op when the profile has none). Throws InputError when the image
 /// size differs from the calibrated one.

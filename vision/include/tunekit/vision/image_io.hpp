@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 #include <opencv2/core.hpp>
 
@@ -38,14 +39,19 @@ std::uint64_t max_image_pixels();
 /// exceeds the limit ...") located at `path`.
 cv::Mat read_image(const std::string& path, ImageColor color = ImageColor::keep);
 
+/// The bytes of an image file, read once for decode_image() (the same errors as read_image()'s
+/// for a file that cannot be read).
+std::string read_image_bytes(const std::string& path);
+
 /// Decodes an image held in memory; `name` is the location used in error messages.
-cv::Mat decode_image(const std::string& bytes, const std::string& name, ImageColor color = ImageColor::keep);
+cv::Mat decode_image(std::string_view bytes, const std::string& name, ImageColor color = ImageColor::keep);
 
 /// PNG file contents of an 8-bit image with 1, 3 (BGR) or 4 (BGRA) channels; 16-bit images are
 /// scaled to 8 bit. Throws InputError for other types or an empty image.
 std::string encode_png(const cv::Mat& image);
 
-/// Writes encode_png(image) to `path`. Throws InputError when the file cannot be written.
-void write_png(const std::string& path, const cv::Mat& image);
+/// Writes encode_png(image) to `path` and returns those bytes. Throws InputError when the file
+/// cannot be written.
+std::string write_png(const std::string& path, const cv::Mat& image);
 
 }  // namespace tunekit::vision

@@ -20,6 +20,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -84,6 +85,8 @@ struct LineWidthResult {
 /// Reads an image as single-channel float (grey; colour is converted to luminance; 16-bit
 /// stays 16-bit in value). Throws InputError when the file cannot be read or is empty.
 cv::Mat load_gray_image(const std::string& path);
+/// The same of an image file's bytes already read; `path` locates the errors.
+cv::Mat gray_image_from_bytes(std::string_view bytes, const std::string& path);
 
 /// Converts any 1/3/4-channel 8/16/32-bit image to single-channel CV_32F.
 cv::Mat to_gray_float(const cv::Mat& image);

@@ -85,6 +85,9 @@ struct FreqOutcome {
   std::string time_column;
   std::string input_sha256;
   std::size_t input_size_bytes = 0;
+  /// The feed track the whole-record model was driven by (options.feed_track, or the one found
+  /// beside the log), as it was read; none without one.
+  std::optional<InputDigest> feed_track_input;
   std::size_t samples = 0;
   std::string input_unit, output_unit;
   /// The input column's range and mean over the record (NaN without an input column); results

@@ -39,11 +39,21 @@ struct StepOptions {
   std::string feed_track;
 };
 
+/// A record's samples: time (s), input and output, in the columns' units.
+struct StepRecordSeries {
+  std::vector<double> t, u, y;
+};
+
 struct StepOutcome {
   StepOptions options;
   std::string time_column;  ///< the time column used
   std::string input_sha256;
   std::size_t input_size_bytes = 0;
+  /// The feed track the whole-record model was driven by (options.feed_track, or the one found
+  /// beside the log), as it was read; none without one.
+  std::optional<InputDigest> feed_track_input;
+  /// The record as analysed (time s, input, output), for the step figure; empty without an input column.
+  StepRecordSeries record;
   std::string input_unit, output_unit, gain_unit;  ///< as results report them ("1": dimensionless)
   ident::StepAnalysis analysis;
   /// The whole-record model (records with an input channel), or why it could not be fitted.
@@ -60,6 +70,9 @@ struct StepOutcome {
 /// figure options.plot_out names). InputError (exit 2) for bad input, FitError (exit 1) when no
 /// fit converges; both located at the file.
 StepOutcome compute_step(const StepOptions& options);
+/// The same on files already read: `file` holds options.file's bytes, `feed_track` the feed
+/// track's (nullptr: none; compute_step(options) reads options.feed_track or the one beside the log).
+StepOutcome compute_step(const StepOptions& options, const InputFile& file, const InputFile* feed_track);
 
 Envelope to_envelope(const StepOutcome& outcome);
 void print_text(const StepOutcome& outcome, std::ostream& os);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/ident/liquefier_record.hpp"
 #include "tunekit/ident/step_analysis.hpp"
@@ -26,9 +27,9 @@ using ident::WholeRecordResult;
 /// run's log reproduces calibrate's number), else none ("").
 std::string feed_track_for(const std::string& given, const std::string& log);
 
-/// The feed track in `path` (empty: none) aligned with the record (t, u: time stamps and logged
-/// window-mean feeds): ident::read_feed_track_csv, then ident::align_feed_track on the whole record.
-std::optional<ident::FeedTrackAlignment> aligned_feed_track(const std::string& path, std::span<const double> t,
+/// The feed track file (none: nullptr) aligned with the record (t, u: time stamps and logged
+/// window-mean feeds): ident::parse_feed_track_csv, then ident::align_feed_track on the whole record.
+std::optional<ident::FeedTrackAlignment> aligned_feed_track(const InputFile* track, std::span<const double> t,
                                                             std::span<const double> u);
 
 /// The terminal line: "  whole record: tau = a u^b, a = ..., b = ..., theta = ... s; <sensor>"

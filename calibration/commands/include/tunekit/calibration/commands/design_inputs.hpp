@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "tunekit/calibration/analyses/agreement.hpp"
+#include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/design/flow_advance.hpp"
@@ -112,8 +113,8 @@ struct DesignInputs {
   std::optional<FreqDesignInput> freq;
   std::map<std::string, AxisShaperInput> axes;  ///< "x", "y"
   std::optional<RheoDesignInput> rheo;
-  std::vector<std::string> origins;                        ///< every input in the order given (files: their paths)
-  std::vector<std::pair<std::string, std::string>> files;  ///< files read: path and bytes (digests)
+  std::vector<std::string> origins;       ///< every input in the order given (files: their paths)
+  std::vector<InputDigest> files;         ///< files read: path, SHA-256 and size of the bytes read
   std::vector<std::string> warnings;      ///< inputs that cannot be exported (a z shaper, an unnamed axis)
   std::vector<std::string> unnamed_axes;  ///< of them, shapers of records that name no axis
 };

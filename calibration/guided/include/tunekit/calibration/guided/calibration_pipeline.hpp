@@ -22,6 +22,7 @@
 #include "tunekit/calibration/results/context.hpp"
 #include "tunekit/calibration/commands/export_command.hpp"
 #include "tunekit/calibration/analyses/freq_command.hpp"
+#include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/calibration/analyses/shaper_command.hpp"
 #include "tunekit/calibration/analyses/step_command.hpp"
 #include "tunekit/machine/machine_profile.hpp"
@@ -130,10 +131,10 @@ struct Identification {
   std::optional<FreqOutcome> freq;         ///< the liquefier chirp's frequency response
   std::map<char, ShaperOutcome> shapers;   ///< per axis ('x', 'y'): modes and the recommended shaper
   std::shared_ptr<CameraAnalysis> camera;  ///< camera path only
-  std::vector<std::string> inputs;         ///< data files the analyses read, in order
+  std::vector<InputDigest> inputs;         ///< data files the analyses read, in order, as they read them
   /// The analyses' JSON files export designs from (step and shapers; the frequency response is
-  /// compared with the step response, not designed from), in order.
-  std::vector<std::string> export_inputs;
+  /// compared with the step response, not designed from), in order, as they were written.
+  std::vector<InputFile> export_inputs;
   std::vector<Reproduction> reproduce;  ///< one per analysis
 };
 
