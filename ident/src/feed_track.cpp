@@ -91,7 +91,7 @@ std::string feed_track_csv(const FeedTrack& track) {
 }
 
 FeedTrack read_feed_track_csv(const std::string& path) {
-  const InputFileBytes bytes(path);
+  const core::MappedFileBytes bytes(path);
   return parse_feed_track_csv(bytes.view(), path);
 }
 
