@@ -475,12 +475,6 @@ double step_instant_resolution(const StepRecord& r) {
 
 using namespace first_order_detail;
 
-StepModel parse_step_model(const std::string& name) {
-  if (name == "fo" || name == "first_order") return StepModel::fo;
-  if (name == "fopdt") return StepModel::fopdt;
-  throw InputError("unknown step model '" + name + "' (expected fo or fopdt)");
-}
-
 std::string model_name(StepModel m) { return m == StepModel::fo ? "first_order" : "fopdt"; }
 
 bool logged_input_is_ideal_step(const StepRecord& r) { return input_is_ideal_step(r); }

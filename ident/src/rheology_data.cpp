@@ -9,7 +9,6 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "tunekit/ident/csv.hpp"
-#include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::ident {
 namespace {
@@ -285,11 +284,6 @@ RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
         fmt::format("{}: viscosity {:g} Pa.s ({}) is below {:g} Pa.s, low for a polymer melt; check the unit",
                     at(e_lo_row), e_lo, stated, kLowViscosity));
   return out;
-}
-
-RheologyTable read_rheology_csv(const std::string& path, const RheologyCsvOptions& o) {
-  const auto bytes = read_file_bytes(path);
-  return parse_rheology_csv(bytes, path, o);
 }
 
 }  // namespace tunekit::ident
