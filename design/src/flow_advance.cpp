@@ -345,17 +345,9 @@ void fa_note_design_flow_range(const FlowAdvanceInputs& in, FlowAdvanceDesign& d
   else if (!fa_trend_usable(in)) d.warnings.push_back(where + ": tau is held at the nearest level there");
 }
 
-}  // namespace
-
-FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
-  fa_validate(in);
-  FlowAdvanceDesign d;
-  if (in.trend && !fa_trend_usable(in))
-    d.warnings.push_back(fmt::format(
-        "the levels' time constants fall with the flow as steeply as tau ~ Q^{:.3g}: followed down to zero flow that "
-        "trend would store an unbounded melt volume, so it is not used; the advance is designed from the measured "
-        "levels, assuming tau holds the lowest level's value below it",
-        in.trend->b));
+/// Whether the advance has a band and what it is: from the levels' intervals, from the power
+/// law, or the interval of a known volume. True when every level has an interval.
+bool fa_band_kind(const FlowAdvanceInputs& in, FlowAdvanceDesign& d) {
   const bool level_band = std::all_of(in.levels.begin(), in.levels.end(),
                                       [](const FlowTau& l) { return fa_finite(l.tau_lo_s) && fa_finite(l.tau_hi_s); });
   d.has_band = level_band || fa_trend_usable(in);
@@ -363,7 +355,12 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   d.band_is_interval = fa_volume_known(in) &&
                        fa_finite(in.low_volume ? std::hypot(in.low_volume->half_width_mm3, in.trend_rel_half_width)
                                                : in.volume_rel_half_width);
-  const FaKnots k = fa_knots(in, 0);
+  return level_band;
+}
+
+/// The identified flows' range and the design flow (given, else their geometric middle) with
+/// the single advance needed there and its band.
+void fa_design_point(const FlowAdvanceInputs& in, const FaKnots& k, FlowAdvanceDesign& d) {
   d.flow_min_mm3_s = k.q.front();
   d.flow_max_mm3_s = k.q.back();
   d.design_flow_mm3_s = fa_finite(in.design_flow_mm3_s) ? in.design_flow_mm3_s : std::sqrt(k.q.front() * k.q.back());
@@ -376,14 +373,11 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   d.k_design_s = needed_advance_s(in, d.design_flow_mm3_s);
   d.k_design_lo_s = needed_advance_s(in, d.design_flow_mm3_s, -1);
   d.k_design_hi_s = needed_advance_s(in, d.design_flow_mm3_s, +1);
-  fa_note_low_flow(in, d);
+}
 
-  // Curve over the identified range (linear in flow).
-  const int ns = std::max(8, in.samples);
-  std::vector<double> flows;
-  for (int i = 0; i < ns; ++i) flows.push_back(d.flow_min_mm3_s + (d.flow_max_mm3_s - d.flow_min_mm3_s) * i / (ns - 1));
-
-  // Kalico: both models, the better one (smaller worst relative error) is written.
+/// Kalico: both models over `flows`, the better one (smaller worst relative error) is written;
+/// the dead time as its pressure_advance_time_offset.
+void fa_kalico(const FlowAdvanceInputs& in, const std::vector<double>& flows, FlowAdvanceDesign& d) {
   const KalicoFit ft = fit_kalico(in, KalicoModel::tanh, flows);
   const KalicoFit fr = fit_kalico(in, KalicoModel::recipr, flows);
   d.kalico = ft.max_rel_error <= fr.max_rel_error ? ft : fr;
@@ -404,7 +398,10 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
                       "0.2 s: written as 0.2 s",
                       in.theta_s));
   }
+}
 
+/// The curve at `flows`: tau, the advance needed (with its band) and the volume, and Kalico's.
+void fa_curve(const FlowAdvanceInputs& in, const std::vector<double>& flows, FlowAdvanceDesign& d) {
   for (double q : flows) {
     FlowAdvanceSample s;
     s.flow_mm3_s = q;
@@ -421,36 +418,38 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
                    v;
     d.curve.push_back(s);
   }
+}
 
-  // The range around the design flow where the single K stays within the tolerance of the need
-  // (a fine scan of the identified range; the contiguous interval holding the design flow).
-  {
-    const int nf = 2000;
-    auto ok = [&](double q) {
-      const double need = needed_advance_s(in, q);
-      return std::abs(d.k_design_s - need) <= in.tolerance * need;
-    };
-    const double qd = std::clamp(d.design_flow_mm3_s, d.flow_min_mm3_s, d.flow_max_mm3_s);
-    if (ok(qd)) {
-      const double step = (d.flow_max_mm3_s - d.flow_min_mm3_s) / nf;
-      double lo = qd, hi = qd;
-      while (lo > d.flow_min_mm3_s && ok(std::max(lo - step, d.flow_min_mm3_s)))
-        lo = std::max(lo - step, d.flow_min_mm3_s);
-      while (hi < d.flow_max_mm3_s && ok(std::min(hi + step, d.flow_max_mm3_s)))
-        hi = std::min(hi + step, d.flow_max_mm3_s);
-      d.k_within_lo_mm3_s = lo;
-      d.k_within_hi_mm3_s = hi;
-    }
-  }
+/// The range around the design flow where the single K stays within the tolerance of the need
+/// (a fine scan of the identified range; the contiguous interval holding the design flow).
+void fa_range_within_tolerance(const FlowAdvanceInputs& in, FlowAdvanceDesign& d) {
+  const int nf = 2000;
+  auto ok = [&](double q) {
+    const double need = needed_advance_s(in, q);
+    return std::abs(d.k_design_s - need) <= in.tolerance * need;
+  };
+  const double qd = std::clamp(d.design_flow_mm3_s, d.flow_min_mm3_s, d.flow_max_mm3_s);
+  if (!ok(qd)) return;
+  const double step = (d.flow_max_mm3_s - d.flow_min_mm3_s) / nf;
+  double lo = qd, hi = qd;
+  while (lo > d.flow_min_mm3_s && ok(std::max(lo - step, d.flow_min_mm3_s))) lo = std::max(lo - step, d.flow_min_mm3_s);
+  while (hi < d.flow_max_mm3_s && ok(std::min(hi + step, d.flow_max_mm3_s))) hi = std::min(hi + step, d.flow_max_mm3_s);
+  d.k_within_lo_mm3_s = lo;
+  d.k_within_hi_mm3_s = hi;
+}
 
-  // OrcaSlicer table: the need at each identified level, for each acceleration.
+/// OrcaSlicer table: the need at each identified level, for each acceleration.
+void fa_orca_table(const FlowAdvanceInputs& in, const FaKnots& k, FlowAdvanceDesign& d) {
   std::vector<double> accels = in.orca_accels_mm_s2;
   if (accels.empty()) accels.push_back(0.0);
   std::sort(accels.begin(), accels.end());
   accels.erase(std::unique(accels.begin(), accels.end()), accels.end());
   for (double q : k.q)
     for (double acc : accels) d.orca.push_back({needed_advance_s(in, q), q, acc});
+}
 
+/// How the advance was designed, and what its band is when the levels have no intervals.
+void fa_note_method(const FlowAdvanceInputs& in, bool level_band, FlowAdvanceDesign& d) {
   const char* below = fa_volume_known(in)
                           ? (in.low_volume ? "the volume at the first level measured" : "the volume read by the sensor")
                       : fa_trend_usable(in) ? "below the lowest level the middle of tau held there and the power law"
@@ -462,6 +461,33 @@ FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
   if (!level_band && !d.band_is_interval)
     d.notes.push_back(d.has_band ? "no 95 % intervals per level: the advance's band is that of the flows below the data"
                                  : "no 95 % intervals per level: the advance is drawn without a band");
+}
+
+}  // namespace
+
+FlowAdvanceDesign design_flow_advance(const FlowAdvanceInputs& in) {
+  fa_validate(in);
+  FlowAdvanceDesign d;
+  if (in.trend && !fa_trend_usable(in))
+    d.warnings.push_back(fmt::format(
+        "the levels' time constants fall with the flow as steeply as tau ~ Q^{:.3g}: followed down to zero flow that "
+        "trend would store an unbounded melt volume, so it is not used; the advance is designed from the measured "
+        "levels, assuming tau holds the lowest level's value below it",
+        in.trend->b));
+  const bool level_band = fa_band_kind(in, d);
+  const FaKnots k = fa_knots(in, 0);
+  fa_design_point(in, k, d);
+  fa_note_low_flow(in, d);
+
+  // Curve over the identified range (linear in flow).
+  const int ns = std::max(8, in.samples);
+  std::vector<double> flows;
+  for (int i = 0; i < ns; ++i) flows.push_back(d.flow_min_mm3_s + (d.flow_max_mm3_s - d.flow_min_mm3_s) * i / (ns - 1));
+  fa_kalico(in, flows, d);
+  fa_curve(in, flows, d);
+  fa_range_within_tolerance(in, d);
+  fa_orca_table(in, k, d);
+  fa_note_method(in, level_band, d);
   return d;
 }
 

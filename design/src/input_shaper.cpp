@@ -261,16 +261,9 @@ TypeScan scan_type(ShaperType type, const std::vector<double>& test_freqs, std::
   return scan;
 }
 
-}  // namespace
-
-ShaperSelection select_shaper(std::span<const double> freq, std::span<const double> psd,
-                              const ShaperSelectionOptions& o) {
-  if (freq.size() != psd.size()) throw InputError("frequency and PSD arrays differ in length");
-  const PsdDataset one{freq, psd};
-  return select_shaper(std::span<const PsdDataset>(&one, 1), o);
-}
-
-ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const ShaperSelectionOptions& o) {
+// InputError for no spectrum, no types, a test damping ratio outside [0, 1) or a frequency step
+// or highest frequency that is not positive.
+void check_selection_options(std::span<const PsdDataset> datasets, const ShaperSelectionOptions& o) {
   if (datasets.empty()) throw InputError("no vibration spectrum to choose a shaper for");
   if (o.types.empty()) throw InputError("no shaper types to choose from");
   if (o.test_damping_ratios.empty()) throw InputError("no test damping ratios");
@@ -278,8 +271,10 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
     if (!(z >= 0 && z < 1)) throw InputError(fmt::format("test damping ratio {} must be in [0, 1)", z));
   if (!(o.freq_step_hz > 0)) throw InputError("shaper frequency step must be positive");
   if (!(o.max_shaper_freq_hz > 0)) throw InputError("the highest shaper frequency must be positive");
+}
 
-  // Shaper frequencies per type: from the type's minimum up to (not including) the maximum.
+// Shaper frequencies per type: from the type's minimum up to (not including) the maximum.
+std::vector<std::vector<double>> type_frequencies(const ShaperSelectionOptions& o) {
   std::vector<std::vector<double>> type_freqs;
   for (ShaperType type : o.types) {
     const double f_end = o.max_shaper_freq_hz;
@@ -292,13 +287,15 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
     }
     type_freqs.push_back(std::move(tf));
   }
-  for (const auto& ds : datasets)
-    if (ds.freq_hz.size() != ds.psd.size()) throw InputError("frequency and PSD arrays differ in length");
+  return type_freqs;
+}
 
-  // Each type's frequencies are scored on their own, on two threads that take the types in
-  // order of their work (impulses x frequencies, the largest first) as each finishes one; the
-  // choice among them below is Klipper's, in the types' order. A type's error is raised after
-  // both threads are done, the first type's first, so the message is the one a single pass gives.
+// Each type's frequencies are scored on their own, on two threads that take the types in
+// order of their work (impulses x frequencies, the largest first) as each finishes one. A type's
+// error is raised after both threads are done, the first type's first, so the message is the
+// one a single pass gives.
+std::vector<TypeScan> scan_types_in_parallel(const std::vector<std::vector<double>>& type_freqs,
+                                             std::span<const PsdDataset> datasets, const ShaperSelectionOptions& o) {
   std::vector<TypeScan> scans(o.types.size());
   std::vector<std::exception_ptr> errors(o.types.size());
   std::vector<std::size_t> order(o.types.size());
@@ -328,28 +325,52 @@ ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const Shaper
   }
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
+  return scans;
+}
 
+// A type's candidate: the frequency with fewest vibrations, or a lower-scoring one (less
+// smoothing) that is not much worse (within 10 % + 0.05 percentage points), scanning from low
+// frequencies. When the smoothing limit cut the scan short, Klipper keeps the fewest-vibrations
+// one. Above a vibrations limit the lowest such frequency is taken whatever its score.
+ShaperCandidate type_candidate(const TypeScan& scan, const ShaperSelectionOptions& o) {
+  const auto& results = scan.results;
+  const std::size_t best_res = scan.best;
+  ShaperCandidate chosen = results[best_res];
+  if (!scan.smoothing_limited) {
+    const double vibr_limit = results[best_res].vibrations * 1.1 + 0.0005;
+    const bool over = o.max_vibrations.has_value() && results[best_res].vibrations > o.max_vibrations.value_or(0.0);
+    for (auto it = results.rbegin(); it != results.rend(); ++it)
+      if (it->vibrations < vibr_limit && (it->score < chosen.score || over)) chosen = *it;
+  }
+  return chosen;
+}
+
+}  // namespace
+
+ShaperSelection select_shaper(std::span<const double> freq, std::span<const double> psd,
+                              const ShaperSelectionOptions& o) {
+  if (freq.size() != psd.size()) throw InputError("frequency and PSD arrays differ in length");
+  const PsdDataset one{freq, psd};
+  return select_shaper(std::span<const PsdDataset>(&one, 1), o);
+}
+
+ShaperSelection select_shaper(std::span<const PsdDataset> datasets, const ShaperSelectionOptions& o) {
+  check_selection_options(datasets, o);
+  const std::vector<std::vector<double>> type_freqs = type_frequencies(o);
+  for (const auto& ds : datasets)
+    if (ds.freq_hz.size() != ds.psd.size()) throw InputError("frequency and PSD arrays differ in length");
+  const std::vector<TypeScan> scans = scan_types_in_parallel(type_freqs, datasets, o);
+
+  // The choice among the types is Klipper's, in the types' order.
   ShaperSelection sel;
   bool have_best = false;
   ShaperCandidate best;
+  const bool limit = o.max_vibrations.has_value();
+  const double max_vibrations = o.max_vibrations.value_or(0.0);
   for (std::size_t ti = 0; ti < o.types.size(); ++ti) {
     const auto& results = scans[ti].results;
-    const std::size_t best_res = scans[ti].best;
-    const bool smoothing_limited = scans[ti].smoothing_limited;
     if (results.empty()) continue;
-    // The frequency with fewest vibrations, or a lower-scoring one (less smoothing) that is
-    // not much worse (within 10 % + 0.05 percentage points), scanning from low frequencies.
-    // When the smoothing limit cut the scan short, Klipper keeps the fewest-vibrations one.
-    // Above a vibrations limit the lowest such frequency is taken whatever its score.
-    ShaperCandidate chosen = results[best_res];
-    const bool limit = o.max_vibrations.has_value();
-    const double max_vibrations = o.max_vibrations.value_or(0.0);
-    if (!smoothing_limited) {
-      const double vibr_limit = results[best_res].vibrations * 1.1 + 0.0005;
-      const bool over = limit && results[best_res].vibrations > max_vibrations;
-      for (auto it = results.rbegin(); it != results.rend(); ++it)
-        if (it->vibrations < vibr_limit && (it->score < chosen.score || over)) chosen = *it;
-    }
+    ShaperCandidate chosen = type_candidate(scans[ti], o);
     // Across types: a new type wins by a 20 % better score, or a 5 % better score with 10 %
     // less smoothing, or fewer vibrations while the best is above the limit.
     if (!have_best || chosen.score * 1.2 < best.score ||

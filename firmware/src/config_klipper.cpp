@@ -409,6 +409,137 @@ std::string klipper_runtime_gcode(const CompensatorSettings& s) {
   return g;
 }
 
+// Where write_klipper puts the values: the file being edited, its parse, the end of its body
+// (before the SAVE_CONFIG header, after the blank line that precedes it, so that the block stays
+// the file's tail) and the new sections, collected so that each gets one header.
+struct KlipperPlacement {
+  LineEditor& ed;
+  const Doc& doc;
+  ExportResult& r;
+  std::size_t body_end = 0;
+  NewSections new_block_sections, new_file_sections, new_body_sections;
+};
+
+// The lines collected for section `sec` (a new entry when it has none yet).
+std::vector<std::string>& pending_lines(NewSections& list, const std::string& sec) {
+  for (auto& [name, lines] : list)
+    if (name == sec) return lines;
+  list.emplace_back(sec, std::vector<std::string>{});
+  return list.back().second;
+}
+
+// The body's last definition of w (in this file) is the one Klipper uses: edit it.
+void edit_body_definition(KlipperPlacement& pl, const Want& w, const Definition& last, const Opt* in_main,
+                          const std::string& key) {
+  const Opt* target = nullptr;
+  for (const auto& sec : pl.doc.main)
+    if (sec.name == w.section)
+      for (const auto& o : sec.opts)
+        if (o.name == w.option && o.line == last.line) target = &o;
+  if (!target) target = in_main;
+  if (same_value(w, target->value)) return;
+  const std::string& t = pl.ed.line(target->line);
+  std::string prefix = t.substr(0, target->value_begin);
+  if (target->value_begin == t.size() && !prefix.empty() && prefix.back() != ' ') prefix += ' ';
+  pl.ed.replace(target->line, prefix + w.value + t.substr(target->value_end));
+  pl.r.changes.push_back({key, target->value, w.value, target->line + 1, "section"});
+}
+
+// A value no section of the body sets: into the body's section of that name, else the block's,
+// else a new section (in the block when the file has one).
+void add_new_value(KlipperPlacement& pl, const Want& w, const std::string& key) {
+  auto& ed = pl.ed;
+  if (const Section* sec = last_section(pl.doc.main, w.section)) {
+    std::string sep = ": ";
+    if (!sec->opts.empty() && sec->opts.front().sep == "=") sep = " = ";
+    ed.insert_before(sec->last_content + 1, {w.option + sep + w.value});
+    pl.r.changes.push_back({key, "", w.value, sec->last_content + 1, "added to section"});
+    return;
+  }
+  if (pl.doc.header) {
+    if (const Section* sec = last_section(pl.doc.block, w.section)) {
+      ed.insert_before(sec->last_content + 1, {"#*# " + w.option + " = " + w.value});
+      pl.r.changes.push_back({key, "", w.value, sec->last_content + 1, "added to SAVE_CONFIG block"});
+    } else {
+      pending_lines(pl.new_block_sections, w.section).push_back("#*# " + w.option + " = " + w.value);
+      pl.r.changes.push_back({key, "", w.value, ed.size(), "new section in SAVE_CONFIG block"});
+    }
+  } else {
+    pending_lines(pl.new_file_sections, w.section).push_back(w.option + ": " + w.value);
+    pl.r.changes.push_back({key, "", w.value, ed.size(), "new section"});
+  }
+}
+
+// One value: edited where Klipper reads it, overridden after the includes when an included file
+// sets it, or added.
+void place_want(KlipperPlacement& pl, const Want& w) {
+  const Doc& doc = pl.doc;
+  ExportResult& r = pl.r;
+  const std::string key = fmt::format("[{}] {}", w.section, w.option);
+  const Opt* in_block = find_opt(doc.block, w.section, w.option);
+  const Definition* last = nullptr;
+  for (const auto& d : doc.regular)
+    if (d.section == w.section && d.option == w.option) last = &d;
+  const Opt* in_main = find_opt(doc.main, w.section, w.option);
+
+  if (last && in_block)
+    r.warnings.push_back(fmt::format(
+        "{}:{}: the SAVE_CONFIG copy {} = {} is ignored by Klipper, which comments out every SAVE_CONFIG option "
+        "that the file above (or an include) also sets (klippy/configfile.py _strip_duplicates); the value is "
+        "written above the block, the copy is left as it is",
+        r.path, in_block->line + 1, key, in_block->value));
+
+  if (last && last->file.empty()) {
+    edit_body_definition(pl, w, *last, in_main, key);
+    return;
+  }
+  if (last) {
+    // Set last by an included file: tunekit edits only this file, so the value goes at the
+    // end of the body, after every include, where it overrides the included one.
+    if (same_value(w, last->value)) return;
+    r.warnings.push_back(fmt::format(
+        "{}:{}: {} = {} is set in an included file; the new value is added at the end of {} (after the includes), "
+        "where Klipper reads it last and uses it; the included line is left as it is",
+        last->file, last->line + 1, key, last->value, r.path));
+    pending_lines(pl.new_body_sections, w.section).push_back(w.option + ": " + w.value);
+    r.changes.push_back({key, last->value, w.value, pl.body_end + 1, "override after includes"});
+    return;
+  }
+  if (in_block) {
+    // Only the block sets it: Klipper reads it there.
+    if (same_value(w, in_block->value)) return;
+    const std::string& t = pl.ed.line(in_block->line);
+    pl.ed.replace(in_block->line, t.substr(0, in_block->value_begin) + w.value + t.substr(in_block->value_end));
+    r.changes.push_back({key, in_block->value, w.value, in_block->line + 1, "SAVE_CONFIG block"});
+    return;
+  }
+  if (std::any_of(pl.new_body_sections.begin(), pl.new_body_sections.end(),
+                  [&](const auto& ns) { return ns.first == w.section; })) {
+    pending_lines(pl.new_body_sections, w.section).push_back(w.option + ": " + w.value);
+    r.changes.push_back({key, "", w.value, pl.body_end + 1, "override after includes"});
+    return;
+  }
+  add_new_value(pl, w, key);
+}
+
+// The sections that override included files: at the end of the body before the SAVE_CONFIG
+// block, or with the file's new sections when it has no block.
+void insert_body_sections(KlipperPlacement& pl) {
+  if (pl.new_body_sections.empty()) return;
+  std::vector<std::string> lines;
+  if (pl.body_end > 0 && !trim(pl.ed.line(pl.body_end - 1)).empty()) lines.push_back("");
+  bool first = true;
+  for (const auto& [sec, opts] : pl.new_body_sections) {
+    if (!first) lines.push_back("");
+    lines.push_back("[" + sec + "]");
+    lines.insert(lines.end(), opts.begin(), opts.end());
+    first = false;
+  }
+  if (pl.doc.header) pl.ed.insert_before(pl.body_end, lines);
+  else
+    pl.new_file_sections.insert(pl.new_file_sections.begin(), pl.new_body_sections.begin(), pl.new_body_sections.end());
+}
+
 }  // namespace
 
 void write_klipper(ExportResult& r, const CompensatorSettings& s) {
@@ -417,121 +548,19 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
 
   const std::vector<Want> wants = klipper_wants(s);
 
-  // New sections are collected so that each gets one header.
-  NewSections new_block_sections, new_file_sections;
-  auto pending = [](auto& list, const std::string& sec) -> std::vector<std::string>& {
-    for (auto& [name, lines] : list)
-      if (name == sec) return lines;
-    list.emplace_back(sec, std::vector<std::string>{});
-    return list.back().second;
-  };
   for (const auto& p : doc.include_problems) r.warnings.push_back(p);
   if (doc.ignored_block)
     r.warnings.push_back(fmt::format(
         "{}:{}: this SAVE_CONFIG block is not read by Klipper (its header is not exactly Klipper's, or a line after "
         "it does not start with '#*# '; klippy/configfile.py _find_autosave_data): values are written above it",
         r.path, *doc.ignored_block + 1));
-  // Where new body lines go: before the SAVE_CONFIG header (after the blank line that precedes
-  // it), so that the block stays the file's tail.
-  std::size_t body_end = doc.header ? *doc.header : ed.size();
+  KlipperPlacement pl{ed, doc, r, doc.header ? *doc.header : ed.size(), {}, {}, {}};
   if (doc.header) {
-    while (body_end > 0 && trim(ed.line(body_end - 1)).empty()) --body_end;
+    while (pl.body_end > 0 && trim(ed.line(pl.body_end - 1)).empty()) --pl.body_end;
   }
-  NewSections new_body_sections;
-
-  for (const auto& w : wants) {
-    const std::string key = fmt::format("[{}] {}", w.section, w.option);
-    const Opt* in_block = find_opt(doc.block, w.section, w.option);
-    const Definition* last = nullptr;
-    for (const auto& d : doc.regular)
-      if (d.section == w.section && d.option == w.option) last = &d;
-    const Opt* in_main = find_opt(doc.main, w.section, w.option);
-
-    if (last && in_block)
-      r.warnings.push_back(fmt::format(
-          "{}:{}: the SAVE_CONFIG copy {} = {} is ignored by Klipper, which comments out every SAVE_CONFIG option "
-          "that the file above (or an include) also sets (klippy/configfile.py _strip_duplicates); the value is "
-          "written above the block, the copy is left as it is",
-          r.path, in_block->line + 1, key, in_block->value));
-
-    if (last && last->file.empty()) {
-      // The body's last definition is the one Klipper uses: edit it.
-      const Opt* target = nullptr;
-      for (const auto& sec : doc.main)
-        if (sec.name == w.section)
-          for (const auto& o : sec.opts)
-            if (o.name == w.option && o.line == last->line) target = &o;
-      if (!target) target = in_main;
-      if (same_value(w, target->value)) continue;
-      const std::string& t = ed.line(target->line);
-      std::string prefix = t.substr(0, target->value_begin);
-      if (target->value_begin == t.size() && !prefix.empty() && prefix.back() != ' ') prefix += ' ';
-      ed.replace(target->line, prefix + w.value + t.substr(target->value_end));
-      r.changes.push_back({key, target->value, w.value, target->line + 1, "section"});
-      continue;
-    }
-    if (last) {
-      // Set last by an included file: tunekit edits only this file, so the value goes at the
-      // end of the body, after every include, where it overrides the included one.
-      if (same_value(w, last->value)) continue;
-      r.warnings.push_back(fmt::format(
-          "{}:{}: {} = {} is set in an included file; the new value is added at the end of {} (after the includes), "
-          "where Klipper reads it last and uses it; the included line is left as it is",
-          last->file, last->line + 1, key, last->value, r.path));
-      pending(new_body_sections, w.section).push_back(w.option + ": " + w.value);
-      r.changes.push_back({key, last->value, w.value, body_end + 1, "override after includes"});
-      continue;
-    }
-    if (in_block) {
-      // Only the block sets it: Klipper reads it there.
-      if (same_value(w, in_block->value)) continue;
-      const std::string& t = ed.line(in_block->line);
-      ed.replace(in_block->line, t.substr(0, in_block->value_begin) + w.value + t.substr(in_block->value_end));
-      r.changes.push_back({key, in_block->value, w.value, in_block->line + 1, "SAVE_CONFIG block"});
-      continue;
-    }
-    if (std::any_of(new_body_sections.begin(), new_body_sections.end(),
-                    [&](const auto& ns) { return ns.first == w.section; })) {
-      pending(new_body_sections, w.section).push_back(w.option + ": " + w.value);
-      r.changes.push_back({key, "", w.value, body_end + 1, "override after includes"});
-      continue;
-    }
-    if (const Section* sec = last_section(doc.main, w.section)) {
-      std::string sep = ": ";
-      if (!sec->opts.empty() && sec->opts.front().sep == "=") sep = " = ";
-      ed.insert_before(sec->last_content + 1, {w.option + sep + w.value});
-      r.changes.push_back({key, "", w.value, sec->last_content + 1, "added to section"});
-      continue;
-    }
-    if (doc.header) {
-      if (const Section* sec = last_section(doc.block, w.section)) {
-        ed.insert_before(sec->last_content + 1, {"#*# " + w.option + " = " + w.value});
-        r.changes.push_back({key, "", w.value, sec->last_content + 1, "added to SAVE_CONFIG block"});
-      } else {
-        pending(new_block_sections, w.section).push_back("#*# " + w.option + " = " + w.value);
-        r.changes.push_back({key, "", w.value, ed.size(), "new section in SAVE_CONFIG block"});
-      }
-    } else {
-      pending(new_file_sections, w.section).push_back(w.option + ": " + w.value);
-      r.changes.push_back({key, "", w.value, ed.size(), "new section"});
-    }
-  }
-
-  if (!new_body_sections.empty()) {
-    std::vector<std::string> lines;
-    if (body_end > 0 && !trim(ed.line(body_end - 1)).empty()) lines.push_back("");
-    bool first = true;
-    for (const auto& [sec, opts] : new_body_sections) {
-      if (!first) lines.push_back("");
-      lines.push_back("[" + sec + "]");
-      lines.insert(lines.end(), opts.begin(), opts.end());
-      first = false;
-    }
-    if (doc.header) ed.insert_before(body_end, lines);
-    else new_file_sections.insert(new_file_sections.begin(), new_body_sections.begin(), new_body_sections.end());
-  }
-
-  append_new_sections(ed, new_block_sections, new_file_sections);
+  for (const auto& w : wants) place_want(pl, w);
+  insert_body_sections(pl);
+  append_new_sections(ed, pl.new_block_sections, pl.new_file_sections);
 
   if (s.kalico) comment_out_pressure_advance(ed, doc, s, r);
   r.updated = ed.render();

@@ -317,17 +317,9 @@ void write_marlin_ft_motion(ExportResult& r, const CompensatorSettings& s, Marli
         "flashing the new build, send M502 (load the compiled values) then M500 (store them)");
 }
 
-}  // namespace
-
-void write_marlin(ExportResult& r, const CompensatorSettings& s) {
-  const LineEditor original(r.original);
-  MarlinEditor m(r);
-  // Fixed-time motion bypasses the classic shaper and smooth linear advance: nothing of them is
-  // touched (stepper.cpp isr()).
-  if (s.marlin_ft_motion) {
-    write_marlin_ft_motion(r, s, m);
-    return;
-  }
+// Linear advance: LIN_ADVANCE enabled, ADVANCE_K set, and ADVANCE_TAU with SMOOTH_LIN_ADVANCE
+// where the build has them. True when ADVANCE_TAU was written.
+bool write_marlin_advance(ExportResult& r, const CompensatorSettings& s, MarlinEditor& m) {
   bool tau_written = false;
   if (s.pa_k_s || s.pa_smooth_s) {
     if (!m.enable("LIN_ADVANCE"))
@@ -354,56 +346,57 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
       tau_written = true;
     }
   }
-  // SHAPING_MIN_FREQ sizes the shaping queue (stepper.h: shaping_echoes = max_step_rate /
-  // shaping_min_freq / 2 + 3); a lower frequency overflows it ("IS will also misbehave!",
-  // stepper.cpp). Without an explicit value it is the minimum of the compiled SHAPING_FREQ_X/Y.
-  if (!s.shapers.empty()) {
-    double min_new = 1e300;
-    for (const auto& [axis, sh] : s.shapers) min_new = std::min(min_new, sh.freq_hz);
-    const auto mins = find_defines(m.editor(), "SHAPING_MIN_FREQ");
-    const Define* active = nullptr;
-    for (const auto& d : mins)
-      if (!d.commented) active = &d;
-    if (active && !active->value.empty()) {
-      const double v = std::strtod(bare_number(active->value).c_str(), nullptr);
-      if (min_new < v)
-        throw InputError(
-            fmt::format("{}:{}: SHAPING_MIN_FREQ is {} Hz but the shaper frequency {} Hz is lower; Marlin "
-                        "sizes its shaping queue for SHAPING_MIN_FREQ and misbehaves below it "
-                        "(Marlin/src/module/stepper.h shaping_echoes); lower SHAPING_MIN_FREQ by hand "
-                        "if the board's RAM allows it",
-                        r.path, active->line + 1, bare_number(active->value), format_number(min_new, 2)));
-    } else {
-      double compiled = 1e300;
-      for (const char* A : {"X", "Y"}) {
-        if (!is_enabled(original, std::string("INPUT_SHAPING_") + A)) continue;
-        for (const auto& d : find_defines(original, std::string("SHAPING_FREQ_") + A))
-          if (!d.commented && !d.value.empty())
-            compiled = std::min(compiled, std::strtod(bare_number(d.value).c_str(), nullptr));
-      }
-      if (compiled < 1e300 && compiled > 0 && min_new < compiled)
-        r.warnings.push_back(fmt::format(
-            "{}: without SHAPING_MIN_FREQ the running build's minimum shaping frequency is its lowest compiled "
-            "SHAPING_FREQ ({} Hz): send the M593 lines only after flashing the new build, not to the running one "
-            "(Marlin/src/module/stepper.h)",
-            r.path, format_number(compiled, 2)));
-    }
-  }
-  for (const auto& [axis, sh] : s.shapers) {
-    std::string A = axis;
-    std::transform(A.begin(), A.end(), A.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-    m.set_index(0);
-    if (!m.enable("INPUT_SHAPING_" + A))
-      throw InputError(fmt::format("no 'INPUT_SHAPING_{}' line: Marlin 2.1.2 or later is needed for input shaping", A),
-                       r.path);
-    if (!m.set("SHAPING_FREQ_" + A, sh.freq_hz, kDecimalsFreq))
-      throw InputError(fmt::format("no '#define SHAPING_FREQ_{}' line", A), r.path);
-    if (!m.set("SHAPING_ZETA_" + A, sh.damping, kDecimalsZeta))
-      throw InputError(fmt::format("no '#define SHAPING_ZETA_{}' line", A), r.path);
-  }
-  r.updated = m.editor().render();
-  r.diff = m.editor().unified_diff(r.path);
+  return tau_written;
+}
 
+// SHAPING_MIN_FREQ sizes the shaping queue (stepper.h: shaping_echoes = max_step_rate /
+// shaping_min_freq / 2 + 3); a lower frequency overflows it ("IS will also misbehave!",
+// stepper.cpp). Without an explicit value it is the minimum of the compiled SHAPING_FREQ_X/Y.
+void check_shaping_min_freq(ExportResult& r, const CompensatorSettings& s, MarlinEditor& m,
+                            const LineEditor& original) {
+  if (s.shapers.empty()) return;
+  double min_new = 1e300;
+  for (const auto& [axis, sh] : s.shapers) min_new = std::min(min_new, sh.freq_hz);
+  const auto mins = find_defines(m.editor(), "SHAPING_MIN_FREQ");
+  const Define* active = nullptr;
+  for (const auto& d : mins)
+    if (!d.commented) active = &d;
+  if (active && !active->value.empty()) {
+    const double v = std::strtod(bare_number(active->value).c_str(), nullptr);
+    if (min_new < v)
+      throw InputError(
+          fmt::format("{}:{}: SHAPING_MIN_FREQ is {} Hz but the shaper frequency {} Hz is lower; Marlin "
+                      "sizes its shaping queue for SHAPING_MIN_FREQ and misbehaves below it "
+                      "(Marlin/src/module/stepper.h shaping_echoes); lower SHAPING_MIN_FREQ by hand "
+                      "if the board's RAM allows it",
+                      r.path, active->line + 1, bare_number(active->value), format_number(min_new, 2)));
+    return;
+  }
+  double compiled = 1e300;
+  for (const char* A : {"X", "Y"}) {
+    if (!is_enabled(original, std::string("INPUT_SHAPING_") + A)) continue;
+    for (const auto& d : find_defines(original, std::string("SHAPING_FREQ_") + A))
+      if (!d.commented && !d.value.empty())
+        compiled = std::min(compiled, std::strtod(bare_number(d.value).c_str(), nullptr));
+  }
+  if (compiled < 1e300 && compiled > 0 && min_new < compiled)
+    r.warnings.push_back(fmt::format(
+        "{}: without SHAPING_MIN_FREQ the running build's minimum shaping frequency is its lowest compiled "
+        "SHAPING_FREQ ({} Hz): send the M593 lines only after flashing the new build, not to the running one "
+        "(Marlin/src/module/stepper.h)",
+        r.path, format_number(compiled, 2)));
+}
+
+// The axis letter in upper case.
+std::string upper_axis(const std::string& axis) {
+  std::string A = axis;
+  std::transform(A.begin(), A.end(), A.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return A;
+}
+
+// The G-code that applies the values to the running printer: M900 and M593, then M500.
+std::string marlin_runtime_gcode(ExportResult& r, const CompensatorSettings& s, const LineEditor& original,
+                                 bool tau_written) {
   std::string g;
   // Marlin/src/gcode/feature/advance/M900.cpp: with ADVANCE_K_EXTRA and slot 1 active, "M900 K"
   // sets the backup slot; "S0" selects slot 0 first, so K becomes the active value. T picks the
@@ -418,8 +411,7 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
     g += "\n";
   }
   for (const auto& [axis, sh] : s.shapers) {
-    std::string A = axis;
-    std::transform(A.begin(), A.end(), A.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+    const std::string A = upper_axis(axis);
     // M593.cpp: on a build without INPUT_SHAPING_X, "M593 X" is not seen as an axis and the
     // values go to every shaped axis (Y). When the running build shapes another axis but not
     // this one, its line is left out (the new build, flashed, has both).
@@ -435,7 +427,36 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
                      format_number(sh.damping, kDecimalsZeta));
   }
   if (!g.empty()) g += "M500\n";
-  r.gcode = g;
+  return g;
+}
+
+}  // namespace
+
+void write_marlin(ExportResult& r, const CompensatorSettings& s) {
+  const LineEditor original(r.original);
+  MarlinEditor m(r);
+  // Fixed-time motion bypasses the classic shaper and smooth linear advance: nothing of them is
+  // touched (stepper.cpp isr()).
+  if (s.marlin_ft_motion) {
+    write_marlin_ft_motion(r, s, m);
+    return;
+  }
+  const bool tau_written = write_marlin_advance(r, s, m);
+  check_shaping_min_freq(r, s, m, original);
+  for (const auto& [axis, sh] : s.shapers) {
+    const std::string A = upper_axis(axis);
+    m.set_index(0);
+    if (!m.enable("INPUT_SHAPING_" + A))
+      throw InputError(fmt::format("no 'INPUT_SHAPING_{}' line: Marlin 2.1.2 or later is needed for input shaping", A),
+                       r.path);
+    if (!m.set("SHAPING_FREQ_" + A, sh.freq_hz, kDecimalsFreq))
+      throw InputError(fmt::format("no '#define SHAPING_FREQ_{}' line", A), r.path);
+    if (!m.set("SHAPING_ZETA_" + A, sh.damping, kDecimalsZeta))
+      throw InputError(fmt::format("no '#define SHAPING_ZETA_{}' line", A), r.path);
+  }
+  r.updated = m.editor().render();
+  r.diff = m.editor().unified_diff(r.path);
+  r.gcode = marlin_runtime_gcode(r, s, original, tau_written);
   // Precedence: with EEPROM_SETTINGS, Marlin loads the stored values at boot over the compiled
   // defaults (Marlin/src/MarlinCore.cpp setup(): settings.first_load(), "Load data from EEPROM if
   // available (or use defaults)"; M502 resets to the compiled ones, M500 stores them).

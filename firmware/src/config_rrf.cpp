@@ -117,84 +117,133 @@ bool is_drive_setup(const std::string& code) {
   return std::any_of(std::begin(codes), std::end(codes), [&](const char* k) { return code == k; });
 }
 
-}  // namespace
-
-void write_rrf(ExportResult& r, const CompensatorSettings& s) {
-  LineEditor ed(r.original);
-  const std::string drive = std::to_string(s.rrf_drive);
+/// Where config.g's lines stand: the M572 of the drive, the M593, the last drive setup command
+/// (new lines go after it) and the first M501.
+struct RrfLines {
   std::optional<std::size_t> m572, m593, anchor, m501;
+};
+
+RrfLines find_rrf_lines(const LineEditor& ed, const std::string& drive) {
+  RrfLines at;
   for (std::size_t i = 0; i < ed.size(); ++i) {
     const auto c = parse_command(ed.line(i));
     if (!c) continue;
     if (c->code == "M572") {
       const std::string d = param_value(ed.line(i), 'D');
-      if (d == drive || index_in_list(d, drive) >= 0) m572 = i;
+      if (d == drive || index_in_list(d, drive) >= 0) at.m572 = i;
     }
-    if (c->code == "M593") m593 = i;
-    if (is_drive_setup(c->code)) anchor = i;
-    if (c->code == "M501" && !m501) m501 = i;
+    if (c->code == "M593") at.m593 = i;
+    if (is_drive_setup(c->code)) at.anchor = i;
+    if (c->code == "M501" && !at.m501) at.m501 = i;
   }
+  return at;
+}
+
+/// Precedence: config.g's M501 runs config-override.g (GCodes2.cpp case 501) where it stands,
+/// so a command there overrides the same command in config.g before the M501. RRF's M500
+/// writes heater, kinematics, probe, tool and workplace values only (GCodes.cpp
+/// WriteConfigOverrideFile), never M572/M593: such lines there were added by hand. InputError
+/// for one that would override a value written here.
+void check_config_override(const ExportResult& r, const CompensatorSettings& s, const RrfLines& at,
+                           const std::string& drive) {
+  if (!at.m501) return;
+  namespace fs = std::filesystem;
+  const fs::path over = fs::path(r.path).parent_path() / "config-override.g";
+  std::error_code ec;
+  if (!fs::exists(over, ec)) return;
+  const LineEditor oe(read_config_file(over.string()));
+  for (std::size_t i = 0; i < oe.size(); ++i) {
+    const auto c = parse_command(oe.line(i));
+    if (!c) continue;
+    const bool pa = c->code == "M572" && s.pa_k_s && param_value(oe.line(i), 'D') == drive;
+    const bool is = c->code == "M593" && !s.shapers.empty();
+    if (!pa && !is) continue;
+    const std::optional<std::size_t>& mine = pa ? at.m572 : at.m593;
+    if (mine && *mine > *at.m501) continue;  // config.g's own line runs after config-override.g
+    throw InputError(fmt::format(
+        "{}:{}: '{}' in config-override.g is run by M501 (config.g line {}) after config.g's own {} and would "
+        "override the value written here; remove that line from config-override.g (RepRapFirmware's M500 never "
+        "writes {}, so it was added by hand) and export again",
+        over.string(), i + 1, oe.line(i), *at.m501 + 1, c->code, c->code));
+  }
+}
+
+/// Pressure advance: the drive's M572 edited (its entry of a drive list), or a new line.
+void write_rrf_advance(ExportResult& r, LineEditor& ed, const CompensatorSettings& s, const RrfLines& at,
+                       const std::string& drive, std::vector<std::string>& new_lines) {
+  const std::string k = format_number(*s.pa_k_s, kDecimalsK);
+  if (!at.m572) {
+    new_lines.push_back(fmt::format("M572 D{} S{} ; pressure advance (s)", drive, k));
+    r.changes.push_back({"M572 D" + drive + " S", "", k, 0, "new line"});
+    return;
+  }
+  const std::size_t line = *at.m572;
+  const std::string& t = ed.line(line);
+  const std::string old = param_value(t, 'S');
+  const std::string dlist = param_value(t, 'D');
+  const int pos = index_in_list(dlist, drive);
+  if (dlist.find(':') != std::string::npos && pos >= 0) {
+    // "M572 D0:1 S0.2:0.3" (GCodes2.cpp case 572: one S per listed drive, or one S for all):
+    // only this drive's entry changes, the others keep theirs.
+    std::vector<std::string> drives = split_colon(dlist), vals = split_colon(old);
+    if (vals.size() == 1) vals.assign(drives.size(), vals[0]);
+    if (vals.size() == drives.size() && !same_number(vals[static_cast<std::size_t>(pos)], *s.pa_k_s, kDecimalsK)) {
+      const std::string before = vals[static_cast<std::size_t>(pos)];
+      vals[static_cast<std::size_t>(pos)] = k;
+      std::string joined;
+      for (std::size_t q = 0; q < vals.size(); ++q) joined += (q ? ":" : "") + vals[q];
+      ed.replace(line, set_param(t, 'S', joined));
+      r.changes.push_back({"M572 D" + drive + " S", before, k, line + 1, "command (drive list)"});
+    } else if (vals.size() != drives.size()) {
+      r.warnings.push_back(fmt::format("{}:{}: M572 D{} S{}: the S list does not match the drives; left as it is",
+                                       r.path, line + 1, dlist, old));
+    }
+  } else if (!same_number(old, *s.pa_k_s, kDecimalsK)) {
+    ed.replace(line, set_param(t, 'S', k));
+    r.changes.push_back({"M572 D" + drive + " S", old, k, line + 1, "command"});
+  }
+}
+
+/// Input shaping: the M593 line's P, F and S edited where they differ, or a new line.
+void write_rrf_shaper(ExportResult& r, LineEditor& ed, const ShaperSetting& sh, const RrfLines& at,
+                      std::vector<std::string>& new_lines) {
+  const std::string type = firmware_shaper_name(ExportFirmware::rrf, sh.type);
+  const std::string f = format_number(sh.freq_hz, kDecimalsFreq);
+  const std::string z = format_number(sh.damping, kDecimalsZeta);
+  if (!at.m593) {
+    new_lines.push_back(fmt::format("M593 P\"{}\" F{} S{} ; input shaping (Hz, damping ratio)", type, f, z));
+    r.changes.push_back({"M593", "", fmt::format("P\"{}\" F{} S{}", type, f, z), 0, "new line"});
+    return;
+  }
+  const std::size_t line = *at.m593;
+  std::string t = ed.line(line);
+  const std::string old_p = param_value(t, 'P'), old_f = param_value(t, 'F'), old_s = param_value(t, 'S');
+  std::string bare_p = old_p;
+  bare_p.erase(std::remove(bare_p.begin(), bare_p.end(), '"'), bare_p.end());
+  if (core::lower(bare_p) != type) {
+    t = set_param(t, 'P', "\"" + type + "\"");
+    r.changes.push_back({"M593 P", old_p, "\"" + type + "\"", line + 1, "command"});
+  }
+  if (!same_number(old_f, sh.freq_hz, kDecimalsFreq)) {
+    t = set_param(t, 'F', f);
+    r.changes.push_back({"M593 F", old_f, f, line + 1, "command"});
+  }
+  if (!same_number(old_s, sh.damping, kDecimalsZeta)) {
+    t = set_param(t, 'S', z);
+    r.changes.push_back({"M593 S", old_s, z, line + 1, "command"});
+  }
+  ed.replace(line, t);
+}
+
+}  // namespace
+
+void write_rrf(ExportResult& r, const CompensatorSettings& s) {
+  LineEditor ed(r.original);
+  const std::string drive = std::to_string(s.rrf_drive);
+  const RrfLines lines = find_rrf_lines(ed, drive);
   std::vector<std::string> new_lines;
-
-  // Precedence: config.g's M501 runs config-override.g (GCodes2.cpp case 501) where it stands,
-  // so a command there overrides the same command in config.g before the M501. RRF's M500
-  // writes heater, kinematics, probe, tool and workplace values only (GCodes.cpp
-  // WriteConfigOverrideFile), never M572/M593: such lines there were added by hand.
-  if (m501) {
-    namespace fs = std::filesystem;
-    const fs::path over = fs::path(r.path).parent_path() / "config-override.g";
-    std::error_code ec;
-    if (fs::exists(over, ec)) {
-      const LineEditor oe(read_config_file(over.string()));
-      for (std::size_t i = 0; i < oe.size(); ++i) {
-        const auto c = parse_command(oe.line(i));
-        if (!c) continue;
-        const bool pa = c->code == "M572" && s.pa_k_s && param_value(oe.line(i), 'D') == drive;
-        const bool is = c->code == "M593" && !s.shapers.empty();
-        if (!pa && !is) continue;
-        const std::optional<std::size_t>& mine = pa ? m572 : m593;
-        if (mine && *mine > *m501) continue;  // config.g's own line runs after config-override.g
-        throw InputError(fmt::format(
-            "{}:{}: '{}' in config-override.g is run by M501 (config.g line {}) after config.g's own {} and would "
-            "override the value written here; remove that line from config-override.g (RepRapFirmware's M500 never "
-            "writes {}, so it was added by hand) and export again",
-            over.string(), i + 1, oe.line(i), *m501 + 1, c->code, c->code));
-      }
-    }
-  }
-
-  if (s.pa_k_s) {
-    const std::string k = format_number(*s.pa_k_s, kDecimalsK);
-    if (m572) {
-      const std::string& t = ed.line(*m572);
-      const std::string old = param_value(t, 'S');
-      const std::string dlist = param_value(t, 'D');
-      const int at = index_in_list(dlist, drive);
-      if (dlist.find(':') != std::string::npos && at >= 0) {
-        // "M572 D0:1 S0.2:0.3" (GCodes2.cpp case 572: one S per listed drive, or one S for all):
-        // only this drive's entry changes, the others keep theirs.
-        std::vector<std::string> drives = split_colon(dlist), vals = split_colon(old);
-        if (vals.size() == 1) vals.assign(drives.size(), vals[0]);
-        if (vals.size() == drives.size() && !same_number(vals[static_cast<std::size_t>(at)], *s.pa_k_s, kDecimalsK)) {
-          const std::string before = vals[static_cast<std::size_t>(at)];
-          vals[static_cast<std::size_t>(at)] = k;
-          std::string joined;
-          for (std::size_t q = 0; q < vals.size(); ++q) joined += (q ? ":" : "") + vals[q];
-          ed.replace(*m572, set_param(t, 'S', joined));
-          r.changes.push_back({"M572 D" + drive + " S", before, k, *m572 + 1, "command (drive list)"});
-        } else if (vals.size() != drives.size()) {
-          r.warnings.push_back(fmt::format("{}:{}: M572 D{} S{}: the S list does not match the drives; left as it is",
-                                           r.path, *m572 + 1, dlist, old));
-        }
-      } else if (!same_number(old, *s.pa_k_s, kDecimalsK)) {
-        ed.replace(*m572, set_param(t, 'S', k));
-        r.changes.push_back({"M572 D" + drive + " S", old, k, *m572 + 1, "command"});
-      }
-    } else {
-      new_lines.push_back(fmt::format("M572 D{} S{} ; pressure advance (s)", drive, k));
-      r.changes.push_back({"M572 D" + drive + " S", "", k, 0, "new line"});
-    }
-  }
+  check_config_override(r, s, lines, drive);
+  if (s.pa_k_s) write_rrf_advance(r, ed, s, lines, drive, new_lines);
   if (s.pa_smooth_s)
     r.warnings.push_back(
         "RepRapFirmware has no pressure-advance smoothing time: the extruder's M201 E acceleration "
@@ -202,39 +251,13 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
 
   std::string axis;
   const ShaperSetting* sh = rrf_single_shaper(s, r.warnings, &axis);
-  if (sh) {
-    const std::string type = firmware_shaper_name(ExportFirmware::rrf, sh->type);
-    const std::string f = format_number(sh->freq_hz, kDecimalsFreq);
-    const std::string z = format_number(sh->damping, kDecimalsZeta);
-    if (m593) {
-      std::string t = ed.line(*m593);
-      const std::string old_p = param_value(t, 'P'), old_f = param_value(t, 'F'), old_s = param_value(t, 'S');
-      std::string bare_p = old_p;
-      bare_p.erase(std::remove(bare_p.begin(), bare_p.end(), '"'), bare_p.end());
-      if (core::lower(bare_p) != type) {
-        t = set_param(t, 'P', "\"" + type + "\"");
-        r.changes.push_back({"M593 P", old_p, "\"" + type + "\"", *m593 + 1, "command"});
-      }
-      if (!same_number(old_f, sh->freq_hz, kDecimalsFreq)) {
-        t = set_param(t, 'F', f);
-        r.changes.push_back({"M593 F", old_f, f, *m593 + 1, "command"});
-      }
-      if (!same_number(old_s, sh->damping, kDecimalsZeta)) {
-        t = set_param(t, 'S', z);
-        r.changes.push_back({"M593 S", old_s, z, *m593 + 1, "command"});
-      }
-      ed.replace(*m593, t);
-    } else {
-      new_lines.push_back(fmt::format("M593 P\"{}\" F{} S{} ; input shaping (Hz, damping ratio)", type, f, z));
-      r.changes.push_back({"M593", "", fmt::format("P\"{}\" F{} S{}", type, f, z), 0, "new line"});
-    }
-  }
+  if (sh) write_rrf_shaper(r, ed, *sh, lines, new_lines);
 
   if (!new_lines.empty()) {
     std::size_t at = ed.size();
-    if (m572 && !m593 && sh) at = *m572 + 1;
-    else if (anchor) at = *anchor + 1;
-    else if (m501) at = *m501;
+    if (lines.m572 && !lines.m593 && sh) at = *lines.m572 + 1;
+    else if (lines.anchor) at = *lines.anchor + 1;
+    else if (lines.m501) at = *lines.m501;
     ed.insert_before(at, new_lines);
     for (auto& c : r.changes)
       if (c.where == "new line") c.line = at;

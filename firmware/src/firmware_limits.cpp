@@ -28,13 +28,6 @@ std::string shaper_list(ExportFirmware fw, bool ft_motion) {
   return out;
 }
 
-std::vector<std::string> designable_shapers(ExportFirmware fw, bool ft_motion) {
-  std::vector<std::string> out;
-  for (const auto& s : shapers_of(fw, ft_motion))
-    if (*s.tunekit_name) out.emplace_back(s.tunekit_name);
-  return out;
-}
-
 std::string firmware_title(ExportFirmware fw) {
   switch (fw) {
     case ExportFirmware::klipper: return "Klipper";

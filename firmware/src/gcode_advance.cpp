@@ -100,25 +100,26 @@ bool parse_advance_command(const std::string& line, ExportFirmware fw, double& k
   return true;
 }
 
-GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvanceOptions& o, const std::string& path) {
-  if (o.k_of_flow.empty()) throw InputError("no advance table for the G-code post-processor");
-  if (!(std::isfinite(o.hysteresis) && o.hysteresis >= 0 && o.hysteresis < 1))
-    throw InputError(fmt::format("hysteresis must be at least 0 and below 1, not {}", o.hysteresis));
+namespace {
+
+// The advance table sorted by flow, every value checked against the firmware's bounds first
+// (it may be written).
+std::vector<std::pair<double, double>> checked_advance_table(const GcodeAdvanceOptions& o) {
   std::vector<std::pair<double, double>> table = o.k_of_flow;
   std::sort(table.begin(), table.end());
-  {
-    // Every value that may be written is checked against the firmware's bounds first.
-    for (const auto& [q, k] : table) {
-      CompensatorSettings s;
-      s.pa_k_s = k;
-      if (!std::isfinite(q)) throw InputError("advance table: a flow is not a number");
-      validate_settings(o.firmware == ExportFirmware::kalico ? ExportFirmware::klipper : o.firmware, s);
-    }
+  for (const auto& [q, k] : table) {
+    CompensatorSettings s;
+    s.pa_k_s = k;
+    if (!std::isfinite(q)) throw InputError("advance table: a flow is not a number");
+    validate_settings(o.firmware == ExportFirmware::kalico ? ExportFirmware::klipper : o.firmware, s);
   }
-  std::vector<double> table_q, table_k;  // the table as columns for fitting::interp_linear
-  for (const auto& [q, k] : table) table_q.push_back(q), table_k.push_back(k);
-  const LineEditor ed(text);
-  double area = o.filament_area_mm2;
+  return table;
+}
+
+// The filament's cross-section (mm^2): given, else from the file's '; filament_diameter = D'
+// comment (the first extruder's value of "1.75,1.75"). InputError when neither gives one.
+double filament_area_mm2(const LineEditor& ed, double given, const std::string& path) {
+  double area = given;
   if (!(area > 0)) {
     for (std::size_t i = 0; i < ed.size(); ++i) {
       const std::string& t = ed.line(i);
@@ -139,14 +140,20 @@ GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvan
   if (!(area > 0))
     throw InputError(
         "no filament diameter: the file has no '; filament_diameter = D' line and no machine profile gave one", path);
+  return area;
+}
 
-  // Pass 1: blocks and their extrusion-weighted flow.
-  struct Block {
-    std::size_t type_line;
-    std::string feature;
-    double e_sum = 0, qe_sum = 0;
-  };
-  std::vector<Block> blocks;
+// A feature block (from its ';TYPE:' line): its extrusion and its extrusion-weighted flow sum.
+struct FeatureBlock {
+  std::size_t type_line;
+  std::string feature;
+  double e_sum = 0, qe_sum = 0;
+};
+
+// Pass 1: the feature blocks and their extrusion-weighted flow (mm^3/s) from the moves' feed,
+// length and extrusion. InputError when the file marks no feature.
+std::vector<FeatureBlock> feature_blocks(const LineEditor& ed, double area, const std::string& path) {
+  std::vector<FeatureBlock> blocks;
   bool rel_xy = false, rel_e = false;
   double x = 0, y = 0, e = 0, f = 0;
   for (std::size_t i = 0; i < ed.size(); ++i) {
@@ -189,6 +196,21 @@ GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvan
   if (blocks.empty())
     throw InputError(
         "no ';TYPE:' feature comments: slice with PrusaSlicer, OrcaSlicer or Cura (they mark every feature)", path);
+  return blocks;
+}
+
+}  // namespace
+
+GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvanceOptions& o, const std::string& path) {
+  if (o.k_of_flow.empty()) throw InputError("no advance table for the G-code post-processor");
+  if (!(std::isfinite(o.hysteresis) && o.hysteresis >= 0 && o.hysteresis < 1))
+    throw InputError(fmt::format("hysteresis must be at least 0 and below 1, not {}", o.hysteresis));
+  const std::vector<std::pair<double, double>> table = checked_advance_table(o);
+  std::vector<double> table_q, table_k;  // the table as columns for fitting::interp_linear
+  for (const auto& [q, k] : table) table_q.push_back(q), table_k.push_back(k);
+  const LineEditor ed(text);
+  const double area = filament_area_mm2(ed, o.filament_area_mm2, path);
+  const std::vector<FeatureBlock> blocks = feature_blocks(ed, area, path);
 
   // Pass 2: decide the changes (with the file's own advance commands in order).
   GcodeAdvanceResult r;
@@ -199,7 +221,7 @@ GcodeAdvanceResult apply_gcode_advance(const std::string& text, const GcodeAdvan
     double k_file = 0;
     if (parse_advance_command(ed.line(i), o.firmware, k_file)) active = k_file;
     if (next_block < blocks.size() && blocks[next_block].type_line == i) {
-      const Block& b = blocks[next_block++];
+      const FeatureBlock& b = blocks[next_block++];
       if (b.e_sum <= 0) continue;
       ++r.features;
       const double q = b.qe_sum / b.e_sum;

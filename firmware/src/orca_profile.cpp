@@ -193,24 +193,76 @@ std::vector<std::pair<std::string, std::string>> json_top_level_members(const st
   return out;
 }
 
-OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaAdvanceProfile& p,
-                                            const std::string& path) {
-  {
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::exception& e) {
-      throw InputError(fmt::format("not valid JSON: {}", core::plain_json_error(e.what())), path);
-    }
-    if (!j.is_object()) throw InputError("an OrcaSlicer profile is a JSON object", path);
-    if (j.contains("type") && j["type"].is_string() && j["type"] != "filament")
-      throw InputError(
-          fmt::format("this is an OrcaSlicer '{}' profile, not a filament profile", j["type"].get<std::string>()),
-          path);
+namespace {
+
+// InputError unless the text is a JSON object and, where it says its type, a filament profile.
+void check_filament_profile(const std::string& text, const std::string& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("not valid JSON: {}", core::plain_json_error(e.what())), path);
   }
+  if (!j.is_object()) throw InputError("an OrcaSlicer profile is a JSON object", path);
+  if (j.contains("type") && j["type"].is_string() && j["type"] != "filament")
+    throw InputError(
+        fmt::format("this is an OrcaSlicer '{}' profile, not a filament profile", j["type"].get<std::string>()), path);
+}
+
+// InputError for a fallback advance outside OrcaSlicer's range.
+void check_fallback_advance(const OrcaAdvanceProfile& p) {
   if (!(std::isfinite(p.fallback_k_s) && p.fallback_k_s >= 0 && p.fallback_k_s <= limits::kOrcaAdvanceMax_s))
     throw InputError(fmt::format("refusing to write OrcaSlicer's pressure_advance {} s (0..{} s)", p.fallback_k_s,
                                  limits::kOrcaAdvanceMax_s));
+}
+
+// A replacement of text[begin, end).
+struct TextEdit {
+  std::size_t begin, end;
+  std::string text;
+};
+
+// The members the profile lacks, appended after its last member in the style of the file's
+// arrays (one line or one element per line, its indent and line ends); their keys into `added`.
+std::string appended_members(const std::string& text, const std::vector<OrcaMember>& members,
+                             const std::vector<std::pair<std::string, std::string>>& missing,
+                             std::vector<std::string>& added) {
+  const OrcaMember& last = members.back();
+  const std::string ind = orca_indent_before(text, last.begin);
+  std::string elem_ind;
+  bool multiline = false;
+  for (const auto& m : members) {
+    if (text[m.value_begin] != '[') continue;
+    const auto nl = text.find('\n', m.value_begin);
+    if (nl != std::string::npos && nl < m.value_end) {
+      const auto first = text.find_first_not_of(" \t", nl + 1);
+      if (first != std::string::npos && first < m.value_end && text[first] != ']') {
+        elem_ind = text.substr(nl + 1, first - nl - 1);
+        multiline = true;
+        break;
+      }
+    }
+  }
+  const std::string eol = text.find("\r\n") != std::string::npos ? "\r\n" : "\n";
+  const bool one_line_object = text.find('\n') == std::string::npos;
+  std::string add;
+  for (const auto& [key, value] : missing) {
+    add += ",";
+    add += one_line_object ? " " : eol + ind;
+    add += orca_json_string(key) + ": ";
+    add += multiline ? "[" + eol + elem_ind + orca_json_string(value) + eol + ind + "]"
+                     : "[" + orca_json_string(value) + "]";
+    added.push_back(key);
+  }
+  return add;
+}
+
+}  // namespace
+
+OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaAdvanceProfile& p,
+                                            const std::string& path) {
+  check_filament_profile(text, path);
+  check_fallback_advance(p);
   const std::vector<std::pair<std::string, std::string>> want = {
       {"adaptive_pressure_advance", "1"},
       {"adaptive_pressure_advance_model", orca_model_text(p.table)},
@@ -221,11 +273,7 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
   const auto members = sc.members();
   if (members.empty()) throw InputError("an empty JSON object is not an OrcaSlicer filament profile", path);
 
-  struct Edit {
-    std::size_t begin, end;
-    std::string text;
-  };
-  std::vector<Edit> edits;
+  std::vector<TextEdit> edits;
   OrcaMergeResult r;
   std::vector<std::pair<std::string, std::string>> missing;
   for (const auto& wanted : want) {
@@ -254,38 +302,10 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
     if (!edits.empty() && edits.back().begin >= it->value_begin && edits.back().end <= it->value_end)
       r.changed_keys.push_back(key);
   }
-  if (!missing.empty()) {
-    // Append after the last member, in the style of the file's arrays.
-    const OrcaMember& last = members.back();
-    const std::string ind = orca_indent_before(text, last.begin);
-    std::string elem_ind;
-    bool multiline = false;
-    for (const auto& m : members) {
-      if (text[m.value_begin] != '[') continue;
-      const auto nl = text.find('\n', m.value_begin);
-      if (nl != std::string::npos && nl < m.value_end) {
-        const auto first = text.find_first_not_of(" \t", nl + 1);
-        if (first != std::string::npos && first < m.value_end && text[first] != ']') {
-          elem_ind = text.substr(nl + 1, first - nl - 1);
-          multiline = true;
-          break;
-        }
-      }
-    }
-    const std::string eol = text.find("\r\n") != std::string::npos ? "\r\n" : "\n";
-    const bool one_line_object = text.find('\n') == std::string::npos;
-    std::string add;
-    for (const auto& [key, value] : missing) {
-      add += ",";
-      add += one_line_object ? " " : eol + ind;
-      add += orca_json_string(key) + ": ";
-      add += multiline ? "[" + eol + elem_ind + orca_json_string(value) + eol + ind + "]"
-                       : "[" + orca_json_string(value) + "]";
-      r.added_keys.push_back(key);
-    }
-    edits.push_back({last.value_end, last.value_end, add});
-  }
-  std::sort(edits.begin(), edits.end(), [](const Edit& a, const Edit& b) { return a.begin > b.begin; });
+  if (!missing.empty())
+    edits.push_back(
+        {members.back().value_end, members.back().value_end, appended_members(text, members, missing, r.added_keys)});
+  std::sort(edits.begin(), edits.end(), [](const TextEdit& a, const TextEdit& b) { return a.begin > b.begin; });
   r.text = text;
   for (const auto& e : edits) r.text.replace(e.begin, e.end - e.begin, e.text);
   try {
@@ -301,9 +321,7 @@ OrcaMergeResult merge_orca_filament_profile(const std::string& text, const OrcaA
 
 std::string new_orca_filament_profile(const OrcaAdvanceProfile& p, const std::string& name,
                                       const std::string& inherits) {
-  if (!(std::isfinite(p.fallback_k_s) && p.fallback_k_s >= 0 && p.fallback_k_s <= limits::kOrcaAdvanceMax_s))
-    throw InputError(fmt::format("refusing to write OrcaSlicer's pressure_advance {} s (0..{} s)", p.fallback_k_s,
-                                 limits::kOrcaAdvanceMax_s));
+  check_fallback_advance(p);
   nlohmann::ordered_json j;
   j["type"] = "filament";
   j["name"] = name;

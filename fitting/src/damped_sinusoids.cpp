@@ -73,29 +73,28 @@ namespace {
 constexpr double kMinDampedZeta = 1e-5;
 constexpr double kMaxDampedZeta = 0.9;
 
-}  // namespace
+// The upper bound of a component's damping ratio.
+double max_zeta_of(const PencilComponent& s) {
+  return s.max_zeta > 0 ? std::min(s.max_zeta, kMaxDampedZeta) : kMaxDampedZeta;
+}
 
-FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
-                               double freq_rel_bound) {
-  if (!(freq_rel_bound > 0 && freq_rel_bound < 1))
-    throw InputError("damped-sinusoid fit: the frequency bound must be in (0, 1)");
+// Start dampings: the components' own, inside the lower half of their bounds.
+std::vector<double> start_dampings(const std::vector<PencilComponent>& start) {
+  std::vector<double> z0(start.size());
+  for (std::size_t i = 0; i < start.size(); ++i)
+    z0[i] = std::clamp(start[i].zeta, 2 * kMinDampedZeta, 0.5 * max_zeta_of(start[i]));
+  return z0;
+}
+
+// Amplitudes and offset enter linearly: their least-squares values for the start frequencies and
+// dampings z0 (one variable-projection step), as a_0, b_0, a_1, ..., offset.
+Eigen::VectorXd linear_start(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
+                             const std::vector<double>& z0) {
   const int m = static_cast<int>(y.size());
   const int nc = static_cast<int>(start.size());
-  if (nc == 0) throw InputError("damped-sinusoid fit: no components to fit");
-  if (m < 4 * nc + 10) throw InputError(fmt::format("damped-sinusoid fit: {} samples are too few", m));
-  const double nyquist = fs_hz / 2;
-  double mean = 0;
-  for (double v : y) mean += v;
-  mean /= m;
-
-  // Amplitudes and offset enter linearly: start them at their least-squares values for the
-  // start frequencies and dampings (one variable-projection step).
   Eigen::MatrixXd D(m, 2 * nc + 1);
-  std::vector<double> z0(static_cast<std::size_t>(nc));
   for (int i = 0; i < nc; ++i) {
     const auto& s = start[static_cast<std::size_t>(i)];
-    const double z_max = s.max_zeta > 0 ? std::min(s.max_zeta, kMaxDampedZeta) : kMaxDampedZeta;
-    z0[static_cast<std::size_t>(i)] = std::clamp(s.zeta, 2 * kMinDampedZeta, 0.5 * z_max);
     const double w = 2 * std::numbers::pi * s.freq_hz, z = z0[static_cast<std::size_t>(i)];
     const double wd = w * std::sqrt(1 - z * z);
     for (int k = 0; k < m; ++k) {
@@ -106,12 +105,23 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   }
   D.col(2 * nc).setOnes();
   const Eigen::Map<const Eigen::VectorXd> yv(y.data(), m);
-  const Eigen::VectorXd lin = D.colPivHouseholderQr().solve(yv);
+  return D.colPivHouseholderQr().solve(yv);
+}
 
-  LsqProblem prob;
-  std::vector<int> tie(static_cast<std::size_t>(nc), 0);  // harmonic number of component 0, or 0: free
-  for (int i = 1; i < nc; ++i)
-    tie[static_cast<std::size_t>(i)] = std::max(0, start[static_cast<std::size_t>(i)].harmonic);
+// Per component its harmonic number of component 0, or 0 when its frequency is free.
+std::vector<int> harmonic_ties(const std::vector<PencilComponent>& start) {
+  std::vector<int> tie(start.size(), 0);
+  for (std::size_t i = 1; i < start.size(); ++i) tie[i] = std::max(0, start[i].harmonic);
+  return tie;
+}
+
+// Parameters f_i, zeta_i, a_i, b_i per component, then the offset; a tied frequency is fixed
+// (the residuals compute it from f0).
+std::vector<ParamSpec> sinusoid_params(const std::vector<PencilComponent>& start, const std::vector<int>& tie,
+                                       const std::vector<double>& z0, const Eigen::VectorXd& lin, double mean,
+                                       double freq_rel_bound, double nyquist) {
+  const int nc = static_cast<int>(start.size());
+  std::vector<ParamSpec> params;
   for (int i = 0; i < nc; ++i) {
     const auto& s = start[static_cast<std::size_t>(i)];
     ParamSpec fp{fmt::format("f{}_hz", i), "Hz", s.freq_hz, (1 - freq_rel_bound) * s.freq_hz,
@@ -122,17 +132,21 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
       fp.upper = std::numeric_limits<double>::infinity();
       fp.fixed = true;
     }
-    prob.params.push_back(fp);
-    prob.params.push_back({fmt::format("zeta{}", i), "1", z0[static_cast<std::size_t>(i)], kMinDampedZeta,
-                           s.max_zeta > 0 ? std::min(s.max_zeta, kMaxDampedZeta) : kMaxDampedZeta});
-    prob.params.push_back({fmt::format("a{}", i), "", std::isfinite(lin(2 * i)) ? lin(2 * i) : 0.0});
-    prob.params.push_back({fmt::format("b{}", i), "", std::isfinite(lin(2 * i + 1)) ? lin(2 * i + 1) : 0.0});
+    params.push_back(fp);
+    params.push_back({fmt::format("zeta{}", i), "1", z0[static_cast<std::size_t>(i)], kMinDampedZeta, max_zeta_of(s)});
+    params.push_back({fmt::format("a{}", i), "", std::isfinite(lin(2 * i)) ? lin(2 * i) : 0.0});
+    params.push_back({fmt::format("b{}", i), "", std::isfinite(lin(2 * i + 1)) ? lin(2 * i + 1) : 0.0});
   }
-  prob.params.push_back({"offset", "", std::isfinite(lin(2 * nc)) ? lin(2 * nc) : mean});
-  const int np = static_cast<int>(prob.params.size());
-  prob.num_residuals = m;
-  prob.observed = y;
-  prob.residuals_and_jacobian = [&y, &tie, fs_hz, nc, np, m](const double* p, double* r, double* J) {
+  params.push_back({"offset", "", std::isfinite(lin(2 * nc)) ? lin(2 * nc) : mean});
+  return params;
+}
+
+// Residuals sum_i e^(-z w t) (a_i cos(wd t) + b_i sin(wd t)) + offset - y and their Jacobian.
+ResidualJacobianFunction sinusoid_residuals(const std::vector<double>& y, const std::vector<int>& tie, double fs_hz,
+                                            int np) {
+  const int m = static_cast<int>(y.size());
+  const int nc = static_cast<int>(tie.size());
+  return [&y, &tie, fs_hz, nc, np, m](const double* p, double* r, double* J) {
     const double two_pi = 2 * std::numbers::pi;
     for (int k = 0; k < m; ++k) r[k] = p[np - 1] - y[static_cast<std::size_t>(k)];
     if (J)
@@ -179,15 +193,13 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
       if (!std::isfinite(r[k])) return false;
     return true;
   };
-  LsqOptions opt;
-  opt.max_iterations = 200;
-  opt.function_tolerance = 1e-12;
-  opt.parameter_tolerance = 1e-12;
-  opt.gradient_tolerance = 1e-14;
-  FitResult fit = solve_least_squares("damped_sinusoids", prob, opt);
+}
+
+// A tied frequency's estimate from f0's: k f0 with k times its error and interval.
+void derive_tied_frequencies(FitResult& fit, const std::vector<int>& tie) {
   const auto& f0 = fit.param("f0_hz");
-  for (int i = 1; i < nc; ++i) {
-    const int k_tie = tie[static_cast<std::size_t>(i)];
+  for (std::size_t i = 1; i < tie.size(); ++i) {
+    const int k_tie = tie[i];
     if (k_tie == 0) continue;
     for (auto& q : fit.params)
       if (q.name == fmt::format("f{}_hz", i)) {
@@ -199,6 +211,39 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
         q.ci95_method = f0.ci95_method;
       }
   }
+}
+
+}  // namespace
+
+FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
+                               double freq_rel_bound) {
+  if (!(freq_rel_bound > 0 && freq_rel_bound < 1))
+    throw InputError("damped-sinusoid fit: the frequency bound must be in (0, 1)");
+  const int m = static_cast<int>(y.size());
+  const int nc = static_cast<int>(start.size());
+  if (nc == 0) throw InputError("damped-sinusoid fit: no components to fit");
+  if (m < 4 * nc + 10) throw InputError(fmt::format("damped-sinusoid fit: {} samples are too few", m));
+  const double nyquist = fs_hz / 2;
+  double mean = 0;
+  for (double v : y) mean += v;
+  mean /= m;
+
+  const std::vector<double> z0 = start_dampings(start);
+  const Eigen::VectorXd lin = linear_start(y, fs_hz, start, z0);
+  const std::vector<int> tie = harmonic_ties(start);
+  LsqProblem prob;
+  prob.params = sinusoid_params(start, tie, z0, lin, mean, freq_rel_bound, nyquist);
+  const int np = static_cast<int>(prob.params.size());
+  prob.num_residuals = m;
+  prob.observed = y;
+  prob.residuals_and_jacobian = sinusoid_residuals(y, tie, fs_hz, np);
+  LsqOptions opt;
+  opt.max_iterations = 200;
+  opt.function_tolerance = 1e-12;
+  opt.parameter_tolerance = 1e-12;
+  opt.gradient_tolerance = 1e-14;
+  FitResult fit = solve_least_squares("damped_sinusoids", prob, opt);
+  derive_tied_frequencies(fit, tie);
   return fit;
 }
 

@@ -467,19 +467,12 @@ double step_instant_resolution(const StepRecord& r) {
   if (r.t.size() < 2) return 0;
   std::vector<double> d(r.t.size() - 1);
   for (std::size_t i = 1; i < r.t.size(); ++i) d[i - 1] = r.t[i] - r.t[i - 1];
-  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-  return d[d.size() / 2] / std::sqrt(12.0);
+  return median(std::move(d)) / std::sqrt(12.0);
 }
 
 }  // namespace first_order_detail
 
 using namespace first_order_detail;
-
-StepModel parse_step_model(const std::string& name) {
-  if (name == "fo" || name == "first_order") return StepModel::fo;
-  if (name == "fopdt") return StepModel::fopdt;
-  throw InputError("unknown step model '" + name + "' (expected fo or fopdt)");
-}
 
 std::string model_name(StepModel m) { return m == StepModel::fo ? "first_order" : "fopdt"; }
 

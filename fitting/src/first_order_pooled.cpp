@@ -251,22 +251,11 @@ void fill_pooled_covariance(FitResult& f, const std::vector<StepRecord>& recs, c
   }
 }
 
-}  // namespace
-
-FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model, const FitResult* start,
-                           const LsqOptions& options) {
-  if (recs.empty()) throw InputError("pooled step fit: no steps");
-  if (recs.size() == 1) return fit_step(recs.front(), model, options);
-  std::size_t m = 0;
-  double min_duration = 1e300, max_duration = 0;
-  for (const auto& r : recs) {
-    check_record(r, model_name(model) + " (pooled)");
-    m += r.t.size();
-    min_duration = std::min(min_duration, response_duration(r));
-    max_duration = std::max(max_duration, response_duration(r));
-  }
-  const std::size_t k = 3 + recs.size();
-  LsqProblem prob;
+// The pooled fit's parameters: K, tau_s and theta_s shared by the steps (from `start` or the
+// first step's log-incomplete start; theta fixed at 0 for the first-order model), then one
+// offset y0_j per step (the mean before its step).
+std::vector<ParamSpec> pooled_params(const std::vector<StepRecord>& recs, StepModel model, const FitResult* start,
+                                     double min_duration, double max_duration) {
   double K0, tau0, theta0;
   if (start != nullptr) {
     K0 = start->value("K");
@@ -279,9 +268,9 @@ FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model,
     theta0 = st.theta_s;
   }
   if (model == StepModel::fo) theta0 = 0;
-  prob.params = {{"K", recs.front().gain_unit, K0},
-                 {"tau_s", "s", tau0, 1e-9, kTauMaxFactor * max_duration},
-                 {"theta_s", "s", theta0, 0.0, 0.9 * min_duration, model == StepModel::fo}};
+  std::vector<ParamSpec> params = {{"K", recs.front().gain_unit, K0},
+                                   {"tau_s", "s", tau0, 1e-9, kTauMaxFactor * max_duration},
+                                   {"theta_s", "s", theta0, 0.0, 0.9 * min_duration, model == StepModel::fo}};
   for (std::size_t j = 0; j < recs.size(); ++j) {
     const auto& r = recs[j];
     double y0 = r.y.front();
@@ -289,40 +278,49 @@ FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model,
     for (double t : r.t)
       if (t < r.t_step) ++before;
     if (before > 0) y0 = mean_of(r.y, 0, before);
-    prob.params.push_back({"y0_" + std::to_string(j), r.output_unit, y0});
+    params.push_back({"y0_" + std::to_string(j), r.output_unit, y0});
   }
-  // One residual block per step (PooledStepCost): Ceres eliminates the offsets y0_j and solves
-  // a dense system in K, tau_s, theta_s only (DENSE_SCHUR), with the same Levenberg-Marquardt
-  // iteration and bounds as solve_least_squares, from a start polished on the normal equations.
-  quiet_solver_logging();
-  const std::string name = model_name(model) + "_pooled";
-  double shared[3];
+  return params;
+}
+
+// The start of the pooled solve: the shared parameters within their bounds and the offsets,
+// polished on the normal equations (polish_pooled_start).
+void polished_pooled_start(const std::vector<StepRecord>& recs, const std::vector<ParamSpec>& params, double shared[3],
+                           std::vector<double>& y0) {
+  const std::size_t k = params.size();
   for (int j = 0; j < 3; ++j) {
-    const auto& ps = prob.params[static_cast<std::size_t>(j)];
+    const auto& ps = params[static_cast<std::size_t>(j)];
     shared[j] = std::clamp(ps.start, ps.lower, ps.upper);
   }
-  std::vector<double> y0(recs.size());
-  for (std::size_t j = 0; j < recs.size(); ++j) y0[j] = prob.params[3 + j].start;
-  {
-    std::vector<double> p(k), lo(k), hi(k);
-    std::vector<bool> fixed(k);
-    for (std::size_t j = 0; j < k; ++j) {
-      p[j] = j < 3 ? shared[j] : y0[j - 3];
-      lo[j] = prob.params[j].lower;
-      hi[j] = prob.params[j].upper;
-      fixed[j] = prob.params[j].fixed;
-    }
-    polish_pooled_start(recs, p, lo, hi, fixed);
-    for (std::size_t j = 0; j < k; ++j) (j < 3 ? shared[j] : y0[j - 3]) = p[j];
+  y0.resize(recs.size());
+  for (std::size_t j = 0; j < recs.size(); ++j) y0[j] = params[3 + j].start;
+  std::vector<double> p(k), lo(k), hi(k);
+  std::vector<bool> fixed(k);
+  for (std::size_t j = 0; j < k; ++j) {
+    p[j] = j < 3 ? shared[j] : y0[j - 3];
+    lo[j] = params[j].lower;
+    hi[j] = params[j].upper;
+    fixed[j] = params[j].fixed;
   }
+  polish_pooled_start(recs, p, lo, hi, fixed);
+  for (std::size_t j = 0; j < k; ++j) (j < 3 ? shared[j] : y0[j - 3]) = p[j];
+}
+
+// One residual block per step (PooledStepCost): Ceres eliminates the offsets y0_j and solves
+// a dense system in K, tau_s, theta_s only (DENSE_SCHUR), with the same Levenberg-Marquardt
+// iteration and bounds as solve_least_squares. FitError when the solve fails or does not
+// converge where convergence is required.
+ceres::Solver::Summary solve_pooled(const std::vector<StepRecord>& recs, StepModel model,
+                                    const std::vector<ParamSpec>& params, double shared[3], std::vector<double>& y0,
+                                    const LsqOptions& options, const std::string& name) {
   ceres::Problem::Options popt;
   popt.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(popt);
   for (std::size_t j = 0; j < recs.size(); ++j)
     problem.AddResidualBlock(new PooledStepCost(recs[j]), nullptr, shared, &y0[j]);
   for (int j = 1; j < 3; ++j) {
-    problem.SetParameterLowerBound(shared, j, prob.params[static_cast<std::size_t>(j)].lower);
-    problem.SetParameterUpperBound(shared, j, prob.params[static_cast<std::size_t>(j)].upper);
+    problem.SetParameterLowerBound(shared, j, params[static_cast<std::size_t>(j)].lower);
+    problem.SetParameterUpperBound(shared, j, params[static_cast<std::size_t>(j)].upper);
   }
   if (model == StepModel::fo) problem.SetManifold(shared, new ceres::SubsetManifold(3, {2}));
   ceres::Solver::Options so;
@@ -348,16 +346,17 @@ FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model,
     throw FitError(name + ": " + detail::plain_solver_failure(summary));
   if (summary.termination_type == ceres::NO_CONVERGENCE && options.require_convergence)
     throw FitError(name + ": did not converge in " + std::to_string(options.max_iterations) + " iterations");
-  FitResult f;
-  f.model = name;
-  f.diagnostics.iterations = static_cast<int>(summary.iterations.size());
-  f.diagnostics.solver = summary.BriefReport();
-  f.diagnostics.num_parameters = static_cast<int>(k) - (model == StepModel::fo ? 1 : 0);
-  f.diagnostics.converged = summary.termination_type == ceres::CONVERGENCE;
-  for (std::size_t j = 0; j < k; ++j) {
-    const auto& ps = prob.params[j];
+  return summary;
+}
+
+// The solved parameters into the result, with a warning for each that ended on a bound;
+// FitError when one is not finite.
+void collect_pooled_params(FitResult& f, const std::vector<ParamSpec>& params, const double shared[3],
+                           const std::vector<double>& y0) {
+  for (std::size_t j = 0; j < params.size(); ++j) {
+    const auto& ps = params[j];
     const double v = j < 3 ? shared[j] : y0[j - 3];
-    if (!std::isfinite(v)) throw FitError(name + ": the solution is not finite (" + f.diagnostics.solver + ")");
+    if (!std::isfinite(v)) throw FitError(f.model + ": the solution is not finite (" + f.diagnostics.solver + ")");
     Param p;
     p.name = ps.name;
     p.unit = ps.unit;
@@ -367,20 +366,54 @@ FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model,
       f.warnings.push_back(ps.name + " ended on its bound (" + std::to_string(v) + ")");
     f.params.push_back(std::move(p));
   }
-  // Residuals at the solution, in time order step after step.
+}
+
+// Residual diagnostics at the solution, the residuals in time order step after step (m of them).
+void pooled_residual_diagnostics(FitResult& f, const std::vector<StepRecord>& recs, const double shared[3],
+                                 const std::vector<double>& y0, std::size_t m) {
   std::vector<double> res(m), observed;
   observed.reserve(m);
-  {
-    std::size_t off = 0;
-    for (std::size_t j = 0; j < recs.size(); ++j) {
-      const auto& r = recs[j];
-      const std::size_t cols[4] = {0, 1, 2, 3};
-      step_residuals(r, shared[0], shared[1], shared[2], y0[j], res.data() + off, nullptr, 4, cols);
-      observed.insert(observed.end(), r.y.begin(), r.y.end());
-      off += r.t.size();
-    }
+  std::size_t off = 0;
+  for (std::size_t j = 0; j < recs.size(); ++j) {
+    const auto& r = recs[j];
+    const std::size_t cols[4] = {0, 1, 2, 3};
+    step_residuals(r, shared[0], shared[1], shared[2], y0[j], res.data() + off, nullptr, 4, cols);
+    observed.insert(observed.end(), r.y.begin(), r.y.end());
+    off += r.t.size();
   }
   fill_residual_diagnostics(f, res, observed, true);
+}
+
+}  // namespace
+
+FitResult fit_steps_pooled(const std::vector<StepRecord>& recs, StepModel model, const FitResult* start,
+                           const LsqOptions& options) {
+  if (recs.empty()) throw InputError("pooled step fit: no steps");
+  if (recs.size() == 1) return fit_step(recs.front(), model, options);
+  std::size_t m = 0;
+  double min_duration = 1e300, max_duration = 0;
+  for (const auto& r : recs) {
+    check_record(r, model_name(model) + " (pooled)");
+    m += r.t.size();
+    min_duration = std::min(min_duration, response_duration(r));
+    max_duration = std::max(max_duration, response_duration(r));
+  }
+  const std::size_t k = 3 + recs.size();
+  const std::vector<ParamSpec> params = pooled_params(recs, model, start, min_duration, max_duration);
+  quiet_solver_logging();
+  const std::string name = model_name(model) + "_pooled";
+  double shared[3];
+  std::vector<double> y0;
+  polished_pooled_start(recs, params, shared, y0);
+  const ceres::Solver::Summary summary = solve_pooled(recs, model, params, shared, y0, options, name);
+  FitResult f;
+  f.model = name;
+  f.diagnostics.iterations = static_cast<int>(summary.iterations.size());
+  f.diagnostics.solver = summary.BriefReport();
+  f.diagnostics.num_parameters = static_cast<int>(k) - (model == StepModel::fo ? 1 : 0);
+  f.diagnostics.converged = summary.termination_type == ceres::CONVERGENCE;
+  collect_pooled_params(f, params, shared, y0);
+  pooled_residual_diagnostics(f, recs, shared, y0, m);
   if (options.compute_covariance) fill_pooled_covariance(f, recs, options);
   check_identifiable(f, nullptr, max_duration, options.compute_covariance);
   return f;

@@ -209,30 +209,36 @@ void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res, con
   }
 }
 
-FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, const LsqOptions& opt) {
-  quiet_glog();
-  const int n = static_cast<int>(prob.params.size());
-  if (n == 0) throw FitError(model + ": no parameters to fit");
-  if (!prob.residuals && !prob.residuals_and_jacobian) throw FitError(model + ": no residual function");
+namespace {
+
+// The number of free parameters; InputError when the data points are fewer.
+int free_parameter_count(const std::string& model, const LsqProblem& prob) {
   int n_free = 0;
-  std::vector<int> fixed_idx;
-  for (int j = 0; j < n; ++j) {
-    if (prob.params[j].fixed) fixed_idx.push_back(j);
-    else ++n_free;
-  }
+  for (const auto& ps : prob.params)
+    if (!ps.fixed) ++n_free;
   if (prob.num_residuals < n_free)
     throw InputError(model + ": " + std::to_string(prob.num_residuals) + " data points for " + std::to_string(n_free) +
                      " free parameters (" + free_names(prob) + ")");
+  return n_free;
+}
 
-  std::vector<double> x(static_cast<std::size_t>(n));
-  for (int j = 0; j < n; ++j) {
+// The parameters' start values, each within its bounds.
+std::vector<double> clamped_start(const LsqProblem& prob) {
+  std::vector<double> x(prob.params.size());
+  for (std::size_t j = 0; j < x.size(); ++j) {
     const auto& ps = prob.params[j];
     x[j] = std::clamp(ps.start, ps.lower, ps.upper);
   }
+  return x;
+}
 
-  ceres::Problem::Options popt;
-  popt.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-  ceres::Problem problem(popt);
+// The whole problem as one residual block on x, with the parameters' bounds and the fixed ones
+// held (all of them when none is free).
+void build_ceres_problem(ceres::Problem& problem, const LsqProblem& prob, std::vector<double>& x, int n_free) {
+  const int n = static_cast<int>(prob.params.size());
+  std::vector<int> fixed_idx;
+  for (int j = 0; j < n; ++j)
+    if (prob.params[j].fixed) fixed_idx.push_back(j);
   problem.AddResidualBlock(new WholeProblemCost(prob), nullptr, x.data());
   for (int j = 0; j < n; ++j) {
     const auto& ps = prob.params[j];
@@ -241,7 +247,9 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
   }
   if (n_free == 0) problem.SetParameterBlockConstant(x.data());
   else if (!fixed_idx.empty()) problem.SetManifold(x.data(), new ceres::SubsetManifold(n, fixed_idx));
+}
 
+ceres::Solver::Options solver_options(const LsqOptions& opt) {
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = opt.max_iterations;
@@ -251,15 +259,13 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
   so.num_threads = 1;
-  ceres::Solver::Summary summary;
-  if (n_free > 0) ceres::Solve(so, &problem, &summary);
+  return so;
+}
 
-  FitResult r;
-  r.model = model;
-  r.diagnostics.iterations = static_cast<int>(summary.iterations.size());
-  r.diagnostics.solver = n_free > 0 ? summary.BriefReport() : "all parameters fixed";
-  r.diagnostics.num_parameters = n_free;
-
+// FitError when the solve failed, did not converge where convergence is required, or ended on a
+// point that is not finite.
+void check_solution(const std::string& model, const ceres::Solver::Summary& summary, const LsqOptions& opt, int n_free,
+                    const std::vector<double>& x, const std::string& solver) {
   if (n_free > 0) {
     if (summary.termination_type == ceres::FAILURE || summary.termination_type == ceres::USER_FAILURE ||
         !summary.IsSolutionUsable())
@@ -268,66 +274,75 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
       throw FitError(model + ": did not converge in " + std::to_string(opt.max_iterations) + " iterations");
   }
   for (double v : x)
-    if (!std::isfinite(v)) throw FitError(model + ": the solution is not finite (" + r.diagnostics.solver + ")");
-  r.diagnostics.converged = n_free == 0 || summary.termination_type == ceres::CONVERGENCE;
+    if (!std::isfinite(v)) throw FitError(model + ": the solution is not finite (" + solver + ")");
+}
 
-  // Parameters the caller holds on a bound: fixed from here on (statistics and covariance).
-  std::vector<bool> fixed(static_cast<std::size_t>(n));
-  for (int j = 0; j < n; ++j) fixed[j] = prob.params[j].fixed;
+// Parameters the caller holds on a bound (hold_before_covariance): fixed from here on
+// (statistics and covariance). `fixed` starts as the problem's fixed parameters; n_free drops by
+// the ones held. True when any was held.
+bool hold_at_callers_request(const LsqOptions& opt, std::vector<double>& x, std::vector<bool>& fixed, int& n_free) {
   bool any_held = false;
-  if (opt.hold_before_covariance && n_free > 0) {
-    std::vector<bool> hold(static_cast<std::size_t>(n), false);
-    opt.hold_before_covariance(x, hold);
-    for (int j = 0; j < n; ++j) {
-      if (!hold[j] || fixed[j]) continue;
-      fixed[j] = true;
-      any_held = true;
-      --n_free;
-    }
-    r.diagnostics.num_parameters = n_free;
+  if (!opt.hold_before_covariance || n_free == 0) return false;
+  const std::size_t n = fixed.size();
+  std::vector<bool> hold(n, false);
+  opt.hold_before_covariance(x, hold);
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!hold[j] || fixed[j]) continue;
+    fixed[j] = true;
+    any_held = true;
+    --n_free;
   }
+  return any_held;
+}
 
-  // Residuals at the solution.
+std::vector<double> residuals_at_solution(const std::string& model, const LsqProblem& prob,
+                                          const std::vector<double>& x) {
   std::vector<double> res(static_cast<std::size_t>(prob.num_residuals));
-  {
-    WholeProblemCost cost(prob);
-    const double* blocks[] = {x.data()};
-    if (!cost.Evaluate(blocks, res.data(), nullptr))
-      throw FitError(model + ": the model cannot be evaluated at the solution");
-  }
-  fill_residual_diagnostics(r, res, prob.observed, prob.residuals_are_time_ordered);
+  WholeProblemCost cost(prob);
+  const double* blocks[] = {x.data()};
+  if (!cost.Evaluate(blocks, res.data(), nullptr))
+    throw FitError(model + ": the model cannot be evaluated at the solution");
+  return res;
+}
 
-  const int dof = prob.num_residuals - n_free;
-  const double s2 = (opt.absolute_sigma || dof <= 0) ? 1.0 : r.diagnostics.rss / dof;
-  const double tq = t_multiplier(opt.confidence, dof);
-
+// The n x n covariance of the parameters from Ceres (before the residual variance s^2): with
+// held parameters the covariance sees the problem with them fixed as well. FitError when the
+// free parameters are not identifiable.
+std::vector<double> ceres_covariance(const std::string& model, const LsqProblem& prob, ceres::Problem& problem,
+                                     const ceres::Problem::Options& popt, std::vector<double>& x,
+                                     const std::vector<bool>& fixed, bool any_held, double min_reciprocal_condition) {
+  const int n = static_cast<int>(prob.params.size());
   std::vector<double> cov(static_cast<std::size_t>(n * n), kNaN);
-  if (opt.compute_covariance && n_free > 0) {
-    if (dof <= 0) throw FitError(model + ": as many parameters as data points; no uncertainty can be estimated");
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.min_reciprocal_condition_number = opt.min_reciprocal_condition;
-    co.null_space_rank = 0;
-    co.apply_loss_function = false;
-    co.num_threads = 1;
-    ceres::Covariance covariance(co);
-    std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
-    // With held parameters the covariance sees the problem with them fixed as well.
-    ceres::Problem held_problem(popt);
-    ceres::Problem* cov_problem = &problem;
-    if (any_held) {
-      held_problem.AddResidualBlock(new WholeProblemCost(prob), nullptr, x.data());
-      std::vector<int> all_fixed;
-      for (int j = 0; j < n; ++j)
-        if (fixed[j]) all_fixed.push_back(j);
-      held_problem.SetManifold(x.data(), new ceres::SubsetManifold(n, all_fixed));
-      cov_problem = &held_problem;
-    }
-    if (!covariance.Compute(blocks, cov_problem) || !covariance.GetCovarianceBlock(x.data(), x.data(), cov.data()))
-      throw FitError(model + ": parameters not identifiable from these data (the Jacobian of " + free_names(prob) +
-                     " is rank deficient); record a longer or richer response, or fix a parameter");
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.min_reciprocal_condition_number = min_reciprocal_condition;
+  co.null_space_rank = 0;
+  co.apply_loss_function = false;
+  co.num_threads = 1;
+  ceres::Covariance covariance(co);
+  std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
+  ceres::Problem held_problem(popt);
+  ceres::Problem* cov_problem = &problem;
+  if (any_held) {
+    held_problem.AddResidualBlock(new WholeProblemCost(prob), nullptr, x.data());
+    std::vector<int> all_fixed;
+    for (int j = 0; j < n; ++j)
+      if (fixed[j]) all_fixed.push_back(j);
+    held_problem.SetManifold(x.data(), new ceres::SubsetManifold(n, all_fixed));
+    cov_problem = &held_problem;
   }
+  if (!covariance.Compute(blocks, cov_problem) || !covariance.GetCovarianceBlock(x.data(), x.data(), cov.data()))
+    throw FitError(model + ": parameters not identifiable from these data (the Jacobian of " + free_names(prob) +
+                   " is rank deficient); record a longer or richer response, or fix a parameter");
+  return cov;
+}
 
+// The result's parameters (value, Wald interval from cov s^2 with the t multiplier tq), the
+// warnings for those that ended on a bound, and the covariance of the free ones.
+void fill_parameters(FitResult& r, const std::string& model, const LsqProblem& prob, const LsqOptions& opt,
+                     const std::vector<double>& x, const std::vector<bool>& fixed, const std::vector<double>& cov,
+                     double s2, double tq, int n_free) {
+  const int n = static_cast<int>(prob.params.size());
   for (int j = 0; j < n; ++j) {
     const auto& ps = prob.params[j];
     Param p;
@@ -354,6 +369,51 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
       for (int j = 0; j < n; ++j)
         if (!fixed[i] && !fixed[j]) r.covariance[i * n + j] = cov[i * n + j] * s2;
   }
+}
+
+}  // namespace
+
+FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, const LsqOptions& opt) {
+  quiet_glog();
+  const int n = static_cast<int>(prob.params.size());
+  if (n == 0) throw FitError(model + ": no parameters to fit");
+  if (!prob.residuals && !prob.residuals_and_jacobian) throw FitError(model + ": no residual function");
+  int n_free = free_parameter_count(model, prob);
+  std::vector<double> x = clamped_start(prob);
+
+  ceres::Problem::Options popt;
+  popt.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(popt);
+  build_ceres_problem(problem, prob, x, n_free);
+  ceres::Solver::Summary summary;
+  if (n_free > 0) ceres::Solve(solver_options(opt), &problem, &summary);
+
+  FitResult r;
+  r.model = model;
+  r.diagnostics.iterations = static_cast<int>(summary.iterations.size());
+  r.diagnostics.solver = n_free > 0 ? summary.BriefReport() : "all parameters fixed";
+  r.diagnostics.num_parameters = n_free;
+  check_solution(model, summary, opt, n_free, x, r.diagnostics.solver);
+  r.diagnostics.converged = n_free == 0 || summary.termination_type == ceres::CONVERGENCE;
+
+  std::vector<bool> fixed(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) fixed[j] = prob.params[j].fixed;
+  const bool any_held = hold_at_callers_request(opt, x, fixed, n_free);
+  r.diagnostics.num_parameters = n_free;
+
+  const std::vector<double> res = residuals_at_solution(model, prob, x);
+  fill_residual_diagnostics(r, res, prob.observed, prob.residuals_are_time_ordered);
+
+  const int dof = prob.num_residuals - n_free;
+  const double s2 = (opt.absolute_sigma || dof <= 0) ? 1.0 : r.diagnostics.rss / dof;
+  const double tq = t_multiplier(opt.confidence, dof);
+
+  std::vector<double> cov(static_cast<std::size_t>(n * n), kNaN);
+  if (opt.compute_covariance && n_free > 0) {
+    if (dof <= 0) throw FitError(model + ": as many parameters as data points; no uncertainty can be estimated");
+    cov = ceres_covariance(model, prob, problem, popt, x, fixed, any_held, opt.min_reciprocal_condition);
+  }
+  fill_parameters(r, model, prob, opt, x, fixed, cov, s2, tq, n_free);
   return r;
 }
 

@@ -68,14 +68,6 @@ std::vector<double> numbers_in(const std::string& s) {
 
 }  // namespace
 
-std::vector<std::string> nist_supported_problems() {
-  return {"Misra1a", "Chwirut2", "Chwirut1", "Lanczos3", "Gauss1",   "Gauss2",  "DanWood", "Misra1b",  "Kirby2",
-          "Hahn1",   "MGH17",    "Lanczos1", "Lanczos2", "Gauss3",   "Misra1c", "Misra1d", "Roszman1", "MGH09",
-          "Thurber", "BoxBOD",   "Rat42",    "MGH10",    "Eckerle4", "Rat43",   "Bennett5"};
-}
-
-double nist_model(const std::string& name, const double* b, double x) { return eval_model<double>(name, b, x); }
-
 NistProblem read_nist_problem(const std::string& path) {
   std::istringstream in(read_file_bytes(path));
   NistProblem p;

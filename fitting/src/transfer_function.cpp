@@ -36,6 +36,46 @@ std::complex<double> polyval(const std::vector<double>& p, std::complex<double> 
   return v;
 }
 
+// A transfer function ready for a sampled simulation: made monic and put in controllable
+// canonical form x' = A x + e1 u, y = C x + D u (n states), its delay split into whole samples
+// and the fraction of a sample left over (0 when it is below 1e-12 samples).
+struct SampledForm {
+  int n = 0;
+  double D = 0;
+  Eigen::MatrixXd A;
+  Eigen::VectorXd C;
+  long d_whole = 0;
+  double frac = 0;
+};
+
+// `method` ("ZOH", "FOH") names the simulation in the InputError for a bad model or interval.
+SampledForm sampled_form(const TransferFunction& tf, double dt, const char* method) {
+  const auto& num = tf.num;
+  const auto& den = tf.den;
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw InputError(fmt::format("{} simulation: the sample interval must be positive", method));
+  if (den.empty() || den.front() == 0 || num.empty() || num.size() > den.size())
+    throw InputError(fmt::format("{} simulation: the transfer function is empty or improper", method));
+  if (!(tf.delay_s >= 0)) throw InputError(fmt::format("{} simulation: negative delay", method));
+  SampledForm sf;
+  sf.n = static_cast<int>(den.size()) - 1;
+  const int n = sf.n;
+  // Monic denominator; numerator padded to n + 1 coefficients.
+  std::vector<double> a(den.size()), b(den.size(), 0.0);
+  for (std::size_t i = 0; i < den.size(); ++i) a[i] = den[i] / den[0];
+  for (std::size_t i = 0; i < num.size(); ++i) b[den.size() - num.size() + i] = num[i] / den[0];
+  sf.D = b[0];
+  sf.d_whole = static_cast<long>(std::floor(tf.delay_s / dt + 1e-12));
+  sf.frac = tf.delay_s - static_cast<double>(sf.d_whole) * dt;
+  if (sf.frac < 1e-12 * dt) sf.frac = 0;
+  sf.A = Eigen::MatrixXd::Zero(n, n);
+  for (int j = 0; j < n; ++j) sf.A(0, j) = -a[static_cast<std::size_t>(j) + 1];
+  for (int i = 1; i < n; ++i) sf.A(i, i - 1) = 1.0;
+  sf.C.resize(n);
+  for (int i = 0; i < n; ++i) sf.C(i) = b[static_cast<std::size_t>(i) + 1] - a[static_cast<std::size_t>(i) + 1] * sf.D;
+  return sf;
+}
+
 }  // namespace
 
 std::complex<double> TransferFunction::response(double freq_hz) const {
@@ -48,32 +88,20 @@ std::complex<double> TransferFunction::response(double freq_hz) const {
 double TransferFunction::dc_gain() const { return num.back() / den.back(); }
 
 std::vector<double> TransferFunction::simulate_zoh(std::span<const double> u, double dt) const {
-  if (!(dt > 0) || !std::isfinite(dt)) throw InputError("ZOH simulation: the sample interval must be positive");
-  if (den.empty() || den.front() == 0 || num.empty() || num.size() > den.size())
-    throw InputError("ZOH simulation: the transfer function is empty or improper");
-  if (!(delay_s >= 0)) throw InputError("ZOH simulation: negative delay");
-  const int n = static_cast<int>(den.size()) - 1;
+  const SampledForm sf = sampled_form(*this, dt, "ZOH");
+  const int n = sf.n;
+  const double D = sf.D, frac = sf.frac;
+  const long d_whole = sf.d_whole;
+  const Eigen::MatrixXd& A = sf.A;
+  const Eigen::VectorXd& C = sf.C;
   const std::size_t N = u.size();
   std::vector<double> y(N, 0.0);
-  // Monic denominator; numerator padded to n + 1 coefficients.
-  std::vector<double> a(den.size()), b(den.size(), 0.0);
-  for (std::size_t i = 0; i < den.size(); ++i) a[i] = den[i] / den[0];
-  for (std::size_t i = 0; i < num.size(); ++i) b[den.size() - num.size() + i] = num[i] / den[0];
-  const double D = b[0];
-  const auto d_whole = static_cast<long>(std::floor(delay_s / dt + 1e-12));
-  double frac = delay_s - static_cast<double>(d_whole) * dt;
-  if (frac < 1e-12 * dt) frac = 0;
   auto uat = [&](long k) { return (k >= 0 && k < static_cast<long>(N)) ? u[static_cast<std::size_t>(k)] : 0.0; };
   if (n == 0) {
     for (std::size_t k = 0; k < N; ++k)
       y[k] = D * (frac > 0 ? uat(static_cast<long>(k) - d_whole - 1) : uat(static_cast<long>(k) - d_whole));
     return y;
   }
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
-  for (int j = 0; j < n; ++j) A(0, j) = -a[static_cast<std::size_t>(j) + 1];
-  for (int i = 1; i < n; ++i) A(i, i - 1) = 1.0;
-  Eigen::VectorXd C(n);
-  for (int i = 0; i < n; ++i) C(i) = b[static_cast<std::size_t>(i) + 1] - a[static_cast<std::size_t>(i) + 1] * D;
   // Phi(h) and Gamma(h) = int_0^h e^{As} ds B from one matrix exponential of [[A, B], [0, 0]] h.
   auto discretize = [&](double h, Eigen::MatrixXd& Phi, Eigen::VectorXd& Gam) {
     Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
@@ -308,20 +336,14 @@ FitResult fit_tf_frf(std::span<const double> freq_hz, std::span<const std::compl
 }
 
 std::vector<double> TransferFunction::simulate_foh(std::span<const double> u, double dt) const {
-  if (!(dt > 0) || !std::isfinite(dt)) throw InputError("FOH simulation: the sample interval must be positive");
-  if (den.empty() || den.front() == 0 || num.empty() || num.size() > den.size())
-    throw InputError("FOH simulation: the transfer function is empty or improper");
-  if (!(delay_s >= 0)) throw InputError("FOH simulation: negative delay");
-  const int n = static_cast<int>(den.size()) - 1;
+  const SampledForm sf = sampled_form(*this, dt, "FOH");
+  const int n = sf.n;
+  const double D = sf.D, frac = sf.frac;
+  const long d_whole = sf.d_whole;
+  const Eigen::MatrixXd& A = sf.A;
+  const Eigen::VectorXd& C = sf.C;
   const auto N = static_cast<long>(u.size());
   std::vector<double> y(u.size(), 0.0);
-  std::vector<double> a(den.size()), b(den.size(), 0.0);
-  for (std::size_t i = 0; i < den.size(); ++i) a[i] = den[i] / den[0];
-  for (std::size_t i = 0; i < num.size(); ++i) b[den.size() - num.size() + i] = num[i] / den[0];
-  const double D = b[0];
-  const auto d_whole = static_cast<long>(std::floor(delay_s / dt + 1e-12));
-  double frac = delay_s - static_cast<double>(d_whole) * dt;
-  if (frac < 1e-12 * dt) frac = 0;
   const double w = frac / dt;  // the delayed input at k dt lies this far back from sample k - d_whole
   auto uat = [&](long k) { return k < 0 ? 0.0 : u[static_cast<std::size_t>(std::min(k, N - 1))]; };
   // The delayed input at k dt, and at k dt + frac (where it passes through sample k - d_whole).
@@ -330,11 +352,6 @@ std::vector<double> TransferFunction::simulate_foh(std::span<const double> u, do
     for (long k = 0; k < N; ++k) y[static_cast<std::size_t>(k)] = D * u_grid(k);
     return y;
   }
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
-  for (int j = 0; j < n; ++j) A(0, j) = -a[static_cast<std::size_t>(j) + 1];
-  for (int i = 1; i < n; ++i) A(i, i - 1) = 1.0;
-  Eigen::VectorXd C(n);
-  for (int i = 0; i < n; ++i) C(i) = b[static_cast<std::size_t>(i) + 1] - a[static_cast<std::size_t>(i) + 1] * D;
   // Over a span h with the input going linearly from v0 to v1: x(h) = Phi x + G v0 + L (v1 - v0),
   // from one matrix exponential of [[A, B, 0], [0, 0, 1], [0, 0, 0]] h (B = e1).
   struct Hold {

@@ -206,6 +206,160 @@ CsvTable read_csv(const std::string& path, const CsvOptions& options) {
   return parse_csv(data.view(), path, options);
 }
 
+namespace {
+
+// The header row: its fields, the delimiter, and the first data row when the header was the
+// comment right above the data (Klipper style; empty otherwise) with its line number.
+struct HeaderRow {
+  std::vector<Field> fields;
+  char delim = ',';
+  std::string_view pending_first_row;
+  std::size_t pending_line = 0;
+};
+
+// Reads up to the header row (blank lines and comments before it skipped); its line number
+// into t.header_line. InputError when there is none or the first row holds numbers without a
+// comment above it.
+HeaderRow read_header_row(LineReader& lines, const std::string& path, CsvTable& t) {
+  HeaderRow h;
+  std::string_view line;
+  std::string_view last_comment;
+  std::size_t last_comment_line = 0;
+  while (lines.next(line)) {
+    const std::string_view tl = trim(line);
+    if (tl.empty()) continue;
+    if (tl.front() == '#') {
+      last_comment = tl.substr(1);
+      last_comment_line = lines.line_no();
+      continue;
+    }
+    h.delim = detect_delimiter(tl);
+    split(tl, h.delim, h.fields);
+    if (all_numeric(h.fields)) {
+      if (last_comment_line == 0)
+        throw InputError("the first row holds numbers, not column names; add a header row (e.g. 'time (s),force (N)')",
+                         source_location(path, lines.line_no()));
+      // Klipper style: the header is the comment right above the data.
+      h.delim = detect_delimiter(last_comment);
+      split(trim(last_comment), h.delim, h.fields);
+      t.header_line = last_comment_line;
+      h.pending_first_row = tl;
+      h.pending_line = lines.line_no();
+    } else {
+      t.header_line = lines.line_no();
+    }
+    return h;
+  }
+  throw InputError("no header row and no data (only comments or blank lines)", path);
+}
+
+// A header column's name as written, its name without the unit, and the unit.
+struct HeaderName {
+  std::string label, base, unit;
+};
+
+std::vector<HeaderName> header_names(const std::vector<Field>& fields) {
+  std::vector<HeaderName> header;
+  for (const auto& f : fields) {
+    auto [label, unit] = split_name_unit(f.text);
+    std::string base = label;
+    if (unit.empty()) std::tie(base, unit) = split_unit_suffix(label);
+    header.push_back({label, base, unit});
+  }
+  return header;
+}
+
+// The index of the header column `name` matches (match_column), or header.size().
+std::size_t find_in_header(const std::vector<HeaderName>& header, std::string_view name) {
+  return match_column(
+      header.size(), [&](std::size_t i) -> const std::string& { return header[i].label; },
+      [&](std::size_t i) -> const std::string& { return header[i].base; },
+      [&](std::size_t i) -> const std::string& { return header[i].unit; }, name);
+}
+
+// The time column's index: given, or found by its usual names (header.size() when not looked
+// for). InputError when the given one or, looked for, none is found.
+std::size_t find_time_column(const std::vector<HeaderName>& header, const CsvOptions& options, const CsvTable& t) {
+  const std::size_t ncols = header.size();
+  std::size_t time_source = ncols;
+  if (!options.time_column.empty()) {
+    time_source = find_in_header(header, options.time_column);
+    if (time_source == ncols)
+      throw InputError(fmt::format("no column '{}'; the file has: {}", split_name_unit(options.time_column).first,
+                                   join_names(t.header)),
+                       source_location(t.path, t.header_line));
+  } else if (options.find_time_column) {
+    for (const char* candidate : kTimeColumnNames) {
+      time_source = find_in_header(header, candidate);
+      if (time_source != ncols) break;
+    }
+    if (time_source == ncols)
+      throw InputError(fmt::format("no time column (looked for time, t, timestamp, with or without a unit such as "
+                                   "time_s); name it with --time; the file has: {}",
+                                   join_names(t.header)),
+                       source_location(t.path, t.header_line));
+  }
+  return time_source;
+}
+
+// Which file column feeds each requested column (the time column first when it was not
+// requested) into `source`, the columns into t.columns. Returns the time column's index among
+// them (t.columns.size() when there is none).
+std::size_t select_columns(const std::vector<HeaderName>& header, const CsvOptions& options, std::size_t time_source,
+                           CsvTable& t, std::vector<std::size_t>& source) {
+  const std::size_t ncols = header.size();
+  std::vector<std::string> wanted = options.columns;
+  if (wanted.empty()) wanted = t.header;
+  std::size_t time_index = ncols;
+  for (const auto& w : wanted) {
+    const std::size_t found = find_in_header(header, w);
+    if (found == ncols)
+      throw InputError(fmt::format("no column '{}'; the file has: {}", split_name_unit(w).first, join_names(t.header)),
+                       source_location(t.path, t.header_line));
+    if (found == time_source) time_index = source.size();
+    source.push_back(found);
+    t.columns.push_back({header[found].label, header[found].base, header[found].unit, {}});
+  }
+  if (time_source != ncols && time_index == ncols) {
+    time_index = 0;
+    source.insert(source.begin(), time_source);
+    t.columns.insert(t.columns.begin(),
+                     {header[time_source].label, header[time_source].base, header[time_source].unit, {}});
+  }
+  if (time_index == ncols) time_index = t.columns.size();
+  return time_index;
+}
+
+detail::CsvRowLayout row_layout(const CsvTable& t, std::size_t ncols, const std::vector<std::size_t>& source,
+                                std::size_t time_index, const CsvOptions& options, char delim) {
+  detail::CsvRowLayout layout;
+  layout.path = &t.path;
+  layout.header = &t.header;
+  for (const auto& c : t.columns) layout.selected_names.push_back(c.name);
+  layout.ncols = ncols;
+  layout.source = source;
+  layout.wanted_field.assign(ncols, 0);
+  for (std::size_t src : source) layout.wanted_field[src] = 1;
+  layout.time_index = time_index;
+  layout.check_time = options.time_must_increase;
+  layout.delim = delim;
+  layout.max_line_bytes = options.max_line_bytes;
+  return layout;
+}
+
+// Time is in seconds everywhere else: a time column logged in ms or us is converted.
+void time_in_seconds(CsvTable& t, std::size_t time_index) {
+  if (time_index >= t.columns.size()) return;
+  auto& tc = t.columns[time_index];
+  const double scale = iequals(tc.unit, "ms") ? 1e-3 : (iequals(tc.unit, "us") ? 1e-6 : 1.0);
+  if (scale != 1.0) {
+    for (double& v : tc.values) v *= scale;
+    tc.unit = "s";
+  }
+}
+
+}  // namespace
+
 CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOptions& options) {
   CsvTable t;
   t.path = path;
@@ -222,136 +376,26 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
     throw InputError("empty file: no header and no data", path);
 
   LineReader lines(text, path, options.max_line_bytes);
-  std::string_view line;
-  std::string_view last_comment;
-  std::size_t last_comment_line = 0;
-  std::vector<Field> fields;
-  bool header_found = false;
-  char delim = ',';
-  std::string_view pending_first_row;  // a row of numbers that followed a comment header
-  std::size_t pending_line = 0;
-
-  while (lines.next(line)) {
-    const std::string_view tl = trim(line);
-    if (tl.empty()) continue;
-    if (tl.front() == '#') {
-      last_comment = tl.substr(1);
-      last_comment_line = lines.line_no();
-      continue;
-    }
-    delim = detect_delimiter(tl);
-    split(tl, delim, fields);
-    if (all_numeric(fields)) {
-      if (last_comment_line == 0)
-        throw InputError("the first row holds numbers, not column names; add a header row (e.g. 'time (s),force (N)')",
-                         source_location(path, lines.line_no()));
-      // Klipper style: the header is the comment right above the data.
-      delim = detect_delimiter(last_comment);
-      split(trim(last_comment), delim, fields);
-      t.header_line = last_comment_line;
-      pending_first_row = tl;
-      pending_line = lines.line_no();
-    } else {
-      t.header_line = lines.line_no();
-    }
-    header_found = true;
-    break;
-  }
-  if (!header_found) throw InputError("no header row and no data (only comments or blank lines)", path);
-
-  struct HeaderName {
-    std::string label, base, unit;
-  };
-  std::vector<HeaderName> header;
-  for (const auto& f : fields) {
-    auto [label, unit] = split_name_unit(f.text);
-    std::string base = label;
-    if (unit.empty()) std::tie(base, unit) = split_unit_suffix(label);
-    header.push_back({label, base, unit});
-    t.header.push_back(label);
-  }
+  const HeaderRow h = read_header_row(lines, path, t);
+  const std::vector<HeaderName> header = header_names(h.fields);
+  for (const auto& name : header) t.header.push_back(name.label);
   const std::size_t ncols = header.size();
-  auto find_in_header = [&](std::string_view name) {
-    return match_column(
-        ncols, [&](std::size_t i) -> const std::string& { return header[i].label; },
-        [&](std::size_t i) -> const std::string& { return header[i].base; },
-        [&](std::size_t i) -> const std::string& { return header[i].unit; }, name);
-  };
-
-  // The time column: given, or found by its usual names.
-  std::size_t time_source = ncols;
-  if (!options.time_column.empty()) {
-    time_source = find_in_header(options.time_column);
-    if (time_source == ncols)
-      throw InputError(fmt::format("no column '{}'; the file has: {}", split_name_unit(options.time_column).first,
-                                   join_names(t.header)),
-                       source_location(path, t.header_line));
-  } else if (options.find_time_column) {
-    for (const char* candidate : kTimeColumnNames) {
-      time_source = find_in_header(candidate);
-      if (time_source != ncols) break;
-    }
-    if (time_source == ncols)
-      throw InputError(fmt::format("no time column (looked for time, t, timestamp, with or without a unit such as "
-                                   "time_s); name it with --time; the file has: {}",
-                                   join_names(t.header)),
-                       source_location(path, t.header_line));
-  }
+  const std::size_t time_source = find_time_column(header, options, t);
   if (time_source != ncols) t.time_column = header[time_source].label;
-
-  // Which file column feeds each requested column.
   std::vector<std::size_t> source;
-  std::vector<std::string> wanted = options.columns;
-  if (wanted.empty()) wanted = t.header;
-  std::size_t time_index = ncols;
-  for (const auto& w : wanted) {
-    const std::size_t found = find_in_header(w);
-    if (found == ncols)
-      throw InputError(fmt::format("no column '{}'; the file has: {}", split_name_unit(w).first, join_names(t.header)),
-                       source_location(path, t.header_line));
-    if (found == time_source) time_index = source.size();
-    source.push_back(found);
-    t.columns.push_back({header[found].label, header[found].base, header[found].unit, {}});
-  }
-  if (time_source != ncols && time_index == ncols) {
-    time_index = 0;
-    source.insert(source.begin(), time_source);
-    t.columns.insert(t.columns.begin(),
-                     {header[time_source].label, header[time_source].base, header[time_source].unit, {}});
-  }
-  if (time_index == ncols) time_index = t.columns.size();
-
-  detail::CsvRowLayout layout;
-  layout.path = &t.path;
-  layout.header = &t.header;
-  for (const auto& c : t.columns) layout.selected_names.push_back(c.name);
-  layout.ncols = ncols;
-  layout.source = source;
-  layout.wanted_field.assign(ncols, 0);
-  for (std::size_t src : source) layout.wanted_field[src] = 1;
-  layout.time_index = time_index;
-  layout.check_time = options.time_must_increase;
-  layout.delim = delim;
-  layout.max_line_bytes = options.max_line_bytes;
+  const std::size_t time_index = select_columns(header, options, time_source, t, source);
+  const detail::CsvRowLayout layout = row_layout(t, ncols, source, time_index, options, h.delim);
 
   detail::CsvRows rows;
   rows.values.resize(t.columns.size());
   const std::size_t estimate = text.size() / std::max<std::size_t>(16, ncols * 8);
   for (auto& v : rows.values) v.reserve(estimate);
-  if (!pending_first_row.empty()) detail::parse_csv_row(pending_first_row, pending_line, layout, rows);
+  if (!h.pending_first_row.empty()) detail::parse_csv_row(h.pending_first_row, h.pending_line, layout, rows);
   detail::parse_csv_rows_parallel(text.substr(lines.pos()), lines.line_no() + 1, layout, rows);
   for (std::size_t k = 0; k < t.columns.size(); ++k) t.columns[k].values = std::move(rows.values[k]);
   t.rows = rows.rows;
   if (t.rows == 0) throw InputError("a header but no data rows", source_location(path, t.header_line));
-  // Time is in seconds everywhere else: convert a time column logged in ms or us.
-  if (time_index < t.columns.size()) {
-    auto& tc = t.columns[time_index];
-    const double scale = iequals(tc.unit, "ms") ? 1e-3 : (iequals(tc.unit, "us") ? 1e-6 : 1.0);
-    if (scale != 1.0) {
-      for (double& v : tc.values) v *= scale;
-      tc.unit = "s";
-    }
-  }
+  time_in_seconds(t, time_index);
   return t;
 }
 

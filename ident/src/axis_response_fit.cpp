@@ -329,31 +329,8 @@ std::vector<fitting::ParamSpec> params_for(const std::vector<fitting::ModeStart>
 
 /// Inflates the intervals by the residuals' correlation and collects the modes.
 void finish(AxisResponseFit& out, std::size_t modes, double confidence) {
-  const auto& d = out.fit.diagnostics;
-  const double dof = std::max(1.0, (d.num_observations - d.num_parameters) / out.variance_inflation);
-  const double tq = fitting::t_multiplier(confidence, dof), s = std::sqrt(out.variance_inflation);
-  for (auto& p : out.fit.params) {
-    if (p.fixed || !std::isfinite(p.std_error)) continue;
-    p.std_error *= s;
-    p.ci95_lo = p.value - tq * p.std_error;
-    p.ci95_hi = p.value + tq * p.std_error;
-  }
-  for (std::size_t k = 0; k < modes; ++k) {
-    const auto& pf = out.fit.params[kParamsPerMode * k];
-    const auto& pz = out.fit.params[kParamsPerMode * k + 1];
-    fitting::ModeEstimate m;
-    m.freq_hz = pf.value;
-    m.zeta = pz.value;
-    m.gain = out.fit.params[kParamsPerMode * k + 2].value;
-    m.freq_stderr_hz = pf.std_error;
-    m.zeta_stderr = pz.std_error;
-    m.freq_ci95_lo = pf.ci95_lo;
-    m.freq_ci95_hi = pf.ci95_hi;
-    m.zeta_ci95_lo = std::max(0.0, pz.ci95_lo);
-    m.zeta_ci95_hi = pz.ci95_hi;
-    out.modes.push_back(m);
-  }
-  std::sort(out.modes.begin(), out.modes.end(), [](const auto& a, const auto& b) { return a.freq_hz < b.freq_hz; });
+  fitting::inflate_uncertainty(out.fit, out.variance_inflation, confidence);
+  out.modes = fitting::modes_from_params(out.fit.params, modes, kParamsPerMode);
 }
 
 /// Below this ratio of the extreme singular values of the Jacobian with unit-scaled columns the

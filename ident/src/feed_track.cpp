@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/interpolate.hpp"
 #include "tunekit/formats/csv.hpp"
 
 namespace tunekit::ident {
@@ -158,11 +159,7 @@ double refine_offset(const TrackIntegral& P, const std::vector<double>& edges, s
 double offset_at(const FeedTrackAlignment& a, double x) {
   const auto& t = a.local_t;
   if (t.empty()) return a.offset_s;
-  if (x <= t.front()) return a.local_offset_s.front();
-  if (x >= t.back()) return a.local_offset_s.back();
-  const std::size_t i = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin()) - 1;
-  const double w = (x - t[i]) / (t[i + 1] - t[i]);
-  return a.local_offset_s[i] + w * (a.local_offset_s[i + 1] - a.local_offset_s[i]);
+  return fitting::interp_linear(t, a.local_offset_s, x);
 }
 
 /// Whether the track (placed by offset s) changes its feed within record times [lo, hi].

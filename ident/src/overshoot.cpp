@@ -155,21 +155,15 @@ void overshoot_check_series(const std::vector<double>& t, const std::vector<cons
     if (!c->empty() && c->size() != t.size()) throw InputError("overshoot: columns of different lengths");
 }
 
-}  // namespace
-
-OvershootAnalysis analyze_overshoot_accel(const std::vector<double>& t, const std::vector<double>& ax,
-                                          const std::vector<double>& ay, const std::vector<double>& cmd_ax,
-                                          const std::vector<double>& cmd_ay, const OvershootOptions& o) {
-  overshoot_check_series(t, {&ax, &ay, &cmd_ax, &cmd_ay});
-  if (ax.size() != t.size() || ay.size() != t.size() || cmd_ax.size() != t.size() || cmd_ay.size() != t.size())
-    throw InputError("overshoot from an accelerometer needs accel_x, accel_y and the commanded accel_x, accel_y");
+// The pauses after commanded motion: the commanded velocity and displacement by integration of
+// the commanded accelerations, reset at every pause; a rest counts as a pause when the velocity
+// has fallen below max(2 mm/s, 10 % of the motion's peak) and it lasts min_pause_s.
+std::vector<OvershootPauseWindow> commanded_pauses(const std::vector<double>& t,
+                                                   const std::vector<double>* const cmd[2], const OvershootOptions& o) {
   const std::size_t n = t.size();
-  const std::vector<double>* cmd[2] = {&cmd_ax, &cmd_ay};
-  const std::vector<double>* meas[2] = {&ax, &ay};
   auto active = [&](std::size_t i) {
-    return std::abs(cmd_ax[i]) > o.accel_zero_mm_s2 || std::abs(cmd_ay[i]) > o.accel_zero_mm_s2;
+    return std::abs((*cmd[0])[i]) > o.accel_zero_mm_s2 || std::abs((*cmd[1])[i]) > o.accel_zero_mm_s2;
   };
-  // Commanded velocity and displacement by integration, reset at every pause.
   std::vector<OvershootPauseWindow> pauses;
   double v[2] = {0, 0}, d[2] = {0, 0}, vpeak = 0;
   bool in_motion = false;
@@ -213,43 +207,64 @@ OvershootAnalysis analyze_overshoot_accel(const std::vector<double>& t, const st
       d[1] += v[1] * dt;
     }
   }
+  return pauses;
+}
+
+// The corner of axis a over pause p: the residual acceleration (measured - commanded) over the
+// pause, integrated twice from an unknown start, less its drift.
+CornerResult residual_corner(const std::vector<double>& t, const OvershootPauseWindow& p, int a,
+                             const std::vector<double>& meas, const std::vector<double>& cmd, int corner,
+                             const OvershootOptions& o) {
+  const std::size_t len = p.end - p.begin + 1;
+  const std::size_t tail =
+      p.begin + static_cast<std::size_t>(std::floor((1 - o.tail_fraction) * static_cast<double>(len)));
+  std::vector<double> pos(len, 0.0);
+  double vel = 0;
+  for (std::size_t k = 1; k < len; ++k) {
+    const double dt = t[p.begin + k] - t[p.begin + k - 1];
+    const double r0 = meas[p.begin + k - 1] - cmd[p.begin + k - 1];
+    const double r1 = meas[p.begin + k] - cmd[p.begin + k];
+    const double v0 = vel;
+    vel += 0.5 * (r0 + r1) * dt;
+    pos[k] = pos[k - 1] + 0.5 * (v0 + vel) * dt;
+  }
+  const std::vector<double> drift = overshoot_baseline(t, p.begin, pos, o.drift_order);
+  CornerResult c;
+  c.index = corner;
+  c.axis = a == 0 ? "x" : "y";
+  c.t_motion_start_s = t[p.motion_begin];
+  c.t_motion_end_s = t[p.begin];
+  c.move_mm = p.move[a];
+  c.t_s.resize(len);
+  c.deviation_mm.resize(len);
+  for (std::size_t k = 0; k < len; ++k) {
+    c.t_s[k] = t[p.begin + k];
+    c.deviation_mm[k] = pos[k] - drift[k];
+  }
+  overshoot_fill_corner(c, p.move[a] > 0 ? 1.0 : -1.0, tail - p.begin, o);
+  return c;
+}
+
+}  // namespace
+
+OvershootAnalysis analyze_overshoot_accel(const std::vector<double>& t, const std::vector<double>& ax,
+                                          const std::vector<double>& ay, const std::vector<double>& cmd_ax,
+                                          const std::vector<double>& cmd_ay, const OvershootOptions& o) {
+  overshoot_check_series(t, {&ax, &ay, &cmd_ax, &cmd_ay});
+  if (ax.size() != t.size() || ay.size() != t.size() || cmd_ax.size() != t.size() || cmd_ay.size() != t.size())
+    throw InputError("overshoot from an accelerometer needs accel_x, accel_y and the commanded accel_x, accel_y");
+  const std::vector<double>* cmd[2] = {&cmd_ax, &cmd_ay};
+  const std::vector<double>* meas[2] = {&ax, &ay};
+  const std::vector<OvershootPauseWindow> pauses = commanded_pauses(t, cmd, o);
   OvershootAnalysis res;
   res.source = "accelerometer";
   int corner = 0;
   for (const auto& p : pauses) {
-    const std::size_t len = p.end - p.begin + 1;
-    const std::size_t tail =
-        p.begin + static_cast<std::size_t>(std::floor((1 - o.tail_fraction) * static_cast<double>(len)));
     bool any = false;
     for (int a = 0; a < 2; ++a) {
       if (std::abs(p.move[a]) < o.min_move_mm) continue;
       any = true;
-      // Residual acceleration over the pause, integrated twice from an unknown start.
-      std::vector<double> pos(len, 0.0);
-      double vel = 0;
-      for (std::size_t k = 1; k < len; ++k) {
-        const double dt = t[p.begin + k] - t[p.begin + k - 1];
-        const double r0 = (*meas[a])[p.begin + k - 1] - (*cmd[a])[p.begin + k - 1];
-        const double r1 = (*meas[a])[p.begin + k] - (*cmd[a])[p.begin + k];
-        const double v0 = vel;
-        vel += 0.5 * (r0 + r1) * dt;
-        pos[k] = pos[k - 1] + 0.5 * (v0 + vel) * dt;
-      }
-      const std::vector<double> drift = overshoot_baseline(t, p.begin, pos, o.drift_order);
-      CornerResult c;
-      c.index = corner;
-      c.axis = a == 0 ? "x" : "y";
-      c.t_motion_start_s = t[p.motion_begin];
-      c.t_motion_end_s = t[p.begin];
-      c.move_mm = p.move[a];
-      c.t_s.resize(len);
-      c.deviation_mm.resize(len);
-      for (std::size_t k = 0; k < len; ++k) {
-        c.t_s[k] = t[p.begin + k];
-        c.deviation_mm[k] = pos[k] - drift[k];
-      }
-      overshoot_fill_corner(c, p.move[a] > 0 ? 1.0 : -1.0, tail - p.begin, o);
-      res.corners.push_back(std::move(c));
+      res.corners.push_back(residual_corner(t, p, a, *meas[a], *cmd[a], corner, o));
     }
     if (any) {
       res.motion_time_s += t[p.begin] - t[p.motion_begin];

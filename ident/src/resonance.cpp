@@ -206,41 +206,21 @@ char axis_from_filename(const std::string& path) {
   return 0;
 }
 
-AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& o,
-                           const std::function<void()>& on_parsed) {
-  AccelRecord r;
-  r.path = path;
-  r.axis = o.axis != 0 ? o.axis : axis_from_filename(path);
-  std::vector<std::string> accel = o.accel_columns;
-  if (accel.empty()) accel = {"accel_x", "accel_y", "accel_z"};
-  CsvOptions co;
-  co.time_column = o.time_column;
-  co.columns.push_back(o.time_column);
-  for (const auto& a : accel) co.columns.push_back(a);
-  if (!o.excitation_column.empty()) co.columns.push_back(o.excitation_column);
-  CsvTable table = parse_csv(bytes, path, co);
-  if (on_parsed) on_parsed();
-  for (const auto& w : table.warnings) r.warnings.push_back(w);
-  if (table.rows < 16)
-    throw InputError(fmt::format("{} rows of accelerometer data; far too few for a spectrum", table.rows), path);
+namespace {
 
-  replace_wild_samples(table, bytes, accel.size(), o, r.warnings);
-  std::vector<double> t = std::move(table.columns[0].values);
+/// The median interval of the time column (the intervals are taken again from t below: one
+/// 3 MB copy less for a 410k-sample record than keeping them).
+double median_interval(const std::vector<double>& t) {
+  std::vector<double> dt(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) dt[i - 1] = t[i] - t[i - 1];
+  return fitting::median(std::move(dt));
+}
+
+/// Gaps (intervals above 1.5 median intervals), the samples they miss and the jitter of the
+/// other intervals into `s`; InputError when the gaps exceed the options' limits.
+void measure_sampling(const std::vector<double>& t, double med, const AccelInputOptions& o, const std::string& path,
+                      SamplingReport& s) {
   const std::size_t n = t.size();
-  // The median interval, found in place (the intervals are taken again from t below: one
-  // 3 MB copy less for a 410k-sample record).
-  double med = 0;
-  {
-    std::vector<double> dt(n - 1);
-    for (std::size_t i = 1; i < n; ++i) dt[i - 1] = t[i] - t[i - 1];
-    const auto mid = dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2);
-    std::nth_element(dt.begin(), mid, dt.end());
-    med = *mid;
-  }
-  r.start_time_s = t.front();
-  auto& s = r.sampling;
-  s.samples = n;
-  s.duration_s = t.back() - t.front();
   double sum = 0, sum2 = 0;
   std::size_t regular = 0;
   double gap_at = 0;
@@ -270,6 +250,14 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
                     s.gaps, s.missing_samples, 100.0 * static_cast<double>(s.missing_samples) / static_cast<double>(n),
                     s.max_gap_s, gap_at, o.max_gap_s, 100 * o.max_missing_fraction),
         path);
+}
+
+/// The record on a regular grid: resampled linearly at the median interval when it has gaps or
+/// jitters beyond the limit, else its sample rate and the grid's start fitted to every sample.
+void regular_grid(AccelRecord& r, CsvTable& table, const std::vector<double>& t, double med, const AccelInputOptions& o,
+                  const std::string& path) {
+  auto& s = r.sampling;
+  const std::size_t n = t.size();
   const bool need_resample = s.gaps > 0 || s.jitter > o.max_jitter;
   if (need_resample) {
     s.sample_rate_hz = 1.0 / med;
@@ -289,18 +277,12 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
     // several times its noise.
     r.start_time_s = grid_start(t, 1.0 / s.sample_rate_hz);
   }
+}
 
-  for (std::size_t c = 1; c <= accel.size(); ++c) {
-    r.channel_names.push_back(core::lower(table.columns[c].name));
-    r.channels.push_back(std::move(table.columns[c].values));
-  }
-  if (!o.excitation_column.empty()) {
-    r.excitation_name = table.columns.back().name;
-    r.excitation = std::move(table.columns.back().values);
-  }
-
-  // One pass per channel for both checks below (a 410k-sample channel is 3.3 MB: each pass
-  // over it is memory traffic).
+/// Each channel's extremes; InputError when every channel is constant or the excitation column is.
+std::vector<Extremes> check_accel_signal(const AccelRecord& r, const AccelInputOptions& o, const std::string& path) {
+  // One pass per channel for both checks (a 410k-sample channel is 3.3 MB: each pass over it is
+  // memory traffic).
   std::vector<Extremes> extremes;
   bool any_signal = false;
   for (const auto& ch : r.channels) {
@@ -316,7 +298,12 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
     const auto [lo, hi] = value_range(r.excitation);
     if (!(hi > lo)) throw InputError("the excitation column '" + o.excitation_column + "' is constant", path);
   }
+  return extremes;
+}
 
+/// Clipped channels: InputError beyond the allowed fraction, else a warning and a report.
+void check_clipping(AccelRecord& r, const AccelInputOptions& o, const std::string& path,
+                    const std::vector<Extremes>& extremes) {
   for (std::size_t c = 0; c < r.channels.size(); ++c) {
     auto rep = detect_clipping(r.channel_names[c], r.channels[c], o.full_scale_mm_s2, extremes[c]);
     if (rep.samples == 0) continue;
@@ -334,6 +321,47 @@ AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, cons
                     path, rep.channel, rep.samples, 100 * frac, rep.limit_mm_s2));
     r.clipping.push_back(rep);
   }
+}
+
+}  // namespace
+
+AccelRecord load_accel_csv(const std::string& path, std::string_view bytes, const AccelInputOptions& o,
+                           const std::function<void()>& on_parsed) {
+  AccelRecord r;
+  r.path = path;
+  r.axis = o.axis != 0 ? o.axis : axis_from_filename(path);
+  std::vector<std::string> accel = o.accel_columns;
+  if (accel.empty()) accel = {"accel_x", "accel_y", "accel_z"};
+  CsvOptions co;
+  co.time_column = o.time_column;
+  co.columns.push_back(o.time_column);
+  for (const auto& a : accel) co.columns.push_back(a);
+  if (!o.excitation_column.empty()) co.columns.push_back(o.excitation_column);
+  CsvTable table = parse_csv(bytes, path, co);
+  if (on_parsed) on_parsed();
+  for (const auto& w : table.warnings) r.warnings.push_back(w);
+  if (table.rows < 16)
+    throw InputError(fmt::format("{} rows of accelerometer data; far too few for a spectrum", table.rows), path);
+
+  replace_wild_samples(table, bytes, accel.size(), o, r.warnings);
+  std::vector<double> t = std::move(table.columns[0].values);
+  const double med = median_interval(t);
+  r.start_time_s = t.front();
+  r.sampling.samples = t.size();
+  r.sampling.duration_s = t.back() - t.front();
+  measure_sampling(t, med, o, path, r.sampling);
+  regular_grid(r, table, t, med, o, path);
+
+  for (std::size_t c = 1; c <= accel.size(); ++c) {
+    r.channel_names.push_back(core::lower(table.columns[c].name));
+    r.channels.push_back(std::move(table.columns[c].values));
+  }
+  if (!o.excitation_column.empty()) {
+    r.excitation_name = table.columns.back().name;
+    r.excitation = std::move(table.columns.back().values);
+  }
+  const std::vector<Extremes> extremes = check_accel_signal(r, o, path);
+  check_clipping(r, o, path, extremes);
   return r;
 }
 

@@ -385,6 +385,71 @@ void check_ringdown(RingdownResult& r, const RingdownOptions& o) {
                     r.channel, r.fit.diagnostics.whiteness_p, r.interval_factor));
 }
 
+// 2. Strength of every channel: decay RMS (over `head` samples from `start`) over the noise
+// floor, each channel into r.channels. Returns the named channel (-1: none named) and every
+// channel's noise RMS. InputError when the named channel is missing, FitError when the channel
+// that decides (the named one, else the strongest) does not ring above its noise.
+int measure_channels(RingdownResult& r, const AccelRecord& rec, const NoiseSpans& spans, std::size_t start,
+                     std::size_t head, const RingdownOptions& o, std::vector<double>& noises) {
+  int named = -1;
+  std::size_t strongest = 0;
+  for (std::size_t c = 0; c < rec.channels.size(); ++c) {
+    const std::span<const double> x(rec.channels[c]);
+    RingdownChannel ch;
+    ch.name = rec.channel_names[c];
+    ch.signal_rms = ringdown_rms(x.subspan(start, head));
+    ch.noise_rms = noise_rms(x, spans);
+    ch.strength = ch.noise_rms > 0 ? ch.signal_rms / ch.noise_rms : std::numeric_limits<double>::infinity();
+    noises.push_back(ch.noise_rms);
+    if (!o.channel.empty() && iequals(ch.name, o.channel)) named = static_cast<int>(c);
+    if (r.channels.empty() || ch.strength > r.channels[strongest].strength) strongest = c;
+    r.channels.push_back(ch);
+  }
+  if (!o.channel.empty() && named < 0)
+    throw InputError(fmt::format("no channel '{}' in the record", o.channel), rec.path);
+  const auto& gate = r.channels[named >= 0 ? static_cast<std::size_t>(named) : strongest];
+  if (!(gate.strength >= o.min_strength))
+    throw FitError(fmt::format("no ring-down to measure: the decay after the impact at {:.3f} s is {:.2f} times the "
+                               "noise floor in {} (RMS {:.4g} over {:.4g} mm/s^2), below the {:g} required; pluck or "
+                               "tap harder, or hold the sensor more rigidly",
+                               r.impact_s, gate.strength, gate.name, gate.signal_rms, gate.noise_rms, o.min_strength),
+                   rec.path);
+  return named;
+}
+
+// 3-6. The fundamental by its harmonic series over the channels' lines, each line measured
+// against its own channel's floor; the series fitted in the best projection. A candidate whose
+// fitted fundamental has no amplitude in the record (a line of the other motion at f/2 of a
+// clear line) is set aside and the next candidate taken.
+void fit_fundamental(RingdownResult& r, const DecayWindow& dw, const RingdownOptions& o) {
+  const double max_hz = dw.max_hz;
+  const auto lines = pooled_lines(dw.windows, dw.named, dw.nfft, dw.df, o.min_hz, max_hz);
+  std::vector<double> excluded;
+  for (int attempt = 0;; ++attempt) {
+    const auto choice = choose(lines, excluded, max_hz, o);
+    if (!choice.found) {
+      if (!excluded.empty())
+        throw FitError(fmt::format("no decaying line: the candidate fundamental {:.2f} Hz has no amplitude in the "
+                                   "fitted decay (it is the other motion's line, not a ring-down's)",
+                                   excluded.front()),
+                       dw.rec.path);
+      throw FitError(
+          fmt::format("no decaying line above the noise: the strongest line between {:g} and {:.0f} Hz "
+                      "stands {:.1f} times over its channel's spectral median (amplitude), below the {:g} "
+                      "required; a weak pluck, a tap or a bump, not a ring-down",
+                      o.min_hz, max_hz, lines.empty() ? 0.0 : std::sqrt(lines.front().power), o.min_line_ratio),
+          dw.rec.path);
+    }
+    RingdownResult attempt_r = r;
+    fit_series(attempt_r, dw, choice, o);
+    if (fundamental_present(attempt_r.fit) || attempt >= 2) {
+      r = std::move(attempt_r);
+      return;
+    }
+    excluded.push_back(choice.best.fundamental.freq_hz);
+  }
+}
+
 }  // namespace
 
 RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o) {
@@ -416,7 +481,7 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
   r.window_start_s = static_cast<double>(start) / fs;
   r.window_s = static_cast<double>(len) / fs;
 
-  // 2. Strength of every channel: decay RMS over the noise floor.
+  // 2. The noise floor before the impact or in the record's tail, and every channel's strength.
   const auto head = std::min(len, static_cast<std::size_t>(0.1 * fs));
   const auto guard = static_cast<std::size_t>(0.01 * fs);
   const auto min_noise = static_cast<std::size_t>(0.03 * fs);
@@ -428,69 +493,19 @@ RingdownResult analyze_ringdown(const AccelRecord& rec, const RingdownOptions& o
                                  "after the decay; record a little longer",
                                  1e3 * static_cast<double>(min_noise + guard) / fs),
                      rec.path);
-  int named = -1;
-  std::size_t strongest = 0;
   std::vector<double> noises;
-  for (std::size_t c = 0; c < rec.channels.size(); ++c) {
-    const std::span<const double> x(rec.channels[c]);
-    RingdownChannel ch;
-    ch.name = rec.channel_names[c];
-    ch.signal_rms = ringdown_rms(x.subspan(start, head));
-    ch.noise_rms = noise_rms(x, spans);
-    ch.strength = ch.noise_rms > 0 ? ch.signal_rms / ch.noise_rms : std::numeric_limits<double>::infinity();
-    noises.push_back(ch.noise_rms);
-    if (!o.channel.empty() && iequals(ch.name, o.channel)) named = static_cast<int>(c);
-    if (r.channels.empty() || ch.strength > r.channels[strongest].strength) strongest = c;
-    r.channels.push_back(ch);
-  }
-  if (!o.channel.empty() && named < 0)
-    throw InputError(fmt::format("no channel '{}' in the record", o.channel), rec.path);
-  const auto& gate = r.channels[named >= 0 ? static_cast<std::size_t>(named) : strongest];
-  if (!(gate.strength >= o.min_strength))
-    throw FitError(fmt::format("no ring-down to measure: the decay after the impact at {:.3f} s is {:.2f} times the "
-                               "noise floor in {} (RMS {:.4g} over {:.4g} mm/s^2), below the {:g} required; pluck or "
-                               "tap harder, or hold the sensor more rigidly",
-                               r.impact_s, gate.strength, gate.name, gate.signal_rms, gate.noise_rms, o.min_strength),
-                   rec.path);
+  const int named = measure_channels(r, rec, spans, start, head, o, noises);
   if (len < min_len)
     throw InputError(fmt::format("{:.3f} s of decay after the impact; at least {:.3f} s are needed for lines down to "
                                  "{:g} Hz (record longer, or raise --ringdown-min)",
                                  r.window_s, static_cast<double>(min_len) / fs, o.min_hz),
                      rec.path);
 
-  // 3-6. The fundamental by its harmonic series over the channels' lines, each line measured
-  // against its own channel's floor; the series fitted in the best projection. A candidate whose
-  // fitted fundamental has no amplitude in the record (a line of the other motion at f/2 of a
-  // clear line) is set aside and the next candidate taken.
   DecayWindow dw{rec, {}, noises, spans, start, len, head, 1, 0, max_hz, named};
   while (dw.nfft < std::max<std::size_t>(8 * len, 16384)) dw.nfft <<= 1;
   dw.df = fs / static_cast<double>(dw.nfft);
   for (const auto& c : rec.channels) dw.windows.push_back(std::span<const double>(c).subspan(start, len));
-  const auto lines = pooled_lines(dw.windows, named, dw.nfft, dw.df, o.min_hz, max_hz);
-  std::vector<double> excluded;
-  for (int attempt = 0;; ++attempt) {
-    const auto choice = choose(lines, excluded, max_hz, o);
-    if (!choice.found) {
-      if (!excluded.empty())
-        throw FitError(fmt::format("no decaying line: the candidate fundamental {:.2f} Hz has no amplitude in the "
-                                   "fitted decay (it is the other motion's line, not a ring-down's)",
-                                   excluded.front()),
-                       rec.path);
-      throw FitError(
-          fmt::format("no decaying line above the noise: the strongest line between {:g} and {:.0f} Hz "
-                      "stands {:.1f} times over its channel's spectral median (amplitude), below the {:g} "
-                      "required; a weak pluck, a tap or a bump, not a ring-down",
-                      o.min_hz, max_hz, lines.empty() ? 0.0 : std::sqrt(lines.front().power), o.min_line_ratio),
-          rec.path);
-    }
-    RingdownResult attempt_r = r;
-    fit_series(attempt_r, dw, choice, o);
-    if (fundamental_present(attempt_r.fit) || attempt >= 2) {
-      r = std::move(attempt_r);
-      break;
-    }
-    excluded.push_back(choice.best.fundamental.freq_hz);
-  }
+  fit_fundamental(r, dw, o);
   check_ringdown(r, o);
   return r;
 }

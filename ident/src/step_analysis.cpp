@@ -150,12 +150,6 @@ std::vector<Change> level_changes(std::span<const double> u, double thr) {
 
 }  // namespace
 
-StepInstant parse_step_instant(const std::string& name) {
-  if (name == "midpoint") return StepInstant::midpoint;
-  if (name == "first") return StepInstant::first_sample;
-  throw InputError("unknown step instant '" + name + "' (expected midpoint or first)");
-}
-
 std::vector<DetectedStep> detect_steps(std::span<const double> t, std::span<const double> u,
                                        const StepDetectOptions& o) {
   const std::size_t n = u.size();

@@ -139,27 +139,10 @@ void check_physical_ranges(const MachineProfile& p, const std::string& path) {
 
 }  // namespace
 
-MachineProfile parse_machine_profile(const std::string& text, const std::string& path) {
-  toml::table root;
-  detail::check_dotted_key_depth(text, path);
-  try {
-    root = toml::parse(text, path);
-  } catch (const toml::parse_error& e) {
-    throw InputError(std::string(e.description()),
-                     source_location(path, e.source().begin.line, e.source().begin.column));
-  }
-  Reader r(root, path);
-  MachineProfile p;
-  p.source_path = path;
+namespace {
 
-  const auto& m = r.section("machine", true);
-  p.name = m["name"].value_or(std::string("unnamed machine"));
-  p.id = m["id"].value_or(std::string());
-  p.kinematics = m["kinematics"].value_or(std::string("cartesian"));
-  p.firmware = m["firmware"].value_or(std::string());
-  if (p.kinematics != "cartesian" && p.kinematics != "corexy" && p.kinematics != "delta")
-    throw InputError(fmt::format("unknown kinematics '{}' (cartesian, corexy, delta)", p.kinematics), path);
-
+// [axes.NAME]: each axis' travel, speed and acceleration limits.
+void read_axes(Reader& r, MachineProfile& p, const std::string& path) {
   const auto& axes = r.section("axes", true);
   for (const auto& [key, node] : axes) {
     const auto* t = node.as_table();
@@ -177,35 +160,10 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
     p.axes[name] = a;
   }
   if (p.axes.empty()) throw InputError("[axes] lists no axis", path);
+}
 
-  const auto& e = r.section("extruder", true);
-  p.extruder.filament_diameter_mm = r.positive(e, "extruder", "filament_diameter_mm", false, 1.75);
-  p.extruder.nozzle_diameter_mm = r.positive(e, "extruder", "nozzle_diameter_mm", false, 0.4);
-  p.extruder.max_flow_mm3_s = r.positive(e, "extruder", "max_flow_mm3_s", true, 0);
-  p.extruder.max_velocity_mm_s = r.positive(e, "extruder", "max_velocity_mm_s", true, 0);
-  p.extruder.max_accel_mm_s2 = r.positive(e, "extruder", "max_accel_mm_s2", true, 0);
-  // Klipper's default (klippy/kinematics/extruder.py:168-169); protocols split longer feeds.
-  p.extruder.max_extrude_only_distance_mm = r.positive(e, "extruder", "max_extrude_only_distance_mm", false,
-                                                       firmware::limits::kKlipperMaxExtrudeOnlyDistance_mm);
-
-  const auto& pr = r.section("print", false);
-  p.print.max_accel_mm_s2 = r.positive(pr, "print", "max_accel_mm_s2", false, 3000);
-  p.print.line_width_mm = r.positive(pr, "print", "line_width_mm", false, 0.45);
-  p.print.layer_height_mm = r.positive(pr, "print", "layer_height_mm", false, 0.2);
-  p.print.speed_mm_s = r.positive(pr, "print", "speed_mm_s", false, 60);
-
-  const auto& bt = r.section("belts", false);
-  p.belts.belt = r.text(bt, "belt", "");
-  p.belts.mass_g_m = r.positive(bt, "belts", "mass_g_m", false, 0);
-  p.belts.span_mm = r.positive(bt, "belts", "span_mm", false, 0);
-  p.belts.span_uncertainty_mm = r.positive(bt, "belts", "span_uncertainty_mm", false, 0);
-  p.belts.target_n = r.positive(bt, "belts", "target_n", false, 0);
-
-  const auto& tt = r.section("temperature", true);
-  p.temperature.hotend_max_c = r.positive(tt, "temperature", "hotend_max_c", true, 0);
-  p.temperature.bed_max_c = r.positive(tt, "temperature", "bed_max_c", false, 100);
-  p.temperature.heaters_off_on_abort = r.flag(tt, "heaters_off_on_abort", true);
-
+// [sensors]: which sensors the machine has and what they are called.
+void read_sensors(Reader& r, MachineProfile& p) {
   const auto& s = r.section("sensors", false);
   // accelerometer = true (an ADXL345) or the chip's name as Klipper's config section names it.
   if (const auto* node = s.get("accelerometer"); node != nullptr && node->is_string()) {
@@ -224,7 +182,10 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
   p.sensors.filament_encoder = r.flag(s, "filament_encoder", false);
   p.sensors.camera = r.flag(s, "camera", false);
   p.sensors.accelerometer_rate_hz = r.positive(s, "sensors", "accelerometer_rate_hz", false, 3200);
+}
 
+// [network]: the firmware's HTTP address (checked) and password.
+void read_network(Reader& r, MachineProfile& p, const std::string& path) {
   const auto& net = r.section("network", false);
   p.http_address = r.text(net, "http", "");
   if (!p.http_address.empty()) {
@@ -235,7 +196,10 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
     }
   }
   p.http_password = r.text(net, "password", "");  // never echoed: see rrf_http.hpp
+}
 
+// [firmware_state]: what the firmware runs with now (shapers, M493 report, planner settings).
+void read_firmware_state(Reader& r, MachineProfile& p) {
   const auto& fs = r.section("firmware_state", false);
   for (const char* axis : {"x", "y"}) {
     const std::string key = std::string("shaper_") + axis;
@@ -279,6 +243,66 @@ MachineProfile parse_machine_profile(const std::string& text, const std::string&
                                       firmware::limits::kMarlinDefaultRetractAccel_mm_s2);
   st.max_accel_e_mm_s2 = r.positive(fs, "firmware_state", "max_accel_e_mm_s2", false, p.extruder.max_accel_mm_s2);
   st.jerk_xy_mm_s = r.positive(fs, "firmware_state", "jerk_xy_mm_s", false, 15.0);
+}
+
+}  // namespace
+
+MachineProfile parse_machine_profile(const std::string& text, const std::string& path) {
+  toml::table root;
+  detail::check_dotted_key_depth(text, path);
+  try {
+    root = toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    throw InputError(std::string(e.description()),
+                     source_location(path, e.source().begin.line, e.source().begin.column));
+  }
+  Reader r(root, path);
+  MachineProfile p;
+  p.source_path = path;
+
+  const auto& m = r.section("machine", true);
+  p.name = m["name"].value_or(std::string("unnamed machine"));
+  p.id = m["id"].value_or(std::string());
+  p.kinematics = m["kinematics"].value_or(std::string("cartesian"));
+  p.firmware = m["firmware"].value_or(std::string());
+  if (p.kinematics != "cartesian" && p.kinematics != "corexy" && p.kinematics != "delta")
+    throw InputError(fmt::format("unknown kinematics '{}' (cartesian, corexy, delta)", p.kinematics), path);
+
+  read_axes(r, p, path);
+
+  const auto& e = r.section("extruder", true);
+  p.extruder.filament_diameter_mm = r.positive(e, "extruder", "filament_diameter_mm", false, 1.75);
+  p.extruder.nozzle_diameter_mm = r.positive(e, "extruder", "nozzle_diameter_mm", false, 0.4);
+  p.extruder.max_flow_mm3_s = r.positive(e, "extruder", "max_flow_mm3_s", true, 0);
+  p.extruder.max_velocity_mm_s = r.positive(e, "extruder", "max_velocity_mm_s", true, 0);
+  p.extruder.max_accel_mm_s2 = r.positive(e, "extruder", "max_accel_mm_s2", true, 0);
+  // Klipper's default (klippy/kinematics/extruder.py:168-169); protocols split longer feeds.
+  p.extruder.max_extrude_only_distance_mm = r.positive(e, "extruder", "max_extrude_only_distance_mm", false,
+                                                       firmware::limits::kKlipperMaxExtrudeOnlyDistance_mm);
+
+  const auto& pr = r.section("print", false);
+  p.print.max_accel_mm_s2 = r.positive(pr, "print", "max_accel_mm_s2", false, 3000);
+  p.print.line_width_mm = r.positive(pr, "print", "line_width_mm", false, 0.45);
+  p.print.layer_height_mm = r.positive(pr, "print", "layer_height_mm", false, 0.2);
+  p.print.speed_mm_s = r.positive(pr, "print", "speed_mm_s", false, 60);
+
+  const auto& bt = r.section("belts", false);
+  p.belts.belt = r.text(bt, "belt", "");
+  p.belts.mass_g_m = r.positive(bt, "belts", "mass_g_m", false, 0);
+  p.belts.span_mm = r.positive(bt, "belts", "span_mm", false, 0);
+  p.belts.span_uncertainty_mm = r.positive(bt, "belts", "span_uncertainty_mm", false, 0);
+  p.belts.target_n = r.positive(bt, "belts", "target_n", false, 0);
+
+  const auto& tt = r.section("temperature", true);
+  p.temperature.hotend_max_c = r.positive(tt, "temperature", "hotend_max_c", true, 0);
+  p.temperature.bed_max_c = r.positive(tt, "temperature", "bed_max_c", false, 100);
+  p.temperature.heaters_off_on_abort = r.flag(tt, "heaters_off_on_abort", true);
+
+  read_sensors(r, p);
+
+  read_network(r, p, path);
+
+  read_firmware_state(r, p);
   check_physical_ranges(p, path);
   return p;
 }

@@ -7,20 +7,14 @@
 
 #include "tunekit/core/error.hpp"
 
+#include "experiment_gcode.hpp"
+
 namespace tunekit::protocols {
 namespace {
 
 constexpr double kMaxLineStepRatio = 1.55;
 
-std::string line_steps_num(double v, int decimals = 4) {
-  std::string s = fmt::format("{:.{}f}", v, decimals);
-  if (s.find('.') != std::string::npos) {
-    while (s.back() == '0') s.pop_back();
-    if (s.back() == '.') s.pop_back();
-  }
-  if (s == "-0") s = "0";
-  return s;
-}
+using experiment_gcode::num;
 
 double line_steps_param(const std::map<std::string, double>& p, const char* k) {
   const auto it = p.find(k);
@@ -87,20 +81,17 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
   // Retraction as fast as the profile allows (the safety check counts it as flow too), at most 30 mm/s.
   const double retract_v = std::min(
       {30.0, profile.extruder.max_velocity_mm_s, 0.9 * profile.extruder.max_flow_mm3_s / profile.filament_area_mm2()});
-  const std::string retract_line =
-      fmt::format("G1 E-{} F{} ; retract", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1));
-  const std::string prime_line =
-      fmt::format("G1 E{} F{} ; prime", line_steps_num(retract, 5), line_steps_num(retract_v * 60, 1));
+  const std::string retract_line = fmt::format("G1 E-{} F{} ; retract", num(retract, 5), num(retract_v * 60, 1));
+  const std::string prime_line = fmt::format("G1 E{} F{} ; prime", num(retract, 5), num(retract_v * 60, 1));
   const auto& last = lines.back().path;  // without the first line's run-up
-  g.push_back(fmt::format("; {} lines along +X, flow steps at {} mm and {} mm", lines.size(),
-                          line_steps_num(last[0].length_mm), line_steps_num(last[0].length_mm + last[1].length_mm)));
+  g.push_back(fmt::format("; {} lines along +X, flow steps at {} mm and {} mm", lines.size(), num(last[0].length_mm),
+                          num(last[0].length_mm + last[1].length_mm)));
   g.push_back("G28");
   g.push_back("G90");
   g.push_back("M83 ; relative extrusion");
   if (p.count("hotend_c") && p.at("hotend_c") > 0) g.push_back(d.set_hotend(p.at("hotend_c"), true));
   g.push_back(d.set_accel(std::min(accel, profile.axis("z").max_accel_mm_s2)));
-  g.push_back(fmt::format("G1 Z{} F{}", line_steps_num(z),
-                          line_steps_num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
+  g.push_back(fmt::format("G1 Z{} F{}", num(z), num(std::min(10.0, profile.axis("z").max_velocity_mm_s) * 60, 1)));
   g.push_back(d.set_accel(accel));
   // Every line starts retracted, the first too: each travel is preceded by a retraction, so each
   // prime only restores it (a prime without one would push retract_mm of filament, about 20 mm of
@@ -108,8 +99,7 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
   if (retract > 0) g.push_back(retract_line);
   const double dwell = p.count("rest_dwell_s") ? std::max(0.0, p.at("rest_dwell_s")) : 0.0;
   for (const auto& l : lines) {
-    g.push_back(
-        fmt::format("G1 X{} Y{} F{}", line_steps_num(l.x0_mm), line_steps_num(l.y_mm), line_steps_num(travel * 60, 1)));
+    g.push_back(fmt::format("G1 X{} Y{} F{}", num(l.x0_mm), num(l.y_mm), num(travel * 60, 1)));
     if (retract > 0) g.push_back(prime_line);
     // A line that begins with a run-up starts from rest: the melt the prime pushed oozes out at
     // the run-up's start while the nozzle waits, and the extrusion then starts at the line's
@@ -121,11 +111,10 @@ void append_line_steps_gcode(std::vector<std::string>& g, const std::map<std::st
     for (const auto& s : l.path) {
       x += s.length_mm;
       if (s.feed_mm == 0) {
-        g.push_back(fmt::format("G1 X{} F{} ; run-up", line_steps_num(x), line_steps_num(s.speed_mm_s * 60, 1)));
+        g.push_back(fmt::format("G1 X{} F{} ; run-up", num(x), num(s.speed_mm_s * 60, 1)));
         continue;
       }
-      g.push_back(fmt::format("G1 X{} E{} F{}", line_steps_num(x), line_steps_num(s.feed_mm, 5),
-                              line_steps_num(s.speed_mm_s * 60, 1)));
+      g.push_back(fmt::format("G1 X{} E{} F{}", num(x), num(s.feed_mm, 5), num(s.speed_mm_s * 60, 1)));
     }
     if (retract > 0) g.push_back(retract_line);
   }

@@ -193,56 +193,60 @@ void build_axis_sweep(const ExperimentRequest& r, Experiment& e) {
   epilogue(g, restore);
 }
 
+// The axis-rectangle test: the corners at the move's speed and acceleration with a pause at each,
+// recorded by the accelerometer with the firmware's shaping off.
+void build_axis_rectangle(const ExperimentRequest& r, Experiment& e) {
+  const machine::MachineProfile& profile = r.profile;
+  const firmware::Dialect& d = r.dialect;
+  auto& p = e.params;
+  auto& g = e.gcode;
+  const double w = p.at("width_mm"), h = p.at("height_mm"), v = p.at("speed_mm_s");
+  const int reps = static_cast<int>(p.at("repeats"));
+  check_plan(r.protocol, 8.0 * reps + 12, (reps * 4 + 1) * p.at("pause_s") + reps * 2 * (w + h) / v, r.limits);
+  const long pause_ms = std::lround(p.at("pause_s") * 1000);
+  const double x0 = mid(profile, "x") - w / 2, y0 = mid(profile, "y") - h / 2;
+  const double accel = p.at("accel_mm_s2");
+  std::vector<std::string> prologue, restore;
+  nlohmann::json changed = nlohmann::json::array();
+  g.push_back("G28");
+  g.push_back("G90");
+  if (d.firmware() != firmware::Firmware::klipper && accel > profile.state.max_accel_xy_mm_s2) {
+    // Marlin and RepRapFirmware cap M204 by M201 (Marlin planner.cpp limit_and_warn, RRF
+    // DDA.cpp): the rectangle's acceleration is allowed for the test and restored after.
+    g.push_back(fmt::format("M201 X{} Y{}", num(accel, 0), num(accel, 0)));
+    restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
+                                  num(profile.state.max_accel_xy_mm_s2, 0)));
+    changed.push_back("M201");
+  }
+  g.push_back(d.set_accel(accel));
+  g.push_back(fmt::format("G1 X{} Y{} F{}", num(x0), num(y0), num(v * 60, 1)));
+  g.push_back(d.wait_for_moves());
+  // The overshoot is measured without the firmware's input shaping (restored after).
+  shaping_off(profile, d, prologue, restore, changed);
+  g.insert(g.end(), prologue.begin(), prologue.end());
+  e.excitation["test_settings"] = prologue;
+  e.excitation["changed"] = changed;
+  g.push_back(";@record accelerometer on");
+  g.push_back(fmt::format("G4 P{}", pause_ms));
+  for (int rep = 0; rep < reps; ++rep) {
+    for (const auto& corner :
+         {std::pair{x0 + w, y0}, std::pair{x0 + w, y0 + h}, std::pair{x0, y0 + h}, std::pair{x0, y0}}) {
+      g.push_back(fmt::format("G1 X{} Y{} F{}", num(corner.first), num(corner.second), num(v * 60, 1)));
+      g.push_back(fmt::format("G4 P{}", pause_ms));
+    }
+  }
+  g.push_back(d.wait_for_moves());
+  g.push_back(";@record accelerometer off");
+  epilogue(g, restore);
+}
+
 }  // namespace
 
 bool build_axis_experiment(const ExperimentRequest& r, Experiment& e) {
-  const std::string& protocol = r.protocol;
-  const machine::MachineProfile& profile = r.profile;
-  const firmware::Dialect& d = r.dialect;
-  const ProtocolLimits& limits = r.limits;
-  auto& p = e.params;
-  auto& g = e.gcode;
   if (r.id == Protocol::axis_sweep) {
     build_axis_sweep(r, e);
   } else if (r.id == Protocol::axis_rectangle) {
-    const double w = p.at("width_mm"), h = p.at("height_mm"), v = p.at("speed_mm_s");
-    const int reps = static_cast<int>(p.at("repeats"));
-    check_plan(protocol, 8.0 * reps + 12, (reps * 4 + 1) * p.at("pause_s") + reps * 2 * (w + h) / v, limits);
-    const long pause_ms = std::lround(p.at("pause_s") * 1000);
-    const double x0 = mid(profile, "x") - w / 2, y0 = mid(profile, "y") - h / 2;
-    const double accel = p.at("accel_mm_s2");
-    std::vector<std::string> prologue, restore;
-    nlohmann::json changed = nlohmann::json::array();
-    g.push_back("G28");
-    g.push_back("G90");
-    if (d.firmware() != firmware::Firmware::klipper && accel > profile.state.max_accel_xy_mm_s2) {
-      // Marlin and RepRapFirmware cap M204 by M201 (Marlin planner.cpp limit_and_warn, RRF
-      // DDA.cpp): the rectangle's acceleration is allowed for the test and restored after.
-      g.push_back(fmt::format("M201 X{} Y{}", num(accel, 0), num(accel, 0)));
-      restore.push_back(fmt::format("M201 X{} Y{}", num(profile.state.max_accel_xy_mm_s2, 0),
-                                    num(profile.state.max_accel_xy_mm_s2, 0)));
-      changed.push_back("M201");
-    }
-    g.push_back(d.set_accel(accel));
-    g.push_back(fmt::format("G1 X{} Y{} F{}", num(x0), num(y0), num(v * 60, 1)));
-    g.push_back(d.wait_for_moves());
-    // The overshoot is measured without the firmware's input shaping (restored after).
-    shaping_off(profile, d, prologue, restore, changed);
-    g.insert(g.end(), prologue.begin(), prologue.end());
-    e.excitation["test_settings"] = prologue;
-    e.excitation["changed"] = changed;
-    g.push_back(";@record accelerometer on");
-    g.push_back(fmt::format("G4 P{}", pause_ms));
-    for (int r = 0; r < reps; ++r) {
-      for (const auto& corner :
-           {std::pair{x0 + w, y0}, std::pair{x0 + w, y0 + h}, std::pair{x0, y0 + h}, std::pair{x0, y0}}) {
-        g.push_back(fmt::format("G1 X{} Y{} F{}", num(corner.first), num(corner.second), num(v * 60, 1)));
-        g.push_back(fmt::format("G4 P{}", pause_ms));
-      }
-    }
-    g.push_back(d.wait_for_moves());
-    g.push_back(";@record accelerometer off");
-    epilogue(g, restore);
+    build_axis_rectangle(r, e);
   } else {
     return false;
   }

@@ -249,6 +249,53 @@ void mark_interrupted(const std::string& run_json, const std::string& where) {
   core::write_file_atomic(run_json, summary.dump(2) + "\n");
 }
 
+/// The sensor records the run wrote, listed among its files.
+void list_recorded_files(const machine::Journal& journal, const Recorder& rec, RunResult& res) {
+  if (journal.has_csv(rec.load_file())) res.files[RunFile::load_cell] = journal.path(rec.load_file());
+  if (journal.has_csv(rec.accel_file())) res.files[RunFile::accel] = journal.path(rec.accel_file());
+  if (journal.has_csv(rec.commanded_file())) res.files[RunFile::commanded_accel] = journal.path(rec.commanded_file());
+  if (journal.has_csv(rec.motion_file())) res.files[RunFile::commanded_motion] = journal.path(rec.motion_file());
+}
+
+/// The end of a run, complete or not: the samples and the link's statistics into the summary,
+/// the session closed, the machine the host served stopped (its own files kept), the files listed and run.json
+/// written.
+void close_run(nlohmann::json& summary, std::unique_ptr<Session>& session, const Recorder& rec,
+               machine::Journal& journal, ServedMachine* served, RunResult& res) {
+  summary["samples"] = {{"load_cell", rec.load_samples()}, {"accel", rec.accel_samples()}};
+  if (session) summary["link"] = session->stats();
+  session.reset();
+  if (served) served->stop(journal, res.files);
+  list_recorded_files(journal, rec, res);
+  summary["files"] = to_json(res.files);
+  core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
+}
+
+/// A run that failed or was stopped (`interrupted`) at `stage`: the journal and run.json say why
+/// and where, the machine is brought to a safe state, and the error is thrown again naming where
+/// the partial run is kept (an InterruptedError when a stop signal ended it).
+[[noreturn]] void fail_run(const MachineError& e, bool interrupted, const std::string& stage,
+                           std::unique_ptr<Session>& session, const machine::MachineProfile& profile,
+                           nlohmann::json& summary, const Recorder& rec, machine::Journal& journal,
+                           ServedMachine* served, RunResult& res) {
+  const std::string signal = StopSignals::received();
+  const MachineError why = interrupted && !signal.empty() ? MachineError("interrupted by " + signal, e.location()) : e;
+  journal.error(why.formatted());
+  if (session) send_safe_state(*session, profile, res.gcode, journal);
+  journal.sync();
+  summary["status"] = interrupted ? "interrupted" : "failed";
+  summary["stopped_at"] = stage;
+  summary["error"] = why.formatted();
+  close_run(summary, session, rec, journal, served, res);
+  if (interrupted && !signal.empty()) {
+    StopSignals::report();
+    throw InterruptedError(StopSignals::received_number(),
+                           fmt::format("{} {} (the partial run is kept in {})", why.message(), stage, res.run_dir),
+                           why.location());
+  }
+  throw MachineError(fmt::format("{} (the partial run is kept in {})", why.message(), res.run_dir), why.location());
+}
+
 }  // namespace
 
 void throw_if_stopped_after_run(const RunResult& r, const std::string& where) {
@@ -299,16 +346,6 @@ RunResult run_experiment(const RunOptions& o) {
     if (o.progress) o.progress(m);
   };
 
-  auto stop_served = [&] {
-    if (served) served->stop(journal, res.files);
-  };
-  auto list_files = [&] {
-    if (journal.has_csv(rec.load_file())) res.files[RunFile::load_cell] = journal.path(rec.load_file());
-    if (journal.has_csv(rec.accel_file())) res.files[RunFile::accel] = journal.path(rec.accel_file());
-    if (journal.has_csv(rec.commanded_file())) res.files[RunFile::commanded_accel] = journal.path(rec.commanded_file());
-    if (journal.has_csv(rec.motion_file())) res.files[RunFile::commanded_motion] = journal.path(rec.motion_file());
-  };
-
   SendGuard guard(profile);  // the last check of every line, in the link
   std::unique_ptr<Session> session;
   std::string stage = "while connecting";  // where a stop or failure found the run (run.json "stopped_at")
@@ -340,41 +377,12 @@ RunResult run_experiment(const RunOptions& o) {
     // A stop that arrived once every line was answered still stops the run (stop_signals.hpp).
     if (abort_flag->load()) throw MachineError("interrupted", port);
   } catch (const MachineError& e) {
-    const bool interrupted = abort_flag->load();
-    const std::string signal = StopSignals::received();
-    const MachineError why =
-        interrupted && !signal.empty() ? MachineError("interrupted by " + signal, e.location()) : e;
-    journal.error(why.formatted());
-    if (session) send_safe_state(*session, profile, res.gcode, journal);
-    journal.sync();
-    summary["status"] = interrupted ? "interrupted" : "failed";
-    summary["stopped_at"] = stage;
-    summary["error"] = why.formatted();
-    summary["samples"] = {{"load_cell", rec.load_samples()}, {"accel", rec.accel_samples()}};
-    if (session) summary["link"] = session->stats();
-    session.reset();
-    stop_served();
-    list_files();
-    summary["files"] = to_json(res.files);
-    core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
-    if (interrupted && !signal.empty()) {
-      StopSignals::report();
-      throw InterruptedError(StopSignals::received_number(),
-                             fmt::format("{} {} (the partial run is kept in {})", why.message(), stage, res.run_dir),
-                             why.location());
-    }
-    throw MachineError(fmt::format("{} (the partial run is kept in {})", why.message(), res.run_dir), why.location());
+    fail_run(e, abort_flag->load(), stage, session, profile, summary, rec, journal, served.get(), res);
   }
   journal.event("end", {{"load_cell_samples", rec.load_samples()}, {"accel_samples", rec.accel_samples()}});
   journal.sync();
   summary["status"] = "complete";
-  summary["samples"] = {{"load_cell", rec.load_samples()}, {"accel", rec.accel_samples()}};
-  summary["link"] = session->stats();
-  session.reset();
-  stop_served();
-  list_files();
-  summary["files"] = to_json(res.files);
-  core::write_file_atomic(journal.path("run.json"), summary.dump(2) + "\n");
+  close_run(summary, session, rec, journal, served.get(), res);
   res.status = "complete";
   res.summary = summary;
   throw_if_stopped_after_run(res, "after the run had ended (every line answered; the machine was idle)");

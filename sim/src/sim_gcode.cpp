@@ -98,6 +98,132 @@ void Simulator::report_firmware(const Emit& emit) const {
   if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
 }
 
+bool Simulator::answer_line_number(const machine::NumberedLine& nl, const machine::GcodeWords* words,
+                                   const Emit& emit) {
+  if (!nl.number) return false;
+  if (words && words->command == "M110") {
+    last_n_ = static_cast<long>(words->get("N", static_cast<double>(*nl.number)));
+    emit("ok\n");
+    return true;
+  }
+  if (*nl.number == last_n_) {  // a line sent again after a late ok: already done
+    emit("ok\n");
+    return true;
+  }
+  if (*nl.number != last_n_ + 1) {
+    out_flush(emit);
+    emit(fmt::format("Error:Line Number is not Last firmware::Line Number+1, Last firmware::Line: {}\nResend: {}\nok\n",
+                     last_n_, last_n_ + 1));
+    return true;
+  }
+  last_n_ = *nl.number;
+  return false;
+}
+
+void Simulator::set_motion_limits(const machine::GcodeWords& w) {
+  const std::string& c = w.command;
+  if (c == "M205") {
+    min_segment_time_s_ = w.get("B", sim::kMarlinDefaultMinSegmentTime_us) * sim::kSecondsPerMicrosecond;
+  } else if (c == "M566") {
+    if (w.has("X"))
+      jerk_x_mm_s_ =
+          std::max(sim::kRrfMinimumJerk_mm_s, w.get("X", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
+    if (w.has("Y"))
+      jerk_y_mm_s_ =
+          std::max(sim::kRrfMinimumJerk_mm_s, w.get("Y", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
+  } else {  // SET_VELOCITY_LIMIT
+    interp_.apply(w);
+    if (w.has("MINIMUM_CRUISE_RATIO")) mcr_ = w.get("MINIMUM_CRUISE_RATIO", mcr_);
+  }
+}
+
+bool Simulator::answer_report(const machine::GcodeWords& w, const Emit& emit) {
+  const std::string& c = w.command;
+  if (c == "M115") {
+    out_flush(emit);
+    report_firmware(emit);
+  } else if (c == "M105") {
+    out_flush(emit);
+    const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);
+    emit(fmt::format("ok T:{:.1f} /{:.1f} B:{:.1f} /{:.1f} @:0 B@:0\n", te, te, tb, tb));
+    return false;
+  } else if (c == "M114") {
+    flush(emit);
+    const auto& p = interp_.position();
+    emit(fmt::format("X:{:.3f} Y:{:.3f} Z:{:.3f} E:{:.3f} Count X:0 Y:0 Z:0\n", p[0], p[1], p[2], p[3]));
+  } else {  // M109, M190
+    flush(emit);
+    interp_.apply(w);
+    const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);
+    emit(fmt::format(" T:{:.1f} /{:.1f} B:{:.1f} /{:.1f} @:0 B@:0\n", te, te, tb, tb));
+  }
+  return true;
+}
+
+bool Simulator::execute(const machine::GcodeWords& w, std::string_view body, const Emit& emit) {
+  const std::string& c = w.command;
+  if (c == "G0" || c == "G1") {
+    if (!queue_move(w, emit)) return false;
+  } else if (c == "G4") {
+    flush(emit);
+    interp_.apply(w);
+    dwell(interp_.dwell_s(), emit);
+  } else if (c == "M400") {
+    flush(emit);
+  } else if (c == "G28") {
+    flush(emit);
+    machine::GcodeWords home;
+    home.command = "G92";
+    for (const char* axis : {"X", "Y", "Z"}) home.args[axis] = 0;
+    interp_.apply(home);
+  } else if ((c == "M205" && w.has("B")) || c == "M566" || c == "SET_VELOCITY_LIMIT") {
+    set_motion_limits(w);
+  } else if (c == "M410" && rrf()) {
+    out_flush(emit);
+    emit("Error: M410: Command is not supported\n");
+  } else if (c == "M410") {
+    pending_.reset();  // quickstop: queued motion is dropped
+    pending_entry_ = 0;
+    step_carry_s_ = 0;
+  } else if (c == "M112") {
+    pending_.reset();
+    halted_ = true;
+    out_flush(emit);
+    return false;
+  } else if (c == "M4100") {
+    flush(emit);
+    if (w.has("A")) set_streaming("accelerometer", w.get("A", 0) != 0);
+    if (w.has("L")) set_streaming("load_cell", w.get("L", 0) != 0);
+  } else if (c == "M955" && rrf()) {
+    out_flush(emit);
+    // Accelerometers.cpp ConfigureAccelerometer without other parameters: the report.
+    emit(
+        fmt::format("Accelerometer 0 type LIS3DH with orientation 20 samples at {}Hz with 10-bit resolution, SPI "
+                    "frequency 2000000\n",
+                    std::lround(cfg_.accel_rate_hz)));
+  } else if (c == "M956" && rrf()) {
+    flush(emit);
+    m956(body, w, emit);
+  } else if (c == "M493" && !klipper() && !rrf()) {
+    out_flush(emit);
+    m493(w, emit);
+  } else if (c == "M115" || c == "M105" || c == "M114" || c == "M109" || c == "M190") {
+    return answer_report(w, emit);
+  } else {
+    interp_.apply(w);
+  }
+  return true;
+}
+
+void Simulator::wait_late(double late_ms) const {
+  // Waited in short slices, so that stopping the simulator ends the wait (set_cancel).
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point until =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(late_ms));
+  while (!(cancel_ && cancel_->load()) && Clock::now() < until)
+    std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(10), until - Clock::now()));
+}
+
 bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
   std::string line(raw);
   while (!line.empty() && (line.back() == '\r' || line.back() == '\n' || line.back() == ' ')) line.pop_back();
@@ -116,112 +242,12 @@ bool Simulator::handle_line(std::string_view raw, const Emit& emit) {
     emit(fmt::format("Error:checksum mismatch, Last firmware::Line: {}\nResend: {}\nok\n", last_n_, last_n_ + 1));
     return true;
   }
-  auto words = machine::parse_gcode(nl.body);
-  if (nl.number) {
-    if (words && words->command == "M110") {
-      last_n_ = static_cast<long>(words->get("N", static_cast<double>(*nl.number)));
-      emit("ok\n");
-      return true;
-    }
-    if (*nl.number == last_n_) {  // a line sent again after a late ok: already done
-      emit("ok\n");
-      return true;
-    }
-    if (*nl.number != last_n_ + 1) {
-      out_flush(emit);
-      emit(fmt::format(
-          "Error:Line Number is not Last firmware::Line Number+1, Last firmware::Line: {}\nResend: {}\nok\n", last_n_,
-          last_n_ + 1));
-      return true;
-    }
-    last_n_ = *nl.number;
-  }
-  if (words) {
-    const std::string& c = words->command;
-    if (c == "G0" || c == "G1") {
-      if (!queue_move(*words, emit)) return true;
-    } else if (c == "G4") {
-      flush(emit);
-      interp_.apply(*words);
-      dwell(interp_.dwell_s(), emit);
-    } else if (c == "M400") {
-      flush(emit);
-    } else if (c == "G28") {
-      flush(emit);
-      machine::GcodeWords home;
-      home.command = "G92";
-      for (const char* axis : {"X", "Y", "Z"}) home.args[axis] = 0;
-      interp_.apply(home);
-    } else if (c == "M205" && words->has("B")) {
-      min_segment_time_s_ = words->get("B", sim::kMarlinDefaultMinSegmentTime_us) * sim::kSecondsPerMicrosecond;
-    } else if (c == "M566") {
-      if (words->has("X"))
-        jerk_x_mm_s_ =
-            std::max(sim::kRrfMinimumJerk_mm_s, words->get("X", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
-      if (words->has("Y"))
-        jerk_y_mm_s_ =
-            std::max(sim::kRrfMinimumJerk_mm_s, words->get("Y", sim::kRrfDefaultJerk_mm_min) / sim::kSecondsPerMinute);
-    } else if (c == "SET_VELOCITY_LIMIT") {
-      interp_.apply(*words);
-      if (words->has("MINIMUM_CRUISE_RATIO")) mcr_ = words->get("MINIMUM_CRUISE_RATIO", mcr_);
-    } else if (c == "M410" && rrf()) {
-      out_flush(emit);
-      emit("Error: M410: Command is not supported\n");
-    } else if (c == "M410") {
-      pending_.reset();  // quickstop: queued motion is dropped
-      pending_entry_ = 0;
-      step_carry_s_ = 0;
-    } else if (c == "M112") {
-      pending_.reset();
-      halted_ = true;
-      out_flush(emit);
-      return true;
-    } else if (c == "M4100") {
-      flush(emit);
-      if (words->has("A")) set_streaming("accelerometer", words->get("A", 0) != 0);
-      if (words->has("L")) set_streaming("load_cell", words->get("L", 0) != 0);
-    } else if (c == "M955" && rrf()) {
-      out_flush(emit);
-      // Accelerometers.cpp ConfigureAccelerometer without other parameters: the report.
-      emit(
-          fmt::format("Accelerometer 0 type LIS3DH with orientation 20 samples at {}Hz with 10-bit resolution, SPI "
-                      "frequency 2000000\n",
-                      std::lround(cfg_.accel_rate_hz)));
-    } else if (c == "M956" && rrf()) {
-      flush(emit);
-      m956(nl.body, *words, emit);
-    } else if (c == "M493" && !klipper() && !rrf()) {
-      out_flush(emit);
-      m493(*words, emit);
-    } else if (c == "M115") {
-      out_flush(emit);
-      report_firmware(emit);
-    } else if (c == "M105") {
-      out_flush(emit);
-      const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);
-      emit(fmt::format("ok T:{:.1f} /{:.1f} B:{:.1f} /{:.1f} @:0 B@:0\n", te, te, tb, tb));
-      return true;
-    } else if (c == "M114") {
-      flush(emit);
-      const auto& p = interp_.position();
-      emit(fmt::format("X:{:.3f} Y:{:.3f} Z:{:.3f} E:{:.3f} Count X:0 Y:0 Z:0\n", p[0], p[1], p[2], p[3]));
-    } else if (c == "M109" || c == "M190") {
-      flush(emit);
-      interp_.apply(*words);
-      const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);
-      emit(fmt::format(" T:{:.1f} /{:.1f} B:{:.1f} /{:.1f} @:0 B@:0\n", te, te, tb, tb));
-    } else {
-      interp_.apply(*words);
-    }
-  }
+  const auto words = machine::parse_gcode(nl.body);
+  if (answer_line_number(nl, words ? &*words : nullptr, emit)) return true;
+  if (words && !execute(*words, nl.body, emit)) return true;
   if (late_ms > 0) {
     out_flush(emit);  // what the line produced arrives on time; only its "ok" is late
-    // Waited in short slices, so that stopping the simulator ends the wait (set_cancel).
-    using Clock = std::chrono::steady_clock;
-    const Clock::time_point until =
-        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(late_ms));
-    while (!(cancel_ && cancel_->load()) && Clock::now() < until)
-      std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(10), until - Clock::now()));
+    wait_late(late_ms);
   }
   // The data a line produced and its "ok" leave in one write, as from a firmware's serial
   // buffer: the host wakes once per line, not once for the data and again for the "ok".

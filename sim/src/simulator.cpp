@@ -56,6 +56,71 @@ void parse_ft_shaper(SimConfig& c, const std::string& key, const std::string& v)
 
 const char* liquefier_model_name(LiquefierModel m) { return m == LiquefierModel::fopdt ? "fopdt" : "physics"; }
 
+// A positive value of option k; InputError otherwise.
+double positive_option(const std::string& k, double d) {
+  if (!(d > 0)) throw InputError(fmt::format("simulator option {} must be positive", k));
+  return d;
+}
+
+// mode_AXIS=FREQ_HZ:ZETA[:WEIGHT],...: the axis' modes.
+std::vector<SimMode> parse_modes(const std::string& k, const std::string& v) {
+  auto pos = [&](double d) { return positive_option(k, d); };
+  std::vector<SimMode> modes;
+  for (const auto& m : split(v, ',')) {
+    const auto parts = split(m, ':');
+    if (parts.size() < 2 || parts.size() > 3)
+      throw InputError(fmt::format("simulator option {}: '{}' is not FREQ_HZ:ZETA[:WEIGHT]", k, m));
+    SimMode sm{pos(parse_double(k, parts[0])), pos(parse_double(k, parts[1])),
+               parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultModeWeight};
+    if (sm.zeta >= 1) throw InputError(fmt::format("simulator option {}: damping ratio must be below 1", k));
+    modes.push_back(sm);
+  }
+  return modes;
+}
+
+// shaper_AXIS=TYPE:FREQ_HZ[:DAMPING]: the firmware's input shaper on the axis, as impulses.
+void parse_shaper_option(SimConfig& c, const std::string& k, const std::string& v) {
+  auto pos = [&](double d) { return positive_option(k, d); };
+  const auto parts = split(v, ':');
+  if (parts.size() < 2 || parts.size() > 3)
+    throw InputError(fmt::format("simulator option {}: '{}' is not TYPE:FREQ_HZ[:DAMPING]", k, v));
+  const double damping = parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultShaperDamping;
+  const auto sh = design::design_shaper(design::parse_shaper_type(parts[0]), pos(parse_double(k, parts[1])), damping);
+  std::vector<std::pair<double, double>> imp;
+  for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) imp.push_back({sh.amplitudes[i], sh.times_s[i]});
+  c.shapers[k.substr(7)] = imp;
+  c.shaper_names[k.substr(7)] = fmt::format("{}:{:g}:{:g}", parts[0], sh.freq_hz, damping);
+}
+
+// fault=KIND@LINE[:MILLISECONDS]: a fault injected at a received line.
+SimFault parse_fault(const std::string& k, const std::string& v) {
+  auto pos = [&](double d) { return positive_option(k, d); };
+  const auto at = v.find('@');
+  if (at == std::string::npos) throw InputError(fmt::format("simulator fault '{}' is not KIND@LINE", v));
+  const std::string kind = v.substr(0, at);
+  SimFault f;
+  auto rest = v.substr(at + 1);
+  if (kind == "late-ok") {
+    const auto colon = rest.find(':');
+    if (colon == std::string::npos) throw InputError("simulator fault late-ok needs @LINE:MILLISECONDS");
+    f.delay_ms = pos(parse_double(k, rest.substr(colon + 1)));
+    // About 30 years: past any host's timeout (1e9 ms, 11.6 days, is a wait that never
+    // ends in practice), and well within what the clock counts in nanoseconds (2^63 ns).
+    constexpr double kMaxLateOk_ms = 1e12;
+    if (f.delay_ms > kMaxLateOk_ms)
+      throw InputError(fmt::format("simulator fault late-ok: {:g} ms is out of range (accepted: up to {:g} ms)",
+                                   f.delay_ms, kMaxLateOk_ms));
+    rest = rest.substr(0, colon);
+    f.kind = SimFault::Kind::late_ok;
+  } else if (kind == "drop") f.kind = SimFault::Kind::drop;
+  else if (kind == "garble") f.kind = SimFault::Kind::garble;
+  else if (kind == "disconnect") f.kind = SimFault::Kind::disconnect;
+  else if (kind == "error") f.kind = SimFault::Kind::error;
+  else throw InputError(fmt::format("unknown simulator fault '{}' (drop, garble, late-ok, disconnect, error)", kind));
+  f.at_line = static_cast<long>(pos(parse_double(k, rest)));
+  return f;
+}
+
 }  // namespace
 
 double SimConfig::tau_at_feed(double feed_mm_s) const {
@@ -92,10 +157,7 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     if (eq == std::string::npos) throw InputError(fmt::format("simulator option '{}' is not key=value", opt));
     const std::string k = opt.substr(0, eq), v = opt.substr(eq + 1);
     if (k == "preset") continue;
-    auto pos = [&](double d) {
-      if (!(d > 0)) throw InputError(fmt::format("simulator option {} must be positive", k));
-      return d;
-    };
+    auto pos = [&](double d) { return positive_option(k, d); };
     auto clock_error = [&](double d) {
       if (!(std::abs(d) < 0.1))
         throw InputError(fmt::format("simulator option {} must be a fraction between -0.1 and 0.1", k));
@@ -160,54 +222,11 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
       if (c.minimum_cruise_ratio < 0 || c.minimum_cruise_ratio >= 1)
         throw InputError("simulator option minimum_cruise_ratio must be in [0, 1)");
     } else if (k.rfind("mode_", 0) == 0 && k.size() == 6) {
-      std::vector<SimMode> modes;
-      for (const auto& m : split(v, ',')) {
-        const auto parts = split(m, ':');
-        if (parts.size() < 2 || parts.size() > 3)
-          throw InputError(fmt::format("simulator option {}: '{}' is not FREQ_HZ:ZETA[:WEIGHT]", k, m));
-        SimMode sm{pos(parse_double(k, parts[0])), pos(parse_double(k, parts[1])),
-                   parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultModeWeight};
-        if (sm.zeta >= 1) throw InputError(fmt::format("simulator option {}: damping ratio must be below 1", k));
-        modes.push_back(sm);
-      }
-      c.modes[k.substr(5)] = modes;
+      c.modes[k.substr(5)] = parse_modes(k, v);
     } else if (k.rfind("shaper_", 0) == 0 && k.size() == 8 && (k[7] == 'x' || k[7] == 'y')) {
-      const auto parts = split(v, ':');
-      if (parts.size() < 2 || parts.size() > 3)
-        throw InputError(fmt::format("simulator option {}: '{}' is not TYPE:FREQ_HZ[:DAMPING]", k, v));
-      const double damping = parts.size() == 3 ? parse_double(k, parts[2]) : sim::kDefaultShaperDamping;
-      const auto sh =
-          design::design_shaper(design::parse_shaper_type(parts[0]), pos(parse_double(k, parts[1])), damping);
-      std::vector<std::pair<double, double>> imp;
-      for (std::size_t i = 0; i < sh.amplitudes.size(); ++i) imp.push_back({sh.amplitudes[i], sh.times_s[i]});
-      c.shapers[k.substr(7)] = imp;
-      c.shaper_names[k.substr(7)] = fmt::format("{}:{:g}:{:g}", parts[0], sh.freq_hz, damping);
+      parse_shaper_option(c, k, v);
     } else if (k == "fault") {
-      const auto at = v.find('@');
-      if (at == std::string::npos) throw InputError(fmt::format("simulator fault '{}' is not KIND@LINE", v));
-      const std::string kind = v.substr(0, at);
-      SimFault f;
-      auto rest = v.substr(at + 1);
-      if (kind == "late-ok") {
-        const auto colon = rest.find(':');
-        if (colon == std::string::npos) throw InputError("simulator fault late-ok needs @LINE:MILLISECONDS");
-        f.delay_ms = pos(parse_double(k, rest.substr(colon + 1)));
-        // About 30 years: past any host's timeout (1e9 ms, 11.6 days, is a wait that never
-        // ends in practice), and well within what the clock counts in nanoseconds (2^63 ns).
-        constexpr double kMaxLateOk_ms = 1e12;
-        if (f.delay_ms > kMaxLateOk_ms)
-          throw InputError(fmt::format("simulator fault late-ok: {:g} ms is out of range (accepted: up to {:g} ms)",
-                                       f.delay_ms, kMaxLateOk_ms));
-        rest = rest.substr(0, colon);
-        f.kind = SimFault::Kind::late_ok;
-      } else if (kind == "drop") f.kind = SimFault::Kind::drop;
-      else if (kind == "garble") f.kind = SimFault::Kind::garble;
-      else if (kind == "disconnect") f.kind = SimFault::Kind::disconnect;
-      else if (kind == "error") f.kind = SimFault::Kind::error;
-      else
-        throw InputError(fmt::format("unknown simulator fault '{}' (drop, garble, late-ok, disconnect, error)", kind));
-      f.at_line = static_cast<long>(pos(parse_double(k, rest)));
-      c.faults.push_back(f);
+      c.faults.push_back(parse_fault(k, v));
     } else {
       throw InputError(fmt::format("unknown simulator option '{}' (see docs/machine.md)", k));
     }

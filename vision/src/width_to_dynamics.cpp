@@ -62,29 +62,6 @@ std::vector<TimedWidth> map_constant_speed(const std::vector<double>& s_mm, cons
   return rows;
 }
 
-std::vector<TimedWidth> map_ring(const std::vector<cv::Point2d>& centre_px, const std::vector<double>& width_mm,
-                                 const std::vector<double>& confidence, cv::Point2d ring_centre_px,
-                                 const RingSine& ring, double start_deg, bool clockwise) {
-  if (!(ring.speed_mm_s > 0) || !(ring.radius_mm > 0)) throw InputError("ring speed and radius must be > 0");
-  const double start = start_deg * M_PI / 180.0;
-  std::vector<TimedWidth> rows;
-  for (std::size_t i = 0; i < centre_px.size(); ++i) {
-    if (!std::isfinite(width_mm[i])) continue;
-    double th = view_angle(centre_px[i], ring_centre_px) - start;
-    if (clockwise) th = -th;
-    th = std::fmod(th, 2 * M_PI);
-    if (th < 0) th += 2 * M_PI;
-    const double t = th * ring.radius_mm / ring.speed_mm_s;
-    rows.push_back({t, th * ring.radius_mm, width_mm[i], ring_setpoint_width_mm(ring, t), confidence[i]});
-  }
-  std::sort(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return a.t_s < b.t_s; });
-  // Equal times (two samples at the same angle) would break a strictly increasing time column.
-  rows.erase(
-      std::unique(rows.begin(), rows.end(), [](const TimedWidth& a, const TimedWidth& b) { return !(b.t_s > a.t_s); }),
-      rows.end());
-  return rows;
-}
-
 double feed_setpoint_width_mm(const PathSegment& seg, double filament_diameter_mm, double layer_height_mm) {
   if (!(seg.length_mm > 0) || !(layer_height_mm > 0)) return std::numeric_limits<double>::quiet_NaN();
   const double area = M_PI * 0.25 * filament_diameter_mm * filament_diameter_mm;

@@ -226,13 +226,6 @@ void add_output_options(CLI::App* sub, OutputOptions& o, bool recordable) {
   if (recordable) add_record_options(sub, o);
 }
 
-CLI::App* add_reserved_command(CLI::App& app, const std::string& name, const std::string& description) {
-  auto* sub = app.add_subcommand(name, description + " [not in this build yet]");
-  sub->allow_extras();
-  sub->callback([name] { throw InputError("'tunekit " + name + "' is not available in this build yet"); });
-  return sub;
-}
-
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   CliContext ctx{out, err};
   ctx.interactive = ::isatty(STDERR_FILENO) != 0;

@@ -37,15 +37,9 @@ struct LinewidthCommand {
   OutputOptions output;
 };
 
-}  // namespace
-
-void register_linewidth(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<LinewidthCommand>();
-  LinewidthOptions& o = cmd->options;
-  auto* sub = app.add_subcommand("linewidth", "Calibrated width profiles of printed lines from photos");
-  sub->add_option("images", o.images,
-                  "Photos of printed lines (PNG, JPEG, BMP, PNM; PNG and PNM may be 16 bit; TIFF: convert to PNG)")
-      ->required();
+// The image's scale and geometry: its size limit, px/mm, a camera profile, a chessboard or
+// ChArUco board, a reference width, rectification.
+void add_scale_options(CLI::App* sub, LinewidthOptions& o) {
   sub->add_option("--max-image-mp", o.max_image_mp,
                   "Refuse images whose header claims more pixels than this, before decoding (megapixels)")
       ->capture_default_str();
@@ -71,6 +65,11 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_flag("--rectify", o.rectify,
                 "Warp the photo onto the bed plane first (perspective of a tilted camera; needs --chessboard or a "
                 "--camera bed plane)");
+}
+
+// How lines are found and what is written besides the widths: polarity, sampling, edges,
+// overlays, a camera calibration.
+void add_detection_options(CLI::App* sub, LinewidthOptions& o) {
   add_choice_option<vision::LinePolarity>(sub, "--polarity", o.detection.polarity,
                                           {{"auto", vision::LinePolarity::automatic},
                                            {"dark", vision::LinePolarity::dark},
@@ -90,6 +89,10 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("--save-camera", o.save_camera,
                   "Calibrate the camera from the IMAGES (chessboard photos; the first lies on the bed) and write the "
                   "profile (JSON) here; nothing is measured");
+}
+
+// A line's profile against time (--profile-csv): which line, the speed and the set-point.
+void add_profile_options(CLI::App* sub, LinewidthOptions& o) {
   sub->add_option(
       "--profile-csv", o.profile_csv,
       "Write line --line's profile against time: columns time (s), s (mm), width (mm), setpoint_width (mm), "
@@ -100,6 +103,10 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("--setpoint-width-mm", o.setpoint_width_mm,
                   "Set-point (G-code) line width (mm); default: the measured mean")
       ->check(CLI::PositiveNumber);
+}
+
+// Holtrup's ring print: the sines, the amplitude, the geometry and the direction.
+void add_ring_options(CLI::App* sub, LinewidthOptions& o) {
   sub->add_option("--ring-sines", o.ring_sines, "Ring print: sines per rotation N (Holtrup 2019 eq. 4.2; 1)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--ring-amplitude-mm", o.ring_amplitude_mm, "Ring print: feeder offset amplitude A (mm)")
@@ -120,6 +127,10 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   sub->add_option("--ring-start-deg", o.ring_start_deg,
                   "Ring print: where theta = 0 is, as an angle in the photo (deg, counterclockwise from +x)");
   sub->add_flag("--ring-clockwise", o.ring_clockwise, "Ring print: the nozzle ran clockwise as seen in the photo");
+}
+
+// A line printed along a G-code path: the file, the filament and where the profile lies on it.
+void add_path_options(CLI::App* sub, LinewidthOptions& o) {
   sub->add_option("--gcode", o.gcode,
                   "G-code that printed the line (with --profile-csv): its extruding moves give the commanded speed "
                   "(F, mm/min in the file) along the path, and with --filament-diameter-mm and --layer-height-mm the "
@@ -132,6 +143,22 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
                   "path");
   sub->add_flag("--path-reversed", o.path.reversed,
                 "With --gcode: the nozzle ran from the profile's end (right/bottom in the photo) to its start");
+}
+
+}  // namespace
+
+void register_linewidth(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<LinewidthCommand>();
+  LinewidthOptions& o = cmd->options;
+  auto* sub = app.add_subcommand("linewidth", "Calibrated width profiles of printed lines from photos");
+  sub->add_option("images", o.images,
+                  "Photos of printed lines (PNG, JPEG, BMP, PNM; PNG and PNM may be 16 bit; TIFF: convert to PNG)")
+      ->required();
+  add_scale_options(sub, o);
+  add_detection_options(sub, o);
+  add_profile_options(sub, o);
+  add_ring_options(sub, o);
+  add_path_options(sub, o);
   add_output_options(sub, cmd->output);
   sub->footer(
       "Examples:\n"

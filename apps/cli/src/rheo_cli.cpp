@@ -29,23 +29,8 @@ struct RheoCommand {
   OutputOptions output;
 };
 
-}  // namespace
-
-void register_rheo(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<RheoCommand>();
-  RheoOptions& o = cmd->options;
-  auto& geometry = o.prediction.geometry;
-  auto* sub = app.add_subcommand("rheo", "Fit melt viscosity models (power law, Cross, Cross-WLF, Carreau-Yasuda)");
-  sub->add_option("file", o.file,
-                  "CSV with shear_rate (1/s), viscosity (Pa.s|mPa.s) or shear_stress (Pa), temperature (degC|K), "
-                  "optional pressure (Pa) and weight")
-      ->required();
-  sub->add_option("-m,--model", o.model, "newtonian, power-law, cross, cross-wlf, carreau-yasuda, or auto (lowest AIC)")
-      ->capture_default_str();
-  sub->add_option("--shift", o.shift,
-                  "Temperature shift for models other than cross-wlf: none, arrhenius, wlf, or auto "
-                  "(arrhenius when the data hold several temperatures)")
-      ->capture_default_str();
+// Reading the file: its columns, their units and temperatures, the rows fitted.
+void add_csv_options(CLI::App* sub, RheoOptions& o) {
   sub->add_option("--shear-rate", o.csv.shear_rate_column, "Shear-rate column (1/s) when not named shear_rate");
   sub->add_option("--viscosity", o.csv.viscosity_column, "Viscosity column when not named viscosity or eta");
   sub->add_option("--shear-stress", o.csv.stress_column, "Shear-stress column (viscosity = stress / shear rate)");
@@ -64,14 +49,10 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
                   "Unit of the viscosity column when its header states none: Pa.s, mPa.s, cP, P (poise) or kPa.s");
   sub->add_option("--temperatures", o.temperatures,
                   "Fit only the rows at LO:HI degC (inclusive; either side may be empty), e.g. 300:350");
-  sub->add_option("--fix", o.fix,
-                  "Hold a parameter at a value, NAME=VALUE in the parameter's SI unit (e.g. D2_K=416); repeatable. "
-                  "cross-wlf holds A2_K=51.6 K and D3_K_per_Pa=0 by default");
-  sub->add_option("--free", o.free,
-                  "Estimate a parameter held by default (A2_K, D3_K_per_Pa, eta_inf_Pa_s); repeatable");
-  sub->add_flag_callback(
-      "--no-compare", [&opts = o] { opts.compare = false; }, "Fit only the chosen model (no AIC comparison)");
-  sub->add_flag("--tts", o.tts, "Time-temperature superposition: shift factors a_T (1) and the master curve");
+}
+
+// A power law fitted to the model over a window of shear rates.
+void add_power_law_options(CLI::App* sub, RheoOptions& o) {
   sub->add_option(
       "--power-law-window", o.power_law_window,
       "Fit K (Pa.s^n) and n of a power law to the fitted model over LOW:HIGH shear rates (1/s), e.g. 600:950");
@@ -79,6 +60,11 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
       ->capture_default_str();
   sub->add_option("--power-law-at", o.power_law_at_degc,
                   "Temperatures of the power-law fits (degC; default: the data's)");
+}
+
+// The liquefier prediction: the nozzle's geometry, the temperature and flows, the pressure model.
+void add_prediction_options(CLI::App* sub, RheoOptions& o) {
+  auto& geometry = o.prediction.geometry;
   // The geometry is kept in m and rad (fitting::NozzleGeometry, with its defaults); the command
   // line speaks mm and degrees.
   const auto mm = [](double m) { return fmt::format("{:g}", m * 1e3); };
@@ -112,6 +98,35 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
   add_parsed_option(
       sub, "--pressure-model", o.prediction.model, fitting::parse_pressure_model,
       [](fitting::PressureModel m) { return fitting::to_string(m); }, "boles, bellini, power-law or hagen-poiseuille");
+}
+
+}  // namespace
+
+void register_rheo(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<RheoCommand>();
+  RheoOptions& o = cmd->options;
+  auto* sub = app.add_subcommand("rheo", "Fit melt viscosity models (power law, Cross, Cross-WLF, Carreau-Yasuda)");
+  sub->add_option("file", o.file,
+                  "CSV with shear_rate (1/s), viscosity (Pa.s|mPa.s) or shear_stress (Pa), temperature (degC|K), "
+                  "optional pressure (Pa) and weight")
+      ->required();
+  sub->add_option("-m,--model", o.model, "newtonian, power-law, cross, cross-wlf, carreau-yasuda, or auto (lowest AIC)")
+      ->capture_default_str();
+  sub->add_option("--shift", o.shift,
+                  "Temperature shift for models other than cross-wlf: none, arrhenius, wlf, or auto "
+                  "(arrhenius when the data hold several temperatures)")
+      ->capture_default_str();
+  add_csv_options(sub, o);
+  sub->add_option("--fix", o.fix,
+                  "Hold a parameter at a value, NAME=VALUE in the parameter's SI unit (e.g. D2_K=416); repeatable. "
+                  "cross-wlf holds A2_K=51.6 K and D3_K_per_Pa=0 by default");
+  sub->add_option("--free", o.free,
+                  "Estimate a parameter held by default (A2_K, D3_K_per_Pa, eta_inf_Pa_s); repeatable");
+  sub->add_flag_callback(
+      "--no-compare", [&opts = o] { opts.compare = false; }, "Fit only the chosen model (no AIC comparison)");
+  sub->add_flag("--tts", o.tts, "Time-temperature superposition: shift factors a_T (1) and the master curve");
+  add_power_law_options(sub, o);
+  add_prediction_options(sub, o);
   sub->add_option("--max-rows", o.max_rows, "Most data rows accepted (count); a longer file is refused")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));

@@ -274,6 +274,80 @@ LinewidthOutcome compute_linewidth(const LinewidthOptions& a, std::ostream& err)
   return outcome;
 }
 
+namespace {
+
+// Line k of an image: its geometry, width statistics in mm and px, stretches and the profile.
+nlohmann::json line_json(const LinewidthImage& run, std::size_t k) {
+  const auto& res = run.result;
+  const double ppm = run.px_per_mm;
+  const auto& l = res.lines[k];
+  nlohmann::json s_mm = nlohmann::json::array(), w_mm = nlohmann::json::array(), conf = nlohmann::json::array(),
+                 flags = nlohmann::json::array(), xs = nlohmann::json::array(), ys = nlohmann::json::array();
+  for (const auto& s : l.samples) {
+    s_mm.push_back(r6(s.s_px / ppm));
+    w_mm.push_back(s.valid() || (std::isfinite(s.width_px) && s.flags == vision::kFlagMerged)
+                       ? nlohmann::json(r6(s.width_px / ppm))
+                       : nlohmann::json(nullptr));
+    conf.push_back(r4(s.confidence));
+    flags.push_back(s.flags);
+    xs.push_back(r4(s.x_px));
+    ys.push_back(r4(s.y_px));
+  }
+  const double med = run.lines[k].median_mm;
+  return nlohmann::json(
+      {{"image", run.path},
+       {"index", k + 1},
+       {"closed", l.closed},
+       {"touches_frame", l.touches_frame},
+       {"length_mm", r6(l.length_px / ppm)},
+       {"samples", l.samples.size()},
+       {"valid_samples", l.valid_samples},
+       {"width_mm",
+        {{"mean", r6(l.mean_width_px / ppm)}, {"std", r6(l.std_width_px / ppm)}, {"median", r6(med)}, {"unit", "mm"}}},
+       {"width_px", {{"mean", r4(l.mean_width_px)}, {"std", r4(l.std_width_px)}}},
+       {"stretches", stretches(l, ppm)},
+       {"profile",
+        {{"s_mm", s_mm}, {"width_mm", w_mm}, {"confidence", conf}, {"flags", flags}, {"x_px", xs}, {"y_px", ys}}}});
+}
+
+// The options of a measurement (not a camera calibration), as the envelope records them.
+nlohmann::json measurement_options(const LinewidthOptions& a) {
+  return {
+      {"px_per_mm", a.px_per_mm},
+      {"camera", a.camera},
+      {"chessboard", a.chessboard},
+      {"charuco", a.charuco},
+      {"marker_mm", a.marker_mm},
+      {"aruco_dict", a.aruco_dict},
+      {"square_mm", a.square_mm},
+      {"reference_width_mm", a.reference_width_mm},
+      {"rectify", a.rectify},
+      {"polarity", linewidth_polarity_name(a.detection.polarity)},
+      {"step_px", a.detection.step_px},
+      {"min_length_px", a.detection.min_length_px},
+      {"allow_edge", a.allow_edge},
+      {"overlay", a.overlay_dir},
+      {"profile_csv", a.profile_csv},
+      {"line", a.line},
+      {"speed_mm_s", a.speed_mm_s},
+      {"setpoint_width_mm", a.setpoint_width_mm},
+      {"ring_sines", a.ring_sines},
+      {"ring_amplitude_mm", a.ring_amplitude_mm},
+      {"ring_radius_mm", a.ring_radius_mm},
+      {"rod_radius_mm", a.rod_radius_mm},
+      {"layer_height_mm", a.layer_height_mm},
+      {"ring_flow_amplitude", a.ring_flow_amplitude},
+      {"ring_segments", a.ring_segments},
+      {"ring_start_deg", a.ring_start_deg},
+      {"ring_clockwise", a.ring_clockwise},
+      {"gcode", a.gcode},
+      {"filament_diameter_mm", a.path.filament_diameter_mm},
+      {"path_offset_mm", std::isfinite(a.path.offset_mm) ? nlohmann::json(a.path.offset_mm) : nlohmann::json(nullptr)},
+      {"path_reversed", a.path.reversed}};
+}
+
+}  // namespace
+
 Envelope to_envelope(const LinewidthOutcome& o) {
   const LinewidthOptions& a = o.options;
   Envelope env("linewidth");
@@ -301,37 +375,7 @@ Envelope to_envelope(const LinewidthOutcome& o) {
                       {"noise", r4(res.noise_sigma)},
                       {"lines_found", res.lines.size()}});
     for (std::size_t k = 0; k < res.lines.size(); ++k) {
-      const auto& l = res.lines[k];
-      nlohmann::json s_mm = nlohmann::json::array(), w_mm = nlohmann::json::array(), conf = nlohmann::json::array(),
-                     flags = nlohmann::json::array(), xs = nlohmann::json::array(), ys = nlohmann::json::array();
-      for (const auto& s : l.samples) {
-        s_mm.push_back(r6(s.s_px / ppm));
-        w_mm.push_back(s.valid() || (std::isfinite(s.width_px) && s.flags == vision::kFlagMerged)
-                           ? nlohmann::json(r6(s.width_px / ppm))
-                           : nlohmann::json(nullptr));
-        conf.push_back(r4(s.confidence));
-        flags.push_back(s.flags);
-        xs.push_back(r4(s.x_px));
-        ys.push_back(r4(s.y_px));
-      }
-      const double med = run.lines[k].median_mm;
-      lines.push_back(
-          {{"image", run.path},
-           {"index", k + 1},
-           {"closed", l.closed},
-           {"touches_frame", l.touches_frame},
-           {"length_mm", r6(l.length_px / ppm)},
-           {"samples", l.samples.size()},
-           {"valid_samples", l.valid_samples},
-           {"width_mm",
-            {{"mean", r6(l.mean_width_px / ppm)},
-             {"std", r6(l.std_width_px / ppm)},
-             {"median", r6(med)},
-             {"unit", "mm"}}},
-           {"width_px", {{"mean", r4(l.mean_width_px)}, {"std", r4(l.std_width_px)}}},
-           {"stretches", stretches(l, ppm)},
-           {"profile",
-            {{"s_mm", s_mm}, {"width_mm", w_mm}, {"confidence", conf}, {"flags", flags}, {"x_px", xs}, {"y_px", ys}}}});
+      lines.push_back(line_json(run, k));
     }
   }
   auto& results = env.results();
@@ -350,38 +394,7 @@ Envelope to_envelope(const LinewidthOutcome& o) {
       break;
     }
 
-  env.set_options(
-      {{"px_per_mm", a.px_per_mm},
-       {"camera", a.camera},
-       {"chessboard", a.chessboard},
-       {"charuco", a.charuco},
-       {"marker_mm", a.marker_mm},
-       {"aruco_dict", a.aruco_dict},
-       {"square_mm", a.square_mm},
-       {"reference_width_mm", a.reference_width_mm},
-       {"rectify", a.rectify},
-       {"polarity", linewidth_polarity_name(a.detection.polarity)},
-       {"step_px", a.detection.step_px},
-       {"min_length_px", a.detection.min_length_px},
-       {"allow_edge", a.allow_edge},
-       {"overlay", a.overlay_dir},
-       {"profile_csv", a.profile_csv},
-       {"line", a.line},
-       {"speed_mm_s", a.speed_mm_s},
-       {"setpoint_width_mm", a.setpoint_width_mm},
-       {"ring_sines", a.ring_sines},
-       {"ring_amplitude_mm", a.ring_amplitude_mm},
-       {"ring_radius_mm", a.ring_radius_mm},
-       {"rod_radius_mm", a.rod_radius_mm},
-       {"layer_height_mm", a.layer_height_mm},
-       {"ring_flow_amplitude", a.ring_flow_amplitude},
-       {"ring_segments", a.ring_segments},
-       {"ring_start_deg", a.ring_start_deg},
-       {"ring_clockwise", a.ring_clockwise},
-       {"gcode", a.gcode},
-       {"filament_diameter_mm", a.path.filament_diameter_mm},
-       {"path_offset_mm", std::isfinite(a.path.offset_mm) ? nlohmann::json(a.path.offset_mm) : nlohmann::json(nullptr)},
-       {"path_reversed", a.path.reversed}});
+  env.set_options(measurement_options(a));
   return env;
 }
 

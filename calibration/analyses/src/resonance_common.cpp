@@ -60,17 +60,58 @@ struct TimedRecord {
   std::vector<ident::AccelPiece> motion;
 };
 
-}  // namespace
-
-AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion ringdown) {
-  const ident::WelchOptions& welch = a.welch;
-  const ident::ResonanceOptions& ro = a.modes;
+// InputError for Welch and mode options outside their ranges (named as the command line names them).
+void check_accel_options(const ident::WelchOptions& welch, const ident::ResonanceOptions& ro) {
   if (!(welch.overlap >= 0 && welch.overlap <= 0.95))
     throw InputError(fmt::format("--overlap {} must be in [0, 0.95]", welch.overlap));
   if (!(ro.fit_max_hz > ro.fit_min_hz) || !(ro.fit_min_hz >= 0))
     throw InputError(fmt::format("--fit-min {} Hz must be below --fit-max {} Hz", ro.fit_min_hz, ro.fit_max_hz));
   if (ro.max_modes < 1) throw InputError("--max-modes must be at least 1");
   if (!(ro.peak_threshold > 0 && ro.peak_threshold < 1)) throw InputError("--peak-threshold must be in (0, 1)");
+}
+
+// The axis `label`'s result from its spectra: averaged, its modes identified and refined with
+// the commanded motion where a record has it; warnings into `warnings`.
+AxisResult axis_result(const std::string& label, std::vector<ident::AxisSpectrum>& spectra,
+                       const ident::ResonanceOptions& ro, const std::map<std::string, TimedRecord>& timed,
+                       std::vector<std::string>& warnings) {
+  // Spectra Klipper normalized (files with shaper columns) and measured ones (raw data, files
+  // without them) of one axis are brought to Klipper's normalization before they are averaged,
+  // as calibrate_shaper.py does; the datasets are kept as read.
+  AxisResult r;
+  r.axis = spectra.front().axis;
+  r.label = label;
+  const bool any_normalized =
+      std::any_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
+  const bool all_normalized =
+      std::all_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
+  if (any_normalized && !all_normalized) {
+    std::vector<ident::AxisSpectrum> same = spectra;
+    for (auto& s : same)
+      if (!s.klipper_normalized) {
+        for (auto* p : {&s.psd_sum, &s.psd_x, &s.psd_y, &s.psd_z})
+          if (!p->empty()) *p = ident::klipper_normalize(s.freq_hz, *p);
+        s.klipper_normalized = true;
+      }
+    r.spectrum = ident::average_spectra(same);
+  } else {
+    r.spectrum = ident::average_spectra(spectra);
+  }
+  r.datasets = std::move(spectra);
+  for (const auto& w : r.spectrum.warnings) warnings.push_back(w);
+  r.modes = ident::identify_modes(r.spectrum, ro);
+  if (const auto it = timed.find(label); it != timed.end())
+    ident::refine_modes_with_motion(r.modes, it->second.record, it->second.motion);
+  for (const auto& w : r.modes.warnings) warnings.push_back(fmt::format("axis {}: {}", label, w));
+  return r;
+}
+
+}  // namespace
+
+AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion ringdown) {
+  const ident::WelchOptions& welch = a.welch;
+  const ident::ResonanceOptions& ro = a.modes;
+  check_accel_options(welch, ro);
   const ident::AccelInputOptions& in = a.input;
 
   AccelAnalysis result;
@@ -148,35 +189,7 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
     for (auto& s : file_spectra) by_axis[record_label(s.axis, path)].push_back(std::move(s));
   }
   for (auto& [label, spectra] : by_axis) {
-    // Spectra Klipper normalized (files with shaper columns) and measured ones (raw data, files
-    // without them) of one axis are brought to Klipper's normalization before they are averaged,
-    // as calibrate_shaper.py does; the datasets are kept as read.
-    AxisResult r;
-    r.axis = spectra.front().axis;
-    r.label = label;
-    const bool any_normalized =
-        std::any_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
-    const bool all_normalized =
-        std::all_of(spectra.begin(), spectra.end(), [](const auto& s) { return s.klipper_normalized; });
-    if (any_normalized && !all_normalized) {
-      std::vector<ident::AxisSpectrum> same = spectra;
-      for (auto& s : same)
-        if (!s.klipper_normalized) {
-          for (auto* p : {&s.psd_sum, &s.psd_x, &s.psd_y, &s.psd_z})
-            if (!p->empty()) *p = ident::klipper_normalize(s.freq_hz, *p);
-          s.klipper_normalized = true;
-        }
-      r.spectrum = ident::average_spectra(same);
-    } else {
-      r.spectrum = ident::average_spectra(spectra);
-    }
-    r.datasets = std::move(spectra);
-    for (const auto& w : r.spectrum.warnings) result.warnings.push_back(w);
-    r.modes = ident::identify_modes(r.spectrum, ro);
-    if (const auto it = timed.find(label); it != timed.end())
-      ident::refine_modes_with_motion(r.modes, it->second.record, it->second.motion);
-    for (const auto& w : r.modes.warnings) result.warnings.push_back(fmt::format("axis {}: {}", label, w));
-    result.axes.push_back(std::move(r));
+    result.axes.push_back(axis_result(label, spectra, ro, timed, result.warnings));
   }
   for (std::size_t i = 0; i < digests.size(); ++i)
     if (digests[i].valid()) result.inputs[i].sha256 = digests[i].get();

@@ -77,28 +77,11 @@ std::map<std::string, double> parse_fixes(const std::vector<std::string>& fixes)
   return m;
 }
 
-}  // namespace
-
-RheoOutcome compute_rheo(const RheoOptions& a) {
-  RheoOutcome o;
-  o.options = a;
-  const std::string bytes = read_file_bytes(a.file);
-  o.input_sha256 = sha256_hex(bytes);
-  o.input_size_bytes = bytes.size();
-  formats::RheologyCsvOptions co = a.csv;
-  if (!co.viscosity_column.empty() && !co.stress_column.empty())
-    throw InputError("give --viscosity or --shear-stress, not both");
-  if (!a.temperatures.empty())
-    std::tie(co.temperature_min_degC, co.temperature_max_degC) = parse_temperature_range(a.temperatures);
-  if (!(co.kelvin_offset == fitting::kKelvinOffset || co.kelvin_offset == fitting::kKelvinOffsetThesis))
-    throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (Holtrup's (2019) code)");
-  require_line_limit(bytes, a.max_rows, "--max-rows", a.file);
-  const auto table = formats::parse_rheology_csv(bytes, a.file, co);
-  const auto& data = table.data;
-  require_row_limit(data.size(), a.max_rows, "--max-rows", a.file);
-  const auto levels = data.temperature_levels_K();
-  const bool multi = levels.size() > 1;
-
+// The requested model's fit options: --fix/--free, the reference temperature, the model and
+// its temperature shift (auto: Arrhenius for data at several temperatures). InputError for
+// options that contradict each other.
+fitting::ViscosityFitOptions primary_fit_options(const RheoOptions& a, const formats::RheologyCsvOptions& co,
+                                                 bool multi) {
   fitting::ViscosityFitOptions primary;
   primary.fixed = parse_fixes(a.fix);
   primary.free = a.free;
@@ -116,12 +99,14 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
     throw InputError("--fix/--free name parameters of one model; choose it with --model");
   if (auto_model && !a.compare)
     throw InputError("--model auto picks the best model by AIC; it cannot be combined with --no-compare");
+  return primary;
+}
 
-  o.num_points = data.size();
-  o.temperatures_K = levels;
-  for (const auto& n : table.notes) o.warnings.push_back(a.file + ": " + n);
-  o.warnings.insert(o.warnings.end(), table.warnings.begin(), table.warnings.end());
-
+// The fit reported: the requested model's (fitted once, as the comparison's first), or with
+// --model auto the comparison's best; the comparison into o.comparison.
+void fit_viscosity_models(RheoOutcome& o, const fitting::RheologyData& data,
+                          const fitting::ViscosityFitOptions& primary, const RheoOptions& a) {
+  const bool auto_model = a.model == "auto";
   fitting::FitResult& fit = o.fit;
   if (auto_model || !!a.compare) {
     auto cands = fitting::default_candidates(data, primary);
@@ -155,6 +140,71 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
   } else {
     fit = fitting::fit_viscosity(data, primary);
   }
+}
+
+// Do the temperatures superpose? A transition or a degraded sample shows here, and a
+// temperature model fitted across it describes neither side. Warnings name the temperatures off
+// the master curve and the reversals; with --tts a failed check is an error.
+void check_temperatures_superpose(RheoOutcome& o, const fitting::RheologyData& data, double T_ref_K,
+                                  const formats::RheologyCsvOptions& co, const RheoOptions& a) {
+  try {
+    const auto sc = fitting::check_superposition(data, T_ref_K);
+    o.superposition = sc;
+    const auto degc = [&](double K) {
+      return fmt::format("{:g} degC", std::round((K - co.kelvin_offset) * 100) / 100);
+    };
+    std::string off;
+    for (const auto& l : sc.levels)
+      if (!l.on_master_curve) off += (off.empty() ? "" : ", ") + degc(l.temperature_K);
+    if (!off.empty())
+      o.warnings.push_back(
+          fmt::format("the curves at {} do not lie on the master curve of the other temperatures (F test, p < {:g}): "
+                      "a transition, a degraded sample or a change of mechanism; one temperature-shift model "
+                      "cannot hold them (select a range with --temperatures)",
+                      off, sc.alpha));
+    for (const auto& r : sc.reversals)
+      o.warnings.push_back(
+          fmt::format("the viscosity rises between {} and {} (shift factor x{:.3g}): a transition between these "
+                      "temperatures (e.g. a liquid-crystalline melt turning isotropic) or curves of different samples; "
+                      "fit each side on its own with --temperatures",
+                      degc(r.lower_K), degc(r.upper_K), r.ratio));
+  } catch (const Error& e) {
+    if (a.tts) throw;
+    o.warnings.push_back("superposition check not done: " + e.message());
+  }
+}
+
+}  // namespace
+
+RheoOutcome compute_rheo(const RheoOptions& a) {
+  RheoOutcome o;
+  o.options = a;
+  const std::string bytes = read_file_bytes(a.file);
+  o.input_sha256 = sha256_hex(bytes);
+  o.input_size_bytes = bytes.size();
+  formats::RheologyCsvOptions co = a.csv;
+  if (!co.viscosity_column.empty() && !co.stress_column.empty())
+    throw InputError("give --viscosity or --shear-stress, not both");
+  if (!a.temperatures.empty())
+    std::tie(co.temperature_min_degC, co.temperature_max_degC) = parse_temperature_range(a.temperatures);
+  if (!(co.kelvin_offset == fitting::kKelvinOffset || co.kelvin_offset == fitting::kKelvinOffsetThesis))
+    throw InputError("--kelvin-offset must be 273.15 (SI) or 273 (Holtrup's (2019) code)");
+  require_line_limit(bytes, a.max_rows, "--max-rows", a.file);
+  const auto table = formats::parse_rheology_csv(bytes, a.file, co);
+  const auto& data = table.data;
+  require_row_limit(data.size(), a.max_rows, "--max-rows", a.file);
+  const auto levels = data.temperature_levels_K();
+  const bool multi = levels.size() > 1;
+
+  const fitting::ViscosityFitOptions primary = primary_fit_options(a, co, multi);
+
+  o.num_points = data.size();
+  o.temperatures_K = levels;
+  for (const auto& n : table.notes) o.warnings.push_back(a.file + ": " + n);
+  o.warnings.insert(o.warnings.end(), table.warnings.begin(), table.warnings.end());
+
+  fit_viscosity_models(o, data, primary, a);
+  const fitting::FitResult& fit = o.fit;
   const auto spec = fitting::spec_from_fit(fit);
 
   o.warnings.insert(o.warnings.end(), fit.warnings.begin(), fit.warnings.end());
@@ -170,35 +220,7 @@ RheoOutcome compute_rheo(const RheoOptions& a) {
                                                                o.power_law_window_1_s.second, a.power_law_points)});
   }
   if (a.tts && !multi) throw InputError("--tts needs data at two or more temperatures", a.file);
-  if (multi) {
-    // Do the temperatures superpose? A transition or a degraded sample shows here, and a
-    // temperature model fitted across it describes neither side.
-    try {
-      const auto sc = fitting::check_superposition(data, primary.T_ref_K);
-      o.superposition = sc;
-      const auto degc = [&](double K) {
-        return fmt::format("{:g} degC", std::round((K - co.kelvin_offset) * 100) / 100);
-      };
-      std::string off;
-      for (const auto& l : sc.levels)
-        if (!l.on_master_curve) off += (off.empty() ? "" : ", ") + degc(l.temperature_K);
-      if (!off.empty())
-        o.warnings.push_back(
-            fmt::format("the curves at {} do not lie on the master curve of the other temperatures (F test, p < {:g}): "
-                        "a transition, a degraded sample or a change of mechanism; one temperature-shift model "
-                        "cannot hold them (select a range with --temperatures)",
-                        off, sc.alpha));
-      for (const auto& r : sc.reversals)
-        o.warnings.push_back(fmt::format(
-            "the viscosity rises between {} and {} (shift factor x{:.3g}): a transition between these "
-            "temperatures (e.g. a liquid-crystalline melt turning isotropic) or curves of different samples; "
-            "fit each side on its own with --temperatures",
-            degc(r.lower_K), degc(r.upper_K), r.ratio));
-    } catch (const Error& e) {
-      if (a.tts) throw;
-      o.warnings.push_back("superposition check not done: " + e.message());
-    }
-  }
+  if (multi) check_temperatures_superpose(o, data, primary.T_ref_K, co, a);
   if (a.predict) {
     ident::LiquefierPredictionOptions po = a.prediction;
     po.temperature_K = std::isfinite(a.predict_at_degc) ? a.predict_at_degc + co.kelvin_offset : T_mid;

@@ -59,17 +59,17 @@ void print_recommended(const ShaperOutcome& o, const std::string& ax, const desi
   const std::string type = design::to_string(b.type);
   const bool klipper_syntax = o.firmware == ExportFirmware::klipper || o.firmware == ExportFirmware::kalico;
   const auto in_firmware = o.firmware ? firmware::limits::find_shaper(*o.firmware, type) : std::nullopt;
-  // The name as a string, not through the optional: GCC's -Wmaybe-uninitialized misreads the
-  // optional's member read inside fmt's argument packing.
-  const std::string firmware_name = in_firmware ? in_firmware->firmware_name : "";
+  // The firmware's name of the shaper, empty when it lacks it (copied out of the optional: GCC's
+  // -Wmaybe-uninitialized misreads the optional's pointer once inlined into fmt).
+  const std::string fw_name = in_firmware ? std::string(in_firmware->firmware_name) : std::string();
   if (klipper_syntax && in_firmware) {
     os << fmt::format("  recommended: shaper_type_{} = {}  shaper_freq_{} = {:.1f}  damping_ratio_{} = {:.3f}\n", ax,
-                      firmware_name, ax, b.freq_hz, ax, b.damping_ratio);
+                      fw_name, ax, b.freq_hz, ax, b.damping_ratio);
     return;
   }
   const std::string own_name =
-      in_firmware && type != firmware_name
-          ? fmt::format(" ({} calls it {})", firmware::limits::firmware_title(*o.firmware), firmware_name)
+      in_firmware && type != fw_name
+          ? fmt::format(" ({} calls it {})", firmware::limits::firmware_title(*o.firmware), fw_name)
           : std::string();
   os << fmt::format("  recommended: {} at {:.1f} Hz, damping ratio {:.3f}{}\n", type, b.freq_hz, b.damping_ratio,
                     own_name);

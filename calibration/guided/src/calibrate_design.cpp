@@ -12,10 +12,6 @@
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 
-#ifndef TUNEKIT_DATASETS_DIR
-#define TUNEKIT_DATASETS_DIR "datasets"
-#endif
-
 namespace tunekit::calibration {
 namespace {
 
@@ -29,7 +25,7 @@ std::string configuration_to_update(const CalibrateArgs& a, const std::string& r
   const auto it = examples.find(a.firmware);
   if (it == examples.end()) throw InputError("--firmware must be klipper, kalico, marlin or rrf");
   const std::string config = run_dir + "/config/" + it->second;
-  const fs::path bundled = fs::path(TUNEKIT_DATASETS_DIR) / "firmware" / it->second;
+  const fs::path bundled = bundled_dataset_path("firmware/" + it->second);
   fs::copy_file(bundled, config, fs::copy_options::overwrite_existing);
   return config;
 }

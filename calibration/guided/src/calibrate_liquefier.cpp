@@ -228,17 +228,13 @@ std::vector<CameraTest> camera_tests(const machine::MachineProfile& profile) {
           {"liquefier-ring", "ring-print", {{"amplitude", kRingAmplitude}, {"periods", kRingPeriods}}}};
 }
 
-CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
-                                     const machine::MachineProfile& profile,
-                                     const std::map<std::string, protocols::RunResult>& runs,
-                                     const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx) {
-  const std::string dir = run_dir + "/liquefier-camera";
-  fs::create_directories(dir);
-  CameraAnalysis out;
-  double px_per_mm = a.px_per_mm;
-  vision::BedPlacement placement;  // known for the simulated camera only
+namespace {
 
-  // 1. The photo.
+// 1. The photo: the simulated camera's (its scale and bed placement known), or one captured from
+// the device, given or asked for; kept with the run (out.photo).
+cv::Mat printed_tests_photo(const std::string& dir, const LiquefierCameraArgs& a,
+                            const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx,
+                            CameraAnalysis& out, double& px_per_mm, vision::BedPlacement& placement) {
   cv::Mat photo;
   if (a.camera == "sim") {
     sim::SimCameraFrame frame;
@@ -268,6 +264,23 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
     }
     out.photo_input = input_digest(out.photo, bytes);
   }
+  return photo;
+}
+
+}  // namespace
+
+CameraAnalysis analyze_camera_prints(const std::string& run_dir, const LiquefierCameraArgs& a,
+                                     const machine::MachineProfile& profile,
+                                     const std::map<std::string, protocols::RunResult>& runs,
+                                     const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx) {
+  const std::string dir = run_dir + "/liquefier-camera";
+  fs::create_directories(dir);
+  CameraAnalysis out;
+  double px_per_mm = a.px_per_mm;
+  vision::BedPlacement placement;  // known for the simulated camera only
+
+  // 1. The photo.
+  const cv::Mat photo = printed_tests_photo(dir, a, bed, can_prompt, ctx, out, px_per_mm, placement);
 
   // 2. The lines and the ring in it: one measurement, the same as `tunekit linewidth`'s.
   const auto& line_run = runs.at("liquefier-lines");

@@ -111,6 +111,10 @@ std::string make_run_dir(const std::string& out_dir) {
 
 }  // namespace
 
+std::string bundled_dataset_path(const std::string& relative) {
+  return (fs::path(TUNEKIT_DATASETS_DIR) / relative).string();
+}
+
 std::string resolved_calibrate_firmware(const std::string& requested, const std::string& profile_firmware) {
   if (!requested.empty()) return firmware::to_string(firmware::parse_export_firmware(requested));
   const std::string fw = core::lower(profile_firmware);
@@ -135,7 +139,7 @@ CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
     io.sensors = a.sensors;
     return {machine::import_machine_profile(a.profile, io), a.profile};
   }
-  return {sim::builtin_sim_profile(), (fs::path(TUNEKIT_DATASETS_DIR) / "machines" / "sim.toml").string()};
+  return {sim::builtin_sim_profile(), bundled_dataset_path("machines/sim.toml")};
 }
 
 namespace {

@@ -55,6 +55,10 @@ protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const 
 /// the limit when one is exceeded.
 void check_plan(CalibrationPlan& plan);
 
+/// The path of `relative` (e.g. "machines/sim.toml") in the datasets bundled with tunekit's
+/// sources (the folder is fixed when tunekit is built; "datasets" when it was not given).
+std::string bundled_dataset_path(const std::string& relative);
+
 /// The time constant (s) a chirp is sized from: `tau_s` within the range the plan checked.
 double clamped_chirp_tau_s(double tau_s);
 

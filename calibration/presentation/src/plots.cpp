@@ -254,6 +254,96 @@ void render_svg(const Figure& fig, const std::string& path) {
   render_figure(fig, path);
 }
 
+namespace {
+
+// With share_x: the x range of every panel's data.
+Range shared_x_range(const Figure& fig) {
+  Range shared_x;
+  if (fig.share_x)
+    for (const auto& p : fig.panels)
+      for (const auto& s : p.series)
+        for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k)
+          if (std::isfinite(axis_value(s.y[k], p.log_y))) shared_x.add(axis_value(s.x[k], p.log_x));
+  return shared_x;
+}
+
+// One series of panel p, a line in pieces between missing values or points. False when it has
+// no finite point (nothing drawn).
+bool draw_series(PlStream& pls, const Series& s, const Panel& p) {
+  // A line is drawn in pieces between missing (non-finite) values: a gap stays a gap.
+  std::vector<std::vector<PLFLT>> xs(1), ys(1);
+  bool any = false;
+  for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
+    const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
+    if (std::isfinite(ax) && std::isfinite(ay)) {
+      xs.back().push_back(ax);
+      ys.back().push_back(ay);
+      any = true;
+    } else if (!xs.back().empty()) {
+      xs.emplace_back();
+      ys.emplace_back();
+    }
+  }
+  if (!any) return false;
+  pls->col0(s.color);
+  for (std::size_t piece = 0; piece < xs.size(); ++piece) {
+    const auto n = static_cast<PLINT>(xs[piece].size());
+    if (n == 0) continue;
+    if (s.style == Series::Style::points) {
+      pls->poin(n, xs[piece].data(), ys[piece].data(), 17);
+    } else {
+      pls->lsty(s.style == Series::Style::dashed ? 2 : 1);
+      pls->width(1.6);
+      pls->line(n, xs[piece].data(), ys[piece].data());
+      pls->lsty(1);
+      pls->width(1);
+    }
+  }
+  return true;
+}
+
+// Panel p in the viewport set for it: its data's range (x shared by every panel with
+// share_x), the frame, the axes' labels and title, its series and their legend.
+void draw_panel(PlStream& pls, const Figure& fig, const Panel& p, const Range& shared_x, double legend_room, double y1,
+                const std::string& path) {
+  Range rx, ry;
+  for (const auto& s : p.series)
+    for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
+      const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
+      if (std::isfinite(ax) && std::isfinite(ay)) {
+        rx.add(ax);
+        ry.add(ay);
+      }
+    }
+  if (!rx.valid() || !ry.valid()) throw InputError(fmt::format("panel '{}' has no finite data to plot", p.title), path);
+  if (fig.share_x && shared_x.valid()) rx = shared_x;
+  if (!p.log_x) rx.pad(0.0);
+  if (rx.hi == rx.lo) rx.pad(0.05);
+  ry.pad(0.06);
+  pls->wind(rx.lo, rx.hi, ry.lo, ry.hi);
+  pls->col0(15);
+  pls->width(1);
+  pls->lsty(1);
+  // Log axes: ticks and grid from PLplot, numbers from label_log_axis.
+  const std::string xopt = p.log_x ? "bcstgl" : "bcnstg";
+  const std::string yopt = p.log_y ? "bcstvgl" : "bcnstvg";
+  pls->box(xopt.c_str(), 0, 0, yopt.c_str(), 0, 0);
+  if (p.log_x) label_log_axis(pls, true, rx.lo, rx.hi);
+  if (p.log_y) label_log_axis(pls, false, ry.lo, ry.hi);
+  // The panel's title left-aligned above its frame (centred, it read as the axis label of the
+  // panel above).
+  pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), "");
+  pls->mtex("t", 0.8, 0.0, 0.0, p.title.c_str());
+
+  std::vector<const Series*> legend;
+  for (const auto& s : p.series)
+    if (draw_series(pls, s, p) && !s.label.empty()) legend.push_back(&s);
+  // The legend sits right of the data, its top level with the panel's frame.
+  if (!legend.empty()) draw_legend(pls, legend, 0.97 - legend_room + 0.01, 0.99, y1, fig.width_px);
+}
+
+}  // namespace
+
 /// Draws the figure with PLplot into `path` (the device for its extension).
 void draw_figure(const Figure& fig, const std::string& path, const char* device) {
   PlStream pls;
@@ -267,12 +357,7 @@ void draw_figure(const Figure& fig, const std::string& path, const char* device)
 
   double total = 0;
   for (const auto& p : fig.panels) total += p.height_weight;
-  Range shared_x;  // with share_x: the x range of every panel's data
-  if (fig.share_x)
-    for (const auto& p : fig.panels)
-      for (const auto& s : p.series)
-        for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k)
-          if (std::isfinite(axis_value(s.y[k], p.log_y))) shared_x.add(axis_value(s.x[k], p.log_x));
+  const Range shared_x = shared_x_range(fig);  // with share_x: the x range of every panel's data
   const double top_margin = fig.title.empty() ? 0.04 : 0.09, bottom = 0.03;
   double y_top = 1.0 - top_margin;
   const double usable = 1.0 - top_margin - bottom;
@@ -290,71 +375,7 @@ void draw_figure(const Figure& fig, const std::string& path, const char* device)
     const double legend_room = longest_label == 0 ? 0.0 : std::min(0.4, 0.05 + 0.0095 * longest_label);
     pls->vpor(0.09, 0.97 - legend_room, y0, y1);
 
-    Range rx, ry;
-    for (const auto& s : p.series)
-      for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
-        const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
-        if (std::isfinite(ax) && std::isfinite(ay)) {
-          rx.add(ax);
-          ry.add(ay);
-        }
-      }
-    if (!rx.valid() || !ry.valid())
-      throw InputError(fmt::format("panel '{}' has no finite data to plot", p.title), path);
-    if (fig.share_x && shared_x.valid()) rx = shared_x;
-    if (!p.log_x) rx.pad(0.0);
-    if (rx.hi == rx.lo) rx.pad(0.05);
-    ry.pad(0.06);
-    pls->wind(rx.lo, rx.hi, ry.lo, ry.hi);
-    pls->col0(15);
-    pls->width(1);
-    pls->lsty(1);
-    // Log axes: ticks and grid from PLplot, numbers from label_log_axis.
-    const std::string xopt = p.log_x ? "bcstgl" : "bcnstg";
-    const std::string yopt = p.log_y ? "bcstvgl" : "bcnstvg";
-    pls->box(xopt.c_str(), 0, 0, yopt.c_str(), 0, 0);
-    if (p.log_x) label_log_axis(pls, true, rx.lo, rx.hi);
-    if (p.log_y) label_log_axis(pls, false, ry.lo, ry.hi);
-    // The panel's title left-aligned above its frame (centred, it read as the axis label of the
-    // panel above).
-    pls->lab(p.xlabel.c_str(), p.ylabel.c_str(), "");
-    pls->mtex("t", 0.8, 0.0, 0.0, p.title.c_str());
-
-    std::vector<const Series*> legend;
-    for (const auto& s : p.series) {
-      // A line is drawn in pieces between missing (non-finite) values: a gap stays a gap.
-      std::vector<std::vector<PLFLT>> xs(1), ys(1);
-      bool any = false;
-      for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
-        const double ax = axis_value(s.x[k], p.log_x), ay = axis_value(s.y[k], p.log_y);
-        if (std::isfinite(ax) && std::isfinite(ay)) {
-          xs.back().push_back(ax);
-          ys.back().push_back(ay);
-          any = true;
-        } else if (!xs.back().empty()) {
-          xs.emplace_back();
-          ys.emplace_back();
-        }
-      }
-      if (!any) continue;
-      pls->col0(s.color);
-      for (std::size_t piece = 0; piece < xs.size(); ++piece) {
-        const auto n = static_cast<PLINT>(xs[piece].size());
-        if (n == 0) continue;
-        if (s.style == Series::Style::points) {
-          pls->poin(n, xs[piece].data(), ys[piece].data(), 17);
-        } else {
-          pls->lsty(s.style == Series::Style::dashed ? 2 : 1);
-          pls->width(1.6);
-          pls->line(n, xs[piece].data(), ys[piece].data());
-          pls->lsty(1);
-          pls->width(1);
-        }
-      }
-      if (!s.label.empty()) legend.push_back(&s);
-    }
-    // The legend sits right of the data, its top level with the panel's frame.
-    if (!legend.empty()) draw_legend(pls, legend, 0.97 - legend_room + 0.01, 0.99, y1, fig.width_px);
+    draw_panel(pls, fig, p, shared_x, legend_room, y1, path);
   }
   if (!fig.title.empty()) {
     pls->vpor(0, 1, 0, 1);

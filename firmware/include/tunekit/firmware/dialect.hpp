@@ -57,8 +57,6 @@ class Dialect {
   explicit Dialect(Firmware f = Firmware::marlin) : fw_(f) {}
   Firmware firmware() const { return fw_; }
   std::string set_accel(double accel_mm_s2) const;  ///< print/travel acceleration
-  std::string relative_extrusion() const { return "M83"; }
-  std::string absolute_positioning() const { return "G90"; }
   std::string wait_for_moves() const { return "M400"; }
   std::string set_hotend(double temp_c, bool wait) const;
   /// Commands that bring the machine to a safe state after an abort: stop motion, then

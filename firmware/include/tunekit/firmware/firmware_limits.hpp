@@ -141,8 +141,6 @@ std::vector<FirmwareShaper> shapers_of(ExportFirmware fw, bool ft_motion = false
 std::optional<FirmwareShaper> find_shaper(ExportFirmware fw, const std::string& type, bool ft_motion = false);
 /// "zv, mzv, ..." in the firmware's spelling, for messages.
 std::string shaper_list(ExportFirmware fw, bool ft_motion = false);
-/// tunekit's names of the firmware's shapers that tunekit can design.
-std::vector<std::string> designable_shapers(ExportFirmware fw, bool ft_motion = false);
 /// The firmware's display name: "Klipper", "Marlin", "RepRapFirmware".
 std::string firmware_title(ExportFirmware fw);
 

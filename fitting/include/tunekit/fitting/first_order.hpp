@@ -21,8 +21,6 @@ namespace tunekit::fitting {
 
 enum class StepModel { fo, fopdt };
 
-/// "fo" or "fopdt"; InputError otherwise.
-StepModel parse_step_model(const std::string& name);
 /// Model name used in FitResult::model: "first_order" or "fopdt".
 std::string model_name(StepModel m);
 

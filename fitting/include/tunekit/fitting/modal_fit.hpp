@@ -70,6 +70,17 @@ struct ModalFit {
   std::vector<std::string> warnings;
 };
 
+/// Widens the fit's intervals for residuals correlated across neighbouring bins: the standard
+/// errors grow by sqrt(vif) and the intervals take the t quantile at `confidence` with the degrees
+/// of freedom divided by vif (the variance inflation factor, >= 1). Fixed parameters and those
+/// without a finite standard error are left as they are.
+void inflate_uncertainty(FitResult& fit, double vif, double confidence);
+
+/// The modes of fitted parameters laid out in blocks of `stride` per mode, each block starting
+/// with frequency (Hz), damping ratio and gain (freq_hz_k, zeta_k, gain_k); sorted by frequency,
+/// the damping ratio's lower bound clipped at 0.
+std::vector<ModeEstimate> modes_from_params(const std::vector<Param>& params, std::size_t modes, std::size_t stride);
+
 /// Fits the PSD model to (freq_hz, psd) with one mode per start value. Bins with psd <= 0 are
 /// ignored. Throws InputError for inconsistent data or too few bins, FitError when the fit
 /// fails or the modes are not identifiable.

@@ -26,12 +26,6 @@ struct NistProblem {
 /// Reads a StRD .dat file; InputError (FILE:LINE) when it is not one or the model is unknown.
 NistProblem read_nist_problem(const std::string& path);
 
-/// Names of the problems whose model is implemented (one predictor).
-std::vector<std::string> nist_supported_problems();
-
-/// Evaluates the problem's model at x with parameters b.
-double nist_model(const std::string& name, const double* b, double x);
-
 /// The least-squares problem (analytic Jacobian by automatic differentiation) from `start`.
 LsqProblem nist_lsq_problem(const NistProblem& p, const std::vector<double>& start);
 

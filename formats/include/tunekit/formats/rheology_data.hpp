@@ -60,7 +60,6 @@ struct RheologyTable {
 
 RheologyTable parse_rheology_csv(std::string_view text, const std::string& path,
                                  const RheologyCsvOptions& options = {});
-RheologyTable read_rheology_csv(const std::string& path, const RheologyCsvOptions& options = {});
 
 /// Multiplier from a viscosity unit to Pa.s; InputError for an unknown unit.
 double viscosity_unit_factor(std::string_view unit);

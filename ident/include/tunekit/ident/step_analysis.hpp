@@ -34,9 +34,6 @@ struct DetectedStep {
 /// theta_s, by up to half a sample interval.
 enum class StepInstant { midpoint, first_sample };
 
-/// "midpoint" or "first"; InputError otherwise.
-StepInstant parse_step_instant(const std::string& name);
-
 /// Default floor of a step, as a fraction of the input's range: half the smallest step of the
 /// liquefier-flow-sweep protocol, so that every step of a sweep is found with a margin of two (its
 /// lowest neighbouring levels differ by (r - 1) q_min with r = 10^(1/7) for its default 6 levels

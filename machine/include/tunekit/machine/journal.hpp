@@ -58,7 +58,6 @@ class Journal {
   /// The CSV stream `file_name` in the run directory, created with `header` on first use.
   CsvAppender& csv(const std::string& file_name, const std::string& header);
   bool has_csv(const std::string& file_name) const { return csvs_.count(file_name) != 0; }
-  const std::map<std::string, std::unique_ptr<CsvAppender>>& csvs() const { return csvs_; }
 
   void flush();  ///< flush journal and every CSV to the operating system
   void sync();   ///< flush and fsync everything

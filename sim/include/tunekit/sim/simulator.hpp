@@ -306,6 +306,15 @@ class Simulator {
   void m493_advance(const machine::GcodeWords& w, bool& report, const Emit& emit);
   void m493_say_shaping(const Emit& emit) const;
   void m956(std::string_view body, const machine::GcodeWords& w, const Emit& emit);
+  /// handle_line's steps: a numbered line out of sequence (or M110, or one sent again) is
+  /// answered here (true); the command run (false: its answer is complete, no "ok" follows);
+  /// the motion limits of M205 B, M566 and SET_VELOCITY_LIMIT; the reports M115, M105, M114
+  /// and the heaters' waits (same return as execute); a late "ok" waited for.
+  bool answer_line_number(const machine::NumberedLine& nl, const machine::GcodeWords* words, const Emit& emit);
+  bool execute(const machine::GcodeWords& w, std::string_view body, const Emit& emit);
+  void set_motion_limits(const machine::GcodeWords& w);
+  bool answer_report(const machine::GcodeWords& w, const Emit& emit);
+  void wait_late(double late_ms) const;
   bool marlin() const { return firmware_ == FirmwareRules::marlin; }
   /// Applies the faults planned for the line just received (sim_faults.cpp): may corrupt `line`
   /// or set `late_ms`; a value means handle_line returns it at once.

@@ -59,13 +59,6 @@ std::vector<TimedWidth> map_constant_speed(const std::vector<double>& s_mm, cons
                                            const std::vector<double>& confidence, double speed_mm_s,
                                            double setpoint_width_mm);
 
-/// Rows of a ring profile: the angle travelled from `start_deg` (view angle of theta = 0)
-/// in the printing direction gives theta, t = theta R / v, s = theta R, set-point from eq. 4.3.
-/// Rows come out sorted by time.
-std::vector<TimedWidth> map_ring(const std::vector<cv::Point2d>& centre_px, const std::vector<double>& width_mm,
-                                 const std::vector<double>& confidence, cv::Point2d ring_centre_px,
-                                 const RingSine& ring, double start_deg, bool clockwise);
-
 /// One straight piece of a commanded print path (from a G-code file), in print order.
 struct PathSegment {
   double length_mm = 0;   ///< XY(Z) length

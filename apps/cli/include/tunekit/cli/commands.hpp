@@ -22,10 +22,6 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
 /// The result of a subcommand's callback, read by run_cli after parsing.
 void set_exit_code(int code);
 
-/// Adds a subcommand whose implementation has not landed yet: it is listed in --help and
-/// answers with a clear error (exit code 2).
-CLI::App* add_reserved_command(CLI::App& app, const std::string& name, const std::string& description);
-
 void register_step(CLI::App& app, CliContext& ctx);
 void register_freq(CLI::App& app, CliContext& ctx);
 void register_rheo(CLI::App& app, CliContext& ctx);
