@@ -22,12 +22,29 @@ struct Estimate {
   double ci95_lo = 0, ci95_hi = 0;  ///< 95 % interval, same unit as value
 };
 
-/// {quantity, unit, estimates: [{method, value, ci95}], difference, combined_half_width,
-/// margin: {relative, value, basis}, verdict ("equivalent", "undecided" or "differ"), agree
-/// (false only for "differ"), statement}. The statement is one sentence for the report ("... do
-/// NOT agree ..." only for "differ"). Throws InputError for non-finite values or an interval
-/// that does not contain its value.
-nlohmann::json compare_estimates(const std::string& quantity, const std::string& unit, const Estimate& a,
-                                 const Estimate& b, const fitting::Margin& margin);
+/// The comparison of two estimates of one quantity.
+struct Agreement {
+  std::string id;  ///< the quantity's short name in the report ("tau", "theta"); empty: none given
+  std::string quantity, unit;
+  Estimate a, b;                   ///< the two estimates compared
+  double difference = 0;           ///< |a - b|, in unit
+  double combined_half_width = 0;  ///< h = sqrt(h_a^2 + h_b^2), in unit
+  double margin_relative = 0;      ///< the equivalence margin as a fraction of the mean |value|
+  double margin_value = 0;         ///< the same margin in unit
+  std::string margin_basis;        ///< one sentence: why this margin
+  std::string verdict;             ///< "equivalent", "undecided" or "differ"
+  bool agree = true;               ///< false only for "differ"
+  std::string statement;           ///< one sentence for the report ("... do NOT agree ..." only for "differ")
+};
+
+/// Compares two estimates by the rule above. Throws InputError for non-finite values or an
+/// interval that does not contain its value.
+Agreement compare_estimates(const std::string& quantity, const std::string& unit, const Estimate& a, const Estimate& b,
+                            const fitting::Margin& margin);
+
+/// An agreement as results JSON holds it: {id (when given), quantity, unit, estimates: [{method,
+/// value, ci95}], difference, combined_half_width, margin: {relative, value, basis}, verdict,
+/// agree, statement}.
+nlohmann::json to_json(const Agreement& a);
 
 }  // namespace tunekit::calibration

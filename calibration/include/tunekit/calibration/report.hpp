@@ -4,6 +4,9 @@
 // that forbids any request leaving the file) built from a run directory's results.json and
 // plotdata.json. `tunekit report RUN_DIR` rebuilds it at any time.
 //
+// The report is rendered from a run's typed record (calibration_record.hpp): by `tunekit
+// calibrate` from the record it has just made, by `tunekit report` from the record read back from
+// results.json and plotdata.json, so both give the same report.
 // results.json is a tunekit envelope. `results.summary` lists the rows of the summary table as
 // {label, path, unit, ci_path?, basis?}: `path` points at a number inside `results`
 // (e.g. "compensators.settings.pa_k_s"), `ci_path` at its 95 % interval [lo, hi]; a row
@@ -21,13 +24,11 @@
 //   directory"}
 // Plots whose data are absent are left out.
 
-#include <map>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "tunekit/calibration/json_access.hpp"  // json_at(): the summary rows' dotted paths
+#include "tunekit/calibration/calibration_record.hpp"
+#include "tunekit/calibration/plot_data.hpp"
 #include "tunekit/calibration/plots.hpp"
 
 namespace tunekit::calibration {
@@ -35,18 +36,17 @@ namespace tunekit::calibration {
 /// The record's input, its output with the whole-record model (colour kWholeRecordModelColor) and
 /// each step's fit (colour 2, dashed), and the residuals; without the model the output panel's
 /// title says why.
-Figure step_figure(const nlohmann::json& d);
+Figure step_figure(const StepPlot& d);
 /// The step plot's sentence on a missing whole-record model ("whole-record model not fitted:
-/// <reason>"); empty when the plot data have the model.
-std::string step_model_note(const nlohmann::json& d);
+/// <reason>"); empty when the plot has the model.
+std::string step_model_note(const StepPlot& d);
 /// The palette colour of the whole-record model's curves.
 constexpr int kWholeRecordModelColor = 5;
-Figure bode_figure(const nlohmann::json& d);
-Figure psd_figure(const nlohmann::json& d, const std::string& axis);
-Figure viscosity_figure(const nlohmann::json& d);
-Figure linewidth_figure(const nlohmann::json& d);
-/// overshoot_grid: {tolerance_mm, cells: [{speed_mm_s, accel_mm_s2, overshoot_mm, completion_time_s, figure_of_merit}]}
-Figure overshoot_grid_figure(const nlohmann::json& d);
+Figure bode_figure(const BodePlot& d);
+Figure psd_figure(const PsdPlot& d, const std::string& axis);
+Figure viscosity_figure(const ViscosityPlot& d);
+Figure linewidth_figure(const LinewidthPlot& d);
+Figure overshoot_grid_figure(const OvershootGridPlot& d);
 
 struct ReportImage {
   std::string id;  ///< e.g. "step", "psd_x"
@@ -55,16 +55,18 @@ struct ReportImage {
   /// Why the figure was not drawn (the plot library failed, e.g. under a memory cap): the report
   /// says so in its place and keeps everything else. Empty when it was drawn.
   std::string failure;
+  std::string bytes;  ///< the image file's contents, kept from rendering (or reading the photo)
 };
 
-/// Renders every plot that plotdata.json has data for into RUN_DIR/plots/*.svg.
-std::vector<ReportImage> render_report_plots(const std::string& run_dir, const nlohmann::json& plotdata);
+/// Renders every plot `plots` has data for into RUN_DIR/plots/*.svg.
+std::vector<ReportImage> render_report_plots(const std::string& run_dir, const ReportPlots& plots);
 
-/// The HTML text for an envelope (results.json contents) and rendered images.
-std::string build_report_html(const nlohmann::json& envelope, const std::vector<ReportImage>& images);
+/// The HTML text of a record and its rendered images.
+std::string build_report_html(const CalibrationRecord& record, const std::vector<ReportImage>& images);
 
-/// Reads RUN_DIR/results.json and RUN_DIR/plotdata.json (optional), renders the plots and
-/// writes RUN_DIR/report.html atomically. Returns the report's path.
+/// Reads RUN_DIR/results.json and RUN_DIR/plotdata.json (optional) into a record
+/// (read_run_record), renders the plots and writes RUN_DIR/report.html atomically. Returns the
+/// report's path.
 std::string write_report(const std::string& run_dir);
 
 /// Formats a number for display with 4 significant digits ("0.4512", "1.25e+04").
