@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tunekit/calibration/json_access.hpp"
 #include "tunekit/calibration/report.hpp"
 #include "tunekit/ident/csv.hpp"
 #include "tunekit/core/error.hpp"
