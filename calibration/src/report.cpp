@@ -346,6 +346,4 @@ ReportOutcome compute_report(const ReportOptions& options) {
 
 void print_text(const ReportOutcome& outcome, std::ostream& os) { os << outcome.html_path << "\n"; }
 
-std::string write_report(const std::string& run_dir) { return compute_report({run_dir}).html_path; }
-
 }  // namespace tunekit::calibration

@@ -7,6 +7,7 @@
 // The report is rendered from a run's typed record (calibration_record.hpp): by `tunekit
 // calibrate` from the record it has just made, by `tunekit report` from the record read back from
 // results.json and plotdata.json, so both give the same report.
+//
 // results.json is a tunekit envelope. `results.summary` lists the rows of the summary table as
 // {label, path, unit, ci_path?, basis?}: `path` points at a number inside `results`
 // (e.g. "compensators.settings.pa_k_s"), `ci_path` at its 95 % interval [lo, hi]; a row
@@ -18,10 +19,15 @@
 //              y_model[] (the whole-record model's output over the record) and model_label, or
 //              model_missing (why there is no model)}
 //   bode:      {freq_hz[], mag_db[], phase_deg[], coherence[], model: {freq_hz[], mag_db[], phase_deg[], label}}
-//   psd.<axis>: {freq_hz[], psd[], modes: [{freq_hz}], shapers: [{type, freq_hz[], response[]}]}
+//   psd_<axis>: {freq_hz[], psd[], modes: [{freq_hz}], shapers: [{type, freq_hz[], response[]}],
+//              recommended: {type, freq_hz}}
+//   flow_advance: {curve: [{flow_mm3_s, tau_s, K_need_s, K_lo_s, K_hi_s, K_kalico_s}], kalico:
+//              {pressure_advance_model}, single: {K_s}, design_flow_mm3_s, orca: [{flow_mm3_s, K_s}]}
+//   overshoot_grid: {tolerance_mm, cells: [{input_shaping, speed_mm_s, accel_mm_s2, overshoot_mm,
+//              completion_time_s, figure_of_merit}]}
 //   viscosity: {series: [{temperature_K, shear_rate_1_s[], viscosity_Pa_s[], fit_shear_rate_1_s[],
-//   fit_viscosity_Pa_s[]}]} linewidth: {s_mm[], width_mm[], setpoint_mm[], overlay_png: "file name in the run
-//   directory"}
+//              fit_viscosity_Pa_s[]}]}
+//   linewidth: {s_mm[], width_mm[], setpoint_mm[], overlay_png: "file name in the run directory"}
 // Plots whose data are absent are left out.
 
 #include <string>
@@ -63,11 +69,6 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const R
 
 /// The HTML text of a record and its rendered images.
 std::string build_report_html(const CalibrationRecord& record, const std::vector<ReportImage>& images);
-
-/// Reads RUN_DIR/results.json and RUN_DIR/plotdata.json (optional) into a record
-/// (read_run_record), renders the plots and writes RUN_DIR/report.html atomically. Returns the
-/// report's path.
-std::string write_report(const std::string& run_dir);
 
 /// Formats a number for display with 4 significant digits ("0.4512", "1.25e+04").
 std::string display_number(double v);
