@@ -4,6 +4,7 @@
 // removed before comparing).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "test_support.hpp"
@@ -24,6 +25,17 @@ std::string rebuilt_report(const std::string& dir) {
   return read_file_bytes(dir + "/report.html");
 }
 
+// Where two reports first differ, with the text around it there; "" when they are equal. (A
+// report is megabytes: a failed comparison says where, not the whole of both.)
+std::string first_difference(const std::string& a, const std::string& b) {
+  if (a == b) return "";
+  const auto at = static_cast<std::size_t>(
+      std::mismatch(a.begin(), a.begin() + std::min(a.size(), b.size()), b.begin()).first - a.begin());
+  const std::size_t from = at > 80 ? at - 80 : 0;
+  return "byte " + std::to_string(at) + " (sizes " + std::to_string(a.size()) + ", " + std::to_string(b.size()) +
+         "):\n" + a.substr(from, 160) + "\n---\n" + b.substr(from, 160);
+}
+
 }  // namespace
 
 TEST_CASE("tunekit report rebuilds calibrate's report from results.json and plotdata.json, byte for byte") {
@@ -37,13 +49,12 @@ TEST_CASE("tunekit report rebuilds calibrate's report from results.json and plot
   const std::string written = read_file_bytes(run.dir + "/report.html");
   const std::string rebuilt = rebuilt_report(dir);
   REQUIRE(written.size() > 100000);  // the plots are embedded
-  CHECK(rebuilt.size() == written.size());
-  CHECK(rebuilt == written);
+  CHECK(first_difference(rebuilt, written) == "");
   // The plots drawn again are the ones calibrate drew.
   for (const char* id : {"step", "bode", "psd_x", "psd_y", "flow_advance"}) {
     INFO(id);
-    CHECK(read_file_bytes(dir + "/plots/" + std::string(id) + ".svg") ==
-          read_file_bytes(run.dir + "/plots/" + std::string(id) + ".svg"));
+    CHECK(first_difference(read_file_bytes(dir + "/plots/" + std::string(id) + ".svg"),
+                           read_file_bytes(run.dir + "/plots/" + std::string(id) + ".svg")) == "");
   }
   // The record read back holds the summary calibrate printed: each row's value with its interval.
   const auto record = tunekit::calibration::read_run_record(dir);
@@ -72,5 +83,5 @@ TEST_CASE("tunekit report rebuilds the camera path's report, ring prediction and
   CHECK(written.find("id=\"plot-linewidth_overlay\"") != std::string::npos);
   CHECK(written.find("id=\"agreement-theta\"") != std::string::npos);  // the ring's dead time against the lines'
   CHECK(written.find("dead time from the ring's phase") != std::string::npos);
-  CHECK(rebuilt_report(dir) == written);
+  CHECK(first_difference(rebuilt_report(dir), written) == "");
 }
