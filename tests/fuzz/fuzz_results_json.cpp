@@ -16,11 +16,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         tunekit::calibration::evaluate_requirement(tunekit::calibration::parse_requirement(req),
                                                    j.contains("results") ? j["results"] : j);
       });
-    try {
-      tunekit::calibration::build_report_html(j, {});
-    } catch (const nlohmann::json::exception&) {
-      // write_report turns these into a located InputError (report.cpp); the builder may throw them.
-    }
+    // The record read back (a located InputError for members of an unexpected type) and its report.
+    tunekit::calibration::build_report_html(tunekit::calibration::record_from_json(j, {}, "fuzz.json"), {});
   });
   return 0;
 }

@@ -225,6 +225,13 @@ TEST_CASE(
   }
   const auto html = tunekit::test::read_text(out + "/report.html");
   CHECK(tunekit::test::embedded_image_base64_length(html, "overshoot_grid") > 1000);
+  CHECK(html.find("fastest speed within tolerance") != std::string::npos);
+  // The report was rendered from the grid's record in memory; `tunekit report` renders the same
+  // from results.json and plotdata.json, byte for byte (the report holds no generation time).
+  const auto again = run_cli({"report", out});
+  INFO(again.err);
+  REQUIRE(again.code == 0);
+  CHECK((tunekit::test::read_text(out + "/report.html") == html));  // not decomposed: no report text on failure
 }
 
 TEST_CASE("overshoot from an encoder column agrees with the closed-form response within 10 %", "[machine][overshoot]") {

@@ -1,7 +1,7 @@
 // Agreement of a quantity measured two ways, and when a liquefier gain is compared with 1.
 #include <catch2/catch.hpp>
 
-#include "tunekit/calibration/analyses/agreement.hpp"
+#include "tunekit/calibration/results/agreement.hpp"
 #include "tunekit/calibration/results/warning_advice.hpp"
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -18,25 +18,32 @@ TEST_CASE("two estimates do NOT agree only when the interval of their difference
   // 9 % apart, half-widths 0.01 and 0.01 (combined 0.0141): the difference's interval
   // [0.026, 0.054] s lies beyond the 2 % margin (0.0094 s).
   const auto bad = compare_estimates("tau", "s", step, {"frequency response", 0.49, 0.48, 0.50}, margin);
-  CHECK(bad.at("verdict") == "differ");
-  CHECK_FALSE(bad.at("agree").get<bool>());
-  CHECK(bad.at("combined_half_width").get<double>() == Approx(std::sqrt(2.0) * 0.01));
-  CHECK(bad.at("margin").at("value").get<double>() == Approx(0.02 * 0.47));
-  CHECK(bad.at("statement").get<std::string>().find("do NOT agree") != std::string::npos);
-  CHECK(advice_for_warning(bad.at("statement").get<std::string>()).find("repeat both experiments") == 0);
+  CHECK(bad.verdict == "differ");
+  CHECK_FALSE(bad.agree);
+  CHECK(bad.combined_half_width == Approx(std::sqrt(2.0) * 0.01));
+  CHECK(bad.margin_value == Approx(0.02 * 0.47));
+  CHECK(bad.statement.find("do NOT agree") != std::string::npos);
+  CHECK(advice_for_warning(bad.statement).find("repeat both experiments") == 0);
+  // As results JSON holds it.
+  const auto j = to_json(bad);
+  CHECK(j.at("verdict") == "differ");
+  CHECK_FALSE(j.at("agree").get<bool>());
+  CHECK(j.at("margin").at("value").get<double>() == bad.margin_value);
+  CHECK(j.at("estimates")[1].at("ci95")[0].get<double>() == 0.48);
+  CHECK_FALSE(j.contains("id"));
   // 0.25 % apart with intervals far narrower than that: different, but not by a margin a
   // compensator feels: equivalent (the old test of equality called this a disagreement).
   const auto close = compare_estimates("tau", "s", {"step response", 0.4497, 0.4496, 0.4498},
                                        {"frequency response", 0.4508, 0.4507, 0.4509}, margin);
-  CHECK(close.at("verdict") == "equivalent");
-  CHECK(close.at("agree").get<bool>());
-  CHECK(close.at("statement").get<std::string>().find("NOT") == std::string::npos);
+  CHECK(close.verdict == "equivalent");
+  CHECK(close.agree);
+  CHECK(close.statement.find("NOT") == std::string::npos);
   // Wide intervals: not shown to differ, not shown equivalent; no disagreement either.
   const auto wide = compare_estimates("tau", "s", {"step response", 0.45, 0.42, 0.48},
                                       {"frequency response", 0.49, 0.45, 0.53}, margin);
-  CHECK(wide.at("verdict") == "undecided");
-  CHECK(wide.at("agree").get<bool>());
-  CHECK(wide.at("statement").get<std::string>().find("NOT") == std::string::npos);
+  CHECK(wide.verdict == "undecided");
+  CHECK(wide.agree);
+  CHECK(wide.statement.find("NOT") == std::string::npos);
 }
 
 TEST_CASE("an estimate whose interval does not hold its value is refused") {

@@ -10,6 +10,9 @@
 #include "test_support.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/formats/csv.hpp"
+#include "tunekit/calibration/results/json_access.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/formats/csv.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/core/file_bytes.hpp"
@@ -95,7 +98,7 @@ int drawn_pixels(const cv::Mat& img) {
 
 TEST_CASE("each plot type renders an SVG of the expected size with its curves drawn") {
   const auto dir = tunekit::test::scratch_dir("plots");
-  const auto images = render_report_plots(dir, sample_plotdata());
+  const auto images = render_report_plots(dir, plots_from_json(sample_plotdata()));
   REQUIRE(images.size() == 5);
   const std::map<std::string, std::pair<int, int>> expected{{"step", {960, 760}},
                                                             {"bode", {960, 760}},
@@ -118,7 +121,7 @@ TEST_CASE("each plot type renders an SVG of the expected size with its curves dr
 
 TEST_CASE("a PNG rendering of a figure has exactly its pixel size and is drawn") {
   const auto dir = tunekit::test::scratch_dir("plots_png");
-  const Figure f = step_figure(sample_plotdata()["step"]);
+  const Figure f = step_figure(plots_from_json(sample_plotdata()).step.value());
   render_png(f, dir + "/step.png");
   const cv::Mat m = tunekit::vision::read_image(dir + "/step.png", tunekit::vision::ImageColor::bgr);
   REQUIRE_FALSE(m.empty());
@@ -171,7 +174,7 @@ TEST_CASE("the report embeds every plot and its summary numbers equal results.js
   std::ofstream(dir + "/results.json") << env.dump(2);
   auto pd = sample_plotdata();
   {  // a stand-in for the line-width overlay photo: any PNG
-    render_png(linewidth_figure(pd["linewidth"]), dir + "/overlay.png");
+    render_png(linewidth_figure(plots_from_json(pd).linewidth.value()), dir + "/overlay.png");
   }
   pd["linewidth"]["overlay_png"] = "overlay.png";
   std::ofstream(dir + "/plotdata.json") << pd.dump();
@@ -217,7 +220,7 @@ TEST_CASE("every warning in the report carries a one-line what to do") {
   env["warnings"] = {"steady-state gain 0.93 differs from 1: the delivered flow is off by that factor",
                      "something no table knows about"};
   env["results"] = {{"summary", nlohmann::json::array()}, {"notes", {"dead time theta = 0.04 s is not cancelled"}}};
-  const std::string html = build_report_html(env, {});
+  const std::string html = build_report_html(record_from_json(env, {}, "results.json"), {});
   CHECK(html.find("differs from 1: the delivered flow is off by that factor<br><span class=\"todo\">What to do: "
                   "calibrate the extrusion multiplier") != std::string::npos);
   CHECK(html.find("something no table knows about<br><span class=\"todo\">What to do: check the file") !=

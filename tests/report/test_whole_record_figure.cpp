@@ -91,14 +91,16 @@ nlohmann::json step_data(bool with_model) {
 }
 
 std::string step_svg(const std::string& dir, const nlohmann::json& step, std::string& caption) {
-  const auto images = render_report_plots(dir, {{"step", step}});
+  const auto images = render_report_plots(dir, plots_from_json({{"step", step}}));
   REQUIRE(images.size() == 1);
   REQUIRE(images[0].id == "step");
   caption = images[0].caption;
-  const std::string html = build_report_html({{"results", nlohmann::json::object()}}, images);
+  const std::string html = build_report_html(CalibrationRecord{}, images);
   CHECK(html.find("<figure id=\"plot-step\">") != std::string::npos);
   CHECK(html.find(caption) != std::string::npos);
-  return tunekit::read_file_bytes(images[0].path);
+  // The SVG text is kept from rendering: the file holds the same bytes.
+  CHECK(images[0].bytes == tunekit::read_file_bytes(images[0].path));
+  return images[0].bytes;
 }
 
 }  // namespace
@@ -135,8 +137,9 @@ TEST_CASE("without the whole-record model the step figure shows the record and t
   CHECK(points.count(kStepFits) == 1);
   CHECK(points.count(kModel) == 0);
   CHECK(caption.find("whole-record model not fitted: the input goes below zero") != std::string::npos);
-  CHECK(step_model_note(step_data(false)) == "whole-record model not fitted: the input goes below zero");
-  CHECK(step_model_note(step_data(true)).empty());
+  CHECK(step_model_note(plots_from_json({{"step", step_data(false)}}).step.value()) ==
+        "whole-record model not fitted: the input goes below zero");
+  CHECK(step_model_note(plots_from_json({{"step", step_data(true)}}).step.value()).empty());
 }
 
 TEST_CASE("calibrate's report: the step figure holds the whole-record model fitted to the flow sweep") {

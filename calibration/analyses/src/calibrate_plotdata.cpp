@@ -55,81 +55,65 @@ std::string model_label(const ident::WholeRecordModel& m) {
 }  // namespace
 
 // Series for the step plot: the measured record, each step's own fitted model and the whole-record model.
-nlohmann::json step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label) {
+StepPlot step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label) {
   // The record as compute_step() analysed it (the file is not read again).
   const auto& t = step.record.t;
   const auto& u = step.record.u;
   const auto& y = step.record.y;
   const std::vector<double> yf = step_fits_output(t, u, step.analysis);
   std::vector<double> ym;
-  nlohmann::json d{{"u_label", u_label}, {"y_label", y_label}};
+  StepPlot d;
+  d.u_label = u_label;
+  d.y_label = y_label;
   if (const auto& m = step.whole_record.model) {
     ym = whole_record_output(*m, t, u);
-    d["model_label"] = model_label(*m);
+    d.model_label = model_label(*m);
   } else {
-    d["model_missing"] =
+    d.model_missing =
         step.whole_record.error.empty() ? std::string("the record has no input column") : step.whole_record.error;
   }
   // Thin very long records for the plot (every n-th sample).
   const std::size_t stride = std::max<std::size_t>(1, t.size() / 4000);
-  std::vector<double> ts, us, ys, fs_, ms;
   for (std::size_t i = 0; i < t.size(); i += stride) {
-    ts.push_back(t[i]);
-    us.push_back(u[i]);
-    ys.push_back(y[i]);
-    fs_.push_back(yf[i]);
-    if (!ym.empty()) ms.push_back(ym[i]);
+    d.t_s.push_back(t[i]);
+    d.u.push_back(u[i]);
+    d.y.push_back(y[i]);
+    d.y_fit.push_back(yf[i]);
+    if (!ym.empty()) d.y_model.push_back(ym[i]);
   }
-  d["t_s"] = ts;
-  d["u"] = us;
-  d["y"] = ys;
-  d["y_fit"] = fs_;
-  if (!ym.empty()) d["y_model"] = ms;
   return d;
 }
 
-nlohmann::json bode_plotdata(const FreqOutcome& chirp) {
-  nlohmann::json d;
+BodePlot bode_plotdata(const FreqOutcome& chirp) {
+  BodePlot d;
   const BodeCurve b = measured_bode(chirp);
-  d["freq_hz"] = b.freq_hz;
-  d["mag_db"] = b.magnitude_db;
-  d["phase_deg"] = b.phase_deg;
-  if (chirp.broadband) d["coherence"] = chirp.broadband->coherence;
+  d.measured = {b.freq_hz, b.magnitude_db, b.phase_deg};
+  if (chirp.broadband) d.coherence = chirp.broadband->coherence;
   // The model the summary reports: the fit freq names as its result.
   if (const auto m = reported_fit_bode(chirp))
-    d["model"] = {{"freq_hz", m->freq_hz},
-                  {"mag_db", m->magnitude_db},
-                  {"phase_deg", m->phase_deg},
-                  {"label", chirp.reported_fit_method()}};
+    d.model = BodePlot::Model{{m->freq_hz, m->magnitude_db, m->phase_deg}, chirp.reported_fit_method()};
   return d;
 }
 
-nlohmann::json psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis) {
-  nlohmann::json d;
+PsdPlot psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis) {
+  PsdPlot d;
   const ident::AxisSpectrum& s = axis.resonance.spectrum;
-  std::vector<double> f, psd;
   for (std::size_t b = 0; b < s.freq_hz.size() && s.freq_hz[b] <= shaper.options.accel.max_plot_hz; ++b) {
-    f.push_back(s.freq_hz[b]);
-    psd.push_back(s.psd_sum[b]);
+    d.freq_hz.push_back(s.freq_hz[b]);
+    d.psd.push_back(s.psd_sum[b]);
   }
-  d["freq_hz"] = f;
-  d["psd"] = psd;
-  d["modes"] = nlohmann::json::array();
   const auto& modes = axis.resonance.modes;
-  for (const auto& m : modes.modes) d["modes"].push_back({{"freq_hz", m.freq_hz}});
+  for (const auto& m : modes.modes) d.mode_freq_hz.push_back(m.freq_hz);
   // Each candidate shaper's remaining vibration against frequency, at the identified damping.
   double zeta = 0.1;
   if (modes.dominant >= 0 && std::isfinite(modes.modes[static_cast<std::size_t>(modes.dominant)].zeta))
     zeta = modes.modes[static_cast<std::size_t>(modes.dominant)].zeta;
-  d["shapers"] = nlohmann::json::array();
-  d["recommended"] = {{"type", design::to_string(axis.choice.recommended.type)},
-                      {"freq_hz", axis.choice.recommended.freq_hz}};
+  d.recommended = PsdPlot::Recommended{design::to_string(axis.choice.recommended.type), axis.choice.recommended.freq_hz};
   for (const auto& c : axis.choice.candidates) {
     const auto shaper_design = design::design_shaper(c.type, c.freq_hz, c.damping_ratio,
-                                                     design::kDefaultVibrationTolerance, design::EiDesign::damped_fit);
-    d["shapers"].push_back({{"type", design::to_string(c.type)},
-                            {"freq_hz", f},
-                            {"response", design::residual_vibration_curve(shaper_design, f, zeta)}});
+                                                    design::kDefaultVibrationTolerance, design::EiDesign::damped_fit);
+    d.shapers.push_back(
+        {design::to_string(c.type), d.freq_hz, design::residual_vibration_curve(shaper_design, d.freq_hz, zeta)});
   }
   return d;
 }

@@ -15,8 +15,13 @@
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/analyses/simulated_machine.hpp"
+#include "tunekit/calibration/analyses/overshoot_command.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/calibration/presentation/report_command.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/text.hpp"
+#include "tunekit/core/version.hpp"
 #include "tunekit/protocols/stop_signals.hpp"
 #include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/overshoot.hpp"
@@ -276,6 +281,29 @@ Envelope overshoot_grid_envelope(const OvershootOutcome& o) {
   return env;
 }
 
+// The grid's report as a record: the fastest point within the tolerance (as results.json's summary
+// lists it), the warnings and the grid's plot; `tunekit report` reads the same back from the files.
+CalibrationRecord overshoot_grid_record(const OvershootOutcome& o) {
+  const OvershootGrid& g = *o.grid;
+  CalibrationRecord r;
+  r.command = "overshoot";
+  r.tool_version = core::kVersion;
+  if (g.best) {
+    const OvershootGridCell& c = g.cells[*g.best];
+    r.summary = {{"fastest speed within tolerance", {c.speed_mm_s}, "mm/s", "n/a", "best.speed_mm_s", ""},
+                 {"its acceleration", {c.accel_mm_s2}, "mm/s^2", "n/a", "best.accel_mm_s2", ""},
+                 {"its overshoot", {c.overshoot_mm}, "mm", "n/a", "best.overshoot_mm", ""},
+                 {"its completion time", {c.completion_time_s}, "s", "n/a", "best.completion_time_s", ""}};
+  }
+  r.warnings = o.warnings;
+  OvershootGridPlot plot{o.options.tolerance_mm, {}};
+  for (const auto& c : g.cells)
+    plot.cells.push_back(
+        {c.input_shaping, c.speed_mm_s, c.accel_mm_s2, c.overshoot_mm, c.completion_time_s, c.figure_of_merit});
+  r.plots.overshoot_grid = plot;
+  return r;
+}
+
 }  // namespace
 
 OvershootOutcome compute_overshoot(const OvershootOptions& a, std::ostream* progress) {
@@ -290,13 +318,13 @@ OvershootOutcome compute_overshoot(const OvershootOptions& a, std::ostream* prog
   if (!a.params.empty() || a.input.empty()) {
     if (!a.input.empty()) throw InputError("give either RUN (analyze) or -p lists (grid mode), not both");
     outcome.grid = compute_overshoot_grid(a, outcome, progress);
-    // results.json is the envelope without the report's path, as the report reads it.
+    // results.json is the envelope without the report's path; the report is rendered from the
+    // grid's record, which `tunekit report` reads back from results.json and plotdata.json.
     const std::string out = outcome.grid->out_dir;
-    nlohmann::json pd;
-    pd["overshoot_grid"] = {{"tolerance_mm", a.tolerance_mm}, {"cells", overshoot_grid_json(*outcome.grid)}};
+    const CalibrationRecord record = overshoot_grid_record(outcome);
     core::write_file_atomic(out + "/results.json", overshoot_grid_envelope(outcome).dump());
-    core::write_file_atomic(out + "/plotdata.json", pd.dump(2) + "\n");
-    outcome.grid->report = write_report(out);
+    core::write_file_atomic(out + "/plotdata.json", plotdata_json(record.plots).dump(2) + "\n");
+    outcome.grid->report = render_report(out, record).html_path;
     return outcome;
   }
   outcome.analysis = std::filesystem::is_directory(a.input)

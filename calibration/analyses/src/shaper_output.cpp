@@ -103,16 +103,22 @@ Envelope to_envelope(const ShaperOutcome& o) {
   return env;
 }
 
+ProposedAccel proposed_max_accel(const ShaperOutcome& o, const ShaperAxis& x) {
+  // The acceleration to use with it: the shaper's own maximum, never above the printer's limit.
+  const double shaper_max = x.choice.recommended.max_accel_mm_s2, limit = o.options.accel_limit_mm_s2;
+  const bool capped = limit > 0 && shaper_max > limit;
+  return {capped ? limit : shaper_klipper_suggested_accel(shaper_max), capped};
+}
+
 nlohmann::json shaper_axis_json(const ShaperOutcome& o, const ShaperAxis& x) {
   const AxisResult& r = x.resonance;
   nlohmann::json j;
   j["modes"] = modes_json(r.modes);
   j["fit"] = fit_json(r.modes);
   j["recommended"] = shaper_candidate_json(x.choice.recommended);
-  // The acceleration to use with it: the shaper's own maximum, never above the printer's limit.
   const double shaper_max = x.choice.recommended.max_accel_mm_s2, limit = o.options.accel_limit_mm_s2;
-  const bool capped = limit > 0 && shaper_max > limit;
-  j["proposed_max_accel_mm_s2"] = capped ? limit : shaper_klipper_suggested_accel(shaper_max);
+  const auto [proposed, capped] = proposed_max_accel(o, x);
+  j["proposed_max_accel_mm_s2"] = proposed;
   if (limit > 0) j["accel_limit_mm_s2"] = limit;
   if (capped)
     j["proposed_max_accel_note"] = fmt::format(

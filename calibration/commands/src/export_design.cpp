@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/fitting/stats.hpp"
-#include "tunekit/calibration/analyses/agreement.hpp"
+#include "tunekit/calibration/results/agreement.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/firmware/firmware_limits.hpp"
@@ -46,11 +46,11 @@ void take_step(const StepDesignInput& s, LiquefierInputs& li) {
 void compare_step_and_freq(const StepDesignInput& s, const FreqDesignInput& f, LiquefierInputs& li, Envelope& env) {
   Estimate by_step, by_freq;
   if (step_tau_for_freq(s, f, by_step) && estimate_of(f.tau_s, "frequency response", by_freq)) {
-    li.agreement.push_back(
-        compare_estimates("liquefier time constant tau", "s", by_step, by_freq, fitting::equivalence_margin("tau_s")));
-    li.agreement.back()["id"] = "tau";
-    if (!li.agreement.back().at("agree").get<bool>())
-      env.warn(li.agreement.back().at("statement").get<std::string>() + "; the step value is used");
+    Agreement a =
+        compare_estimates("liquefier time constant tau", "s", by_step, by_freq, fitting::equivalence_margin("tau_s"));
+    a.id = "tau";
+    if (!a.agree) env.warn(a.statement + "; the step value is used");
+    li.agreement.push_back(to_json(a));
     return;
   }
   env.warn(

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -305,14 +306,14 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   std::vector<vision::TimedWidth> rows;
   nlohmann::json lines_json = nlohmann::json::array();
   double t_offset = 0;
-  nlohmann::json plot_line;
+  LinewidthPlot plot_line;
   for (std::size_t k = 0; k < pw.line_test.size(); ++k) {
     const auto& lt = pw.line_test[k];
     for (auto r : lt.rows) {
       if (k == 0) {
-        plot_line["s_mm"].push_back(r.s_mm);
-        plot_line["width_mm"].push_back(r.width_mm);
-        plot_line["setpoint_mm"].push_back(r.setpoint_mm);
+        plot_line.s_mm.push_back(r.s_mm);
+        plot_line.width_mm.push_back(r.width_mm);
+        plot_line.setpoint_mm.push_back(r.setpoint_mm);
       }
       r.t_s += t_offset;
       rows.push_back(r);
@@ -350,16 +351,16 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   if (!ring_json.is_null()) out.results["ring"] = ring_json;
   out.ring = pw.ring;
   out.warnings = pw.warnings;
-  plot_line["overlay_png"] = fs::relative(out.overlay, run_dir).generic_string();
+  plot_line.overlay_png = fs::relative(out.overlay, run_dir).generic_string();
   out.linewidth_plot = plot_line;
   return out;
 }
 
 namespace {
 
-// value +- 1.96 stderr as a JSON interval (null when the standard error is not known).
-nlohmann::json normal_ci95(double value, double stderr_) {
-  if (!std::isfinite(value) || !std::isfinite(stderr_)) return nullptr;
+// value +- 1.96 stderr as an interval (NaN bounds when the standard error is not known).
+std::pair<double, double> normal_ci95(double value, double stderr_) {
+  if (!std::isfinite(value) || !std::isfinite(stderr_)) return {std::nan(""), std::nan("")};
   return {value - fitting::kZ95 * stderr_, value + fitting::kZ95 * stderr_};
 }
 
@@ -374,25 +375,25 @@ void add_ring_prediction(CameraAnalysis& camera, const RingModel& model) {
   // The ring's gain is relative to the steady width (vision::RingResult), the model's likewise:
   // its response at f over its steady gain K.
   const std::complex<double> G = std::exp(std::complex<double>(0, -w * theta)) / std::complex<double>(1, w * tau);
-  auto& ring = camera.results["ring"];
+  RingPrediction p;
   constexpr double kDeg = 180 / std::numbers::pi;
   // d(-atan(w tau))/d tau = -w / (1 + (w tau)^2): tau's error as phase (rad).
   const double tau_phase_se = w * model.tau_stderr_s / (1 + w * w * tau * tau);
-  ring["model_gain"] = std::abs(G);
-  ring["model_phase_deg"] = std::arg(G) * kDeg;
+  p.model_gain = std::abs(G);
+  p.model_phase_deg = std::arg(G) * kDeg;
   // tau and theta from one fit are negatively correlated; adding their variances overstates the
   // phase's, so this interval is on the wide side.
-  ring["model_phase_ci95_deg"] =
+  std::tie(p.model_phase_ci95_lo_deg, p.model_phase_ci95_hi_deg) =
       normal_ci95(std::arg(G) * kDeg, std::hypot(tau_phase_se, w * model.theta_stderr_s) * kDeg);
   // The dead time the ring's phase implies with the lines' tau: phase = -atan(w tau) - w theta.
   // It does not depend on where the lines lie on their paths (the weak point of a photo whose
   // placement on the bed is not known), only on the ring's start direction (+X). Its error: the
   // ring's phase and the lines' tau, independent measurements.
   const double lag = -camera.ring->phase_deg / kDeg - std::atan(w * tau);
-  ring["theta_from_phase_s"] = lag / w;
-  ring["theta_from_phase_ci95_s"] =
+  p.theta_from_phase_s = lag / w;
+  std::tie(p.theta_from_phase_ci95_lo_s, p.theta_from_phase_ci95_hi_s) =
       normal_ci95(lag / w, std::hypot(camera.ring->phase_stderr_deg / kDeg, tau_phase_se) / w);
-  camera.ring_predicted = true;
+  camera.ring_prediction = p;
 }
 
 }  // namespace tunekit::calibration

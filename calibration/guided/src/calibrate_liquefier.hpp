@@ -23,6 +23,9 @@
 #include "tunekit/calibration/guided/calibrate_command.hpp"
 #include "tunekit/calibration/results/context.hpp"
 #include "tunekit/calibration/results/input_digest.hpp"
+#include "tunekit/calibration/guided/calibrate_command.hpp"
+#include "tunekit/calibration/results/plot_data.hpp"
+#include "tunekit/calibration/results/context.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/sim/sim_camera.hpp"
@@ -49,6 +52,20 @@ struct CameraTest {
 /// The line test's lead-in is as long as the profile's X travel takes (up to 90 mm; see line_lead_mm).
 std::vector<CameraTest> camera_tests(const machine::MachineProfile& profile);
 
+/// The step model's prediction at the ring's frequency (add_ring_prediction): gain (relative to
+/// the steady gain, as the ring's measured gain is) and phase (deg), and the dead time (s) the
+/// ring's measured phase implies with the lines' tau. Interval bounds are NaN when a standard
+/// error is not known.
+struct RingPrediction {
+  double model_gain = std::numeric_limits<double>::quiet_NaN();
+  double model_phase_deg = std::numeric_limits<double>::quiet_NaN();
+  double model_phase_ci95_lo_deg = std::numeric_limits<double>::quiet_NaN(),
+         model_phase_ci95_hi_deg = std::numeric_limits<double>::quiet_NaN();
+  double theta_from_phase_s = std::numeric_limits<double>::quiet_NaN();
+  double theta_from_phase_ci95_lo_s = std::numeric_limits<double>::quiet_NaN(),
+         theta_from_phase_ci95_hi_s = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct CameraAnalysis {                    // declared in calibration_pipeline.hpp
   std::string photo;                       ///< the photo used (in the run directory)
   std::string overlay;                     ///< the photo with the measured edges (PNG, in the run directory)
@@ -57,11 +74,11 @@ struct CameraAnalysis {                    // declared in calibration_pipeline.h
   InputFile width_record;                  ///< width_csv as written: the step analysis takes it from memory
   InputFile feed_track;                    ///< feed_track_csv as written, likewise
   InputDigest photo_input;                 ///< the photo's digest, of the bytes read (or written)
-  nlohmann::json results;                  ///< lines, ring (gain and phase), warnings
+  nlohmann::json results;                  ///< lines, ring (gain and phase), warnings, as results.json holds them
   std::optional<vision::RingResult> ring;  ///< the ring's gain and phase, when the photo shows it
-  bool ring_predicted = false;             ///< the step model's prediction was added (add_ring_prediction)
-  std::vector<std::string> warnings;       ///< the photo measurement's
-  nlohmann::json linewidth_plot;           ///< plotdata.json "linewidth"
+  std::optional<RingPrediction> ring_prediction;  ///< set by add_ring_prediction
+  std::vector<std::string> warnings;              ///< the photo measurement's
+  LinewidthPlot linewidth_plot;                   ///< the line test's first line (plotdata.json "linewidth")
 };
 
 /// Obtains the photo, measures the lines and the ring and writes the width record. InputError

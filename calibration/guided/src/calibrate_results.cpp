@@ -1,7 +1,8 @@
-// tunekit calibrate, stage 5: the run's record. results.json is built from the stages' typed
-// outcomes (each analysis' results as its own JSON holds them, the summary rows, notes and the
-// agreement of the two liquefier time constants), then plotdata.json, report.html, the
-// analysis README and, with --record, the history.
+// tunekit calibrate, stage 5: the run's record (calibration_record.hpp), built from the stages'
+// typed outcomes: the summary rows with their estimates, the agreements of quantities measured
+// two ways, notes, the plots' series, and each analysis' results as its own JSON holds them.
+// results.json, plotdata.json, report.html, the terminal's table and, with --record, the history
+// are rendered from it; then the analysis README.
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -17,11 +18,18 @@
 #include "tunekit/calibration/presentation/report_command.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "tunekit/core/file_bytes.hpp"
-#include "tunekit/calibration/analyses/agreement.hpp"
+#include "tunekit/calibration/results/agreement.hpp"
 #include "tunekit/calibration/commands/design_inputs.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/core/atomic_file.hpp"
+#include "tunekit/formats/csv.hpp"
+#include "tunekit/calibration/results/agreement.hpp"
+#include "tunekit/calibration/results/calibration_record.hpp"
+#include "tunekit/calibration/commands/design_inputs.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/calibration/results/results_json.hpp"
+#include "tunekit/core/version.hpp"
 #include "tunekit/formats/csv.hpp"
 
 namespace tunekit::calibration {
@@ -29,25 +37,36 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Two-sided 95 % quantile of the normal distribution: the advance's interval from its standard error.
-
-// What results.json and plotdata.json are assembled in.
+// The record and the envelope results.json is written into (command, options, inputs).
 struct RunRecord {
   Envelope env{"calibrate"};
-  nlohmann::json plot = nlohmann::json::object();
-  nlohmann::json summary = nlohmann::json::array();
-  nlohmann::json agreement = nlohmann::json::array();
-  nlohmann::json notes = nlohmann::json::array();
-  nlohmann::json& res() { return env.results(); }
-  // A summary row: the value at `path`, its 95 % interval at `ci_path` or, without one, its basis.
-  void row(const std::string& label, const std::string& path, const std::string& unit, const std::string& ci_path,
-           const std::string& basis = "") {
-    nlohmann::json r{{"label", label}, {"path", path}, {"unit", unit}};
-    if (!ci_path.empty()) r["ci_path"] = ci_path;
-    else r["basis"] = basis;
-    summary.push_back(r);
+  CalibrationRecord rec;
+  nlohmann::json& details() { return rec.details; }
+  // A summary row with a 95 % interval, recorded in results.json at `path` and `ci_path`.
+  void row(const std::string& label, const ValueEstimate& e, const std::string& unit, const std::string& path,
+           const std::string& ci_path) {
+    rec.summary.push_back({label, e, unit, "", path, ci_path});
+  }
+  // A summary row without an interval: `basis` says why.
+  void row_basis(const std::string& label, double value, const std::string& unit, const std::string& path,
+                 const std::string& basis) {
+    rec.summary.push_back({label, {value}, unit, basis, path, ""});
+  }
+  void agreement(Agreement a, const std::string& id) {
+    a.id = id;
+    if (!a.agree) rec.warnings.push_back(a.statement);
+    rec.agreements.push_back(std::move(a));
   }
 };
+
+ValueEstimate estimate_of(const fitting::Param& p) { return {p.value, p.ci95_lo, p.ci95_hi}; }
+
+// A fitted parameter's estimate; NaN when the fit has no such parameter.
+ValueEstimate param_estimate(const fitting::FitResult& f, const std::string& name) {
+  for (const auto& p : f.params)
+    if (p.name == name) return estimate_of(p);
+  return {};
+}
 
 // An estimate for the agreement check from a fitted parameter with its 95 % interval; false when
 // it has none or it is not finite.
@@ -69,14 +88,30 @@ struct WholeRecordWords {
 
 void add_whole_record_rows(RunRecord& r, const ident::WholeRecordModel& m, const WholeRecordWords& w) {
   const std::string p = "liquefier.step.whole_record.";
-  r.row(fmt::format("liquefier time constant tau at {} ({})", w.where, w.model), p + "tau_ref_s.value", "s",
-        p + "tau_ref_s.ci95");
-  if (!m.model.fit.param("b").fixed)
-    r.row(fmt::format("tau's flow exponent b (tau = a u^b, {})", w.model), p + "b.value", "1", p + "b.ci95");
-  r.row(fmt::format("liquefier dead time theta ({})", w.model), p + "theta_s.value", "s", p + "theta_s.ci95");
+  const auto& f = m.model.fit;
+  r.row(fmt::format("liquefier time constant tau at {} ({})", w.where, w.model), param_estimate(f, "tau_ref_s"), "s",
+        p + "tau_ref_s.value", p + "tau_ref_s.ci95");
+  if (!f.param("b").fixed)
+    r.row(fmt::format("tau's flow exponent b (tau = a u^b, {})", w.model), param_estimate(f, "b"), "1", p + "b.value",
+          p + "b.ci95");
+  r.row(fmt::format("liquefier dead time theta ({})", w.model), param_estimate(f, "theta_s"), "s", p + "theta_s.value",
+        p + "theta_s.ci95");
   const bool flow_sensor = m.model.sensor == fitting::LiquefierSensor::flow;
-  r.row(fmt::format("{} ({})", flow_sensor ? w.gain : "force per stored filament g", w.model),
-        p + "model.params.g.value", m.model.fit.param("g").unit, p + "model.params.g.ci95");
+  r.row(fmt::format("{} ({})", flow_sensor ? w.gain : "force per stored filament g", w.model), param_estimate(f, "g"),
+        f.param("g").unit, p + "model.params.g.value", p + "model.params.g.ci95");
+}
+
+// The pooled step fit's rows, when the whole-record model could not be fitted: tau, theta and the
+// gain (`gain_label`, `gain_unit`) of the step fits of `source` ("step response", "line widths").
+void add_pooled_rows(RunRecord& r, const std::optional<fitting::FitResult>& pooled, const std::string& source,
+                     const std::string& gain_label, const std::string& gain_unit) {
+  const std::string p = "liquefier.step.pooled.params.";
+  const fitting::FitResult f = pooled.value_or(fitting::FitResult{});
+  r.row(fmt::format("liquefier time constant tau ({})", source), param_estimate(f, "tau_s"), "s", p + "tau_s.value",
+        p + "tau_s.ci95");
+  r.row(fmt::format("liquefier dead time theta ({})", source), param_estimate(f, "theta_s"), "s", p + "theta_s.value",
+        p + "theta_s.ci95");
+  r.row(fmt::format("{} ({})", gain_label, source), param_estimate(f, "K"), gain_unit, p + "K.value", p + "K.ci95");
 }
 
 // The camera path's two dead times: the line test's (its whole-record model's, else its pooled
@@ -84,29 +119,60 @@ void add_whole_record_rows(RunRecord& r, const ident::WholeRecordModel& m, const
 // the photo places the lines on their paths (docs/calibrate.md). They differ when that placement is
 // off, or the ring's start direction.
 void add_camera_theta_agreement(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths) {
-  if (!cam.ring_predicted || !cam.results.contains("ring")) return;
-  const auto& ring = cam.results.at("ring");
-  const auto ci = ring.value("theta_from_phase_ci95_s", nlohmann::json());
-  if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number()) return;
-  const Estimate by_ring{"ring test's phase", ring.at("theta_from_phase_s").get<double>(), ci[0].get<double>(),
-                         ci[1].get<double>()};
+  if (!cam.ring || !cam.ring_prediction) return;
+  const RingPrediction& ring = *cam.ring_prediction;
+  if (!std::isfinite(ring.theta_from_phase_ci95_lo_s) || !std::isfinite(ring.theta_from_phase_ci95_hi_s)) return;
+  const Estimate by_ring{"ring test's phase", ring.theta_from_phase_s, ring.theta_from_phase_ci95_lo_s,
+                         ring.theta_from_phase_ci95_hi_s};
   const fitting::FitResult* lines_fit = widths.whole_record.model ? &widths.whole_record.model->model.fit
                                         : widths.analysis.pooled  ? &*widths.analysis.pooled
                                                                   : nullptr;
   Estimate by_lines;
   if (lines_fit == nullptr || !calibrate_estimate(lines_fit->param("theta_s"), "line test", by_lines)) return;
-  auto a =
-      compare_estimates("liquefier dead time theta", "s", by_lines, by_ring, fitting::equivalence_margin("theta_s"));
-  a["id"] = "theta";
-  if (!a.at("agree").get<bool>()) r.env.warn(a.at("statement").get<std::string>());
-  r.agreement.push_back(a);
+  r.agreement(
+      compare_estimates("liquefier dead time theta", "s", by_lines, by_ring, fitting::equivalence_margin("theta_s")),
+      "theta");
+}
+
+// The ring's results as results.json holds them: the measurement and, when made, the prediction.
+nlohmann::json camera_results(const CameraAnalysis& cam) {
+  nlohmann::json j = cam.results;
+  if (!cam.ring_prediction || !j.contains("ring")) return j;
+  const RingPrediction& p = *cam.ring_prediction;
+  auto interval = [](double lo, double hi) {
+    return std::isfinite(lo) && std::isfinite(hi) ? nlohmann::json{lo, hi} : nlohmann::json(nullptr);
+  };
+  auto& ring = j["ring"];
+  ring["model_gain"] = p.model_gain;
+  ring["model_phase_deg"] = p.model_phase_deg;
+  ring["model_phase_ci95_deg"] = interval(p.model_phase_ci95_lo_deg, p.model_phase_ci95_hi_deg);
+  ring["theta_from_phase_s"] = p.theta_from_phase_s;
+  ring["theta_from_phase_ci95_s"] = interval(p.theta_from_phase_ci95_lo_s, p.theta_from_phase_ci95_hi_s);
+  return j;
+}
+
+void add_ring_rows(RunRecord& r, const CameraAnalysis& cam) {
+  const vision::RingResult& ring = *cam.ring;
+  const std::string p = "liquefier.camera.ring.";
+  r.row_basis("ring frequency", ring.freq_hz, "Hz", p + "freq_hz", "set by the test (N v / (2 pi R))");
+  r.row("ring gain (measured)", {ring.gain, ring.gain_ci95[0], ring.gain_ci95[1]}, "1", p + "gain", p + "gain_ci95");
+  r.row("ring phase (measured)", {ring.phase_deg, ring.phase_ci95_deg[0], ring.phase_ci95_deg[1]}, "deg",
+        p + "phase_deg", p + "phase_ci95_deg");
+  if (const auto& pred = cam.ring_prediction) {
+    r.row("ring phase (step model)",
+          {pred->model_phase_deg, pred->model_phase_ci95_lo_deg, pred->model_phase_ci95_hi_deg}, "deg",
+          p + "model_phase_deg", p + "model_phase_ci95_deg");
+    r.row("dead time from the ring's phase",
+          {pred->theta_from_phase_s, pred->theta_from_phase_ci95_lo_s, pred->theta_from_phase_ci95_hi_s}, "s",
+          p + "theta_from_phase_s", p + "theta_from_phase_ci95_s");
+  }
 }
 
 void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widths, double filament_area_mm2) {
-  r.res()["liquefier"]["step"] = analysis_results(widths);
-  r.res()["liquefier"]["camera"] = cam.results;
-  r.plot["step"] = step_plotdata(widths, "feed (mm/s)", "delivered feed (mm/s, from the width)");
-  r.plot["linewidth"] = cam.linewidth_plot;
+  r.details()["liquefier"]["step"] = analysis_results(widths);
+  r.details()["liquefier"]["camera"] = camera_results(cam);
+  r.rec.plots.step = step_plotdata(widths, "feed (mm/s)", "delivered feed (mm/s, from the width)");
+  r.rec.plots.linewidth = cam.linewidth_plot;
   // The whole-record model of the line widths, as the load-cell path lists it; the pooled fit of
   // the line test's two levels when the model could not be fitted. Each width sample's set-point
   // is the commanded width's mean over the sample's window (vision::map_path), which places the
@@ -117,28 +183,16 @@ void add_camera(RunRecord& r, const CameraAnalysis& cam, const StepOutcome& widt
     add_whole_record_rows(
         r, *m, {display_number(m->model.reference_input * filament_area_mm2) + " mm^3/s", "line widths", "width gain"});
   } else {
-    const std::string p = "liquefier.step.pooled.params.";
-    r.row("liquefier time constant tau (line widths)", p + "tau_s.value", "s", p + "tau_s.ci95");
-    r.row("liquefier dead time theta (line widths)", p + "theta_s.value", "s", p + "theta_s.ci95");
-    r.row("width gain K (line widths)", p + "K.value", "1", p + "K.ci95");
+    add_pooled_rows(r, widths.analysis.pooled, "line widths", "width gain K", "1");
   }
-  if (cam.ring) {
-    const std::string p = "liquefier.camera.ring.";
-    r.row("ring frequency", p + "freq_hz", "Hz", "", "set by the test (N v / (2 pi R))");
-    r.row("ring gain (measured)", p + "gain", "1", p + "gain_ci95");
-    r.row("ring phase (measured)", p + "phase_deg", "deg", p + "phase_ci95_deg");
-    if (cam.ring_predicted) {
-      r.row("ring phase (step model)", p + "model_phase_deg", "deg", p + "model_phase_ci95_deg");
-      r.row("dead time from the ring's phase", p + "theta_from_phase_s", "s", p + "theta_from_phase_ci95_s");
-    }
-  }
+  if (cam.ring) add_ring_rows(r, cam);
   add_camera_theta_agreement(r, cam, widths);
-  for (const auto& w : cam.warnings) r.env.warn(w);
+  for (const auto& w : cam.warnings) r.rec.warnings.push_back(w);
 }
 
 void add_load_cell_step(RunRecord& r, const StepOutcome& step, double filament_area_mm2) {
-  auto& j = r.res()["liquefier"]["step"] = analysis_results(step);
-  r.plot["step"] = step_plotdata(step, "feed (mm/s)", "force (N)");
+  auto& j = r.details()["liquefier"]["step"] = analysis_results(step);
+  r.rec.plots.step = step_plotdata(step, "feed (mm/s)", "force (N)");
   std::string levels;
   const auto& arrivals = step.analysis.arrival_levels;
   for (std::size_t i = 0; i < arrivals.size(); ++i) {
@@ -152,31 +206,39 @@ void add_load_cell_step(RunRecord& r, const StepOutcome& step, double filament_a
     std::string trend;
     if (const auto& tau_trend = step.analysis.level_trends.tau)
       trend = fmt::format(" (tau = a u^b, b = {})", display_number(tau_trend->value("b")));
-    r.notes.push_back(fmt::format("flow sweep: tau at each level reached from both sides, {}{}", levels, trend));
+    r.rec.notes.push_back(fmt::format("flow sweep: tau at each level reached from both sides, {}{}", levels, trend));
   }
   if (const auto& m = step.whole_record.model) {
     add_whole_record_rows(r, *m, {display_number(m->model.reference_input * filament_area_mm2) + " mm^3/s"});
     return;
   }
-  const std::string p = "liquefier.step.pooled.params.";
-  r.row("liquefier time constant tau (step response)", p + "tau_s.value", "s", p + "tau_s.ci95");
-  r.row("liquefier dead time theta (step response)", p + "theta_s.value", "s", p + "theta_s.ci95");
-  r.row("liquefier gain K (step response)", p + "K.value", "N/(mm/s)", p + "K.ci95");
+  add_pooled_rows(r, step.analysis.pooled, "step response", "liquefier gain K", "N/(mm/s)");
+}
+
+// The chirp's plan as results.json records it, and the note that says how it was sized and analysed.
+void add_chirp_plan(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs) {
+  const auto& plan = runs.chirp;
+  r.details()["liquefier"]["chirp_plan"] = {{"expected_tau_s", plan.expected_tau_s},
+                                            {"basis", runs.chirp_basis},
+                                            {"corner_hz", plan.corner_hz},
+                                            {"freq_min_hz", plan.freq_min_hz},
+                                            {"freq_max_hz", plan.freq_max_hz},
+                                            {"duration_s", plan.duration_s},
+                                            {"settle_s", plan.settle_s}};
+  const auto& bb = *chirp.broadband;
+  r.rec.notes.push_back(
+      fmt::format("chirp sized from {}: corner {} Hz, {}-{} Hz over {} s; analysed from {} s up to {} Hz in Welch "
+                  "segments of {} samples ({} Hz bins)",
+                  runs.chirp_basis, display_number(plan.corner_hz), display_number(plan.freq_min_hz),
+                  display_number(plan.freq_max_hz), display_number(plan.duration_s), display_number(bb.start_s),
+                  display_number(bb.fmax_hz), bb.segment_length,
+                  display_number(bb.sample_rate_hz / static_cast<double>(bb.segment_length))));
 }
 
 void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs,
               const std::optional<StepOutcome>& step, double filament_area_mm2) {
-  const auto& plan = runs.chirp;
-  r.res()["liquefier"]["freq"] = analysis_results(chirp);
-  r.res()["liquefier"]["chirp_plan"] = {{"expected_tau_s", plan.expected_tau_s},
-                                        {"basis", runs.chirp_basis},
-                                        {"corner_hz", plan.corner_hz},
-                                        {"freq_min_hz", plan.freq_min_hz},
-                                        {"freq_max_hz", plan.freq_max_hz},
-                                        {"duration_s", plan.duration_s},
-                                        {"settle_s", plan.settle_s}};
-  r.plot["bode"] = bode_plotdata(chirp);
-  const auto& bb = *chirp.broadband;
+  r.details()["liquefier"]["freq"] = analysis_results(chirp);
+  r.rec.plots.bode = bode_plotdata(chirp);
   const fitting::FitResult* fit = chirp.reported_fit();
   if (const auto& m = chirp.whole_record.model) {
     // The chirp's record identifies the same model as the flow sweep's (the transfer function
@@ -184,29 +246,21 @@ void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs
     // results): its tau at its own reference feed.
     r.row(fmt::format("liquefier time constant tau at {} mm^3/s (chirp, whole-record model)",
                       display_number(m->model.reference_input * filament_area_mm2)),
-          "liquefier.freq.whole_record.tau_ref_s.value", "s", "liquefier.freq.whole_record.tau_ref_s.ci95");
+          param_estimate(m->model.fit, "tau_ref_s"), "s", "liquefier.freq.whole_record.tau_ref_s.value",
+          "liquefier.freq.whole_record.tau_ref_s.ci95");
   } else if (fit != nullptr) {
     const std::string p = "liquefier.freq.fit.params.";
-    r.row(fmt::format("tau from the frequency response (chirp, {})", chirp.reported_fit_method()), p + "tau_s.value",
-          "s", p + "tau_s.ci95");
+    r.row(fmt::format("tau from the frequency response (chirp, {})", chirp.reported_fit_method()),
+          param_estimate(*fit, "tau_s"), "s", p + "tau_s.value", p + "tau_s.ci95");
   }
-  r.notes.push_back(
-      fmt::format("chirp sized from {}: corner {} Hz, {}-{} Hz over {} s; analysed from {} s up to {} Hz in Welch "
-                  "segments of {} samples ({} Hz bins)",
-                  runs.chirp_basis, display_number(plan.corner_hz), display_number(plan.freq_min_hz),
-                  display_number(plan.freq_max_hz), display_number(plan.duration_s), display_number(bb.start_s),
-                  display_number(bb.fmax_hz), bb.segment_length,
-                  display_number(bb.sample_rate_hz / static_cast<double>(bb.segment_length))));
+  add_chirp_plan(r, chirp, runs);
   Estimate by_step, by_freq;
   if (step && fit != nullptr &&
       step_tau_for_freq(step_design_input(*step, ""), freq_design_input(chirp, ""), by_step) &&
-      calibrate_estimate(fit->param("tau_s"), "frequency response", by_freq)) {
-    auto a =
-        compare_estimates("liquefier time constant tau", "s", by_step, by_freq, fitting::equivalence_margin("tau_s"));
-    a["id"] = "tau";
-    if (!a.at("agree").get<bool>()) r.env.warn(a.at("statement").get<std::string>());
-    r.agreement.push_back(a);
-  }
+      calibrate_estimate(fit->param("tau_s"), "frequency response", by_freq))
+    r.agreement(
+        compare_estimates("liquefier time constant tau", "s", by_step, by_freq, fitting::equivalence_margin("tau_s")),
+        "tau");
 }
 
 void add_axes(RunRecord& r, const Identification& id) {
@@ -214,42 +268,50 @@ void add_axes(RunRecord& r, const Identification& id) {
     const std::string label(1, axis);
     const ShaperAxis* result = shaper.axis(label);
     if (result == nullptr) throw InputError("'tunekit shaper' found no " + label + " axis in its file");
-    r.res()["axes"][label] = shaper_axis_json(shaper, *result);
-    r.plot["psd_" + label] = psd_plotdata(shaper, *result);
+    r.details()["axes"][label] = shaper_axis_json(shaper, *result);
+    r.rec.plots.psd[label] = psd_plotdata(shaper, *result);
     const std::string base = "axes." + label;
-    r.row(label + " resonance frequency", base + ".modes[0].freq_hz", "Hz", base + ".modes[0].freq_ci95");
-    r.row(label + " damping ratio", base + ".modes[0].zeta", "1", base + ".modes[0].zeta_ci95");
-    r.row(label + " shaper frequency", base + ".recommended.freq_hz", "Hz", "", "designed");
-    r.row(label + " max acceleration", base + ".proposed_max_accel_mm_s2", "mm/s^2", "",
-          r.res()["axes"][label].contains("proposed_max_accel_note") ? "the printer's limit (the shaper allows more)"
-                                                                     : "designed");
+    const auto& modes = result->resonance.modes.modes;
+    ValueEstimate freq, zeta;
+    if (!modes.empty()) {
+      freq = {modes[0].freq_hz, modes[0].freq_ci95_lo, modes[0].freq_ci95_hi};
+      zeta = {modes[0].zeta, modes[0].zeta_ci95_lo, modes[0].zeta_ci95_hi};
+    }
+    r.row(label + " resonance frequency", freq, "Hz", base + ".modes[0].freq_hz", base + ".modes[0].freq_ci95");
+    r.row(label + " damping ratio", zeta, "1", base + ".modes[0].zeta", base + ".modes[0].zeta_ci95");
+    r.row_basis(label + " shaper frequency", result->choice.recommended.freq_hz, "Hz", base + ".recommended.freq_hz",
+                "designed");
+    const ProposedAccel accel = proposed_max_accel(shaper, *result);
+    r.row_basis(label + " max acceleration", accel.mm_s2, "mm/s^2", base + ".proposed_max_accel_mm_s2",
+                accel.capped ? "the printer's limit (the shaper allows more)" : "designed");
   }
 }
 
 void add_compensators(RunRecord& r, const CompensatorDesign& design, const std::string& run_dir) {
   const ExportOutcome& ex = design.exported;
-  if (design.marlin_ft_live) r.res()["firmware_ft_motion"] = "active (M493): settings written as M493";
-  r.res()["compensators"] = analysis_results(ex);
+  if (design.marlin_ft_live) r.details()["firmware_ft_motion"] = "active (M493): settings written as M493";
+  r.details()["compensators"] = analysis_results(ex);
   // The report draws the advance the liquefier needs against flow (the export's flow design).
-  if (ex.flow) r.plot["flow_advance"] = ex.flow->to_json();
-  r.res()["config_diff"] = ex.change.diff;
-  if (ex.settings.pa_k_s) {
+  if (ex.flow) r.rec.plots.flow_advance = flow_advance_plot(*ex.flow);
+  r.rec.config_diff = ex.change.diff;
+  if (const auto& k = ex.settings.pa_k_s) {
     const auto& ci = ex.pa_k_ci95;  // export's own interval: `tunekit export` prints the same
     if (ci) {
-      r.res()["compensators"]["pa_k_ci95"] = {ci->first, ci->second};
-      r.row("pressure advance K", "compensators.settings.pa_k_s", "s", "compensators.pa_k_ci95");
+      r.details()["compensators"]["pa_k_ci95"] = {ci->first, ci->second};
+      r.row("pressure advance K", {*k, ci->first, ci->second}, "s", "compensators.settings.pa_k_s",
+            "compensators.pa_k_ci95");
     } else {
-      r.row("pressure advance K", "compensators.settings.pa_k_s", "s", "", "designed (K = tau)");
+      r.row_basis("pressure advance K", *k, "s", "compensators.settings.pa_k_s", "designed (K = tau)");
     }
   }
-  if (ex.settings.pa_smooth_s)
-    r.row("advance smoothing time", "compensators.settings.pa_smooth_s", "s", "", "designed");
+  if (const auto& smooth = ex.settings.pa_smooth_s)
+    r.row_basis("advance smoothing time", *smooth, "s", "compensators.settings.pa_smooth_s", "designed");
   if (ex.design)
-    for (const auto& n : ex.design->notes) r.notes.push_back(n);
+    for (const auto& n : ex.design->notes) r.rec.notes.push_back(n);
   for (const auto& w : to_envelope(ex).warnings()) {
     nlohmann::json wj = w;
     strip_prefix(wj, run_dir + "/");
-    r.env.warn(wj.get<std::string>());
+    r.rec.warnings.push_back(wj.get<std::string>());
   }
 }
 
@@ -258,6 +320,25 @@ nlohmann::json reproduce_json(const Identification& id) {
   for (const auto& rep : id.reproduce)
     out.push_back({{"analysis", rep.analysis}, {"json", rep.json}, {"command", rep.command()}});
   return out;
+}
+
+// Paths inside the run directory, as results.json writes them (strip_prefix): in every string of
+// the record's results (not its warnings, which keep what the analyses said).
+void strip_run_dir(CalibrationRecord& rec, const std::string& prefix) {
+  auto strip = [&](std::string& s) {
+    nlohmann::json j = s;
+    strip_prefix(j, prefix);
+    s = j.get<std::string>();
+  };
+  strip(rec.machine);
+  for (auto& row : rec.summary)
+    for (auto* s : {&row.label, &row.unit, &row.basis, &row.path, &row.ci_path}) strip(*s);
+  for (auto& a : rec.agreements)
+    for (auto* s : {&a.id, &a.quantity, &a.unit, &a.a.method, &a.b.method, &a.margin_basis, &a.verdict, &a.statement})
+      strip(*s);
+  for (auto& n : rec.notes) strip(n);
+  strip(rec.config_diff);
+  strip_prefix(rec.details, prefix);
 }
 
 RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, const Identification& id,
@@ -275,17 +356,16 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
                      {"config", a.config},
                      {"write", a.write},
                      {"sim", a.sim_options}});
-  r.res()["machine"] = plan.profile.profile.name;
+  r.rec.tool_version = core::kVersion;
+  r.rec.machine = plan.profile.profile.name;
   if (id.camera) add_camera(r, *id.camera, *id.step, plan.profile.profile.filament_area_mm2());
   else if (id.step) add_load_cell_step(r, *id.step, plan.profile.profile.filament_area_mm2());
   if (id.freq) add_freq(r, *id.freq, runs, id.step, plan.profile.profile.filament_area_mm2());
   add_axes(r, id);
   add_compensators(r, design, plan.run_dir);
-  r.res()["summary"] = r.summary;
-  r.res()["agreement"] = r.agreement;
-  r.res()["notes"] = r.notes;
-  r.res()["reproduce"] = reproduce_json(id);
-  strip_prefix(r.res(), plan.run_dir + "/");
+  r.details()["reproduce"] = reproduce_json(id);
+  strip_run_dir(r.rec, plan.run_dir + "/");
+  write_record_results(r.rec, r.env);
   return r;
 }
 
@@ -310,8 +390,8 @@ int write_run(const CalibrationPlan& plan, const ExperimentRuns& runs, const Ide
   progress.begin("write report", 2);
   core::write_file_atomic(plan.run_dir + "/analysis/README", analysis_readme(identified));
   core::write_file_atomic(plan.run_dir + "/results.json", r.env.dump());
-  core::write_file_atomic(plan.run_dir + "/plotdata.json", r.plot.dump() + "\n");
-  const ReportOutcome written = compute_report({plan.run_dir});
+  core::write_file_atomic(plan.run_dir + "/plotdata.json", plotdata_json(r.rec.plots).dump() + "\n");
+  const ReportOutcome written = render_report(plan.run_dir, r.rec);
   const std::string& report = written.html_path;
   progress.end(report);
   // A plot library that failed (a memory cap): one line; the report holds everything but the figures.
@@ -323,7 +403,7 @@ int write_run(const CalibrationPlan& plan, const ExperimentRuns& runs, const Ide
         written.images.size(), std::find_if(written.images.begin(), written.images.end(), [](const ReportImage& i) {
                                  return !i.failure.empty();
                                })->failure);
-  if (!plan.options.output.json) print_calibrate_terminal(r.res(), design, report, ctx.out);
+  if (!plan.options.output.json) print_calibrate_terminal(r.rec, design, report, ctx.out);
   OutputOptions output = plan.output;
   output.record_source = plan.run_dir;
   return emit(r.env, output, ctx);

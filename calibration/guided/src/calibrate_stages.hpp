@@ -10,6 +10,9 @@
 #include "tunekit/calibration/guided/calibration_pipeline.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/results/input_digest.hpp"
+#include "tunekit/calibration/guided/calibration_pipeline.hpp"
+#include "tunekit/calibration/results/calibration_record.hpp"
+#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::calibration {
@@ -65,11 +68,11 @@ double clamped_chirp_tau_s(double tau_s);
 /// The liquefier step test analysed as `tunekit step FILE --input feed --output force` does.
 StepOptions load_cell_step_options(const std::string& csv, const std::string& feed_track);
 
-/// What the technician reads after the progress (calibrate_terminal.cpp): the summary rows of
-/// `results` (each identified quantity, its value and 95 % interval or basis), the configuration's
+/// What the technician reads after the progress (calibrate_terminal.cpp): the record's summary
+/// rows (each identified quantity, its value and 95 % interval or basis), the configuration's
 /// settings (current, proposed, change), the diff, what to do next, and the report's path.
-void print_calibrate_terminal(const nlohmann::json& results, const CompensatorDesign& design, const std::string& report,
-                              std::ostream& os);
+void print_calibrate_terminal(const CalibrationRecord& record, const CompensatorDesign& design,
+                              const std::string& report, std::ostream& os);
 
 /// Paths inside the run directory are written relative to it, so that results.json does not
 /// depend on where the run lives (and two runs of one machine are byte-identical).

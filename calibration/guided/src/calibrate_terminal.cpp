@@ -12,6 +12,8 @@
 #include "calibrate_stages.hpp"
 #include "tunekit/calibration/results/json_access.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/calibration/results/calibration_record.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -25,25 +27,17 @@ std::string with_unit(double v, const std::string& unit) {
   return unit.empty() || unit == "1" ? display_number(v) : display_number(v) + " " + unit;
 }
 
-std::string interval_text(const nlohmann::json& results, const nlohmann::json& row) {
-  const std::string ci_path = row.value("ci_path", std::string());
-  if (ci_path.empty()) return row.value("basis", std::string());
-  const auto* ci = json_at(results, ci_path);
-  if (ci == nullptr || !ci->is_array() || ci->size() != 2 || !(*ci)[0].is_number() || !(*ci)[1].is_number())
-    return "n/a";
-  return display_interval((*ci)[0].get<double>(), (*ci)[1].get<double>());
+std::string interval_text(const SummaryRow& row) {
+  if (row.ci_path.empty()) return row.basis;
+  if (!row.estimate.has_interval()) return "n/a";
+  return display_interval(row.estimate.ci95_lo, row.estimate.ci95_hi);
 }
 
-std::vector<QuantityLine> quantity_lines(const nlohmann::json& results) {
+std::vector<QuantityLine> quantity_lines(const CalibrationRecord& record) {
   std::vector<QuantityLine> lines;
-  if (!results.contains("summary")) return lines;
-  for (const auto& row : results.at("summary")) {
-    const std::string path = row.value("path", std::string());
-    const auto* v = json_at(results, path);
-    if (v == nullptr || !v->is_number()) continue;
-    lines.push_back({row.value("label", path), with_unit(v->get<double>(), row.value("unit", std::string())),
-                     interval_text(results, row)});
-  }
+  for (const auto& row : record.summary)
+    if (row.estimate.has_value())
+      lines.push_back({row.label, with_unit(row.estimate.value, row.unit), interval_text(row)});
   return lines;
 }
 
@@ -88,11 +82,11 @@ void print_settings(const ExportOutcome& ex, std::ostream& os) {
 
 }  // namespace
 
-void print_calibrate_terminal(const nlohmann::json& results, const CompensatorDesign& design, const std::string& report,
-                              std::ostream& os) {
+void print_calibrate_terminal(const CalibrationRecord& record, const CompensatorDesign& design,
+                              const std::string& report, std::ostream& os) {
   const ExportOutcome& ex = design.exported;
   os << "\n";
-  print_quantities(quantity_lines(results), os);
+  print_quantities(quantity_lines(record), os);
   print_settings(ex, os);
   const std::string& diff = ex.change.diff;
   if (!diff.empty()) os << "\n" << diff << (diff.back() == '\n' ? "" : "\n");

@@ -11,14 +11,11 @@
 
 namespace tunekit::calibration {
 
-Figure overshoot_grid_figure(const nlohmann::json& d) {
+Figure overshoot_grid_figure(const OvershootGridPlot& d) {
   Figure f;
   f.title = "Overshoot grid: speed x acceleration";
-  std::map<std::pair<bool, double>, std::vector<std::pair<double, const nlohmann::json*>>> by_speed;
-  if (d.contains("cells"))
-    for (const auto& c : d["cells"])
-      by_speed[{c.value("input_shaping", false), c.value("speed_mm_s", 0.0)}].push_back(
-          {c.value("accel_mm_s2", 0.0), &c});
+  std::map<std::pair<bool, double>, std::vector<std::pair<double, const OvershootGridPlot::Cell*>>> by_speed;
+  for (const auto& c : d.cells) by_speed[{c.input_shaping, c.speed_mm_s}].push_back({c.accel_mm_s2, &c});
   Panel os{"Overshoot (mean over corners, worst axis)", "", "overshoot (mm)", false, false, {}, 1.2};
   Panel fom{"Figure of merit (normalized speed within tolerance, else 0)",
             "acceleration (mm/s^2)",
@@ -40,11 +37,11 @@ Figure overshoot_grid_figure(const nlohmann::json& d) {
     Series sc{"", {}, {}, style, color};
     for (const auto& [acc, c] : cells) {
       so.x.push_back(acc);
-      so.y.push_back(c->value("overshoot_mm", 0.0));
+      so.y.push_back(c->overshoot_mm);
       sf.x.push_back(acc);
-      sf.y.push_back(c->value("figure_of_merit", 0.0));
+      sf.y.push_back(c->figure_of_merit);
       sc.x.push_back(acc);
-      sc.y.push_back(c->value("completion_time_s", 0.0));
+      sc.y.push_back(c->completion_time_s);
       ax_all.push_back(acc);
     }
     os.series.push_back(so);
@@ -53,7 +50,7 @@ Figure overshoot_grid_figure(const nlohmann::json& d) {
     color = color % 8 + 1;
   }
   if (!ax_all.empty()) {
-    const double tol = d.value("tolerance_mm", 0.0);
+    const double tol = d.tolerance_mm;
     const auto [lo, hi] = std::minmax_element(ax_all.begin(), ax_all.end());
     os.series.push_back({"tolerance", {*lo, *hi}, {tol, tol}, Series::Style::dashed, 8});
   }

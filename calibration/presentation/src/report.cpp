@@ -1,5 +1,7 @@
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
+#include "tunekit/calibration/presentation/report.hpp"
+#include "tunekit/calibration/presentation/report_command.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -11,6 +13,8 @@
 
 #include "tunekit/calibration/results/warning_advice.hpp"
 #include "tunekit/core/json_error_text.hpp"
+#include "tunekit/calibration/results/calibration_record.hpp"
+#include "tunekit/calibration/results/warning_advice.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/formats/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"
@@ -20,14 +24,6 @@
 
 namespace tunekit::calibration {
 namespace {
-
-std::vector<double> vec(const nlohmann::json& d, const char* key) {
-  if (!d.contains(key) || !d[key].is_array()) return {};
-  std::vector<double> v;
-  v.reserve(d[key].size());
-  for (const auto& x : d[key]) v.push_back(x.is_number() ? x.get<double>() : std::nan(""));
-  return v;
-}
 
 std::string base64(std::string_view bytes) {
   std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
@@ -62,35 +58,27 @@ std::string image_mime(const std::string& path) {
   throw InputError("a report image must be .svg or .png", path);
 }
 
+// render_svg, returning the SVG text it wrote (the plot library writes only to a file): the
+// text the report embeds, kept from rendering.
+std::string render_svg_text(const Figure& fig, const std::string& path) {
+  render_svg(fig, path);
+  return read_file_bytes(path);
+}
+
 }  // namespace
 
-std::string display_number(double v) {
-  if (!std::isfinite(v)) return "n/a";
-  return fmt::format("{:.4g}", v);
+
+std::string step_model_note(const StepPlot& d) {
+  if (d.has_model()) return "";
+  return d.model_missing.empty() ? std::string("no whole-record model in the plot data")
+                                 : "whole-record model not fitted: " + d.model_missing;
 }
 
-std::string display_interval(double lo, double hi) {
-  if (!std::isfinite(lo) || !std::isfinite(hi)) return fmt::format("[{}, {}]", display_number(lo), display_number(hi));
-  // 8 significant digits tell apart bounds 1e-7 apart relative to their size: an interval narrower
-  // than that is a measurement's rounding, not information, and prints as equal bounds.
-  constexpr int kMaxDigits = 8;
-  int digits = 4;
-  while (digits < kMaxDigits && lo != hi && fmt::format("{:.{}g}", lo, digits) == fmt::format("{:.{}g}", hi, digits))
-    ++digits;
-  return fmt::format("[{:.{}g}, {:.{}g}]", lo, digits, hi, digits);
-}
-
-std::string step_model_note(const nlohmann::json& d) {
-  if (d.contains("y_model")) return "";
-  const std::string why = d.value("model_missing", std::string());
-  return why.empty() ? std::string("no whole-record model in the plot data") : "whole-record model not fitted: " + why;
-}
-
-Figure step_figure(const nlohmann::json& d) {
+Figure step_figure(const StepPlot& d) {
   Figure f;
   f.title = "Liquefier step response";
-  Panel in{"Input", "", d.value("u_label", std::string("input")), false, false, {}, 0.6};
-  in.series.push_back({"commanded", vec(d, "t_s"), vec(d, "u"), Series::Style::line, 4});
+  Panel in{"Input", "", d.u_label, false, false, {}, 0.6};
+  in.series.push_back({"commanded", d.t_s, d.u, Series::Style::line, 4});
   const std::string note = step_model_note(d);
   // The panel's title says why the model is missing (shortened to fit above the panel; the
   // caption has it in full).
@@ -98,28 +86,26 @@ Figure step_figure(const nlohmann::json& d) {
   std::string title =
       note.empty() ? "Output, the whole-record model and each step's fit" : "Output and step fits; " + note;
   if (title.size() > kTitleChars) title = title.substr(0, kTitleChars - 3) + "...";
-  Panel out{title, "", d.value("y_label", std::string("output")), false, false, {}, 1.4};
-  out.series.push_back({"measured", vec(d, "t_s"), vec(d, "y"), Series::Style::line, 1});
+  Panel out{title, "", d.y_label, false, false, {}, 1.4};
+  out.series.push_back({"measured", d.t_s, d.y, Series::Style::line, 1});
   if (note.empty())
-    out.series.push_back({d.value("model_label", std::string("whole-record model")), vec(d, "t_s"), vec(d, "y_model"),
-                          Series::Style::line, kWholeRecordModelColor});
-  out.series.push_back({"step fits (each over its step)", vec(d, "t_s"), vec(d, "y_fit"), Series::Style::dashed, 2});
+    out.series.push_back({d.model_label, d.t_s, d.y_model, Series::Style::line, kWholeRecordModelColor});
+  out.series.push_back({"step fits (each over its step)", d.t_s, d.y_fit, Series::Style::dashed, 2});
   // The residuals of each: the model's over the whole record, the step fits' over their steps.
-  auto residuals = [&](const char* key, const std::string& panel_title, int color) {
-    const auto y = vec(d, "y"), fit = vec(d, key);
-    std::vector<double> res(std::min(y.size(), fit.size()));
-    for (std::size_t i = 0; i < res.size(); ++i) res[i] = y[i] - fit[i];
+  auto residuals = [&](const std::vector<double>& fit, const std::string& panel_title, int color) {
+    std::vector<double> res(std::min(d.y.size(), fit.size()));
+    for (std::size_t i = 0; i < res.size(); ++i) res[i] = d.y[i] - fit[i];
     Panel rp{panel_title, "", "residual", false, false, {}, 0.7};
-    rp.series.push_back({"", vec(d, "t_s"), res, Series::Style::line, color});
+    rp.series.push_back({"", d.t_s, res, Series::Style::line, color});
     return rp;
   };
   f.panels = {in, out};
   if (note.empty()) {
-    f.panels.push_back(residuals("y_model", "Residuals of the whole-record model", kWholeRecordModelColor));
-    f.panels.push_back(residuals("y_fit", "Residuals of the step fits", 3));
+    f.panels.push_back(residuals(d.y_model, "Residuals of the whole-record model", kWholeRecordModelColor));
+    f.panels.push_back(residuals(d.y_fit, "Residuals of the step fits", 3));
     f.height_px = 900;
   } else {
-    f.panels.push_back(residuals("y_fit", "Residuals", 3));
+    f.panels.push_back(residuals(d.y_fit, "Residuals", 3));
     f.panels.back().height_weight = 0.8;
     f.height_px = 760;
   }
@@ -128,24 +114,22 @@ Figure step_figure(const nlohmann::json& d) {
   return f;
 }
 
-Figure bode_figure(const nlohmann::json& d) {
+Figure bode_figure(const BodePlot& d) {
   Figure f;
   f.title = "Liquefier frequency response";
-  const auto fr = vec(d, "freq_hz");
+  const auto& fr = d.measured.freq_hz;
   Panel mag{"Magnitude", "", "|H| (dB)", true, false, {}, 1.2};
-  mag.series.push_back({"measured", fr, vec(d, "mag_db"), Series::Style::points, 1});
+  mag.series.push_back({"measured", fr, d.measured.mag_db, Series::Style::points, 1});
   Panel ph{"Phase", "", "phase (deg)", true, false, {}, 1.0};
-  ph.series.push_back({"measured", fr, vec(d, "phase_deg"), Series::Style::points, 1});
-  if (d.contains("model")) {
-    const auto& m = d["model"];
-    const std::string label = m.value("label", std::string("fitted model"));
-    mag.series.push_back({label, vec(m, "freq_hz"), vec(m, "mag_db"), Series::Style::line, 2});
-    ph.series.push_back({label, vec(m, "freq_hz"), vec(m, "phase_deg"), Series::Style::line, 2});
+  ph.series.push_back({"measured", fr, d.measured.phase_deg, Series::Style::points, 1});
+  if (const auto& m = d.model) {
+    mag.series.push_back({m->label, m->curve.freq_hz, m->curve.mag_db, Series::Style::line, 2});
+    ph.series.push_back({m->label, m->curve.freq_hz, m->curve.phase_deg, Series::Style::line, 2});
   }
   f.panels = {mag, ph};
-  if (d.contains("coherence")) {
+  if (!d.coherence.empty()) {
     Panel coh{"Coherence", "frequency (Hz)", "coherence", true, false, {}, 0.7};
-    coh.series.push_back({"", fr, vec(d, "coherence"), Series::Style::line, 3});
+    coh.series.push_back({"", fr, d.coherence, Series::Style::line, 3});
     f.panels.push_back(coh);
   } else {
     f.panels.back().xlabel = "frequency (Hz)";
@@ -154,36 +138,29 @@ Figure bode_figure(const nlohmann::json& d) {
   return f;
 }
 
-Figure psd_figure(const nlohmann::json& d, const std::string& axis) {
+Figure psd_figure(const PsdPlot& d, const std::string& axis) {
   Figure f;
   f.title = fmt::format("Axis {}: power spectral density, modes and input shapers", axis);
-  const auto fr = vec(d, "freq_hz");
-  const auto psd = vec(d, "psd");
   Panel p{"Acceleration PSD", "", "PSD ((mm/s^2)^2/Hz)", false, false, {}, 1.3};
-  p.series.push_back({"measured", fr, psd, Series::Style::line, 1});
+  p.series.push_back({"measured", d.freq_hz, d.psd, Series::Style::line, 1});
   double peak = 0;
-  for (double v : psd) peak = std::isfinite(v) ? std::max(peak, v) : peak;
+  for (double v : d.psd) peak = std::isfinite(v) ? std::max(peak, v) : peak;
   int color = 2;
-  if (d.contains("modes"))
-    for (const auto& m : d["modes"]) {
-      const double fm = m.value("freq_hz", 0.0);
-      p.series.push_back({fmt::format("mode {:.1f} Hz", fm), {fm, fm}, {0.0, peak}, Series::Style::dashed, color});
-      color = color % 8 + 1;
-    }
+  for (double fm : d.mode_freq_hz) {
+    p.series.push_back({fmt::format("mode {:.1f} Hz", fm), {fm, fm}, {0.0, peak}, Series::Style::dashed, color});
+    color = color % 8 + 1;
+  }
   Panel s{"Shaper response (remaining vibration)", "frequency (Hz)", "fraction", false, false, {}, 1.0};
   int sc = 2;
   // The recommended shaper is marked: named so in the legend, drawn solid; the others dashed.
-  const std::string chosen = d.contains("recommended") ? d["recommended"].value("type", std::string()) : "";
-  if (d.contains("shapers"))
-    for (const auto& sh : d["shapers"]) {
-      const std::string type = sh.value("type", std::string("?"));
-      const bool is_chosen = type == chosen;
-      s.series.push_back(
-          {is_chosen ? fmt::format("{} (recommended, {:.1f} Hz)", type, d["recommended"].value("freq_hz", 0.0)) : type,
-           vec(sh, "freq_hz"), vec(sh, "response"),
-           is_chosen || chosen.empty() ? Series::Style::line : Series::Style::dashed, sc});
-      sc = sc % 8 + 1;
-    }
+  const std::string chosen = d.recommended ? d.recommended->type : "";
+  for (const auto& sh : d.shapers) {
+    const bool is_chosen = sh.type == chosen;
+    s.series.push_back(
+        {is_chosen ? fmt::format("{} (recommended, {:.1f} Hz)", sh.type, d.recommended->freq_hz) : sh.type, sh.freq_hz,
+         sh.response, is_chosen || chosen.empty() ? Series::Style::line : Series::Style::dashed, sc});
+    sc = sc % 8 + 1;
+  }
   f.panels = {p};
   if (!s.series.empty()) f.panels.push_back(s);
   else f.panels.back().xlabel = "frequency (Hz)";
@@ -191,79 +168,73 @@ Figure psd_figure(const nlohmann::json& d, const std::string& axis) {
   return f;
 }
 
-Figure viscosity_figure(const nlohmann::json& d) {
+Figure viscosity_figure(const ViscosityPlot& d) {
   Figure f;
   f.title = "Melt viscosity";
   Panel p{"Viscosity against shear rate", "shear rate (1/s)", "viscosity (Pa s)", true, true, {}, 1.0};
   int c = 1;
-  if (d.contains("series"))
-    for (const auto& s : d["series"]) {
-      const double tk = s.value("temperature_K", 0.0);
-      p.series.push_back({fmt::format("{:.0f} K data", tk), vec(s, "shear_rate_1_s"), vec(s, "viscosity_Pa_s"),
-                          Series::Style::points, c});
-      p.series.push_back({"", vec(s, "fit_shear_rate_1_s"), vec(s, "fit_viscosity_Pa_s"), Series::Style::line, c});
-      c = c % 8 + 1;
-    }
+  for (const auto& s : d.series) {
+    p.series.push_back(
+        {fmt::format("{:.0f} K data", s.temperature_K), s.shear_rate_1_s, s.viscosity_Pa_s, Series::Style::points, c});
+    p.series.push_back({"", s.fit_shear_rate_1_s, s.fit_viscosity_Pa_s, Series::Style::line, c});
+    c = c % 8 + 1;
+  }
   f.panels = {p};
   return f;
 }
 
-Figure linewidth_figure(const nlohmann::json& d) {
+Figure linewidth_figure(const LinewidthPlot& d) {
   Figure f;
   f.title = "Line width profile";
   Panel p{"Width along the line", "arc length (mm)", "width (mm)", false, false, {}, 1.0};
-  p.series.push_back({"measured", vec(d, "s_mm"), vec(d, "width_mm"), Series::Style::line, 1});
-  if (d.contains("setpoint_mm"))
-    p.series.push_back({"set point", vec(d, "s_mm"), vec(d, "setpoint_mm"), Series::Style::dashed, 2});
+  p.series.push_back({"measured", d.s_mm, d.width_mm, Series::Style::line, 1});
+  if (!d.setpoint_mm.empty()) p.series.push_back({"set point", d.s_mm, d.setpoint_mm, Series::Style::dashed, 2});
   f.panels = {p};
   f.height_px = 420;
   return f;
 }
 
-std::vector<ReportImage> render_report_plots(const std::string& run_dir, const nlohmann::json& pd) {
+std::vector<ReportImage> render_report_plots(const std::string& run_dir, const ReportPlots& pd) {
   std::vector<ReportImage> images;
   const std::string dir = run_dir + "/plots";
+  // Each figure's SVG text is kept from rendering: the report embeds it without reading it again.
   auto add = [&](const std::string& id, const std::string& caption, const Figure& fig) {
     const std::string path = dir + "/" + id + ".svg";
     try {
-      render_svg(fig, path);
-      images.push_back({id, caption, path, {}});
+      images.push_back({id, caption, path, {}, render_svg_text(fig, path)});
     } catch (const InputError& e) {
-      images.push_back({id, caption, {}, e.message()});  // the report goes on without it
+      images.push_back({id, caption, {}, e.message(), {}});  // the report goes on without it
     }
   };
-  if (pd.contains("step")) {
-    const std::string note = step_model_note(pd["step"]);
+  if (pd.step) {
+    const std::string note = step_model_note(*pd.step);
     add("step",
         note.empty() ? "Step response: the record, the whole-record model over all of it, each step's fit over its "
                        "step, and the residuals"
                      : "Step response: the record, each step's fit over its step and the residuals; " + note,
-        step_figure(pd["step"]));
+        step_figure(*pd.step));
   }
-  if (pd.contains("bode")) add("bode", "Bode plot with the fitted model and the coherence", bode_figure(pd["bode"]));
-  for (const char* axis : {"x", "y", "z"}) {
-    const std::string key = std::string("psd_") + axis;
-    if (pd.contains(key))
-      add(key, fmt::format("Axis {}: PSD with identified modes and the candidate shapers' responses", axis),
-          psd_figure(pd[key], axis));
-  }
-  if (pd.contains("overshoot_grid"))
+  if (pd.bode) add("bode", "Bode plot with the fitted model and the coherence", bode_figure(*pd.bode));
+  for (const auto& [axis, psd] : pd.psd)
+    add("psd_" + axis, fmt::format("Axis {}: PSD with identified modes and the candidate shapers' responses", axis),
+        psd_figure(psd, axis));
+  if (pd.overshoot_grid)
     add("overshoot_grid", "Overshoot, completion time and figure of merit over the speed x acceleration grid",
-        overshoot_grid_figure(pd["overshoot_grid"]));
-  if (pd.contains("flow_advance"))
+        overshoot_grid_figure(*pd.overshoot_grid));
+  if (pd.flow_advance)
     add("flow_advance", "Advance against flow: the need with its 95 % band, each exported model, the design flow",
-        flow_advance_figure(pd["flow_advance"]));
-  if (pd.contains("viscosity"))
-    add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(pd["viscosity"]));
-  if (pd.contains("linewidth")) {
-    add("linewidth", "Line-width profile", linewidth_figure(pd["linewidth"]));
+        flow_advance_figure(*pd.flow_advance));
+  if (pd.viscosity)
+    add("viscosity", "Viscosity against shear rate with the fitted model", viscosity_figure(*pd.viscosity));
+  if (pd.linewidth) {
+    add("linewidth", "Line-width profile", linewidth_figure(*pd.linewidth));
     // The photo with the detected edges and centreline, shown beside its profile.
-    const std::string overlay = pd["linewidth"].value("overlay_png", std::string());
-    if (!overlay.empty()) {
+    if (const std::string& overlay = pd.linewidth->overlay_png; !overlay.empty()) {
       const std::string path = run_dir + "/" + overlay;
       if (!std::filesystem::exists(path))
         throw InputError("the line-width overlay named in plotdata.json is missing", path);
-      images.push_back({"linewidth_overlay", "Photo overlay: detected edges and centreline", path, {}});  // a PNG photo
+      images.push_back(
+          {"linewidth_overlay", "Photo overlay: detected edges and centreline", path, {}, read_file_bytes(path)});
     }
   }
   return images;
@@ -271,71 +242,51 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const n
 
 namespace {
 
-// The "95 % interval" cell of a summary row: [lo, hi] from the row's ci_path, else its basis.
-std::string interval_cell(const nlohmann::json& results, const nlohmann::json& row) {
-  const std::string ci_path = row.value("ci_path", std::string());
-  if (!ci_path.empty()) {
-    const auto* ci = json_at(results, ci_path);
-    if (ci != nullptr && ci->is_array() && ci->size() == 2 && (*ci)[0].is_number() && (*ci)[1].is_number())
-      return fmt::format("<td class=\"ci\" data-path=\"{}\">{}</td>", html::escape(ci_path),
-                         display_interval((*ci)[0].get<double>(), (*ci)[1].get<double>()));
-    return "<td class=\"ci\">n/a</td>";
-  }
-  return "<td class=\"ci\">" + html::escape(row.value("basis", std::string("n/a"))) + "</td>";
+// The "95 % interval" cell of a summary row: [lo, hi], else n/a, or the row's basis.
+std::string interval_cell(const SummaryRow& row) {
+  if (row.ci_path.empty()) return "<td class=\"ci\">" + html::escape(row.basis) + "</td>";
+  if (!row.estimate.has_interval()) return "<td class=\"ci\">n/a</td>";
+  return fmt::format("<td class=\"ci\" data-path=\"{}\">{}</td>", html::escape(row.ci_path),
+                     display_interval(row.estimate.ci95_lo, row.estimate.ci95_hi));
 }
 
-}  // namespace
-
-std::string build_report_html(const nlohmann::json& env, const std::vector<ReportImage>& images) {
-  const auto& results = env.contains("results") ? env["results"] : env;
-  std::ostringstream h;
-  // Nothing may leave the file: no scripts, no fetches; images only from data: URIs.
-  h << html::head("tunekit calibration report", report_css(), kReportCsp);
-  h << "<h1>tunekit calibration report</h1>\n";
-  const std::string machine = results.value("machine", std::string());
-  if (!machine.empty()) h << "<p>Machine: " << html::escape(machine) << "</p>\n";
-  if (env.contains("tool"))
-    h << "<p>tunekit " << html::escape(env["tool"].value("version", std::string("?"))) << ", command <code>"
-      << html::escape(env.value("command", std::string("?"))) << "</code></p>\n";
-
+void summary_html(const CalibrationRecord& r, std::ostream& h) {
   h << "<h2>Summary</h2>\n<table id=\"summary\">\n"
     << "<tr><th>quantity</th><th>value</th><th>95 % interval</th><th>unit</th></tr>\n";
-  if (results.contains("summary"))
-    for (const auto& row : results["summary"]) {
-      const std::string path = row.value("path", std::string());
-      const auto* v = json_at(results, path);
-      if (v == nullptr || !v->is_number()) continue;
-      h << "<tr><td>" << html::escape(row.value("label", path)) << "</td><td class=\"num\" data-path=\""
-        << html::escape(path) << "\" data-value=\"" << v->dump() << "\">" << display_number(v->get<double>()) << "</td>"
-        << interval_cell(results, row) << "<td>" << html::escape(row.value("unit", std::string())) << "</td></tr>\n";
-    }
-  h << "</table>\n";
-
-  if (results.contains("agreement") && results["agreement"].is_array() && !results["agreement"].empty()) {
-    h << "<h2>Methods compared</h2>\n";
-    for (const auto& a : results["agreement"]) {
-      const bool ok = a.value("agree", false);
-      h << "<p class=\"" << (ok ? "agree" : "disagree") << "\" id=\"agreement-"
-        << html::escape(a.value("id", std::string("quantity"))) << "\" data-agree=\"" << (ok ? "true" : "false")
-        << "\">" << html::escape(a.value("statement", std::string())) << "</p>\n";
-    }
+  for (const auto& row : r.summary) {
+    if (!row.estimate.has_value()) continue;
+    h << "<tr><td>" << html::escape(row.label) << "</td><td class=\"num\" data-path=\"" << html::escape(row.path)
+      << "\" data-value=\"" << nlohmann::json(row.estimate.value).dump() << "\">" << display_number(row.estimate.value)
+      << "</td>" << interval_cell(row) << "<td>" << html::escape(row.unit) << "</td></tr>\n";
   }
+  h << "</table>\n";
+}
 
-  if (env.contains("warnings") && !env["warnings"].empty()) {
+void agreements_html(const CalibrationRecord& r, std::ostream& h) {
+  if (r.agreements.empty()) return;
+  h << "<h2>Methods compared</h2>\n";
+  for (const auto& a : r.agreements)
+    h << "<p class=\"" << (a.agree ? "agree" : "disagree") << "\" id=\"agreement-"
+      << html::escape(a.id.empty() ? std::string("quantity") : a.id) << "\" data-agree=\""
+      << (a.agree ? "true" : "false") << "\">" << html::escape(a.statement) << "</p>\n";
+}
+
+void warnings_and_notes_html(const CalibrationRecord& r, std::ostream& h) {
+  if (!r.warnings.empty()) {
     h << "<h2>Warnings</h2>\n<ul id=\"warnings\">\n";
-    for (const auto& w : env["warnings"]) {
-      const std::string text = w.get<std::string>();
+    for (const auto& text : r.warnings)
       h << "<li class=\"warn\">" << html::escape(text)
         << "<br><span class=\"todo\">What to do: " << html::escape(advice_for_warning(text)) << "</span></li>\n";
-    }
     h << "</ul>\n";
   }
-  if (results.contains("notes") && results["notes"].is_array() && !results["notes"].empty()) {
+  if (!r.notes.empty()) {
     h << "<h2>Notes</h2>\n<ul id=\"notes\">\n";
-    for (const auto& n : results["notes"])
-      if (n.is_string()) h << "<li>" << html::escape(n.get<std::string>()) << "</li>\n";
+    for (const auto& n : r.notes) h << "<li>" << html::escape(n) << "</li>\n";
     h << "</ul>\n";
   }
+}
+
+void images_html(const std::vector<ReportImage>& images, std::ostream& h) {
   if (!images.empty()) h << "<h2>Plots</h2>\n";
   for (const auto& img : images) {
     if (!img.failure.empty()) {
@@ -343,17 +294,45 @@ std::string build_report_html(const nlohmann::json& env, const std::vector<Repor
         << html::escape(img.failure) << ")</figcaption></figure>\n";
       continue;
     }
-    const std::string bytes = read_file_bytes(img.path);
     h << "<figure id=\"plot-" << img.id << "\"><img alt=\"" << html::escape(img.caption)
-      << "\" src=\"data:" << image_mime(img.path) << ";base64," << base64(bytes) << "\"><figcaption>"
+      << "\" src=\"data:" << image_mime(img.path) << ";base64," << base64(img.bytes) << "\"><figcaption>"
       << html::escape(img.caption) << "</figcaption></figure>\n";
   }
-  if (results.contains("config_diff") && results["config_diff"].is_string() &&
-      !results["config_diff"].get<std::string>().empty())
-    h << "<h2>Configuration changes</h2>\n<pre>" << html::escape(results["config_diff"].get<std::string>())
-      << "</pre>\n";
+}
+
+}  // namespace
+
+std::string build_report_html(const CalibrationRecord& r, const std::vector<ReportImage>& images) {
+  std::ostringstream h;
+  // Nothing may leave the file: no scripts, no fetches; images only from data: URIs.
+  h << html::head("tunekit calibration report", report_css(), kReportCsp);
+  h << "<h1>tunekit calibration report</h1>\n";
+  if (!r.machine.empty()) h << "<p>Machine: " << html::escape(r.machine) << "</p>\n";
+  if (!r.tool_version.empty())
+    h << "<p>tunekit " << html::escape(r.tool_version) << ", command <code>" << html::escape(r.command)
+      << "</code></p>\n";
+  summary_html(r, h);
+  agreements_html(r, h);
+  warnings_and_notes_html(r, h);
+  images_html(images, h);
+  if (!r.config_diff.empty()) h << "<h2>Configuration changes</h2>\n<pre>" << html::escape(r.config_diff) << "</pre>\n";
   h << "</body>\n</html>\n";
   return h.str();
 }
+
+ReportOutcome render_report(const std::string& run_dir, const CalibrationRecord& record) {
+  ReportOutcome outcome;
+  outcome.options = {run_dir};
+  outcome.images = render_report_plots(run_dir, record.plots);
+  outcome.html_path = run_dir + "/report.html";
+  core::write_file_atomic(outcome.html_path, build_report_html(record, outcome.images));
+  return outcome;
+}
+
+ReportOutcome compute_report(const ReportOptions& options) {
+  return render_report(options.run_dir, read_run_record(options.run_dir));
+}
+
+void print_text(const ReportOutcome& outcome, std::ostream& os) { os << outcome.html_path << "\n"; }
 
 }  // namespace tunekit::calibration

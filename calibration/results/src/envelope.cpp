@@ -125,6 +125,7 @@ Emission prepare_emission(const Envelope& env, const OutputOptions& o) {
   make_utf8(j);
   Emission e;
   e.text = j.dump(2) + "\n";
+  e.document = std::move(j);
   for (const auto& r : outcomes) {
     if (r.met) continue;
     e.unmet.push_back(fmt::format("tunekit: requirement not met: {} ({} = {:.6g})\n", r.requirement.expression,
@@ -168,7 +169,7 @@ int finish_emission(const Envelope& env, const OutputOptions& o, const Emission&
                     bool write_output_file) {
   if (write_output_file) check_output_not_input(o.output_path, "--json-file", env.input_paths());
   if (write_output_file && !o.output_path.empty()) write_output_text(o.output_path, e.text);
-  if (o.record) record_result(nlohmann::json::parse(e.text), o, ctx);
+  if (o.record) record_result(e.document, o, ctx);
   if (o.json) ctx.out << e.text;
   for (const auto& w : env.warnings()) ctx.err << "tunekit: warning: " << utf8_or_latin1(w) << "\n";
   for (const auto& u : e.unmet) ctx.err << u;

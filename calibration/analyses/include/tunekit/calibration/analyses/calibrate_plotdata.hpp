@@ -1,12 +1,15 @@
 #pragma once
-// The series behind the plots of `tunekit calibrate`'s report (RUN_DIR/plotdata.json): the step
-// records with each step's fitted model, the liquefier's Bode plot and each axis' PSD.
+// The series behind the plots of `tunekit calibrate`'s report (plot_data.hpp; RUN_DIR/plotdata.json):
+// the step records with each step's fitted model, the liquefier's Bode plot and each axis' PSD.
 
 #include <string>
 
 #include <nlohmann/json.hpp>
-
 #include "tunekit/calibration/analyses/freq_command.hpp"
+#include "tunekit/calibration/analyses/shaper_command.hpp"
+#include "tunekit/calibration/analyses/step_command.hpp"
+#include "tunekit/calibration/analyses/freq_command.hpp"
+#include "tunekit/calibration/results/plot_data.hpp"
 #include "tunekit/calibration/analyses/shaper_command.hpp"
 #include "tunekit/calibration/analyses/step_command.hpp"
 #include "tunekit/fitting/fit_result.hpp"
@@ -22,11 +25,11 @@ double calibrate_param(const fitting::FitResult& f, const std::string& name);
 /// output over all of it (y_model, with its legend text model_label) or, when it was not fitted,
 /// why (model_missing).
 /// The record is read again from the step analysis' file and columns (it needs an input column).
-nlohmann::json step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label);
+StepPlot step_plotdata(const StepOutcome& step, const std::string& u_label, const std::string& y_label);
 /// Magnitude and phase of the measured frequency response and of the reported fitted model.
-nlohmann::json bode_plotdata(const FreqOutcome& chirp);
+BodePlot bode_plotdata(const FreqOutcome& chirp);
 /// One axis' PSD up to the plot's highest frequency, its fitted modes and each candidate
 /// shaper's remaining vibration at the identified damping.
-nlohmann::json psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis);
+PsdPlot psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis);
 
 }  // namespace tunekit::calibration

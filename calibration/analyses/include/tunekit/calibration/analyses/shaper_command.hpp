@@ -97,6 +97,13 @@ Envelope to_envelope(const ShaperOutcome& outcome);
 /// One axis' results as to_envelope() writes them under results.axes.LABEL: modes (Hz, damping
 /// ratio), fit, recommended shaper, candidates, selection, PSD.
 nlohmann::json shaper_axis_json(const ShaperOutcome& outcome, const ShaperAxis& axis);
+/// The maximum acceleration (mm/s^2) proposed with an axis' recommended shaper: the shaper's own
+/// (rounded as Klipper suggests it), or the printer's limit when the shaper allows more (`capped`).
+struct ProposedAccel {
+  double mm_s2 = 0;
+  bool capped = false;
+};
+ProposedAccel proposed_max_accel(const ShaperOutcome& outcome, const ShaperAxis& axis);
 void print_text(const ShaperOutcome& outcome, std::ostream& os);
 
 }  // namespace tunekit::calibration

@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "tunekit/calibration/analyses/agreement.hpp"
+#include "tunekit/calibration/results/agreement.hpp"
 #include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/fitting/fit_result.hpp"

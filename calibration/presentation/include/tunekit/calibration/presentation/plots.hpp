@@ -7,7 +7,8 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
+#include "tunekit/calibration/results/plot_data.hpp"
+#include "tunekit/design/flow_advance.hpp"
 
 namespace tunekit::calibration {
 
@@ -45,9 +46,11 @@ void render_figure(const Figure& figure, const std::string& path);
 /// every decade and, when the span is at most three decades, 2x and 5x each decade.
 std::vector<double> log_axis_ticks(double lo_exp, double hi_exp);
 
-/// The flow-dependent advance figure (flow_advance_plot.cpp) from `tunekit export`'s
-/// results.flow_advance (optionally with a "rheology" member: flow_mm3_s, tau_pred_s, max_gap_rel).
-Figure flow_advance_figure(const nlohmann::json& flow_advance);
+/// The flow-dependent advance figure (flow_advance_plot.cpp): the need with its band, each
+/// exported model, the design flow and (when given) the rheology prediction.
+Figure flow_advance_figure(const FlowAdvancePlot& flow_advance);
+/// The flow-dependent advance plot of a design (without a rheology prediction).
+FlowAdvancePlot flow_advance_plot(const design::FlowAdvanceDesign& design);
 
 /// render_figure for a ".png" path (InputError otherwise).
 void render_png(const Figure& figure, const std::string& path);

@@ -26,11 +26,11 @@ struct ReportOutcome {
 /// InputError (exit 2, located at the file) for a missing or malformed results file.
 ReportOutcome compute_report(const ReportOptions& options);
 
+/// Renders `record` as RUN_DIR's report: the plots into RUN_DIR/plots/*.svg, report.html written
+/// atomically (what compute_report does with the record read from RUN_DIR).
+ReportOutcome render_report(const std::string& run_dir, const CalibrationRecord& record);
+
 /// The report's path, one line.
 void print_text(const ReportOutcome& outcome, std::ostream& os);
-
-/// Reads RUN_DIR/results.json and RUN_DIR/plotdata.json (optional), renders the plots and
-/// writes RUN_DIR/report.html atomically. Returns the report's path.
-std::string write_report(const std::string& run_dir);
 
 }  // namespace tunekit::calibration

@@ -67,7 +67,8 @@ int emit(const Envelope& env, const OutputOptions& o, CliContext& ctx);
 /// JSON text; finish_emission() prints it and the warnings and returns the exit code, writing
 /// the --output file only when `write_output_file` (the caller has written it otherwise).
 struct Emission {
-  std::string text;  ///< the JSON document, ending in a newline
+  nlohmann::json document;  ///< the JSON document (what --record stores)
+  std::string text;         ///< the same, as text ending in a newline
   int exit_code = 0;
   std::vector<std::string> unmet;  ///< "tunekit: requirement not met: ..." lines
 };

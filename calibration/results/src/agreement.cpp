@@ -1,16 +1,16 @@
-#include "tunekit/calibration/analyses/agreement.hpp"
+#include "tunekit/calibration/results/agreement.hpp"
 
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "tunekit/calibration/presentation/report.hpp"  // display_number()
+#include "tunekit/calibration/results/display_number.hpp"
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::calibration {
 
-nlohmann::json compare_estimates(const std::string& quantity, const std::string& unit, const Estimate& a,
-                                 const Estimate& b, const fitting::Margin& margin) {
+Agreement compare_estimates(const std::string& quantity, const std::string& unit, const Estimate& a, const Estimate& b,
+                            const fitting::Margin& margin) {
   for (const auto* e : {&a, &b}) {
     if (!std::isfinite(e->value) || !std::isfinite(e->ci95_lo) || !std::isfinite(e->ci95_hi))
       throw InputError(fmt::format("{} from the {}: value or interval is not a finite number", quantity, e->method));
@@ -41,18 +41,37 @@ nlohmann::json compare_estimates(const std::string& quantity, const std::string&
                 "{}: {} and {} are not shown to differ by more than the margin a compensator would feel, nor "
                 "to lie within it ({})",
                 quantity, est(a), est(b), gap);
+  Agreement out;
+  out.quantity = quantity;
+  out.unit = unit;
+  out.a = a;
+  out.b = b;
+  out.difference = diff;
+  out.combined_half_width = combined;
+  out.margin_relative = margin.relative;
+  out.margin_value = m;
+  out.margin_basis = margin.basis;
+  out.verdict = verdict;
+  out.agree = where <= 0;
+  out.statement = statement;
+  return out;
+}
+
+nlohmann::json to_json(const Agreement& a) {
   nlohmann::json ests = nlohmann::json::array();
-  for (const auto* e : {&a, &b})
+  for (const auto* e : {&a.a, &a.b})
     ests.push_back({{"method", e->method}, {"value", e->value}, {"ci95", {e->ci95_lo, e->ci95_hi}}});
-  return {{"quantity", quantity},
-          {"unit", unit},
-          {"estimates", ests},
-          {"difference", diff},
-          {"combined_half_width", combined},
-          {"margin", {{"relative", margin.relative}, {"value", m}, {"basis", margin.basis}}},
-          {"verdict", verdict},
-          {"agree", where <= 0},
-          {"statement", statement}};
+  nlohmann::json j{{"quantity", a.quantity},
+                   {"unit", a.unit},
+                   {"estimates", ests},
+                   {"difference", a.difference},
+                   {"combined_half_width", a.combined_half_width},
+                   {"margin", {{"relative", a.margin_relative}, {"value", a.margin_value}, {"basis", a.margin_basis}}},
+                   {"verdict", a.verdict},
+                   {"agree", a.agree},
+                   {"statement", a.statement}};
+  if (!a.id.empty()) j["id"] = a.id;
+  return j;
 }
 
 }  // namespace tunekit::calibration
