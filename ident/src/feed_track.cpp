@@ -92,7 +92,7 @@ std::string feed_track_csv(const FeedTrack& track) {
 }
 
 FeedTrack read_feed_track_csv(const std::string& path) {
-  const core::MappedFileBytes bytes(path);
+  const MappedFileBytes bytes(path);
   return parse_feed_track_csv(bytes.view(), path);
 }
 

@@ -15,7 +15,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/fitting/nist_strd.hpp"
+#include "nist_strd.hpp"
 
 using namespace tunekit::fitting;
 

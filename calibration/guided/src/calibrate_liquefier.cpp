@@ -356,44 +356,10 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
   return out;
 }
 
-namespace {
-
-// value +- 1.96 stderr as an interval (NaN bounds when the standard error is not known).
-std::pair<double, double> normal_ci95(double value, double stderr_) {
-  if (!std::isfinite(value) || !std::isfinite(stderr_)) return {std::nan(""), std::nan("")};
-  return {value - fitting::kZ95 * stderr_, value + fitting::kZ95 * stderr_};
-}
-
-}  // namespace
-
 void add_ring_prediction(CameraAnalysis& camera, const RingModel& model) {
-  const double tau = model.tau_s;
-  double theta = model.theta_s;
-  if (!camera.ring || !std::isfinite(tau)) return;
-  const double w = 2 * std::numbers::pi * camera.ring->freq_hz;
-  if (!std::isfinite(theta)) theta = 0;
-  // The ring's gain is relative to the steady width (vision::RingResult), the model's likewise:
-  // its response at f over its steady gain K.
-  const std::complex<double> G = std::exp(std::complex<double>(0, -w * theta)) / std::complex<double>(1, w * tau);
-  RingPrediction p;
-  constexpr double kDeg = 180 / std::numbers::pi;
-  // d(-atan(w tau))/d tau = -w / (1 + (w tau)^2): tau's error as phase (rad).
-  const double tau_phase_se = w * model.tau_stderr_s / (1 + w * w * tau * tau);
-  p.model_gain = std::abs(G);
-  p.model_phase_deg = std::arg(G) * kDeg;
-  // tau and theta from one fit are negatively correlated; adding their variances overstates the
-  // phase's, so this interval is on the wide side.
-  std::tie(p.model_phase_ci95_lo_deg, p.model_phase_ci95_hi_deg) =
-      normal_ci95(std::arg(G) * kDeg, std::hypot(tau_phase_se, w * model.theta_stderr_s) * kDeg);
-  // The dead time the ring's phase implies with the lines' tau: phase = -atan(w tau) - w theta.
-  // It does not depend on where the lines lie on their paths (the weak point of a photo whose
-  // placement on the bed is not known), only on the ring's start direction (+X). Its error: the
-  // ring's phase and the lines' tau, independent measurements.
-  const double lag = -camera.ring->phase_deg / kDeg - std::atan(w * tau);
-  p.theta_from_phase_s = lag / w;
-  std::tie(p.theta_from_phase_ci95_lo_s, p.theta_from_phase_ci95_hi_s) =
-      normal_ci95(lag / w, std::hypot(camera.ring->phase_stderr_deg / kDeg, tau_phase_se) / w);
-  camera.ring_prediction = p;
+  if (!camera.ring || !std::isfinite(model.tau_s)) return;
+  camera.ring_prediction =
+      ident::predict_ring(model, {camera.ring->freq_hz, camera.ring->phase_deg, camera.ring->phase_stderr_deg});
 }
 
 }  // namespace tunekit::calibration

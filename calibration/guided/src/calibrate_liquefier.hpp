@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tunekit/calibration/guided/calibrate_command.hpp"
+#include "tunekit/ident/ring_prediction.hpp"
 #include "tunekit/calibration/results/context.hpp"
 #include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/calibration/guided/calibrate_command.hpp"
@@ -52,19 +53,7 @@ struct CameraTest {
 /// The line test's lead-in is as long as the profile's X travel takes (up to 90 mm; see line_lead_mm).
 std::vector<CameraTest> camera_tests(const machine::MachineProfile& profile);
 
-/// The step model's prediction at the ring's frequency (add_ring_prediction): gain (relative to
-/// the steady gain, as the ring's measured gain is) and phase (deg), and the dead time (s) the
-/// ring's measured phase implies with the lines' tau. Interval bounds are NaN when a standard
-/// error is not known.
-struct RingPrediction {
-  double model_gain = std::numeric_limits<double>::quiet_NaN();
-  double model_phase_deg = std::numeric_limits<double>::quiet_NaN();
-  double model_phase_ci95_lo_deg = std::numeric_limits<double>::quiet_NaN(),
-         model_phase_ci95_hi_deg = std::numeric_limits<double>::quiet_NaN();
-  double theta_from_phase_s = std::numeric_limits<double>::quiet_NaN();
-  double theta_from_phase_ci95_lo_s = std::numeric_limits<double>::quiet_NaN(),
-         theta_from_phase_ci95_hi_s = std::numeric_limits<double>::quiet_NaN();
-};
+using ident::RingPrediction;
 
 struct CameraAnalysis {                    // declared in calibration_pipeline.hpp
   std::string photo;                       ///< the photo used (in the run directory)
@@ -89,14 +78,7 @@ CameraAnalysis analyze_camera_prints(const std::string& run_dir, const Liquefier
                                      const std::map<std::string, protocols::RunResult>& runs,
                                      const std::shared_ptr<sim::SimPrintBed>& bed, bool can_prompt, CliContext& ctx);
 
-/// The liquefier the ring's prediction is made with: tau (s) at the ring's feed, dead time (s),
-/// and their standard errors (s; NaN: not known). The prediction is relative to the steady gain,
-/// as the ring's measured gain is.
-struct RingModel {
-  double tau_s = std::numeric_limits<double>::quiet_NaN(), theta_s = std::numeric_limits<double>::quiet_NaN();
-  double tau_stderr_s = std::numeric_limits<double>::quiet_NaN(),
-         theta_stderr_s = std::numeric_limits<double>::quiet_NaN();
-};
+using ident::RingModel;
 
 /// The ring's gain and phase, added to the camera analysis once tau and theta are known from
 /// the lines (the model's prediction at the ring frequency is reported beside the measurement).

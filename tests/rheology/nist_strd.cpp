@@ -1,4 +1,4 @@
-#include "tunekit/fitting/nist_strd.hpp"
+#include "nist_strd.hpp"
 
 #include <algorithm>
 #include <cmath>
