@@ -13,6 +13,7 @@
 
 #include "test_support.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/core/file_open_log.hpp"
 #include "tunekit/vision/image_io.hpp"
@@ -191,4 +192,23 @@ TEST_CASE("calibrate opens each record it analyses once and records the digests 
       CHECK(log.opens(dir + "/" + json) == 0);
     }
   }
+}
+
+TEST_CASE("calibrate with a profile file opens it once: the export records the digest of the bytes the plan read") {
+  const std::string dir = tunekit::test::scratch_dir("read_once_cal_profile");
+  const std::string profile = dir + "/printer.toml";
+  tunekit::core::write_file_atomic(profile, tunekit::read_file_bytes(tunekit::test::dataset("machines/sim.toml")));
+  FileOpenLog log;
+  const auto r = run_cli({"calibrate", "--machine", "sim", "--profile", profile, "--skip-liquefier", "--out", dir + "/run"});
+  INFO(r.err << "\nopened:" << opened_list(log));
+  REQUIRE(r.code == 0);
+  CHECK(log.opens(profile) == 1);
+  const auto exported = tunekit::test::read_json(dir + "/run/analysis/export.json");
+  bool recorded = false;
+  for (const auto& in : exported["inputs"])
+    if (in["path"] == profile) {
+      recorded = true;
+      CHECK(in["sha256"] == tunekit::calibration::sha256_hex(tunekit::read_file_bytes(profile)));
+    }
+  CHECK(recorded);
 }

@@ -95,7 +95,10 @@ LiquefierInputs liquefier_inputs(const ExportOptions& a, const DesignInputs& d, 
 
 void apply_machine_profile(const ExportOptions& a, LiquefierInputs& li, Envelope& env) {
   machine::MachineProfile profile;
-  if (!a.profile.empty()) {
+  if (a.loaded_profile && a.loaded_profile_digest) {
+    profile = *a.loaded_profile;
+    add_input(env, *a.loaded_profile_digest);
+  } else if (!a.profile.empty()) {
     std::string bytes;
     profile = machine::load_machine_profile(a.profile, &bytes);
     env.add_input(a.profile, bytes);

@@ -56,6 +56,8 @@ CompensatorDesign design_and_export(const CalibrationPlan& plan, const Experimen
   eo.firmware = plan.options.firmware;
   eo.config = configuration_to_update(plan.options, plan.run_dir);
   eo.profile = plan.profile.path;
+  eo.loaded_profile = plan.profile.profile;
+  eo.loaded_profile_digest = plan.profile.digest;
   // A Marlin printer that answered M493 with fixed-time motion enabled bypasses M593/M900 U:
   // its settings go to M493 (the runner records the answer in each run).
   // The G-code takes the letters of the form that report took (run.json firmware.m493_form).

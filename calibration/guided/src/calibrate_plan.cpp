@@ -137,9 +137,13 @@ CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
           a.profile);
     machine::ProfileImportOptions io;
     io.sensors = a.sensors;
-    return {machine::import_machine_profile(a.profile, io), a.profile};
+    std::string bytes;
+    auto profile = machine::import_machine_profile(a.profile, io, &bytes);
+    return {std::move(profile), a.profile, input_digest(a.profile, bytes)};
   }
-  return {sim::builtin_sim_profile(), bundled_dataset_path("machines/sim.toml")};
+  // The built-in profile's text is the bundled sim.toml's, byte for byte (built in at compile time).
+  const std::string bundled = bundled_dataset_path("machines/sim.toml");
+  return {sim::builtin_sim_profile(), bundled, input_digest(bundled, sim::builtin_sim_profile_toml())};
 }
 
 namespace {

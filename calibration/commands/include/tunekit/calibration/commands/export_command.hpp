@@ -18,6 +18,8 @@
 #include "tunekit/calibration/results/context.hpp"
 #include "tunekit/calibration/commands/design_inputs.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
+#include "tunekit/calibration/results/input_digest.hpp"
+#include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/design/flow_advance.hpp"
 #include "tunekit/design/pressure_advance.hpp"
@@ -36,6 +38,10 @@ struct ExportOptions {
   std::string config;                  ///< the configuration file to change
   std::vector<std::string> results;    ///< JSON results of step, freq, shaper, rheo
   std::string profile;                 ///< machine profile TOML; empty: assumed defaults
+  /// The profile at `profile` as its caller already loaded it, and the digest of the bytes it was
+  /// read from (tunekit calibrate): export then reads nothing again.
+  std::optional<machine::MachineProfile> loaded_profile;
+  std::optional<InputDigest> loaded_profile_digest;
   double pa_k = fitting::kNaN;         ///< advance K (s) instead of the results; NaN: not given
   double pa_smooth = fitting::kNaN;    ///< smoothing time (s) instead of the design; NaN: not given
   double design_flow = fitting::kNaN;  ///< flow (mm^3/s) the single K is designed for; NaN: from the profile

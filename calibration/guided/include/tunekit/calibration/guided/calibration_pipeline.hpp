@@ -60,7 +60,8 @@ class SilentProgress final : public Progress {
 /// The machine profile a calibration checks its protocols against, and where it came from.
 struct CalibrationProfile {
   machine::MachineProfile profile;
-  std::string path;  ///< the TOML file (the bundled sim.toml for the built-in simulator)
+  std::string path;    ///< the TOML file (the bundled sim.toml for the built-in simulator)
+  InputDigest digest;  ///< of the bytes the profile was read from: export records it, reading nothing again
 };
 
 /// --profile, or the built-in simulated printer's; InputError (exit 2) for a real machine without one.
