@@ -200,7 +200,14 @@ def main():
     if code != 0:
         failures.append(f"allowed includes: expected exit 0, got {code}:\n{out}")
 
-    # 4. A room of the library that grows past its share fails, naming the room.
+    # 4. A source file in calibration/ outside its rooms fails, naming the file.
+    tree = fresh("homeless")
+    plant(tree, "calibration/src/planted_homeless.cpp", "int planted_homeless = 0;")
+    code, out = run(check, tree)
+    if code != 1 or "calibration/src/planted_homeless.cpp: error: in no room" not in out:
+        failures.append(f"a file outside the rooms: expected exit 1 naming it, got {code}:\n{out}")
+
+    # 5. A room of the library that grows past its share fails, naming the room.
     tree = fresh("oversized")
     filler = "\n".join(f"int planted_{i} = {i};" for i in range(12000)) + "\n"
     with open(os.path.join(tree, "history", "src", "planted_filler.cpp"), "w", encoding="utf-8") as f:
