@@ -55,7 +55,7 @@ std::string plan_refusal(const std::string& path, const std::vector<std::string>
   a.profile = path;
   a.dry_run = true;
   try {
-    const CalibrationProfile profile{tunekit::machine::import_machine_profile(path, io), path};
+    const CalibrationProfile profile{tunekit::machine::import_machine_profile(path, io), path, {}};
     const auto plan = tunekit::calibration::plan_calibration(a, profile, false);
     for (const auto& e : plan.experiments)
       if (!(e.estimated_s > 0)) return e.name + " has no machine time";
