@@ -14,6 +14,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_open_log.hpp"
+#include "tunekit/core/input_read_scope.hpp"
 
 namespace tunekit {
 namespace {
@@ -95,10 +96,23 @@ std::string read_checked(const std::string& path, std::uint64_t max_bytes, bool 
 }  // namespace
 
 std::string read_file_bytes(const std::string& path, std::uint64_t max_bytes) {
-  return read_checked(path, max_bytes, true);
+  if (auto kept = core::InputReadScope::cached(path)) {
+    if (kept->size() > max_bytes) too_large(path, max_bytes);
+    return std::move(*kept);
+  }
+  std::string bytes = read_checked(path, max_bytes, true);
+  core::InputReadScope::keep(path, bytes);
+  return bytes;
 }
 
 std::string read_file_head(const std::string& path, std::uint64_t max_bytes) {
+  if (auto kept = core::InputReadScope::cached(path)) return kept->substr(0, max_bytes);
+  if (core::InputReadScope::active()) {
+    // In a scope the whole file is read once and kept: what reads it next gets the same bytes.
+    std::string bytes = read_checked(path, kMaxInputFileBytes, true);
+    core::InputReadScope::keep(path, bytes);
+    return bytes.substr(0, max_bytes);
+  }
   return read_checked(path, max_bytes, false);
 }
 

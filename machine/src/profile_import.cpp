@@ -10,6 +10,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
+#include "tunekit/core/input_read_scope.hpp"
 #include "tunekit/core/text.hpp"
 
 namespace tunekit::machine {
@@ -135,6 +136,9 @@ MachineProfile as_loaded(const MachineProfile& imported, const std::string& path
 
 MachineProfile import_machine_profile(const std::string& path, const ProfileImportOptions& options,
                                       std::string* bytes) {
+  // The format's sniffing, the importer and the firmware's own parser each read the file by path:
+  // opened once, the same bytes for all (and the includes of a Klipper configuration likewise).
+  const core::InputReadScope read_once;
   std::string local;
   std::string& text = bytes != nullptr ? *bytes : local;
   text = read_file_bytes(path);

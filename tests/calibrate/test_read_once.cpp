@@ -199,7 +199,8 @@ TEST_CASE("calibrate with a profile file opens it once: the export records the d
   const std::string profile = dir + "/printer.toml";
   tunekit::core::write_file_atomic(profile, tunekit::read_file_bytes(tunekit::test::dataset("machines/sim.toml")));
   FileOpenLog log;
-  const auto r = run_cli({"calibrate", "--machine", "sim", "--profile", profile, "--skip-liquefier", "--out", dir + "/run"});
+  const auto r =
+      run_cli({"calibrate", "--machine", "sim", "--profile", profile, "--skip-liquefier", "--out", dir + "/run"});
   INFO(r.err << "\nopened:" << opened_list(log));
   REQUIRE(r.code == 0);
   CHECK(log.opens(profile) == 1);
@@ -211,4 +212,30 @@ TEST_CASE("calibrate with a profile file opens it once: the export records the d
       CHECK(in["sha256"] == tunekit::calibration::sha256_hex(tunekit::read_file_bytes(profile)));
     }
   CHECK(recorded);
+}
+
+TEST_CASE("a firmware configuration given as the profile is opened once, its includes once each") {
+  // Klipper's own example with an include beside it, a Marlin Configuration.h (with its
+  // Configuration_adv.h) and an RRF config.g: the format's check, the importer and the
+  // firmware's parser read each by path, the file layer opens it once.
+  const std::string dir = tunekit::test::scratch_dir("read_once_profiles");
+  const std::string cfg = dir + "/printer.cfg", inc = dir + "/macros.cfg";
+  tunekit::core::write_file_atomic(
+      cfg, "[include macros.cfg]\n" +
+               tunekit::read_file_bytes(tunekit::test::dataset("klipper_configs/printer-creality-ender3-2018.cfg")));
+  tunekit::core::write_file_atomic(inc, "[gcode_macro PARK]\ngcode:\n  G28\n");
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"profile", cfg},
+                                               {"calibrate", "--machine", "sim", "--profile", cfg, "--sensor",
+                                                "accelerometer", "--dry-run", "--out", dir + "/run"}}) {
+    FileOpenLog log;
+    const auto r = run_cli(args);
+    INFO(args[0] << "\n" << r.err << "\nopened:" << opened_list(log));
+    REQUIRE(r.code == 0);
+    CHECK(log.opens(cfg) == 1);
+    CHECK(log.opens(inc) == 1);
+    for (const auto& p : log.paths()) {
+      INFO(p);
+      CHECK(log.opens(p) == 1);
+    }
+  }
 }

@@ -67,14 +67,14 @@ ProfileOutcome compute_profile(const ProfileOptions& options) {
     throw InputError("--travel takes three values: X,Y,Z (mm)");
   ProfileOutcome o;
   o.options = options;
-  const std::string bytes = read_file_bytes(options.file);
-  o.input = input_digest(options.file, bytes);
   machine::ProfileImportOptions io;
   io.sensors = options.sensors;
   io.travel_mm = options.travel_mm;
   io.hotend_max_c = options.hotend_max_c;
   io.bed_max_c = options.bed_max_c;
-  o.profile = machine::import_machine_profile(options.file, io);
+  std::string bytes;  // as the import read them: the digest is of the bytes imported
+  o.profile = machine::import_machine_profile(options.file, io, &bytes);
+  o.input = input_digest(options.file, bytes);
   o.format = machine::to_string(machine::detect_config_format(bytes, options.file));
   if (o.profile.firmware.empty() || o.format == "toml") o.format = "toml";
   o.toml = machine::machine_profile_toml(o.profile);

@@ -14,6 +14,7 @@
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/calibration/analyses/simulated_machine.hpp"
+#include "tunekit/core/input_read_scope.hpp"
 #include "tunekit/core/text.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/machine/profile_import.hpp"
@@ -130,6 +131,7 @@ CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
     throw InputError(
         "a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
   if (!a.profile.empty()) {
+    const core::InputReadScope read_once;  // the format check and the import read the file once
     if (!a.sensors.empty() && !machine::is_firmware_configuration(a.profile))
       throw InputError(
           "--sensor declares sensors a firmware configuration does not list; a TOML profile lists its own "
