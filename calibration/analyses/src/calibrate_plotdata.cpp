@@ -108,10 +108,11 @@ PsdPlot psd_plotdata(const ShaperOutcome& shaper, const ShaperAxis& axis) {
   double zeta = 0.1;
   if (modes.dominant >= 0 && std::isfinite(modes.modes[static_cast<std::size_t>(modes.dominant)].zeta))
     zeta = modes.modes[static_cast<std::size_t>(modes.dominant)].zeta;
-  d.recommended = PsdPlot::Recommended{design::to_string(axis.choice.recommended.type), axis.choice.recommended.freq_hz};
+  d.recommended =
+      PsdPlot::Recommended{design::to_string(axis.choice.recommended.type), axis.choice.recommended.freq_hz};
   for (const auto& c : axis.choice.candidates) {
     const auto shaper_design = design::design_shaper(c.type, c.freq_hz, c.damping_ratio,
-                                                    design::kDefaultVibrationTolerance, design::EiDesign::damped_fit);
+                                                     design::kDefaultVibrationTolerance, design::EiDesign::damped_fit);
     d.shapers.push_back(
         {design::to_string(c.type), d.freq_hz, design::residual_vibration_curve(shaper_design, d.freq_hz, zeta)});
   }

@@ -287,8 +287,9 @@ void freq_whole_record(FreqOutcome& o, const FreqOptions& a, const formats::CsvT
     o.feed_track_input = track_file->digest();
   }
   const auto track = aligned_feed_track(track_file ? &*track_file : nullptr, t, u);  // on the whole record
-  o.whole_record = ident::fit_whole_record(t.subspan(first), u.subspan(first), y.subspan(first), o.input_unit, o.output_unit,
-                                    nullptr, a.profile_intervals, o.warnings, track ? &*track : nullptr);
+  o.whole_record =
+      ident::fit_whole_record(t.subspan(first), u.subspan(first), y.subspan(first), o.input_unit, o.output_unit,
+                              nullptr, a.profile_intervals, o.warnings, track ? &*track : nullptr);
 }
 
 }  // namespace

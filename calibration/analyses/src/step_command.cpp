@@ -169,7 +169,7 @@ StepOutcome compute_step(const StepOptions& a, const InputFile& file, const Inpu
     if (feed_track) outcome.feed_track_input = feed_track->digest();
     outcome.record = {tcol.values, u, ycol.values};
     outcome.whole_record = ident::fit_whole_record(tcol.values, u, ycol.values, input_unit, opt.output_unit, &res,
-                                            a.profile_intervals, res.warnings, track ? &*track : nullptr);
+                                                   a.profile_intervals, res.warnings, track ? &*track : nullptr);
   }
   outcome.time_column = table.time_column;
   outcome.input_sha256 = file.digest().sha256;

@@ -67,7 +67,6 @@ std::string render_svg_text(const Figure& fig, const std::string& path) {
 
 }  // namespace
 
-
 std::string step_model_note(const StepPlot& d) {
   if (d.has_model()) return "";
   return d.model_missing.empty() ? std::string("no whole-record model in the plot data")

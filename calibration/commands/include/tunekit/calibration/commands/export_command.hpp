@@ -35,9 +35,9 @@ struct ExportOptions {
   /// ("mode", "axis_slash", "axis_named", "axis_list", "axis_list_v2"); empty: axis_named; "none"
   /// (a report that did not show its form): axis_named with a warning.
   std::string marlin_m493_form;
-  std::string config;                  ///< the configuration file to change
-  std::vector<std::string> results;    ///< JSON results of step, freq, shaper, rheo
-  std::string profile;                 ///< machine profile TOML; empty: assumed defaults
+  std::string config;                ///< the configuration file to change
+  std::vector<std::string> results;  ///< JSON results of step, freq, shaper, rheo
+  std::string profile;               ///< machine profile TOML; empty: assumed defaults
   /// The profile at `profile` as its caller already loaded it, and the digest of the bytes it was
   /// read from (tunekit calibrate): export then reads nothing again.
   std::optional<machine::MachineProfile> loaded_profile;

@@ -74,5 +74,4 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const R
 /// The HTML text of a record and its rendered images.
 std::string build_report_html(const CalibrationRecord& record, const std::vector<ReportImage>& images);
 
-
 }  // namespace tunekit::calibration
