@@ -13,8 +13,6 @@
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/formats/csv.hpp"
 #include "tunekit/calibration/results/json_access.hpp"
-#include "tunekit/calibration/presentation/report.hpp"
-#include "tunekit/formats/csv.hpp"
 #include "tunekit/ident/liquefier_record.hpp"
 #include "tunekit/core/file_bytes.hpp"
 

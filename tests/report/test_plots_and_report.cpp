@@ -11,8 +11,6 @@
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/formats/csv.hpp"
 #include "tunekit/calibration/results/json_access.hpp"
-#include "tunekit/calibration/presentation/report.hpp"
-#include "tunekit/formats/csv.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/core/file_bytes.hpp"

@@ -13,7 +13,6 @@
 
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/core/error.hpp"
-#include "tunekit/cli/option_binding.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 
 namespace tunekit::cli {

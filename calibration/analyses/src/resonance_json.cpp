@@ -9,7 +9,6 @@
 #include <vector>
 #include <fmt/format.h>
 
-#include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/fit_result.hpp"

@@ -293,56 +293,55 @@ Envelope to_envelope(const RheoOutcome& o) {
   return env;
 }
 
-void print_text(const RheoOutcome& o, std::ostream& os) {
-  const auto& a = o.options;
-  const auto& fit = o.fit;
-  const Envelope env = to_envelope(o);  // the comparison, superposition and prediction as reported
-  const auto& res = env.results();
-  {
-    os << fmt::format("{}: {} points at {} temperature(s); model {}\n", a.file, o.num_points, o.temperatures_K.size(),
-                      fit.model);
-    for (const auto& p : fit.params) {
-      if (p.fixed) os << fmt::format("  {:<14} {:>12.6g} {:<8} (held)\n", p.name, p.value, p.unit);
-      else
-        os << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]{}\n", p.name, p.value, p.unit, p.ci95_lo,
-                          p.ci95_hi, p.ci95_method == "profile-likelihood" ? " (profile likelihood)" : "");
-    }
-    for (const auto& p : fit.derived)
-      os << fmt::format("  {:<26} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", p.name, p.value, p.unit, p.ci95_lo,
-                        p.ci95_hi);
-    if (res.contains("superposition"))
-      for (const auto& l : res["superposition"]["levels"])
-        os << fmt::format("  a_T at {:.2f} K: {:.4g} [{:.4g}, {:.4g}]{}\n", l["temperature_K"].get<double>(),
-                          l["a_T"].get<double>(), l["a_T_ci95"][0].get<double>(), l["a_T_ci95"][1].get<double>(),
-                          l["on_master_curve"].get<bool>() ? "" : "  NOT on the master curve");
-    os << fmt::format("  rms(ln eta) {:.4g}, R2 {:.5f}, AIC {:.2f}\n", fit.diagnostics.rms, fit.diagnostics.r2,
-                      fit.diagnostics.aic);
-    if (res.contains("model_comparison")) {
-      os << "  model comparison (AIC):\n";
-      for (const auto& e : res["model_comparison"]["models"]) {
-        if (e["ok"].get<bool>())
-          os << fmt::format("    {:<26} k={} dAIC {:8.2f} weight {:.3f}\n", e["model"].get<std::string>(),
-                            e["num_parameters"].get<int>(), e["delta_aic"].get<double>(),
-                            e["akaike_weight"].get<double>());
-        else
-          os << fmt::format("    {:<26} not fitted: {}\n", e["model"].get<std::string>(),
-                            e["error"].get<std::string>());
-      }
-    }
-    if (res.contains("power_law"))
-      for (const auto& f : res["power_law"]["fits"])
-        os << fmt::format("  power law at {:.2f} K: K {:.6g} Pa.s^n, n {:.5f}\n", f["temperature_K"].get<double>(),
-                          f["params"]["K_Pa_s_n"]["value"].get<double>(), f["params"]["n"]["value"].get<double>());
-    if (res.contains("prediction")) {
-      const auto& p = res["prediction"];
-      os << fmt::format("  liquefier at {:.2f} K ({}): flow mm3/s, dP MPa, dP/dQ Pa.s/mm3, relative tau\n",
-                        p["temperature_K"].get<double>(), p["pressure_model"].get<std::string>());
-      for (std::size_t i = 0; i < p["flow_mm3_s"].size(); ++i)
-        os << fmt::format("    {:8.3g} {:10.4g} {:12.5g} {:8.4f}\n", p["flow_mm3_s"][i].get<double>(),
-                          p["pressure_drop_Pa"][i].get<double>() * 1e-6, p["dP_dQ_Pa_s_per_mm3"][i].get<double>(),
-                          p["relative_tau"][i].get<double>());
-    }
+namespace {
+
+// The shift factor of each temperature of a superposition check, and whether it is on the curve.
+void print_superposition(const fitting::SuperpositionCheck& c, std::ostream& os) {
+  for (const auto& l : c.levels)
+    os << fmt::format("  a_T at {:.2f} K: {:.4g} [{:.4g}, {:.4g}]{}\n", l.temperature_K, l.shift_factor, l.shift_lo,
+                      l.shift_hi, l.on_master_curve ? "" : "  NOT on the master curve");
+}
+
+void print_comparison(const fitting::ModelComparison& c, std::ostream& os) {
+  os << "  model comparison (AIC):\n";
+  for (const auto& e : c.entries) {
+    if (e.ok)
+      os << fmt::format("    {:<26} k={} dAIC {:8.2f} weight {:.3f}\n", e.model, e.num_parameters, e.delta_aic,
+                        e.akaike_weight);
+    else os << fmt::format("    {:<26} not fitted: {}\n", e.model, e.error);
   }
+}
+
+void print_prediction(const ident::LiquefierPrediction& p, std::ostream& os) {
+  os << fmt::format("  liquefier at {:.2f} K ({}): flow mm3/s, dP MPa, dP/dQ Pa.s/mm3, relative tau\n", p.temperature_K,
+                    p.pressure_model);
+  for (std::size_t i = 0; i < p.flow_mm3_s.size(); ++i)
+    os << fmt::format("    {:8.3g} {:10.4g} {:12.5g} {:8.4f}\n", p.flow_mm3_s[i], p.pressure_drop_Pa[i] * 1e-6,
+                      p.dP_dQ_Pa_s_per_mm3[i], p.relative_tau[i]);
+}
+
+}  // namespace
+
+void print_text(const RheoOutcome& o, std::ostream& os) {
+  const auto& fit = o.fit;
+  os << fmt::format("{}: {} points at {} temperature(s); model {}\n", o.options.file, o.num_points,
+                    o.temperatures_K.size(), fit.model);
+  for (const auto& p : fit.params) {
+    if (p.fixed) os << fmt::format("  {:<14} {:>12.6g} {:<8} (held)\n", p.name, p.value, p.unit);
+    else
+      os << fmt::format("  {:<14} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]{}\n", p.name, p.value, p.unit, p.ci95_lo,
+                        p.ci95_hi, p.ci95_method == "profile-likelihood" ? " (profile likelihood)" : "");
+  }
+  for (const auto& p : fit.derived)
+    os << fmt::format("  {:<26} {:>12.6g} {:<8} 95% [{:.6g}, {:.6g}]\n", p.name, p.value, p.unit, p.ci95_lo, p.ci95_hi);
+  if (o.superposition) print_superposition(*o.superposition, os);
+  os << fmt::format("  rms(ln eta) {:.4g}, R2 {:.5f}, AIC {:.2f}\n", fit.diagnostics.rms, fit.diagnostics.r2,
+                    fit.diagnostics.aic);
+  if (o.comparison) print_comparison(*o.comparison, os);
+  for (const auto& pl : o.power_laws)
+    os << fmt::format("  power law at {:.2f} K: K {:.6g} Pa.s^n, n {:.5f}\n", pl.temperature_K,
+                      pl.fit.param("K_Pa_s_n").value, pl.fit.param("n").value);
+  if (o.prediction) print_prediction(*o.prediction, os);
 }
 
 }  // namespace tunekit::calibration

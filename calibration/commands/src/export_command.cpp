@@ -24,14 +24,6 @@
 #include "tunekit/calibration/presentation/plots.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/calibration/results/agreement.hpp"
-#include "tunekit/calibration/presentation/report.hpp"
-#include "tunekit/calibration/commands/design_inputs.hpp"
-#include "tunekit/calibration/results/envelope.hpp"
-#include "tunekit/calibration/commands/export_command.hpp"
-#include "tunekit/calibration/results/json_access.hpp"
-#include "tunekit/calibration/presentation/plots.hpp"
-#include "tunekit/calibration/results/results_json.hpp"
-#include "tunekit/calibration/results/agreement.hpp"
 #include "tunekit/calibration/results/calibration_record.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/core/error.hpp"
@@ -377,7 +369,9 @@ void fill_results(const ExportOptions& a, const export_design::LiquefierInputs& 
   if (!a.plot_out.empty()) {
     if (!flow)
       throw InputError("--plot needs a flow-dependent advance: results of 'tunekit step' with two or more levels");
-    render_figure(flow_advance_figure(flow_advance_plot_from_json(res["flow_advance"])), a.plot_out);
+    FlowAdvancePlot plot = flow_advance_plot(*flow);
+    if (rheology.is_object()) plot.rheology = flow_rheology_from_json(rheology);
+    render_figure(flow_advance_figure(plot), a.plot_out);
   }
   res["export"] = outcome.change.to_json();
   outcome.schedule_gcode =

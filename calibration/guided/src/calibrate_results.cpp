@@ -24,13 +24,8 @@
 #include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/formats/csv.hpp"
-#include "tunekit/calibration/results/agreement.hpp"
 #include "tunekit/calibration/results/calibration_record.hpp"
-#include "tunekit/calibration/commands/design_inputs.hpp"
-#include "tunekit/calibration/presentation/report.hpp"
-#include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/core/version.hpp"
-#include "tunekit/formats/csv.hpp"
 
 namespace tunekit::calibration {
 namespace {

@@ -10,9 +10,7 @@
 #include "tunekit/calibration/guided/calibration_pipeline.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/results/input_digest.hpp"
-#include "tunekit/calibration/guided/calibration_pipeline.hpp"
 #include "tunekit/calibration/results/calibration_record.hpp"
-#include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::calibration {

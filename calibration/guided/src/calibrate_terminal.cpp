@@ -13,7 +13,6 @@
 #include "tunekit/calibration/results/json_access.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/results/calibration_record.hpp"
-#include "tunekit/calibration/presentation/report.hpp"
 
 namespace tunekit::calibration {
 namespace {

@@ -1,6 +1,5 @@
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
-#include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/presentation/report_command.hpp"
 
 #include <cmath>
@@ -14,7 +13,6 @@
 #include "tunekit/calibration/results/warning_advice.hpp"
 #include "tunekit/core/json_error_text.hpp"
 #include "tunekit/calibration/results/calibration_record.hpp"
-#include "tunekit/calibration/results/warning_advice.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/formats/csv.hpp"
 #include "tunekit/core/atomic_file.hpp"

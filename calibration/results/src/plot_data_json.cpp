@@ -220,17 +220,18 @@ FlowAdvancePlot flow_advance_plot_from_json(const json& fa) {
     p.orca_flow_mm3_s = column(fa["orca"], "flow_mm3_s");
     p.orca_k_s = column(fa["orca"], "K_s");
   }
-  if (fa.contains("rheology") && fa["rheology"].is_object()) {
-    const auto& r = fa["rheology"];
-    FlowAdvancePlot::Rheology rh;
-    if (r.contains("flow_mm3_s") && r.contains("tau_pred_s")) {
-      rh.flow_mm3_s = r["flow_mm3_s"].get<std::vector<double>>();
-      rh.tau_pred_s = r["tau_pred_s"].get<std::vector<double>>();
-    }
-    if (r.contains("max_gap_rel") && r["max_gap_rel"].is_number()) rh.max_gap_rel = r["max_gap_rel"].get<double>();
-    p.rheology = rh;
-  }
+  if (fa.contains("rheology") && fa["rheology"].is_object()) p.rheology = flow_rheology_from_json(fa["rheology"]);
   return p;
+}
+
+FlowAdvancePlot::Rheology flow_rheology_from_json(const json& r) {
+  FlowAdvancePlot::Rheology rh;
+  if (r.contains("flow_mm3_s") && r.contains("tau_pred_s")) {
+    rh.flow_mm3_s = r["flow_mm3_s"].get<std::vector<double>>();
+    rh.tau_pred_s = r["tau_pred_s"].get<std::vector<double>>();
+  }
+  if (r.contains("max_gap_rel") && r["max_gap_rel"].is_number()) rh.max_gap_rel = r["max_gap_rel"].get<double>();
+  return rh;
 }
 
 }  // namespace tunekit::calibration

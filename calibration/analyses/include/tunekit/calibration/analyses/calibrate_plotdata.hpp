@@ -8,10 +8,7 @@
 #include "tunekit/calibration/analyses/freq_command.hpp"
 #include "tunekit/calibration/analyses/shaper_command.hpp"
 #include "tunekit/calibration/analyses/step_command.hpp"
-#include "tunekit/calibration/analyses/freq_command.hpp"
 #include "tunekit/calibration/results/plot_data.hpp"
-#include "tunekit/calibration/analyses/shaper_command.hpp"
-#include "tunekit/calibration/analyses/step_command.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 

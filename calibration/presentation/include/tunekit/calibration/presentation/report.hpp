@@ -39,7 +39,6 @@
 #include "tunekit/calibration/results/calibration_record.hpp"
 #include "tunekit/calibration/results/display_number.hpp"  // display_number(), display_interval()
 #include "tunekit/calibration/results/plot_data.hpp"
-#include "tunekit/calibration/presentation/plots.hpp"
 
 namespace tunekit::calibration {
 

@@ -83,5 +83,8 @@ ReportPlots plots_from_json(const nlohmann::json& plotdata);
 /// The flow-dependent advance plot from `tunekit export`'s results.flow_advance (with its optional
 /// rheology member) or plotdata.json's flow_advance.
 FlowAdvancePlot flow_advance_plot_from_json(const nlohmann::json& flow_advance);
+/// The rheology-predicted tau beside a flow design (export's comparison with tunekit rheo's
+/// prediction, as its results hold it).
+FlowAdvancePlot::Rheology flow_rheology_from_json(const nlohmann::json& rheology);
 
 }  // namespace tunekit::calibration
