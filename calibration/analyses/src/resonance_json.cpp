@@ -7,8 +7,8 @@
 #include <numbers>
 #include <utility>
 #include <vector>
-#include <fmt/format.h>
 
+#include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/fit_result.hpp"
