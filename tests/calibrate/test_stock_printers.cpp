@@ -116,3 +116,17 @@ TEST_CASE("every Klipper stock printer's calibration plan holds with default set
   INFO(all);
   CHECK(unexpected.empty());
 }
+
+TEST_CASE("calibrate --sensor with a profile it cannot read says why it cannot read it; a TOML profile is refused") {
+  const std::string dir = tunekit::test::scratch_dir("sensor_profile_errors");
+  const auto missing = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--profile", dir + "/missing.cfg",
+                                               "--sensor", "accelerometer", "--dry-run", "--out", dir + "/run"});
+  CHECK(missing.code == 2);
+  CHECK(missing.err.find("cannot open") != std::string::npos);
+  CHECK(missing.err.find("--sensor declares") == std::string::npos);
+  const auto toml =
+      tunekit::test::run_cli({"calibrate", "--machine", "sim", "--profile", tunekit::test::dataset("machines/sim.toml"),
+                              "--sensor", "accelerometer", "--dry-run", "--out", dir + "/run2"});
+  CHECK(toml.code == 2);
+  CHECK(toml.err.find("--sensor declares sensors a firmware configuration does not list") != std::string::npos);
+}

@@ -131,16 +131,18 @@ CalibrationProfile load_calibration_profile(const CalibrateArgs& a) {
     throw InputError(
         "a real machine needs its profile: --profile FILE (limits and sensors; see datasets/machines/sim.toml)");
   if (!a.profile.empty()) {
-    const core::InputReadScope read_once;  // the format check and the import read the file once
+    // The import and the format check read the file once; the import first, so that a file that
+    // cannot be read is reported as such, not as a TOML profile given --sensor.
+    const core::InputReadScope read_once;
+    machine::ProfileImportOptions io;
+    io.sensors = a.sensors;
+    std::string bytes;
+    auto profile = machine::import_machine_profile(a.profile, io, &bytes);
     if (!a.sensors.empty() && !machine::is_firmware_configuration(a.profile))
       throw InputError(
           "--sensor declares sensors a firmware configuration does not list; a TOML profile lists its own "
           "in [sensors]",
           a.profile);
-    machine::ProfileImportOptions io;
-    io.sensors = a.sensors;
-    std::string bytes;
-    auto profile = machine::import_machine_profile(a.profile, io, &bytes);
     return {std::move(profile), a.profile, input_digest(a.profile, bytes)};
   }
   // The built-in profile's text is the bundled sim.toml's, byte for byte (built in at compile time).
