@@ -117,7 +117,8 @@ TEST_CASE("every Klipper stock printer's calibration plan holds with default set
   CHECK(unexpected.empty());
 }
 
-TEST_CASE("calibrate --sensor with a profile it cannot read says why it cannot read it, and a TOML profile is refused") {
+TEST_CASE(
+    "calibrate --sensor with a profile it cannot read says why it cannot read it, and a TOML profile is refused") {
   const std::string dir = tunekit::test::scratch_dir("sensor_profile_errors");
   const auto missing = tunekit::test::run_cli({"calibrate", "--machine", "sim", "--profile", dir + "/missing.cfg",
                                                "--sensor", "accelerometer", "--dry-run", "--out", dir + "/run"});
