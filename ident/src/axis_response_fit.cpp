@@ -47,6 +47,9 @@ Schedule make_schedule(const std::vector<AccelPiece>& motion, double t0, double 
   s.sample_end.assign(n, 0);
   s.whole.assign(n, 0);
   s.accel_at.assign(n, 0.0);
+  // One piece per sample interval and one more per boundary within the record, at most: reserved
+  // once, the pieces are not copied (and their fresh pages faulted in) at every growth.
+  s.subs.reserve(n + std::min(motion.size(), n));
   std::size_t c = 0;
   auto skip_ended = [&](double t) {
     while (c < motion.size() && motion[c].t0_s + motion[c].duration_s <= t) ++c;
