@@ -498,6 +498,7 @@ fitting::FitResult normal_solve_result(const std::vector<double>& y, const std::
 fitting::FitResult ceres_from(const Schedule& sched, std::size_t modes, const std::vector<double>& y,
                               fitting::LsqProblem& prob, const fitting::LsqOptions& lo, const std::vector<double>& p) {
   for (std::size_t j = 0; j < p.size(); ++j) prob.params[j].start = p[j];
+  prob.observed = y;  // for solve_least_squares' diagnostics (the normal-equation path needs no copy)
   std::vector<double> m(y.size()), rel(y.size());
   prob.residuals = [&](const double* q, double* r) {
     if (!in_domain(q, modes)) return false;
@@ -598,7 +599,6 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
   fitting::LsqProblem prob;
   prob.params = params_for(starts, o.max_zeta);
   prob.num_residuals = static_cast<int>(n);
-  prob.observed = y;
   fitting::LsqOptions lo;
   lo.max_iterations = 100;
   lo.function_tolerance = 1e-12;
