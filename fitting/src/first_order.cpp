@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdio>
 #include <memory>
+#include <span>
 
 #include <Eigen/Dense>
 #include <ceres/ceres.h>
@@ -39,8 +40,11 @@ void check_record(const StepRecord& r, const std::string& what) {
   if (!r.u.empty() && r.u.size() != r.t.size()) throw InputError(what + ": time and input have different lengths");
   for (double v : r.u)
     if (!std::isfinite(v)) throw InputError(what + ": NaN or infinite input sample");
-  const auto [lo, hi] = std::minmax_element(r.y.begin(), r.y.end());
-  if (!(*hi > *lo)) throw InputError(what + ": the output is constant; there is no response to fit");
+  // The output's range by minima and maxima (no branch per sample: minmax_element's comparisons
+  // of noisy samples are mispredicted); the samples are finite here.
+  double lo = r.y[0], hi = r.y[0];
+  for (double v : r.y) lo = std::min(lo, v), hi = std::max(hi, v);
+  if (!(hi > lo)) throw InputError(what + ": the output is constant; there is no response to fit");
   std::size_t after = 0;
   for (double t : r.t)
     if (t > r.t_step) ++after;
@@ -230,7 +234,8 @@ std::array<double, 3> line_fit(const std::vector<double>& t, const std::vector<d
 
 namespace {
 // normal_equations for a record driven by its recorded input: the rows of driven_model_points.
-double driven_normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
+double driven_normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr,
+                               std::span<double> res_out) {
   std::vector<StepModelPoint> pts;
   driven_model_points(r, p[0], p[1], p[2], p[3], pts);
   JtJ.setZero();
@@ -239,6 +244,7 @@ double driven_normal_equations(const StepRecord& r, const double p[4], Eigen::Ma
   for (std::size_t i = 0; i < pts.size(); ++i) {
     const Eigen::Vector4d j(pts[i].dK, pts[i].dtau, pts[i].dtheta, 1.0);
     const double res = pts[i].m - r.y[i];
+    if (!res_out.empty()) res_out[i] = res;
     rss += res * res;
     JtJ.selfadjointView<Eigen::Upper>().rankUpdate(j);
     Jtr += j * res;
@@ -250,64 +256,61 @@ double driven_normal_equations(const StepRecord& r, const double p[4], Eigen::Ma
 
 // Accumulates J^T J (4x4), J^T r and the residual sum of squares for one record without storing
 // the Jacobian (100k samples cost a few milliseconds).
-double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
-  if (!r.u.empty()) return driven_normal_equations(r, p, JtJ, Jtr);
-  // Before the response starts the Jacobian row is (0, 0, 0, 1): only the count and the sum of
-  // residuals matter there. Afterwards the ten products of the symmetric 4x4 are accumulated in
-  // scalars (an Eigen outer product per row costs twice as much on 100k rows). The exponentials
-  // of a block of samples come first: a call inside the accumulating loop would make the
-  // fourteen sums leave their registers for every sample. The sums add the same terms in the
-  // same order either way.
+double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr,
+                        std::span<double> res_out) {
+  if (!r.u.empty()) return driven_normal_equations(r, p, JtJ, Jtr, res_out);
+  // Before the response starts (the times increase, so these are the first samples) the Jacobian
+  // row is (0, 0, 0, 1): only the count and the sum of residuals matter there. Afterwards the ten
+  // products of the symmetric 4x4, J'r and the residual sum of squares are accumulated two sums
+  // to a register (Sums2: each lane adds its own terms in the order of the samples, so every sum
+  // is rounded as a scalar sum would be). The exponentials of a block of samples come first: a
+  // call inside the accumulating loop would make the sums leave their registers for every sample.
   const std::size_t n = r.t.size();
   const double K = p[0], tau = p[1], theta = p[2], y0 = p[3], du = r.du;
   const double inv_tau = 1.0 / tau, Kdu = K * du;
   const double t_on = r.t_step + theta;
+  const bool keep = !res_out.empty();
   double rss = 0, n_pre = 0, r_sum = 0;
-  double a00 = 0, a01 = 0, a02 = 0, a03 = 0, a11 = 0, a12 = 0, a13 = 0, a22 = 0, a23 = 0, a33 = 0;
-  double b0 = 0, b1 = 0, b2 = 0;
+  std::size_t i = 0;
+  for (; i < n && !(r.t[i] - t_on > 0); ++i) {
+    const double res = y0 - r.y[i];
+    if (keep) res_out[i] = res;
+    rss += res * res;
+    n_pre += 1;
+    r_sum += res;
+  }
+  using Sums2 = double __attribute__((vector_size(16)));
+  Sums2 s00_01 = {0, 0}, s02_b0 = {0, 0}, s11_12 = {0, 0}, sb1_22 = {0, 0}, sb2_rss = {0, rss};
+  Sums2 s03_13 = {0, 0}, s23_r = {0, r_sum};
+  double a33 = 0;
   constexpr std::size_t kBlock = 256;
   std::array<double, kBlock> exps;
-  for (std::size_t begin = 0; begin < n; begin += kBlock) {
+  for (std::size_t begin = i; begin < n; begin += kBlock) {
     const std::size_t end = std::min(n, begin + kBlock);
-    for (std::size_t i = begin; i < end; ++i) {
-      const double s = r.t[i] - t_on;
-      exps[i - begin] = s > 0 ? std::exp(-s * inv_tau) : 0.0;
-    }
-    for (std::size_t i = begin; i < end; ++i) {
-      const double s = r.t[i] - t_on;
-      if (!(s > 0)) {
-        const double res = y0 - r.y[i];
-        rss += res * res;
-        n_pre += 1;
-        r_sum += res;
-        continue;
-      }
-      const double e = exps[i - begin];
+    for (std::size_t k = begin; k < end; ++k) exps[k - begin] = std::exp(-(r.t[k] - t_on) * inv_tau);
+    for (std::size_t k = begin; k < end; ++k) {
+      const double s = r.t[k] - t_on;
+      const double e = exps[k - begin];
       const double j0 = du * (1 - e);
       const double j2 = -Kdu * e * inv_tau;
       const double j1 = j2 * s * inv_tau;
-      const double res = y0 + K * j0 - r.y[i];
-      rss += res * res;
-      a00 += j0 * j0;
-      a01 += j0 * j1;
-      a02 += j0 * j2;
-      a03 += j0;
-      a11 += j1 * j1;
-      a12 += j1 * j2;
-      a13 += j1;
-      a22 += j2 * j2;
-      a23 += j2;
-      a33 += 1;
-      b0 += j0 * res;
-      b1 += j1 * res;
-      b2 += j2 * res;
-      r_sum += res;  // the y0 column is 1 on every row
+      const double res = y0 + K * j0 - r.y[k];
+      if (keep) res_out[k] = res;
+      s00_01 += j0 * Sums2{j0, j1};
+      s02_b0 += j0 * Sums2{j2, res};
+      s11_12 += j1 * Sums2{j1, j2};
+      sb1_22 += Sums2{j1, j2} * Sums2{res, j2};
+      sb2_rss += res * Sums2{j2, res};
+      s03_13 += Sums2{j0, j1};
+      s23_r += Sums2{j2, res};
+      a33 += 1;  // the y0 column is 1 on every row
     }
   }
   a33 += n_pre;
-  JtJ << a00, a01, a02, a03, a01, a11, a12, a13, a02, a12, a22, a23, a03, a13, a23, a33;
-  Jtr << b0, b1, b2, r_sum;
-  return rss;
+  JtJ << s00_01[0], s00_01[1], s02_b0[0], s03_13[0], s00_01[1], s11_12[0], s11_12[1], s03_13[1], s02_b0[0], s11_12[1],
+      sb1_22[1], s23_r[0], s03_13[0], s03_13[1], s23_r[0], a33;
+  Jtr << s02_b0[1], sb1_22[0], sb2_rss[0], s23_r[1];
+  return sb2_rss[1];
 }
 
 // Levenberg-Marquardt on the 4x4 normal equations, carried to convergence by Ceres Solver's own
@@ -316,15 +319,19 @@ double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d&
 // evaluated and factored the 100k x 4 Jacobian for an iteration that did not move the parameters.
 struct NormalSolve {
   lm_detail::Confirmed confirmed;
-  int iterations = 0;   // iterations after the polish
-  Eigen::Matrix4d JtJ;  // J'J at the end point (unpinned)
-  double rss = 0;       // residual sum of squares there
+  int iterations = 0;             // iterations after the polish
+  Eigen::Matrix4d JtJ;            // J'J at the end point (unpinned)
+  double rss = 0;                 // residual sum of squares there
+  std::vector<double> residuals;  // model - data there
 };
 
 NormalSolve solve_normal_equations(const StepRecord& r, double p[4], const double lo[4], const double hi[4],
                                    const bool fixed[4], const lm_detail::Tolerances& tol) {
-  auto equations = [&r](std::span<const double> q, Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
-    return normal_equations(r, q.data(), JtJ, Jtr);
+  lm_detail::ResidualMemo memo(r.t.size());
+  auto equations = [&r, &memo](std::span<const double> q, Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
+    const double c = normal_equations(r, q.data(), JtJ, Jtr, memo.trial());
+    memo.evaluated(q, c);
+    return c;
   };
   const std::span<double> ps(p, 4);
   const std::span<const double> los(lo, 4), his(hi, 4);
@@ -349,6 +356,7 @@ NormalSolve solve_normal_equations(const StepRecord& r, double p[4], const doubl
   }
   s.JtJ = at.N;
   s.rss = at.cost;
+  s.residuals = memo.take(std::span<const double>(p, 4));
   return s;
 }
 
@@ -366,7 +374,7 @@ const char* end_name(lm_detail::ConfirmEnd e) {
 // The FitResult of a converged solve_normal_equations: what solve_least_squares reports for the
 // same solution (residual diagnostics, bound warnings), without the covariance.
 FitResult normal_solve_result(const StepRecord& r, StepModel model, const std::vector<ParamSpec>& specs,
-                              const double p[4], const NormalSolve& s) {
+                              const double p[4], NormalSolve& s) {
   FitResult f;
   f.model = model_name(model);
   f.diagnostics.iterations = s.iterations;
@@ -379,10 +387,13 @@ FitResult normal_solve_result(const StepRecord& r, StepModel model, const std::v
   f.diagnostics.converged = true;
   for (int j = 0; j < 4; ++j)
     if (!std::isfinite(p[j])) throw FitError(f.model + ": the solution is not finite (" + f.diagnostics.solver + ")");
-  // The residuals as step_residuals computes them for the Ceres cost, for the diagnostics.
-  std::vector<double> res(r.t.size());
-  static constexpr std::size_t cols[4] = {0, 1, 2, 3};
-  step_residuals(r, p[0], p[1], p[2], p[3], res.data(), nullptr, 4, cols);
+  // The residuals of the solver's last evaluation at p, for the diagnostics.
+  std::vector<double> res = std::move(s.residuals);
+  if (res.size() != r.t.size()) {
+    res.resize(r.t.size());
+    static constexpr std::size_t cols[4] = {0, 1, 2, 3};
+    step_residuals(r, p[0], p[1], p[2], p[3], res.data(), nullptr, 4, cols);
+  }
   fill_residual_diagnostics(f, res, r.y, true);
   for (std::size_t j = 0; j < 4; ++j) {
     const auto& ps = specs[j];
@@ -608,7 +619,7 @@ FitResult fit_step(const StepRecord& r, StepModel model, const LsqOptions& optio
       hi[j] = ps.upper;
       fixed[j] = ps.fixed;
     }
-    const NormalSolve ns = solve_normal_equations(r, p, lo, hi, fixed, tol);
+    NormalSolve ns = solve_normal_equations(r, p, lo, hi, fixed, tol);
     if (ns.confirmed.converged()) {
       FitResult fr = normal_solve_result(r, model, prob.params, p, ns);
       if (options.compute_covariance) fill_covariance(fr, r, options, &ns.JtJ);

@@ -4,6 +4,7 @@
 // sample, the residuals, and the identifiability check. Private to the fitting library.
 
 #include <array>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -40,8 +41,10 @@ void step_residuals(const StepRecord& r, double K, double tau, double theta, dou
                     std::size_t width, const std::size_t cols[4]);
 
 /// The Gauss-Newton normal equations J'J and J'r of one step at p = {K, tau_s, theta_s, y0};
-/// returns the residual sum of squares.
-double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr);
+/// returns the residual sum of squares. When res_out is not empty (one element per sample), the
+/// residuals (model - data) are stored there as well.
+double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr,
+                        std::span<double> res_out = {});
 
 /// Ljung-Box p below which the residuals count as not white and the intervals take the
 /// model error in (a sandwich covariance).

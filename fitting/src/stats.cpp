@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include <boost/math/distributions/chi_squared.hpp>
@@ -18,6 +19,58 @@ double t_multiplier(double confidence, double dof) {
 
 int default_whiteness_lags(std::size_t n) { return static_cast<int>(std::clamp<std::size_t>(n / 4, 1, 20)); }
 
+namespace {
+
+// The deviations r_i - mean in reverse order: rev[j] = r[n - 1 - j] - mean.
+std::vector<double> reversed_deviations(std::span<const double> r, double mean) {
+  std::vector<double> rev(r.size());
+  for (std::size_t j = 0; j < r.size(); ++j) rev[j] = r[r.size() - 1 - j] - mean;
+  return rev;
+}
+
+// The autocovariances c[k0 .. k0 + 2 Pairs - 1] (Pairs 1 or 4) of the deviations d_i (given
+// reversed, as reversed_deviations makes them) in one pass: c_k = sum_{i >= k} d_i d_{i-k}. Two
+// lags share a register: d_{i-k} and d_{i-k-1} lie side by side in the reversed order, and each
+// lane adds its own lag's terms in the order of i, so every c_k is rounded exactly as one lag at
+// a time would round it (one sum at a time is bound by the latency of its additions).
+template <std::size_t Pairs>
+void autocovariance_block(const std::vector<double>& rev, std::size_t k0, std::vector<double>& c) {
+  static_assert(Pairs == 1 || Pairs == 4);
+  constexpr std::size_t kLags = 2 * Pairs;
+  using Lanes = double __attribute__((vector_size(16)));
+  const std::size_t n = rev.size();
+  auto d = [&](std::size_t i) { return rev[n - 1 - i]; };
+  auto load = [](const double* x) {
+    Lanes v;
+    std::memcpy(&v, x, sizeof v);
+    return v;
+  };
+  double head[kLags] = {};
+  // Lag k0 + m starts at i = k0 + m (lags <= n - 1, so these i are samples).
+  for (std::size_t i = k0; i < k0 + kLags - 1; ++i)
+    for (std::size_t m = 0; k0 + m <= i; ++m) head[m] += d(i) * d(i - k0 - m);
+  // Four named sums, not an array: an array's elements would be stored and loaded every sample.
+  Lanes a0 = {head[0], head[1]}, a1 = {0, 0}, a2 = {0, 0}, a3 = {0, 0};
+  if constexpr (Pairs == 4) a1 = Lanes{head[2], head[3]}, a2 = Lanes{head[4], head[5]}, a3 = Lanes{head[6], head[7]};
+  for (std::size_t i = k0 + kLags - 1; i < n; ++i) {
+    const double di = d(i);
+    const double* lag = rev.data() + (n - 1 - i + k0);  // lag[m] = d_{i - k0 - m}
+    a0 += di * load(lag);
+    if constexpr (Pairs == 4) {
+      a1 += di * load(lag + 2);
+      a2 += di * load(lag + 4);
+      a3 += di * load(lag + 6);
+    }
+  }
+  const Lanes sums[4] = {a0, a1, a2, a3};
+  for (std::size_t q = 0; q < Pairs; ++q) {
+    c[k0 + 2 * q] = sums[q][0];
+    c[k0 + 2 * q + 1] = sums[q][1];
+  }
+}
+
+}  // namespace
+
 WhitenessTest ljung_box(std::span<const double> r, int lags) {
   WhitenessTest t;
   const std::size_t n = r.size();
@@ -29,28 +82,16 @@ WhitenessTest ljung_box(std::span<const double> r, int lags) {
   double c0 = 0;
   for (double v : r) c0 += (v - mean) * (v - mean);
   if (!(c0 > 0)) return t;
-  // The autocovariances c_k = sum_{i >= k} (r_i - mean)(r_{i-k} - mean), four lags per pass over
-  // the residuals: the four sums do not wait for each other's additions (one sum at a time is
-  // bound by the latency of its additions). Each sum still adds its terms in the order of i, so
-  // every c_k is rounded exactly as one lag at a time would round it.
+  // The autocovariances c_k = sum_{i >= k} (r_i - mean)(r_{i-k} - mean), several lags per pass
+  // over the residuals (autocovariance_block).
+  const std::vector<double> rev = reversed_deviations(r, mean);
   std::vector<double> c(static_cast<std::size_t>(lags) + 1, 0.0);
-  constexpr int kBlock = 4;
   int k = 1;
-  for (; k + kBlock - 1 <= lags; k += kBlock) {
-    const auto k0 = static_cast<std::size_t>(k);
-    double a[kBlock] = {0, 0, 0, 0};
-    // Lag k + m starts at i = k + m (lags <= n - 1, so these i are samples).
-    for (std::size_t i = k0; i < k0 + kBlock - 1; ++i)
-      for (std::size_t m = 0; k0 + m <= i; ++m) a[m] += (r[i] - mean) * (r[i - k0 - m] - mean);
-    for (std::size_t i = k0 + kBlock - 1; i < n; ++i) {
-      const double di = r[i] - mean;
-      for (std::size_t m = 0; m < kBlock; ++m) a[m] += di * (r[i - k0 - m] - mean);
-    }
-    for (std::size_t m = 0; m < kBlock; ++m) c[k0 + m] = a[m];
-  }
+  for (; k + 7 <= lags; k += 8) autocovariance_block<4>(rev, static_cast<std::size_t>(k), c);
+  for (; k + 1 <= lags; k += 2) autocovariance_block<1>(rev, static_cast<std::size_t>(k), c);
   for (; k <= lags; ++k) {
     double ck = 0;
-    for (std::size_t i = static_cast<std::size_t>(k); i < n; ++i) ck += (r[i] - mean) * (r[i - k] - mean);
+    for (std::size_t i = static_cast<std::size_t>(k); i < n; ++i) ck += rev[n - 1 - i] * rev[n - 1 - i + k];
     c[static_cast<std::size_t>(k)] = ck;
   }
   double q = 0;

@@ -47,6 +47,9 @@ Schedule make_schedule(const std::vector<AccelPiece>& motion, double t0, double 
   s.sample_end.assign(n, 0);
   s.whole.assign(n, 0);
   s.accel_at.assign(n, 0.0);
+  // One piece per sample interval and one more per boundary within the record, at most: reserved
+  // once, the pieces are not copied (and their fresh pages faulted in) at every growth.
+  s.subs.reserve(n + std::min(motion.size(), n));
   std::size_t c = 0;
   auto skip_ended = [&](double t) {
     while (c < motion.size() && motion[c].t0_s + motion[c].duration_s <= t) ++c;
@@ -169,14 +172,16 @@ struct SensitivityState {
 /// One exact step of h under a(s) = a0 + j s (BaseExcitedMode::advance: the free transition of
 /// the state less the particular solution z_p = -(a0 + j s)/k + c j/k^2, k = w^2, c = 2 zeta w)
 /// with the derivatives carried through it.
+/// Multiplied by 1/k and 1/k^2 instead of divided by k and k^2 (a dozen divisions a step, each
+/// the cost of several multiplications).
 void sensitivity_step(SensitivityState& x, const Transition& t, double w, double zeta, double h, double a0, double j) {
-  const double k = w * w, c = 2 * zeta * w, k2 = k * k;
-  const double zp0 = -a0 / k + c * j / k2, vp = -j / k, zp1 = zp0 - j * h / k;
+  const double k = w * w, c = 2 * zeta * w, inv_k = 1 / k, inv_k2 = inv_k * inv_k;
+  const double zp0 = -a0 * inv_k + c * j * inv_k2, vp = -j * inv_k, zp1 = zp0 - j * h * inv_k;
   const double ez = x.z - zp0, ev = x.v - vp;
   for (int p = 0; p < 2; ++p) {
     const double dk = p == 0 ? 2 * w : 0, dc = p == 0 ? 2 * zeta : 2 * w;
-    const double dzp0 = a0 * dk / k2 + j * dc / k2 - 2 * c * j * dk / (k2 * k), dvp = j * dk / k2;
-    const double dzp1 = dzp0 + j * h * dk / k2;
+    const double dzp0 = (a0 * dk + j * dc - 2 * c * j * dk * inv_k) * inv_k2, dvp = j * dk * inv_k2;
+    const double dzp1 = dzp0 + j * h * dk * inv_k2;
     const double dez = x.sz[p] - dzp0, dev = x.sv[p] - dvp;
     const double nz = t.d[p][0][0] * ez + t.d[p][0][1] * ev + t.phi[0][0] * dez + t.phi[0][1] * dev + dzp1;
     const double nv = t.d[p][1][0] * ez + t.d[p][1][1] * ev + t.phi[1][0] * dez + t.phi[1][1] * dev + dvp;
@@ -190,37 +195,64 @@ void sensitivity_step(SensitivityState& x, const Transition& t, double w, double
 }
 
 /// Columns of one under-damped mode's relative acceleration z'' = -c v - k z - a at every sample
-/// (forward sensitivities, exact for the model): out[0][i] its derivative in the frequency (Hz),
-/// out[1][i] in zeta, out[2][i] the value itself, out[3][i] and out[4][i] the derivatives in the
-/// first deflection and rate.
-void mode_sensitivities(const Schedule& s, double freq_hz, double zeta, ModeState x0, double* const out[5]) {
-  const double w = 2 * std::numbers::pi * freq_hz, k = w * w, c = 2 * zeta * w;
-  const Transition whole = transition(w, zeta, s.dt_s);
-  SensitivityState x;
-  x.z = x0.z_mm, x.v = x0.v_mm_s;
-  auto record = [&](std::size_t i) {
-    for (int p = 0; p < 2; ++p) {
-      const double dk = p == 0 ? 2 * w : 0, dc = p == 0 ? 2 * zeta : 2 * w;
-      out[p][i] = -dc * x.v - dk * x.z - c * x.sv[p] - k * x.sz[p];
-    }
-    out[0][i] *= 2 * std::numbers::pi;  // dw / df
-    out[2][i] = -c * x.v - k * x.z - s.accel_at[i];
-    out[3][i] = -c * x.e1v - k * x.e1z;
-    out[4][i] = -c * x.e2v - k * x.e2z;
-  };
-  record(0);
-  for (std::size_t i = 1; i < s.accel_at.size(); ++i) {
-    if (s.whole[i]) {
-      const Sub& u = s.subs[s.sample_end[i - 1]];
-      sensitivity_step(x, whole, w, zeta, s.dt_s, u.a0, u.jerk);
-    } else {
-      for (std::size_t j = s.sample_end[i - 1]; j < s.sample_end[i]; ++j)
-        if (s.subs[j].h_s > 0)
-          sensitivity_step(x, transition(w, zeta, s.subs[j].h_s), w, zeta, s.subs[j].h_s, s.subs[j].a0, s.subs[j].jerk);
-    }
-    record(i);
+/// (forward sensitivities, exact for the model), a block of samples at a time: out[0][i] its
+/// derivative in the frequency (Hz), out[1][i] in zeta, out[2][i] the value itself, out[3][i] and
+/// out[4][i] the derivatives in the first deflection and rate.
+class ModeSensitivities {
+ public:
+  ModeSensitivities(const Schedule& s, double freq_hz, double zeta, ModeState x0)
+      : s_(s), w_(2 * std::numbers::pi * freq_hz), zeta_(zeta), whole_(transition(w_, zeta, s.dt_s)) {
+    x_.z = x0.z_mm, x_.v = x0.v_mm_s;
   }
-}
+
+  /// The samples from where the last call ended (the first sample at first) up to `end`, into
+  /// out[c][0 ..].
+  void next(std::size_t end, double* const out[5]) {
+    const double k = w_ * w_, c = 2 * zeta_ * w_;
+    for (std::size_t o = 0; next_ < end; ++next_, ++o) {
+      const std::size_t i = next_;
+      if (i > 0) step_to(i), flush_decayed();
+      for (int p = 0; p < 2; ++p) {
+        const double dk = p == 0 ? 2 * w_ : 0, dc = p == 0 ? 2 * zeta_ : 2 * w_;
+        out[p][o] = -dc * x_.v - dk * x_.z - c * x_.sv[p] - k * x_.sz[p];
+      }
+      out[0][o] *= 2 * std::numbers::pi;  // dw / df
+      out[2][o] = -c * x_.v - k * x_.z - s_.accel_at[i];
+      out[3][o] = -c * x_.e1v - k * x_.e1z;
+      out[4][o] = -c * x_.e2v - k * x_.e2z;
+    }
+  }
+
+ private:
+  // The free responses to the first state decay geometrically; once below kDecayed they are
+  // taken as 0, before they and their products in J'J reach the subnormal range, where every
+  // operation on them costs a hundred or more cycles (a mode at 48 Hz with zeta 0.08 decays
+  // below 1e-150 within 15 s). Their share of J'J is then below 1e-290 of an entry.
+  static constexpr double kDecayed = 1e-150;
+  void flush_decayed() {
+    if (std::abs(x_.e1z) < kDecayed && std::abs(x_.e1v) < kDecayed) x_.e1z = x_.e1v = 0;
+    if (std::abs(x_.e2z) < kDecayed && std::abs(x_.e2v) < kDecayed) x_.e2z = x_.e2v = 0;
+  }
+
+  // From sample i - 1 to sample i.
+  void step_to(std::size_t i) {
+    if (s_.whole[i]) {
+      const Sub& u = s_.subs[s_.sample_end[i - 1]];
+      sensitivity_step(x_, whole_, w_, zeta_, s_.dt_s, u.a0, u.jerk);
+      return;
+    }
+    for (std::size_t j = s_.sample_end[i - 1]; j < s_.sample_end[i]; ++j)
+      if (s_.subs[j].h_s > 0)
+        sensitivity_step(x_, transition(w_, zeta_, s_.subs[j].h_s), w_, zeta_, s_.subs[j].h_s, s_.subs[j].a0,
+                         s_.subs[j].jerk);
+  }
+
+  const Schedule& s_;
+  double w_, zeta_;
+  Transition whole_;
+  SensitivityState x_;
+  std::size_t next_ = 0;
+};
 
 /// Are the modes' frequencies and damping ratios in the model's domain?
 bool in_domain(const double* p, std::size_t modes) {
@@ -229,80 +261,135 @@ bool in_domain(const double* p, std::size_t modes) {
   return true;
 }
 
-/// The residuals y - model and their Jacobian (samples x parameters, column-major, its storage kept
-/// from one evaluation to the next). The gain, the first state and the offset enter the model
-/// linearly; a mode's frequency and damping ratio by forward sensitivities (mode_sensitivities),
-/// or, for a mode near critical damping, by central differences of that mode's response alone
-/// with the step of solve_least_squares' numeric Jacobian (1e-6 of the value).
-class RecordJacobian {
+/// Rows of the Jacobian taken together when J'J is summed: their columns stay in the first-level
+/// cache while every pair of columns is multiplied (a general matrix product of the 6 x 100k-odd
+/// transpose with the 100k-odd x 6 Jacobian took several times longer than the model's evaluation).
+constexpr Eigen::Index kRowBlock = 512;
+
+/// The normal equations J'J and J'r of the residuals y - model, a block of kRowBlock samples at a
+/// time: each mode's columns for the block are propagated (ModeSensitivities) and multiplied while
+/// they are in the first-level cache, so the samples x parameters Jacobian is never stored. The
+/// gain, the first state and the offset enter the model linearly; a mode's frequency and damping
+/// ratio by forward sensitivities, or, for a mode near critical damping, by central differences of
+/// that mode's response alone with the step of solve_least_squares' numeric Jacobian (1e-6 of the
+/// value), computed for the whole record first.
+class RecordEquations {
  public:
-  RecordJacobian(const Schedule& s, std::size_t modes, const std::vector<double>& y)
+  RecordEquations(const Schedule& s, std::size_t modes, const std::vector<double>& y)
       : s_(s),
         modes_(modes),
         y_(y),
-        m_(y.size()),
-        rel_(y.size()),
-        dz_(y.size()),
-        dv_(y.size()),
-        plus_(y.size()),
-        minus_(y.size()),
-        jac_(static_cast<Eigen::Index>(y.size()), static_cast<Eigen::Index>(modes * kParamsPerMode + 1)) {}
+        block_(kRowBlock, static_cast<Eigen::Index>(modes * kParamsPerMode + 1)),
+        raw_(kParamsPerMode * static_cast<std::size_t>(kRowBlock)),
+        model_(static_cast<std::size_t>(kRowBlock)),
+        r_(kRowBlock),
+        differenced_(modes) {}
 
-  /// The residuals at p into r and the Jacobian into jacobian(); false outside the model's domain.
-  bool evaluate(const double* p, std::vector<double>& r) {
-    if (!in_domain(p, modes_)) return false;
-    model(s_, modes_, p, m_, rel_);
-    for (std::size_t i = 0; i < y_.size(); ++i) r[i] = y_[i] - m_[i];
-    jac_.col(jac_.cols() - 1).setConstant(-1);  // the offset
-    for (std::size_t k = 0; k < modes_; ++k) mode_columns(p, k);
-    return true;
+  /// J'J into N and J'r into g at p; returns the residual sum of squares (HUGE_VAL outside the
+  /// model's domain), the residuals into `residuals` when it is not empty.
+  double operator()(const double* p, Eigen::MatrixXd& N, Eigen::VectorXd& g, std::span<double> residuals) {
+    if (!in_domain(p, modes_)) return HUGE_VAL;
+    const Eigen::Index k = block_.cols();
+    N.setZero(k, k);
+    g.setZero(k);
+    std::vector<ModeSensitivities> props;
+    props.reserve(modes_);
+    for (std::size_t m = 0; m < modes_; ++m) {
+      const double* q = p + kParamsPerMode * m;
+      if (q[1] < kSensitivityMaxZeta) props.emplace_back(s_, q[0], q[1], ModeState{q[3], q[4]});
+      else differenced_columns(q, differenced_[m]);
+    }
+    const std::size_t n = y_.size();
+    double rss = 0;
+    for (std::size_t b = 0; b < n; b += static_cast<std::size_t>(kRowBlock)) {
+      const std::size_t len = std::min(static_cast<std::size_t>(kRowBlock), n - b);
+      const double offset = p[kParamsPerMode * modes_];
+      for (std::size_t i = 0; i < len; ++i) model_[i] = s_.accel_at[b + i] + offset;
+      for (std::size_t m = 0, sens = 0; m < modes_; ++m) {
+        const double* q = p + kParamsPerMode * m;
+        if (q[1] < kSensitivityMaxZeta)
+          sensitivity_block(props[sens++], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
+        else differenced_block(differenced_[m], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
+      }
+      const auto L = static_cast<Eigen::Index>(len);
+      block_.col(k - 1).head(L).setConstant(-1);  // the offset
+      for (std::size_t i = 0; i < len; ++i) r_(static_cast<Eigen::Index>(i)) = y_[b + i] - model_[i];
+      if (!residuals.empty()) std::copy(r_.data(), r_.data() + L, residuals.begin() + static_cast<std::ptrdiff_t>(b));
+      for (Eigen::Index i = 0; i < k; ++i) {
+        const auto ci = block_.col(i).head(L);
+        for (Eigen::Index j = 0; j <= i; ++j) N(i, j) += ci.dot(block_.col(j).head(L));
+        g(i) += ci.dot(r_.head(L));
+      }
+      rss += r_.head(L).squaredNorm();
+    }
+    N.triangularView<Eigen::StrictlyUpper>() = N.transpose();
+    return rss;
   }
-  const Eigen::MatrixXd& jacobian() const { return jac_; }
 
  private:
-  void mode_columns(const double* p, std::size_t k) {
-    const double* q = p + kParamsPerMode * k;
-    const ModeState x0{q[3], q[4]};
-    const double gain = q[2];
-    const auto c = static_cast<Eigen::Index>(kParamsPerMode * k);
-    const std::size_t n = y_.size();
-    if (q[1] < kSensitivityMaxZeta) {
-      double* const cols[5] = {plus_.data(), minus_.data(), rel_.data(), dz_.data(), dv_.data()};
-      mode_sensitivities(s_, q[0], q[1], x0, cols);
-      for (std::size_t i = 0; i < n; ++i) {
-        const auto row = static_cast<Eigen::Index>(i);
-        jac_(row, c) = -gain * plus_[i];
-        jac_(row, c + 1) = -gain * minus_[i];
-        jac_(row, c + 2) = -rel_[i];
-        jac_(row, c + 3) = -gain * dz_[i];
-        jac_(row, c + 4) = -gain * dv_[i];
-      }
-      return;
-    }
-    mode_response(s_, q[0], q[1], x0, rel_.data(), dz_.data(), dv_.data());
-    for (std::size_t i = 0; i < n; ++i) {
+  // The next block of an under-damped mode's columns (from column c) and its share of the model.
+  void sensitivity_block(ModeSensitivities& prop, double gain, Eigen::Index c, std::size_t b, std::size_t len) {
+    const std::size_t B = static_cast<std::size_t>(kRowBlock);
+    double* const out[5] = {raw_.data(), raw_.data() + B, raw_.data() + 2 * B, raw_.data() + 3 * B,
+                            raw_.data() + 4 * B};
+    prop.next(b + len, out);
+    for (std::size_t i = 0; i < len; ++i) {
       const auto row = static_cast<Eigen::Index>(i);
-      jac_(row, c + 2) = -rel_[i];
-      jac_(row, c + 3) = -gain * dz_[i];
-      jac_(row, c + 4) = -gain * dv_[i];
+      block_(row, c) = -gain * out[0][i];
+      block_(row, c + 1) = -gain * out[1][i];
+      block_(row, c + 2) = -out[2][i];
+      block_(row, c + 3) = -gain * out[3][i];
+      block_(row, c + 4) = -gain * out[4][i];
+      model_[i] += gain * out[2][i];
     }
+  }
+
+  // A mode near critical damping: its response and the derivatives in the first state for the
+  // whole record (mode_response), and those in the frequency and the damping ratio by central
+  // differences: cols = {response(+h) - response(-h) in f and in zeta, value, d/dz0, d/dv0} of
+  // the relative acceleration, h the steps.
+  struct Differenced {
+    std::array<std::vector<double>, 5> cols;
+    double h[2] = {0, 0};
+  };
+  void differenced_columns(const double* q, Differenced& dif) {
+    auto& cols = dif.cols;
+    for (auto& c : cols) c.resize(y_.size());
+    const ModeState x0{q[3], q[4]};
+    mode_response(s_, q[0], q[1], x0, cols[2].data(), cols[3].data(), cols[4].data());
+    std::vector<double> minus(y_.size());
     for (int d = 0; d < 2; ++d) {
       const double h = 1e-6 * std::max(std::abs(q[d]), 1e-6);
       double qp[2] = {q[0], q[1]}, qm[2] = {q[0], q[1]};
       qp[d] += h;
       qm[d] -= h;
-      mode_response(s_, qp[0], qp[1], x0, plus_.data(), nullptr, nullptr);
-      mode_response(s_, qm[0], qm[1], x0, minus_.data(), nullptr, nullptr);
-      for (std::size_t i = 0; i < n; ++i)
-        jac_(static_cast<Eigen::Index>(i), c + d) = -gain * (plus_[i] - minus_[i]) / (2 * h);
+      auto& plus = cols[static_cast<std::size_t>(d)];
+      mode_response(s_, qp[0], qp[1], x0, plus.data(), nullptr, nullptr);
+      mode_response(s_, qm[0], qm[1], x0, minus.data(), nullptr, nullptr);
+      for (std::size_t i = 0; i < y_.size(); ++i) plus[i] -= minus[i];
+      dif.h[d] = h;
+    }
+  }
+  void differenced_block(const Differenced& dif, double gain, Eigen::Index c, std::size_t b, std::size_t len) {
+    const auto& cols = dif.cols;
+    for (std::size_t i = 0; i < len; ++i) {
+      const auto row = static_cast<Eigen::Index>(i);
+      block_(row, c) = -gain * cols[0][b + i] / (2 * dif.h[0]);
+      block_(row, c + 1) = -gain * cols[1][b + i] / (2 * dif.h[1]);
+      block_(row, c + 2) = -cols[2][b + i];
+      block_(row, c + 3) = -gain * cols[3][b + i];
+      block_(row, c + 4) = -gain * cols[4][b + i];
+      model_[i] += gain * cols[2][b + i];
     }
   }
 
   const Schedule& s_;
   std::size_t modes_;
   const std::vector<double>& y_;
-  std::vector<double> m_, rel_, dz_, dv_, plus_, minus_;
-  Eigen::MatrixXd jac_;
+  Eigen::MatrixXd block_;  // kRowBlock x parameters, column-major
+  std::vector<double> raw_, model_;
+  Eigen::VectorXd r_;
+  std::vector<Differenced> differenced_;
 };
 
 const std::vector<double>& axis_channel(const AccelRecord& r) {
@@ -374,33 +461,10 @@ void set_covariance(fitting::FitResult& f, const Eigen::MatrixXd& JtJ, double co
   }
 }
 
-/// Rows of the Jacobian taken together when J'J is summed: their columns stay in the first-level
-/// cache while every pair of columns is multiplied (a general matrix product of the 6 x 100k-odd
-/// transpose with the 100k-odd x 6 Jacobian took several times longer than the model's evaluation).
-constexpr Eigen::Index kRowBlock = 512;
-
-/// J'J and J'r of the column-major Jacobian J and residuals r; returns r'r.
-double normal_matrix(const Eigen::MatrixXd& J, const std::vector<double>& r, Eigen::MatrixXd& N, Eigen::VectorXd& g) {
-  const Eigen::Index m = J.rows(), k = J.cols();
-  N.setZero(k, k);
-  g.setZero(k);
-  const Eigen::Map<const Eigen::VectorXd> rv(r.data(), m);
-  for (Eigen::Index b = 0; b < m; b += kRowBlock) {
-    const Eigen::Index len = std::min(kRowBlock, m - b);
-    for (Eigen::Index i = 0; i < k; ++i) {
-      const auto ci = J.col(i).segment(b, len);
-      for (Eigen::Index j = 0; j <= i; ++j) N(i, j) += ci.dot(J.col(j).segment(b, len));
-      g(i) += ci.dot(rv.segment(b, len));
-    }
-  }
-  N.triangularView<Eigen::StrictlyUpper>() = N.transpose();
-  return rv.squaredNorm();
-}
-
 /// The FitResult of a converged solve on the normal equations at p, J'J there: what
 /// solve_least_squares reports for the same solution (residual diagnostics, bound warnings, the
-/// covariance).
-fitting::FitResult normal_solve_result(const Schedule& sched, std::size_t modes, const std::vector<double>& y,
+/// covariance). `res`: the residuals at p.
+fitting::FitResult normal_solve_result(const std::vector<double>& y, const std::vector<double>& res,
                                        const fitting::LsqProblem& prob, const std::vector<double>& p,
                                        const Eigen::MatrixXd& JtJ, const fitting::lm_detail::Confirmed& c,
                                        double confidence) {
@@ -414,9 +478,6 @@ fitting::FitResult normal_solve_result(const Schedule& sched, std::size_t modes,
                   p.size(), p.size(), c.iterations);
   for (double v : p)
     if (!std::isfinite(v)) throw FitError(f.model + ": the solution is not finite (" + f.diagnostics.solver + ")");
-  std::vector<double> m(y.size()), rel(y.size()), res(y.size());
-  model(sched, modes, p.data(), m, rel);
-  for (std::size_t i = 0; i < y.size(); ++i) res[i] = y[i] - m[i];
   fitting::fill_residual_diagnostics(f, res, y, true);
   for (std::size_t j = 0; j < p.size(); ++j) {
     const auto& ps = prob.params[j];
@@ -437,6 +498,7 @@ fitting::FitResult normal_solve_result(const Schedule& sched, std::size_t modes,
 fitting::FitResult ceres_from(const Schedule& sched, std::size_t modes, const std::vector<double>& y,
                               fitting::LsqProblem& prob, const fitting::LsqOptions& lo, const std::vector<double>& p) {
   for (std::size_t j = 0; j < p.size(); ++j) prob.params[j].start = p[j];
+  prob.observed = y;  // for solve_least_squares' diagnostics (the normal-equation path needs no copy)
   std::vector<double> m(y.size()), rel(y.size());
   prob.residuals = [&](const double* q, double* r) {
     if (!in_domain(q, modes)) return false;
@@ -453,18 +515,31 @@ fitting::FitResult ceres_from(const Schedule& sched, std::size_t modes, const st
 /// projected line search on the bounded frequencies and damping ratios, which evaluates each
 /// trial with its Jacobian, and the SVD of the Jacobian for the covariance cost about six times
 /// the model's evaluations). When that does not converge, Ceres takes over from where it ended.
+/// The trials of the confirming iterations are costed by the model alone (about a quarter of an
+/// evaluation of the normal equations): the last one, which meets a tolerance, is not taken.
+/// `residuals`: those at the solution.
 fitting::FitResult solve_record(const Schedule& sched, std::size_t modes, const std::vector<double>& y,
-                                fitting::LsqProblem& prob, const fitting::LsqOptions& lo) {
+                                fitting::LsqProblem& prob, const fitting::LsqOptions& lo,
+                                std::vector<double>& residuals) {
   const std::size_t k = prob.params.size(), n = y.size();
-  std::vector<double> p(k), lower(k), upper(k), r(n);
+  std::vector<double> p(k), lower(k), upper(k), m(n), rel(n);
   const std::vector<bool> fixed(k, false);
   for (std::size_t j = 0; j < k; ++j)
     lower[j] = prob.params[j].lower, upper[j] = prob.params[j].upper,
     p[j] = std::clamp(prob.params[j].start, lower[j], upper[j]);
-  RecordJacobian jac(sched, modes, y);
+  RecordEquations record_equations(sched, modes, y);
+  fitting::lm_detail::ResidualMemo memo(n);
   auto equations = [&](std::span<const double> q, Eigen::MatrixXd& N, Eigen::VectorXd& g) {
-    if (!jac.evaluate(q.data(), r)) return HUGE_VAL;
-    return normal_matrix(jac.jacobian(), r, N, g);
+    const double c = record_equations(q.data(), N, g, memo.trial());
+    memo.evaluated(q, c);
+    return c;
+  };
+  auto cost = [&](std::span<const double> q) {
+    if (!in_domain(q.data(), modes)) return HUGE_VAL;
+    model(sched, modes, q.data(), m, rel);
+    double rss = 0;
+    for (std::size_t i = 0; i < n; ++i) rss += (y[i] - m[i]) * (y[i] - m[i]);
+    return rss;
   };
   fitting::lm_detail::Equations<Eigen::MatrixXd, Eigen::VectorXd> at;
   at.cost = equations(std::span<const double>(p), at.N, at.g);
@@ -476,10 +551,22 @@ fitting::FitResult solve_record(const Schedule& sched, std::size_t modes, const 
     fitting::lm_detail::polish_from(ps, los, his, fixed, equations, at, lambda, true);
     c = fitting::lm_detail::confirm(
         ps, los, his, fixed, equations, at, lambda,
-        {lo.function_tolerance, lo.parameter_tolerance, lo.gradient_tolerance, lo.max_iterations});
+        {lo.function_tolerance, lo.parameter_tolerance, lo.gradient_tolerance, lo.max_iterations}, cost);
   }
-  if (!c.converged()) return ceres_from(sched, modes, y, prob, lo, p);
-  return normal_solve_result(sched, modes, y, prob, p, at.N, c, lo.confidence);
+  auto residuals_at = [&](const std::vector<double>& q) {
+    model(sched, modes, q.data(), m, rel);
+    residuals.resize(n);
+    for (std::size_t i = 0; i < n; ++i) residuals[i] = y[i] - m[i];
+  };
+  if (!c.converged()) {
+    fitting::FitResult f = ceres_from(sched, modes, y, prob, lo, p);
+    for (std::size_t j = 0; j < k; ++j) p[j] = f.params[j].value;
+    residuals_at(p);
+    return f;
+  }
+  residuals = memo.take(std::span<const double>(p));
+  if (residuals.size() != n) residuals_at(p);  // not expected: the end point is a kept evaluation
+  return normal_solve_result(y, residuals, prob, p, at.N, c, lo.confidence);
 }
 
 }  // namespace
@@ -512,7 +599,6 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
   fitting::LsqProblem prob;
   prob.params = params_for(starts, o.max_zeta);
   prob.num_residuals = static_cast<int>(n);
-  prob.observed = y;
   fitting::LsqOptions lo;
   lo.max_iterations = 100;
   lo.function_tolerance = 1e-12;
@@ -520,15 +606,10 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
   lo.gradient_tolerance = 1e-14;
   lo.confidence = o.confidence;
   AxisResponseFit out;
-  out.fit = solve_record(sched, modes, y, prob, lo);
+  std::vector<double> res;
+  out.fit = solve_record(sched, modes, y, prob, lo, res);
   out.samples = n;
   out.pieces = sched.pieces_used;
-  std::vector<double> p;
-  for (const auto& q : out.fit.params) p.push_back(q.value);
-  std::vector<double> m(n), rel(n);
-  model(sched, modes, p.data(), m, rel);
-  std::vector<double> res(n);
-  for (std::size_t i = 0; i < n; ++i) res[i] = y[i] - m[i];
   out.variance_inflation = fitting::residual_variance_factor(res);
   finish(out, modes, o.confidence);
   return out;

@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstddef>
 #include <span>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -136,6 +138,39 @@ void polish(std::span<double> p, std::span<const double> lo, std::span<const dou
   polish_from(p, lo, hi, fixed, normal_equations, at, lambda);
 }
 
+/// The residuals of the two evaluations with the lowest cost so far, each with its parameters:
+/// the end point of polish_from and confirm is one of them (confirm may end on a trial that
+/// lowered the cost but was not taken), so a model that stores its residuals while it evaluates
+/// its normal equations needs no further pass for the residuals at the end point.
+class ResidualMemo {
+ public:
+  explicit ResidualMemo(std::size_t n) : trial_(n), best_(n) {}
+  /// Where the next evaluation stores its residuals.
+  std::span<double> trial() { return trial_; }
+  /// After an evaluation at q into trial() with the residual sum of squares c.
+  void evaluated(std::span<const double> q, double c) {
+    if (!(c < best_cost_)) {
+      trial_p_.assign(q.begin(), q.end());
+      return;
+    }
+    std::swap(trial_, best_);
+    trial_p_ = std::move(best_p_);
+    best_p_.assign(q.begin(), q.end());
+    best_cost_ = c;
+  }
+  /// The residuals at p (moved out), or an empty vector when neither kept evaluation is at p.
+  std::vector<double> take(std::span<const double> p) {
+    auto at_p = [&p](const std::vector<double>& q) { return std::equal(q.begin(), q.end(), p.begin(), p.end()); };
+    if (at_p(best_p_)) return std::move(best_);
+    if (at_p(trial_p_)) return std::move(trial_);
+    return {};
+  }
+
+ private:
+  std::vector<double> trial_, best_, trial_p_, best_p_;
+  double best_cost_ = HUGE_VAL;
+};
+
 /// Convergence tests of confirm(): those of Ceres Solver's trust-region minimizer (Agarwal,
 /// Mierle and others, Ceres Solver 2.1, 2022: Solver::Options), with the same meaning.
 struct Tolerances {
@@ -163,11 +198,15 @@ struct Confirmed {
 /// convergence tests holds: the gradient is small, or a trial moves the parameters or changes
 /// the cost by less than the tolerances. As in Ceres, such a trial is not taken: p stays the
 /// last accepted point and `at` holds its equations. Parameters at active bounds are held in
-/// each step (held()).
-template <class Matrix, class Vector, class Fixed, class NormalEquations>
+/// each step (held()). With `cost` (cost(q) returns the residual sum of squares alone), each
+/// trial is first costed by it, and only a trial that is taken has its normal equations
+/// evaluated: for a model whose equations cost several times its residuals, since the last
+/// trial (the one that meets a tolerance) and rejected ones need no equations.
+template <class Matrix, class Vector, class Fixed, class NormalEquations, class Cost = std::nullptr_t>
 Confirmed confirm(std::span<double> p, std::span<const double> lo, std::span<const double> hi, const Fixed& fixed,
                   NormalEquations&& normal_equations, Equations<Matrix, Vector>& at, double lambda,
-                  const Tolerances& tol) {
+                  const Tolerances& tol, Cost&& cost = nullptr) {
+  constexpr bool kCostFirst = !std::is_null_pointer_v<std::remove_cvref_t<Cost>>;
   Matrix N_q;
   Vector g_q;
   std::vector<double> q(p.size());
@@ -197,7 +236,9 @@ Confirmed confirm(std::span<double> p, std::span<const double> lo, std::span<con
       double step = 0;
       for (std::size_t j = 0; j < p.size(); ++j) step += (q[j] - p[j]) * (q[j] - p[j]);
       if (std::sqrt(step) <= tol.parameter * (p_norm + tol.parameter)) return end(ConfirmEnd::parameter_tolerance);
-      const double c = normal_equations(std::span<const double>(q), N_q, g_q);
+      double c;
+      if constexpr (kCostFirst) c = cost(std::span<const double>(q));
+      else c = normal_equations(std::span<const double>(q), N_q, g_q);
       if (std::isfinite(c) && std::abs(at.cost - c) <= tol.function * at.cost)
         return end(ConfirmEnd::function_tolerance);
       if (!(std::isfinite(c) && c < at.cost)) {
@@ -205,6 +246,7 @@ Confirmed confirm(std::span<double> p, std::span<const double> lo, std::span<con
         ++out.rejected_trials;
         continue;
       }
+      if constexpr (kCostFirst) c = normal_equations(std::span<const double>(q), N_q, g_q);
       std::copy(q.begin(), q.end(), p.begin());
       at = {N_q, g_q, c};
       lambda = std::max(lambda / kDampingDecrease, kMinDamping);
