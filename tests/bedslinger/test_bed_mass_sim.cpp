@@ -3,6 +3,8 @@
 // tunekit resonance --load-kg fits f(m) = sqrt(k / (m0 + m)) / (2 pi) to two sweeps and predicts a
 // third it did not see.
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -86,6 +88,33 @@ TEST_CASE("three sweeps of a simulated bed slinger recover its moving mass and s
 
   // The damping ratio falls with the mass, as a fixed viscous damper makes it.
   CHECK(r["damping"]["slope_per_kg"].get<double>() < 0);
+
+  // A sliced 500 g print (PLA, 1.75 mm: 2.98 mg per mm of filament) scheduled from that fit.
+  std::string sliced = "M83\nG28\n";
+  const double e_layer = 500.0 / (1.24e-3 * M_PI / 4 * 1.75 * 1.75) / 50;
+  for (int l = 0; l < 50; ++l)
+    sliced += ";LAYER_CHANGE\nG1 Z" + std::to_string(0.2 * (l + 1)) + "\nG1 X50 Y50 E" + std::to_string(e_layer) + "\n";
+  const std::string in = tunekit::test::write_scratch("bed_mass_print.gcode", sliced);
+  const std::string out = dir + "/bed_mass_print.scheduled.gcode";
+  const auto sched = run_cli({"resonance", empty.accel, heavy.accel, "--axis", "y", "--load-kg", "0", "--load-kg",
+                              "0.6", "--gcode-in", in, "--gcode-out", out, "--step-hz", "0.25", "--json"});
+  INFO(sched.err);
+  REQUIRE(sched.code == 0);
+  const auto s = nlohmann::json::parse(sched.out)["results"]["bed_mass"];
+  CHECK(s["gcode_post"]["print_mass_g"].get<double>() == Approx(500).epsilon(1e-4));
+  const double m0_fit = m0["value"].get<double>(), k_fit = k["value"].get<double>();
+  const auto& changes = s["gcode_post"]["changes"];
+  REQUIRE(changes.size() >= 10);
+  for (const auto& c : changes) {
+    const double f = std::sqrt(k_fit * 1000 / (m0_fit + c["mass_g"].get<double>() / 1000)) / (2 * M_PI);
+    CHECK(c["freq_hz"].get<double>() == Approx(f).margin(0.005));
+  }
+  std::ifstream scheduled(out);
+  const std::string text((std::istreambuf_iterator<char>(scheduled)), std::istreambuf_iterator<char>());
+  CHECK(text.find("SET_INPUT_SHAPER SHAPER_FREQ_Y=") != std::string::npos);
+  // Marlin's and Prusa's lines over the file's 500 g.
+  CHECK(s["schedule"]["marlin"]["gcode"][1] == "M493 D2");
+  CHECK(s["schedule"]["prusa"]["gcode"][1].get<std::string>().rfind("M593 A-", 0) == 0);
 }
 
 TEST_CASE("a sweep with a load says what to place and where before the homing move", "[bedslinger]") {
