@@ -199,7 +199,7 @@ void print_text(const BedMassOutcome& out, std::ostream& os) {
   const auto& p = out.fit.fit.params;
   os << fmt::format("bed axis f(m) = sqrt(k / (m0 + m)) / (2 pi) from {} sweeps\n", out.records.size());
   for (const auto& rec : out.records)
-    os << fmt::format("  {:.3f} kg: {:.3f} Hz +- {:.3f} (zeta {:.4f})  {}\n", rec.point.added_mass_kg,
+    os << fmt::format("  {:.3f} kg: {:.3f} Hz +- {:.2g} (zeta {:.4f})  {}\n", rec.point.added_mass_kg,
                       rec.point.freq_hz, rec.point.freq_stderr_hz, rec.point.zeta, rec.point.source);
   os << fmt::format("  m0 = {:.4f} kg  [{:.4f}, {:.4f}]\n", m.moving_mass_kg, p[0].ci95_lo, p[0].ci95_hi);
   os << fmt::format("  k  = {:.3f} N/mm  [{:.3f}, {:.3f}]   correlation(m0, k) {:.3f}\n", m.stiffness_N_per_mm,
