@@ -144,6 +144,7 @@ GcodeMassResult apply_gcode_mass_schedule(const std::string& text, const ident::
   r.resets_e = trace.resets_e;
   std::vector<double> masses;
   for (auto l : trace.layer_lines) masses.push_back(trace.e_before[l] * o.grams_per_mm);
+  r.layer_mass_g = masses;
   double active = std::isfinite(o.configured_hz) ? o.configured_hz : model.freq_hz(0);
   LineEditor out(text);
   std::size_t from = 0;

@@ -96,8 +96,14 @@ TEST_CASE("three sweeps of a simulated bed slinger recover its moving mass and s
     sliced += ";LAYER_CHANGE\nG1 Z" + std::to_string(0.2 * (l + 1)) + "\nG1 X50 Y50 E" + std::to_string(e_layer) + "\n";
   const std::string in = tunekit::test::write_scratch("bed_mass_print.gcode", sliced);
   const std::string out = dir + "/bed_mass_print.scheduled.gcode";
-  const auto sched = run_cli({"resonance", empty.accel, heavy.accel, "--axis", "y", "--load-kg", "0", "--load-kg",
-                              "0.6", "--gcode-in", in, "--gcode-out", out, "--step-hz", "0.25", "--json"});
+  const auto sched = run_cli({"resonance",  empty.accel, heavy.accel,
+                              "--axis",     "y",         "--load-kg",
+                              "0",          "--load-kg", "0.6",
+                              "--gcode-in", in,          "--gcode-out",
+                              out,          "--step-hz", "0.25",
+                              "--held-out", held.accel,  "--held-out-load-kg",
+                              "0.3",        "--plot",    dir + "/bed_mass.svg",
+                              "--json"});
   INFO(sched.err);
   REQUIRE(sched.code == 0);
   const auto s = nlohmann::json::parse(sched.out)["results"]["bed_mass"];
@@ -112,6 +118,10 @@ TEST_CASE("three sweeps of a simulated bed slinger recover its moving mass and s
   std::ifstream scheduled(out);
   const std::string text((std::istreambuf_iterator<char>(scheduled)), std::istreambuf_iterator<char>());
   CHECK(text.find("SET_INPUT_SHAPER SHAPER_FREQ_Y=") != std::string::npos);
+  // The figure: f(m) with its band, the sweeps, the print's mass over its layers.
+  std::ifstream svg(dir + "/bed_mass.svg");
+  const std::string figure((std::istreambuf_iterator<char>(svg)), std::istreambuf_iterator<char>());
+  CHECK(figure.find("<svg") != std::string::npos);
   // Marlin's and Prusa's lines over the file's 500 g.
   CHECK(s["schedule"]["marlin"]["gcode"][1] == "M493 D2");
   CHECK(s["schedule"]["prusa"]["gcode"][1].get<std::string>().rfind("M593 A-", 0) == 0);

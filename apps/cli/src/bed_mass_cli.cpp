@@ -32,6 +32,8 @@ void add_bed_mass_options(CLI::App* sub, calibration::BedMassOptions& o) {
       ->capture_default_str();
   sub->add_option("--step-hz", o.step_hz, "Write a new frequency only when it moved by more than this (Hz)")
       ->capture_default_str();
+  sub->add_option("--plot", o.plot,
+                  "Write the figure of f(m), its band, the sweeps and the print's layers (SVG or PNG)");
 }
 
 }  // namespace tunekit::cli

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "tunekit/calibration/presentation/bed_mass_plot.hpp"
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
@@ -104,6 +105,9 @@ BedMassOutcome compute_bed_mass(const BedMassOptions& o) {
   }
   firmware_lines(o, out);
   if (out.gcode) core::write_file_atomic(o.gcode_out, out.gcode->text);
+  if (!o.plot.empty())
+    render_figure(bed_mass_figure(out.fit, out.held_out, out.gcode ? out.gcode->layer_mass_g : std::vector<double>{}),
+                  o.plot);
   return out;
 }
 

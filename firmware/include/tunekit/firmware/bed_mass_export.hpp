@@ -66,8 +66,9 @@ struct GcodeMassResult {
   std::string text;
   std::vector<GcodeMassChange> changes;
   std::size_t layers = 0;
-  double print_mass_g = 0;  ///< the file's net extrusion, in grams
-  bool resets_e = false;    ///< the file resets E (G92 E) while printing
+  std::vector<double> layer_mass_g;  ///< on the bed when each layer starts
+  double print_mass_g = 0;           ///< the file's net extrusion, in grams
+  bool resets_e = false;             ///< the file resets E (G92 E) while printing
   std::vector<std::string> warnings;
 };
 /// Inserts the per-layer frequency (Klipper, Kalico) or mass (Prusa M74 W) after each layer

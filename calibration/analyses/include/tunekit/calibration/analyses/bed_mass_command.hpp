@@ -34,6 +34,7 @@ struct BedMassOptions {
   std::string gcode_in, gcode_out;                ///< a sliced file and where its schedule goes
   std::string gcode_firmware = "klipper";         ///< klipper, kalico (SET_INPUT_SHAPER) or prusa (M74 W)
   double step_hz = 0.5;                           ///< the per-layer schedule's smallest change
+  std::string plot;  ///< the figure (SVG or PNG): f(m), its band, the sweeps, the print's layers
 };
 
 struct BedMassRecord {
