@@ -3,6 +3,7 @@
 #include "tunekit/calibration/analyses/bed_mass_command.hpp"
 
 #include <cmath>
+#include <iterator>
 
 #include <fmt/format.h>
 
@@ -11,6 +12,7 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/design/bed_mass_schedule.hpp"
+#include "tunekit/firmware/firmware_limits.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -51,15 +53,16 @@ void firmware_lines(const BedMassOptions& o, BedMassOutcome& out) {
   if (!(mass_g > 0)) return;
   out.schedule = design::linear_schedule(out.fit.model, mass_g);
   const auto& s = *out.schedule;
-  const int code = [&] {
-    const std::string names[] = {"", "zv", "zvd", "zvdd", "zvddd", "ei", "2hump_ei", "3hump_ei", "mzv"};
-    for (int i = 1; i < 9; ++i)
-      if (o.shaper == names[i]) return i;
+  // ftMotionShaper_t's code: the shaper's place in ft_types.h's order (firmware_limits.hpp).
+  int code = 0;
+  for (std::size_t i = 0; i < std::size(firmware::limits::kMarlinFtMotionShapers); ++i)
+    if (o.shaper == firmware::limits::kMarlinFtMotionShapers[i].tunekit_name) code = static_cast<int>(i) + 1;
+  if (code == 0)
     throw InputError(
-        fmt::format("--shaper {}: Marlin's FT_MOTION has zv, zvd, zvdd, zvddd, ei, 2hump_ei, 3hump_ei, "
-                    "mzv",
+        fmt::format("--schedule-shaper {}: Marlin's FT_MOTION has zv, zvd, zvdd, ei, 2hump_ei, "
+                    "3hump_ei and mzv",
                     o.shaper));
-  }();
+
   out.marlin_lines = firmware::marlin_mass_schedule_lines(firmware::parse_m493_syntax(o.marlin_m493_form), code,
                                                           o.shaper_zeta, s, out.grams_per_mm);
   if (o.shaper == "zvdd" || o.shaper == "zvddd")
