@@ -55,7 +55,9 @@ TEST_CASE("three sweeps of a simulated bed slinger recover its moving mass and s
 
   // The run recorded the mass and its place; the simulator carried it.
   const auto run_json = tunekit::test::read_json(dir + "/m600/run.json");
-  INFO(run_json.dump());
+  CHECK(run_json["experiment"]["params"]["load_kg"].get<double>() == Approx(0.6));
+  CHECK(run_json["experiment"]["excitation"]["bed_load"]["instruction"].get<std::string>().rfind("place 0.6 kg", 0) ==
+        0);
   const auto bed = heavy.truth["axes"]["y"]["bed"];
   CHECK(bed["load_kg"].get<double>() == Approx(0.6));
   const double m0_true = bed["moving_mass_kg"].get<double>();
