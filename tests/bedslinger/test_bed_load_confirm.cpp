@@ -9,8 +9,7 @@
 
 using namespace tunekit;
 
-TEST_CASE("a sweep with a mass on a real printer's bed asks first and stops when it is not confirmed",
-          "[bedslinger]") {
+TEST_CASE("a sweep with a mass on a real printer's bed asks first and stops when it is not confirmed", "[bedslinger]") {
   calibration::RunCommandOptions o;
   o.run.protocol = "axis-sweep";
   o.run.axis = "y";
