@@ -8,58 +8,13 @@
 #include <fmt/format.h>
 
 #include "export_writers.hpp"
+#include "gcode_words.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/firmware/config_edit.hpp"
 #include "tunekit/fitting/interpolate.hpp"
 
 namespace tunekit::firmware {
 namespace {
-
-std::string ga_upper(std::string s) {
-  for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return s;
-}
-
-/// The code part of a line (before ';'), trimmed.
-std::string ga_code(const std::string& line) {
-  std::string c = line.substr(0, line.find(';'));
-  const auto b = c.find_first_not_of(" \t");
-  if (b == std::string::npos) return {};
-  const auto e = c.find_last_not_of(" \t\r");
-  return c.substr(b, e - b + 1);
-}
-
-/// Value of word `letter` in a G-code line's code ("G1 X10.5 E0.2"), if present.
-std::optional<double> ga_word(const std::string& code, char letter) {
-  for (std::size_t i = 0; i < code.size(); ++i) {
-    if (std::toupper(static_cast<unsigned char>(code[i])) != letter) continue;
-    if (i > 0 && code[i - 1] != ' ' && code[i - 1] != '\t') continue;
-    try {
-      std::size_t used = 0;
-      const double v = std::stod(code.substr(i + 1), &used);
-      if (used > 0) return v;
-    } catch (const std::logic_error&) {
-    }
-  }
-  return std::nullopt;
-}
-
-/// Klipper-style KEY=value parameter.
-std::optional<double> ga_param(const std::string& code, const std::string& key) {
-  const std::string u = ga_upper(code);
-  const auto p = u.find(" " + key + "=");
-  if (p == std::string::npos) return std::nullopt;
-  try {
-    return std::stod(code.substr(p + key.size() + 2));
-  } catch (const std::logic_error&) {
-    return std::nullopt;
-  }
-}
-
-std::string ga_command(const std::string& code) {
-  const auto sp = code.find_first_of(" \t");
-  return ga_upper(code.substr(0, sp));
-}
 
 std::string ga_set_command(const GcodeAdvanceOptions& o, double k, double q, const std::string& feature) {
   const std::string ks = format_number(k, detail::kDecimalsK);
@@ -79,20 +34,20 @@ std::string ga_set_command(const GcodeAdvanceOptions& o, double k, double q, con
 }  // namespace
 
 bool parse_advance_command(const std::string& line, ExportFirmware fw, double& k_s) {
-  const std::string code = ga_code(line);
+  const std::string code = gcode_words::code(line);
   if (code.empty()) return false;
-  const std::string cmd = ga_command(code);
+  const std::string cmd = gcode_words::command(code);
   std::optional<double> v;
   switch (fw) {
     case ExportFirmware::klipper:
     case ExportFirmware::kalico:
-      if (cmd == "SET_PRESSURE_ADVANCE") v = ga_param(code, "ADVANCE");
+      if (cmd == "SET_PRESSURE_ADVANCE") v = gcode_words::param(code, "ADVANCE");
       break;
     case ExportFirmware::marlin:
-      if (cmd == "M900") v = ga_word(code, 'K');
+      if (cmd == "M900") v = gcode_words::word(code, 'K');
       break;
     case ExportFirmware::rrf:
-      if (cmd == "M572") v = ga_word(code, 'S');
+      if (cmd == "M572") v = gcode_words::word(code, 'S');
       break;
   }
   if (!v) return false;
@@ -164,24 +119,24 @@ std::vector<FeatureBlock> feature_blocks(const LineEditor& ed, double area, cons
       blocks.push_back({i, feat});
       continue;
     }
-    const std::string code = ga_code(t);
+    const std::string code = gcode_words::code(t);
     if (code.empty()) continue;
-    const std::string cmd = ga_command(code);
+    const std::string cmd = gcode_words::command(code);
     if (cmd == "G90") rel_xy = false;
     else if (cmd == "G91") rel_xy = true;
     else if (cmd == "M82") rel_e = false;
     else if (cmd == "M83") rel_e = true;
     else if (cmd == "G92") {
-      if (auto v = ga_word(code, 'E')) e = *v;
-      if (auto v = ga_word(code, 'X')) x = *v;
-      if (auto v = ga_word(code, 'Y')) y = *v;
+      if (auto v = gcode_words::word(code, 'E')) e = *v;
+      if (auto v = gcode_words::word(code, 'X')) x = *v;
+      if (auto v = gcode_words::word(code, 'Y')) y = *v;
     } else if (cmd == "G0" || cmd == "G1" || cmd == "G00" || cmd == "G01") {
       const double x0 = x, y0 = y;
-      if (auto v = ga_word(code, 'X')) x = rel_xy ? x + *v : *v;
-      if (auto v = ga_word(code, 'Y')) y = rel_xy ? y + *v : *v;
-      if (auto v = ga_word(code, 'F')) f = *v;
+      if (auto v = gcode_words::word(code, 'X')) x = rel_xy ? x + *v : *v;
+      if (auto v = gcode_words::word(code, 'Y')) y = rel_xy ? y + *v : *v;
+      if (auto v = gcode_words::word(code, 'F')) f = *v;
       double de = 0;
-      if (auto v = ga_word(code, 'E')) {
+      if (auto v = gcode_words::word(code, 'E')) {
         de = rel_e ? *v : *v - e;
         e = rel_e ? e + *v : *v;
       }

@@ -126,6 +126,20 @@ std::pair<double, double> emit_sweep(const ExperimentRequest& r, const std::vect
   return {lo, hi};
 }
 
+/// Bed slinger: the mass placed on the bed for the sweep, and where (the middle of the travel
+/// unless given), in the experiment's record and as a comment at the top of its G-code.
+void record_bed_load(const ExperimentRequest& r, Experiment& e) {
+  auto& p = e.params;
+  if (std::isnan(p["load_x_mm"])) p["load_x_mm"] = mid(r.profile, "x");
+  if (std::isnan(p["load_y_mm"])) p["load_y_mm"] = mid(r.profile, "y");
+  if (!(p.at("load_kg") > 0)) return;
+  const std::string place = fmt::format("place {} kg on the bed, centred at X{} Y{} (mm), fixed so it cannot slide",
+                                        num(p.at("load_kg"), 3), num(p.at("load_x_mm"), 1), num(p.at("load_y_mm"), 1));
+  e.excitation["bed_load"] = {
+      {"load_kg", p.at("load_kg")}, {"x_mm", p.at("load_x_mm")}, {"y_mm", p.at("load_y_mm")}, {"instruction", place}};
+  e.gcode.push_back("; bed load: " + place);
+}
+
 void build_axis_sweep(const ExperimentRequest& r, Experiment& e) {
   const std::string& axis_in = r.axis_in;
   const machine::MachineProfile& profile = r.profile;
@@ -138,6 +152,7 @@ void build_axis_sweep(const ExperimentRequest& r, Experiment& e) {
   const std::string other = axis_in == "x" ? "y" : "x";
   if (std::isnan(p["center_mm"])) p["center_mm"] = mid(profile, axis_in);
   if (std::isnan(p["other_mm"])) p["other_mm"] = mid(profile, other);
+  record_bed_load(r, e);
   const SweepDesign design = sweep_design(r, p);
   const double f0 = design.freq_start_hz, f1 = design.freq_end_hz, rate = design.hz_per_sec;
   if (f1 <= f0) throw InputError("freq_end_hz must exceed freq_start_hz");

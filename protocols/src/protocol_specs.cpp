@@ -37,6 +37,7 @@ constexpr double kMaxFreqHz = 1000;       // excitation frequency, Hz
 constexpr double kMaxLengthMm = 10000;    // sizes and positions, mm
 constexpr double kMaxTemperatureC = 500;  // set temperature, degC (the profile's hotend_max_c applies too)
 constexpr double kMaxFlowMm3S = 1000;     // volumetric flow, mm^3/s
+constexpr double kMaxLoadKg = 20;         // a mass placed on a bed, kg
 
 /// The hot end's set temperature, a parameter of every protocol that extrudes.
 ProtocolParam hotend_param() {
@@ -249,7 +250,15 @@ void add_axis_specs(std::vector<ProtocolSpec>& s) {
         {"travel_speed_mm_s", kMachineDefault, "mm/s",
          "speed of the move to the start position (default: 100, or 90 % of the axes' limit when lower)",
          ParamDomain::positive, kMaxSpeedMmS},
-        {"settle_s", 0.3, "s", "recorded rest before and after the sweep", ParamDomain::non_negative, kMaxTimeS}},
+        {"settle_s", 0.3, "s", "recorded rest before and after the sweep", ParamDomain::non_negative, kMaxTimeS},
+        {"load_kg", 0, "kg",
+         "bed slinger: a known mass placed on the bed for this sweep (the run says what to place and where, asks to "
+         "confirm on a terminal, and records it; the simulated printer carries it); 0: the bed as it is",
+         ParamDomain::non_negative, kMaxLoadKg},
+        {"load_x_mm", kMachineDefault, "mm", "where the mass sits on the bed, x (default: middle of the travel)",
+         ParamDomain::any, kMaxLengthMm},
+        {"load_y_mm", kMachineDefault, "mm", "where the mass sits on the bed, y (default: middle of the travel)",
+         ParamDomain::any, kMaxLengthMm}},
        {"accelerometer"},
        true});
   s.push_back({Protocol::axis_rectangle,

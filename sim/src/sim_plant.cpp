@@ -38,7 +38,8 @@ Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed
     ftm_shaper_[a] = cfg_.ft_shaper[a];
     ftm_freq_[a] = cfg_.ft_freq_hz[a];
   }
-  for (const auto& [axis, modes] : cfg_.modes) {
+  // The modes as the load on the bed moves them (the weights stay those of cfg_.modes).
+  for (const auto& [axis, modes] : cfg_.loaded_modes()) {
     mode_state_[axis].assign(modes.size(), {0.0, 0.0});
     for (const auto& md : modes) {
       mode_physics_[axis].emplace_back(md.freq_hz, md.zeta);

@@ -62,6 +62,12 @@ double positive_option(const std::string& k, double d) {
   return d;
 }
 
+// A value of option k that is zero or positive; InputError otherwise.
+double non_negative_option(const std::string& k, double d) {
+  if (!(d >= 0)) throw InputError(fmt::format("simulator option {} must be zero or positive", k));
+  return d;
+}
+
 // mode_AXIS=FREQ_HZ:ZETA[:WEIGHT],...: the axis' modes.
 std::vector<SimMode> parse_modes(const std::string& k, const std::string& v) {
   auto pos = [&](double d) { return positive_option(k, d); };
@@ -129,6 +135,24 @@ double SimConfig::tau_at_feed(double feed_mm_s) const {
   return tau_s * std::pow(u / tau_ref_feed_mm_s, tau_flow_exponent);
 }
 
+double SimConfig::bed_stiffness_N_per_m() const {
+  const auto it = modes.find(bed_axis);
+  if (it == modes.end() || it->second.empty()) return 0;
+  const double w = 2 * std::numbers::pi * it->second.front().freq_hz;
+  return bed_moving_mass_kg * w * w;
+}
+
+std::map<std::string, std::vector<SimMode>> SimConfig::loaded_modes() const {
+  auto out = modes;
+  const auto it = out.find(bed_axis);
+  if (it == out.end() || it->second.empty() || bed_load_kg == 0) return out;
+  // f ~ 1/sqrt(m0 + m) at a fixed stiffness; zeta ~ 1/sqrt(m0 + m) at a fixed viscous damping.
+  const double scale = std::sqrt(bed_moving_mass_kg / (bed_moving_mass_kg + bed_load_kg));
+  it->second.front().freq_hz *= scale;
+  it->second.front().zeta *= scale;
+  return out;
+}
+
 const char* SimConfig::preset_name(SimPreset p) { return p == SimPreset::desktop ? "desktop" : "peek"; }
 
 SimConfig SimConfig::with_preset(SimPreset p) {
@@ -183,7 +207,12 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     else if (k == "accel_noise_mm_s2") c.accel_noise_mm_s2 = std::max(0.0, parse_double(k, v));
     else if (k == "cross_coupling") c.cross_coupling = parse_double(k, v);
     else if (k == "jerk_mm_s3") c.jerk_mm_s3 = pos(parse_double(k, v));
-    else if (k == "seed") c.seed = static_cast<unsigned>(parse_double(k, v));
+    else if (k == "bed_moving_mass_kg") c.bed_moving_mass_kg = pos(parse_double(k, v));
+    else if (k == "bed_load_kg") c.bed_load_kg = non_negative_option(k, parse_double(k, v));
+    else if (k == "bed_axis") {
+      if (v != "x" && v != "y") throw InputError("simulator option bed_axis must be x or y");
+      c.bed_axis = v;
+    } else if (k == "seed") c.seed = static_cast<unsigned>(parse_double(k, v));
     else if (k == "firmware") {
       if (v != "marlin" && v != "klipper" && v != "rrf")
         throw InputError("simulator option firmware must be marlin, klipper or rrf");
@@ -316,10 +345,18 @@ nlohmann::json SimConfig::truth() const {
   j["preset"] = preset_name(preset);
   j["liquefier"] = liq;
   nlohmann::json axes = nlohmann::json::object();
-  for (const auto& [axis, modes] : this->modes) {
+  for (const auto& [axis, modes] : loaded_modes()) {
     nlohmann::json ms = nlohmann::json::array();
     for (const auto& m : modes) ms.push_back({{"freq_hz", m.freq_hz}, {"zeta", m.zeta}, {"weight", m.weight}});
     axes[axis] = {{"modes", ms}};
+  }
+  if (axes.contains(bed_axis)) {
+    const double k = bed_stiffness_N_per_m(), z0 = modes.at(bed_axis).front().zeta;
+    axes[bed_axis]["bed"] = {{"moving_mass_kg", bed_moving_mass_kg},
+                             {"stiffness_N_per_m", k},
+                             {"damping_N_s_per_m", 2 * z0 * std::sqrt(k * bed_moving_mass_kg)},
+                             {"load_kg", bed_load_kg},
+                             {"equations", "f = sqrt(k / (m0 + m)) / (2 pi), zeta = c / (2 sqrt(k (m0 + m)))"}};
   }
   j["axes"] = axes;
   j["accelerometer"] = {

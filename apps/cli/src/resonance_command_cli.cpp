@@ -2,6 +2,7 @@
 // option structs, so --help shows the library's defaults); the work is done by the
 // calibration library's compute function.
 
+#include "bed_mass_cli.hpp"
 #include "resonance_cli.hpp"
 #include "tunekit/cli/command.hpp"
 #include "tunekit/cli/commands.hpp"
@@ -20,6 +21,7 @@ using namespace calibration;
 namespace {
 struct ResonanceCommand {
   ResonanceOptions options;
+  BedMassOptions bed;  ///< --load-kg: the bed slinger's f(m) instead
   OutputOptions output;
 };
 }  // namespace
@@ -31,6 +33,7 @@ void register_resonance(CLI::App& app, CliContext& ctx) {
       "resonance", "Axis resonances from accelerometer data: PSD, modes with natural frequency and damping ratio");
   add_accel_files_options(sub, o.accel, cmd->output);
   add_ringdown_options(sub, o.ringdown_options, &o.ringdown);
+  add_bed_mass_options(sub, cmd->bed);
   sub->footer(klipper_files_help() +
               "\nExamples:\n"
               "  tunekit resonance /tmp/raw_data_x_*.csv /tmp/raw_data_y_*.csv --json\n"
@@ -38,10 +41,19 @@ void register_resonance(CLI::App& app, CliContext& ctx) {
               "  tunekit resonance log.csv --axis y --time t --accel ay --excitation ay_cmd --json -o y.json\n"
               "  tunekit resonance /tmp/raw_data_x_*.csv --require 'x.freq_hz>=40'    # CI drift check\n"
               "  tunekit resonance --ringdown /tmp/adxl345-belt_A.csv   # a plucked belt: fundamental and damping\n"
+              "  tunekit resonance y0.csv y300.csv --axis y --load-kg 0 --load-kg 0.3 --held-out y150.csv \\\n"
+              "      --held-out-load-kg 0.15 --gcode-in part.gcode --gcode-out part.tk.gcode   # a bed slinger's f(m)\n"
               "Ring-down analysis: the fundamental and damping ratio of a free decay from a time-domain fit of damped\n"
               "sinusoids (matrix pencil start: Hua and Sarkar, IEEE Trans. ASSP, 1990; least-squares refinement).\n"
               "A record whose decay is below --min-strength times its noise floor is refused with exit 1.");
-  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_resonance(cmd->options), cmd->output, ctx)); });
+  sub->callback([cmd, &ctx] {
+    if (cmd->bed.loads_kg.empty()) {
+      set_exit_code(report_outcome(compute_resonance(cmd->options), cmd->output, ctx));
+      return;
+    }
+    cmd->bed.accel = cmd->options.accel;
+    set_exit_code(report_outcome(compute_bed_mass(cmd->bed), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

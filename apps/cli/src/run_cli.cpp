@@ -12,7 +12,10 @@
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
 #include "tunekit/protocols/stop_signals.hpp"
+#include <unistd.h>
+
 #include <atomic>
+#include <iostream>
 #include <cmath>
 #include <csignal>
 #include <fmt/format.h>
@@ -113,6 +116,14 @@ void register_run(CLI::App& app, CliContext& ctx) {
     cmd->options.run.progress = [&ctx](const std::string& m) {
       if (ctx.verbosity > 0) ctx.err << "tunekit: " << m << "\n";
     };
+    // A set-up step the technician does (a mass on the bed) is asked for on a terminal only.
+    if (::isatty(STDIN_FILENO) != 0 && ctx.interactive)
+      cmd->options.confirm_setup = [&ctx](const std::string& instruction) {
+        ctx.err << "tunekit: " << instruction << "; then press Enter (or type 'no' to stop): ";
+        ctx.err.flush();
+        std::string answer;
+        return static_cast<bool>(std::getline(std::cin, answer)) && answer != "no" && answer != "n";
+      };
     // A stop signal at any instant, reading and printing the results included, ends the command
     // with exit code 128 + its number and run.json saying where (stop_signals.hpp).
     const protocols::StopSignals stop_signals;

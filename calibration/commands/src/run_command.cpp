@@ -1,5 +1,6 @@
 // tunekit run: run an experiment protocol on a printer or on the built-in simulated printer,
 // journaling every line and sensor sample into a run directory (protocols/runner.hpp).
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -49,6 +50,29 @@ void check_run_ranges(const RunCommandOptions& a) {
                                  r.limits.max_lines, r.limits.max_bytes));
 }
 
+/// Bed slinger: the mass the sweep wants on the bed (-p load_kg). The simulated printer carries
+/// it (unless --sim bed_load_kg says otherwise); a technician is asked to place it on a terminal,
+/// and without one the option stands for the mass placed (the run records it with the sweep).
+void place_bed_load(const RunCommandOptions& a, const protocols::RunOptions& o, std::vector<std::string>& sim) {
+  const auto it = o.params.find("load_kg");
+  if (it == o.params.end() || !(it->second > 0) || o.dry_run) return;
+  if (o.machine == "sim") {
+    const bool given =
+        std::any_of(sim.begin(), sim.end(), [](const auto& s) { return s.rfind("bed_load_kg=", 0) == 0; });
+    if (!given) sim.push_back(fmt::format("bed_load_kg={}", it->second));
+    return;
+  }
+  auto at = [&](const char* key, const char* axis) {
+    const auto p = o.params.find(key);
+    return p == o.params.end() ? fmt::format("{} at the middle of its travel", axis)
+                               : fmt::format("{} {} mm", axis, p->second);
+  };
+  const std::string instruction = fmt::format("place {} kg on the bed ({}, {}), fixed so it cannot slide", it->second,
+                                              at("load_x_mm", "x"), at("load_y_mm", "y"));
+  if (a.confirm_setup && !a.confirm_setup(instruction))
+    throw InputError("the mass on the bed was not confirmed: nothing was sent");
+}
+
 }  // namespace
 
 RunOutcome compute_run(const RunCommandOptions& a) {
@@ -73,7 +97,10 @@ RunOutcome compute_run(const RunCommandOptions& a) {
         "--port is needed with a machine profile (a serial device, a PTY such as /tmp/printer, or "
         "unix:/tmp/klippy_uds)");
   if (o.machine != "sim" && o.port.empty()) o.port = "(dry run)";
-  load_run_machine(o, a.profile_path, a.sim_options);
+  std::vector<std::string> sim_options = a.sim_options;
+  place_bed_load(a, o, sim_options);
+  outcome.options.sim_options = sim_options;
+  load_run_machine(o, a.profile_path, sim_options);
   outcome.result = protocols::run_experiment(o);
   if (!o.dry_run && outcome.result.files.count(protocols::RunFile::truth))
     outcome.truth = read_json_file(outcome.result.files.at(protocols::RunFile::truth));

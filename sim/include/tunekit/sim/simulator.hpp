@@ -120,6 +120,20 @@ struct SimConfig {
   double load_cell_clock_error = 0.0025;
   // Axes.
   std::map<std::string, std::vector<SimMode>> modes{{"x", {{48, 0.08, 1}}}, {"y", {{42, 0.09, 1}}}};
+  /// The bed of a bed slinger: the axis that carries it (bed_axis, "x" or "y"), its effective
+  /// moving mass m0 (bed, carriage and the belt's share, as its first mode sees them) and a load
+  /// m placed on it (kg). The axis' first mode in `modes` is the empty bed's: its frequency f0 and
+  /// damping ratio z0 set the axis' stiffness k = m0 (2 pi f0)^2 and viscous damping
+  /// c = 2 z0 sqrt(k m0); with the load the mode runs at f = (1/2 pi) sqrt(k / (m0 + m)) with
+  /// zeta = c / (2 sqrt(k (m0 + m))) (loaded_modes()). Options "bed_axis=y",
+  /// "bed_moving_mass_kg=1", "bed_load_kg=0.3"; the load's place on the bed is recorded only.
+  std::string bed_axis = "y";
+  double bed_moving_mass_kg = 1.0;
+  double bed_load_kg = 0;
+  /// The bed axis' stiffness k (N/m) from its empty-bed mode and moving mass.
+  double bed_stiffness_N_per_m() const;
+  /// `modes` with the bed axis' first mode moved by the load (the modes the plant runs).
+  std::map<std::string, std::vector<SimMode>> loaded_modes() const;
   double accel_rate_hz = 3200;
   double accel_noise_mm_s2 = 20;
   double cross_coupling = 0.05;  ///< share of one horizontal axis' response seen on the other
@@ -188,7 +202,7 @@ struct SimConfig {
   /// "firmware=klipper", "steps_per_mm=160",
   /// "liquefier=physics", "mode_x=48:0.08" or "mode_x=48:0.08:0.7,95:0.05:0.3",
   /// "fault=garble@12", "fault=late-ok@12:300", "fault=drop@12", "fault=disconnect@40",
-  /// "fault=error@30", "seed=3". InputError for unknown keys or bad values.
+  /// "fault=error@30", "seed=3", "bed_load_kg=0.3". InputError for unknown keys or bad values.
   static SimConfig from_options(const std::vector<std::string>& options);
   /// The simulated printer a machine profile describes: its firmware's planner rules
   /// ([machine] firmware; prusa runs Marlin's, kalico Klipper's), X/Y steps per mm, the

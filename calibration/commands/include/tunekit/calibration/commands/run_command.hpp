@@ -5,6 +5,7 @@
 // a command is described in docs/cpp-api.md.
 
 #include <chrono>
+#include <functional>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -30,6 +31,10 @@ struct RunCommandOptions {
   std::vector<std::string> sim_options;
   /// Protocol parameters as NAME=VALUE (value in the unit the name carries), checked by compute_run().
   std::vector<std::string> params;
+  /// Asks the technician to do a set-up step before anything is sent (axis-sweep -p load_kg: the
+  /// mass to place on the bed) and returns whether it was done; the caller's terminal. Empty (no
+  /// terminal, CI): the step is taken as done as the options state it, and the run says so.
+  std::function<bool(const std::string& instruction)> confirm_setup;
   /// Silence allowed while waiting for the firmware's "ok" (s); the link's default.
   double timeout_s = std::chrono::duration<double>(machine::LinkOptions{}.timeout).count();
 };
