@@ -20,6 +20,6 @@ result = tunekit.step(log, time="time", input="feed", output="force", step_at="f
 
 print(f"pooled fit of {len(result['steps'])} steps ({result.fit.model}):")
 for name, p in result.params.items():
-    print(f"  {name:8s} = {p.value:.4g} {p.unit}   95 % [{p.ci95[0]:.4g}, {p.ci95[1]:.4g}]   stderr {p.stderr:.2g}")
+    print(f"  {name:8s} = {p.value:.5g} {p.unit}   95 % [{p.ci95[0]:.5g}, {p.ci95[1]:.5g}]   stderr {p.stderr:.2g}")
 tau = result.params["tau_s"]
 print(f"tau_s = {tau.value:.3f} s, 95 % interval {tau.ci95[0]:.3f}..{tau.ci95[1]:.3f} s")

@@ -40,7 +40,7 @@ using FitAt = std::pair<std::string, const fitting::FitResult*>;
 void parse_command(const std::function<CLI::App*(CLI::App&)>& add_command, const std::vector<std::string>& positional,
                    const std::vector<KeywordArgument>& keywords);
 
-/// The results' JSON text and, per fit with a covariance, its JSON pointer -> (names, matrix).
+/// Per fit with a covariance: its JSON pointer -> (parameter names, covariance matrix as numpy).
 py::dict covariances(const std::vector<FitAt>& fits);
 
 void bind_errors(py::module_& m);

@@ -90,8 +90,11 @@ def test_overshoot_results_equal_the_commands_and_a_table_in_memory_reads_as_the
 def test_step_from_numpy_arrays_reads_as_the_file():
     """Columns in memory go through the same CSV reader, from memory, and give the file's numbers."""
     path = dataset("liquefier/synthetic_steps.csv")
-    data = np.genfromtxt(path, delimiter=",", names=True)
-    table = {name: data[name] for name in data.dtype.names}
+    with open(path) as f:
+        lines = [line for line in f if not line.startswith("#")]
+    names = lines[0].strip().split(",")  # "time (s)", "feed (mm/s)", ...: units in the names, as in the file
+    data = np.loadtxt(lines[1:], delimiter=",")
+    table = {name: data[:, i] for i, name in enumerate(names)}
     options = dict(time="time", input="feed", output="force", step_at="first")
     from_memory = tunekit.step(table, **options).to_dict()
     assert from_memory == cli_results("step", path, *command_line(options))
@@ -114,8 +117,20 @@ def test_a_parameter_carries_value_stderr_interval_and_the_fit_its_covariance():
     i = r.fit.covariance_names.index("tau_s")
     assert math.isclose(math.sqrt(cov[i, i]), tau.stderr, rel_tol=1e-6) or \
         math.isclose(tau.value * math.sqrt(cov[i, i]), tau.stderr, rel_tol=1e-6)
-    # Every step's fit carries its own.
-    assert all(f.covariance is not None for p, f in r.fits.items() if p.startswith("/steps/"))
+    # Every fitted model of the results is a Fit by its JSON pointer, the single steps' too.
+    assert {"/pooled", "/steps/0", "/steps/3"} <= set(r.fits)
+    assert r.fits["/steps/0"].params["tau_s"].value == r.to_dict()["steps"][0]["params"]["tau_s"]["value"]
+
+
+def test_the_other_fits_with_a_covariance_carry_it():
+    fits = [tunekit.freq(dataset("liquefier/synthetic_chirp.csv"), time="time", input="feed", output="force",
+                         mode="h1", fit_tf="2,0", fmax=40).fit,
+            tunekit.rheo(dataset("rheology/peek_cross_wlf_synthetic.csv"), model="cross-wlf").fit,
+            tunekit.nozzle(fit=dataset("rheology/nozzle_pressure_synthetic.csv")).fit]
+    for fit in fits:
+        assert sorted(fit.covariance_names) == sorted(fit.params)  # in the estimator's order; params by name
+        assert fit.covariance.shape == (len(fit.params), len(fit.params))
+        assert np.all(np.diag(fit.covariance) >= 0) and np.any(np.diag(fit.covariance) > 0)
 
 
 def test_the_version_is_the_commands():

@@ -55,10 +55,12 @@ def test_export_writes_as_the_command_writes(tmp_path):
     assert again.read_text() == by_cli.read_text()
 
 
-def test_export_refuses_results_it_cannot_design_from():
+def test_export_refuses_results_it_cannot_design_from(tmp_path):
     rheo = tunekit.rheo(dataset("rheology/peek_cross_wlf_synthetic.csv"), model="cross-wlf")
-    with pytest.raises(ValueError, match="cannot be designed from here"):
-        tunekit.export(rheo, firmware="klipper", pa_k=0.04)
+    cfg = tmp_path / "printer.cfg"
+    shutil.copy(dataset("firmware/printer.cfg"), cfg)
+    with pytest.raises(ValueError, match="results of 'rheo' cannot be designed from here"):
+        tunekit.export(rheo, firmware="klipper", config=cfg)
 
 
 def test_the_history_reads_as_the_command_reads_it(tmp_path):
