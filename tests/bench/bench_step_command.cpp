@@ -11,6 +11,7 @@
 
 #include "bench_common.hpp"
 #include "tunekit/calibration/analyses/step_command.hpp"
+#include "tunekit/core/error.hpp"
 
 int main(int argc, char** argv) {
   using namespace tunekit;
@@ -27,7 +28,12 @@ int main(int argc, char** argv) {
   const int runs = argc > 4 ? std::stoi(argv[4]) : 5;
   std::size_t bytes = 0;
   auto once = [&] { bytes += calibration::to_envelope(calibration::compute_step(o)).results().dump().size(); };
-  once();  // warm-up: the file in the page cache, the allocator's arenas
+  try {
+    once();  // warm-up: the file in the page cache, the allocator's arenas
+  } catch (const Error& e) {
+    std::fprintf(stderr, "%s\n", e.formatted().c_str());
+    return 1;
+  }
   std::vector<double> ms;
   for (int i = 0; i < runs; ++i) {
     const std::clock_t c0 = std::clock();

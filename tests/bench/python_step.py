@@ -40,7 +40,7 @@ def python_round(path, t_step, du, runs):
     times = []
     for _ in range(runs):
         c0 = time.process_time()
-        tunekit.step(path, output="y", step_time=t_step, step_size=du, model="fopdt").to_dict()
+        tunekit.step(path, output="y", step_time=t_step, step_size=du, model="fopdt")
         times.append(1e3 * (time.process_time() - c0))
     return sorted(times)[len(times) // 2]
 
