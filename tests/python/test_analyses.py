@@ -2,6 +2,9 @@
 sets the command's own tests use; and the typed view of them (Param, covariance) reads the same."""
 
 import math
+import os
+import shlex
+import subprocess
 
 import numpy as np
 import pytest
@@ -133,6 +136,13 @@ def test_the_other_fits_with_a_covariance_carry_it():
         assert np.all(np.diag(fit.covariance) >= 0) and np.any(np.diag(fit.covariance) > 0)
 
 
-def test_the_version_is_the_commands():
+def test_the_version_is_the_commands_and_python3_finds_the_module_as_the_readme_says():
     from conftest import cli
     assert cli("--version")[1].strip() == f"tunekit {tunekit.__version__}"
+    # README: export PYTHONPATH=$PWD/build/python && python3 -c "import tunekit; print(tunekit.__version__)",
+    # with whichever python3 comes first on PATH (the version needs neither numpy nor pandas).
+    package_parent = os.path.dirname(os.path.dirname(os.path.abspath(tunekit.__file__)))
+    r = subprocess.run(["bash", "-c", f"export PYTHONPATH={shlex.quote(package_parent)} && "
+                        "python3 -c 'import tunekit; print(tunekit.__version__)'"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert cli("--version")[1].strip() == f"tunekit {r.stdout.strip()}"
