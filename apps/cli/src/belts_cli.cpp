@@ -5,6 +5,7 @@
 #include "resonance_cli.hpp"
 #include "tunekit/calibration/analyses/belts_command.hpp"
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/core/error.hpp"
@@ -24,9 +25,7 @@ struct BeltsCommand {
 };
 }  // namespace
 
-void register_belts(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<BeltsCommand>();
-  BeltsOptions& o = cmd->options;
+CLI::App* add_belts_command(CLI::App& app, BeltsOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand("belts",
                                  "Compare two belts from a pluck recording of each: fundamentals, tensions in N, "
                                  "which to tighten");
@@ -55,7 +54,7 @@ void register_belts(CLI::App& app, CliContext& ctx) {
   sub->add_option("--profile", o.profile,
                   "Machine profile (TOML) whose [belts] section gives belt, span_mm, "
                   "span_uncertainty_mm, target_n");
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "Each recording holds one pluck: the belt is plucked like a string with the accelerometer on the toolhead\n"
       "(Klipper: ACCELEROMETER_MEASURE, or a belt-tension tool's recorder). The fundamental is the line whose "
@@ -73,7 +72,14 @@ void register_belts(CLI::App& app, CliContext& ctx) {
       "  tunekit belts /tmp/adxl345-belt_A.csv /tmp/adxl345-belt_B.csv\n"
       "  tunekit belts a.csv b.csv --span-mm 150 --belt gt2-6mm --target-n 20\n"
       "  tunekit belts a.csv b.csv --json --require 'difference_hz<2' --require 'difference_hz>-2'");
-  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_belts(cmd->options), cmd->output, ctx)); });
+  return sub;
+}
+
+void register_belts(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<BeltsCommand>();
+  add_belts_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_belts(cmd->options), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

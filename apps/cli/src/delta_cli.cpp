@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/calibration/analyses/delta_command.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
@@ -30,9 +31,7 @@ struct DeltaCommand {
 
 }  // namespace
 
-void register_delta(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<DeltaCommand>();
-  DeltaOptions& o = cmd->options;
+CLI::App* add_delta_command(CLI::App& app, DeltaOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand("delta", "Delta printer calibration: fit geometric errors to probe heights, export");
   sub->add_option("probes", o.probes_csv, "CSV of probe heights: x_mm,y_mm,z_mm (G30 S-1 trigger heights)")->required();
   sub->add_option("-f,--factors", o.factors,
@@ -57,13 +56,20 @@ void register_delta(CLI::App& app, CliContext& ctx) {
   sub->add_option("--max-rows", o.max_rows, "Most probe rows accepted (count); a longer file is refused")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "Probe heights come from a CSV (probing over the machine link is not built in yet).\n"
       "Factor sets as RepRapFirmware's G32; the 6-factor set is Klipper's DELTA_CALIBRATE set.\n"
       "Example:\n"
       "  tunekit delta probes.csv --radius 105 --rod 215 --height 250 --factors 6 --export klipper");
-  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_delta(cmd->options), cmd->output, ctx)); });
+  return sub;
+}
+
+void register_delta(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<DeltaCommand>();
+  add_delta_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_delta(cmd->options), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/commands/export_command.hpp"
@@ -64,9 +65,7 @@ CLI::Option* export_finite_option(CLI::App* sub, const std::string& name, double
 
 }  // namespace
 
-void register_export(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<ExportCommand>();
-  ExportOptions& o = cmd->options;
+CLI::App* add_export_command(CLI::App& app, ExportOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand(
       "export", "Write pressure advance and input shaping into firmware configuration (diff preview; --write applies)");
   sub->add_option("results", o.results,
@@ -125,7 +124,7 @@ void register_export(CLI::App& app, CliContext& ctx) {
   sub->add_option("--hysteresis", o.hysteresis,
                   "Relative change of the advance needed before the post-processor writes a new value (default 0.1)")
       ->check(CLI::Range(0.0, 0.99));
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "Prints a unified diff of the configuration on stdout (a summary and the equivalent G-code on stderr);\n"
       "nothing is written without --write. Running it again after --write changes nothing.\n"
@@ -143,7 +142,14 @@ void register_export(CLI::App& app, CliContext& ctx) {
       "With two or more identified flow levels the advance is designed per flow (the stored melt volume, the\n"
       "integral of tau over flow): Klipper/Marlin/RepRapFirmware get K at the design flow and the flow range\n"
       "where it stays within 10 % of the need; Kalico its nonlinear model; OrcaSlicer the adaptive table.");
-  sub->callback([cmd, &ctx] { set_exit_code(commit_export(compute_export(cmd->options), cmd->output, ctx)); });
+  return sub;
+}
+
+void register_export(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<ExportCommand>();
+  add_export_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
+    set_exit_code(commit_export(compute_export(cmd->options), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

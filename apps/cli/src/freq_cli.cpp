@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/analyses/freq_command.hpp"
@@ -29,9 +30,7 @@ struct FreqCommand {
 };
 }  // namespace
 
-void register_freq(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<FreqCommand>();
-  FreqOptions& o = cmd->options;
+CLI::App* add_freq_command(CLI::App& app, FreqOptions& o, OutputOptions& output) {
   auto* sub =
       app.add_subcommand("freq", "Liquefier frequency response: sine dwell, broadband H1 and transfer-function fits");
   sub->add_option("file", o.file, "CSV log (time in s; units in column names, e.g. 'width (mm)')")->required();
@@ -81,7 +80,7 @@ void register_freq(CLI::App& app, CliContext& ctx) {
   sub->add_flag("--profile-intervals", o.profile_intervals,
                 "With --input: the whole-record model's 95 % intervals of b and theta_s by profile likelihood "
                 "(several times slower; default: Wald intervals widened for correlated residuals)");
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "Examples:\n"
       "  tunekit freq datasets/liquefier/appendix_d/exp_07.csv --time time --output width \\\n"
@@ -99,7 +98,14 @@ void register_freq(CLI::App& app, CliContext& ctx) {
       "tau(Q) = a Q^b, dead time theta; as 'tunekit step' does) to the record from --tmin on, results\n"
       "'whole_record'; a record it cannot describe (no input column, an input below zero) is reported as not\n"
       "fitted with the reason and a warning, and freq's own results stand.");
-  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_freq(cmd->options), cmd->output, ctx)); });
+  return sub;
+}
+
+void register_freq(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<FreqCommand>();
+  add_freq_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_freq(cmd->options), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

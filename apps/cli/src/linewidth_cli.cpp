@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/analyses/linewidth_command.hpp"
@@ -147,9 +148,7 @@ void add_path_options(CLI::App* sub, LinewidthOptions& o) {
 
 }  // namespace
 
-void register_linewidth(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<LinewidthCommand>();
-  LinewidthOptions& o = cmd->options;
+CLI::App* add_linewidth_command(CLI::App& app, LinewidthOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand("linewidth", "Calibrated width profiles of printed lines from photos");
   sub->add_option("images", o.images,
                   "Photos of printed lines (PNG, JPEG, BMP, PNM; PNG and PNM may be 16 bit; TIFF: convert to PNG)")
@@ -159,7 +158,7 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
   add_profile_options(sub, o);
   add_ring_options(sub, o);
   add_path_options(sub, o);
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "Examples:\n"
       "  tunekit linewidth lines.png --px-per-mm 20 --json --overlay check/\n"
@@ -176,8 +175,14 @@ void register_linewidth(CLI::App& app, CliContext& ctx) {
       "      --input setpoint_width --output width --json\n"
       "Exit codes: 0 measured, 1 nothing measured (no line found), 2 bad input (unreadable image, line touching\n"
       "the frame edge, scale target not found).");
-  sub->callback(
-      [cmd, &ctx] { set_exit_code(report_outcome(compute_linewidth(cmd->options, ctx.err), cmd->output, ctx)); });
+  return sub;
+}
+
+void register_linewidth(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<LinewidthCommand>();
+  add_linewidth_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_linewidth(cmd->options, ctx.err), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

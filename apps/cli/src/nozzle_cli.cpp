@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/analyses/nozzle_command.hpp"
@@ -43,9 +44,7 @@ CLI::Option* add_nozzle_si_option(CLI::App* sub, const std::string& names, doubl
 
 }  // namespace
 
-void register_nozzle(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<NozzleCommand>();
-  NozzleOptions& o = cmd->options;
+CLI::App* add_nozzle_command(CLI::App& app, NozzleOptions& o, OutputOptions& output) {
   fitting::NozzleGeometry& g = o.prediction.geometry;
   auto* sub = app.add_subcommand("nozzle", "Nozzle pressure drop from rheology and geometry, and its inverse fit");
   add_choice_option<fitting::PressureModel>(
@@ -83,7 +82,7 @@ void register_nozzle(CLI::App& app, CliContext& ctx) {
   sub->add_option("--max-rows", o.max_rows, "Most rows of the --fit file accepted (count); a longer file is refused")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "Defaults are Holtrup's (2019) regular nozzle (Table 5.3): d 0.6 mm, l 4 mm, alpha 30 deg, D 5 mm.\n"
       "Examples:\n"
@@ -92,7 +91,14 @@ void register_nozzle(CLI::App& app, CliContext& ctx) {
       "  tunekit nozzle --material PEEK -T 405 --flow 1.5 --flow 3 --flow 6 --model bellini --json\n"
       "  tunekit nozzle --rheology peek_fit.json -T 405 --flow 3 --json       # results.prediction\n"
       "  tunekit nozzle --fit datasets/rheology/nozzle_pressure_synthetic.csv --json   # fit K, n (and Ea)");
-  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_nozzle(cmd->options), cmd->output, ctx)); });
+  return sub;
+}
+
+void register_nozzle(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<NozzleCommand>();
+  add_nozzle_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_nozzle(cmd->options), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

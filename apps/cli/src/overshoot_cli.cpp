@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
@@ -33,9 +34,7 @@ struct OvershootCommand {
 
 }  // namespace
 
-void register_overshoot(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<OvershootCommand>();
-  OvershootOptions& o = cmd->options;
+CLI::App* add_overshoot_command(CLI::App& app, OvershootOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand(
       "overshoot", "Axis overshoot and settling at corners (axis-rectangle runs); grid of speeds and accelerations");
   sub->add_option("run", o.input,
@@ -73,7 +72,7 @@ void register_overshoot(CLI::App& app, CliContext& ctx) {
                   "(repeatable, e.g. x=zv:48) and compare shaping on/off");
   sub->add_option("--out", o.out_dir, "Grid mode: directory for the grid's runs, results.json and report.html");
   sub->add_option("--runs-root", o.run.runs_root, "Grid mode: default parent of --out")->capture_default_str();
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "The overshoot is the largest excursion past the settled position after the commanded motion into a corner\n"
       "ends; the settling time runs from that end until the deviation stays within --band-mm. From an\n"
@@ -90,7 +89,12 @@ void register_overshoot(CLI::App& app, CliContext& ctx) {
       "  tunekit overshoot -p accel_mm_s2=2000,5000,8000 --sim mode_x=48:0.08 --shaper x=zv:48 --shaper y=mzv:37 \\\n"
       "      --out runs/os-shaped    # the same grid with input shaping off and on\n"
       "Exit codes: 2 bad input (no corner found, missing columns), 3 machine failure in grid mode.");
-  sub->callback([cmd, &ctx] {
+  return sub;
+}
+
+void register_overshoot(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<OvershootCommand>();
+  add_overshoot_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
     set_exit_code(
         report_outcome(compute_overshoot(cmd->options, ctx.verbosity > 0 ? &ctx.err : nullptr), cmd->output, ctx));
   });

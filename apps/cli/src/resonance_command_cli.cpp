@@ -5,6 +5,7 @@
 #include "bed_mass_cli.hpp"
 #include "resonance_cli.hpp"
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/calibration/analyses/resonance_command.hpp"
@@ -26,14 +27,11 @@ struct ResonanceCommand {
 };
 }  // namespace
 
-void register_resonance(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<ResonanceCommand>();
-  ResonanceOptions& o = cmd->options;
+CLI::App* add_resonance_command(CLI::App& app, ResonanceOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand(
       "resonance", "Axis resonances from accelerometer data: PSD, modes with natural frequency and damping ratio");
-  add_accel_files_options(sub, o.accel, cmd->output);
+  add_accel_files_options(sub, o.accel, output);
   add_ringdown_options(sub, o.ringdown_options, &o.ringdown);
-  add_bed_mass_options(sub, cmd->bed);
   sub->footer(klipper_files_help() +
               "\nExamples:\n"
               "  tunekit resonance /tmp/raw_data_x_*.csv /tmp/raw_data_y_*.csv --json\n"
@@ -46,6 +44,13 @@ void register_resonance(CLI::App& app, CliContext& ctx) {
               "Ring-down analysis: the fundamental and damping ratio of a free decay from a time-domain fit of damped\n"
               "sinusoids (matrix pencil start: Hua and Sarkar, IEEE Trans. ASSP, 1990; least-squares refinement).\n"
               "A record whose decay is below --min-strength times its noise floor is refused with exit 1.");
+  return sub;
+}
+
+void register_resonance(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<ResonanceCommand>();
+  auto* sub = add_resonance_command(app, cmd->options, cmd->output);
+  add_bed_mass_options(sub, cmd->bed);
   sub->callback([cmd, &ctx] {
     if (cmd->bed.loads_kg.empty()) {
       set_exit_code(report_outcome(compute_resonance(cmd->options), cmd->output, ctx));

@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
@@ -102,9 +103,7 @@ void add_prediction_options(CLI::App* sub, RheoOptions& o) {
 
 }  // namespace
 
-void register_rheo(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<RheoCommand>();
-  RheoOptions& o = cmd->options;
+CLI::App* add_rheo_command(CLI::App& app, RheoOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand("rheo", "Fit melt viscosity models (power law, Cross, Cross-WLF, Carreau-Yasuda)");
   sub->add_option("file", o.file,
                   "CSV with shear_rate (1/s), viscosity (Pa.s|mPa.s) or shear_stress (Pa), temperature (degC|K), "
@@ -130,7 +129,7 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
   sub->add_option("--max-rows", o.max_rows, "Most data rows accepted (count); a longer file is refused")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000000}));
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "Examples:\n"
       "  tunekit rheo datasets/rheology/peek_cross_wlf_synthetic.csv --model cross-wlf --json\n"
@@ -148,7 +147,14 @@ void register_rheo(CLI::App& app, CliContext& ctx) {
       "the temperatures that do not superpose (a transition, a degraded sample).\n"
       "Parameters (SI): n, tau_star_Pa, D1_Pa_s, D2_K, D3_K_per_Pa, A1, A2_K (cross-wlf); eta0_Pa_s, K_Pa_s_n,\n"
       "lambda_s, a, eta_inf_Pa_s; shifts Ea_J_per_mol or C1, C2_K with T_ref_K.");
-  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_rheo(cmd->options), cmd->output, ctx)); });
+  return sub;
+}
+
+void register_rheo(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<RheoCommand>();
+  add_rheo_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_rheo(cmd->options), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli

@@ -4,6 +4,7 @@
 
 #include "resonance_cli.hpp"
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/cli/option_binding.hpp"
 #include "tunekit/calibration/analyses/shaper_command.hpp"
@@ -30,11 +31,9 @@ struct ShaperCommand {
 };
 }  // namespace
 
-void register_shaper(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<ShaperCommand>();
-  ShaperOptions& o = cmd->options;
+CLI::App* add_shaper_command(CLI::App& app, ShaperOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand("shaper", "Input shaper design and recommendation from accelerometer data");
-  add_accel_files_options(sub, o.accel, cmd->output);
+  add_accel_files_options(sub, o.accel, output);
   sub->add_flag("--klipper-compatible", o.klipper_compatible,
                 "Select exactly as Klipper's calibrate_shaper.py does (assumed damping 0.1, vibrations pessimized "
                 "over 0.075/0.1/0.15, Klipper's shaper list and tie-breaking) instead of using the identified damping");
@@ -85,7 +84,12 @@ void register_shaper(CLI::App& app, CliContext& ctx) {
       "  tunekit shaper /tmp/resonances_x_20240101.csv --klipper-compatible   # same as calibrate_shaper.py\n"
       "  tunekit shaper /tmp/raw_data_x_*.csv --klipper-csv calibration_data_{axis}.csv\n"
       "  tunekit shaper log.csv --axis x --accel ax --excitation ax_cmd --json -o shaper.json");
-  sub->callback([cmd, &ctx] {
+  return sub;
+}
+
+void register_shaper(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<ShaperCommand>();
+  add_shaper_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
     cmd->options.accel.digest_inputs = envelope_leaves_process(cmd->output);
     set_exit_code(report_outcome(compute_shaper(cmd->options), cmd->output, ctx));
   });

@@ -3,6 +3,7 @@
 // calibration library's compute function.
 
 #include "tunekit/cli/command.hpp"
+#include "tunekit/cli/analysis_commands.hpp"
 #include "tunekit/cli/commands.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/cli/option_binding.hpp"
@@ -28,9 +29,7 @@ struct StepCommand {
 
 }  // namespace
 
-void register_step(CLI::App& app, CliContext& ctx) {
-  auto cmd = std::make_shared<StepCommand>();
-  StepOptions& o = cmd->options;
+CLI::App* add_step_command(CLI::App& app, StepOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand("step", "Identify liquefier dynamics (K, tau, theta) from step-response logs");
   sub->add_option("file", o.file, "CSV log (time in s; units in column names, e.g. 'force (N)')")->required();
   sub->add_option("-t,--time", o.time_column,
@@ -69,7 +68,7 @@ void register_step(CLI::App& app, CliContext& ctx) {
   sub->add_option("--plot", o.plot_out,
                   "With --input: also draw the record, the whole-record model, each step's fit and the residuals "
                   "(the calibration report's step figure) into this .svg or .png file");
-  add_output_options(sub, cmd->output);
+  add_output_options(sub, output);
   sub->footer(
       "Model: y(t) = y0 + K du (1 - exp(-(t - t_step - theta)/tau)) after each step; each step is fitted on\n"
       "its own (start values by the log-incomplete-response method), then all steps pooled, then per operating\n"
@@ -88,7 +87,14 @@ void register_step(CLI::App& app, CliContext& ctx) {
       "  tunekit step log.csv --input flow_mm3_s --output force_N   # time_s found by name, units from the names\n"
       "Exit codes: 2 bad input (no step found, constant output, NaN, too few samples, time not increasing),\n"
       "1 the fit failed (no convergence, or tau not identifiable because the record is too short).");
-  sub->callback([cmd, &ctx] { set_exit_code(report_outcome(compute_step(cmd->options), cmd->output, ctx)); });
+  return sub;
+}
+
+void register_step(CLI::App& app, CliContext& ctx) {
+  auto cmd = std::make_shared<StepCommand>();
+  add_step_command(app, cmd->options, cmd->output)->callback([cmd, &ctx] {
+    set_exit_code(report_outcome(compute_step(cmd->options), cmd->output, ctx));
+  });
 }
 
 }  // namespace tunekit::cli
