@@ -18,6 +18,7 @@
 #include "test_support.hpp"
 #include "tunekit/calibration/analyses/simulated_machine.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/error.hpp"
 #include "tunekit/machine/klipper_settings.hpp"
 #include "tunekit/protocols/experiments.hpp"
 #include "tunekit/protocols/runner.hpp"
@@ -60,6 +61,13 @@ TEST_CASE("every protocol built for the bundled profile uses only commands a Kli
     FakeKlipper server(sock, tunekit::sim::SimConfig::from_options({"firmware=klipper"}), fake);
     auto o = bundled_profile_on(sock, spec.name, dir + "/run");
     if (spec.name == "axis-sweep") o.params = {{"freq_start_hz", 35}, {"freq_end_hz", 70}, {"hz_per_sec", 3}};
+    if (spec.name == "heater-identify") {
+      // The heater is not recorded over Klipper's API yet: refused before anything but the
+      // identification is sent (no heating, no homing).
+      CHECK_THROWS_AS(tprot::run_experiment(o), tunekit::MachineError);
+      CHECK(server.scripts().empty());
+      continue;
+    }
     const auto res = tprot::run_experiment(o);
     REQUIRE(res.status == "complete");
     // Identified before anything else was sent: info, then the configuration in force.

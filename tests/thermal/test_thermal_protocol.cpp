@@ -136,7 +136,7 @@ TEST_CASE("calibrate --thermal identifies the hot end first, reports it and reco
   const auto results = nlohmann::json::parse(r.out)["results"];
   REQUIRE(results.contains("thermal"));
   CHECK(results["thermal"]["held_out"]["rms_c"].get<double>() < 1.0);
-  CHECK(read_text(dir + "/report.html").find("Hot end thermal record") != std::string::npos);
+  CHECK(read_text(dir + "/report.html").find("Hot end: the heater's duty") != std::string::npos);
   CHECK(read_json(dir + "/plotdata.json").contains("thermal"));
   // The history's quantities: the hot end's parameters, so that their drift shows.
   const auto q = tunekit::history::extract_quantities("calibrate", results);
