@@ -146,3 +146,20 @@ TEST_CASE("calibrate --thermal identifies the hot end first, reports it and reco
   // The analysis is reproduced by the command its README names.
   CHECK(read_text(dir + "/analysis/README").find("tunekit thermal heater/thermal.csv") != std::string::npos);
 }
+
+TEST_CASE("tunekit thermal: a record without a heater duty is bad input, one that cannot be fitted a fit failure",
+          "[thermal]") {
+  std::string no_duty = "time (s),temperature (degC)\n", flat = "time (s),temperature (degC),heater_duty (1)\n";
+  for (int i = 0; i < 40; ++i) {
+    no_duty += std::to_string(i) + ",25\n";
+    flat += std::to_string(i) + ",25,0\n";
+  }
+  const auto bad = run_cli({"thermal", tunekit::test::write_scratch("thermal_no_duty.csv", no_duty)});
+  CHECK(bad.code == 2);
+  CHECK(bad.err.find("heater_duty") != std::string::npos);
+  CHECK(bad.out.empty());
+  // Nothing happens in the record: the fit is refused (exit 1), no number is printed.
+  const auto none = run_cli({"thermal", tunekit::test::write_scratch("thermal_flat.csv", flat), "--json"});
+  CHECK(none.code == 1);
+  CHECK(none.out.find("block_heat_capacity_j_per_k") == std::string::npos);
+}
