@@ -148,7 +148,7 @@ std::string klipper_param_value(const std::string& value) {
 
 std::string Dialect::sensor_stream(const std::string& sensor, bool on) const {
   if (fw_ == Firmware::klipper) return {};
-  const char* code = sensor == "accelerometer" ? "A" : sensor == "load_cell" ? "L" : "F";
+  const char* code = sensor == "accelerometer" ? "A" : sensor == "load_cell" ? "L" : sensor == "heater" ? "H" : "F";
   return fmt::format("M4100 {}{}", code, on ? 1 : 0);
 }
 

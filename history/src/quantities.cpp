@@ -134,6 +134,19 @@ void belt_quantities(QuantityList& out, const nlohmann::json& r) {
   out.param("belt_b.tension_n", qty_at(r, {"tension_b_n"}), "N");
 }
 
+// The hot end's thermal model (tunekit thermal; calibrate --thermal): its parameters under
+// "hot_end.", so that a failing cartridge (C and A seen against the same given power) or a loose
+// thermistor (a slower sensor, R) shows as drift.
+void thermal_quantities(QuantityList& out, const nlohmann::json* thermal) {
+  const auto* params = thermal != nullptr ? qty_at(*thermal, {"params"}) : nullptr;
+  if (params == nullptr) return;
+  for (const char* name : {"block_heat_capacity_j_per_k", "sensor_responsiveness_per_s", "ambient_transfer_w_per_k",
+                           "fan_transfer_w_per_k", "filament_heat_capacity_j_per_k_mm", "ambient_c"})
+    if (const auto* p = qty_at(*params, {name}); p != nullptr && !(p->contains("fixed") && (*p)["fixed"] == true))
+      out.param(std::string("hot_end.") + name, p, "");
+  out.number("hot_end.held_out_rms_c", qty_at(*thermal, {"held_out", "rms_c"}), nullptr, "degC");
+}
+
 // Any other fitted parameter: objects under a "params" key whose members have a value.
 void other_params(QuantityList& out, const std::string& command, const nlohmann::json& j, int depth) {
   if (depth > 6 || !j.is_object()) return;
@@ -159,6 +172,9 @@ std::vector<Quantity> extract_quantities(const std::string& command, const nlohm
     liquefier_freq(out, qty_at(r, {"liquefier", "freq"}));
     axis_quantities(out, qty_at(r, {"axes"}));
     advance_quantities(out, qty_at(r, {"compensators", "settings"}));
+    thermal_quantities(out, qty_at(r, {"thermal"}));
+  } else if (command == "thermal") {
+    thermal_quantities(out, &r);
   } else if (command == "step") {
     liquefier_step(out, &r);
   } else if (command == "freq") {

@@ -63,5 +63,7 @@ struct ExperimentRequest {
 bool build_liquefier_experiment(const ExperimentRequest& r, Experiment& e);
 bool build_axis_experiment(const ExperimentRequest& r, Experiment& e);
 bool build_print_experiment(const ExperimentRequest& r, Experiment& e);
+/// heater-identify (thermal_plan.cpp).
+void build_thermal_experiment(const ExperimentRequest& r, Experiment& e);
 
 }  // namespace tunekit::protocols::experiment_gcode

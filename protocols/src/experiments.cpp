@@ -97,7 +97,9 @@ Experiment build_experiment(const std::string& protocol, const std::map<std::str
       check_param_domain(protocol, prm, e.params.at(prm.name));
   auto& g = e.gcode;
   g.push_back(fmt::format("; tunekit {} on {}", protocol, core::comment_safe(profile.name)));
-  if (!experiment_gcode::build_liquefier_experiment(request, e) && !experiment_gcode::build_axis_experiment(request, e))
+  if (spec.id == Protocol::heater_identify) experiment_gcode::build_thermal_experiment(request, e);
+  else if (!experiment_gcode::build_liquefier_experiment(request, e) &&
+           !experiment_gcode::build_axis_experiment(request, e))
     experiment_gcode::build_print_experiment(request, e);
   e.estimated_duration_s = estimate_gcode_duration_s(g);
   return e;

@@ -303,6 +303,25 @@ void add_pattern_spec(std::vector<ProtocolSpec>& s) {
        false});
 }
 
+/// The hot end's thermal experiment (thermal_plan.hpp).
+void add_thermal_spec(std::vector<ProtocolSpec>& s) {
+  s.push_back({Protocol::heater_identify,
+               "heater-identify",
+               "the hot end's thermal model in five minutes: from rest a heat-up to hotend_c, a step down and up, a "
+               "full-fan step and an extrusion step, then a held-out fan and extrusion step the model predicts; the "
+               "heater's temperature and duty recorded",
+               {{"hotend_c", 210, "degC", "printing temperature held (never above the profile's hotend_max_c)",
+                 ParamDomain::positive, kMaxTemperatureC},
+                {"step_down_c", 15, "K", "the target's step down and back up", ParamDomain::positive, 100},
+                {"fan_duty", 1, "", "the part-cooling fan's duty in the fan steps (0..1]", ParamDomain::positive, 1},
+                {"feed_mm_s", kMachineDefault, "mm/s",
+                 "filament feed of the extrusion steps (default: 4 mm^3/s, at most a third of the profile's "
+                 "flow and feed limits)",
+                 ParamDomain::positive, kMaxFeedMmS}},
+               {"heater"},
+               false});
+}
+
 std::vector<ProtocolSpec> make_specs() {
   std::vector<ProtocolSpec> s;
   add_liquefier_step_specs(s);
@@ -310,6 +329,7 @@ std::vector<ProtocolSpec> make_specs() {
   add_print_specs(s);
   add_axis_specs(s);
   add_pattern_spec(s);
+  add_thermal_spec(s);
   return s;
 }
 

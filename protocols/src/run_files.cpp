@@ -13,6 +13,7 @@ std::string_view to_string(RunFile file) {
     case RunFile::load_cell: return "load_cell";
     case RunFile::sim_received: return "sim_received";
     case RunFile::summary: return "summary";
+    case RunFile::thermal: return "thermal";
     case RunFile::truth: return "truth";
   }
   return "unknown";

@@ -61,9 +61,20 @@ class Recorder {
         j_.csv(motion_file_, "time (s),duration (s),accel_x (mm/s^2),accel_y (mm/s^2),jerk_x (mm/s^3),jerk_y (mm/s^3)");
     c.row(csv_row({{v[0], 9}, {v[1], 9}, {v[2], 4}, {v[3], 4}, {v[4], 1}, {v[5], 1}}));
   }
+  /// One sample of the hot end: time, temperature, target, heater duty, fan duty, feed.
+  void thermal(const double* v) {
+    auto& c =
+        j_.csv(kThermalFile, "time (s),temperature (degC),target (degC),heater_duty (1),fan_duty (1),feed (mm/s)");
+    c.row(csv_row({{v[0], 3}, {v[1], 2}, {v[2], 1}, {v[3], 4}, {v[4], 4}, {v[5], 4}}));
+    ++thermal_;
+  }
   /// Handles a tunekit-sim data line; true if it was one.
   bool line(std::string_view l) {
     double v[6];
+    if (l.rfind("echo:TKH ", 0) == 0) {
+      if (parse_numbers(l.substr(9), v, 6) == 6) thermal(v);
+      return true;
+    }
     if (l.rfind("echo:TKM ", 0) == 0) {
       if (parse_numbers(l.substr(9), v, 6) == 6) motion(v);
       return true;
@@ -80,6 +91,8 @@ class Recorder {
     }
     return false;
   }
+  static constexpr const char* kThermalFile = "thermal.csv";
+  long thermal_samples() const { return thermal_; }
   long load_samples() const { return load_; }
   long accel_samples() const { return accel_; }
   const std::string& load_file() const { return load_file_; }
@@ -98,7 +111,7 @@ class Recorder {
   machine::Journal& j_;
   std::string row_;
   std::string load_file_, accel_file_, cmd_file_, motion_file_;
-  long load_ = 0, accel_ = 0;
+  long load_ = 0, accel_ = 0, thermal_ = 0;
 };
 
 class Session {

@@ -255,6 +255,7 @@ void list_recorded_files(const machine::Journal& journal, const Recorder& rec, R
   if (journal.has_csv(rec.accel_file())) res.files[RunFile::accel] = journal.path(rec.accel_file());
   if (journal.has_csv(rec.commanded_file())) res.files[RunFile::commanded_accel] = journal.path(rec.commanded_file());
   if (journal.has_csv(rec.motion_file())) res.files[RunFile::commanded_motion] = journal.path(rec.motion_file());
+  if (journal.has_csv(Recorder::kThermalFile)) res.files[RunFile::thermal] = journal.path(Recorder::kThermalFile);
 }
 
 /// The end of a run, complete or not: the samples and the link's statistics into the summary,
@@ -263,6 +264,7 @@ void list_recorded_files(const machine::Journal& journal, const Recorder& rec, R
 void close_run(nlohmann::json& summary, std::unique_ptr<Session>& session, const Recorder& rec,
                machine::Journal& journal, ServedMachine* served, RunResult& res) {
   summary["samples"] = {{"load_cell", rec.load_samples()}, {"accel", rec.accel_samples()}};
+  if (rec.thermal_samples() > 0) summary["samples"]["thermal"] = rec.thermal_samples();
   if (session) summary["link"] = session->stats();
   session.reset();
   if (served) served->stop(journal, res.files);

@@ -216,6 +216,7 @@ std::vector<Violation> check_protocol(const std::vector<std::string>& gcode, con
                          : s == "load_cell"        ? p.sensors.load_cell
                          : s == "filament_encoder" ? p.sensors.filament_encoder
                          : s == "camera"           ? p.sensors.camera
+                         : s == "heater"           ? true  // every hot end has its thermistor
                                                    : false;
     if (!present)
       out.push_back({0, "",

@@ -21,6 +21,17 @@ inline constexpr double kDefaultModeWeight = 1.0;
 inline constexpr std::array<double, 6> kTruthOperatingFeeds_mm_s{0.5, 1.0, 2.0, 3.0, 4.0, 5.0};
 
 // --- Plant ---
+/// The hot end is run in chunks of this much machine time (s), not every simulation step: its
+/// time constants are seconds.
+inline constexpr double kHeaterChunk_s = 0.01;
+/// The hot end's thermistor noise is drawn from its own generator, seeded from the simulator's
+/// seed times this (odd, so that seeds map to distinct streams).
+inline constexpr unsigned kHeaterNoiseSeedFactor = 7919;
+/// Marlin's M105 reports the heater's soft PWM as "@:" in 0..127 (temperature.cpp: the
+/// soft_pwm_amount, the PID's 0..255 output halved).
+inline constexpr double kMarlinPwmReportMax = 127;
+/// M106 S: the fan's duty in 0..255 (Marlin, Klipper; RepRapFirmware reads S <= 1 as a fraction).
+inline constexpr double kFanFullScale = 255;
 /// Lowest feed (filament mm/s) at which the FOPDT liquefier's flow-dependent time constant is
 /// evaluated: a stopped extruder relaxes at this feed's time constant instead of an infinite one.
 inline constexpr double kTauFloorFeed_mm_s = 0.2;

@@ -37,6 +37,8 @@ std::optional<bool> Simulator::inject_faults(std::string& line, double& late_ms,
       case SimFault::Kind::error:
         out_flush(emit);
         emit("Error:Thermal Runaway, system stopped! Heater_ID: 0\nError:Printer halted. kill() called!\n");
+        sync_heater();
+        heater_.off();  // kill() turns the heaters off
         halted_ = true;
         return true;
     }

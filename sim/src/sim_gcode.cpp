@@ -137,16 +137,32 @@ void Simulator::set_motion_limits(const machine::GcodeWords& w) {
   }
 }
 
+bool Simulator::hot_end_command(const machine::GcodeWords& w, const Emit& emit) {
+  const std::string& c = w.command;
+  if (c != "M104" && c != "M106" && c != "M107" && c != "M105") return false;
+  sync_heater();
+  if (c == "M104") {
+    interp_.apply(w);
+    heater_.set_target(interp_.hotend_c.value_or(0));
+  } else if (c == "M106") {
+    const double s = w.get("S", sim::kFanFullScale);
+    heater_.set_fan(rrf() && s <= 1 ? s : s / sim::kFanFullScale);
+  } else if (c == "M107") {
+    heater_.set_fan(0);
+  } else {  // M105: the hot end's reading, target and duty, the bed's target
+    out_flush(emit);
+    const double tb = interp_.bed_c.value_or(0);
+    emit(fmt::format("ok T:{:.2f} /{:.1f} B:{:.1f} /{:.1f} @:{} B@:0\n", heater_.reading_c(), heater_.target_c(), tb,
+                     tb, std::lround(heater_.duty() * sim::kMarlinPwmReportMax)));
+  }
+  return true;
+}
+
 bool Simulator::answer_report(const machine::GcodeWords& w, const Emit& emit) {
   const std::string& c = w.command;
   if (c == "M115") {
     out_flush(emit);
     report_firmware(emit);
-  } else if (c == "M105") {
-    out_flush(emit);
-    const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);
-    emit(fmt::format("ok T:{:.1f} /{:.1f} B:{:.1f} /{:.1f} @:0 B@:0\n", te, te, tb, tb));
-    return false;
   } else if (c == "M114") {
     flush(emit);
     const auto& p = interp_.position();
@@ -154,6 +170,8 @@ bool Simulator::answer_report(const machine::GcodeWords& w, const Emit& emit) {
   } else {  // M109, M190
     flush(emit);
     interp_.apply(w);
+    sync_heater();
+    if (c == "M109") heater_.settle(interp_.hotend_c.value_or(0));  // the wait, passed at once
     const double te = interp_.hotend_c.value_or(0), tb = interp_.bed_c.value_or(0);
     emit(fmt::format(" T:{:.1f} /{:.1f} B:{:.1f} /{:.1f} @:0 B@:0\n", te, te, tb, tb));
   }
@@ -187,11 +205,16 @@ bool Simulator::execute(const machine::GcodeWords& w, std::string_view body, con
     step_carry_s_ = 0;
   } else if (c == "M112") {
     pending_.reset();
+    sync_heater();
+    heater_.off();  // a kill turns the heaters off (Marlin's kill(), Klipper's shutdown)
     halted_ = true;
     out_flush(emit);
     return false;
+  } else if (hot_end_command(w, emit)) {
+    return c != "M105";
   } else if (c == "M4100") {
     flush(emit);
+    if (w.has("H")) set_streaming("heater", w.get("H", 0) != 0);
     if (w.has("A")) set_streaming("accelerometer", w.get("A", 0) != 0);
     if (w.has("L")) set_streaming("load_cell", w.get("L", 0) != 0);
   } else if (c == "M955" && rrf()) {
@@ -207,7 +230,7 @@ bool Simulator::execute(const machine::GcodeWords& w, std::string_view body, con
   } else if (c == "M493" && !klipper() && !rrf()) {
     out_flush(emit);
     m493(w, emit);
-  } else if (c == "M115" || c == "M105" || c == "M114" || c == "M109" || c == "M190") {
+  } else if (c == "M115" || c == "M114" || c == "M109" || c == "M190") {
     return answer_report(w, emit);
   } else {
     interp_.apply(w);

@@ -27,7 +27,8 @@ void append_data_line(std::string& out, std::string_view tag, std::initializer_l
 
 }  // namespace
 
-Simulator::Simulator(SimConfig config) : cfg_(std::move(config)), rng_(cfg_.seed) {
+Simulator::Simulator(SimConfig config)
+    : cfg_(std::move(config)), heater_(cfg_.hot_end, sim::kHeaterNoiseSeedFactor * cfg_.seed + 1), rng_(cfg_.seed) {
   firmware_ = cfg_.firmware == "klipper" ? FirmwareRules::klipper
               : cfg_.firmware == "rrf"   ? FirmwareRules::rrf
                                          : FirmwareRules::marlin;
@@ -221,6 +222,7 @@ void Simulator::step(const std::array<double, 4>& pos, const std::array<double, 
   }
   const double fed_before = fed_total_mm_;
   fed_total_mm_ += u * h;
+  run_heater(h, u * h);
   if (stream_load_) sample_load_cell(h, fed_before, cfg_.force_offset_N + force);
   load_force_before_ = cfg_.force_offset_N + force;
   if (out_.size() > sim::kOutputFlushBytes) out_flush(emit);
@@ -379,6 +381,29 @@ void Simulator::dwell(double seconds, const Emit& emit) {
   const std::array<double, 3> zero3{};
   const std::vector<PathPiece> rest{{dt_, 0.0, 0.0}};
   for (int i = 0; i < n; ++i) step(zero4, zero4, zero4, zero3, zero3, emit, &rest, &zero4);
+}
+
+void Simulator::run_heater(double h, double fed_mm) {
+  heater_dt_ += h;
+  heater_fed_ += fed_mm;
+  if (heater_dt_ >= sim::kHeaterChunk_s) sync_heater();
+}
+
+void Simulator::sync_heater() {
+  if (heater_dt_ > 0) heater_.advance(heater_dt_, heater_fed_);
+  heater_dt_ = heater_fed_ = 0;
+  const auto& r = heater_.record();
+  // A sample is complete (its fan and feed means known) once the next tick is taken.
+  for (; stream_heater_ && heater_sent_ + 1 < r.t_s.size(); ++heater_sent_) {
+    const std::size_t i = heater_sent_;
+    append_data_line(out_, "echo:TKH",
+                     {{r.t_s[i], 3},
+                      {r.temp_c[i], 2},
+                      {r.target_c[i], 1},
+                      {r.heater_duty[i], 4},
+                      {r.fan_duty[i], 4},
+                      {r.feed_mm_s[i], 4}});
+  }
 }
 
 void Simulator::flush(const Emit& emit) {

@@ -127,6 +127,32 @@ SimFault parse_fault(const std::string& k, const std::string& v) {
   return f;
 }
 
+// The hot end's options (SimConfig::hot_end); false when `k` is not one of them.
+bool thermal_option(ThermalPlantTruth& t, const std::string& k, const std::string& v) {
+  auto& m = t.model;
+  double* field = k == "heater_power_w"                      ? &m.heater_power_w
+                  : k == "block_heat_capacity_j_per_k"       ? &m.block_heat_capacity_j_per_k
+                  : k == "sensor_responsiveness_per_s"       ? &m.sensor_responsiveness_per_s
+                  : k == "ambient_transfer_w_per_k"          ? &m.ambient_transfer_w_per_k
+                  : k == "fan_transfer_w_per_k"              ? &m.fan_transfer_w_per_k
+                  : k == "filament_heat_capacity_j_per_k_mm" ? &m.filament_heat_capacity_j_per_k_mm
+                  : k == "fan_exponent"                      ? &t.fan_exponent
+                  : k == "thermistor_noise_c"                ? &t.sensor_noise_c
+                  : k == "adc_step_c"                        ? &t.adc_step_c
+                                                             : nullptr;
+  if (k == "ambient_c") {
+    m.ambient_c = parse_double(k, v);
+    return true;
+  }
+  if (!field) return false;
+  const double d = parse_double(k, v);
+  const bool may_be_zero = k == "filament_heat_capacity_j_per_k_mm" || k == "thermistor_noise_c" || k == "adc_step_c";
+  if (may_be_zero ? d < 0 : !(d > 0))
+    throw InputError(fmt::format("simulator option {} must be {}", k, may_be_zero ? "at least 0" : "positive"));
+  *field = d;
+  return true;
+}
+
 }  // namespace
 
 double SimConfig::tau_at_feed(double feed_mm_s) const {
@@ -180,7 +206,7 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     const auto eq = opt.find('=');
     if (eq == std::string::npos) throw InputError(fmt::format("simulator option '{}' is not key=value", opt));
     const std::string k = opt.substr(0, eq), v = opt.substr(eq + 1);
-    if (k == "preset") continue;
+    if (k == "preset" || k == "hot_end" || thermal_option(c.hot_end, k, v)) continue;
     auto pos = [&](double d) { return positive_option(k, d); };
     auto clock_error = [&](double d) {
       if (!(std::abs(d) < 0.1))
@@ -260,6 +286,22 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
       throw InputError(fmt::format("unknown simulator option '{}' (see docs/machine.md)", k));
     }
   }
+  return with_hot_end_drawn(c, options);
+}
+
+SimConfig SimConfig::with_hot_end_drawn(SimConfig c, const std::vector<std::string>& options) {
+  // "hot_end=drawn": the plant drawn from the seed, then the single values given beside it.
+  bool drawn = false;
+  for (const auto& opt : options)
+    if (opt.rfind("hot_end=", 0) == 0) {
+      if (opt != "hot_end=drawn") throw InputError("simulator option hot_end must be drawn");
+      drawn = true;
+    }
+  if (!drawn) return c;
+  c.hot_end = draw_thermal_plant(c.seed);
+  for (const auto& opt : options)
+    if (const auto eq = opt.find('='); eq != std::string::npos)
+      thermal_option(c.hot_end, opt.substr(0, eq), opt.substr(eq + 1));
   return c;
 }
 
@@ -378,6 +420,7 @@ nlohmann::json SimConfig::truth() const {
     for (const auto& line : acceleration_gcode()) j["planner"]["acceleration_gcode"].push_back(line);
   for (const auto& [axis, name] : shaper_names) j["input_shaper"][axis] = name;
   j["seed"] = seed;
+  j["hot_end"] = hot_end.to_json();
   nlohmann::json faults = nlohmann::json::array();
   for (const auto& f : this->faults) faults.push_back(f.describe());
   j["faults"] = faults;
@@ -392,7 +435,11 @@ std::vector<std::string> Simulator::received() const {
 
 void Simulator::set_streaming(const std::string& sensor, bool on) {
   if (sensor == "accelerometer") stream_accel_ = on;
-  else if (sensor == "load_cell") {
+  else if (sensor == "heater") {
+    sync_heater();
+    if (on && !stream_heater_) heater_sent_ = heater_.record().t_s.size();  // from the next tick on
+    stream_heater_ = on;
+  } else if (sensor == "load_cell") {
     if (on && !stream_load_) start_load_cell();
     if (!on && stream_load_) emit_pending_load_sample(t_, fed_total_mm_);  // its window ends here
     stream_load_ = on;

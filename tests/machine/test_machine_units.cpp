@@ -370,7 +370,8 @@ TEST_CASE("the built-in simulator profile is datasets/machines/sim.toml", "[mach
 TEST_CASE("every protocol has one entry in the protocol table, found by its id and by its name", "[machine]") {
   const Protocol all[] = {Protocol::liquefier_step,  Protocol::liquefier_flow_sweep, Protocol::liquefier_sine,
                           Protocol::liquefier_chirp, Protocol::ring_print,           Protocol::line_steps,
-                          Protocol::axis_sweep,      Protocol::axis_rectangle,       Protocol::test_pattern};
+                          Protocol::axis_sweep,      Protocol::axis_rectangle,       Protocol::test_pattern,
+                          Protocol::heater_identify};
   REQUIRE(protocol_specs().size() == std::size(all));
   for (const Protocol id : all) {
     const auto& spec = protocol_spec(id);

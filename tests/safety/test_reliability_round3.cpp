@@ -128,10 +128,10 @@ TEST_CASE("profiles are range-checked at load: an infinite travel or a 1e9 degC 
   }
 }
 
-TEST_CASE("'tunekit thermal --help' names an unknown command (exit 2), not the main help", "[safety]") {
-  const auto r = run_cli({"thermal", "--help"});
+TEST_CASE("'tunekit thermals --help' names an unknown command (exit 2), not the main help", "[safety]") {
+  const auto r = run_cli({"thermals", "--help"});
   CHECK(r.code == 2);
-  CHECK(r.err.find("unknown command 'thermal'") != std::string::npos);
+  CHECK(r.err.find("unknown command 'thermals'") != std::string::npos);
   CHECK(r.out.empty());
   CHECK(run_cli({"step", "--help"}).code == 0);
   CHECK(run_cli({"--help"}).code == 0);

@@ -65,6 +65,12 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
                 "Apply the configuration change (backup + atomic replace); default: preview the diff");
   sub->add_flag("--skip-liquefier", a->skip_liquefier, "Leave out the liquefier flow sweep and chirp tests");
   sub->add_flag("--skip-axes", a->skip_axes, "Leave out the X and Y resonance sweeps");
+  sub->add_flag("--thermal", a->thermal,
+                "First of all, the hot end's thermal experiment (heater-identify, five minutes from rest) and model");
+  sub->add_option("--heater-power", a->heater_power_w,
+                  "With --thermal: the heater's power at full duty (W), the thermal model's given P")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-3, 1e5));
   sub->add_flag("--keep-heaters", a->keep_heaters,
                 "Leave the hot end at the experiments' temperature when they end (default: turned off)");
   sub->add_option("--sim", a->sim_options, "Simulator truth and faults, KEY=VALUE (see 'tunekit run --help')");

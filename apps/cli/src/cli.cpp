@@ -264,6 +264,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   register_delta(app, ctx);
   register_overshoot(app, ctx);
   register_profile(app, ctx);
+  register_thermal(app, ctx);
 
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses from the back

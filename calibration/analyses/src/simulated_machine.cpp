@@ -63,6 +63,10 @@ class ServedSimulator final : public protocols::ServedMachine {
                                            {"load_cell_samples_sent", server_.sim().load_cell_samples_sent()},
                                            {"disconnected", server_.disconnected()},
                                            {"halted", server_.sim().halted()},
+                                           {"hot_end",
+                                            {{"target_c", server_.sim().hot_end().target_c()},
+                                             {"heater_duty", server_.sim().hot_end().duty()},
+                                             {"fan_duty", server_.sim().hot_end().fan_duty()}}},
                                            {"machine_time_s", server_.sim().time_s()}}
                                     .dump(2) +
                                 "\n");

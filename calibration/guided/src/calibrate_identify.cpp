@@ -157,6 +157,26 @@ void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Iden
   }
 }
 
+// --thermal: the hot end's record as `tunekit thermal` fits it (the held-out part from the run's
+// run.json beside it).
+void identify_thermal(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {
+  const auto it = runs.runs.find("heater");
+  if (it == runs.runs.end()) return;
+  const auto file = it->second.files.find(protocols::RunFile::thermal);
+  if (file == it->second.files.end()) throw MachineError("the thermal experiment recorded no heater samples");
+  ThermalOptions to;
+  to.file = file->second;
+  to.fit.heater_power_w = plan.options.heater_power_w;
+  id.thermal = calibrate_analysis("thermal", [&] { return compute_thermal(to); });
+  keep_analysis(*id.thermal, plan.run_dir + "/analysis/thermal.json", ctx);
+  id.inputs.push_back(id.thermal->input);
+  id.reproduce.push_back({"thermal",
+                          "analysis/thermal.json",
+                          "the hot end's thermal model (heater, sensor lag, losses) and its held-out prediction",
+                          {"tunekit", "thermal", relative_to(to.file, plan.run_dir), "--heater-power",
+                           fmt::format("{:g}", to.fit.heater_power_w)}});
+}
+
 }  // namespace
 
 std::string Reproduction::command() const {
@@ -178,6 +198,7 @@ Identification identify(const CalibrationPlan& plan, const ExperimentRuns& runs,
   if (plan.camera_path) identify_camera(plan, runs, id, ctx);
   identify_load_cell(plan, runs, id, ctx);
   identify_axes(plan, runs, id, ctx);
+  identify_thermal(plan, runs, id, ctx);
   progress.end("models identified");
   return id;
 }

@@ -43,6 +43,8 @@ std::string utc_stamp() {
 std::vector<PlannedExperiment> choose_experiments(const CalibrateArgs& a, const CalibrationProfile& p,
                                                   bool camera_path) {
   std::vector<PlannedExperiment> exps;
+  // The thermal experiment first: its record starts with the hot end at rest.
+  if (a.thermal) exps.push_back({"heater", "heater-identify", "", {}, 0, {}});
   if (!a.skip_liquefier && !camera_path) {
     // The step test is a flow sweep: every level reached from below and from above, so that tau,
     // K and theta are known per arrival level (the liquefier's dynamics change with the flow).
@@ -57,7 +59,8 @@ std::vector<PlannedExperiment> choose_experiments(const CalibrateArgs& a, const 
     exps.push_back({"axis-x", "axis-sweep", "x", {}, 0, {}});
     exps.push_back({"axis-y", "axis-sweep", "y", {}, 0, {}});
   }
-  if (exps.empty()) throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given");
+  if (exps.empty())
+    throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given (and no --thermal)");
   return exps;
 }
 

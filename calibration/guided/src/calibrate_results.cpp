@@ -258,6 +258,34 @@ void add_freq(RunRecord& r, const FreqOutcome& chirp, const ExperimentRuns& runs
         "tau");
 }
 
+// --thermal: the hot end's model, each parameter with its interval, and the held-out prediction.
+void add_thermal(RunRecord& r, const ThermalOutcome& t) {
+  r.details()["thermal"] = analysis_results(t);
+  StepPlot plot;
+  plot.u_label = "heater duty (1)";
+  plot.y_label = "temperature (degC)";
+  plot.t_s = t.record.t_s;
+  plot.u = t.record.heater_duty;
+  plot.y = t.record.temp_c;
+  plot.y_model = t.fit.predicted_c;
+  plot.model_label = "thermal model";
+  r.rec.plots.thermal = std::move(plot);
+  const auto& f = t.fit.fit;
+  const std::string p = "thermal.params.";
+  const std::pair<const char*, const char*> rows[] = {
+      {"block_heat_capacity_j_per_k", "hot end heat capacity C"},
+      {"sensor_responsiveness_per_s", "hot end sensor responsiveness R"},
+      {"ambient_transfer_w_per_k", "hot end loss to the ambient A (fan off)"},
+      {"fan_transfer_w_per_k", "hot end loss to the ambient F (full fan)"},
+      {"filament_heat_capacity_j_per_k_mm", "filament heat capacity H"}};
+  for (const auto& [name, label] : rows)
+    if (!f.param(name).fixed)
+      r.row(label, param_estimate(f, name), f.param(name).unit, p + name + ".value", p + name + ".ci95");
+  if (t.fit.held_out_samples > 0)
+    r.row_basis("hot end held-out prediction error (RMS)", t.fit.held_out_rms_c, "degC", "thermal.held_out.rms_c",
+                "the model run on through the held-out fan and extrusion steps");
+}
+
 void add_axes(RunRecord& r, const Identification& id) {
   for (const auto& [axis, shaper] : id.shapers) {
     const std::string label(1, axis);
@@ -357,6 +385,7 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
   else if (id.step) add_load_cell_step(r, *id.step, plan.profile.profile.filament_area_mm2());
   if (id.freq) add_freq(r, *id.freq, runs, id.step, plan.profile.profile.filament_area_mm2());
   add_axes(r, id);
+  if (id.thermal) add_thermal(r, *id.thermal);
   add_compensators(r, design, plan.run_dir);
   r.details()["reproduce"] = reproduce_json(id);
   strip_run_dir(r.rec, plan.run_dir + "/");

@@ -71,6 +71,26 @@ std::string step_model_note(const StepPlot& d) {
                                  : "whole-record model not fitted: " + d.model_missing;
 }
 
+// The hot end's record: the heater's duty, the measured temperature with the model's, and the
+// model's residuals (the held-out part's included: there they are the prediction's errors).
+Figure thermal_figure(const StepPlot& d) {
+  Figure f;
+  f.title = "Hot end thermal record";
+  Panel in{"Heater duty", "", d.u_label, false, false, {}, 0.6};
+  in.series.push_back({"heater duty", d.t_s, d.u, Series::Style::line, 4});
+  Panel out{"Temperature and the thermal model", "", d.y_label, false, false, {}, 1.4};
+  out.series.push_back({"measured", d.t_s, d.y, Series::Style::line, 1});
+  out.series.push_back({d.model_label, d.t_s, d.y_model, Series::Style::line, kWholeRecordModelColor});
+  std::vector<double> res(std::min(d.y.size(), d.y_model.size()));
+  for (std::size_t i = 0; i < res.size(); ++i) res[i] = d.y[i] - d.y_model[i];
+  Panel rp{"Residuals (measured - model)", "time (s)", "residual (degC)", false, false, {}, 0.7};
+  rp.series.push_back({"", d.t_s, res, Series::Style::line, kWholeRecordModelColor});
+  f.panels = {in, out, rp};
+  f.height_px = 760;
+  f.share_x = true;
+  return f;
+}
+
 Figure step_figure(const StepPlot& d) {
   Figure f;
   f.title = "Liquefier step response";
@@ -212,6 +232,11 @@ std::vector<ReportImage> render_report_plots(const std::string& run_dir, const R
         step_figure(*pd.step));
   }
   if (pd.bode) add("bode", "Bode plot with the fitted model and the coherence", bode_figure(*pd.bode));
+  if (pd.thermal && pd.thermal->has_model())
+    add("thermal",
+        "Hot end: the heater's duty, the measured temperature with the thermal model (fitted, then run on through "
+        "the held-out fan and extrusion steps) and its residuals",
+        thermal_figure(*pd.thermal));
   for (const auto& [axis, psd] : pd.psd)
     add("psd_" + axis, fmt::format("Axis {}: PSD with identified modes and the candidate shapers' responses", axis),
         psd_figure(psd, axis));

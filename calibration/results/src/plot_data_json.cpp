@@ -185,6 +185,7 @@ json plotdata_json(const ReportPlots& plots) {
   if (plots.flow_advance) pd["flow_advance"] = flow_advance_json(*plots.flow_advance);
   if (plots.viscosity) pd["viscosity"] = viscosity_json(*plots.viscosity);
   if (plots.linewidth) pd["linewidth"] = linewidth_json(*plots.linewidth);
+  if (plots.thermal) pd["thermal"] = step_json(*plots.thermal);
   return pd;
 }
 
@@ -192,6 +193,7 @@ ReportPlots plots_from_json(const json& pd) {
   ReportPlots plots;
   if (!pd.is_object()) return plots;
   if (pd.contains("step")) plots.step = step_from_json(pd["step"]);
+  if (pd.contains("thermal")) plots.thermal = step_from_json(pd["thermal"]);
   if (pd.contains("bode")) plots.bode = bode_from_json(pd["bode"]);
   for (const char* axis : {"x", "y", "z"})
     if (pd.contains(std::string("psd_") + axis)) plots.psd[axis] = psd_from_json(pd[std::string("psd_") + axis]);

@@ -18,6 +18,8 @@
 //                       with the slow +-sweeping_accel motion of period sweeping_period Klipper adds
 //   axis-rectangle      Hemminger's (UCLA, 2022) overshoot rectangle: XY rectangle with pauses, repeated
 //   test-pattern        pads, line steps and rings ordered by the coverage planner (coverage_planner.hpp)
+//   heater-identify     the hot end's thermal experiment: heat-up, target steps, fan and extrusion steps, a
+//                       held-out fan and extrusion step; the heater recorded (thermal_plan.hpp)
 
 #include <cstddef>
 #include <map>
@@ -63,6 +65,7 @@ enum class Protocol {
   axis_sweep,
   axis_rectangle,
   test_pattern,
+  heater_identify,
 };
 
 struct ProtocolSpec {

@@ -22,6 +22,7 @@ enum class RunFile {
   load_cell,         ///< the load cell's samples: step.csv or feed_force.csv
   sim_received,      ///< what the simulated printer received: sim_received.gcode
   summary,           ///< the run's summary: run.json
+  thermal,           ///< the hot end's samples (temperature, duties, feed, target): thermal.csv
   truth,             ///< the simulated printer's truth: truth.json
 };
 

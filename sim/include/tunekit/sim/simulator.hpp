@@ -18,6 +18,12 @@
 //                   <duration_s> <accel_x> <accel_y> <jerk_x> <jerk_y>" (mm/s^2, mm/s^3): the
 //                   acceleration accel + jerk * (t - t0) over [t0, t0 + duration]
 //   M4100 L1 / L0   load cell on/off:     "echo:TKL <t_s> <feed_mm_s> <force_N>"
+//   M4100 H1 / H0   hot end on/off: each tick of the heater loop (thermal_plant.hpp), one period
+//                   late, "echo:TKH <t_s> <temp_c> <target_c> <heater_duty> <fan_duty> <feed_mm_s>"
+//                   (the duty applied from t_s on, the fan's and the feed's means until the next tick)
+// The hot end is a thermal plant (thermal_plant.hpp): M104 sets its target, M106/M107 its fan,
+// M105 reports its reading and duty (Marlin's "@:" in 0..127); M109 returns at once with the hot
+// end settled at its target; M112 turns the heater off.
 // M115 answers "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim ...)" and "Cap:TUNEKIT_SENSOR_STREAM:1".
 
 #include <atomic>
@@ -41,6 +47,7 @@
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/machine/trajectory.hpp"
 #include "tunekit/machine/transport.hpp"
+#include "tunekit/sim/thermal_plant.hpp"
 
 namespace tunekit::sim {
 
@@ -144,6 +151,12 @@ struct SimConfig {
   std::map<std::string, std::vector<std::pair<double, double>>> shapers;  ///< axis -> (A_i, T_i s)
   std::map<std::string, std::string> shaper_names;                        ///< axis -> "zv:48:0.1"
   unsigned seed = 1;
+  /// The hot end's thermal plant (thermal_plant.hpp). Options: "hot_end=drawn" draws it from the
+  /// seed (draw_thermal_plant), then "heater_power_w=", "block_heat_capacity_j_per_k=",
+  /// "sensor_responsiveness_per_s=", "ambient_transfer_w_per_k=", "fan_transfer_w_per_k=",
+  /// "filament_heat_capacity_j_per_k_mm=", "ambient_c=", "fan_exponent=", "thermistor_noise_c=",
+  /// "adc_step_c=" set single values.
+  ThermalPlantTruth hot_end;
   // The firmware whose planner rules the simulator follows ("marlin", "klipper", "rrf"): M115
   // names it, and moves run as that firmware plans them:
   //   Klipper: every extrude-only move stops at both ends (toolhead.py Move.calc_junction) and
@@ -204,6 +217,9 @@ struct SimConfig {
   /// "fault=garble@12", "fault=late-ok@12:300", "fault=drop@12", "fault=disconnect@40",
   /// "fault=error@30", "seed=3", "bed_load_kg=0.3". InputError for unknown keys or bad values.
   static SimConfig from_options(const std::vector<std::string>& options);
+  /// from_options' last step: "hot_end=drawn" draws the hot end from the seed (whatever the
+  /// options' order), the single hot-end values given beside it then set.
+  static SimConfig with_hot_end_drawn(SimConfig c, const std::vector<std::string>& options);
   /// The simulated printer a machine profile describes: its firmware's planner rules
   /// ([machine] firmware; prusa runs Marlin's, kalico Klipper's), X/Y steps per mm, the
   /// extruder's extrude-only acceleration and longest move, Klipper's minimum cruise ratio, the
@@ -268,6 +284,9 @@ class Simulator {
   long load_cell_samples_sent() const { return load_sent_; }
   bool halted() const { return halted_; }
   double time_s() const { return t_; }
+  /// The hot end's heater loop (its target, duty and reading now); read it while the simulator
+  /// is not serving.
+  const SimHeater& hot_end() const { return heater_; }
   /// A file on the simulated board ("0:/sys/accelerometer/x.csv"), thread-safe; nullopt if absent.
   std::optional<std::string> file(const std::string& name) const;
 
@@ -345,7 +364,18 @@ class Simulator {
   double ftm_zeta_[2] = {0.1, 0.1};
   bool ftm_la_ = false;
   double ftm_k_ = 0;
-  bool stream_accel_ = false, stream_load_ = false;
+  bool stream_accel_ = false, stream_load_ = false, stream_heater_ = false;
+  // The hot end: its heater loop, the time and filament not yet run through it (it is advanced
+  // in chunks, not every simulation step), and the samples streamed so far.
+  SimHeater heater_;
+  double heater_dt_ = 0, heater_fed_ = 0;
+  std::size_t heater_sent_ = 0;
+  /// Runs the hot end up to the simulator's time and streams its finished samples.
+  void sync_heater();
+  /// One simulation step of `h` s with `fed_mm` of filament: the hot end is run every chunk.
+  void run_heater(double h, double fed_mm);
+  /// M104, M106, M107 and M105 on the hot end; false when `w` is none of them.
+  bool hot_end_command(const machine::GcodeWords& w, const Emit& emit);
   // RepRapFirmware M956 run: the file being written, samples still to take, the next number.
   std::map<std::string, std::string> files_;
   std::string capture_name_, capture_text_;

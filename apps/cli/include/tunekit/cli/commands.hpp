@@ -41,5 +41,6 @@ void register_belts(CLI::App& app, CliContext& ctx);
 void register_delta(CLI::App& app, CliContext& ctx);
 void register_overshoot(CLI::App& app, CliContext& ctx);
 void register_profile(CLI::App& app, CliContext& ctx);
+void register_thermal(CLI::App& app, CliContext& ctx);
 
 }  // namespace tunekit::cli

@@ -36,6 +36,10 @@ struct CalibrateArgs {
   bool write = false;
   bool skip_liquefier = false;
   bool skip_axes = false;
+  /// --thermal: first of all, the hot end's thermal experiment (heater-identify, from rest) and
+  /// its model (tunekit thermal) with `heater_power_w` given as its P (W).
+  bool thermal = false;
+  double heater_power_w = 40.0;
   /// Leave the heaters at the experiments' temperatures at the end (protocols::RunOptions::keep_heaters);
   /// by default every experiment that heated turns them off when it ends.
   bool keep_heaters = false;

@@ -25,6 +25,7 @@
 #include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/calibration/analyses/shaper_command.hpp"
 #include "tunekit/calibration/analyses/step_command.hpp"
+#include "tunekit/calibration/analyses/thermal_command.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
 #include "tunekit/protocols/machine_host.hpp"
@@ -131,6 +132,7 @@ struct Identification {
   std::optional<StepOutcome> step;         ///< the liquefier's steps: load-cell flow sweep or line widths
   std::optional<FreqOutcome> freq;         ///< the liquefier chirp's frequency response
   std::map<char, ShaperOutcome> shapers;   ///< per axis ('x', 'y'): modes and the recommended shaper
+  std::optional<ThermalOutcome> thermal;   ///< the hot end's thermal model (--thermal)
   std::shared_ptr<CameraAnalysis> camera;  ///< camera path only
   std::vector<InputDigest> inputs;         ///< data files the analyses read, in order, as they read them
   /// The analyses' JSON files export designs from (step and shapers; the frequency response is

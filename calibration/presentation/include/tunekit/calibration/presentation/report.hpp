@@ -28,6 +28,9 @@
 //   viscosity: {series: [{temperature_K, shear_rate_1_s[], viscosity_Pa_s[], fit_shear_rate_1_s[],
 //              fit_viscosity_Pa_s[]}]}
 //   linewidth: {s_mm[], width_mm[], setpoint_mm[], overlay_png: "file name in the run directory"}
+//   thermal:   the step's layout for the hot end's record (calibrate --thermal): u the heater's duty,
+//              y the measured temperature, y_model the thermal model's (fitted, then predicted over
+//              the held-out part)
 // Plots whose data are absent are left out.
 
 #include <string>

@@ -104,6 +104,9 @@ struct ReportPlots {
   std::optional<FlowAdvancePlot> flow_advance;
   std::optional<ViscosityPlot> viscosity;
   std::optional<LinewidthPlot> linewidth;
+  /// The hot end's thermal record (calibrate --thermal): heater duty as the input, the measured
+  /// temperature and the fitted model's (y_model, over the held-out part too); y_fit unused.
+  std::optional<StepPlot> thermal;
 };
 
 }  // namespace tunekit::calibration
