@@ -27,15 +27,16 @@ void require_model(const ident::ThermalModel& m) {
         "ambient transfer A (P {} W, C {} J/K, R {} 1/s, A {} W/K)",
         m.heater_power_w, m.block_heat_capacity_j_per_k, m.sensor_responsiveness_per_s, m.ambient_transfer_w_per_k));
   if (!std::isfinite(m.fan_transfer_w_per_k) || m.fan_transfer_w_per_k < 0)
-    throw InputError(fmt::format("the thermal model's fan transfer F must be >= 0 W/K, not {}", m.fan_transfer_w_per_k));
+    throw InputError(
+        fmt::format("the thermal model's fan transfer F must be >= 0 W/K, not {}", m.fan_transfer_w_per_k));
 }
 
 /// The loop L(jw) = G(jw) C(jw): the model's two lags and delay under the parallel PID.
 std::complex<double> loop_at(const ThermalPid& p, double w) {
   using C = std::complex<double>;
   const C s(0.0, w);
-  const C plant = p.process_gain_k * std::exp(-p.loop_delay_s * s) /
-                  ((p.block_time_s * s + 1.0) * (p.sensor_time_s * s + 1.0));
+  const C plant =
+      p.process_gain_k * std::exp(-p.loop_delay_s * s) / ((p.block_time_s * s + 1.0) * (p.sensor_time_s * s + 1.0));
   return plant * (p.kp_per_k + p.ki_per_k_s / s + p.kd_s_per_k * s);
 }
 
@@ -113,8 +114,8 @@ RrfHeaterModel rrf_heater_model(const ident::ThermalModel& m, double exponent, d
     throw InputError(fmt::format(
         "RepRapFirmware's cooling exponent E must be within 1 to 1.6 (src/Heating/FOPDT.cpp), not {}", exponent));
   if (!positive(match_rise_k))
-    throw InputError(fmt::format("the temperature rise the cooling rate is matched at must be above 0 K, not {}",
-                                 match_rise_k));
+    throw InputError(
+        fmt::format("the temperature rise the cooling rate is matched at must be above 0 K, not {}", match_rise_k));
   if (!std::isfinite(loop_delay_s) || loop_delay_s < 0)
     throw InputError(fmt::format("the loop delay must be >= 0 s, not {}", loop_delay_s));
   const double c = m.block_heat_capacity_j_per_k;

@@ -383,16 +383,17 @@ void comment_out_pressure_advance(LineEditor& ed, const Doc& doc, const Compensa
 /// pid_ki, pid_kd (klippy/extras/heaters.py); Kalico's MPC the model's keys (heaters.py).
 std::vector<std::string> stale_control_options(ExportFirmware fw, const ThermalExport& t) {
   static const std::vector<std::string> kPid = {"pid_kp", "pid_ki", "pid_kd"};
-  static const std::vector<std::string> kMpc = {"heater_power",         "block_heat_capacity", "sensor_responsiveness",
-                                                "ambient_transfer",     "fan_ambient_transfer", "filament_heat_capacity",
-                                                "filament_density",     "filament_diameter",    "target_reach_time",
-                                                "smoothing",            "min_ambient_change",   "steady_state_rate",
-                                                "maximum_retract",      "filament_temperature_source",
-                                                "ambient_temp_sensor",  "cooling_fan"};
+  static const std::vector<std::string> kMpc = {
+      "heater_power",     "block_heat_capacity",         "sensor_responsiveness",
+      "ambient_transfer", "fan_ambient_transfer",        "filament_heat_capacity",
+      "filament_density", "filament_diameter",           "target_reach_time",
+      "smoothing",        "min_ambient_change",          "steady_state_rate",
+      "maximum_retract",  "filament_temperature_source", "ambient_temp_sensor",
+      "cooling_fan"};
   std::vector<std::string> out = {"max_delta"};
   const bool mpc = fw == ExportFirmware::kalico && !t.kalico_pid;
   const auto& other = mpc ? kPid : kMpc;
-  if (fw == ExportFirmware::kalico || mpc) out.insert(out.end(), other.begin(), other.end());
+  if (fw == ExportFirmware::kalico) out.insert(out.end(), other.begin(), other.end());
   return out;
 }
 
@@ -407,8 +408,8 @@ void comment_out_stale_control(LineEditor& ed, const Doc& doc, const Compensator
         if (std::find(stale.begin(), stale.end(), o.name) == stale.end()) continue;
         const std::string& t = ed.line(o.line);
         ed.replace(o.line, block ? "#*# #" + t.substr(std::min<std::size_t>(4, t.size())) : "#" + t);
-        r.changes.push_back({fmt::format("[{}] {}", s.klipper_extruder, o.name), o.value, "(commented out)",
-                             o.line + 1, block ? "SAVE_CONFIG block" : "section"});
+        r.changes.push_back({fmt::format("[{}] {}", s.klipper_extruder, o.name), o.value, "(commented out)", o.line + 1,
+                             block ? "SAVE_CONFIG block" : "section"});
       }
     }
   };
@@ -617,9 +618,11 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
         "(D. Butyugin, Klipper, 4 October 2025); an older Klipper refuses to start on them above the SAVE_CONFIG "
         "block and ignores them inside it");
   if (r.updated != r.original)
-    r.notes.push_back(
-        "Klipper reads printer.cfg only at start-up: send RESTART after writing (or the G-code above to "
-        "apply the values now without a restart)");
+    r.notes.push_back(r.gcode.empty()
+                          ? "Klipper reads printer.cfg only at start-up: send RESTART after writing (a "
+                            "heater's PID gains have no run-time command)"
+                          : "Klipper reads printer.cfg only at start-up: send RESTART after writing (or the "
+                            "G-code above to apply the values now without a restart)");
 }
 
 void validate_kalico(const KalicoAdvanceSetting& k, std::vector<std::string>& bad) {

@@ -179,7 +179,14 @@ class MarlinEditor {
         if (nv.find('.') == std::string::npos) nv += ".0";  // "45f" is not a C float literal
         nv += 'f';
       }
-      if (!d.value.empty() && d.value.front() == '{') nv = "{ " + nv + " }";
+      if (!d.value.empty() && d.value.front() == '{') {
+        // "{ 40.0f }" (Configuration.h's per-hotend MPC lists) keeps its float suffix.
+        const std::string inner = d.value.substr(0, d.value.find('}'));
+        if (inner.find_last_not_of(" \t") != std::string::npos &&
+            (inner[inner.find_last_not_of(" \t")] == 'f' || inner[inner.find_last_not_of(" \t")] == 'F'))
+          nv += nv.find('.') == std::string::npos ? ".0f" : "f";
+        nv = "{ " + nv + " }";
+      }
       std::string rest = t.substr(d.value_end);
       if (d.value.empty()) {
         // A define without a value: add one after the name.
@@ -445,9 +452,10 @@ std::string marlin_runtime_gcode(ExportResult& r, const CompensatorSettings& s, 
 // extruder's entry of their per-hotend lists.
 void write_marlin_thermal(ExportResult& r, const CompensatorSettings& s, MarlinEditor& m) {
   if (!m.enable("MPCTEMP"))
-    throw InputError("no 'MPCTEMP' line: the thermal model is written into Marlin's Configuration.h (Marlin 2.1.2 or "
-                     "later), not Configuration_adv.h",
-                     r.path);
+    throw InputError(
+        "no 'MPCTEMP' line: the thermal model is written into Marlin's Configuration.h (Marlin 2.1.2 or "
+        "later), not Configuration_adv.h",
+        r.path);
   m.disable("PIDTEMP");
   m.set_index(static_cast<std::size_t>(s.extruder_index));
   for (const auto& d : marlin_mpc_defines(*s.thermal)) {

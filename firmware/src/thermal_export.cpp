@@ -87,11 +87,12 @@ std::string thermal_klipper_gcode(ExportFirmware fw, const ThermalExport& t, con
   const auto& m = t.model;
   std::string fan = kalico_fan_list(t);
   fan.erase(std::remove(fan.begin(), fan.end(), ' '), fan.end());
-  std::string g = fmt::format("MPC_SET HEATER={} BLOCK_HEAT_CAPACITY={} SENSOR_RESPONSIVENESS={} AMBIENT_TRANSFER={} "
-                              "FAN_AMBIENT_TRANSFER={}",
-                              section, format_number(m.block_heat_capacity_j_per_k, kDecimalsKalicoCapacity),
-                              format_number(m.sensor_responsiveness_per_s, kDecimalsKalicoSmall),
-                              format_number(m.ambient_transfer_w_per_k, kDecimalsKalicoSmall), fan);
+  std::string g = fmt::format(
+      "MPC_SET HEATER={} BLOCK_HEAT_CAPACITY={} SENSOR_RESPONSIVENESS={} AMBIENT_TRANSFER={} "
+      "FAN_AMBIENT_TRANSFER={}",
+      section, format_number(m.block_heat_capacity_j_per_k, kDecimalsKalicoCapacity),
+      format_number(m.sensor_responsiveness_per_s, kDecimalsKalicoSmall),
+      format_number(m.ambient_transfer_w_per_k, kDecimalsKalicoSmall), fan);
   if (m.filament_heat_capacity_j_per_k_mm > 0)
     g += " FILAMENT_HEAT_CAPACITY=" + format_number(kalico_specific_heat(t), kDecimalsKalicoCapacity);
   return g + "\n";
@@ -139,18 +140,22 @@ void validate_rrf(const ThermalExport& t, std::vector<std::string>& bad) {
   const double fr = written(r.fan_cooling_rate_k_s, kDecimalsRrfRate), dt = written(r.dead_time_s, kDecimalsRrfTime);
   const std::string src = "(src/Heating/FOPDT.cpp SetParameters)";
   if (!(cr > 0) || hr / cr < 0.1)
-    bad.push_back(fmt::format("RepRapFirmware refuses M307 R{} K{}: \"estimated temperature rise too small\" (R/K "
-                              "below 0.1) {}",
-                              hr, cr, src));
+    bad.push_back(
+        fmt::format("RepRapFirmware refuses M307 R{} K{}: \"estimated temperature rise too small\" (R/K "
+                    "below 0.1) {}",
+                    hr, cr, src));
   if (fr < 0)
-    bad.push_back(fmt::format("RepRapFirmware refuses a negative fan cooling rate K..:{} (\"fan reduces cooling "
-                              "rate\": the model's F is below A) {}",
-                              fr, src));
-  if (dt <= 0.0099) bad.push_back(fmt::format("RepRapFirmware refuses the dead time D{} (\"dead time too small\") {}", dt, src));
+    bad.push_back(
+        fmt::format("RepRapFirmware refuses a negative fan cooling rate K..:{} (\"fan reduces cooling "
+                    "rate\": the model's F is below A) {}",
+                    fr, src));
+  if (dt <= 0.0099)
+    bad.push_back(fmt::format("RepRapFirmware refuses the dead time D{} (\"dead time too small\") {}", dt, src));
   if (dt * cr > 50.0)
-    bad.push_back(fmt::format("RepRapFirmware refuses D{} with K{} (\"dead time too close to cooling time constant\", "
-                              "D K above 50) {}",
-                              dt, cr, src));
+    bad.push_back(
+        fmt::format("RepRapFirmware refuses D{} with K{} (\"dead time too close to cooling time constant\", "
+                    "D K above 50) {}",
+                    dt, cr, src));
   if (!(t.rrf_max_pwm > 0.0099 && t.rrf_max_pwm <= 1.0))
     bad.push_back(fmt::format("RepRapFirmware's M307 S (max PWM) must be above 0.0099 and at most 1, not {} {}",
                               t.rrf_max_pwm, src));
@@ -159,19 +164,21 @@ void validate_rrf(const ThermalExport& t, std::vector<std::string>& bad) {
 
 void validate_kalico_mpc(const ThermalExport& t, std::vector<std::string>& bad) {
   if (!(t.filament_density_g_cm3 > 0) || !(t.filament_diameter_mm > 0))
-    bad.push_back(fmt::format("Kalico's filament_density and filament_diameter must be above 0 (heaters.py above=0.), "
-                              "not {} g/cm^3 and {} mm",
-                              t.filament_density_g_cm3, t.filament_diameter_mm));
+    bad.push_back(
+        fmt::format("Kalico's filament_density and filament_diameter must be above 0 (heaters.py above=0.), "
+                    "not {} g/cm^3 and {} mm",
+                    t.filament_density_g_cm3, t.filament_diameter_mm));
   if (t.kalico_fan_breakpoints < 2)
-    bad.push_back(fmt::format("Kalico's fan_ambient_transfer needs at least 2 breakpoints, not {}",
-                              t.kalico_fan_breakpoints));
+    bad.push_back(
+        fmt::format("Kalico's fan_ambient_transfer needs at least 2 breakpoints, not {}", t.kalico_fan_breakpoints));
   const auto& m = t.model;
   if (!(written(m.fan_transfer_w_per_k, kDecimalsKalicoSmall) >= 0))
     bad.push_back(fmt::format("the fan's ambient transfer must be >= 0 W/K, not {}", m.fan_transfer_w_per_k));
   if (m.filament_heat_capacity_j_per_k_mm < 0)
-    bad.push_back(fmt::format("Kalico's filament_heat_capacity must be above 0 (heaters.py above=0.), not from H = {} "
-                              "J/(K mm)",
-                              m.filament_heat_capacity_j_per_k_mm));
+    bad.push_back(
+        fmt::format("Kalico's filament_heat_capacity must be above 0 (heaters.py above=0.), not from H = {} "
+                    "J/(K mm)",
+                    m.filament_heat_capacity_j_per_k_mm));
 }
 
 }  // namespace
@@ -197,9 +204,10 @@ void validate_thermal(ExportFirmware fw, const ThermalExport& t, std::vector<std
   if (fw == ExportFirmware::rrf) validate_rrf(t, bad);
   if (is_kalico_mpc(fw, t)) validate_kalico_mpc(t, bad);
   if (fw == ExportFirmware::marlin && m.fan_transfer_w_per_k < m.ambient_transfer_w_per_k)
-    bad.push_back(fmt::format("Marlin's MPC_AMBIENT_XFER_COEFF_FAN255 ({} W/K) is below MPC_AMBIENT_XFER_COEFF ({} W/K): "
-                              "the fan would warm the hot end",
-                              m.fan_transfer_w_per_k, m.ambient_transfer_w_per_k));
+    bad.push_back(
+        fmt::format("Marlin's MPC_AMBIENT_XFER_COEFF_FAN255 ({} W/K) is below MPC_AMBIENT_XFER_COEFF ({} W/K): "
+                    "the fan would warm the hot end",
+                    m.fan_transfer_w_per_k, m.ambient_transfer_w_per_k));
   if (fw == ExportFirmware::klipper || (fw == ExportFirmware::kalico && t.kalico_pid)) {
     try {
       (void)design::design_thermal_pid(m, t.pid);

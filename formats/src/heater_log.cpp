@@ -48,7 +48,8 @@ std::optional<double> field(std::string_view line, std::string_view key, std::si
 }
 
 void add_sample(HeaterLog& log, double t, double target, double temp, double duty, double max_gap_s) {
-  if (log.t_s.empty() || t <= log.t_s.back() || t - log.t_s.back() > max_gap_s) log.run_starts.push_back(log.t_s.size());
+  if (log.t_s.empty() || t <= log.t_s.back() || t - log.t_s.back() > max_gap_s)
+    log.run_starts.push_back(log.t_s.size());
   log.t_s.push_back(t);
   log.target_c.push_back(target);
   log.temp_c.push_back(temp);

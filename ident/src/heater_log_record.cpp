@@ -10,8 +10,8 @@ namespace tunekit::ident {
 
 ThermalRecord thermal_record_from_heater_log(const formats::HeaterLog& log, const formats::HeaterRun& run) {
   if (run.begin >= run.end || run.end > log.t_s.size())
-    throw InputError(fmt::format("the heater log has no samples {} to {} (it has {})", run.begin, run.end,
-                                 log.t_s.size()));
+    throw InputError(
+        fmt::format("the heater log has no samples {} to {} (it has {})", run.begin, run.end, log.t_s.size()));
   ThermalRecord r;
   const double t0 = log.t_s[run.begin];
   for (std::size_t i = run.begin; i < run.end; ++i) {
@@ -32,8 +32,8 @@ formats::HeaterRun heated_run(const formats::HeaterLog& log) {
     if (heated && run.end - run.begin > best.end - best.begin) best = run;
   }
   if (best.end == best.begin)
-    throw InputError(fmt::format("the heater '{}' is never given a target in the log: there is no heat-up to fit",
-                                 log.heater));
+    throw InputError(
+        fmt::format("the heater '{}' is never given a target in the log: there is no heat-up to fit", log.heater));
   return best;
 }
 

@@ -68,7 +68,8 @@ void register_export(CLI::App& app, CliContext& ctx) {
   auto cmd = std::make_shared<ExportCommand>();
   ExportOptions& o = cmd->options;
   auto* sub = app.add_subcommand(
-      "export", "Write pressure advance, input shaping and the hot end's temperature control into firmware configuration "
+      "export",
+      "Write pressure advance, input shaping and the hot end's temperature control into firmware configuration "
       "(diff preview; --write applies)");
   sub->add_option("results", o.results,
                   "JSON results of 'tunekit step', 'freq', 'shaper' and/or 'rheo' (any number, any order)");

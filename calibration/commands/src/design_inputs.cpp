@@ -277,8 +277,8 @@ ThermalDesignInput read_thermal_results(const json& res, const std::string& path
   t.ambient_transfer_w_per_k = thermal_value(m, "ambient_transfer_w_per_k", path);
   t.fan_transfer_w_per_k = thermal_value(m, "fan_transfer_w_per_k", path);
   t.filament_heat_capacity_j_per_k_mm = thermal_value(m, "filament_heat_capacity_j_per_k_mm", path, false);
-  t.ambient_c = value_at_or_null(m, "/ambient_c"_json_pointer).is_null() ? t.ambient_c
-                                                                           : thermal_value(m, "ambient_c", path);
+  t.ambient_c =
+      value_at_or_null(m, "/ambient_c"_json_pointer).is_null() ? t.ambient_c : thermal_value(m, "ambient_c", path);
   return in;
 }
 
@@ -296,7 +296,8 @@ void read_one_results_file(const std::string& path, DesignInputs& out) {
   else if (cmd == "rheo") out.rheo = read_rheo_results(res, path);
   else if (cmd == "thermal") out.thermal = read_thermal_results(res, path);
   else
-    throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper, rheo or thermal)", cmd), path);
+    throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper, rheo or thermal)", cmd),
+                     path);
 }
 
 }  // namespace

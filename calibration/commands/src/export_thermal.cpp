@@ -21,10 +21,10 @@ ident::ThermalModel parse_thermal_model(const std::string& arg) {
     char* end = nullptr;
     const double x = std::strtod(part.c_str(), &end);
     if (part.empty() || end != part.c_str() + part.size() || !std::isfinite(x))
-      throw InputError(fmt::format(
-          "--thermal-model takes P:C:R:A:F[:H] numbers (W, J/K, 1/s, W/K, W/K, J/(K mm)), e.g. "
-          "40:16.7:0.22:0.068:0.097:0.0056; '{}' is not a number",
-          part));
+      throw InputError(
+          fmt::format("--thermal-model takes P:C:R:A:F[:H] numbers (W, J/K, 1/s, W/K, W/K, J/(K mm)), e.g. "
+                      "40:16.7:0.22:0.068:0.097:0.0056; '{}' is not a number",
+                      part));
     v.push_back(x);
     if (e == std::string::npos) break;
     b = e + 1;
@@ -49,8 +49,8 @@ std::optional<firmware::ThermalExport> thermal_settings(const ExportOptions& a, 
     return std::nullopt;
   }
   if (!a.thermal_model.empty() && d.thermal)
-    throw InputError(fmt::format("--thermal-model and the thermal results {} both give the model: give one",
-                                 d.thermal->origin));
+    throw InputError(
+        fmt::format("--thermal-model and the thermal results {} both give the model: give one", d.thermal->origin));
   if (a.thermal_model.empty() && !d.thermal) return std::nullopt;
   firmware::ThermalExport t;
   t.model = d.thermal ? d.thermal->model : parse_thermal_model(a.thermal_model);

@@ -36,18 +36,18 @@ struct ThermalPidOptions {
 /// A PID in parallel form, u = kp e + ki integral(e) + kd de/dt (u the heater duty in [0, 1],
 /// e in K), with the model it was designed on and the margins of the loop it closes.
 struct ThermalPid {
-  double kp_per_k = 0.0;      ///< duty per K
-  double ki_per_k_s = 0.0;    ///< duty per K s
-  double kd_s_per_k = 0.0;    ///< duty s per K
-  double process_gain_k = 0.0;     ///< k = P / (A + f (F - A)), K per unit duty
-  double block_time_s = 0.0;       ///< tau1 = C / (A + f (F - A))
-  double sensor_time_s = 0.0;      ///< tau2 = 1 / R
-  double loop_delay_s = 0.0;       ///< theta
+  double kp_per_k = 0.0;            ///< duty per K
+  double ki_per_k_s = 0.0;          ///< duty per K s
+  double kd_s_per_k = 0.0;          ///< duty s per K
+  double process_gain_k = 0.0;      ///< k = P / (A + f (F - A)), K per unit duty
+  double block_time_s = 0.0;        ///< tau1 = C / (A + f (F - A))
+  double sensor_time_s = 0.0;       ///< tau2 = 1 / R
+  double loop_delay_s = 0.0;        ///< theta
   double closed_loop_time_s = 0.0;  ///< tau_c
-  double gain_margin = 0.0;        ///< 1 / |L| where the loop's phase is -180 degrees
-  double phase_margin_deg = 0.0;   ///< 180 + arg L where |L| = 1
-  double max_sensitivity = 0.0;    ///< Ms = max |1 / (1 + L)| (SIMC's tight tuning gives about 1.6-1.7)
-  std::string rule;                ///< one sentence naming the rule and its choices
+  double gain_margin = 0.0;         ///< 1 / |L| where the loop's phase is -180 degrees
+  double phase_margin_deg = 0.0;    ///< 180 + arg L where |L| = 1
+  double max_sensitivity = 0.0;     ///< Ms = max |1 / (1 + L)| (SIMC's tight tuning gives about 1.6-1.7)
+  std::string rule;                 ///< one sentence naming the rule and its choices
 };
 
 /// The SIMC PID for `m`. InputError when the model lacks a positive P, C, R or A, or the options

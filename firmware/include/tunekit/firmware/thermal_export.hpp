@@ -33,12 +33,12 @@ enum class ExportFirmware;
 /// What is exported from a thermal identification, and how.
 struct ThermalExport {
   ident::ThermalModel model;
-  design::ThermalPidOptions pid;      ///< Klipper's PID design
-  bool kalico_pid = false;            ///< Kalico: write the PID (control: pid) instead of its MPC
-  int rrf_heater = 1;                 ///< RepRapFirmware heater number (M307 H)
-  double rrf_cooling_exponent = 1.0;  ///< M307 E (design::rrf_heater_model)
-  double rrf_max_pwm = 1.0;           ///< M307 S for a new line (an existing S is kept)
-  double rrf_match_rise_k = 180.0;    ///< the rise above ambient the cooling rate is matched at when E != 1
+  design::ThermalPidOptions pid;        ///< Klipper's PID design
+  bool kalico_pid = false;              ///< Kalico: write the PID (control: pid) instead of its MPC
+  int rrf_heater = 1;                   ///< RepRapFirmware heater number (M307 H)
+  double rrf_cooling_exponent = 1.0;    ///< M307 E (design::rrf_heater_model)
+  double rrf_max_pwm = 1.0;             ///< M307 S for a new line (an existing S is kept)
+  double rrf_match_rise_k = 180.0;      ///< the rise above ambient the cooling rate is matched at when E != 1
   double filament_density_g_cm3 = 1.2;  ///< Kalico's filament_density (its default) for filament_heat_capacity
   double filament_diameter_mm = 1.75;   ///< Kalico's filament_diameter (its default)
   int kalico_fan_breakpoints = 3;       ///< entries of fan_ambient_transfer (Kalico's default 3: 0/50/100 %)

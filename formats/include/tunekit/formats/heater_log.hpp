@@ -3,7 +3,8 @@
 //
 // * Klipper's klippy.log "Stats" lines (Kevin O'Connor et al., Klipper, klippy/extras/
 //   statistics.py and heaters.py), one a second:
-//     Stats 2016.5: gcodein=0  mcu: ... heater_bed: target=60 temp=59.8 pwm=0.127 ... extruder: target=210 temp=209.8 pwm=0.512
+//     Stats 2016.5: gcodein=0  mcu: ... heater_bed: target=60 temp=59.8 pwm=0.127 ... extruder: target=210 temp=209.8
+//     pwm=0.512
 //   the time is the host's monotonic clock in seconds; each heater prints
 //   "<name>: target=%.0f temp=%.1f pwm=%.3f" (Heater.stats) -- and only while it is active
 //   (a target set, or its last reading above 50 degC): a cold, idle heater is absent from the
@@ -24,16 +25,16 @@ namespace tunekit::formats {
 
 /// One heater's samples as a log states them, in file order.
 struct HeaterLog {
-  std::string heater;              ///< "extruder", "T0", ...
-  std::vector<double> t_s;         ///< sample time, s (klippy.log: the host's clock)
-  std::vector<double> target_c;    ///< the target temperature, degC
-  std::vector<double> temp_c;      ///< the measured temperature, degC
-  std::vector<double> duty;        ///< heater PWM duty in [0, 1]
+  std::string heater;            ///< "extruder", "T0", ...
+  std::vector<double> t_s;       ///< sample time, s (klippy.log: the host's clock)
+  std::vector<double> target_c;  ///< the target temperature, degC
+  std::vector<double> temp_c;    ///< the measured temperature, degC
+  std::vector<double> duty;      ///< heater PWM duty in [0, 1]
   /// Index of the first sample of each continuous run: a new run starts where the log's time goes
   /// back or jumps by more than `max_gap_s` (a restart of the host, the heater idle and absent).
   std::vector<std::size_t> run_starts;
-  std::size_t lines_read = 0;      ///< Stats lines (or report lines) seen
-  std::size_t lines_skipped = 0;   ///< of those, lines cut short or without this heater
+  std::size_t lines_read = 0;     ///< Stats lines (or report lines) seen
+  std::size_t lines_skipped = 0;  ///< of those, lines cut short or without this heater
 };
 
 /// The samples of one continuous run [begin, end).
@@ -46,8 +47,7 @@ std::vector<HeaterRun> heater_runs(const HeaterLog& log);
 /// line without its heater's three values) is skipped and counted. InputError (exit 2) when the
 /// text has no Stats line, or no line with this heater (naming the heaters that are there).
 /// `max_gap_s`: a longer gap between samples starts a new run.
-HeaterLog read_klippy_heater_log(std::string_view text, const std::string& heater = "extruder",
-                                 double max_gap_s = 5.0);
+HeaterLog read_klippy_heater_log(std::string_view text, const std::string& heater = "extruder", double max_gap_s = 5.0);
 
 /// Reads hot end `tool`'s samples ("T" for a single hot end, "T0", "T1" ...) from Marlin's
 /// temperature reports, one report each `interval_s` seconds. InputError when no report line has

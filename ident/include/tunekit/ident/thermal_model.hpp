@@ -19,13 +19,13 @@ namespace tunekit::ident {
 
 /// One hot end's thermal parameters (SI units, temperatures in degC).
 struct ThermalModel {
-  double heater_power_w = 0.0;                   ///< P: heater power at full duty, W
-  double block_heat_capacity_j_per_k = 0.0;      ///< C: heater block, nozzle and sensor, J/K
-  double sensor_responsiveness_per_s = 0.0;      ///< R: rate the sensor follows the block, 1/s
-  double ambient_transfer_w_per_k = 0.0;         ///< A: loss to the ambient with the fan off, W/K
-  double fan_transfer_w_per_k = 0.0;             ///< F: loss to the ambient at full fan, W/K
+  double heater_power_w = 0.0;                     ///< P: heater power at full duty, W
+  double block_heat_capacity_j_per_k = 0.0;        ///< C: heater block, nozzle and sensor, J/K
+  double sensor_responsiveness_per_s = 0.0;        ///< R: rate the sensor follows the block, 1/s
+  double ambient_transfer_w_per_k = 0.0;           ///< A: loss to the ambient with the fan off, W/K
+  double fan_transfer_w_per_k = 0.0;               ///< F: loss to the ambient at full fan, W/K
   double filament_heat_capacity_j_per_k_mm = 0.0;  ///< H: heat taken per mm of filament and K
-  double ambient_c = 25.0;                       ///< T_a: the ambient temperature, degC
+  double ambient_c = 25.0;                         ///< T_a: the ambient temperature, degC
 };
 
 }  // namespace tunekit::ident
