@@ -2,8 +2,11 @@
 // klippy/extras/heaters.py Heater.stats prints it, "%s: target=%.0f temp=%.1f pwm=%.3f", only
 // while the heater is active) and Marlin's temperature reports (@ the 0-127 soft-PWM amount,
 // Marlin/src/module/temperature.cpp). Hostile inputs get one clear message.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <string>
+
+#include "test_support.hpp"
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/formats/heater_log.hpp"
@@ -111,4 +114,30 @@ TEST_CASE("Marlin temperature reports: @ is the 0-127 soft-PWM amount, lines int
   CHECK(t1.duty[0] == Approx(100.0 / 127.0));
   CHECK_THROWS_WITH(formats::read_marlin_temperature_reports(" T:25.3 /0.0 B:24.9 /0.0\n", 1.0), Contains("power '@'"));
   CHECK_THROWS_AS(formats::read_marlin_temperature_reports(text, 0.0), InputError);
+}
+
+TEST_CASE("A real klippy.log heat-up (datasets/thermal/klippy_cetus3d) is read into a record") {
+  // An excerpt of a public printer's klippy.log (PROVENANCE.md beside it): the extruder heated
+  // from 16 degC to 230 degC at its max_power 0.7, held there, then cooled to 50 degC, where
+  // Klipper stops printing it.
+  const auto h = formats::read_klippy_heater_log(
+      tunekit::test::read_text(tunekit::test::dataset("thermal/klippy_cetus3d/klippy-heatup.log")));
+  CHECK(h.lines_read == 890);
+  CHECK(h.lines_skipped == 0);
+  REQUIRE(formats::heater_runs(h).size() == 1);
+  const auto rec = ident::thermal_record_from_heater_log(h, ident::heated_run(h));
+  REQUIRE(rec.t_s.size() == 890);
+  CHECK(rec.t_s.back() == Approx(7665.2 - 6775.5).margin(1e-9));  // its first and last Stats times
+  CHECK(rec.target_c[65] == Approx(230));
+  CHECK(rec.target_c[64] == Approx(0));
+  CHECK(rec.heater_duty[65] == Approx(0.7));  // max_power: Klipper's pwm never exceeds it
+  CHECK(*std::max_element(rec.heater_duty.begin(), rec.heater_duty.end()) == Approx(0.7));
+  CHECK(*std::max_element(rec.temp_c.begin(), rec.temp_c.end()) == Approx(233.3));
+  CHECK(rec.temp_c.back() == Approx(50.0));
+  CHECK(rec.fan_duty.empty());
+  // The log's other heaters are its own: extruder1 heated alongside, the bed to 60 degC.
+  const auto e1 = formats::read_klippy_heater_log(
+      tunekit::test::read_text(tunekit::test::dataset("thermal/klippy_cetus3d/klippy-heatup.log")), "extruder1");
+  CHECK(e1.t_s.size() > 100);
+  CHECK(*std::max_element(e1.target_c.begin(), e1.target_c.end()) == Approx(230));
 }
