@@ -225,7 +225,7 @@ TEST_CASE("tunekit export reads the results of tunekit thermal and refuses a mod
   std::ofstream(cfg) << original;
   nlohmann::json results = {{"command", "thermal"},
                             {"results",
-                             {{"model",
+                             {{"thermal_model",
                                {{"heater_power_w", 42.5},
                                 {"block_heat_capacity_j_per_k", {{"value", 18.42}, {"ci95", {18.0, 18.9}}}},
                                 {"sensor_responsiveness_per_s", 0.2176},
@@ -242,7 +242,7 @@ TEST_CASE("tunekit export reads the results of tunekit thermal and refuses a mod
   CHECK(has_line(written, "#max_delta: 2.0"));
   CHECK(has_line(written, "pid_kp: " + format_number(k.kp, 3)));
 
-  results["results"]["model"]["sensor_responsiveness_per_s"] = -0.2;
+  results["results"]["thermal_model"]["sensor_responsiveness_per_s"] = -0.2;
   const std::string bad = dir + "/bad.json";
   std::ofstream(bad) << results.dump(2);
   std::ofstream(cfg) << original;

@@ -261,13 +261,15 @@ double thermal_value(const json& model, const char* key, const std::string& path
   const json& v = j.is_object() ? value_at_or_null(j, "/value"_json_pointer) : j;
   if (v.is_null() && !required) return 0.0;
   if (!v.is_number())
-    throw InputError(fmt::format("results.model.{} must be a number (or {{\"value\": number}})", key), path);
+    throw InputError(fmt::format("results.thermal_model.{} must be a number (or {{\"value\": number}})", key), path);
   return v.get<double>();
 }
 
 ThermalDesignInput read_thermal_results(const json& res, const std::string& path) {
-  const json& m = value_at_or_null(res, "/model"_json_pointer);
-  if (!m.is_object()) throw InputError("thermal results without a 'model' object", path);
+  // `tunekit thermal` writes results.thermal_model (calibration/analyses thermal_command.cpp).
+  const json& tm = value_at_or_null(res, "/thermal_model"_json_pointer);
+  const json& m = tm.is_object() ? tm : value_at_or_null(res, "/model"_json_pointer);
+  if (!m.is_object()) throw InputError("thermal results without a 'thermal_model' object", path);
   ThermalDesignInput in;
   in.origin = path;
   auto& t = in.model;

@@ -109,7 +109,7 @@ struct RheoDesignInput {
   double reference_flow_mm3_s = fitting::kNaN;
 };
 
-/// From `tunekit thermal`: the hot end's thermal model (results.model, one key per field of
+/// From `tunekit thermal`: the hot end's thermal model (results.thermal_model, one key per field of
 /// ident::ThermalModel, each a number or a fitted parameter {value, stderr, ci95}).
 struct ThermalDesignInput {
   std::string origin;
