@@ -305,7 +305,7 @@ namespace {
 
 /// The options to set, in the order they are written: the advance (or Kalico's model), its
 /// smoothing time, each axis' shaper.
-std::vector<Want> klipper_wants(const CompensatorSettings& s) {
+std::vector<Want> klipper_wants(ExportFirmware fw, const CompensatorSettings& s) {
   std::vector<Want> wants;
   auto num = [&](const std::string& sec, const std::string& opt, double v, int dec) {
     wants.push_back({sec, opt, format_number(v, dec), true, v, dec});
@@ -321,6 +321,9 @@ std::vector<Want> klipper_wants(const CompensatorSettings& s) {
       num(s.klipper_extruder, "pressure_advance_time_offset", *s.kalico->time_offset_s, kDecimalsKalico);
   }
   if (s.pa_smooth_s) num(s.klipper_extruder, "pressure_advance_smooth_time", *s.pa_smooth_s, kDecimalsSmooth);
+  if (s.thermal)
+    for (const auto& o : thermal_klipper_options(fw, *s.thermal))
+      wants.push_back({s.klipper_extruder, o.option, o.value, o.numeric, o.number, o.decimals});
   for (const auto& [axis, sh] : s.shapers) {
     const std::string type = firmware_shaper_name(ExportFirmware::klipper, sh.type);
     wants.push_back({"input_shaper", "shaper_type_" + axis, type, false, 0, 0});
@@ -372,6 +375,46 @@ void comment_out_pressure_advance(LineEditor& ed, const Doc& doc, const Compensa
         fmt::format("{}: the SAVE_CONFIG block sets [{}] pressure_advance, which Kalico's {} model "
                     "does not read: remove it there before restarting",
                     r.path, s.klipper_extruder, s.kalico->model));
+}
+
+/// The options of the heater's other controls, which the new control does not read: Klipper-style
+/// config checking refuses an option nobody reads ("Option '...' is not valid in section",
+/// klippy/configfile.py check_unused_options). Klipper's watermark reads max_delta, its PID pid_kp,
+/// pid_ki, pid_kd (klippy/extras/heaters.py); Kalico's MPC the model's keys (heaters.py).
+std::vector<std::string> stale_control_options(ExportFirmware fw, const ThermalExport& t) {
+  static const std::vector<std::string> kPid = {"pid_kp", "pid_ki", "pid_kd"};
+  static const std::vector<std::string> kMpc = {
+      "heater_power",     "block_heat_capacity",         "sensor_responsiveness",
+      "ambient_transfer", "fan_ambient_transfer",        "filament_heat_capacity",
+      "filament_density", "filament_diameter",           "target_reach_time",
+      "smoothing",        "min_ambient_change",          "steady_state_rate",
+      "maximum_retract",  "filament_temperature_source", "ambient_temp_sensor",
+      "cooling_fan"};
+  std::vector<std::string> out = {"max_delta"};
+  const bool mpc = fw == ExportFirmware::kalico && !t.kalico_pid;
+  const auto& other = mpc ? kPid : kMpc;
+  if (fw == ExportFirmware::kalico) out.insert(out.end(), other.begin(), other.end());
+  return out;
+}
+
+/// Comments out the stale options of the heater's section, in the body and in the SAVE_CONFIG
+/// block (where "#*# #option" is a comment once Klipper strips the block's prefix).
+void comment_out_stale_control(LineEditor& ed, const Doc& doc, const CompensatorSettings& s, ExportResult& r) {
+  const auto stale = stale_control_options(r.firmware, *s.thermal);
+  const auto visit = [&](const std::vector<Section>& secs, bool block) {
+    for (const auto& sec : secs) {
+      if (sec.name != s.klipper_extruder) continue;
+      for (const auto& o : sec.opts) {
+        if (std::find(stale.begin(), stale.end(), o.name) == stale.end()) continue;
+        const std::string& t = ed.line(o.line);
+        ed.replace(o.line, block ? "#*# #" + t.substr(std::min<std::size_t>(4, t.size())) : "#" + t);
+        r.changes.push_back({fmt::format("[{}] {}", s.klipper_extruder, o.name), o.value, "(commented out)", o.line + 1,
+                             block ? "SAVE_CONFIG block" : "section"});
+      }
+    }
+  };
+  visit(doc.main, false);
+  visit(doc.block, true);
 }
 
 /// The runtime commands that apply the same values without a restart.
@@ -546,7 +589,7 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
   LineEditor ed(r.original);
   const Doc doc = parse(ed, r.path);
 
-  const std::vector<Want> wants = klipper_wants(s);
+  const std::vector<Want> wants = klipper_wants(r.firmware, s);
 
   for (const auto& p : doc.include_problems) r.warnings.push_back(p);
   if (doc.ignored_block)
@@ -563,19 +606,23 @@ void write_klipper(ExportResult& r, const CompensatorSettings& s) {
   append_new_sections(ed, pl.new_block_sections, pl.new_file_sections);
 
   if (s.kalico) comment_out_pressure_advance(ed, doc, s, r);
+  if (s.thermal) comment_out_stale_control(ed, doc, s, r);
   r.updated = ed.render();
   r.diff = ed.unified_diff(r.path);
 
   r.gcode = klipper_runtime_gcode(s);
+  if (s.thermal) r.gcode += thermal_klipper_gcode(r.firmware, *s.thermal, s.klipper_extruder);
   if (s.shapers.count("z"))
     r.notes.push_back(
         "shaper_type_z, shaper_freq_z and damping_ratio_z are read by Klipper since its Z-axis input shaper "
         "(D. Butyugin, Klipper, 4 October 2025); an older Klipper refuses to start on them above the SAVE_CONFIG "
         "block and ignores them inside it");
   if (r.updated != r.original)
-    r.notes.push_back(
-        "Klipper reads printer.cfg only at start-up: send RESTART after writing (or the G-code above to "
-        "apply the values now without a restart)");
+    r.notes.push_back(r.gcode.empty()
+                          ? "Klipper reads printer.cfg only at start-up: send RESTART after writing (a "
+                            "heater's PID gains have no run-time command)"
+                          : "Klipper reads printer.cfg only at start-up: send RESTART after writing (or the "
+                            "G-code above to apply the values now without a restart)");
 }
 
 void validate_kalico(const KalicoAdvanceSetting& k, std::vector<std::string>& bad) {

@@ -113,6 +113,16 @@ class MarlinEditor {
     return true;
   }
 
+  /// Comments out every active definition of a flag (Marlin's "//#define NAME").
+  void disable(const std::string& name) {
+    for (const auto& d : find_defines(ed_, name)) {
+      if (d.commented) continue;
+      const std::string& t = ed_.line(d.line);
+      ed_.replace(d.line, t.substr(0, d.indent_end) + "//" + t.substr(d.define_at));
+      r_.changes.push_back({name, "enabled", "disabled", d.line + 1, "feature flag"});
+    }
+  }
+
   /// Sets a value define; false when the file has no such line.
   bool set(const std::string& name, double v, int decimals) {
     const auto defs = find_defines(ed_, name);
@@ -169,7 +179,14 @@ class MarlinEditor {
         if (nv.find('.') == std::string::npos) nv += ".0";  // "45f" is not a C float literal
         nv += 'f';
       }
-      if (!d.value.empty() && d.value.front() == '{') nv = "{ " + nv + " }";
+      if (!d.value.empty() && d.value.front() == '{') {
+        // "{ 40.0f }" (Configuration.h's per-hotend MPC lists) keeps its float suffix.
+        const std::string inner = d.value.substr(0, d.value.find('}'));
+        if (inner.find_last_not_of(" \t") != std::string::npos &&
+            (inner[inner.find_last_not_of(" \t")] == 'f' || inner[inner.find_last_not_of(" \t")] == 'F'))
+          nv += nv.find('.') == std::string::npos ? ".0f" : "f";
+        nv = "{ " + nv + " }";
+      }
       std::string rest = t.substr(d.value_end);
       if (d.value.empty()) {
         // A define without a value: add one after the name.
@@ -430,15 +447,35 @@ std::string marlin_runtime_gcode(ExportResult& r, const CompensatorSettings& s, 
   return g;
 }
 
+// The hot end's model-predictive control (Marlin/Configuration.h, "Model Predictive Control for
+// hotend"): MPCTEMP on, PIDTEMP off (SanityCheck.h refuses both), the model's defines set for the
+// extruder's entry of their per-hotend lists.
+void write_marlin_thermal(ExportResult& r, const CompensatorSettings& s, MarlinEditor& m) {
+  if (!m.enable("MPCTEMP"))
+    throw InputError(
+        "no 'MPCTEMP' line: the thermal model is written into Marlin's Configuration.h (Marlin 2.1.2 or "
+        "later), not Configuration_adv.h",
+        r.path);
+  m.disable("PIDTEMP");
+  m.set_index(static_cast<std::size_t>(s.extruder_index));
+  for (const auto& d : marlin_mpc_defines(*s.thermal)) {
+    if (d.name == "MPC_AMBIENT_XFER_COEFF_FAN255") m.enable("MPC_INCLUDE_FAN");
+    if (!m.set(d.name, d.value, d.decimals))
+      throw InputError(fmt::format("no '#define {}' line in the MPC section", d.name), r.path);
+  }
+}
+
 }  // namespace
 
 void write_marlin(ExportResult& r, const CompensatorSettings& s) {
   const LineEditor original(r.original);
   MarlinEditor m(r);
+  if (s.thermal) write_marlin_thermal(r, s, m);
   // Fixed-time motion bypasses the classic shaper and smooth linear advance: nothing of them is
   // touched (stepper.cpp isr()).
   if (s.marlin_ft_motion) {
     write_marlin_ft_motion(r, s, m);
+    if (s.thermal) r.gcode = marlin_m306_gcode(*s.thermal, s.extruder_index) + (r.gcode.empty() ? "M500\n" : r.gcode);
     return;
   }
   const bool tau_written = write_marlin_advance(r, s, m);
@@ -457,6 +494,7 @@ void write_marlin(ExportResult& r, const CompensatorSettings& s) {
   r.updated = m.editor().render();
   r.diff = m.editor().unified_diff(r.path);
   r.gcode = marlin_runtime_gcode(r, s, original, tau_written);
+  if (s.thermal) r.gcode = marlin_m306_gcode(*s.thermal, s.extruder_index) + (r.gcode.empty() ? "M500\n" : r.gcode);
   // Precedence: with EEPROM_SETTINGS, Marlin loads the stored values at boot over the compiled
   // defaults (Marlin/src/MarlinCore.cpp setup(): settings.first_load(), "Load data from EEPROM if
   // available (or use defaults)"; M502 resets to the compiled ones, M500 stores them).

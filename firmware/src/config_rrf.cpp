@@ -235,6 +235,65 @@ void write_rrf_shaper(ExportResult& r, LineEditor& ed, const ShaperSetting& sh, 
   ed.replace(line, t);
 }
 
+/// The heater's M307 line, and the M950 that creates the heater (M307 must follow it).
+struct RrfHeaterLines {
+  std::optional<std::size_t> m307, m950;
+};
+
+RrfHeaterLines find_heater_lines(const LineEditor& ed, const std::string& heater) {
+  RrfHeaterLines at;
+  for (std::size_t i = 0; i < ed.size(); ++i) {
+    const auto c = parse_command(ed.line(i));
+    if (!c) continue;
+    if (c->code == "M307" && param_value(ed.line(i), 'H') == heater) at.m307 = i;
+    if (c->code == "M950" && param_value(ed.line(i), 'H') == heater) at.m950 = i;
+  }
+  return at;
+}
+
+/// The heater model: the heater's M307 edited (R, K, D, E; S, B and V kept) or a new line after its
+/// M950. RRF's M500 writes M307 into config-override.g (GCodes.cpp WriteConfigOverrideFile), which
+/// M501 runs after config.g's line: said when that file holds one for this heater.
+void write_rrf_thermal(ExportResult& r, LineEditor& ed, const CompensatorSettings& s) {
+  const std::string h = std::to_string(s.thermal->rrf_heater);
+  const RrfHeaterLines at = find_heater_lines(ed, h);
+  const RrfM307Values v = rrf_m307_values(*s.thermal);
+  const std::pair<char, std::string> params[] = {{'R', v.r}, {'K', v.k}, {'D', v.d}, {'E', v.e}};
+  if (at.m307) {
+    std::string t = ed.line(*at.m307);
+    for (const auto& [letter, value] : params) {
+      const std::string old = param_value(t, letter);
+      if (old == value) continue;
+      t = set_param(t, letter, value);
+      r.changes.push_back({fmt::format("M307 H{} {}", h, letter), old, value, *at.m307 + 1, "command"});
+    }
+    ed.replace(*at.m307, t);
+  } else {
+    if (!at.m950)
+      throw InputError(fmt::format("config.g creates no heater {} (no 'M950 H{}' line): the heater model is written "
+                                   "after the heater is created; choose the heater with --heater",
+                                   h, h),
+                       r.path);
+    const std::string line = fmt::format("M307 H{} R{} K{} D{} E{} S{} B0 ; heater model (K/s, K/s at 100 K, s)", h,
+                                         v.r, v.k, v.d, v.e, format_number(s.thermal->rrf_max_pwm, 2));
+    ed.insert_before(*at.m950 + 1, {line});
+    r.changes.push_back({fmt::format("M307 H{}", h), "", line.substr(0, line.find(" ;")), *at.m950 + 2, "new line"});
+  }
+  namespace fs = std::filesystem;
+  const fs::path over = fs::path(r.path).parent_path() / "config-override.g";
+  std::error_code ec;
+  if (!fs::exists(over, ec)) return;
+  const LineEditor oe(read_config_file(over.string()));
+  for (std::size_t i = 0; i < oe.size(); ++i) {
+    const auto c = parse_command(oe.line(i));
+    if (c && c->code == "M307" && param_value(oe.line(i), 'H') == h)
+      r.warnings.push_back(fmt::format(
+          "{}:{}: config-override.g holds '{}' (RepRapFirmware's M500 writes it), which M501 runs after config.g: send "
+          "the G-code below and then M500 so that it holds the new model too",
+          over.string(), i + 1, oe.line(i)));
+  }
+}
+
 }  // namespace
 
 void write_rrf(ExportResult& r, const CompensatorSettings& s) {
@@ -263,9 +322,14 @@ void write_rrf(ExportResult& r, const CompensatorSettings& s) {
       if (c.where == "new line") c.line = at;
   }
 
+  if (s.thermal) write_rrf_thermal(r, ed, s);
   r.updated = ed.render();
   r.diff = ed.unified_diff(r.path);
   std::string g;
+  if (s.thermal) {
+    const RrfM307Values v = rrf_m307_values(*s.thermal);
+    g += fmt::format("M307 H{} R{} K{} D{} E{}\n", s.thermal->rrf_heater, v.r, v.k, v.d, v.e);
+  }
   if (s.pa_k_s) g += fmt::format("M572 D{} S{}\n", drive, format_number(*s.pa_k_s, kDecimalsK));
   if (sh)
     g += fmt::format("M593 P\"{}\" F{} S{}\n", firmware_shaper_name(ExportFirmware::rrf, sh->type),

@@ -134,6 +134,7 @@ void validate_settings(ExportFirmware fw, const CompensatorSettings& settings) {
   if (s.kalico && fw != ExportFirmware::kalico)
     bad.push_back(fmt::format("the nonlinear advance model is Kalico's; {} does not read it", name));
   if (s.kalico && fw == ExportFirmware::kalico) detail::validate_kalico(*s.kalico, bad);
+  if (s.thermal) validate_thermal(fw, *s.thermal, bad);
   if (s.pa_k_s) {
     const double k = *s.pa_k_s;
     if (!std::isfinite(k) || k < 0) bad.push_back(fmt::format("advance K {} s is negative or not a number", k));

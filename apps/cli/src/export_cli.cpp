@@ -67,7 +67,9 @@ CLI::Option* export_finite_option(CLI::App* sub, const std::string& name, double
 
 CLI::App* add_export_command(CLI::App& app, ExportOptions& o, OutputOptions& output) {
   auto* sub = app.add_subcommand(
-      "export", "Write pressure advance and input shaping into firmware configuration (diff preview; --write applies)");
+      "export",
+      "Write pressure advance, input shaping and the hot end's temperature control into firmware configuration "
+      "(diff preview; --write applies)");
   sub->add_option("results", o.results,
                   "JSON results of 'tunekit step', 'freq', 'shaper' and/or 'rheo' (any number, any order)");
   sub->add_option("-f,--firmware", o.firmware,
@@ -104,6 +106,16 @@ CLI::App* add_export_command(CLI::App& app, ExportOptions& o, OutputOptions& out
                   "mode (2023), axis_slash (2024), axis_named (2024-2025, the default), axis_list (2025), "
                   "axis_list_v2 (late 2025 on, M493 V answers FTM V2), or none (not known: axis_named, with a "
                   "warning); tunekit run records it in run.json");
+  sub->add_option("--thermal-model", o.thermal_model,
+                  "Hot end thermal model P:C:R:A:F[:H] (W, J/K, 1/s, W/K, W/K, J/(K mm)) instead of the results of "
+                  "'tunekit thermal': Marlin MPC (Configuration.h), Kalico MPC, Klipper PID, RepRapFirmware M307");
+  sub->add_flag("--no-thermal", o.no_thermal, "Leave the temperature control alone");
+  sub->add_option("--heater", o.heater, "RepRapFirmware heater number for M307 H (default: 1)")
+      ->check(CLI::Range(0, 31));
+  sub->add_flag("--kalico-pid", o.kalico_pid, "Kalico: write a PID designed from the thermal model instead of MPC");
+  export_finite_option(sub, "--thermal-loop-delay", o.thermal_loop_delay, "s",
+                       "Control loop delay in s for the PID design and RepRapFirmware's D (default 0.8: Klipper's "
+                       "0.3 s sensor report plus half its 1 s derivative smoothing)");
   sub->add_flag("--no-pa", o.no_pa, "Leave pressure/linear advance alone");
   sub->add_flag("--no-shaper", o.no_shaper, "Leave input shaping alone");
   sub->add_flag("--write", o.write,
@@ -135,6 +147,7 @@ CLI::App* add_export_command(CLI::App& app, ExportOptions& o, OutputOptions& out
       "--write\n"
       "  tunekit export --firmware rrf --config sys/config.g step.json shaper.json rheo.json --json\n"
       "  tunekit export -f klipper -c printer.cfg --shaper-x mzv:52.4 --shaper-y ei:38.1:0.12 --no-pa\n"
+      "  tunekit export -f marlin -c Marlin/Configuration.h thermal.json   # MPC; Klipper: a PID from the model\n"
       "  tunekit export -f kalico -c printer.cfg -p machine.toml sweep.json --orca-in PLA.json --orca-out "
       "PLA-tuned.json\n"
       "  tunekit export -f klipper -c printer.cfg -p machine.toml sweep.json --gcode-in part.gcode --gcode-out "

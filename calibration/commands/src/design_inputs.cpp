@@ -255,6 +255,35 @@ RheoDesignInput read_rheo_results(const json& res, const std::string& path) {
   return in;
 }
 
+/// One model value: a number, or a fitted parameter whose value is taken; required.
+double thermal_value(const json& model, const char* key, const std::string& path, bool required = true) {
+  const json& j = value_at_or_null(model, json::json_pointer(std::string("/") + key));
+  const json& v = j.is_object() ? value_at_or_null(j, "/value"_json_pointer) : j;
+  if (v.is_null() && !required) return 0.0;
+  if (!v.is_number())
+    throw InputError(fmt::format("results.thermal_model.{} must be a number (or {{\"value\": number}})", key), path);
+  return v.get<double>();
+}
+
+ThermalDesignInput read_thermal_results(const json& res, const std::string& path) {
+  // `tunekit thermal` writes results.thermal_model (calibration/analyses thermal_command.cpp).
+  const json& tm = value_at_or_null(res, "/thermal_model"_json_pointer);
+  const json& m = tm.is_object() ? tm : value_at_or_null(res, "/model"_json_pointer);
+  if (!m.is_object()) throw InputError("thermal results without a 'thermal_model' object", path);
+  ThermalDesignInput in;
+  in.origin = path;
+  auto& t = in.model;
+  t.heater_power_w = thermal_value(m, "heater_power_w", path);
+  t.block_heat_capacity_j_per_k = thermal_value(m, "block_heat_capacity_j_per_k", path);
+  t.sensor_responsiveness_per_s = thermal_value(m, "sensor_responsiveness_per_s", path);
+  t.ambient_transfer_w_per_k = thermal_value(m, "ambient_transfer_w_per_k", path);
+  t.fan_transfer_w_per_k = thermal_value(m, "fan_transfer_w_per_k", path);
+  t.filament_heat_capacity_j_per_k_mm = thermal_value(m, "filament_heat_capacity_j_per_k_mm", path, false);
+  t.ambient_c =
+      value_at_or_null(m, "/ambient_c"_json_pointer).is_null() ? t.ambient_c : thermal_value(m, "ambient_c", path);
+  return in;
+}
+
 void read_one_results_file(const std::string& path, DesignInputs& out) {
   std::string bytes;
   const json j = read_results_json(path, &bytes);
@@ -267,7 +296,10 @@ void read_one_results_file(const std::string& path, DesignInputs& out) {
   else if (cmd == "freq") out.freq = read_freq_results(res, path);
   else if (cmd == "shaper") read_shaper_results(res, path, out);
   else if (cmd == "rheo") out.rheo = read_rheo_results(res, path);
-  else throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper or rheo)", cmd), path);
+  else if (cmd == "thermal") out.thermal = read_thermal_results(res, path);
+  else
+    throw InputError(fmt::format("results of '{}' cannot be exported (step, freq, shaper, rheo or thermal)", cmd),
+                     path);
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "export_design.hpp"
+#include "export_thermal.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/commands/design_inputs.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
@@ -227,7 +228,7 @@ void finish_settings(const ExportOptions& a, const DesignInputs& d,
     if (!a.shaper_z.empty()) shapers["z"] = parse_shaper_arg(a.shaper_z, "z");
     settings.shapers = shapers;
   }
-  if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty()) {
+  if (!settings.pa_k_s && !settings.pa_smooth_s && settings.shapers.empty() && !settings.thermal) {
     if (!d.unnamed_axes.empty()) throw InputError("nothing to export; " + d.unnamed_axes.front());
     if (d.rheo && !a.no_pa)
       throw InputError(
@@ -235,7 +236,9 @@ void finish_settings(const ExportOptions& a, const DesignInputs& d,
           "tau itself: give it beside the results of 'tunekit step' or 'freq' (export step.json rheo.json), which "
           "size the advance, or set the advance with --pa-k",
           d.rheo->origin);
-    throw InputError("nothing to export: give results of 'tunekit step', 'freq' or 'shaper', or --pa-k / --shaper-x");
+    throw InputError(
+        "nothing to export: give results of 'tunekit step', 'freq', 'shaper' or 'thermal', or --pa-k / --shaper-x / "
+        "--thermal-model");
   }
   check_plausible(settings);
 }
@@ -252,6 +255,11 @@ nlohmann::json export_options_json(const ExportOptions& a, firmware::ExportFirmw
           {"shaper_z", a.shaper_z},
           {"no_pa", a.no_pa},
           {"no_shaper", a.no_shaper},
+          {"thermal_model", a.thermal_model},
+          {"no_thermal", a.no_thermal},
+          {"heater", a.heater},
+          {"kalico_pid", a.kalico_pid},
+          {"thermal_loop_delay_s", a.thermal_loop_delay},
           {"write", a.write}};
 }
 
@@ -373,6 +381,8 @@ void fill_results(const ExportOptions& a, const export_design::LiquefierInputs& 
     if (rheology.is_object()) plot.rheology = flow_rheology_from_json(rheology);
     render_figure(flow_advance_figure(plot), a.plot_out);
   }
+  if (outcome.settings.thermal)
+    res["thermal"] = export_thermal::thermal_results_json(outcome.firmware, *outcome.settings.thermal);
   res["export"] = outcome.change.to_json();
   outcome.schedule_gcode =
       design ? firmware::advance_schedule_gcode(outcome.firmware, design->schedule, outcome.settings) : std::string();
@@ -400,6 +410,7 @@ ExportOutcome compute_export(const ExportOptions& a, const DesignInputs& inputs)
   export_design::apply_machine_profile(a, li, env);
   set_extruder(a, fw, outcome.settings);
   outcome.settings.change_note = change_note(a, inputs);
+  outcome.settings.thermal = export_thermal::thermal_settings(a, inputs);
   const nlohmann::json rheology = export_design::design_advance(a, li, outcome);
   outcome.pa_k_ci95 = export_design::advance_interval(li, outcome);
   finish_settings(a, inputs, std::move(shapers), outcome);

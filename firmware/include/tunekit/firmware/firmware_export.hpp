@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tunekit/firmware/marlin_m493.hpp"
+#include "tunekit/firmware/thermal_export.hpp"
 #include "tunekit/design/pressure_advance.hpp"
 
 namespace tunekit::firmware {
@@ -75,6 +76,9 @@ struct CompensatorSettings {
   /// The letters of that M493 (marlin_m493.hpp: the form its report took); default the
   /// 2024-2025 axis_named form: S1, X/Y shaper 1-8, A/B frequency, I/J damping, P1 K advance.
   M493Syntax marlin_m493;
+  /// The hot end's thermal model, written as the firmware's temperature control
+  /// (thermal_export.hpp): Marlin's MPC, Kalico's MPC, Klipper's PID, RepRapFirmware's M307.
+  std::optional<ThermalExport> thermal;
   /// Replaces the trailing comment of a line whose value changes (the old comment described
   /// the old value), e.g. "tunekit 2026-01-31: from step.json"; empty: comments are kept.
   std::string change_note;

@@ -20,6 +20,7 @@
 #include "tunekit/firmware/firmware_export.hpp"
 #include "tunekit/fitting/fit_result.hpp"
 #include "tunekit/design/flow_advance.hpp"
+#include "tunekit/ident/thermal_model.hpp"
 
 namespace tunekit::calibration {
 
@@ -108,11 +109,19 @@ struct RheoDesignInput {
   double reference_flow_mm3_s = fitting::kNaN;
 };
 
+/// From `tunekit thermal`: the hot end's thermal model (results.thermal_model, one key per field of
+/// ident::ThermalModel, each a number or a fitted parameter {value, stderr, ci95}).
+struct ThermalDesignInput {
+  std::string origin;
+  ident::ThermalModel model;
+};
+
 struct DesignInputs {
   std::optional<StepDesignInput> step;
   std::optional<FreqDesignInput> freq;
   std::map<std::string, AxisShaperInput> axes;  ///< "x", "y"
   std::optional<RheoDesignInput> rheo;
+  std::optional<ThermalDesignInput> thermal;
   std::vector<std::string> origins;       ///< every input in the order given (files: their paths)
   std::vector<InputDigest> files;         ///< files read: path, SHA-256 and size of the bytes read
   std::vector<std::string> warnings;      ///< inputs that cannot be exported (a z shaper, an unnamed axis)

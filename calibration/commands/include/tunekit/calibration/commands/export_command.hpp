@@ -57,6 +57,13 @@ struct ExportOptions {
   double hysteresis = 0.10;           ///< relative change of K before the post-processor writes a new one
   std::string plot_out;               ///< the flow-dependent advance figure (SVG or PNG)
   std::string orca_in, orca_out, orca_name = "tunekit flow-dependent advance";
+  /// The hot end's thermal model P:C:R:A:F[:H] (W, J/K, 1/s, W/K, W/K, J/(K mm)) instead of the
+  /// results of `tunekit thermal`; written as Marlin's or Kalico's MPC, Klipper's PID, RRF's M307.
+  std::string thermal_model;
+  bool no_thermal = false;          ///< leave the temperature control alone
+  int heater = 1;                   ///< RepRapFirmware heater number (M307 H)
+  bool kalico_pid = false;          ///< Kalico: a PID designed from the model instead of its MPC
+  double thermal_loop_delay = 0.8;  ///< s: the control loop's own delay in the PID design and RRF's D
 };
 
 struct ExportOutcome {
