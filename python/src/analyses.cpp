@@ -86,6 +86,8 @@ std::vector<FitAt> nozzle_fits(const NozzleOutcome& o) {
   return o.fit ? std::vector<FitAt>{{"", &o.fit->fit}} : std::vector<FitAt>{};
 }
 
+std::vector<FitAt> thermal_fits(const ThermalOutcome& o) { return {{"", &o.fit.fit}}; }
+
 /// step on a table already in memory: `csv` is the text formats/csv reads, named `name`.
 void bind_step_in_memory(py::module_& m) {
   m.def("step_csv", [](const std::vector<std::string>& positional, const std::vector<KeywordArgument>& keywords,
@@ -112,6 +114,7 @@ void bind_analyses(py::module_& m) {
   bind_analysis(m, "shaper", cli::add_shaper_command, compute_shaper, no_fits<ShaperOutcome>);
   bind_analysis(m, "belts", cli::add_belts_command, compute_belts, no_fits<BeltsOutcome>);
   bind_analysis(m, "delta", cli::add_delta_command, compute_delta, no_fits<DeltaOutcome>);
+  bind_analysis(m, "thermal", cli::add_thermal_command, compute_thermal, thermal_fits);
   bind_analysis(
       m, "linewidth", cli::add_linewidth_command,
       [](const LinewidthOptions& o) {

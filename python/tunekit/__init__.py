@@ -26,7 +26,7 @@ from ._tunekit import FitError, MachineError  # noqa: F401 (the package's except
 __version__ = _tunekit.__version__
 
 __all__ = ["FitError", "MachineError", "Param", "Fit", "Result", "ExportResult", "step", "freq", "rheo", "nozzle",
-           "resonance", "shaper", "belts", "linewidth", "overshoot", "delta", "export", "history_list",
+           "resonance", "shaper", "belts", "linewidth", "overshoot", "delta", "thermal", "export", "history_list",
            "history_show", "history_trend", "history_records"]
 
 
@@ -198,6 +198,7 @@ belts = _analysis("belts", "Two belts compared from a pluck recording of each: b
 linewidth = _analysis("linewidth", "Line-width profiles from photos of printed lines: linewidth(*images, ...)")
 overshoot = _analysis("overshoot", "Axis overshoot and settling at corners: overshoot(run_or_csv, ...)")
 delta = _analysis("delta", "Delta printer geometry from probe heights: delta(file, ...)")
+thermal = _analysis("thermal", "The hot end's thermal model from a thermal record or a klippy.log: thermal(file, ...)")
 
 
 def export(*results, origins=None, **options):

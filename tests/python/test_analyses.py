@@ -34,6 +34,7 @@ CASES = [
     ("shaper", [dataset("klipper_sweeps/inputshaper_20250509_131744_axis_X.stdata")], dict(max_smoothing=0.2)),
     ("belts", [dataset("belts/adxl345-belt_A_1_cut.csv"), dataset("belts/adxl345-belt_B_1_cut.csv")], {}),
     ("delta", [dataset("delta/probes_simulated.csv")], dict(radius=105, rod=215, height=250, factors=6)),
+    ("thermal", [dataset("thermal/klippy_cetus3d/klippy-heatup.log")], dict(until=300.0)),
 ]
 
 

@@ -10,6 +10,8 @@
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
 #include "tunekit/formats/csv.hpp"
+#include "tunekit/formats/heater_log.hpp"
+#include "tunekit/ident/heater_log_record.hpp"
 
 namespace tunekit::calibration {
 namespace {
@@ -45,7 +47,26 @@ nlohmann::json model_json(const ident::ThermalModel& m) {
           {"ambient_c", m.ambient_c}};
 }
 
+/// The record cut to its first `until_s` seconds (NaN: unchanged). InputError when nothing is left.
+void keep_first_seconds(ident::ThermalRecord& r, double until_s) {
+  if (std::isnan(until_s)) return;
+  std::size_t n = 0;
+  while (n < r.t_s.size() && r.t_s[n] - r.t_s.front() <= until_s) ++n;
+  if (n < 2) throw InputError(fmt::format("--until {:g} s leaves fewer than two samples of the record", until_s));
+  for (auto* v : {&r.t_s, &r.temp_c, &r.heater_duty, &r.fan_duty, &r.feed_mm_s, &r.target_c})
+    if (v->size() > n) v->resize(n);
+}
+
 }  // namespace
+
+bool looks_like_klippy_log(std::string_view bytes) {
+  return bytes.rfind("Stats ", 0) == 0 || bytes.find("\nStats ") != std::string_view::npos;
+}
+
+ident::ThermalRecord read_klippy_thermal_record(std::string_view bytes, const std::string& heater) {
+  const auto log = formats::read_klippy_heater_log(bytes, heater);
+  return ident::thermal_record_from_heater_log(log, ident::heated_run(log));
+}
 
 ident::ThermalRecord read_thermal_csv(const std::string& path, std::string_view bytes) {
   formats::CsvOptions co;
@@ -76,7 +97,10 @@ ThermalOutcome compute_thermal(const ThermalOptions& o) {
   out.options = o;
   const std::string bytes = read_file_bytes(o.file);
   out.input = input_digest(o.file, bytes);
-  out.record = read_thermal_csv(o.file, bytes);
+  out.format = looks_like_klippy_log(bytes) ? "klippy.log" : "csv";
+  out.record =
+      out.format == "csv" ? read_thermal_csv(o.file, bytes) : read_klippy_thermal_record(bytes, o.heater);
+  keep_first_seconds(out.record, o.until_s);
   ident::ThermalFitOptions fo = o.fit;
   out.held_out_source = "option";
   if (std::isnan(fo.held_out_from_s)) {
@@ -95,7 +119,10 @@ Envelope to_envelope(const ThermalOutcome& o) {
       {{"heater_power_w", o.options.fit.heater_power_w},
        {"held_out_from_s", std::isnan(o.options.fit.held_out_from_s) ? nlohmann::json(nullptr)
                                                                      : nlohmann::json(o.options.fit.held_out_from_s)},
-       {"held_out_source", o.held_out_source}});
+       {"held_out_source", o.held_out_source},
+       {"format", o.format},
+       {"heater", o.options.heater},
+       {"until_s", std::isnan(o.options.until_s) ? nlohmann::json(nullptr) : nlohmann::json(o.options.until_s)}});
   add_input(env, o.input);
   auto& res = env.results();
   res = fitting::to_json(f.fit);

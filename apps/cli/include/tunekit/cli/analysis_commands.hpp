@@ -17,6 +17,7 @@
 #include "tunekit/calibration/analyses/rheo_command.hpp"
 #include "tunekit/calibration/analyses/shaper_command.hpp"
 #include "tunekit/calibration/analyses/step_command.hpp"
+#include "tunekit/calibration/analyses/thermal_command.hpp"
 #include "tunekit/calibration/commands/export_command.hpp"
 #include "tunekit/calibration/results/context.hpp"
 
@@ -34,6 +35,7 @@ CLI::App* add_belts_command(CLI::App& app, calibration::BeltsOptions& o, OutputO
 CLI::App* add_linewidth_command(CLI::App& app, calibration::LinewidthOptions& o, OutputOptions& output);
 CLI::App* add_overshoot_command(CLI::App& app, calibration::OvershootOptions& o, OutputOptions& output);
 CLI::App* add_delta_command(CLI::App& app, calibration::DeltaOptions& o, OutputOptions& output);
+CLI::App* add_thermal_command(CLI::App& app, calibration::ThermalOptions& o, OutputOptions& output);
 CLI::App* add_export_command(CLI::App& app, calibration::ExportOptions& o, OutputOptions& output);
 
 }  // namespace tunekit::cli

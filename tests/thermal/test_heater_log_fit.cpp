@@ -2,16 +2,13 @@
 // (klippy/extras/heaters.py Heater.stats: "extruder: target=%.0f temp=%.1f pwm=%.3f", once a
 // second, statistics.py "Stats %.1f:"), read into a thermal record and fitted by the thermal fit;
 // the residuals are those of the temperature Klipper printed (0.1 degC steps) against the model.
-//
-// Pending: it needs ident::fit_thermal_record (ident/thermal_fit.hpp, the thermal identification
-// being written beside this reader; it passed against that fit as it stood on its branch).
-// Enable at merge by renaming to .cpp.
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
 #include <string>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
 #include "tunekit/formats/heater_log.hpp"
@@ -117,4 +114,22 @@ TEST_CASE("The real klippy.log heat-up (datasets/thermal/klippy_cetus3d) is fitt
   CHECK(fit.model.sensor_responsiveness_per_s < 0.3);
   CHECK(fit.model.block_heat_capacity_j_per_k > 3.0);
   CHECK(fit.model.block_heat_capacity_j_per_k < 20.0);
+}
+
+TEST_CASE("tunekit thermal reads a klippy.log as it is and shows the real heat-up's fit and residuals") {
+  const auto log = tunekit::test::dataset("thermal/klippy_cetus3d/klippy-heatup.log");
+  const auto r = tunekit::test::run_cli({"thermal", log, "--until", "300", "--json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto j = nlohmann::json::parse(r.out);
+  CHECK(j["options"]["format"] == "klippy.log");
+  CHECK(j["options"]["heater"] == "extruder");
+  const auto& res = j["results"];
+  CHECK(res["diagnostics"]["rms"].get<double>() < 2.5);
+  CHECK(res["thermal_model"]["sensor_responsiveness_per_s"].get<double>() > 0.03);
+  const auto text = tunekit::test::run_cli({"thermal", log, "--until", "300"});
+  REQUIRE(text.code == 0);
+  CHECK(text.out.find("residuals: rms") != std::string::npos);
+  const auto missing = tunekit::test::run_cli({"thermal", log, "--heater", "heater_bed_2"});
+  CHECK(missing.code == 2);
 }
