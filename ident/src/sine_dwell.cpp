@@ -17,14 +17,14 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = 180.0 / kPi;
 
-nlohmann::json param_json(const fitting::Param& p) {
+nlohmann::json dwell_param_json(const fitting::Param& p) {
   return {{"value", p.value}, {"stderr", p.std_error}, {"ci95", {p.ci95_lo, p.ci95_hi}}, {"unit", p.unit}};
 }
 
 nlohmann::json sine_json(const fitting::FitResult& f) {
-  return {{"amplitude", param_json(f.param("amplitude"))},
-          {"phase_deg", param_json(f.param("phase_deg"))},
-          {"offset", param_json(f.param("offset"))},
+  return {{"amplitude", dwell_param_json(f.param("amplitude"))},
+          {"phase_deg", dwell_param_json(f.param("phase_deg"))},
+          {"offset", dwell_param_json(f.param("offset"))},
           {"model", f.model},
           {"diagnostics", fitting::to_json(f.diagnostics)}};
 }
@@ -146,8 +146,8 @@ nlohmann::json to_json(const SineDwell& s) {
   nlohmann::json j{{"freq_hz", s.freq_hz}, {"output", sine_json(s.output)}};
   if (s.input) {
     j["input"] = sine_json(*s.input);
-    j["gain"] = param_json(s.gain);
-    j["phase_lag_deg"] = param_json(s.phase_lag_deg);
+    j["gain"] = dwell_param_json(s.gain);
+    j["phase_lag_deg"] = dwell_param_json(s.phase_lag_deg);
   }
   return j;
 }
