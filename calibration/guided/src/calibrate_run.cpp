@@ -25,6 +25,27 @@ StepOptions load_cell_step_options(const std::string& csv, const std::string& fe
   return so;
 }
 
+protocols::LiquefierPrior liquefier_prior_from(const protocols::LiquefierPrior& given, const ident::WholeRecordModel& m,
+                                               const std::string& what) {
+  protocols::LiquefierPrior prior = given;
+  const auto& f = m.model.fit;
+  prior.tau_ref_s = f.value("tau_ref_s");
+  prior.ref_feed_mm_s = m.model.reference_input;
+  prior.b = f.value("b");
+  prior.theta_s = f.value("theta_s");
+  if (m.model.sensor == fitting::LiquefierSensor::flow) prior.gain_N_per_mm_s = f.value("g");
+  prior.basis =
+      fmt::format("{} (tau {} s at {} mm/s, b {}, theta {} s)", what, display_number(prior.tau_ref_s),
+                  display_number(prior.ref_feed_mm_s), display_number(prior.b), display_number(prior.theta_s));
+  return prior;
+}
+
+protocols::LiquefierPrior measured_liquefier_prior(const CalibrationPlan& plan,
+                                                   const std::optional<StepOutcome>& step) {
+  if (!step || !step->whole_record.model) return plan.liquefier_prior;
+  return liquefier_prior_from(plan.liquefier_prior, *step->whole_record.model, "the flow sweep's whole-record model");
+}
+
 ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) {
   // A stop signal between two experiments stops the calibration too (stop_signals.hpp).
   const protocols::StopSignals stop_signals;
@@ -49,6 +70,15 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
     progress.begin("run " + e.name, plan.sim ? std::max(1.0, estimate_s / 4) : estimate_s);
     protocols::RunOptions run_options = experiment_run_options(plan, e, out.chirp, false);
     run_options.keep_heaters = plan.options.keep_heaters;
+    // Predicted before it runs, from the experiment as it will run (the chirp sized again).
+    const protocols::RunOptions dry = [&] {
+      auto o = run_options;
+      o.dry_run = true;
+      return o;
+    }();
+    if (const auto predicted = predict_experiment(plan, protocols::run_experiment(dry).experiment,
+                                                  measured_liquefier_prior(plan, out.liquefier_step)))
+      out.predicted[e.name] = *predicted;
     const auto& run = out.runs[e.name] = protocols::run_experiment(run_options);
     progress.end(run.status);
     // The chirp as run: the protocol sized its staircase step from the chirp's end (never shorter
