@@ -64,7 +64,9 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
         if (sized != tau)
           out.chirp_basis += fmt::format(", held at {} s, the end of the range checked", display_number(sized));
         // The dry run timed the chirp of the plan; this one is longer or shorter by the difference.
-        estimate_s += out.chirp.duration_s - plan.chirp.duration_s;
+        if (!e.params.count("duration_s"))
+          estimate_s += designed_params(plan, e, out.chirp).params.at("duration_s") -
+                        designed_params(plan, e, plan.chirp).params.at("duration_s");
       }
     }
     progress.begin("run " + e.name, plan.sim ? std::max(1.0, estimate_s / 4) : estimate_s);
@@ -83,8 +85,10 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
     progress.end(run.status);
     // The chirp as run: the protocol sized its staircase step from the chirp's end (never shorter
     // than the machine's), which sets the band the plan describes.
-    if (e.protocol == "liquefier-chirp")
+    if (e.protocol == "liquefier-chirp") {
       out.chirp = protocols::plan_liquefier_chirp(out.chirp.expected_tau_s, run.experiment.params.at("segment_s"));
+      out.chirp.duration_s = run.experiment.params.at("duration_s");  // the design's (experiment_design.hpp)
+    }
     if (e.name == "liquefier-step") {
       const auto track = run.files.find(protocols::RunFile::feed_track);
       const auto options = load_cell_step_options(run.files.at(protocols::RunFile::load_cell),
