@@ -9,17 +9,17 @@
 //     shaper is scored against the measured spectrum, which carries that shape: held at the
 //     axis' limit over the band instead, the simulated printer's X axis got a 29 Hz shaper for
 //     its 48 Hz mode), with accel_per_hz as large as the axis' limit allows at the sweep's end;
-//     the rate is kDesignedSweepRate_hz_s, twice Klipper's 2 Hz/s (on a printer whose limit
-//     allows no more than Klipper's accel_per_hz, the intervals widen by sqrt(2)).
+//     the rate is kDesignedSweepRate_hz_s, 3.5 times Klipper's 2 Hz/s (on a printer whose limit
+//     allows no more than Klipper's accel_per_hz, the intervals widen by sqrt(3.5)).
 //   flow sweep: a step's time constant and dead time are told by its transient, a few time
-//     constants long; the gain by the steady holds (the simulated printer's gain interval widens
-//     by about 1.4 from holds of 3 s to 1.5 s while tau's and b's barely move). The hold is sized from the slowest time
+//     constants long; the gain by the steady holds. The hold is sized from the slowest time
 //     constant the prior allows (its value at the lowest flow times kPriorTauMargin, the spread
 //     of desktop liquefiers) with kHoldTaus of them: the transient, then steady force for the
-//     gain.
+//     gain. Half as many predict the same tau and b, but over drawn plants the whole-record
+//     tau's interval then covered its truth on 88 % (docs/calibrate.md): the holds stay long.
 //   chirp: the whole-record fit's information on tau grows with the number of corner periods the
 //     chirp spends near the corner; kDesignedChirp_s holds dozens of them for any liquefier whose
-//     corner lies above 1 Hz, and at least kChirpCornerPeriods otherwise.
+//     corner lies above 2 Hz, and at least kChirpCornerPeriods (the protocol's own rule) otherwise.
 // A budget (s of machine time for all experiments) scales the variable parts of all three (the
 // sweeps' time, the holds, the chirp) by one factor; the intervals widen by about its inverse
 // square root, which the predictions state before anything runs.
@@ -32,13 +32,13 @@
 
 namespace tunekit::protocols {
 
-inline constexpr double kDesignedSweepRate_hz_s = 4;  ///< the axis sweep's rate, Hz/s
+inline constexpr double kDesignedSweepRate_hz_s = 7;  ///< the axis sweep's rate, Hz/s
 inline constexpr double kMaxSweepRate_hz_s = 10;      ///< the fastest a budget may ask, Hz/s
 inline constexpr double kPriorTauMargin = 3;          ///< slowest plausible tau over the prior's
-inline constexpr double kHoldTaus = 10;               ///< flow-sweep hold, in slowest plausible taus
+inline constexpr double kHoldTaus = 20;               ///< flow-sweep hold, in slowest plausible taus
 inline constexpr double kMinHoldTaus = 3;             ///< the shortest hold a budget may ask
-inline constexpr double kDesignedChirp_s = 12;        ///< chirp duration, s
-inline constexpr double kChirpCornerPeriods = 10;     ///< at least this many corner periods
+inline constexpr double kDesignedChirp_s = 10;        ///< chirp duration, s
+inline constexpr double kChirpCornerPeriods = 20;     ///< at least this many corner periods
 
 /// The designed parameters of calibrate's experiments at a time `scale` (1: the design; below
 /// 1: the variable parts shortened by that factor for a budget), as protocol parameter overrides.
