@@ -60,10 +60,11 @@ DesignedParams design_flow_sweep(const machine::MachineProfile& profile, const L
   const double taus = std::max(kMinHoldTaus, kHoldTaus * scale);
   d.params["expected_tau_s"] = slowest;
   d.params["hold_taus"] = taus;
+  d.params["levels"] = kFlowLevels;
   d.why = fmt::format(
-      "held {:.3g} s at each level: {:.3g} of the slowest time constant expected at the lowest flow ({:.3g} s, "
+      "{} levels held {:.3g} s each: {:.3g} of the slowest time constant expected at the lowest flow ({:.3g} s, "
       "{:g} times the prior's {:.3g} s)",
-      taus * slowest, taus, slowest, kPriorTauMargin, tau);
+      kFlowLevels, taus * slowest, taus, slowest, kPriorTauMargin, tau);
   return d;
 }
 
