@@ -11,6 +11,7 @@
 #include "test_support.hpp"
 #include "tunekit/formats/csv.hpp"
 #include "tunekit/core/file_bytes.hpp"
+#include "tunekit/protocols/experiment_design.hpp"
 
 using tunekit::read_file_bytes;
 
@@ -29,7 +30,8 @@ TEST_CASE("calibrate's flow sweep on the physics liquefier recovers the true tau
   // The linearised time constant of C dP/dt = A u - (P/k)^(1/n) at the flow Q.
   auto true_tau = [&](double q) { return C * k * n * std::pow(q, n - 1); };
 
-  // The protocol that ran: 6 levels up to 90 % of the profile's max_flow_mm3_s (15 mm^3/s).
+  // The protocol that ran: the design's levels (experiment_design.hpp) up to 90 % of the
+  // profile's max_flow_mm3_s (15 mm^3/s).
   const auto& levels = step.at("operating_points");
   int both = 0;
   double qmax = 0;
@@ -43,7 +45,7 @@ TEST_CASE("calibrate's flow sweep on the physics liquefier recovers the true tau
     INFO("flow " << q << " mm^3/s: tau " << tau << " s, truth " << true_tau(q) << " s");
     CHECK(tau == Approx(true_tau(q)).epsilon(0.05));
   }
-  CHECK(both == 6);
+  CHECK(both == tunekit::protocols::kFlowLevels);
   CHECK(qmax == Approx(13.5).epsilon(0.02));
   // The trend's exponent: tau = C k n Q^(n-1), so b = n - 1.
   const auto& b = step.at("trend").at("tau_s");

@@ -54,6 +54,11 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
                   "accelerometer, load_cell or camera (repeatable)");
   sub->add_flag("--dry-run", a->dry_run,
                 "Plan every experiment for the profile's limits, check it, print the plan and stop (nothing is sent)");
+  sub->add_option("--budget-s", a->budget_s,
+                  "Machine time (s) all experiments may take together; below the design's own the sweeps run faster "
+                  "and the holds and the chirp are shorter, and the plan (--dry-run) says how much wider each "
+                  "predicted interval becomes")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--port", a->port, "Serial device, pseudo-terminal or unix:SOCKET of a real machine");
   sub->add_option("--out", a->out_dir, "Run directory (default: runs/calibrate-UTCSTAMP)");
   sub->add_option("-f,--firmware", a->firmware,

@@ -34,6 +34,21 @@ void strip_prefix(nlohmann::json& j, const std::string& prefix) {
 
 namespace {
 
+/// "tau_ref_s +-0.61 %, b +-0.0066" (a relative half-width, or an absolute one for a quantity
+/// near 0), each with the unbudgeted design's in brackets when there is one.
+std::string prediction_text(const protocols::ExperimentPrediction& p,
+                            const std::optional<protocols::ExperimentPrediction>& unbudgeted) {
+  const auto one = [](const protocols::PredictedInterval& i) {
+    return i.quantity == "b" ? fmt::format("+-{:.2g}", i.half_width) : fmt::format("+-{:.2g} %", 100 * i.relative());
+  };
+  std::string text;
+  for (const auto& i : p.intervals) {
+    text += fmt::format("{}{} {}", text.empty() ? "" : ", ", i.quantity, one(i));
+    if (const auto* u = unbudgeted ? unbudgeted->find(i.quantity) : nullptr) text += fmt::format(" [{}]", one(*u));
+  }
+  return text;
+}
+
 /// calibrate --dry-run: the plan as checked (each experiment's protocol, parameters with the
 /// reasons of those derived from the machine, and machine time), as JSON or text.
 int print_plan(const CalibrationPlan& plan, CliContext& ctx) {
@@ -43,6 +58,8 @@ int print_plan(const CalibrationPlan& plan, CliContext& ctx) {
   for (const auto& e : plan.experiments) {
     nlohmann::json j = e.checked.to_json();
     j["name"] = e.name;
+    if (e.predicted) j["predicted"] = e.predicted->to_json();
+    if (e.unbudgeted) j["predicted_without_budget"] = e.unbudgeted->to_json();
     exps.push_back(j);
     total_s += e.estimated_s;
   }
@@ -51,7 +68,8 @@ int print_plan(const CalibrationPlan& plan, CliContext& ctx) {
                    {"profile_source", plan.profile.path},
                    {"firmware", plan.options.firmware},
                    {"experiments", exps},
-                   {"machine_time_s", total_s}};
+                   {"machine_time_s", total_s},
+                   {"design_scale", plan.design_scale}};
   if (plan.output.json || !plan.output.output_path.empty()) return emit(env, plan.output, ctx);
   ctx.out << fmt::format("calibrate plan for {} ({}), checked against its limits; nothing was sent\n",
                          plan.profile.profile.name, plan.options.firmware);
@@ -60,7 +78,17 @@ int print_plan(const CalibrationPlan& plan, CliContext& ctx) {
     if (const auto it = e.checked.excitation.find("machine_defaults"); it != e.checked.excitation.end())
       for (const auto& [name, why] : it->items())
         ctx.out << fmt::format("      {} = {:g}: {}\n", name, e.checked.params.at(name), why.get<std::string>());
+    if (const auto design = designed_params(plan, e, plan.chirp); !design.why.empty())
+      ctx.out << fmt::format("      design: {}\n", design.why);
+    if (e.predicted)
+      ctx.out << fmt::format("      predicted 95 % intervals: {}\n", prediction_text(*e.predicted, e.unbudgeted));
   }
+  if (plan.options.budget_s > 0)
+    ctx.out << fmt::format("  budget {:g} s: {}\n", plan.options.budget_s,
+                           plan.design_scale < 1 ? fmt::format("the sweeps, holds and chirp at {:.2f} of the design's "
+                                                               "time (each interval's width without the budget in [])",
+                                                               plan.design_scale)
+                                                 : std::string("the design fits it"));
   ctx.out << fmt::format("  total ~{:.1f} s of machine time ('tunekit run PROTOCOL --dry-run' prints its G-code)\n",
                          total_s);
   return 0;

@@ -17,6 +17,7 @@
 #include "tunekit/core/input_read_scope.hpp"
 #include "tunekit/core/text.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
+#include "tunekit/protocols/experiment_design.hpp"
 #include "tunekit/machine/profile_import.hpp"
 #include "tunekit/sim/builtin_profile.hpp"
 #include "tunekit/sim/sim_camera.hpp"
@@ -48,16 +49,16 @@ std::vector<PlannedExperiment> choose_experiments(const CalibrateArgs& a, const 
   if (!a.skip_liquefier && !camera_path) {
     // The step test is a flow sweep: every level reached from below and from above, so that tau,
     // K and theta are known per arrival level (the liquefier's dynamics change with the flow).
-    exps.push_back({"liquefier-step", "liquefier-flow-sweep", "", {}, 0, {}});
-    exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}, 0, {}});
+    exps.push_back({"liquefier-step", "liquefier-flow-sweep", "", {}, 0, {}, {}, {}});
+    exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}, 0, {}, {}, {}});
   }
   if (camera_path)
-    for (const auto& t : camera_tests(p.profile)) exps.push_back({t.name, t.protocol, "", t.params, 0, {}});
+    for (const auto& t : camera_tests(p.profile)) exps.push_back({t.name, t.protocol, "", t.params, 0, {}, {}, {}});
   if (!a.skip_axes) {
     if (!p.profile.sensors.accelerometer)
       throw InputError("the axis sweeps need an accelerometer ([sensors] accelerometer = true)", p.path);
-    exps.push_back({"axis-x", "axis-sweep", "x", {}, 0, {}});
-    exps.push_back({"axis-y", "axis-sweep", "y", {}, 0, {}});
+    exps.push_back({"axis-x", "axis-sweep", "x", {}, 0, {}, {}, {}});
+    exps.push_back({"axis-y", "axis-sweep", "y", {}, 0, {}, {}, {}});
   }
   if (exps.empty())
     throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given (and no --thermal)");
@@ -96,6 +97,12 @@ void apply_params(const std::vector<std::string>& params, std::vector<PlannedExp
 // twice Bellini's 0.45 s (a PEEK-class liquefier's) the chirp would only grow longer.
 constexpr double kChirpTauMin_s = 0.002;
 constexpr double kChirpTauMax_s = 2 * protocols::kLiteratureLiquefierTau_s;
+
+// The chirp's mean feed (the protocol's nominal 2 mm/s), where the prior's tau sizes the plan's chirp.
+constexpr double kChirpMeanFeed_mm_s = 2.0;
+// The shortest design a budget may ask for: the sweeps at their fastest rate, the holds at their
+// fewest time constants (experiment_design.hpp).
+constexpr double kShortestDesignScale = protocols::kDesignedSweepRate_hz_s / protocols::kMaxSweepRate_hz_s;
 
 // Each calibration keeps its own run directory: a used one is never written into again.
 std::string make_run_dir(const std::string& out_dir) {
@@ -168,7 +175,33 @@ std::vector<std::string> simulator_options(const CalibrateArgs& a) {
   return options;
 }
 
+// A real printer's sensors as the predictions assume them when nothing better is known: an
+// ADXL345 read at 3.2 kHz and a hobby load cell (docs/interval-coverage.md, `noisy`).
+constexpr double kTypicalAccelNoise_mm_s2 = 200;
+constexpr double kTypicalLoadCellNoise_N = 0.2;
+constexpr double kTypicalLoadCellRate_hz = 200;
+
+/// The priors the predicted intervals are made with: a desktop printer's typical plant, read by
+/// the simulated printer's own sensors (their noise and rates) or by typical ones.
+void set_priors(CalibrationPlan& plan, const sim::SimConfig& sim_config) {
+  const auto& sensors = plan.profile.profile.sensors;
+  plan.liquefier_prior =
+      plan.sim ? protocols::typical_liquefier_prior(sim_config.force_noise_N, sim_config.load_cell_rate_hz)
+               : protocols::typical_liquefier_prior(kTypicalLoadCellNoise_N, kTypicalLoadCellRate_hz);
+  plan.axis_prior = plan.sim ? protocols::typical_axis_prior(sim_config.accel_noise_mm_s2, sim_config.accel_rate_hz)
+                             : protocols::typical_axis_prior(kTypicalAccelNoise_mm_s2, sensors.accelerometer_rate_hz);
+}
+
 }  // namespace
+
+std::optional<protocols::ExperimentPrediction> predict_experiment(const CalibrationPlan& plan,
+                                                                  const protocols::Experiment& built,
+                                                                  const protocols::LiquefierPrior& liquefier) {
+  if (built.protocol == "axis-sweep") return protocols::predict_axis_sweep(built, plan.axis_prior);
+  if (built.protocol == "liquefier-flow-sweep" || built.protocol == "liquefier-chirp")
+    return protocols::predict_liquefier_record(built, liquefier);
+  return std::nullopt;
+}
 
 CalibrationPlan plan_calibration(const CalibrateArgs& given, const CalibrationProfile& profile, bool can_prompt) {
   CalibrationPlan plan;
@@ -202,26 +235,78 @@ CalibrationPlan plan_calibration(const CalibrateArgs& given, const CalibrationPr
                                              : sim::SimConfig::from_options(a.sim_options);
   if (plan.camera_path && cam.camera == "sim") plan.bed = std::make_shared<sim::SimPrintBed>(sim_config.seed);
   if (plan.sim) plan.simulator = simulated_machine(sim_config, plan.bed);
+  set_priors(plan, sim_config);
   check_plan(plan);
   return plan;
 }
 
-void check_plan(CalibrationPlan& plan) {
-  // The chirp is sized from the expected liquefier corner: the literature time constant until
-  // the step test has measured one (it runs first).
-  plan.chirp = protocols::plan_liquefier_chirp(protocols::kLiteratureLiquefierTau_s);
-  plan.chirp_basis = fmt::format("the literature time constant {} s", display_number(plan.chirp.expected_tau_s));
-  // Safety first: every protocol is built and checked against the limits before any byte is sent;
-  // the chirp also for the extremes of the time constants it may be sized from later.
+namespace {
+
+/// Every experiment built at the plan's design scale and checked against the limits (the chirp
+/// also for the extremes of the time constants it may be sized from later); their machine time.
+double build_and_check(CalibrationPlan& plan) {
+  double total_s = 0;
   for (auto& e : plan.experiments) {
     const auto built = protocols::run_experiment(experiment_run_options(plan, e, plan.chirp, true)).experiment;
     e.estimated_s = built.estimated_duration_s;
     e.checked = built;
+    e.predicted = predict_experiment(plan, built, plan.liquefier_prior);
+    total_s += e.estimated_s;
     if (e.protocol != "liquefier-chirp") continue;
     plan.chirp = protocols::plan_liquefier_chirp(plan.chirp.expected_tau_s, built.params.at("segment_s"));
     for (const double tau : {kChirpTauMin_s, kChirpTauMax_s})
       protocols::run_experiment(experiment_run_options(plan, e, protocols::plan_liquefier_chirp(tau), true));
   }
+  return total_s;
+}
+
+/// --budget-s: the largest design scale whose plan takes at most the budget (bisection; the
+/// plan's machine time rises with the scale). InputError when even the shortest plan exceeds it.
+void fit_budget(CalibrationPlan& plan, double budget_s) {
+  plan.design_scale = kShortestDesignScale;
+  const double shortest = build_and_check(plan);
+  if (shortest > budget_s)
+    throw InputError(fmt::format(
+        "--budget-s {:g}: the shortest plan these experiments allow takes {:.1f} s of machine time (the sweeps at "
+        "{:g} Hz/s, holds of {:g} time constants); give at least that, or leave experiments out",
+        budget_s, shortest, protocols::kMaxSweepRate_hz_s, protocols::kMinHoldTaus));
+  double lo = kShortestDesignScale, hi = 1;
+  for (int i = 0; i < 12; ++i) {
+    plan.design_scale = 0.5 * (lo + hi);
+    (build_and_check(plan) <= budget_s ? lo : hi) = plan.design_scale;
+  }
+  plan.design_scale = lo;
+}
+
+}  // namespace
+
+void check_plan(CalibrationPlan& plan) {
+  // The chirp is sized from the expected liquefier corner: the prior's time constant at the
+  // chirp's mean feed until the step test has measured one (it runs first).
+  const auto& prior = plan.liquefier_prior;
+  plan.chirp = protocols::plan_liquefier_chirp(
+      clamped_chirp_tau_s(prior.tau_ref_s * std::pow(kChirpMeanFeed_mm_s / prior.ref_feed_mm_s, prior.b)));
+  plan.chirp_basis = fmt::format("the prior's time constant {} s", display_number(plan.chirp.expected_tau_s));
+  // Safety first: every protocol is built and checked against the limits before any byte is sent.
+  plan.design_scale = 1;
+  const double total_s = build_and_check(plan);
+  const double budget = plan.options.budget_s;
+  if (budget > 0 && total_s > budget) {
+    // What the budget costs: the predicted intervals of the design without it, kept to compare.
+    for (auto& e : plan.experiments) e.unbudgeted = e.predicted;
+    fit_budget(plan, budget);
+    build_and_check(plan);
+  }
+}
+
+protocols::DesignedParams designed_params(const CalibrationPlan& plan, const PlannedExperiment& e,
+                                          const protocols::ChirpPlan& chirp) {
+  const auto& profile = plan.profile.profile;
+  if (e.protocol == "axis-sweep") return protocols::design_axis_sweep(profile, e.axis, plan.design_scale);
+  if (e.protocol == "liquefier-flow-sweep")
+    return protocols::design_flow_sweep(profile, plan.liquefier_prior, plan.design_scale);
+  if (e.protocol == "liquefier-chirp") return protocols::design_chirp(chirp.expected_tau_s, plan.design_scale);
+  return {};
 }
 
 protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const PlannedExperiment& e,
@@ -238,6 +323,9 @@ protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const 
   o.dry_run = dry;
   o.run_dir = plan.run_dir + "/" + e.name;
   o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
+  // The experiment's design (experiment_design.hpp) where --param did not set the parameter.
+  for (const auto& [name, value] : designed_params(plan, e, chirp).params)
+    if (!e.params.count(name)) o.params[name] = value;
   if (e.protocol == "liquefier-chirp") {
     // Sized from the time constant (the protocol's staircase step as long as the chirp's end
     // allows, never shorter than the machine's: chirp_plan.hpp, machine_defaults) ...

@@ -364,6 +364,94 @@ void strip_run_dir(CalibrationRecord& rec, const std::string& prefix) {
   strip_prefix(rec.details, prefix);
 }
 
+/// A fit's parameters as (estimate, 95 % half-width).
+std::map<std::string, std::pair<double, double>> half_widths(const fitting::FitResult& f) {
+  std::map<std::string, std::pair<double, double>> out;
+  for (const auto& p : f.params)
+    if (!p.fixed) out[p.name] = {p.value, 0.5 * (p.ci95_hi - p.ci95_lo)};
+  return out;
+}
+
+/// What one experiment achieved: each quantity's (estimate, 95 % half-width), and the prediction
+/// made at those estimates from the experiment as it ran (how well the information was
+/// computed, whatever the prior). Empty when its analysis has no such quantities.
+struct Achieved {
+  std::map<std::string, std::pair<double, double>> intervals;
+  std::optional<protocols::ExperimentPrediction> at_estimate;
+};
+
+Achieved achieved_by(const CalibrationPlan& plan, const PlannedExperiment& e, const protocols::Experiment& ran,
+                     const Identification& id) {
+  Achieved a;
+  const WholeRecordResult* record = e.protocol == "liquefier-flow-sweep" && id.step ? &id.step->whole_record
+                                    : e.protocol == "liquefier-chirp" && id.freq    ? &id.freq->whole_record
+                                                                                    : nullptr;
+  if (record && record->model) {
+    a.intervals = half_widths(record->model->model.fit);
+    a.at_estimate = protocols::predict_liquefier_record(
+        ran, liquefier_prior_from(plan.liquefier_prior, *record->model, "this experiment's whole-record model"));
+  }
+  if (e.protocol != "axis-sweep" || e.axis.empty()) return a;
+  const auto s = id.shapers.find(e.axis[0]);
+  const ShaperAxis* axis = s != id.shapers.end() ? s->second.axis(e.axis) : nullptr;
+  if (!axis || axis->resonance.modes.modes.empty()) return a;
+  const auto& m = axis->resonance.modes.modes[0];
+  a.intervals["freq_hz"] = {m.freq_hz, 0.5 * (m.freq_ci95_hi - m.freq_ci95_lo)};
+  a.intervals["zeta"] = {m.zeta, 0.5 * (m.zeta_ci95_hi - m.zeta_ci95_lo)};
+  protocols::AxisPrior prior = plan.axis_prior;
+  prior.freq_hz = m.freq_hz;
+  prior.zeta = m.zeta;
+  a.at_estimate = protocols::predict_axis_sweep(ran, prior);
+  return a;
+}
+
+/// Each quantity's achieved 95 % half-width beside the one predicted before the run and the one
+/// predicted at the estimates.
+nlohmann::json achieved_beside_predicted(const protocols::ExperimentPrediction& predicted, const Achieved& achieved) {
+  nlohmann::json q = nlohmann::json::object();
+  for (const auto& i : predicted.intervals) {
+    auto& j = q[i.quantity] = {{"predicted_half_width", i.half_width}, {"prior", i.value}};
+    const auto it = achieved.intervals.find(i.quantity);
+    if (it == achieved.intervals.end() || !std::isfinite(it->second.second)) continue;
+    j["achieved_half_width"] = it->second.second;
+    j["estimate"] = it->second.first;
+    j["achieved_over_predicted"] = it->second.second / i.half_width;
+    if (const auto* at = achieved.at_estimate ? achieved.at_estimate->find(i.quantity) : nullptr) {
+      j["predicted_at_estimate_half_width"] = at->half_width;
+      j["achieved_over_predicted_at_estimate"] = it->second.second / at->half_width;
+    }
+  }
+  return {{"quantities", q}, {"basis", predicted.basis}};
+}
+
+/// results.experiment_design: each experiment's machine time and its parameters' predicted and
+/// achieved intervals; a note line for the report with the ratio of the two.
+void add_design_check(RunRecord& r, const CalibrationPlan& plan, const ExperimentRuns& runs, const Identification& id) {
+  nlohmann::json exps = nlohmann::json::object();
+  std::string note;
+  double total_s = 0;
+  for (const auto& e : plan.experiments) {
+    const auto run = runs.runs.find(e.name);
+    if (run == runs.runs.end()) continue;
+    total_s += run->second.experiment.estimated_duration_s;
+    auto& j =
+        exps[e.name] = {{"protocol", e.protocol}, {"machine_time_s", run->second.experiment.estimated_duration_s}};
+    const auto p = runs.predicted.find(e.name);
+    if (p == runs.predicted.end()) continue;
+    j["predicted"] = achieved_beside_predicted(p->second, achieved_by(plan, e, run->second.experiment, id));
+    for (const auto& [q, v] : j["predicted"]["quantities"].items())
+      if (v.contains("achieved_over_predicted"))
+        note += fmt::format("{}{} {} {:.2f}", note.empty() ? "" : ", ", e.name, q,
+                            v["achieved_over_predicted"].get<double>());
+  }
+  r.details()["experiment_design"] = {{"experiments", exps}, {"machine_time_s", total_s}};
+  if (!note.empty())
+    r.rec.notes.push_back(
+        fmt::format("experiment design: {:.1f} s of machine time; each interval achieved over the "
+                    "one predicted before the run: {}",
+                    total_s, note));
+}
+
 RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, const Identification& id,
                        const CompensatorDesign& design) {
   RunRecord r;
@@ -387,6 +475,7 @@ RunRecord build_record(const CalibrationPlan& plan, const ExperimentRuns& runs, 
   add_axes(r, id);
   if (id.thermal) add_thermal(r, *id.thermal);
   add_compensators(r, design, plan.run_dir);
+  add_design_check(r, plan, runs, id);
   r.details()["reproduce"] = reproduce_json(id);
   strip_run_dir(r.rec, plan.run_dir + "/");
   write_record_results(r.rec, r.env);

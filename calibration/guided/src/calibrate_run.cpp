@@ -25,6 +25,27 @@ StepOptions load_cell_step_options(const std::string& csv, const std::string& fe
   return so;
 }
 
+protocols::LiquefierPrior liquefier_prior_from(const protocols::LiquefierPrior& given, const ident::WholeRecordModel& m,
+                                               const std::string& what) {
+  protocols::LiquefierPrior prior = given;
+  const auto& f = m.model.fit;
+  prior.tau_ref_s = f.value("tau_ref_s");
+  prior.ref_feed_mm_s = m.model.reference_input;
+  prior.b = f.value("b");
+  prior.theta_s = f.value("theta_s");
+  if (m.model.sensor == fitting::LiquefierSensor::flow) prior.gain_N_per_mm_s = f.value("g");
+  prior.basis =
+      fmt::format("{} (tau {} s at {} mm/s, b {}, theta {} s)", what, display_number(prior.tau_ref_s),
+                  display_number(prior.ref_feed_mm_s), display_number(prior.b), display_number(prior.theta_s));
+  return prior;
+}
+
+protocols::LiquefierPrior measured_liquefier_prior(const CalibrationPlan& plan,
+                                                   const std::optional<StepOutcome>& step) {
+  if (!step || !step->whole_record.model) return plan.liquefier_prior;
+  return liquefier_prior_from(plan.liquefier_prior, *step->whole_record.model, "the flow sweep's whole-record model");
+}
+
 ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) {
   // A stop signal between two experiments stops the calibration too (stop_signals.hpp).
   const protocols::StopSignals stop_signals;
@@ -43,18 +64,31 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
         if (sized != tau)
           out.chirp_basis += fmt::format(", held at {} s, the end of the range checked", display_number(sized));
         // The dry run timed the chirp of the plan; this one is longer or shorter by the difference.
-        estimate_s += out.chirp.duration_s - plan.chirp.duration_s;
+        if (!e.params.count("duration_s"))
+          estimate_s += designed_params(plan, e, out.chirp).params.at("duration_s") -
+                        designed_params(plan, e, plan.chirp).params.at("duration_s");
       }
     }
     progress.begin("run " + e.name, plan.sim ? std::max(1.0, estimate_s / 4) : estimate_s);
     protocols::RunOptions run_options = experiment_run_options(plan, e, out.chirp, false);
     run_options.keep_heaters = plan.options.keep_heaters;
+    // Predicted before it runs, from the experiment as it will run (the chirp sized again).
+    const protocols::RunOptions dry = [&] {
+      auto o = run_options;
+      o.dry_run = true;
+      return o;
+    }();
+    if (const auto predicted = predict_experiment(plan, protocols::run_experiment(dry).experiment,
+                                                  measured_liquefier_prior(plan, out.liquefier_step)))
+      out.predicted[e.name] = *predicted;
     const auto& run = out.runs[e.name] = protocols::run_experiment(run_options);
     progress.end(run.status);
     // The chirp as run: the protocol sized its staircase step from the chirp's end (never shorter
     // than the machine's), which sets the band the plan describes.
-    if (e.protocol == "liquefier-chirp")
+    if (e.protocol == "liquefier-chirp") {
       out.chirp = protocols::plan_liquefier_chirp(out.chirp.expected_tau_s, run.experiment.params.at("segment_s"));
+      out.chirp.duration_s = run.experiment.params.at("duration_s");  // the design's (experiment_design.hpp)
+    }
     if (e.name == "liquefier-step") {
       const auto track = run.files.find(protocols::RunFile::feed_track);
       const auto options = load_cell_step_options(run.files.at(protocols::RunFile::load_cell),

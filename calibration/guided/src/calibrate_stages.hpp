@@ -12,6 +12,7 @@
 #include "tunekit/calibration/results/input_digest.hpp"
 #include "tunekit/calibration/results/calibration_record.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/protocols/experiment_design.hpp"
 
 namespace tunekit::calibration {
 
@@ -55,6 +56,25 @@ protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const 
 /// its time constants too), fills in their machine times and the chirp plan. InputError naming
 /// the limit when one is exceeded.
 void check_plan(CalibrationPlan& plan);
+
+/// The intervals `built` (one of the plan's experiments, as built) is expected to give with the
+/// plan's axis prior and the liquefier prior given (the plan's, or one the step test measured).
+std::optional<protocols::ExperimentPrediction> predict_experiment(const CalibrationPlan& plan,
+                                                                  const protocols::Experiment& built,
+                                                                  const protocols::LiquefierPrior& liquefier);
+
+/// The parameters the experiment design gives `e` at the plan's scale (the chirp's for `chirp`'s
+/// time constant); calibrate uses them where --param did not set them.
+protocols::DesignedParams designed_params(const CalibrationPlan& plan, const PlannedExperiment& e,
+                                          const protocols::ChirpPlan& chirp);
+
+/// `given` with the plant's parameters of a whole-record model (`what` names it in the basis).
+protocols::LiquefierPrior liquefier_prior_from(const protocols::LiquefierPrior& given, const ident::WholeRecordModel& m,
+                                               const std::string& what);
+
+/// The liquefier prior of the experiments after the step test: its whole-record model's
+/// parameters when it has one, else the plan's.
+protocols::LiquefierPrior measured_liquefier_prior(const CalibrationPlan& plan, const std::optional<StepOutcome>& step);
 
 /// The path of `relative` (e.g. "machines/sim.toml") in the datasets bundled with tunekit's
 /// sources (the folder is fixed when tunekit is built; "datasets" when it was not given).

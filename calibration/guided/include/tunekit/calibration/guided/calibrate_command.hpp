@@ -53,6 +53,10 @@ struct CalibrateArgs {
   /// Plan and check every experiment against the limits, print the plan (each experiment's
   /// protocol, parameters and machine time) and stop: nothing is sent, no run directory is made.
   bool dry_run = false;
+  /// Machine time (s) the experiments may take together; 0: the design's own. Below it, the
+  /// sweeps run faster, the holds and the chirp shorter, by one factor; the plan says what the
+  /// intervals then cost. InputError when even the shortest design exceeds it.
+  double budget_s = 0;
   /// Sensors the firmware configuration given as --profile does not list but the machine has
   /// ("accelerometer", "load_cell", "camera"): `tunekit profile --sensor`'s. A TOML profile lists
   /// its own ([sensors]).

@@ -28,6 +28,7 @@
 #include "tunekit/calibration/analyses/thermal_command.hpp"
 #include "tunekit/machine/machine_profile.hpp"
 #include "tunekit/protocols/chirp_plan.hpp"
+#include "tunekit/protocols/experiment_information.hpp"
 #include "tunekit/protocols/machine_host.hpp"
 #include "tunekit/protocols/runner.hpp"
 
@@ -76,6 +77,11 @@ struct PlannedExperiment {
   std::map<std::string, double> params;  ///< protocol parameter overrides
   double estimated_s = 0;                ///< the protocol's machine time (s), from its dry run
   protocols::Experiment checked;         ///< the experiment as built and checked by that dry run
+  /// Its parameters' 95 % intervals expected from its planned excitation and the plan's priors
+  /// (experiment_information.hpp); nullopt for an experiment no prediction is made for.
+  std::optional<protocols::ExperimentPrediction> predicted;
+  /// With --budget-s below the design's time: the prediction of the design without the budget.
+  std::optional<protocols::ExperimentPrediction> unbudgeted;
 };
 
 struct CalibrationPlan {
@@ -93,6 +99,12 @@ struct CalibrationPlan {
   /// it holds the limits checked before anything was sent.
   protocols::ChirpPlan chirp;
   std::string chirp_basis;  ///< what the chirp was sized from, in words
+  /// What the experiments' predicted intervals assume: the plant's typical values and the
+  /// sensors' noise and rates (the simulated printer's own sensors with `sim`).
+  protocols::LiquefierPrior liquefier_prior;
+  protocols::AxisPrior axis_prior;
+  /// The experiments' time scale (protocols/experiment_design.hpp): 1, or lower for --budget-s.
+  double design_scale = 1;
   /// The simulated camera's print bed (camera path on the simulator), else null.
   std::shared_ptr<sim::SimPrintBed> bed;
   /// The simulated printer every run is made on (with `sim`; simulated_machine.hpp), its options
@@ -108,6 +120,9 @@ struct ExperimentRuns {
   std::map<std::string, protocols::RunResult> runs;  ///< by PlannedExperiment::name
   protocols::ChirpPlan chirp;                        ///< the chirp that ran
   std::string chirp_basis;
+  /// Each run's predicted intervals (by PlannedExperiment::name), made before it ran: the chirp's
+  /// with the liquefier the step test measured, the others with the plan's priors.
+  std::map<std::string, protocols::ExperimentPrediction> predicted;
   /// The load-cell step test identified between the runs (its tau sizes the chirp), as
   /// compute_step() with `tunekit step`'s defaults gives it.
   std::optional<StepOutcome> liquefier_step;
