@@ -98,8 +98,7 @@ ThermalOutcome compute_thermal(const ThermalOptions& o) {
   const std::string bytes = read_file_bytes(o.file);
   out.input = input_digest(o.file, bytes);
   out.format = looks_like_klippy_log(bytes) ? "klippy.log" : "csv";
-  out.record =
-      out.format == "csv" ? read_thermal_csv(o.file, bytes) : read_klippy_thermal_record(bytes, o.heater);
+  out.record = out.format == "csv" ? read_thermal_csv(o.file, bytes) : read_klippy_thermal_record(bytes, o.heater);
   keep_first_seconds(out.record, o.until_s);
   ident::ThermalFitOptions fo = o.fit;
   out.held_out_source = "option";

@@ -21,9 +21,9 @@
 namespace tunekit::calibration {
 
 struct ThermalOptions {
-  std::string file;                  ///< the record (CSV) or a klippy.log
-  std::string heater = "extruder";   ///< klippy.log: the heater whose Stats are read
-  double until_s = fitting::kNaN;    ///< fit only the record's first seconds (NaN: all of it)
+  std::string file;                 ///< the record (CSV) or a klippy.log
+  std::string heater = "extruder";  ///< klippy.log: the heater whose Stats are read
+  double until_s = fitting::kNaN;   ///< fit only the record's first seconds (NaN: all of it)
   /// P, the held-out part and the confidence (ident::ThermalFitOptions). A held-out start left
   /// NaN is read from the run.json beside the record when a heater-identify run wrote it.
   ident::ThermalFitOptions fit;
