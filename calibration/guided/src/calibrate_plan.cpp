@@ -45,7 +45,7 @@ std::vector<PlannedExperiment> choose_experiments(const CalibrateArgs& a, const 
                                                   bool camera_path) {
   std::vector<PlannedExperiment> exps;
   // The thermal experiment first: its record starts with the hot end at rest.
-  if (a.thermal) exps.push_back({"heater", "heater-identify", "", {}, 0, {}});
+  if (a.thermal) exps.push_back({"heater", "heater-identify", "", {}, 0, {}, {}, {}});
   if (!a.skip_liquefier && !camera_path) {
     // The step test is a flow sweep: every level reached from below and from above, so that tau,
     // K and theta are known per arrival level (the liquefier's dynamics change with the flow).
