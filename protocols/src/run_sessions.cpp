@@ -7,6 +7,7 @@
 
 #include "tunekit/core/atomic_file.hpp"
 #include "tunekit/core/error.hpp"
+#include "tunekit/formats/heater_log.hpp"
 #include "tunekit/ident/rrf_accelerometer.hpp"
 #include "tunekit/machine/klipper_api.hpp"
 #include "tunekit/machine/klipper_sensors.hpp"
@@ -32,9 +33,28 @@ int parse_numbers(std::string_view s, double* out, int max) {
   return n;
 }
 
+bool Recorder::marlin_report(std::string_view l) {
+  if (l.find("T:") == std::string_view::npos || l.find("@:") == std::string_view::npos) return false;
+  formats::HeaterLog one;
+  try {
+    one = formats::read_marlin_temperature_reports(l, 1.0);
+  } catch (const InputError&) {
+    return false;  // no hot end with its power: not a report of use (journaled as received)
+  }
+  const double t = report_clock_();
+  ThermalInput in;
+  for (const auto& i : thermal_inputs_)
+    if (i.from_s <= t) in = i;
+  const double v[6] = {t, one.temp_c.front(), one.target_c.front(), one.duty.front(), in.fan_duty, in.feed_mm_s};
+  thermal(v);
+  return true;
+}
+
 namespace {
 
 constexpr std::chrono::milliseconds kHttpTimeout{5000};
+// Marlin's temperature auto-report interval the heater is recorded at, s (M155 S1).
+constexpr int kReportInterval_s = 1;
 // Lines kept unanswered on Klipper's G-code pseudo-terminal. Klipper stops reading at 20
 // pending commands (klippy/gcode.py); 8 keeps the link busy without filling its queue, and an
 // interrupted run has at most 8 lines queued beyond the one that was answering.
@@ -44,13 +64,14 @@ class GcodeSession : public Session {
  public:
   GcodeSession(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                const machine::LinkOptions& lo, const std::atomic<bool>* abort, SendGuard& guard, std::string http,
-               std::optional<std::string> http_password)
+               std::optional<std::string> http_password, bool wall_clock)
       : t_(std::move(t)),
         link_(*t_, &j, lo),
         j_(j),
         rec_(rec),
         http_(std::move(http)),
-        http_password_(std::move(http_password)) {
+        http_password_(std::move(http_password)),
+        wall_clock_(wall_clock) {
     link_.guard = &guard;
     link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
     link_.on_batch = [&j] { j.flush(); };
@@ -89,6 +110,11 @@ class GcodeSession : public Session {
       else fetch_m956();
       return;
     }
+    if (!firmware.sensor_stream() && marlin_auto_report(sensor)) {
+      if (on) start_auto_report();
+      else stop_auto_report();
+      return;
+    }
     // tunekit-sim streams with M4100 whichever firmware it follows.
     const std::string cmd = firmware.sensor_stream()
                                 ? firmware::Dialect(firmware::Firmware::marlin).sensor_stream(sensor, on)
@@ -102,7 +128,7 @@ class GcodeSession : public Session {
     link_.send(cmd);
   }
   bool can_record(const std::string& sensor) const override {
-    return firmware.sensor_stream() || rrf_file_accelerometer(sensor);
+    return firmware.sensor_stream() || rrf_file_accelerometer(sensor) || marlin_auto_report(sensor);
   }
   void check_recording(const std::string& sensor) override {
     // A wrong or missing password fails here, before heating or homing, not after the test.
@@ -112,7 +138,11 @@ class GcodeSession : public Session {
   }
   void finish() override {}
   void safe_state(const std::vector<std::string>& commands) override {
-    link_.send_best_effort(commands, std::chrono::milliseconds(300));
+    auto lines = commands;
+    if (auto_report_on_) lines.push_back("M155 S0");  // the reports stop with the run
+    link_.send_best_effort(lines, std::chrono::milliseconds(300));
+    auto_report_on_ = false;
+    rec_.stop_reports();
   }
   nlohmann::json stats() const override {
     const auto& s = link_.stats();
@@ -126,6 +156,36 @@ class GcodeSession : public Session {
   }
 
  private:
+  /// Marlin built with AUTO_REPORT_TEMPERATURES (M115 "Cap:AUTOREPORT_TEMP:1") reports the hot
+  /// end's reading, target and soft-PWM power by itself (M155 S<seconds>): the heater's record.
+  bool marlin_auto_report(const std::string& sensor) const {
+    const auto cap = firmware.capabilities.find("AUTOREPORT_TEMP");
+    return firmware.firmware == firmware::Firmware::marlin && sensor == "heater" &&
+           cap != firmware.capabilities.end() && cap->second;
+  }
+  void start_auto_report() {
+    const std::string cmd = fmt::format("M155 S{}", kReportInterval_s);
+    for (const auto& l : link_.send(cmd))
+      if (l.find("Unknown command") != std::string::npos)
+        throw MachineError(fmt::format("the firmware answered '{}' with '{}': it offers Cap:AUTOREPORT_TEMP but "
+                                       "has no temperature auto-report; the heater was not turned on",
+                                       cmd, l),
+                           t_->describe());
+    auto_report_on_ = true;
+    // Each report at the host's time of arrival on a real printer; on the simulated printer,
+    // whose clock runs as fast as it is read, at its place in the firmware's schedule.
+    if (wall_clock_) {
+      const auto t0 = std::chrono::steady_clock::now();
+      rec_.start_reports([t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); });
+    } else {
+      rec_.start_reports([n = 0]() mutable { return static_cast<double>(++n * kReportInterval_s); });
+    }
+  }
+  void stop_auto_report() {
+    link_.send("M155 S0");
+    auto_report_on_ = false;
+    rec_.stop_reports();
+  }
   /// RepRapFirmware records its accelerometer into a file (M956); tunekit fetches it over the
   /// board's web server (rrf_http.hpp), the only way RepRapFirmware offers to read a file.
   bool rrf_file_accelerometer(const std::string& sensor) const {
@@ -181,6 +241,7 @@ class GcodeSession : public Session {
   std::string m956_name_;
   double m956_rate_hz_ = 0, m956_window_s_ = 0;
   std::vector<std::string> m956_files_;
+  bool wall_clock_ = true, auto_report_on_ = false;
 };
 
 class KlipperSession : public Session {
@@ -356,9 +417,9 @@ class KlipperSession : public Session {
 std::unique_ptr<Session> make_gcode_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                             const machine::LinkOptions& lo, const std::atomic<bool>* abort,
                                             SendGuard& guard, std::string http,
-                                            std::optional<std::string> http_password) {
+                                            std::optional<std::string> http_password, bool wall_clock) {
   return std::make_unique<GcodeSession>(std::move(t), j, rec, lo, abort, guard, std::move(http),
-                                        std::move(http_password));
+                                        std::move(http_password), wall_clock);
 }
 std::unique_ptr<Session> make_klipper_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                               const machine::LinkOptions& lo, const machine::Sensors& sensors,

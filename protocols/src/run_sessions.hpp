@@ -2,8 +2,11 @@
 // The runner's machine sessions (internal to the protocols library): what records the sensor
 // samples into the run directory (Recorder), and one session per kind of link, G-code over a
 // serial line or pseudo-terminal (Marlin, Prusa, RepRapFirmware, tunekit-sim) or Klipper's API
-// server, each identifying the firmware before anything else is sent.
+// server, each identifying the firmware before anything else is sent. `wall_clock`: the machine's
+// time is the host's (a real printer; the simulated printer's runs as fast as it is read, and its
+// reports are then timed by their schedule).
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -68,8 +71,22 @@ class Recorder {
     c.row(csv_row({{v[0], 3}, {v[1], 2}, {v[2], 1}, {v[3], 4}, {v[4], 4}, {v[5], 4}}));
     ++thermal_;
   }
-  /// Handles a tunekit-sim data line; true if it was one.
+  /// What the protocol commands of the hot end that Marlin's temperature reports do not state:
+  /// from `from_s` (s after the record starts) on, the fan's duty (0..1) and the feed (mm/s).
+  struct ThermalInput {
+    double from_s = 0, fan_duty = 0, feed_mm_s = 0;
+  };
+  void set_thermal_inputs(std::vector<ThermalInput> inputs) { thermal_inputs_ = std::move(inputs); }
+  /// From now on Marlin's temperature reports (" T:210.00 /210.00 ... @:64 ...") are heater
+  /// samples, each at `clock()` (s after the record started), with the fan and feed the protocol
+  /// commands then; until stop_reports().
+  void start_reports(std::function<double()> clock) { report_clock_ = std::move(clock); }
+  void stop_reports() { report_clock_ = nullptr; }
+  /// A Marlin temperature report while reports are read, as a heater sample; true if it was one.
+  bool marlin_report(std::string_view l);
+  /// Handles a tunekit-sim data line, or a Marlin report while they are read; true if it was one.
   bool line(std::string_view l) {
+    if (report_clock_ && marlin_report(l)) return true;
     double v[6];
     if (l.rfind("echo:TKH ", 0) == 0) {
       if (parse_numbers(l.substr(9), v, 6) == 6) thermal(v);
@@ -112,6 +129,8 @@ class Recorder {
   std::string row_;
   std::string load_file_, accel_file_, cmd_file_, motion_file_;
   long load_ = 0, accel_ = 0, thermal_ = 0;
+  std::vector<ThermalInput> thermal_inputs_;
+  std::function<double()> report_clock_;
 };
 
 class Session {
@@ -152,7 +171,7 @@ class Session {
 std::unique_ptr<Session> make_gcode_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                             const machine::LinkOptions& lo, const std::atomic<bool>* abort,
                                             SendGuard& guard, std::string http,
-                                            std::optional<std::string> http_password);
+                                            std::optional<std::string> http_password, bool wall_clock);
 std::unique_ptr<Session> make_klipper_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                               const machine::LinkOptions& lo, const machine::Sensors& sensors,
                                               SendGuard& guard);

@@ -133,6 +133,16 @@ void note_firmware(const Session& session, machine::Journal& journal, nlohmann::
   }
 }
 
+/// The fan and feed the protocol commands from each piece of its thermal plan on (none for a
+/// protocol without one): what a firmware's temperature reports do not state.
+std::vector<Recorder::ThermalInput> thermal_inputs(const Experiment& e) {
+  std::vector<Recorder::ThermalInput> out;
+  if (e.excitation.contains("pieces"))
+    for (const auto& p : e.excitation["pieces"])
+      out.push_back({p.value("from_s", 0.0), p.value("fan_duty", 0.0), p.value("feed_mm_s", 0.0)});
+  return out;
+}
+
 /// Fails before heating and homing when the link cannot record what the protocol needs.
 void require_recordable(Session& session, const std::vector<std::string>& sensors, const std::string& port) {
   for (const auto& sensor : sensors)
@@ -145,6 +155,10 @@ void require_recordable(Session& session, const std::vector<std::string>& sensor
                             "no way to read a file over USB serial (M28/M29 write, M20 lists, M36/M38 describe a "
                             "file); give the profile its web server, [network] http = \"http://HOST\", to fetch it "
                             "with rr_download"
+                      : sensor == "heater"
+                          ? "Marlin reports its temperatures by itself only when built with AUTO_REPORT_TEMPERATURES "
+                            "(M115 Cap:AUTOREPORT_TEMP:1), and polling M105 cannot sample through the protocol's "
+                            "dwells; Klipper's heaters and RepRapFirmware's object model are not read yet"
                           : "no tunekit sensor stream"),
           port);
     }
@@ -359,7 +373,7 @@ RunResult run_experiment(const RunOptions& o) {
     else
       session = detail::make_gcode_session(std::move(transport), journal, rec, o.link, abort_flag, guard,
                                            served ? served->http_url() : profile.http_address,
-                                           machine::rrf_password(profile.http_password));
+                                           machine::rrf_password(profile.http_password), !o.host);
     stage = "while identifying the firmware";
     session->firmware = session->identify();
     session->dialect = firmware::Dialect(
@@ -367,6 +381,7 @@ RunResult run_experiment(const RunOptions& o) {
     session->dialect.set_ft_motion(session->firmware.m493);
     note_firmware(*session, journal, summary, res);
     adapt_to_firmware(o, profile, *session, port, journal, summary, res, progress);
+    rec.set_thermal_inputs(thermal_inputs(res.experiment));
     require_recordable(*session, res.experiment.sensors, port);
     progress(fmt::format("firmware: {} {}; running {} ({} lines, ~{:.0f} s of machine time)", session->firmware.name,
                          session->firmware.version, o.protocol, res.gcode.size(), res.experiment.estimated_duration_s));

@@ -30,6 +30,8 @@ inline constexpr unsigned kHeaterNoiseSeedFactor = 7919;
 /// Marlin's M105 reports the heater's soft PWM as "@:" in 0..127 (temperature.cpp: the
 /// soft_pwm_amount, the PID's 0..255 output halved).
 inline constexpr double kMarlinPwmReportMax = 127;
+/// Marlin's longest temperature auto-report interval, s (AutoReporter::set_interval's limit).
+inline constexpr double kMarlinAutoReportMax_s = 60;
 /// M106 S: the fan's duty in 0..255 (Marlin, Klipper; RepRapFirmware reads S <= 1 as a fraction).
 inline constexpr double kFanFullScale = 255;
 /// Lowest feed (filament mm/s) at which the FOPDT liquefier's flow-dependent time constant is

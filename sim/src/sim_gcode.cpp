@@ -93,8 +93,8 @@ void Simulator::report_firmware(const Emit& emit) const {
         "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim {}) SOURCE_CODE_URL:https://github.com/MarlinFirmware/Marlin "
         "PROTOCOL_VERSION:1.0 MACHINE_TYPE:tunekit-sim EXTRUDER_COUNT:1 "
         "UUID:00000000-0000-0000-0000-000000000000\n"
-        "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:0\n",
-        core::kVersion));
+        "Cap:EEPROM:0\nCap:AUTOREPORT_TEMP:{}\n",
+        core::kVersion, cfg_.autoreport_temp ? 1 : 0));
   if (cfg_.sensor_stream) emit("Cap:TUNEKIT_SENSOR_STREAM:1\n");
 }
 
@@ -158,6 +158,33 @@ bool Simulator::hot_end_command(const machine::GcodeWords& w, const Emit& emit) 
   return true;
 }
 
+void Simulator::set_auto_report(const machine::GcodeWords& w, std::string_view body, const Emit& emit) {
+  if (!cfg_.autoreport_temp) {
+    out_flush(emit);
+    emit(fmt::format("echo:Unknown command: \"{}\"\n", body));
+    return;
+  }
+  if (!w.has("S")) return;
+  sync_heater();
+  // A byte of whole seconds, at most 60; the first report one interval after the command.
+  autoreport_s_ = std::clamp(std::floor(w.get("S", 0)), 0.0, sim::kMarlinAutoReportMax_s);
+  autoreport_next_s_ = heater_.time_s() + autoreport_s_;
+}
+
+void Simulator::auto_report() {
+  const auto& r = heater_.record();
+  for (; autoreport_s_ > 0 && autoreport_next_s_ <= heater_.time_s(); autoreport_next_s_ += autoreport_s_) {
+    while (autoreport_tick_ + 1 < r.t_s.size() && r.t_s[autoreport_tick_ + 1] <= autoreport_next_s_) ++autoreport_tick_;
+    const bool ticked = autoreport_tick_ < r.t_s.size() && r.t_s[autoreport_tick_] <= autoreport_next_s_;
+    const double reading = ticked ? r.temp_c[autoreport_tick_] : heater_.reading_c();
+    const double target = ticked ? r.target_c[autoreport_tick_] : heater_.target_c();
+    const double duty = ticked ? r.heater_duty[autoreport_tick_] : heater_.duty();
+    const double tb = interp_.bed_c.value_or(0);
+    out_ += fmt::format(" T:{:.2f} /{:.2f} B:{:.2f} /{:.2f} @:{} B@:0\n", reading, target, tb, tb,
+                        std::lround(duty * sim::kMarlinPwmReportMax));
+  }
+}
+
 bool Simulator::answer_report(const machine::GcodeWords& w, const Emit& emit) {
   const std::string& c = w.command;
   if (c == "M115") {
@@ -206,7 +233,8 @@ bool Simulator::execute(const machine::GcodeWords& w, std::string_view body, con
   } else if (c == "M112") {
     pending_.reset();
     sync_heater();
-    heater_.off();  // a kill turns the heaters off (Marlin's kill(), Klipper's shutdown)
+    heater_.off();      // a kill turns the heaters off (Marlin's kill(), Klipper's shutdown)
+    autoreport_s_ = 0;  // and a killed Marlin reports nothing more
     halted_ = true;
     out_flush(emit);
     return false;
@@ -227,6 +255,8 @@ bool Simulator::execute(const machine::GcodeWords& w, std::string_view body, con
   } else if (c == "M956" && rrf()) {
     flush(emit);
     m956(body, w, emit);
+  } else if (c == "M155" && !klipper() && !rrf()) {
+    set_auto_report(w, body, emit);
   } else if (c == "M493" && !klipper() && !rrf()) {
     out_flush(emit);
     m493(w, emit);

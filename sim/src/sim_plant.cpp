@@ -404,6 +404,7 @@ void Simulator::sync_heater() {
                       {r.fan_duty[i], 4},
                       {r.feed_mm_s[i], 4}});
   }
+  auto_report();
 }
 
 void Simulator::flush(const Emit& emit) {

@@ -252,6 +252,9 @@ SimConfig SimConfig::from_options(const std::vector<std::string>& options) {
     else if (k == "sensor_stream") {
       if (v != "0" && v != "1") throw InputError("simulator option sensor_stream must be 0 or 1");
       c.sensor_stream = v == "1";
+    } else if (k == "autoreport_temp") {
+      if (v != "0" && v != "1") throw InputError("simulator option autoreport_temp must be 0 or 1");
+      c.autoreport_temp = v == "1";
     } else if (k == "rrf_http") {
       if (v != "0" && v != "1") throw InputError("simulator option rrf_http must be 0 or 1");
       c.rrf_http = v == "1";

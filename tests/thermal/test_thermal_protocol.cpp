@@ -126,6 +126,69 @@ TEST_CASE("a heater-identify run stopped by a machine failure leaves the heater 
   }
 }
 
+TEST_CASE(
+    "heater-identify on a Marlin without tunekit's stream records its M155 auto-reports and predicts the held-out "
+    "steps",
+    "[thermal]") {
+  const auto dir = scratch_dir("thermal_m155") + "/run";
+  const auto r = run_cli({"run", "heater-identify", "--machine", "sim", "--run-dir", dir, "--sim", "sensor_stream=0"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const std::string rx = read_text(dir + "/sim_received.gcode");
+  CHECK(rx.find("M4100") == std::string::npos);
+  const auto on = rx.find("M155 S1"), off = rx.find("M155 S0");
+  REQUIRE(on != std::string::npos);
+  REQUIRE(off != std::string::npos);
+  CHECK(on < rx.find("M104 S210"));    // recording from rest, before the heater is on
+  CHECK(off > rx.rfind("M104 S210"));  // and to the plan's end
+  CHECK(rx.rfind("M104 S0") > off);    // the heater off after
+  const auto stats = read_json(dir + "/sim_stats.json");
+  CHECK(stats["hot_end"]["target_c"] == 0);
+  CHECK(stats["hot_end"]["heater_duty"] == 0);
+  // One report a second over the 286 s record.
+  CHECK(std::abs(read_json(dir + "/run.json")["samples"]["thermal"].get<double>() - 286) <= 2);
+  const auto f = run_cli({"thermal", dir + "/thermal.csv", "--json"});
+  INFO(f.err);
+  REQUIRE(f.code == 0);
+  const auto res = nlohmann::json::parse(f.out)["results"];
+  CHECK(res["held_out"]["rms_c"].get<double>() < 1.0);
+  REQUIRE(res["held_out"]["steps"].size() == 2);
+  for (const auto& s : res["held_out"]["steps"]) CHECK(s["rms_c"].get<double>() < 1.0);
+}
+
+TEST_CASE("heater-identify on a Marlin without AUTO_REPORT_TEMPERATURES is refused before homing or heating",
+          "[thermal][safety]") {
+  const auto dir = scratch_dir("thermal_no_autoreport") + "/run";
+  const auto r = run_cli({"run", "heater-identify", "--machine", "sim", "--run-dir", dir, "--sim", "sensor_stream=0",
+                          "--sim", "autoreport_temp=0"});
+  CHECK(r.code == 3);
+  CHECK(r.err.find("AUTO_REPORT_TEMPERATURES") != std::string::npos);
+  const std::string rx = read_text(dir + "/sim_received.gcode");
+  CHECK(rx.find("G28") == std::string::npos);
+  CHECK(rx.find("M104 S2") == std::string::npos);
+  CHECK(rx.find("M155") == std::string::npos);
+}
+
+TEST_CASE("a heater-identify run on Marlin's auto-reports stopped by a failure turns the reports and the heater off",
+          "[thermal][safety]") {
+  for (const std::string fault : {"drop@20", "error@20"}) {
+    const auto dir = scratch_dir("thermal_m155_stop_" + fault.substr(0, fault.find('@'))) + "/run";
+    const auto r = run_cli({"run", "heater-identify", "--machine", "sim", "--run-dir", dir, "--sim", "sensor_stream=0",
+                            "--sim", "fault=" + fault, "--timeout", "1", "--retries", "0"});
+    INFO(fault << ": " << r.err);
+    CHECK(r.code == 3);
+    const auto stats = read_json(dir + "/sim_stats.json");
+    CHECK(stats["hot_end"]["target_c"] == 0);
+    CHECK(stats["hot_end"]["heater_duty"] == 0);
+    const std::string rx = read_text(dir + "/sim_received.gcode");
+    const auto heated = rx.find("M104 S210");
+    REQUIRE(heated != std::string::npos);  // it had heated, reports on
+    CHECK(rx.find("M155 S1") < heated);
+    CHECK(rx.rfind("M155 S0") > heated);  // the host stopped the reports
+    CHECK(rx.rfind("M104 S0") > heated);  // and turned the heater off
+  }
+}
+
 TEST_CASE("calibrate --thermal identifies the hot end first, reports it and records it for the history",
           "[thermal][calibrate]") {
   const auto dir = scratch_dir("thermal_calibrate") + "/run";

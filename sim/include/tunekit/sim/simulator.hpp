@@ -23,7 +23,10 @@
 //                   (the duty applied from t_s on, the fan's and the feed's means until the next tick)
 // The hot end is a thermal plant (thermal_plant.hpp): M104 sets its target, M106/M107 its fan,
 // M105 reports its reading and duty (Marlin's "@:" in 0..127); M109 returns at once with the hot
-// end settled at its target; M112 turns the heater off.
+// end settled at its target; M112 turns the heater off. M155 S<s> (Marlin's temperature
+// auto-report, AUTO_REPORT_TEMPERATURES): every s seconds of machine time (at most 60; S0 stops),
+// the first s seconds after M155, " T:<reading> /<target> B:<bed> /<bed target> @:<0..127> B@:0"
+// from the heater loop's last tick; with SimConfig::autoreport_temp off, "Unknown command".
 // M115 answers "FIRMWARE_NAME:Marlin 2.1.2 (tunekit-sim ...)" and "Cap:TUNEKIT_SENSOR_STREAM:1".
 
 #include <atomic>
@@ -183,6 +186,9 @@ struct SimConfig {
   /// Whether M115 offers tunekit's sensor stream (Cap:TUNEKIT_SENSOR_STREAM:1); off, the
   /// simulator is a firmware that cannot stream its sensors over the G-code link.
   bool sensor_stream = true;
+  /// Marlin only: built with AUTO_REPORT_TEMPERATURES (M115 "Cap:AUTOREPORT_TEMP:1", M155
+  /// auto-reports); off, M155 is an unknown command.
+  bool autoreport_temp = true;
   /// Marlin only: the build's FT_MOTION (fixed-time motion, M493): "none" (not built: M493 is
   /// an unknown command), "off" (built, M493 S0) or "on" (built and active, M493 S1). M493
   /// answers as Marlin/src/gcode/feature/ft_motion/M493.cpp does (say_shaping()).
@@ -370,6 +376,14 @@ class Simulator {
   SimHeater heater_;
   double heater_dt_ = 0, heater_fed_ = 0;
   std::size_t heater_sent_ = 0;
+  // M155: the auto-report's interval (0: off), the machine time of the next report, s, and the
+  // heater loop's tick it last reported.
+  double autoreport_s_ = 0, autoreport_next_s_ = 0;
+  std::size_t autoreport_tick_ = 0;
+  /// M155 S<s>, as Marlin's AutoReporter::set_interval (Marlin/src/libs/autoreport.h).
+  void set_auto_report(const machine::GcodeWords& w, std::string_view body, const Emit& emit);
+  /// The auto-reports due up to the hot end's time, into the output.
+  void auto_report();
   /// Runs the hot end up to the simulator's time and streams its finished samples.
   void sync_heater();
   /// One simulation step of `h` s with `fed_mm` of filament: the hot end is run every chunk.

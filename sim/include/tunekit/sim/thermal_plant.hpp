@@ -86,6 +86,8 @@ class SimHeater {
   double duty() const { return duty_; }
   /// The last reading (what M105 reports), degC.
   double reading_c() const { return reading_c_; }
+  /// The loop's time, s since the simulator started.
+  double time_s() const { return t_; }
   const ThermalPlant& plant() const { return plant_; }
   /// Every tick so far: t_s, temp_c (the reading), heater_duty (applied from that tick on),
   /// fan_duty and feed_mm_s (the means over the interval that starts at the tick, filled at the
