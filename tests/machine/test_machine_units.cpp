@@ -29,6 +29,7 @@
 #include "tunekit/machine/trajectory.hpp"
 #include "tunekit/machine/transport.hpp"
 #include "tunekit/formats/csv.hpp"
+#include "tunekit/formats/heater_log.hpp"
 
 using namespace tunekit::protocols;
 using namespace tunekit::machine;
@@ -324,6 +325,41 @@ TEST_CASE("simulated liquefier follows its first-order truth", "[machine]") {
   // One time constant after the dead time: 63 % of the step.
   CHECK((force_at_tau - 0.5) / 4.0 == Approx(1 - std::exp(-1.0)).margin(0.03));
   CHECK(sim.load_cell_samples_sent() > 900);
+}
+
+TEST_CASE("the simulated Marlin answers M155 with temperature auto-reports on its own clock", "[machine]") {
+  Simulator sim(SimConfig::from_options({}));
+  std::string out;
+  const Simulator::Emit emit = [&](std::string_view s) { out += s; };
+  sim.handle_line("M115", emit);
+  CHECK(out.find("Cap:AUTOREPORT_TEMP:1") != std::string::npos);
+  const auto reports = [&] {
+    std::size_t n = 0;
+    for (std::size_t p = out.find("\n T:"); p != std::string::npos; p = out.find("\n T:", p + 1)) ++n;
+    return n;
+  };
+  out.clear();
+  for (const char* l : {"M104 S200", "M155 S1", "G4 P5500"}) sim.handle_line(l, emit);
+  CHECK(reports() == 5);  // one a second of machine time, the first a second after M155
+  const auto log = tunekit::formats::read_marlin_temperature_reports(out, 1.0);
+  REQUIRE(log.t_s.size() == 5);
+  for (std::size_t i = 0; i < 5; ++i) {
+    CHECK(log.target_c[i] == 200);
+    CHECK(log.duty[i] > 0);  // heating from the ambient
+  }
+  CHECK(log.temp_c.back() > log.temp_c.front());
+  out.clear();
+  for (const char* l : {"M155 S0", "G4 P3000"}) sim.handle_line(l, emit);
+  CHECK(reports() == 0);
+  for (const char* l : {"M155 S200", "G4 P61000"}) sim.handle_line(l, emit);
+  CHECK(reports() == 1);  // at most 60 s apart
+
+  Simulator without(SimConfig::from_options({"autoreport_temp=0"}));
+  out.clear();
+  for (const char* l : {"M115", "M155 S1", "G4 P3000"}) without.handle_line(l, emit);
+  CHECK(out.find("Cap:AUTOREPORT_TEMP:0") != std::string::npos);
+  CHECK(out.find("echo:Unknown command: \"M155 S1\"") != std::string::npos);
+  CHECK(reports() == 0);
 }
 
 TEST_CASE("physics liquefier: gain and time constant depend on the flow", "[machine]") {
