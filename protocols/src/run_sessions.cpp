@@ -64,14 +64,13 @@ class GcodeSession : public Session {
  public:
   GcodeSession(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                const machine::LinkOptions& lo, const std::atomic<bool>* abort, SendGuard& guard, std::string http,
-               std::optional<std::string> http_password, bool wall_clock)
+               std::optional<std::string> http_password)
       : t_(std::move(t)),
         link_(*t_, &j, lo),
         j_(j),
         rec_(rec),
         http_(std::move(http)),
-        http_password_(std::move(http_password)),
-        wall_clock_(wall_clock) {
+        http_password_(std::move(http_password)) {
     link_.guard = &guard;
     link_.on_line = [&rec](std::string_view l) { return rec.line(l); };
     link_.on_batch = [&j] { j.flush(); };
@@ -172,9 +171,9 @@ class GcodeSession : public Session {
                                        cmd, l),
                            t_->describe());
     auto_report_on_ = true;
-    // Each report at the host's time of arrival on a real printer; on the simulated printer,
-    // whose clock runs as fast as it is read, at its place in the firmware's schedule.
-    if (wall_clock_) {
+    // Each report at the host's time of arrival on a real printer; on the simulated printer (its
+    // M115 names tunekit-sim), whose clock runs as fast as it is read, at its place in the schedule.
+    if (firmware.name.find("tunekit-sim") == std::string::npos) {
       const auto t0 = std::chrono::steady_clock::now();
       rec_.start_reports([t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); });
     } else {
@@ -241,7 +240,7 @@ class GcodeSession : public Session {
   std::string m956_name_;
   double m956_rate_hz_ = 0, m956_window_s_ = 0;
   std::vector<std::string> m956_files_;
-  bool wall_clock_ = true, auto_report_on_ = false;
+  bool auto_report_on_ = false;
 };
 
 class KlipperSession : public Session {
@@ -417,9 +416,9 @@ class KlipperSession : public Session {
 std::unique_ptr<Session> make_gcode_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                             const machine::LinkOptions& lo, const std::atomic<bool>* abort,
                                             SendGuard& guard, std::string http,
-                                            std::optional<std::string> http_password, bool wall_clock) {
+                                            std::optional<std::string> http_password) {
   return std::make_unique<GcodeSession>(std::move(t), j, rec, lo, abort, guard, std::move(http),
-                                        std::move(http_password), wall_clock);
+                                        std::move(http_password));
 }
 std::unique_ptr<Session> make_klipper_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                               const machine::LinkOptions& lo, const machine::Sensors& sensors,

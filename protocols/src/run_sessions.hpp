@@ -2,9 +2,7 @@
 // The runner's machine sessions (internal to the protocols library): what records the sensor
 // samples into the run directory (Recorder), and one session per kind of link, G-code over a
 // serial line or pseudo-terminal (Marlin, Prusa, RepRapFirmware, tunekit-sim) or Klipper's API
-// server, each identifying the firmware before anything else is sent. `wall_clock`: the machine's
-// time is the host's (a real printer; the simulated printer's runs as fast as it is read, and its
-// reports are then timed by their schedule).
+// server, each identifying the firmware before anything else is sent.
 #include <atomic>
 #include <functional>
 #include <memory>
@@ -171,7 +169,7 @@ class Session {
 std::unique_ptr<Session> make_gcode_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                             const machine::LinkOptions& lo, const std::atomic<bool>* abort,
                                             SendGuard& guard, std::string http,
-                                            std::optional<std::string> http_password, bool wall_clock);
+                                            std::optional<std::string> http_password);
 std::unique_ptr<Session> make_klipper_session(std::unique_ptr<machine::Transport> t, machine::Journal& j, Recorder& rec,
                                               const machine::LinkOptions& lo, const machine::Sensors& sensors,
                                               SendGuard& guard);

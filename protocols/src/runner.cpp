@@ -373,7 +373,7 @@ RunResult run_experiment(const RunOptions& o) {
     else
       session = detail::make_gcode_session(std::move(transport), journal, rec, o.link, abort_flag, guard,
                                            served ? served->http_url() : profile.http_address,
-                                           machine::rrf_password(profile.http_password), !o.host);
+                                           machine::rrf_password(profile.http_password));
     stage = "while identifying the firmware";
     session->firmware = session->identify();
     session->dialect = firmware::Dialect(
