@@ -193,6 +193,26 @@ TEST_CASE("line protocol recovers from a garbled line with Resend", "[machine]")
   CHECK(rx[2] == rx[3]);  // the same numbered line arrived twice
 }
 
+TEST_CASE("line protocol hands Marlin's temperature auto-reports between ok replies to the reader", "[machine]") {
+  InProcess ip({});
+  GcodeLink link(*ip.pair.first, nullptr, {std::chrono::milliseconds(2000), 1, true});
+  std::vector<std::string> reports;
+  link.on_line = [&](std::string_view l) {
+    if (l.find(" T:") != 0) return false;
+    reports.emplace_back(l);
+    return true;
+  };
+  link.reset_line_numbers();
+  for (const char* l : {"M104 S200", "M155 S1", "G4 P3500"}) CHECK(link.send(l).empty());
+  CHECK(reports.size() == 3);  // one a second, none taken for an ok
+  link.send("M105");           // its own report is the "ok T:..." reply, not an auto-report
+  link.send("M155 S0");
+  link.send("G4 P2000");
+  CHECK(reports.size() == 3);
+  const auto log = tunekit::formats::read_marlin_temperature_reports(reports[2], 1.0);
+  CHECK(log.target_c.front() == 200);
+}
+
 TEST_CASE("line protocol re-sends a dropped line after the timeout", "[machine]") {
   InProcess ip({"fault=drop@2"});
   GcodeLink link(*ip.pair.first, nullptr, {std::chrono::milliseconds(200), 2, true});
