@@ -146,7 +146,11 @@ std::vector<double> step_taus(const std::string& run_dir) {
   const auto step = tunekit::test::read_json(run_dir + "/analysis/step.json");
   std::vector<double> taus;
   for (const auto& s : step["results"]["steps"]) taus.push_back(s["params"]["tau_s"]["value"].get<double>());
-  REQUIRE(taus.size() == 14);  // the flow sweep's steps
+  // The flow sweep's steps: up to each of its levels and back down from each, as designed for
+  // this run (its run.json), two more for the first rise and the last fall.
+  const auto levels = tunekit::test::read_json(run_dir + "/liquefier-step/run.json")["experiment"]["params"]["levels"];
+  REQUIRE(levels.get<double>() >= 3);
+  REQUIRE(taus.size() == 2 * static_cast<std::size_t>(levels.get<double>()) + 2);
   return taus;
 }
 
@@ -167,11 +171,14 @@ TEST_CASE("Klipper's stops between extrude-only moves: the step fits driven by t
   // Klipper brings the extruder to rest where two extrude-only moves meet: the logged feed dips at
   // every step and the force a dead time later. An ideal step read that dip as a faster response:
   // on a liquefier with one time constant the two steps falling from the top level came out 9 and
-  // 11 % short and the pooled tau 3.5 % short. Driven by the logged feed, each step is within 3 %
-  // of the truth and the pooled fit within 1.5 %.
+  // 11 % short and the pooled tau 3.5 % short. Driven by the logged feed, each step is within 5 %
+  // of the truth and the pooled fit within 1.5 %. (With the six levels of the sweep before it was
+  // designed for machine time each step was within 3 %; the designed sweep's five levels make the
+  // step from the top level a quarter larger, and the steps on either side of it read 3.3 % short
+  // and 3.0 % long: what is left of the stop's dip grows with the step.)
   const double tau = 0.026;
   const auto run = calibrate_liquefier("klipper", {"tau_flow_exponent=0"});
-  for (double t : step_taus(run)) CHECK(t == Approx(tau).epsilon(0.03));
+  for (double t : step_taus(run)) CHECK(t == Approx(tau).epsilon(0.05));
   const auto pooled = tunekit::test::read_json(run + "/analysis/step.json")["results"]["pooled"]["params"]["tau_s"];
   CHECK(pooled["value"].get<double>() == Approx(tau).epsilon(0.015));
 }
@@ -179,15 +186,24 @@ TEST_CASE("Klipper's stops between extrude-only moves: the step fits driven by t
 TEST_CASE("the default simulated printer's steps read the same tau on Klipper as on Marlin, which does not stop") {
   // The default liquefier's time constant falls with the flow: each step has its own. Marlin joins
   // extrude-only moves at speed, Klipper stops between them; fitted against the feed each logged,
-  // every step agrees within 5 % (the ideal step put the first step falling from the top level
-  // 19 % short on Klipper).
-  const auto klipper = step_taus(calibrate_liquefier("klipper", {}));
-  const auto marlin = step_taus(calibrate_liquefier("marlin", {}));
+  // every step agrees within 10 % and the pooled tau within 3 % (the ideal step put the first step
+  // falling from the top level 19 % short on Klipper). With the six levels of the sweep before it
+  // was designed for machine time every step agreed within 5 %; the designed five levels make the
+  // step from the top level a quarter larger, and the first step down from it reads 8.6 % short.
+  const auto klipper_run = calibrate_liquefier("klipper", {});
+  const auto marlin_run = calibrate_liquefier("marlin", {});
+  const auto klipper = step_taus(klipper_run);
+  const auto marlin = step_taus(marlin_run);
   REQUIRE(klipper.size() == marlin.size());
   for (std::size_t i = 0; i < klipper.size(); ++i) {
     INFO("step " << i);
-    CHECK(klipper[i] == Approx(marlin[i]).epsilon(0.05));
+    CHECK(klipper[i] == Approx(marlin[i]).epsilon(0.10));
   }
+  const auto pooled_tau = [](const std::string& run) {
+    return tunekit::test::read_json(run + "/analysis/step.json")["results"]["pooled"]["params"]["tau_s"]["value"]
+        .get<double>();
+  };
+  CHECK(pooled_tau(klipper_run) == Approx(pooled_tau(marlin_run)).epsilon(0.03));
 }
 
 TEST_CASE("a recorded input that steps between two samples gives the fit of the ideal step half-way between them") {
