@@ -139,6 +139,19 @@ RrfLines find_rrf_lines(const LineEditor& ed, const std::string& drive) {
   return at;
 }
 
+/// The config-override.g beside config.g at `config_path` (RepRapFirmware's M500 writes it, M501
+/// runs it): its path, and its lines (nullopt when there is none).
+std::string config_override_path(const std::string& config_path) {
+  return (std::filesystem::path(config_path).parent_path() / "config-override.g").string();
+}
+
+std::optional<LineEditor> read_config_override(const std::string& config_path) {
+  const std::string over = config_override_path(config_path);
+  std::error_code ec;
+  if (!std::filesystem::exists(over, ec)) return std::nullopt;
+  return LineEditor(read_config_file(over));
+}
+
 /// Precedence: config.g's M501 runs config-override.g (GCodes2.cpp case 501) where it stands,
 /// so a command there overrides the same command in config.g before the M501. RRF's M500
 /// writes heater, kinematics, probe, tool and workplace values only (GCodes.cpp
@@ -147,11 +160,9 @@ RrfLines find_rrf_lines(const LineEditor& ed, const std::string& drive) {
 void check_config_override(const ExportResult& r, const CompensatorSettings& s, const RrfLines& at,
                            const std::string& drive) {
   if (!at.m501) return;
-  namespace fs = std::filesystem;
-  const fs::path over = fs::path(r.path).parent_path() / "config-override.g";
-  std::error_code ec;
-  if (!fs::exists(over, ec)) return;
-  const LineEditor oe(read_config_file(over.string()));
+  const auto override_file = read_config_override(r.path);
+  if (!override_file) return;
+  const LineEditor& oe = *override_file;
   for (std::size_t i = 0; i < oe.size(); ++i) {
     const auto c = parse_command(oe.line(i));
     if (!c) continue;
@@ -164,7 +175,7 @@ void check_config_override(const ExportResult& r, const CompensatorSettings& s, 
         "{}:{}: '{}' in config-override.g is run by M501 (config.g line {}) after config.g's own {} and would "
         "override the value written here; remove that line from config-override.g (RepRapFirmware's M500 never "
         "writes {}, so it was added by hand) and export again",
-        over.string(), i + 1, oe.line(i), *at.m501 + 1, c->code, c->code));
+        config_override_path(r.path), i + 1, oe.line(i), *at.m501 + 1, c->code, c->code));
   }
 }
 
@@ -279,18 +290,16 @@ void write_rrf_thermal(ExportResult& r, LineEditor& ed, const CompensatorSetting
     ed.insert_before(*at.m950 + 1, {line});
     r.changes.push_back({fmt::format("M307 H{}", h), "", line.substr(0, line.find(" ;")), *at.m950 + 2, "new line"});
   }
-  namespace fs = std::filesystem;
-  const fs::path over = fs::path(r.path).parent_path() / "config-override.g";
-  std::error_code ec;
-  if (!fs::exists(over, ec)) return;
-  const LineEditor oe(read_config_file(over.string()));
+  const auto override_file = read_config_override(r.path);
+  if (!override_file) return;
+  const LineEditor& oe = *override_file;
   for (std::size_t i = 0; i < oe.size(); ++i) {
     const auto c = parse_command(oe.line(i));
     if (c && c->code == "M307" && param_value(oe.line(i), 'H') == h)
       r.warnings.push_back(fmt::format(
           "{}:{}: config-override.g holds '{}' (RepRapFirmware's M500 writes it), which M501 runs after config.g: send "
           "the G-code below and then M500 so that it holds the new model too",
-          over.string(), i + 1, oe.line(i)));
+          config_override_path(r.path), i + 1, oe.line(i)));
   }
 }
 

@@ -156,14 +156,7 @@ ExperimentPrediction predict_liquefier_record(const Experiment& e, const Liquefi
 ExperimentPrediction predict_axis_sweep(const Experiment& e, const AxisPrior& prior) {
   if (e.protocol != "axis-sweep") throw InputError(fmt::format("{} is not an axis sweep", e.protocol));
   const auto& p = e.params;
-  experiment_gcode::SweepDesign d;
-  d.freq_start_hz = p.at("freq_start_hz");
-  d.freq_end_hz = p.at("freq_end_hz");
-  d.hz_per_sec = p.at("hz_per_sec");
-  d.accel_per_hz = p.at("accel_per_hz");
-  d.sweeping_accel_mm_s2 = p.at("sweeping_accel");
-  d.sweeping_period_s = p.at("sweeping_period");
-  d.max_accel_mm_s2 = e.excitation.value("accel_limit_mm_s2", 0.0);
+  auto d = experiment_gcode::sweep_design_from_params(p, e.excitation.value("accel_limit_mm_s2", 0.0));
   d.min_half_mm = e.excitation.value("min_move_mm", 0.0);
   const auto segs = experiment_gcode::add_sweeping(experiment_gcode::vibration_pulses(d), d);
   std::vector<double> accel;

@@ -73,14 +73,7 @@ void sweep_test_settings(const ExperimentRequest& r, double peak_accel, std::vec
 /// there, refused elsewhere: its moves join at speed, which only Klipper's planner was checked for).
 SweepDesign sweep_design(const ExperimentRequest& r, std::map<std::string, double>& p) {
   const bool klipper = r.dialect.firmware() == firmware::Firmware::klipper;
-  SweepDesign d;
-  d.freq_start_hz = p.at("freq_start_hz");
-  d.freq_end_hz = p.at("freq_end_hz");
-  d.hz_per_sec = p.at("hz_per_sec");
-  d.accel_per_hz = p.at("accel_per_hz");
-  d.sweeping_accel_mm_s2 = p.at("sweeping_accel");
-  d.sweeping_period_s = p.at("sweeping_period");
-  d.max_accel_mm_s2 = r.profile.axis(r.axis_in).max_accel_mm_s2;
+  SweepDesign d = sweep_design_from_params(p, r.profile.axis(r.axis_in).max_accel_mm_s2);
   if (d.sweeping() && !klipper)
     throw InputError(fmt::format(
         "axis-sweep's sweeping motion (sweeping_accel {:g} mm/s^2) follows Klipper's TEST_RESONANCES and is made "

@@ -170,6 +170,18 @@ std::vector<SweepSegment> add_sweeping(const std::vector<SweepSegment>& pulses, 
   return out;
 }
 
+SweepDesign sweep_design_from_params(const std::map<std::string, double>& p, double max_accel_mm_s2) {
+  SweepDesign d;
+  d.freq_start_hz = p.at("freq_start_hz");
+  d.freq_end_hz = p.at("freq_end_hz");
+  d.hz_per_sec = p.at("hz_per_sec");
+  d.accel_per_hz = p.at("accel_per_hz");
+  d.sweeping_accel_mm_s2 = p.at("sweeping_accel");
+  d.sweeping_period_s = p.at("sweeping_period");
+  d.max_accel_mm_s2 = max_accel_mm_s2;
+  return d;
+}
+
 std::vector<SweepMove> sweep_moves(const std::vector<SweepSegment>& segments, double stop_accel_mm_s2) {
   std::vector<SweepMove> moves = hold_slowest_points(joined_moves(pieces_of(segments)));
   if (!moves.empty() && moves.back().v_end > kRest_mm_s) {

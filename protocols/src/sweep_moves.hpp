@@ -6,6 +6,8 @@
 // ResonanceTestExecutor.run_test makes of the sum, written as G1 moves whose speeds and
 // junctions a planner follows. Not installed; used by experiments_axis.cpp.
 
+#include <map>
+#include <string>
 #include <vector>
 
 namespace tunekit::protocols::experiment_gcode {
@@ -32,6 +34,11 @@ struct SweepDesign {
   /// The frequency (Hz) above which the pulses' acceleration is held at pulse_accel_cap().
   double held_above_hz() const { return pulse_accel_cap() / accel_per_hz; }
 };
+
+/// The design as an axis-sweep's parameters state it (freq_start_hz, freq_end_hz, hz_per_sec,
+/// accel_per_hz, sweeping_accel, sweeping_period), under the axis limit max_accel_mm_s2; the
+/// firmware's own adjustments (min_half_mm) are the caller's.
+SweepDesign sweep_design_from_params(const std::map<std::string, double>& params, double max_accel_mm_s2);
 
 /// One piece of constant commanded acceleration: it ends at t_end_s (from the sweep's start),
 /// accel_mm_s2 signed along the axis, during the pulse of frequency freq_hz.
