@@ -187,17 +187,28 @@ void validate_thermal(ExportFirmware fw, const ThermalExport& t, std::vector<std
   const auto& m = t.model;
   // Every firmware's model needs these above 0 (Kalico heaters.py: heater_power, block_heat_capacity,
   // sensor_responsiveness above=0.; Marlin's and RRF's models divide by them).
+  // The upper ends are a hot end's, with a wide margin: cartridges of 30-80 W, blocks of 5-50 J/K
+  // (Marlin's MPC documentation gives 40 W and 16.7 J/K as typical); a value past them is a typing
+  // error or a failed fit, and would be written into the firmware as it stands.
   const struct {
     const char* what;
     double v;
     int decimals;
-  } required[] = {{"heater power P (W)", m.heater_power_w, kDecimalsMarlinPC},
-                  {"block heat capacity C (J/K)", m.block_heat_capacity_j_per_k, kDecimalsMarlinPC},
-                  {"sensor responsiveness R (1/s)", m.sensor_responsiveness_per_s, kDecimalsMarlinSmall},
-                  {"ambient transfer A (W/K)", m.ambient_transfer_w_per_k, kDecimalsMarlinSmall}};
-  for (const auto& q : required)
+    double max;
+  } required[] = {{"heater power P (W)", m.heater_power_w, kDecimalsMarlinPC, 1000.0},
+                  {"block heat capacity C (J/K)", m.block_heat_capacity_j_per_k, kDecimalsMarlinPC, 1000.0},
+                  {"sensor responsiveness R (1/s)", m.sensor_responsiveness_per_s, kDecimalsMarlinSmall, 100.0},
+                  {"ambient transfer A (W/K)", m.ambient_transfer_w_per_k, kDecimalsMarlinSmall, 100.0}};
+  for (const auto& q : required) {
     if (!(written(q.v, q.decimals) > 0))
       bad.push_back(fmt::format("the thermal model's {} must be above 0 as written, not {}", q.what, q.v));
+    else if (!(q.v <= q.max))
+      bad.push_back(fmt::format("the thermal model's {} is {:g}, more than any hot end's {:g}", q.what, q.v, q.max));
+  }
+  if (!(m.fan_transfer_w_per_k <= 100.0) || !(m.filament_heat_capacity_j_per_k_mm <= 1.0))
+    bad.push_back(
+        "the thermal model's fan transfer F (at most 100 W/K) or filament heat capacity H (at most 1 "
+        "J/(K mm)) is beyond any hot end's");
   if (!std::isfinite(m.fan_transfer_w_per_k) || !std::isfinite(m.filament_heat_capacity_j_per_k_mm))
     bad.push_back("the thermal model's fan transfer F and filament heat capacity H must be numbers");
   if (!bad.empty()) return;  // the designs below need a valid model

@@ -253,4 +253,12 @@ TEST_CASE("tunekit export reads the results of tunekit thermal and refuses a mod
   const auto garbled = run_cli({"export", "-f", "rrf", "-c", cfg, "--thermal-model", "40:16.7:x:0.07:0.09"});
   CHECK(garbled.code == 2);
   CHECK_THAT(garbled.err, Contains("--thermal-model takes P:C:R:A:F[:H]"));
+  // A finite value no hot end has (a typing error, a failed fit) never reaches the file either.
+  for (const char* model : {"1e308:16.7:0.22:0.07:0.09", "40:16.7:0.22:0.07:1e300", "40:1e9:0.22:0.07:0.09"}) {
+    INFO(model);
+    const auto huge = run_cli({"export", "-f", "klipper", "-c", cfg, "--thermal-model", model, "--write"});
+    CHECK(huge.code == 2);
+    CHECK_THAT(huge.err, Contains("any hot end's"));
+    CHECK(tunekit::test::read_text(cfg) == original);
+  }
 }
