@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -88,6 +89,36 @@ TEST_CASE("a curved line (polyline with round joins) is followed and measured wi
   CHECK(std::abs(s.mean - w) <= 0.1);
   CHECK(s.std <= 0.25);
   CHECK(res.lines[0].length_px > 500);
+}
+
+TEST_CASE("the stations measured on worker threads give the samples of one thread, bit for bit") {
+  std::vector<cv::Point2d> pts;
+  for (int i = 0; i <= 200; ++i) {
+    const double x = 60 + 2.6 * i;
+    pts.push_back({x, 240 + 110 * std::sin(x / 90.0)});
+  }
+  const auto cov = rd::coverage(640, 480, rd::polyline(pts, 12.0));
+  rd::Photo ph;
+  ph.noise = 2.0;
+  const cv::Mat gray = vision::to_gray_float(rd::photograph(cov, ph));
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  const auto one = vision::measure_line_widths(gray);
+  cv::setNumThreads(4);
+  const auto several = vision::measure_line_widths(gray);
+  cv::setNumThreads(threads);
+  REQUIRE(one.lines.size() == 1);
+  REQUIRE(several.lines.size() == 1);
+  const auto& a = one.lines[0].samples;
+  const auto& b = several.lines[0].samples;
+  REQUIRE(a.size() == b.size());
+  REQUIRE(a.size() > 400);
+  int differing = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (std::memcmp(&a[i].width_px, &b[i].width_px, sizeof(double)) != 0 || a[i].x_px != b[i].x_px ||
+        a[i].flags != b[i].flags)
+      ++differing;
+  CHECK(differing == 0);
 }
 
 TEST_CASE("a ring with a sine-modulated width yields the amplitude within 3 % and the phase within 3 deg") {

@@ -265,18 +265,18 @@ std::optional<Centreline> trace_centreline(const Coarse& c, const cv::Mat& label
   return cl;
 }
 
-void recentre_centreline(const cv::Mat& gray, bool light, Centreline& cl, double half_window, const LineWidthOptions& o,
-                         std::vector<double>& prof) {
+void recentre_centreline(const cv::Mat& gray, bool light, Centreline& cl, double half_window,
+                         const LineWidthOptions& o) {
   std::vector<Pt>& q = cl.points;
   const bool closed = cl.closed;
   std::vector<Station> st = stations_from(q, closed);
   std::vector<std::pair<double, double>> off(q.size(), {0.0, 0.0});
   std::vector<double> known(q.size(), 0.0);
-  WidthSample ws;
+  std::vector<WidthSample> ws;
+  measure_stations(gray, light, st, kRecentreStride, half_window, o.along_half_px, cl.w0, ws);
   for (std::size_t i = 0; i < st.size(); i += kRecentreStride) {
-    measure_station(gray, light, st[i], half_window, o.along_half_px, cl.w0, prof, ws);
-    if (ws.flags == 0 && std::isfinite(ws.width_px)) {
-      off[i] = {ws.x_px - st[i].c.x, ws.y_px - st[i].c.y};
+    if (ws[i].flags == 0 && std::isfinite(ws[i].width_px)) {
+      off[i] = {ws[i].x_px - st[i].c.x, ws[i].y_px - st[i].c.y};
       known[i] = 1;
     }
   }

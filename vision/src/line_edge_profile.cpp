@@ -453,4 +453,17 @@ void measure_station(const cv::Mat& img, bool light, const Station& st, double h
   record_bar(f, st, out);
 }
 
+void measure_stations(const cv::Mat& img, bool light, const std::vector<Station>& st, std::size_t stride,
+                      double half_window, double along_half, double w_guess, std::vector<WidthSample>& out) {
+  out.assign(st.size(), WidthSample{});
+  const int n = static_cast<int>((st.size() + stride - 1) / stride);
+  cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& r) {
+    std::vector<double> prof;
+    for (int k = r.start; k < r.end; ++k) {
+      const std::size_t i = static_cast<std::size_t>(k) * stride;
+      measure_station(img, light, st[i], half_window, along_half, w_guess, prof, out[i]);
+    }
+  });
+}
+
 }  // namespace tunekit::vision::detail

@@ -107,7 +107,6 @@ LineWidthResult measure_line_widths(const cv::Mat& gray_in, const LineWidthOptio
   if (static_cast<int>(order.size()) > kCandidatesPerLine * o.max_lines)
     order.resize(static_cast<std::size_t>(kCandidatesPerLine * o.max_lines));
 
-  std::vector<double> prof;
   for (int lab : order) {
     std::optional<detail::Centreline> cl = detail::trace_centreline(c, labels, stats, lab, o);
     if (!cl) continue;
@@ -118,14 +117,13 @@ LineWidthResult measure_line_widths(const cv::Mat& gray_in, const LineWidthOptio
 
     const double half_window = detail::measuring_half_window(cl->w0);
     // Pass 1 (a subset of the stations): re-centre the centreline on the measured mid-points.
-    detail::recentre_centreline(gray, c.light, *cl, half_window, o, prof);
+    detail::recentre_centreline(gray, c.light, *cl, half_window, o);
     // Pass 2: every station.
     const std::vector<detail::Station> st = detail::stations_from(cl->points, cl->closed);
-    line.samples.resize(st.size());
+    detail::measure_stations(gray, c.light, st, 1, half_window, o.along_half_px, cl->w0, line.samples);
     double s_acc = 0;
     for (std::size_t i = 0; i < st.size(); ++i) {
       if (i > 0) s_acc += std::hypot(st[i].c.x - st[i - 1].c.x, st[i].c.y - st[i - 1].c.y);
-      detail::measure_station(gray, c.light, st[i], half_window, o.along_half_px, cl->w0, prof, line.samples[i]);
       line.samples[i].s_px = s_acc;
     }
     line.length_px = s_acc;

@@ -108,8 +108,8 @@ std::optional<Centreline> trace_centreline(const Coarse& c, const cv::Mat& label
 
 /// Moves the centreline onto the mid-points between the fitted edges of a subset of stations
 /// (the skeleton of the coarse mask is off by up to a coarse pixel).
-void recentre_centreline(const cv::Mat& gray, bool light, Centreline& cl, double half_window, const LineWidthOptions& o,
-                         std::vector<double>& prof);
+void recentre_centreline(const cv::Mat& gray, bool light, Centreline& cl, double half_window,
+                         const LineWidthOptions& o);
 
 // ---------------------------------------------------------------- edge profile
 
@@ -129,5 +129,12 @@ double measuring_half_window(double w0);
 /// blurred bar; fills the sample (without s). `prof` is scratch space.
 void measure_station(const cv::Mat& img, bool light, const Station& st, double half_window, double along_half,
                      double w_guess, std::vector<double>& prof, WidthSample& out);
+
+/// Measures the stations st[0], st[stride], st[2 stride], ... into out[i] (out is resized to
+/// st.size(); the samples between stay default). The stations are independent, so they are
+/// measured on OpenCV's worker threads (cv::parallel_for_), each stripe with its own scratch;
+/// the samples are the same as one measure_station after another.
+void measure_stations(const cv::Mat& img, bool light, const std::vector<Station>& st, std::size_t stride,
+                      double half_window, double along_half, double w_guess, std::vector<WidthSample>& out);
 
 }  // namespace tunekit::vision::detail
