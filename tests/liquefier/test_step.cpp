@@ -176,7 +176,11 @@ TEST_CASE("Klipper's stops between extrude-only moves: the step fits driven by t
   // from the top level a quarter larger than with six) the steps either side of the top level read
   // 3.3 % short and 3.0 % long, 6.8 and 5.2 of their standard errors, and the pooled tau 1 % short.
   // Driven by the run's feed track (the planner's stops where they happened) every step is within
-  // 2.8 % of the truth and 2.3 of its standard errors, and the pooled tau within 0.1 %.
+  // 2.8 % of the truth and 2.3 of its standard errors, and the pooled tau within 0.1 %. The bound
+  // in standard errors is the one that tells a bias from the noise: the steps at the lowest levels
+  // have standard errors of 2-3 %, and on seeds 2-4 one of them reads up to 5.9 % off (2.9 of its
+  // standard errors), while the steps beside the top level, 5-9 standard errors off driven by the
+  // window means on seeds 1-4, are within 1.8 %.
   const double tau = 0.026;
   const auto run = calibrate_liquefier("klipper", {"tau_flow_exponent=0"});
   const auto step = tunekit::test::read_json(run + "/analysis/step.json")["results"];
