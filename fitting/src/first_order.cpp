@@ -40,6 +40,11 @@ void check_record(const StepRecord& r, const std::string& what) {
   if (!r.u.empty() && r.u.size() != r.t.size()) throw InputError(what + ": time and input have different lengths");
   for (double v : r.u)
     if (!std::isfinite(v)) throw InputError(what + ": NaN or infinite input sample");
+  if (r.input_t.size() != r.input_u.size())
+    throw InputError(what + ": the input track has different numbers of instants and values");
+  for (std::size_t i = 0; i < r.input_t.size(); ++i)
+    if (!std::isfinite(r.input_t[i]) || !std::isfinite(r.input_u[i]) || (i > 0 && r.input_t[i] < r.input_t[i - 1]))
+      throw InputError(what + ": the input track's instants decrease or it holds NaN or infinity");
   // The output's range by minima and maxima (no branch per sample: minmax_element's comparisons
   // of noisy samples are mispredicted); the samples are finite here.
   double lo = r.y[0], hi = r.y[0];
@@ -124,6 +129,7 @@ constexpr double kNegligibleDeparture = 1e-9;
 // The samples are taken at s = t - theta in the input's time, so dx/dtheta = -(v - x) / tau.
 void driven_model_points(const StepRecord& r, double K, double tau, double theta, double y0,
                          std::vector<StepModelPoint>& out) {
+  if (!r.input_t.empty()) return track_model_points(r, K, tau, theta, y0, out);
   const std::size_t n = r.t.size();
   out.resize(n);
   const DrivenInput in = driven_input(r);
@@ -164,7 +170,7 @@ void driven_model_points(const StepRecord& r, double K, double tau, double theta
 }  // namespace
 
 bool input_is_ideal_step(const StepRecord& r) {
-  if (r.u.empty() || r.u.size() != r.t.size()) return false;
+  if (!r.input_t.empty() || r.u.empty() || r.u.size() != r.t.size()) return false;
   const DrivenInput in = driven_input(r);
   const double negligible = kNegligibleDeparture * std::max(std::abs(r.du), std::abs(in.u_before));
   return std::all_of(in.departure.begin(), in.departure.end(),
@@ -173,7 +179,7 @@ bool input_is_ideal_step(const StepRecord& r) {
 
 void step_model_points(const StepRecord& r, double K, double tau, double theta, double y0,
                        std::vector<StepModelPoint>& out) {
-  if (!r.u.empty()) return driven_model_points(r, K, tau, theta, y0, out);
+  if (follows_input(r)) return driven_model_points(r, K, tau, theta, y0, out);
   out.resize(r.t.size());
   for (std::size_t i = 0; i < r.t.size(); ++i) out[i] = step_model_at(r, i, K, tau, theta, y0);
 }
@@ -181,7 +187,7 @@ void step_model_points(const StepRecord& r, double K, double tau, double theta, 
 void step_residuals(const StepRecord& r, double K, double tau, double theta, double y0, double* res, double* jac,
                     std::size_t width, const std::size_t cols[4]) {
   const std::size_t n = r.t.size();
-  if (!r.u.empty()) {
+  if (follows_input(r)) {
     std::vector<StepModelPoint> pts;
     driven_model_points(r, K, tau, theta, y0, pts);
     for (std::size_t i = 0; i < n; ++i) {
@@ -258,7 +264,7 @@ double driven_normal_equations(const StepRecord& r, const double p[4], Eigen::Ma
 // the Jacobian (100k samples cost a few milliseconds).
 double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr,
                         std::span<double> res_out) {
-  if (!r.u.empty()) return driven_normal_equations(r, p, JtJ, Jtr, res_out);
+  if (follows_input(r)) return driven_normal_equations(r, p, JtJ, Jtr, res_out);
   // Before the response starts (the times increase, so these are the first samples) the Jacobian
   // row is (0, 0, 0, 1): only the count and the sum of residuals matter there. Afterwards the ten
   // products of the symmetric 4x4, J'r and the residual sum of squares are accumulated two sums

@@ -30,8 +30,14 @@ StepModelPoint step_model_at(const StepRecord& r, std::size_t i, double K, doubl
 /// logged_input_is_ideal_step (first_order.hpp).
 bool input_is_ideal_step(const StepRecord& r);
 
+/// The response to a record's commanded input track (StepRecord::input_t, input_u) and its
+/// derivatives at every sample (first_order_track.cpp).
+void track_model_points(const StepRecord& r, double K, double tau, double theta, double y0,
+                        std::vector<StepModelPoint>& out);
+
 /// The model and its derivatives at every sample of a record: step_model_at for an ideal step,
-/// the response to the recorded input (StepRecord::u) when the record has one.
+/// the response to the commanded input track (StepRecord::input_t) when the record has one, else
+/// to the recorded input (StepRecord::u) when it has that.
 void step_model_points(const StepRecord& r, double K, double tau, double theta, double y0,
                        std::vector<StepModelPoint>& out);
 

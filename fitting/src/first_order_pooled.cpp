@@ -44,9 +44,10 @@ class PooledStepCost final : public ceres::CostFunction {
     const std::size_t n = r_.t.size();
     const double K = p[0][0], tau = p[0][1], theta = p[0][2], y0 = p[1][0];
     std::vector<StepModelPoint> pts;  // a driven record's model, computed over the whole record
-    if (!r_.u.empty()) step_model_points(r_, K, tau, theta, y0, pts);
+    const bool driven = follows_input(r_);
+    if (driven) step_model_points(r_, K, tau, theta, y0, pts);
     for (std::size_t i = 0; i < n; ++i) {
-      const StepModelPoint m = r_.u.empty() ? step_model_at(r_, i, K, tau, theta, y0) : pts[i];
+      const StepModelPoint m = driven ? pts[i] : step_model_at(r_, i, K, tau, theta, y0);
       res[i] = m.m - r_.y[i];
       if (j_shared != nullptr) {
         j_shared[3 * i] = m.dK;

@@ -43,21 +43,13 @@ bool rises_from_rest(const StepFit& s) {
   return std::abs(s.step.u_before) <= kRestInputShare * std::abs(s.step.u_after);
 }
 
-/// The model's response over one step's window, fitted as the step was (driven by the same
-/// recorded input).
+/// The model's response over one step's window, fitted as the step was (following the same
+/// input: the analysis' feed track, or the logged feed; step_fit_record).
 void check_step(const WholeRecordModel& m, const fitting::LiquefierRecord& rec, const std::vector<double>& sim,
-                const StepFit& s, fitting::InputHold hold, std::size_t index, std::vector<StepModelCheck>& out) {
+                const StepAnalysis& steps, std::size_t index, std::vector<StepModelCheck>& out) {
+  const StepFit& s = steps.steps[index];
   if (!s.fit) return;
-  fitting::StepRecord r;
-  r.t_step = s.step.t_step_s;
-  r.du = s.step.u_after - s.step.u_before;
-  for (std::size_t i = s.step.begin; i < s.step.end && i < rec.t.size(); ++i) {
-    r.t.push_back(rec.t[i]);
-    r.y.push_back(sim[i]);
-    r.u.push_back(rec.u[i]);
-  }
-  r.u_hold = hold;
-  if (fitting::logged_input_is_ideal_step(r)) r.u.clear();  // the same model, computed faster
+  const fitting::StepRecord r = step_fit_record(steps, s.step, rec.t, rec.u, sim);
   StepModelCheck c;
   c.step = index;
   c.u_after = s.step.u_after;
@@ -253,8 +245,7 @@ WholeRecordModel analyze_whole_record(std::span<const double> t, std::span<const
     full.t = tv;
     full.u = uv;
     for (std::size_t i = 0; i < steps->steps.size(); ++i)
-      if (steps->steps[i].step.begin >= m.first_sample)
-        check_step(m, full, sim, steps->steps[i], steps->input_hold, i, m.checks);
+      if (steps->steps[i].step.begin >= m.first_sample) check_step(m, full, sim, *steps, i, m.checks);
     const std::size_t bad = disagreeing_checks(m.checks);
     if (step_checks_contradict_model(m.checks.size(), bad))
       m.warnings.push_back(fmt::format(

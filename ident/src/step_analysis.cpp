@@ -19,21 +19,12 @@ fitting::InputHold input_hold(StepInstant instant) {
   return instant == StepInstant::first_sample ? fitting::InputHold::from_stamp : fitting::InputHold::centred;
 }
 
-// One step's samples, with the recorded input that drives the model over them (the instant
-// convention decides how a value stands for the input between samples).
-StepRecord make_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
-                       const DetectedStep& s, const StepAnalysisOptions& o) {
-  StepRecord r;
-  const auto b = static_cast<std::ptrdiff_t>(s.begin), e = static_cast<std::ptrdiff_t>(s.end);
-  r.t.assign(t.begin() + b, t.begin() + e);
-  r.y.assign(y.begin() + b, y.begin() + e);
-  r.u.assign(u.begin() + b, u.begin() + e);
-  r.u_hold = input_hold(o.detect.instant);
-  r.t_step = s.t_step_s;
-  r.du = s.u_after - s.u_before;
+// One step's samples with the input that drives its model (step_fit_record) and the units.
+StepRecord make_record(const StepAnalysis& a, std::span<const double> t, std::span<const double> u,
+                       std::span<const double> y, const DetectedStep& s, const StepAnalysisOptions& o) {
+  StepRecord r = step_fit_record(a, s, t, u, y);
   r.output_unit = o.output_unit;
   r.gain_unit = o.gain_unit;
-  if (fitting::logged_input_is_ideal_step(r)) r.u.clear();  // the same model, computed faster
   return r;
 }
 
@@ -199,8 +190,27 @@ std::vector<DetectedStep> detect_steps(std::span<const double> t, std::span<cons
   return steps;
 }
 
+fitting::StepRecord step_fit_record(const StepAnalysis& a, const DetectedStep& s, std::span<const double> t,
+                                    std::span<const double> u, std::span<const double> y) {
+  StepRecord r;
+  const auto b = static_cast<std::ptrdiff_t>(s.begin);
+  const auto e = static_cast<std::ptrdiff_t>(std::min(s.end, t.size()));
+  r.t.assign(t.begin() + b, t.begin() + e);
+  if (!y.empty()) r.y.assign(y.begin() + b, y.begin() + e);
+  r.t_step = s.t_step_s;
+  r.du = s.u_after - s.u_before;
+  if (!a.input_track.empty()) {
+    fitting::set_input_track(r, a.input_track.t, a.input_track.u);
+    return r;
+  }
+  r.u.assign(u.begin() + b, u.begin() + e);
+  r.u_hold = a.input_hold;
+  if (fitting::logged_input_is_ideal_step(r)) r.u.clear();  // the same model, computed faster
+  return r;
+}
+
 StepAnalysis analyze_steps(std::span<const double> t, std::span<const double> u, std::span<const double> y,
-                           const StepAnalysisOptions& o) {
+                           const StepAnalysisOptions& o, const FeedTrack* track) {
   if (y.size() != t.size()) throw InputError("time and output have different lengths");
   {
     const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
@@ -208,11 +218,12 @@ StepAnalysis analyze_steps(std::span<const double> t, std::span<const double> u,
   }
   StepAnalysis a;
   a.input_hold = input_hold(o.detect.instant);
+  if (track != nullptr) a.input_track = *track;
   auto det = detect_steps(t, u, o.detect);
   std::vector<StepRecord> recs;
   for (auto& s : det) {
     s.begin = settled_begin(y, s.begin, s.sample);
-    recs.push_back(make_record(t, u, y, s, o));
+    recs.push_back(make_record(a, t, u, y, s, o));
     StepFit sf;
     sf.step = s;
     try {
@@ -322,6 +333,8 @@ nlohmann::json to_json(const StepAnalysis& a) {
     steps.push_back(j);
   }
   return {{"steps", steps},
+          // What the step fits' model followed: the commanded feed track, or the logged input.
+          {"steps_driven_by", a.input_track.empty() ? "logged input" : "feed track"},
           {"pooled", a.pooled ? fitting::to_json(*a.pooled) : json(nullptr)},
           {"operating_points", arrival_levels_json(a)},
           {"trend", level_trends_json(a)}};

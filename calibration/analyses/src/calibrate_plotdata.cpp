@@ -22,25 +22,19 @@ double calibrate_param(const fitting::FitResult& f, const std::string& name) {
 namespace {
 
 // Each step's model over the samples its fit used and nowhere else (not over the warm-up from
-// rest, which no step models), driven by the record's input as the fit was; NaN elsewhere.
+// rest, which no step models), driven by the input the fit followed; NaN elsewhere.
 std::vector<double> step_fits_output(const std::vector<double>& t, const std::vector<double>& u,
                                      const ident::StepAnalysis& steps) {
   std::vector<double> yf(t.size(), std::nan(""));
   for (const auto& s : steps.steps) {
     if (!s.fit) continue;
-    const std::size_t begin = s.step.begin, end = std::min(s.step.end, t.size());
-    fitting::StepRecord r;
-    r.t_step = s.step.t_step_s;
-    r.du = s.step.u_after - s.step.u_before;
-    r.t.assign(t.begin() + static_cast<std::ptrdiff_t>(begin), t.begin() + static_cast<std::ptrdiff_t>(end));
-    r.u.assign(u.begin() + static_cast<std::ptrdiff_t>(begin), u.begin() + static_cast<std::ptrdiff_t>(end));
-    r.u_hold = steps.input_hold;
+    const fitting::StepRecord r = ident::step_fit_record(steps, s.step, t, u, {});
     const auto& f = *s.fit;
     double theta = calibrate_param(f, "theta_s");
     if (!std::isfinite(theta)) theta = 0;
     const auto m = fitting::step_model_output(r, calibrate_param(f, "K"), calibrate_param(f, "tau_s"), theta,
                                               calibrate_param(f, "y0"));
-    std::copy(m.begin(), m.end(), yf.begin() + static_cast<std::ptrdiff_t>(begin));
+    std::copy(m.begin(), m.end(), yf.begin() + static_cast<std::ptrdiff_t>(s.step.begin));
   }
   return yf;
 }

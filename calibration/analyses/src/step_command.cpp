@@ -69,6 +69,20 @@ bool explained_by_whole_record(const std::string& warning, const WholeRecordResu
   return !m.model.linear_chosen && m.warnings.empty() && m.model.fit.diagnostics.whiteness_p >= ident::kWhitenessAlarmP;
 }
 
+// The analysis options with the units of the log's columns (or the ones the options give).
+ident::StepAnalysisOptions analysis_options(const StepOptions& a, const formats::CsvTable& table) {
+  ident::StepAnalysisOptions opt = a.analysis;
+  opt.output_unit = unit_or_1(a.output_unit.empty() ? table.column(a.output_column).unit : a.output_unit);
+  std::string input_unit = "1";
+  if (!a.input_column.empty()) input_unit = unit_or_1(table.column(a.input_column).unit);
+  else if (!a.group_column.empty()) input_unit = unit_or_1(table.column(a.group_column).unit);
+  if (!a.input_unit.empty()) input_unit = a.input_unit;
+  if (formats::is_volumetric_flow_unit(input_unit)) input_unit = "mm^3/s";
+  opt.input_unit = input_unit;
+  opt.gain_unit = opt.output_unit == input_unit ? "1" : opt.output_unit + "/(" + input_unit + ")";
+  return opt;
+}
+
 // The options checked before the log is read.
 void check_step_options(const StepOptions& a) {
   if (!(a.analysis.detect.min_step_fraction > 0 && a.analysis.detect.min_step_fraction < 1))
@@ -107,22 +121,20 @@ StepOutcome compute_step(const StepOptions& a, const InputFile& file, const Inpu
     throw InputError(fmt::format("too few samples ({}) for a step analysis; at least 10 are needed", table.rows),
                      a.file);
 
-  ident::StepAnalysisOptions opt = a.analysis;
-  opt.output_unit = unit_or_1(a.output_unit.empty() ? ycol.unit : a.output_unit);
-  std::string input_unit = "1";
-  if (!a.input_column.empty()) input_unit = unit_or_1(table.column(a.input_column).unit);
-  else if (!a.group_column.empty()) input_unit = unit_or_1(table.column(a.group_column).unit);
-  if (!a.input_unit.empty()) input_unit = a.input_unit;
-  if (formats::is_volumetric_flow_unit(input_unit)) input_unit = "mm^3/s";
-  opt.input_unit = input_unit;
-  opt.gain_unit = opt.output_unit == input_unit ? "1" : opt.output_unit + "/(" + input_unit + ")";
+  const ident::StepAnalysisOptions opt = analysis_options(a, table);
+  const std::string& input_unit = opt.input_unit;
 
   ident::StepAnalysis& res = outcome.analysis;
+  // The feed track on the record's clock: the step fits and the whole-record model follow it
+  // where it matches the logged feed (a stop between moves lies where the planner put it).
+  std::optional<ident::FeedTrackAlignment> track;
+  if (!a.input_column.empty()) track = aligned_feed_track(feed_track, tcol.values, table.column(a.input_column).values);
+  const ident::FeedTrack* steps_track = track && track->matches ? &track->aligned : nullptr;
   try {
     if (!a.input_column.empty()) {
       if (!a.group_column.empty() || !std::isnan(a.step_size))
         throw InputError("--input finds the steps itself; do not combine it with --group or --step-size");
-      res = ident::analyze_steps(tcol.values, table.column(a.input_column).values, ycol.values, opt);
+      res = ident::analyze_steps(tcol.values, table.column(a.input_column).values, ycol.values, opt, steps_track);
     } else {
       std::map<double, std::vector<std::size_t>> groups;
       if (!a.group_column.empty()) {
@@ -165,7 +177,6 @@ StepOutcome compute_step(const StepOptions& a, const InputFile& file, const Inpu
 
   if (!a.input_column.empty()) {  // the whole-record model beside the per-step fits: any excitation
     const auto& u = table.column(a.input_column).values;
-    const auto track = aligned_feed_track(feed_track, tcol.values, u);
     if (feed_track) outcome.feed_track_input = feed_track->digest();
     outcome.record = {tcol.values, u, ycol.values};
     outcome.whole_record = ident::fit_whole_record(tcol.values, u, ycol.values, input_unit, opt.output_unit, &res,

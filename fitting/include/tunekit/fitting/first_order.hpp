@@ -11,6 +11,7 @@
 // per trial) until Ceres Solver's convergence tests hold, with solve_least_squares taking over if
 // they do not, and refuse (FitError) when tau cannot be seen in the record.
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,12 @@ enum class InputHold { centred, from_stamp };
 /// milliseconds between moves, or ramps it over a few samples, is then in the model instead of
 /// in the residuals (an ideal step reads the force's dip after a pause as a faster response).
 /// y0 is the output at that settled start in both cases, K and tau_s mean the same.
+///
+/// With `input_t` and `input_u` (the commanded input on its own instants: a planner's moves,
+/// set_input_track) the model is the first-order response to that input instead, started settled
+/// at its value where the first sample's window begins: a stop between two moves then lies where
+/// the planner put it, which the logged window means cannot say (each holds only the feed over
+/// its whole window; a 5 ms window misplaces a stop's dip by up to 2.5 ms, a tenth of a 26 ms tau).
 struct StepRecord {
   std::vector<double> t;          ///< s, increasing
   std::vector<double> y;          ///< output samples
@@ -50,7 +57,21 @@ struct StepRecord {
   std::string gain_unit = "1";    ///< unit of K (output unit per input unit)
   std::vector<double> u;          ///< the recorded input at t (input unit), or empty
   InputHold u_hold = InputHold::centred;
+  /// The commanded input's breakpoints (s, non-decreasing, on the record's clock; two at one
+  /// instant make a jump) and its values there (input unit), linear between them and held
+  /// beyond; empty: the model follows `u` (or the ideal step).
+  std::vector<double> input_t, input_u;
 };
+
+/// Whether a record's model follows an input (its commanded input track or its logged `u`)
+/// rather than the ideal step.
+bool follows_input(const StepRecord& r);
+
+/// Gives a record the commanded input its model follows (StepRecord::input_t, input_u): the part
+/// of the track (breakpoints t, values u as there) from where the first sample's window begins
+/// to the last sample, its values at both ends interpolated. InputError unless t and u have the
+/// same length (at least one), t does not decrease and both are finite.
+void set_input_track(StepRecord& r, std::span<const double> t, std::span<const double> u);
 
 /// Start values found by the log-incomplete-response method.
 struct StepStart {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "tunekit/fitting/first_order.hpp"
+#include "tunekit/ident/feed_track.hpp"
 
 namespace tunekit::ident {
 
@@ -100,6 +101,9 @@ struct StepAnalysis {
   std::string input_unit = "1";  ///< unit of u, as StepAnalysisOptions::input_unit
   /// How the step fits read the logged input between samples (from the step instant convention).
   fitting::InputHold input_hold = fitting::InputHold::centred;
+  /// The commanded feed the step fits followed, on the record's clock (analyze_steps' track);
+  /// empty: they followed the logged input.
+  FeedTrack input_track;
   std::vector<std::string> warnings;
 };
 
@@ -111,9 +115,19 @@ struct StepAnalysisOptions {
   std::string input_unit = "1";
 };
 
-/// Analysis of one record with an input channel.
+/// Analysis of one record with an input channel. The steps are found in the logged input u; with
+/// a `track` (the commanded input on the record's clock: FeedTrackAlignment::aligned of a track
+/// that matches the record) every step fit follows it instead of the logged u (StepRecord::input_t),
+/// which places a planner's stop between moves where it happened rather than anywhere in its
+/// sample's window.
 StepAnalysis analyze_steps(std::span<const double> t, std::span<const double> u, std::span<const double> y,
-                           const StepAnalysisOptions& options = {});
+                           const StepAnalysisOptions& options = {}, const FeedTrack* track = nullptr);
+
+/// The record a step of `a` was fitted on: samples [s.begin, s.end) of t and y (y may be empty:
+/// the model's output alone is wanted), with the input its model follows, a.input_track when the
+/// analysis had one, else the logged u held as a.input_hold.
+fitting::StepRecord step_fit_record(const StepAnalysis& a, const DetectedStep& s, std::span<const double> t,
+                                    std::span<const double> u, std::span<const double> y);
 
 /// Analysis of records without an input channel (e.g. Holtrup 2019 Table B.1: ooze length after a
 /// stop): each record is one step from u_before to u_after at `t_step`; its operating point is u_after.
@@ -156,8 +170,8 @@ nlohmann::json arrival_levels_json(const StepAnalysis& a);
 /// theta_s: {c0, c1, c1_ci95, fit}, levels_used}.
 nlohmann::json level_trends_json(const StepAnalysis& a);
 
-/// JSON of a whole analysis: {steps[], pooled, operating_points[] (arrival_levels_json), trend
-/// (level_trends_json)}.
+/// JSON of a whole analysis: {steps[], steps_driven_by ("feed track" or "logged input"), pooled,
+/// operating_points[] (arrival_levels_json), trend (level_trends_json)}.
 nlohmann::json to_json(const StepAnalysis& a);
 
 }  // namespace tunekit::ident
