@@ -239,6 +239,41 @@ std::array<double, 3> line_fit(const std::vector<double>& t, const std::vector<d
 }
 
 namespace {
+
+// Samples per block of normal_equations: one exponential per block on a regular clock (BlockDecay).
+constexpr std::size_t kBlock = 256;
+
+// exp(-(t_k - t_on) / tau) for the samples of a block, without an exponential per sample on a
+// regular clock: e_k = e_b exp(-j h / tau) exp(-delta / tau), b the block's first sample, j = k - b,
+// h the record's mean sample interval after t_on, delta = t_k - t_b - j h. e_b is the exponential
+// of the sample itself, exp(-j h / tau) a table of the block's length per evaluation, and on a
+// regular clock delta is rounding, so that exp(-delta / tau) is 1 - x + x^2 / 2 (x = delta / tau,
+// at most 1e-6: the series' remainder is below 2e-19). A jittery or gappy clock's samples, whose
+// delta is larger, take their exponential as it is. Each value is within a few rounding units of
+// exp(-(t_k - t_on) / tau), whose argument carries the rounding of t_k - t_on already.
+struct BlockDecay {
+  static constexpr double kSeriesMax2 = 1e-12;  // the largest x^2 of the series
+  BlockDecay(const std::vector<double>& times, std::size_t first, double start, double inverse_tau)
+      : t(times), t_on(start), inv_tau(inverse_tau) {
+    const std::size_t n = t.size();
+    if (n - first < 2) return;
+    h = (t[n - 1] - t[first]) / static_cast<double>(n - 1 - first);
+    const std::size_t len = std::min(kBlock, n - first);
+    for (std::size_t j = 0; j < len; ++j) ratio[j] = std::exp(-(static_cast<double>(j) * h) * inv_tau);
+  }
+  /// e_b of the block that starts at sample b.
+  double base(std::size_t b) const { return std::exp(-(t[b] - t_on) * inv_tau); }
+  /// e_k of the block that starts at sample b, whose e_b is eb.
+  double at(std::size_t b, double eb, std::size_t k) const {
+    const std::size_t j = k - b;
+    const double x = ((t[k] - t[b]) - static_cast<double>(j) * h) * inv_tau;
+    return x * x <= kSeriesMax2 ? eb * ratio[j] * (1 - x * (1 - 0.5 * x)) : std::exp(-(t[k] - t_on) * inv_tau);
+  }
+  const std::vector<double>& t;
+  double t_on, inv_tau, h = 0;
+  std::array<double, kBlock> ratio{};
+};
+
 // normal_equations for a record driven by its recorded input: the rows of driven_model_points.
 double driven_normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr,
                                std::span<double> res_out) {
@@ -260,20 +295,95 @@ double driven_normal_equations(const StepRecord& r, const double p[4], Eigen::Ma
 }
 }  // namespace
 
+namespace {
+
+// Four samples to a register: each lane sums every fourth sample.
+using Lanes = double __attribute__((vector_size(32)));
+
+// The sums over the samples after the response's start that the normal equations of an ideal
+// step are made of, per sample: its decay e = exp(-s / tau) (s the time since the start), f = 1 - e,
+// es = e s and the residual r. The Jacobian's row is (du f, c1 es, c2 e, 1), c2 = -K du / tau,
+// c1 = c2 / tau, so J'J and J'r are these sums times constants (step_equations).
+struct DecaySums {
+  Lanes ff{}, fe{}, fes{}, eses{}, ese{}, ee{}, f{}, es{}, e{}, fr{}, esr{}, er{}, rr{}, r{};
+};
+
+// Adds the samples [b, e) of one block (at most kBlock, after the response's start) to `a`, their
+// decays from dec (BlockDecay::at, four at a time); the residuals y0 + K (du f) - y (rounded as
+// the model's value is) into res_out[b .. e) unless it is null. Built for AVX2 as well as the
+// baseline: then four samples take one instruction.
+[[gnu::target_clones("avx2", "default")]] void add_decay_sums(const BlockDecay& dec, const double* y, std::size_t b,
+                                                              std::size_t e, const double p[4], double du,
+                                                              double* res_out, DecaySums& a) {
+  const double K = p[0], y0 = p[3], t_on = dec.t_on, tb = dec.t[b], eb = dec.base(b);
+  const double* t = dec.t.data();
+  Lanes ff = a.ff, fe = a.fe, fes = a.fes, eses = a.eses, ese = a.ese, ee = a.ee, fs = a.f, ess = a.es, esum = a.e;
+  Lanes fr = a.fr, esr = a.esr, er = a.er, rr = a.rr, rs = a.r;
+  Lanes jv = {0, 1, 2, 3};
+  const std::size_t len = e - b;
+  for (std::size_t g = 0; g < len; g += 4, jv += 4) {
+    Lanes tv, yv, ev, on = {1, 1, 1, 1};
+    if (g + 4 <= len) {
+      Lanes rt;
+      __builtin_memcpy(&tv, t + b + g, sizeof tv);
+      __builtin_memcpy(&yv, y + b + g, sizeof yv);
+      __builtin_memcpy(&rt, dec.ratio.data() + g, sizeof rt);
+      const Lanes x = ((tv - tb) - jv * dec.h) * dec.inv_tau;
+      ev = eb * rt * (1 - x * (1 - 0.5 * x));
+      const auto off = x * x > BlockDecay::kSeriesMax2;  // off the series: a jittery clock
+      for (std::size_t l = 0; l < 4; ++l)
+        if (off[l]) ev[l] = dec.at(b, eb, b + g + l);
+    } else {  // the block's last samples: the lanes past its end add nothing
+      for (std::size_t l = 0; l < 4; ++l) {
+        const std::size_t k = b + g + l;
+        const bool in = g + l < len;
+        tv[l] = in ? t[k] : t_on, yv[l] = in ? y[k] : y0, ev[l] = in ? dec.at(b, eb, k) : 1, on[l] = in ? 1 : 0;
+      }
+    }
+    const Lanes f = (1 - ev) * on, es = ev * (tv - t_on) * on, res = y0 + K * (du * f) - yv;
+    ev *= on;
+    if (res_out != nullptr)
+      for (std::size_t l = 0; l < 4 && g + l < len; ++l) res_out[b + g + l] = res[l];
+    ff += f * f, fe += f * ev, fes += f * es, eses += es * es, ese += es * ev, ee += ev * ev;
+    fs += f, ess += es, esum += ev;
+    fr += f * res, esr += es * res, er += ev * res, rr += res * res, rs += res;
+  }
+  a = {ff, fe, fes, eses, ese, ee, fs, ess, esum, fr, esr, er, rr, rs};
+}
+
+double lanes_sum(const Lanes& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
+
+// J'J and J'r of an ideal step from its sums after the response's start, the samples before it
+// (n_pre, the sum of their residuals r_pre and of their squares rss_pre) and the constants of the
+// Jacobian's row; returns the residual sum of squares.
+double step_equations(const DecaySums& a, double n_after, double n_pre, double r_pre, double rss_pre, double du,
+                      double c1, double c2, Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr) {
+  const double ff = lanes_sum(a.ff), fe = lanes_sum(a.fe), fes = lanes_sum(a.fes), eses = lanes_sum(a.eses);
+  const double ese = lanes_sum(a.ese), ee = lanes_sum(a.ee), f = lanes_sum(a.f), es = lanes_sum(a.es);
+  const double e = lanes_sum(a.e);
+  JtJ << du * du * ff, du * c1 * fes, du * c2 * fe, du * f,   //
+      du * c1 * fes, c1 * c1 * eses, c1 * c2 * ese, c1 * es,  //
+      du * c2 * fe, c1 * c2 * ese, c2 * c2 * ee, c2 * e,      //
+      du * f, c1 * es, c2 * e, n_after + n_pre;
+  Jtr << du * lanes_sum(a.fr), c1 * lanes_sum(a.esr), c2 * lanes_sum(a.er), lanes_sum(a.r) + r_pre;
+  return lanes_sum(a.rr) + rss_pre;
+}
+
+}  // namespace
+
 // Accumulates J^T J (4x4), J^T r and the residual sum of squares for one record without storing
-// the Jacobian (100k samples cost a few milliseconds).
+// the Jacobian (100k samples cost a millisecond or two).
 double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d& JtJ, Eigen::Vector4d& Jtr,
                         std::span<double> res_out) {
   if (follows_input(r)) return driven_normal_equations(r, p, JtJ, Jtr, res_out);
   // Before the response starts (the times increase, so these are the first samples) the Jacobian
-  // row is (0, 0, 0, 1): only the count and the sum of residuals matter there. Afterwards the ten
-  // products of the symmetric 4x4, J'r and the residual sum of squares are accumulated two sums
-  // to a register (Sums2: each lane adds its own terms in the order of the samples, so every sum
-  // is rounded as a scalar sum would be). The exponentials of a block of samples come first: a
-  // call inside the accumulating loop would make the sums leave their registers for every sample.
+  // row is (0, 0, 0, 1): only the count and the sum of residuals matter there. Afterwards the
+  // products of the decays the Jacobian's row is made of are summed four samples to a register
+  // (add_decay_sums), a block of samples at a time (BlockDecay: a table and one exponential per
+  // block on a regular clock).
   const std::size_t n = r.t.size();
-  const double K = p[0], tau = p[1], theta = p[2], y0 = p[3], du = r.du;
-  const double inv_tau = 1.0 / tau, Kdu = K * du;
+  const double tau = p[1], theta = p[2], y0 = p[3], du = r.du;
+  const double inv_tau = 1.0 / tau;
   const double t_on = r.t_step + theta;
   const bool keep = !res_out.empty();
   double rss = 0, n_pre = 0, r_sum = 0;
@@ -285,38 +395,12 @@ double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d&
     n_pre += 1;
     r_sum += res;
   }
-  using Sums2 = double __attribute__((vector_size(16)));
-  Sums2 s00_01 = {0, 0}, s02_b0 = {0, 0}, s11_12 = {0, 0}, sb1_22 = {0, 0}, sb2_rss = {0, rss};
-  Sums2 s03_13 = {0, 0}, s23_r = {0, r_sum};
-  double a33 = 0;
-  constexpr std::size_t kBlock = 256;
-  std::array<double, kBlock> exps;
-  for (std::size_t begin = i; begin < n; begin += kBlock) {
-    const std::size_t end = std::min(n, begin + kBlock);
-    for (std::size_t k = begin; k < end; ++k) exps[k - begin] = std::exp(-(r.t[k] - t_on) * inv_tau);
-    for (std::size_t k = begin; k < end; ++k) {
-      const double s = r.t[k] - t_on;
-      const double e = exps[k - begin];
-      const double j0 = du * (1 - e);
-      const double j2 = -Kdu * e * inv_tau;
-      const double j1 = j2 * s * inv_tau;
-      const double res = y0 + K * j0 - r.y[k];
-      if (keep) res_out[k] = res;
-      s00_01 += j0 * Sums2{j0, j1};
-      s02_b0 += j0 * Sums2{j2, res};
-      s11_12 += j1 * Sums2{j1, j2};
-      sb1_22 += Sums2{j1, j2} * Sums2{res, j2};
-      sb2_rss += res * Sums2{j2, res};
-      s03_13 += Sums2{j0, j1};
-      s23_r += Sums2{j2, res};
-      a33 += 1;  // the y0 column is 1 on every row
-    }
-  }
-  a33 += n_pre;
-  JtJ << s00_01[0], s00_01[1], s02_b0[0], s03_13[0], s00_01[1], s11_12[0], s11_12[1], s03_13[1], s02_b0[0], s11_12[1],
-      sb1_22[1], s23_r[0], s03_13[0], s03_13[1], s23_r[0], a33;
-  Jtr << s02_b0[1], sb1_22[0], sb2_rss[0], s23_r[1];
-  return sb2_rss[1];
+  DecaySums sums;
+  const BlockDecay decay(r.t, i, t_on, inv_tau);
+  for (std::size_t begin = i; begin < n; begin += kBlock)
+    add_decay_sums(decay, r.y.data(), begin, std::min(n, begin + kBlock), p, du, keep ? res_out.data() : nullptr, sums);
+  const double c2 = -(p[0] * du) * inv_tau;
+  return step_equations(sums, static_cast<double>(n - i), n_pre, r_sum, rss, du, c2 * inv_tau, c2, JtJ, Jtr);
 }
 
 // Levenberg-Marquardt on the 4x4 normal equations, carried to convergence by Ceres Solver's own

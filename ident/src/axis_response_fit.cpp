@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <span>
 #include <string>
@@ -134,6 +135,28 @@ void model(const Schedule& s, std::size_t modes, const double* p, std::vector<do
 /// by sqrt(1 - zeta^2), and the Jacobian's columns are differenced instead.
 constexpr double kSensitivityMaxZeta = 0.999;
 
+/// What the transitions and steps of one under-damped mode share, for its w (rad/s) and zeta:
+/// computed once per mode and evaluation, not per step (a square root and two divisions), by the
+/// same expressions as before, so that every step is rounded as it was.
+/// dk, dc, dsg and dwd are the derivatives of k = w^2, c = 2 zeta w, sg = zeta w and
+/// wd = w sqrt(1 - zeta^2) in w (index 0) and zeta (index 1).
+struct ModeConstants {
+  double w, zeta, k, c, inv_k, inv_k2, sg, r1, wd;
+  double dk[2], dc[2], dsg[2], dwd[2];
+};
+
+ModeConstants mode_constants(double w, double zeta) {
+  ModeConstants m;
+  m.w = w, m.zeta = zeta, m.k = w * w, m.c = 2 * zeta * w;
+  m.inv_k = 1 / m.k, m.inv_k2 = m.inv_k * m.inv_k;
+  m.sg = zeta * w, m.r1 = std::sqrt(1 - zeta * zeta), m.wd = w * m.r1;
+  m.dk[0] = 2 * w, m.dk[1] = 0;
+  m.dc[0] = 2 * zeta, m.dc[1] = 2 * w;
+  m.dsg[0] = zeta, m.dsg[1] = w;
+  m.dwd[0] = m.r1, m.dwd[1] = -w * zeta / m.r1;
+  return m;
+}
+
 /// The free transition over h of an under-damped mode (BaseExcitedMode::free_map's) and its
 /// derivatives d[p] in w (rad/s, p = 0) and zeta (p = 1): the product rule through the decay
 /// exp(-zeta w h) and the damped oscillation's cos and sin(w sqrt(1 - zeta^2) h).
@@ -142,16 +165,16 @@ struct Transition {
   double d[2][2][2];
 };
 
-Transition transition(double w, double zeta, double h) {
+Transition transition(const ModeConstants& m, double h) {
   Transition t;
-  const double k = w * w, sg = zeta * w, r1 = std::sqrt(1 - zeta * zeta), wd = w * r1;
+  const double k = m.k, sg = m.sg, wd = m.wd;
   const double D = std::exp(-sg * h), C = std::cos(wd * h), S = std::sin(wd * h), q = S / wd;
   t.phi[0][0] = D * (C + sg * q);
   t.phi[0][1] = D * q;
   t.phi[1][0] = -k * D * q;
   t.phi[1][1] = D * (C - sg * q);
   for (int p = 0; p < 2; ++p) {
-    const double dsg = p == 0 ? zeta : w, dwd = p == 0 ? r1 : -w * zeta / r1, dk = p == 0 ? 2 * w : 0;
+    const double dsg = m.dsg[p], dwd = m.dwd[p], dk = m.dk[p];
     const double dD = -h * D * dsg, dC = -S * h * dwd, dq = dwd * (C * h - q) / wd;
     t.d[p][0][0] = dD * (C + sg * q) + D * (dC + dsg * q + sg * dq);
     t.d[p][0][1] = dD * q + D * dq;
@@ -162,24 +185,23 @@ Transition transition(double w, double zeta, double h) {
 }
 
 /// A mode's state, its derivatives in w and zeta, and its free responses to a unit deflection
-/// and a unit rate at the first sample.
+/// and a unit rate at the first sample; `free_decayed` once those are taken as 0 for good.
 struct SensitivityState {
   double z = 0, v = 0;
   double sz[2] = {0, 0}, sv[2] = {0, 0};
   double e1z = 1, e1v = 0, e2z = 0, e2v = 1;
+  bool free_decayed = false;
 };
 
 /// One exact step of h under a(s) = a0 + j s (BaseExcitedMode::advance: the free transition of
 /// the state less the particular solution z_p = -(a0 + j s)/k + c j/k^2, k = w^2, c = 2 zeta w)
-/// with the derivatives carried through it.
-/// Multiplied by 1/k and 1/k^2 instead of divided by k and k^2 (a dozen divisions a step, each
-/// the cost of several multiplications).
-void sensitivity_step(SensitivityState& x, const Transition& t, double w, double zeta, double h, double a0, double j) {
-  const double k = w * w, c = 2 * zeta * w, inv_k = 1 / k, inv_k2 = inv_k * inv_k;
+/// with the derivatives carried through it, the divisions by k of the mode's constants.
+void sensitivity_step(SensitivityState& x, const Transition& t, const ModeConstants& m, double h, double a0, double j) {
+  const double c = m.c, inv_k = m.inv_k, inv_k2 = m.inv_k2;
   const double zp0 = -a0 * inv_k + c * j * inv_k2, vp = -j * inv_k, zp1 = zp0 - j * h * inv_k;
   const double ez = x.z - zp0, ev = x.v - vp;
   for (int p = 0; p < 2; ++p) {
-    const double dk = p == 0 ? 2 * w : 0, dc = p == 0 ? 2 * zeta : 2 * w;
+    const double dk = m.dk[p], dc = m.dc[p];
     const double dzp0 = (a0 * dk + j * dc - 2 * c * j * dk * inv_k) * inv_k2, dvp = j * dk * inv_k2;
     const double dzp1 = dzp0 + j * h * dk * inv_k2;
     const double dez = x.sz[p] - dzp0, dev = x.sv[p] - dvp;
@@ -189,6 +211,7 @@ void sensitivity_step(SensitivityState& x, const Transition& t, double w, double
   }
   x.z = t.phi[0][0] * ez + t.phi[0][1] * ev + zp1;
   x.v = t.phi[1][0] * ez + t.phi[1][1] * ev + vp;
+  if (x.free_decayed) return;  // zeros stay zeros
   const double e1z = t.phi[0][0] * x.e1z + t.phi[0][1] * x.e1v, e2z = t.phi[0][0] * x.e2z + t.phi[0][1] * x.e2v;
   x.e1v = t.phi[1][0] * x.e1z + t.phi[1][1] * x.e1v, x.e2v = t.phi[1][0] * x.e2z + t.phi[1][1] * x.e2v;
   x.e1z = e1z, x.e2z = e2z;
@@ -201,21 +224,18 @@ void sensitivity_step(SensitivityState& x, const Transition& t, double w, double
 class ModeSensitivities {
  public:
   ModeSensitivities(const Schedule& s, double freq_hz, double zeta, ModeState x0)
-      : s_(s), w_(2 * std::numbers::pi * freq_hz), zeta_(zeta), whole_(transition(w_, zeta, s.dt_s)) {
+      : s_(s), m_(mode_constants(2 * std::numbers::pi * freq_hz, zeta)), whole_(transition(m_, s.dt_s)) {
     x_.z = x0.z_mm, x_.v = x0.v_mm_s;
   }
 
   /// The samples from where the last call ended (the first sample at first) up to `end`, into
   /// out[c][0 ..].
   void next(std::size_t end, double* const out[5]) {
-    const double k = w_ * w_, c = 2 * zeta_ * w_;
+    const double k = m_.k, c = m_.c;
     for (std::size_t o = 0; next_ < end; ++next_, ++o) {
       const std::size_t i = next_;
-      if (i > 0) step_to(i), flush_decayed();
-      for (int p = 0; p < 2; ++p) {
-        const double dk = p == 0 ? 2 * w_ : 0, dc = p == 0 ? 2 * zeta_ : 2 * w_;
-        out[p][o] = -dc * x_.v - dk * x_.z - c * x_.sv[p] - k * x_.sz[p];
-      }
+      if (i > 0 && (step_to(i), !x_.free_decayed)) flush_decayed(i);
+      for (int p = 0; p < 2; ++p) out[p][o] = -m_.dc[p] * x_.v - m_.dk[p] * x_.z - c * x_.sv[p] - k * x_.sz[p];
       out[0][o] *= 2 * std::numbers::pi;  // dw / df
       out[2][o] = -c * x_.v - k * x_.z - s_.accel_at[i];
       out[3][o] = -c * x_.e1v - k * x_.e1z;
@@ -223,35 +243,42 @@ class ModeSensitivities {
     }
   }
 
+  /// The first sample from which out[3] and out[4] are 0 (the free responses have decayed), as
+  /// far as next() has gone; the largest size_t before.
+  std::size_t free_zero_from() const { return free_zero_from_; }
+
  private:
   // The free responses to the first state decay geometrically; once below kDecayed they are
-  // taken as 0, before they and their products in J'J reach the subnormal range, where every
-  // operation on them costs a hundred or more cycles (a mode at 48 Hz with zeta 0.08 decays
-  // below 1e-150 within 15 s). Their share of J'J is then below 1e-290 of an entry.
-  static constexpr double kDecayed = 1e-150;
-  void flush_decayed() {
+  // taken as 0 (and neither propagated nor multiplied any more), long before they and their
+  // products in J'J would reach the subnormal range, where every operation on them costs a
+  // hundred or more cycles. A mode at 48 Hz with zeta 0.08 decays below 1e-60 of its unit start
+  // within 6 s. What they would still add to a sum of J'J or J'r is then some 40 orders of
+  // magnitude below that sum's rounding unit: the sums come out the same to the last bit.
+  static constexpr double kDecayed = 1e-60;
+  void flush_decayed(std::size_t i) {
     if (std::abs(x_.e1z) < kDecayed && std::abs(x_.e1v) < kDecayed) x_.e1z = x_.e1v = 0;
     if (std::abs(x_.e2z) < kDecayed && std::abs(x_.e2v) < kDecayed) x_.e2z = x_.e2v = 0;
+    if (x_.e1z == 0 && x_.e1v == 0 && x_.e2z == 0 && x_.e2v == 0) x_.free_decayed = true, free_zero_from_ = i;
   }
 
   // From sample i - 1 to sample i.
   void step_to(std::size_t i) {
     if (s_.whole[i]) {
       const Sub& u = s_.subs[s_.sample_end[i - 1]];
-      sensitivity_step(x_, whole_, w_, zeta_, s_.dt_s, u.a0, u.jerk);
+      sensitivity_step(x_, whole_, m_, s_.dt_s, u.a0, u.jerk);
       return;
     }
     for (std::size_t j = s_.sample_end[i - 1]; j < s_.sample_end[i]; ++j)
       if (s_.subs[j].h_s > 0)
-        sensitivity_step(x_, transition(w_, zeta_, s_.subs[j].h_s), w_, zeta_, s_.subs[j].h_s, s_.subs[j].a0,
-                         s_.subs[j].jerk);
+        sensitivity_step(x_, transition(m_, s_.subs[j].h_s), m_, s_.subs[j].h_s, s_.subs[j].a0, s_.subs[j].jerk);
   }
 
   const Schedule& s_;
-  double w_, zeta_;
+  ModeConstants m_;
   Transition whole_;
   SensitivityState x_;
   std::size_t next_ = 0;
+  std::size_t free_zero_from_ = std::numeric_limits<std::size_t>::max();
 };
 
 /// Are the modes' frequencies and damping ratios in the model's domain?
@@ -283,6 +310,7 @@ class RecordEquations {
         raw_(kParamsPerMode * static_cast<std::size_t>(kRowBlock)),
         model_(static_cast<std::size_t>(kRowBlock)),
         r_(kRowBlock),
+        zero_(modes * kParamsPerMode + 1),
         differenced_(modes) {}
 
   /// J'J into N and J'r into g at p; returns the residual sum of squares (HUGE_VAL outside the
@@ -305,19 +333,27 @@ class RecordEquations {
       const std::size_t len = std::min(static_cast<std::size_t>(kRowBlock), n - b);
       const double offset = p[kParamsPerMode * modes_];
       for (std::size_t i = 0; i < len; ++i) model_[i] = s_.accel_at[b + i] + offset;
+      std::fill(zero_.begin(), zero_.end(), 0);
       for (std::size_t m = 0, sens = 0; m < modes_; ++m) {
         const double* q = p + kParamsPerMode * m;
-        if (q[1] < kSensitivityMaxZeta)
-          sensitivity_block(props[sens++], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
-        else differenced_block(differenced_[m], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
+        if (q[1] < kSensitivityMaxZeta) {
+          sensitivity_block(props[sens], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
+          // The block's columns in the first state are 0 once the free responses have decayed:
+          // their products add nothing to the sums.
+          if (props[sens++].free_zero_from() <= b) zero_[kParamsPerMode * m + 3] = zero_[kParamsPerMode * m + 4] = 1;
+        } else {
+          differenced_block(differenced_[m], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
+        }
       }
       const auto L = static_cast<Eigen::Index>(len);
       block_.col(k - 1).head(L).setConstant(-1);  // the offset
       for (std::size_t i = 0; i < len; ++i) r_(static_cast<Eigen::Index>(i)) = y_[b + i] - model_[i];
       if (!residuals.empty()) std::copy(r_.data(), r_.data() + L, residuals.begin() + static_cast<std::ptrdiff_t>(b));
       for (Eigen::Index i = 0; i < k; ++i) {
+        if (zero_[static_cast<std::size_t>(i)]) continue;
         const auto ci = block_.col(i).head(L);
-        for (Eigen::Index j = 0; j <= i; ++j) N(i, j) += ci.dot(block_.col(j).head(L));
+        for (Eigen::Index j = 0; j <= i; ++j)
+          if (!zero_[static_cast<std::size_t>(j)]) N(i, j) += ci.dot(block_.col(j).head(L));
         g(i) += ci.dot(r_.head(L));
       }
       rss += r_.head(L).squaredNorm();
@@ -389,6 +425,7 @@ class RecordEquations {
   Eigen::MatrixXd block_;  // kRowBlock x parameters, column-major
   std::vector<double> raw_, model_;
   Eigen::VectorXd r_;
+  std::vector<char> zero_;  // per column: 0 throughout the block
   std::vector<Differenced> differenced_;
 };
 
