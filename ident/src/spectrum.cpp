@@ -1,7 +1,9 @@
 #include "tunekit/ident/spectrum.hpp"
 
 #include <cmath>
+#include <future>
 #include <mutex>
+#include <stdexcept>
 #include <numbers>
 
 #include <boost/math/special_functions/bessel.hpp>
@@ -26,25 +28,28 @@ std::mutex& planner_mutex() {
 // A real-to-complex transform of fixed length with its own aligned buffers.
 class RealFft {
  public:
-  explicit RealFft(std::size_t n) : n_(n) {
-    in_ = fftw_alloc_real(n);
-    out_ = fftw_alloc_complex(n / 2 + 1);
+  explicit RealFft(std::size_t n) : n_(n), in_(fftw_alloc_real(n)), out_(fftw_alloc_complex(n / 2 + 1)) {
     std::lock_guard lock(planner_mutex());
     plan_ = fftw_plan_dft_r2c_1d(static_cast<int>(n), in_, out_, FFTW_ESTIMATE);
+    owns_plan_ = true;
   }
+  // Buffers of its own that execute `planned`'s plan (FFTW's new-array execution, which is
+  // thread-safe; fftw_alloc gives every buffer the alignment the plan was made for): channels
+  // transformed side by side share one plan instead of each planning under the lock.
+  explicit RealFft(const RealFft& planned)
+      : n_(planned.n_), in_(fftw_alloc_real(n_)), out_(fftw_alloc_complex(n_ / 2 + 1)), plan_(planned.plan_) {}
   ~RealFft() {
-    {
+    if (owns_plan_) {
       std::lock_guard lock(planner_mutex());
       fftw_destroy_plan(plan_);
     }
     fftw_free(in_);
     fftw_free(out_);
   }
-  RealFft(const RealFft&) = delete;
   RealFft& operator=(const RealFft&) = delete;
   double* input() { return in_; }
   std::complex<double> bin(std::size_t k) const { return {out_[k][0], out_[k][1]}; }
-  void execute() { fftw_execute(plan_); }
+  void execute() { fftw_execute_dft_r2c(plan_, in_, out_); }
   std::size_t bins() const { return n_ / 2 + 1; }
 
  private:
@@ -52,26 +57,32 @@ class RealFft {
   double* in_;
   fftw_complex* out_;
   fftw_plan plan_;
+  bool owns_plan_ = false;
 };
 
-void detrend_segment(double* s, std::size_t n, Detrend d) {
-  if (d == Detrend::none) return;
+// One segment of x, detrended and windowed, into out: out[i] = (x[i] - trend[i]) * w[i], the
+// same operations as detrending a copy in place and then windowing it, in one pass.
+void detrended_windowed(const double* x, std::size_t n, Detrend d, const double* w, double* out) {
+  if (d == Detrend::none) {
+    for (std::size_t i = 0; i < n; ++i) out[i] = x[i] * w[i];
+    return;
+  }
   double mean = 0;
-  for (std::size_t i = 0; i < n; ++i) mean += s[i];
+  for (std::size_t i = 0; i < n; ++i) mean += x[i];
   mean /= static_cast<double>(n);
   if (d == Detrend::constant) {
-    for (std::size_t i = 0; i < n; ++i) s[i] -= mean;
+    for (std::size_t i = 0; i < n; ++i) out[i] = (x[i] - mean) * w[i];
     return;
   }
   const double tm = 0.5 * static_cast<double>(n - 1);
   double sxy = 0, sxx = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double dt = static_cast<double>(i) - tm;
-    sxy += dt * (s[i] - mean);
+    sxy += dt * (x[i] - mean);
     sxx += dt * dt;
   }
   const double slope = sxx > 0 ? sxy / sxx : 0;
-  for (std::size_t i = 0; i < n; ++i) s[i] -= mean + slope * (static_cast<double>(i) - tm);
+  for (std::size_t i = 0; i < n; ++i) out[i] = (x[i] - (mean + slope * (static_cast<double>(i) - tm))) * w[i];
 }
 
 struct SegmentPlan {
@@ -169,22 +180,19 @@ std::vector<double> padded_amplitude_spectrum(std::span<const double> x, std::si
   return mag;
 }
 
-Spectrum welch_psd(std::span<const double> x, double fs, const WelchOptions& o) {
-  const auto sp = plan_segments(x.size(), fs, o);
-  const auto w = make_window(o.window, sp.nperseg, o.kaiser_beta);
-  double wss = 0;
-  for (double v : w) wss += v * v;
-  RealFft fft(sp.nperseg);
+namespace {
+
+// The Welch PSD of x with its segments, window (and the window's energy) and a transform of the
+// segment length given.
+Spectrum welch_with(std::span<const double> x, double fs, const WelchOptions& o, const SegmentPlan& sp,
+                    const std::vector<double>& w, double wss, RealFft& fft) {
   Spectrum s;
   s.sample_rate_hz = fs;
   s.segment_length = sp.nperseg;
   s.segments = sp.count;
   s.psd.assign(fft.bins(), 0.0);
   for (std::size_t k = 0; k < sp.count; ++k) {
-    double* in = fft.input();
-    std::copy_n(x.data() + k * sp.step, sp.nperseg, in);
-    detrend_segment(in, sp.nperseg, o.detrend);
-    for (std::size_t i = 0; i < sp.nperseg; ++i) in[i] *= w[i];
+    detrended_windowed(x.data() + k * sp.step, sp.nperseg, o.detrend, w.data(), fft.input());
     fft.execute();
     for (std::size_t b = 0; b < fft.bins(); ++b) s.psd[b] += std::norm(fft.bin(b));
   }
@@ -198,6 +206,42 @@ Spectrum welch_psd(std::span<const double> x, double fs, const WelchOptions& o) 
   return s;
 }
 
+double window_energy(const std::vector<double>& w) {
+  double wss = 0;
+  for (double v : w) wss += v * v;
+  return wss;
+}
+
+}  // namespace
+
+Spectrum welch_psd(std::span<const double> x, double fs, const WelchOptions& o) {
+  const auto sp = plan_segments(x.size(), fs, o);
+  const auto w = make_window(o.window, sp.nperseg, o.kaiser_beta);
+  RealFft fft(sp.nperseg);
+  return welch_with(x, fs, o, sp, w, window_energy(w), fft);
+}
+
+std::vector<Spectrum> welch_psds(std::span<const std::span<const double>> channels, double fs, const WelchOptions& o) {
+  std::vector<Spectrum> out(channels.size());
+  if (channels.empty()) return out;
+  const std::size_t n = channels.front().size();
+  for (const auto& c : channels)
+    if (c.size() != n) throw std::invalid_argument("welch_psds: the channels differ in length");
+  const auto sp = plan_segments(n, fs, o);
+  const auto w = make_window(o.window, sp.nperseg, o.kaiser_beta);
+  const double wss = window_energy(w);
+  RealFft planned(sp.nperseg);
+  std::vector<std::future<Spectrum>> others;
+  for (std::size_t c = 1; c < channels.size(); ++c)
+    others.push_back(std::async(std::launch::async, [&, c] {
+      RealFft fft(planned);
+      return welch_with(channels[c], fs, o, sp, w, wss, fft);
+    }));
+  out[0] = welch_with(channels[0], fs, o, sp, w, wss, planned);
+  for (std::size_t c = 1; c < channels.size(); ++c) out[c] = others[c - 1].get();
+  return out;
+}
+
 CrossSpectrum welch_csd(std::span<const double> x, std::span<const double> y, double fs, const WelchOptions& o) {
   if (x.size() != y.size())
     throw InputError(fmt::format("input and output records differ in length ({} and {} samples)", x.size(), y.size()));
@@ -205,7 +249,7 @@ CrossSpectrum welch_csd(std::span<const double> x, std::span<const double> y, do
   const auto w = make_window(o.window, sp.nperseg, o.kaiser_beta);
   double wss = 0;
   for (double v : w) wss += v * v;
-  RealFft fx(sp.nperseg), fy(sp.nperseg);
+  RealFft fx(sp.nperseg), fy(fx);
   CrossSpectrum c;
   c.sample_rate_hz = fs;
   c.segment_length = sp.nperseg;
@@ -215,16 +259,8 @@ CrossSpectrum welch_csd(std::span<const double> x, std::span<const double> y, do
   c.pxx.assign(nb, 0);
   c.pyy.assign(nb, 0);
   for (std::size_t k = 0; k < sp.count; ++k) {
-    double* ix = fx.input();
-    double* iy = fy.input();
-    std::copy_n(x.data() + k * sp.step, sp.nperseg, ix);
-    std::copy_n(y.data() + k * sp.step, sp.nperseg, iy);
-    detrend_segment(ix, sp.nperseg, o.detrend);
-    detrend_segment(iy, sp.nperseg, o.detrend);
-    for (std::size_t i = 0; i < sp.nperseg; ++i) {
-      ix[i] *= w[i];
-      iy[i] *= w[i];
-    }
+    detrended_windowed(x.data() + k * sp.step, sp.nperseg, o.detrend, w.data(), fx.input());
+    detrended_windowed(y.data() + k * sp.step, sp.nperseg, o.detrend, w.data(), fy.input());
     fx.execute();
     fy.execute();
     for (std::size_t b = 0; b < nb; ++b) {

@@ -74,7 +74,7 @@ void check_accel_options(const ident::WelchOptions& welch, const ident::Resonanc
 // the commanded motion where a record has it; warnings into `warnings`.
 AxisResult axis_result(const std::string& label, std::vector<ident::AxisSpectrum>& spectra,
                        const ident::ResonanceOptions& ro, const std::map<std::string, TimedRecord>& timed,
-                       std::vector<std::string>& warnings) {
+                       std::vector<std::string>& warnings, const BesideModes& beside) {
   // Spectra Klipper normalized (files with shaper columns) and measured ones (raw data, files
   // without them) of one axis are brought to Klipper's normalization before they are averaged,
   // as calibrate_shaper.py does; the datasets are kept as read.
@@ -99,16 +99,20 @@ AxisResult axis_result(const std::string& label, std::vector<ident::AxisSpectrum
   }
   r.datasets = std::move(spectra);
   for (const auto& w : r.spectrum.warnings) warnings.push_back(w);
+  // The future's destructor waits for `beside` when the mode fit throws.
+  std::future<void> beside_done =
+      beside ? std::async(std::launch::async, [&beside, &r] { beside(r); }) : std::future<void>{};
   r.modes = ident::identify_modes(r.spectrum, ro);
   if (const auto it = timed.find(label); it != timed.end())
     ident::refine_modes_with_motion(r.modes, it->second.record, it->second.motion);
   for (const auto& w : r.modes.warnings) warnings.push_back(fmt::format("axis {}: {}", label, w));
+  if (beside_done.valid()) beside_done.wait();  // before r is moved to the caller
   return r;
 }
 
 }  // namespace
 
-AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion ringdown) {
+AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion ringdown, const BesideModes& beside) {
   const ident::WelchOptions& welch = a.welch;
   const ident::ResonanceOptions& ro = a.modes;
   check_accel_options(welch, ro);
@@ -189,7 +193,7 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
     for (auto& s : file_spectra) by_axis[record_label(s.axis, path)].push_back(std::move(s));
   }
   for (auto& [label, spectra] : by_axis) {
-    result.axes.push_back(axis_result(label, spectra, ro, timed, result.warnings));
+    result.axes.push_back(axis_result(label, spectra, ro, timed, result.warnings, beside));
   }
   for (std::size_t i = 0; i < digests.size(); ++i)
     if (digests[i].valid()) result.inputs[i].sha256 = digests[i].get();

@@ -5,7 +5,11 @@
 // text are written by shaper_output.cpp.
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <set>
 #include <utility>
 
@@ -103,6 +107,42 @@ void shaper_restrict_to_firmware(firmware::ExportFirmware fw, const std::string&
   so.types = allowed;
 }
 
+// One axis's shaper selection: its options as run, the choice and the normalized datasets it
+// was made on, with its warnings and its error kept for the caller to report in order (the
+// selection may run beside the axis's mode fit, analyze_accel_files()).
+struct AxisSelection {
+  design::ShaperSelectionOptions options;
+  ShaperAxis out;  // klipper_method, choice, datasets, normalized_by_us
+  std::vector<ident::AxisSpectrum> normalized;
+  std::vector<std::string> warnings;
+  std::exception_ptr error;
+};
+
+AxisSelection shaper_select_axis(const ShaperOptions& a, double max_shaper_freq,
+                                 std::optional<firmware::ExportFirmware> fw, const AxisResult& r) {
+  AxisSelection s;
+  try {
+    s.options = a.selection;
+    s.options.max_shaper_freq_hz = max_shaper_freq;
+    shaper_choose_damping(a, r, s.options, s.out, s.warnings);
+    if (fw) shaper_restrict_to_firmware(*fw, r.label, s.options, s.warnings);
+    // Klipper's selection works on its normalized PSD (divided by f + 0.1 Hz, damped below 10
+    // Hz), each recording (or dataset of a spectrum file) on its own; a shaper's vibrations are
+    // the worst over them.
+    for (const auto& d : r.datasets) {
+      if (!d.klipper_normalized) ++s.out.normalized_by_us;
+      s.normalized.push_back(shaper_normalized_psd(d));
+    }
+    s.out.datasets = s.normalized.size();
+    std::vector<design::PsdDataset> psds;
+    for (const auto& d : s.normalized) psds.push_back({d.freq_hz, d.psd_sum});
+    s.out.choice = design::select_shaper(psds, s.options);
+  } catch (...) {
+    s.error = std::current_exception();
+  }
+  return s;
+}
+
 }  // namespace
 
 const ShaperAxis* ShaperOutcome::axis(const std::string& label) const {
@@ -130,30 +170,32 @@ ShaperOutcome compute_shaper(const ShaperOptions& a) {
   if (mv && !(*mv >= 0.001 && *mv <= 1)) throw InputError("--max-vibrations must be from 0.1 to 100 (per cent)");
   if (a.damping_ratio >= 1) throw InputError("--damping-ratio must be below 1");
 
-  AccelAnalysis analysis = analyze_accel_files(a.accel);
+  // With Klipper's method the selection does not use the modes: each axis's runs on another
+  // core beside its mode fit; its warnings and errors are reported below, in the same order.
+  std::map<std::string, AxisSelection> selected;
+  std::mutex selected_mutex;
+  BesideModes beside;
+  if (a.klipper_compatible)
+    beside = [&](const AxisResult& r) {
+      AxisSelection s = shaper_select_axis(a, max_shaper_freq, outcome.firmware, r);
+      const std::lock_guard lock(selected_mutex);
+      selected.emplace(r.label, std::move(s));
+    };
+  AccelAnalysis analysis = analyze_accel_files(a.accel, RingdownDiversion::none, beside);
   outcome.inputs = std::move(analysis.inputs);
   outcome.warnings = std::move(analysis.warnings);
   const std::size_t n_axes = analysis.axes.size();
   if (!a.klipper_csv.empty()) (void)shaper_csv_path_for_axis(a.klipper_csv, "x", n_axes);  // fail before the search
   std::vector<std::pair<std::string, std::string>> csv_files;  // written once every axis succeeded
   for (auto& r : analysis.axes) {
-    ShaperAxis out;
-    design::ShaperSelectionOptions so = a.selection;
-    so.max_shaper_freq_hz = max_shaper_freq;
-    shaper_choose_damping(a, r, so, out, outcome.warnings);
-    if (outcome.firmware) shaper_restrict_to_firmware(*outcome.firmware, r.label, so, outcome.warnings);
-    // Klipper's selection works on its normalized PSD (divided by f + 0.1 Hz, damped below 10 Hz),
-    // each recording (or dataset of a spectrum file) on its own; a shaper's vibrations are the
-    // worst over them.
-    std::vector<ident::AxisSpectrum> normalized;
-    for (const auto& d : r.datasets) {
-      if (!d.klipper_normalized) ++out.normalized_by_us;
-      normalized.push_back(shaper_normalized_psd(d));
-    }
-    out.datasets = normalized.size();
-    std::vector<design::PsdDataset> psds;
-    for (const auto& d : normalized) psds.push_back({d.freq_hz, d.psd_sum});
-    out.choice = design::select_shaper(psds, so);
+    const auto done = selected.find(r.label);
+    AxisSelection sel =
+        done != selected.end() ? std::move(done->second) : shaper_select_axis(a, max_shaper_freq, outcome.firmware, r);
+    outcome.warnings.insert(outcome.warnings.end(), sel.warnings.begin(), sel.warnings.end());
+    if (sel.error) std::rethrow_exception(sel.error);
+    ShaperAxis out = std::move(sel.out);
+    design::ShaperSelectionOptions so = std::move(sel.options);
+    const std::vector<ident::AxisSpectrum> normalized = std::move(sel.normalized);
 
     if (!a.klipper_csv.empty()) {
       // Klipper's layout with the shaper response columns: the PSDs written are the normalized

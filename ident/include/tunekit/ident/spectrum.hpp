@@ -70,6 +70,10 @@ std::vector<double> padded_amplitude_spectrum(std::span<const double> x, std::si
 
 /// Throws InputError when the record is shorter than two segments or options are invalid.
 Spectrum welch_psd(std::span<const double> x, double sample_rate_hz, const WelchOptions& options = {});
+/// welch_psd of each of several channels of one length (one record's axes), the channels after
+/// the first on threads of their own; they share one window and one transform plan.
+std::vector<Spectrum> welch_psds(std::span<const std::span<const double>> channels, double sample_rate_hz,
+                                 const WelchOptions& options = {});
 CrossSpectrum welch_csd(std::span<const double> x, std::span<const double> y, double sample_rate_hz,
                         const WelchOptions& options = {});
 /// H1 estimate of the system from input x to output y.

@@ -8,6 +8,7 @@
 // ends).
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -56,11 +57,17 @@ enum class RingdownDiversion {
   all,        ///< every generic CSV record (`tunekit resonance --ringdown`)
 };
 
+/// Work on an axis that does not need its modes, run on another thread while they are
+/// identified: it may read the axis's label, spectrum and datasets, not its modes, and must not
+/// throw (it keeps its own errors for its caller to report after the analysis).
+using BesideModes = std::function<void(const AxisResult&)>;
+
 /// Checks the options (InputError, exit 2), reads every file, groups the spectra by axis (a file
 /// whose name names no axis, without an axis in the options, is its own group under its file
-/// stem), averages each group and identifies its modes.
+/// stem), averages each group and identifies its modes; `beside`, when given, runs for each axis
+/// beside its mode fit and has finished when this returns.
 AccelAnalysis analyze_accel_files(const AccelFilesOptions& options,
-                                  RingdownDiversion ringdown = RingdownDiversion::none);
+                                  RingdownDiversion ringdown = RingdownDiversion::none, const BesideModes& beside = {});
 
 /// The label of a record: its axis letter, or its file stem.
 std::string record_label(char axis, const std::string& path);
