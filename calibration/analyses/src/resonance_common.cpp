@@ -106,6 +106,30 @@ AxisResult axis_result(const std::string& label, std::vector<ident::AxisSpectrum
   return r;
 }
 
+/// A record of `refine_files` and its commanded motion, into `timed` (InputError when it has no
+/// motion beside it or is not a raw record of x or y); both inputs recorded with their digests.
+void load_refine_record(const std::string& path, const ident::AccelInputOptions& in, bool digest_inputs,
+                        std::vector<std::unique_ptr<const formats::InputFileBytes>>& files,
+                        std::vector<std::future<std::string>>& digests, std::map<std::string, TimedRecord>& timed,
+                        AccelAnalysis& result) {
+  const std::string motion = ident::commanded_motion_beside(path);
+  if (motion.empty())
+    throw InputError("a record that refines the modes needs its commanded motion beside it (commanded_motion.csv)",
+                     path);
+  for (const auto& p : {path, motion}) {
+    files.push_back(std::make_unique<const formats::InputFileBytes>(p));
+    const std::string_view bytes = files.back()->view();
+    result.inputs.push_back({p, {}, bytes.size()});
+    digests.push_back(digest_inputs ? std::async(std::launch::async, [bytes] { return sha256_hex(bytes); })
+                                    : std::future<std::string>{});
+  }
+  auto rec = ident::load_accel_csv(path, files[files.size() - 2]->view(), in, [] {});
+  if (rec.axis != 'x' && rec.axis != 'y') throw InputError("a record that refines the modes must be of x or y", path);
+  auto pieces = ident::load_commanded_motion_csv(motion, files.back()->view(), rec.axis);
+  const std::string label = record_label(rec.axis, path);
+  timed.emplace(label, TimedRecord{std::move(rec), std::move(pieces)});
+}
+
 }  // namespace
 
 AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion ringdown) {
@@ -121,6 +145,8 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
   // the analysis goes on, and collected at the end; the files stay mapped until then.
   std::vector<std::unique_ptr<const formats::InputFileBytes>> files;
   std::vector<std::future<std::string>> digests;
+  // The records that refine their axis' modes first: the first record of a label with its motion wins.
+  for (const auto& path : a.refine_files) load_refine_record(path, in, a.digest_inputs, files, digests, timed, result);
   for (const auto& path : a.files) {
     // Mapped, not copied: a fresh 20 MB buffer costs more in page faults than the parse.
     files.push_back(std::make_unique<const formats::InputFileBytes>(path));

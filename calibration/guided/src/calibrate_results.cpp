@@ -436,6 +436,12 @@ void add_design_check(RunRecord& r, const CalibrationPlan& plan, const Experimen
     total_s += run->second.experiment.estimated_duration_s;
     auto& j =
         exps[e.name] = {{"protocol", e.protocol}, {"machine_time_s", run->second.experiment.estimated_duration_s}};
+    // A coarse pass reports no interval: it locates the mode its fine pass is designed and predicted from.
+    if (const auto located = runs.fine_modes.find(e.locates); located != runs.fine_modes.end())
+      j["locates"] = {{"fine_pass", e.locates},
+                      {"freq_hz", located->second.freq_hz},
+                      {"zeta", located->second.zeta},
+                      {"basis", located->second.basis}};
     const auto p = runs.predicted.find(e.name);
     if (p == runs.predicted.end()) continue;
     j["predicted"] = achieved_beside_predicted(p->second, achieved_by(plan, e, run->second.experiment, id));
