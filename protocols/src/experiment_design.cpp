@@ -101,11 +101,8 @@ DesignedParams design_flow_sweep(const machine::MachineProfile& profile, const L
   d.params["expected_tau_s"] = slowest;
   d.params["hold_taus"] = taus;
   d.params["levels"] = kFlowLevels;
-  // The steps at spread phases of the load cell's samples: the dead time's information then
-  // does not hang on where one phase puts them (experiment_information.hpp).
-  d.params["hold_stagger_s"] = 1 / prior.rate_hz;
   d.why = fmt::format(
-      "{} levels held {:.3g} s each (staggered by up to a sample period of the load cell): {:.3g} of the slowest time "
+      "{} levels held {:.3g} s each : {:.3g} of the slowest time "
       "constant expected at the lowest flow ({:.3g} s, "
       "{:g} times the prior's {:.3g} s)",
       kFlowLevels, taus * slowest, taus, slowest, kPriorTauMargin, tau);

@@ -50,11 +50,6 @@ void size_chirp(const std::map<std::string, double>& overrides, Experiment& e) {
     if (!overrides.count(k)) p[k] = v;
 }
 
-// The i-th hold lengthened by frac(i kGoldenFraction) hold_stagger_s: the steps' instants, as a
-// sensor's samples see them, spread over its sample period (the differences of their phases are
-// equidistributed, whatever the sensor's clock adds to each hold).
-constexpr double kGoldenFraction = 0.6180339887498949;
-
 // The flow sweep: every level of plan_flow_sweep reached from below and from above (the range
 // from the profile's hot end when not given), recorded by the load cell.
 void build_flow_sweep(const ExperimentRequest& r, Experiment& e) {
@@ -83,12 +78,7 @@ void build_flow_sweep(const ExperimentRequest& r, Experiment& e) {
   double lines = 10;
   for (double q : plan.sequence_mm3_s)
     lines += std::ceil(q / area * plan.hold_s / std::max(profile.extruder.max_extrude_only_distance_mm, 1e-3)) + 1;
-  // Each hold lengthened by at most one stagger (flow_sweep_plan.hpp's duration plus those).
-  const double stagger = p.at("hold_stagger_s");
-  const auto hold_of = [&](std::size_t i) {
-    return i == 0 ? plan.settle_s : plan.hold_s + std::fmod(static_cast<double>(i) * kGoldenFraction, 1.0) * stagger;
-  };
-  check_plan(protocol, lines, plan.duration_s() + plan.steps() * stagger, limits);
+  check_plan(protocol, lines, plan.duration_s(), limits);
   std::vector<std::string> restore;
   const FeedPlan fp = liquefier_prologue(g, restore, p, profile, d);
   record_feed_plan(e, fp);
@@ -105,7 +95,7 @@ void build_flow_sweep(const ExperimentRequest& r, Experiment& e) {
                           num(plan.ratio, 3), num(plan.flow_min_mm3_s), num(plan.flow_max_mm3_s), num(plan.hold_s, 3)));
   g.push_back(";@record load_cell on");
   for (std::size_t i = 0; i < plan.sequence_mm3_s.size(); ++i) {
-    feed_move(g, fp, plan.sequence_mm3_s[i] / area, hold_of(i));
+    feed_move(g, fp, plan.sequence_mm3_s[i] / area, i == 0 ? plan.settle_s : plan.hold_s);
     guard();
   }
   g.push_back(d.wait_for_moves());

@@ -88,10 +88,6 @@ void add_liquefier_step_specs(std::vector<ProtocolSpec>& s) {
         {"expected_tau_s", 0.5, "s", "time constant expected at the lowest flow (the slowest)", ParamDomain::positive,
          kMaxTimeS},
         {"hold_taus", 6, "", "time at each level in expected time constants", ParamDomain::positive, 1000},
-        {"hold_stagger_s", 0, "s",
-         "the i-th hold is lengthened by the fractional part of i times the golden ratio times this, so that the "
-         "steps fall at spread phases of a sensor's sample clock whatever its rate (one sample period)",
-         ParamDomain::non_negative, 1},
         {"settle_s", 3.0, "s", "time at the lowest flow before the first step", ParamDomain::positive, kMaxTimeS},
         {"cycles", 1, "", "up-and-down sweeps", ParamDomain::count, 100},
         {"accel_mm_s2", kMachineDefault, "mm/s^2",

@@ -77,6 +77,9 @@ TEST_CASE(
       CHECK(v.at("achieved_over_predicted_at_estimate").get<double>() <= 1.3);
       // Predicted before the run: the flow sweep's from the liquefier's prior, the chirp's from
       // what the flow sweep measured, each axis' fine pass from the mode its coarse pass located.
+      // The flow sweep's dead time is predicted as the average over the load cell's unknown
+      // sample phase and clock; the simulated printer's phase is an unlucky one (1.27 here,
+      // 1.26-1.32 over seeds 1-6: docs/calibrate.md).
       CHECK(v.at("achieved_over_predicted").get<double>() >= 0.7);
       CHECK(v.at("achieved_over_predicted").get<double>() <= 1.3);
     }

@@ -58,7 +58,34 @@ namespace {
 struct TimedRecord {
   ident::AccelRecord record;
   std::vector<ident::AccelPiece> motion;
+  /// A record of refine_files: a sweep over the dominant mode's band only, which cannot tell the
+  /// spectrum's other modes; it refines the dominant one, the others stay the spectrum's.
+  bool dominant_band = false;
 };
+
+/// `m`'s modes refined by the fit of `t` against its motion: all of them, or with
+/// t.dominant_band the dominant one alone (the others as the spectrum found them).
+void refine_modes(ident::AxisModes& m, const TimedRecord& t) {
+  if (!t.dominant_band || m.modes.size() <= 1 || m.dominant < 0) {
+    ident::refine_modes_with_motion(m, t.record, t.motion);
+    return;
+  }
+  ident::AxisModes one = m;
+  one.modes = {m.modes[static_cast<std::size_t>(m.dominant)]};
+  one.dominant = 0;
+  one.warnings.clear();
+  ident::refine_modes_with_motion(one, t.record, t.motion);
+  for (const auto& w : one.warnings) m.warnings.push_back(w);
+  if (one.method != "output_error") return;
+  m.modes[static_cast<std::size_t>(m.dominant)] = one.modes.front();
+  const double f = one.modes.front().freq_hz;
+  std::sort(m.modes.begin(), m.modes.end(), [](const auto& a, const auto& b) { return a.freq_hz < b.freq_hz; });
+  for (std::size_t k = 0; k < m.modes.size(); ++k)
+    if (m.modes[k].freq_hz == f) m.dominant = static_cast<int>(k);
+  m.method = one.method;
+  m.time_fit = std::move(one.time_fit);
+  m.time_fit_variance_inflation = one.time_fit_variance_inflation;
+}
 
 // InputError for Welch and mode options outside their ranges (named as the command line names them).
 void check_accel_options(const ident::WelchOptions& welch, const ident::ResonanceOptions& ro) {
@@ -100,8 +127,7 @@ AxisResult axis_result(const std::string& label, std::vector<ident::AxisSpectrum
   r.datasets = std::move(spectra);
   for (const auto& w : r.spectrum.warnings) warnings.push_back(w);
   r.modes = ident::identify_modes(r.spectrum, ro);
-  if (const auto it = timed.find(label); it != timed.end())
-    ident::refine_modes_with_motion(r.modes, it->second.record, it->second.motion);
+  if (const auto it = timed.find(label); it != timed.end()) refine_modes(r.modes, it->second);
   for (const auto& w : r.modes.warnings) warnings.push_back(fmt::format("axis {}: {}", label, w));
   return r;
 }
@@ -127,7 +153,7 @@ void load_refine_record(const std::string& path, const ident::AccelInputOptions&
   if (rec.axis != 'x' && rec.axis != 'y') throw InputError("a record that refines the modes must be of x or y", path);
   auto pieces = ident::load_commanded_motion_csv(motion, files.back()->view(), rec.axis);
   const std::string label = record_label(rec.axis, path);
-  timed.emplace(label, TimedRecord{std::move(rec), std::move(pieces)});
+  timed.emplace(label, TimedRecord{std::move(rec), std::move(pieces), true});
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "calibrate_liquefier.hpp"
 #include "calibrate_stages.hpp"
+#include "tunekit/core/input_read_scope.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 
 namespace tunekit::calibration {
@@ -133,6 +134,9 @@ void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs,
 }
 
 void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {
+  // The coarse passes' records as read between the runs (each record opened once).
+  const core::InputReadScope read_once;
+  for (const auto& [path, bytes] : runs.coarse_bytes) core::InputReadScope::keep(path, bytes);
   for (const char axis : {'x', 'y'}) {
     const auto it = runs.runs.find(std::string("axis-") + axis);
     if (it == runs.runs.end()) continue;

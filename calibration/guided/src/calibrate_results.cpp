@@ -395,7 +395,8 @@ Achieved achieved_by(const CalibrationPlan& plan, const PlannedExperiment& e, co
   const auto s = id.shapers.find(e.axis[0]);
   const ShaperAxis* axis = s != id.shapers.end() ? s->second.axis(e.axis) : nullptr;
   if (!axis || axis->resonance.modes.modes.empty()) return a;
-  const auto& m = axis->resonance.modes.modes[0];
+  const auto& modes = axis->resonance.modes;
+  const auto& m = modes.modes[modes.dominant >= 0 ? static_cast<std::size_t>(modes.dominant) : 0];
   a.intervals["freq_hz"] = {m.freq_hz, 0.5 * (m.freq_ci95_hi - m.freq_ci95_lo)};
   a.intervals["zeta"] = {m.zeta, 0.5 * (m.zeta_ci95_hi - m.zeta_ci95_lo)};
   protocols::AxisPrior prior = plan.axis_prior;

@@ -7,6 +7,9 @@
 
 #include "calibrate_stages.hpp"
 #include "tunekit/calibration/analyses/resonance_common.hpp"
+#include "tunekit/core/file_bytes.hpp"
+#include "tunekit/core/input_read_scope.hpp"
+#include "tunekit/ident/commanded_motion.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/protocols/runner.hpp"
@@ -67,10 +70,14 @@ void resize_chirp(const PlannedExperiment& e, ExperimentRuns& out) {
 /// `tunekit resonance` analyses it, the prior of its fine pass; the plan's axis prior, saying
 /// why, when it located none.
 protocols::AxisPrior located_mode(const CalibrationPlan& plan, const PlannedExperiment& coarse,
-                                  const protocols::RunResult& run) {
+                                  const protocols::RunResult& run, std::map<std::string, std::string>& kept) {
   protocols::AxisPrior mode = plan.axis_prior;
   AccelFilesOptions o;
   o.files = {run.files.at(protocols::RunFile::accel)};
+  // Read once: the record and its motion kept for the axis' analysis after the runs.
+  const core::InputReadScope read_once;
+  for (const auto& path : {o.files.front(), ident::commanded_motion_beside(o.files.front())})
+    if (!path.empty()) kept[path] = read_file_bytes(path);
   o.input.axis = coarse.axis.empty() ? 0 : coarse.axis[0];
   o.digest_inputs = false;
   try {
@@ -128,7 +135,7 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
       out.chirp.duration_s = run.experiment.params.at("duration_s");  // the design's (experiment_design.hpp)
     }
     if (!e.locates.empty() && run.files.count(protocols::RunFile::accel))
-      out.fine_modes[e.locates] = located_mode(plan, e, run);
+      out.fine_modes[e.locates] = located_mode(plan, e, run, out.coarse_bytes);
     if (e.name == "liquefier-step") {
       const auto track = run.files.find(protocols::RunFile::feed_track);
       const auto options = load_cell_step_options(run.files.at(protocols::RunFile::load_cell),

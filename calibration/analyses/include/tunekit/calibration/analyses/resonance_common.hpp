@@ -21,8 +21,9 @@ namespace tunekit::calibration {
 struct AccelFilesOptions {
   std::vector<std::string> files;  ///< accelerometer CSVs, Klipper spectrum files, .stdata files
   /// Raw accelerometer CSVs, each with its commanded motion beside it, whose fit against that
-  /// motion refines the modes of its axis in place of the first of `files` (their spectra are not
-  /// averaged with the others'): a second, slower sweep over the band of a mode the first located.
+  /// motion refines the dominant mode of its axis in place of the first of `files` (their spectra
+  /// are not averaged with the others', the other modes stay the spectrum's): a second, slower
+  /// sweep over the band of the mode the first located.
   std::vector<std::string> refine_files;
   /// Columns (time in s, accelerations in mm/s^2), the axis of every file (0: from the Klipper
   /// file name) and the sensor range for clipping detection.

@@ -130,6 +130,9 @@ struct ExperimentRuns {
   /// Each fine pass' mode (by PlannedExperiment::name), located by its coarse pass before it ran:
   /// the mode its band and its predicted intervals were designed from.
   std::map<std::string, protocols::AxisPrior> fine_modes;
+  /// The coarse passes' records (and their commanded motion) as read to locate the modes, by
+  /// path: the axes' analyses read those bytes again, not the files (each record opened once).
+  std::map<std::string, std::string> coarse_bytes;
   /// The load-cell step test identified between the runs (its tau sizes the chirp), as
   /// compute_step() with `tunekit step`'s defaults gives it.
   std::optional<StepOutcome> liquefier_step;
