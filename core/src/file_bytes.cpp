@@ -117,6 +117,11 @@ std::string read_file_head(const std::string& path, std::uint64_t max_bytes) {
 }
 
 MappedFileBytes::MappedFileBytes(const std::string& path) {
+  // In an InputReadScope that holds the file's bytes: those, the file not opened again.
+  if (auto kept = core::InputReadScope::cached(path)) {
+    copy_ = std::move(*kept);
+    return;
+  }
   struct stat st {};
   const Fd fd = open_input(path, st);
   if (st.st_size > 0 && static_cast<std::uint64_t>(st.st_size) <= kMaxInputFileBytes) {

@@ -26,24 +26,64 @@ void check_scale(double scale) {
 
 }  // namespace
 
+namespace {
+
+/// accel_per_hz f reaching the axis' limit (less Klipper's sweeping motion) at the sweep's end:
+/// the most acceleration at every frequency that keeps the excitation's shape; 0 where Klipper's
+/// default is more than that limit allows (the protocol then lowers it itself).
+double designed_accel_per_hz(const machine::MachineProfile& profile, const std::string& axis) {
+  const double per_hz =
+      std::floor((profile.axis(axis).max_accel_mm_s2 - experiment_gcode::kKlipperSweepingAccel_mm_s2) / kSweepEnd_hz);
+  return per_hz > kKlipperAccelPerHz_mm_s2 ? per_hz : 0.0;
+}
+
+/// The rate of the fine pass at `scale`, Hz/s.
+double fine_rate(double scale) { return std::min(kMaxSweepRate_hz_s, kFineSweepRate_hz_s / scale); }
+
+}  // namespace
+
 DesignedParams design_axis_sweep(const machine::MachineProfile& profile, const std::string& axis, double scale) {
   check_scale(scale);
-  const auto& limits = profile.axis(axis);
   DesignedParams d;
-  // accel_per_hz f reaches the axis' limit (less Klipper's sweeping motion) at the sweep's end:
-  // the most acceleration at every frequency that keeps the excitation's shape.
-  const double per_hz =
-      std::floor((limits.max_accel_mm_s2 - experiment_gcode::kKlipperSweepingAccel_mm_s2) / kSweepEnd_hz);
-  const double rate = std::min(kMaxSweepRate_hz_s, kDesignedSweepRate_hz_s / scale);
-  d.params["hz_per_sec"] = rate;
-  if (per_hz > kKlipperAccelPerHz_mm_s2) {
-    d.params["accel_per_hz"] = per_hz;
-    d.why = fmt::format("accel_per_hz {:g} (the axis' {:g} mm/s^2 at {:g} Hz), swept at {:.3g} Hz/s", per_hz,
-                        limits.max_accel_mm_s2, kSweepEnd_hz, rate);
-  } else {
-    d.why = fmt::format("swept at {:.3g} Hz/s", rate);
-  }
+  d.params["hz_per_sec"] = kCoarseSweepRate_hz_s;
+  const double per_hz = designed_accel_per_hz(profile, axis);
+  if (per_hz > 0) d.params["accel_per_hz"] = per_hz;
+  d.why = fmt::format("coarse pass over the whole band at {:g} Hz/s{}: it locates the mode the fine pass sweeps",
+                      kCoarseSweepRate_hz_s,
+                      per_hz > 0 ? fmt::format(", accel_per_hz {:g} (the axis' {:g} mm/s^2 at {:g} Hz)", per_hz,
+                                               profile.axis(axis).max_accel_mm_s2, kSweepEnd_hz)
+                                 : std::string());
   return d;
+}
+
+DesignedParams design_axis_fine_sweep(const machine::MachineProfile& profile, const std::string& axis,
+                                      const AxisPrior& mode, const FineSweepEnvelope& envelope, double scale) {
+  check_scale(scale);
+  if (!(envelope.freq_end_hz > envelope.freq_start_hz && envelope.freq_start_hz > 0))
+    throw InputError(
+        fmt::format("the fine pass' envelope {:g}-{:g} Hz is empty", envelope.freq_start_hz, envelope.freq_end_hz));
+  const double f = std::clamp(mode.freq_hz, envelope.freq_start_hz, envelope.freq_end_hz);
+  const double w = std::clamp(kFineBandZetas * mode.zeta, kFineBandMin, kFineBandMax);
+  const double width = std::min(2 * w * f, envelope.freq_end_hz - envelope.freq_start_hz);
+  // Centred on the mode, moved inside the envelope where it would reach past an end.
+  const double lo = std::clamp(f - width / 2, envelope.freq_start_hz, envelope.freq_end_hz - width);
+  DesignedParams d;
+  d.params["freq_start_hz"] = lo;
+  d.params["freq_end_hz"] = lo + width;
+  d.params["hz_per_sec"] = fine_rate(scale);
+  if (const double per_hz = designed_accel_per_hz(profile, axis); per_hz > 0) d.params["accel_per_hz"] = per_hz;
+  d.why = fmt::format(
+      "fine pass over {:.4g}-{:.4g} Hz at {:.3g} Hz/s: the mode at {:.4g} Hz +- {:g} times its damping ratio {:.3g}",
+      lo, lo + width, fine_rate(scale), mode.freq_hz, kFineBandZetas, mode.zeta);
+  return d;
+}
+
+std::vector<AxisPrior> fine_sweep_extremes(const FineSweepEnvelope& envelope) {
+  AxisPrior low, high;
+  low.freq_hz = envelope.freq_start_hz;
+  high.freq_hz = envelope.freq_end_hz;
+  low.zeta = high.zeta = kFineBandMax / kFineBandZetas;
+  return {low, high};
 }
 
 DesignedParams design_flow_sweep(const machine::MachineProfile& profile, const LiquefierPrior& prior, double scale) {
@@ -62,7 +102,8 @@ DesignedParams design_flow_sweep(const machine::MachineProfile& profile, const L
   d.params["hold_taus"] = taus;
   d.params["levels"] = kFlowLevels;
   d.why = fmt::format(
-      "{} levels held {:.3g} s each: {:.3g} of the slowest time constant expected at the lowest flow ({:.3g} s, "
+      "{} levels held {:.3g} s each : {:.3g} of the slowest time "
+      "constant expected at the lowest flow ({:.3g} s, "
       "{:g} times the prior's {:.3g} s)",
       kFlowLevels, taus * slowest, taus, slowest, kPriorTauMargin, tau);
   return d;

@@ -29,15 +29,36 @@ Eigen::MatrixXd covariance(const Eigen::MatrixXd& jtj, double sigma) {
 }
 
 /// The samples of the record the fit uses: from the end of the track's first steady stretch
-/// (what comes before is the liquefier settling from rest: the analyses start after it) to the
-/// track's end, at `rate_hz`.
-std::vector<double> record_instants(const ident::FeedTrack& k, double rate_hz) {
+/// (what comes before is the liquefier settling from rest: the analyses start after it) plus
+/// `phase` sample periods to the track's end, at `rate_hz`.
+std::vector<double> record_instants(const ident::FeedTrack& k, double rate_hz, double phase) {
   std::size_t i = 1;
   while (i + 1 < k.t.size() && !(k.u[i] > 0 && k.u[i + 1] == k.u[i] && k.t[i + 1] > k.t[i])) ++i;
-  const double start = i + 1 < k.t.size() ? k.t[i + 1] : k.t.front();
+  const double start = (i + 1 < k.t.size() ? k.t[i + 1] : k.t.front()) + phase / rate_hz;
   std::vector<double> t;
   for (double x = start; x <= k.t.back(); x += 1.0 / rate_hz) t.push_back(x);
   return t;
+}
+
+// The sensor's clock is not the planner's: where its samples fall between the instants of the
+// feed's steps is not known before the run, and drifts through it (a converter runs on its own
+// oscillator, off its nominal rate by kMinClockError to kMaxClockError). The dead time is told
+// mostly by the samples just after each delayed kink of the feed, above all by those that fall
+// inside the brief stops Klipper makes between extrude-only moves (a fraction of a millisecond):
+// with a few steps, which samples do is a lottery, and the interval the fit reports varies with
+// it (the flow sweep's dead time by +-25 % on the simulated printer). The prediction is the
+// estimate's variance averaged over kClockDraws sample grids, each with its own phase and clock
+// error (a low-discrepancy sequence: the same grids every time): the variance of the estimate
+// when the grid is not known, E[Var(estimate | grid)].
+constexpr int kClockDraws = 24;
+constexpr double kMinClockError = 0.001, kMaxClockError = 0.01;
+
+/// The `k`-th of the kClockDraws grids: (phase in sample periods, relative clock error).
+std::pair<double, double> clock_draw(int k) {
+  constexpr double kGolden = 0.6180339887498949;
+  const double u = std::fmod((k + 1) * kGolden, 1.0);
+  const double error = kMinClockError + (kMaxClockError - kMinClockError) * u;
+  return {(k + 0.5) / kClockDraws, k % 2 == 0 ? error : -error};
 }
 
 /// The track's feed at time x (linear between breakpoints, held outside).
@@ -115,32 +136,50 @@ AxisPrior typical_axis_prior(double noise_mm_s2, double rate_hz) {
   return p;
 }
 
-ExperimentPrediction predict_liquefier_record(const Experiment& e, const LiquefierPrior& prior) {
-  const ident::FeedTrack track = planned_feed_track(e);
-  if (track.t.size() < 3) throw InputError(fmt::format("{} has no planned feed track to predict from", e.protocol));
-  const std::vector<double> t = record_instants(track, prior.rate_hz);
-  if (t.size() < 10) throw InputError(fmt::format("{} records too little to predict from", e.protocol));
-  fitting::LiquefierParams p;
-  p.b = prior.b;
-  p.a = prior.tau_ref_s * std::pow(prior.ref_feed_mm_s, -prior.b);
-  p.theta_s = prior.theta_s;
-  p.g = prior.gain_N_per_mm_s;
-  p.c = prior.offset_N;
-  p.v0 = fitting::liquefier_volume(p, std::max(track_feed(track, t.front() - prior.theta_s), 1e-6));
+namespace {
+
+/// The whole-record model's J^T J (columns a, b, theta, v0, g, c) over the samples `t` of the
+/// track, the median positive feed over them appended to `feeds`.
+Eigen::MatrixXd liquefier_information(const ident::FeedTrack& track, const std::vector<double>& t,
+                                      fitting::LiquefierParams p, double prior_theta_s, std::vector<double>& feeds) {
+  p.v0 = fitting::liquefier_volume(p, std::max(track_feed(track, t.front() - prior_theta_s), 1e-6));
   const auto sens = fitting::liquefier_sensitivities(t, track.t, track.u, p, fitting::LiquefierSensor::flow);
   const auto y = fitting::simulate_liquefier(t, track.t, track.u, p, fitting::LiquefierSensor::flow);
-  // Columns: a, b, theta, v0, g, c.
   Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(6, 6);
-  std::vector<double> feeds;
   for (std::size_t i = 0; i < t.size(); ++i) {
     Eigen::Matrix<double, 6, 1> row;
     row << sens[i][0], sens[i][1], sens[i][2], sens[i][3], (y[i] - p.c) / p.g, 1.0;
     jtj += row * row.transpose();
     if (const double u = track_feed(track, t[i]); u > 0) feeds.push_back(u);
   }
+  return jtj;
+}
+
+}  // namespace
+
+ExperimentPrediction predict_liquefier_record(const Experiment& e, const LiquefierPrior& prior) {
+  const ident::FeedTrack track = planned_feed_track(e);
+  if (track.t.size() < 3) throw InputError(fmt::format("{} has no planned feed track to predict from", e.protocol));
+  if (record_instants(track, prior.rate_hz, 0).size() < 10)
+    throw InputError(fmt::format("{} records too little to predict from", e.protocol));
+  fitting::LiquefierParams p;
+  p.b = prior.b;
+  p.a = prior.tau_ref_s * std::pow(prior.ref_feed_mm_s, -prior.b);
+  p.theta_s = prior.theta_s;
+  p.g = prior.gain_N_per_mm_s;
+  p.c = prior.offset_N;
+  // The covariance averaged over the grids (each grid's inverted on its own).
+  std::vector<double> feeds;
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(6, 6);
+  for (int k = 0; k < kClockDraws; ++k) {
+    const auto [phase, error] = clock_draw(k);
+    cov += covariance(liquefier_information(track, record_instants(track, prior.rate_hz * (1 + error), phase), p,
+                                            prior.theta_s, feeds),
+                      prior.noise_N) /
+           kClockDraws;
+  }
   std::nth_element(feeds.begin(), feeds.begin() + feeds.size() / 2, feeds.end());
   const double q_ref = feeds[feeds.size() / 2];
-  const Eigen::MatrixXd cov = covariance(jtj, prior.noise_N);
   const Eigen::Vector2d grad(1 / p.a, std::log(q_ref));  // d ln tau_ref / d(a, b)
   const double var_ln_tau = grad.transpose() * cov.topLeftCorner(2, 2) * grad;
   ExperimentPrediction out;

@@ -42,7 +42,7 @@ double machine_time_s(const std::string& dir) {
     total += s;
     ++experiments;
   }
-  CHECK(experiments == 4);
+  CHECK(experiments == 6);  // the flow sweep, the chirp, each axis' coarse and fine pass
   return total;
 }
 
@@ -56,31 +56,37 @@ TEST_CASE(
   const auto results = read_json(dir + "/results.json").at("results");
   const auto& design = results.at("experiment_design");
   CHECK(design.at("machine_time_s").get<double>() <= 90);
-  int compared = 0;
+  int compared = 0, located = 0;
   for (const auto& [name, e] : design.at("experiments").items()) {
+    if (e.contains("locates")) {
+      // A coarse pass reports no interval: its mode is the prior of its fine pass, recorded.
+      INFO(name << ": " << e.dump());
+      CHECK_FALSE(e.contains("predicted"));
+      CHECK(design.at("experiments").contains(e.at("locates").at("fine_pass").get<std::string>()));
+      CHECK(e.at("locates").at("freq_hz").get<double>() > 0);
+      ++located;
+      continue;
+    }
     REQUIRE(e.contains("predicted"));
     for (const auto& [q, v] : e.at("predicted").at("quantities").items()) {
       INFO(name << " " << q << ": " << v.dump());
       REQUIRE(v.contains("achieved_over_predicted"));
       ++compared;
-      // The flow sweep's dead time is told by the instants of its steps between the load cell's
-      // samples, a kink the linearised information averages over: its achieved interval came out
-      // 0.8 to 1.75 times the prediction as the holds moved by tenths of a second (docs/calibrate.md).
-      if (e.at("protocol") == "liquefier-flow-sweep" && q == "theta_s") continue;
       // The information of the experiment as it ran, at the parameters it found.
       CHECK(v.at("achieved_over_predicted_at_estimate").get<double>() >= 0.7);
       CHECK(v.at("achieved_over_predicted_at_estimate").get<double>() <= 1.3);
-      // Predicted before the run: the liquefier's from its prior (the chirp's from the flow
-      // sweep), within 30 %; the axes' from a desktop axis' prior (45 Hz, damping ratio 0.1,
-      // Klipper's default), which the simulated X axis' 0.08 undercuts: its intervals come out
-      // about 0.7 of the prior's.
-      const double low = e.at("protocol") == "axis-sweep" ? 0.6 : 0.7;
-      CHECK(v.at("achieved_over_predicted").get<double>() >= low);
+      // Predicted before the run: the flow sweep's from the liquefier's prior, the chirp's from
+      // what the flow sweep measured, each axis' fine pass from the mode its coarse pass located.
+      // The flow sweep's dead time is predicted as the average over the load cell's unknown
+      // sample phase and clock; the simulated printer's phase is an unlucky one (1.27 here,
+      // 1.26-1.32 over seeds 1-6: docs/calibrate.md).
+      CHECK(v.at("achieved_over_predicted").get<double>() >= 0.7);
       CHECK(v.at("achieved_over_predicted").get<double>() <= 1.3);
     }
   }
   // The flow sweep's and the chirp's tau_ref_s, b, theta_s and g, each axis' frequency and damping.
   CHECK(compared == 12);
+  CHECK(located == 2);
 }
 
 TEST_CASE("calibrate on a stock printer's limits (generic-ramps.cfg) takes at most 120 s of machine time") {
@@ -107,7 +113,7 @@ TEST_CASE("calibrate --budget-s shortens the plan to the budget and says what ea
   CHECK(j.at("design_scale").get<double>() < 1);
   // Each axis' frequency is predicted wider than without the budget, and the plan says by how much.
   for (const auto& e : j.at("experiments")) {
-    if (e.at("protocol") != "axis-sweep") continue;
+    if (e.at("protocol") != "axis-sweep" || !e.contains("predicted")) continue;  // a coarse pass predicts nothing
     const double with = e.at("predicted").at("intervals").at("freq_hz").at("half_width").get<double>();
     const double without =
         e.at("predicted_without_budget").at("intervals").at("freq_hz").at("half_width").get<double>();

@@ -74,6 +74,12 @@ void add_accel_files_options(CLI::App* sub, AccelFilesOptions& o, OutputOptions&
                   "files, or generic CSVs "
                   "with --time/--accel")
       ->required();
+  sub->add_option(
+         "--refine-with", o.refine_files,
+         "A raw record (raw_data_<axis>_*.csv with its commanded_motion_<axis>_*.csv beside it) whose fit "
+         "against its commanded motion refines its axis' dominant mode, its spectrum not averaged with the files': "
+         "calibrate's fine pass over the band of the mode its coarse sweep located (repeatable)")
+      ->check(CLI::ExistingFile);
   sub->add_option_function<std::string>(
       "--axis", [&o](const std::string& s) { o.input.axis = parse_axis_name(s); },
       "Axis of every file: x, y or z (default: from the Klipper file name; a file whose name names no "

@@ -58,7 +58,34 @@ namespace {
 struct TimedRecord {
   ident::AccelRecord record;
   std::vector<ident::AccelPiece> motion;
+  /// A record of refine_files: a sweep over the dominant mode's band only, which cannot tell the
+  /// spectrum's other modes; it refines the dominant one, the others stay the spectrum's.
+  bool dominant_band = false;
 };
+
+/// `m`'s modes refined by the fit of `t` against its motion: all of them, or with
+/// t.dominant_band the dominant one alone (the others as the spectrum found them).
+void refine_modes(ident::AxisModes& m, const TimedRecord& t) {
+  if (!t.dominant_band || m.modes.size() <= 1 || m.dominant < 0) {
+    ident::refine_modes_with_motion(m, t.record, t.motion);
+    return;
+  }
+  ident::AxisModes one = m;
+  one.modes = {m.modes[static_cast<std::size_t>(m.dominant)]};
+  one.dominant = 0;
+  one.warnings.clear();
+  ident::refine_modes_with_motion(one, t.record, t.motion);
+  for (const auto& w : one.warnings) m.warnings.push_back(w);
+  if (one.method != "output_error") return;
+  m.modes[static_cast<std::size_t>(m.dominant)] = one.modes.front();
+  const double f = one.modes.front().freq_hz;
+  std::sort(m.modes.begin(), m.modes.end(), [](const auto& a, const auto& b) { return a.freq_hz < b.freq_hz; });
+  for (std::size_t k = 0; k < m.modes.size(); ++k)
+    if (m.modes[k].freq_hz == f) m.dominant = static_cast<int>(k);
+  m.method = one.method;
+  m.time_fit = std::move(one.time_fit);
+  m.time_fit_variance_inflation = one.time_fit_variance_inflation;
+}
 
 // InputError for Welch and mode options outside their ranges (named as the command line names them).
 void check_accel_options(const ident::WelchOptions& welch, const ident::ResonanceOptions& ro) {
@@ -103,11 +130,34 @@ AxisResult axis_result(const std::string& label, std::vector<ident::AxisSpectrum
   std::future<void> beside_done =
       beside ? std::async(std::launch::async, [&beside, &r] { beside(r); }) : std::future<void>{};
   r.modes = ident::identify_modes(r.spectrum, ro);
-  if (const auto it = timed.find(label); it != timed.end())
-    ident::refine_modes_with_motion(r.modes, it->second.record, it->second.motion);
+  if (const auto it = timed.find(label); it != timed.end()) refine_modes(r.modes, it->second);
   for (const auto& w : r.modes.warnings) warnings.push_back(fmt::format("axis {}: {}", label, w));
   if (beside_done.valid()) beside_done.wait();  // before r is moved to the caller
   return r;
+}
+
+/// A record of `refine_files` and its commanded motion, into `timed` (InputError when it has no
+/// motion beside it or is not a raw record of x or y); both inputs recorded with their digests.
+void load_refine_record(const std::string& path, const ident::AccelInputOptions& in, bool digest_inputs,
+                        std::vector<std::unique_ptr<const formats::InputFileBytes>>& files,
+                        std::vector<std::future<std::string>>& digests, std::map<std::string, TimedRecord>& timed,
+                        AccelAnalysis& result) {
+  const std::string motion = ident::commanded_motion_beside(path);
+  if (motion.empty())
+    throw InputError("a record that refines the modes needs its commanded motion beside it (commanded_motion.csv)",
+                     path);
+  for (const auto& p : {path, motion}) {
+    files.push_back(std::make_unique<const formats::InputFileBytes>(p));
+    const std::string_view bytes = files.back()->view();
+    result.inputs.push_back({p, {}, bytes.size()});
+    digests.push_back(digest_inputs ? std::async(std::launch::async, [bytes] { return sha256_hex(bytes); })
+                                    : std::future<std::string>{});
+  }
+  auto rec = ident::load_accel_csv(path, files[files.size() - 2]->view(), in, [] {});
+  if (rec.axis != 'x' && rec.axis != 'y') throw InputError("a record that refines the modes must be of x or y", path);
+  auto pieces = ident::load_commanded_motion_csv(motion, files.back()->view(), rec.axis);
+  const std::string label = record_label(rec.axis, path);
+  timed.emplace(label, TimedRecord{std::move(rec), std::move(pieces), true});
 }
 
 }  // namespace
@@ -125,6 +175,8 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
   // the analysis goes on, and collected at the end; the files stay mapped until then.
   std::vector<std::unique_ptr<const formats::InputFileBytes>> files;
   std::vector<std::future<std::string>> digests;
+  // The records that refine their axis' modes first: the first record of a label with its motion wins.
+  for (const auto& path : a.refine_files) load_refine_record(path, in, a.digest_inputs, files, digests, timed, result);
   for (const auto& path : a.files) {
     // Mapped, not copied: a fresh 20 MB buffer costs more in page faults than the parse.
     files.push_back(std::make_unique<const formats::InputFileBytes>(path));

@@ -4,9 +4,11 @@
 // the command it records in results.json reproduces it from the run directory.
 #include <filesystem>
 #include <stdexcept>
+#include <utility>
 
 #include "calibrate_liquefier.hpp"
 #include "calibrate_stages.hpp"
+#include "tunekit/core/input_read_scope.hpp"
 #include "tunekit/firmware/firmware_export.hpp"
 
 namespace tunekit::calibration {
@@ -132,15 +134,23 @@ void identify_load_cell(const CalibrationPlan& plan, const ExperimentRuns& runs,
 }
 
 void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Identification& id, CliContext& ctx) {
+  // The coarse passes' records as read between the runs (each record opened once).
+  const core::InputReadScope read_once;
+  for (const auto& [path, bytes] : runs.coarse_bytes) core::InputReadScope::keep(path, bytes);
   for (const char axis : {'x', 'y'}) {
     const auto it = runs.runs.find(std::string("axis-") + axis);
     if (it == runs.runs.end()) continue;
-    const std::string csv = it->second.files.at(protocols::RunFile::accel);
+    // The coarse pass' record is the spectrum (the whole band, the shaper is scored against it);
+    // the fine pass over the mode's band refines the modes (its fit against its commanded motion).
+    std::string csv = it->second.files.at(protocols::RunFile::accel), fine;
+    if (const auto coarse = runs.runs.find(std::string("axis-") + axis + "-coarse"); coarse != runs.runs.end())
+      fine = std::exchange(csv, coarse->second.files.at(protocols::RunFile::accel));
     const std::string name = std::string("shaper_") + axis;
     const std::string out = plan.run_dir + "/analysis/" + name + ".json";
     // The recommendation is made among the target firmware's shapers (and its damping bounds).
     ShaperOptions so;
     so.accel.files = {csv};
+    if (!fine.empty()) so.accel.refine_files = {fine};
     so.accel.input.axis = axis;
     so.firmware = firmware::parse_export_firmware(plan.options.firmware);
     // The proposed maximum acceleration stays within the printer's limit on this axis.
@@ -148,12 +158,16 @@ void identify_axes(const CalibrationPlan& plan, const ExperimentRuns& runs, Iden
     const auto& shaper = id.shapers[axis] = calibrate_analysis("shaper", [&] { return compute_shaper(so); });
     id.export_inputs.push_back(keep_analysis(shaper, out, ctx));
     id.inputs.push_back(read_input(shaper.inputs, csv));
-    id.reproduce.push_back(
-        {name,
-         "analysis/" + name + ".json",
-         std::string("axis ") + axis + "'s resonances (frequency, damping) and the recommended input shaper",
-         {"tunekit", "shaper", relative_to(csv, plan.run_dir), "--axis", std::string(1, axis), "--firmware",
-          plan.options.firmware, "--accel-limit", fmt::format("{:g}", so.accel_limit_mm_s2)}});
+    Reproduction r{name,
+                   "analysis/" + name + ".json",
+                   std::string("axis ") + axis + "'s resonances (frequency, damping) and the recommended input shaper",
+                   {"tunekit", "shaper", relative_to(csv, plan.run_dir), "--axis", std::string(1, axis), "--firmware",
+                    plan.options.firmware, "--accel-limit", fmt::format("{:g}", so.accel_limit_mm_s2)}};
+    if (!fine.empty()) {
+      id.inputs.push_back(read_input(shaper.inputs, fine));
+      r.args.insert(r.args.end(), {"--refine-with", relative_to(fine, plan.run_dir)});
+    }
+    id.reproduce.push_back(std::move(r));
   }
 }
 

@@ -45,20 +45,24 @@ std::vector<PlannedExperiment> choose_experiments(const CalibrateArgs& a, const 
                                                   bool camera_path) {
   std::vector<PlannedExperiment> exps;
   // The thermal experiment first: its record starts with the hot end at rest.
-  if (a.thermal) exps.push_back({"heater", "heater-identify", "", {}, 0, {}, {}, {}});
+  if (a.thermal) exps.push_back({"heater", "heater-identify", "", {}, "", 0, {}, {}, {}});
   if (!a.skip_liquefier && !camera_path) {
     // The step test is a flow sweep: every level reached from below and from above, so that tau,
     // K and theta are known per arrival level (the liquefier's dynamics change with the flow).
-    exps.push_back({"liquefier-step", "liquefier-flow-sweep", "", {}, 0, {}, {}, {}});
-    exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}, 0, {}, {}, {}});
+    exps.push_back({"liquefier-step", "liquefier-flow-sweep", "", {}, "", 0, {}, {}, {}});
+    exps.push_back({"liquefier-chirp", "liquefier-chirp", "", {}, "", 0, {}, {}, {}});
   }
   if (camera_path)
-    for (const auto& t : camera_tests(p.profile)) exps.push_back({t.name, t.protocol, "", t.params, 0, {}, {}, {}});
+    for (const auto& t : camera_tests(p.profile)) exps.push_back({t.name, t.protocol, "", t.params, "", 0, {}, {}, {}});
   if (!a.skip_axes) {
     if (!p.profile.sensors.accelerometer)
       throw InputError("the axis sweeps need an accelerometer ([sensors] accelerometer = true)", p.path);
-    exps.push_back({"axis-x", "axis-sweep", "x", {}, 0, {}, {}, {}});
-    exps.push_back({"axis-y", "axis-sweep", "y", {}, 0, {}, {}, {}});
+    // Each axis twice: a coarse pass over the whole band locates the mode, a fine pass sweeps its
+    // band (experiment_design.hpp); the axis' analysis is named by the fine pass.
+    for (const std::string axis : {"x", "y"}) {
+      exps.push_back({"axis-" + axis + "-coarse", "axis-sweep", axis, {}, "axis-" + axis, 0, {}, {}, {}});
+      exps.push_back({"axis-" + axis, "axis-sweep", axis, {}, "", 0, {}, {}, {}});
+    }
   }
   if (exps.empty())
     throw InputError("nothing to calibrate: both --skip-liquefier and --skip-axes were given (and no --thermal)");
@@ -102,7 +106,7 @@ constexpr double kChirpTauMax_s = 2 * protocols::kLiteratureLiquefierTau_s;
 constexpr double kChirpMeanFeed_mm_s = 2.0;
 // The shortest design a budget may ask for: the sweeps at their fastest rate, the holds at their
 // fewest time constants (experiment_design.hpp).
-constexpr double kShortestDesignScale = protocols::kDesignedSweepRate_hz_s / protocols::kMaxSweepRate_hz_s;
+constexpr double kShortestDesignScale = protocols::kFineSweepRate_hz_s / protocols::kMaxSweepRate_hz_s;
 
 // Each calibration keeps its own run directory: a used one is never written into again.
 std::string make_run_dir(const std::string& out_dir) {
@@ -194,10 +198,12 @@ void set_priors(CalibrationPlan& plan, const sim::SimConfig& sim_config) {
 
 }  // namespace
 
-std::optional<protocols::ExperimentPrediction> predict_experiment(const CalibrationPlan& plan,
+std::optional<protocols::ExperimentPrediction> predict_experiment(const PlannedExperiment& e,
                                                                   const protocols::Experiment& built,
-                                                                  const protocols::LiquefierPrior& liquefier) {
-  if (built.protocol == "axis-sweep") return protocols::predict_axis_sweep(built, plan.axis_prior);
+                                                                  const protocols::LiquefierPrior& liquefier,
+                                                                  const protocols::AxisPrior& axis) {
+  if (!e.locates.empty()) return std::nullopt;  // a coarse pass: its mode is the fine pass' prior
+  if (built.protocol == "axis-sweep") return protocols::predict_axis_sweep(built, axis);
   if (built.protocol == "liquefier-flow-sweep" || built.protocol == "liquefier-chirp")
     return protocols::predict_liquefier_record(built, liquefier);
   return std::nullopt;
@@ -242,16 +248,29 @@ CalibrationPlan plan_calibration(const CalibrateArgs& given, const CalibrationPr
 
 namespace {
 
+/// The fine pass `fine`'s envelope: the band of its coarse pass as that was built and checked.
+std::optional<protocols::FineSweepEnvelope> fine_envelope(const CalibrationPlan& plan, const PlannedExperiment& fine) {
+  for (const auto& c : plan.experiments)
+    if (c.locates == fine.name && c.checked.params.count("freq_end_hz"))
+      return protocols::FineSweepEnvelope{c.checked.params.at("freq_start_hz"), c.checked.params.at("freq_end_hz")};
+  return std::nullopt;
+}
+
 /// Every experiment built at the plan's design scale and checked against the limits (the chirp
-/// also for the extremes of the time constants it may be sized from later); their machine time.
+/// also for the extremes of the time constants it may be sized from later, each fine pass for
+/// the widest bands at both ends of its coarse pass' band); their machine time.
 double build_and_check(CalibrationPlan& plan) {
   double total_s = 0;
   for (auto& e : plan.experiments) {
     const auto built = protocols::run_experiment(experiment_run_options(plan, e, plan.chirp, true)).experiment;
     e.estimated_s = built.estimated_duration_s;
     e.checked = built;
-    e.predicted = predict_experiment(plan, built, plan.liquefier_prior);
+    e.predicted = predict_experiment(e, built, plan.liquefier_prior, plan.axis_prior);
     total_s += e.estimated_s;
+    if (e.protocol == "axis-sweep" && e.locates.empty())
+      if (const auto envelope = fine_envelope(plan, e))
+        for (const auto& mode : protocols::fine_sweep_extremes(*envelope))
+          protocols::run_experiment(experiment_run_options(plan, e, plan.chirp, true, &mode));
     if (e.protocol != "liquefier-chirp") continue;
     plan.chirp = protocols::plan_liquefier_chirp(plan.chirp.expected_tau_s, built.params.at("segment_s"));
     for (const double tau : {kChirpTauMin_s, kChirpTauMax_s})
@@ -267,8 +286,8 @@ void fit_budget(CalibrationPlan& plan, double budget_s) {
   const double shortest = build_and_check(plan);
   if (shortest > budget_s)
     throw InputError(fmt::format(
-        "--budget-s {:g}: the shortest plan these experiments allow takes {:.1f} s of machine time (the sweeps at "
-        "{:g} Hz/s, holds of {:g} time constants); give at least that, or leave experiments out",
+        "--budget-s {:g}: the shortest plan these experiments allow takes {:.1f} s of machine time (the fine passes "
+        "at {:g} Hz/s, holds of {:g} time constants); give at least that, or leave experiments out",
         budget_s, shortest, protocols::kMaxSweepRate_hz_s, protocols::kMinHoldTaus));
   double lo = kShortestDesignScale, hi = 1;
   for (int i = 0; i < 12; ++i) {
@@ -300,9 +319,14 @@ void check_plan(CalibrationPlan& plan) {
 }
 
 protocols::DesignedParams designed_params(const CalibrationPlan& plan, const PlannedExperiment& e,
-                                          const protocols::ChirpPlan& chirp) {
+                                          const protocols::ChirpPlan& chirp, const protocols::AxisPrior* fine_mode) {
   const auto& profile = plan.profile.profile;
-  if (e.protocol == "axis-sweep") return protocols::design_axis_sweep(profile, e.axis, plan.design_scale);
+  if (e.protocol == "axis-sweep") {
+    const auto envelope = e.locates.empty() ? fine_envelope(plan, e) : std::nullopt;
+    if (!envelope) return protocols::design_axis_sweep(profile, e.axis, plan.design_scale);
+    return protocols::design_axis_fine_sweep(profile, e.axis, fine_mode ? *fine_mode : plan.axis_prior, *envelope,
+                                             plan.design_scale);
+  }
   if (e.protocol == "liquefier-flow-sweep")
     return protocols::design_flow_sweep(profile, plan.liquefier_prior, plan.design_scale);
   if (e.protocol == "liquefier-chirp") return protocols::design_chirp(chirp.expected_tau_s, plan.design_scale);
@@ -310,7 +334,8 @@ protocols::DesignedParams designed_params(const CalibrationPlan& plan, const Pla
 }
 
 protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const PlannedExperiment& e,
-                                             const protocols::ChirpPlan& chirp, bool dry) {
+                                             const protocols::ChirpPlan& chirp, bool dry,
+                                             const protocols::AxisPrior* fine_mode) {
   const CalibrateArgs& a = plan.options;
   protocols::RunOptions o;
   o.protocol = e.protocol;
@@ -324,7 +349,7 @@ protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const 
   o.run_dir = plan.run_dir + "/" + e.name;
   o.file_tag = "tunekit";  // raw_data_x_tunekit.csv: names that do not change from run to run
   // The experiment's design (experiment_design.hpp) where --param did not set the parameter.
-  for (const auto& [name, value] : designed_params(plan, e, chirp).params)
+  for (const auto& [name, value] : designed_params(plan, e, chirp, fine_mode).params)
     if (!e.params.count(name)) o.params[name] = value;
   if (e.protocol == "liquefier-chirp") {
     // Sized from the time constant (the protocol's staircase step as long as the chirp's end

@@ -395,7 +395,8 @@ Achieved achieved_by(const CalibrationPlan& plan, const PlannedExperiment& e, co
   const auto s = id.shapers.find(e.axis[0]);
   const ShaperAxis* axis = s != id.shapers.end() ? s->second.axis(e.axis) : nullptr;
   if (!axis || axis->resonance.modes.modes.empty()) return a;
-  const auto& m = axis->resonance.modes.modes[0];
+  const auto& modes = axis->resonance.modes;
+  const auto& m = modes.modes[modes.dominant >= 0 ? static_cast<std::size_t>(modes.dominant) : 0];
   a.intervals["freq_hz"] = {m.freq_hz, 0.5 * (m.freq_ci95_hi - m.freq_ci95_lo)};
   a.intervals["zeta"] = {m.zeta, 0.5 * (m.zeta_ci95_hi - m.zeta_ci95_lo)};
   protocols::AxisPrior prior = plan.axis_prior;
@@ -436,6 +437,12 @@ void add_design_check(RunRecord& r, const CalibrationPlan& plan, const Experimen
     total_s += run->second.experiment.estimated_duration_s;
     auto& j =
         exps[e.name] = {{"protocol", e.protocol}, {"machine_time_s", run->second.experiment.estimated_duration_s}};
+    // A coarse pass reports no interval: it locates the mode its fine pass is designed and predicted from.
+    if (const auto located = runs.fine_modes.find(e.locates); located != runs.fine_modes.end())
+      j["locates"] = {{"fine_pass", e.locates},
+                      {"freq_hz", located->second.freq_hz},
+                      {"zeta", located->second.zeta},
+                      {"basis", located->second.basis}};
     const auto p = runs.predicted.find(e.name);
     if (p == runs.predicted.end()) continue;
     j["predicted"] = achieved_beside_predicted(p->second, achieved_by(plan, e, run->second.experiment, id));

@@ -6,6 +6,10 @@
 #include <fmt/format.h>
 
 #include "calibrate_stages.hpp"
+#include "tunekit/calibration/analyses/resonance_common.hpp"
+#include "tunekit/core/file_bytes.hpp"
+#include "tunekit/core/input_read_scope.hpp"
+#include "tunekit/ident/commanded_motion.hpp"
 #include "tunekit/calibration/presentation/report.hpp"
 #include "tunekit/calibration/results/results_json.hpp"
 #include "tunekit/protocols/runner.hpp"
@@ -46,6 +50,58 @@ protocols::LiquefierPrior measured_liquefier_prior(const CalibrationPlan& plan,
   return liquefier_prior_from(plan.liquefier_prior, *step->whole_record.model, "the flow sweep's whole-record model");
 }
 
+namespace {
+
+/// The chirp sized again from the step test's pooled time constant (clamped to the range the plan
+/// checked), when it has one.
+void resize_chirp(const PlannedExperiment& e, ExperimentRuns& out) {
+  if (!out.liquefier_step || !out.liquefier_step->analysis.pooled) return;
+  const double tau = out.liquefier_step->analysis.pooled->value("tau_s");
+  if (!(std::isfinite(tau) && tau > 0)) return;
+  const double sized = clamped_chirp_tau_s(tau);
+  out.chirp = protocols::plan_liquefier_chirp(sized, e.checked.params.at("segment_s"));
+  out.chirp_basis =
+      fmt::format("the pooled step fit's time constant {} s (one tau over every step)", display_number(tau));
+  if (sized != tau)
+    out.chirp_basis += fmt::format(", held at {} s, the end of the range checked", display_number(sized));
+}
+
+/// The mode the coarse pass `coarse` located: the dominant mode of its record analysed as
+/// `tunekit resonance` analyses it, the prior of its fine pass; the plan's axis prior, saying
+/// why, when it located none.
+protocols::AxisPrior located_mode(const CalibrationPlan& plan, const PlannedExperiment& coarse,
+                                  const protocols::RunResult& run, std::map<std::string, std::string>& kept) {
+  protocols::AxisPrior mode = plan.axis_prior;
+  AccelFilesOptions o;
+  o.files = {run.files.at(protocols::RunFile::accel)};
+  // Read once: the record and its motion kept for the axis' analysis after the runs.
+  const core::InputReadScope read_once;
+  for (const auto& path : {o.files.front(), ident::commanded_motion_beside(o.files.front())})
+    if (!path.empty()) kept[path] = read_file_bytes(path);
+  o.input.axis = coarse.axis.empty() ? 0 : coarse.axis[0];
+  o.digest_inputs = false;
+  try {
+    for (const auto& axis : analyze_accel_files(o).axes) {
+      const auto& modes = axis.modes.modes;
+      if (modes.empty()) continue;
+      const auto& m = modes[axis.modes.dominant >= 0 ? static_cast<std::size_t>(axis.modes.dominant) : 0];
+      if (!(m.freq_hz > 0 && m.zeta > 0)) continue;
+      mode.freq_hz = m.freq_hz;
+      mode.zeta = m.zeta;
+      mode.basis =
+          fmt::format("{}'s mode ({} Hz, damping ratio {}), accelerometer {:g} mm/s^2 rms at {:g} Hz", coarse.name,
+                      display_number(m.freq_hz), display_number(m.zeta), mode.noise_mm_s2, mode.rate_hz);
+      return mode;
+    }
+    mode.basis += fmt::format("; {} located no mode", coarse.name);
+  } catch (const Error& e) {
+    mode.basis += fmt::format("; {} located no mode: {}", coarse.name, e.message());
+  }
+  return mode;
+}
+
+}  // namespace
+
 ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) {
   // A stop signal between two experiments stops the calibration too (stop_signals.hpp).
   const protocols::StopSignals stop_signals;
@@ -53,33 +109,22 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
   out.chirp = plan.chirp;
   out.chirp_basis = plan.chirp_basis;
   for (const auto& e : plan.experiments) {
-    double estimate_s = e.estimated_s;
-    if (e.protocol == "liquefier-chirp" && out.liquefier_step && out.liquefier_step->analysis.pooled) {
-      const double tau = out.liquefier_step->analysis.pooled->value("tau_s");
-      if (std::isfinite(tau) && tau > 0) {
-        const double sized = clamped_chirp_tau_s(tau);
-        out.chirp = protocols::plan_liquefier_chirp(sized, e.checked.params.at("segment_s"));
-        out.chirp_basis =
-            fmt::format("the pooled step fit's time constant {} s (one tau over every step)", display_number(tau));
-        if (sized != tau)
-          out.chirp_basis += fmt::format(", held at {} s, the end of the range checked", display_number(sized));
-        // The dry run timed the chirp of the plan; this one is longer or shorter by the difference.
-        if (!e.params.count("duration_s"))
-          estimate_s += designed_params(plan, e, out.chirp).params.at("duration_s") -
-                        designed_params(plan, e, plan.chirp).params.at("duration_s");
-      }
-    }
-    progress.begin("run " + e.name, plan.sim ? std::max(1.0, estimate_s / 4) : estimate_s);
-    protocols::RunOptions run_options = experiment_run_options(plan, e, out.chirp, false);
+    if (e.protocol == "liquefier-chirp") resize_chirp(e, out);
+    const auto fine = out.fine_modes.find(e.name);
+    const protocols::AxisPrior* fine_mode = fine != out.fine_modes.end() ? &fine->second : nullptr;
+    protocols::RunOptions run_options = experiment_run_options(plan, e, out.chirp, false, fine_mode);
     run_options.keep_heaters = plan.options.keep_heaters;
-    // Predicted before it runs, from the experiment as it will run (the chirp sized again).
-    const protocols::RunOptions dry = [&] {
+    // Built and predicted before it runs, as it will run (the chirp sized again, a fine pass'
+    // band from its coarse pass' mode, inside the envelope the plan checked).
+    const protocols::Experiment planned = [&] {
       auto o = run_options;
       o.dry_run = true;
-      return o;
+      return protocols::run_experiment(o).experiment;
     }();
-    if (const auto predicted = predict_experiment(plan, protocols::run_experiment(dry).experiment,
-                                                  measured_liquefier_prior(plan, out.liquefier_step)))
+    const double estimate_s = planned.estimated_duration_s;
+    progress.begin("run " + e.name, plan.sim ? std::max(1.0, estimate_s / 4) : estimate_s);
+    if (const auto predicted = predict_experiment(e, planned, measured_liquefier_prior(plan, out.liquefier_step),
+                                                  fine_mode ? *fine_mode : plan.axis_prior))
       out.predicted[e.name] = *predicted;
     const auto& run = out.runs[e.name] = protocols::run_experiment(run_options);
     progress.end(run.status);
@@ -89,6 +134,8 @@ ExperimentRuns run_experiments(const CalibrationPlan& plan, Progress& progress) 
       out.chirp = protocols::plan_liquefier_chirp(out.chirp.expected_tau_s, run.experiment.params.at("segment_s"));
       out.chirp.duration_s = run.experiment.params.at("duration_s");  // the design's (experiment_design.hpp)
     }
+    if (!e.locates.empty() && run.files.count(protocols::RunFile::accel))
+      out.fine_modes[e.locates] = located_mode(plan, e, run, out.coarse_bytes);
     if (e.name == "liquefier-step") {
       const auto track = run.files.find(protocols::RunFile::feed_track);
       const auto options = load_cell_step_options(run.files.at(protocols::RunFile::load_cell),

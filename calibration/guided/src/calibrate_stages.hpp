@@ -48,25 +48,31 @@ nlohmann::json analysis_results(const Outcome& outcome) {
   return to_envelope(outcome).results();
 }
 
-/// The run options of one planned experiment (`dry`: build and check only).
+/// The run options of one planned experiment (`dry`: build and check only); a fine pass' band
+/// from `fine_mode` (its coarse pass' mode; the plan's axis prior when null).
 protocols::RunOptions experiment_run_options(const CalibrationPlan& plan, const PlannedExperiment& e,
-                                             const protocols::ChirpPlan& chirp, bool dry);
+                                             const protocols::ChirpPlan& chirp, bool dry,
+                                             const protocols::AxisPrior* fine_mode = nullptr);
 
 /// Builds and checks every planned experiment against the limits (the chirp for the extremes of
 /// its time constants too), fills in their machine times and the chirp plan. InputError naming
 /// the limit when one is exceeded.
 void check_plan(CalibrationPlan& plan);
 
-/// The intervals `built` (one of the plan's experiments, as built) is expected to give with the
-/// plan's axis prior and the liquefier prior given (the plan's, or one the step test measured).
-std::optional<protocols::ExperimentPrediction> predict_experiment(const CalibrationPlan& plan,
+/// The intervals `built` (the plan's experiment `e`, as built) is expected to give with the
+/// liquefier prior and the axis' mode given (the plan's priors, or what an earlier stage
+/// measured); nullopt for an experiment no prediction is made for (a coarse pass).
+std::optional<protocols::ExperimentPrediction> predict_experiment(const PlannedExperiment& e,
                                                                   const protocols::Experiment& built,
-                                                                  const protocols::LiquefierPrior& liquefier);
+                                                                  const protocols::LiquefierPrior& liquefier,
+                                                                  const protocols::AxisPrior& axis);
 
 /// The parameters the experiment design gives `e` at the plan's scale (the chirp's for `chirp`'s
-/// time constant); calibrate uses them where --param did not set them.
+/// time constant, a fine pass' for `fine_mode`, the plan's axis prior when null); calibrate uses
+/// them where --param did not set them.
 protocols::DesignedParams designed_params(const CalibrationPlan& plan, const PlannedExperiment& e,
-                                          const protocols::ChirpPlan& chirp);
+                                          const protocols::ChirpPlan& chirp,
+                                          const protocols::AxisPrior* fine_mode = nullptr);
 
 /// `given` with the plant's parameters of a whole-record model (`what` names it in the basis).
 protocols::LiquefierPrior liquefier_prior_from(const protocols::LiquefierPrior& given, const ident::WholeRecordModel& m,

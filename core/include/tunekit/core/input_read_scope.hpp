@@ -4,7 +4,8 @@
 // the same file again by path. While an InputReadScope is alive on a thread, read_file_bytes()
 // and read_file_head() (file_bytes.hpp) of a path read before in it return the bytes read the
 // first time, without opening the file again: every part of the step sees the same bytes, and the
-// file is opened once (core::FileOpenLog counts it so).
+// file is opened once (core::FileOpenLog counts it so). A MappedFileBytes of such a path takes
+// those bytes too (it keeps nothing itself).
 
 #include <map>
 #include <optional>

@@ -10,10 +10,14 @@
 //   liquefier record (flow sweep, chirp): the whole-record model of fitting/liquefier_model.hpp
 //     (tau(q) = a q^b, dead time, a flow sensor's gain and offset, the stored volume at the
 //     first sample) driven by the planned feed track (feed_track_plan.hpp), sampled at the
-//     load cell's rate; quantities tau_ref_s (at the median feed), b, theta_s, g;
+//     load cell's rate; quantities tau_ref_s (at the median feed), b, theta_s, g. The dead time
+//     is told mostly by the first samples after each step's delayed kink, and where the load
+//     cell's clock puts them is not known before the run: the covariance is the average over
+//     sample grids of different phase and clock error (the expected variance);
 //   axis sweep: one mode driven through its base (ident/base_excited_mode.hpp) by the sweep's
 //     planned acceleration pulses, read by the accelerometer (y = a + g z'' + offset) at its
-//     rate; quantities freq_hz and zeta.
+//     rate; quantities freq_hz and zeta. A fine pass is predicted from the mode its coarse pass
+//     located (experiment_design.hpp), before it runs.
 //
 // The prediction holds for the fit's Wald interval when the model describes the record to its
 // noise; an analysis that widens its intervals for correlated residuals reports wider ones.

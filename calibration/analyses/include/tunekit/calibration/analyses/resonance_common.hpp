@@ -21,6 +21,11 @@ namespace tunekit::calibration {
 /// The accelerometer files and how their spectra and modes are computed.
 struct AccelFilesOptions {
   std::vector<std::string> files;  ///< accelerometer CSVs, Klipper spectrum files, .stdata files
+  /// Raw accelerometer CSVs, each with its commanded motion beside it, whose fit against that
+  /// motion refines the dominant mode of its axis in place of the first of `files` (their spectra
+  /// are not averaged with the others', the other modes stay the spectrum's): a second, slower
+  /// sweep over the band of the mode the first located.
+  std::vector<std::string> refine_files;
   /// Columns (time in s, accelerations in mm/s^2), the axis of every file (0: from the Klipper
   /// file name) and the sensor range for clipping detection.
   ident::AccelInputOptions input;

@@ -3,7 +3,8 @@
 //
 //   plan_calibration   the experiments, the run directory and the chirp; every protocol is built
 //                      and checked against the machine's limits once, before anything is sent
-//   run_experiments    runs them in order (the liquefier step test first: its tau sizes the chirp)
+//   run_experiments    runs them in order (the liquefier step test first: its tau sizes the chirp;
+//                      each axis' coarse pass before its fine pass: its mode sets the fine band)
 //   identify           the analyses a user's single commands make of the files the runs wrote
 //                      (compute_step, compute_freq, compute_shaper with their default options,
 //                      only the file and its columns named); typed outcomes
@@ -75,8 +76,11 @@ struct PlannedExperiment {
   std::string protocol;                  ///< protocols::protocol_specs() name
   std::string axis;                      ///< "x" or "y" for the axis sweeps, else empty
   std::map<std::string, double> params;  ///< protocol parameter overrides
-  double estimated_s = 0;                ///< the protocol's machine time (s), from its dry run
-  protocols::Experiment checked;         ///< the experiment as built and checked by that dry run
+  /// An axis' coarse pass: the fine pass (experiment name) whose band the mode it locates sets;
+  /// it reports no interval of its own. Empty for every other experiment.
+  std::string locates;
+  double estimated_s = 0;         ///< the protocol's machine time (s), from its dry run
+  protocols::Experiment checked;  ///< the experiment as built and checked by that dry run
   /// Its parameters' 95 % intervals expected from its planned excitation and the plan's priors
   /// (experiment_information.hpp); nullopt for an experiment no prediction is made for.
   std::optional<protocols::ExperimentPrediction> predicted;
@@ -123,6 +127,12 @@ struct ExperimentRuns {
   /// Each run's predicted intervals (by PlannedExperiment::name), made before it ran: the chirp's
   /// with the liquefier the step test measured, the others with the plan's priors.
   std::map<std::string, protocols::ExperimentPrediction> predicted;
+  /// Each fine pass' mode (by PlannedExperiment::name), located by its coarse pass before it ran:
+  /// the mode its band and its predicted intervals were designed from.
+  std::map<std::string, protocols::AxisPrior> fine_modes;
+  /// The coarse passes' records (and their commanded motion) as read to locate the modes, by
+  /// path: the axes' analyses read those bytes again, not the files (each record opened once).
+  std::map<std::string, std::string> coarse_bytes;
   /// The load-cell step test identified between the runs (its tau sizes the chirp), as
   /// compute_step() with `tunekit step`'s defaults gives it.
   std::optional<StepOutcome> liquefier_step;
