@@ -2,11 +2,15 @@
 #include "tunekit/ident/axis_response_fit.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <exception>
+#include <future>
 #include <limits>
 #include <numbers>
 #include <span>
 #include <string>
+#include <thread>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -18,10 +22,7 @@
 #include "tunekit/ident/base_excited_mode.hpp"
 
 namespace tunekit::ident {
-namespace {
-
-/// Parameters per mode: frequency, damping ratio, gain, deflection and its rate at the first sample.
-constexpr std::size_t kParamsPerMode = 5;
+namespace axis_fit {
 
 /// The commanded acceleration between two samples, piece by piece (fixed for the fit).
 struct Sub {
@@ -39,6 +40,22 @@ struct Schedule {
   std::vector<double> accel_at;  ///< the commanded acceleration at each sample
   std::size_t pieces_used = 0;
 };
+
+}  // namespace axis_fit
+
+/// The samples the fit models and the motion on their clock.
+struct AxisResponseInput::Data {
+  std::vector<double> y;  ///< the channel from the first piece of motion that starts within the record
+  axis_fit::Schedule sched;
+};
+
+namespace {
+
+using axis_fit::Schedule;
+using axis_fit::Sub;
+
+/// Parameters per mode: frequency, damping ratio, gain, deflection and its rate at the first sample.
+constexpr std::size_t kParamsPerMode = 5;
 
 double accel_of(const AccelPiece& p, double t) { return p.accel_mm_s2 + p.jerk_mm_s3 * (t - p.t0_s); }
 
@@ -228,6 +245,30 @@ class ModeSensitivities {
     x_.z = x0.z_mm, x_.v = x0.v_mm_s;
   }
 
+  /// The same mode with next() going on from sample `from`: started from rest at sample `rest`
+  /// (what the motion does from there on), carried to sample from - 1, where the response to the
+  /// first state x0 and the free responses to a unit first state are added, exactly (the free
+  /// transition over from - 1 sample intervals and its derivatives). What the motion before `rest`
+  /// left ringing is left out: the caller chooses `rest` where that has decayed below the rounding
+  /// of the propagation (warm_up_samples).
+  ModeSensitivities(const Schedule& s, double freq_hz, double zeta, ModeState x0, std::size_t rest, std::size_t from)
+      : ModeSensitivities(s, freq_hz, zeta, ModeState{0, 0}) {
+    x_.e1z = x_.e2v = 0;
+    x_.free_decayed = true;
+    for (std::size_t i = rest + 1; i < from; ++i) step_to(i);
+    const Transition t = transition(m_, static_cast<double>(from - 1) * s.dt_s);
+    const double z0 = x0.z_mm, v0 = x0.v_mm_s;
+    x_.z += t.phi[0][0] * z0 + t.phi[0][1] * v0;
+    x_.v += t.phi[1][0] * z0 + t.phi[1][1] * v0;
+    for (int p = 0; p < 2; ++p) {
+      x_.sz[p] += t.d[p][0][0] * z0 + t.d[p][0][1] * v0;
+      x_.sv[p] += t.d[p][1][0] * z0 + t.d[p][1][1] * v0;
+    }
+    x_.e1z = t.phi[0][0], x_.e1v = t.phi[1][0], x_.e2z = t.phi[0][1], x_.e2v = t.phi[1][1];
+    x_.free_decayed = false;
+    next_ = from;
+  }
+
   /// The samples from where the last call ended (the first sample at first) up to `end`, into
   /// out[c][0 ..].
   void next(std::size_t end, double* const out[5]) {
@@ -281,6 +322,16 @@ class ModeSensitivities {
   std::size_t free_zero_from_ = std::numeric_limits<std::size_t>::max();
 };
 
+/// Samples after which what a mode's state was has decayed below 2^-64 of itself in the state and
+/// its derivatives in w and zeta (exp(-zeta w t) (1 + w t), the derivatives' secular factor), at
+/// sample interval dt: beyond the rounding (2^-53) of the propagation itself.
+std::size_t warm_up_samples(double freq_hz, double zeta, double dt) {
+  const double w = 2 * std::numbers::pi * freq_hz, a = zeta * w, digits = 64 * std::numbers::ln2;
+  double t = digits / a;
+  for (int it = 0; it < 8; ++it) t = (digits + std::log1p(w * t)) / a;
+  return static_cast<std::size_t>(std::ceil(t / dt)) + 1;
+}
+
 /// Are the modes' frequencies and damping ratios in the model's domain?
 bool in_domain(const double* p, std::size_t modes) {
   for (std::size_t k = 0; k < modes; ++k)
@@ -293,6 +344,9 @@ bool in_domain(const double* p, std::size_t modes) {
 /// transpose with the 100k-odd x 6 Jacobian took several times longer than the model's evaluation).
 constexpr Eigen::Index kRowBlock = 512;
 
+/// Records shorter than this many samples are summed on one thread.
+constexpr std::size_t kMinSplitSamples = 16 * static_cast<std::size_t>(kRowBlock);
+
 /// The normal equations J'J and J'r of the residuals y - model, a block of kRowBlock samples at a
 /// time: each mode's columns for the block are propagated (ModeSensitivities) and multiplied while
 /// they are in the first-level cache, so the samples x parameters Jacobian is never stored. The
@@ -300,83 +354,147 @@ constexpr Eigen::Index kRowBlock = 512;
 /// ratio by forward sensitivities, or, for a mode near critical damping, by central differences of
 /// that mode's response alone with the step of solve_least_squares' numeric Jacobian (1e-6 of the
 /// value), computed for the whole record first.
+/// On a machine with two or more cores the record is cut in two halves summed on two threads: the
+/// second half's modes start from rest some samples before it (warm_up_samples: the damped modes
+/// forget their earlier state below the rounding) plus the exact response to the first state.
+/// The sums then differ from those on one thread only in the rounding of their order. A mode too
+/// lightly damped to forget its state within a quarter of the record keeps the fit on one thread.
 class RecordEquations {
  public:
   RecordEquations(const Schedule& s, std::size_t modes, const std::vector<double>& y)
-      : s_(s),
-        modes_(modes),
-        y_(y),
-        block_(kRowBlock, static_cast<Eigen::Index>(modes * kParamsPerMode + 1)),
-        raw_(kParamsPerMode * static_cast<std::size_t>(kRowBlock)),
-        model_(static_cast<std::size_t>(kRowBlock)),
-        r_(kRowBlock),
-        zero_(modes * kParamsPerMode + 1),
-        differenced_(modes) {}
+      : s_(s), modes_(modes), y_(y), differenced_(modes) {
+    for (auto& w : scratch_) {
+      w.block.resize(kRowBlock, static_cast<Eigen::Index>(modes * kParamsPerMode + 1));
+      w.raw.resize(kParamsPerMode * static_cast<std::size_t>(kRowBlock));
+      w.model.resize(static_cast<std::size_t>(kRowBlock));
+      w.r.resize(kRowBlock);
+      w.zero.resize(modes * kParamsPerMode + 1);
+    }
+  }
 
   /// J'J into N and J'r into g at p; returns the residual sum of squares (HUGE_VAL outside the
   /// model's domain), the residuals into `residuals` when it is not empty.
   double operator()(const double* p, Eigen::MatrixXd& N, Eigen::VectorXd& g, std::span<double> residuals) {
     if (!in_domain(p, modes_)) return HUGE_VAL;
-    const Eigen::Index k = block_.cols();
+    const Eigen::Index k = scratch_[0].block.cols();
     N.setZero(k, k);
     g.setZero(k);
+    for (std::size_t m = 0; m < modes_; ++m)
+      if (const double* q = p + kParamsPerMode * m; !(q[1] < kSensitivityMaxZeta))
+        differenced_columns(q, differenced_[m]);
+    const std::size_t n = y_.size(), split = split_at(p);
+    if (split == n) {
+      const double rss = sum_range(p, props_from(p, 0, 0), 0, n, scratch_[0], N, g, residuals);
+      N.triangularView<Eigen::StrictlyUpper>() = N.transpose();
+      return rss;
+    }
+    Eigen::MatrixXd N2 = Eigen::MatrixXd::Zero(k, k);
+    Eigen::VectorXd g2 = Eigen::VectorXd::Zero(k);
+    double rss2 = 0;
+    std::thread second([&] {
+      rss2 = sum_range(p, props_from(p, split - warm_up(p), split), split, n, scratch_[1], N2, g2, residuals);
+    });
+    const double rss = sum_range(p, props_from(p, 0, 0), 0, split, scratch_[0], N, g, residuals);
+    second.join();
+    N += N2;
+    g += g2;
+    N.triangularView<Eigen::StrictlyUpper>() = N.transpose();
+    return rss + rss2;
+  }
+
+ private:
+  // What one thread's sums use.
+  struct Scratch {
+    Eigen::MatrixXd block;  // kRowBlock x parameters, column-major
+    std::vector<double> raw, model;
+    Eigen::VectorXd r;
+    std::vector<char> zero;  // per column: 0 throughout the block
+  };
+
+  // The samples the second half's modes start from rest before it: the longest of the modes'.
+  std::size_t warm_up(const double* p) const {
+    std::size_t w = 0;
+    for (std::size_t m = 0; m < modes_; ++m)
+      if (const double* q = p + kParamsPerMode * m; q[1] < kSensitivityMaxZeta)
+        w = std::max(w, warm_up_samples(q[0], q[1], s_.dt_s));
+    return w;
+  }
+
+  // Where the second half starts (a block boundary, the halves' work balanced), or n: one thread.
+  std::size_t split_at(const double* p) const {
+    const std::size_t n = y_.size(), B = static_cast<std::size_t>(kRowBlock);
+    if (n < kMinSplitSamples || std::thread::hardware_concurrency() < 2) return n;
+    const std::size_t w = warm_up(p);
+    if (w > n / 4) return n;
+    return std::max((n + w) / 2 / B * B, w + 1);
+  }
+
+  // The under-damped modes' propagations from sample `from` (started from rest at `rest`, or at
+  // the first state for from = 0).
+  std::vector<ModeSensitivities> props_from(const double* p, std::size_t rest, std::size_t from) const {
     std::vector<ModeSensitivities> props;
     props.reserve(modes_);
     for (std::size_t m = 0; m < modes_; ++m) {
       const double* q = p + kParamsPerMode * m;
-      if (q[1] < kSensitivityMaxZeta) props.emplace_back(s_, q[0], q[1], ModeState{q[3], q[4]});
-      else differenced_columns(q, differenced_[m]);
+      if (!(q[1] < kSensitivityMaxZeta)) continue;
+      if (from == 0) props.emplace_back(s_, q[0], q[1], ModeState{q[3], q[4]});
+      else props.emplace_back(s_, q[0], q[1], ModeState{q[3], q[4]}, rest, from);
     }
-    const std::size_t n = y_.size();
+    return props;
+  }
+
+  // The samples [from, to) added to N's lower triangle and g; returns their residual sum of squares.
+  double sum_range(const double* p, std::vector<ModeSensitivities> props, std::size_t from, std::size_t to, Scratch& w,
+                   Eigen::MatrixXd& N, Eigen::VectorXd& g, std::span<double> residuals) {
+    const Eigen::Index k = w.block.cols();
     double rss = 0;
-    for (std::size_t b = 0; b < n; b += static_cast<std::size_t>(kRowBlock)) {
-      const std::size_t len = std::min(static_cast<std::size_t>(kRowBlock), n - b);
+    for (std::size_t b = from; b < to; b += static_cast<std::size_t>(kRowBlock)) {
+      const std::size_t len = std::min(static_cast<std::size_t>(kRowBlock), to - b);
       const double offset = p[kParamsPerMode * modes_];
-      for (std::size_t i = 0; i < len; ++i) model_[i] = s_.accel_at[b + i] + offset;
-      std::fill(zero_.begin(), zero_.end(), 0);
+      for (std::size_t i = 0; i < len; ++i) w.model[i] = s_.accel_at[b + i] + offset;
+      std::fill(w.zero.begin(), w.zero.end(), 0);
       for (std::size_t m = 0, sens = 0; m < modes_; ++m) {
         const double* q = p + kParamsPerMode * m;
         if (q[1] < kSensitivityMaxZeta) {
-          sensitivity_block(props[sens], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
+          sensitivity_block(w, props[sens], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
           // The block's columns in the first state are 0 once the free responses have decayed:
           // their products add nothing to the sums.
-          if (props[sens++].free_zero_from() <= b) zero_[kParamsPerMode * m + 3] = zero_[kParamsPerMode * m + 4] = 1;
+          if (props[sens++].free_zero_from() <= b) w.zero[kParamsPerMode * m + 3] = w.zero[kParamsPerMode * m + 4] = 1;
         } else {
-          differenced_block(differenced_[m], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
+          differenced_block(w, differenced_[m], q[2], static_cast<Eigen::Index>(kParamsPerMode * m), b, len);
         }
       }
       const auto L = static_cast<Eigen::Index>(len);
-      block_.col(k - 1).head(L).setConstant(-1);  // the offset
-      for (std::size_t i = 0; i < len; ++i) r_(static_cast<Eigen::Index>(i)) = y_[b + i] - model_[i];
-      if (!residuals.empty()) std::copy(r_.data(), r_.data() + L, residuals.begin() + static_cast<std::ptrdiff_t>(b));
+      w.block.col(k - 1).head(L).setConstant(-1);  // the offset
+      for (std::size_t i = 0; i < len; ++i) w.r(static_cast<Eigen::Index>(i)) = y_[b + i] - w.model[i];
+      if (!residuals.empty()) std::copy(w.r.data(), w.r.data() + L, residuals.begin() + static_cast<std::ptrdiff_t>(b));
       for (Eigen::Index i = 0; i < k; ++i) {
-        if (zero_[static_cast<std::size_t>(i)]) continue;
-        const auto ci = block_.col(i).head(L);
+        if (w.zero[static_cast<std::size_t>(i)]) continue;
+        const auto ci = w.block.col(i).head(L);
         for (Eigen::Index j = 0; j <= i; ++j)
-          if (!zero_[static_cast<std::size_t>(j)]) N(i, j) += ci.dot(block_.col(j).head(L));
-        g(i) += ci.dot(r_.head(L));
+          if (!w.zero[static_cast<std::size_t>(j)]) N(i, j) += ci.dot(w.block.col(j).head(L));
+        g(i) += ci.dot(w.r.head(L));
       }
-      rss += r_.head(L).squaredNorm();
+      rss += w.r.head(L).squaredNorm();
     }
-    N.triangularView<Eigen::StrictlyUpper>() = N.transpose();
     return rss;
   }
 
- private:
   // The next block of an under-damped mode's columns (from column c) and its share of the model.
-  void sensitivity_block(ModeSensitivities& prop, double gain, Eigen::Index c, std::size_t b, std::size_t len) {
+  static void sensitivity_block(Scratch& w, ModeSensitivities& prop, double gain, Eigen::Index c, std::size_t b,
+                                std::size_t len) {
     const std::size_t B = static_cast<std::size_t>(kRowBlock);
-    double* const out[5] = {raw_.data(), raw_.data() + B, raw_.data() + 2 * B, raw_.data() + 3 * B,
-                            raw_.data() + 4 * B};
+    double* const out[5] = {w.raw.data(), w.raw.data() + B, w.raw.data() + 2 * B, w.raw.data() + 3 * B,
+                            w.raw.data() + 4 * B};
     prop.next(b + len, out);
     for (std::size_t i = 0; i < len; ++i) {
       const auto row = static_cast<Eigen::Index>(i);
-      block_(row, c) = -gain * out[0][i];
-      block_(row, c + 1) = -gain * out[1][i];
-      block_(row, c + 2) = -out[2][i];
-      block_(row, c + 3) = -gain * out[3][i];
-      block_(row, c + 4) = -gain * out[4][i];
-      model_[i] += gain * out[2][i];
+      w.block(row, c) = -gain * out[0][i];
+      w.block(row, c + 1) = -gain * out[1][i];
+      w.block(row, c + 2) = -out[2][i];
+      w.block(row, c + 3) = -gain * out[3][i];
+      w.block(row, c + 4) = -gain * out[4][i];
+      w.model[i] += gain * out[2][i];
     }
   }
 
@@ -406,35 +524,26 @@ class RecordEquations {
       dif.h[d] = h;
     }
   }
-  void differenced_block(const Differenced& dif, double gain, Eigen::Index c, std::size_t b, std::size_t len) {
+  static void differenced_block(Scratch& w, const Differenced& dif, double gain, Eigen::Index c, std::size_t b,
+                                std::size_t len) {
     const auto& cols = dif.cols;
     for (std::size_t i = 0; i < len; ++i) {
       const auto row = static_cast<Eigen::Index>(i);
-      block_(row, c) = -gain * cols[0][b + i] / (2 * dif.h[0]);
-      block_(row, c + 1) = -gain * cols[1][b + i] / (2 * dif.h[1]);
-      block_(row, c + 2) = -cols[2][b + i];
-      block_(row, c + 3) = -gain * cols[3][b + i];
-      block_(row, c + 4) = -gain * cols[4][b + i];
-      model_[i] += gain * cols[2][b + i];
+      w.block(row, c) = -gain * cols[0][b + i] / (2 * dif.h[0]);
+      w.block(row, c + 1) = -gain * cols[1][b + i] / (2 * dif.h[1]);
+      w.block(row, c + 2) = -cols[2][b + i];
+      w.block(row, c + 3) = -gain * cols[3][b + i];
+      w.block(row, c + 4) = -gain * cols[4][b + i];
+      w.model[i] += gain * cols[2][b + i];
     }
   }
 
   const Schedule& s_;
   std::size_t modes_;
   const std::vector<double>& y_;
-  Eigen::MatrixXd block_;  // kRowBlock x parameters, column-major
-  std::vector<double> raw_, model_;
-  Eigen::VectorXd r_;
-  std::vector<char> zero_;  // per column: 0 throughout the block
+  std::array<Scratch, 2> scratch_;  // the first half's (or the whole record's) and the second's
   std::vector<Differenced> differenced_;
 };
-
-const std::vector<double>& axis_channel(const AccelRecord& r) {
-  const std::string want = fmt::format("accel_{}", r.axis);
-  for (std::size_t c = 0; c < r.channel_names.size(); ++c)
-    if (r.channel_names[c] == want) return r.channels[c];
-  throw InputError(fmt::format("the record has no {} column for its axis", want), r.path);
-}
 
 std::vector<fitting::ParamSpec> params_for(const std::vector<fitting::ModeStart>& starts, double max_zeta) {
   std::vector<fitting::ParamSpec> ps;
@@ -554,10 +663,10 @@ fitting::FitResult ceres_from(const Schedule& sched, std::size_t modes, const st
 /// the model's evaluations). When that does not converge, Ceres takes over from where it ended.
 /// The trials of the confirming iterations are costed by the model alone (about a quarter of an
 /// evaluation of the normal equations): the last one, which meets a tolerance, is not taken.
-/// `residuals`: those at the solution.
+/// `residuals`: those at the solution; `variance_factor`: their residual_variance_factor.
 fitting::FitResult solve_record(const Schedule& sched, std::size_t modes, const std::vector<double>& y,
                                 fitting::LsqProblem& prob, const fitting::LsqOptions& lo,
-                                std::vector<double>& residuals) {
+                                std::vector<double>& residuals, double& variance_factor) {
   const std::size_t k = prob.params.size(), n = y.size();
   std::vector<double> p(k), lower(k), upper(k), m(n), rel(n);
   const std::vector<bool> fixed(k, false);
@@ -599,40 +708,84 @@ fitting::FitResult solve_record(const Schedule& sched, std::size_t modes, const 
     fitting::FitResult f = ceres_from(sched, modes, y, prob, lo, p);
     for (std::size_t j = 0; j < k; ++j) p[j] = f.params[j].value;
     residuals_at(p);
+    variance_factor = fitting::residual_variance_factor(residuals);
     return f;
   }
   residuals = memo.take(std::span<const double>(p));
   if (residuals.size() != n) residuals_at(p);  // not expected: the end point is a kept evaluation
-  return normal_solve_result(y, residuals, prob, p, at.N, c, lo.confidence);
+  // The residuals' correlation on another core, beside the diagnostics and the covariance.
+  auto factor = std::async(std::launch::async, [&residuals] { return fitting::residual_variance_factor(residuals); });
+  fitting::FitResult f = normal_solve_result(y, residuals, prob, p, at.N, c, lo.confidence);
+  variance_factor = factor.get();
+  return f;
 }
 
 }  // namespace
 
-AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<AccelPiece>& motion,
-                                  const std::vector<fitting::ModeStart>& starts, const AxisResponseOptions& o) {
-  if (starts.empty()) throw InputError("output-error fit: no modes to start from");
-  const std::vector<double>& channel = axis_channel(record);
-  const double dt = 1.0 / record.sampling.sample_rate_hz;
+const std::vector<double>& axis_channel(const AccelRecord& r) {
+  const std::string want = fmt::format("accel_{}", r.axis);
+  for (std::size_t c = 0; c < r.channel_names.size(); ++c)
+    if (r.channel_names[c] == want) return r.channels[c];
+  throw InputError(fmt::format("the record has no {} column for its axis", want), r.path);
+}
+
+AxisResponseInput::AxisResponseInput(std::span<const double> channel, double start_time_s, double sample_rate_hz,
+                                     const std::string& path, const std::vector<AccelPiece>& motion)
+    : data_(std::make_unique<Data>()) {
+  const double dt = 1.0 / sample_rate_hz;
   // The record from the first piece of motion that starts within it: before that the axis rests,
   // and what rings there is the motion before the record, of every mode the sensor feels (another
   // axis' too, through its cross-axis sensitivity), which the model does not follow. Each mode's
   // state where the fit starts is estimated; by the motion's start the ringing has mostly died out.
   const auto first =
-      std::find_if(motion.begin(), motion.end(), [&](const AccelPiece& p) { return p.t0_s > record.start_time_s; });
+      std::find_if(motion.begin(), motion.end(), [&](const AccelPiece& p) { return p.t0_s > start_time_s; });
   const std::size_t skip =
-      first == motion.end() ? 0
-                            : std::min(channel.size() - 1,
-                                       static_cast<std::size_t>(std::floor((first->t0_s - record.start_time_s) / dt)));
-  const std::vector<double> y(channel.begin() + static_cast<std::ptrdiff_t>(skip), channel.end());
-  const std::size_t n = y.size();
-  const double t_first = record.start_time_s + static_cast<double>(skip) * dt;
-  if (n < 16) throw InputError("the record ends where the commanded motion starts", record.path);
-  const Schedule sched = make_schedule(motion, t_first, dt, n);
-  if (sched.pieces_used == 0)
+      first == motion.end() || channel.empty()
+          ? 0
+          : std::min(channel.size() - 1, static_cast<std::size_t>(std::floor((first->t0_s - start_time_s) / dt)));
+  data_->y.assign(channel.begin() + static_cast<std::ptrdiff_t>(skip), channel.end());
+  const std::size_t n = data_->y.size();
+  const double t_first = start_time_s + static_cast<double>(skip) * dt;
+  if (n < 16) throw InputError("the record ends where the commanded motion starts", path);
+  data_->sched = make_schedule(motion, t_first, dt, n);
+  if (data_->sched.pieces_used == 0)
     throw InputError(fmt::format("the commanded motion does not overlap the record ({:.6g} s to {:.6g} s)", t_first,
                                  t_first + static_cast<double>(n - 1) * dt),
-                     record.path);
-  const std::size_t modes = starts.size();
+                     path);
+}
+
+AxisResponseInput::AxisResponseInput(const AccelRecord& record, const std::vector<AccelPiece>& motion)
+    : AxisResponseInput(axis_channel(record), record.start_time_s, record.sampling.sample_rate_hz, record.path,
+                        motion) {}
+
+std::future<AxisResponseInput> prepare_axis_response(const AccelRecord& record,
+                                                     std::function<std::vector<AccelPiece>()> read_motion) {
+  std::span<const double> channel;
+  std::exception_ptr no_channel;
+  try {
+    channel = axis_channel(record);
+  } catch (const InputError&) {
+    no_channel = std::current_exception();
+  }
+  return std::async(std::launch::async,
+                    [channel, no_channel, start = record.start_time_s, rate = record.sampling.sample_rate_hz,
+                     path = record.path, read_motion = std::move(read_motion)] {
+                      const std::vector<AccelPiece> motion = read_motion();
+                      if (no_channel) std::rethrow_exception(no_channel);
+                      return AxisResponseInput(channel, start, rate, path, motion);
+                    });
+}
+
+AxisResponseInput::AxisResponseInput(AxisResponseInput&&) noexcept = default;
+AxisResponseInput& AxisResponseInput::operator=(AxisResponseInput&&) noexcept = default;
+AxisResponseInput::~AxisResponseInput() = default;
+
+AxisResponseFit fit_axis_response(const AxisResponseInput& input, const std::vector<fitting::ModeStart>& starts,
+                                  const AxisResponseOptions& o) {
+  if (starts.empty()) throw InputError("output-error fit: no modes to start from");
+  const std::vector<double>& y = input.data().y;
+  const Schedule& sched = input.data().sched;
+  const std::size_t n = y.size(), modes = starts.size();
   fitting::LsqProblem prob;
   prob.params = params_for(starts, o.max_zeta);
   prob.num_residuals = static_cast<int>(n);
@@ -644,12 +797,17 @@ AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<A
   lo.confidence = o.confidence;
   AxisResponseFit out;
   std::vector<double> res;
-  out.fit = solve_record(sched, modes, y, prob, lo, res);
+  out.fit = solve_record(sched, modes, y, prob, lo, res, out.variance_inflation);
   out.samples = n;
   out.pieces = sched.pieces_used;
-  out.variance_inflation = fitting::residual_variance_factor(res);
   finish(out, modes, o.confidence);
   return out;
+}
+
+AxisResponseFit fit_axis_response(const AccelRecord& record, const std::vector<AccelPiece>& motion,
+                                  const std::vector<fitting::ModeStart>& starts, const AxisResponseOptions& o) {
+  if (starts.empty()) throw InputError("output-error fit: no modes to start from");
+  return fit_axis_response(AxisResponseInput(record, motion), starts, o);
 }
 
 namespace {
@@ -673,12 +831,16 @@ std::string disagreement(const std::vector<fitting::ModeEstimate>& spectrum,
 
 }  // namespace
 
-void refine_modes_with_motion(AxisModes& m, const AccelRecord& record, const std::vector<AccelPiece>& motion) {
+namespace {
+
+/// refine_modes_with_motion with the input prepared by `prepare` (whose errors become the warning).
+template <class Prepare>
+void refine_with(AxisModes& m, Prepare&& prepare) {
   if (m.modes.empty()) return;
   std::vector<fitting::ModeStart> starts;
   for (const auto& e : m.modes) starts.push_back({e.freq_hz, e.zeta, 1.0});
   try {
-    auto fit = fit_axis_response(record, motion, starts);
+    auto fit = fit_axis_response(prepare(), starts);
     if (const auto why = disagreement(m.modes, fit.modes); !why.empty()) {
       m.warnings.push_back("the fit against the commanded motion does not agree with the spectrum's (" + why +
                            "); the modes are the spectrum's. Is the motion on the samples' clock?");
@@ -699,6 +861,16 @@ void refine_modes_with_motion(AxisModes& m, const AccelRecord& record, const std
     m.warnings.push_back("the fit against the commanded motion failed (" + e.message() +
                          "); the modes are the spectrum's");
   }
+}
+
+}  // namespace
+
+void refine_modes_with_motion(AxisModes& m, const AccelRecord& record, const std::vector<AccelPiece>& motion) {
+  refine_with(m, [&] { return AxisResponseInput(record, motion); });
+}
+
+void refine_modes_with_motion(AxisModes& m, std::future<AxisResponseInput>& input) {
+  refine_with(m, [&] { return input.get(); });
 }
 
 }  // namespace tunekit::ident

@@ -54,10 +54,11 @@ std::string record_label(char axis, const std::string& path) {
 
 namespace {
 
-/// A raw record whose commanded motion was recorded beside it.
+/// A raw record whose commanded motion was recorded beside it, and the output-error fit's input
+/// from them, prepared on another core while the record's modes are identified.
 struct TimedRecord {
   ident::AccelRecord record;
-  std::vector<ident::AccelPiece> motion;
+  std::future<ident::AxisResponseInput> input;
   /// A record of refine_files: a sweep over the dominant mode's band only, which cannot tell the
   /// spectrum's other modes; it refines the dominant one, the others stay the spectrum's.
   bool dominant_band = false;
@@ -65,16 +66,16 @@ struct TimedRecord {
 
 /// `m`'s modes refined by the fit of `t` against its motion: all of them, or with
 /// t.dominant_band the dominant one alone (the others as the spectrum found them).
-void refine_modes(ident::AxisModes& m, const TimedRecord& t) {
+void refine_modes(ident::AxisModes& m, TimedRecord& t) {
   if (!t.dominant_band || m.modes.size() <= 1 || m.dominant < 0) {
-    ident::refine_modes_with_motion(m, t.record, t.motion);
+    ident::refine_modes_with_motion(m, t.input);
     return;
   }
   ident::AxisModes one = m;
   one.modes = {m.modes[static_cast<std::size_t>(m.dominant)]};
   one.dominant = 0;
   one.warnings.clear();
-  ident::refine_modes_with_motion(one, t.record, t.motion);
+  ident::refine_modes_with_motion(one, t.input);
   for (const auto& w : one.warnings) m.warnings.push_back(w);
   if (one.method != "output_error") return;
   m.modes[static_cast<std::size_t>(m.dominant)] = one.modes.front();
@@ -100,7 +101,7 @@ void check_accel_options(const ident::WelchOptions& welch, const ident::Resonanc
 // The axis `label`'s result from its spectra: averaged, its modes identified and refined with
 // the commanded motion where a record has it; warnings into `warnings`.
 AxisResult axis_result(const std::string& label, std::vector<ident::AxisSpectrum>& spectra,
-                       const ident::ResonanceOptions& ro, const std::map<std::string, TimedRecord>& timed,
+                       const ident::ResonanceOptions& ro, std::map<std::string, TimedRecord>& timed,
                        std::vector<std::string>& warnings, const BesideModes& beside) {
   // Spectra Klipper normalized (files with shaper columns) and measured ones (raw data, files
   // without them) of one axis are brought to Klipper's normalization before they are averaged,
@@ -157,7 +158,27 @@ void load_refine_record(const std::string& path, const ident::AccelInputOptions&
   if (rec.axis != 'x' && rec.axis != 'y') throw InputError("a record that refines the modes must be of x or y", path);
   auto pieces = ident::load_commanded_motion_csv(motion, files.back()->view(), rec.axis);
   const std::string label = record_label(rec.axis, path);
-  timed.emplace(label, TimedRecord{std::move(rec), std::move(pieces), true});
+  auto input = ident::prepare_axis_response(rec, [pieces = std::move(pieces)] { return pieces; });
+  timed.emplace(label, TimedRecord{std::move(rec), std::move(input), true});
+}
+
+/// The output-error fit's input from `rec` and its commanded motion (the CSV `path`, in `bytes`),
+/// read and laid on the record's clock on another core (ident::prepare_axis_response); `read`
+/// becomes ready when the file has been read, or holds the error that reading it raised.
+std::future<ident::AxisResponseInput> read_motion_beside(const ident::AccelRecord& rec, const std::string& path,
+                                                         std::string_view bytes, std::future<void>& read) {
+  auto done = std::make_shared<std::promise<void>>();
+  read = done->get_future();
+  return ident::prepare_axis_response(rec, [done, path, bytes, axis = rec.axis] {
+    try {
+      auto pieces = ident::load_commanded_motion_csv(path, bytes, axis);
+      done->set_value();
+      return pieces;
+    } catch (...) {
+      done->set_exception(std::current_exception());
+      throw;
+    }
+  });
 }
 
 }  // namespace
@@ -226,17 +247,28 @@ AccelAnalysis analyze_accel_files(const AccelFilesOptions& a, RingdownDiversion 
         result.ringdown_records.push_back(std::move(rec));
         continue;
       }
+      // The commanded motion beside the record is read and laid on the record's clock on another
+      // core while the spectrum is computed and its modes identified (a motion file that cannot
+      // be read is still an error of the command).
+      const std::string motion = ro.use_commanded_motion ? ident::commanded_motion_beside(path) : std::string{};
+      const bool timed_axis =
+          !motion.empty() && (rec.axis == 'x' || rec.axis == 'y') && !timed.count(record_label(rec.axis, path));
+      std::string_view mbytes;
+      std::future<void> motion_read;
+      std::future<ident::AxisResponseInput> input;
+      if (timed_axis) {
+        files.push_back(std::make_unique<const formats::InputFileBytes>(motion));
+        mbytes = files.back()->view();
+        input = read_motion_beside(rec, motion, mbytes, motion_read);
+      }
       file_spectra.push_back(ident::record_spectrum(rec, welch));
       record_input();
-      const std::string motion = ro.use_commanded_motion ? ident::commanded_motion_beside(path) : std::string{};
-      if (!motion.empty() && (rec.axis == 'x' || rec.axis == 'y') && !timed.count(record_label(rec.axis, path))) {
-        files.push_back(std::make_unique<const formats::InputFileBytes>(motion));
-        const std::string_view mbytes = files.back()->view();
-        auto pieces = ident::load_commanded_motion_csv(motion, mbytes, rec.axis);
+      if (timed_axis) {
+        motion_read.get();  // a motion file that cannot be read is an error of the command
         result.inputs.push_back({motion, {}, mbytes.size()});
         digests.push_back(a.digest_inputs ? std::async(std::launch::async, [mbytes] { return sha256_hex(mbytes); })
                                           : std::future<std::string>{});
-        timed.emplace(record_label(rec.axis, path), TimedRecord{std::move(rec), std::move(pieces)});
+        timed.emplace(record_label(rec.axis, path), TimedRecord{std::move(rec), std::move(input)});
       }
       for (auto& s : file_spectra) by_axis[record_label(s.axis, path)].push_back(std::move(s));
       continue;

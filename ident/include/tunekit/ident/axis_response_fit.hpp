@@ -17,6 +17,11 @@
 // Bartlett 1935) where the model does not describe the record to its noise. Starting values come
 // from the spectrum's modal fit.
 
+#include <functional>
+#include <future>
+#include <memory>
+#include <span>
+#include <string>
 #include <vector>
 
 #include "tunekit/fitting/fit_result.hpp"
@@ -39,6 +44,45 @@ struct AxisResponseFit {
   std::size_t pieces = 0;  ///< pieces of commanded motion within the record
 };
 
+/// A record's channel and the commanded motion laid on the record's clock (cut at every sample and
+/// every piece boundary, from the first piece that starts within the record): all that
+/// fit_axis_response needs besides the starting values. It does not depend on them, so it can be
+/// built while the spectrum that gives them is analysed (on another core). It keeps its own copy
+/// of the samples. InputError when the record ends where the motion starts or the motion does not
+/// overlap the record.
+class AxisResponseInput {
+ public:
+  /// `channel`: the samples of the axis' channel, the first at start_time_s (s on the motion's
+  /// clock), at sample_rate_hz; `path` names the record in errors.
+  AxisResponseInput(std::span<const double> channel, double start_time_s, double sample_rate_hz,
+                    const std::string& path, const std::vector<AccelPiece>& motion);
+  /// From the record's channel for its axis ("accel_x" for 'x'; InputError without one).
+  AxisResponseInput(const AccelRecord& record, const std::vector<AccelPiece>& motion);
+  AxisResponseInput(AxisResponseInput&&) noexcept;
+  AxisResponseInput& operator=(AxisResponseInput&&) noexcept;
+  ~AxisResponseInput();
+
+  struct Data;  ///< defined where the fit is
+  const Data& data() const { return *data_; }
+
+ private:
+  std::unique_ptr<Data> data_;
+};
+
+/// An AxisResponseInput of `record`'s channel for its axis and the motion that read_motion()
+/// returns, both on another thread (std::async); get() rethrows their errors. The record's channel
+/// must stay where it is until then (moving the record keeps it in place; destroying or resizing it
+/// does not).
+std::future<AxisResponseInput> prepare_axis_response(const AccelRecord& record,
+                                                     std::function<std::vector<AccelPiece>()> read_motion);
+
+/// The record's channel for its axis ("accel_x" for 'x'); InputError when it has none.
+const std::vector<double>& axis_channel(const AccelRecord& record);
+
+/// Fits the modes of `input` from `starts` (see below). FitError when the fit fails.
+AxisResponseFit fit_axis_response(const AxisResponseInput& input, const std::vector<fitting::ModeStart>& starts,
+                                  const AxisResponseOptions& options = {});
+
 /// Fits the modes of `record`'s channel for its axis ("accel_x" for 'x') against `motion` (that
 /// axis' commanded motion on the record's clock), from `starts`. InputError when the record has
 /// no such channel or the motion does not overlap the record; FitError when the fit fails.
@@ -57,5 +101,9 @@ inline constexpr double kMotionFitAgreementHalfWidths = 3.0;
 /// when that fit fails or when a mode's frequency or damping ratio lies more than
 /// kMotionFitAgreementHalfWidths of the spectrum's interval away from the spectrum's estimate.
 void refine_modes_with_motion(AxisModes& m, const AccelRecord& record, const std::vector<AccelPiece>& motion);
+
+/// The same with the record and its motion being prepared by prepare_axis_response: its errors
+/// too become the warning.
+void refine_modes_with_motion(AxisModes& m, std::future<AxisResponseInput>& input);
 
 }  // namespace tunekit::ident
