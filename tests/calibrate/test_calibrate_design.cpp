@@ -127,4 +127,12 @@ TEST_CASE("calibrate --budget-s shortens the plan to the budget and says what ea
   const auto refused = run_cli({"calibrate", "--machine", "sim", "--dry-run", "--budget-s", "5"});
   CHECK(refused.code == 2);
   CHECK(refused.err.find("shortest plan") != std::string::npos);
+  // A budget that is no number of seconds is a usage error, nan included.
+  for (const char* word : {"nan", "inf", "0", "-0", "-5", "", "60x"}) {
+    INFO(word);
+    const auto bad = run_cli({"calibrate", "--machine", "sim", "--dry-run", "--budget-s", word});
+    CHECK(bad.code == 2);
+    CHECK(bad.err.find("positive, finite number") != std::string::npos);
+    CHECK(bad.out.find("total") == std::string::npos);
+  }
 }

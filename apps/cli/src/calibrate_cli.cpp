@@ -58,7 +58,7 @@ void register_calibrate(CLI::App& app, CliContext& ctx) {
                   "Machine time (s) all experiments may take together; below the design's own the sweeps run faster "
                   "and the holds and the chirp are shorter, and the plan (--dry-run) says how much wider each "
                   "predicted interval becomes")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_finite("seconds of machine time"));
   sub->add_option("--port", a->port, "Serial device, pseudo-terminal or unix:SOCKET of a real machine");
   sub->add_option("--out", a->out_dir, "Run directory (default: runs/calibrate-UTCSTAMP)");
   sub->add_option("-f,--firmware", a->firmware,

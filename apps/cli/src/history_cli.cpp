@@ -68,7 +68,7 @@ void register_history(CLI::App& app, CliContext& ctx) {
   t->add_option("--coverage", trend->options.drift.coverage_k,
                 "Drift when |change| > K x sqrt(u_run^2 + u_baseline^2) (1.96: 95 % interval of the difference)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_finite("a coverage factor"));
   t->add_flag("--runs", trend->options.show_runs, "Every run of every machine (default: every run only for --machine)");
   t->footer(
       "A change within the combined uncertainty of the run and the baseline is not drift. drift.NAME is the latest\n"
@@ -97,7 +97,7 @@ void register_history(CLI::App& app, CliContext& ctx) {
       ->check(CLI::PositiveNumber);
   r->add_option("--coverage", report->options.drift.coverage_k, "Coverage factor of the drift interval")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_finite("a coverage factor"));
   r->callback(
       [report, &ctx] { set_exit_code(report_outcome(compute_history_report(report->options), report->output, ctx)); });
 

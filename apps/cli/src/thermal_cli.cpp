@@ -2,8 +2,6 @@
 // option structs, so --help shows the library's defaults); the work is done by the
 // calibration library's compute function.
 
-#include <cmath>
-#include <cstdlib>
 #include <memory>
 #include <string>
 
@@ -36,12 +34,7 @@ CLI::App* add_thermal_command(CLI::App& app, ThermalOptions& o, OutputOptions& o
       ->required();
   sub->add_option("--heater", o.heater, "klippy.log: the heater whose Stats lines are read")->capture_default_str();
   sub->add_option("--until", o.until_s, "Fit only the record's first seconds (s; default: all of it)")
-      ->check(CLI::Validator(
-          [](std::string& v) {
-            const double s = std::strtod(v.c_str(), nullptr);
-            return s > 0 && std::isfinite(s) ? std::string() : "--until takes a positive number of seconds, not " + v;
-          },
-          "SECONDS"));
+      ->check(positive_finite("seconds"));
   sub->add_option("--heater-power", o.fit.heater_power_w,
                   "Heater power at full duty (W; Marlin's MPC_HEATER_POWER): C, A, F and H are relative to it")
       ->capture_default_str()

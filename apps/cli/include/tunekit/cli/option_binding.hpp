@@ -2,6 +2,8 @@
 // Binding a command-line word to a library enum (or flag) in place, so that the default shown
 // by --help is the library's own default and no command restates it.
 
+#include <cmath>
+#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,6 +13,20 @@
 #include "tunekit/calibration/results/context.hpp"
 
 namespace tunekit::cli {
+
+/// A check for options that take a positive, finite number (a time, a budget, a factor): the
+/// whole word must be the number. CLI11's PositiveNumber lets nan through (no comparison with
+/// nan fails) and prints its range as a 309-digit number; this names the option's meaning.
+inline CLI::Validator positive_finite(const std::string& what) {
+  return CLI::Validator(
+      [what](std::string& v) {
+        char* end = nullptr;
+        const double x = std::strtod(v.c_str(), &end);
+        const bool ok = !v.empty() && end != nullptr && *end == '\0' && std::isfinite(x) && x > 0;
+        return ok ? std::string() : "takes " + what + " (a positive, finite number), not '" + v + "'";
+      },
+      "POSITIVE");
+}
 
 /// Adds `--name WORD` that sets `target` to the value named by WORD. `choices` pairs each word
 /// with its value; the default shown is the word of `target`'s current value. A word not in
