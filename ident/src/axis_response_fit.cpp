@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/least_squares.hpp"
 #include "tunekit/fitting/levenberg_marquardt.hpp"
 #include "tunekit/fitting/stats.hpp"
@@ -580,15 +581,15 @@ void set_covariance(fitting::FitResult& f, const Eigen::MatrixXd& JtJ, double co
   Eigen::VectorXd d(k);
   for (Eigen::Index j = 0; j < k; ++j) d(j) = 1.0 / std::sqrt(std::max(JtJ(j, j), 1e-300));
   const Eigen::MatrixXd S = d.asDiagonal() * JtJ * d.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S, Eigen::EigenvaluesOnly);
-  const double lmin = es.eigenvalues().minCoeff(), lmax = es.eigenvalues().maxCoeff();
+  const Eigen::VectorXd eigenvalues = fitting::symmetric_eigenvalues(S);
+  const double lmin = eigenvalues.minCoeff(), lmax = eigenvalues.maxCoeff();
   if (!(lmax > 0) || !(lmin > 0) || std::sqrt(lmin / lmax) < kMinScaledReciprocalCondition) {
     std::string names;
     for (const auto& p : f.params) names += (names.empty() ? "" : ", ") + p.name;
     throw FitError(f.model + ": parameters not identifiable from these data (the Jacobian of " + names +
                    " is rank deficient); record a longer or richer response, or fix a parameter");
   }
-  const Eigen::MatrixXd Sinv = S.inverse();
+  const Eigen::MatrixXd Sinv = fitting::inverse(S);
   const int dof = f.diagnostics.num_observations - static_cast<int>(k);
   if (dof <= 0) throw FitError(f.model + ": as many parameters as data points; no uncertainty can be estimated");
   const double s2 = f.diagnostics.rss / dof, tq = fitting::t_multiplier(confidence, dof);

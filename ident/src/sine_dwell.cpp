@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/least_squares.hpp"
 #include "tunekit/fitting/stats.hpp"
 
@@ -62,7 +63,7 @@ fitting::FitResult fit_sine(std::span<const double> t, std::span<const double> y
     X(k, 2) = std::cos(w * t[i]);
     Y(k) = y[i];
   }
-  const Eigen::Vector3d c = X.colPivHouseholderQr().solve(Y);
+  const Eigen::Vector3d c = fitting::least_squares_solve(X, Y);
   const double A0 = std::hypot(c(1), c(2));
   const double phi0 = std::atan2(c(2), c(1)) * kDeg;  // a sin + b cos = A sin(wt + phi)
   const std::vector<double> tv(t.begin(), t.end()), yv(y.begin(), y.end());

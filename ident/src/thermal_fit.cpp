@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/least_squares.hpp"
 #include "tunekit/fitting/modal_fit.hpp"
 #include "tunekit/fitting/stats.hpp"
@@ -80,7 +81,7 @@ std::array<double, kThermalParams> start_values(const ThermalRecord& r, std::siz
   }
   if (!fan) X.col(2).setZero();
   if (!feed) X.col(3).setZero();
-  const Eigen::VectorXd c = X.colPivHouseholderQr().solve(y);
+  const Eigen::VectorXd c = fitting::least_squares_solve(X, y);
   std::array<double, kThermalParams> p{};
   p[kP] = power_w;
   p[kC] = std::clamp(c(0), 1.0, 1000.0);

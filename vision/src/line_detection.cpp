@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "line_width_stages.hpp"
+#include "tunekit/fitting/dense_solvers.hpp"
 
 namespace tunekit::vision::detail {
 namespace {
@@ -115,9 +116,9 @@ cv::Mat fit_lighting(const cv::Mat& img, const cv::Mat& exclude) {
   for (int it = 0; it < kLightingReweightRounds; ++it) {
     const Eigen::MatrixXd AtA = A.transpose() * wt.asDiagonal() * A;
     const Eigen::VectorXd Atb = A.transpose() * wt.cwiseProduct(vals);
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(AtA);
-    if (ldlt.info() != Eigen::Success) break;
-    coef = ldlt.solve(Atb);
+    const auto solved = fitting::ldlt_solve(AtA, Atb);
+    if (!solved) break;
+    coef = *solved;
     const Eigen::VectorXd res = vals - A * coef;
     std::vector<double> kept;
     for (Eigen::Index i = 0; i < n; ++i)

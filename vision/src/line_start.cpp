@@ -13,6 +13,7 @@
 
 #include "line_width_stages.hpp"
 #include "photo_widths_stages.hpp"
+#include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::vision::detail {
@@ -70,7 +71,7 @@ double integrated_contrast(const cv::Mat& img, double x, double yc, int half) {
 
 // Least squares of y on the columns of A (rows: samples).
 Eigen::VectorXd least_squares(const Eigen::MatrixXd& A, const Eigen::VectorXd& y) {
-  return A.colPivHouseholderQr().solve(y);
+  return fitting::least_squares_solve(A, y);
 }
 
 // The centreline y = c0 + c1 x through the edge fit's centres over the bead's first 20 mm.

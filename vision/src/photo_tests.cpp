@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "photo_widths_stages.hpp"
+#include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/stats.hpp"
 
 namespace tunekit::vision {
@@ -93,11 +94,12 @@ SineFit sine_fit(const std::vector<double>& t, const std::vector<double>& y, dou
     }
     b(r) = y[static_cast<std::size_t>(r)];
   }
-  const Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
+  const Eigen::VectorXd x = fitting::least_squares_solve(A, b);
   const Eigen::VectorXd res = b - A * x;
   const std::vector<double> rv(res.data(), res.data() + n);
   const double factor = fitting::residual_variance_factor(rv);
-  const Eigen::MatrixXd C = (res.squaredNorm() / static_cast<double>(n - p)) * factor * (A.transpose() * A).inverse();
+  const Eigen::MatrixXd C =
+      (res.squaredNorm() / static_cast<double>(n - p)) * factor * fitting::inverse(A.transpose() * A);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, p);  // (level, real, imaginary) from the coefficients
   J(0, 0) = 1;
   J(0, 1) = t_mean;
