@@ -1,8 +1,12 @@
 #include "tunekit/fitting/stats.hpp"
 
+#include "whiteness_detail.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include <boost/math/distributions/chi_squared.hpp>
@@ -21,11 +25,16 @@ int default_whiteness_lags(std::size_t n) { return static_cast<int>(std::clamp<s
 
 namespace {
 
-// The deviations r_i - mean in reverse order: rev[j] = r[n - 1 - j] - mean.
-std::vector<double> reversed_deviations(std::span<const double> r, double mean) {
-  std::vector<double> rev(r.size());
-  for (std::size_t j = 0; j < r.size(); ++j) rev[j] = r[r.size() - 1 - j] - mean;
-  return rev;
+// The deviations r_i - mean in reverse order: rev[j] = r[n - 1 - j] - mean. `rev` may be `r`
+// itself (then r is overwritten).
+void reversed_deviations(std::span<const double> r, double mean, std::span<double> rev) {
+  const std::size_t n = r.size();
+  for (std::size_t j = 0; j < n / 2; ++j) {
+    const double a = r[j], b = r[n - 1 - j];
+    rev[j] = b - mean;
+    rev[n - 1 - j] = a - mean;
+  }
+  if (n % 2 == 1) rev[n / 2] = r[n / 2] - mean;
 }
 
 // The autocovariances c[k0 .. k0 + 2 Pairs - 1] (Pairs 1 or 4) of the deviations d_i (given
@@ -34,7 +43,7 @@ std::vector<double> reversed_deviations(std::span<const double> r, double mean) 
 // lane adds its own lag's terms in the order of i, so every c_k is rounded exactly as one lag at
 // a time would round it (one sum at a time is bound by the latency of its additions).
 template <std::size_t Pairs>
-void autocovariance_block(const std::vector<double>& rev, std::size_t k0, std::vector<double>& c) {
+void autocovariance_block(std::span<const double> rev, std::size_t k0, std::vector<double>& c) {
   static_assert(Pairs == 1 || Pairs == 4);
   constexpr std::size_t kLags = 2 * Pairs;
   using Lanes = double __attribute__((vector_size(16)));
@@ -75,7 +84,7 @@ void autocovariance_block(const std::vector<double>& rev, std::size_t k0, std::v
 // every c_k is the same to the bit. Compiled for AVX2 beside the baseline (one 4-lane register
 // there, two 2-lane registers in the baseline); AVX2 alone does not contract into FMA, so both
 // clones round alike.
-[[gnu::target_clones("avx2", "default")]] void autocovariance_20(const std::vector<double>& rev, std::size_t k0,
+[[gnu::target_clones("avx2", "default")]] void autocovariance_20(std::span<const double> rev, std::size_t k0,
                                                                  std::vector<double>& c) {
   constexpr std::size_t kLags = 20;
   using Lanes = double __attribute__((vector_size(32)));
@@ -113,20 +122,24 @@ void autocovariance_block(const std::vector<double>& rev, std::size_t k0, std::v
 
 }  // namespace
 
-WhitenessTest ljung_box(std::span<const double> r, int lags) {
-  WhitenessTest t;
-  const std::size_t n = r.size();
-  if (n < 3 || lags < 1) return t;
-  lags = std::min<int>(lags, static_cast<int>(n) - 1);
+namespace {
+
+// The mean of r and the sum of squared deviations from it.
+std::pair<double, double> mean_and_c0(std::span<const double> r) {
   double mean = 0;
   for (double v : r) mean += v;
-  mean /= static_cast<double>(n);
+  mean /= static_cast<double>(r.size());
   double c0 = 0;
   for (double v : r) c0 += (v - mean) * (v - mean);
-  if (!(c0 > 0)) return t;
+  return {mean, c0};
+}
+
+// Ljung-Box from the reversed deviations (reversed_deviations) and their c0.
+WhitenessTest ljung_box_of_deviations(std::span<const double> rev, double c0, int lags) {
+  WhitenessTest t;
+  const std::size_t n = rev.size();
   // The autocovariances c_k = sum_{i >= k} (r_i - mean)(r_{i-k} - mean), several lags per pass
   // over the residuals (autocovariance_block).
-  const std::vector<double> rev = reversed_deviations(r, mean);
   std::vector<double> c(static_cast<std::size_t>(lags) + 1, 0.0);
   int k = 1;
   for (; k + 19 <= lags; k += 20) autocovariance_20(rev, static_cast<std::size_t>(k), c);
@@ -147,6 +160,33 @@ WhitenessTest ljung_box(std::span<const double> r, int lags) {
   t.lags = lags;
   t.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared_distribution<>(lags), q));
   return t;
+}
+
+}  // namespace
+
+WhitenessTest ljung_box(std::span<const double> r, int lags) {
+  const std::size_t n = r.size();
+  if (n < 3 || lags < 1) return {};
+  lags = std::min<int>(lags, static_cast<int>(n) - 1);
+  const auto [mean, c0] = mean_and_c0(r);
+  if (!(c0 > 0)) return {};
+  std::vector<double> rev(n);
+  reversed_deviations(r, mean, rev);
+  return ljung_box_of_deviations(rev, c0, lags);
+}
+
+WhitenessTest ljung_box_in_place(std::span<double> r, int lags) {
+  if (r.size() < 3 || lags < 1) return {};
+  const auto [mean, c0] = mean_and_c0(r);
+  return whiteness_detail::ljung_box_in_place(r, mean, c0, lags);
+}
+
+WhitenessTest whiteness_detail::ljung_box_in_place(std::span<double> r, double mean, double c0, int lags) {
+  const std::size_t n = r.size();
+  lags = std::min<int>(lags, static_cast<int>(n) - 1);
+  if (!(c0 > 0)) return {};
+  reversed_deviations(r, mean, r);
+  return ljung_box_of_deviations(r, c0, lags);
 }
 
 double residual_variance_factor(std::span<const double> r) {
@@ -170,7 +210,9 @@ double residual_variance_factor(std::span<const double> r) {
   return std::max(1.0, f);
 }
 
-double median(std::vector<double> v) {
+double median(std::vector<double> v) { return median_in_place(v); }
+
+double median_in_place(std::span<double> v) {
   if (v.empty()) return 0;
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
