@@ -586,65 +586,8 @@ void check_identifiable(const FitResult& f, const StepRecord* rec, double durati
 
 double response_duration(const StepRecord& r) { return r.t.back() - r.t_step; }
 
-namespace {
-
-// The median of the sample intervals t[i] - t[i - 1] (the one median() takes: the (n - 1) / 2-th
-// smallest from 0) when they take at most 8 distinct values, without a buffer; NaN when they take
-// more. A regular clock's intervals differ only by the rounding of its instants: a 100k-sample
-// record at 1 kHz has 6. Each interval is compared with the 8 values at once and counted where it
-// equals one. Built for AVX2 beside the baseline.
-[[gnu::target_clones("avx2", "default")]] double median_of_few_intervals(const double* t, std::size_t n) {
-  using Lanes = double __attribute__((vector_size(32)));
-  using Counts = decltype(Lanes{} == Lanes{});
-  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();  // an empty slot: equals nothing
-  double values[8] = {kNone, kNone, kNone, kNone, kNone, kNone, kNone, kNone};
-  Lanes v0, v1, dv;
-  std::memcpy(&v0, values, sizeof v0);
-  std::memcpy(&v1, values + 4, sizeof v1);
-  Counts c0 = {}, c1 = {};
-  std::size_t distinct = 0;
-  for (std::size_t i = 1; i < n; ++i) {
-    const double d = t[i] - t[i - 1];
-    dv = Lanes{} + d;
-    const Counts e0 = v0 == dv, e1 = v1 == dv, any = e0 | e1;
-    if ((any[0] | any[1] | any[2] | any[3]) == 0) {  // a value not seen before
-      if (distinct == 8 || std::isnan(d)) return kNone;
-      values[distinct++] = d;
-      std::memcpy(&v0, values, sizeof v0);
-      std::memcpy(&v1, values + 4, sizeof v1);
-      --i;  // counted on the next pass through the loop
-      continue;
-    }
-    c0 -= e0;  // a true lane is -1
-    c1 -= e1;
-  }
-  // The median: the smallest value with more than k intervals at or below it.
-  long count[8];
-  for (std::size_t j = 0; j < 8; ++j) count[j] = j < 4 ? c0[j] : c1[j - 4];
-  const auto k = static_cast<long>((n - 1) / 2);
-  for (std::size_t j = 0; j < distinct; ++j) {
-    long at_or_below = 0;
-    for (std::size_t m = 0; m < distinct; ++m)
-      if (values[m] <= values[j]) at_or_below += count[m];
-    if (at_or_below > k && at_or_below - count[j] <= k) return values[j];
-  }
-  return kNone;
-}
-
-}  // namespace
-
 double step_instant_resolution(const StepRecord& r, std::span<double> scratch) {
-  const std::size_t n = r.t.size();
-  if (n < 2) return 0;
-  if (const double dt = median_of_few_intervals(r.t.data(), n); !std::isnan(dt)) return dt / std::sqrt(12.0);
-  std::vector<double> own;
-  if (scratch.size() < n - 1) {
-    own.resize(n - 1);
-    scratch = own;
-  }
-  const std::span<double> d = scratch.first(n - 1);
-  for (std::size_t i = 1; i < n; ++i) d[i - 1] = r.t[i] - r.t[i - 1];
-  return median_in_place(d) / std::sqrt(12.0);
+  return r.t.size() < 2 ? 0 : median_interval(r.t, scratch) / std::sqrt(12.0);
 }
 
 }  // namespace first_order_detail

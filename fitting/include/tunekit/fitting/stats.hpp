@@ -36,6 +36,11 @@ double residual_variance_factor(std::span<const double> residuals);
 double median(std::vector<double> v);
 /// The same median without a copy: `v` is partially reordered in place.
 double median_in_place(std::span<double> v);
+/// The median of the intervals t[i] - t[i - 1] (as median() takes it), 0 for fewer than 2
+/// instants. When they take at most 8 distinct values (a regular clock's intervals differ only by
+/// the rounding of its instants) they are counted without a buffer; otherwise they are written to
+/// `scratch` when it holds t.size() - 1 values (it is overwritten), or to a buffer of their own.
+double median_interval(std::span<const double> t, std::span<double> scratch = {});
 
 /// Default number of lags for Ljung-Box: min(20, n/4), at least 1.
 int default_whiteness_lags(std::size_t n);
