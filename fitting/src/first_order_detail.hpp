@@ -57,8 +57,10 @@ double normal_equations(const StepRecord& r, const double p[4], Eigen::Matrix4d&
 constexpr double kWhitenessRobustP = 0.01;
 
 /// The standard uncertainty of a step's instant from the sampling: dt / sqrt(12), dt the
-/// record's median sample interval (the instant lies somewhere within a sample).
-double step_instant_resolution(const StepRecord& r);
+/// record's median sample interval (the instant lies somewhere within a sample). `scratch`, when
+/// it has at least one element per sample, holds the intervals (it is overwritten); otherwise a
+/// buffer is allocated.
+double step_instant_resolution(const StepRecord& r, std::span<double> scratch = {});
 
 /// FitError when tau_s ran to its bound or is not determined, or theta_s ran to its bound.
 void check_identifiable(const FitResult& f, const StepRecord* rec, double duration, bool have_stderr);

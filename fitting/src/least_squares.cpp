@@ -15,6 +15,7 @@
 #include "solver_text.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/stats.hpp"
+#include "whiteness_detail.hpp"
 
 namespace tunekit::fitting {
 namespace {
@@ -160,53 +161,117 @@ std::string free_names(const LsqProblem& p) {
 
 void quiet_solver_logging() { quiet_glog(); }
 
-double residual_variance_floor(const std::vector<double>& observed) {
+namespace {
+
+// The largest finite |v| of observed, at least 1 (residual_variance_floor's scale).
+double observed_scale(std::span<const double> observed) {
   double scale = 1.0;
   for (double v : observed)
     if (std::isfinite(v)) scale = std::max(scale, std::abs(v));
+  return scale;
+}
+
+double floor_of_scale(double scale) {
   const double sigma = kRelativeResidualFloor * scale;
   return sigma * sigma;
 }
 
-void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res, const std::vector<double>& observed,
-                               bool time_ordered) {
+// The sums fill_residual_diagnostics is made of, each summed in the order of the samples.
+struct ResidualSums {
+  double rss = 0, res_sum = 0;  // of the residuals' squares and of the residuals
+  double obs_sum = 0, tss = 0;  // of the observations and of their squared deviations from their mean
+  double scale = 1;             // observed_scale
+  double res_c0 = 0;            // of the residuals' squared deviations from their mean (with_c0)
+};
+
+// All of them in two passes over the samples, several independent sums per pass (one sum at a
+// time is bound by the latency of its additions). Each is the sum it was one at a time, to the bit.
+ResidualSums residual_sums(std::span<const double> res, std::span<const double> obs, bool with_c0) {
+  ResidualSums s;
+  const std::size_t n = res.size();
+  if (obs.size() != n) {  // no R^2: the residuals' sums and the scale alone
+    for (double v : res) s.rss += v * v, s.res_sum += v;
+    s.scale = observed_scale(obs);
+  } else {
+    double scale = 1.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v = res[i], o = obs[i], a = std::abs(o);
+      s.rss += v * v;
+      s.res_sum += v;
+      s.obs_sum += o;
+      if (a > scale && std::isfinite(a)) scale = a;
+    }
+    s.scale = scale;
+  }
+  const double res_mean = s.res_sum / static_cast<double>(n), obs_mean = s.obs_sum / static_cast<double>(n);
+  if (obs.size() == n && with_c0) {
+    for (std::size_t i = 0; i < n; ++i) {
+      s.tss += (obs[i] - obs_mean) * (obs[i] - obs_mean);
+      s.res_c0 += (res[i] - res_mean) * (res[i] - res_mean);
+    }
+  } else if (obs.size() == n) {
+    for (double o : obs) s.tss += (o - obs_mean) * (o - obs_mean);
+  } else if (with_c0) {
+    for (double v : res) s.res_c0 += (v - res_mean) * (v - res_mean);
+  }
+  return s;
+}
+
+// Every statistic of fill_residual_diagnostics but the whiteness test, from those sums.
+void fill_fit_statistics(FitResult& r, const ResidualSums& s, std::size_t num_res, std::size_t num_obs) {
   auto& d = r.diagnostics;
-  const double n = static_cast<double>(res.size());
-  double rss = 0;
-  for (double v : res) rss += v * v;
-  d.num_observations = static_cast<int>(res.size());
+  const double n = static_cast<double>(num_res);
+  const double rss = s.rss;
+  d.num_observations = static_cast<int>(num_res);
   d.rss = rss;
-  d.rms = res.empty() ? kNaN : std::sqrt(rss / n);
+  d.rms = num_res == 0 ? kNaN : std::sqrt(rss / n);
   const double k = d.num_parameters;
   // An exact fit (rss = 0) has no finite log-likelihood; the residual variance is floored at
   // what the arithmetic can resolve, so exact fits get finite criteria and the simpler model
   // wins a tie (the 2k term decides).
-  const double floor = residual_variance_floor(observed);
-  if (!res.empty() && std::isfinite(rss)) {
+  const double floor = floor_of_scale(s.scale);
+  if (num_res > 0 && std::isfinite(rss)) {
     const double var = std::max(rss / n, floor);
     d.aic = n * std::log(var) + 2 * k;
     d.bic = n * std::log(var) + k * std::log(n);
   }
-  if (observed.size() == res.size() && !observed.empty()) {
-    double mean = 0;
-    for (double v : observed) mean += v;
-    mean /= n;
-    double tss = 0;
-    for (double v : observed) tss += (v - mean) * (v - mean);
+  if (num_obs == num_res && num_obs > 0) {
     // Data that do not vary leave nothing to explain: R^2 is 1 for a fit to within the floor
     // and 0 otherwise (the fit explains nothing the mean does not), with a warning.
-    if (tss > floor * n) {
-      d.r2 = 1.0 - rss / tss;
+    if (s.tss > floor * n) {
+      d.r2 = 1.0 - rss / s.tss;
     } else {
       d.r2 = rss <= floor * n ? 1.0 : 0.0;
       r.warnings.push_back("the observed values do not vary; R^2 says nothing about this fit");
     }
   }
-  if (time_ordered) {
-    const auto wt = ljung_box(res, default_whiteness_lags(res.size()));
-    d.whiteness_p = wt.p_value;
-    d.whiteness_lags = wt.lags;
-  }
+}
+
+void set_whiteness(FitResult& r, const WhitenessTest& wt) {
+  r.diagnostics.whiteness_p = wt.p_value;
+  r.diagnostics.whiteness_lags = wt.lags;
+}
+
+}  // namespace
+
+double residual_variance_floor(const std::vector<double>& observed) { return floor_of_scale(observed_scale(observed)); }
+
+void fill_residual_diagnostics(FitResult& r, const std::vector<double>& res, const std::vector<double>& observed,
+                               bool time_ordered) {
+  fill_fit_statistics(r, residual_sums(res, observed, false), res.size(), observed.size());
+  if (time_ordered) set_whiteness(r, ljung_box(res, default_whiteness_lags(res.size())));
+}
+
+void fill_residual_diagnostics_in_place(FitResult& r, std::span<double> res, std::span<const double> observed,
+                                        bool time_ordered) {
+  const bool whiteness = time_ordered && res.size() >= 3;
+  const ResidualSums s = residual_sums(res, observed, whiteness);
+  fill_fit_statistics(r, s, res.size(), observed.size());
+  if (!time_ordered) return;
+  const int lags = default_whiteness_lags(res.size());
+  set_whiteness(r, whiteness ? whiteness_detail::ljung_box_in_place(res, s.res_sum / static_cast<double>(res.size()),
+                                                                    s.res_c0, lags)
+                             : WhitenessTest{});
 }
 
 namespace {

@@ -117,6 +117,74 @@ TEST_CASE("the Ljung-Box statistic over many lags is the definition's, to the bi
   CHECK(ljung_box(r, lags).lags == lags);
 }
 
+TEST_CASE("the Ljung-Box test and the residual diagnostics in place are the same to the bit") {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> e(0, 1);
+  for (std::size_t n : {999u, 1000u}) {  // the reversal in place pairs the samples; odd n has a middle one
+    std::vector<double> r, y;
+    double x = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      r.push_back(x = 0.3 * x + e(rng));
+      y.push_back(5.0 + 0.01 * static_cast<double>(i) + r.back());
+    }
+    const WhitenessTest a = ljung_box(r, 20);
+    std::vector<double> scratch = r;
+    const WhitenessTest b = ljung_box_in_place(scratch, 20);
+    CHECK(b.q == a.q);
+    CHECK(b.p_value == a.p_value);
+    CHECK(b.lags == a.lags);
+    CHECK(scratch != r);  // overwritten, as documented
+
+    FitResult f, g;
+    f.diagnostics.num_parameters = g.diagnostics.num_parameters = 3;
+    fill_residual_diagnostics(f, r, y, true);
+    scratch = r;
+    fill_residual_diagnostics_in_place(g, scratch, y, true);
+    CHECK(g.diagnostics.rss == f.diagnostics.rss);
+    CHECK(g.diagnostics.rms == f.diagnostics.rms);
+    CHECK(g.diagnostics.r2 == f.diagnostics.r2);
+    CHECK(g.diagnostics.aic == f.diagnostics.aic);
+    CHECK(g.diagnostics.bic == f.diagnostics.bic);
+    CHECK(g.diagnostics.whiteness_p == f.diagnostics.whiteness_p);
+    CHECK(g.diagnostics.whiteness_lags == f.diagnostics.whiteness_lags);
+    CHECK(f.diagnostics.whiteness_lags == 20);
+  }
+  // Constant residuals: no whiteness statistic (p 1, no lags), in place as well.
+  std::vector<double> flat(10, 2.0);
+  CHECK(ljung_box_in_place(flat, 5).p_value == 1.0);
+  CHECK(ljung_box_in_place(flat, 5).lags == 0);
+}
+
+TEST_CASE("the median sample interval counted without a buffer is the median of the intervals") {
+  auto intervals_median = [](const std::vector<double>& t) {
+    std::vector<double> d;
+    for (std::size_t i = 1; i < t.size(); ++i) d.push_back(t[i] - t[i - 1]);
+    return median(d);
+  };
+  // A regular 1 kHz clock: its intervals differ by the rounding of its instants alone (a few values).
+  std::vector<double> regular;
+  for (int i = 0; i < 100000; ++i) regular.push_back(-10.0 + i * 1e-3);
+  CHECK(median_interval(regular) == intervals_median(regular));
+  // Exactly 8 and then 9 distinct intervals (the second takes the buffer), of uneven counts.
+  for (int kinds : {8, 9}) {
+    std::vector<double> t = {0.0};
+    for (int i = 0; i < 1001; ++i) t.push_back(t.back() + 1.0 + (i * 7 % kinds) * 0.125);
+    std::vector<double> scratch(t.size() - 1);
+    CHECK(median_interval(t, scratch) == intervals_median(t));
+    CHECK(median_interval(t) == intervals_median(t));
+  }
+  // A jittery clock: every interval its own value.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(0.9e-3, 1.1e-3);
+  std::vector<double> jittery = {0.0};
+  for (int i = 0; i < 4000; ++i) jittery.push_back(jittery.back() + jitter(rng));
+  CHECK(median_interval(jittery) == intervals_median(jittery));
+  // An even number of intervals: the upper middle one, as median() takes it.
+  CHECK(median_interval(std::vector<double>{0.0, 1.0, 3.0, 6.0, 10.0}) == 3.0);
+  CHECK(median_interval(std::vector<double>{0.0, 1.0, 2.0, 4.0, 6.0}) == 2.0);
+  CHECK(median_interval(std::vector<double>{5.0}) == 0.0);
+}
+
 TEST_CASE("the residuals' variance factor is 1 for white noise and (1 + phi) / (1 - phi) for AR(1)") {
   std::mt19937 rng(11);
   std::normal_distribution<double> e(0, 1);
@@ -136,6 +204,8 @@ TEST_CASE("the median is the upper middle value, 0 for no values") {
   CHECK(median({3.0, 1.0, 2.0}) == 2.0);
   CHECK(median({4.0, 1.0, 3.0, 2.0}) == 3.0);
   CHECK(median({}) == 0.0);
+  std::vector<double> v = {4.0, 1.0, 3.0, 2.0};
+  CHECK(median_in_place(v) == 3.0);
 }
 
 TEST_CASE("linear interpolation holds the end values outside the table and is exact at knots") {

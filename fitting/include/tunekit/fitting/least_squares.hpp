@@ -18,6 +18,7 @@
 
 #include <functional>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -89,5 +90,10 @@ double residual_variance_floor(const std::vector<double>& observed);
 /// R^2 of data that do not vary is 1 for a fit within the floor and 0 otherwise (with a warning).
 void fill_residual_diagnostics(FitResult& r, const std::vector<double>& residuals, const std::vector<double>& observed,
                                bool time_ordered);
+/// The same statistics, to the bit, without a buffer of the residuals' length: the whiteness
+/// test runs in the residuals' own storage, so `residuals` is overwritten (for a caller that does
+/// not need them afterwards).
+void fill_residual_diagnostics_in_place(FitResult& r, std::span<double> residuals, std::span<const double> observed,
+                                        bool time_ordered);
 
 }  // namespace tunekit::fitting

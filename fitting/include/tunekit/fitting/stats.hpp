@@ -21,6 +21,9 @@ struct WhitenessTest {
   int lags = 0;
 };
 WhitenessTest ljung_box(std::span<const double> residuals, int lags);
+/// The same test, without a buffer of the residuals' length: `residuals` is overwritten (with
+/// their deviations from the mean in reverse order). The statistic is the same to the bit.
+WhitenessTest ljung_box_in_place(std::span<double> residuals, int lags);
 
 /// Variance factor of a fit whose residuals are correlated in time: 1 + 2 sum of the residuals'
 /// autocorrelation up to its first non-positive lag (at most n / 10 lags, 2000), at least 1. The
@@ -31,6 +34,13 @@ double residual_variance_factor(std::span<const double> residuals);
 
 /// Median of `v` (taken by value: it is partially reordered). 0 for an empty vector.
 double median(std::vector<double> v);
+/// The same median without a copy: `v` is partially reordered in place.
+double median_in_place(std::span<double> v);
+/// The median of the intervals t[i] - t[i - 1] (as median() takes it), 0 for fewer than 2
+/// instants. When they take at most 8 distinct values (a regular clock's intervals differ only by
+/// the rounding of its instants) they are counted without a buffer; otherwise they are written to
+/// `scratch` when it holds t.size() - 1 values (it is overwritten), or to a buffer of their own.
+double median_interval(std::span<const double> t, std::span<double> scratch = {});
 
 /// Default number of lags for Ljung-Box: min(20, n/4), at least 1.
 int default_whiteness_lags(std::size_t n);
