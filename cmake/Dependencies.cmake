@@ -138,6 +138,14 @@ add_library(tunekit_plplot_headers INTERFACE)
 target_include_directories(tunekit_plplot_headers SYSTEM INTERFACE ${PLPLOT_INCLUDE_DIRS})
 add_library(tunekit_libpq_headers INTERFACE)
 target_include_directories(tunekit_libpq_headers SYSTEM INTERFACE ${LIBPQ_INCLUDE_DIRS})
+# libcrypto (SHA-256, Base64) and SQLite are opened on first use too: both are bound at load
+# time in full (BIND_NOW), some 5,000 symbol lookups at every start of every command.
+tunekit_soname(TUNEKIT_LIBCRYPTO_SONAME OPENSSL crypto)
+tunekit_soname(TUNEKIT_SQLITE3_SONAME SQLITE3 sqlite3)
+add_library(tunekit_openssl_headers INTERFACE)
+target_include_directories(tunekit_openssl_headers SYSTEM INTERFACE ${OPENSSL_INCLUDE_DIR})
+add_library(tunekit_sqlite3_headers INTERFACE)
+target_include_directories(tunekit_sqlite3_headers SYSTEM INTERFACE ${SQLITE3_INCLUDE_DIRS})
 
 if(TUNEKIT_BUILD_TESTS)
   find_package(Catch2 2 QUIET)

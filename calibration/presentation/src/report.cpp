@@ -8,8 +8,8 @@
 #include <sstream>
 
 #include <fmt/format.h>
-#include <openssl/evp.h>
 
+#include "tunekit/calibration/results/base64.hpp"
 #include "tunekit/calibration/results/warning_advice.hpp"
 #include "tunekit/core/json_error_text.hpp"
 #include "tunekit/calibration/results/calibration_record.hpp"
@@ -22,14 +22,6 @@
 
 namespace tunekit::calibration {
 namespace {
-
-std::string base64(std::string_view bytes) {
-  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
-  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
-                                reinterpret_cast<const unsigned char*>(bytes.data()), static_cast<int>(bytes.size()));
-  out.resize(static_cast<std::size_t>(n));
-  return out;
-}
 
 // The report's page width and style sheet (tables, figures, warnings, agreements).
 constexpr int kReportMaxWidthPx = 1000;

@@ -5,7 +5,6 @@
 #include <ostream>
 
 #include <fmt/format.h>
-#include <openssl/evp.h>
 
 #include "tunekit/calibration/results/history_record.hpp"
 #include "tunekit/calibration/results/requirements.hpp"
@@ -16,16 +15,6 @@
 #include "tunekit/core/file_bytes.hpp"
 
 namespace tunekit::calibration {
-
-std::string sha256_hex(std::string_view bytes) {
-  unsigned char md[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  EVP_Digest(bytes.data(), bytes.size(), md, &len, EVP_sha256(), nullptr);
-  std::string hex;
-  hex.reserve(len * 2);
-  for (unsigned int i = 0; i < len; ++i) hex += fmt::format("{:02x}", md[i]);
-  return hex;
-}
 
 std::string sha256_file(const std::string& path) { return sha256_hex(read_file_bytes(path)); }
 
