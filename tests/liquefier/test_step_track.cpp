@@ -194,7 +194,8 @@ TEST_CASE("Monte-Carlo: following the feed track, tau's 95 % interval covers the
     r.t_step = 2.0042 + (kTopLevels[2] + kTopLevels[3]) / (2 * kTrackAccel);
     r.du = kTopLevels[3] - kTopLevels[2];
     fitting::set_input_track(r, track.t, track.u);
-    const auto& p = fitting::fit_step(r, fitting::StepModel::fopdt).param("tau_s");
+    const auto fit = fitting::fit_step(r, fitting::StepModel::fopdt);
+    const auto& p = fit.param("tau_s");
     ++n;
     if (p.ci95_lo <= kTrackTau && kTrackTau <= p.ci95_hi) ++covered;
   }
