@@ -163,8 +163,14 @@ TEST_CASE("argument errors are one line with the tool's prefix and a pointer to 
   }
   SECTION("an unknown option of a nested command") {
     const auto r = run_cli({"history", "list", "--frobnicate"});
-    check_one_line_usage_error(r, "--help");
-    CHECK(r.err.find("--frobnicate") != std::string::npos);
+    check_one_line_usage_error(r, "'tunekit history list --help'");
+    CHECK(r.err.find("unknown option '--frobnicate' for 'tunekit history list'") != std::string::npos);
+  }
+  SECTION("a nested command's own option with a bad value is not called unknown") {
+    const auto r = run_cli({"history", "trend", "--coverage", "nan"});
+    check_one_line_usage_error(r, "'tunekit history trend --help'");
+    CHECK(r.err.find("unknown option") == std::string::npos);
+    CHECK(r.err.find("--coverage") != std::string::npos);
   }
   SECTION("a missing required argument") {
     const auto r = run_cli({"step"});

@@ -66,6 +66,31 @@ bool cli_is_number(const std::string& s) {
   return !s.empty() && end == s.c_str() + s.size();
 }
 
+// The long options ("--name") of the program and of each command and subcommand the words of
+// `args` from `cmd_at` on name ("history", then "trend"), and that path ("history trend").
+std::pair<std::vector<std::string>, std::string> cli_long_options(CLI::App& app, const std::vector<std::string>& args,
+                                                                  std::size_t cmd_at) {
+  std::vector<std::string> longs;
+  const auto add = [&longs](const CLI::App* a) {
+    for (const auto* o : a->get_options())
+      for (const auto& l : o->get_lnames()) longs.push_back("--" + l);
+  };
+  add(&app);
+  CLI::App* cur = &app;
+  std::string path;
+  for (std::size_t i = cmd_at; i < args.size() && args[i] != "--"; ++i) {
+    if (args[i].empty() || args[i][0] == '-') continue;
+    for (auto* s : cur->get_subcommands([](const CLI::App*) { return true; }))
+      if (s->get_name() == args[i]) {
+        cur = s;
+        path += (path.empty() ? "" : " ") + args[i];
+        add(s);
+        break;
+      }
+  }
+  return {longs, path};
+}
+
 // "unknown command 'stpe'; did you mean 'step'?" for a first word that names no command, or
 // the same for an option the command does not have; empty when the arguments look fine.
 std::string cli_typo_message(CLI::App& app, const std::vector<std::string>& args) {
@@ -90,11 +115,7 @@ std::string cli_typo_message(CLI::App& app, const std::vector<std::string>& args
     return fmt::format("unknown command '{}'{}; 'tunekit --help' lists the commands", cmd,
                        near.empty() ? std::string() : fmt::format("; did you mean '{}'?", near));
   }
-  std::vector<std::string> longs;
-  for (const auto* o : sub->get_options())
-    for (const auto& l : o->get_lnames()) longs.push_back("--" + l);
-  for (const auto* o : app.get_options())
-    for (const auto& l : o->get_lnames()) longs.push_back("--" + l);
+  const auto [longs, path] = cli_long_options(app, args, cmd_at);
   for (std::size_t i = cmd_at + 1; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (a == "--") break;
@@ -102,8 +123,8 @@ std::string cli_typo_message(CLI::App& app, const std::vector<std::string>& args
     const std::string name = a.substr(0, a.find('='));
     if (std::find(longs.begin(), longs.end(), name) != longs.end()) continue;
     const std::string near = cli_nearest(name, longs);
-    return fmt::format("unknown option '{}' for 'tunekit {}'{}; 'tunekit {} --help' lists its options", name, cmd,
-                       near.empty() ? std::string() : fmt::format("; did you mean '{}'?", near), cmd);
+    return fmt::format("unknown option '{}' for 'tunekit {}'{}; 'tunekit {} --help' lists its options", name, path,
+                       near.empty() ? std::string() : fmt::format("; did you mean '{}'?", near), path);
   }
   return {};
 }
