@@ -122,6 +122,10 @@ TEST_CASE("calibrate --budget-s shortens the plan to the budget and says what ea
   const auto text =
       run_cli({"calibrate", "--machine", "sim", "--dry-run", "--budget-s", std::to_string(static_cast<int>(budget))});
   CHECK(text.out.find("predicted 95 % intervals") != std::string::npos);
+  // They are the sensor noise's bound, and the plan says so once: a technician reading
+  // "+-0.0003 %" must know it is not what a real axis will give.
+  CHECK(text.out.find("the predicted intervals are the sensors' noise alone") != std::string::npos);
+  CHECK(text.out.find("the sensors' noise alone") == text.out.rfind("the sensors' noise alone"));
   CHECK(text.out.find("budget") != std::string::npos);
   // A budget no design meets is refused before anything is sent.
   const auto refused = run_cli({"calibrate", "--machine", "sim", "--dry-run", "--budget-s", "5"});

@@ -14,6 +14,7 @@
 //   RUN_DIR/config/          the configuration before and after, and the diff
 // The stages are in calibration_pipeline.hpp, one source file each (calibrate_plan.cpp,
 // calibrate_run.cpp, calibrate_identify.cpp, calibrate_design.cpp, calibrate_results.cpp).
+#include <algorithm>
 #include <unistd.h>
 
 #include "calibrate_stages.hpp"
@@ -83,6 +84,10 @@ int print_plan(const CalibrationPlan& plan, CliContext& ctx) {
     if (e.predicted)
       ctx.out << fmt::format("      predicted 95 % intervals: {}\n", prediction_text(*e.predicted, e.unbudgeted));
   }
+  if (std::any_of(plan.experiments.begin(), plan.experiments.end(), [](const auto& e) { return e.predicted; }))
+    ctx.out << "  the predicted intervals are the sensors' noise alone (each fit's Cramer-Rao bound for a model\n"
+               "  that describes the machine exactly); a real machine's departures from the models (more modes,\n"
+               "  friction, a sensor's drift) widen what its fits report\n";
   if (plan.options.budget_s > 0)
     ctx.out << fmt::format("  budget {:g} s: {}\n", plan.options.budget_s,
                            plan.design_scale < 1 ? fmt::format("the sweeps, holds and chirp at {:.2f} of the design's "
