@@ -133,19 +133,20 @@ function(tunekit_soname var prefix name)
 endfunction()
 tunekit_soname(TUNEKIT_PLPLOT_SONAME PLPLOT plplot)
 tunekit_soname(TUNEKIT_LIBPQ_SONAME LIBPQ pq)
-# Their headers, for the build only (nothing to link, nothing in the installed package).
-add_library(tunekit_plplot_headers INTERFACE)
-target_include_directories(tunekit_plplot_headers SYSTEM INTERFACE ${PLPLOT_INCLUDE_DIRS})
-add_library(tunekit_libpq_headers INTERFACE)
-target_include_directories(tunekit_libpq_headers SYSTEM INTERFACE ${LIBPQ_INCLUDE_DIRS})
+# tunekit_headers_only(TARGET DIRS...): a library's headers, for the build only (nothing to link,
+# nothing in the installed package).
+function(tunekit_headers_only target)
+  add_library(${target} INTERFACE)
+  target_include_directories(${target} SYSTEM INTERFACE ${ARGN})
+endfunction()
+tunekit_headers_only(tunekit_plplot_headers ${PLPLOT_INCLUDE_DIRS})
+tunekit_headers_only(tunekit_libpq_headers ${LIBPQ_INCLUDE_DIRS})
 # libcrypto (SHA-256, Base64) and SQLite are opened on first use too: both are bound at load
 # time in full (BIND_NOW), some 5,000 symbol lookups at every start of every command.
 tunekit_soname(TUNEKIT_LIBCRYPTO_SONAME OPENSSL crypto)
 tunekit_soname(TUNEKIT_SQLITE3_SONAME SQLITE3 sqlite3)
-add_library(tunekit_openssl_headers INTERFACE)
-target_include_directories(tunekit_openssl_headers SYSTEM INTERFACE ${OPENSSL_INCLUDE_DIR})
-add_library(tunekit_sqlite3_headers INTERFACE)
-target_include_directories(tunekit_sqlite3_headers SYSTEM INTERFACE ${SQLITE3_INCLUDE_DIRS})
+tunekit_headers_only(tunekit_openssl_headers ${OPENSSL_INCLUDE_DIR})
+tunekit_headers_only(tunekit_sqlite3_headers ${SQLITE3_INCLUDE_DIRS})
 
 if(TUNEKIT_BUILD_TESTS)
   find_package(Catch2 2 QUIET)

@@ -69,11 +69,6 @@ double integrated_contrast(const cv::Mat& img, double x, double yc, int half) {
   return sum;
 }
 
-// Least squares of y on the columns of A (rows: samples).
-Eigen::VectorXd least_squares(const Eigen::MatrixXd& A, const Eigen::VectorXd& y) {
-  return fitting::least_squares_solve(A, y);
-}
-
 // The centreline y = c0 + c1 x through the edge fit's centres over the bead's first 20 mm.
 Eigen::Vector2d centreline(const std::vector<const WidthSample*>& valid, double ppm) {
   const double x_end = valid.front()->x_px + kCentrelineFitMm * ppm;
@@ -85,7 +80,7 @@ Eigen::Vector2d centreline(const std::vector<const WidthSample*>& valid, double 
     const auto k = static_cast<Eigen::Index>(i);
     A(k, 0) = 1, A(k, 1) = valid[i]->x_px, y(k) = valid[i]->y_px;
   }
-  return least_squares(A, y);
+  return fitting::least_squares_solve(A, y);
 }
 
 // The contrast per unit width along the line, c0 + c1 z + c2 z^2 with z in mm from x0, fitted to
@@ -107,7 +102,7 @@ std::optional<Eigen::Vector3d> contrast_along(const cv::Mat& img, const std::vec
     const auto k = static_cast<Eigen::Index>(i);
     Z(k, 0) = 1, Z(k, 1) = zr[i][0], Z(k, 2) = zr[i][0] * zr[i][0], r(k) = zr[i][1];
   }
-  return Eigen::Vector3d(least_squares(Z, r));
+  return Eigen::Vector3d(fitting::least_squares_solve(Z, r));
 }
 
 }  // namespace
