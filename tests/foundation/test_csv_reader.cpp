@@ -3,8 +3,11 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
+#include <random>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -179,6 +182,39 @@ TEST_CASE("plain decimals and the general number forms read the same values, map
   const auto r = run_cli({"inspect", bad, "--time", "time"});
   CHECK(r.code == 2);
   CHECK(r.err == "tunekit: error: " + bad + ":3:5: '-' in column 'a' is not a number\n");
+}
+
+TEST_CASE("plain decimals of every length read exactly the double that from_chars reads") {
+  // The one-pass path reads plain decimals of up to 15 digits by Clinger's fast path, longer ones
+  // by std::from_chars; every split of 0-9 integer and 0-9 fraction digits, with and without a
+  // sign and a point, in a middle and in the last column, must give the correctly rounded value.
+  std::mt19937_64 rng(20261129);
+  std::string text = "time,a,b\n";
+  std::vector<std::string> fields;
+  double time = 0;
+  for (int int_digits = 0; int_digits <= 9; ++int_digits)
+    for (int frac_digits = 0; frac_digits <= 9; ++frac_digits)
+      for (int k = 0; k < 20; ++k) {
+        std::string f = (k % 2) != 0 ? "-" : "";
+        for (int i = 0; i < int_digits; ++i) f += static_cast<char>('0' + rng() % 10);
+        if (frac_digits > 0 || k % 5 == 0) f += '.';
+        for (int i = 0; i < frac_digits; ++i) f += static_cast<char>('0' + rng() % 10);
+        if (int_digits + frac_digits == 0) f += '0';
+        fields.push_back(f);
+        text += fmt::format("{},{},{}\n", time += 1, f, f);
+      }
+  const auto t = tunekit::formats::parse_csv(text, "digits.csv", {{"a", "b"}, "time"});
+  REQUIRE(t.rows == fields.size());
+  for (std::size_t r = 0; r < fields.size(); ++r) {
+    INFO(fields[r]);
+    const std::string& f = fields[r];
+    double want = 0;
+    const char* begin = f.data() + (f.front() == '-' ? 1 : 0);
+    REQUIRE(std::from_chars(begin, f.data() + f.size(), want).ec == std::errc());
+    if (f.front() == '-') want = -want;
+    CHECK(t.column("a").values[r] == want);
+    CHECK(t.column("b").values[r] == want);
+  }
 }
 
 namespace {
