@@ -14,6 +14,7 @@
 
 #include "tunekit/core/error.hpp"
 #include "tunekit/core/file_bytes.hpp"
+#include "tunekit/core/huge_pages.hpp"
 
 #include "csv_rows.hpp"
 
@@ -389,7 +390,10 @@ CsvTable parse_csv(std::string_view text, const std::string& path, const CsvOpti
   detail::CsvRows rows;
   rows.values.resize(t.columns.size());
   const std::size_t estimate = text.size() / std::max<std::size_t>(16, ncols * 8);
-  for (auto& v : rows.values) v.reserve(estimate);
+  for (auto& v : rows.values) {
+    v.reserve(estimate);
+    core::advise_huge_pages(v.data(), v.capacity() * sizeof(double));
+  }
   if (!h.pending_first_row.empty()) detail::parse_csv_row(h.pending_first_row, h.pending_line, layout, rows);
   detail::parse_csv_rows_parallel(text.substr(lines.pos()), lines.line_no() + 1, layout, rows);
   for (std::size_t k = 0; k < t.columns.size(); ++k) t.columns[k].values = std::move(rows.values[k]);

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/core/huge_pages.hpp"
 
 namespace tunekit::formats::detail {
 namespace {
@@ -228,7 +229,10 @@ void parse_csv_rows_parallel(std::string_view text, std::size_t first_line, cons
   const std::string_view first = text.substr(0, nl + 1), second = text.substr(nl + 1);
   CsvRows tail;
   tail.values.resize(out.values.size());
-  for (auto& v : tail.values) v.reserve(second.size() / std::max<std::size_t>(16, layout.ncols * 8));
+  for (auto& v : tail.values) {
+    v.reserve(second.size() / std::max<std::size_t>(16, layout.ncols * 8));
+    core::advise_huge_pages(v.data(), v.capacity() * sizeof(double));
+  }
   // The first thread decides, once both halves are parsed, whether the second joins the first
   // (it parsed cleanly and the time column continues across the cut); if so each thread then
   // appends half of the columns, into memory the first half's columns reserved.
