@@ -116,18 +116,21 @@ std::vector<int> harmonic_ties(const std::vector<PencilComponent>& start) {
 }
 
 // Parameters f_i, zeta_i, a_i, b_i per component, then the offset; a tied frequency is fixed
-// (the residuals compute it from f0).
-std::vector<ParamSpec> sinusoid_params(const std::vector<PencilComponent>& start, const std::vector<int>& tie,
+// (the residuals compute it from f0). Frequencies start at `start`'s (kept inside the bounds) and
+// are bounded around `model`'s; dampings start at z0.
+std::vector<ParamSpec> sinusoid_params(const std::vector<PencilComponent>& model,
+                                       const std::vector<PencilComponent>& start, const std::vector<int>& tie,
                                        const std::vector<double>& z0, const Eigen::VectorXd& lin, double mean,
                                        double freq_rel_bound, double nyquist) {
-  const int nc = static_cast<int>(start.size());
+  const int nc = static_cast<int>(model.size());
   std::vector<ParamSpec> params;
   for (int i = 0; i < nc; ++i) {
-    const auto& s = start[static_cast<std::size_t>(i)];
-    ParamSpec fp{fmt::format("f{}_hz", i), "Hz", s.freq_hz, (1 - freq_rel_bound) * s.freq_hz,
-                 std::min((1 + freq_rel_bound) * s.freq_hz, nyquist)};
+    const auto& s = model[static_cast<std::size_t>(i)];
+    const double lo = (1 - freq_rel_bound) * s.freq_hz, hi = std::min((1 + freq_rel_bound) * s.freq_hz, nyquist);
+    ParamSpec fp{fmt::format("f{}_hz", i), "Hz", std::clamp(start[static_cast<std::size_t>(i)].freq_hz, lo, hi), lo,
+                 hi};
     if (tie[static_cast<std::size_t>(i)] > 0) {
-      fp.start = tie[static_cast<std::size_t>(i)] * start.front().freq_hz;
+      fp.start = tie[static_cast<std::size_t>(i)] * params.front().start;
       fp.lower = -std::numeric_limits<double>::infinity();
       fp.upper = std::numeric_limits<double>::infinity();
       fp.fixed = true;
@@ -215,12 +218,31 @@ void derive_tied_frequencies(FitResult& fit, const std::vector<int>& tie) {
 
 }  // namespace
 
-FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
-                               double freq_rel_bound) {
+namespace {
+
+// `start`'s values with `model`'s ties and damping bounds, its frequencies inside model's bounds.
+std::vector<PencilComponent> start_within(const std::vector<PencilComponent>& model,
+                                          const std::vector<PencilComponent>& start, double freq_rel_bound,
+                                          double nyquist) {
+  if (start.size() != model.size())
+    throw InputError(
+        fmt::format("damped-sinusoid fit: a start set of {} components for a model of {}", start.size(), model.size()));
+  std::vector<PencilComponent> st = model;
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    const double f = model[i].freq_hz;
+    st[i].freq_hz = std::clamp(start[i].freq_hz, (1 - freq_rel_bound) * f, std::min((1 + freq_rel_bound) * f, nyquist));
+    st[i].zeta = start[i].zeta;
+  }
+  return st;
+}
+
+// The fit of `model`'s components (frequency bounds, ties, damping bounds) from `start`'s values.
+FitResult fit_from(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& model,
+                   const std::vector<PencilComponent>& start, double freq_rel_bound) {
   if (!(freq_rel_bound > 0 && freq_rel_bound < 1))
     throw InputError("damped-sinusoid fit: the frequency bound must be in (0, 1)");
   const int m = static_cast<int>(y.size());
-  const int nc = static_cast<int>(start.size());
+  const int nc = static_cast<int>(model.size());
   if (nc == 0) throw InputError("damped-sinusoid fit: no components to fit");
   if (m < 4 * nc + 10) throw InputError(fmt::format("damped-sinusoid fit: {} samples are too few", m));
   const double nyquist = fs_hz / 2;
@@ -228,11 +250,12 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   for (double v : y) mean += v;
   mean /= m;
 
-  const std::vector<double> z0 = start_dampings(start);
-  const Eigen::VectorXd lin = linear_start(y, fs_hz, start, z0);
-  const std::vector<int> tie = harmonic_ties(start);
+  const std::vector<PencilComponent> st = start_within(model, start, freq_rel_bound, nyquist);
+  const std::vector<double> z0 = start_dampings(st);
+  const Eigen::VectorXd lin = linear_start(y, fs_hz, st, z0);
+  const std::vector<int> tie = harmonic_ties(model);
   LsqProblem prob;
-  prob.params = sinusoid_params(start, tie, z0, lin, mean, freq_rel_bound, nyquist);
+  prob.params = sinusoid_params(model, st, tie, z0, lin, mean, freq_rel_bound, nyquist);
   const int np = static_cast<int>(prob.params.size());
   prob.num_residuals = m;
   prob.observed = y;
@@ -245,6 +268,33 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   FitResult fit = solve_least_squares("damped_sinusoids", prob, opt);
   derive_tied_frequencies(fit, tie);
   return fit;
+}
+
+}  // namespace
+
+FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
+                               double freq_rel_bound) {
+  return fit_from(y, fs_hz, start, start, freq_rel_bound);
+}
+
+FitResult fit_damped_sinusoids_best_of(const std::vector<double>& y, double fs_hz,
+                                       const std::vector<std::vector<PencilComponent>>& starts, double freq_rel_bound) {
+  if (starts.empty()) throw InputError("damped-sinusoid fit: no start values");
+  FitResult best;
+  std::string first_failure;
+  bool found = false;
+  for (const auto& start : starts) {
+    try {
+      FitResult fit = fit_from(y, fs_hz, starts.front(), start, freq_rel_bound);
+      // Strictly lower by more than rounding: starts that end in the same minimum keep the first.
+      if (!found || fit.diagnostics.rss < best.diagnostics.rss * (1 - 1e-9)) best = std::move(fit);
+      found = true;
+    } catch (const FitError& e) {
+      if (first_failure.empty()) first_failure = e.message();
+    }
+  }
+  if (!found) throw FitError(first_failure);
+  return best;
 }
 
 double damped_sinusoids_value(const FitResult& fit, double t) {

@@ -80,6 +80,9 @@ struct RingdownOptions {
                                  ///< of its amplitude over the window (a steady tone)
   double max_zeta = 0;           ///< refuse a fundamental damped more than this (a tap); 0: no limit
   std::string channel;           ///< analyse this channel alone; empty: the best projection of all
+  /// Relative change of every start frequency (1 + this) and damping ratio (1 - this) of the fit,
+  /// 0 in use: checks that the answer is the record's, not the start values' last digits.
+  double start_perturbation = 0;
 };
 
 struct RingdownChannel {
