@@ -6,62 +6,118 @@
 #include <complex>
 #include <numbers>
 
-#include <Eigen/Dense>
+#include <Eigen/Core>
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/least_squares.hpp"
+
+// LAPACK's Fortran interface (Debian's liblapack-dev): the singular value decomposition and the
+// eigenvalues of a general real matrix. The character arguments' hidden lengths (the gfortran
+// calling convention) are passed last.
+extern "C" {
+void dgesvd_(const char* jobu, const char* jobvt, const int* m, const int* n, double* a, const int* lda, double* s,
+             double* u, const int* ldu, double* vt, const int* ldvt, double* work, const int* lwork, int* info,
+             std::size_t jobu_len, std::size_t jobvt_len);
+void dgeev_(const char* jobvl, const char* jobvr, const int* n, double* a, const int* lda, double* wr, double* wi,
+            double* vl, const int* ldvl, double* vr, const int* ldvr, double* work, const int* lwork, int* info,
+            std::size_t jobvl_len, std::size_t jobvr_len);
+}
 
 namespace tunekit::fitting {
 
+namespace {
+
+// The first `order` right singular vectors (as columns, L + 1 x order) of the Hankel matrix of y
+// with L + 1 columns, largest singular value first (LAPACK's DGESVD).
+Eigen::MatrixXd hankel_right_singular_vectors(const std::vector<double>& y, int L, int order) {
+  int rows = static_cast<int>(y.size()) - L, cols = L + 1, k = std::min(rows, cols), one = 1, info = 0, lwork = -1;
+  Eigen::MatrixXd Y(rows, cols);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) Y(r, c) = y[static_cast<std::size_t>(r + c)];
+  Eigen::VectorXd sv(k);
+  Eigen::MatrixXd vt(k, cols);
+  double u_unused = 0, query = 0;
+  dgesvd_("N", "S", &rows, &cols, Y.data(), &rows, sv.data(), &u_unused, &one, vt.data(), &k, &query, &lwork, &info, 1,
+          1);
+  lwork = std::max(1, static_cast<int>(query));
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  dgesvd_("N", "S", &rows, &cols, Y.data(), &rows, sv.data(), &u_unused, &one, vt.data(), &k, work.data(), &lwork,
+          &info, 1, 1);
+  if (info != 0) throw FitError("matrix pencil: the singular value decomposition did not converge");
+  return vt.topRows(order).transpose();
+}
+
+// The eigenvalues of the square matrix A (LAPACK's DGEEV).
+std::vector<std::complex<double>> eigenvalues(Eigen::MatrixXd A) {
+  int n = static_cast<int>(A.rows()), one = 1, info = 0, lwork = -1;
+  std::vector<double> wr(static_cast<std::size_t>(n)), wi(static_cast<std::size_t>(n));
+  double unused = 0, query = 0;
+  dgeev_("N", "N", &n, A.data(), &n, wr.data(), wi.data(), &unused, &one, &unused, &one, &query, &lwork, &info, 1, 1);
+  lwork = std::max(1, static_cast<int>(query));
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  dgeev_("N", "N", &n, A.data(), &n, wr.data(), wi.data(), &unused, &one, &unused, &one, work.data(), &lwork, &info, 1,
+         1);
+  if (info != 0) throw FitError("matrix pencil: the eigenvalue problem did not converge");
+  std::vector<std::complex<double>> z;
+  for (std::size_t i = 0; i < wr.size(); ++i) z.emplace_back(wr[i], wi[i]);
+  return z;
+}
+
+// The complex amplitudes h of y_k = sum_i h_i z_i^k in least squares, as the real problem of
+// twice the size: [Re Z, -Im Z; Im Z, Re Z] [Re h; Im h] = [y; 0].
+std::vector<std::complex<double>> vandermonde_amplitudes(const std::vector<double>& y,
+                                                         const std::vector<std::complex<double>>& z) {
+  const int n = static_cast<int>(y.size()), order = static_cast<int>(z.size());
+  Eigen::MatrixXd Z(2 * n, 2 * order);
+  for (int i = 0; i < order; ++i) {
+    std::complex<double> p(1.0, 0.0);
+    for (int k = 0; k < n; ++k) {
+      Z(k, i) = Z(n + k, order + i) = p.real();
+      Z(n + k, i) = p.imag();
+      Z(k, order + i) = -p.imag();
+      p *= z[static_cast<std::size_t>(i)];
+    }
+  }
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * n);
+  for (int k = 0; k < n; ++k) rhs(k) = y[static_cast<std::size_t>(k)];
+  const Eigen::VectorXd x = least_squares_solve(Z, rhs);
+  std::vector<std::complex<double>> h;
+  for (int i = 0; i < order; ++i) h.emplace_back(x(i), x(order + i));
+  return h;
+}
+
+}  // namespace
+
 std::vector<PencilComponent> matrix_pencil(const std::vector<double>& y, double fs_hz, int order, int pencil) {
-  using Mat = Eigen::MatrixXd;
   const int n = static_cast<int>(y.size());
   if (order < 1) throw InputError("matrix pencil: the order must be at least 1");
   int L = pencil > 0 ? pencil : std::min(n / 3, 100);
   L = std::max(L, order + 1);
   if (n < 2 * L + 1 || !(fs_hz > 0))
     throw InputError(fmt::format("matrix pencil: {} samples are too few for {} exponentials", n, order));
-  // Hankel data matrix Y (n-L) x (L+1); its dominant right singular vectors span the signal.
-  Mat Y(n - L, L + 1);
-  for (int r = 0; r < n - L; ++r)
-    for (int c = 0; c <= L; ++c) Y(r, c) = y[static_cast<std::size_t>(r + c)];
-  Eigen::BDCSVD<Mat> svd(Y, Eigen::ComputeThinV);
-  const Mat V = svd.matrixV().leftCols(order);
-  const Mat V1 = V.topRows(L);     // rows 0..L-1
-  const Mat V2 = V.bottomRows(L);  // rows 1..L
-  // The poles z are the eigenvalues of pinv(V1) V2 (order x order).
-  const Mat A = V1.completeOrthogonalDecomposition().solve(V2);
-  Eigen::EigenSolver<Mat> es(A);
-  if (es.info() != Eigen::Success) throw FitError("matrix pencil: the eigenvalue problem did not converge");
-  const Eigen::VectorXcd z = es.eigenvalues();
-
-  // Complex amplitudes h from the Vandermonde system y_k = sum h_i z_i^k (least squares).
-  Eigen::MatrixXcd Z(n, order);
-  for (int i = 0; i < order; ++i) {
-    std::complex<double> p(1.0, 0.0);
-    for (int k = 0; k < n; ++k) {
-      Z(k, i) = p;
-      p *= z(i);
-    }
-  }
-  Eigen::VectorXcd yc(n);
-  for (int k = 0; k < n; ++k) yc(k) = y[static_cast<std::size_t>(k)];
-  // Distinct poles make Z full rank: a column-pivoted QR solves it as the complete orthogonal
-  // decomposition did, at two thirds of this file's compile time.
-  const Eigen::VectorXcd h = Z.colPivHouseholderQr().solve(yc);
+  // The Hankel data matrix's dominant right singular vectors V span the signal; the poles z are
+  // the eigenvalues of pinv(V1) V2 (V1: V's rows 0..L-1, V2: rows 1..L), each column of it the
+  // least-squares solution of V1 a = V2's column.
+  const Eigen::MatrixXd V = hankel_right_singular_vectors(y, L, order);
+  const Eigen::MatrixXd V1 = V.topRows(L), V2 = V.bottomRows(L);
+  Eigen::MatrixXd A(order, order);
+  for (int c = 0; c < order; ++c) A.col(c) = least_squares_solve(V1, V2.col(c));
+  const auto z = eigenvalues(A);
+  const auto h = vandermonde_amplitudes(y, z);
 
   std::vector<PencilComponent> out;
-  for (int i = 0; i < order; ++i) {
-    const double wd = std::arg(z(i)) * fs_hz;  // rad/s
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    const double wd = std::arg(z[i]) * fs_hz;  // rad/s
     if (!(wd > 0)) continue;                   // conjugate twin or a real (non-oscillating) pole
-    const double sigma = -std::log(std::abs(z(i))) * fs_hz;
+    const double sigma = -std::log(std::abs(z[i])) * fs_hz;
     const double wn = std::hypot(wd, sigma);
     PencilComponent c;
     c.freq_hz = wn / (2 * std::numbers::pi);
     c.zeta = sigma / wn;
-    c.amplitude = 2 * std::abs(h(i));
-    c.phase_rad = std::arg(h(i));
+    c.amplitude = 2 * std::abs(h[i]);
+    c.phase_rad = std::arg(h[i]);
     if (std::isfinite(c.freq_hz) && std::isfinite(c.zeta) && std::isfinite(c.amplitude)) out.push_back(c);
   }
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.amplitude > b.amplitude; });
@@ -104,8 +160,7 @@ Eigen::VectorXd linear_start(const std::vector<double>& y, double fs_hz, const s
     }
   }
   D.col(2 * nc).setOnes();
-  const Eigen::Map<const Eigen::VectorXd> yv(y.data(), m);
-  return D.colPivHouseholderQr().solve(yv);
+  return least_squares_solve(D, Eigen::Map<const Eigen::VectorXd>(y.data(), m));
 }
 
 // Per component its harmonic number of component 0, or 0 when its frequency is free.
