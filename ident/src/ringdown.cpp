@@ -124,18 +124,51 @@ std::vector<rd::Line> pooled_lines(const std::vector<std::span<const double>>& w
 // twice that limit, so that a tap still fits above the limit and is refused by it.
 double series_max_zeta(const RingdownOptions& o) { return o.max_zeta > 0 ? 2 * o.max_zeta : 0.25; }
 
-// Start values of the components `comps` (harmonic number or 0, spectral line in Hz): the
-// matrix pencil's line of `order` exponentials where it finds one near, else the spectral line
-// with a damping ratio of 0.01 (order 0: the spectral lines alone).
-std::vector<fitting::PencilComponent> component_starts(const std::vector<double>& win, double fs,
-                                                       const std::vector<std::pair<int, double>>& comps, int order,
-                                                       const RingdownOptions& o) {
-  std::vector<fitting::PencilComponent> pencil;
-  try {
-    if (order > 0) pencil = fitting::matrix_pencil(win, fs, order);
-  } catch (const Error&) {
-    pencil.clear();  // the spectral start values serve
+// The matrix pencils of a decay window, by order (empty where the window is too short for the
+// order, and for order 0: the spectral start values then serve). Computed once per window: the
+// fit starts from several and the other motion's lines come from the highest.
+struct DecayPencils {
+  std::vector<std::pair<int, std::vector<fitting::PencilComponent>>> by_order;
+
+  const std::vector<fitting::PencilComponent>& of(int order) const {
+    static const std::vector<fitting::PencilComponent> none;
+    for (const auto& [k, c] : by_order)
+      if (k == order) return c;
+    return none;
   }
+};
+
+constexpr int kOtherMotionOrder = 40;  ///< exponentials of the pencil the other motion's lines come from
+
+// The orders of the matrix pencils the fit starts from (0: the spectral lines alone): the usual
+// one first (it also centres the frequency bounds), then lower and higher ones.
+std::vector<int> start_orders(const RingdownOptions& o) {
+  const int base = 2 * o.max_components + 4;
+  return {base, base - 4, base + 8, base + 20, 0};
+}
+
+DecayPencils decay_pencils(const std::vector<double>& win, double fs, const RingdownOptions& o) {
+  DecayPencils p;
+  auto orders = start_orders(o);
+  orders.push_back(kOtherMotionOrder);
+  for (int order : orders) {
+    std::vector<fitting::PencilComponent> c;
+    try {
+      if (order > 0) c = fitting::matrix_pencil(win, fs, order);
+    } catch (const Error&) {
+      c.clear();  // the spectral start values serve
+    }
+    p.by_order.emplace_back(order, std::move(c));
+  }
+  return p;
+}
+
+// Start values of the components `comps` (harmonic number or 0, spectral line in Hz): the line of
+// the matrix pencil `pencil` where it finds one near, else the spectral line with a damping
+// ratio of 0.01.
+std::vector<fitting::PencilComponent> component_starts(const std::vector<fitting::PencilComponent>& pencil,
+                                                       const std::vector<std::pair<int, double>>& comps,
+                                                       const RingdownOptions& o) {
   std::vector<fitting::PencilComponent> starts;
   for (const auto& c : comps) {
     fitting::PencilComponent s;
@@ -157,14 +190,12 @@ std::vector<fitting::PencilComponent> component_starts(const std::vector<double>
 }
 
 // Least squares from several starts, the least residual kept (fitting::fit_damped_sinusoids_best_of):
-// the matrix pencil at the usual order (it also centres the frequency bounds), at lower and
-// higher orders, and the spectral lines; the fundamental (component 0) into r.
+// the matrix pencils of `orders` (start_orders); the fundamental (component 0) into r.
 void fit_components(RingdownResult& r, const std::vector<double>& win, double fs,
-                    const std::vector<std::pair<int, double>>& comps, const RingdownOptions& o) {
+                    const std::vector<std::pair<int, double>>& comps, const DecayPencils& pencils,
+                    const std::vector<int>& orders, const RingdownOptions& o) {
   std::vector<std::vector<fitting::PencilComponent>> start_sets;
-  const int base = 2 * o.max_components + 4;
-  for (int order : {base, base - 4, base + 8, base + 20, 0})
-    start_sets.push_back(component_starts(win, fs, comps, order, o));
+  for (int order : orders) start_sets.push_back(component_starts(pencils.of(order), comps, o));
   const auto& starts = start_sets.front();
   try {
     r.fit = fitting::fit_damped_sinusoids_best_of(win, fs, start_sets, o.max_line_shift);
@@ -208,19 +239,12 @@ void fit_components(RingdownResult& r, const std::vector<double>& win, double fs
 // the strongest lines of a matrix pencil of high order in the band [min_hz / 2, max_hz] that
 // decay (a damping ratio below 0.5) and lie more than twice the series' tolerance from every
 // component, at most four.
-std::vector<std::pair<int, double>> other_motion_lines(const std::vector<double>& win, double fs,
+std::vector<std::pair<int, double>> other_motion_lines(const DecayPencils& pencils,
                                                        const std::vector<std::pair<int, double>>& comps,
                                                        const RingdownOptions& o, double max_hz) {
-  constexpr int kOrder = 40;
   constexpr std::size_t kLines = 4;
-  std::vector<fitting::PencilComponent> pencil;
-  try {
-    pencil = fitting::matrix_pencil(win, fs, kOrder);
-  } catch (const Error&) {
-    return {};
-  }
   std::vector<std::pair<int, double>> out;
-  for (const auto& p : pencil) {  // strongest first
+  for (const auto& p : pencils.of(kOtherMotionOrder)) {  // strongest first
     if (out.size() >= kLines) break;
     if (p.freq_hz < 0.5 * o.min_hz || p.freq_hz > max_hz || !(p.zeta > 0 && p.zeta < 0.5)) continue;
     auto near = [&](const auto& c) { return std::abs(c.second - p.freq_hz) <= 2 * o.harmonic_tolerance * c.second; };
@@ -236,15 +260,16 @@ std::vector<std::pair<int, double>> other_motion_lines(const std::vector<double>
 // is taken up by the fundamental's damping or by another component pinned on its bounds, and the
 // fit's end moves with its start values' last digits. `before` is r as it was before the fit.
 void extend_for_other_motion(RingdownResult& r, const RingdownResult& before, const std::vector<double>& win, double fs,
-                             std::vector<std::pair<int, double>>& comps, const RingdownOptions& o, double max_hz) {
+                             std::vector<std::pair<int, double>>& comps, const DecayPencils& pencils,
+                             const RingdownOptions& o, double max_hz) {
   if (!(r.fit.diagnostics.whiteness_p < 0.01)) return;
-  const auto extra = other_motion_lines(win, fs, comps, o, max_hz);
+  const auto extra = other_motion_lines(pencils, comps, o, max_hz);
   if (extra.empty()) return;
   auto extended = comps;
   extended.insert(extended.end(), extra.begin(), extra.end());
   RingdownResult alt = before;
   try {
-    fit_components(alt, win, fs, extended, o);
+    fit_components(alt, win, fs, extended, pencils, start_orders(o), o);
   } catch (const FitError&) {
     return;
   }
@@ -411,9 +436,10 @@ bool fit_series(RingdownResult& r, const DecayWindow& dw, const rd::SeriesChoice
       comps.emplace_back(0, l.freq_hz);
   }
   const RingdownResult before = r;
-  fit_components(r, win, fs, comps, o);
+  const DecayPencils pencils = decay_pencils(win, fs, o);
+  fit_components(r, win, fs, comps, pencils, start_orders(o), o);
   const bool present = fundamental_present(r.fit);
-  extend_for_other_motion(r, before, win, fs, comps, o, dw.max_hz);
+  extend_for_other_motion(r, before, win, fs, comps, pencils, o, dw.max_hz);
   widen_for_coloured_residuals(r, win, fs, dw.nfft, comps);
 
   // The harmonic series found, and where the strongest line stands in it.
