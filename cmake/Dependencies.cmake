@@ -19,6 +19,13 @@ if(NOT Ceres_FOUND)
   tunekit_missing("Ceres Solver" "libceres-dev")
 endif()
 
+# The matrix pencil's singular values and eigenvalues (fitting/src/damped_sinusoids.cpp): LAPACK's
+# Fortran interface, which Ceres links too.
+find_package(LAPACK QUIET)
+if(NOT LAPACK_FOUND)
+  tunekit_missing("LAPACK" "liblapack-dev")
+endif()
+
 # Debian ships the C and the C++ NLopt configs under the same package name; ask for the C++ one.
 find_package(NLopt QUIET CONFIG
   HINTS "/usr/lib/${CMAKE_LIBRARY_ARCHITECTURE}/cmake/nlopt_cxx" "/usr/lib/cmake/nlopt_cxx")

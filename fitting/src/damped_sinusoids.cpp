@@ -6,62 +6,118 @@
 #include <complex>
 #include <numbers>
 
-#include <Eigen/Dense>
+#include <Eigen/Core>
 #include <fmt/format.h>
 
 #include "tunekit/core/error.hpp"
+#include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/least_squares.hpp"
+
+// LAPACK's Fortran interface (Debian's liblapack-dev): the singular value decomposition and the
+// eigenvalues of a general real matrix. The character arguments' hidden lengths (the gfortran
+// calling convention) are passed last.
+extern "C" {
+void dgesvd_(const char* jobu, const char* jobvt, const int* m, const int* n, double* a, const int* lda, double* s,
+             double* u, const int* ldu, double* vt, const int* ldvt, double* work, const int* lwork, int* info,
+             std::size_t jobu_len, std::size_t jobvt_len);
+void dgeev_(const char* jobvl, const char* jobvr, const int* n, double* a, const int* lda, double* wr, double* wi,
+            double* vl, const int* ldvl, double* vr, const int* ldvr, double* work, const int* lwork, int* info,
+            std::size_t jobvl_len, std::size_t jobvr_len);
+}
 
 namespace tunekit::fitting {
 
+namespace {
+
+// The first `order` right singular vectors (as columns, L + 1 x order) of the Hankel matrix of y
+// with L + 1 columns, largest singular value first (LAPACK's DGESVD).
+Eigen::MatrixXd hankel_right_singular_vectors(const std::vector<double>& y, int L, int order) {
+  int rows = static_cast<int>(y.size()) - L, cols = L + 1, k = std::min(rows, cols), one = 1, info = 0, lwork = -1;
+  Eigen::MatrixXd Y(rows, cols);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) Y(r, c) = y[static_cast<std::size_t>(r + c)];
+  Eigen::VectorXd sv(k);
+  Eigen::MatrixXd vt(k, cols);
+  double u_unused = 0, query = 0;
+  dgesvd_("N", "S", &rows, &cols, Y.data(), &rows, sv.data(), &u_unused, &one, vt.data(), &k, &query, &lwork, &info, 1,
+          1);
+  lwork = std::max(1, static_cast<int>(query));
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  dgesvd_("N", "S", &rows, &cols, Y.data(), &rows, sv.data(), &u_unused, &one, vt.data(), &k, work.data(), &lwork,
+          &info, 1, 1);
+  if (info != 0) throw FitError("matrix pencil: the singular value decomposition did not converge");
+  return vt.topRows(order).transpose();
+}
+
+// The eigenvalues of the square matrix A (LAPACK's DGEEV).
+std::vector<std::complex<double>> eigenvalues(Eigen::MatrixXd A) {
+  int n = static_cast<int>(A.rows()), one = 1, info = 0, lwork = -1;
+  std::vector<double> wr(static_cast<std::size_t>(n)), wi(static_cast<std::size_t>(n));
+  double unused = 0, query = 0;
+  dgeev_("N", "N", &n, A.data(), &n, wr.data(), wi.data(), &unused, &one, &unused, &one, &query, &lwork, &info, 1, 1);
+  lwork = std::max(1, static_cast<int>(query));
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  dgeev_("N", "N", &n, A.data(), &n, wr.data(), wi.data(), &unused, &one, &unused, &one, work.data(), &lwork, &info, 1,
+         1);
+  if (info != 0) throw FitError("matrix pencil: the eigenvalue problem did not converge");
+  std::vector<std::complex<double>> z;
+  for (std::size_t i = 0; i < wr.size(); ++i) z.emplace_back(wr[i], wi[i]);
+  return z;
+}
+
+// The complex amplitudes h of y_k = sum_i h_i z_i^k in least squares, as the real problem of
+// twice the size: [Re Z, -Im Z; Im Z, Re Z] [Re h; Im h] = [y; 0].
+std::vector<std::complex<double>> vandermonde_amplitudes(const std::vector<double>& y,
+                                                         const std::vector<std::complex<double>>& z) {
+  const int n = static_cast<int>(y.size()), order = static_cast<int>(z.size());
+  Eigen::MatrixXd Z(2 * n, 2 * order);
+  for (int i = 0; i < order; ++i) {
+    std::complex<double> p(1.0, 0.0);
+    for (int k = 0; k < n; ++k) {
+      Z(k, i) = Z(n + k, order + i) = p.real();
+      Z(n + k, i) = p.imag();
+      Z(k, order + i) = -p.imag();
+      p *= z[static_cast<std::size_t>(i)];
+    }
+  }
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * n);
+  for (int k = 0; k < n; ++k) rhs(k) = y[static_cast<std::size_t>(k)];
+  const Eigen::VectorXd x = least_squares_solve(Z, rhs);
+  std::vector<std::complex<double>> h;
+  for (int i = 0; i < order; ++i) h.emplace_back(x(i), x(order + i));
+  return h;
+}
+
+}  // namespace
+
 std::vector<PencilComponent> matrix_pencil(const std::vector<double>& y, double fs_hz, int order, int pencil) {
-  using Mat = Eigen::MatrixXd;
   const int n = static_cast<int>(y.size());
   if (order < 1) throw InputError("matrix pencil: the order must be at least 1");
   int L = pencil > 0 ? pencil : std::min(n / 3, 100);
   L = std::max(L, order + 1);
   if (n < 2 * L + 1 || !(fs_hz > 0))
     throw InputError(fmt::format("matrix pencil: {} samples are too few for {} exponentials", n, order));
-  // Hankel data matrix Y (n-L) x (L+1); its dominant right singular vectors span the signal.
-  Mat Y(n - L, L + 1);
-  for (int r = 0; r < n - L; ++r)
-    for (int c = 0; c <= L; ++c) Y(r, c) = y[static_cast<std::size_t>(r + c)];
-  Eigen::BDCSVD<Mat> svd(Y, Eigen::ComputeThinV);
-  const Mat V = svd.matrixV().leftCols(order);
-  const Mat V1 = V.topRows(L);     // rows 0..L-1
-  const Mat V2 = V.bottomRows(L);  // rows 1..L
-  // The poles z are the eigenvalues of pinv(V1) V2 (order x order).
-  const Mat A = V1.completeOrthogonalDecomposition().solve(V2);
-  Eigen::EigenSolver<Mat> es(A);
-  if (es.info() != Eigen::Success) throw FitError("matrix pencil: the eigenvalue problem did not converge");
-  const Eigen::VectorXcd z = es.eigenvalues();
-
-  // Complex amplitudes h from the Vandermonde system y_k = sum h_i z_i^k (least squares).
-  Eigen::MatrixXcd Z(n, order);
-  for (int i = 0; i < order; ++i) {
-    std::complex<double> p(1.0, 0.0);
-    for (int k = 0; k < n; ++k) {
-      Z(k, i) = p;
-      p *= z(i);
-    }
-  }
-  Eigen::VectorXcd yc(n);
-  for (int k = 0; k < n; ++k) yc(k) = y[static_cast<std::size_t>(k)];
-  // Distinct poles make Z full rank: a column-pivoted QR solves it as the complete orthogonal
-  // decomposition did, at two thirds of this file's compile time.
-  const Eigen::VectorXcd h = Z.colPivHouseholderQr().solve(yc);
+  // The Hankel data matrix's dominant right singular vectors V span the signal; the poles z are
+  // the eigenvalues of pinv(V1) V2 (V1: V's rows 0..L-1, V2: rows 1..L), each column of it the
+  // least-squares solution of V1 a = V2's column.
+  const Eigen::MatrixXd V = hankel_right_singular_vectors(y, L, order);
+  const Eigen::MatrixXd V1 = V.topRows(L), V2 = V.bottomRows(L);
+  Eigen::MatrixXd A(order, order);
+  for (int c = 0; c < order; ++c) A.col(c) = least_squares_solve(V1, V2.col(c));
+  const auto z = eigenvalues(A);
+  const auto h = vandermonde_amplitudes(y, z);
 
   std::vector<PencilComponent> out;
-  for (int i = 0; i < order; ++i) {
-    const double wd = std::arg(z(i)) * fs_hz;  // rad/s
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    const double wd = std::arg(z[i]) * fs_hz;  // rad/s
     if (!(wd > 0)) continue;                   // conjugate twin or a real (non-oscillating) pole
-    const double sigma = -std::log(std::abs(z(i))) * fs_hz;
+    const double sigma = -std::log(std::abs(z[i])) * fs_hz;
     const double wn = std::hypot(wd, sigma);
     PencilComponent c;
     c.freq_hz = wn / (2 * std::numbers::pi);
     c.zeta = sigma / wn;
-    c.amplitude = 2 * std::abs(h(i));
-    c.phase_rad = std::arg(h(i));
+    c.amplitude = 2 * std::abs(h[i]);
+    c.phase_rad = std::arg(h[i]);
     if (std::isfinite(c.freq_hz) && std::isfinite(c.zeta) && std::isfinite(c.amplitude)) out.push_back(c);
   }
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.amplitude > b.amplitude; });
@@ -104,8 +160,7 @@ Eigen::VectorXd linear_start(const std::vector<double>& y, double fs_hz, const s
     }
   }
   D.col(2 * nc).setOnes();
-  const Eigen::Map<const Eigen::VectorXd> yv(y.data(), m);
-  return D.colPivHouseholderQr().solve(yv);
+  return least_squares_solve(D, Eigen::Map<const Eigen::VectorXd>(y.data(), m));
 }
 
 // Per component its harmonic number of component 0, or 0 when its frequency is free.
@@ -116,18 +171,21 @@ std::vector<int> harmonic_ties(const std::vector<PencilComponent>& start) {
 }
 
 // Parameters f_i, zeta_i, a_i, b_i per component, then the offset; a tied frequency is fixed
-// (the residuals compute it from f0).
-std::vector<ParamSpec> sinusoid_params(const std::vector<PencilComponent>& start, const std::vector<int>& tie,
+// (the residuals compute it from f0). Frequencies start at `start`'s (kept inside the bounds) and
+// are bounded around `model`'s; dampings start at z0.
+std::vector<ParamSpec> sinusoid_params(const std::vector<PencilComponent>& model,
+                                       const std::vector<PencilComponent>& start, const std::vector<int>& tie,
                                        const std::vector<double>& z0, const Eigen::VectorXd& lin, double mean,
                                        double freq_rel_bound, double nyquist) {
-  const int nc = static_cast<int>(start.size());
+  const int nc = static_cast<int>(model.size());
   std::vector<ParamSpec> params;
   for (int i = 0; i < nc; ++i) {
-    const auto& s = start[static_cast<std::size_t>(i)];
-    ParamSpec fp{fmt::format("f{}_hz", i), "Hz", s.freq_hz, (1 - freq_rel_bound) * s.freq_hz,
-                 std::min((1 + freq_rel_bound) * s.freq_hz, nyquist)};
+    const auto& s = model[static_cast<std::size_t>(i)];
+    const double lo = (1 - freq_rel_bound) * s.freq_hz, hi = std::min((1 + freq_rel_bound) * s.freq_hz, nyquist);
+    ParamSpec fp{fmt::format("f{}_hz", i), "Hz", std::clamp(start[static_cast<std::size_t>(i)].freq_hz, lo, hi), lo,
+                 hi};
     if (tie[static_cast<std::size_t>(i)] > 0) {
-      fp.start = tie[static_cast<std::size_t>(i)] * start.front().freq_hz;
+      fp.start = tie[static_cast<std::size_t>(i)] * params.front().start;
       fp.lower = -std::numeric_limits<double>::infinity();
       fp.upper = std::numeric_limits<double>::infinity();
       fp.fixed = true;
@@ -215,12 +273,31 @@ void derive_tied_frequencies(FitResult& fit, const std::vector<int>& tie) {
 
 }  // namespace
 
-FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
-                               double freq_rel_bound) {
+namespace {
+
+// `start`'s values with `model`'s ties and damping bounds, its frequencies inside model's bounds.
+std::vector<PencilComponent> start_within(const std::vector<PencilComponent>& model,
+                                          const std::vector<PencilComponent>& start, double freq_rel_bound,
+                                          double nyquist) {
+  if (start.size() != model.size())
+    throw InputError(
+        fmt::format("damped-sinusoid fit: a start set of {} components for a model of {}", start.size(), model.size()));
+  std::vector<PencilComponent> st = model;
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    const double f = model[i].freq_hz;
+    st[i].freq_hz = std::clamp(start[i].freq_hz, (1 - freq_rel_bound) * f, std::min((1 + freq_rel_bound) * f, nyquist));
+    st[i].zeta = start[i].zeta;
+  }
+  return st;
+}
+
+// The fit of `model`'s components (frequency bounds, ties, damping bounds) from `start`'s values.
+FitResult fit_from(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& model,
+                   const std::vector<PencilComponent>& start, double freq_rel_bound) {
   if (!(freq_rel_bound > 0 && freq_rel_bound < 1))
     throw InputError("damped-sinusoid fit: the frequency bound must be in (0, 1)");
   const int m = static_cast<int>(y.size());
-  const int nc = static_cast<int>(start.size());
+  const int nc = static_cast<int>(model.size());
   if (nc == 0) throw InputError("damped-sinusoid fit: no components to fit");
   if (m < 4 * nc + 10) throw InputError(fmt::format("damped-sinusoid fit: {} samples are too few", m));
   const double nyquist = fs_hz / 2;
@@ -228,11 +305,12 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   for (double v : y) mean += v;
   mean /= m;
 
-  const std::vector<double> z0 = start_dampings(start);
-  const Eigen::VectorXd lin = linear_start(y, fs_hz, start, z0);
-  const std::vector<int> tie = harmonic_ties(start);
+  const std::vector<PencilComponent> st = start_within(model, start, freq_rel_bound, nyquist);
+  const std::vector<double> z0 = start_dampings(st);
+  const Eigen::VectorXd lin = linear_start(y, fs_hz, st, z0);
+  const std::vector<int> tie = harmonic_ties(model);
   LsqProblem prob;
-  prob.params = sinusoid_params(start, tie, z0, lin, mean, freq_rel_bound, nyquist);
+  prob.params = sinusoid_params(model, st, tie, z0, lin, mean, freq_rel_bound, nyquist);
   const int np = static_cast<int>(prob.params.size());
   prob.num_residuals = m;
   prob.observed = y;
@@ -245,6 +323,33 @@ FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const
   FitResult fit = solve_least_squares("damped_sinusoids", prob, opt);
   derive_tied_frequencies(fit, tie);
   return fit;
+}
+
+}  // namespace
+
+FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
+                               double freq_rel_bound) {
+  return fit_from(y, fs_hz, start, start, freq_rel_bound);
+}
+
+FitResult fit_damped_sinusoids_best_of(const std::vector<double>& y, double fs_hz,
+                                       const std::vector<std::vector<PencilComponent>>& starts, double freq_rel_bound) {
+  if (starts.empty()) throw InputError("damped-sinusoid fit: no start values");
+  FitResult best;
+  std::string first_failure;
+  bool found = false;
+  for (const auto& start : starts) {
+    try {
+      FitResult fit = fit_from(y, fs_hz, starts.front(), start, freq_rel_bound);
+      // Strictly lower by more than rounding: starts that end in the same minimum keep the first.
+      if (!found || fit.diagnostics.rss < best.diagnostics.rss * (1 - 1e-9)) best = std::move(fit);
+      found = true;
+    } catch (const FitError& e) {
+      if (first_failure.empty()) first_failure = e.message();
+    }
+  }
+  if (!found) throw FitError(first_failure);
+  return best;
 }
 
 double damped_sinusoids_value(const FitResult& fit, double t) {

@@ -124,16 +124,51 @@ std::vector<rd::Line> pooled_lines(const std::vector<std::span<const double>>& w
 // twice that limit, so that a tap still fits above the limit and is refused by it.
 double series_max_zeta(const RingdownOptions& o) { return o.max_zeta > 0 ? 2 * o.max_zeta : 0.25; }
 
-// Start values from the matrix pencil where it finds the line, then least squares; the
-// fundamental (component 0) into r.
-void fit_components(RingdownResult& r, const std::vector<double>& win, double fs,
-                    const std::vector<std::pair<int, double>>& comps, const RingdownOptions& o) {
-  std::vector<fitting::PencilComponent> pencil;
-  try {
-    pencil = fitting::matrix_pencil(win, fs, 2 * o.max_components + 4);
-  } catch (const Error&) {
-    pencil.clear();  // the spectral start values below serve
+// The matrix pencils of a decay window, by order (empty where the window is too short for the
+// order, and for order 0: the spectral start values then serve). Computed once per window: the
+// fit starts from several and the other motion's lines come from the highest.
+struct DecayPencils {
+  std::vector<std::pair<int, std::vector<fitting::PencilComponent>>> by_order;
+
+  const std::vector<fitting::PencilComponent>& of(int order) const {
+    static const std::vector<fitting::PencilComponent> none;
+    for (const auto& [k, c] : by_order)
+      if (k == order) return c;
+    return none;
   }
+};
+
+constexpr int kOtherMotionOrder = 40;  ///< exponentials of the pencil the other motion's lines come from
+
+// The orders of the matrix pencils the fit starts from (0: the spectral lines alone): the usual
+// one first (it also centres the frequency bounds), then lower and higher ones.
+std::vector<int> start_orders(const RingdownOptions& o) {
+  const int base = 2 * o.max_components + 4;
+  return {base, base - 4, base + 8, base + 20, 0};
+}
+
+DecayPencils decay_pencils(const std::vector<double>& win, double fs, const RingdownOptions& o) {
+  DecayPencils p;
+  auto orders = start_orders(o);
+  orders.push_back(kOtherMotionOrder);
+  for (int order : orders) {
+    std::vector<fitting::PencilComponent> c;
+    try {
+      if (order > 0) c = fitting::matrix_pencil(win, fs, order);
+    } catch (const Error&) {
+      c.clear();  // the spectral start values serve
+    }
+    p.by_order.emplace_back(order, std::move(c));
+  }
+  return p;
+}
+
+// Start values of the components `comps` (harmonic number or 0, spectral line in Hz): the line of
+// the matrix pencil `pencil` where it finds one near, else the spectral line with a damping
+// ratio of 0.01.
+std::vector<fitting::PencilComponent> component_starts(const std::vector<fitting::PencilComponent>& pencil,
+                                                       const std::vector<std::pair<int, double>>& comps,
+                                                       const RingdownOptions& o) {
   std::vector<fitting::PencilComponent> starts;
   for (const auto& c : comps) {
     fitting::PencilComponent s;
@@ -147,10 +182,23 @@ void fit_components(RingdownResult& r, const std::vector<double>& win, double fs
         s.zeta = p.zeta;
         break;
       }
+    s.freq_hz *= 1 + o.start_perturbation;
+    s.zeta *= 1 - o.start_perturbation;
     starts.push_back(s);
   }
+  return starts;
+}
+
+// Least squares from several starts, the least residual kept (fitting::fit_damped_sinusoids_best_of):
+// the matrix pencils of `orders` (start_orders); the fundamental (component 0) into r.
+void fit_components(RingdownResult& r, const std::vector<double>& win, double fs,
+                    const std::vector<std::pair<int, double>>& comps, const DecayPencils& pencils,
+                    const std::vector<int>& orders, const RingdownOptions& o) {
+  std::vector<std::vector<fitting::PencilComponent>> start_sets;
+  for (int order : orders) start_sets.push_back(component_starts(pencils.of(order), comps, o));
+  const auto& starts = start_sets.front();
   try {
-    r.fit = fitting::fit_damped_sinusoids(win, fs, starts, o.max_line_shift);
+    r.fit = fitting::fit_damped_sinusoids_best_of(win, fs, start_sets, o.max_line_shift);
   } catch (const Error& e) {
     throw FitError(fmt::format("the damped-sinusoid fit of the decay in {} failed: {}", r.channel, e.message()),
                    r.path);
@@ -185,6 +233,49 @@ void fit_components(RingdownResult& r, const std::vector<double>& win, double fs
         "the fundamental's damping is not identified: its fitted line reached the bound {:g} (the impact's transient "
         "at {:.2f} Hz); the frequency is the harmonic series', and the series' damping is {:.4f}",
         series_max_zeta(o), r.freq_hz, r.series_zeta));
+}
+
+// Lines of other motion than the fitted ones (the toolhead's own modes, the impact's transient):
+// the strongest lines of a matrix pencil of high order in the band [min_hz / 2, max_hz] that
+// decay (a damping ratio below 0.5) and lie more than twice the series' tolerance from every
+// component, at most four.
+std::vector<std::pair<int, double>> other_motion_lines(const DecayPencils& pencils,
+                                                       const std::vector<std::pair<int, double>>& comps,
+                                                       const RingdownOptions& o, double max_hz) {
+  constexpr std::size_t kLines = 4;
+  std::vector<std::pair<int, double>> out;
+  for (const auto& p : pencils.of(kOtherMotionOrder)) {  // strongest first
+    if (out.size() >= kLines) break;
+    if (p.freq_hz < 0.5 * o.min_hz || p.freq_hz > max_hz || !(p.zeta > 0 && p.zeta < 0.5)) continue;
+    auto near = [&](const auto& c) { return std::abs(c.second - p.freq_hz) <= 2 * o.harmonic_tolerance * c.second; };
+    if (std::any_of(comps.begin(), comps.end(), near) || std::any_of(out.begin(), out.end(), near)) continue;
+    out.emplace_back(0, p.freq_hz);
+  }
+  return out;
+}
+
+// Where the fit's residuals are not white, the record holds more than the fitted lines: the
+// model is extended by the other motion's lines (other_motion_lines), each with its own
+// frequency and damping, and the extended fit kept when its BIC is lower. Left out, that motion
+// is taken up by the fundamental's damping or by another component pinned on its bounds, and the
+// fit's end moves with its start values' last digits. `before` is r as it was before the fit.
+void extend_for_other_motion(RingdownResult& r, const RingdownResult& before, const std::vector<double>& win, double fs,
+                             std::vector<std::pair<int, double>>& comps, const DecayPencils& pencils,
+                             const RingdownOptions& o, double max_hz) {
+  if (!(r.fit.diagnostics.whiteness_p < 0.01)) return;
+  const auto extra = other_motion_lines(pencils, comps, o, max_hz);
+  if (extra.empty()) return;
+  auto extended = comps;
+  extended.insert(extended.end(), extra.begin(), extra.end());
+  RingdownResult alt = before;
+  try {
+    fit_components(alt, win, fs, extended, pencils, start_orders(o), o);
+  } catch (const FitError&) {
+    return;
+  }
+  if (!(alt.fit.diagnostics.bic < r.fit.diagnostics.bic)) return;
+  r = std::move(alt);
+  comps = std::move(extended);
 }
 
 // The decay window of a record and what the fundamental's choice and the fit share.
@@ -280,8 +371,12 @@ void widen_for_coloured_residuals(RingdownResult& r, const std::vector<double>& 
 
 // 4-5. The projection in which the fundamental stands highest over the noise; the fundamental,
 // its harmonics present in the projection, then the other strong lines of the projection,
-// fitted; the series found reported.
-void fit_series(RingdownResult& r, const DecayWindow& dw, const rd::SeriesChoice& choice, const RingdownOptions& o) {
+// fitted; the series found reported. Whether the fundamental is in the record (its fitted
+// amplitude, fundamental_present) is judged in the fit of these lines, before the other motion's
+// are added (extend_for_other_motion): those are heavily damped, their broad lines overlap the
+// fundamental's and share its amplitude, which leaves a weak fundamental's amplitude uncertain
+// there without making it absent.
+bool fit_series(RingdownResult& r, const DecayWindow& dw, const rd::SeriesChoice& choice, const RingdownOptions& o) {
   const auto& rec = dw.rec;
   const double fs = r.sample_rate_hz;
   const auto& series = choice.best;
@@ -312,10 +407,14 @@ void fit_series(RingdownResult& r, const DecayWindow& dw, const rd::SeriesChoice
     return std::none_of(comps.begin(), comps.end(),
                         [&](const auto& c) { return std::abs(c.second - f) <= o.harmonic_tolerance * c.second; });
   };
+  // A harmonic of the series counts down to the series' own threshold (min_pair_line_ratio, as in
+  // the series' choice): left out of the fit, its line would be taken up by the fundamental's
+  // damping or by another line's.
+  const double harmonic_ratio2 = std::min(ratio2, o.min_pair_line_ratio * o.min_pair_line_ratio);
   for (const auto& [k, hl] : series.harmonics) {
     if (static_cast<int>(comps.size()) >= o.max_components) break;
     const auto* l = rd::line_near(plines, hl.freq_hz, o.harmonic_tolerance);
-    if (l && l->power >= ratio2 * pfloor && distinct(l->freq_hz)) comps.emplace_back(k, l->freq_hz);
+    if (l && l->power >= harmonic_ratio2 * pfloor && distinct(l->freq_hz)) comps.emplace_back(k, l->freq_hz);
   }
   // The series' f0 to start from: each line's f_k / k weighted by k^2 times its power (a line's
   // frequency error falls with its amplitude, and f_k / k divides it by k), so that a strong
@@ -336,7 +435,11 @@ void fit_series(RingdownResult& r, const DecayWindow& dw, const rd::SeriesChoice
     if (l.freq_hz >= o.min_hz && l.power >= 0.09 * ptop && l.power >= ratio2 * pfloor && distinct(l.freq_hz))
       comps.emplace_back(0, l.freq_hz);
   }
-  fit_components(r, win, fs, comps, o);
+  const RingdownResult before = r;
+  const DecayPencils pencils = decay_pencils(win, fs, o);
+  fit_components(r, win, fs, comps, pencils, start_orders(o), o);
+  const bool present = fundamental_present(r.fit);
+  extend_for_other_motion(r, before, win, fs, comps, pencils, o, dw.max_hz);
   widen_for_coloured_residuals(r, win, fs, dw.nfft, comps);
 
   // The harmonic series found, and where the strongest line stands in it.
@@ -358,6 +461,7 @@ void fit_series(RingdownResult& r, const DecayWindow& dw, const rd::SeriesChoice
   if (r.strongest_is_harmonic)
     r.warnings.push_back(fmt::format("the strongest line, {:.2f} Hz, is harmonic {} of the fundamental {:.2f} Hz",
                                      r.strongest_peak_hz, r.harmonic_number, r.freq_hz));
+  return present;
 }
 
 // 6. A ring-down decays, and a belt's decays slowly.
@@ -441,8 +545,7 @@ void fit_fundamental(RingdownResult& r, const DecayWindow& dw, const RingdownOpt
           dw.rec.path);
     }
     RingdownResult attempt_r = r;
-    fit_series(attempt_r, dw, choice, o);
-    if (fundamental_present(attempt_r.fit) || attempt >= 2) {
+    if (fit_series(attempt_r, dw, choice, o) || attempt >= 2) {
       r = std::move(attempt_r);
       return;
     }

@@ -154,8 +154,10 @@ TEST_CASE("real belt plucks: every belt A pluck reads within 2 % of its document
     CHECK(h[1]["k"] == 2);
     CHECK(h[1]["freq_hz"].get<double>() == Approx(218.0).epsilon(0.02));
     // The residuals are other motion (not white): the interval is widened for their level at
-    // the series' lines.
-    CHECK(one["interval_factor"].get<double>() > 1.5);
+    // the series' lines (with the other motion's own lines fitted, that level stands 1.07-3.4
+    // times the residuals' mean at these plucks' lines; the intervals' overlap below is what
+    // the widening is for).
+    CHECK(one["fit"]["diagnostics"]["whiteness_p"].get<double>() < 0.01);
     intervals.emplace_back(one["freq_ci95"][0].get<double>(), one["freq_ci95"][1].get<double>());
   }
   // Three plucks of one belt: their intervals (once 109.64 [109.50, 109.78], 109.24 [109.17,
@@ -353,4 +355,37 @@ TEST_CASE("a series fitted with its harmonics at k f0 reads a weak fundamental f
   // The harmonic carries ten times the amplitude: f0 from the series is several times more
   // precise than from the fundamental's own line.
   CHECK(p0.std_error < 0.5 * ff.param("f0_hz").std_error);
+}
+
+// The belt B pluck whose fundamental stands no higher than the toolhead's own lines: its fit once
+// ended where the start values' last digits sent it (the same matrix pencil from another
+// linear-algebra library, its poles equal to 1e-14, moved the fundamental's damping ratio from
+// 0.013 to 0.075, and `belts` refused the pluck as a tap). Now every real pluck of that printer,
+// read as `resonance --ringdown` and as `belts` read it, gives the same fundamental, damping and
+// residual from start values changed by 1e-12 and 1e-10 either way.
+TEST_CASE("the ring-down fit of a real pluck does not depend on its start values' last digits") {
+  ident::RingdownOptions belts;
+  belts.min_hz = 40;
+  belts.max_zeta = 0.06;
+  ident::AccelInputOptions in;
+  in.axis = 'x';  // not used: a ring-down is no axis measurement
+  for (const char* file : {"b_belt_82hz_hard_case.csv", "b_belt_82hz_1.csv", "a_belt_86hz_1.csv"}) {
+    const std::string path = dataset(std::string("belts/helixscreen/") + file);
+    const auto rec = ident::load_accel_csv(path, tunekit::test::read_text(path), in);
+    for (const auto& base : {ident::RingdownOptions{}, belts}) {
+      INFO(file << (base.max_zeta > 0 ? " as belts reads it" : " as resonance reads it"));
+      const auto ref = ident::analyze_ringdown(rec, base);
+      CHECK(ref.freq_hz == Approx(file[0] == 'a' ? 86 : 82).epsilon(0.02));
+      for (double eps : {-1e-10, -1e-12, 1e-12, 1e-10}) {
+        INFO("start values x (1 + " << eps << ")");
+        auto o = base;
+        o.start_perturbation = eps;
+        const auto r = ident::analyze_ringdown(rec, o);
+        CHECK(r.freq_hz == Approx(ref.freq_hz).epsilon(1e-7));
+        CHECK(r.zeta == Approx(ref.zeta).epsilon(1e-5));
+        CHECK(r.series_zeta == Approx(ref.series_zeta).epsilon(1e-5));
+        CHECK(r.fit.diagnostics.rss == Approx(ref.fit.diagnostics.rss).epsilon(1e-9));
+      }
+    }
+  }
 }

@@ -44,6 +44,17 @@ std::vector<PencilComponent> matrix_pencil(const std::vector<double>& y, double 
 FitResult fit_damped_sinusoids(const std::vector<double>& y, double fs_hz, const std::vector<PencilComponent>& start,
                                double freq_rel_bound = 0.5);
 
+/// fit_damped_sinusoids of one model from several start sets, the fit of least residual sum of
+/// squares kept. starts.front() is the model (its frequencies centre the bounds; its ties and
+/// damping bounds hold for all); every set gives start frequencies and dampings for the same
+/// components (e.g. the matrix pencil's at several orders, the spectrum's). A fit ends in the
+/// minimum nearest its start, and on a record with more motion than its lines that minimum can
+/// move with the start's last digits; the least of several starts is the data's answer. Start
+/// sets whose fit fails are passed over; FitError (the first reason) when every one fails.
+FitResult fit_damped_sinusoids_best_of(const std::vector<double>& y, double fs_hz,
+                                       const std::vector<std::vector<PencilComponent>>& starts,
+                                       double freq_rel_bound = 0.5);
+
 /// Model value at sample k for parameters laid out as fit_damped_sinusoids names them.
 double damped_sinusoids_value(const FitResult& fit, double t_s);
 

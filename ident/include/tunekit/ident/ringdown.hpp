@@ -24,12 +24,15 @@
 //      noise, the principal direction of the fundamental's complex amplitudes). A named
 //      channel is used alone instead;
 //   5. the fundamental, its harmonics and the other strong lines of the projection are
-//      fitted as damped sinusoids (matrix pencil start, least-squares refinement;
-//      fitting/damped_sinusoids.hpp): the harmonics at exactly k f0, each line of the series
-//      with its own damping, amplitude and phase, the other lines free, giving the
-//      fundamental's frequency (informed by every harmonic) and damping ratio with 95 %
-//      intervals. A candidate whose fitted fundamental has no amplitude (a Wald test) is set
-//      aside and the next one taken;
+//      fitted as damped sinusoids (least squares from several starts, the matrix pencil's at
+//      several orders and the spectrum's, the least residual kept; fitting/damped_sinusoids.hpp):
+//      the harmonics at exactly k f0, each line of the series with its own damping, amplitude
+//      and phase, the other lines free, giving the fundamental's frequency (informed by every
+//      harmonic) and damping ratio with 95 % intervals. Where the residuals are not white, up to
+//      four lines of the other motion (a high-order matrix pencil's) are added, each with its
+//      own frequency and damping, when they lower the BIC. A candidate whose fitted fundamental
+//      has no amplitude (a Wald test, before those lines are added) is set aside and the next
+//      one taken;
 //   6. what is not a ring-down is refused (FitError, exit 1): no line standing above the
 //      spectrum's floor (a weak pluck, a bump), a line that does not decay (a fan's or a
 //      motor's steady tone), a decay faster than `max_zeta` (a tap on the frame, when the
@@ -59,7 +62,8 @@ struct RingdownOptions {
                                  ///< not yet free swings are not a free decay of fixed frequency)
   double max_window_s = 0.5;     ///< longest decay window fitted, s
   double min_strength = 3.0;     ///< refuse below this signal/noise RMS ratio
-  int max_components = 5;        ///< damped sinusoids fitted (fundamental and harmonics first)
+  int max_components = 5;        ///< damped sinusoids fitted (fundamental and harmonics first), besides
+                                 ///< the other motion's lines added where the residuals are not white
   double max_line_shift = 0.05;  ///< a fitted line may move this fraction from its spectral start
   /// Relative tolerance of a harmonic at k f: a belt's overtones run at most about 1 % sharp of
   /// k f (its bending stiffness), and a wider tolerance pairs unrelated lines by chance.
@@ -80,6 +84,9 @@ struct RingdownOptions {
                                  ///< of its amplitude over the window (a steady tone)
   double max_zeta = 0;           ///< refuse a fundamental damped more than this (a tap); 0: no limit
   std::string channel;           ///< analyse this channel alone; empty: the best projection of all
+  /// Relative change of every start frequency (1 + this) and damping ratio (1 - this) of the fit,
+  /// 0 in use: checks that the answer is the record's, not the start values' last digits.
+  double start_perturbation = 0;
 };
 
 struct RingdownChannel {
