@@ -15,7 +15,6 @@
 
 namespace tunekit::core {
 
-/// `s` with the ASCII letters A-Z in lower case.
 /// `text` (a profile's name, a machine id, a file name) made safe to put in a G-code or
 /// configuration comment: every control character (a line break would start a live line after
 /// the comment) becomes '?'; the rest is kept as it is.
@@ -26,6 +25,7 @@ inline std::string comment_safe(std::string_view text) {
   return out;
 }
 
+/// `s` with the ASCII letters A-Z in lower case.
 inline std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
