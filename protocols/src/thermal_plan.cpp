@@ -97,15 +97,15 @@ void build_thermal_experiment(const ExperimentRequest& r, Experiment& e) {
   std::vector<std::string> restore;
   g.push_back("G28");
   g.push_back("G90");
-  const auto& ax = r.profile.axes;
-  const double z = std::min(kPurgeHeightMm, 0.5 * (ax.at("z").max_mm - ax.at("z").min_mm));
-  const double xy_speed = std::min({kParkXySpeedMmS, ax.at("x").max_velocity_mm_s, ax.at("y").max_velocity_mm_s});
+  const auto& ax = r.profile.axis("x");  // a profile without the axis is refused, not indexed
+  const auto& ay = r.profile.axis("y");
+  const auto& az = r.profile.axis("z");
+  const double z = std::min(kPurgeHeightMm, 0.5 * (az.max_mm - az.min_mm));
+  const double xy_speed = std::min({kParkXySpeedMmS, ax.max_velocity_mm_s, ay.max_velocity_mm_s});
   // Z at its own acceleration, then X and Y at the print's (as the printed tests' prologue does).
-  g.push_back(r.dialect.set_accel(std::min(r.profile.print.max_accel_mm_s2, ax.at("z").max_accel_mm_s2)));
-  g.push_back(
-      fmt::format("G1 Z{} F{}", num(z, 3), num(60 * std::min(ax.at("z").max_velocity_mm_s, kParkZSpeedMmS), 3)));
-  g.push_back(r.dialect.set_accel(
-      std::min({r.profile.print.max_accel_mm_s2, ax.at("x").max_accel_mm_s2, ax.at("y").max_accel_mm_s2})));
+  g.push_back(r.dialect.set_accel(std::min(r.profile.print.max_accel_mm_s2, az.max_accel_mm_s2)));
+  g.push_back(fmt::format("G1 Z{} F{}", num(z, 3), num(60 * std::min(az.max_velocity_mm_s, kParkZSpeedMmS), 3)));
+  g.push_back(r.dialect.set_accel(std::min({r.profile.print.max_accel_mm_s2, ax.max_accel_mm_s2, ay.max_accel_mm_s2})));
   g.push_back(
       fmt::format("G1 X{} Y{} F{}", num(mid(r.profile, "x"), 3), num(mid(r.profile, "y"), 3), num(60 * xy_speed, 3)));
   g.push_back("M83 ; relative extrusion");

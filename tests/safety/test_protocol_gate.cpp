@@ -170,6 +170,27 @@ TEST_CASE("the simulator hears nothing of a protocol with accel_per_hz=1e308", "
   CHECK_FALSE(fs::exists(o.run_dir));
 }
 
+TEST_CASE("every protocol on a profile without the X, Y or Z axis is refused with the axis named", "[safety]") {
+  // A profile may list only the axes it has (a loaded TOML needs one); a protocol that moves an
+  // absent axis says which one, as bad input, instead of failing on a lookup.
+  const Dialect marlin;
+  for (const std::string missing : {"x", "y", "z"}) {
+    auto profile = builtin_sim_profile();
+    profile.axes.erase(missing);
+    for (const auto& spec : protocol_specs()) {
+      INFO(spec.name << " without " << missing);
+      try {
+        const auto e = build_experiment(spec.name, {}, "x", profile, marlin);
+        require_within_limits(e.gcode, profile, e.sensors, ProtocolLimits{});
+      } catch (const tunekit::InputError& err) {
+        CHECK(std::string(err.what()).find("'" + missing + "'") != std::string::npos);
+      } catch (const tunekit::Error&) {
+        // A refusal of another kind (the gate's own message) is a refusal too.
+      }
+    }
+  }
+}
+
 TEST_CASE("unbounded protocols are refused before they are generated", "[safety]") {
   const std::vector<std::vector<std::string>> cases{
       {"run", "axis-sweep", "--dry-run", "-p", "hz_per_sec=0.001"},
