@@ -88,6 +88,40 @@ TEST_CASE("malformed CSV inputs are refused with file, line, column and reason")
                   "the first row holds numbers, not column names; add a header row (e.g. 'time (s),force (N)')");
 }
 
+TEST_CASE("a field or a column name with control bytes or broken UTF-8 is quoted escaped, UTF-8 kept") {
+  // An escape sequence in a file must not drive the terminal the error is printed on, and a
+  // byte that is not UTF-8 must not reach a JSON document; a degree sign stays a degree sign.
+  expect_rejected("control.csv", "time,y\n0,1\n1,\x1b[31mred\x01\n", ":3:3",
+                  "'\\x1b[31mred\\x01' in column 'y' is not a number");
+  expect_rejected("latin1.csv",
+                  "time,y\n0,1\n1,5\xb0"
+                  "C\xe2\x82\n",
+                  ":3:3", "'5\\xb0C\\xe2\\x82' in column 'y' is not a number");
+  expect_rejected("utf8.csv",
+                  "time,y\n0,1\n1,5\xc2\xb0"
+                  "C\n",
+                  ":3:3",
+                  "'5\xc2\xb0"
+                  "C' in column 'y' is not a number");
+  const auto path = write_scratch("name_bytes.csv", "time,y\xff\n0,1\n");
+  const auto r = run_cli({"inspect", path, "--time", "time", "--columns", "y"});
+  CHECK(r.code == 2);
+  CHECK(r.err == "tunekit: error: " + path + ":1: no column 'y'; the file has: time, y\\xff\n");
+}
+
+TEST_CASE("an error's text is printable: control bytes, overlong forms and surrogates become \\xNN") {
+  using tunekit::printable_message;
+  CHECK(printable_message("line one\n\tline two") == "line one\n\tline two");
+  CHECK(printable_message("a\rb\x7f") == "a\\x0db\\x7f");
+  CHECK(printable_message("\xc0\xaf") == "\\xc0\\xaf");                    // an overlong '/'
+  CHECK(printable_message("\xed\xa0\x80") == "\\xed\\xa0\\x80");           // a UTF-16 surrogate
+  CHECK(printable_message("\xf4\x90\x80\x80") == "\\xf4\\x90\\x80\\x80");  // above U+10FFFF
+  CHECK(printable_message("\xf0\x9f\x94\xa5 \xe2\x82\xac \xc3\xa9") == "\xf0\x9f\x94\xa5 \xe2\x82\xac \xc3\xa9");
+  const tunekit::InputError e("bad \x1b", "f\x07.csv:1");
+  CHECK(e.formatted() == "tunekit: error: f\\x07.csv:1: bad \\x1b");
+  CHECK(std::string(e.what()) == "f\\x07.csv:1: bad \\x1b");
+}
+
 TEST_CASE("a 10 MB line without a newline is refused without reading it as data") {
   const std::string huge(10u << 20, '7');
   expect_rejected(

@@ -6,6 +6,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace tunekit {
 
@@ -13,7 +14,9 @@ enum class ExitCode : int { ok = 0, fit_failed = 1, bad_input = 2, machine = 3 }
 
 class Error : public std::runtime_error {
  public:
-  /// `location` is empty or "FILE", "FILE:LINE" or "FILE:LINE:COLUMN".
+  /// `location` is empty or "FILE", "FILE:LINE" or "FILE:LINE:COLUMN". Both are kept as
+  /// printable_message() makes them: an error quotes what a file held (a field, a column name,
+  /// a firmware reply), and what it holds must not reach a terminal or a JSON document raw.
   Error(ExitCode code, std::string message, std::string location = {});
   ExitCode code() const noexcept { return code_; }
   const std::string& location() const noexcept { return location_; }
@@ -56,6 +59,12 @@ class InterruptedError : public Error {
   InterruptedError(int signal_number, std::string message, std::string location = {})
       : Error(static_cast<ExitCode>(128 + signal_number), std::move(message), std::move(location)) {}
 };
+
+/// `text` safe to print and to store as a JSON string: a control character other than a line
+/// break or a tab (an escape sequence would drive the terminal), DEL, and every byte that is not
+/// part of well-formed UTF-8 become "\xNN"; well-formed UTF-8 (a header's "Kraft (N)" or "°C")
+/// is kept as it is.
+std::string printable_message(std::string_view text);
 
 /// "FILE:LINE" or "FILE:LINE:COLUMN" (a column of 0 is left out).
 std::string source_location(const std::string& file, std::size_t line, std::size_t column = 0);
