@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/run_cli.hpp"
 
 int main(int argc, char** argv) {
   // The analyses allocate and free buffers of a few MB each (a record's columns, spectra, a fit's

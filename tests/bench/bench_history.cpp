@@ -20,7 +20,7 @@
 #include <fmt/format.h>
 
 #include "bench_common.hpp"
-#include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/run_cli.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/results/history_record.hpp"
 #include "tunekit/history/store.hpp"

@@ -24,7 +24,7 @@
 
 #include "../resonance/synth_sweep.hpp"
 #include "bench_common.hpp"
-#include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/run_cli.hpp"
 
 namespace {
 

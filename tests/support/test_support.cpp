@@ -14,7 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "tunekit/cli/commands.hpp"
+#include "tunekit/cli/run_cli.hpp"
 
 namespace tunekit::test {
 

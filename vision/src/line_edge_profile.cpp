@@ -176,26 +176,30 @@ bool bar_in_domain(std::span<const double> t, double u0, int n) {
 }
 
 // The weighted normal equations J'WJ and J'Wr of the bar at t over the pixels (du, dv, dw) and
-// its weighted residual sum of squares.
+// its weighted residual sum of squares. The sums are kept in locals (the lower triangle) and
+// written once: accumulated into the output matrices, every term was a load and a store.
 double bar_normal_equations(std::span<const double> t, const std::vector<double>& du, const std::vector<double>& dv,
                             const std::vector<double>& dw, Mat6& JtJ, Vec6& Jtr) {
   double rss = 0;
-  JtJ.setZero();
-  Jtr.setZero();
+  double n[6][6] = {};
+  double g[6] = {};
   for (std::size_t k = 0; k < du.size(); ++k) {
-    const double u = du[k];
+    const double u = du[k], w = dw[k];
     const PixelEdge ea = pixel_edge(u, t[3], t[5]), eb = pixel_edge(u, t[4], t[5]);
     const double r = t[0] + t[1] * u + t[2] * (ea.e - eb.e) - dv[k];
-    rss += dw[k] * r * r;
+    rss += w * r * r;
     const double j[6] = {1.0, u, ea.e - eb.e, t[2] * ea.d_edge, -t[2] * eb.d_edge, t[2] * (ea.d_s - eb.d_s)};
     const int m = (ea.near || eb.near) ? 6 : 3;  // far from both edges only the background and contrast terms move
     for (int a = 0; a < m; ++a) {
-      Jtr(a) += dw[k] * j[a] * r;
-      for (int b = 0; b <= a; ++b) JtJ(a, b) += dw[k] * j[a] * j[b];
+      const double wj = w * j[a];
+      g[a] += wj * r;
+      for (int b = 0; b <= a; ++b) n[a][b] += wj * j[b];
     }
   }
-  for (int a = 0; a < 6; ++a)
-    for (int b = a + 1; b < 6; ++b) JtJ(a, b) = JtJ(b, a);
+  for (int a = 0; a < 6; ++a) {
+    Jtr(a) = g[a];
+    for (int b = 0; b <= a; ++b) JtJ(a, b) = JtJ(b, a) = n[a][b];
+  }
   return rss;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
-// The tunekit command line. Each subcommand lives in its own cmd_<name>.cpp and is added
-// to the application by its register_* function.
+// The tunekit command line's parts. Each subcommand lives in its own <name>_cli.cpp and is
+// added to the application by its register_* function; run_cli() (run_cli.hpp) puts them
+// together.
 
 #include <ostream>
 #include <string>
@@ -9,15 +10,12 @@
 #include <CLI/CLI.hpp>
 
 #include "tunekit/calibration/results/context.hpp"
+#include "tunekit/cli/run_cli.hpp"
 
 namespace tunekit::cli {
 
 using calibration::CliContext;
 using calibration::OutputOptions;
-
-/// Runs the CLI on `args` (without the program name) and returns the exit code.
-/// Never throws: errors are printed on `err` as one line.
-int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 /// The result of a subcommand's callback, read by run_cli after parsing.
 void set_exit_code(int code);
