@@ -15,6 +15,7 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
+#include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/stats.hpp"
 
 #include "tunekit/core/error.hpp"
@@ -547,8 +548,8 @@ void fill_covariance(FitResult& f, const StepRecord& r, const LsqOptions& o, con
   Eigen::Vector4d d;
   for (int j = 0; j < 4; ++j) d(j) = 1.0 / std::sqrt(std::max(M(j, j), 1e-300));
   const Eigen::Matrix4d S = d.asDiagonal() * M * d.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(S, Eigen::EigenvaluesOnly);
-  const double lmin = es.eigenvalues().minCoeff(), lmax = es.eigenvalues().maxCoeff();
+  const Eigen::VectorXd eigenvalues = symmetric_eigenvalues(S);  // once per fit: the solver compiled once
+  const double lmin = eigenvalues.minCoeff(), lmax = eigenvalues.maxCoeff();
   std::string names;
   for (int j : free_idx) names += (names.empty() ? "" : ", ") + f.params[static_cast<std::size_t>(j)].name;
   if (!(lmax > 0) || !(lmin > 0) || std::sqrt(lmin / lmax) < std::max(o.min_reciprocal_condition, 1e-10))
