@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/formats/csv.hpp"
 
 namespace {
@@ -33,6 +34,7 @@ void generate(const char* path) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   if (argc == 3 && std::strcmp(argv[1], "--generate") == 0) {
     generate(argv[2]);
     return 0;

@@ -18,6 +18,7 @@
 
 #include "../liquefier/synth_flow_sweep.hpp"
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/ident/step_analysis.hpp"
 
 namespace {
@@ -37,6 +38,7 @@ double median_cpu_ms_flow(F&& f, int runs) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   using namespace tunekit;
   int runs = 9;
   const char* json_path = nullptr;

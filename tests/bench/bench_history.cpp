@@ -20,6 +20,7 @@
 #include <fmt/format.h>
 
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/cli/run_cli.hpp"
 #include "tunekit/calibration/results/envelope.hpp"
 #include "tunekit/calibration/results/history_record.hpp"
@@ -58,6 +59,7 @@ std::pair<bench::Timing, double> wall_and_cpu_ms(F&& f, int runs, int warmup) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   const fs::path dir = fs::temp_directory_path() / fmt::format("tunekit-bench-history-{}", ::getpid());
   fs::create_directories(dir);
   std::string results, fleet_db;

@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 #include "../vision/synthetic_render.hpp"
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/vision/image_io.hpp"
 #include "tunekit/vision/line_width.hpp"
 
@@ -66,6 +67,7 @@ void bench(int w, int h, double line_px, int runs) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 11;
   bench(1920, 1080, 12.0, runs);
   bench(3840, 2160, 24.0, runs);

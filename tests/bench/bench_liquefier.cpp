@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/fitting/first_order.hpp"
 #include "tunekit/ident/spectrum.hpp"
 
@@ -61,6 +62,7 @@ bool write_step_csv(const tunekit::fitting::StepRecord& rec, const std::string& 
 }  // namespace
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   using namespace tunekit;
   std::string write_step;
   bool fopdt_only = false;

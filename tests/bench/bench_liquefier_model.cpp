@@ -12,6 +12,7 @@
 
 #include "../liquefier/synth_store.hpp"
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/fitting/liquefier_model.hpp"
 
 namespace {
@@ -29,6 +30,7 @@ double median_cpu_ms_model(F&& f, int runs) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   using namespace tunekit;
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 7;
   const test::StoreTruth tr;

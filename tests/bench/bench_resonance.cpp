@@ -24,6 +24,7 @@
 
 #include "../resonance/synth_sweep.hpp"
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/cli/run_cli.hpp"
 
 namespace {
@@ -59,6 +60,7 @@ int run_process(const std::string& exe, const std::vector<std::string>& args, st
 }  // namespace
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   int runs = 7;
   std::string csv = "/tmp/raw_data_x_bench.csv";
   bool write_only = false, klipper = false;

@@ -12,12 +12,14 @@
 #include <vector>
 
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/fitting/rheology_fit.hpp"
 #include "tunekit/fitting/viscosity.hpp"
 
 using namespace tunekit::fitting;
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 9;
   const auto& peek = cross_wlf_material("PEEK").params;
   RheologyData d;

@@ -24,6 +24,7 @@
 
 #include "../support/size_bound_inputs.hpp"
 #include "bench_common.hpp"
+#include "tunekit/core/heap_policy.hpp"
 #include "tunekit/calibration/analyses/delta_command.hpp"
 #include "tunekit/calibration/analyses/nozzle_command.hpp"
 #include "tunekit/calibration/analyses/rheo_command.hpp"
@@ -79,6 +80,7 @@ void time_command(const char* key, const char* what, int runs, F&& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tunekit::core::keep_freed_memory_in_heap();  // as the tunekit executable runs
   if (argc == 3 && std::string(argv[1]) == "--write-cross-wlf") {
     write(argv[2], test::cross_wlf_rheometer_csv(10000));
     return 0;

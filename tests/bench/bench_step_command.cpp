@@ -1,6 +1,8 @@
 // Times `tunekit step` as a C++ program calls it: compute_step() on a log file (read, step fit
 // with intervals) and its JSON envelope, in CPU time. The Python row (tests/bench/python_step.py)
-// runs this program and the same call from Python alternately and compares.
+// runs this program and the same call from Python alternately and compares. Unlike the other
+// benchmark programs it keeps glibc's default heap policy: the Python process it is compared
+// with has that one (core/heap_policy.hpp).
 //   build/tests/bench/bench_step_command FILE STEP_TIME_S STEP_SIZE [RUNS]
 // FILE: bench_liquefier --write-step's record (columns t_s, y; 100k samples, one FOPDT step).
 #include <algorithm>
