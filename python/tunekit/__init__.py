@@ -114,16 +114,20 @@ def _number(v):
 
 
 def _fits_in(node, pointer):
-    """(JSON pointer, object) of every fitted model in the results: objects with named params."""
+    """(JSON pointer, object) of every fitted model in the results: objects with named params.
+    Only objects and arrays are walked into: a number or a string holds no model, and a plot's
+    arrays hold thousands of them."""
     if isinstance(node, dict):
         params = node.get("params")
         if isinstance(params, dict) and params and all(isinstance(p, dict) and "value" in p for p in params.values()):
             yield pointer, node
         for key, value in node.items():
-            yield from _fits_in(value, pointer + "/" + str(key).replace("~", "~0").replace("/", "~1"))
+            if isinstance(value, (dict, list)):
+                yield from _fits_in(value, pointer + "/" + str(key).replace("~", "~0").replace("/", "~1"))
     elif isinstance(node, list):
         for i, value in enumerate(node):
-            yield from _fits_in(value, f"{pointer}/{i}")
+            if isinstance(value, (dict, list)):
+                yield from _fits_in(value, f"{pointer}/{i}")
 
 
 def _keywords(options):
