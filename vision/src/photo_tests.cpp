@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "photo_widths_stages.hpp"
+#include "ring_geometry.hpp"
 #include "tunekit/fitting/dense_solvers.hpp"
 #include "tunekit/fitting/stats.hpp"
 

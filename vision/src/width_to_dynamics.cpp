@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include "ring_geometry.hpp"
 #include "tunekit/core/error.hpp"
 
 namespace tunekit::vision {

@@ -15,8 +15,6 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
-
 namespace tunekit::vision {
 
 struct RingSine {
@@ -47,12 +45,6 @@ struct TimedWidth {
   /// (a rectangular bead); NaN when the path's feed is not known.
   double feed_per_width = std::numeric_limits<double>::quiet_NaN();
 };
-
-/// Circle through points (algebraic least squares). Returns centre and radius (same units).
-cv::Vec3d fit_circle(const std::vector<cv::Point2d>& pts);
-
-/// Polar angle of p around c as seen in the image (counterclockwise, 0 = +x), in [0, 2 pi).
-double view_angle(cv::Point2d p, cv::Point2d c);
 
 /// Rows of a profile printed at constant speed: t = s / v (s from the path start).
 std::vector<TimedWidth> map_constant_speed(const std::vector<double>& s_mm, const std::vector<double>& width_mm,
