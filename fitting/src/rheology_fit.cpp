@@ -5,8 +5,6 @@
 #include <limits>
 #include <memory>
 
-#include <boost/math/distributions/fisher_f.hpp>
-
 #include <cstdarg>
 #include <cstdio>
 

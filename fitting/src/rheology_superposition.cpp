@@ -6,8 +6,6 @@
 #include <cmath>
 #include <limits>
 
-#include <boost/math/distributions/fisher_f.hpp>
-
 #include <cstdarg>
 #include <cstdio>
 
@@ -337,8 +335,7 @@ SuperpositionLevel level_test(const TtsResult& t, std::size_t k, const MasterRes
     l.rms_own_ln = std::sqrt(own.rss[k] / m.count[k]);
     const double df1 = kOwnParams - 1;
     l.f_statistic = std::max(0.0, (m.rss[k] - own.rss[k]) / df1 / s2);
-    const boost::math::fisher_f_distribution<> fd(df1, own.pooled_dof);
-    l.p_value = boost::math::cdf(boost::math::complement(fd, l.f_statistic));
+    l.p_value = f_test_p_value(l.f_statistic, df1, own.pooled_dof);
     // Off the curve: a significant misfit that is also material (precise, digitized curves
     // make percent-level shape differences significant).
     l.on_master_curve = !(l.p_value < alpha && l.rms_master_ln > kSuperpositionTolerance);

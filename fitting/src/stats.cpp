@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
@@ -20,6 +21,10 @@ double t_multiplier(double confidence, double dof) {
   const double p = 0.5 + 0.5 * confidence;
   if (!(dof > 0) || dof > 1e7) return boost::math::quantile(boost::math::normal_distribution<>(), p);
   return boost::math::quantile(boost::math::students_t_distribution<>(dof), p);
+}
+
+double f_test_p_value(double f, double df1, double df2) {
+  return boost::math::cdf(boost::math::complement(boost::math::fisher_f_distribution<>(df1, df2), f));
 }
 
 int default_whiteness_lags(std::size_t n) { return static_cast<int>(std::clamp<std::size_t>(n / 4, 1, 20)); }

@@ -14,6 +14,10 @@ inline constexpr double kZ95 = 1.959963984540054;
 /// P(|T| <= t) = confidence. Falls back to the normal quantile for dof <= 0 or huge dof.
 double t_multiplier(double confidence, double dof);
 
+/// P(F >= f) for Fisher's F distribution with (df1, df2) degrees of freedom: the p-value of an
+/// F test that a model's extra parameters explain no variance.
+double f_test_p_value(double f, double df1, double df2);
+
 /// Ljung-Box portmanteau test of residual whiteness over `lags` lags.
 struct WhitenessTest {
   double q = 0;        ///< test statistic
