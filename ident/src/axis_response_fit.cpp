@@ -66,9 +66,17 @@ Schedule make_schedule(const std::vector<AccelPiece>& motion, double t0, double 
   s.sample_end.assign(n, 0);
   s.whole.assign(n, 0);
   s.accel_at.assign(n, 0.0);
-  // One piece per sample interval and one more per boundary within the record, at most: reserved
-  // once, the pieces are not copied (and their fresh pages faulted in) at every growth.
-  s.subs.reserve(n + std::min(motion.size(), n));
+  // One piece per sample interval and one more per boundary within it, at most: a piece of
+  // motion has two boundaries (its start and its end, which is not the next piece's start where
+  // the motion pauses). Reserved once, the pieces are not copied (and fresh pages faulted in for
+  // the copy) when the vector would grow: with one boundary per piece reserved, a simulated axis
+  // sweep's 146k samples and 28k pieces outgrew it, and its copy was an eighth of the fit's page
+  // faults. Pages reserved and never written cost nothing.
+  const double t_end = t0 + static_cast<double>(n - 1) * dt;
+  const auto first = std::partition_point(motion.begin(), motion.end(),
+                                          [t0](const AccelPiece& p) { return p.t0_s + p.duration_s <= t0; });
+  const auto last = std::partition_point(first, motion.end(), [t_end](const AccelPiece& p) { return p.t0_s < t_end; });
+  s.subs.reserve(n + 2 * static_cast<std::size_t>(last - first));
   std::size_t c = 0;
   auto skip_ended = [&](double t) {
     while (c < motion.size() && motion[c].t0_s + motion[c].duration_s <= t) ++c;
