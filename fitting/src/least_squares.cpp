@@ -6,6 +6,7 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include <ceres/ceres.h>
@@ -13,6 +14,7 @@
 
 #include "solver_logging.hpp"
 #include "solver_text.hpp"
+#include "svd_covariance.hpp"
 #include "tunekit/core/error.hpp"
 #include "tunekit/fitting/stats.hpp"
 #include "whiteness_detail.hpp"
@@ -153,8 +155,8 @@ class WholeProblemCost final : public ceres::CostFunction {
   mutable EvaluationMemo memo_;
 };
 
-// Ceres reports through glog, which (never initialised by the program) writes ERROR lines such
-// as "Covariance matrix is near rank deficient" to stderr before our own one-line FitError. The
+// Ceres reports through glog, which (never initialised by the program) writes ERROR and WARNING
+// lines to stderr before our own one-line FitError. The
 // solver's outcome is read from its summary and return values instead, so glog is kept quiet:
 // nothing below FATAL, and nothing to stderr.
 void quiet_glog() {
@@ -403,40 +405,41 @@ std::vector<double> residuals_at_solution(const std::string& model, const LsqPro
   return res;
 }
 
-// The n x n covariance of the parameters from Ceres (before the residual variance s^2), NaN where
-// a parameter is fixed: of `problem`'s block xf, the free parameters, or with held parameters of
-// a problem over the parameters still free. FitError when the free parameters are not
-// identifiable.
-std::vector<double> ceres_covariance(const std::string& model, const LsqProblem& prob, ceres::Problem& problem,
-                                     const ceres::Problem::Options& popt, const std::vector<double>& x,
-                                     std::vector<double>& xf, const std::vector<bool>& fixed, bool any_held,
-                                     double min_reciprocal_condition) {
+// The n x n covariance of the parameters (before the residual variance s^2), NaN where a
+// parameter is fixed: (J'J)^-1 of the free parameters from the Jacobian J of `problem`'s cost at
+// its block xf (where the solve ended, so the cost's memo serves it), or with held parameters of
+// a cost over the parameters still free. FitError when the free parameters are not identifiable.
+std::vector<double> free_covariance(const std::string& model, const LsqProblem& prob, ceres::Problem& problem,
+                                    const std::vector<double>& x, std::vector<double>& xf,
+                                    const std::vector<bool>& fixed, bool any_held, double min_reciprocal_condition) {
   const int n = static_cast<int>(prob.params.size());
   const std::vector<int> free = free_indices(fixed);
-  ceres::Covariance::Options co;
-  co.algorithm_type = ceres::DENSE_SVD;
-  co.min_reciprocal_condition_number = min_reciprocal_condition;
-  co.null_space_rank = 0;
-  co.apply_loss_function = false;
-  co.num_threads = 1;
-  ceres::Covariance covariance(co);
-  ceres::Problem held_problem(popt);
-  ceres::Problem* cov_problem = &problem;
+  const int nf = static_cast<int>(free.size()), m = prob.num_residuals;
   std::vector<double> xh = gathered(x, free);
-  double* block = any_held ? xh.data() : xf.data();
+  std::unique_ptr<WholeProblemCost> held;
+  const ceres::CostFunction* cost = nullptr;
   if (any_held) {
-    held_problem.AddResidualBlock(new WholeProblemCost(prob, free, x), nullptr, xh.data());
-    cov_problem = &held_problem;
+    held = std::make_unique<WholeProblemCost>(prob, free, x);
+    cost = held.get();
+  } else {
+    std::vector<ceres::ResidualBlockId> blocks;
+    problem.GetResidualBlocks(&blocks);
+    cost = problem.GetCostFunctionForResidualBlock(blocks.front());
   }
-  const std::size_t nf = free.size();
-  std::vector<double> cov_free(nf * nf);
-  const std::vector<std::pair<const double*, const double*>> blocks{{block, block}};
-  if (!covariance.Compute(blocks, cov_problem) || !covariance.GetCovarianceBlock(block, block, cov_free.data()))
+  const double* parameters[] = {any_held ? xh.data() : xf.data()};
+  std::vector<double> res(static_cast<std::size_t>(m)), jac(static_cast<std::size_t>(m) * static_cast<std::size_t>(nf));
+  double* jacobians[] = {jac.data()};
+  if (!cost->Evaluate(parameters, res.data(), jacobians))
+    throw FitError(model + ": the model cannot be evaluated at the solution");
+  const std::optional<std::vector<double>> cov_free = svd_covariance(jac, m, nf, min_reciprocal_condition);
+  if (!cov_free)
     throw FitError(model + ": parameters not identifiable from these data (the Jacobian of " + free_names(prob) +
                    " is rank deficient); record a longer or richer response, or fix a parameter");
   std::vector<double> cov(static_cast<std::size_t>(n * n), kNaN);
-  for (std::size_t a = 0; a < nf; ++a)
-    for (std::size_t b = 0; b < nf; ++b) cov[static_cast<std::size_t>(free[a] * n + free[b])] = cov_free[a * nf + b];
+  const auto unf = static_cast<std::size_t>(nf);
+  for (std::size_t a = 0; a < unf; ++a)
+    for (std::size_t b = 0; b < unf; ++b)
+      cov[static_cast<std::size_t>(free[a] * n + free[b])] = (*cov_free)[a * unf + b];
   return cov;
 }
 
@@ -520,7 +523,7 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
   std::vector<double> cov(static_cast<std::size_t>(n * n), kNaN);
   if (opt.compute_covariance && n_free > 0) {
     if (dof <= 0) throw FitError(model + ": as many parameters as data points; no uncertainty can be estimated");
-    cov = ceres_covariance(model, prob, problem, popt, x, xf, fixed, any_held, opt.min_reciprocal_condition);
+    cov = free_covariance(model, prob, problem, x, xf, fixed, any_held, opt.min_reciprocal_condition);
   }
   fill_parameters(r, model, prob, opt, x, fixed, cov, s2, tq, n_free);
   return r;

@@ -35,6 +35,10 @@ TEST_CASE("a straight line fit gives the textbook standard errors") {
   const double s2 = fit.diagnostics.rss / (n - 2);
   CHECK(fit.param("b").std_error == Approx(std::sqrt(s2 / sxx_c)).epsilon(1e-6));
   CHECK(fit.param("a").std_error == Approx(std::sqrt(s2 * (1 / n + sx * sx / n / n / sxx_c))).epsilon(1e-6));
+  // The whole covariance, off the diagonal too, symmetric: cov(a, b) = -s^2 mean(x) / Sxx.
+  REQUIRE(fit.covariance.size() == 4);
+  CHECK(fit.covariance[1] == Approx(-s2 * (sx / n) / sxx_c).epsilon(1e-6));
+  CHECK(fit.covariance[2] == fit.covariance[1]);
   CHECK(fit.diagnostics.converged);
   CHECK(fit.diagnostics.r2 > 0.99);
   CHECK(fit.param("b").ci95_lo < 2.0);

@@ -3,11 +3,12 @@
 //
 // A model describes its parameters (name, unit, start, bounds) and a residual function
 // r(p) of length m. solve_least_squares() minimizes 1/2 sum r_i^2 with Levenberg-Marquardt,
-// then computes the covariance of the estimate with ceres::Covariance (dense SVD, so a
-// rank-deficient Jacobian is detected and reported as "not identifiable" instead of giving
-// meaningless intervals). Standard errors are scaled by the residual variance
-// s^2 = rss / (m - k) unless the residuals are already divided by known standard deviations
-// (`absolute_sigma`). 95 % intervals use the Student-t quantile with m - k degrees of freedom.
+// then computes the covariance of the estimate from the singular values of the Jacobian at the
+// solution, with ceres::Covariance's dense-SVD rank test (so a rank-deficient Jacobian is
+// detected and reported as "not identifiable" instead of giving meaningless intervals).
+// Standard errors are scaled by the residual variance s^2 = rss / (m - k) unless the residuals
+// are already divided by known standard deviations (`absolute_sigma`). 95 % intervals use the
+// Student-t quantile with m - k degrees of freedom.
 //
 //   LsqProblem prob;
 //   prob.params = {{"K", "1", 1.0}, {"tau_s", "s", 0.5, 1e-6, 100.0}};
