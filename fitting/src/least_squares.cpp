@@ -156,9 +156,9 @@ class WholeProblemCost final : public ceres::CostFunction {
 };
 
 // Ceres reports through glog, which (never initialised by the program) writes ERROR and WARNING
-// lines to stderr before our own one-line FitError. The
-// solver's outcome is read from its summary and return values instead, so glog is kept quiet:
-// nothing below FATAL, and nothing to stderr.
+// lines to stderr before our own one-line FitError. The solver's outcome is read from its
+// summary and return values instead, so glog is kept quiet: nothing below FATAL, and nothing to
+// stderr.
 void quiet_glog() {
   static std::once_flag once;
   std::call_once(once, [] {
@@ -393,44 +393,59 @@ bool hold_at_callers_request(const LsqOptions& opt, std::vector<double>& x, std:
   return any_held;
 }
 
-std::vector<double> residuals_at_solution(const std::string& model, const LsqProblem& prob,
-                                          const std::vector<double>& x) {
+// The cost the solution's residuals and covariance are evaluated with, at `point`: the Ceres
+// problem's own at its block xf, whose memo holds the solve's last evaluations there; with held
+// parameters, a cost over the parameters still free; with every parameter fixed, one over all of
+// them at x.
+struct SolutionCost {
+  std::unique_ptr<WholeProblemCost> own;
+  const ceres::CostFunction* cost = nullptr;
+  std::vector<double> point;
+};
+
+SolutionCost solution_cost(const LsqProblem& prob, ceres::Problem& problem, const std::vector<double>& x,
+                           const std::vector<double>& xf, const std::vector<bool>& fixed, int n_free, bool any_held) {
+  SolutionCost c;
+  if (n_free > 0 && !any_held) {
+    std::vector<ceres::ResidualBlockId> blocks;
+    problem.GetResidualBlocks(&blocks);
+    c.cost = problem.GetCostFunctionForResidualBlock(blocks.front());
+    c.point = xf;
+    return c;
+  }
+  std::vector<int> free = free_indices(fixed);
+  if (n_free == 0) {
+    free.resize(prob.params.size());
+    for (std::size_t j = 0; j < free.size(); ++j) free[j] = static_cast<int>(j);
+  }
+  c.point = gathered(x, free);
+  c.own = std::make_unique<WholeProblemCost>(prob, std::move(free), x);
+  c.cost = c.own.get();
+  return c;
+}
+
+// The residuals at the solution, with the Jacobian of the cost's parameters into `jacobian` when
+// it is not empty.
+std::vector<double> evaluate_at_solution(const std::string& model, const LsqProblem& prob, const SolutionCost& c,
+                                         std::vector<double>& jacobian) {
   std::vector<double> res(static_cast<std::size_t>(prob.num_residuals));
-  std::vector<int> every(prob.params.size());
-  for (std::size_t j = 0; j < every.size(); ++j) every[j] = static_cast<int>(j);
-  WholeProblemCost cost(prob, every, x);
-  const double* blocks[] = {x.data()};
-  if (!cost.Evaluate(blocks, res.data(), nullptr))
+  const double* parameters[] = {c.point.data()};
+  double* jacobians[] = {jacobian.data()};
+  if (!c.cost->Evaluate(parameters, res.data(), jacobian.empty() ? nullptr : jacobians))
     throw FitError(model + ": the model cannot be evaluated at the solution");
   return res;
 }
 
 // The n x n covariance of the parameters (before the residual variance s^2), NaN where a
-// parameter is fixed: (J'J)^-1 of the free parameters from the Jacobian J of `problem`'s cost at
-// its block xf (where the solve ended, so the cost's memo serves it), or with held parameters of
-// a cost over the parameters still free. FitError when the free parameters are not identifiable.
-std::vector<double> free_covariance(const std::string& model, const LsqProblem& prob, ceres::Problem& problem,
-                                    const std::vector<double>& x, std::vector<double>& xf,
-                                    const std::vector<bool>& fixed, bool any_held, double min_reciprocal_condition) {
+// parameter is fixed: (J'J)^-1 of the free parameters from the Jacobian J of the solution's cost.
+// FitError when the free parameters are not identifiable.
+std::vector<double> free_covariance(const std::string& model, const LsqProblem& prob, const SolutionCost& c,
+                                    const std::vector<bool>& fixed, double min_reciprocal_condition) {
   const int n = static_cast<int>(prob.params.size());
   const std::vector<int> free = free_indices(fixed);
   const int nf = static_cast<int>(free.size()), m = prob.num_residuals;
-  std::vector<double> xh = gathered(x, free);
-  std::unique_ptr<WholeProblemCost> held;
-  const ceres::CostFunction* cost = nullptr;
-  if (any_held) {
-    held = std::make_unique<WholeProblemCost>(prob, free, x);
-    cost = held.get();
-  } else {
-    std::vector<ceres::ResidualBlockId> blocks;
-    problem.GetResidualBlocks(&blocks);
-    cost = problem.GetCostFunctionForResidualBlock(blocks.front());
-  }
-  const double* parameters[] = {any_held ? xh.data() : xf.data()};
-  std::vector<double> res(static_cast<std::size_t>(m)), jac(static_cast<std::size_t>(m) * static_cast<std::size_t>(nf));
-  double* jacobians[] = {jac.data()};
-  if (!cost->Evaluate(parameters, res.data(), jacobians))
-    throw FitError(model + ": the model cannot be evaluated at the solution");
+  std::vector<double> jac(static_cast<std::size_t>(m) * static_cast<std::size_t>(nf));
+  evaluate_at_solution(model, prob, c, jac);
   const std::optional<std::vector<double>> cov_free = svd_covariance(jac, m, nf, min_reciprocal_condition);
   if (!cov_free)
     throw FitError(model + ": parameters not identifiable from these data (the Jacobian of " + free_names(prob) +
@@ -513,7 +528,9 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
   // In place: xf's storage is the Ceres problem's parameter block.
   for (std::size_t k = 0; k < free.size(); ++k) xf[k] = x[static_cast<std::size_t>(free[k])];
 
-  const std::vector<double> res = residuals_at_solution(model, prob, x);
+  const SolutionCost at_solution = solution_cost(prob, problem, x, xf, fixed, n_free, any_held);
+  std::vector<double> no_jacobian;
+  const std::vector<double> res = evaluate_at_solution(model, prob, at_solution, no_jacobian);
   fill_residual_diagnostics(r, res, prob.observed, prob.residuals_are_time_ordered);
 
   const int dof = prob.num_residuals - n_free;
@@ -523,7 +540,7 @@ FitResult solve_least_squares(const std::string& model, const LsqProblem& prob, 
   std::vector<double> cov(static_cast<std::size_t>(n * n), kNaN);
   if (opt.compute_covariance && n_free > 0) {
     if (dof <= 0) throw FitError(model + ": as many parameters as data points; no uncertainty can be estimated");
-    cov = free_covariance(model, prob, problem, x, xf, fixed, any_held, opt.min_reciprocal_condition);
+    cov = free_covariance(model, prob, at_solution, fixed, opt.min_reciprocal_condition);
   }
   fill_parameters(r, model, prob, opt, x, fixed, cov, s2, tq, n_free);
   return r;
